@@ -1,0 +1,588 @@
+"""The estimation pipeline: tare, filter, contact onset, latched contact point, measurement.
+
+:func:`estimate` runs it over a whole log, vectorised; :class:`Estimator` runs it one sample
+at a time for live use. Both call the same kernels (:mod:`softtip.contact`,
+:mod:`softtip.spin`, :mod:`softtip.noise`) and agree to rounding.
+
+Per sample (SPEC §3):
+
+1. **Tare.** Unless a bias is given, the mean of the samples in the first ``tare_duration``
+   seconds is the bias; those samples are reported as ``none`` (``taring``). The fingertip
+   must not be touched then.
+2. **Filter** (optional): causal Butterworth low-pass, steady state at the first sample.
+3. **Contact** while ``|f| ≥ contact_threshold``.
+4. **Contact point.** ``track``: the soft-finger solution of every sample. ``latch`` (the
+   papers'): during the first rise of the force after onset (until ``|f|`` first exceeds the
+   light-force window, or sets no new maximum for ``stall_time``), the soft-finger solutions
+   of the samples inside the window are averaged; that mean, put back on the skin, is the
+   contact point from then on, until contact ends. Before the first window sample the
+   current soft-finger solution is used. With no window sample in the whole rise, the mean
+   of the first ``fallback_samples`` solutions of the contact is latched and flagged.
+5. **Measurement**: spin torque, its tangential part ``h``, the noise level of ``h``, the
+   state ``point`` or ``line`` and, for ``line`` only, the direction and its angle with a
+   standard deviation.
+
+In ``track`` mode ``h`` is zero by construction (the soft-finger model puts all of ``q``
+along ``n``), so only ``point`` contacts are reported: use ``latch`` for directions.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from softtip._xp import NP, PY
+from softtip.contact import contact_kernel
+from softtip.filtering import SosStream, lowpass_sos, noise_gain, sosfilt_batch
+from softtip.fingertip import Fingertip, load_fingertip
+from softtip.noise import NANO17, SensorNoise, angle_std_kernel, h_std_kernel
+from softtip.spin import angle_kernel, direction_kernel, spin_torque_kernel, tangential_kernel
+from softtip.units import KGF
+
+__all__ = ["STATES", "EstimatorConfig", "Estimates", "SampleEstimate", "Estimator", "estimate"]
+
+#: Contact states, indexed by the integer codes in :attr:`Estimates.state`.
+STATES = ("none", "point", "line")
+NONE, POINT, LINE = 0, 1, 2
+
+
+@dataclass(frozen=True)
+class EstimatorConfig:
+    """Settings of the pipeline. SI units.
+
+    Parameters
+    ----------
+    contact_point : {"latch", "track"}
+        How the contact point is obtained (module docstring).
+    contact_threshold : float
+        N; in contact while ``|f|`` (tared, filtered) is at least this.
+    latch_window : (float, float)
+        N; light-force window of the latch (default 0.2–0.5 kgf).
+    stall_time : float
+        s; the first rise ends when ``|f|`` has set no new maximum for this long.
+    fallback_samples : int
+        Samples averaged for a latch when the rise has no sample in the window.
+    noise : SensorNoise
+        Standard deviations of the unfiltered sensor noise.
+    h_sigmas, h_min : float
+        ``|h|`` is significant (a ``line`` contact) above ``max(h_sigmas · h_std, h_min)``;
+        ``h_min`` in N·m (default 0.5 N·mm).
+    lowpass_hz : float or None
+        Cutoff of the causal Butterworth low-pass, Hz; ``None`` for no filter.
+    lowpass_order : int
+    sample_rate : float or None
+        Hz. Needed with ``lowpass_hz``; :func:`estimate` infers it from the median time step
+        when absent.
+    bias : 6 floats or None
+        Sensor bias (N, N·m) to subtract; ``None`` to tare from the first samples.
+    tare_duration : float
+        s of samples averaged for the bias when ``bias`` is ``None``; 0 disables taring
+        (the input is already tared).
+    """
+
+    contact_point: Literal["latch", "track"] = "latch"
+    contact_threshold: float = 0.05
+    latch_window: tuple[float, float] = (0.2 * KGF, 0.5 * KGF)
+    stall_time: float = 0.1
+    fallback_samples: int = 5
+    noise: SensorNoise = field(default=NANO17)
+    h_sigmas: float = 3.0
+    h_min: float = 5e-4
+    lowpass_hz: float | None = None
+    lowpass_order: int = 2
+    sample_rate: float | None = None
+    bias: tuple[float, ...] | None = None
+    tare_duration: float = 0.2
+
+    def __post_init__(self) -> None:
+        if self.contact_point not in ("latch", "track"):
+            raise ValueError(f"contact_point must be 'latch' or 'track', got {self.contact_point!r}")
+        lo, hi = (float(v) for v in self.latch_window)
+        if not (0.0 <= lo < hi):
+            raise ValueError(f"latch_window must be (low, high) with 0 <= low < high, in N; got {self.latch_window!r}")
+        object.__setattr__(self, "latch_window", (lo, hi))
+        for name in ("contact_threshold", "stall_time", "h_sigmas", "h_min", "tare_duration"):
+            v = float(getattr(self, name))
+            if not (math.isfinite(v) and v >= 0.0):
+                raise ValueError(f"{name} must be a non-negative number, got {getattr(self, name)!r}")
+            object.__setattr__(self, name, v)
+        if int(self.fallback_samples) < 1:
+            raise ValueError(f"fallback_samples must be at least 1, got {self.fallback_samples!r}")
+        if self.bias is not None:
+            b = np.asarray(self.bias, dtype=float)
+            if b.shape != (6,) or not np.all(np.isfinite(b)):
+                raise ValueError(f"bias must be 6 finite numbers (N, N·m), got {self.bias!r}")
+            object.__setattr__(self, "bias", tuple(float(v) for v in b))
+        if self.lowpass_hz is not None and self.sample_rate is not None:
+            lowpass_sos(self.lowpass_hz, self.sample_rate, self.lowpass_order)  # validates
+
+
+@dataclass(frozen=True)
+class Estimates:
+    """Per-sample output of :func:`estimate`. SI units, sensor frame; ``N`` samples.
+
+    Attributes
+    ----------
+    t : (N,) s
+    state : (N,) int8 codes into :data:`STATES` (``none``, ``point``, ``line``)
+    wrench : (N, 6) the tared (and filtered) wrench the estimates come from, N and N·m
+    point, normal : (N, 3) contact point (m) and outward normal; NaN when ``none``
+    sigma : (N,) spin torque about the normal, N·m
+    h : (N, 3) tangential spin torque, N·m; ``h_norm`` its magnitude
+    h_std : (N,) noise level of ``h`` (``sqrt(trace Σ_h)``), N·m
+    direction : (N, 3) unit direction of the edge / strip; NaN unless ``line``
+    angle, angle_std : (N,) its angle in the SPEC §3.4 tangent frame and the angle's
+        standard deviation, rad; NaN unless ``line``
+    latched : (N,) the contact point is the latched one (not this sample's own solution)
+    latch_fallback : (N,) that latch had no light-force sample (SPEC §3.6)
+    pulling : (N,) in contact by force but no pushing contact point (reported ``none``)
+    taring : (N,) sample used for the bias (reported ``none``)
+    bias : (6,) the bias subtracted, N and N·m
+    """
+
+    t: NDArray[np.float64]
+    state: NDArray[np.int8]
+    wrench: NDArray[np.float64]
+    point: NDArray[np.float64]
+    normal: NDArray[np.float64]
+    sigma: NDArray[np.float64]
+    h: NDArray[np.float64]
+    h_norm: NDArray[np.float64]
+    h_std: NDArray[np.float64]
+    direction: NDArray[np.float64]
+    angle: NDArray[np.float64]
+    angle_std: NDArray[np.float64]
+    latched: NDArray[np.bool_]
+    latch_fallback: NDArray[np.bool_]
+    pulling: NDArray[np.bool_]
+    taring: NDArray[np.bool_]
+    bias: NDArray[np.float64]
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    @property
+    def state_names(self) -> NDArray[np.str_]:
+        """``state`` as strings, shape (N,)."""
+        return np.asarray(STATES)[self.state]
+
+    @property
+    def n_pulling(self) -> int:
+        """Samples in contact by force whose force pulls at every root (reported ``none``)."""
+        return int(np.count_nonzero(self.pulling))
+
+    def columns(self) -> dict[str, NDArray]:
+        """The SPEC §4 output columns (SI, angles in degrees), in order, then softtip's extras."""
+        w, p, n, h, d = self.wrench, self.point, self.normal, self.h, self.direction
+        return {
+            "t": self.t,
+            "state": self.state_names,
+            "fx": w[:, 0], "fy": w[:, 1], "fz": w[:, 2],
+            "mx": w[:, 3], "my": w[:, 4], "mz": w[:, 5],
+            "rx": p[:, 0], "ry": p[:, 1], "rz": p[:, 2],
+            "nx": n[:, 0], "ny": n[:, 1], "nz": n[:, 2],
+            "sigma": self.sigma,
+            "hx": h[:, 0], "hy": h[:, 1], "hz": h[:, 2],
+            "h_norm": self.h_norm,
+            "dx": d[:, 0], "dy": d[:, 1], "dz": d[:, 2],
+            "angle_deg": np.degrees(self.angle),
+            "h_std": self.h_std,
+            "angle_std_deg": np.degrees(self.angle_std),
+            "latched": self.latched,
+            "latch_fallback": self.latch_fallback,
+        }  # fmt: skip
+
+
+@dataclass(frozen=True)
+class SampleEstimate:
+    """One sample of :class:`Estimator` output; fields as in :class:`Estimates` (floats)."""
+
+    t: float
+    state: str
+    wrench: tuple[float, ...]
+    point: tuple[float, float, float]
+    normal: tuple[float, float, float]
+    sigma: float
+    h: tuple[float, float, float]
+    h_norm: float
+    h_std: float
+    direction: tuple[float, float, float]
+    angle: float
+    angle_std: float
+    latched: bool
+    latch_fallback: bool
+    pulling: bool
+    taring: bool
+
+
+# -- the measurement, shared by batch and stream ----------------------------------------------
+
+
+def _measure(fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, noise, h_sigmas, h_min, xp):
+    """Spin torque, ``h``, noise, direction and the line test for a contact point."""
+    qx, qy, qz = spin_torque_kernel(fx, fy, fz, mx, my, mz, rx, ry, rz)
+    sigma, hx, hy, hz = tangential_kernel(qx, qy, qz, nx, ny, nz)
+    hn, dx, dy, dz = direction_kernel(hx, hy, hz, nx, ny, nz, xp)
+    h_std = h_std_kernel(rx, ry, rz, nx, ny, nz, noise, xp)
+    line = hn > xp.maximum(h_sigmas * h_std, h_min)
+    angle = angle_kernel(dx, dy, dz, nx, ny, nz, xp)
+    angle_std = angle_std_kernel(dx, dy, dz, hn, rx, ry, rz, noise, xp)
+    pushing = fx * nx + fy * ny + fz * nz < 0.0
+    return sigma, hx, hy, hz, hn, h_std, dx, dy, dz, angle, angle_std, line, pushing
+
+
+def _effective_noise(config: EstimatorConfig, sos) -> SensorNoise:
+    return config.noise if sos is None else config.noise.scaled(noise_gain(sos))
+
+
+def _infer_rate(t: NDArray) -> float:
+    if len(t) < 2:
+        raise ValueError("a low-pass filter needs at least two samples to infer the sample rate")
+    return 1.0 / float(np.median(np.diff(t)))
+
+
+# -- batch ---------------------------------------------------------------------------------------
+
+
+def _validate_log(t: ArrayLike, wrench: ArrayLike) -> tuple[NDArray, NDArray]:
+    t = np.asarray(t, dtype=float)
+    w = np.asarray(wrench, dtype=float)
+    if t.ndim != 1 or w.shape != (len(t), 6):
+        raise ValueError(f"expected t of shape (N,) and wrench of shape (N, 6), got {t.shape} and {w.shape}")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(w))):
+        raise ValueError("t and wrench must be finite")
+    if np.any(np.diff(t) <= 0):
+        raise ValueError("t must be strictly increasing")
+    return t, w
+
+
+def _latch_points(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig):
+    """Contact point per sample in ``latch`` mode; returns (point (N,3), latched, fallback)."""
+    n = len(t)
+    point = np.full((n, 3), np.nan)
+    latched = np.zeros(n, dtype=bool)
+    fallback = np.zeros(n, dtype=bool)
+    valid = np.asarray(sc[7], dtype=bool)
+    r_sc = np.where(valid[:, None], np.stack(sc[:3], axis=-1), np.nan)
+    lo, hi = config.latch_window
+    edges = np.diff(np.concatenate(([False], contact, [False])).astype(np.int8))
+    starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    # one iteration per contact (a handful per log), vectorised within each
+    for s, e in zip(starts, stops):
+        fe, te, ve, re = fn[s:e], t[s:e], valid[s:e], r_sc[s:e]
+        idx = np.arange(e - s)
+        prev_peak = np.concatenate(([-np.inf], np.maximum.accumulate(fe)[:-1]))
+        t_peak = te[np.maximum.accumulate(np.where(fe > prev_peak, idx, 0))]
+        rise_over = (fe > hi) | (te - t_peak > config.stall_time)
+        end = int(np.argmax(rise_over)) if rise_over.any() else e - s
+        win = (idx < end) & (fe >= lo) & (fe <= hi) & ve
+        n_win = np.cumsum(win)
+        sum_win = np.cumsum(np.where(win[:, None], re, 0.0), axis=0)
+        fb = ve & (np.cumsum(ve) <= config.fallback_samples)
+        n_fb = np.cumsum(fb)
+        sum_fb = np.cumsum(np.where(fb[:, None], re, 0.0), axis=0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            mean_win = tip.project(sum_win / n_win[:, None])
+            mean_fb = tip.project(sum_fb / n_fb[:, None])
+        total_win = n_win[end - 1] if end > 0 else 0
+        rising = idx < end
+        pe = np.where((rising & (n_win > 0))[:, None], mean_win, re)
+        if total_win > 0:
+            pe[~rising] = mean_win[end - 1]
+            lat = rising & (n_win > 0) | ~rising
+            fbk = np.zeros(e - s, dtype=bool)
+        else:
+            after = ~rising
+            pe[after] = np.where((n_fb[after] > 0)[:, None], mean_fb[after], np.nan)
+            lat = after & (n_fb > 0)
+            fbk = lat
+        point[s:e], latched[s:e], fallback[s:e] = pe, lat, fbk
+    return point, latched, fallback
+
+
+def estimate(
+    t: ArrayLike,
+    wrench: ArrayLike,
+    tip: Fingertip | str = "murakami2006",
+    config: EstimatorConfig | None = None,
+) -> Estimates:
+    """Run the pipeline over a whole log.
+
+    Parameters
+    ----------
+    t : array-like, shape (N,)
+        Sample times, s, strictly increasing.
+    wrench : array-like, shape (N, 6)
+        Raw sensor wrench ``fx, fy, fz`` (N), ``mx, my, mz`` (N·m), sensor frame.
+    tip : Fingertip or str
+        Fingertip, preset name or TOML path.
+    config : EstimatorConfig, optional
+
+    Returns
+    -------
+    Estimates
+
+    Examples
+    --------
+    >>> from softtip import estimate, load_example
+    >>> log = load_example()
+    >>> est = estimate(log.t, log.wrench, "murakami2006")
+    >>> sorted(set(est.state_names))
+    ['line', 'none', 'point']
+    """
+    tip = load_fingertip(tip)
+    config = config or EstimatorConfig()
+    t, w = _validate_log(t, wrench)
+    n = len(t)
+
+    taring = np.zeros(n, dtype=bool)
+    if config.bias is not None:
+        bias = np.asarray(config.bias)
+    elif config.tare_duration > 0 and n:
+        # same comparison as the stream, so both agree on the boundary sample
+        n_tare = int(np.count_nonzero(t - t[0] < config.tare_duration))
+        taring[:n_tare] = True
+        # a log that never leaves the tare period has no bias (as in the stream)
+        bias = np.mean(w[:n_tare], axis=0) if n_tare < n else np.full(6, np.nan)
+    else:
+        bias = np.zeros(6)
+    x = w - bias
+
+    sos = None
+    if config.lowpass_hz is not None:
+        rate = config.sample_rate or _infer_rate(t)
+        sos = lowpass_sos(config.lowpass_hz, rate, config.lowpass_order)
+        x = sosfilt_batch(sos, x) if np.all(np.isfinite(bias)) else x
+    noise = _effective_noise(config, sos)
+
+    c = [np.ascontiguousarray(x[:, i]) for i in range(6)]
+    fn = np.sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2])
+    contact = (fn >= config.contact_threshold) & ~taring
+    with np.errstate(invalid="ignore", divide="ignore"):
+        sc = contact_kernel(tip, *c, xp=NP)
+        if config.contact_point == "track":
+            point = np.stack(sc[:3], axis=-1)
+            normal = np.stack(sc[3:6], axis=-1)
+            has = np.asarray(sc[7], dtype=bool)
+            latched = fallback = np.zeros(n, dtype=bool)
+        else:
+            point, latched, fallback = _latch_points(t, fn, contact, sc, tip, config)
+            normal = tip.normal(point)
+            has = np.all(np.isfinite(point), axis=-1)
+        sigma, hx, hy, hz, hn, h_std, dx, dy, dz, angle, angle_std, line, pushing = _measure(
+            *c, *point.T, *normal.T, noise, config.h_sigmas, config.h_min, NP
+        )
+
+    located = contact & has & pushing
+    pulling = contact & ~located
+    is_line = located & line
+    state = np.where(located, np.where(is_line, LINE, POINT), NONE).astype(np.int8)
+
+    def keep(a, mask):
+        a = np.asarray(a, dtype=float)
+        return np.where(mask.reshape(mask.shape + (1,) * (a.ndim - 1)), a, np.nan)
+
+    return Estimates(
+        t=t,
+        state=state,
+        wrench=x,
+        point=keep(point, located),
+        normal=keep(normal, located),
+        sigma=keep(sigma, located),
+        h=keep(np.stack((hx, hy, hz), axis=-1), located),
+        h_norm=keep(hn, located),
+        h_std=keep(h_std, located),
+        direction=keep(np.stack((dx, dy, dz), axis=-1), is_line),
+        angle=keep(angle, is_line),
+        angle_std=keep(angle_std, is_line),
+        latched=latched & located,
+        latch_fallback=fallback & located,
+        pulling=pulling,
+        taring=taring,
+        bias=bias,
+    )
+
+
+# -- stream --------------------------------------------------------------------------------------
+
+_NAN3 = (math.nan, math.nan, math.nan)
+
+
+class Estimator:
+    """The pipeline of :func:`estimate`, one sample at a time (live use).
+
+    Parameters
+    ----------
+    tip : Fingertip or str
+        Fingertip, preset name or TOML path.
+    config : EstimatorConfig, optional
+        With ``lowpass_hz`` set, ``config.sample_rate`` is required.
+
+    Examples
+    --------
+    >>> from softtip import Estimator, load_example
+    >>> log = load_example()
+    >>> est = Estimator("murakami2006")
+    >>> out = [est.update(t, w) for t, w in zip(log.t, log.wrench)]
+    >>> out[-1].state
+    'line'
+    """
+
+    def __init__(self, tip: Fingertip | str = "murakami2006", config: EstimatorConfig | None = None):
+        self.tip = load_fingertip(tip)
+        self.config = config or EstimatorConfig()
+        cfg = self.config
+        self._sos = None
+        if cfg.lowpass_hz is not None:
+            if cfg.sample_rate is None:
+                raise ValueError("streaming with a low-pass filter needs config.sample_rate (Hz)")
+            self._sos = lowpass_sos(cfg.lowpass_hz, cfg.sample_rate, cfg.lowpass_order)
+        self._noise = _effective_noise(cfg, self._sos)
+        self._track = cfg.contact_point == "track"
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget everything: bias (unless given), filter state and contact."""
+        cfg = self.config
+        self.bias: tuple[float, ...] | None = cfg.bias
+        if self.bias is None and cfg.tare_duration <= 0:
+            self.bias = (0.0,) * 6
+        self._tare_buf: list[tuple[float, ...]] = []
+        self._t0: float | None = None
+        self._filter = SosStream(self._sos) if self._sos is not None else None
+        self._in_contact = False
+        self._t_prev: float | None = None
+
+    def _start_contact(self, fn: float, t: float) -> None:
+        self._in_contact = True
+        self._rising = True
+        self._peak = fn
+        self._t_peak = t
+        self._n_win = 0
+        self._sum_win = [0.0, 0.0, 0.0]
+        self._n_fb = 0
+        self._sum_fb = [0.0, 0.0, 0.0]
+        self._latch: tuple[float, float, float] | None = None
+        self._latch_is_fallback = False
+
+    def update(self, t: float, wrench: ArrayLike) -> SampleEstimate:
+        """Process one raw sample.
+
+        Parameters
+        ----------
+        t : float
+            s; must increase from call to call.
+        wrench : array-like, shape (6,)
+            Raw ``fx, fy, fz`` (N), ``mx, my, mz`` (N·m).
+        """
+        t = float(t)
+        w = [float(v) for v in (wrench.tolist() if isinstance(wrench, np.ndarray) else wrench)]
+        if len(w) != 6 or not all(math.isfinite(v) for v in w) or not math.isfinite(t):
+            raise ValueError(f"expected a finite time and 6 finite wrench components, got t={t!r}, wrench={wrench!r}")
+        if self._t_prev is not None and t <= self._t_prev:
+            raise ValueError(f"time must increase: {t!r} s after {self._t_prev!r} s")
+        self._t_prev = t
+
+        if self.bias is None:
+            if self._t0 is None:
+                self._t0 = t
+            if t - self._t0 < self.config.tare_duration:
+                self._tare_buf.append(tuple(w))
+                return self._none(t, w, taring=True)
+            self.bias = tuple(np.mean(np.array(self._tare_buf), axis=0).tolist())
+            if self._filter is not None:  # the tare samples prime the filter, as in the batch
+                for b in self._tare_buf:
+                    self._filter([v - bb for v, bb in zip(b, self.bias)])
+            self._tare_buf = []
+        x = [v - b for v, b in zip(w, self.bias)]
+        if self._filter is not None:
+            x = self._filter(x)
+        return self._step(t, x)
+
+    def _none(self, t, x, taring=False, pulling=False) -> SampleEstimate:
+        nan = math.nan
+        return SampleEstimate(
+            t, "none", tuple(x), _NAN3, _NAN3, nan, _NAN3, nan, nan, _NAN3, nan, nan, False, False, pulling, taring
+        )
+
+    def _step(self, t: float, x: list[float]) -> SampleEstimate:
+        cfg = self.config
+        fx, fy, fz, mx, my, mz = x
+        fn = math.sqrt(fx * fx + fy * fy + fz * fz)
+        if fn < cfg.contact_threshold:
+            self._in_contact = False
+            return self._none(t, x)
+
+        tip = self.tip
+        latched = fallback = False
+        if self._track:
+            rx, ry, rz, nx, ny, nz, _, valid = contact_kernel(tip, *x, xp=PY)
+            if not valid:
+                return self._none(t, x, pulling=True)
+        else:
+            if not self._in_contact:
+                self._start_contact(fn, t)
+            elif self._rising and fn > self._peak:
+                self._peak, self._t_peak = fn, t
+            point = self._latch
+            if point is None:
+                sc = contact_kernel(tip, *x, xp=PY)
+                valid = sc[7]
+                if valid and self._n_fb < cfg.fallback_samples:
+                    self._n_fb += 1
+                    self._sum_fb = [s + v for s, v in zip(self._sum_fb, sc[:3])]
+                lo, hi = cfg.latch_window
+                if self._rising and (fn > hi or t - self._t_peak > cfg.stall_time):
+                    self._rising = False
+                    if self._n_win > 0:
+                        self._latch = point = self._mean(self._sum_win, self._n_win)
+                if self._rising:
+                    if valid and lo <= fn <= hi:
+                        self._n_win += 1
+                        self._sum_win = [s + v for s, v in zip(self._sum_win, sc[:3])]
+                    if self._n_win > 0:
+                        point = self._mean(self._sum_win, self._n_win)
+                    elif valid:
+                        point = (sc[0], sc[1], sc[2])
+                elif point is None and self._n_fb > 0:
+                    point = self._mean(self._sum_fb, self._n_fb)
+                    fallback = True
+                    if self._n_fb >= cfg.fallback_samples:
+                        self._latch, self._latch_is_fallback = point, True
+                latched = point is not None and (self._n_win > 0 or fallback)
+            else:
+                latched, fallback = True, self._latch_is_fallback
+            if point is None:
+                return self._none(t, x, pulling=True)
+            rx, ry, rz = point
+            nx, ny, nz = tip._normal_kernel(rx, ry, rz, PY)
+
+        sigma, hx, hy, hz, hn, h_std, dx, dy, dz, angle, angle_std, line, pushing = _measure(
+            fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, self._noise, cfg.h_sigmas, cfg.h_min, PY
+        )
+        if not pushing:
+            return self._none(t, x, pulling=True)
+        if line:
+            state, d = "line", (dx, dy, dz)
+        else:
+            state, d, angle, angle_std = "point", _NAN3, math.nan, math.nan
+        return SampleEstimate(
+            t, state, tuple(x), (rx, ry, rz), (nx, ny, nz), sigma, (hx, hy, hz), hn, h_std, d, angle, angle_std,
+            latched, fallback, False, False,
+        )  # fmt: skip
+
+    def _mean(self, total: list[float], count: int) -> tuple[float, float, float]:
+        return self.tip._project_kernel(total[0] / count, total[1] / count, total[2] / count, PY)
+
+    def process(self, t: ArrayLike, wrench: ArrayLike) -> list[SampleEstimate]:
+        """Feed a sequence of samples through :meth:`update`; returns one estimate each."""
+        return [self.update(ti, wi) for ti, wi in zip(np.asarray(t, dtype=float), np.asarray(wrench, dtype=float))]
+
+
+def with_config(config: EstimatorConfig | None, **changes) -> EstimatorConfig:
+    """A copy of ``config`` (or the defaults) with ``changes`` applied."""
+    return replace(config or EstimatorConfig(), **changes)
