@@ -1,3 +1,66 @@
-"""softtip: intrinsic tactile sensing with a soft fingertip on a six-axis F/T sensor."""
+"""softtip: intrinsic tactile sensing with a soft fingertip on a six-axis F/T sensor.
+
+From the six numbers of a force/torque sensor under a soft-skinned fingertip: where the
+fingertip is touched, the contact normal, the spin torque, whether the contact is a point
+or a strip (line), and the direction of the edge, stick, thin plate, thin cylinder or fringe
+being touched (Murakami & Hasegawa 2004, 2006; Bicchi 1990). SI units, sensor frame.
+"""
+
+from softtip.axial import axial_difference, axial_mean, axial_median
+from softtip.contact import Contact, contact_from_wrench
+from softtip.errors import InputError
+from softtip.examples import EXAMPLE_PATH, load_example
+from softtip.fingertip import (
+    PRESETS,
+    Capsule,
+    Ellipsoid,
+    Fingertip,
+    ImplicitSurface,
+    Sphere,
+    load_fingertip,
+    murakami2006,
+)
+from softtip.noise import NANO17, SensorNoise, direction_angle_std, tangential_spin_torque_std
+from softtip.pipeline import STATES, Estimates, Estimator, EstimatorConfig, SampleEstimate, estimate
+from softtip.spin import direction_angle, edge_direction, spin_torque, tangent_frame, tangential_spin_torque
+from softtip.units import KGF, KGF_MM, wrench_from_si, wrench_to_si
 
 __version__ = "0.1.0"
+
+__all__ = [
+    "Capsule",
+    "Contact",
+    "EXAMPLE_PATH",
+    "Ellipsoid",
+    "Estimates",
+    "Estimator",
+    "EstimatorConfig",
+    "Fingertip",
+    "ImplicitSurface",
+    "InputError",
+    "KGF",
+    "KGF_MM",
+    "NANO17",
+    "PRESETS",
+    "STATES",
+    "SampleEstimate",
+    "SensorNoise",
+    "Sphere",
+    "axial_difference",
+    "axial_mean",
+    "axial_median",
+    "contact_from_wrench",
+    "direction_angle",
+    "direction_angle_std",
+    "edge_direction",
+    "estimate",
+    "load_example",
+    "load_fingertip",
+    "murakami2006",
+    "spin_torque",
+    "tangent_frame",
+    "tangential_spin_torque",
+    "tangential_spin_torque_std",
+    "wrench_from_si",
+    "wrench_to_si",
+]

@@ -93,7 +93,9 @@ def _capsule_kernel(fx, fy, fz, mx, my, mz, radius, length, xp):
     cz = xp.div(ax * sphi - cphi * ay, det)
     csig = xp.div(-fy * ay - fx * ax, det)
     cyl_solved = xp.logical_and(det > 0.0, xp.isfinite(cz + csig))
-    on_side = xp.logical_and(cyl_solved, xp.logical_and(cz >= 0.0, cz <= length))
+    # a rounding-size margin keeps contacts exactly on the base rim (z = 0)
+    tol = 1e-12 * (radius + length)
+    on_side = xp.logical_and(cyl_solved, xp.logical_and(cz >= -tol, cz <= length))
     # Near the seam, noise can put the sphere root just below the equator and the cylinder
     # root just above it; the surface is C¹ there, so keep the sphere root.
     seam = xp.logical_and(xp.logical_and(sval, xp.logical_not(on_cap)), xp.logical_and(cyl_solved, cz > length))
@@ -327,7 +329,7 @@ def contact_from_wrench(wrench: ArrayLike, tip: Fingertip | str) -> Contact:
     if isinstance(tip, ImplicitSurface):
         return _implicit_contact(w, tip)
     # contiguous per-axis arrays: component arithmetic on them is several times faster
-    comps = [np.ascontiguousarray(w[..., i]) for i in range(6)]
+    comps = [w[..., i].copy() for i in range(6)]
     with np.errstate(invalid="ignore", divide="ignore"):
         rx, ry, rz, nx, ny, nz, sigma, valid = contact_kernel(tip, *comps, xp=NP)
     valid = np.asarray(valid, dtype=bool)

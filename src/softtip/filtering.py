@@ -15,9 +15,15 @@ import math
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import signal
 
 __all__ = ["lowpass_sos", "noise_gain", "sosfilt_batch", "SosStream"]
+
+
+def _signal():
+    # scipy.signal takes ~1.5 s to import; only pay for it when a filter is used
+    from scipy import signal
+
+    return signal
 
 
 def lowpass_sos(cutoff_hz: float, sample_rate: float, order: int = 2) -> NDArray[np.float64]:
@@ -41,7 +47,7 @@ def lowpass_sos(cutoff_hz: float, sample_rate: float, order: int = 2) -> NDArray
         )
     if int(order) < 1:
         raise ValueError(f"filter order must be at least 1, got {order!r}")
-    return signal.butter(int(order), cutoff_hz, btype="low", fs=sample_rate, output="sos")
+    return _signal().butter(int(order), cutoff_hz, btype="low", fs=sample_rate, output="sos")
 
 
 def noise_gain(sos: NDArray[np.float64]) -> float:
@@ -52,13 +58,14 @@ def noise_gain(sos: NDArray[np.float64]) -> float:
     n = 1 << 16
     impulse = np.zeros(n)
     impulse[0] = 1.0
-    return float(np.sqrt(np.sum(signal.sosfilt(sos, impulse) ** 2)))
+    return float(np.sqrt(np.sum(_signal().sosfilt(sos, impulse) ** 2)))
 
 
 def sosfilt_batch(sos: NDArray[np.float64], x: NDArray[np.float64]) -> NDArray[np.float64]:
     """Filter ``x`` (shape ``(N, C)``) along axis 0, starting in steady state for ``x[0]``."""
     if len(x) == 0:
         return x.copy()
+    signal = _signal()
     zi = signal.sosfilt_zi(sos)[:, :, None] * x[0][None, None, :]
     y, _ = signal.sosfilt(sos, x, axis=0, zi=zi)
     return y
@@ -71,7 +78,7 @@ class SosStream:
 
     def __init__(self, sos: NDArray[np.float64]):
         self._coef = [tuple(float(v) for v in row) for row in np.asarray(sos)]
-        self._zi0 = [tuple(float(v) for v in row) for row in signal.sosfilt_zi(sos)]
+        self._zi0 = [tuple(float(v) for v in row) for row in _signal().sosfilt_zi(sos)]
         self._state: list[list[list[float]]] | None = None
 
     def reset(self) -> None:

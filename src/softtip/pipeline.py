@@ -129,7 +129,8 @@ class Estimates:
     ----------
     t : (N,) s
     state : (N,) int8 codes into :data:`STATES` (``none``, ``point``, ``line``)
-    wrench : (N, 6) the tared (and filtered) wrench the estimates come from, N and N·m
+    wrench : (N, 6) the tared (and filtered) wrench the estimates come from, N and N·m;
+        NaN while taring
     point, normal : (N, 3) contact point (m) and outward normal; NaN when ``none``
     sigma : (N,) spin torque about the normal, N·m
     h : (N, 3) tangential spin torque, N·m; ``h_norm`` its magnitude
@@ -389,7 +390,8 @@ def estimate(
     return Estimates(
         t=t,
         state=state,
-        wrench=x,
+        # the bias is not known while taring, so neither is the tared wrench (as in the stream)
+        wrench=keep(x, ~taring),
         point=keep(point, located),
         normal=keep(normal, located),
         sigma=keep(sigma, located),
@@ -492,7 +494,7 @@ class Estimator:
                 self._t0 = t
             if t - self._t0 < self.config.tare_duration:
                 self._tare_buf.append(tuple(w))
-                return self._none(t, w, taring=True)
+                return self._none(t, (math.nan,) * 6, taring=True)
             self.bias = tuple(np.mean(np.array(self._tare_buf), axis=0).tolist())
             if self._filter is not None:  # the tare samples prime the filter, as in the batch
                 for b in self._tare_buf:

@@ -1,0 +1,217 @@
+"""The installed ``softtip`` command, run as a user would."""
+
+import csv
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from softtip import EXAMPLE_PATH, estimate, load_example
+from softtip.io import read_log, write_table
+from softtip.units import KGF, KGF_MM
+
+SOFTTIP = str(Path(sys.executable).with_name("softtip"))
+SPEC_COLUMNS = (
+    "t state fx fy fz mx my mz rx ry rz nx ny nz sigma hx hy hz h_norm dx dy dz angle_deg".split()
+)
+
+
+def run(*args, stdin=None, cwd=None):
+    return subprocess.run(
+        [SOFTTIP, *map(str, args)], capture_output=True, text=True, input=stdin, cwd=cwd, timeout=120
+    )
+
+
+def read_csv(path):
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def test_help_explains_units_and_frames():
+    for args in ([], ["estimate"]):
+        out = run(*args, "--help")
+        assert out.returncode == 0
+        assert "sensor frame" in out.stdout and "N·m" in out.stdout
+
+
+def test_example_writes_csv_and_plot(tmp_path):
+    out = run("estimate", "--example", "-o", tmp_path / "est.csv", "--plot", tmp_path / "est.png")
+    assert out.returncode == 0, out.stderr
+    rows = read_csv(tmp_path / "est.csv")
+    assert list(rows[0])[: len(SPEC_COLUMNS)] == SPEC_COLUMNS
+    assert {r["state"] for r in rows} == {"none", "point", "line"}
+    angles = [float(r["angle_deg"]) for r in rows if r["state"] == "line"]
+    assert abs(np.median(angles) - 45.0) < 3.0
+    # nothing measured where there is no contact or no line
+    none = [r for r in rows if r["state"] == "none"]
+    assert all(r["rx"] == "nan" and r["angle_deg"] == "nan" for r in none)
+    assert all(r["angle_deg"] == "nan" for r in rows if r["state"] == "point")
+    assert (tmp_path / "est.png").stat().st_size > 10_000
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["est.csv", "est.png"]
+
+
+def test_stdout_matches_library(tmp_path):
+    out = run("estimate", EXAMPLE_PATH)
+    assert out.returncode == 0, out.stderr
+    rows = list(csv.DictReader(out.stdout.splitlines()))
+    log = load_example()
+    est = estimate(log.t, log.wrench, "murakami2006")
+    assert [r["state"] for r in rows] == list(est.state_names)
+    np.testing.assert_allclose([float(r["rz"]) for r in rows], est.point[:, 2], rtol=1e-9, equal_nan=True)
+
+
+def test_kgf_mm_input_gives_the_si_result(tmp_path):
+    log = load_example()
+    cols = {"t": log.t}
+    for i, name in enumerate(("fx", "fy", "fz", "mx", "my", "mz")):
+        cols[name] = log.wrench[:, i] / (KGF if i < 3 else KGF_MM)
+    write_table(cols, tmp_path / "kgf.csv", float_format="%.17g")
+    si = run("estimate", EXAMPLE_PATH, "-o", tmp_path / "si.csv")
+    kg = run("estimate", tmp_path / "kgf.csv", "--units", "kgf-mm", "-o", tmp_path / "kg.csv")
+    assert si.returncode == 0 and kg.returncode == 0, kg.stderr
+    a, b = read_csv(tmp_path / "si.csv"), read_csv(tmp_path / "kg.csv")
+    assert [r["state"] for r in a] == [r["state"] for r in b]
+    for key in ("rx", "ry", "rz", "h_norm", "angle_deg"):
+        np.testing.assert_allclose(
+            [float(r[key]) for r in a], [float(r[key]) for r in b], rtol=1e-8, atol=1e-12, equal_nan=True
+        )
+
+
+def test_output_units_kgf_mm(tmp_path):
+    si = run("estimate", "--example", "-o", tmp_path / "si.csv")
+    kg = run("estimate", "--example", "--output-units", "kgf-mm", "-o", tmp_path / "kg.csv")
+    assert si.returncode == kg.returncode == 0
+    a, b = read_csv(tmp_path / "si.csv")[-1], read_csv(tmp_path / "kg.csv")[-1]
+    assert float(b["fz"]) == pytest.approx(float(a["fz"]) / KGF, rel=1e-8)
+    assert float(b["h_norm"]) == pytest.approx(float(a["h_norm"]) / KGF_MM, rel=1e-8)
+    assert float(b["rz"]) == pytest.approx(float(a["rz"]))
+
+
+def test_extra_columns_are_kept(tmp_path):
+    src = tmp_path / "in.csv"
+    lines = EXAMPLE_PATH.read_text().splitlines()
+    src.write_text("\n".join([lines[0] + ",trial"] + [ln + ",a b" for ln in lines[1:]]) + "\n")
+    out = run("estimate", src, "-o", tmp_path / "out.csv")
+    assert out.returncode == 0, out.stderr
+    assert {r["trial"] for r in read_csv(tmp_path / "out.csv")} == {"a b"}
+
+
+def test_tip_from_toml_and_track_mode(tmp_path):
+    toml = tmp_path / "tip.toml"
+    toml.write_text('[fingertip]\nshape = "capsule"\nradius = 0.016\nlength = 0.020\n')
+    out = run("estimate", "--example", "--tip", toml, "--contact-point", "track", "-o", tmp_path / "o.csv")
+    assert out.returncode == 0, out.stderr
+    assert {r["state"] for r in read_csv(tmp_path / "o.csv")} == {"none", "point"}
+
+
+def test_lowpass_option(tmp_path):
+    out = run("estimate", "--example", "--lowpass", "5", "-o", tmp_path / "o.csv")
+    assert out.returncode == 0, out.stderr
+    bad = run("estimate", "--example", "--lowpass", "40", "-o", tmp_path / "p.csv")
+    assert bad.returncode == 2 and "Nyquist" in bad.stderr
+    assert not (tmp_path / "p.csv").exists()
+
+
+def good_lines():
+    return EXAMPLE_PATH.read_text().splitlines()
+
+
+def bad_inputs():
+    lines = good_lines()
+    header, rows = lines[0], lines[1:]
+    yield "missing-column", "t,fx,fy,fz,mx,my\n" + "\n".join(",".join(r.split(",")[:6]) for r in rows), ["mz"]
+    yield "misspelled-column", header.replace("fy", "Fy") + "\n" + "\n".join(rows), ["fy", "Fy"]
+    yield "non-numeric", "\n".join([header] + rows[:5] + ["0.1,abc,0,0,0,0,0"] + rows[6:]), [":7:", "fx", "abc"]
+    yield "nan", "\n".join([header] + rows[:3] + [rows[3].replace(rows[3].split(",")[3], "nan", 1)] + rows[4:]), [":5:", "fz"]
+    yield "inf", "\n".join([header] + rows[:3] + ["0.07,inf,0,0,0,0,0"] + rows[4:]), [":5:", "fx"]
+    yield "time-not-increasing", "\n".join([header] + rows[:10] + [rows[8]] + rows[11:]), [":12:", "t"]
+    yield "empty", "", ["empty"]
+    yield "header-only", header + "\n", ["no data"]
+
+
+@pytest.mark.parametrize("name,text,needles", list(bad_inputs()), ids=[b[0] for b in bad_inputs()])
+def test_bad_input_exits_2_with_a_clear_message_and_no_output(tmp_path, name, text, needles):
+    src = tmp_path / "bad.csv"
+    src.write_text(text)
+    dest = tmp_path / "out.csv"
+    out = run("estimate", src, "-o", dest, "--plot", tmp_path / "out.png")
+    assert out.returncode == 2
+    assert "bad.csv" in out.stderr
+    for needle in needles:
+        assert needle.lower() in out.stderr.lower(), out.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.csv"]
+
+
+def test_failure_leaves_an_existing_output_untouched(tmp_path):
+    src = tmp_path / "bad.csv"
+    src.write_text("t,fx\n0,1\n")
+    dest = tmp_path / "out.csv"
+    dest.write_text("precious\n")
+    assert run("estimate", src, "-o", dest).returncode == 2
+    assert dest.read_text() == "precious\n"
+
+
+@pytest.mark.parametrize(
+    "args,needles",
+    [
+        (["--units", "furlongs"], ["furlongs", "si", "kgf-mm"]),
+        (["--tip", "nonexistent_preset"], ["nonexistent_preset", "murakami2006"]),
+        (["--tip", "missing.toml"], ["missing.toml", "not found"]),
+        (["--contact-point", "joint"], ["joint", "latch", "track"]),
+    ],
+)
+def test_bad_options_exit_2(tmp_path, args, needles):
+    out = run("estimate", "--example", "-o", tmp_path / "o.csv", *args)
+    assert out.returncode == 2
+    for needle in needles:
+        assert needle in out.stderr
+    assert not (tmp_path / "o.csv").exists()
+
+
+@pytest.mark.parametrize(
+    "text,needles",
+    [
+        ("[fingertip\nshape=", ["malformed TOML"]),
+        ('[fingertip]\nshape = "cube"\nradius = 0.01\n', ["cube", "sphere", "capsule"]),
+        ('[fingertip]\nshape = "capsule"\nradius = 0.016\n', ["missing", "length"]),
+        ('[fingertip]\nshape = "sphere"\nradius = -1\n', ["radius", "positive"]),
+        ('[fingertip]\nshape = "sphere"\nradius = 0.01\nradios = 2\n', ["radios"]),
+        ('[fingertip]\nshape = "sphere"\nradius = "big"\n', ["radius", "number"]),
+    ],
+)
+def test_malformed_fingertip_file(tmp_path, text, needles):
+    toml = tmp_path / "tip.toml"
+    toml.write_text(text)
+    out = run("estimate", "--example", "--tip", toml, "-o", tmp_path / "o.csv")
+    assert out.returncode == 2
+    assert "tip.toml" in out.stderr
+    for needle in needles:
+        assert needle in out.stderr, out.stderr
+    assert not (tmp_path / "o.csv").exists()
+
+
+def test_input_and_example_are_exclusive(tmp_path):
+    assert run("estimate").returncode == 2
+    assert run("estimate", EXAMPLE_PATH, "--example").returncode == 2
+
+
+def test_pulling_samples_are_none_with_a_warning(tmp_path):
+    log = read_log(EXAMPLE_PATH)
+    w = log.wrench.copy()
+    w[300:320, 2] = -w[300:320, 2] + 2 * w[0, 2]  # pull on the tip instead of pushing
+    cols = {"t": log.t, **{n: w[:, i] for i, n in enumerate(("fx", "fy", "fz", "mx", "my", "mz"))}}
+    write_table(cols, tmp_path / "pull.csv", float_format="%.17g")
+    out = run("estimate", tmp_path / "pull.csv", "-o", tmp_path / "o.csv")
+    assert out.returncode == 0, out.stderr
+    assert "warning" in out.stderr and "20 sample" in out.stderr
+    states = [r["state"] for r in read_csv(tmp_path / "o.csv")]
+    assert set(states[300:320]) == {"none"}
+
+
+def test_stdin_input():
+    out = run("estimate", "-", stdin=EXAMPLE_PATH.read_text())
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.count("\n") == 501
