@@ -328,12 +328,35 @@ def contact_from_wrench(wrench: ArrayLike, tip: Fingertip | str) -> Contact:
         raise ValueError(f"wrench must have shape (..., 6), got {w.shape}")
     if isinstance(tip, ImplicitSurface):
         return _implicit_contact(w, tip)
-    # contiguous per-axis arrays: component arithmetic on them is several times faster
-    comps = [w[..., i].copy() for i in range(6)]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        rx, ry, rz, nx, ny, nz, sigma, valid = contact_kernel(tip, *comps, xp=NP)
-    valid = np.asarray(valid, dtype=bool)
-    point = np.where(valid[..., None], np.stack((rx, ry, rz), axis=-1), np.nan)
-    normal = np.where(valid[..., None], np.stack((nx, ny, nz), axis=-1), np.nan)
-    sigma = np.where(valid, sigma, np.nan)
-    return Contact(point, normal, sigma, valid)
+    shape = w.shape[:-1]
+    rx, ry, rz, nx, ny, nz, sigma, valid = contact_arrays(tip, *np.moveaxis(w.reshape(-1, 6), -1, 0))
+    point = np.stack((rx, ry, rz), axis=-1)
+    normal = np.stack((nx, ny, nz), axis=-1)
+    invalid = ~valid
+    if invalid.any():
+        point[invalid] = np.nan
+        normal[invalid] = np.nan
+        sigma[invalid] = np.nan
+    return Contact(point.reshape(*shape, 3), normal.reshape(*shape, 3), sigma.reshape(shape), valid.reshape(shape))
+
+
+#: Samples per block in batch kernels: the temporaries of a block stay in cache, which
+#: doubles the throughput over whole-array evaluation.
+CHUNK = 16384
+
+
+def contact_arrays(tip: Fingertip, fx, fy, fz, mx, my, mz) -> tuple[NDArray, ...]:
+    """:func:`contact_kernel` over 1-D component arrays of any length, in cache-sized blocks.
+
+    Returns the 8 arrays ``(rx, ry, rz, nx, ny, nz, sigma, valid)``; invalid samples are not
+    masked.
+    """
+    comps = [np.ascontiguousarray(c, dtype=float) for c in (fx, fy, fz, mx, my, mz)]
+    n = len(comps[0])
+    out = [np.empty(n) for _ in range(7)] + [np.empty(n, dtype=bool)]
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        for start in range(0, n, CHUNK):
+            block = slice(start, start + CHUNK)
+            for dst, src in zip(out, contact_kernel(tip, *(c[block] for c in comps), xp=NP)):
+                dst[block] = src
+    return tuple(out)

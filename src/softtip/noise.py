@@ -83,9 +83,8 @@ def _quad_kernel(vx, vy, vz, rx, ry, rz, noise: SensorNoise):
     )
 
 
-def h_std_kernel(rx, ry, rz, nx, ny, nz, noise: SensorNoise, xp):
-    """``sqrt(trace Σ_h)`` component-wise."""
-    e1x, e1y, e1z, e2x, e2y, e2z = tangent_frame_kernel(nx, ny, nz, xp)
+def h_std_kernel(rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, noise: SensorNoise, xp):
+    """``sqrt(trace Σ_h)`` component-wise, from any orthonormal tangent frame ``(e1, e2)``."""
     return xp.sqrt(_quad_kernel(e1x, e1y, e1z, rx, ry, rz, noise) + _quad_kernel(e2x, e2y, e2z, rx, ry, rz, noise))
 
 
@@ -112,7 +111,8 @@ def tangential_spin_torque_std(point: ArrayLike, normal: ArrayLike, noise: Senso
         Unit normal.
     noise : SensorNoise
     """
-    return np.asarray(h_std_kernel(*_split3(point, "point"), *_split3(normal, "normal"), noise, NP))
+    frame = tangent_frame_kernel(*_split3(normal, "normal"), NP)
+    return np.asarray(h_std_kernel(*_split3(point, "point"), *frame, noise, NP))
 
 
 def direction_angle_std(

@@ -30,17 +30,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from typing import Literal
+from typing import Literal, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from softtip._xp import NP, PY
-from softtip.contact import contact_kernel
+from softtip.contact import contact_arrays, contact_kernel
 from softtip.filtering import SosStream, lowpass_sos, noise_gain, sosfilt_batch
 from softtip.fingertip import Fingertip, load_fingertip
 from softtip.noise import NANO17, SensorNoise, angle_std_kernel, h_std_kernel
-from softtip.spin import angle_kernel, direction_kernel, spin_torque_kernel, tangential_kernel
+from softtip.spin import angle_kernel, direction_kernel, spin_torque_kernel, tangent_frame_kernel, tangential_kernel
 from softtip.units import KGF
 
 __all__ = ["STATES", "EstimatorConfig", "Estimates", "SampleEstimate", "Estimator", "estimate"]
@@ -198,9 +198,11 @@ class Estimates:
         }  # fmt: skip
 
 
-@dataclass(frozen=True)
-class SampleEstimate:
-    """One sample of :class:`Estimator` output; fields as in :class:`Estimates` (floats)."""
+class SampleEstimate(NamedTuple):
+    """One sample of :class:`Estimator` output; fields as in :class:`Estimates` (floats).
+
+    A named tuple: cheap to create at sensor rate, immutable.
+    """
 
     t: float
     state: str
@@ -228,9 +230,10 @@ def _measure(fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, noise, h_sigmas, h_
     qx, qy, qz = spin_torque_kernel(fx, fy, fz, mx, my, mz, rx, ry, rz)
     sigma, hx, hy, hz = tangential_kernel(qx, qy, qz, nx, ny, nz)
     hn, dx, dy, dz = direction_kernel(hx, hy, hz, nx, ny, nz, xp)
-    h_std = h_std_kernel(rx, ry, rz, nx, ny, nz, noise, xp)
+    frame = tangent_frame_kernel(nx, ny, nz, xp)
+    h_std = h_std_kernel(rx, ry, rz, *frame, noise, xp)
     line = hn > xp.maximum(h_sigmas * h_std, h_min)
-    angle = angle_kernel(dx, dy, dz, nx, ny, nz, xp)
+    angle = angle_kernel(dx, dy, dz, *frame, xp)
     angle_std = angle_std_kernel(dx, dy, dz, hn, rx, ry, rz, noise, xp)
     pushing = fx * nx + fy * ny + fz * nz < 0.0
     return sigma, hx, hy, hz, hn, h_std, dx, dy, dz, angle, angle_std, line, pushing
@@ -364,7 +367,7 @@ def estimate(
     fn = np.sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2])
     contact = (fn >= config.contact_threshold) & ~taring
     with np.errstate(invalid="ignore", divide="ignore"):
-        sc = contact_kernel(tip, *c, xp=NP)
+        sc = contact_arrays(tip, *c)
         if config.contact_point == "track":
             point = np.stack(sc[:3], axis=-1)
             normal = np.stack(sc[3:6], axis=-1)

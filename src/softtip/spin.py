@@ -79,9 +79,8 @@ def tangent_frame_kernel(nx, ny, nz, xp):
     return e1x, e1y, e1z, e2x, e2y, e2z
 
 
-def angle_kernel(dx, dy, dz, nx, ny, nz, xp):
-    """Axial angle of ``d`` in the tangent frame at ``n``, radians in ``(−π/2, π/2]``."""
-    e1x, e1y, e1z, e2x, e2y, e2z = tangent_frame_kernel(nx, ny, nz, xp)
+def angle_kernel(dx, dy, dz, e1x, e1y, e1z, e2x, e2y, e2z, xp):
+    """Axial angle of ``d`` in the tangent frame ``(e1, e2)``, radians in ``(−π/2, π/2]``."""
     a = xp.atan2(dx * e2x + dy * e2y + dz * e2z, dx * e1x + dy * e1y + dz * e1z)
     # d and −d are the same axis
     return a - math.pi * (a > _HALF_PI) + math.pi * (a <= -_HALF_PI)
@@ -181,5 +180,6 @@ def direction_angle(direction: ArrayLike, normal: ArrayLike, *, unit: str = "rad
     """
     if unit not in ("rad", "deg"):
         raise ValueError(f"unit must be 'rad' or 'deg', got {unit!r}")
-    a = angle_kernel(*_comp(direction, "direction"), *_comp(normal, "normal"), NP)
+    frame = tangent_frame_kernel(*_comp(normal, "normal"), NP)
+    a = angle_kernel(*_comp(direction, "direction"), *frame, NP)
     return np.degrees(a) if unit == "deg" else np.asarray(a)

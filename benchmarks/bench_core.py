@@ -1,0 +1,105 @@
+"""Throughput of the contact solvers and latency of the streaming pipeline.
+
+    python benchmarks/bench_core.py [--samples 1000000]
+
+Prints batch samples/s for each fingertip shape (one core: numpy runs these kernels on one
+thread) and the median and 99th-percentile time of one sample through the streaming
+estimator. SPEC §6 targets: capsule batch >= 5 M samples/s; streaming median <= 20 us.
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import time
+
+import numpy as np
+
+from softtip import Capsule, Ellipsoid, EstimatorConfig, Estimator, ImplicitSurface, Sphere, contact_from_wrench, estimate
+from softtip.synthetic import synthetic_grasp
+
+
+def pushing_wrenches(tip, n, rng):
+    centre, radius = tip.bounding_sphere
+    u = rng.normal(size=(n, 3))
+    u[:, 2] = np.abs(u[:, 2])
+    r = tip.project(centre + 3 * radius * u / np.linalg.norm(u, axis=1, keepdims=True))
+    nrm = tip.normal(r)
+    f = -rng.uniform(0.1, 10.0, (n, 1)) * nrm + rng.normal(scale=0.3, size=(n, 3))
+    f = np.where(np.sum(f * nrm, axis=1, keepdims=True) < 0, f, -nrm)
+    m = np.cross(r, f) + rng.uniform(-3e-3, 3e-3, (n, 1)) * nrm
+    return np.ascontiguousarray(np.concatenate((f, m), axis=1))
+
+
+def best_of(fn, repeats):
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return min(times)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--samples", type=int, default=1_000_000)
+    ap.add_argument("--stream-samples", type=int, default=20_000)
+    args = ap.parse_args()
+    rng = np.random.default_rng(6)
+    n = args.samples
+    print(f"softtip core benchmark | python {platform.python_version()} | numpy {np.__version__} | {platform.machine()}")
+    print(f"batch contact location, {n:,} samples (best of 3; general solver: 1 run)")
+
+    capsule = Capsule(0.016, 0.020)
+    ellipsoid = Ellipsoid((0.014, 0.016, 0.022), center=(0.0, 0.0, 0.01))
+    c = np.array(ellipsoid.center)
+    a = np.array(ellipsoid.semi_axes)
+    implicit = ImplicitSurface(
+        function=lambda p: np.sum(((p - c) / a) ** 2, -1) - 1.0,
+        gradient=lambda p: 2 * (p - c) / a**2,
+        hessian=lambda p: np.broadcast_to(np.diag(2 / a**2), p.shape + (3,)),
+        center=c,
+        radius=float(a.max()),
+    )
+    shapes = [
+        ("sphere", Sphere(0.016, center=(0.0, 0.0, 0.02)), 3),
+        ("capsule", capsule, 3),
+        ("ellipsoid", ellipsoid, 3),
+        ("general (implicit ellipsoid)", implicit, 1),
+    ]
+    for name, tip, repeats in shapes:
+        w = pushing_wrenches(ellipsoid if tip is implicit else tip, n, rng)
+        dt = best_of(lambda: contact_from_wrench(w, tip), repeats)
+        print(f"  {name:30s} {n / dt / 1e6:8.2f} M samples/s   ({dt:.3f} s)")
+
+    g = synthetic_grasp("murakami2006", angle_deg=45.0, duration=10.0, rate=1000.0, seed=1)
+    reps = max(1, args.samples // len(g.t))
+    t_rep = np.arange(reps * len(g.t)) * 1e-3
+    w_rep = np.tile(g.wrench, (reps, 1))
+    dt = best_of(lambda: estimate(t_rep, w_rep, "murakami2006"), 3)
+    print(f"  {'whole batch pipeline (capsule)':30s} {len(t_rep) / dt / 1e6:8.2f} M samples/s   ({dt:.3f} s)")
+
+    print(f"streaming pipeline, one sample at a time ({args.stream_samples:,} samples of a 1 kHz grasp)")
+    for label, cfg in (
+        ("latch, no filter", EstimatorConfig()),
+        ("latch, 4th-order low-pass", EstimatorConfig(lowpass_hz=30.0, sample_rate=1000.0, lowpass_order=4)),
+        ("track", EstimatorConfig(contact_point="track")),
+    ):
+        est = Estimator("murakami2006", cfg)
+        ts = g.t[: args.stream_samples]
+        ws = g.wrench[: args.stream_samples].tolist()
+        per = np.empty(len(ts))
+        clock = time.perf_counter
+        for i, (t, w) in enumerate(zip(ts.tolist(), ws)):
+            t0 = clock()
+            est.update(t, w)
+            per[i] = clock() - t0
+        contact = g.t[: len(per)] > 2.2
+        print(
+            f"  {label:30s} median {np.median(per) * 1e6:6.1f} us   p99 {np.percentile(per, 99) * 1e6:6.1f} us"
+            f"   (in contact: median {np.median(per[contact]) * 1e6:6.1f} us)"
+        )
+
+
+if __name__ == "__main__":
+    main()
