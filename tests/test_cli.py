@@ -1,7 +1,6 @@
 """The installed ``softtip`` command, run as a user would."""
 
 import csv
-import os
 import subprocess
 import sys
 from pathlib import Path

@@ -7,7 +7,7 @@ from numpy.testing import assert_allclose
 from softtip import Capsule, Ellipsoid, InputError, Sphere, load_fingertip, murakami2006
 from softtip.fingertip import fingertip_from_mapping
 
-from strategies import TIPS, surface_points, unit_vectors
+from strategies import TIPS, surface_points
 
 
 @pytest.mark.parametrize("tip", TIPS, ids=lambda t: t.kind)

@@ -1,11 +1,9 @@
-import math
 
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from softtip import Capsule, Estimator, EstimatorConfig, Sphere, axial_difference, axial_median, estimate
-from softtip.noise import NANO17
+from softtip import Capsule, Estimator, EstimatorConfig, Sphere, axial_difference, estimate
 from softtip.synthetic import synthetic_grasp
 from softtip.units import KGF, KGF_MM
 

@@ -1,0 +1,544 @@
+"""Tests for softtip.io: reading logs (and every bad-input message) and writing tables."""
+
+from __future__ import annotations
+
+import io
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import softtip.io as sio
+from softtip.errors import InputError
+from softtip.io import Log, read_log, write_table
+
+HEADER = "t,fx,fy,fz,mx,my,mz"
+WRENCH = ("fx", "fy", "fz", "mx", "my", "mz")
+
+
+def _write(tmp_path: Path, text: str | bytes, name: str = "log.csv") -> str:
+    """Write ``text`` verbatim (no newline translation) and return the path as a str."""
+    path = tmp_path / name
+    path.write_bytes(text.encode("utf-8") if isinstance(text, str) else text)
+    return str(path)
+
+
+def _error(path: str, **kw: str) -> str:
+    with pytest.raises(InputError) as info:
+        read_log(path, **kw)
+    return str(info.value)
+
+
+def _columns(t: np.ndarray, wrench: np.ndarray) -> dict[str, np.ndarray]:
+    return {"t": t, **{name: wrench[:, i] for i, name in enumerate(WRENCH)}}
+
+
+@pytest.fixture
+def sample() -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(7)
+    t = np.cumsum(rng.uniform(1e-4, 0.02, 200))
+    # Wide dynamic range, negative values and exact zeros.
+    wrench = rng.normal(size=(200, 6)) * np.array([1, 10, 1e-3, 1e-6, 0.3, 1e3])
+    wrench[5] = 0.0
+    return t, wrench
+
+
+# ---------------------------------------------------------------------------- good input
+
+
+def test_round_trip_exact_with_17_digits(tmp_path: Path, sample: tuple[np.ndarray, np.ndarray]) -> None:
+    t, wrench = sample
+    path = str(tmp_path / "out.csv")
+    write_table(_columns(t, wrench), path, float_format="%.17g")
+    log = read_log(path)
+    assert isinstance(log, Log)
+    np.testing.assert_array_equal(log.t, t)
+    np.testing.assert_array_equal(log.wrench, wrench)
+    assert log.t.dtype == np.float64 and log.t.shape == (200,)
+    assert log.wrench.dtype == np.float64 and log.wrench.shape == (200, 6)
+    assert log.wrench.flags.c_contiguous
+    assert log.extra == {}
+    assert log.source == path
+    assert log.units == "si"
+
+
+def test_round_trip_default_format_to_10_digits(tmp_path: Path, sample: tuple[np.ndarray, np.ndarray]) -> None:
+    t, wrench = sample
+    path = tmp_path / "out.csv"
+    write_table(_columns(t, wrench), path)  # a PathLike works too
+    log = read_log(path)
+    np.testing.assert_allclose(log.t, t, rtol=1e-9, atol=0)
+    np.testing.assert_allclose(log.wrench, wrench, rtol=1e-9, atol=0)
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    st.lists(st.floats(-1e6, 1e6, allow_nan=False), min_size=1, max_size=20, unique=True),
+    st.floats(allow_nan=False, allow_infinity=False),
+)
+def test_round_trip_property(times: list[float], value: float) -> None:
+    buf = io.StringIO()
+    t = np.sort(np.array(times))
+    wrench = np.full((len(t), 6), value)
+    write_table(_columns(t, wrench), buf, float_format="%.17g")
+    buf.seek(0)
+    log = read_log(buf)
+    np.testing.assert_array_equal(log.t, t)
+    np.testing.assert_array_equal(log.wrench, wrench)
+
+
+def test_kgf_mm_is_converted_to_si(tmp_path: Path) -> None:
+    path = _write(tmp_path, f"{HEADER}\n0.5,1,2,-1,1,2,-1\n")
+    log = read_log(path, units="kgf-mm")
+    np.testing.assert_allclose(log.wrench, [[9.80665, 19.6133, -9.80665, 9.80665e-3, 19.6133e-3, -9.80665e-3]])
+    np.testing.assert_array_equal(log.t, [0.5])  # t stays in seconds
+    assert log.units == "kgf-mm"
+    si = read_log(path)
+    np.testing.assert_array_equal(si.wrench, [[1, 2, -1, 1, 2, -1]])
+
+
+def test_column_order_does_not_matter_and_extras_are_kept(tmp_path: Path) -> None:
+    ordered = _write(tmp_path, f"{HEADER}\n0,1,2,3,4,5,6\n0.1,7,8,9,10,11,12\n", "a.csv")
+    shuffled = _write(
+        tmp_path,
+        'note, mz ,t,my,id,fz,mx,fy,fx\n'
+        '"a, b",6,0,5,007,3,4,2,1\n'
+        ' x ,12,0.1,11,1e3,9,10,8,7\n',
+        "b.csv",
+    )
+    a, b = read_log(ordered), read_log(shuffled)
+    np.testing.assert_array_equal(a.t, b.t)
+    np.testing.assert_array_equal(a.wrench, b.wrench)
+    np.testing.assert_array_equal(b.wrench, [[1, 2, 3, 4, 5, 6], [7, 8, 9, 10, 11, 12]])
+    # Extras: names stripped, input order, cells verbatim (no number parsing, spaces kept).
+    assert list(b.extra) == ["note", "id"]
+    assert b.extra == {"note": ["a, b", " x "], "id": ["007", "1e3"]}
+
+
+def test_tolerated_layout(tmp_path: Path) -> None:
+    """BOM, CRLF, comments and blanks before the header, spaces, trailing blank lines."""
+    text = "\ufeff# recorded 2024-01-01\r\n\r\n#  units: si\r\n t , fx,fy,fz,mx,my,mz \r\n 0 , 1,2,3,4,5,6\r\n1,1,2,3,4,5,6\r\n\r\n  \r\n"
+    log = read_log(_write(tmp_path, text))
+    np.testing.assert_array_equal(log.t, [0, 1])
+    np.testing.assert_array_equal(log.wrench, [[1, 2, 3, 4, 5, 6]] * 2)
+
+
+def test_read_from_streams() -> None:
+    text = f"{HEADER}\n0,1,2,3,4,5,6\n"
+    log = read_log(io.StringIO(text))
+    assert log.source == "<stream>"
+    np.testing.assert_array_equal(log.wrench, [[1, 2, 3, 4, 5, 6]])
+    binary = io.BytesIO(b"\xef\xbb\xbf" + text.encode())
+    binary.name = "<stdin>"  # what sys.stdin.buffer reports
+    log = read_log(binary)
+    assert log.source == "<stdin>"
+    np.testing.assert_array_equal(log.t, [0.0])
+
+
+@pytest.mark.parametrize("where", ["first", "boundary", "late"])
+def test_chunked_parse_matches_row_by_row(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, where: str) -> None:
+    """The block parser and the careful parser agree, across block boundaries."""
+    monkeypatch.setattr(sio, "_CHUNK_ROWS", 4)
+    n = {"first": 3, "boundary": 8, "late": 11}[where]
+    rows = "".join(f"{0.1 * i!r},{i},{-i},{i * 1e-3},1,2,3,r{i}\n" for i in range(n))
+    path = _write(tmp_path, f"{HEADER},tag\n{rows}\n\n")
+    fast = read_log(path)
+    header = sio._read_header(Path(path).read_text(), path)
+    start = (header.lines.tell(), 0)
+    t, wrench, extra = sio._parse_careful(header, sio._column_index(header, path), path, start)
+    np.testing.assert_array_equal(fast.t, t)
+    np.testing.assert_array_equal(fast.wrench, wrench)
+    assert fast.extra == extra == {"tag": [f"r{i}" for i in range(n)]}
+
+
+def test_quoted_line_break_counts_lines_like_an_editor(tmp_path: Path) -> None:
+    path = _write(tmp_path, f'{HEADER},note\n0,1,2,3,4,5,6,"two\nlines"\n1,1,2,3,4,5,6,x\n2,oops,2,3,4,5,6,x\n')
+    assert _error(path) == f"{path}:5: column 'fx': expected a number, got 'oops'"
+
+
+# ----------------------------------------------------------------------------- bad input
+
+
+def test_unknown_units(tmp_path: Path) -> None:
+    path = _write(tmp_path, f"{HEADER}\n0,1,2,3,4,5,6\n")
+    assert _error(path, units="N-mm") == f"{path}: unknown units 'N-mm'; expected one of: si, kgf-mm"
+
+
+def test_file_not_found(tmp_path: Path) -> None:
+    path = str(tmp_path / "nope.csv")
+    assert _error(path) == f"{path}: file not found; expected an existing CSV log file"
+
+
+def test_unreadable_directory(tmp_path: Path) -> None:
+    assert _error(str(tmp_path)) == f"{tmp_path}: is a directory; expected a CSV log file"
+
+
+@pytest.mark.parametrize(
+    ("exc", "expected"),
+    [
+        (PermissionError(13, "Permission denied"), "permission denied; expected a readable CSV log file"),
+        (OSError(5, "Input/output error"), "cannot read (Input/output error); expected a readable CSV log file"),
+    ],
+)
+def test_unreadable_os_errors(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, exc: OSError, expected: str) -> None:
+    # Simulated: the tests may run as root, who can read anything.
+    path = _write(tmp_path, f"{HEADER}\n0,1,2,3,4,5,6\n")
+
+    def refuse(*args: object, **kwargs: object) -> None:
+        raise exc
+
+    monkeypatch.setattr(sio, "open", refuse, raising=False)
+    assert _error(path) == f"{path}: {expected}"
+
+
+def test_not_utf8_text_stream() -> None:
+    stream = io.TextIOWrapper(io.BytesIO(b"t,fx\n\xff\n"), encoding="utf-8")
+    with pytest.raises(InputError, match=r"^<stream>: not valid UTF-8 \(invalid start byte\); expected UTF-8 text$"):
+        read_log(stream)
+
+
+def test_not_utf8(tmp_path: Path) -> None:
+    path = _write(tmp_path, f"{HEADER}\n0,1,2,3,4,5,6\n1,2,3,4,5,6,\xb0\n".encode("latin-1"))
+    assert _error(path) == (
+        f"{path}:3: not valid UTF-8 (byte 0xb0 at byte offset 46); "
+        "expected a UTF-8 text file (re-save it as UTF-8)"
+    )
+
+
+@pytest.mark.parametrize("text", ["", "\n\n  \n"])
+def test_empty_file(tmp_path: Path, text: str) -> None:
+    path = _write(tmp_path, text)
+    assert _error(path) == f"{path}: empty file; expected a CSV header row naming t, fx, fy, fz, mx, my, mz"
+
+
+def test_only_comments(tmp_path: Path) -> None:
+    path = _write(tmp_path, "# nothing here\n")
+    assert _error(path) == (
+        f"{path}: only comments and blank lines; expected a CSV header row naming t, fx, fy, fz, mx, my, mz"
+    )
+
+
+@pytest.mark.parametrize("tail", ["", "\n", "\n\n\n"])
+def test_header_only(tmp_path: Path, tail: str) -> None:
+    path = _write(tmp_path, "# comment\n" + HEADER + tail)
+    assert _error(path) == (
+        f"{path}:2: header only, no data rows; expected at least one row of t, fx, fy, fz, mx, my, mz "
+        "after the header"
+    )
+
+
+def test_missing_columns_with_suggestions(tmp_path: Path) -> None:
+    path = _write(tmp_path, "time,Fx,f_y,fz,mx,my,torque_z\n0,1,2,3,4,5,6\n")
+    assert _error(path) == (
+        f"{path}:1: missing columns 't', 'fx', 'fy', 'mz'; expected a header with columns "
+        "t, fx, fy, fz, mx, my, mz (any order, exact case). "
+        "Column 1 is 'time': did you mean 't'? Column 2 is 'Fx': did you mean 'fx'? "
+        "Column 3 is 'f_y': did you mean 'fy'?"
+    )
+
+
+def test_missing_column_difflib_typo(tmp_path: Path) -> None:
+    path = _write(tmp_path, "t,fx,fy,fz,mx,my,mzz\n0,1,2,3,4,5,6\n")
+    assert _error(path).endswith("Column 7 is 'mzz': did you mean 'mz'?")
+
+
+def test_missing_column_without_near_miss(tmp_path: Path) -> None:
+    path = _write(tmp_path, "t,fx,fy,fz,mx,my\n0,1,2,3,4,5\n")
+    assert _error(path) == (
+        f"{path}:1: missing column 'mz'; expected a header with columns "
+        "t, fx, fy, fz, mx, my, mz (any order, exact case)"
+    )
+
+
+def test_missing_header_hints(tmp_path: Path) -> None:
+    semicolons = _write(tmp_path, "t;fx;fy;fz;mx;my;mz\n0;1;2;3;4;5;6\n", "a.csv")
+    assert _error(semicolons).endswith(
+        "(any order, exact case). The header looks semicolon-separated; expected commas between columns."
+    )
+    commented = _write(tmp_path, "# t,fx,fy,fz,mx,my,mz\n0,1,2,3,4,5,6\n", "b.csv")
+    assert _error(commented).startswith(f"{commented}:2: missing columns 't', 'fx',")
+    assert _error(commented).endswith("Line 1 looks like the header commented out with '#'; remove the '#'.")
+    no_header = _write(tmp_path, "0,1,2,3,4,5,6\n", "c.csv")
+    assert _error(no_header).endswith("Line 1 looks like data; expected the header row first.")
+
+
+def test_duplicate_column(tmp_path: Path) -> None:
+    path = _write(tmp_path, "t,fx,fy,fz,mx,my,mz, fx\n0,1,2,3,4,5,6,7\n")
+    assert _error(path) == f"{path}:1: duplicate column 'fx' (columns 2 and 8); expected each column name once"
+
+
+@pytest.mark.parametrize(("row", "got"), [("0.1,1,2,3,4,5", 6), ("0.1,1,2,3,4,5,6,7", 8)])
+def test_wrong_number_of_cells(tmp_path: Path, row: str, got: int) -> None:
+    path = _write(tmp_path, f"{HEADER}\n0,1,2,3,4,5,6\n{row}\n0.2,1,2,3,4,5,6\n")
+    assert _error(path) == f"{path}:3: expected 7 cells (one per header column), got {got}"
+
+
+def test_non_numeric_cell(tmp_path: Path) -> None:
+    path = _write(tmp_path, f"{HEADER},note\n0,1,2,3,4,5,6,ok\n0.1,1,2,3,4,1.5 N,6,also text\n")
+    assert _error(path) == f"{path}:3: column 'my': expected a number, got '1.5 N'"
+
+
+@pytest.mark.parametrize("cell", ["nan", "NaN", "inf", "-Infinity", "1e999"])
+def test_nan_or_inf(tmp_path: Path, cell: str) -> None:
+    path = _write(tmp_path, f"{HEADER}\n0,1,2,3,4,5,6\n0.1,1,2,{cell},4,5,6\n")
+    assert _error(path) == f"{path}:3: column 'fz': expected a finite number, got '{cell}'"
+
+
+def test_nan_in_t(tmp_path: Path) -> None:
+    path = _write(tmp_path, f"{HEADER}\nnan,1,2,3,4,5,6\n")
+    assert _error(path) == f"{path}:2: column 't': expected a finite number, got 'nan'"
+
+
+@pytest.mark.parametrize("cell", ["", "  "])
+def test_empty_cell(tmp_path: Path, cell: str) -> None:
+    path = _write(tmp_path, f"{HEADER}\n0,1,2,3,4,5,6\n0.1,1,2,3,{cell},5,6\n")
+    assert _error(path) == f"{path}:3: column 'mx': empty cell; expected a number"
+
+
+def test_empty_extra_cell_is_fine(tmp_path: Path) -> None:
+    log = read_log(_write(tmp_path, f"{HEADER},note\n0,1,2,3,4,5,6,\n"))
+    assert log.extra == {"note": [""]}
+
+
+@pytest.mark.parametrize("t3", ["0.1", "0.05"])
+def test_t_not_strictly_increasing(tmp_path: Path, t3: str) -> None:
+    path = _write(tmp_path, f"{HEADER}\n0,1,2,3,4,5,6\n0.1,1,2,3,4,5,6\n{t3},1,2,3,4,5,6\n")
+    assert _error(path) == (
+        f"{path}:4: column 't': expected t strictly increasing, got t = {t3} on line 4 after t = 0.1 on line 3"
+    )
+
+
+def test_t_decreasing_across_block_boundary(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(sio, "_CHUNK_ROWS", 3)
+    rows = "".join(f"{t},1,2,3,4,5,6\n" for t in ["0", "1", "2", "1.5", "3"])
+    path = _write(tmp_path, f"{HEADER}\n{rows}")
+    assert _error(path) == (
+        f"{path}:5: column 't': expected t strictly increasing, got t = 1.5 on line 5 after t = 2 on line 4"
+    )
+
+
+def test_blank_line_between_data_rows(tmp_path: Path) -> None:
+    path = _write(tmp_path, f"{HEADER}\n0,1,2,3,4,5,6\n\n \n1,1,2,3,4,5,6\n")
+    assert _error(path) == (
+        f"{path}:3: blank line between data rows (data continues on line 5); "
+        "expected blank lines only at the end of the file"
+    )
+
+
+def test_first_error_in_file_order_wins(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(sio, "_CHUNK_ROWS", 2)  # the errors sit in different blocks
+    good = "".join(f"{t},1,2,3,4,5,6\n" for t in range(3))
+    # Line 5: wrong cell count; line 6: non-numeric; line 7: non-increasing t.
+    path = _write(tmp_path, f"{HEADER}\n{good}3,1,2\n4,x,2,3,4,5,6\n0,1,2,3,4,5,6\n")
+    assert _error(path) == f"{path}:5: expected 7 cells (one per header column), got 3"
+
+    # Within a row, cells are checked in file order: here 'fz' comes before the bad 't' ...
+    path = _write(tmp_path, "fz,t,fx,fy,mx,my,mz\n1,0,1,2,4,5,6\nbad,-1,1,2,4,5,6\n")
+    assert _error(path) == f"{path}:3: column 'fz': expected a number, got 'bad'"
+    # ... and here after it.
+    path = _write(tmp_path, "t,fx,fy,mx,my,mz,fz\n0,1,2,4,5,6,1\n-1,1,2,4,5,6,bad\n")
+    assert _error(path) == (
+        f"{path}:3: column 't': expected t strictly increasing, got t = -1 on line 3 after t = 0 on line 2"
+    )
+
+
+_CORRUPTIONS = {
+    "text": lambda i: f"{i},1,2,x,4,5,6,n",
+    "cells": lambda i: f"{i},1,2",
+    "blank": lambda i: f"\n\n{i},1,2,3,4,5,6,n",
+    "t": lambda i: f"{i - 1},1,2,3,4,5,6,n",
+    "nan": lambda i: f"{i},1,2,3,4,5,nan,n",
+}
+
+
+@pytest.mark.parametrize("kind", sorted(_CORRUPTIONS))
+def test_block_size_never_changes_the_reported_error(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, kind: str
+) -> None:
+    """The fast parser hands over to the careful one mid-file; the message must not depend on where."""
+    n = 9
+    for bad in range(1 if kind == "t" else 0, n):  # row 0 has no previous t
+        rows = [f'{i},1,2,3,4,5,6,"multi\nline"' if i % 3 == 1 else f"{i},1,2,3,4,5,6,n" for i in range(n)]
+        rows[bad] = _CORRUPTIONS[kind](bad)
+        path = _write(tmp_path, f"{HEADER},note\n" + "\n".join(rows) + "\n\n")
+        messages = set()
+        for chunk in (1, 2, 3, 10**6):
+            monkeypatch.setattr(sio, "_CHUNK_ROWS", chunk)
+            messages.add(_error(path))
+        assert len(messages) == 1, messages
+
+
+def test_stream_errors_name_the_stream() -> None:
+    stream = io.StringIO(f"{HEADER}\n0,1,2,3,4,5,x\n")
+    stream.name = "<stdin>"
+    with pytest.raises(InputError, match=r"^<stdin>:2: column 'mz': expected a number, got 'x'$"):
+        read_log(stream)
+
+
+def test_input_error_is_a_value_error(tmp_path: Path) -> None:
+    with pytest.raises(ValueError):
+        read_log(tmp_path / "missing.csv")
+
+
+# ------------------------------------------------------------------------------- writing
+
+
+def test_write_formats_each_kind(tmp_path: Path) -> None:
+    path = tmp_path / "t.csv"
+    write_table(
+        {
+            "t": np.array([0.0, 0.02]),
+            "state": ["line", "none"],
+            "ok": np.array([True, False]),
+            "n": [3, -4],
+            "angle_deg": [45.0, np.nan],
+            "note": ['a,b', 'say "hi"'],
+            "obj": [None, 1.5],
+        },
+        path,
+    )
+    assert path.read_text() == (
+        "t,state,ok,n,angle_deg,note,obj\n"
+        '0,line,1,3,45,"a,b",None\n'
+        '0.02,none,0,-4,nan,"say ""hi""",1.5\n'
+    )
+
+
+def test_write_float_format(tmp_path: Path) -> None:
+    buf = io.StringIO()
+    write_table({"x": [1 / 3, -np.inf, 1e-300]}, buf, float_format="%.3e")
+    assert buf.getvalue() == "x\n3.333e-01\n-inf\n1.000e-300\n"
+
+
+def test_write_to_stdout(capsys: pytest.CaptureFixture[str]) -> None:
+    write_table({"a": [1.5], "b c": ["x"]}, None)
+    assert capsys.readouterr().out == "a,b c\n1.5,x\n"
+
+
+def test_write_zero_rows_writes_header(tmp_path: Path) -> None:
+    path = tmp_path / "empty.csv"
+    write_table({"t": np.empty(0), "fx": []}, path)
+    assert path.read_text() == "t,fx\n"
+
+
+def test_write_round_trips_extras_through_read(tmp_path: Path) -> None:
+    path = tmp_path / "x.csv"
+    notes = ["plain", "with, comma", 'quote "q"', "two\nlines"]
+    write_table({**_columns(np.arange(4.0), np.ones((4, 6))), "note": notes}, path)
+    assert read_log(path).extra == {"note": notes}
+
+
+def test_write_many_blocks_matches_one_block(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    cols = {"t": np.arange(10.0) / 3, "s": [f"s{i}" for i in range(10)], "b": np.arange(10) % 2 == 0}
+    one, many = io.StringIO(), io.StringIO()
+    write_table(cols, one)
+    monkeypatch.setattr(sio, "_CHUNK_ROWS", 3)
+    write_table(cols, many)
+    assert one.getvalue() == many.getvalue()
+    assert one.getvalue().count("\n") == 11
+
+
+def test_write_rejects_unequal_lengths(tmp_path: Path) -> None:
+    path = tmp_path / "x.csv"
+    with pytest.raises(ValueError, match=r"different lengths \('t': 3, 'fx': 2\)"):
+        write_table({"t": [0.0, 1.0, 2.0], "fx": [1.0, 2.0]}, path)
+    assert not path.exists()
+
+
+@pytest.mark.parametrize(
+    ("columns", "float_format", "match"),
+    [
+        ({}, "%.10g", "no columns"),
+        ({"w": np.zeros((2, 6))}, "%.10g", r"column 'w': expected a 1-D sequence, got shape \(2, 6\)"),
+        ({"x": [1.0]}, "%.3g %.3g", "must format exactly one float"),
+        ({"x": [1.0]}, "%.3g,", "expected no comma"),
+    ],
+)
+def test_write_rejects_bad_arguments(columns: dict, float_format: str, match: str) -> None:
+    with pytest.raises(ValueError, match=match):
+        write_table(columns, io.StringIO(), float_format=float_format)
+
+
+class _Explodes:
+    """A cell whose text cannot be produced: fails the write part-way through."""
+
+    def __str__(self) -> str:
+        raise RuntimeError("boom")
+
+
+def _failing_columns(n: int = 40, bad_row: int = 30) -> dict[str, list]:
+    cells: list[object] = [f"ok{i}" for i in range(n)]
+    cells[bad_row] = _Explodes()
+    return {"t": list(np.arange(n, dtype=float)), "obj": cells}
+
+
+def test_atomic_write_leaves_nothing_on_failure(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(sio, "_CHUNK_ROWS", 8)  # several blocks are written before the failure
+    written: list[int] = []
+    real = sio._write_rows
+
+    def spy(out, plan):  # type: ignore[no-untyped-def]
+        try:
+            real(out, plan)
+        finally:
+            written.append(out.tell())
+
+    monkeypatch.setattr(sio, "_write_rows", spy)
+    path = tmp_path / "out.csv"
+    with pytest.raises(RuntimeError, match="boom"):
+        write_table(_failing_columns(), path)
+    assert written and written[0] > 0  # the failure really was mid-write
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_atomic_write_keeps_existing_file_on_failure(tmp_path: Path) -> None:
+    path = tmp_path / "out.csv"
+    path.write_text("precious\n")
+    with pytest.raises(RuntimeError, match="boom"):
+        write_table(_failing_columns(), path)
+    assert path.read_text() == "precious\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["out.csv"]
+
+
+def test_atomic_write_cleans_up_when_replace_fails(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    path = tmp_path / "out.csv"
+    path.write_text("precious\n")
+
+    def no_replace(src: str, dst: str) -> None:
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(sio.os, "replace", no_replace)
+    with pytest.raises(InputError, match=r"out\.csv: cannot write \(Permission denied\)"):
+        write_table({"t": [1.0]}, path)
+    assert path.read_text() == "precious\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["out.csv"]
+
+
+def test_atomic_write_replaces_existing_file(tmp_path: Path) -> None:
+    path = tmp_path / "out.csv"
+    path.write_text("old\n")
+    write_table({"t": [1.0]}, path)
+    assert path.read_text() == "t\n1\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["out.csv"]
+    if os.name == "posix":  # the umask decides the mode, as for a plain open()
+        umask = os.umask(0)
+        os.umask(umask)
+        assert path.stat().st_mode & 0o777 == 0o666 & ~umask
+
+
+def test_write_to_missing_directory_or_directory(tmp_path: Path) -> None:
+    missing = tmp_path / "no" / "out.csv"
+    with pytest.raises(InputError, match=r"no/out\.csv: cannot write \(No such file or directory\)"):
+        write_table({"t": [1.0]}, missing)
+    with pytest.raises(InputError, match="is a directory"):
+        write_table({"t": [1.0]}, tmp_path)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_write_to_stream_leaves_it_open() -> None:
+    buf = io.StringIO()
+    write_table({"t": [0.5]}, buf)
+    assert not buf.closed and buf.getvalue() == "t\n0.5\n"
