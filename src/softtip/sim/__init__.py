@@ -1,0 +1,80 @@
+"""Soft-fingertip contact simulator: synthetic F/T logs with ground truth.
+
+A quasi-static elastic-foundation (Winkler) model of the 5 mm silicone skin over the rigid
+shell, with a Coulomb-limited elastic tangential layer, touched by rigid objects given as
+signed distance functions (plane, thin plate, wedge, cylinder/stick, cylinder-bottom
+fringe). Scenarios reproduce the papers' grasps (SPEC §5); the sensor model adds bias,
+noise and quantisation.
+
+Modules: :mod:`~softtip.sim.skin` (surface elements), :mod:`~softtip.sim.objects` (SDF
+objects), :mod:`~softtip.sim.contact` (Winkler + friction), :mod:`~softtip.sim.scenario`
+(grasp time series, the papers' hand), :mod:`~softtip.sim.sensor` (noise),
+:mod:`~softtip.sim.truth` (ground truth), :mod:`~softtip.sim.simulate` (the loop and the
+writers), :mod:`~softtip.sim.commands` (the ``simulate`` command).
+
+Example
+-------
+>>> from softtip import murakami2006
+>>> from softtip.sim import Plate, paper_scenario, simulate_grasp
+>>> import math
+>>> log = simulate_grasp(murakami2006(), Plate(0.001), paper_scenario(math.radians(45)), rng=1)
+>>> log.wrench.shape
+(500, 6)
+"""
+
+from softtip.sim.contact import ContactModel, ContactParams, ContactResult, FrictionState
+from softtip.sim.objects import (
+    OBJECT_KINDS,
+    Cylinder,
+    CylinderRim,
+    HalfSpace,
+    Plate,
+    RigidObject,
+    Wedge,
+    make_object,
+    stick,
+)
+from softtip.sim.pose import Pose, rotation_matrix
+from softtip.sim.scenario import Disturbance, GraspScenario, HandFrame, paper_scenario, push_scenario, smoothstep
+from softtip.sim.sensor import NANO17, SensorModel
+from softtip.sim.simulate import SimLog, run_simulation, simulate_grasp, truth_dict, write_log_csv, write_truth_json
+from softtip.sim.skin import DEFAULT_ELEMENTS, SkinMesh, discretise_skin
+from softtip.sim.truth import GroundTruth, line_angle, tangent_frame
+
+__all__ = [
+    "ContactModel",
+    "ContactParams",
+    "ContactResult",
+    "FrictionState",
+    "OBJECT_KINDS",
+    "Cylinder",
+    "CylinderRim",
+    "HalfSpace",
+    "Plate",
+    "RigidObject",
+    "Wedge",
+    "make_object",
+    "stick",
+    "Pose",
+    "rotation_matrix",
+    "Disturbance",
+    "GraspScenario",
+    "HandFrame",
+    "paper_scenario",
+    "push_scenario",
+    "smoothstep",
+    "NANO17",
+    "SensorModel",
+    "SimLog",
+    "run_simulation",
+    "simulate_grasp",
+    "truth_dict",
+    "write_log_csv",
+    "write_truth_json",
+    "DEFAULT_ELEMENTS",
+    "SkinMesh",
+    "discretise_skin",
+    "GroundTruth",
+    "line_angle",
+    "tangent_frame",
+]

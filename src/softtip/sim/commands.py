@@ -1,0 +1,147 @@
+"""The ``softtip simulate`` command (click); register it in the main CLI group.
+
+Lengths accept a unit suffix (``2mm``, ``0.5 mm``, ``40e-3``, ``1cm``; a bare number is in
+metres); forces accept ``N`` or ``kgf`` (``0.5kgf``; bare: newtons); angles are degrees.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import sys
+from pathlib import Path
+
+import click
+
+from softtip.errors import InputError
+from softtip.sim.objects import OBJECT_KINDS
+from softtip.sim.simulate import log_csv_text, run_simulation, write_log_csv, write_truth_json
+from softtip.sim.skin import DEFAULT_ELEMENTS
+from softtip.units import KGF, UNIT_SYSTEMS
+
+__all__ = ["simulate", "parse_length", "parse_force"]
+
+_LENGTH_UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6, "µm": 1e-6}
+_FORCE_UNITS = {"n": 1.0, "kgf": KGF}
+_NUMBER = r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([a-zA-Zµ]*)\s*"
+
+
+def _parse(text: str, units: dict[str, float], what: str) -> float:
+    m = re.fullmatch(_NUMBER, str(text))
+    unit = m.group(2).lower() if m else ""
+    if not m or (unit and unit not in units):
+        raise ValueError(f"{text!r} is not a {what} (a number with an optional unit: {', '.join(units)})")
+    value = float(m.group(1)) * (units[unit] if unit else 1.0)
+    if not math.isfinite(value):
+        raise ValueError(f"{text!r} is not a finite {what}")
+    return value
+
+
+def parse_length(text: str) -> float:
+    """``"2mm"`` → 0.002 (m). A bare number is in metres."""
+    return _parse(text, _LENGTH_UNITS, "length")
+
+
+def parse_force(text: str) -> float:
+    """``"0.5kgf"`` → 4.903325 (N). A bare number is in newtons."""
+    return _parse(text, _FORCE_UNITS, "force")
+
+
+class _Length(click.ParamType):
+    name = "LENGTH"
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, float):
+            return value
+        try:
+            return parse_length(value)
+        except ValueError as exc:
+            self.fail(str(exc), param, ctx)
+
+
+class _Force(click.ParamType):
+    name = "FORCE"
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, float):
+            return value
+        try:
+            return parse_force(value)
+        except ValueError as exc:
+            self.fail(str(exc), param, ctx)
+
+
+LENGTH, FORCE = _Length(), _Force()
+
+
+@click.command("simulate")
+@click.option("--object", "object_kind", type=click.Choice(OBJECT_KINDS), default="plate", show_default=True,
+              help="What the fingertip touches.")
+@click.option("--size", type=LENGTH, default=None,
+              help="Plate thickness, or cylinder/stick/fringe diameter (e.g. 2mm). Defaults: plate 1mm, "
+                   "cylinder 6mm, stick 4mm, fringe 40mm.")
+@click.option("--angle", "angle_deg", type=float, default=0.0, show_default=True,
+              help="Direction of the edge/axis/fringe at the contact, degrees from the sensor x axis "
+                   "(SPEC §3.4 tangent frame; 90 = along the hand's joint axes).")
+@click.option("--scenario", type=click.Choice(["paper", "push"]), default="paper", show_default=True,
+              help="paper: the papers' two-fingered grasp with joint and gravity disturbances; "
+                   "push: a plain push.")
+@click.option("--tip", default="murakami2006", show_default=True, help="Fingertip preset or TOML file.")
+@click.option("--edge-radius", type=LENGTH, default=0.0, show_default=True,
+              help="Plate corner radius or wedge tip radius (length).")
+@click.option("--apex-angle", "apex_angle_deg", type=float, default=90.0, show_default=True,
+              help="Wedge apex angle, degrees.")
+@click.option("--tilt", "tilt_deg", type=float, default=45.0, show_default=True,
+              help="Fringe: contact normal's angle from the cylinder side toward its bottom face, degrees.")
+@click.option("--force", type=FORCE, default="0.5kgf", show_default=True, help="Held grasp force (N or kgf).")
+@click.option("--duration", type=float, default=10.0, show_default=True, help="Recorded time, s.")
+@click.option("--t-contact", type=float, default=2.0, show_default=True, help="Time of first touch, s.")
+@click.option("--t-stable", type=float, default=4.0, show_default=True, help="End of the force ramp, s.")
+@click.option("--rate", type=float, default=50.0, show_default=True, help="Sample rate, Hz.")
+@click.option("--joint-rotation", "joint_rotation_deg", type=float, default=3.0, show_default=True,
+              help="paper: object rotation about the joint axis during the grasp, degrees.")
+@click.option("--gravity-spin", "gravity_spin_deg", type=float, default=1.0, show_default=True,
+              help="paper: object rotation about the grasp axis from its weight, degrees.")
+@click.option("--mass", "object_mass", type=float, default=0.01, show_default=True,
+              help="paper: object mass, kg (half its weight loads each finger tangentially).")
+@click.option("--misalignment", "misalignment_deg", type=float, default=0.0, show_default=True,
+              help="paper: fixed alignment error about the hand z axis, degrees.")
+@click.option("--elements", "n_elements", type=click.IntRange(50), default=DEFAULT_ELEMENTS, show_default=True,
+              help="Skin surface elements.")
+@click.option("--modulus", type=float, default=0.6e6, show_default=True, help="Skin Winkler modulus, Pa.")
+@click.option("--shear-modulus", type=float, default=None, help="Skin shear modulus, Pa [default: modulus/3].")
+@click.option("--friction", type=float, default=1.0, show_default=True, help="Coulomb friction coefficient.")
+@click.option("--thickness", type=LENGTH, default="5mm", show_default=True, help="Skin thickness (length).")
+@click.option("--noise/--no-noise", default=True, show_default=True,
+              help="Apply the sensor model (ATI Nano17 class noise and quantisation) or write the true wrench.")
+@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the noise generator.")
+@click.option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True,
+              help="Units of the written log: si (N, N·m) or kgf-mm.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Log CSV (t,fx,fy,fz,mx,my,mz) [default: stdout].")
+@click.option("--truth", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Ground truth JSON [default: OUTPUT with suffix .truth.json; none when writing to stdout].")
+def simulate(output: Path | None, truth: Path | None, units: str, **options) -> None:
+    """Simulate a grasp of an object by the soft fingertip and write the F/T log.
+
+    The log is the SPEC §4 input of `softtip estimate`; the truth file holds the object's
+    line direction and angle, the nominal and pressure-centre contact points, contact area,
+    depth and normal force per sample, and every parameter of the run.
+    """
+    if truth is None and output is not None:
+        truth = output.with_name(output.stem + ".truth.json")
+    for path in (output, truth):
+        if path is not None and not path.parent.exists():
+            raise click.BadParameter(f"directory {path.parent} does not exist", param_hint=str(path))
+    try:
+        log = run_simulation(**options)
+    except InputError as exc:
+        raise click.BadParameter(str(exc), param_hint="--tip") from None
+    except ValueError as exc:
+        raise click.UsageError(str(exc)) from None
+    if output is None:
+        sys.stdout.write(log_csv_text(log, units))
+    else:
+        write_log_csv(log, output, units)
+    if truth is not None:
+        write_truth_json(log, truth)

@@ -1,0 +1,391 @@
+"""Grasp scenarios: how the object moves relative to the fingertip over time.
+
+A scenario places the object's contact frame (see :mod:`softtip.sim.objects`) at the
+*nominal contact point* ``r_c`` on the skin with its outward normal along the *push axis*
+``u`` (into the fingertip) and its line direction at ``angle`` in the SPEC §3.4 tangent
+frame. The object then
+
+1. approaches along ``u`` at ``approach_speed`` and touches at ``t_contact``;
+2. is pushed along ``u`` by a travel ``s(t)`` solved per sample so that the force along
+   ``u`` follows the grasp profile (smoothstep from 0 at ``t_contact`` to ``force`` at
+   ``t_stable``, held to ``duration``) — the papers' grasp;
+3. meanwhile undergoes prescribed *disturbances*: rotations about given axes and
+   translations, each ramped with the same smoothstep (or over its own interval).
+
+The object's pose at time ``t`` is ``T(s u) ∘ D(t) ∘ B ∘ P``, where ``B`` is the placement,
+``P`` the object's own pose (an offset in its contact frame, identity by default) and
+``D(t) = D_k ∘ … ∘ D_1`` the disturbances, each a rotation about a line through its pivot
+(default: ``r_c``) followed by a translation. With a ``tangential_force`` the object's
+position across the push axis is solved as well (force balance), as in the papers' grasp.
+
+The papers' hand (:func:`paper_scenario`, :class:`HandFrame`)
+--------------------------------------------------------------
+Two fingers, every joint axis parallel to the hand's ``y``, gravity along the hand's ``-z``;
+the right fingertip touches the object at its apex (``n = z_s``) while the fingers close
+along the hand's ``x``. The sensor frame of the right fingertip is mapped to the hand as
+
+    sensor x = hand z (up),   sensor y = hand y (joint axes),   sensor z = -hand x,
+
+so that a plate at 90° (SPEC §3.4: angle from sensor x at the tip) lies along the joint
+axes, as in the paper. Disturbances come only from the joints (rotation about hand ``y``)
+and gravity (rotation about the grasp axis, hand ``x``, from an off-axis centre of mass,
+and half the object's weight as a tangential load along hand ``-z``): nothing rotates the
+object about hand ``z``. A 90° plate therefore
+gets no rotation about the in-plane axis perpendicular to it (hand ``z`` = sensor ``x``)
+and shows almost no tangential spin torque — the paper's unobservable case, reproduced by
+the physics rather than special-cased. ``misalignment`` (a fixed rotation about hand ``z``)
+models the paper's "alignment error of the fingers and grasped object".
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from softtip.fingertip import Fingertip
+from softtip.sim.pose import Pose, unit
+from softtip.sim.truth import tangent_frame
+from softtip.units import KGF, STANDARD_GRAVITY
+
+__all__ = ["Disturbance", "HandFrame", "GraspScenario", "paper_scenario", "push_scenario", "smoothstep"]
+
+
+def smoothstep(x: ArrayLike) -> NDArray[np.float64]:
+    """``3x² − 2x³`` on ``x`` clipped to [0, 1]: a ramp with zero slope at both ends."""
+    c = np.clip(np.asarray(x, dtype=float), 0.0, 1.0)
+    return c * c * (3.0 - 2.0 * c)
+
+
+def _opt_vec(v: ArrayLike | None) -> tuple[float, float, float] | None:
+    if v is None:
+        return None
+    a = np.asarray(v, dtype=float).reshape(3)
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"expected 3 finite numbers, got {v!r}")
+    return (float(a[0]), float(a[1]), float(a[2]))
+
+
+@dataclass(frozen=True)
+class Disturbance:
+    """A prescribed rotation and/or translation of the object relative to the fingertip.
+
+    At full amplitude the object is rotated by ``angle`` (rad) about the line through
+    ``pivot`` along ``axis`` and then translated by ``translation`` (m); both in the sensor
+    frame. The amplitude ramps as ``smoothstep((t - start) / (end - start))``; with
+    ``start == end`` it is a step at ``start``.
+
+    Parameters
+    ----------
+    axis : 3 floats, optional
+        Rotation axis (any length). None: no rotation.
+    angle : float
+        Rotation at full amplitude, rad.
+    translation : 3 floats
+        Translation at full amplitude, m.
+    pivot : 3 floats, optional
+        A point of the rotation axis, m; None: the nominal contact point.
+    start, end : float, optional
+        Ramp interval, s; None: the scenario's ``t_contact`` / ``t_stable``.
+    label : str
+        Name shown in ``truth.json``.
+    """
+
+    axis: tuple[float, float, float] | None = None
+    angle: float = 0.0
+    translation: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    pivot: tuple[float, float, float] | None = None
+    start: float | None = None
+    end: float | None = None
+    label: str = ""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "axis", None if self.axis is None else tuple(unit(self.axis, "axis")))
+        object.__setattr__(self, "translation", _opt_vec(self.translation))
+        object.__setattr__(self, "pivot", _opt_vec(self.pivot))
+        if not math.isfinite(self.angle):
+            raise ValueError(f"angle must be finite, got {self.angle!r}")
+        if self.start is not None and self.end is not None and self.end < self.start:
+            raise ValueError(f"disturbance {self.label!r}: end {self.end} s is before start {self.start} s")
+
+    def amplitude(self, t: float, t_contact: float, t_stable: float) -> float:
+        """Fraction of the full disturbance applied at time ``t`` (s)."""
+        a = t_contact if self.start is None else self.start
+        b = t_stable if self.end is None else self.end
+        if b <= a:
+            return 1.0 if t >= a else 0.0
+        return float(smoothstep((t - a) / (b - a)))
+
+    def pose(self, fraction: float, contact_point: ArrayLike) -> Pose:
+        """The rigid motion at ``fraction`` of the full amplitude."""
+        out = Pose.from_translation(fraction * np.asarray(self.translation))
+        if self.axis is not None and self.angle != 0.0:
+            pivot = contact_point if self.pivot is None else self.pivot
+            out = out @ Pose.from_axis_angle(self.axis, fraction * self.angle, pivot)
+        return out
+
+    def as_dict(self) -> dict:
+        """JSON-ready, SI (angle in rad and deg)."""
+        return {
+            "label": self.label,
+            "axis": None if self.axis is None else list(self.axis),
+            "angle_rad": self.angle,
+            "angle_deg": math.degrees(self.angle),
+            "translation_m": list(self.translation),
+            "pivot_m": None if self.pivot is None else list(self.pivot),
+            "start_s": self.start,
+            "end_s": self.end,
+        }
+
+
+@dataclass(frozen=True, eq=False)
+class HandFrame:
+    """Axes of the papers' hand frame expressed in the right fingertip's sensor frame.
+
+    Parameters
+    ----------
+    rotation : (3, 3)
+        Columns: hand ``x`` (grasp axis, from the right finger toward the left), hand ``y``
+        (joint axes) and hand ``z`` (up) in sensor coordinates; ``v_sensor = rotation @ v_hand``.
+    """
+
+    rotation: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        r = np.array(self.rotation, dtype=float).reshape(3, 3)
+        if np.abs(r.T @ r - np.eye(3)).max() > 1e-9 or np.linalg.det(r) < 0.0:
+            raise ValueError("hand frame rotation must be a proper rotation matrix")
+        r.setflags(write=False)
+        object.__setattr__(self, "rotation", r)
+
+    @classmethod
+    def paper(cls, finger_pitch: float = 0.0) -> HandFrame:
+        """The mapping used for the papers' experiments.
+
+        ``sensor x = hand z``, ``sensor y = hand y``, ``sensor z = -hand x`` when
+        ``finger_pitch = 0``; ``finger_pitch`` (rad) rotates the finger about the joint
+        axis (sensor ``y``), tilting the fingertip axis in the hand's x–z plane.
+        """
+        base = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
+        c, s = math.cos(finger_pitch), math.sin(finger_pitch)
+        pitch = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+        return cls(pitch @ base)
+
+    @property
+    def grasp_axis(self) -> NDArray[np.float64]:
+        """Hand ``x`` in the sensor frame."""
+        return self.rotation[:, 0].copy()
+
+    @property
+    def joint_axis(self) -> NDArray[np.float64]:
+        """Hand ``y`` (every finger joint axis) in the sensor frame."""
+        return self.rotation[:, 1].copy()
+
+    @property
+    def up(self) -> NDArray[np.float64]:
+        """Hand ``z`` in the sensor frame."""
+        return self.rotation[:, 2].copy()
+
+    @property
+    def gravity(self) -> NDArray[np.float64]:
+        """Unit gravity direction (hand ``-z``) in the sensor frame."""
+        return -self.up
+
+    def as_dict(self) -> dict:
+        """JSON-ready."""
+        return {
+            "hand_axes_in_sensor_frame": {
+                "x": self.grasp_axis.tolist(),
+                "y": self.joint_axis.tolist(),
+                "z": self.up.tolist(),
+            },
+            "gravity": self.gravity.tolist(),
+        }
+
+
+@dataclass(frozen=True)
+class GraspScenario:
+    """A grasp: approach, force-controlled push and disturbances (see the module docs).
+
+    Parameters
+    ----------
+    angle : float
+        Line direction of the object at the nominal contact, rad, in the SPEC §3.4 tangent
+        frame (at the apex: from the sensor x axis).
+    force : float
+        Held grasp force along the push axis, N (default 0.5 kgf).
+    duration : float
+        Recorded time, s.
+    t_contact, t_stable : float
+        First touch and end of the force ramp, s.
+    approach_speed : float
+        Speed of the object toward the fingertip before contact, m/s.
+    contact_point : 3 floats, optional
+        Nominal contact point, m (projected onto the skin); None: the fingertip's apex.
+    push_direction : 3 floats, optional
+        Push axis, into the fingertip; None: minus the skin normal at the contact point.
+    disturbances : tuple of Disturbance
+        Applied in order.
+    tangential_force : 3 floats, optional
+        Tangential load the object puts on the fingertip at full grasp, N, sensor frame
+        (its part along the push axis is ignored); ramped like the grasp force. When given,
+        the object's position across the push axis is solved per sample so that the
+        tangential force follows it (the object settles where the forces balance, as in a
+        real grasp) and disturbance translations across the push axis have no effect.
+        None (default): the position across the push axis is prescribed (kinematic).
+    hand : HandFrame, optional
+        The hand frame, recorded in the truth (the papers' scenario).
+    name : str
+        Label.
+    """
+
+    angle: float = 0.0
+    force: float = 0.5 * KGF
+    duration: float = 10.0
+    t_contact: float = 2.0
+    t_stable: float = 4.0
+    approach_speed: float = 0.005
+    contact_point: tuple[float, float, float] | None = None
+    push_direction: tuple[float, float, float] | None = None
+    disturbances: tuple[Disturbance, ...] = field(default_factory=tuple)
+    tangential_force: tuple[float, float, float] | None = None
+    hand: HandFrame | None = None
+    name: str = "push"
+
+    def __post_init__(self) -> None:
+        for nm in ("angle", "force", "duration", "t_contact", "t_stable", "approach_speed"):
+            if not math.isfinite(getattr(self, nm)):
+                raise ValueError(f"{nm} must be finite")
+        if self.force <= 0.0:
+            raise ValueError(f"force must be positive (N), got {self.force!r}")
+        if not (0.0 <= self.t_contact < self.t_stable):
+            raise ValueError(f"need 0 <= t_contact < t_stable, got {self.t_contact!r}, {self.t_stable!r} s")
+        if self.duration <= self.t_contact:
+            raise ValueError(f"duration {self.duration!r} s ends before contact at {self.t_contact!r} s")
+        if self.approach_speed < 0.0:
+            raise ValueError(f"approach_speed must be non-negative (m/s), got {self.approach_speed!r}")
+        object.__setattr__(self, "contact_point", _opt_vec(self.contact_point))
+        object.__setattr__(self, "push_direction", _opt_vec(self.push_direction))
+        object.__setattr__(self, "tangential_force", _opt_vec(self.tangential_force))
+        object.__setattr__(self, "disturbances", tuple(self.disturbances))
+
+    def nominal_contact(self, tip: Fingertip) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """``(r_c, n_c, u)``: nominal contact point (m), skin normal there, push axis."""
+        if self.contact_point is None:
+            centre, radius = tip.bounding_sphere
+            guess = centre + np.array([0.0, 0.0, 4.0 * radius])
+        else:
+            guess = np.asarray(self.contact_point)
+        r_c = tip.project(guess)
+        n_c = tip.normal(r_c)
+        u = -n_c if self.push_direction is None else unit(self.push_direction, "push_direction")
+        if u @ n_c >= 0.0:
+            raise ValueError("push_direction must point into the fingertip (against the skin normal)")
+        return r_c, n_c, u
+
+    def placement(self, tip: Fingertip) -> Pose:
+        """Pose of the object's contact frame at first touch (before any disturbance)."""
+        r_c, n_c, u = self.nominal_contact(tip)
+        e1, e2 = tangent_frame(n_c)
+        d = math.cos(self.angle) * e1 + math.sin(self.angle) * e2
+        if abs(d @ u) > 0.999:
+            raise ValueError("the line direction is parallel to the push axis")
+        return Pose.from_frame(u, d, r_c)
+
+    def force_target(self, t: ArrayLike) -> NDArray[np.float64]:
+        """Grasp force profile along the push axis, N, at times ``t`` (s)."""
+        return self.force * smoothstep((np.asarray(t, dtype=float) - self.t_contact) / (self.t_stable - self.t_contact))
+
+    def disturbance_pose(self, t: float, contact_point: ArrayLike) -> Pose:
+        """``D(t)``: all disturbances composed in order."""
+        out = Pose.identity()
+        for d in self.disturbances:
+            out = d.pose(d.amplitude(t, self.t_contact, self.t_stable), contact_point) @ out
+        return out
+
+    def as_dict(self) -> dict:
+        """JSON-ready, SI (angles also in degrees)."""
+        return {
+            "name": self.name,
+            "angle_rad": self.angle,
+            "angle_deg": math.degrees(self.angle),
+            "force_N": self.force,
+            "duration_s": self.duration,
+            "t_contact_s": self.t_contact,
+            "t_stable_s": self.t_stable,
+            "approach_speed_m_per_s": self.approach_speed,
+            "contact_point_m": None if self.contact_point is None else list(self.contact_point),
+            "push_direction": None if self.push_direction is None else list(self.push_direction),
+            "disturbances": [d.as_dict() for d in self.disturbances],
+            "tangential_force_N": None if self.tangential_force is None else list(self.tangential_force),
+            "hand": None if self.hand is None else self.hand.as_dict(),
+        }
+
+
+def push_scenario(angle: float = 0.0, **kwargs) -> GraspScenario:
+    """A plain force-controlled push at the apex with no disturbance (``kwargs``: any
+    :class:`GraspScenario` field)."""
+    return GraspScenario(angle=angle, name=kwargs.pop("name", "push"), **kwargs)
+
+
+def paper_scenario(
+    angle: float = 0.0,
+    *,
+    joint_rotation: float = math.radians(3.0),
+    gravity_spin: float = math.radians(1.0),
+    object_mass: float = 0.01,
+    misalignment: float = 0.0,
+    finger_pitch: float = 0.0,
+    **kwargs,
+) -> GraspScenario:
+    """The papers' grasp with the right fingertip of the two-fingered hand (SPEC §5).
+
+    Parameters
+    ----------
+    angle : float
+        Object direction at the apex, rad (SPEC §3.4; 90° is along the joint axes).
+    joint_rotation : float
+        Rotation of the object relative to the fingertip about the joint axis (hand ``y``)
+        while the grasp force builds up (finger compliance, joint servo error), rad.
+        Default 3°.
+    gravity_spin : float
+        Rotation about the grasp axis (hand ``x``) by the object's weight acting off the
+        grasp axis, rad. Default 1°.
+    object_mass : float
+        Mass of the object, kg (default 10 g). Each finger carries half its weight: a
+        tangential load along gravity (hand ``-z``), with the object's position across the
+        push axis solved for it.
+    misalignment : float
+        Fixed alignment error: rotation of the object about hand ``z`` through the contact,
+        rad (default 0).
+    finger_pitch : float
+        See :meth:`HandFrame.paper`, rad.
+    **kwargs
+        Other :class:`GraspScenario` fields (force, timing, ...).
+
+    Notes
+    -----
+    The amplitudes and the mass are this project's choices: the papers report none of
+    them. They are small (the fingers hold the object stably) and give a tangential spin
+    torque of a few N·mm on a 1–2 mm plate at 0° and ±45°, well above the sensor noise.
+    """
+    if not (math.isfinite(object_mass) and object_mass >= 0.0):
+        raise ValueError(f"object_mass must be a non-negative mass in kg, got {object_mass!r}")
+    hand = HandFrame.paper(finger_pitch)
+    dist = [
+        Disturbance(axis=tuple(hand.joint_axis), angle=joint_rotation, label="joint"),
+        Disturbance(axis=tuple(hand.grasp_axis), angle=gravity_spin, label="gravity-spin"),
+    ]
+    if misalignment != 0.0:
+        dist.insert(0, Disturbance(axis=tuple(hand.up), angle=misalignment, start=0.0, end=0.0, label="misalignment"))
+    load = 0.5 * object_mass * STANDARD_GRAVITY * hand.gravity
+    return GraspScenario(
+        angle=angle,
+        disturbances=tuple(dist),
+        tangential_force=tuple(load),
+        hand=hand,
+        name=kwargs.pop("name", "paper"),
+        **kwargs,
+    )

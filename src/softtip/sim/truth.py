@@ -1,0 +1,134 @@
+"""Ground truth of a simulated grasp and the SPEC §3.4 angle convention."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = ["GroundTruth", "tangent_frame", "line_angle"]
+
+
+def tangent_frame(normal: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """SPEC §3.4 tangent frame ``(e1, e2)`` at unit normals ``normal`` (..., 3).
+
+    ``e1`` is the sensor x axis projected on the tangent plane (the y axis when
+    ``|x × n| < 0.1``), ``e2 = n × e1``.
+    """
+    n = np.asarray(normal, dtype=float)
+    x = np.broadcast_to([1.0, 0.0, 0.0], n.shape)
+    y = np.broadcast_to([0.0, 1.0, 0.0], n.shape)
+    use_y = np.linalg.norm(np.cross(x, n), axis=-1) < 0.1
+    ref = np.where(use_y[..., None], y, x)
+    e1 = ref - np.sum(ref * n, axis=-1, keepdims=True) * n
+    e1 = e1 / np.linalg.norm(e1, axis=-1, keepdims=True)
+    return e1, np.cross(n, e1)
+
+
+def line_angle(direction: ArrayLike, normal: ArrayLike) -> NDArray[np.float64]:
+    """Angle (rad) of the axis ``direction`` (..., 3) in the tangent frame at ``normal`` (..., 3).
+
+    ``atan2(d·e2, d·e1)`` wrapped into ``(-π/2, π/2]`` (``d`` and ``-d`` are the same axis).
+    NaN where ``direction`` is NaN.
+    """
+    d = np.asarray(direction, dtype=float)
+    e1, e2 = tangent_frame(normal)
+    a = np.arctan2(np.sum(d * e2, axis=-1), np.sum(d * e1, axis=-1))
+    a = np.where(a > 0.5 * math.pi, a - math.pi, a)
+    return np.where(a <= -0.5 * math.pi, a + math.pi, a)
+
+
+@dataclass(frozen=True, eq=False)
+class GroundTruth:
+    """Per-sample truth of a simulated grasp (sensor frame, SI).
+
+    Attributes
+    ----------
+    direction : (N, 3)
+        Unit line direction of the object (edge, axis, fringe tangent) at the nominal
+        contact point; NaN for a plane. An axis (sign is arbitrary).
+    angle : (N,)
+        Its angle (rad) in the SPEC §3.4 tangent frame at the nominal contact normal,
+        in ``(-π/2, π/2]``.
+    contact_point : (N, 3)
+        Nominal contact point: where the push axis meets the undeformed skin, m.
+    contact_normal : (N, 3)
+        Skin outward normal there.
+    pressure_centre : (N, 3)
+        Pressure-weighted mean of the compressed skin points (undeformed positions), m;
+        NaN when not in contact.
+    contact_area : (N,)
+        Compressed skin area, m².
+    depth : (N,)
+        Largest compression, m.
+    push : (N,)
+        Object travel along the push axis from first touch, m (negative before contact).
+    normal_force : (N,)
+        True force along the push axis (into the fingertip), N.
+    force_target : (N,)
+        The grasp-force profile the push was solved for, N.
+    in_contact : (N,) bool
+        Whether any skin point is compressed.
+    slip_fraction : (N,)
+        Fraction of the contact area at the Coulomb limit.
+    """
+
+    direction: NDArray[np.float64]
+    angle: NDArray[np.float64]
+    contact_point: NDArray[np.float64]
+    contact_normal: NDArray[np.float64]
+    pressure_centre: NDArray[np.float64]
+    contact_area: NDArray[np.float64]
+    depth: NDArray[np.float64]
+    push: NDArray[np.float64]
+    normal_force: NDArray[np.float64]
+    force_target: NDArray[np.float64]
+    in_contact: NDArray[np.bool_]
+    slip_fraction: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            a = np.ascontiguousarray(getattr(self, f.name))
+            a.setflags(write=False)
+            object.__setattr__(self, f.name, a)
+
+    @property
+    def angle_deg(self) -> NDArray[np.float64]:
+        """:attr:`angle` in degrees."""
+        return np.degrees(self.angle)
+
+    def as_dict(self) -> dict:
+        """JSON-ready columns (NaN → None), keyed with their units."""
+        units = {
+            "direction": "unit",
+            "angle": "deg",
+            "contact_point": "m",
+            "contact_normal": "unit",
+            "pressure_centre": "m",
+            "contact_area": "m2",
+            "depth": "m",
+            "push": "m",
+            "normal_force": "N",
+            "force_target": "N",
+            "in_contact": "bool",
+            "slip_fraction": "1",
+        }
+        out = {}
+        for f in fields(self):
+            a = self.angle_deg if f.name == "angle" else getattr(self, f.name)
+            key = f"{f.name}_{units[f.name]}" if units[f.name] not in ("bool", "unit", "1") else f.name
+            out[key] = _jsonable(a)
+        return out
+
+
+def _jsonable(a: NDArray) -> list:
+    """Nested lists with NaN/inf replaced by None (JSON has no NaN)."""
+
+    def fix(v):
+        if isinstance(v, list):
+            return [fix(x) for x in v]
+        return None if (isinstance(v, float) and not math.isfinite(v)) else v
+
+    return fix(np.asarray(a).tolist())
