@@ -22,6 +22,7 @@ from softtip.fingertip import (
 )
 from softtip.noise import NANO17, SensorNoise, direction_angle_std, tangential_spin_torque_std
 from softtip.pipeline import STATES, Estimates, Estimator, EstimatorConfig, SampleEstimate, estimate
+from softtip.sources import run
 from softtip.spin import direction_angle, edge_direction, spin_torque, tangent_frame, tangential_spin_torque
 from softtip.units import KGF, KGF_MM, wrench_from_si, wrench_to_si
 
@@ -57,6 +58,7 @@ __all__ = [
     "load_example",
     "load_fingertip",
     "murakami2006",
+    "run",
     "spin_torque",
     "tangent_frame",
     "tangential_spin_torque",

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import shutil
 import sys
 from pathlib import Path
 
@@ -14,8 +15,9 @@ from softtip.axial import axial_median
 from softtip.errors import InputError
 from softtip.fingertip import PRESETS, load_fingertip
 from softtip.noise import NANO17, SensorNoise
-from softtip.pipeline import STATES, EstimatorConfig, estimate as run_estimate
-from softtip.units import KGF, KGF_MM, UNIT_SYSTEMS
+from softtip.pipeline import STATES, EstimatorConfig
+from softtip.pipeline import estimate as run_estimate
+from softtip.units import KGF, KGF_MM, UNIT_SYSTEMS, wrench_to_si
 
 FRAMES_HELP = """\
 Frames and units: every vector is in the sensor frame (origin at the F/T sensor's
@@ -44,6 +46,67 @@ def main() -> None:
     pass
 
 
+_ESTIMATOR_OPTIONS = [
+    click.option(
+        "--tip",
+        default="murakami2006",
+        show_default=True,
+        metavar="PRESET_OR_TOML",
+        help=f"Fingertip: a preset ({', '.join(sorted(PRESETS))}) or a TOML file ([fingertip] shape = sphere|capsule|ellipsoid, lengths in m).",
+    ),
+    click.option(
+        "--contact-point",
+        type=click.Choice(["latch", "track"]),
+        default="latch",
+        show_default=True,
+        help="latch: measure the contact point in the light-force window at the start of the grasp and hold it (the papers'); "
+        "track: soft-finger solution every sample (h is then zero by construction: no directions).",
+    ),
+    click.option("--lowpass", type=float, metavar="HZ", help="Causal Butterworth low-pass cutoff in Hz (default: no filter)."),
+    click.option(
+        "--tare-duration",
+        type=float,
+        default=0.2,
+        show_default=True,
+        metavar="S",
+        help="Average the first S seconds (fingertip untouched) as the sensor bias; 0 if INPUT is already tared.",
+    ),
+    click.option("--contact-threshold", type=float, default=0.05, show_default=True, metavar="N", help="In contact while |f| is at least this, N."),
+    click.option(
+        "--latch-window",
+        type=(float, float),
+        default=(0.2 * KGF, 0.5 * KGF),
+        show_default=True,
+        metavar="LOW HIGH",
+        help="Light-force window for latching the contact point, N (default 0.2–0.5 kgf).",
+    ),
+    click.option("--h-min", type=float, default=0.5, show_default=True, metavar="N·mm", help="Smallest |h| reported as a line contact, N·mm."),
+    click.option(
+        "--force-noise",
+        type=float,
+        default=NANO17.force_std[0],
+        show_default=True,
+        metavar="N",
+        help="Per-axis standard deviation of the sensor's force noise, N (Nano17-class default).",
+    ),
+    click.option(
+        "--moment-noise",
+        type=float,
+        default=NANO17.moment_std[0] * 1e3,
+        show_default=True,
+        metavar="N·mm",
+        help="Per-axis standard deviation of the sensor's moment noise, N·mm.",
+    ),
+]
+
+
+def _estimator_options(f):
+    """The pipeline settings shared by ``estimate`` and ``stream``."""
+    for option in reversed(_ESTIMATOR_OPTIONS):
+        f = option(f)
+    return f
+
+
 @main.command(
     help="""Estimate contact point, normal, spin torque, contact state and edge direction
 from a force/torque log.
@@ -62,19 +125,20 @@ angle_std_deg, latched, latch_fallback, then the input's extra columns. r, n, h 
 (nan) when state is none; d and the angle only for line contacts, where |h| stands out of
 the noise.
 
+INPUT may also be a ROS bag (rosbag2 directory with sqlite3 or MCAP storage, a .mcap or
+.db3 file, or a ROS 1 .bag; needs softtip[ros]): the samples are the
+geometry_msgs/msg/WrenchStamped messages of --topic, timed by header.stamp (t counts
+from the first message; the stamps are copied to a stamp_ns column). --to-bag
+writes the estimates as a rosbag2 (MCAP) with standard messages on /softtip/state,
+/softtip/contact_point, /softtip/normal, /softtip/edge_direction and /softtip/wrench, plus
+the raw wrench; with --to-bag and no -o no CSV is written.
+
 """
     + FRAMES_HELP
 )
-@click.argument("input_path", metavar="INPUT", required=False, type=click.Path(dir_okay=False, allow_dash=True))
+@click.argument("input_path", metavar="INPUT", required=False, type=click.Path(allow_dash=True))
 @click.option("--example", is_flag=True, help="Use the shipped example grasp (a 45° line contact, murakami2006 tip) as INPUT.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False, writable=True), help="Output CSV (default: standard output).")
-@click.option(
-    "--tip",
-    default="murakami2006",
-    show_default=True,
-    metavar="PRESET_OR_TOML",
-    help=f"Fingertip: a preset ({', '.join(sorted(PRESETS))}) or a TOML file ([fingertip] shape = sphere|capsule|ellipsoid, lengths in m).",
-)
 @click.option(
     "--units",
     type=click.Choice(UNIT_SYSTEMS),
@@ -89,61 +153,27 @@ the noise.
     show_default=True,
     help="Units of force and moment columns in the output; lengths stay in m, angles in degrees.",
 )
-@click.option(
-    "--contact-point",
-    type=click.Choice(["latch", "track"]),
-    default="latch",
-    show_default=True,
-    help="latch: measure the contact point in the light-force window at the start of the grasp and hold it (the papers'); "
-    "track: soft-finger solution every sample (h is then zero by construction: no directions).",
-)
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Also draw the papers' four panels (force, moment, |h|, direction) to this PNG/PDF/SVG.")
 @click.option("--plot-units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the plot's force and moment axes.")
-@click.option("--lowpass", type=float, metavar="HZ", help="Causal Butterworth low-pass cutoff in Hz (default: no filter).")
-@click.option(
-    "--tare-duration",
-    type=float,
-    default=0.2,
-    show_default=True,
-    metavar="S",
-    help="Average the first S seconds (fingertip untouched) as the sensor bias; 0 if INPUT is already tared.",
-)
-@click.option("--contact-threshold", type=float, default=0.05, show_default=True, metavar="N", help="In contact while |f| is at least this, N.")
-@click.option(
-    "--latch-window",
-    type=(float, float),
-    default=(0.2 * KGF, 0.5 * KGF),
-    show_default=True,
-    metavar="LOW HIGH",
-    help="Light-force window for latching the contact point, N (default 0.2–0.5 kgf).",
-)
-@click.option("--h-min", type=float, default=0.5, show_default=True, metavar="N·mm", help="Smallest |h| reported as a line contact, N·mm.")
-@click.option(
-    "--force-noise",
-    type=float,
-    default=NANO17.force_std[0],
-    show_default=True,
-    metavar="N",
-    help="Per-axis standard deviation of the sensor's force noise, N (Nano17-class default).",
-)
-@click.option(
-    "--moment-noise",
-    type=float,
-    default=NANO17.moment_std[0] * 1e3,
-    show_default=True,
-    metavar="N·mm",
-    help="Per-axis standard deviation of the sensor's moment noise, N·mm.",
-)
+@click.option("--topic", metavar="TOPIC", help="Bag input: the geometry_msgs/msg/WrenchStamped topic (default: the bag's only one).")
+@click.option("--to-bag", "to_bag", type=click.Path(file_okay=False), metavar="DIR", help="Also write the estimates as a rosbag2 directory (MCAP storage); DIR must not exist.")
+@click.option("--rerun", "rerun_spawn", is_flag=True, help="Show the fingertip, force, contact point, normal and edge in a Rerun viewer (softtip[viz]).")
+@click.option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save the Rerun 3-D view and time series to FILE.rrd (open with `rerun FILE.rrd`).")
+@_estimator_options
 def estimate(
     input_path,
     example,
     output,
-    tip,
     units,
     output_units,
-    contact_point,
     plot_path,
     plot_units,
+    topic,
+    to_bag,
+    rerun_spawn,
+    rerun_save,
+    tip,
+    contact_point,
     lowpass,
     tare_duration,
     contact_threshold,
@@ -153,30 +183,38 @@ def estimate(
     moment_noise,
 ):
     from softtip.examples import EXAMPLE_PATH
-    from softtip.io import read_log, write_table
+    from softtip.io import Log, read_log, write_table
 
     if example == (input_path is not None):
         raise click.UsageError("give either INPUT or --example")
     fingertip = load_fingertip(tip)
-    try:
-        config = EstimatorConfig(
-            contact_point=contact_point,
-            contact_threshold=contact_threshold,
-            latch_window=latch_window,
-            noise=SensorNoise((force_noise,) * 3, (moment_noise * 1e-3,) * 3),
-            h_min=h_min * 1e-3,
-            lowpass_hz=lowpass,
-            tare_duration=tare_duration,
-        )
-    except ValueError as exc:
-        raise click.UsageError(str(exc)) from None
+    config = _make_config(contact_point, contact_threshold, latch_window, h_min, force_noise, moment_noise, lowpass, tare_duration)
 
+    bag_log = None
     if example:
         log = read_log(EXAMPLE_PATH, units="si")
     elif input_path == "-":
         log = read_log(sys.stdin, units=units)
+    elif _is_bag(input_path):
+        bag = _optional("softtip.bag", "ros")
+        bag_log = bag.read_bag(input_path, topic)
+        # t counts from the first message; the absolute stamps go along as an extra column
+        extra = {"stamp_ns": [str(v) for v in bag_log.stamps_ns.tolist()]}
+        log = Log(t=bag_log.t, wrench=wrench_to_si(bag_log.wrench, units), extra=extra, source=bag_log.source, units=units)
+        frames = ", ".join(repr(f) for f in bag_log.frame_ids)
+        click.echo(
+            f"softtip: {input_path}: {len(log.t)} samples from {bag_log.topic}, frame_id {frames}, "
+            f"t = 0 at stamp {bag_log.stamps_ns[0]} ns",
+            err=True,
+        )
+        if bag_log.record_time_used:
+            click.echo(f"softtip: {bag_log.record_time_used} message(s) had a zero header.stamp; their recording time was used", err=True)
     else:
+        if os.path.isdir(input_path):
+            raise InputError(f"{input_path}: is a directory but not a ROS bag (no metadata.yaml); expected a CSV log or a bag")
         log = read_log(input_path, units=units)
+    if topic is not None and bag_log is None:
+        raise click.UsageError("--topic applies to bag input only")
     try:
         est = run_estimate(log.t, log.wrench, fingertip, config)
     except ValueError as exc:  # e.g. a low-pass cutoff above Nyquist for this log's rate
@@ -191,7 +229,13 @@ def estimate(
     for name, values in log.extra.items():
         columns[name if name not in columns else f"input_{name}"] = np.asarray(values)
 
+    viz = rerun_tmp = None
+    if rerun_spawn or rerun_save:
+        viz = _optional("softtip.viz", "viz")
+        if rerun_save:
+            rerun_tmp = Path(rerun_save).with_name(f".{Path(rerun_save).name}.partial")
     plot_tmp = None
+    bag_written = False
     try:
         if plot_path is not None:
             from softtip.plot import plot_estimates
@@ -202,13 +246,33 @@ def estimate(
             source = "example grasp" if example else Path(log.source).name
             threshold = np.maximum(config.h_sigmas * est.h_std, config.h_min)
             plot_estimates(est, plot_tmp, units=plot_units, title=f"softtip: {source}", h_threshold=threshold)
-        write_table(columns, output)
+        if viz is not None:
+            logger = viz.RerunLogger(fingertip, save=rerun_tmp, spawn=rerun_spawn)
+            logger.log_estimates(est)
+            logger.close()
+        if to_bag is not None:
+            bag = _optional("softtip.bag", "ros")
+            if bag_log is not None:
+                bag.write_estimates_bag(to_bag, est, bag_log.wrench, bag_log.stamps_ns, bag_log.frame_id, bag_log.topic)
+            else:
+                bag.write_estimates_bag(to_bag, est, log.wrench)
+            bag_written = True
+        if output is not None or to_bag is None:
+            write_table(columns, output)
         if plot_tmp is not None:
             os.replace(plot_tmp, plot_path)
             plot_tmp = None
+        if rerun_tmp is not None:
+            os.replace(rerun_tmp, rerun_save)
+            rerun_tmp = None
+        bag_written = False  # every output is in place: keep the bag
     finally:
         if plot_tmp is not None:
             plot_tmp.unlink(missing_ok=True)
+        if rerun_tmp is not None:
+            rerun_tmp.unlink(missing_ok=True)
+        if bag_written:
+            shutil.rmtree(to_bag, ignore_errors=True)
 
     counts = {name: int(np.count_nonzero(est.state == code)) for code, name in enumerate(STATES)}
     if est.n_pulling:
@@ -217,13 +281,180 @@ def estimate(
             "pushes into the fingertip; reported as none",
             err=True,
         )
-    if output is not None:
+    targets = [p for p in (output, to_bag, rerun_save) if p is not None]
+    if targets:
         summary = ", ".join(f"{v} {k}" for k, v in counts.items())
-        click.echo(f"softtip: {len(est)} samples ({summary}) -> {output}", err=True)
+        click.echo(f"softtip: {len(est)} samples ({summary}) -> {', '.join(map(str, targets))}", err=True)
         if counts["line"]:
             line = est.state == 2
             ang = np.degrees(axial_median(est.angle[line]))
             click.echo(f"softtip: median direction of line samples {ang:+.1f} deg", err=True)
+
+
+def _make_config(contact_point, contact_threshold, latch_window, h_min, force_noise, moment_noise, lowpass, tare_duration, sample_rate=None):
+    try:
+        return EstimatorConfig(
+            contact_point=contact_point,
+            contact_threshold=contact_threshold,
+            latch_window=latch_window,
+            noise=SensorNoise((force_noise,) * 3, (moment_noise * 1e-3,) * 3),
+            h_min=h_min * 1e-3,
+            lowpass_hz=lowpass,
+            sample_rate=sample_rate,
+            tare_duration=tare_duration,
+        )
+    except ValueError as exc:
+        raise click.UsageError(str(exc)) from None
+
+
+def _is_bag(path: str) -> bool:
+    from softtip.bag import is_bag  # rosbags itself is imported only to read one
+
+    return is_bag(path)
+
+
+def _optional(module: str, extra: str):
+    """Import one of softtip's modules that needs an optional extra; exit 2 naming the extra."""
+    import importlib
+
+    try:
+        mod = importlib.import_module(module)
+        getattr(mod, {"ros": "import_rosbags", "netft": "import_pynetft", "viz": "import_rerun"}[extra])()
+    except ImportError as exc:
+        raise InputError(f"{exc} (optional extra '{extra}' not installed: pip install 'softtip[{extra}]')") from None
+    return mod
+
+
+@main.command(
+    help="""Estimate live: from an ATI Net F/T or Axia sensor, or a replayed log.
+
+With --netft HOST softtip reads the calibration (counts per force and torque unit, units)
+from the sensor over HTTP (/netftapi2.xml), streams RDT records over UDP, converts them to
+SI and runs the streaming estimator on every sample (needs softtip[netft]). With --replay
+LOG.csv the log is fed through the same path at its recorded rate times --speed (0: as
+fast as possible).
+
+Taring: the first --tare-duration seconds (0.2 s) are averaged as the sensor bias, so keep
+the fingertip untouched when the stream starts; --device-bias also zeroes the sensor
+itself first.
+
+The terminal view (standard error, redrawn a few times a second when it is a terminal)
+shows the state, contact point, normal, |h|, edge angle ± std, sample rate, lost packets
+(gaps in the RDT sequence) and samples dropped by softtip itself. --record FILE.csv writes
+every sample as it comes (flushed every 0.05 s) with the columns of `softtip estimate`,
+then raw_fx..raw_mz (the untared wrench), seq (RDT sequence or row) and lost (packets
+missing just before this one). Ctrl-C stops cleanly (exit 0); so do --duration and the end
+of a replayed log. No data for --timeout seconds is an error (exit 1).
+
+"""
+    + FRAMES_HELP
+)
+@click.option("--netft", "host", metavar="HOST", help="Address of the Net F/T / Axia.")
+@click.option("--replay", "replay", type=click.Path(dir_okay=False), metavar="LOG.csv", help="Replay a recorded CSV log (columns t, fx, fy, fz, mx, my, mz) instead.")
+@click.option("--speed", type=float, default=1.0, show_default=True, help="Replay speed: 1 real time, 2 twice as fast, 0 as fast as possible.")
+@click.option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the replayed log's wrench.")
+@click.option("--rdt-port", type=int, default=49152, show_default=True, help="UDP port of the sensor's RDT server.")
+@click.option("--http-port", type=int, default=80, show_default=True, help="HTTP port of the sensor's web server (calibration).")
+@click.option("--timeout", type=float, default=2.0, show_default=True, metavar="S", help="Give up after S seconds without data from the sensor.")
+@click.option("--device-bias", is_flag=True, help="Send the sensor's own bias (zero) command at start, before softtip's tare.")
+@click.option("--duration", type=float, metavar="S", help="Stop after S seconds (default: until Ctrl-C or the end of the replayed log).")
+@click.option("--record", type=click.Path(dir_okay=False), metavar="FILE.csv", help="Record raw samples and estimates to FILE.csv as they come.")
+@click.option("--view/--no-view", default=None, help="Live terminal view (default: when standard error is a terminal).")
+@click.option("--rerun", "rerun_spawn", is_flag=True, help="Show the 3-D view live in a Rerun viewer (softtip[viz]; at most 50 samples/s are drawn).")
+@click.option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save the 3-D view and time series to FILE.rrd.")
+@_estimator_options
+@click.pass_context
+def stream(
+    ctx,
+    host,
+    replay,
+    speed,
+    units,
+    rdt_port,
+    http_port,
+    timeout,
+    device_bias,
+    duration,
+    record,
+    view,
+    rerun_spawn,
+    rerun_save,
+    tip,
+    contact_point,
+    lowpass,
+    tare_duration,
+    contact_threshold,
+    latch_window,
+    h_min,
+    force_noise,
+    moment_noise,
+):
+    import signal
+    import threading
+
+    from softtip.live import LiveStats, Recorder, TerminalView, run_live
+    from softtip.pipeline import Estimator
+    from softtip.sources import LogSource, SourceError
+
+    if (host is None) == (replay is None):
+        raise click.UsageError("give either --netft HOST or --replay LOG.csv")
+    if duration is not None and not duration > 0:
+        raise click.UsageError(f"--duration must be positive, got {duration}")
+    if not speed >= 0:
+        raise click.UsageError(f"--speed must be 0 (as fast as possible) or positive, got {speed}")
+    fingertip = load_fingertip(tip)
+    recorder = Recorder(record) if record is not None else None
+    viz = _optional("softtip.viz", "viz") if (rerun_spawn or rerun_save) else None
+    netft = _optional("softtip.netft", "netft") if host is not None else None
+
+    stop = threading.Event()
+    # Ctrl-C ends the loop between two samples: the recording stays complete
+    previous = signal.signal(signal.SIGINT, lambda *_: stop.set())
+    source = None
+    try:
+        try:
+            if replay is not None:
+                source = LogSource.from_csv(replay, units=units, speed=speed)
+                info = f"(replay x{speed:g})" if speed else "(replay, as fast as possible)"
+            else:
+                source = netft.NetFTSource(host, rdt_port=rdt_port, http_port=http_port, timeout=timeout, device_bias=device_bias).open()
+                d = source.info
+                rate = f"{d.rate_hz:g} Hz" if d.rate_hz else "rate unknown"
+                info = f"({d.product}, {d.force_unit} / {d.torque_unit}, {rate})"
+            config = _make_config(
+                contact_point, contact_threshold, latch_window, h_min, force_noise, moment_noise, lowpass, tare_duration,
+                sample_rate=source.rate_hz if lowpass is not None else None,
+            )  # fmt: skip
+            if lowpass is not None and source.rate_hz is None:
+                raise click.UsageError("--lowpass needs the sample rate, which this source does not report")
+            estimator = Estimator(fingertip, config)
+            stats = LiveStats(source_name=source.name, info=info, dropped=(lambda: source.dropped) if hasattr(type(source), "dropped") else None)
+            show = sys.stderr.isatty() if view is None else view
+            term = TerminalView(stats, interval=0.2, h_threshold=config.h_min, recorder=recorder) if show else None
+            on_estimate = None
+            if viz is not None:
+                logger = viz.RerunLogger(fingertip, save=rerun_save, spawn=rerun_spawn)
+                on_estimate = lambda e, r: logger.log_sample(e)
+            summary = run_live(source, estimator, recorder=recorder, view=term, stats=stats, duration=duration, stop=stop, on_estimate=on_estimate)
+            recorder = None  # closed by run_live
+            if viz is not None:
+                logger.close()
+        except SourceError as exc:
+            click.echo(f"softtip: error: {exc}", err=True)
+            ctx.exit(1)
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        if source is not None and hasattr(source, "close"):
+            source.close()
+        if recorder is not None:
+            recorder.close()
+    rate = summary.samples / summary.seconds if summary.seconds > 0 else 0.0
+    why = {"end": "end of log", "duration": "duration reached", "interrupt": "interrupted"}[summary.reason]
+    click.echo(
+        f"softtip: {summary.samples} samples in {summary.seconds:.2f} s ({rate:.1f} Hz), {summary.lost} lost, "
+        f"{summary.dropped} dropped by softtip; {why}" + (f"; recorded -> {record}" if record else ""),
+        err=True,
+    )
 
 
 if __name__ == "__main__":  # pragma: no cover

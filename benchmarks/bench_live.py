@@ -1,0 +1,120 @@
+"""Latency and sustained rate of the live path, against the fake Net F/T on 127.0.0.1.
+
+    python benchmarks/bench_live.py [--rates 1000 7000] [--seconds 5]
+
+For each rate a fake device (``python -m softtip.netft_fake``, its own process so it does
+not share softtip's interpreter) streams RDT records over UDP; softtip receives them with
+``pynetft``, runs the streaming estimator on every sample, records every row to a CSV file
+and redraws the terminal view (to /dev/null) five times a second: the full
+``softtip stream --record`` path. Latency is from a packet's arrival on the socket
+(pynetft's receive time stamp, monotonic clock) to its estimate being available (the
+``on_estimate`` hook, after the row was queued for the file). Reported: median and 99th
+percentile latency, the rate sustained, packets lost (RDT sequence gaps) and samples dropped
+by softtip (receive queue overflow). Target: 7 kHz with nothing dropped.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+from softtip.live import LiveStats, Recorder, TerminalView, run_live
+from softtip.netft import NetFTSource
+from softtip.pipeline import Estimator
+
+
+def bench(rate: float, seconds: float, record: bool = True, view: bool = True) -> dict:
+    dev = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "softtip.netft_fake",
+            "--rate",
+            str(rate),
+            "--duration",
+            str(seconds + 10),
+        ],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        line = dev.stdout.readline().split()
+        rdt_port, http_port = (
+            int(line[line.index("--rdt-port") + 1]),
+            int(line[line.index("--http-port") + 1]),
+        )
+        latencies = np.empty(int(rate * (seconds + 5)), dtype=np.int64)
+        n = 0
+
+        def on_estimate(e, r):
+            nonlocal n
+            latencies[n] = time.monotonic_ns() - r.arrival_ns
+            n += 1
+
+        with tempfile.TemporaryDirectory() as tmp, open(os.devnull, "w") as null:
+            recorder = Recorder(os.path.join(tmp, "rec.csv")) if record else None
+            with NetFTSource(
+                "127.0.0.1", rdt_port=rdt_port, http_port=http_port, timeout=2.0
+            ) as src:
+                stats = LiveStats(source_name=src.name, dropped=lambda: src.dropped)
+                term = (
+                    TerminalView(stats, out=null, recorder=recorder) if view else None
+                )
+                summary = run_live(
+                    src,
+                    Estimator(),
+                    recorder=recorder,
+                    view=term,
+                    stats=stats,
+                    duration=seconds,
+                    on_estimate=on_estimate,
+                )
+                rows = recorder.rows if recorder else 0
+    finally:
+        dev.kill()
+        dev.wait()
+    lat = latencies[:n] * 1e-6  # ms
+    return {
+        "rate": rate,
+        "samples": summary.samples,
+        "sustained": summary.samples / summary.seconds,
+        "median_ms": float(np.median(lat)),
+        "p99_ms": float(np.percentile(lat, 99)),
+        "max_ms": float(lat.max()),
+        "lost": summary.lost,
+        "dropped": summary.dropped,
+        "rows": rows,
+    }
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--rates", type=float, nargs="+", default=[1000.0, 7000.0])
+    p.add_argument("--seconds", type=float, default=5.0)
+    p.add_argument("--no-record", action="store_true", help="without the CSV recorder")
+    p.add_argument("--no-view", action="store_true", help="without the terminal view")
+    args = p.parse_args()
+    print(
+        f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"
+    )
+    print(
+        "| input rate | samples | sustained | latency median | p99 | max | lost (network) | dropped by softtip | rows recorded |"
+    )
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    for rate in args.rates:
+        r = bench(rate, args.seconds, record=not args.no_record, view=not args.no_view)
+        print(
+            f"| {r['rate']:.0f} Hz | {r['samples']} | {r['sustained']:.0f} Hz | {r['median_ms']:.3f} ms | {r['p99_ms']:.3f} ms "
+            f"| {r['max_ms']:.2f} ms | {r['lost']} | {r['dropped']} | {r['rows']} |"
+        )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,390 @@
+"""The live path: a source through the streaming estimator to a terminal view and a recording.
+
+:func:`run_live` is what ``softtip stream`` runs, for a live sensor and for a replayed log
+alike. Its consumer loop takes each :class:`~softtip.sources.Reading` from the source, runs
+:meth:`Estimator.update <softtip.pipeline.Estimator.update>` on it and hands the result
+on without waiting for anything slow:
+
+* the :class:`Recorder` queues rows; its own thread formats and writes them in batches and
+  flushes the file every ``flush_interval`` (0.05 s), so an interrupt loses at most that
+  and the loop never waits on the disk;
+* the :class:`TerminalView` thread redraws one screen a few times a second from the latest
+  estimate and the counters in :class:`LiveStats`;
+* an optional ``on_estimate`` callback (the rerun logger) is called in the loop and must
+  be cheap (it decimates).
+
+Receiving itself happens before the loop: for a Net F/T in pynetft's native receive
+thread and queue, so even a stalled loop does not lose packets until the queue is full.
+"""
+
+from __future__ import annotations
+
+import collections
+import itertools
+import math
+import os
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+from typing import TextIO
+
+from softtip.errors import InputError
+from softtip.pipeline import Estimator, SampleEstimate
+from softtip.sources import Reading, readings
+
+__all__ = [
+    "RECORD_COLUMNS",
+    "LiveStats",
+    "Recorder",
+    "TerminalView",
+    "estimate_row",
+    "run_live",
+]
+
+#: Columns of a live recording: those of ``softtip estimate`` (SPEC §4 and softtip's
+#: extras), then the raw (untared) wrench, the source's sequence number, and the samples
+#: lost just before this one.
+RECORD_COLUMNS: tuple[str, ...] = (
+    "t", "state", "fx", "fy", "fz", "mx", "my", "mz", "rx", "ry", "rz", "nx", "ny", "nz", "sigma",
+    "hx", "hy", "hz", "h_norm", "dx", "dy", "dz", "angle_deg", "h_std", "angle_std_deg", "latched",
+    "latch_fallback", "raw_fx", "raw_fy", "raw_fz", "raw_mx", "raw_my", "raw_mz", "seq", "lost",
+)  # fmt: skip
+# Same number formatting as softtip.io.write_table (so a recording matches `softtip estimate`).
+_F = "%.10g"
+_ROW_FORMAT = ",".join(["%s" if c == "state" else "%d" if c in ("latched", "latch_fallback", "seq", "lost") else _F
+                        for c in RECORD_COLUMNS]) + "\n"  # fmt: skip
+_DEG = 180.0 / math.pi
+_BLOCK = 32  # rows formatted per call by the recorder
+
+
+def estimate_row(e: SampleEstimate, r: Reading) -> tuple:
+    """One recording row (:data:`RECORD_COLUMNS`) from an estimate and its raw reading."""
+    return (
+        e.t, e.state, *e.wrench, *e.point, *e.normal, e.sigma, *e.h, e.h_norm, *e.direction,
+        e.angle * _DEG, e.h_std, e.angle_std * _DEG, e.latched, e.latch_fallback, *r.wrench, r.seq, r.lost,
+    )  # fmt: skip
+
+
+@dataclass
+class LiveStats:
+    """Counters of a live run, updated by the consumer loop, read by the view.
+
+    Attributes
+    ----------
+    received : int
+        Samples taken from the source.
+    lost : int
+        Samples missing in the source's sequence (network loss).
+    dropped : Callable or None
+        Returns samples dropped before softtip read them (receive queue overflow).
+    started : float
+        ``time.monotonic()`` at the first sample.
+    latest : SampleEstimate or None
+    """
+
+    received: int = 0
+    lost: int = 0
+    dropped: Callable[[], int] | None = None
+    started: float | None = None
+    latest: SampleEstimate | None = None
+    source_name: str = ""
+    info: str = ""
+    rate_window: collections.deque = field(
+        default_factory=lambda: collections.deque(maxlen=8)
+    )
+
+    def rate(self) -> float:
+        """Samples per second over the last couple of seconds (needs calls a few times a second)."""
+        now = time.monotonic()
+        self.rate_window.append((now, self.received))
+        (t0, n0), (t1, n1) = self.rate_window[0], self.rate_window[-1]
+        return (n1 - n0) / (t1 - t0) if t1 > t0 else 0.0
+
+
+class Recorder:
+    """Writes recording rows to a CSV file as they come, from a thread, in batches.
+
+    The file is created when the first row is written (a run that fails before any sample
+    leaves no file), and flushed to the OS every ``flush_interval`` seconds.
+
+    Parameters
+    ----------
+    path : str or path-like
+        CSV file; an existing file is replaced.
+    flush_interval : float
+        s between flushes (at most this much is lost if the process is killed).
+    """
+
+    def __init__(
+        self, path: str | os.PathLike[str], flush_interval: float = 0.05
+    ) -> None:
+        self.path = os.fspath(path)
+        if os.path.isdir(self.path):
+            raise InputError(
+                f"{self.path}: is a directory; expected a file name for the recording"
+            )
+        directory = os.path.dirname(os.path.abspath(self.path))
+        if not os.path.isdir(directory) or not os.access(directory, os.W_OK):
+            raise InputError(
+                f"{self.path}: cannot write there; expected an existing, writable directory"
+            )
+        self.flush_interval = flush_interval
+        self.rows = 0
+        self._pending: collections.deque = collections.deque()
+        self._fh: TextIO | None = None
+        self._stop = threading.Event()
+        self._error: BaseException | None = None
+        self._thread = threading.Thread(
+            target=self._loop, daemon=True, name="softtip-recorder"
+        )
+        self._thread.start()
+
+    def add(self, row: tuple) -> None:
+        """Queue one row (from the consumer loop; never blocks)."""
+        if self._error is not None:
+            raise self._error
+        self._pending.append(row)
+
+    def _write_pending(self) -> None:
+        pending = self._pending
+        n = len(pending)
+        if not n:
+            return
+        if self._fh is None:
+            self._fh = open(self.path, "w", encoding="utf-8", newline="")
+            self._fh.write(",".join(RECORD_COLUMNS) + "\n")
+        rows = [pending.popleft() for _ in range(n)]
+        # one C-level format per block of rows (as softtip.io.write_table does); small blocks,
+        # because a format call holds the GIL and the consumer loop must not wait long for it
+        for i in range(0, n, _BLOCK):
+            block = rows[i : i + _BLOCK]
+            self._fh.write(
+                (_ROW_FORMAT * len(block)) % tuple(itertools.chain.from_iterable(block))
+            )
+        self._fh.flush()
+        self.rows += n
+
+    def _loop(self) -> None:
+        try:
+            while not self._stop.wait(self.flush_interval):
+                self._write_pending()
+        except BaseException as exc:  # noqa: BLE001 - reported to the consumer on its next add()/close()
+            self._error = exc
+
+    def close(self) -> None:
+        """Write what is queued, flush, sync and close (idempotent)."""
+        if self._stop.is_set():
+            return
+        self._stop.set()
+        self._thread.join()
+        try:
+            if self._error is None:
+                self._write_pending()
+        finally:
+            if self._fh is not None:
+                self._fh.flush()
+                os.fsync(self._fh.fileno())
+                self._fh.close()
+        if self._error is not None:
+            raise InputError(f"{self.path}: cannot write the recording ({self._error})")
+
+
+def _fmt_vec(v, scale: float = 1.0, fmt: str = "{:+7.2f}") -> str:
+    if any(math.isnan(x) for x in v):
+        return "—"
+    return "(" + ", ".join(fmt.format(x * scale) for x in v) + ")"
+
+
+class TerminalView:
+    """A one-screen live view, redrawn in place with ANSI escapes a few times a second.
+
+    Parameters
+    ----------
+    stats : LiveStats
+    out : text stream
+        Where to draw (standard error by default, so standard output stays clean).
+    interval : float
+        s between redraws.
+    h_threshold : float
+        ``h_min`` of the configuration, N·m, shown next to ``|h|``.
+    recorder : Recorder, optional
+        Its row count is shown.
+    """
+
+    def __init__(
+        self,
+        stats: LiveStats,
+        out: TextIO | None = None,
+        interval: float = 0.2,
+        h_threshold: float = 5e-4,
+        recorder: Recorder | None = None,
+    ) -> None:
+        self.stats, self.out, self.interval = stats, out or sys.stderr, interval
+        self.h_threshold, self.recorder = h_threshold, recorder
+        self._lines = 0
+        self._stop = threading.Event()
+        self._thread = threading.Thread(
+            target=self._loop, daemon=True, name="softtip-view"
+        )
+
+    def start(self) -> TerminalView:
+        self._thread.start()
+        return self
+
+    def stop(self) -> None:
+        """Stop redrawing; the last screen stays."""
+        self._stop.set()
+        if self._thread.is_alive():
+            self._thread.join()
+        self.draw()
+
+    def _loop(self) -> None:
+        while not self._stop.wait(self.interval):
+            self.draw()
+
+    def render(self) -> list[str]:
+        """The screen as lines of text."""
+        s, e = self.stats, self.stats.latest
+        rate = s.rate()
+        dropped = s.dropped() if s.dropped else 0
+        lines = [f"softtip stream  {s.source_name}  {s.info}".rstrip()]
+        if e is None:
+            lines.append("waiting for data ...")
+        else:
+            fn = (
+                math.sqrt(sum(x * x for x in e.wrench[:3]))
+                if not math.isnan(e.wrench[0])
+                else math.nan
+            )
+            flags = " ".join(
+                n
+                for n, on in (("latched", e.latched), ("fallback", e.latch_fallback))
+                if on
+            )
+            state = (
+                "taring (keep the fingertip untouched)" if e.taring else e.state.upper()
+            )
+            lines += [
+                f"t        {e.t:10.3f} s",
+                f"state    {state:<8} {flags}",
+                f"|f|      {fn:8.3f} N      f = {_fmt_vec(e.wrench[:3])} N",
+                f"contact  r = {_fmt_vec(e.point, 1e3)} mm",
+                f"normal   n = {_fmt_vec(e.normal, 1.0, '{:+6.3f}')}",
+                f"|h|      {e.h_norm * 1e3:8.3f} N·mm   (significant above {max(3 * e.h_std, self.h_threshold) * 1e3:.3f} N·mm)"
+                if not math.isnan(e.h_norm) else "|h|             —",
+                f"edge     {e.angle * _DEG:+7.1f}° ± {e.angle_std * _DEG:.1f}°" if e.state == "line" else "edge            —",
+            ]  # fmt: skip
+        pct = 100.0 * s.lost / (s.received + s.lost) if s.received else 0.0
+        lines.append(
+            f"rate     {rate:8.1f} Hz     samples {s.received}   lost {s.lost} ({pct:.2f} %)   dropped {dropped}"
+        )
+        if self.recorder is not None:
+            lines.append(f"record   {self.recorder.path}  {self.recorder.rows} rows")
+        lines.append("Ctrl-C to stop")
+        return lines
+
+    def draw(self) -> None:
+        lines = self.render()
+        # back to the top of the previous screen, then rewrite each line and clear the rest
+        up = f"\x1b[{self._lines}F" if self._lines else ""
+        text = up + "".join(f"\x1b[2K{line}\n" for line in lines) + "\x1b[J"
+        self._lines = len(lines)
+        try:
+            self.out.write(text)
+            self.out.flush()
+        except (OSError, ValueError):  # terminal gone
+            pass
+
+
+@dataclass
+class LiveSummary:
+    """How a live run ended. ``reason``: ``end`` (source exhausted), ``duration``, ``interrupt``."""
+
+    samples: int
+    lost: int
+    dropped: int
+    seconds: float
+    reason: str
+    last: SampleEstimate | None
+
+
+def run_live(
+    source: Iterable,
+    estimator: Estimator,
+    *,
+    recorder: Recorder | None = None,
+    view: TerminalView | None = None,
+    stats: LiveStats | None = None,
+    duration: float | None = None,
+    stop: threading.Event | None = None,
+    on_estimate: Callable[[SampleEstimate, Reading], None] | None = None,
+) -> LiveSummary:
+    """Run ``source`` through ``estimator`` until it ends, ``duration`` passes or ``stop`` is set.
+
+    Parameters
+    ----------
+    source : iterable of Reading or (t, wrench)
+    estimator : Estimator
+    recorder : Recorder, optional
+        Gets one row per sample; closed (flushed) at the end, also on errors.
+    view : TerminalView, optional
+        Started here, stopped at the end.
+    stats : LiveStats, optional
+        Counters to update (the view's); a new one otherwise.
+    duration : float, optional
+        s of wall-clock time after the first sample.
+    stop : threading.Event, optional
+        Set it (e.g. from a SIGINT handler) to end the run cleanly.
+    on_estimate : callable, optional
+        Called with each estimate and its reading, in the loop.
+
+    Returns
+    -------
+    LiveSummary
+    """
+    stats = stats or LiveStats()
+    stop = stop or threading.Event()
+    update = estimator.update
+    add = recorder.add if recorder is not None else None
+    reason = "end"
+    if view is not None:
+        view.start()
+    deadline = math.inf
+    try:
+        for r in readings(source):
+            if stats.started is None:
+                stats.started = time.monotonic()
+                if duration is not None:
+                    deadline = stats.started + duration
+            e = update(r.t, r.wrench)
+            stats.received += 1
+            stats.lost += r.lost
+            stats.latest = e
+            if add is not None:
+                add(estimate_row(e, r))
+            if on_estimate is not None:
+                on_estimate(e, r)
+            if stop.is_set():
+                reason = "interrupt"
+                break
+            if time.monotonic() >= deadline:
+                reason = "duration"
+                break
+    finally:
+        try:
+            if recorder is not None:
+                recorder.close()
+        finally:
+            if view is not None:
+                view.stop()  # after the recorder, so the last screen shows every row
+    seconds = time.monotonic() - stats.started if stats.started is not None else 0.0
+    return LiveSummary(
+        stats.received,
+        stats.lost,
+        stats.dropped() if stats.dropped else 0,
+        seconds,
+        reason,
+        stats.latest,
+    )

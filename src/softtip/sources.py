@@ -1,0 +1,184 @@
+"""Sources of force/torque samples, and driving the streaming estimator from any of them.
+
+A **source** is anything iterable that yields samples ``(t, wrench)``: ``t`` in s (strictly
+increasing), ``wrench`` six numbers ``fx, fy, fz`` (N), ``mx, my, mz`` (N·m), raw (softtip
+tares it), sensor frame. softtip's own sources yield :class:`Reading`, a named tuple whose
+first two fields are exactly that, plus the bookkeeping a live sensor needs (sequence
+number, packets lost before this one, arrival time). A plain generator works as well::
+
+    import softtip
+
+    def my_sensor():
+        while True:
+            t, w = read_my_driver()      # s, (fx, fy, fz, mx, my, mz) in N, N·m
+            yield t, w
+
+    for est in softtip.run(my_sensor(), "murakami2006"):
+        if est.state == "line":
+            print(est.angle)              # rad
+
+Sources here: :class:`LogSource` (a recorded log, replayed at its recorded rate, faster,
+or as fast as possible) and, with the ``netft`` extra, :class:`softtip.netft.NetFTSource`
+(an ATI Net F/T or Axia over RDT/UDP).
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Iterable, Iterator
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from softtip.fingertip import Fingertip
+from softtip.pipeline import Estimator, EstimatorConfig, SampleEstimate
+
+__all__ = ["LogSource", "Reading", "SourceError", "readings", "run"]
+
+
+class SourceError(RuntimeError):
+    """A live source failed at run time: no data (time-out), device unreachable, ...
+
+    Not bad input (that is :class:`~softtip.errors.InputError`): the command line exits
+    with code 1 and the message.
+    """
+
+
+class Reading(NamedTuple):
+    """One raw sample from a source.
+
+    Attributes
+    ----------
+    t : float
+        s, strictly increasing within a source.
+    wrench : tuple of 6 float
+        Raw ``fx, fy, fz`` (N) and ``mx, my, mz`` (N·m), sensor frame, not tared.
+    seq : int
+        The source's sequence number (RDT sequence for a Net F/T, row index for a log).
+    lost : int
+        Samples missing just before this one (gaps in ``seq``); 0 for a log.
+    arrival_ns : int
+        When the sample reached this host, ``time.monotonic_ns()`` clock; 0 if unknown.
+    """
+
+    t: float
+    wrench: tuple[float, ...]
+    seq: int = 0
+    lost: int = 0
+    arrival_ns: int = 0
+
+
+def readings(source: Iterable) -> Iterator[Reading]:
+    """Normalise a source's items to :class:`Reading` (plain ``(t, wrench)`` pairs included)."""
+    for seq, item in enumerate(source):
+        if isinstance(item, Reading):
+            yield item
+        else:
+            t, w = item[0], item[1]
+            w = w.tolist() if isinstance(w, np.ndarray) else w
+            yield Reading(float(t), tuple(float(v) for v in w), seq, 0, 0)
+
+
+def run(
+    source: Iterable,
+    tip: Fingertip | str = "murakami2006",
+    config: EstimatorConfig | None = None,
+) -> Iterator[SampleEstimate]:
+    """Run the streaming :class:`~softtip.pipeline.Estimator` over a source.
+
+    Parameters
+    ----------
+    source : iterable of (t, wrench) or Reading
+        ``t`` in s, strictly increasing; ``wrench`` raw, shape (6,), N and N·m.
+    tip : Fingertip or str
+        Fingertip, preset name or TOML path.
+    config : EstimatorConfig, optional
+
+    Yields
+    ------
+    SampleEstimate
+        One per sample, as soon as it is computed.
+
+    Examples
+    --------
+    >>> import softtip
+    >>> log = softtip.load_example()
+    >>> states = [e.state for e in softtip.run(zip(log.t, log.wrench))]
+    >>> states[-1]
+    'line'
+    """
+    estimator = Estimator(tip, config)
+    update = estimator.update
+    for item in source:
+        yield update(item[0], item[1])
+
+
+class LogSource:
+    """A recorded log as a live source, replayed in (scaled) real time.
+
+    Parameters
+    ----------
+    t : array-like, shape (N,)
+        s, strictly increasing.
+    wrench : array-like, shape (N, 6)
+        Raw wrench, N and N·m.
+    speed : float
+        Replay speed: 1 is the recorded rate, 2 twice as fast, 0 as fast as possible.
+    name : str
+        Shown in the live view.
+
+    Notes
+    -----
+    Sample ``k`` is released at ``start + (t[k] - t[0]) / speed`` (wall clock): a slow
+    consumer catches up without drift instead of stretching the log.
+    """
+
+    def __init__(
+        self, t: ArrayLike, wrench: ArrayLike, speed: float = 1.0, name: str = "log"
+    ) -> None:
+        self.t = np.asarray(t, dtype=float)
+        self.wrench = np.asarray(wrench, dtype=float)
+        if self.t.ndim != 1 or self.wrench.shape != (len(self.t), 6):
+            raise ValueError(
+                f"expected t (N,) and wrench (N, 6), got {self.t.shape} and {self.wrench.shape}"
+            )
+        if not (np.isfinite(speed) and speed >= 0):
+            raise ValueError(
+                f"speed must be a non-negative number (0: as fast as possible), got {speed!r}"
+            )
+        self.speed = float(speed)
+        self.name = name
+        dt = np.diff(self.t)
+        #: Recorded sample rate, Hz (median step); None for fewer than two samples.
+        self.rate_hz: float | None = float(1.0 / np.median(dt)) if len(dt) else None
+
+    @classmethod
+    def from_csv(
+        cls, path: str | os.PathLike[str], units: str = "si", speed: float = 1.0
+    ) -> LogSource:
+        """Read a SPEC §4 CSV log (columns ``t, fx, fy, fz, mx, my, mz``); see :func:`softtip.io.read_log`."""
+        from softtip.io import read_log
+
+        log = read_log(path, units=units)
+        return cls(log.t, log.wrench, speed=speed, name=os.path.basename(log.source))
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    def __iter__(self) -> Iterator[Reading]:
+        ts = self.t.tolist()
+        ws = [tuple(row) for row in self.wrench.tolist()]
+        clock = time.monotonic_ns
+        if self.speed == 0 or not ts:
+            for k, (t, w) in enumerate(zip(ts, ws)):
+                yield Reading(t, w, k, 0, clock())
+            return
+        start = time.monotonic()
+        t0, speed = ts[0], self.speed
+        for k, (t, w) in enumerate(zip(ts, ws)):
+            wait = start + (t - t0) / speed - time.monotonic()
+            if wait > 0:
+                time.sleep(wait)
+            yield Reading(t, w, k, 0, clock())

@@ -1,0 +1,157 @@
+"""Live Net F/T input (softtip[netft]) against a fake device on 127.0.0.1.
+
+Every network wait is bounded: the fake device streams only while asked, the commands
+run with --duration / --timeout, and every subprocess has a time limit.
+"""
+
+import csv
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("pynetft")
+from softtip.live import RECORD_COLUMNS
+from softtip.netft import NetFTSource
+from softtip.netft_fake import FakeNetFT
+from softtip.sources import SourceError
+
+SOFTTIP = str(Path(sys.executable).with_name("softtip"))
+
+
+def stream_args(dev, *more):
+    return [
+        SOFTTIP,
+        "stream",
+        "--netft",
+        "127.0.0.1",
+        "--rdt-port",
+        str(dev.rdt_port),
+        "--http-port",
+        str(dev.http_port),
+        *map(str, more),
+    ]
+
+
+def read_rows(path):
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def test_stream_records_every_sample_and_counts_loss(tmp_path):
+    with FakeNetFT(rate_hz=1000, drop={300, 301, 302}) as dev:
+        out = subprocess.run(
+            stream_args(dev, "--duration", 1.5, "--record", tmp_path / "rec.csv"),
+            capture_output=True,
+            text=True,
+            timeout=30,
+        )
+    assert out.returncode == 0, out.stderr
+    rows = read_rows(tmp_path / "rec.csv")
+    assert list(rows[0]) == list(RECORD_COLUMNS)
+    assert 1200 <= len(rows) <= 1700  # 1.5 s at 1 kHz
+    seq = np.array([int(r["seq"]) for r in rows])
+    lost = np.array([int(r["lost"]) for r in rows])
+    assert np.all(np.diff(seq) >= 1)
+    # the dropped packets show as a gap and are counted on the next row, nowhere else
+    assert lost.sum() == 3 and lost[seq == 303].tolist() == [3]
+    assert np.array_equal(np.diff(seq) - 1, lost[1:])
+    t = np.array([float(r["t"]) for r in rows])
+    assert t[0] == 0 and np.allclose(
+        np.diff(t), np.diff(seq) / 1000.0
+    )  # device clock from comrdtrate
+    assert ", 3 lost," in out.stderr and "duration reached" in out.stderr
+    assert {r["state"] for r in rows[:150]} == {"none"}  # taring for the first 0.2 s
+
+
+def test_units_from_the_device_are_converted_to_si():
+    wrench = np.tile([[1.5, -2.0, 3.25, 0.01, -0.02, 0.005]], (100, 1))  # N, N·m
+    with FakeNetFT(
+        wrench,
+        rate_hz=500,
+        force_unit="lbf",
+        torque_unit="lbf-in",
+        counts_per_force=1e6,
+        counts_per_torque=1e6,
+    ) as dev:
+        with NetFTSource(
+            "127.0.0.1", rdt_port=dev.rdt_port, http_port=dev.http_port, timeout=2.0
+        ) as src:
+            assert (src.info.force_unit, src.info.torque_unit, src.info.rate_hz) == (
+                "lbf",
+                "lbf-in",
+                500.0,
+            )
+            assert src.info.counts_per_force == 1e6
+            got = []
+            for r in src:
+                got.append(r.wrench)
+                if len(got) == 20:
+                    break
+    # one count is 1e-6 lbf, 4.4e-6 N: well inside this tolerance
+    np.testing.assert_allclose(got, wrench[:20], atol=1e-5)
+
+
+def test_silent_device_times_out(tmp_path):
+    with FakeNetFT(rate_hz=1000, silent=True) as dev:
+        t0 = time.monotonic()
+        out = subprocess.run(
+            stream_args(dev, "--timeout", 0.5, "--record", tmp_path / "rec.csv"),
+            capture_output=True,
+            text=True,
+            timeout=30,
+        )
+        elapsed = time.monotonic() - t0
+    assert out.returncode == 1
+    assert (
+        "no data for 0.5 s" in out.stderr
+        and f"RDT UDP port {dev.rdt_port}" in out.stderr
+    )
+    assert elapsed < 10
+    assert not (tmp_path / "rec.csv").exists()  # nothing recorded: no file
+
+
+def test_unreachable_device(tmp_path):
+    dev = FakeNetFT(rate_hz=1000)  # bound but never started: HTTP does not answer
+    try:
+        with pytest.raises(SourceError, match="cannot read the calibration"):
+            NetFTSource(
+                "127.0.0.1", rdt_port=dev.rdt_port, http_port=dev.http_port, timeout=0.5
+            ).open()
+    finally:
+        dev._http.server_close()
+        dev._udp.close()
+
+
+def test_sigint_keeps_every_row(tmp_path):
+    rec = tmp_path / "rec.csv"
+    with FakeNetFT(rate_hz=1000) as dev:
+        proc = subprocess.Popen(
+            stream_args(dev, "--record", rec, "--duration", 20),
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        try:
+            deadline = time.monotonic() + 15
+            seen = 0
+            while seen < 500 and time.monotonic() < deadline:
+                time.sleep(0.05)
+                seen = rec.read_text().count("\n") - 1 if rec.exists() else 0
+            assert seen >= 500, "no recording appeared"
+            proc.send_signal(signal.SIGINT)
+            _, err = proc.communicate(timeout=15)
+        finally:
+            proc.kill()
+    assert proc.returncode == 0, err
+    assert "interrupted" in err
+    text = rec.read_text()
+    assert text.endswith("\n")
+    rows = read_rows(rec)
+    assert len(rows) >= seen
+    assert all(len(r) == len(RECORD_COLUMNS) and None not in r.values() for r in rows)
+    seq = [int(r["seq"]) for r in rows]
+    assert seq == list(range(seq[0], seq[0] + len(seq)))  # nothing missing on loopback
