@@ -11,7 +11,7 @@ import numpy as np
 from softtip.pipeline import LINE, Estimates
 from softtip.units import KGF, KGF_MM
 
-__all__ = ["plot_estimates"]
+__all__ = ["plot_estimates", "plot_direction_chart", "plot_position_error"]
 
 _UNITS = {
     "si": (1.0, 1e3, "N", "N·mm"),
@@ -37,6 +37,7 @@ def plot_estimates(
     units: str = "si",
     title: str | None = None,
     h_threshold: float | np.ndarray | None = None,
+    reference_angles: Sequence[float] | None = None,
 ):
     """Draw the four panels of the papers' figures (e.g. 2006 Figs. 8–11).
 
@@ -55,6 +56,8 @@ def plot_estimates(
     units : {"si", "kgf-mm"}
         Plot force in N and moment in N·mm, or kgf and kgf·mm as in the papers.
     title : str, optional
+    reference_angles : sequence of float, optional
+        True directions (degrees), one per log, drawn as dashed lines in its colour.
     h_threshold : float or array of shape (N,), optional
         The ``|h|`` significance level (N·m) of the first log, drawn dashed: a constant or
         per sample (``max(h_sigmas · h_std, h_min)``).
@@ -89,6 +92,8 @@ def plot_estimates(
         std = np.degrees(est.angle_std)
         ax_d.plot(est.t, angle, ".", ms=2.5, color=line.get_color(), label=label)
         ax_d.fill_between(est.t, angle - std, angle + std, color=line.get_color(), alpha=0.2, lw=0)
+        if reference_angles is not None:
+            ax_d.axhline(reference_angles[k], ls="--", lw=0.8, color=line.get_color())
     if h_threshold is not None:
         level = np.broadcast_to(np.asarray(h_threshold, dtype=float), first.t.shape)
         ax_h.plot(first.t, level * mscale, ls="--", color="0.4", lw=1, label="significance")
@@ -104,8 +109,95 @@ def plot_estimates(
         ax.grid(True, alpha=0.3)
     if title:
         fig.suptitle(title)
+    _save(fig, plt, path)
+    return fig
+
+
+def _save(fig, plt, path) -> None:
     if path is not None:
         Path(path).parent.mkdir(parents=True, exist_ok=True)
         fig.savefig(path, dpi=110)
         plt.close(fig)
+
+
+def plot_direction_chart(
+    rows: Sequence[tuple[str, Sequence[Estimates], Sequence[str], Sequence[float]]],
+    path: str | os.PathLike | None = None,
+    *,
+    title: str | None = None,
+):
+    """The papers' per-object charts (2006 Figs. 14–17, 19–22): one row per object, ``|h|``
+    (N·mm) on the left and the measured direction (degrees) on the right, a trace per angle
+    with its true direction dashed.
+
+    Parameters
+    ----------
+    rows : sequence of (name, estimates, labels, true angles in degrees)
+    path : str or PathLike, optional
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    plt = _figure_module()
+    fig, axes = plt.subplots(len(rows), 2, figsize=(10, 2.1 * len(rows) + 0.6), sharex=True, squeeze=False, constrained_layout=True)
+    for (name, runs, labels, truths), (ax_h, ax_d) in zip(rows, axes):
+        for est, label, truth in zip(runs, labels, truths):
+            (ln,) = ax_h.plot(est.t, est.h_norm * 1e3, lw=1, label=label)
+            angle = np.where(est.state == LINE, np.degrees(est.angle), np.nan)
+            ax_d.plot(est.t, angle, ".", ms=2, color=ln.get_color())
+            ax_d.axhline(truth, ls="--", lw=0.8, color=ln.get_color())
+        ax_h.set_ylabel("|h| [N·mm]")
+        ax_h.set_title(name, fontsize=9, loc="left")
+        ax_d.set_ylim(-90, 90)
+        ax_d.set_yticks([-90, -45, 0, 45, 90])
+        ax_d.set_ylabel("direction [deg]")
+        ax_h.legend(loc="upper left", fontsize=7, ncol=len(labels))
+        for ax in (ax_h, ax_d):
+            ax.grid(True, alpha=0.3)
+    axes[-1, 0].set_xlabel("time [s]")
+    axes[-1, 1].set_xlabel("time [s]")
+    if title:
+        fig.suptitle(title)
+    _save(fig, plt, path)
+    return fig
+
+
+def plot_position_error(
+    runs: Sequence[tuple[str, np.ndarray, np.ndarray]],
+    path: str | os.PathLike | None = None,
+    *,
+    bound: float | None = None,
+    title: str | None = None,
+):
+    """Contact-position error against pushing force (2006 Fig. 7).
+
+    Parameters
+    ----------
+    runs : sequence of (label, |f| in N (N,), position error in m (N,))
+    path : str or PathLike, optional
+    bound : float, optional
+        An error bound to draw, m.
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    plt = _figure_module()
+    fig, ax = plt.subplots(figsize=(7, 4.2), constrained_layout=True)
+    for label, fn, err in runs:
+        ok = np.isfinite(err) & (fn > 0)
+        ax.plot(fn[ok] / KGF, err[ok] * 1e3, ".", ms=3, label=label)
+    if bound is not None:
+        ax.axhline(bound * 1e3, ls="--", color="0.4", lw=1, label=f"{bound * 1e3:g} mm")
+    ax.axvline(0.2, ls=":", color="0.4", lw=1)
+    ax.set_xlabel("pushing force [kgf]")
+    ax.set_ylabel("contact position error [mm]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    if title:
+        ax.set_title(title, fontsize=10)
+    _save(fig, plt, path)
     return fig

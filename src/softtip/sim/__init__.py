@@ -35,7 +35,18 @@ from softtip.sim.objects import (
     stick,
 )
 from softtip.sim.pose import Pose, rotation_matrix
-from softtip.sim.scenario import Disturbance, GraspScenario, HandFrame, paper_scenario, push_scenario, smoothstep
+from softtip.sim.scenario import (
+    DISTURBANCE_RAMP,
+    DISTURBANCE_TIMINGS,
+    JOINT_ROTATION_DEG,
+    OBJECT_MASS,
+    Disturbance,
+    GraspScenario,
+    HandFrame,
+    paper_scenario,
+    push_scenario,
+    smoothstep,
+)
 from softtip.sim.sensor import NANO17, SensorModel
 from softtip.sim.simulate import SimLog, run_simulation, simulate_grasp, truth_dict, write_log_csv, write_truth_json
 from softtip.sim.skin import DEFAULT_ELEMENTS, SkinMesh, discretise_skin
@@ -57,6 +68,10 @@ __all__ = [
     "stick",
     "Pose",
     "rotation_matrix",
+    "DISTURBANCE_RAMP",
+    "DISTURBANCE_TIMINGS",
+    "JOINT_ROTATION_DEG",
+    "OBJECT_MASS",
     "Disturbance",
     "GraspScenario",
     "HandFrame",

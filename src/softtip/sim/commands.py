@@ -15,6 +15,7 @@ import click
 
 from softtip.errors import InputError
 from softtip.sim.objects import OBJECT_KINDS
+from softtip.sim.scenario import DISTURBANCE_TIMINGS, JOINT_ROTATION_DEG, OBJECT_MASS
 from softtip.sim.simulate import log_csv_text, run_simulation, write_log_csv, write_truth_json
 from softtip.sim.skin import DEFAULT_ELEMENTS
 from softtip.units import KGF, UNIT_SYSTEMS
@@ -98,12 +99,16 @@ LENGTH, FORCE = _Length(), _Force()
 @click.option("--t-contact", type=float, default=2.0, show_default=True, help="Time of first touch, s.")
 @click.option("--t-stable", type=float, default=4.0, show_default=True, help="End of the force ramp, s.")
 @click.option("--rate", type=float, default=50.0, show_default=True, help="Sample rate, Hz.")
-@click.option("--joint-rotation", "joint_rotation_deg", type=float, default=3.0, show_default=True,
-              help="paper: object rotation about the joint axis during the grasp, degrees.")
+@click.option("--joint-rotation", "joint_rotation_deg", type=float, default=JOINT_ROTATION_DEG, show_default=True,
+              help="paper: object rotation about the joint axis once the grasp holds it, degrees.")
 @click.option("--gravity-spin", "gravity_spin_deg", type=float, default=1.0, show_default=True,
               help="paper: object rotation about the grasp axis from its weight, degrees.")
-@click.option("--mass", "object_mass", type=float, default=0.01, show_default=True,
+@click.option("--mass", "object_mass", type=float, default=OBJECT_MASS, show_default=True,
               help="paper: object mass, kg (half its weight loads each finger tangentially).")
+@click.option("--disturbance-timing", type=click.Choice(DISTURBANCE_TIMINGS), default="after_grasp",
+              show_default=True,
+              help="paper: after_grasp (the papers' procedure: disturbances ramp in after the grasp force "
+                   "is established) or during_rise (together with the force rise; harder for the latch).")
 @click.option("--misalignment", "misalignment_deg", type=float, default=0.0, show_default=True,
               help="paper: fixed alignment error about the hand z axis, degrees.")
 @click.option("--elements", "n_elements", type=click.IntRange(50), default=DEFAULT_ELEMENTS, show_default=True,

@@ -35,6 +35,47 @@ gets no rotation about the in-plane axis perpendicular to it (hand ``z`` = senso
 and shows almost no tangential spin torque — the paper's unobservable case, reproduced by
 the physics rather than special-cased. ``misalignment`` (a fixed rotation about hand ``z``)
 models the paper's "alignment error of the fingers and grasped object".
+
+Timing
+------
+By default (``disturbance_timing="after_grasp"``) the object is kept still while the
+fingers close and the grasp force builds (2 → 4 s), so the contact point is measured at
+light force on an undisturbed contact (paper III-C, 2006 §IV steps 1–3); the joint
+rotation and the gravity spin then ramp in over 4 → 5.5 s. ``"during_rise"`` (the earlier
+behaviour) ramps them with the force; the pressure centre then moves along the strip while
+the latch averages, and the latched point absorbs part of the tangential spin torque.
+
+Amplitudes
+----------
+Tangential spin torque comes from the relative rotation about the joint axis; on the
+murakami2006 tip at 0.5 kgf a 1–2 mm plate resists a rotation about the in-plane axis
+across it with about 1.3 N·mm per degree (Winkler strip bending). The default 3.5°
+(finger compliance and joint servo error of a few degrees) gives |h| ≈ 4.5 N·mm at 0° and
+≈ 3.2 N·mm at ±45° (the papers' Figs. 8–10: roughly 0.3–1.5 kgf·mm), while the 90° plate
+stays at ≈ 0.4 N·mm, below ``h_min``. The gravity spin (1°) and the mass (10 g, a light
+plate; 0.05 N of tangential load per finger) are kept small: see the limits below.
+
+Known limits of the contact model (measured, not fixed)
+-------------------------------------------------------
+* A rotation about hand ``y`` has a component about the strip's own axis (sin of the
+  angle between them): at ±45° half of it tilts the plate about its cut edge. In the
+  Winkler model the springs stay vertical under the footprint the tilted plate cuts in the
+  undeformed skin, which lies ``δ·tan α`` beside the cut face (δ ≈ 3 mm): the line of
+  action moves across the strip and the tilt is resisted with ``≈ F·δ`` ≈ 15 N·mm/rad,
+  about a fifth of the bending stiffness across it (≈ 75 N·mm/rad). With the true wrench
+  and the nominal point this biases the direction at ±45° toward 0° by 3–5° (5–9° through
+  the estimator with noise) for the
+  default amplitudes (33° instead of 45° with no gravity load at all). The pivot of the rotation
+  plays no part (the translations are solved from force balance: pivot at the contact,
+  3 mm deep or 40 mm away give the same wrench to 0.05°). Real rubber also resists the
+  tilt (side walls of the 3 mm deep groove), so a bias of this kind is plausible, but
+  its size here is a property of the Winkler spring direction, not a measured one.
+* The Winkler layer has no side-wall stiffness across an embedded thin plate: only the
+  shear layer holds it sideways (≈ 0.3 N/mm instead of ≈ 10 N/mm for rubber walls), so a
+  tangential load across the strip shifts it and adds ``|f| × shift`` to ``h``. Heavier
+  objects (≥ 50 g) therefore corrupt ±45° and 90° plates, and applying the weight only
+  after the grasp (stuck strip) makes the lateral force solve fail at 90°; the weight
+  ramps with the grasp force for that reason.
 """
 
 from __future__ import annotations
@@ -50,7 +91,23 @@ from softtip.sim.pose import Pose, unit
 from softtip.sim.truth import tangent_frame
 from softtip.units import KGF, STANDARD_GRAVITY
 
-__all__ = ["Disturbance", "HandFrame", "GraspScenario", "paper_scenario", "push_scenario", "smoothstep"]
+__all__ = [
+    "DISTURBANCE_RAMP",
+    "DISTURBANCE_TIMINGS",
+    "JOINT_ROTATION_DEG",
+    "OBJECT_MASS",
+    "Disturbance",
+    "HandFrame",
+    "GraspScenario",
+    "paper_scenario",
+    "push_scenario",
+    "smoothstep",
+]
+
+#: Default relative rotation about the joint axis in :func:`paper_scenario`, degrees.
+JOINT_ROTATION_DEG = 3.5
+#: Default object mass in :func:`paper_scenario`, kg.
+OBJECT_MASS = 0.01
 
 
 def smoothstep(x: ArrayLike) -> NDArray[np.float64]:
@@ -239,6 +296,10 @@ class GraspScenario:
         The hand frame, recorded in the truth (the papers' scenario).
     name : str
         Label.
+    load_start, load_end : float, optional
+        Ramp interval of the ``tangential_force``, s (smoothstep; a step when equal).
+        None (default): the load ramps with the grasp force, from ``t_contact`` to
+        ``t_stable``.
     """
 
     angle: float = 0.0
@@ -253,11 +314,20 @@ class GraspScenario:
     tangential_force: tuple[float, float, float] | None = None
     hand: HandFrame | None = None
     name: str = "push"
+    load_start: float | None = None
+    load_end: float | None = None
 
     def __post_init__(self) -> None:
         for nm in ("angle", "force", "duration", "t_contact", "t_stable", "approach_speed"):
             if not math.isfinite(getattr(self, nm)):
                 raise ValueError(f"{nm} must be finite")
+        if (self.load_start is None) != (self.load_end is None):
+            raise ValueError("give both load_start and load_end, or neither")
+        if self.load_start is not None:
+            if not (math.isfinite(self.load_start) and math.isfinite(self.load_end)):
+                raise ValueError("load_start and load_end must be finite")
+            if self.load_end < self.load_start:
+                raise ValueError(f"load_end {self.load_end} s is before load_start {self.load_start} s")
         if self.force <= 0.0:
             raise ValueError(f"force must be positive (N), got {self.force!r}")
         if not (0.0 <= self.t_contact < self.t_stable):
@@ -298,6 +368,16 @@ class GraspScenario:
         """Grasp force profile along the push axis, N, at times ``t`` (s)."""
         return self.force * smoothstep((np.asarray(t, dtype=float) - self.t_contact) / (self.t_stable - self.t_contact))
 
+    def load_ramp(self, t: ArrayLike) -> NDArray[np.float64]:
+        """Fraction of ``tangential_force`` applied at times ``t`` (s)."""
+        t = np.asarray(t, dtype=float)
+        if self.load_start is None:
+            return np.where(t >= self.t_contact, self.force_target(t) / self.force, 0.0)
+        a, b = float(self.load_start), float(self.load_end)
+        if b <= a:
+            return np.where(t >= a, 1.0, 0.0)
+        return smoothstep((t - a) / (b - a))
+
     def disturbance_pose(self, t: float, contact_point: ArrayLike) -> Pose:
         """``D(t)``: all disturbances composed in order."""
         out = Pose.identity()
@@ -321,6 +401,8 @@ class GraspScenario:
             "disturbances": [d.as_dict() for d in self.disturbances],
             "tangential_force_N": None if self.tangential_force is None else list(self.tangential_force),
             "hand": None if self.hand is None else self.hand.as_dict(),
+            "load_start_s": self.load_start,
+            "load_end_s": self.load_end,
         }
 
 
@@ -330,14 +412,23 @@ def push_scenario(angle: float = 0.0, **kwargs) -> GraspScenario:
     return GraspScenario(angle=angle, name=kwargs.pop("name", "push"), **kwargs)
 
 
+#: Disturbance timings accepted by :func:`paper_scenario`.
+DISTURBANCE_TIMINGS = ("after_grasp", "during_rise")
+#: Default ramp time of the disturbances after the grasp is established, s.
+DISTURBANCE_RAMP = 1.5
+
+
 def paper_scenario(
     angle: float = 0.0,
     *,
-    joint_rotation: float = math.radians(3.0),
+    joint_rotation: float = math.radians(JOINT_ROTATION_DEG),
     gravity_spin: float = math.radians(1.0),
-    object_mass: float = 0.01,
+    object_mass: float = OBJECT_MASS,
     misalignment: float = 0.0,
     finger_pitch: float = 0.0,
+    disturbance_timing: str = "after_grasp",
+    disturbance_start: float | None = None,
+    disturbance_end: float | None = None,
     **kwargs,
 ) -> GraspScenario:
     """The papers' grasp with the right fingertip of the two-fingered hand (SPEC §5).
@@ -348,44 +439,82 @@ def paper_scenario(
         Object direction at the apex, rad (SPEC §3.4; 90° is along the joint axes).
     joint_rotation : float
         Rotation of the object relative to the fingertip about the joint axis (hand ``y``)
-        while the grasp force builds up (finger compliance, joint servo error), rad.
-        Default 3°.
+        once the object is released into the grasp (finger compliance, joint servo error),
+        rad. Default: see :data:`JOINT_ROTATION_DEG`.
     gravity_spin : float
         Rotation about the grasp axis (hand ``x``) by the object's weight acting off the
         grasp axis, rad. Default 1°.
     object_mass : float
-        Mass of the object, kg (default 10 g). Each finger carries half its weight: a
-        tangential load along gravity (hand ``-z``), with the object's position across the
-        push axis solved for it.
+        Mass of the object, kg (default :data:`OBJECT_MASS`). Each finger carries half its
+        weight: a tangential load along gravity (hand ``-z``), with the object's position
+        across the push axis solved for it.
     misalignment : float
         Fixed alignment error: rotation of the object about hand ``z`` through the contact,
-        rad (default 0).
+        rad (default 0), present from the start.
     finger_pitch : float
         See :meth:`HandFrame.paper`, rad.
+    disturbance_timing : {"after_grasp", "during_rise"}
+        When the joint rotation, the gravity spin and the weight come in.
+
+        ``"after_grasp"`` (default, the papers' procedure, 2006 §IV): the object "is put
+        into the open space and is kept still"; the fingers close, touch at ``t_contact``
+        (the contact point is measured then, at light force) and build the grasp force
+        to ``t_stable``; only then do the moments of the finger joints and of the weight
+        rotate the object relative to the fingertip, ramping in from ``t_stable`` over
+        :data:`DISTURBANCE_RAMP` s. The direction is read "at the end of this motion".
+        (The weight's tangential load itself still ramps with the grasp force: applied
+        to a fully stuck strip it makes the lateral force balance of a thin plate in the
+        Winkler model fragile, see the module docs.)
+
+        ``"during_rise"``: everything ramps together with the grasp force, from
+        ``t_contact`` to ``t_stable`` (the behaviour before this option existed). This is
+        the harder case for the latch: the pressure centre already moves along the strip
+        while the contact point is being measured, so the latched point absorbs part of
+        the tangential spin torque.
+    disturbance_start, disturbance_end : float, optional
+        Explicit ramp interval of the joint rotation and the gravity spin, s; override the
+        ``disturbance_timing`` defaults (either may be given alone).
     **kwargs
         Other :class:`GraspScenario` fields (force, timing, ...).
 
     Notes
     -----
-    The amplitudes and the mass are this project's choices: the papers report none of
-    them. They are small (the fingers hold the object stably) and give a tangential spin
-    torque of a few N·mm on a 1–2 mm plate at 0° and ±45°, well above the sensor noise.
+    The papers report none of the amplitudes; they are this project's choices (module
+    docs, "Amplitudes"), small enough that the two fingers hold the object stably.
     """
     if not (math.isfinite(object_mass) and object_mass >= 0.0):
         raise ValueError(f"object_mass must be a non-negative mass in kg, got {object_mass!r}")
+    if disturbance_timing not in DISTURBANCE_TIMINGS:
+        raise ValueError(f"unknown disturbance_timing {disturbance_timing!r}; expected one of {', '.join(DISTURBANCE_TIMINGS)}")
+    t_contact = float(kwargs.get("t_contact", GraspScenario.t_contact))
+    t_stable = float(kwargs.get("t_stable", GraspScenario.t_stable))
+    if disturbance_timing == "after_grasp":
+        start, end = t_stable, t_stable + DISTURBANCE_RAMP
+    else:
+        start, end = t_contact, t_stable
+    if disturbance_start is not None:
+        start = float(disturbance_start)
+        if disturbance_end is None:
+            end = max(end, start)
+    if disturbance_end is not None:
+        end = float(disturbance_end)
+    if not (math.isfinite(start) and math.isfinite(end) and start >= 0.0 and end >= start):
+        raise ValueError(f"need 0 <= disturbance_start <= disturbance_end, got {start!r}, {end!r} s")
     hand = HandFrame.paper(finger_pitch)
     dist = [
-        Disturbance(axis=tuple(hand.joint_axis), angle=joint_rotation, label="joint"),
-        Disturbance(axis=tuple(hand.grasp_axis), angle=gravity_spin, label="gravity-spin"),
+        Disturbance(axis=tuple(hand.joint_axis), angle=joint_rotation, start=start, end=end, label="joint"),
+        Disturbance(axis=tuple(hand.grasp_axis), angle=gravity_spin, start=start, end=end, label="gravity-spin"),
     ]
     if misalignment != 0.0:
         dist.insert(0, Disturbance(axis=tuple(hand.up), angle=misalignment, start=0.0, end=0.0, label="misalignment"))
     load = 0.5 * object_mass * STANDARD_GRAVITY * hand.gravity
+    timing = {}
     return GraspScenario(
         angle=angle,
         disturbances=tuple(dist),
         tangential_force=tuple(load),
         hand=hand,
         name=kwargs.pop("name", "paper"),
+        **timing,
         **kwargs,
     )

@@ -29,7 +29,7 @@ from softtip.fingertip import Fingertip, load_fingertip
 from softtip.sim.contact import ContactModel, ContactParams, ContactResult, FrictionState
 from softtip.sim.objects import RigidObject, make_object
 from softtip.sim.pose import Pose
-from softtip.sim.scenario import GraspScenario, paper_scenario, push_scenario
+from softtip.sim.scenario import JOINT_ROTATION_DEG, OBJECT_MASS, GraspScenario, paper_scenario, push_scenario
 from softtip.sim.sensor import SensorModel
 from softtip.sim.skin import DEFAULT_ELEMENTS, discretise_skin
 from softtip.sim.truth import GroundTruth, line_angle, tangent_frame
@@ -303,7 +303,8 @@ def simulate_grasp(
     axes = np.stack((u, e1, e2))
     n_free = 1 if scenario.tangential_force is None else 3
     load = np.zeros(3) if scenario.tangential_force is None else axes @ np.asarray(scenario.tangential_force)
-    ramp = np.where(t >= scenario.t_contact, target / scenario.force, 0.0)
+    # before contact the object is free: no tangential load
+    ramp = np.where(t >= scenario.t_contact, scenario.load_ramp(t), 0.0)
 
     state = FrictionState()
     history: list[NDArray[np.float64]] = []
@@ -431,10 +432,11 @@ def run_simulation(
     t_contact: float = 2.0,
     t_stable: float = 4.0,
     rate: float = 50.0,
-    joint_rotation_deg: float = 3.0,
+    joint_rotation_deg: float = JOINT_ROTATION_DEG,
     gravity_spin_deg: float = 1.0,
-    object_mass: float = 0.01,
+    object_mass: float = OBJECT_MASS,
     misalignment_deg: float = 0.0,
+    disturbance_timing: str = "after_grasp",
     n_elements: int = DEFAULT_ELEMENTS,
     modulus: float = 0.6e6,
     shear_modulus: float | None = None,
@@ -464,6 +466,7 @@ def run_simulation(
             gravity_spin=math.radians(gravity_spin_deg),
             object_mass=object_mass,
             misalignment=math.radians(misalignment_deg),
+            disturbance_timing=disturbance_timing,
             **timing,
         )
     elif scenario == "push":
