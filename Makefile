@@ -1,4 +1,5 @@
-# Quick start: `make demo` runs softtip on the shipped example grasp; `make test` runs the tests.
+# Quick start: `make demo` reproduces the papers' experiments on the simulator and runs
+# softtip on the shipped example grasp; `make test` runs the tests.
 # Both create ./.venv on first use.
 PYTHON ?= python3
 VENV := .venv
@@ -15,14 +16,17 @@ $(BIN)/softtip: pyproject.toml
 
 demo: $(BIN)/softtip
 	mkdir -p $(OUT)
+	$(BIN)/softtip reproduce --out $(OUT)/reproduction
 	$(BIN)/softtip estimate --example -o $(OUT)/estimates.csv --plot $(OUT)/estimates.png
-	@echo "wrote $(OUT)/estimates.csv and $(OUT)/estimates.png"
+	@echo "wrote $(OUT)/reproduction/ (figures, summary.md) and $(OUT)/estimates.csv, .png"
 
 test: $(BIN)/softtip
 	$(BIN)/python -m pytest -q
 
 bench: $(BIN)/softtip
 	$(BIN)/python benchmarks/bench_core.py
+	$(BIN)/python benchmarks/bench_sim.py
+	$(BIN)/python benchmarks/bench_live.py
 
 clean:
 	rm -rf $(VENV) $(OUT) .pytest_cache .hypothesis
