@@ -8,36 +8,15 @@ from dataclasses import dataclass, fields
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from softtip.spin import direction_angle, tangent_frame
+
 __all__ = ["GroundTruth", "tangent_frame", "line_angle"]
 
 
-def tangent_frame(normal: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """SPEC §3.4 tangent frame ``(e1, e2)`` at unit normals ``normal`` (..., 3).
-
-    ``e1`` is the sensor x axis projected on the tangent plane (the y axis when
-    ``|x × n| < 0.1``), ``e2 = n × e1``.
-    """
-    n = np.asarray(normal, dtype=float)
-    x = np.broadcast_to([1.0, 0.0, 0.0], n.shape)
-    y = np.broadcast_to([0.0, 1.0, 0.0], n.shape)
-    use_y = np.linalg.norm(np.cross(x, n), axis=-1) < 0.1
-    ref = np.where(use_y[..., None], y, x)
-    e1 = ref - np.sum(ref * n, axis=-1, keepdims=True) * n
-    e1 = e1 / np.linalg.norm(e1, axis=-1, keepdims=True)
-    return e1, np.cross(n, e1)
-
-
 def line_angle(direction: ArrayLike, normal: ArrayLike) -> NDArray[np.float64]:
-    """Angle (rad) of the axis ``direction`` (..., 3) in the tangent frame at ``normal`` (..., 3).
-
-    ``atan2(d·e2, d·e1)`` wrapped into ``(-π/2, π/2]`` (``d`` and ``-d`` are the same axis).
-    NaN where ``direction`` is NaN.
-    """
-    d = np.asarray(direction, dtype=float)
-    e1, e2 = tangent_frame(normal)
-    a = np.arctan2(np.sum(d * e2, axis=-1), np.sum(d * e1, axis=-1))
-    a = np.where(a > 0.5 * math.pi, a - math.pi, a)
-    return np.where(a <= -0.5 * math.pi, a + math.pi, a)
+    """Angle (rad) of the axis ``direction`` (..., 3) in the SPEC §3.4 tangent frame at
+    ``normal`` (..., 3): the estimator's own convention (:func:`softtip.spin.direction_angle`)."""
+    return direction_angle(direction, normal)
 
 
 @dataclass(frozen=True, eq=False)
