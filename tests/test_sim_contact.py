@@ -175,3 +175,24 @@ def test_params_validate():
         ContactParams(friction=-0.1)
     p = ContactParams()
     assert p.tangential_stiffness == pytest.approx(p.normal_stiffness / 3.0)
+
+
+def test_column_depth_rule_matches_on_a_plane_and_frees_the_plate_tilt_about_its_edge(model):
+    col = ContactModel(model.skin, ContactParams(depth_rule="column"))
+    for depth in (0.5e-3, 2e-3):
+        pose = place(APEX, Z, depth)
+        assert np.allclose(col.evaluate(HalfSpace(), pose).wrench, model.evaluate(HalfSpace(), pose).wrench, rtol=1e-9, atol=1e-12)
+    # a 1 mm plate 2.5 mm deep tilted ±1° about its own cut edge: the surface rule puts the
+    # springs under the footprint beside the edge (≈ F·δ/rad); the column rule under the edge
+    e1, _ = tangent_frame(Z)
+    pose, bottom = place(APEX, Z, 2.5e-3), APEX - 2.5e-3 * Z
+    near = model.candidates_near(APEX, 0.012)
+    stiff = {}
+    for m in (model, col):
+        mom = [m.evaluate(Plate(0.001), Pose.from_axis_angle(e1, s * math.radians(1.0), bottom) @ pose,
+                          candidates=near).moment_about(bottom) @ e1 for s in (1, -1)]
+        stiff[m.params.depth_rule] = (mom[0] - mom[1]) / (2 * math.radians(1.0))
+    assert stiff["surface"] > 4e-3  # N·m/rad
+    assert abs(stiff["column"]) < 0.25 * stiff["surface"]
+    with pytest.raises(ValueError):
+        ContactParams(depth_rule="nope")

@@ -49,13 +49,20 @@ from softtip.sim.objects import RigidObject
 from softtip.sim.pose import Pose
 from softtip.sim.skin import SkinMesh
 
-__all__ = ["ContactParams", "FrictionState", "ContactResult", "ContactModel"]
+__all__ = ["DEPTH_RULES", "ContactParams", "FrictionState", "ContactResult", "ContactModel"]
 
 # Projected start points sit this far inside the object, m (keeps them off the boundary).
 _INSIDE_EPS = 1e-10
 # An element's quadrature points and their coverage filters reach this many element sizes
 # from its centre (half a sub-cell diagonal plus half a sub-cell, rounded up).
 _REACH = 0.75
+# Steps of the search for a column's closest approach to the object ("column" rule).
+_COLUMN_STEPS = 30
+# ... stopped once the closest approach is known to this accuracy, m.
+_COLUMN_TOL = 1e-9
+
+#: Values of :attr:`ContactParams.depth_rule`.
+DEPTH_RULES = ("surface", "column")
 
 
 @dataclass(frozen=True)
@@ -78,6 +85,20 @@ class ContactParams:
         Coulomb coefficient μ between skin and object (default 1.0, silicone on metal).
     max_depth : float, optional
         Saturation of the compression, m (default: ``thickness``).
+    depth_rule : {"surface", "column"}
+        How an element's compression is found. ``"surface"`` (default, the original
+        rule): only elements whose skin point lies inside the object (or within the
+        coverage filter of its silhouette on the skin) are compressed, by the distance
+        from that point to where the ray along ``-n_skin`` leaves the object.
+        ``"column"``: the elastic-foundation rule proper: an element's spring (its column
+        of rubber along ``-n_skin``) is compressed to the deepest object point on that
+        column, whether or not the skin point itself lies inside the object, and the
+        coverage filter uses the distance from the column to the object (the object's
+        *shadow* along the column) instead of the distance at the skin point. The two
+        rules agree whenever the object is widest where it cuts the skin (plane, straight
+        plate, cylinder, wedge); they differ for overhanging objects, e.g. a thin plate
+        tilted about its own edge, whose cut edge lies beside the footprint it cuts in
+        the skin: the springs under the cut edge carry the load there.
     """
 
     thickness: float = 0.005
@@ -85,6 +106,7 @@ class ContactParams:
     shear_modulus: float | None = None
     friction: float = 1.0
     max_depth: float | None = None
+    depth_rule: str = "surface"
 
     def __post_init__(self) -> None:
         for name in ("thickness", "modulus"):
@@ -97,6 +119,8 @@ class ContactParams:
             raise ValueError(f"friction must be non-negative and finite, got {self.friction!r}")
         if self.max_depth is not None and not (math.isfinite(self.max_depth) and self.max_depth > 0.0):
             raise ValueError(f"max_depth must be positive and finite, got {self.max_depth!r}")
+        if self.depth_rule not in DEPTH_RULES:
+            raise ValueError(f"depth_rule must be one of {DEPTH_RULES}, got {self.depth_rule!r}")
 
     @property
     def normal_stiffness(self) -> float:
@@ -122,6 +146,7 @@ class ContactParams:
             "shear_modulus_pa": self.tangential_stiffness * self.thickness,
             "friction": self.friction,
             "max_depth_m": self.depth_cap,
+            "depth_rule": self.depth_rule,
             "normal_stiffness_pa_per_m": self.normal_stiffness,
             "tangential_stiffness_pa_per_m": self.tangential_stiffness,
         }
@@ -319,11 +344,17 @@ class ContactModel:
 
         The signed distance is 1-Lipschitz, so an element whose centre is farther than
         ``margin`` plus its own reach from the object cannot touch it after the object
-        moves by at most ``margin``.
+        moves by at most ``margin``. With ``depth_rule="column"`` an element whose column
+        may pass within that distance of the object is kept as well.
         """
         idx = np.arange(len(self.skin)) if candidates is None else np.asarray(candidates, dtype=np.intp)
         q = (self.skin.centres[idx] - pose.translation) @ pose.rotation
-        return idx[obj.sdf_local(q) < _REACH * self.skin.spacing[idx] + margin]
+        sd = obj.sdf_local(q)
+        reach = _REACH * self.skin.spacing[idx] + margin
+        keep = sd < reach
+        if self.params.depth_rule == "column":
+            keep |= self._overhang(obj, q, -self.skin.normals[idx] @ pose.rotation, sd, reach)
+        return idx[keep]
 
     def evaluate(
         self,
@@ -356,11 +387,17 @@ class ContactModel:
         skin, prm = self.skin, self.params
         rot, trans = pose.rotation, pose.translation
         idx = np.arange(len(skin)) if candidates is None else np.asarray(candidates, dtype=np.intp)
+        column = prm.depth_rule == "column"
         nq2 = self.quadrature**2
         if nq2 > 1:
             # element-level cull, then the element's quadrature points
             qe = (skin.centres[idx] - trans) @ rot
-            idx = np.sort(idx[obj.sdf_local(qe) < _REACH * skin.spacing[idx]])
+            reach = _REACH * skin.spacing[idx]
+            sde = obj.sdf_local(qe)
+            keep = sde < reach
+            if column:
+                keep |= self._overhang(obj, qe, -skin.normals[idx] @ rot, sde, reach)
+            idx = np.sort(idx[keep])
             idx = (idx[:, None] * nq2 + np.arange(nq2)).ravel()
         else:
             idx = np.sort(idx)
@@ -368,33 +405,19 @@ class ContactModel:
         q = (pts[idx] - trans) @ rot
         sd = obj.sdf_local(q)
         half = 0.5 * sizes[idx]
-        act = np.flatnonzero(sd < half)
-        if len(act) == 0:
+        if column:
+            geo = self._column_points(obj, idx, q, -nrm[idx] @ rot, sd, half)
+        else:
+            geo = self._surface_points(obj, idx, q, -nrm[idx] @ rot, sd, half)
+        if geo is None:
             return self._empty(pose)
-        gidx, q, sd, half = idx[act], q[act], sd[act], half[act]
-        u = -nrm[gidx] @ rot
-        cover = np.ones(len(act))
-        near = np.flatnonzero(sd > -half)
-        if len(near):
-            # box filter across the silhouette: distance in the skin's tangent plane to where
-            # the object surface cuts the skin is sdf / |tangential part of the object normal|
-            g = obj.normal_local(q[near])
-            un = u[near]
-            gt = g - np.einsum("ij,ij->i", g, un)[:, None] * un
-            tang = np.sqrt(np.einsum("ij,ij->i", gt, gt))
-            with np.errstate(divide="ignore", invalid="ignore"):
-                lateral = np.where(tang > 1e-12, sd[near] / tang, np.where(sd[near] > 0.0, np.inf, -np.inf))
-            cover[near] = np.clip(0.5 - lateral / (2.0 * half[near]), 0.0, 1.0)
-            out = sd[near] > 0.0
-            if out.any():
-                # centre just outside: take the compression of the nearest object surface point
-                o = near[out]
-                q[o] -= (sd[o] + _INSIDE_EPS)[:, None] * g[out]
-        s, _ = obj.exit_local(q, u)
-        depth = np.minimum(s, prm.depth_cap)
+        gidx, start, base, u, offset, cover = geo
+        s, _ = obj.exit_local(start, u)
+        depth = np.minimum(offset + s, prm.depth_cap)
         touch = (depth > 0.0) & (cover > 0.0)
         if not touch.any():
             return self._empty(pose)
+        q = base
         area = areas[gidx[touch]] * cover[touch]
         gidx, q, u, depth = gidx[touch], q[touch], u[touch], depth[touch]
         e_loc = q + depth[:, None] * u
@@ -435,6 +458,128 @@ class ContactModel:
             slip=slip,
             state=FrictionState(gidx, disp, pose),
         )
+
+    def _overhang(self, obj: RigidObject, q: NDArray[np.float64], u: NDArray[np.float64],
+                  sd: NDArray[np.float64], reach: NDArray[np.float64]) -> NDArray[np.bool_]:
+        """Columns ``q + s u``, ``0 <= s <= depth cap``, that may come within ``reach`` of the object.
+
+        The signed distance is convex along a line (the object is convex), so it stays
+        above its tangent at ``s = 0``: ``sd + min(0, ∂sd/∂s) · cap`` bounds it from below.
+        """
+        cap = self.params.depth_cap
+        out = np.zeros(len(q), dtype=bool)
+        pool = np.flatnonzero((sd >= reach) & (sd < reach + cap))
+        if len(pool):
+            slope = np.einsum("ij,ij->i", obj.normal_local(q[pool]), u[pool])
+            out[pool] = sd[pool] + np.minimum(slope, 0.0) * cap < reach[pool]
+        return out
+
+    def _surface_points(self, obj, idx, q, u, sd, half):
+        # "surface" rule: the skin point itself must lie inside (or at the silhouette of) the object
+        act = np.flatnonzero(sd < half)
+        if len(act) == 0:
+            return None
+        gidx, q, sd, half, u = idx[act], q[act], sd[act], half[act], u[act]
+        cover = np.ones(len(act))
+        near = np.flatnonzero(sd > -half)
+        if len(near):
+            # box filter across the silhouette: distance in the skin's tangent plane to where
+            # the object surface cuts the skin is sdf / |tangential part of the object normal|
+            g = obj.normal_local(q[near])
+            un = u[near]
+            gt = g - np.einsum("ij,ij->i", g, un)[:, None] * un
+            tang = np.sqrt(np.einsum("ij,ij->i", gt, gt))
+            with np.errstate(divide="ignore", invalid="ignore"):
+                lateral = np.where(tang > 1e-12, sd[near] / tang, np.where(sd[near] > 0.0, np.inf, -np.inf))
+            cover[near] = np.clip(0.5 - lateral / (2.0 * half[near]), 0.0, 1.0)
+            out = sd[near] > 0.0
+            if out.any():
+                # centre just outside: take the compression of the nearest object surface point
+                o = near[out]
+                q[o] -= (sd[o] + _INSIDE_EPS)[:, None] * g[out]
+        return gidx, q, q, u, np.zeros(len(act)), cover
+
+    def _column_points(self, obj, idx, q, u, sd, half):
+        # "column" rule: the spring's column q + s u (0 <= s <= cap) against the whole object
+        cap = self.params.depth_cap
+        over = np.zeros(len(q), dtype=bool)
+        slope = np.zeros(len(q))
+        pool = np.flatnonzero((sd >= -half) & (sd < half + cap))
+        if len(pool):
+            slope[pool] = np.einsum("ij,ij->i", obj.normal_local(q[pool]), u[pool])
+            # the signed distance decreases into the skin: the object overhangs this point
+            over[pool] = (slope[pool] < 0.0) & (sd[pool] + slope[pool] * cap < half[pool])
+
+        def slope_of(k):
+            return slope[k].copy()
+
+        plain = (sd < half) & ~over
+        res = self._surface_points(obj, idx[plain], q[plain].copy(), u[plain], sd[plain], half[plain])
+        o = np.flatnonzero(over)
+        if len(o) == 0:
+            return res
+        qo, uo = q[o], u[o]
+        # closest approach of the column: the signed distance f(s) is convex along it, so
+        # refine the bracket [lo, hi] (slope < 0 at lo, >= 0 at hi) at the intersection of
+        # the tangents at its ends (exact in one step at a kink between two flat faces)
+        f_lo, d_lo = sd[o], slope_of(o)
+        lo = np.zeros(len(o))
+        hi = np.full(len(o), cap)
+        p_hi = qo + cap * uo
+        f_hi = obj.sdf_local(p_hi)
+        d_hi = np.einsum("ij,ij->i", obj.normal_local(p_hi), uo)
+        act = np.flatnonzero(d_hi < 0.0)
+        lo[act], f_lo[act] = cap, f_hi[act]  # still descending at the shell: the minimum is there
+        act = np.flatnonzero(d_hi >= 0.0)
+        for _ in range(_COLUMN_STEPS):
+            if len(act) == 0:
+                break
+            a0, a1 = lo[act], hi[act]
+            den = d_lo[act] - d_hi[act]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                sx = (f_hi[act] - f_lo[act] + d_lo[act] * a0 - d_hi[act] * a1) / den
+            lower = f_lo[act] + d_lo[act] * (sx - a0)
+            width = a1 - a0
+            sx = np.where(np.isfinite(sx), np.clip(sx, a0 + 1e-3 * width, a1 - 1e-3 * width), 0.5 * (a0 + a1))
+            px = qo[act] + sx[:, None] * uo[act]
+            fx = obj.sdf_local(px)
+            dx = np.einsum("ij,ij->i", obj.normal_local(px), uo[act])
+            neg = dx < 0.0
+            lo[act] = np.where(neg, sx, a0)
+            f_lo[act] = np.where(neg, fx, f_lo[act])
+            d_lo[act] = np.where(neg, dx, d_lo[act])
+            hi[act] = np.where(neg, a1, sx)
+            f_hi[act] = np.where(neg, f_hi[act], fx)
+            d_hi[act] = np.where(neg, d_hi[act], dx)
+            # stop once the best value is within tolerance of the tangents' lower bound
+            best = np.minimum(f_lo[act], f_hi[act])
+            act = act[(best - np.where(np.isfinite(lower), lower, -np.inf) > _COLUMN_TOL) & (hi[act] - lo[act] > _COLUMN_TOL)]
+        s_min = np.where(f_lo <= f_hi, lo, hi)
+        p = qo + s_min[:, None] * uo
+        m = np.minimum(f_lo, f_hi)
+        g = obj.normal_local(p)
+        gt = g - np.einsum("ij,ij->i", g, uo)[:, None] * uo
+        tang = np.sqrt(np.einsum("ij,ij->i", gt, gt))
+        # lateral distance from the column to the object's shadow; inside, the minimum is
+        # reached against a face along the column (tangential normal ≈ 1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            lateral = np.where(m < 0.0, m, np.where(tang > 1e-12, m / tang, np.inf))
+        cover = np.clip(0.5 - lateral / (2.0 * half[o]), 0.0, 1.0)
+        keep = cover > 0.0
+        if not keep.any():
+            return res
+        o, qo, uo, s_min, p, m, g, cover = o[keep], qo[keep], uo[keep], s_min[keep], p[keep], m[keep], g[keep], cover[keep]
+        outside = m > -_INSIDE_EPS
+        # start the exit search from an interior point of the column, or (column just beside
+        # the object) from the nearest object point, as the surface rule does
+        start = p - np.where(outside, m + _INSIDE_EPS, 0.0)[:, None] * g
+        base = start - s_min[:, None] * uo
+        parts = [(idx[o], start, base, uo, s_min, cover)]
+        if res is not None:
+            parts.insert(0, res)
+        cat = [np.concatenate(x) for x in zip(*parts)]
+        order = np.argsort(cat[0], kind="stable")
+        return tuple(a[order] for a in cat)
 
     def _empty(self, pose: Pose) -> ContactResult:
         z3 = np.zeros((0, 3))
