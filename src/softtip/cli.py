@@ -159,6 +159,7 @@ the raw wrench; with --to-bag and no -o no CSV is written.
 @click.option("--to-bag", "to_bag", type=click.Path(file_okay=False), metavar="DIR", help="Also write the estimates as a rosbag2 directory (MCAP storage); DIR must not exist.")
 @click.option("--rerun", "rerun_spawn", is_flag=True, help="Show the fingertip, force, contact point, normal and edge in a Rerun viewer (softtip[viz]).")
 @click.option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save the Rerun 3-D view and time series to FILE.rrd (open with `rerun FILE.rrd`).")
+@click.option("--payload", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Remove the fingertip's weight ([payload] mass kg, com m; see calibrate-payload) before taring, using INPUT's qw, qx, qy, qz columns (sensor frame in a z-up world frame).")
 @_estimator_options
 def estimate(
     input_path,
@@ -181,6 +182,7 @@ def estimate(
     h_min,
     force_noise,
     moment_noise,
+    payload=None,
 ):
     from softtip.examples import EXAMPLE_PATH
     from softtip.io import Log, read_log, write_table
@@ -215,6 +217,10 @@ def estimate(
         log = read_log(input_path, units=units)
     if topic is not None and bag_log is None:
         raise click.UsageError("--topic applies to bag input only")
+    if payload is not None:  # gravity compensation first: the tare then removes only the sensor bias
+        from softtip.payload import compensate_log
+
+        log = compensate_log(log, payload)
     try:
         est = run_estimate(log.t, log.wrench, fingertip, config)
     except ValueError as exc:  # e.g. a low-pass cutoff above Nyquist for this log's rate
@@ -362,6 +368,7 @@ of a replayed log. No data for --timeout seconds is an error (exit 1).
 @click.option("--view/--no-view", default=None, help="Live terminal view (default: when standard error is a terminal).")
 @click.option("--rerun", "rerun_spawn", is_flag=True, help="Show the 3-D view live in a Rerun viewer (softtip[viz]; at most 50 samples/s are drawn).")
 @click.option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save the 3-D view and time series to FILE.rrd.")
+@click.option("--payload", type=click.Path(dir_okay=False), metavar="FILE.toml", help="With --replay: remove the fingertip's weight per sample, using the log's qw, qx, qy, qz columns (recorded raw_* columns are then compensated).")
 @_estimator_options
 @click.pass_context
 def stream(
@@ -388,6 +395,7 @@ def stream(
     h_min,
     force_noise,
     moment_noise,
+    payload=None,
 ):
     import signal
     import threading
@@ -398,6 +406,8 @@ def stream(
 
     if (host is None) == (replay is None):
         raise click.UsageError("give either --netft HOST or --replay LOG.csv")
+    if payload is not None and replay is None:
+        raise click.UsageError("--payload needs the orientation columns of a replayed log (--replay LOG.csv)")
     if duration is not None and not duration > 0:
         raise click.UsageError(f"--duration must be positive, got {duration}")
     if not speed >= 0:
@@ -414,7 +424,12 @@ def stream(
     try:
         try:
             if replay is not None:
-                source = LogSource.from_csv(replay, units=units, speed=speed)
+                if payload is None:
+                    source = LogSource.from_csv(replay, units=units, speed=speed)
+                else:
+                    from softtip.payload import replay_source
+
+                    source = replay_source(replay, units, speed, payload)
                 info = f"(replay x{speed:g})" if speed else "(replay, as fast as possible)"
             else:
                 source = netft.NetFTSource(host, rdt_port=rdt_port, http_port=http_port, timeout=timeout, device_bias=device_bias).open()
@@ -510,13 +525,15 @@ def reproduce(out_dir, only, seed, jobs):
     )
 
 
-def _register_simulate() -> None:
+def _register_commands() -> None:
+    from softtip.cli_calibrate import calibrate, calibrate_payload
     from softtip.sim.commands import simulate
 
-    main.add_command(simulate)
+    for command in (simulate, calibrate, calibrate_payload):
+        main.add_command(command)
 
 
-_register_simulate()
+_register_commands()
 
 
 if __name__ == "__main__":  # pragma: no cover
