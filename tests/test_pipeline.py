@@ -4,12 +4,13 @@ import pytest
 from numpy.testing import assert_allclose
 
 from softtip import Capsule, Estimator, EstimatorConfig, Sphere, axial_difference, estimate
+from softtip.depth import MURAKAMI2006_DEPTH
 from softtip.synthetic import synthetic_grasp
 from softtip.units import KGF, KGF_MM
 
 FIELDS_3 = ("wrench", "point", "normal", "h", "direction")
-FIELDS_1 = ("sigma", "h_norm", "h_std", "angle", "angle_std")
-FLAGS = ("latched", "latch_fallback", "pulling", "taring")
+FIELDS_1 = ("sigma", "h_norm", "h_std", "angle", "angle_std", "depth", "joint_conditioning")
+FLAGS = ("latched", "latch_fallback", "pulling", "taring", "relatched", "joint_fallback")
 
 
 def assert_stream_equals_batch(t, w, tip, config):
@@ -39,8 +40,28 @@ def impact_grasp():
     return g.t, g.wrench
 
 
+def sliding_grasp():
+    # after the grasp the force drops into the light-force window and the contact slides
+    # 4 mm across the tip (the moment follows the moved point): a re-latch case
+    g = synthetic_grasp(angle_deg=30.0, seed=6, duration=10.0)
+    w = g.wrench.copy()
+    late = g.t > 6.0
+    w[late, :3] = g.bias[:3] + (w[late, :3] - g.bias[:3]) * (0.4 / 0.5)
+    shift = np.clip((g.t - 6.0) / 1.0, 0.0, 1.0)[:, None] * np.array([0.004, 0.0, 0.0])
+    w[:, 3:] += np.cross(shift, w[:, :3] - g.bias[:3])
+    return g.t, w
+
+
 CASES = {
     "latch": EstimatorConfig(),
+    "latch-no-relatch": EstimatorConfig(relatch_distance=None),
+    "latch-relatch-tight": EstimatorConfig(relatch_distance=0.3e-3),
+    "latch-depth": EstimatorConfig(depth=MURAKAMI2006_DEPTH),
+    "joint": EstimatorConfig(contact_point="joint"),
+    "joint-depth-lowpass": EstimatorConfig(
+        contact_point="joint", depth=MURAKAMI2006_DEPTH, lowpass_hz=8.0, sample_rate=50.0, joint_window=15
+    ),
+    "track-depth": EstimatorConfig(contact_point="track", depth=MURAKAMI2006_DEPTH),
     "latch-lowpass": EstimatorConfig(lowpass_hz=8.0, sample_rate=50.0, lowpass_order=4),
     "track": EstimatorConfig(contact_point="track"),
     "given-bias": EstimatorConfig(bias=(0.12, -0.05, 0.3, 2e-3, -1e-3, 5e-4), lowpass_hz=5.0, sample_rate=50.0),
@@ -49,9 +70,11 @@ CASES = {
 
 
 @pytest.mark.parametrize("name", CASES)
-@pytest.mark.parametrize("log", ["single", "two-contacts", "impact"])
+@pytest.mark.parametrize("log", ["single", "two-contacts", "impact", "sliding"])
 def test_stream_agrees_with_batch(name, log):
-    if log == "single":
+    if log == "sliding":
+        t, w = sliding_grasp()
+    elif log == "single":
         g = synthetic_grasp(angle_deg=45.0, seed=1)
         t, w = g.t, g.wrench
     elif log == "two-contacts":
@@ -160,7 +183,13 @@ def test_kgf_mm_config_values_are_si():
 
 def test_config_rejects_nonsense():
     with pytest.raises(ValueError, match="contact_point"):
-        EstimatorConfig(contact_point="joint")
+        EstimatorConfig(contact_point="joints")
+    with pytest.raises(ValueError, match="relatch_distance"):
+        EstimatorConfig(relatch_distance=-1.0)
+    with pytest.raises(ValueError, match="joint_window"):
+        EstimatorConfig(joint_window=1)
+    with pytest.raises(ValueError, match="depth"):
+        EstimatorConfig(depth=2.0)
     with pytest.raises(ValueError, match="latch_window"):
         EstimatorConfig(latch_window=(5.0, 1.0))
     with pytest.raises(ValueError, match="Nyquist"):

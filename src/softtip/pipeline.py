@@ -24,11 +24,27 @@ Per sample (SPEC §3):
 
 In ``track`` mode ``h`` is zero by construction (the soft-finger model puts all of ``q``
 along ``n``), so only ``point`` contacts are reported: use ``latch`` for directions.
+
+softtip's extensions (issue 5), each an :class:`EstimatorConfig` field:
+
+- ``contact_point="joint"``: the contact point and the line direction estimated jointly
+  over a sliding window of ``joint_window`` samples (:mod:`softtip.joint`), starting from
+  and regularised toward the latched point along the line; where the window's force
+  history does not determine it (conditioning below ``joint_min_conditioning``) the
+  latched point is used and ``joint_fallback`` is set.
+- ``relatch_distance``: once the latch is held, a sample at light force (inside the
+  window) whose soft-finger solution lies farther than this from the latched point starts
+  a new latch (a new first rise, from that sample); ``relatched`` flags that sample, and
+  the first sample of every contact that follows a latched one (contact lost and regained).
+- ``depth``: a :class:`~softtip.depth.DepthLaw`; the moment is taken about the effective
+  contact point ``r − δ(F_n) n`` inside the skin, where friction acts
+  (:mod:`softtip.depth`); ``depth`` reports ``δ``.
 """
 
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import dataclass, field, replace
 from typing import Literal, NamedTuple
 
@@ -37,17 +53,21 @@ from numpy.typing import ArrayLike, NDArray
 
 from softtip._xp import NP, PY
 from softtip.contact import contact_arrays, contact_kernel
+from softtip.depth import DepthLaw, depth_kernel
+from softtip.joint import N_SUMS, joint_products, joint_solve_kernel
 from softtip.filtering import SosStream, lowpass_sos, noise_gain, sosfilt_batch
 from softtip.fingertip import Fingertip, load_fingertip
 from softtip.noise import NANO17, SensorNoise, angle_std_kernel, h_std_kernel
 from softtip.spin import angle_kernel, direction_kernel, spin_torque_kernel, tangent_frame_kernel, tangential_kernel
 from softtip.units import KGF
 
-__all__ = ["STATES", "EstimatorConfig", "Estimates", "SampleEstimate", "Estimator", "estimate"]
+__all__ = ["STATES", "CONTACT_POINT_MODES", "EstimatorConfig", "Estimates", "SampleEstimate", "Estimator", "estimate"]
 
 #: Contact states, indexed by the integer codes in :attr:`Estimates.state`.
 STATES = ("none", "point", "line")
 NONE, POINT, LINE = 0, 1, 2
+#: Values of :attr:`EstimatorConfig.contact_point`.
+CONTACT_POINT_MODES = ("latch", "track", "joint")
 
 
 @dataclass(frozen=True)
@@ -56,7 +76,7 @@ class EstimatorConfig:
 
     Parameters
     ----------
-    contact_point : {"latch", "track"}
+    contact_point : {"latch", "track", "joint"}
         How the contact point is obtained (module docstring).
     contact_threshold : float
         N; in contact while ``|f|`` (tared, filtered) is at least this.
@@ -82,6 +102,22 @@ class EstimatorConfig:
     tare_duration : float
         s of samples averaged for the bias when ``bias`` is ``None``; 0 disables taring
         (the input is already tared).
+    relatch_distance : float or None
+        m; re-latch when, with the latch held and ``|f|`` inside ``latch_window``, the
+        soft-finger solution lies farther than this from the latched point. ``None``: only
+        on contact loss. Default 3 mm: beyond the soft-finger bias of the papers' line
+        contacts at light force (≈ |h| / |f| ≤ 1 mm), so their grasps never re-latch.
+    depth : DepthLaw or None
+        Depth compensation (:mod:`softtip.depth`); ``None`` (default): off, the papers'
+        undeformed contact point. :data:`softtip.depth.MURAKAMI2006_DEPTH` is the
+        murakami2006 skin.
+    joint_window : int
+        Samples of the sliding window of ``joint`` mode (default 25: 0.5 s at 50 Hz).
+    joint_min_conditioning : float
+        ``joint`` mode falls back to the latched point where the window's conditioning
+        (:mod:`softtip.joint`, in [0, 1]) is below this.
+    joint_iterations : int
+        Gauss–Newton steps of the joint solve.
     """
 
     contact_point: Literal["latch", "track"] = "latch"
@@ -97,10 +133,31 @@ class EstimatorConfig:
     sample_rate: float | None = None
     bias: tuple[float, ...] | None = None
     tare_duration: float = 0.2
+    relatch_distance: float | None = 3e-3
+    depth: DepthLaw | None = None
+    joint_window: int = 25
+    joint_min_conditioning: float = 0.02
+    joint_iterations: int = 2
 
     def __post_init__(self) -> None:
-        if self.contact_point not in ("latch", "track"):
-            raise ValueError(f"contact_point must be 'latch' or 'track', got {self.contact_point!r}")
+        if self.contact_point not in CONTACT_POINT_MODES:
+            raise ValueError(f"contact_point must be one of {', '.join(CONTACT_POINT_MODES)}, got {self.contact_point!r}")
+        if self.relatch_distance is not None:
+            v = float(self.relatch_distance)
+            if not (math.isfinite(v) and v > 0.0):
+                raise ValueError(f"relatch_distance must be a positive distance in m or None, got {self.relatch_distance!r}")
+            object.__setattr__(self, "relatch_distance", v)
+        if self.depth is not None and not isinstance(self.depth, DepthLaw):
+            raise ValueError(f"depth must be a softtip.depth.DepthLaw or None, got {self.depth!r}")
+        if int(self.joint_window) < 3:
+            raise ValueError(f"joint_window must be at least 3 samples, got {self.joint_window!r}")
+        object.__setattr__(self, "joint_window", int(self.joint_window))
+        if not (0.0 <= float(self.joint_min_conditioning) <= 1.0):
+            raise ValueError(f"joint_min_conditioning must be in [0, 1], got {self.joint_min_conditioning!r}")
+        object.__setattr__(self, "joint_min_conditioning", float(self.joint_min_conditioning))
+        if int(self.joint_iterations) < 1:
+            raise ValueError(f"joint_iterations must be at least 1, got {self.joint_iterations!r}")
+        object.__setattr__(self, "joint_iterations", int(self.joint_iterations))
         lo, hi = (float(v) for v in self.latch_window)
         if not (0.0 <= lo < hi):
             raise ValueError(f"latch_window must be (low, high) with 0 <= low < high, in N; got {self.latch_window!r}")
@@ -143,6 +200,13 @@ class Estimates:
     pulling : (N,) in contact by force but no pushing contact point (reported ``none``)
     taring : (N,) sample used for the bias (reported ``none``)
     bias : (6,) the bias subtracted, N and N·m
+    relatched : (N,) a new latch starts at this sample, replacing an earlier one (drift at
+        light force, or contact regained after a latched contact); an event, not masked
+    depth : (N,) depth compensation ``δ`` used, m (0 without a depth law); NaN when ``none``
+    joint_conditioning : (N,) conditioning of the ``joint`` window in [0, 1]; NaN where no
+        joint solve was made (other modes, window not yet full)
+    joint_fallback : (N,) ``joint`` mode used the latched point here (window not full or
+        ill-conditioned)
     """
 
     t: NDArray[np.float64]
@@ -162,6 +226,10 @@ class Estimates:
     pulling: NDArray[np.bool_]
     taring: NDArray[np.bool_]
     bias: NDArray[np.float64]
+    relatched: NDArray[np.bool_]
+    depth: NDArray[np.float64]
+    joint_conditioning: NDArray[np.float64]
+    joint_fallback: NDArray[np.bool_]
 
     def __len__(self) -> int:
         return len(self.t)
@@ -196,6 +264,8 @@ class Estimates:
             "latched": self.latched,
             "latch_fallback": self.latch_fallback,
         }  # fmt: skip
+        # relatched, depth, joint_conditioning, joint_fallback are fields, not yet CSV
+        # columns: the live recorder (softtip.live) must gain them in the same change
 
 
 class SampleEstimate(NamedTuple):
@@ -220,13 +290,26 @@ class SampleEstimate(NamedTuple):
     latch_fallback: bool
     pulling: bool
     taring: bool
+    relatched: bool = False
+    depth: float = math.nan
+    joint_conditioning: float = math.nan
+    joint_fallback: bool = False
 
 
 # -- the measurement, shared by batch and stream ----------------------------------------------
 
 
-def _measure(fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, noise, h_sigmas, h_min, xp):
-    """Spin torque, ``h``, noise, direction and the line test for a contact point."""
+def _measure(fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, noise, h_sigmas, h_min, law, xp):
+    """Spin torque, ``h``, noise, direction and the line test for a contact point.
+
+    With a depth law the moment is taken about ``r − δ n`` (friction acts inside the skin).
+    """
+    pushing = fx * nx + fy * ny + fz * nz < 0.0
+    if law is None:
+        delta = 0.0 * fx
+    else:
+        delta = depth_kernel(-(fx * nx + fy * ny + fz * nz), law, xp)
+        rx, ry, rz = rx - delta * nx, ry - delta * ny, rz - delta * nz
     qx, qy, qz = spin_torque_kernel(fx, fy, fz, mx, my, mz, rx, ry, rz)
     sigma, hx, hy, hz = tangential_kernel(qx, qy, qz, nx, ny, nz)
     hn, dx, dy, dz = direction_kernel(hx, hy, hz, nx, ny, nz, xp)
@@ -235,8 +318,21 @@ def _measure(fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, noise, h_sigmas, h_
     line = hn > xp.maximum(h_sigmas * h_std, h_min)
     angle = angle_kernel(dx, dy, dz, *frame, xp)
     angle_std = angle_std_kernel(dx, dy, dz, hn, rx, ry, rz, noise, xp)
-    pushing = fx * nx + fy * ny + fz * nz < 0.0
-    return sigma, hx, hy, hz, hn, h_std, dx, dy, dz, angle, angle_std, line, pushing
+    return sigma, hx, hy, hz, hn, h_std, dx, dy, dz, angle, angle_std, line, pushing, delta
+
+
+def _joint_moment(fx, fy, fz, mx, my, mz, nx, ny, nz, ax, ay, az, law, xp):
+    """Moment about the anchor ``a`` that enters the joint sums, component-wise.
+
+    With a depth law the moment is first moved to the undeformed surface with this
+    sample's soft-finger normal: ``m + δ n × f`` (so that the surface point is fitted).
+    """
+    if law is not None:
+        delta = depth_kernel(-(fx * nx + fy * ny + fz * nz), law, xp)
+        mx = mx + delta * (ny * fz - nz * fy)
+        my = my + delta * (nz * fx - nx * fz)
+        mz = mz + delta * (nx * fy - ny * fx)
+    return spin_torque_kernel(fx, fy, fz, mx, my, mz, ax, ay, az)
 
 
 def _effective_noise(config: EstimatorConfig, sos) -> SensorNoise:
@@ -264,48 +360,129 @@ def _validate_log(t: ArrayLike, wrench: ArrayLike) -> tuple[NDArray, NDArray]:
     return t, w
 
 
+def _latch_segment(t, fn, valid, r_sc, tip: Fingertip, config: EstimatorConfig):
+    """The latch of one segment (a contact, or its rest after a re-latch), vectorised.
+
+    The segment's first sample starts a first rise. Returns ``(point (k, 3), latched (k,),
+    fallback (k,), held (k,), latch point (3,))``, where ``held`` marks the samples that
+    start with the latch already fixed (where a drift re-latch may happen).
+    """
+    k = len(t)
+    lo, hi = config.latch_window
+    idx = np.arange(k)
+    prev_peak = np.concatenate(([-np.inf], np.maximum.accumulate(fn)[:-1]))
+    t_peak = t[np.maximum.accumulate(np.where(fn > prev_peak, idx, 0))]
+    rise_over = (fn > hi) | (t - t_peak > config.stall_time)
+    end = int(np.argmax(rise_over)) if rise_over.any() else k
+    win = (idx < end) & (fn >= lo) & (fn <= hi) & valid
+    n_win = np.cumsum(win)
+    sum_win = np.cumsum(np.where(win[:, None], r_sc, 0.0), axis=0)
+    fb = valid & (np.cumsum(valid) <= config.fallback_samples)
+    n_fb = np.cumsum(fb)
+    sum_fb = np.cumsum(np.where(fb[:, None], r_sc, 0.0), axis=0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean_win = tip.project(sum_win / n_win[:, None])
+        mean_fb = tip.project(sum_fb / n_fb[:, None])
+    total_win = n_win[end - 1] if end > 0 else 0
+    rising = idx < end
+    pe = np.where((rising & (n_win > 0))[:, None], mean_win, r_sc)
+    if total_win > 0:
+        pe[~rising] = mean_win[end - 1]
+        lat = rising & (n_win > 0) | ~rising
+        fbk = np.zeros(k, dtype=bool)
+        fixed, latch = end, mean_win[end - 1]
+    else:
+        after = ~rising
+        pe[after] = np.where((n_fb[after] > 0)[:, None], mean_fb[after], np.nan)
+        lat = after & (n_fb > 0)
+        fbk = lat
+        # the stream fixes the fallback latch once it has all its samples
+        done = after & (n_fb >= config.fallback_samples)
+        fixed = int(np.argmax(done)) if done.any() else k
+        latch = mean_fb[fixed] if fixed < k else np.full(3, np.nan)
+    return pe, lat, fbk, idx > fixed, latch
+
+
 def _latch_points(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig):
-    """Contact point per sample in ``latch`` mode; returns (point (N,3), latched, fallback)."""
+    """Contact point per sample in ``latch`` mode, with re-latching.
+
+    Returns ``(point (N, 3), latched, fallback, relatched)``. One iteration per contact and
+    per re-latch (a handful per log), vectorised within each.
+    """
     n = len(t)
     point = np.full((n, 3), np.nan)
     latched = np.zeros(n, dtype=bool)
     fallback = np.zeros(n, dtype=bool)
+    relatched = np.zeros(n, dtype=bool)
     valid = np.asarray(sc[7], dtype=bool)
     r_sc = np.where(valid[:, None], np.stack(sc[:3], axis=-1), np.nan)
     lo, hi = config.latch_window
+    dist = config.relatch_distance
     edges = np.diff(np.concatenate(([False], contact, [False])).astype(np.int8))
     starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
-    # one iteration per contact (a handful per log), vectorised within each
+    had_latch = False
     for s, e in zip(starts, stops):
-        fe, te, ve, re = fn[s:e], t[s:e], valid[s:e], r_sc[s:e]
-        idx = np.arange(e - s)
-        prev_peak = np.concatenate(([-np.inf], np.maximum.accumulate(fe)[:-1]))
-        t_peak = te[np.maximum.accumulate(np.where(fe > prev_peak, idx, 0))]
-        rise_over = (fe > hi) | (te - t_peak > config.stall_time)
-        end = int(np.argmax(rise_over)) if rise_over.any() else e - s
-        win = (idx < end) & (fe >= lo) & (fe <= hi) & ve
-        n_win = np.cumsum(win)
-        sum_win = np.cumsum(np.where(win[:, None], re, 0.0), axis=0)
-        fb = ve & (np.cumsum(ve) <= config.fallback_samples)
-        n_fb = np.cumsum(fb)
-        sum_fb = np.cumsum(np.where(fb[:, None], re, 0.0), axis=0)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            mean_win = tip.project(sum_win / n_win[:, None])
-            mean_fb = tip.project(sum_fb / n_fb[:, None])
-        total_win = n_win[end - 1] if end > 0 else 0
-        rising = idx < end
-        pe = np.where((rising & (n_win > 0))[:, None], mean_win, re)
-        if total_win > 0:
-            pe[~rising] = mean_win[end - 1]
-            lat = rising & (n_win > 0) | ~rising
-            fbk = np.zeros(e - s, dtype=bool)
-        else:
-            after = ~rising
-            pe[after] = np.where((n_fb[after] > 0)[:, None], mean_fb[after], np.nan)
-            lat = after & (n_fb > 0)
-            fbk = lat
-        point[s:e], latched[s:e], fallback[s:e] = pe, lat, fbk
-    return point, latched, fallback
+        relatched[s] = had_latch  # contact regained after a latched one
+        a = s
+        while True:
+            pe, lat, fbk, held, latch = _latch_segment(t[a:e], fn[a:e], valid[a:e], r_sc[a:e], tip, config)
+            stop = e - a
+            if dist is not None and held.any():
+                fe = fn[a:e]
+                dx, dy, dz = (r_sc[a:e, i] - latch[i] for i in range(3))
+                with np.errstate(invalid="ignore"):
+                    drift = held & valid[a:e] & (fe >= lo) & (fe <= hi) & (dx * dx + dy * dy + dz * dz > dist * dist)
+                if drift.any():
+                    stop = int(np.argmax(drift))
+            point[a : a + stop], latched[a : a + stop], fallback[a : a + stop] = pe[:stop], lat[:stop], fbk[:stop]
+            if stop == e - a:
+                break
+            a += stop
+            relatched[a] = True
+        had_latch = had_latch or bool(latched[s:e].any())
+    return point, latched, fallback, relatched
+
+
+def _joint_points(c, contact, sc, base, relatched, tip: Fingertip, config: EstimatorConfig):
+    """``joint`` mode: windowed joint estimate of the contact point, vectorised.
+
+    ``c`` are the six wrench components, ``sc`` the soft-finger solutions, ``base`` the
+    latched points (N, 3) (start and regularisation of the solve). Returns
+    ``(point (N, 3), conditioning (N,), accepted (N,))``: the joint point where accepted, the
+    latched one elsewhere.
+    """
+    n = len(c[0])
+    w = config.joint_window
+    valid = contact & np.asarray(sc[7], dtype=bool)
+    cond = np.full(n, np.nan)
+    jp = np.full((n, 3), np.nan)
+    edges = np.diff(np.concatenate(([False], contact, [False])).astype(np.int8))
+    for s, e in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
+        v = np.flatnonzero(valid[s:e]) + s
+        if len(v) < w:
+            continue
+        anchor = [float(sc[i][v[0]]) for i in range(3)]  # first soft-finger point of the contact
+        qa = _joint_moment(*(ci[v] for ci in c), *(sc[i][v] for i in (3, 4, 5)), *anchor, config.depth, NP)
+        sums = []
+        for p in joint_products(c[0][v], c[1][v], c[2][v], *qa):
+            cz = np.concatenate(([0.0], np.cumsum(p)))  # sequential, as the stream's running sums
+            sums.append(cz[w:] - cz[:-w])
+        idx = v[w - 1 :]
+        out = joint_solve_kernel(sums, *base[idx].T, *anchor, tip, config.joint_iterations, NP)
+        jp[idx] = np.stack(out[:3], axis=-1)
+        cond[idx] = out[6]
+    accept = valid & (cond >= config.joint_min_conditioning) & np.all(np.isfinite(jp), axis=-1)
+    # between well-conditioned windows hold the last accepted joint point of the segment
+    # (a held grasp has no force variation to identify it from); a segment starts at
+    # contact onset and at every re-latch
+    i = np.arange(n)
+    begin = np.concatenate(([contact[0]], contact[1:] & ~contact[:-1])) | (relatched & contact) if n else contact
+    seg0 = np.maximum.accumulate(np.where(begin, i, 0)) if n else i
+    last = np.maximum.accumulate(np.where(accept, i, -1)) if n else i
+    hold = contact & ~accept & (last >= seg0)
+    out = np.where(accept[:, None], jp, base)
+    out[hold] = jp[last[hold]]
+    return out, cond, accept, hold
 
 
 def estimate(
@@ -366,6 +543,9 @@ def estimate(
     c = [np.ascontiguousarray(x[:, i]) for i in range(6)]
     fn = np.sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2])
     contact = (fn >= config.contact_threshold) & ~taring
+    relatched = np.zeros(n, dtype=bool)
+    joint_cond = np.full(n, np.nan)
+    joint_fb = np.zeros(n, dtype=bool)
     with np.errstate(invalid="ignore", divide="ignore"):
         sc = contact_arrays(tip, *c)
         if config.contact_point == "track":
@@ -374,11 +554,16 @@ def estimate(
             has = np.asarray(sc[7], dtype=bool)
             latched = fallback = np.zeros(n, dtype=bool)
         else:
-            point, latched, fallback = _latch_points(t, fn, contact, sc, tip, config)
+            point, latched, fallback, relatched = _latch_points(t, fn, contact, sc, tip, config)
+            if config.contact_point == "joint":
+                point, joint_cond, accept, hold = _joint_points(c, contact, sc, point, relatched, tip, config)
+                latched = latched & ~accept & ~hold
+                fallback = fallback & ~accept & ~hold
+                joint_fb = contact & ~accept
             normal = tip.normal(point)
             has = np.all(np.isfinite(point), axis=-1)
-        sigma, hx, hy, hz, hn, h_std, dx, dy, dz, angle, angle_std, line, pushing = _measure(
-            *c, *point.T, *normal.T, noise, config.h_sigmas, config.h_min, NP
+        sigma, hx, hy, hz, hn, h_std, dx, dy, dz, angle, angle_std, line, pushing, delta = _measure(
+            *c, *point.T, *normal.T, noise, config.h_sigmas, config.h_min, config.depth, NP
         )
 
     located = contact & has & pushing
@@ -409,6 +594,10 @@ def estimate(
         pulling=pulling,
         taring=taring,
         bias=bias,
+        relatched=relatched,
+        depth=keep(delta, located),
+        joint_conditioning=keep(joint_cond, located),
+        joint_fallback=joint_fb & located,
     )
 
 
@@ -448,6 +637,7 @@ class Estimator:
             self._sos = lowpass_sos(cfg.lowpass_hz, cfg.sample_rate, cfg.lowpass_order)
         self._noise = _effective_noise(cfg, self._sos)
         self._track = cfg.contact_point == "track"
+        self._joint = cfg.contact_point == "joint"
         self.reset()
 
     def reset(self) -> None:
@@ -460,9 +650,11 @@ class Estimator:
         self._t0: float | None = None
         self._filter = SosStream(self._sos) if self._sos is not None else None
         self._in_contact = False
+        self._had_latch = False
         self._t_prev: float | None = None
 
     def _start_contact(self, fn: float, t: float) -> None:
+        """A new first rise: at contact onset, and at a re-latch."""
         self._in_contact = True
         self._rising = True
         self._peak = fn
@@ -473,6 +665,14 @@ class Estimator:
         self._sum_fb = [0.0, 0.0, 0.0]
         self._latch: tuple[float, float, float] | None = None
         self._latch_is_fallback = False
+        self._joint_held: tuple[float, float, float] | None = None
+
+    def _start_joint(self) -> None:
+        # running (cumulative) sums of the joint products since contact onset, and the
+        # last joint_window + 1 of them: window sums are differences, as in the batch
+        self._anchor: tuple[float, float, float] | None = None
+        self._cum = [0.0] * N_SUMS
+        self._hist: deque[list[float]] = deque([self._cum], maxlen=self.config.joint_window + 1)
 
     def update(self, t: float, wrench: ArrayLike) -> SampleEstimate:
         """Process one raw sample.
@@ -508,11 +708,50 @@ class Estimator:
             x = self._filter(x)
         return self._step(t, x)
 
-    def _none(self, t, x, taring=False, pulling=False) -> SampleEstimate:
+    def _none(self, t, x, taring=False, pulling=False, relatched=False) -> SampleEstimate:
         nan = math.nan
         return SampleEstimate(
-            t, "none", tuple(x), _NAN3, _NAN3, nan, _NAN3, nan, nan, _NAN3, nan, nan, False, False, pulling, taring
-        )
+            t, "none", tuple(x), _NAN3, _NAN3, nan, _NAN3, nan, nan, _NAN3, nan, nan, False, False, pulling, taring,
+            relatched,
+        )  # fmt: skip
+
+    def _latch_step(self, t: float, fn: float, x: list[float], sc):
+        """The latch stage for a sample in contact: ``(point, latched, fallback, sc)``.
+
+        ``sc`` (this sample's soft-finger solution) is computed only when needed and
+        returned for reuse (None otherwise).
+        """
+        cfg = self.config
+        point = self._latch
+        if point is not None:
+            return point, True, self._latch_is_fallback, sc
+        if sc is None:
+            sc = contact_kernel(self.tip, *x, xp=PY)
+        fallback = False
+        valid = sc[7]
+        if valid and self._n_fb < cfg.fallback_samples:
+            self._n_fb += 1
+            self._sum_fb = [s + v for s, v in zip(self._sum_fb, sc[:3])]
+        lo, hi = cfg.latch_window
+        if self._rising and (fn > hi or t - self._t_peak > cfg.stall_time):
+            self._rising = False
+            if self._n_win > 0:
+                self._latch = point = self._mean(self._sum_win, self._n_win)
+        if self._rising:
+            if valid and lo <= fn <= hi:
+                self._n_win += 1
+                self._sum_win = [s + v for s, v in zip(self._sum_win, sc[:3])]
+            if self._n_win > 0:
+                point = self._mean(self._sum_win, self._n_win)
+            elif valid:
+                point = (sc[0], sc[1], sc[2])
+        elif point is None and self._n_fb > 0:
+            point = self._mean(self._sum_fb, self._n_fb)
+            fallback = True
+            if self._n_fb >= cfg.fallback_samples:
+                self._latch, self._latch_is_fallback = point, True
+        latched = point is not None and (self._n_win > 0 or fallback)
+        return point, latched, fallback, sc
 
     def _step(self, t: float, x: list[float]) -> SampleEstimate:
         cfg = self.config
@@ -523,61 +762,75 @@ class Estimator:
             return self._none(t, x)
 
         tip = self.tip
-        latched = fallback = False
+        latched = fallback = relatched = joint_fb = False
+        cond = math.nan
         if self._track:
             rx, ry, rz, nx, ny, nz, _, valid = contact_kernel(tip, *x, xp=PY)
             if not valid:
                 return self._none(t, x, pulling=True)
         else:
+            sc = None
             if not self._in_contact:
+                relatched = self._had_latch  # contact regained after a latched one
                 self._start_contact(fn, t)
-            elif self._rising and fn > self._peak:
-                self._peak, self._t_peak = fn, t
-            point = self._latch
-            if point is None:
-                sc = contact_kernel(tip, *x, xp=PY)
-                valid = sc[7]
-                if valid and self._n_fb < cfg.fallback_samples:
-                    self._n_fb += 1
-                    self._sum_fb = [s + v for s, v in zip(self._sum_fb, sc[:3])]
-                lo, hi = cfg.latch_window
-                if self._rising and (fn > hi or t - self._t_peak > cfg.stall_time):
-                    self._rising = False
-                    if self._n_win > 0:
-                        self._latch = point = self._mean(self._sum_win, self._n_win)
-                if self._rising:
-                    if valid and lo <= fn <= hi:
-                        self._n_win += 1
-                        self._sum_win = [s + v for s, v in zip(self._sum_win, sc[:3])]
-                    if self._n_win > 0:
-                        point = self._mean(self._sum_win, self._n_win)
-                    elif valid:
-                        point = (sc[0], sc[1], sc[2])
-                elif point is None and self._n_fb > 0:
-                    point = self._mean(self._sum_fb, self._n_fb)
-                    fallback = True
-                    if self._n_fb >= cfg.fallback_samples:
-                        self._latch, self._latch_is_fallback = point, True
-                latched = point is not None and (self._n_win > 0 or fallback)
+                if self._joint:
+                    self._start_joint()
             else:
-                latched, fallback = True, self._latch_is_fallback
+                if self._rising and fn > self._peak:
+                    self._peak, self._t_peak = fn, t
+                dist = cfg.relatch_distance
+                lo, hi = cfg.latch_window
+                if self._latch is not None and dist is not None and lo <= fn <= hi:
+                    # held latch at light force: has the contact moved away from it?
+                    sc = contact_kernel(tip, *x, xp=PY)
+                    if sc[7]:
+                        lx, ly, lz = self._latch
+                        dx, dy, dz = sc[0] - lx, sc[1] - ly, sc[2] - lz
+                        if dx * dx + dy * dy + dz * dz > dist * dist:
+                            relatched = True
+                            self._start_contact(fn, t)
+            point, latched, fallback, sc = self._latch_step(t, fn, x, sc)
+            if latched:
+                self._had_latch = True
+            if self._joint:
+                if sc is None:
+                    sc = contact_kernel(tip, *x, xp=PY)
+                joint_fb = True
+                if sc[7]:
+                    if self._anchor is None:
+                        self._anchor = (sc[0], sc[1], sc[2])
+                    ax, ay, az = self._anchor
+                    qa = _joint_moment(fx, fy, fz, mx, my, mz, sc[3], sc[4], sc[5], ax, ay, az, cfg.depth, PY)
+                    self._cum = [c + p for c, p in zip(self._cum, joint_products(fx, fy, fz, *qa))]
+                    self._hist.append(self._cum)
+                    if len(self._hist) > cfg.joint_window and point is not None:
+                        old = self._hist[0]
+                        sums = [c - o for c, o in zip(self._cum, old)]
+                        jx, jy, jz, _, _, _, cond = joint_solve_kernel(
+                            sums, *point, ax, ay, az, tip, cfg.joint_iterations, PY
+                        )
+                        if cond >= cfg.joint_min_conditioning and math.isfinite(jx + jy + jz):
+                            point, latched, fallback, joint_fb = (jx, jy, jz), False, False, False
+                            self._joint_held = point
+                if joint_fb and self._joint_held is not None:
+                    point, latched, fallback = self._joint_held, False, False
             if point is None:
-                return self._none(t, x, pulling=True)
+                return self._none(t, x, pulling=True, relatched=relatched)
             rx, ry, rz = point
             nx, ny, nz = tip._normal_kernel(rx, ry, rz, PY)
 
-        sigma, hx, hy, hz, hn, h_std, dx, dy, dz, angle, angle_std, line, pushing = _measure(
-            fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, self._noise, cfg.h_sigmas, cfg.h_min, PY
+        sigma, hx, hy, hz, hn, h_std, dx, dy, dz, angle, angle_std, line, pushing, delta = _measure(
+            fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, self._noise, cfg.h_sigmas, cfg.h_min, cfg.depth, PY
         )
         if not pushing:
-            return self._none(t, x, pulling=True)
+            return self._none(t, x, pulling=True, relatched=relatched)
         if line:
             state, d = "line", (dx, dy, dz)
         else:
             state, d, angle, angle_std = "point", _NAN3, math.nan, math.nan
         return SampleEstimate(
             t, state, tuple(x), (rx, ry, rz), (nx, ny, nz), sigma, (hx, hy, hz), hn, h_std, d, angle, angle_std,
-            latched, fallback, False, False,
+            latched, fallback, False, False, relatched, delta, cond, joint_fb,
         )  # fmt: skip
 
     def _mean(self, total: list[float], count: int) -> tuple[float, float, float]:
