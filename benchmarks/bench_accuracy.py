@@ -14,11 +14,9 @@ method | error with softtip's extension``. Sections:
   ``latch`` vs ``latch`` + :data:`~softtip.depth.MURAKAMI2006_DEPTH`. Skin with the shear
   layer stiffened to G = 2 MPa (side walls; with the default E/3 layer the simulator cannot
   hold a load across a thin plate, see :mod:`softtip.sim.scenario`).
-* **joint** (item 4): the papers' grasp with the disturbances during the force rise (the
-  latch absorbs part of ``h``): ``latch`` vs ``joint``; also ``track``.
-* **slide** (items 4, 5): after the grasp the object slides 4 mm along the skin
-  (kinematic translation, no tangential load) with the joint disturbance: ``latch``
-  without re-latch vs with re-latch (default) and ``joint``.
+* **slide** (item 5): after the grasp the object slides 4 mm along the skin (kinematic
+  translation, no tangential load) with the joint disturbance: ``latch`` without re-latch
+  (the papers') vs with re-latch at 3 mm.
 
 Room is left for other sections (calibration and gravity: ``bench_calibration.py``).
 """
@@ -50,7 +48,6 @@ from softtip.units import KGF
 
 TIP = murakami2006()
 HELD = 6.0  # s: the grasp is held (disturbances done) from here
-JOINT_COND = float(__import__("os").environ.get("JOINT_COND", EstimatorConfig().joint_min_conditioning))
 
 
 def _dir_err(est, log, sel) -> tuple[float, float]:
@@ -98,38 +95,10 @@ def depth_section(seed: int = 1) -> None:
                 _row(f"{name} {ang:+.0f}°, f_t = {ratio:.2f} f_n across", *out)
 
 
-def joint_section(seed: int = 1) -> None:
-    print("\n### joint contact point (item 4): disturbances during the force rise\n")
-    print("| condition | papers' latch: point error, direction error | track: point | joint: point, direction (fallback share) |")
-    print("| --- | --- | --- | --- |")
-    model = ContactModel(discretise_skin(TIP, 10000), ContactParams()).prepare()
-    for name, obj in (("plate 1 mm", Plate(0.001)), ("plate 2 mm", Plate(0.002)), ("wedge 90°", Wedge(math.pi / 2))):
-        for ang, timing in ((-45.0, "during_rise"), (0.0, "during_rise"), (45.0, "during_rise"), (0.0, "after_grasp"), (45.0, "after_grasp")):
-            scn = paper_scenario(math.radians(ang), disturbance_timing=timing)
-            try:
-                log = simulate_grasp(TIP, obj, scn, rng=seed, model=model)
-            except RuntimeError:
-                _row(f"{name} {ang:+.0f}°, {timing}", "simulator's force solve fails", "")
-                continue
-            sel = log.t > HELD
-            truth = np.asarray(log.truth.contact_point)
-            lat = estimate(log.t, log.wrench, TIP)
-            trk = estimate(log.t, log.wrench, TIP, EstimatorConfig(contact_point="track"))
-            jnt = estimate(log.t, log.wrench, TIP, EstimatorConfig(contact_point="joint", joint_min_conditioning=JOINT_COND))
-            le, lc = _dir_err(lat, log, sel)
-            je, jc = _dir_err(jnt, log, sel)
-            fb = float(np.mean(jnt.joint_fallback[sel & (jnt.state > 0)]))
-            _row(
-                f"{name} {ang:+.0f}°, {timing}",
-                f"{_point_err(lat, truth, sel):.2f} mm, {le:.1f}° ({lc:.0%})",
-                f"{_point_err(trk, truth, sel):.2f} mm | {_point_err(jnt, truth, sel):.2f} mm, {je:.1f}° ({jc:.0%}, fallback {fb:.0%})",
-            )
-
-
 def slide_section(seed: int = 1) -> None:
-    print("\n### sliding contact (items 4, 5): the object slides 4 mm along the skin after the grasp\n")
-    print("| condition | papers' latch (no re-latch): point, direction | re-latch: point, direction (re-latches) | joint: point, direction |")
-    print("| --- | --- | --- | --- |")
+    print("\n### sliding contact (item 5): the object slides 4 mm along the skin after the grasp\n")
+    print("| condition | papers' latch (no re-latch): point, direction | re-latch at 3 mm: point, direction (re-latches) |")
+    print("| --- | --- | --- |")
     model = ContactModel(discretise_skin(TIP, 10000), ContactParams()).prepare()
     for name, obj in (("plate 1 mm", Plate(0.001)), ("plate 2 mm", Plate(0.002))):
         for ang, slide in ((0.0, (0.0, 0.004, 0.0)), (45.0, (0.0, 0.004, 0.0)), (0.0, (0.004, 0.0, 0.0))):
@@ -148,14 +117,10 @@ def slide_section(seed: int = 1) -> None:
                 truth = TIP.project(np.array([scn.disturbance_pose(float(t), r_c).apply(r_c[None])[0] for t in log.t]))
                 sel = log.t > 8.0
                 cells = []
-                for cfg in (
-                    EstimatorConfig(relatch_distance=None),
-                    EstimatorConfig(),
-                    EstimatorConfig(contact_point="joint", joint_min_conditioning=JOINT_COND),
-                ):
+                for cfg in (EstimatorConfig(), EstimatorConfig(relatch_distance=3e-3)):
                     est = estimate(log.t, log.wrench, TIP, cfg)
                     e_, cov = _dir_err(est, log, sel)
-                    extra = f", {int(est.relatched.sum())} re-latch" if cfg.relatch_distance and cfg.contact_point == "latch" else ""
+                    extra = f", {int(est.relatched.sum())} re-latch" if cfg.relatch_distance else ""
                     cells.append(f"{_point_err(est, truth, sel):.2f} mm, {e_:.1f}° ({cov:.0%}){extra}")
                 along = "along x" if slide[0] else "along y"
                 _row(f"{name} {ang:+.0f}°, {force_kgf} kgf, slide {along}", *cells)
@@ -188,12 +153,10 @@ def stream_cost() -> None:
 
     g = synthetic_grasp(angle_deg=30.0, seed=1)
     for label, cfg in (
-        ("latch (default, re-latch on)", EstimatorConfig()),
-        ("latch, no re-latch", EstimatorConfig(relatch_distance=None)),
+        ("latch (default)", EstimatorConfig()),
+        ("latch, re-latch at 3 mm", EstimatorConfig(relatch_distance=3e-3)),
         ("latch + depth", EstimatorConfig(depth=MURAKAMI2006_DEPTH)),
         ("track", EstimatorConfig(contact_point="track")),
-        ("joint", EstimatorConfig(contact_point="joint")),
-        ("joint + depth", EstimatorConfig(contact_point="joint", depth=MURAKAMI2006_DEPTH)),
     ):
         times = []
         for _ in range(3):
@@ -210,14 +173,14 @@ def stream_cost() -> None:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--fit-depth", action="store_true", help="refit the default depth law and stop")
-    ap.add_argument("--sections", nargs="*", default=["depth", "joint", "slide", "cost"])
+    ap.add_argument("--sections", nargs="*", default=["depth", "slide", "cost"])
     args = ap.parse_args()
     if args.fit_depth:
         fit_depth()
         return
     print("murakami2006 tip (capsule R 16 mm, cylinder 20 mm), simulator with friction (μ = 1) and Nano17-class noise, 50 Hz")
     for name in args.sections:
-        {"depth": depth_section, "joint": joint_section, "slide": slide_section, "cost": stream_cost}[name]()
+        {"depth": depth_section, "slide": slide_section, "cost": stream_cost}[name]()
 
 
 if __name__ == "__main__":

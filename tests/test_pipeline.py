@@ -9,8 +9,8 @@ from softtip.synthetic import synthetic_grasp
 from softtip.units import KGF, KGF_MM
 
 FIELDS_3 = ("wrench", "point", "normal", "h", "direction")
-FIELDS_1 = ("sigma", "h_norm", "h_std", "angle", "angle_std", "depth", "joint_conditioning")
-FLAGS = ("latched", "latch_fallback", "pulling", "taring", "relatched", "joint_fallback")
+FIELDS_1 = ("sigma", "h_norm", "h_std", "angle", "angle_std", "depth")
+FLAGS = ("latched", "latch_fallback", "pulling", "taring", "relatched")
 
 
 def assert_stream_equals_batch(t, w, tip, config):
@@ -54,12 +54,11 @@ def sliding_grasp():
 
 CASES = {
     "latch": EstimatorConfig(),
-    "latch-no-relatch": EstimatorConfig(relatch_distance=None),
+    "latch-relatch": EstimatorConfig(relatch_distance=3e-3),
     "latch-relatch-tight": EstimatorConfig(relatch_distance=0.3e-3),
     "latch-depth": EstimatorConfig(depth=MURAKAMI2006_DEPTH),
-    "joint": EstimatorConfig(contact_point="joint"),
-    "joint-depth-lowpass": EstimatorConfig(
-        contact_point="joint", depth=MURAKAMI2006_DEPTH, lowpass_hz=8.0, sample_rate=50.0, joint_window=15
+    "latch-depth-relatch-lowpass": EstimatorConfig(
+        depth=MURAKAMI2006_DEPTH, relatch_distance=3e-3, lowpass_hz=8.0, sample_rate=50.0
     ),
     "track-depth": EstimatorConfig(contact_point="track", depth=MURAKAMI2006_DEPTH),
     "latch-lowpass": EstimatorConfig(lowpass_hz=8.0, sample_rate=50.0, lowpass_order=4),
@@ -183,11 +182,9 @@ def test_kgf_mm_config_values_are_si():
 
 def test_config_rejects_nonsense():
     with pytest.raises(ValueError, match="contact_point"):
-        EstimatorConfig(contact_point="joints")
+        EstimatorConfig(contact_point="joint")
     with pytest.raises(ValueError, match="relatch_distance"):
         EstimatorConfig(relatch_distance=-1.0)
-    with pytest.raises(ValueError, match="joint_window"):
-        EstimatorConfig(joint_window=1)
     with pytest.raises(ValueError, match="depth"):
         EstimatorConfig(depth=2.0)
     with pytest.raises(ValueError, match="latch_window"):

@@ -14,6 +14,7 @@ from softtip import __version__
 from softtip.axial import axial_median
 from softtip.errors import InputError
 from softtip.fingertip import PRESETS, load_fingertip
+from softtip.depth import MURAKAMI2006_DEPTH, DepthLaw
 from softtip.noise import NANO17, SensorNoise
 from softtip.pipeline import STATES, EstimatorConfig
 from softtip.pipeline import estimate as run_estimate
@@ -97,6 +98,28 @@ _ESTIMATOR_OPTIONS = [
         metavar="N·mm",
         help="Per-axis standard deviation of the sensor's moment noise, N·mm.",
     ),
+    click.option(
+        "--relatch-distance",
+        type=float,
+        metavar="MM",
+        help="Latch again when, at light force, the soft-finger contact point moves farther than this from the "
+        "latched one, mm (default: only when contact is lost and regained, the papers').",
+    ),
+    click.option(
+        "--depth-compensation",
+        is_flag=True,
+        help="Take the moment about the point inside the skin where friction acts, at the depth the normal force "
+        "gives by the skin law (--skin-law); removes the spurious tangential moment of a tangential force.",
+    ),
+    click.option(
+        "--skin-law",
+        type=(float, float, float),
+        default=(MURAKAMI2006_DEPTH.stiffness, MURAKAMI2006_DEPTH.exponent, MURAKAMI2006_DEPTH.max_depth * 1e3),
+        show_default=True,
+        metavar="K P MAX_MM",
+        help="Skin law of --depth-compensation: normal force = K·depth^P (N, m), depth at most MAX_MM mm "
+        "(default: the murakami2006 skin, fitted on softtip's simulator).",
+    ),
 ]
 
 
@@ -174,15 +197,8 @@ def estimate(
     rerun_spawn,
     rerun_save,
     tip,
-    contact_point,
-    lowpass,
-    tare_duration,
-    contact_threshold,
-    latch_window,
-    h_min,
-    force_noise,
-    moment_noise,
     payload=None,
+    **estimator_opts,
 ):
     from softtip.examples import EXAMPLE_PATH
     from softtip.io import Log, read_log, write_table
@@ -190,7 +206,7 @@ def estimate(
     if example == (input_path is not None):
         raise click.UsageError("give either INPUT or --example")
     fingertip = load_fingertip(tip)
-    config = _make_config(contact_point, contact_threshold, latch_window, h_min, force_noise, moment_noise, lowpass, tare_duration)
+    config = _make_config(estimator_opts)
 
     bag_log = None
     if example:
@@ -297,17 +313,25 @@ def estimate(
             click.echo(f"softtip: median direction of line samples {ang:+.1f} deg", err=True)
 
 
-def _make_config(contact_point, contact_threshold, latch_window, h_min, force_noise, moment_noise, lowpass, tare_duration, sample_rate=None):
+def _make_config(opts: dict, sample_rate: float | None = None) -> EstimatorConfig:
+    """The :class:`EstimatorConfig` of the shared estimator options (CLI units → SI)."""
     try:
+        depth = None
+        if opts["depth_compensation"]:
+            k, p, max_mm = opts["skin_law"]
+            depth = DepthLaw(k, p, max_mm * 1e-3)
+        relatch = opts["relatch_distance"]
         return EstimatorConfig(
-            contact_point=contact_point,
-            contact_threshold=contact_threshold,
-            latch_window=latch_window,
-            noise=SensorNoise((force_noise,) * 3, (moment_noise * 1e-3,) * 3),
-            h_min=h_min * 1e-3,
-            lowpass_hz=lowpass,
+            contact_point=opts["contact_point"],
+            contact_threshold=opts["contact_threshold"],
+            latch_window=opts["latch_window"],
+            noise=SensorNoise((opts["force_noise"],) * 3, (opts["moment_noise"] * 1e-3,) * 3),
+            h_min=opts["h_min"] * 1e-3,
+            lowpass_hz=opts["lowpass"],
             sample_rate=sample_rate,
-            tare_duration=tare_duration,
+            tare_duration=opts["tare_duration"],
+            relatch_distance=None if relatch is None else relatch * 1e-3,
+            depth=depth,
         )
     except ValueError as exc:
         raise click.UsageError(str(exc)) from None
@@ -387,15 +411,8 @@ def stream(
     rerun_spawn,
     rerun_save,
     tip,
-    contact_point,
-    lowpass,
-    tare_duration,
-    contact_threshold,
-    latch_window,
-    h_min,
-    force_noise,
-    moment_noise,
     payload=None,
+    **estimator_opts,
 ):
     import signal
     import threading
@@ -436,10 +453,8 @@ def stream(
                 d = source.info
                 rate = f"{d.rate_hz:g} Hz" if d.rate_hz else "rate unknown"
                 info = f"({d.product}, {d.force_unit} / {d.torque_unit}, {rate})"
-            config = _make_config(
-                contact_point, contact_threshold, latch_window, h_min, force_noise, moment_noise, lowpass, tare_duration,
-                sample_rate=source.rate_hz if lowpass is not None else None,
-            )  # fmt: skip
+            lowpass = estimator_opts["lowpass"]
+            config = _make_config(estimator_opts, sample_rate=source.rate_hz if lowpass is not None else None)
             if lowpass is not None and source.rate_hz is None:
                 raise click.UsageError("--lowpass needs the sample rate, which this source does not report")
             estimator = Estimator(fingertip, config)

@@ -27,11 +27,6 @@ along ``n``), so only ``point`` contacts are reported: use ``latch`` for directi
 
 softtip's extensions (issue 5), each an :class:`EstimatorConfig` field:
 
-- ``contact_point="joint"``: the contact point and the line direction estimated jointly
-  over a sliding window of ``joint_window`` samples (:mod:`softtip.joint`), starting from
-  and regularised toward the latched point along the line; where the window's force
-  history does not determine it (conditioning below ``joint_min_conditioning``) the
-  latched point is used and ``joint_fallback`` is set.
 - ``relatch_distance``: once the latch is held, a sample at light force (inside the
   window) whose soft-finger solution lies farther than this from the latched point starts
   a new latch (a new first rise, from that sample); ``relatched`` flags that sample, and
@@ -44,8 +39,7 @@ softtip's extensions (issue 5), each an :class:`EstimatorConfig` field:
 from __future__ import annotations
 
 import math
-from collections import deque
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Literal, NamedTuple
 
 import numpy as np
@@ -54,7 +48,6 @@ from numpy.typing import ArrayLike, NDArray
 from softtip._xp import NP, PY
 from softtip.contact import contact_arrays, contact_kernel
 from softtip.depth import DepthLaw, depth_kernel
-from softtip.joint import N_SUMS, joint_products, joint_solve_kernel
 from softtip.filtering import SosStream, lowpass_sos, noise_gain, sosfilt_batch
 from softtip.fingertip import Fingertip, load_fingertip
 from softtip.noise import NANO17, SensorNoise, angle_std_kernel, h_std_kernel
@@ -67,7 +60,7 @@ __all__ = ["STATES", "CONTACT_POINT_MODES", "EstimatorConfig", "Estimates", "Sam
 STATES = ("none", "point", "line")
 NONE, POINT, LINE = 0, 1, 2
 #: Values of :attr:`EstimatorConfig.contact_point`.
-CONTACT_POINT_MODES = ("latch", "track", "joint")
+CONTACT_POINT_MODES = ("latch", "track")
 
 
 @dataclass(frozen=True)
@@ -76,7 +69,7 @@ class EstimatorConfig:
 
     Parameters
     ----------
-    contact_point : {"latch", "track", "joint"}
+    contact_point : {"latch", "track"}
         How the contact point is obtained (module docstring).
     contact_threshold : float
         N; in contact while ``|f|`` (tared, filtered) is at least this.
@@ -104,20 +97,13 @@ class EstimatorConfig:
         (the input is already tared).
     relatch_distance : float or None
         m; re-latch when, with the latch held and ``|f|`` inside ``latch_window``, the
-        soft-finger solution lies farther than this from the latched point. ``None``: only
-        on contact loss. Default 3 mm: beyond the soft-finger bias of the papers' line
-        contacts at light force (≈ |h| / |f| ≤ 1 mm), so their grasps never re-latch.
+        soft-finger solution lies farther than this from the latched point. ``None``
+        (default, the papers'): only on contact loss. A few mm (e.g. 3 mm) is beyond the
+        soft-finger bias of the papers' line contacts at light force (≈ |h| / |f| ≤ 1 mm).
     depth : DepthLaw or None
         Depth compensation (:mod:`softtip.depth`); ``None`` (default): off, the papers'
         undeformed contact point. :data:`softtip.depth.MURAKAMI2006_DEPTH` is the
         murakami2006 skin.
-    joint_window : int
-        Samples of the sliding window of ``joint`` mode (default 25: 0.5 s at 50 Hz).
-    joint_min_conditioning : float
-        ``joint`` mode falls back to the latched point where the window's conditioning
-        (:mod:`softtip.joint`, in [0, 1]) is below this.
-    joint_iterations : int
-        Gauss–Newton steps of the joint solve.
     """
 
     contact_point: Literal["latch", "track"] = "latch"
@@ -133,11 +119,8 @@ class EstimatorConfig:
     sample_rate: float | None = None
     bias: tuple[float, ...] | None = None
     tare_duration: float = 0.2
-    relatch_distance: float | None = 3e-3
+    relatch_distance: float | None = None
     depth: DepthLaw | None = None
-    joint_window: int = 25
-    joint_min_conditioning: float = 0.02
-    joint_iterations: int = 2
 
     def __post_init__(self) -> None:
         if self.contact_point not in CONTACT_POINT_MODES:
@@ -149,15 +132,6 @@ class EstimatorConfig:
             object.__setattr__(self, "relatch_distance", v)
         if self.depth is not None and not isinstance(self.depth, DepthLaw):
             raise ValueError(f"depth must be a softtip.depth.DepthLaw or None, got {self.depth!r}")
-        if int(self.joint_window) < 3:
-            raise ValueError(f"joint_window must be at least 3 samples, got {self.joint_window!r}")
-        object.__setattr__(self, "joint_window", int(self.joint_window))
-        if not (0.0 <= float(self.joint_min_conditioning) <= 1.0):
-            raise ValueError(f"joint_min_conditioning must be in [0, 1], got {self.joint_min_conditioning!r}")
-        object.__setattr__(self, "joint_min_conditioning", float(self.joint_min_conditioning))
-        if int(self.joint_iterations) < 1:
-            raise ValueError(f"joint_iterations must be at least 1, got {self.joint_iterations!r}")
-        object.__setattr__(self, "joint_iterations", int(self.joint_iterations))
         lo, hi = (float(v) for v in self.latch_window)
         if not (0.0 <= lo < hi):
             raise ValueError(f"latch_window must be (low, high) with 0 <= low < high, in N; got {self.latch_window!r}")
@@ -203,10 +177,6 @@ class Estimates:
     relatched : (N,) a new latch starts at this sample, replacing an earlier one (drift at
         light force, or contact regained after a latched contact); an event, not masked
     depth : (N,) depth compensation ``δ`` used, m (0 without a depth law); NaN when ``none``
-    joint_conditioning : (N,) conditioning of the ``joint`` window in [0, 1]; NaN where no
-        joint solve was made (other modes, window not yet full)
-    joint_fallback : (N,) ``joint`` mode used the latched point here (window not full or
-        ill-conditioned)
     """
 
     t: NDArray[np.float64]
@@ -228,8 +198,6 @@ class Estimates:
     bias: NDArray[np.float64]
     relatched: NDArray[np.bool_]
     depth: NDArray[np.float64]
-    joint_conditioning: NDArray[np.float64]
-    joint_fallback: NDArray[np.bool_]
 
     def __len__(self) -> int:
         return len(self.t)
@@ -263,9 +231,9 @@ class Estimates:
             "angle_std_deg": np.degrees(self.angle_std),
             "latched": self.latched,
             "latch_fallback": self.latch_fallback,
+            "relatched": self.relatched,
+            "depth": self.depth,
         }  # fmt: skip
-        # relatched, depth, joint_conditioning, joint_fallback are fields, not yet CSV
-        # columns: the live recorder (softtip.live) must gain them in the same change
 
 
 class SampleEstimate(NamedTuple):
@@ -292,8 +260,6 @@ class SampleEstimate(NamedTuple):
     taring: bool
     relatched: bool = False
     depth: float = math.nan
-    joint_conditioning: float = math.nan
-    joint_fallback: bool = False
 
 
 # -- the measurement, shared by batch and stream ----------------------------------------------
@@ -319,20 +285,6 @@ def _measure(fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, noise, h_sigmas, h_
     angle = angle_kernel(dx, dy, dz, *frame, xp)
     angle_std = angle_std_kernel(dx, dy, dz, hn, rx, ry, rz, noise, xp)
     return sigma, hx, hy, hz, hn, h_std, dx, dy, dz, angle, angle_std, line, pushing, delta
-
-
-def _joint_moment(fx, fy, fz, mx, my, mz, nx, ny, nz, ax, ay, az, law, xp):
-    """Moment about the anchor ``a`` that enters the joint sums, component-wise.
-
-    With a depth law the moment is first moved to the undeformed surface with this
-    sample's soft-finger normal: ``m + δ n × f`` (so that the surface point is fitted).
-    """
-    if law is not None:
-        delta = depth_kernel(-(fx * nx + fy * ny + fz * nz), law, xp)
-        mx = mx + delta * (ny * fz - nz * fy)
-        my = my + delta * (nz * fx - nx * fz)
-        mz = mz + delta * (nx * fy - ny * fx)
-    return spin_torque_kernel(fx, fy, fz, mx, my, mz, ax, ay, az)
 
 
 def _effective_noise(config: EstimatorConfig, sos) -> SensorNoise:
@@ -443,48 +395,6 @@ def _latch_points(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig):
     return point, latched, fallback, relatched
 
 
-def _joint_points(c, contact, sc, base, relatched, tip: Fingertip, config: EstimatorConfig):
-    """``joint`` mode: windowed joint estimate of the contact point, vectorised.
-
-    ``c`` are the six wrench components, ``sc`` the soft-finger solutions, ``base`` the
-    latched points (N, 3) (start and regularisation of the solve). Returns
-    ``(point (N, 3), conditioning (N,), accepted (N,))``: the joint point where accepted, the
-    latched one elsewhere.
-    """
-    n = len(c[0])
-    w = config.joint_window
-    valid = contact & np.asarray(sc[7], dtype=bool)
-    cond = np.full(n, np.nan)
-    jp = np.full((n, 3), np.nan)
-    edges = np.diff(np.concatenate(([False], contact, [False])).astype(np.int8))
-    for s, e in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
-        v = np.flatnonzero(valid[s:e]) + s
-        if len(v) < w:
-            continue
-        anchor = [float(sc[i][v[0]]) for i in range(3)]  # first soft-finger point of the contact
-        qa = _joint_moment(*(ci[v] for ci in c), *(sc[i][v] for i in (3, 4, 5)), *anchor, config.depth, NP)
-        sums = []
-        for p in joint_products(c[0][v], c[1][v], c[2][v], *qa):
-            cz = np.concatenate(([0.0], np.cumsum(p)))  # sequential, as the stream's running sums
-            sums.append(cz[w:] - cz[:-w])
-        idx = v[w - 1 :]
-        out = joint_solve_kernel(sums, *base[idx].T, *anchor, tip, config.joint_iterations, NP)
-        jp[idx] = np.stack(out[:3], axis=-1)
-        cond[idx] = out[6]
-    accept = valid & (cond >= config.joint_min_conditioning) & np.all(np.isfinite(jp), axis=-1)
-    # between well-conditioned windows hold the last accepted joint point of the segment
-    # (a held grasp has no force variation to identify it from); a segment starts at
-    # contact onset and at every re-latch
-    i = np.arange(n)
-    begin = np.concatenate(([contact[0]], contact[1:] & ~contact[:-1])) | (relatched & contact) if n else contact
-    seg0 = np.maximum.accumulate(np.where(begin, i, 0)) if n else i
-    last = np.maximum.accumulate(np.where(accept, i, -1)) if n else i
-    hold = contact & ~accept & (last >= seg0)
-    out = np.where(accept[:, None], jp, base)
-    out[hold] = jp[last[hold]]
-    return out, cond, accept, hold
-
-
 def estimate(
     t: ArrayLike,
     wrench: ArrayLike,
@@ -544,8 +454,6 @@ def estimate(
     fn = np.sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2])
     contact = (fn >= config.contact_threshold) & ~taring
     relatched = np.zeros(n, dtype=bool)
-    joint_cond = np.full(n, np.nan)
-    joint_fb = np.zeros(n, dtype=bool)
     with np.errstate(invalid="ignore", divide="ignore"):
         sc = contact_arrays(tip, *c)
         if config.contact_point == "track":
@@ -555,11 +463,6 @@ def estimate(
             latched = fallback = np.zeros(n, dtype=bool)
         else:
             point, latched, fallback, relatched = _latch_points(t, fn, contact, sc, tip, config)
-            if config.contact_point == "joint":
-                point, joint_cond, accept, hold = _joint_points(c, contact, sc, point, relatched, tip, config)
-                latched = latched & ~accept & ~hold
-                fallback = fallback & ~accept & ~hold
-                joint_fb = contact & ~accept
             normal = tip.normal(point)
             has = np.all(np.isfinite(point), axis=-1)
         sigma, hx, hy, hz, hn, h_std, dx, dy, dz, angle, angle_std, line, pushing, delta = _measure(
@@ -596,8 +499,6 @@ def estimate(
         bias=bias,
         relatched=relatched,
         depth=keep(delta, located),
-        joint_conditioning=keep(joint_cond, located),
-        joint_fallback=joint_fb & located,
     )
 
 
@@ -637,7 +538,6 @@ class Estimator:
             self._sos = lowpass_sos(cfg.lowpass_hz, cfg.sample_rate, cfg.lowpass_order)
         self._noise = _effective_noise(cfg, self._sos)
         self._track = cfg.contact_point == "track"
-        self._joint = cfg.contact_point == "joint"
         self.reset()
 
     def reset(self) -> None:
@@ -665,14 +565,6 @@ class Estimator:
         self._sum_fb = [0.0, 0.0, 0.0]
         self._latch: tuple[float, float, float] | None = None
         self._latch_is_fallback = False
-        self._joint_held: tuple[float, float, float] | None = None
-
-    def _start_joint(self) -> None:
-        # running (cumulative) sums of the joint products since contact onset, and the
-        # last joint_window + 1 of them: window sums are differences, as in the batch
-        self._anchor: tuple[float, float, float] | None = None
-        self._cum = [0.0] * N_SUMS
-        self._hist: deque[list[float]] = deque([self._cum], maxlen=self.config.joint_window + 1)
 
     def update(self, t: float, wrench: ArrayLike) -> SampleEstimate:
         """Process one raw sample.
@@ -762,8 +654,7 @@ class Estimator:
             return self._none(t, x)
 
         tip = self.tip
-        latched = fallback = relatched = joint_fb = False
-        cond = math.nan
+        latched = fallback = relatched = False
         if self._track:
             rx, ry, rz, nx, ny, nz, _, valid = contact_kernel(tip, *x, xp=PY)
             if not valid:
@@ -773,8 +664,6 @@ class Estimator:
             if not self._in_contact:
                 relatched = self._had_latch  # contact regained after a latched one
                 self._start_contact(fn, t)
-                if self._joint:
-                    self._start_joint()
             else:
                 if self._rising and fn > self._peak:
                     self._peak, self._t_peak = fn, t
@@ -792,28 +681,6 @@ class Estimator:
             point, latched, fallback, sc = self._latch_step(t, fn, x, sc)
             if latched:
                 self._had_latch = True
-            if self._joint:
-                if sc is None:
-                    sc = contact_kernel(tip, *x, xp=PY)
-                joint_fb = True
-                if sc[7]:
-                    if self._anchor is None:
-                        self._anchor = (sc[0], sc[1], sc[2])
-                    ax, ay, az = self._anchor
-                    qa = _joint_moment(fx, fy, fz, mx, my, mz, sc[3], sc[4], sc[5], ax, ay, az, cfg.depth, PY)
-                    self._cum = [c + p for c, p in zip(self._cum, joint_products(fx, fy, fz, *qa))]
-                    self._hist.append(self._cum)
-                    if len(self._hist) > cfg.joint_window and point is not None:
-                        old = self._hist[0]
-                        sums = [c - o for c, o in zip(self._cum, old)]
-                        jx, jy, jz, _, _, _, cond = joint_solve_kernel(
-                            sums, *point, ax, ay, az, tip, cfg.joint_iterations, PY
-                        )
-                        if cond >= cfg.joint_min_conditioning and math.isfinite(jx + jy + jz):
-                            point, latched, fallback, joint_fb = (jx, jy, jz), False, False, False
-                            self._joint_held = point
-                if joint_fb and self._joint_held is not None:
-                    point, latched, fallback = self._joint_held, False, False
             if point is None:
                 return self._none(t, x, pulling=True, relatched=relatched)
             rx, ry, rz = point
@@ -830,7 +697,7 @@ class Estimator:
             state, d, angle, angle_std = "point", _NAN3, math.nan, math.nan
         return SampleEstimate(
             t, state, tuple(x), (rx, ry, rz), (nx, ny, nz), sigma, (hx, hy, hz), hn, h_std, d, angle, angle_std,
-            latched, fallback, False, False, relatched, delta, cond, joint_fb,
+            latched, fallback, False, False, relatched, delta,
         )  # fmt: skip
 
     def _mean(self, total: list[float], count: int) -> tuple[float, float, float]:
@@ -840,7 +707,3 @@ class Estimator:
         """Feed a sequence of samples through :meth:`update`; returns one estimate each."""
         return [self.update(ti, wi) for ti, wi in zip(np.asarray(t, dtype=float), np.asarray(wrench, dtype=float))]
 
-
-def with_config(config: EstimatorConfig | None, **changes) -> EstimatorConfig:
-    """A copy of ``config`` (or the defaults) with ``changes`` applied."""
-    return replace(config or EstimatorConfig(), **changes)
