@@ -158,7 +158,9 @@ def test_line_contact_spin_torque_is_perpendicular_to_the_plate(model, thickness
     d = np.cross(Z, h)
     d /= np.linalg.norm(d)
     err = abs((math.degrees(line_angle(d, Z)) - angle_deg + 90.0) % 180.0 - 90.0)
-    assert err < 3.0
+    # the tilt imposed here has half its rotation about the plate's own edge, which a 1 mm
+    # strip barely resists under the column rule: 3.5–4° measured for 1 mm, < 3° for 2 mm
+    assert err < (5.0 if thickness < 0.0015 else 3.0)
 
 
 def test_no_contact_gives_an_empty_result(model):
@@ -179,6 +181,7 @@ def test_params_validate():
 
 def test_column_depth_rule_matches_on_a_plane_and_frees_the_plate_tilt_about_its_edge(model):
     col = ContactModel(model.skin, ContactParams(depth_rule="column"))
+    model = ContactModel(model.skin, ContactParams(depth_rule="surface"))
     for depth in (0.5e-3, 2e-3):
         pose = place(APEX, Z, depth)
         assert np.allclose(col.evaluate(HalfSpace(), pose).wrench, model.evaluate(HalfSpace(), pose).wrench, rtol=1e-9, atol=1e-12)

@@ -16,7 +16,6 @@ from softtip.sim import (
     SensorModel,
     Wedge,
     discretise_skin,
-    line_angle,
     paper_scenario,
     push_scenario,
     simulate_grasp,
@@ -75,13 +74,18 @@ def test_grasp_follows_the_papers_time_line(plate_logs):
 
 @pytest.mark.parametrize("angle", [0, 45])
 def test_thin_plate_direction_is_measurable(plate_logs, angle):
+    # measured as the papers do: about the contact point latched at light force (the
+    # object's weight already shifts the strip there; the nominal point ignores that)
+    from softtip import axial_difference, estimate
+
     log = plate_logs[angle]
-    h, d, n = tangential_spin(log, -1)
+    h, _, _ = tangential_spin(log, -1)
     assert np.linalg.norm(h) > 1e-3  # > 1 N·mm
-    est = math.degrees(line_angle(d, n))
-    # 0°: ~1°; 45°: ~4° (the joint rotation also tilts the plate about its own edge,
-    # see the scenario module docs)
-    assert axial_error_deg(est, log.truth.angle_deg[-1]) < 6.0
+    est = estimate(log.t, log.wrench, TIP)
+    held = (log.t >= 6.0) & (est.state == 2)
+    assert held.sum() > 150
+    err = np.degrees(np.abs(axial_difference(est.angle[held], log.truth.angle[held])))
+    assert np.median(err) < 3.0
     assert abs(log.truth.angle_deg[-1] - angle) < 2.0  # the gravity spin turns the plate ~1°
 
 

@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from softtip.sim import Cylinder, CylinderRim, HalfSpace, Plate, Pose, Wedge, make_object, rotation_matrix
+from softtip.sim.objects import RigidObject
 
 OBJECTS = [
     HalfSpace(),
@@ -113,3 +114,23 @@ def test_pose_algebra(a, b, data):
     piv = _vec(data, coord)
     rot = Pose.from_axis_angle([0.0, 0.0, 1.0], 0.3, piv)
     assert_allclose(rot.apply(piv), piv, atol=1e-15)
+
+
+@pytest.mark.parametrize("obj", OBJECTS, ids=IDS)
+@settings(max_examples=40)
+@given(data=st.data())
+def test_segment_min_is_the_deepest_point_of_the_segment(obj, data):
+    # closed forms (extruded objects) and the numerical search (fringe) against sampling
+    rng = np.random.default_rng(data.draw(st.integers(0, 2**32 - 1)))
+    q = rng.normal(scale=2e-3, size=(64, 3))
+    u = rng.normal(size=(64, 3))
+    u /= np.linalg.norm(u, axis=1)[:, None]
+    length = 5e-3
+    s, f = obj.segment_min_local(q, u, length)
+    assert np.all((s >= 0.0) & (s <= length))
+    assert_allclose(obj.sdf_local(q + s[:, None] * u), f, atol=1e-12)
+    along = np.min([obj.sdf_local(q + t * u) for t in np.linspace(0.0, length, 801)], axis=0)
+    assert np.all(f <= along + 2e-9)  # (the fringe: a search to 1e-9 m)
+    assert np.all(f >= along - 0.5 * length / 800)  # 1-Lipschitz: within half a sampling step
+    _, f2 = RigidObject.segment_min_local(obj, q, u, length, obj.sdf_local(q))  # the generic search
+    assert_allclose(f, f2, atol=2e-9)

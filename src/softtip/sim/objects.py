@@ -49,6 +49,10 @@ __all__ = [
 ]
 
 _TINY = 1e-30
+# Numerical search of RigidObject.segment_min_local (objects without a closed form):
+# at most this many steps, stopped once the minimum is known to _SEGMENT_TOL, m.
+_SEGMENT_STEPS = 30
+_SEGMENT_TOL = 1e-9
 
 
 def _points(points: ArrayLike) -> NDArray[np.float64]:
@@ -77,6 +81,10 @@ class RigidObject:
         """Unit gradient of the signed distance (outward normal of the nearest surface), (M, 3)."""
         raise NotImplementedError
 
+    def sdf_normal_local(self, q: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``sdf_local(q), normal_local(q)`` (subclasses may share the work)."""
+        return self.sdf_local(q), self.normal_local(q)
+
     def exit_local(
         self, q: NDArray[np.float64], u: NDArray[np.float64]
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:  # pragma: no cover - abstract
@@ -91,6 +99,57 @@ class RigidObject:
     def line_direction_local(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
         """Unit line direction (edge/axis/fringe tangent) near ``q``, (M, 3); NaN if none."""
         return np.broadcast_to(np.array([0.0, 0.0, 1.0]), q.shape).copy()
+
+    def segment_min_local(
+        self, q: NDArray[np.float64], u: NDArray[np.float64], length: float, sdf0: NDArray[np.float64] | None = None
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Deepest point of the segments ``q + s u``, ``0 <= s <= length`` (object frame).
+
+        ``sdf0``, optional: the signed distance at ``q``, if already known.
+        Returns ``s_min`` (M,) and the signed distance there (M,): the minimum of the
+        signed distance along each segment (for a segment crossing the object, its deepest
+        point; otherwise its closest approach). Subclasses override this with closed
+        forms; the default is a numerical search, valid because the signed distance of a
+        convex object is convex along a line: a bracket ``[lo, hi]`` (slope < 0 at ``lo``,
+        >= 0 at ``hi``) refined at the intersection of the tangents at its ends (exact in
+        one step at a kink between two flat faces), stopped once the best value is within
+        ``_SEGMENT_TOL`` of the tangents' lower bound.
+        """
+        m = len(q)
+        s0 = np.zeros(m)
+        f0 = self.sdf_local(q) if sdf0 is None else np.array(sdf0, dtype=float)
+        d0 = np.einsum("ij,ij->i", self.normal_local(q), u)
+        p1 = q + length * u
+        f1 = self.sdf_local(p1)
+        d1 = np.einsum("ij,ij->i", self.normal_local(p1), u)
+        lo, hi = s0, np.full(m, float(length))
+        f_lo, d_lo, f_hi, d_hi = f0, d0, f1, d1
+        act = np.flatnonzero((d0 < 0.0) & (d1 >= 0.0))
+        for _ in range(_SEGMENT_STEPS):
+            if len(act) == 0:
+                break
+            a0, a1 = lo[act], hi[act]
+            den = d_lo[act] - d_hi[act]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                sx = (f_hi[act] - f_lo[act] + d_lo[act] * a0 - d_hi[act] * a1) / den
+            lower = f_lo[act] + d_lo[act] * (sx - a0)
+            width = a1 - a0
+            sx = np.where(np.isfinite(sx), np.clip(sx, a0 + 1e-3 * width, a1 - 1e-3 * width), 0.5 * (a0 + a1))
+            px = q[act] + sx[:, None] * u[act]
+            fx = self.sdf_local(px)
+            dx = np.einsum("ij,ij->i", self.normal_local(px), u[act])
+            neg = dx < 0.0
+            lo[act] = np.where(neg, sx, a0)
+            f_lo[act] = np.where(neg, fx, f_lo[act])
+            d_lo[act] = np.where(neg, dx, d_lo[act])
+            hi[act] = np.where(neg, a1, sx)
+            f_hi[act] = np.where(neg, f_hi[act], fx)
+            d_hi[act] = np.where(neg, d_hi[act], dx)
+            best = np.minimum(f_lo[act], f_hi[act])
+            done = (best - np.where(np.isfinite(lower), lower, -np.inf) <= _SEGMENT_TOL) | (hi[act] - lo[act] <= _SEGMENT_TOL)
+            act = act[~done]
+        first = f_lo <= f_hi
+        return np.where(first, lo, hi), np.where(first, f_lo, f_hi)
 
     def params(self) -> dict:  # pragma: no cover - abstract
         """Geometric parameters, SI, JSON-ready."""
@@ -150,13 +209,25 @@ class RigidObject:
 
 
 # -- 2-D rounded convex polygons (extruded along z') -------------------------------------
+def _dot(cx: float, cy: float, x: NDArray[np.float64], y: NDArray[np.float64]):
+    # cx x + cy y, skipping zero terms (the faces and edges here are mostly axis-aligned)
+    if cy == 0.0:
+        return cx * x
+    if cx == 0.0:
+        return cy * y
+    return cx * x + cy * y
+
+
 @dataclass(frozen=True, eq=False)
 class _Profile:
     """Inner convex polygon ``{p : normals @ p <= offsets}`` dilated by a disc of ``rho``.
 
     ``vertices`` (J, 2) are the polygon's corners; ``edges`` (J, 2, 2) the unit directions
     from each corner along its two edges (zeros for an isolated point, whose normal cone is
-    the whole plane).
+    the whole plane). The kernels take the two coordinates as separate arrays, stack the
+    (at most three) faces and loop over the (at most two) corners: they run on the few
+    hundred points of one contact evaluation, where the number of numpy calls matters
+    more than their size.
     """
 
     normals: NDArray[np.float64]
@@ -165,67 +236,163 @@ class _Profile:
     edges: NDArray[np.float64]
     rho: float
 
-    def _cone(self, w: NDArray[np.float64], j: int) -> NDArray[np.bool_]:
-        # w - vertex lies in the vertex's normal cone: the vertex is the closest inner point
-        ea, eb = self.edges[j]
-        return (w @ ea <= 0.0) & (w @ eb <= 0.0)
+    @cached_property
+    def _face_cols(self) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        return self.normals[:, :1].copy(), self.normals[:, 1:].copy(), self.offsets[:, None].copy()
 
-    def sdf(self, q2: NDArray[np.float64]) -> NDArray[np.float64]:
+    @cached_property
+    def _pairs(self) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+        j, k = np.triu_indices(len(self.offsets), 1)
+        return j, k
+
+    @cached_property
+    def _corners(self) -> tuple[tuple[float, float, float, float, float, float, bool], ...]:
+        # (vx, vy, edge a, edge b, whether the normal cone is the whole plane)
+        return tuple(
+            (float(v[0]), float(v[1]), float(e[0, 0]), float(e[0, 1]), float(e[1, 0]), float(e[1, 1]), not np.any(e))
+            for v, e in zip(self.vertices, self.edges)
+        )
+
+    def _faces_at(self, x, y):
+        nx, ny, o = self._face_cols
+        return nx * x + ny * y - o  # (F, M)
+
+    def _inner(self, x, y, grad: bool):
+        # signed distance to the inner polygon (and its gradient): the largest face function,
+        # replaced by the distance to a corner inside that corner's normal cone
+        m = x.shape[0]
+        gx = gy = None
         if len(self.offsets):
-            d = (q2 @ self.normals.T - self.offsets).max(axis=1)
+            a = self._faces_at(x, y)
+            if grad:
+                k = a.argmax(axis=0)
+                d = a[k, np.arange(m)]
+                gx, gy = self.normals[k, 0], self.normals[k, 1]
+            else:
+                d = a.max(axis=0)
         else:
-            d = np.full(q2.shape[0], -np.inf)
-        for j in range(len(self.vertices)):
-            w = q2 - self.vertices[j]
-            cone = self._cone(w, j)
-            if cone.any():
-                wc = w[cone]
-                d[cone] = np.hypot(wc[:, 0], wc[:, 1])
-        return d - self.rho
+            d = np.full(m, -np.inf)
+            if grad:
+                gx, gy = np.zeros(m), np.zeros(m)
+        for vx, vy, ax, ay, bx, by, everywhere in self._corners:
+            wx, wy = x - vx, y - vy
+            dist = np.sqrt(wx * wx + wy * wy)
+            if everywhere:
+                d = dist
+                if grad:
+                    gx, gy = np.ones(m), np.zeros(m)
+                    np.divide(wx, dist, out=gx, where=dist > 0.0)
+                    np.divide(wy, dist, out=gy, where=dist > 0.0)
+                continue
+            cone = (_dot(ax, ay, wx, wy) <= 0.0) & (_dot(bx, by, wx, wy) <= 0.0)
+            np.copyto(d, dist, where=cone)
+            if grad:
+                np.copyto(gx, 1.0, where=cone)
+                np.copyto(gy, 0.0, where=cone)
+                ok = cone & (dist > 0.0)
+                np.divide(wx, dist, out=gx, where=ok)
+                np.divide(wy, dist, out=gy, where=ok)
+        return d, gx, gy
 
-    def grad(self, q2: NDArray[np.float64]) -> NDArray[np.float64]:
-        m = q2.shape[0]
+    def sdf(self, x: NDArray[np.float64], y: NDArray[np.float64]) -> NDArray[np.float64]:
+        return self._inner(x, y, False)[0] - self.rho
+
+    def sdf_grad(self, x: NDArray[np.float64], y: NDArray[np.float64]):
+        """Signed distance and its (unit) gradient components ``(d, gx, gy)``."""
+        d, gx, gy = self._inner(x, y, True)
+        return d - self.rho, gx, gy
+
+    def exit(self, x, y, ux, uy):
+        """Ray exit ``s`` and the exit normal ``(nx, ny)`` of rays from interior points."""
+        m = x.shape[0]
+        rho = self.rho
         if len(self.offsets):
-            g = self.normals[np.argmax(q2 @ self.normals.T - self.offsets, axis=1)]
+            nx, ny, o = self._face_cols
+            nu = nx * ux + ny * uy
+            sk = np.full(nu.shape, np.inf)
+            np.divide(o + rho - (nx * x + ny * y), nu, out=sk, where=nu > 1e-15)
+            k = sk.argmin(axis=0)  # (a ray that never leaves: the first face's normal)
+            s = sk[k, np.arange(m)]
+            nxo, nyo = self.normals[k, 0], self.normals[k, 1]
         else:
-            g = np.zeros((m, 2))
-        for j in range(len(self.vertices)):
-            w = q2 - self.vertices[j]
-            cone = self._cone(w, j)
-            if cone.any():
-                wc = w[cone]
-                dist = np.hypot(wc[:, 0], wc[:, 1])
-                ok = dist > 0.0
-                g[cone] = np.where(ok[:, None], wc / np.where(ok, dist, 1.0)[:, None], [1.0, 0.0])
-        return g
-
-    def exit(self, q2: NDArray[np.float64], u2: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        m = q2.shape[0]
-        s = np.full(m, np.inf)
-        n = np.zeros((m, 2))
-        if len(self.offsets):
-            nu = u2 @ self.normals.T
-            num = self.offsets + self.rho - q2 @ self.normals.T
-            with np.errstate(divide="ignore", invalid="ignore"):
-                sk = np.where(nu > 1e-15, num / np.where(nu > 1e-15, nu, 1.0), np.inf)
-            k = np.argmin(sk, axis=1)
-            s = sk[np.arange(m), k]
-            n = self.normals[k]
-        if self.rho > 0.0:
-            a = np.einsum("ij,ij->i", u2, u2)
-            for j in range(len(self.vertices)):
-                w = q2 - self.vertices[j]
-                b = np.einsum("ij,ij->i", w, u2)
-                c = np.einsum("ij,ij->i", w, w) - self.rho**2
+            s, nxo, nyo = np.full(m, np.inf), np.zeros(m), np.zeros(m)
+        if rho > 0.0:
+            a = ux * ux + uy * uy
+            for vx, vy, ax, ay, bx, by, everywhere in self._corners:
+                wx, wy = x - vx, y - vy
+                b = wx * ux + wy * uy
+                c = wx * wx + wy * wy - rho * rho
                 disc = b * b - a * c
                 ok = (a > _TINY) & (disc >= 0.0)
-                s2 = np.where(ok, (-b + np.sqrt(np.where(ok, disc, 0.0))) / np.where(ok, a, 1.0), np.inf)
+                s2 = np.full(m, np.inf)
+                np.divide(np.sqrt(np.maximum(disc, 0.0)) - b, a, out=s2, where=ok)
                 s2 = np.maximum(s2, 0.0)
-                e = w + np.where(np.isfinite(s2), s2, 0.0)[:, None] * u2
-                better = ok & self._cone(e, j) & (s2 < s)
+                s2f = np.where(ok, s2, 0.0)
+                ex, ey = wx + s2f * ux, wy + s2f * uy
+                better = ok & (s2 < s)
+                if not everywhere:
+                    better &= (_dot(ax, ay, ex, ey) <= 0.0) & (_dot(bx, by, ex, ey) <= 0.0)
                 s = np.where(better, s2, s)
-                n = np.where(better[:, None], e / self.rho, n)
-        return np.maximum(s, 0.0), n
+                nxo = np.where(better, ex / rho, nxo)
+                nyo = np.where(better, ey / rho, nyo)
+        return np.maximum(s, 0.0), nxo, nyo
+
+    def segment_min(self, x, y, ux, uy, length: float, sdf0=None):
+        """Minimum of the signed distance along ``(x, y) + s (ux, uy)``, ``0 <= s <= length``.
+
+        Returns ``(s, sdf)``; ``sdf0``, if given, is the signed distance at ``s = 0``.
+        Exact, no search: let ``g(s)`` be the largest face function (a lower bound of the
+        polygon's signed distance, equal to it inside the polygon). ``g`` is convex and
+        piecewise linear, so its minimum over the segment is at an end or where two face
+        functions cross. If that minimum is <= 0 the segment enters the polygon there and
+        it is the answer. Otherwise the segment misses the polygon, and the closest pair of
+        two disjoint convex polygons (the segment is one) involves a vertex of one of
+        them: an end of the segment, or a corner of the polygon and its foot on the
+        segment. The dilation by ``rho`` subtracts a constant.
+        """
+        L = float(length)
+        m = x.shape[0]
+        r = np.arange(m)
+        inside = None
+        if len(self.offsets):
+            nx, ny, _ = self._face_cols
+            a = self._faces_at(x, y)
+            b = nx * ux + ny * uy
+            j, k = self._pairs
+            cand = np.zeros((2 + len(j), m))
+            cand[1] = L
+            if len(j):
+                den = b[j] - b[k]
+                np.divide(a[k] - a[j], den, out=cand[2:], where=np.abs(den) > 1e-15)
+                np.clip(cand[2:], 0.0, L, out=cand[2:])
+            val = (a[None, :, :] + cand[:, None, :] * b[None, :, :]).max(axis=1)  # (C, M)
+            kc = val.argmin(axis=0)
+            g_s, g_f = cand[kc, r], val[kc, r]
+            inside = g_f <= 1e-12  # (rounding: a plate with fully rounded corners has no interior)
+            if inside.all():
+                return g_s, g_f - self.rho
+        # ends of the segment (exact signed distance), then the corners' feet on it
+        d0 = self._inner(x, y, False)[0] if sdf0 is None else np.asarray(sdf0) + self.rho
+        d1 = self._inner(x + L * ux, y + L * uy, False)[0]
+        far = d1 < d0
+        best_s = far * L
+        best_f = np.where(far, d1, d0)
+        if len(self._corners):
+            uu = ux * ux + uy * uy
+            inv = np.zeros(m)
+            np.divide(1.0, uu, out=inv, where=uu > _TINY)
+            for vx, vy, *_ in self._corners:
+                wx, wy = x - vx, y - vy
+                sc = np.clip(-(wx * ux + wy * uy) * inv, 0.0, L)
+                ex, ey = wx + sc * ux, wy + sc * uy
+                dist = np.sqrt(ex * ex + ey * ey)
+                better = dist < best_f
+                np.copyto(best_s, sc, where=better)
+                np.copyto(best_f, dist, where=better)
+        if inside is not None:
+            np.copyto(best_s, g_s, where=inside)
+            np.copyto(best_f, g_f, where=inside)
+        return best_s, best_f - self.rho
 
 
 class _Extruded(RigidObject):
@@ -236,15 +403,22 @@ class _Extruded(RigidObject):
         raise NotImplementedError
 
     def sdf_local(self, q):
-        return self._profile.sdf(q[:, :2])
+        return self._profile.sdf(q[:, 0], q[:, 1])
 
     def normal_local(self, q):
-        g = self._profile.grad(q[:, :2])
-        return np.column_stack((g, np.zeros(len(q))))
+        _, gx, gy = self._profile.sdf_grad(q[:, 0], q[:, 1])
+        return np.column_stack((gx, gy, np.zeros(len(q))))
+
+    def sdf_normal_local(self, q):
+        d, gx, gy = self._profile.sdf_grad(q[:, 0], q[:, 1])
+        return d, np.column_stack((gx, gy, np.zeros(len(q))))
 
     def exit_local(self, q, u):
-        s, n2 = self._profile.exit(q[:, :2], u[:, :2])
-        return s, np.column_stack((n2, np.zeros(len(q))))
+        s, nx, ny = self._profile.exit(q[:, 0], q[:, 1], u[:, 0], u[:, 1])
+        return s, np.column_stack((nx, ny, np.zeros(len(q))))
+
+    def segment_min_local(self, q, u, length, sdf0=None):
+        return self._profile.segment_min(q[:, 0], q[:, 1], u[:, 0], u[:, 1], length, sdf0)
 
 
 def _positive(value: float, name: str) -> float:

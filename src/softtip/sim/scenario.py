@@ -58,21 +58,20 @@ plate; 0.05 N of tangential load per finger) are kept small: see the limits belo
 Known limits of the contact model (measured, not fixed)
 -------------------------------------------------------
 * A rotation about hand ``y`` has a component about the strip's own axis (sin of the
-  angle between them): at ±45° half of it tilts the plate about its cut edge. In the
-  Winkler model the springs stay vertical under the footprint the tilted plate cuts in the
-  undeformed skin, which lies ``δ·tan α`` beside the cut face (δ ≈ 3 mm): the line of
-  action moves across the strip and the tilt is resisted with ``≈ F·δ`` ≈ 15 N·mm/rad,
-  about a fifth of the bending stiffness across it (≈ 75 N·mm/rad). With the true wrench
-  and the nominal point this biases the direction at ±45° toward 0° by 3–5° (5–9° through
-  the estimator with noise) for the
-  default amplitudes (33° instead of 45° with no gravity load at all). The pivot of the rotation
-  plays no part (the translations are solved from force balance: pivot at the contact,
-  3 mm deep or 40 mm away give the same wrench to 0.05°). Real rubber also resists the
-  tilt (side walls of the 3 mm deep groove), so a bias of this kind is plausible, but
-  its size here is a property of the Winkler spring direction, not a measured one.
+  angle between them): at ±45° half of it tilts the plate about its cut edge. With the
+  default elastic-foundation rule (``ContactParams(depth_rule="column")``: each spring is
+  compressed to the deepest object point on its column) a 1–2 mm strip barely resists
+  that tilt (≈ 0.4–2.5 N·mm/rad against ≈ 75 N·mm/rad across it), so the direction is
+  measured within 3° at ±45°. The older ``"surface"`` rule compressed only springs whose
+  skin point lies inside the object; it resisted the tilt with ``≈ F·δ`` ≈ 15 N·mm/rad and
+  biased ±45° by 5–9°. Real rubber resists the tilt somewhat through the groove's walls.
+* Thick plates: the strip turns "round" only around 10 mm here (3–4 mm plates still
+  behave mostly like strips), where the papers saw large errors from 3 mm on.
 * The Winkler layer has no side-wall stiffness across an embedded thin plate: only the
   shear layer holds it sideways (≈ 0.3 N/mm instead of ≈ 10 N/mm for rubber walls), so a
-  tangential load across the strip shifts it and adds ``|f| × shift`` to ``h``. Heavier
+  tangential load across the strip shifts it and adds ``|f| × shift`` to ``h`` (the 10 g
+  default weight shifts a 1 mm plate at 90° by ≈ 0.15 mm: |h| ≈ 0.48 N·mm about the
+  nominal point, below the estimator's significance level of ≈ 0.9 N·mm). Heavier
   objects (≥ 50 g) therefore corrupt ±45° and 90° plates, and applying the weight only
   after the grasp (stuck strip) makes the lateral force solve fail at 90°; the weight
   ramps with the grasp force for that reason.
