@@ -59,14 +59,20 @@ def _sphere_kernel(fx, fy, fz, mx, my, mz, radius, cx, cy, cz, xp):
     g = fx * mx + fy * my + fz * mz  # f · m_c
     f2 = fx * fx + fy * fy + fz * fz
     b = r2 * f2 - (mx * mx + my * my + mz * mz)
-    disc = xp.sqrt(b * b + 4.0 * r2 * g * g)
-    pos = b > 0.0
-    # u = k² (k = σ/R) is the positive root of R² u² + b u − g² = 0; gk = g / k = p · f.
-    # Each branch avoids the cancellation of the other, so both stay exact as g → 0.
-    u = xp.where(pos, xp.div(2.0 * g * g, b + disc), xp.div(disc - b, 2.0 * r2))
-    gk = xp.where(pos, -xp.sqrt(0.5 * (b + disc)), -radius * xp.abs(g) * xp.sqrt(xp.div(2.0, disc - b)))
+    g2 = g * g
+    disc = xp.sqrt(b * b + 4.0 * r2 * g2)
+    # u = k² (k = σ/R) is the positive root of R² u² + b u − g² = 0 and gk = g / k = p · f.
+    # With P = (|b| + disc) / 2 (no cancellation): b > 0 gives u = g²/P, gk² = P; b ≤ 0 gives
+    # u = P/R², gk² = R²g²/P. Both stay exact as g → 0; the branch is chosen by arithmetic
+    # (a 0/1 weight, exact), which is faster than a data-dependent select in numpy.
+    big = 0.5 * (xp.abs(b) + disc)
+    small = xp.div(g2, big)
+    pos = 1.0 * (b > 0.0)
+    neg = 1.0 - pos
+    u = pos * small + neg * (big / r2)
+    gk = -xp.sqrt(pos * big + neg * (r2 * small))
     # the pushing root has p · f = g / k < 0, i.e. k of opposite sign to g
-    k = xp.where(g >= 0.0, -1.0, 1.0) * xp.sqrt(u)
+    k = (2.0 * (g < 0.0) - 1.0) * xp.sqrt(u)
     den = k * k + f2
     px = xp.div(k * mx + (fy * mz - fz * my) + gk * fx, den)
     py = xp.div(k * my + (fz * mx - fx * mz) + gk * fy, den)
@@ -329,9 +335,14 @@ def contact_from_wrench(wrench: ArrayLike, tip: Fingertip | str) -> Contact:
     if isinstance(tip, ImplicitSurface):
         return _implicit_contact(w, tip)
     shape = w.shape[:-1]
-    rx, ry, rz, nx, ny, nz, sigma, valid = contact_arrays(tip, *np.moveaxis(w.reshape(-1, 6), -1, 0))
-    point = np.stack((rx, ry, rz), axis=-1)
-    normal = np.stack((nx, ny, nz), axis=-1)
+    w2 = w.reshape(-1, 6)
+    n = len(w2)
+    point, normal = np.empty((n, 3)), np.empty((n, 3))
+    sigma, valid = np.empty(n), np.empty(n, dtype=bool)
+    for block, out in _blocks(tip, [w2[:, i] for i in range(6)]):
+        for i in range(3):
+            point[block, i], normal[block, i] = out[i], out[3 + i]
+        sigma[block], valid[block] = out[6], out[7]
     invalid = ~valid
     if invalid.any():
         point[invalid] = np.nan
@@ -345,18 +356,29 @@ def contact_from_wrench(wrench: ArrayLike, tip: Fingertip | str) -> Contact:
 CHUNK = 16384
 
 
+def _blocks(tip: Fingertip, comps: list[NDArray]):
+    """Yield ``(block, kernel outputs)`` over cache-sized blocks of 1-D component arrays.
+
+    Each block's components are copied to contiguous arrays first (the columns of an
+    ``(N, 6)`` wrench are strided), so the kernel's temporaries stay in cache.
+    """
+    n = len(comps[0])
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        for start in range(0, n, CHUNK):
+            block = slice(start, start + CHUNK)
+            yield block, contact_kernel(tip, *(np.ascontiguousarray(c[block], dtype=float) for c in comps), xp=NP)
+
+
 def contact_arrays(tip: Fingertip, fx, fy, fz, mx, my, mz) -> tuple[NDArray, ...]:
     """:func:`contact_kernel` over 1-D component arrays of any length, in cache-sized blocks.
 
     Returns the 8 arrays ``(rx, ry, rz, nx, ny, nz, sigma, valid)``; invalid samples are not
     masked.
     """
-    comps = [np.ascontiguousarray(c, dtype=float) for c in (fx, fy, fz, mx, my, mz)]
+    comps = [np.asarray(c, dtype=float) for c in (fx, fy, fz, mx, my, mz)]
     n = len(comps[0])
     out = [np.empty(n) for _ in range(7)] + [np.empty(n, dtype=bool)]
-    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        for start in range(0, n, CHUNK):
-            block = slice(start, start + CHUNK)
-            for dst, src in zip(out, contact_kernel(tip, *(c[block] for c in comps), xp=NP)):
-                dst[block] = src
+    for block, res in _blocks(tip, comps):
+        for dst, src in zip(out, res):
+            dst[block] = src
     return tuple(out)
