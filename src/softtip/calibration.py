@@ -59,6 +59,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
 
 from softtip.contact import _sphere_kernel
+from softtip._vec import cross as _cross
+from softtip._vec import skew as _skew
 from softtip._xp import NP
 from softtip.errors import InputError
 from softtip.fingertip import Capsule, Fingertip, Sphere
@@ -195,29 +197,6 @@ def find_presses(
     on = np.asarray(force_norm, dtype=float) >= contact_threshold
     edges = np.flatnonzero(np.diff(np.concatenate(([0], on.astype(np.int8), [0]))))
     return [np.arange(a, b) for a, b in zip(edges[::2], edges[1::2]) if b - a >= min_samples]
-
-
-def _cross(a: NDArray, b: NDArray) -> NDArray:
-    return np.stack(
-        (
-            a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
-            a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
-            a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0],
-        ),
-        axis=-1,
-    )
-
-
-def _skew(v: NDArray) -> NDArray:
-    z = np.zeros(v.shape[:-1])
-    return np.stack(
-        (
-            np.stack((z, -v[..., 2], v[..., 1]), axis=-1),
-            np.stack((v[..., 2], z, -v[..., 0]), axis=-1),
-            np.stack((-v[..., 1], v[..., 0], z), axis=-1),
-        ),
-        axis=-2,
-    )
 
 
 def _force_spread(f: NDArray) -> float:

@@ -17,6 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from softtip._vec import cross as _cross
+from softtip._vec import skew as _skew
 from softtip._xp import NP
 from softtip.fingertip import Capsule, Ellipsoid, Fingertip, ImplicitSurface, Sphere, load_fingertip
 
@@ -164,29 +166,6 @@ def contact_kernel(tip: Fingertip, fx, fy, fz, mx, my, mz, xp=NP):
 
 
 # -- general implicit surfaces ---------------------------------------------------------------
-
-
-def _cross(a: NDArray, b: NDArray) -> NDArray:
-    return np.stack(
-        (
-            a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
-            a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
-            a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0],
-        ),
-        axis=-1,
-    )
-
-
-def _skew(v: NDArray) -> NDArray:
-    z = np.zeros(v.shape[:-1])
-    return np.stack(
-        (
-            np.stack((z, -v[..., 2], v[..., 1]), axis=-1),
-            np.stack((v[..., 2], z, -v[..., 0]), axis=-1),
-            np.stack((-v[..., 1], v[..., 0], z), axis=-1),
-        ),
-        axis=-2,
-    )
 
 
 def _wrench_axis_start(f: NDArray, m: NDArray, tip: ImplicitSurface, n_grid: int = 129) -> NDArray:
