@@ -13,6 +13,7 @@ either numpy arrays or Python floats (see :mod:`softtip._xp`).
 
 from __future__ import annotations
 
+import abc
 import math
 import sys
 from dataclasses import dataclass, field
@@ -63,7 +64,7 @@ def _split(points: ArrayLike) -> tuple[NDArray, NDArray, NDArray]:
     return p[..., 0], p[..., 1], p[..., 2]
 
 
-class Fingertip:
+class Fingertip(abc.ABC):
     """Base class of the fingertip shapes.
 
     Subclasses define the component-wise kernels; the array methods below wrap them.
@@ -72,14 +73,17 @@ class Fingertip:
     kind: ClassVar[str] = ""
 
     # -- kernels (components in, components out; xp is softtip._xp.NP or PY) --------------
-    def _surface_kernel(self, x, y, z, xp):  # pragma: no cover - abstract
-        raise NotImplementedError
+    @abc.abstractmethod
+    def _surface_kernel(self, x, y, z, xp):
+        """``S`` at the point ``(x, y, z)``."""
 
-    def _normal_kernel(self, x, y, z, xp):  # pragma: no cover - abstract
-        raise NotImplementedError
+    @abc.abstractmethod
+    def _normal_kernel(self, x, y, z, xp):
+        """Outward unit normal ``(nx, ny, nz)`` at ``(x, y, z)``."""
 
-    def _project_kernel(self, x, y, z, xp):  # pragma: no cover - abstract
-        raise NotImplementedError
+    @abc.abstractmethod
+    def _project_kernel(self, x, y, z, xp):
+        """The point of the skin nearest ``(x, y, z)`` (see :meth:`project`)."""
 
     # -- array API ----------------------------------------------------------------------
     def surface(self, points: ArrayLike) -> NDArray[np.float64]:
@@ -100,13 +104,13 @@ class Fingertip:
         return np.stack(self._project_kernel(*_split(points), NP), axis=-1)
 
     @property
+    @abc.abstractmethod
     def bounding_sphere(self) -> tuple[NDArray[np.float64], float]:
         """Centre (m, shape (3,)) and radius (m) of a sphere containing the whole skin."""
-        raise NotImplementedError  # pragma: no cover - abstract
 
+    @abc.abstractmethod
     def to_toml(self) -> str:
         """The fingertip as a SPEC §2 TOML file."""
-        raise NotImplementedError  # pragma: no cover - abstract
 
 
 def _fmt(v: float) -> str:
