@@ -144,7 +144,8 @@ rx, ry, rz (contact point, m), nx, ny, nz (outward normal), sigma (spin torque a
 normal, N·m), hx, hy, hz, h_norm (tangential spin torque, N·m), dx, dy, dz (direction of
 the touched edge / strip, an axis), angle_deg (its angle in the tangent frame, degrees in
 (-90, 90]; at the tip: from the sensor x axis), h_std (noise level of h, N·m),
-angle_std_deg, latched, latch_fallback, then the input's extra columns. r, n, h are empty
+angle_std_deg, latched, latch_fallback, relatched (a new latch starts here), depth
+(m, the depth compensation used; 0 without it), then the input's extra columns. r, n, h are empty
 (nan) when state is none; d and the angle only for line contacts, where |h| stands out of
 the noise.
 
