@@ -214,3 +214,35 @@ def test_stdin_input():
     out = run("estimate", "-", stdin=EXAMPLE_PATH.read_text())
     assert out.returncode == 0, out.stderr
     assert out.stdout.count("\n") == 501
+
+
+@pytest.mark.parametrize(
+    "args,needles",
+    [
+        (["--plot", "figure"], ["figure", ".png"]),
+        (["--plot", "x.xyz"], ["x.xyz", ".pdf"]),
+        (["--plot", "no_such_folder/x.png"], ["no_such_folder", "does not exist"]),
+        (["--units", "kgf-mm"], ["--units", "example"]),
+        (["--relatch-distance", "-1"], ["--relatch-distance"]),
+        (["--h-min", "nan"], ["--h-min", "finite"]),
+    ],
+)
+def test_bad_plot_paths_and_values_exit_2(tmp_path, args, needles):
+    out = run("estimate", "--example", "-o", "o.csv", *args, cwd=tmp_path)
+    assert out.returncode == 2
+    for needle in needles:
+        assert needle in out.stderr, out.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_tare_that_cannot_be_right_is_reported(tmp_path):
+    log = read_log(EXAMPLE_PATH)
+    for name, keep in (("short.csv", log.t < 0.1), ("in_contact.csv", log.t > 3.0)):
+        cols = {"t": log.t[keep], **{n: log.wrench[keep, i] for i, n in enumerate(("fx", "fy", "fz", "mx", "my", "mz"))}}
+        write_table(cols, tmp_path / name)
+    short = run("estimate", tmp_path / "short.csv", "-o", tmp_path / "a.csv")
+    assert short.returncode == 0 and "whole log lies within" in short.stderr
+    touched = run("estimate", tmp_path / "in_contact.csv", "-o", tmp_path / "b.csv")
+    assert touched.returncode == 0 and "while taring" in touched.stderr
+    untouched = run("estimate", "--example", "-o", tmp_path / "c.csv")
+    assert "bias from the first 0.2 s" in untouched.stderr and "while taring" not in untouched.stderr

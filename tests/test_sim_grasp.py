@@ -207,3 +207,8 @@ def test_default_spin_torque_is_of_the_papers_order(plate_logs):
     for angle in (0, 45):
         h, _, _ = tangential_spin(plate_logs[angle], -1)
         assert 2.5e-3 < np.linalg.norm(h) < 10e-3
+
+
+def test_a_bare_size_above_10_cm_needs_a_unit():
+    out = CliRunner().invoke(simulate, ["--object", "plate", "--size", "2", "-o", "x.csv"])
+    assert out.exit_code == 2 and "give a unit" in out.output

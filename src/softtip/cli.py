@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import os
 import shutil
 import sys
@@ -27,6 +28,19 @@ every file softtip uses SI: N, N·m, m, s; angles are degrees in files and plots
 are the force and moment the touched object exerts on the fingertip, moment about the
 sensor origin; in contact f pushes into the fingertip.
 """
+
+class _Number(click.FloatRange):
+    """A finite number in a range (click's FloatRange lets NaN through)."""
+
+    def convert(self, value, param, ctx):
+        v = super().convert(value, param, ctx)
+        if not math.isfinite(v):
+            self.fail(f"{value!r} is not a finite number", param, ctx)
+        return v
+
+
+NON_NEGATIVE = _Number(min=0.0)
+POSITIVE = _Number(min=0.0, min_open=True)
 
 _FORCE_COLUMNS = ("fx", "fy", "fz")
 _MOMENT_COLUMNS = ("mx", "my", "mz", "sigma", "hx", "hy", "hz", "h_norm", "h_std")
@@ -63,16 +77,16 @@ _ESTIMATOR_OPTIONS = [
         help="latch: measure the contact point in the light-force window at the start of the grasp and hold it (the papers'); "
         "track: soft-finger solution every sample (h is then zero by construction: no directions).",
     ),
-    click.option("--lowpass", type=float, metavar="HZ", help="Causal Butterworth low-pass cutoff in Hz (default: no filter)."),
+    click.option("--lowpass", type=POSITIVE, metavar="HZ", help="Causal Butterworth low-pass cutoff in Hz (default: no filter)."),
     click.option(
         "--tare-duration",
-        type=float,
+        type=NON_NEGATIVE,
         default=0.2,
         show_default=True,
         metavar="S",
         help="Average the first S seconds (fingertip untouched) as the sensor bias; 0 if INPUT is already tared.",
     ),
-    click.option("--contact-threshold", type=float, default=0.05, show_default=True, metavar="N", help="In contact while |f| is at least this, N."),
+    click.option("--contact-threshold", type=NON_NEGATIVE, default=0.05, show_default=True, metavar="N", help="In contact while |f| is at least this, N."),
     click.option(
         "--latch-window",
         type=(float, float),
@@ -81,10 +95,10 @@ _ESTIMATOR_OPTIONS = [
         metavar="LOW HIGH",
         help="Light-force window for latching the contact point, N (default 0.2–0.5 kgf).",
     ),
-    click.option("--h-min", type=float, default=0.5, show_default=True, metavar="N·mm", help="Smallest |h| reported as a line contact, N·mm."),
+    click.option("--h-min", type=NON_NEGATIVE, default=0.5, show_default=True, metavar="N·mm", help="Smallest |h| reported as a line contact, N·mm."),
     click.option(
         "--force-noise",
-        type=float,
+        type=NON_NEGATIVE,
         default=NANO17.force_std[0],
         show_default=True,
         metavar="N",
@@ -92,7 +106,7 @@ _ESTIMATOR_OPTIONS = [
     ),
     click.option(
         "--moment-noise",
-        type=float,
+        type=NON_NEGATIVE,
         default=NANO17.moment_std[0] * 1e3,
         show_default=True,
         metavar="N·mm",
@@ -100,7 +114,7 @@ _ESTIMATOR_OPTIONS = [
     ),
     click.option(
         "--relatch-distance",
-        type=float,
+        type=POSITIVE,
         metavar="MM",
         help="Latch again when, at light force, the soft-finger contact point moves farther than this from the "
         "latched one, mm (default: only when contact is lost and regained, the papers').",
@@ -206,6 +220,10 @@ def estimate(
 
     if example == (input_path is not None):
         raise click.UsageError("give either INPUT or --example")
+    if example and units != "si":
+        raise click.UsageError("--units applies to INPUT; the example grasp is in SI")
+    if plot_path is not None:
+        _check_figure_path(plot_path)
     fingertip = load_fingertip(tip)
     config = _make_config(estimator_opts)
 
@@ -268,7 +286,10 @@ def estimate(
             plot_tmp = plot_path.with_name(f".{plot_path.name}.partial{plot_path.suffix}")
             source = "example grasp" if example else Path(log.source).name
             threshold = np.maximum(config.h_sigmas * est.h_std, config.h_min)
-            plot_estimates(est, plot_tmp, units=plot_units, title=f"softtip: {source}", h_threshold=threshold)
+            plot_estimates(
+                est, plot_tmp, units=plot_units, title=f"softtip: {source}", h_threshold=threshold,
+                fmt=plot_path.suffix.lower().lstrip("."),
+            )  # fmt: skip
         if viz is not None:
             logger = viz.RerunLogger(fingertip, save=rerun_tmp, spawn=rerun_spawn)
             logger.log_estimates(est)
@@ -298,6 +319,7 @@ def estimate(
             shutil.rmtree(to_bag, ignore_errors=True)
 
     counts = {name: int(np.count_nonzero(est.state == code)) for code, name in enumerate(STATES)}
+    _tare_warnings(est, config)
     if est.n_pulling:
         click.echo(
             f"softtip: warning: {est.n_pulling} sample(s) in contact by force had no contact point where the force "
@@ -312,6 +334,45 @@ def estimate(
             line = est.state == 2
             ang = np.degrees(axial_median(est.angle[line]))
             click.echo(f"softtip: median direction of line samples {ang:+.1f} deg", err=True)
+
+
+def _check_figure_path(path: str) -> None:
+    """A figure path needs an existing folder and a format matplotlib writes (exit 2 otherwise)."""
+    from softtip.plot import figure_formats
+
+    p = Path(path)
+    formats = figure_formats()
+    if p.suffix.lower().lstrip(".") not in formats:
+        raise InputError(f"{path}: expected a figure file name ending in one of {', '.join('.' + f for f in sorted(formats))}")
+    if not p.parent.is_dir():
+        raise InputError(f"{path}: folder {str(p.parent)!r} does not exist")
+
+
+def _tare_warnings(est, config: EstimatorConfig) -> None:
+    """Say what the tare did, and when it cannot have been right."""
+    if not est.taring.any():
+        return
+    if est.taring.all():
+        click.echo(
+            f"softtip: warning: the whole log lies within the first {config.tare_duration:g} s used to tare the "
+            "sensor; nothing was estimated (give --tare-duration 0 for a log that is already tared)",
+            err=True,
+        )
+        return
+    f, m = est.bias[:3], est.bias[3:] * 1e3
+    click.echo(
+        f"softtip: bias from the first {config.tare_duration:g} s: force ({f[0]:+.4f}, {f[1]:+.4f}, {f[2]:+.4f}) N, "
+        f"moment ({m[0]:+.4f}, {m[1]:+.4f}, {m[2]:+.4f}) N·mm",
+        err=True,
+    )
+    if est.tare_force_std > 5.0 * max(config.noise.force_std):
+        click.echo(
+            f"softtip: warning: the force varied by {est.tare_force_std:.3g} N (standard deviation) while taring, far "
+            f"above the sensor noise ({max(config.noise.force_std):g} N): was the fingertip touched in the first "
+            f"{config.tare_duration:g} s? The bias, and every estimate, would then be wrong (--tare-duration 0 for a "
+            "log that is already tared)",
+            err=True,
+        )
 
 
 def _make_config(opts: dict, sample_rate: float | None = None) -> EstimatorConfig:

@@ -174,6 +174,9 @@ class Estimates:
     pulling : (N,) in contact by force but no pushing contact point (reported ``none``)
     taring : (N,) sample used for the bias (reported ``none``)
     bias : (6,) the bias subtracted, N and N·m
+    tare_force_std : float, N: the largest standard deviation of a force component over
+        the tare samples (NaN without a tare). Far above the sensor noise, the fingertip
+        was touched while taring and the bias is wrong.
     relatched : (N,) a new latch starts at this sample, replacing an earlier one (drift at
         light force, or contact regained after a latched contact); an event, not masked
     depth : (N,) depth compensation ``δ`` used, m (0 without a depth law); NaN when ``none``
@@ -198,6 +201,7 @@ class Estimates:
     bias: NDArray[np.float64]
     relatched: NDArray[np.bool_]
     depth: NDArray[np.float64]
+    tare_force_std: float = math.nan
 
     def __len__(self) -> int:
         return len(self.t)
@@ -431,6 +435,7 @@ def estimate(
     n = len(t)
 
     taring = np.zeros(n, dtype=bool)
+    tare_force_std = math.nan
     if config.bias is not None:
         bias = np.asarray(config.bias)
     elif config.tare_duration > 0 and n:
@@ -439,6 +444,7 @@ def estimate(
         taring[:n_tare] = True
         # a log that never leaves the tare period has no bias (as in the stream)
         bias = np.mean(w[:n_tare], axis=0) if n_tare < n else np.full(6, np.nan)
+        tare_force_std = float(np.max(np.std(w[:n_tare, :3], axis=0)))
     else:
         bias = np.zeros(6)
     x = w - bias
@@ -497,6 +503,7 @@ def estimate(
         pulling=pulling,
         taring=taring,
         bias=bias,
+        tare_force_std=tare_force_std,
         relatched=relatched,
         depth=keep(delta, located),
     )
@@ -577,7 +584,10 @@ class Estimator:
             Raw ``fx, fy, fz`` (N), ``mx, my, mz`` (N·m).
         """
         t = float(t)
-        w = [float(v) for v in (wrench.tolist() if isinstance(wrench, np.ndarray) else wrench)]
+        try:
+            w = [float(v) for v in (wrench.tolist() if isinstance(wrench, np.ndarray) else wrench)]
+        except (TypeError, ValueError):
+            w = []
         if len(w) != 6 or not all(math.isfinite(v) for v in w) or not math.isfinite(t):
             raise ValueError(f"expected a finite time and 6 finite wrench components, got t={t!r}, wrench={wrench!r}")
         if self._t_prev is not None and t <= self._t_prev:

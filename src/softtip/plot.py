@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import os
-from pathlib import Path
 from typing import Sequence
 
 import numpy as np
@@ -11,7 +10,7 @@ import numpy as np
 from softtip.pipeline import LINE, Estimates
 from softtip.units import KGF, KGF_MM
 
-__all__ = ["plot_estimates", "plot_direction_chart", "plot_position_error"]
+__all__ = ["plot_estimates", "plot_direction_chart", "plot_position_error", "figure_formats"]
 
 _UNITS = {
     "si": (1.0, 1e3, "N", "N·mm"),
@@ -38,6 +37,7 @@ def plot_estimates(
     title: str | None = None,
     h_threshold: float | np.ndarray | None = None,
     reference_angles: Sequence[float] | None = None,
+    fmt: str | None = None,
 ):
     """Draw the four panels of the papers' figures (e.g. 2006 Figs. 8–11).
 
@@ -56,6 +56,8 @@ def plot_estimates(
     units : {"si", "kgf-mm"}
         Plot force in N and moment in N·mm, or kgf and kgf·mm as in the papers.
     title : str, optional
+    fmt : str, optional
+        File format (e.g. ``"png"``); default from the extension of ``path``.
     reference_angles : sequence of float, optional
         True directions (degrees), one per log, drawn as dashed lines in its colour.
     h_threshold : float or array of shape (N,), optional
@@ -113,10 +115,19 @@ def plot_estimates(
     return fig
 
 
-def _save(fig, plt, path) -> None:
+def figure_formats() -> set[str]:
+    """File name extensions (without the dot) that the figures can be saved as."""
+    plt = _figure_module()
+    fig = plt.figure()
+    try:
+        return set(fig.canvas.get_supported_filetypes())
+    finally:
+        plt.close(fig)
+
+
+def _save(fig, plt, path, fmt: str | None = None) -> None:
     if path is not None:
-        Path(path).parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(path, dpi=110)
+        fig.savefig(path, dpi=110, format=fmt)
         plt.close(fig)
 
 

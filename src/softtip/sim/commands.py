@@ -55,9 +55,13 @@ class _Length(click.ParamType):
         if isinstance(value, float):
             return value
         try:
-            return parse_length(value)
+            length = parse_length(value)
         except ValueError as exc:
             self.fail(str(exc), param, ctx)
+        # a bare number is in metres: "--size 2" would be a 2 m object, surely meant in mm
+        if abs(length) >= 0.1 and not re.search(r"[a-zA-Zµ]", str(value)):
+            self.fail(f"{value!r} is {length:g} m; give a unit, e.g. '{value}mm'", param, ctx)
+        return length
 
 
 class _Force(click.ParamType):
