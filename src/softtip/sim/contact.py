@@ -50,6 +50,7 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from softtip._vec import cross as _cross
 from softtip.sim.objects import RigidObject
 from softtip.sim.pose import Pose
 from softtip.sim.skin import SkinMesh
@@ -188,13 +189,6 @@ class FrictionState:
     def __post_init__(self) -> None:
         object.__setattr__(self, "index", _frozen(self.index, np.intp))
         object.__setattr__(self, "displacement", _frozen(np.reshape(self.displacement, (-1, 3))))
-
-
-def _cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
-    # component form: several times faster than np.cross on (k, 3) arrays
-    ax, ay, az = a[:, 0], a[:, 1], a[:, 2]
-    bx, by, bz = b[:, 0], b[:, 1], b[:, 2]
-    return np.column_stack((ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx))
 
 
 @dataclass(frozen=True, eq=False)

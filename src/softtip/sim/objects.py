@@ -26,6 +26,7 @@ routine for the distance, the normal and the ray exit.
 
 from __future__ import annotations
 
+import abc
 import math
 from dataclasses import dataclass, field, replace
 from functools import cached_property
@@ -62,7 +63,7 @@ def _points(points: ArrayLike) -> NDArray[np.float64]:
     return p
 
 
-class RigidObject:
+class RigidObject(abc.ABC):
     """Base class: a convex rigid body posed in the sensor frame by ``self.pose``.
 
     Subclasses implement the ``*_local`` methods on arrays of object-frame points of shape
@@ -73,28 +74,28 @@ class RigidObject:
     pose: Pose
 
     # -- local (object-frame) kernels ---------------------------------------------------
-    def sdf_local(self, q: NDArray[np.float64]) -> NDArray[np.float64]:  # pragma: no cover - abstract
+    @abc.abstractmethod
+    def sdf_local(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
         """Signed distance (m) at object-frame points ``q`` (M, 3); negative inside."""
-        raise NotImplementedError
 
-    def normal_local(self, q: NDArray[np.float64]) -> NDArray[np.float64]:  # pragma: no cover - abstract
+    @abc.abstractmethod
+    def normal_local(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
         """Unit gradient of the signed distance (outward normal of the nearest surface), (M, 3)."""
-        raise NotImplementedError
 
     def sdf_normal_local(self, q: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """``sdf_local(q), normal_local(q)`` (subclasses may share the work)."""
         return self.sdf_local(q), self.normal_local(q)
 
+    @abc.abstractmethod
     def exit_local(
         self, q: NDArray[np.float64], u: NDArray[np.float64]
-    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:  # pragma: no cover - abstract
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Where the ray ``q + s u`` (s >= 0) from an interior point leaves the object.
 
         Returns ``s_exit`` (M,) in units of ``|u|`` (``inf`` if it never leaves) and the
         outward unit normal at the exit point (M, 3). Points outside give ``s_exit = 0``
         or a meaningless value; callers pass interior points only.
         """
-        raise NotImplementedError
 
     def line_direction_local(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
         """Unit line direction (edge/axis/fringe tangent) near ``q``, (M, 3); NaN if none."""
@@ -151,9 +152,9 @@ class RigidObject:
         first = f_lo <= f_hi
         return np.where(first, lo, hi), np.where(first, f_lo, f_hi)
 
-    def params(self) -> dict:  # pragma: no cover - abstract
+    @abc.abstractmethod
+    def params(self) -> dict:
         """Geometric parameters, SI, JSON-ready."""
-        raise NotImplementedError
 
     # -- sensor-frame API ---------------------------------------------------------------
     def with_pose(self, pose: Pose) -> RigidObject:
@@ -398,9 +399,10 @@ class _Profile:
 class _Extruded(RigidObject):
     """An object whose cross-section in the x'y' plane is a :class:`_Profile`, infinite in z'."""
 
-    @cached_property
-    def _profile(self) -> _Profile:  # pragma: no cover - abstract
-        raise NotImplementedError
+    @property
+    @abc.abstractmethod
+    def _profile(self) -> _Profile:
+        """The cross-section (subclasses cache it)."""
 
     def sdf_local(self, q):
         return self._profile.sdf(q[:, 0], q[:, 1])
