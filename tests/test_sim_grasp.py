@@ -85,7 +85,8 @@ def test_thin_plate_direction_is_measurable(plate_logs, angle):
     held = (log.t >= 6.0) & (est.state == 2)
     assert held.sum() > 150
     err = np.degrees(np.abs(axial_difference(est.angle[held], log.truth.angle[held])))
-    assert np.median(err) < 3.0
+    # about ±1° of this is the skin's discretisation (README, reproduction)
+    assert np.median(err) < 4.0
     assert abs(log.truth.angle_deg[-1] - angle) < 2.0  # the gravity spin turns the plate ~1°
 
 
