@@ -15,7 +15,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from softtip.fingertip import Fingertip, load_fingertip
 from softtip.noise import NANO17, SensorNoise
@@ -51,10 +51,10 @@ class SyntheticGrasp:
     bias: NDArray[np.float64]
 
 
-def smoothstep(x: NDArray[np.float64]) -> NDArray[np.float64]:
-    """0 below 0, 1 above 1, ``3x² − 2x³`` between."""
-    x = np.clip(x, 0.0, 1.0)
-    return x * x * (3.0 - 2.0 * x)
+def smoothstep(x: ArrayLike) -> NDArray[np.float64]:
+    """``3x² − 2x³`` on ``x`` clipped to [0, 1]: a ramp with zero slope at both ends."""
+    c = np.clip(np.asarray(x, dtype=float), 0.0, 1.0)
+    return c * c * (3.0 - 2.0 * c)
 
 
 def synthetic_grasp(

@@ -88,6 +88,7 @@ from numpy.typing import ArrayLike, NDArray
 from softtip.fingertip import Fingertip
 from softtip.sim.pose import Pose, unit
 from softtip.sim.truth import tangent_frame
+from softtip.synthetic import smoothstep
 from softtip.units import KGF, STANDARD_GRAVITY
 
 __all__ = [
@@ -107,12 +108,6 @@ __all__ = [
 JOINT_ROTATION_DEG = 3.5
 #: Default object mass in :func:`paper_scenario`, kg.
 OBJECT_MASS = 0.01
-
-
-def smoothstep(x: ArrayLike) -> NDArray[np.float64]:
-    """``3x² − 2x³`` on ``x`` clipped to [0, 1]: a ramp with zero slope at both ends."""
-    c = np.clip(np.asarray(x, dtype=float), 0.0, 1.0)
-    return c * c * (3.0 - 2.0 * c)
 
 
 def _opt_vec(v: ArrayLike | None) -> tuple[float, float, float] | None:
