@@ -1,6 +1,6 @@
 """Accuracy of softtip's extensions against the papers' method, on the simulator.
 
-    python benchmarks/bench_accuracy.py            # all sections (~1 min)
+    python benchmarks/bench_accuracy.py            # all sections (~4 min)
     python benchmarks/bench_accuracy.py --fit-depth  # refit the default depth law
 
 Every case is a simulated grasp (Winkler skin with the Coulomb-limited tangential layer,
@@ -9,14 +9,19 @@ grasp (t > 6 s) of the samples in contact; directions only where the estimator r
 line contact (the coverage is printed). Printed table: ``condition | error with the papers'
 method | error with softtip's extension``. Sections:
 
-* **depth** (issue 5 item 3): a tangential friction load across the line (0.25 and 0.5
-  of the normal force) applied after the grasp, on top of the papers' joint disturbance;
-  ``latch`` vs ``latch`` + :data:`~softtip.depth.MURAKAMI2006_DEPTH`. Skin with the shear
-  layer stiffened to G = 2 MPa (side walls; with the default E/3 layer the simulator cannot
-  hold a load across a thin plate, see :mod:`softtip.sim.scenario`).
-* **slide** (item 5): after the grasp the object slides 4 mm along the skin (kinematic
-  translation, no tangential load) with the joint disturbance: ``latch`` without re-latch
-  (the papers') vs with re-latch at 3 mm.
+* **depth** (issue 5 items 3 and 4, deep penetration): a tangential friction load across
+  the line (0.25 and 0.5 of the normal force) applied after the grasp, on top of the
+  papers' joint disturbance; ``latch`` (the papers') vs ``latch`` +
+  :data:`~softtip.depth.MURAKAMI2006_DEPTH`, ``track``, ``joint`` and ``joint`` + depth.
+  Skin with the shear layer stiffened to G = 2 MPa (side walls; with the default E/3
+  layer the simulator cannot hold a load across a thin plate, see
+  :mod:`softtip.sim.scenario`).
+* **slide** (items 4 and 5): after the grasp the object slides 4 mm across the line along
+  the skin (kinematic translation, no tangential load), then the papers' joint
+  disturbance moves it: ``latch`` without re-latch (the papers') vs re-latch at 3 mm,
+  ``track`` and ``joint``; point and direction errors after both (t > 8 s).
+* **papers** (item 4): the papers' grasps (1 mm plate, 90° edge, Ø 4 mm cylinder), where
+  the latch is right: what ``joint`` changes there.
 
 Room is left for other sections (calibration and gravity: ``bench_calibration.py``).
 """
@@ -34,6 +39,7 @@ from softtip import EstimatorConfig, axial_difference, estimate, murakami2006
 from softtip.depth import MURAKAMI2006_DEPTH, DepthLaw, lever_depth
 from softtip.sim import (
     ContactModel,
+    Cylinder,
     ContactParams,
     Disturbance,
     Plate,
@@ -70,9 +76,9 @@ def _row(cond: str, *cells: str) -> None:
 
 
 def depth_section(seed: int = 1) -> None:
-    print("\n### depth compensation (item 3): direction error, median (line coverage)\n")
-    print("| condition | error with the papers' method (latch) | error with softtip's extension (latch + depth) |")
-    print("| --- | --- | --- |")
+    print("\n### deep penetration (items 3, 4): direction error, median (line coverage); contact-point error\n")
+    print("| condition | the papers' method (latch) | latch + depth | track | joint | joint + depth |")
+    print("| --- | --- | --- | --- | --- | --- |")
     model = ContactModel(discretise_skin(TIP, 10000), ContactParams(shear_modulus=2e6)).prepare()
     force = 0.5 * KGF
     for name, obj in (("plate 1 mm", Plate(0.001)), ("plate 2 mm", Plate(0.002)), ("wedge 90°", Wedge(math.pi / 2))):
@@ -85,45 +91,81 @@ def depth_section(seed: int = 1) -> None:
                 try:
                     log = simulate_grasp(TIP, obj, scn, rng=seed, model=model)
                 except RuntimeError:
-                    _row(f"{name} {ang:+.0f}°, f_t = {ratio:.2f} f_n", "simulator cannot hold it", "")
+                    _row(f"{name} {ang:+.0f}°, f_t = {ratio:.2f} f_n", "simulator cannot hold it", "", "", "", "")
                     continue
                 sel = log.t > HELD
                 out = []
-                for cfg in (EstimatorConfig(), EstimatorConfig(depth=MURAKAMI2006_DEPTH)):
-                    e_, cov = _dir_err(estimate(log.t, log.wrench, TIP, cfg), log, sel)
-                    out.append(f"{e_:.1f}° ({cov:.0%})")
+                for cfg in DEPTH_CONFIGS:
+                    est = estimate(log.t, log.wrench, TIP, cfg)
+                    e_, cov = _dir_err(est, log, sel)
+                    out.append(f"{e_:.1f}° ({cov:.0%}), {_point_err(est, log.truth.contact_point, sel):.2f} mm")
                 _row(f"{name} {ang:+.0f}°, f_t = {ratio:.2f} f_n across", *out)
 
 
+DEPTH_CONFIGS = (
+    EstimatorConfig(),
+    EstimatorConfig(depth=MURAKAMI2006_DEPTH),
+    EstimatorConfig(contact_point="track"),
+    EstimatorConfig(contact_point="joint"),
+    EstimatorConfig(contact_point="joint", depth=MURAKAMI2006_DEPTH),
+)
+
+
 def slide_section(seed: int = 1) -> None:
-    print("\n### sliding contact (item 5): the object slides 4 mm along the skin after the grasp\n")
-    print("| condition | papers' latch (no re-latch): point, direction | re-latch at 3 mm: point, direction (re-latches) |")
-    print("| --- | --- | --- |")
+    print("\n### sliding contact (items 4, 5): 4 mm slide across the line after the latch, then the joint disturbance\n")
+    print("contact-point error, direction error (line coverage), t > 8 s\n")
+    print("| condition | the papers' latch | re-latch at 3 mm | track | joint |")
+    print("| --- | --- | --- | --- | --- |")
     model = ContactModel(discretise_skin(TIP, 10000), ContactParams()).prepare()
-    for name, obj in (("plate 1 mm", Plate(0.001)), ("plate 2 mm", Plate(0.002))):
-        for ang, slide in ((0.0, (0.0, 0.004, 0.0)), (45.0, (0.0, 0.004, 0.0)), (0.0, (0.004, 0.0, 0.0))):
-            for force_kgf in (0.4, 0.5):
-                dist = (
-                    Disturbance(axis=(0.0, 1.0, 0.0), angle=math.radians(3.5), start=4.0, end=5.0, label="joint"),
-                    Disturbance(translation=slide, start=5.5, end=7.5, label="slide"),
-                )
-                scn = push_scenario(math.radians(ang), disturbances=dist, force=force_kgf * KGF)
-                try:
-                    log = simulate_grasp(TIP, obj, scn, rng=seed, model=model)
-                except RuntimeError:
-                    _row(f"{name} {ang:+.0f}°, {force_kgf} kgf", "simulator's force solve fails", "")
-                    continue
-                r_c = np.asarray(log.truth.contact_point[0])
-                truth = TIP.project(np.array([scn.disturbance_pose(float(t), r_c).apply(r_c[None])[0] for t in log.t]))
-                sel = log.t > 8.0
-                cells = []
-                for cfg in (EstimatorConfig(), EstimatorConfig(relatch_distance=3e-3)):
-                    est = estimate(log.t, log.wrench, TIP, cfg)
-                    e_, cov = _dir_err(est, log, sel)
-                    extra = f", {int(est.relatched.sum())} re-latch" if cfg.relatch_distance else ""
-                    cells.append(f"{_point_err(est, truth, sel):.2f} mm, {e_:.1f}° ({cov:.0%}){extra}")
-                along = "along x" if slide[0] else "along y"
-                _row(f"{name} {ang:+.0f}°, {force_kgf} kgf, slide {along}", *cells)
+    configs = (
+        EstimatorConfig(),
+        EstimatorConfig(relatch_distance=3e-3),
+        EstimatorConfig(contact_point="track"),
+        EstimatorConfig(contact_point="joint"),
+    )
+    for name, obj, ang in (("plate 1 mm", Plate(0.001), 0.0), ("plate 1 mm", Plate(0.001), 45.0),
+                           ("plate 1 mm", Plate(0.001), -45.0), ("plate 2 mm", Plate(0.002), 0.0)):  # fmt: skip
+        for force_kgf in (0.4, 0.5):
+            a = math.radians(ang)
+            across = 0.004 * np.array([-math.sin(a), math.cos(a), 0.0])
+            dist = (
+                Disturbance(translation=tuple(across), start=4.5, end=6.0, label="slide"),
+                Disturbance(axis=(0.0, 1.0, 0.0), angle=math.radians(3.5), start=6.5, end=7.5, label="joint"),
+            )
+            scn = push_scenario(a, disturbances=dist, force=force_kgf * KGF)
+            try:
+                log = simulate_grasp(TIP, obj, scn, rng=seed, model=model)
+            except RuntimeError:
+                _row(f"{name} {ang:+.0f}°, {force_kgf} kgf", "simulator's force solve fails", "", "", "")
+                continue
+            r_c = np.asarray(log.truth.contact_point[0])
+            truth = TIP.project(np.array([scn.disturbance_pose(float(t), r_c).apply(r_c[None])[0] for t in log.t]))
+            sel = log.t > 8.0
+            cells = []
+            for cfg in configs:
+                est = estimate(log.t, log.wrench, TIP, cfg)
+                e_, cov = _dir_err(est, log, sel)
+                extra = f", {int(est.relatched.sum())} re-latch" if cfg.relatch_distance else ""
+                cells.append(f"{_point_err(est, truth, sel):.2f} mm, {e_:.1f}° ({cov:.0%}){extra}")
+            _row(f"{name} {ang:+.0f}°, {force_kgf} kgf", *cells)
+
+
+def papers_section(seed: int = 2006) -> None:
+    print("\n### the papers' grasps (item 4): contact-point error, direction error (line coverage), t > 6 s\n")
+    print("| condition | the papers' latch | joint (share of samples still on the latch) |")
+    print("| --- | --- | --- |")
+    for name, obj in (("plate 1 mm", Plate(0.001)), ("90° edge", Wedge(math.pi / 2)), ("cylinder Ø 4 mm", Cylinder(0.002))):
+        for ang in (0.0, 45.0, -45.0):
+            log = simulate_grasp(TIP, obj, paper_scenario(math.radians(ang)), rng=seed)
+            sel = log.t > HELD
+            cells = []
+            for cfg in (EstimatorConfig(), EstimatorConfig(contact_point="joint")):
+                est = estimate(log.t, log.wrench, TIP, cfg)
+                e_, cov = _dir_err(est, log, sel)
+                m = sel & (est.state > 0)
+                extra = f"; {est.joint_fallback[m].mean():.0%} on the latch" if cfg.contact_point == "joint" else ""
+                cells.append(f"{_point_err(est, log.truth.contact_point, sel):.2f} mm, {e_:.1f}° ({cov:.0%}){extra}")
+            _row(f"{name} {ang:+.0f}°", *cells)
 
 
 def fit_depth() -> DepthLaw:
@@ -157,6 +199,7 @@ def stream_cost() -> None:
         ("latch, re-latch at 3 mm", EstimatorConfig(relatch_distance=3e-3)),
         ("latch + depth", EstimatorConfig(depth=MURAKAMI2006_DEPTH)),
         ("track", EstimatorConfig(contact_point="track")),
+        ("joint", EstimatorConfig(contact_point="joint")),
     ):
         times = []
         for _ in range(3):
@@ -173,14 +216,14 @@ def stream_cost() -> None:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--fit-depth", action="store_true", help="refit the default depth law and stop")
-    ap.add_argument("--sections", nargs="*", default=["depth", "slide", "cost"])
+    ap.add_argument("--sections", nargs="*", default=["depth", "slide", "papers", "cost"])
     args = ap.parse_args()
     if args.fit_depth:
         fit_depth()
         return
     print("murakami2006 tip (capsule R 16 mm, cylinder 20 mm), simulator with friction (μ = 1) and Nano17-class noise, 50 Hz")
     for name in args.sections:
-        {"depth": depth_section, "slide": slide_section, "cost": stream_cost}[name]()
+        {"depth": depth_section, "slide": slide_section, "papers": papers_section, "cost": stream_cost}[name]()
 
 
 if __name__ == "__main__":

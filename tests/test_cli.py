@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from softtip import EXAMPLE_PATH, estimate, load_example
+from softtip import EXAMPLE_PATH, EstimatorConfig, estimate, load_example
 from softtip.io import read_log, write_table
 from softtip.units import KGF, KGF_MM
 
@@ -159,7 +159,9 @@ def test_failure_leaves_an_existing_output_untouched(tmp_path):
         (["--units", "furlongs"], ["furlongs", "si", "kgf-mm"]),
         (["--tip", "nonexistent_preset"], ["nonexistent_preset", "murakami2006"]),
         (["--tip", "missing.toml"], ["missing.toml", "not found"]),
-        (["--contact-point", "joint"], ["joint", "latch", "track"]),
+        (["--contact-point", "windowed"], ["windowed", "latch", "track", "joint"]),
+        (["--contact-point", "joint", "--joint-max-std", "0", "0.2"], ["--joint-max-std", "0"]),
+        (["--contact-point", "joint", "--joint-window", "-1"], ["--joint-window", "-1"]),
     ],
 )
 def test_bad_options_exit_2(tmp_path, args, needles):
@@ -246,3 +248,19 @@ def test_tare_that_cannot_be_right_is_reported(tmp_path):
     assert touched.returncode == 0 and "while taring" in touched.stderr
     untouched = run("estimate", "--example", "-o", tmp_path / "c.csv")
     assert "bias from the first 0.2 s" in untouched.stderr and "while taring" not in untouched.stderr
+
+
+def test_joint_mode_columns(tmp_path):
+    out = run("estimate", "--example", "--contact-point", "joint", "--joint-window", "0.8", "--joint-max-std", "3", "0.3",
+              "-o", tmp_path / "j.csv")  # fmt: skip
+    assert out.returncode == 0, out.stderr
+    rows = read_csv(tmp_path / "j.csv")
+    log = load_example()
+    cfg = EstimatorConfig(contact_point="joint", joint_window=0.8, joint_max_angle_std=np.radians(3.0),
+                          joint_max_offset_std=0.3e-3)  # fmt: skip
+    est = estimate(log.t, log.wrench, "murakami2006", cfg)
+    assert [r["joint_fallback"] for r in rows] == [str(int(v)) for v in est.joint_fallback]
+    for key, ref in (("joint_angle_std_deg", np.degrees(est.joint_angle_std)), ("joint_residual", est.joint_residual),
+                     ("rx", est.point[:, 0])):  # fmt: skip
+        np.testing.assert_allclose([float(r[key]) for r in rows], ref, rtol=1e-9, equal_nan=True)
+    assert np.isfinite(est.joint_conditioning).any()

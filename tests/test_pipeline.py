@@ -1,4 +1,6 @@
 
+import math
+
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
@@ -9,8 +11,9 @@ from softtip.synthetic import synthetic_grasp
 from softtip.units import KGF, KGF_MM
 
 FIELDS_3 = ("wrench", "point", "normal", "h", "direction")
-FIELDS_1 = ("sigma", "h_norm", "h_std", "angle", "angle_std", "depth")
-FLAGS = ("latched", "latch_fallback", "pulling", "taring", "relatched")
+FIELDS_1 = ("sigma", "h_norm", "h_std", "angle", "angle_std", "depth", "joint_conditioning", "joint_angle_std",
+            "joint_offset_std", "joint_residual")  # fmt: skip
+FLAGS = ("latched", "latch_fallback", "pulling", "taring", "relatched", "joint_fallback")
 
 
 def assert_stream_equals_batch(t, w, tip, config):
@@ -65,6 +68,13 @@ CASES = {
     "track": EstimatorConfig(contact_point="track"),
     "given-bias": EstimatorConfig(bias=(0.12, -0.05, 0.3, 2e-3, -1e-3, 5e-4), lowpass_hz=5.0, sample_rate=50.0),
     "no-tare": EstimatorConfig(tare_duration=0.0),
+    "joint": EstimatorConfig(contact_point="joint"),
+    "joint-short-window-loose": EstimatorConfig(
+        contact_point="joint", joint_window=0.2, joint_max_angle_std=0.5, joint_max_offset_std=1e-3
+    ),
+    "joint-depth-relatch-lowpass": EstimatorConfig(
+        contact_point="joint", depth=MURAKAMI2006_DEPTH, relatch_distance=3e-3, lowpass_hz=8.0, sample_rate=50.0
+    ),
 }
 
 
@@ -182,7 +192,13 @@ def test_kgf_mm_config_values_are_si():
 
 def test_config_rejects_nonsense():
     with pytest.raises(ValueError, match="contact_point"):
-        EstimatorConfig(contact_point="joint")
+        EstimatorConfig(contact_point="windowed")
+    with pytest.raises(ValueError, match="joint_window"):
+        EstimatorConfig(joint_window=0.0)
+    with pytest.raises(ValueError, match="joint_max_angle_std"):
+        EstimatorConfig(joint_max_angle_std=math.nan)
+    with pytest.raises(ValueError, match="joint_iterations"):
+        EstimatorConfig(joint_iterations=0)
     with pytest.raises(ValueError, match="relatch_distance"):
         EstimatorConfig(relatch_distance=-1.0)
     with pytest.raises(ValueError, match="depth"):

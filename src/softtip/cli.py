@@ -71,11 +71,30 @@ _ESTIMATOR_OPTIONS = [
     ),
     click.option(
         "--contact-point",
-        type=click.Choice(["latch", "track"]),
+        type=click.Choice(["latch", "track", "joint"]),
         default="latch",
         show_default=True,
         help="latch: measure the contact point in the light-force window at the start of the grasp and hold it (the papers'); "
-        "track: soft-finger solution every sample (h is then zero by construction: no directions).",
+        "track: soft-finger solution every sample (h is then zero by construction: no directions); "
+        "joint: latch, then move the point across the line to where a sliding window (--joint-window) fits the "
+        "line-contact model, wherever the window determines it (flagged joint_fallback until one does).",
+    ),
+    click.option(
+        "--joint-window",
+        type=POSITIVE,
+        default=1.0,
+        show_default=True,
+        metavar="S",
+        help="Sliding window of --contact-point joint, s.",
+    ),
+    click.option(
+        "--joint-max-std",
+        type=(POSITIVE, POSITIVE),
+        default=(2.0, 0.2),
+        show_default=True,
+        metavar="DEG MM",
+        help="--contact-point joint accepts a window when the standard deviations of its line angle and of its "
+        "offset across the line are at most these (degrees, mm).",
     ),
     click.option("--lowpass", type=POSITIVE, metavar="HZ", help="Causal Butterworth low-pass cutoff in Hz (default: no filter)."),
     click.option(
@@ -159,7 +178,11 @@ normal, N·m), hx, hy, hz, h_norm (tangential spin torque, N·m), dx, dy, dz (di
 the touched edge / strip, an axis), angle_deg (its angle in the tangent frame, degrees in
 (-90, 90]; at the tip: from the sensor x axis), h_std (noise level of h, N·m),
 angle_std_deg, latched, latch_fallback, relatched (a new latch starts here), depth
-(m, the depth compensation used; 0 without it), then the input's extra columns. r, n, h are empty
+(m, the depth compensation used; 0 without it), joint_conditioning, joint_angle_std_deg,
+joint_offset_std (m) and joint_fallback (the sliding window of --contact-point joint:
+reciprocal condition number, standard deviations of its line angle and offset, and whether
+the latched point is used because no window has been accepted yet), then the input's
+extra columns. r, n, h are empty
 (nan) when state is none; d and the angle only for line contacts, where |h| stands out of
 the noise.
 
@@ -394,6 +417,9 @@ def _make_config(opts: dict, sample_rate: float | None = None) -> EstimatorConfi
             tare_duration=opts["tare_duration"],
             relatch_distance=None if relatch is None else relatch * 1e-3,
             depth=depth,
+            joint_window=opts["joint_window"],
+            joint_max_angle_std=math.radians(opts["joint_max_std"][0]),
+            joint_max_offset_std=opts["joint_max_std"][1] * 1e-3,
         )
     except ValueError as exc:
         raise click.UsageError(str(exc)) from None

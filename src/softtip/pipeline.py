@@ -34,11 +34,20 @@ softtip's extensions (issue 5), each an :class:`EstimatorConfig` field:
 - ``depth``: a :class:`~softtip.depth.DepthLaw`; the moment is taken about the effective
   contact point ``r − δ(F_n) n`` inside the skin, where friction acts
   (:mod:`softtip.depth`); ``depth`` reports ``δ``.
+- ``contact_point="joint"``: the latch of ``latch`` mode, then the contact point moved
+  across the line to where a window of the last ``joint_window`` seconds fits the line
+  contact model (:mod:`softtip.joint`). A window is accepted when its standard deviations
+  of line angle and offset are below ``joint_max_angle_std`` and ``joint_max_offset_std``
+  and its fit residual below ``joint_max_residual`` noise standard deviations;
+  between accepted windows the last accepted point of the contact is held, and before the
+  first one the latched point is used and ``joint_fallback`` set. The coordinate along the
+  line is the latch's: a line contact does not tell it.
 """
 
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import dataclass, field
 from typing import Literal, NamedTuple
 
@@ -48,6 +57,7 @@ from numpy.typing import ArrayLike, NDArray
 from softtip._xp import NP, PY
 from softtip.contact import contact_arrays, contact_kernel
 from softtip.depth import DepthLaw, depth_kernel
+from softtip.joint import N_SUMS, joint_products, joint_solve_kernel
 from softtip.filtering import SosStream, lowpass_sos, noise_gain, sosfilt_batch
 from softtip.fingertip import Fingertip, load_fingertip
 from softtip.noise import NANO17, SensorNoise, angle_std_kernel, h_std_kernel
@@ -60,7 +70,7 @@ __all__ = ["STATES", "CONTACT_POINT_MODES", "EstimatorConfig", "Estimates", "Sam
 STATES = ("none", "point", "line")
 NONE, POINT, LINE = 0, 1, 2
 #: Values of :attr:`EstimatorConfig.contact_point`.
-CONTACT_POINT_MODES = ("latch", "track")
+CONTACT_POINT_MODES = ("latch", "track", "joint")
 
 
 @dataclass(frozen=True)
@@ -69,7 +79,7 @@ class EstimatorConfig:
 
     Parameters
     ----------
-    contact_point : {"latch", "track"}
+    contact_point : {"latch", "track", "joint"}
         How the contact point is obtained (module docstring).
     contact_threshold : float
         N; in contact while ``|f|`` (tared, filtered) is at least this.
@@ -104,9 +114,19 @@ class EstimatorConfig:
         Depth compensation (:mod:`softtip.depth`); ``None`` (default): off, the papers'
         undeformed contact point. :data:`softtip.depth.MURAKAMI2006_DEPTH` is the
         murakami2006 skin.
+    joint_window : float
+        s; length of the sliding window of ``joint`` mode (default 1 s: 50 samples at the
+        papers' 50 Hz).
+    joint_max_angle_std, joint_max_offset_std : float
+        ``joint`` mode accepts a window when the standard deviations of its line angle (rad,
+        default 2°) and of its offset across the line (m, default 0.2 mm) are at most these.
+    joint_max_residual : float
+        ... and the RMS residual of its fit is at most this many noise standard deviations.
+    joint_iterations : int
+        Gauss–Newton steps of each window's solve.
     """
 
-    contact_point: Literal["latch", "track"] = "latch"
+    contact_point: Literal["latch", "track", "joint"] = "latch"
     contact_threshold: float = 0.05
     latch_window: tuple[float, float] = (0.2 * KGF, 0.5 * KGF)
     stall_time: float = 0.1
@@ -121,6 +141,11 @@ class EstimatorConfig:
     tare_duration: float = 0.2
     relatch_distance: float | None = None
     depth: DepthLaw | None = None
+    joint_window: float = 1.0
+    joint_max_angle_std: float = math.radians(2.0)
+    joint_max_offset_std: float = 2e-4
+    joint_max_residual: float = 3.0
+    joint_iterations: int = 2
 
     def __post_init__(self) -> None:
         if self.contact_point not in CONTACT_POINT_MODES:
@@ -136,6 +161,14 @@ class EstimatorConfig:
         if not (0.0 <= lo < hi):
             raise ValueError(f"latch_window must be (low, high) with 0 <= low < high, in N; got {self.latch_window!r}")
         object.__setattr__(self, "latch_window", (lo, hi))
+        for name in ("joint_window", "joint_max_angle_std", "joint_max_offset_std", "joint_max_residual"):
+            v = float(getattr(self, name))
+            if not (math.isfinite(v) and v > 0.0):
+                raise ValueError(f"{name} must be a positive number, got {getattr(self, name)!r}")
+            object.__setattr__(self, name, v)
+        if int(self.joint_iterations) < 1:
+            raise ValueError(f"joint_iterations must be at least 1, got {self.joint_iterations!r}")
+        object.__setattr__(self, "joint_iterations", int(self.joint_iterations))
         for name in ("contact_threshold", "stall_time", "h_sigmas", "h_min", "tare_duration"):
             v = float(getattr(self, name))
             if not (math.isfinite(v) and v >= 0.0):
@@ -180,6 +213,13 @@ class Estimates:
     relatched : (N,) a new latch starts at this sample, replacing an earlier one (drift at
         light force, or contact regained after a latched contact); an event, not masked
     depth : (N,) depth compensation ``δ`` used, m (0 without a depth law); NaN when ``none``
+    joint_conditioning, joint_angle_std, joint_offset_std, joint_residual : (N,) the
+        ``joint`` window ending at this sample (:mod:`softtip.joint`): reciprocal condition
+        number in [0, 1], standard deviations of its line angle (rad) and of its offset
+        across the line (m), and the fit's RMS residual in units of the noise; NaN where no
+        window was solved (other modes, ``none``, or no soft-finger solution)
+    joint_fallback : (N,) ``joint`` mode: no window of this contact accepted yet, so the
+        point is the latched one
     """
 
     t: NDArray[np.float64]
@@ -201,6 +241,11 @@ class Estimates:
     bias: NDArray[np.float64]
     relatched: NDArray[np.bool_]
     depth: NDArray[np.float64]
+    joint_conditioning: NDArray[np.float64]
+    joint_angle_std: NDArray[np.float64]
+    joint_offset_std: NDArray[np.float64]
+    joint_residual: NDArray[np.float64]
+    joint_fallback: NDArray[np.bool_]
     tare_force_std: float = math.nan
 
     def __len__(self) -> int:
@@ -237,6 +282,11 @@ class Estimates:
             "latch_fallback": self.latch_fallback,
             "relatched": self.relatched,
             "depth": self.depth,
+            "joint_conditioning": self.joint_conditioning,
+            "joint_angle_std_deg": np.degrees(self.joint_angle_std),
+            "joint_offset_std": self.joint_offset_std,
+            "joint_residual": self.joint_residual,
+            "joint_fallback": self.joint_fallback,
         }  # fmt: skip
 
 
@@ -264,6 +314,11 @@ class SampleEstimate(NamedTuple):
     taring: bool
     relatched: bool = False
     depth: float = math.nan
+    joint_conditioning: float = math.nan
+    joint_angle_std: float = math.nan
+    joint_offset_std: float = math.nan
+    joint_residual: float = math.nan
+    joint_fallback: bool = False
 
 
 # -- the measurement, shared by batch and stream ----------------------------------------------
@@ -289,6 +344,30 @@ def _measure(fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, noise, h_sigmas, h_
     angle = angle_kernel(dx, dy, dz, *frame, xp)
     angle_std = angle_std_kernel(dx, dy, dz, hn, rx, ry, rz, noise, xp)
     return sigma, hx, hy, hz, hn, h_std, dx, dy, dz, angle, angle_std, line, pushing, delta
+
+
+def _joint_moment(fx, fy, fz, mx, my, mz, nx, ny, nz, ax, ay, az, law, xp):
+    """Moment about the anchor ``a`` that enters the joint sums, component-wise.
+
+    With a depth law the moment is first moved to the undeformed surface with this
+    sample's soft-finger normal, ``m + δ n × f``, so that the surface point is fitted.
+    """
+    if law is not None:
+        delta = depth_kernel(-(fx * nx + fy * ny + fz * nz), law, xp)
+        mx = mx + delta * (ny * fz - nz * fy)
+        my = my + delta * (nz * fx - nx * fz)
+        mz = mz + delta * (nx * fy - ny * fx)
+    return spin_torque_kernel(fx, fy, fz, mx, my, mz, ax, ay, az)
+
+
+def _joint_accept(cond, angle_std, offset_std, residual, config: EstimatorConfig):
+    # written so that NaN (undefined window) is never accepted, in both back ends
+    return (
+        (angle_std <= config.joint_max_angle_std)
+        & (offset_std <= config.joint_max_offset_std)
+        & (residual <= config.joint_max_residual)
+        & (cond >= 0.0)
+    )
 
 
 def _effective_noise(config: EstimatorConfig, sos) -> SensorNoise:
@@ -399,6 +478,53 @@ def _latch_points(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig):
     return point, latched, fallback, relatched
 
 
+def _joint_points(t, c, contact, sc, base, relatched, tip: Fingertip, config: EstimatorConfig, noise: SensorNoise):
+    """``joint`` mode over a whole log, vectorised within each contact.
+
+    ``c`` are the six wrench components, ``sc`` the soft-finger solutions, ``base`` the
+    latched points (N, 3) (start of each solve; their coordinate along the line is kept).
+    Returns ``(point (N, 3), stats (4, N), accepted (N,), held (N,))``: the joint point
+    where a window is accepted, the last accepted one of the contact where ``held``, the
+    latched one elsewhere.
+    """
+    n = len(t)
+    valid = contact & np.asarray(sc[7], dtype=bool)
+    stats = np.full((4, n), np.nan)
+    jp = np.full((n, 3), np.nan)
+    edges = np.diff(np.concatenate(([False], contact, [False])).astype(np.int8))
+    for s, e in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
+        v = np.flatnonzero(valid[s:e]) + s
+        if not len(v):
+            continue
+        anchor = [float(sc[i][v[0]]) for i in range(3)]  # first soft-finger point of the contact
+        qa = _joint_moment(*(ci[v] for ci in c), *(sc[i][v] for i in (3, 4, 5)), *anchor, config.depth, NP)
+        tv = t[v]
+        # window of sample k: the valid samples i with t_i > t_k − T (the stream's test)
+        first = np.searchsorted(tv, tv - config.joint_window, side="right")
+        last = np.arange(1, len(v) + 1)
+        sums = []
+        for p in joint_products(c[0][v], c[1][v], c[2][v], *qa):
+            cz = np.concatenate(([0.0], np.cumsum(p)))  # sequential, as the stream's running sums
+            sums.append(cz[last] - cz[first])
+        ok = np.all(np.isfinite(base[v]), axis=-1)
+        count = (last - first).astype(float)
+        out = joint_solve_kernel(sums, count, *base[v].T, *anchor, tip, config.joint_iterations, noise, NP)
+        jp[v[ok]] = np.stack(out[:3], axis=-1)[ok]
+        stats[:, v[ok]] = np.stack(out[6:10])[:, ok]
+    with np.errstate(invalid="ignore"):
+        accept = valid & _joint_accept(*stats, config) & np.all(np.isfinite(jp), axis=-1)
+    # between accepted windows hold the last accepted point of the segment (a held grasp has
+    # nothing to identify it from); a segment starts at contact onset and at every re-latch
+    i = np.arange(n)
+    begin = np.concatenate((contact[:1], contact[1:] & ~contact[:-1])) | (relatched & contact)
+    seg0 = np.maximum.accumulate(np.where(begin, i, 0)) if n else i
+    prev = np.maximum.accumulate(np.where(accept, i, -1)) if n else i
+    held = contact & ~accept & (prev >= seg0)
+    point = np.where(accept[:, None], jp, base)
+    point[held] = jp[prev[held]]
+    return point, stats, accept, held
+
+
 def estimate(
     t: ArrayLike,
     wrench: ArrayLike,
@@ -460,6 +586,8 @@ def estimate(
     fn = np.sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2])
     contact = (fn >= config.contact_threshold) & ~taring
     relatched = np.zeros(n, dtype=bool)
+    joint_stats = np.full((4, n), np.nan)
+    joint_fb = np.zeros(n, dtype=bool)
     with np.errstate(invalid="ignore", divide="ignore"):
         sc = contact_arrays(tip, *c)
         if config.contact_point == "track":
@@ -469,6 +597,12 @@ def estimate(
             latched = fallback = np.zeros(n, dtype=bool)
         else:
             point, latched, fallback, relatched = _latch_points(t, fn, contact, sc, tip, config)
+            if config.contact_point == "joint":
+                point, joint_stats, accept, held = _joint_points(
+                    t, c, contact, sc, point, relatched, tip, config, noise
+                )
+                moved = accept | held
+                latched, fallback, joint_fb = latched & ~moved, fallback & ~moved, contact & ~moved
             normal = tip.normal(point)
             has = np.all(np.isfinite(point), axis=-1)
         sigma, hx, hy, hz, hn, h_std, dx, dy, dz, angle, angle_std, line, pushing, delta = _measure(
@@ -506,12 +640,18 @@ def estimate(
         tare_force_std=tare_force_std,
         relatched=relatched,
         depth=keep(delta, located),
+        joint_conditioning=keep(joint_stats[0], located),
+        joint_angle_std=keep(joint_stats[1], located),
+        joint_offset_std=keep(joint_stats[2], located),
+        joint_residual=keep(joint_stats[3], located),
+        joint_fallback=joint_fb & located,
     )
 
 
 # -- stream --------------------------------------------------------------------------------------
 
 _NAN3 = (math.nan, math.nan, math.nan)
+_NAN4 = (math.nan,) * 4
 
 
 class Estimator:
@@ -545,6 +685,7 @@ class Estimator:
             self._sos = lowpass_sos(cfg.lowpass_hz, cfg.sample_rate, cfg.lowpass_order)
         self._noise = _effective_noise(cfg, self._sos)
         self._track = cfg.contact_point == "track"
+        self._joint = cfg.contact_point == "joint"
         self.reset()
 
     def reset(self) -> None:
@@ -572,6 +713,15 @@ class Estimator:
         self._sum_fb = [0.0, 0.0, 0.0]
         self._latch: tuple[float, float, float] | None = None
         self._latch_is_fallback = False
+        self._joint_held: tuple[float, float, float] | None = None
+
+    def _start_joint(self) -> None:
+        """At contact onset: running sums of the joint products, and for each valid sample
+        of the last ``joint_window`` seconds its time and the sums before it (window sums
+        are differences, as in the batch)."""
+        self._anchor: tuple[float, float, float] | None = None
+        self._cum = [0.0] * N_SUMS
+        self._hist: deque[tuple[float, list[float]]] = deque()
 
     def update(self, t: float, wrench: ArrayLike) -> SampleEstimate:
         """Process one raw sample.
@@ -664,7 +814,8 @@ class Estimator:
             return self._none(t, x)
 
         tip = self.tip
-        latched = fallback = relatched = False
+        latched = fallback = relatched = joint_fb = False
+        stats = _NAN4
         if self._track:
             rx, ry, rz, nx, ny, nz, _, valid = contact_kernel(tip, *x, xp=PY)
             if not valid:
@@ -674,6 +825,8 @@ class Estimator:
             if not self._in_contact:
                 relatched = self._had_latch  # contact regained after a latched one
                 self._start_contact(fn, t)
+                if self._joint:
+                    self._start_joint()
             else:
                 if self._rising and fn > self._peak:
                     self._peak, self._t_peak = fn, t
@@ -691,6 +844,11 @@ class Estimator:
             point, latched, fallback, sc = self._latch_step(t, fn, x, sc)
             if latched:
                 self._had_latch = True
+            if self._joint:
+                point, stats, moved = self._joint_step(t, x, point, sc)
+                if moved:
+                    latched = fallback = False
+                joint_fb = not moved
             if point is None:
                 return self._none(t, x, pulling=True, relatched=relatched)
             rx, ry, rz = point
@@ -707,8 +865,38 @@ class Estimator:
             state, d, angle, angle_std = "point", _NAN3, math.nan, math.nan
         return SampleEstimate(
             t, state, tuple(x), (rx, ry, rz), (nx, ny, nz), sigma, (hx, hy, hz), hn, h_std, d, angle, angle_std,
-            latched, fallback, False, False, relatched, delta,
+            latched, fallback, False, False, relatched, delta, *stats, joint_fb,
         )  # fmt: skip
+
+    def _joint_step(self, t: float, x: list[float], point, sc):
+        """The joint stage: ``(point, (conditioning, angle_std, offset_std, residual), moved)``."""
+        cfg = self.config
+        stats = _NAN4
+        if sc is None:
+            sc = contact_kernel(self.tip, *x, xp=PY)
+        accepted = False
+        if sc[7]:
+            if self._anchor is None:
+                self._anchor = (sc[0], sc[1], sc[2])
+            ax, ay, az = self._anchor
+            qa = _joint_moment(*x, sc[3], sc[4], sc[5], ax, ay, az, cfg.depth, PY)
+            hist = self._hist
+            hist.append((t, self._cum))
+            self._cum = [c + p for c, p in zip(self._cum, joint_products(x[0], x[1], x[2], *qa))]
+            while hist[0][0] <= t - cfg.joint_window:
+                hist.popleft()
+            if point is not None:
+                sums = [c - o for c, o in zip(self._cum, hist[0][1])]
+                out = joint_solve_kernel(
+                    sums, float(len(hist)), *point, ax, ay, az, self.tip, cfg.joint_iterations, self._noise, PY
+                )
+                stats = out[6:10]
+                if _joint_accept(*stats, cfg) and math.isfinite(out[0] + out[1] + out[2]):
+                    accepted = True
+                    self._joint_held = out[:3]
+        if self._joint_held is not None:
+            return self._joint_held, stats, True
+        return point, stats, accepted
 
     def _mean(self, total: list[float], count: int) -> tuple[float, float, float]:
         return self.tip._project_kernel(total[0] / count, total[1] / count, total[2] / count, PY)
