@@ -22,6 +22,8 @@ method | error with softtip's extension``. Sections:
   ``track`` and ``joint``; point and direction errors after both (t > 8 s).
 * **papers** (item 4): the papers' grasps (1 mm plate, 90° edge, Ø 4 mm cylinder), where
   the latch is right: what ``joint`` changes there.
+* **start** (item 4): the log starts in the held grasp (from 4.5 s, the disturbances applied
+  during the rise, the sensor bias given): no light-force phase to latch in.
 
 Room is left for other sections (calibration and gravity: ``bench_calibration.py``).
 """
@@ -168,6 +170,28 @@ def papers_section(seed: int = 2006) -> None:
             _row(f"{name} {ang:+.0f}°", *cells)
 
 
+def start_section(seed: int = 1) -> None:
+    print("\n### a log that starts in the held grasp (item 4): point error, direction error (line coverage), t > 6 s\n")
+    print("| condition | whole log, latch | from 4.5 s: latch | track | joint |")
+    print("| --- | --- | --- | --- | --- |")
+    for name, obj in (("plate 1 mm", Plate(0.001)), ("90° edge", Wedge(math.pi / 2))):
+        for ang in (0.0, 45.0, -45.0):
+            scn = paper_scenario(math.radians(ang), disturbance_timing="during_rise")
+            log = simulate_grasp(TIP, obj, scn, rng=seed)
+            whole = estimate(log.t, log.wrench, TIP)
+            e_, cov = _dir_err(whole, log, log.t > HELD)
+            cells = [f"{_point_err(whole, log.truth.contact_point, log.t > HELD):.2f} mm, {e_:.1f}° ({cov:.0%})"]
+            cut = log.t >= 4.5
+            t, angle, point = log.t[cut], log.truth.angle[cut], log.truth.contact_point[cut]
+            sel = t > HELD
+            for mode in ("latch", "track", "joint"):
+                est = estimate(t, log.wrench[cut], TIP, EstimatorConfig(contact_point=mode, bias=log.sensor.bias))
+                line = sel & (est.state == 2)
+                e_ = np.median(np.degrees(np.abs(axial_difference(est.angle[line], angle[line])))) if line.any() else math.nan
+                cells.append(f"{_point_err(est, point, sel):.2f} mm, {e_:.1f}° ({line.sum() / sel.sum():.0%})")
+            _row(f"{name} {ang:+.0f}°", *cells)
+
+
 def fit_depth() -> DepthLaw:
     """Refit :data:`MURAKAMI2006_DEPTH` from simulated calibration presses."""
     model = ContactModel(discretise_skin(TIP, 10000), ContactParams(shear_modulus=2e6)).prepare()
@@ -216,14 +240,15 @@ def stream_cost() -> None:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--fit-depth", action="store_true", help="refit the default depth law and stop")
-    ap.add_argument("--sections", nargs="*", default=["depth", "slide", "papers", "cost"])
+    ap.add_argument("--sections", nargs="*", default=["depth", "slide", "papers", "start", "cost"])
     args = ap.parse_args()
     if args.fit_depth:
         fit_depth()
         return
     print("murakami2006 tip (capsule R 16 mm, cylinder 20 mm), simulator with friction (μ = 1) and Nano17-class noise, 50 Hz")
     for name in args.sections:
-        {"depth": depth_section, "slide": slide_section, "papers": papers_section, "cost": stream_cost}[name]()
+        {"depth": depth_section, "slide": slide_section, "papers": papers_section, "start": start_section,
+         "cost": stream_cost}[name]()  # fmt: skip
 
 
 if __name__ == "__main__":

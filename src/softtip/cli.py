@@ -96,6 +96,14 @@ _ESTIMATOR_OPTIONS = [
         help="--contact-point joint accepts a window when the standard deviations of its line angle and of its "
         "offset across the line are at most these (degrees, mm).",
     ),
+    click.option(
+        "--joint-max-residual",
+        type=POSITIVE,
+        default=3.0,
+        show_default=True,
+        metavar="SIGMAS",
+        help="... and the RMS residual of its fit is at most this many noise standard deviations.",
+    ),
     click.option("--lowpass", type=POSITIVE, metavar="HZ", help="Causal Butterworth low-pass cutoff in Hz (default: no filter)."),
     click.option(
         "--tare-duration",
@@ -179,10 +187,10 @@ the touched edge / strip, an axis), angle_deg (its angle in the tangent frame, d
 (-90, 90]; at the tip: from the sensor x axis), h_std (noise level of h, N·m),
 angle_std_deg, latched, latch_fallback, relatched (a new latch starts here), depth
 (m, the depth compensation used; 0 without it), joint_conditioning, joint_angle_std_deg,
-joint_offset_std (m) and joint_fallback (the sliding window of --contact-point joint:
-reciprocal condition number, standard deviations of its line angle and offset, and whether
-the latched point is used because no window has been accepted yet), then the input's
-extra columns. r, n, h are empty
+joint_offset_std (m), joint_residual and joint_fallback (the sliding window of
+--contact-point joint: reciprocal condition number, standard deviations of its line angle
+and offset, RMS fit residual in noise standard deviations, and whether the latched point
+is used because no window has been accepted yet), then the input's extra columns. r, n, h are empty
 (nan) when state is none; d and the angle only for line contacts, where |h| stands out of
 the noise.
 
@@ -420,6 +428,7 @@ def _make_config(opts: dict, sample_rate: float | None = None) -> EstimatorConfi
             joint_window=opts["joint_window"],
             joint_max_angle_std=math.radians(opts["joint_max_std"][0]),
             joint_max_offset_std=opts["joint_max_std"][1] * 1e-3,
+            joint_max_residual=opts["joint_max_residual"],
         )
     except ValueError as exc:
         raise click.UsageError(str(exc)) from None

@@ -30,24 +30,29 @@ back ends of :mod:`softtip._xp`.
 tangential spin torque scales with the normal force (a grasp squeezing up, or held still)
 exactly as well as the true contact. What separates them is a change of the moment about
 ``n × d`` that the normal force does not follow: a disturbance of the held object, a
-tangential load changing at depth, a changing force direction. The Gauss–Newton normal
-matrix of ``(θ, s)`` is ``[[Σ τ², −Σ τ c], [−Σ τ c, Σ c²]]``; with ``ρ`` the (uncentred)
-correlation of ``τ`` and ``c`` the window reports
+tangential load changing at depth, a changing force direction. Noise alone also makes
+``τ_k`` vary, and at high sample rates a window holds enough samples for that to look like
+excitation (errors in variables): the direction would then be the quietest noise direction.
+So the solve subtracts what the noise puts into ``P``, ``(N − 1)`` times the noise
+covariance of the tangential moment (from the sensor noise model at ``r``), before taking
+its smallest eigenvector, and the excitation counted is the larger eigenvalue of that
+corrected ``P`` less three standard deviations of its noise part,
+``E = λ_max − 3 σ_τ² √(2 (N − 1) L)`` (``L`` samples per independent noise sample: 1
+unfiltered, more after a low-pass). The window reports
 
-* ``conditioning = (1 − |ρ|) / (1 + |ρ|)``: the reciprocal condition number of the
-  unit-diagonal normal matrix, in [0, 1];
-* ``angle_std = σ / sqrt(Σ τ² (1 − ρ²))`` and ``offset_std = σ / sqrt(Σ c² (1 − ρ²))``: the
-  first-order standard deviations of ``θ`` (rad) and ``s`` (m) for a residual noise ``σ``
-  per sample (the sensor noise model projected on ``d`` at ``r``);
+* ``conditioning = (1 − |ρ|) / (1 + |ρ|)`` with ``ρ² = 1 − E / Σ τ²``: the reciprocal
+  condition number of the unit-diagonal normal matrix of ``(θ, s)``, counting only
+  excitation beyond noise, in [0, 1];
+* ``angle_std = σ / √E`` and ``offset_std = σ √(Σ τ² / (Σ c² E))``: the first-order standard
+  deviations of ``θ`` (rad) and ``s`` (m) for a residual noise ``σ`` per sample (the sensor
+  noise model projected on ``d`` at ``r``); infinite without excitation;
 * ``residual``: the root-mean-square residual of the fit in units of ``σ`` (about 1 when
   the window is a line contact; far above, the window is not one: the contact moved
   within it, or the model's other assumptions fail).
 
 The pipeline accepts a window only when both standard deviations and the residual are
-small; noise in
-``τ`` alone makes a held grasp look excited, and ``angle_std`` is what tells it apart
-(pure noise gives ``angle_std ≈ 1/√N`` rad for ``N`` samples). Samples of a low-pass
-filtered log are correlated, so there the standard deviations are optimistic.
+small. With a low-pass filter the noise model is the filtered one; the standard deviations
+still count every sample as independent, so they are optimistic there.
 """
 
 from __future__ import annotations
@@ -121,7 +126,7 @@ def _cross(ax, ay, az, bx, by, bz):
     return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
 
 
-def joint_solve_kernel(sums, count, r0x, r0y, r0z, ax, ay, az, tip, iterations, noise: SensorNoise, xp):
+def joint_solve_kernel(sums, count, r0x, r0y, r0z, ax, ay, az, tip, iterations, noise: SensorNoise, corr, xp):
     """Joint contact point, direction and conditioning from the window sums, component-wise.
 
     Parameters
@@ -140,8 +145,10 @@ def joint_solve_kernel(sums, count, r0x, r0y, r0z, ax, ay, az, tip, iterations, 
     iterations : int
         Gauss–Newton steps (each: closed-form direction and offset, then projection).
     noise : SensorNoise
-        Per-sample noise of the wrench the sums were made from (for the standard
-        deviations).
+        Per-sample noise of the wrench the sums were made from.
+    corr : float
+        Samples per independent noise sample (1 for white noise; ``1 / g²`` after a filter
+        of white-noise gain ``g``), for the margin on the noise excitation.
     xp : namespace
         :data:`softtip._xp.NP` or :data:`softtip._xp.PY`.
 
@@ -175,32 +182,40 @@ def joint_solve_kernel(sums, count, r0x, r0y, r0z, ax, ay, az, tip, iterations, 
         p11 = q11 - xp.div(g1 * g1, scc)
         p12 = q12 - xp.div(g1 * g2, scc)
         p22 = q22 - xp.div(g2 * g2, scc)
-        # smallest eigenvector of [[p11, p12], [p12, p22]] in closed form (square roots
+        # minus what the noise alone puts in P, (count − 1) times its tangential covariance,
+        # so that the line is not the quietest noise direction (errors in variables)
+        k = count - 1.0
+        n11 = _quad_kernel(t1x, t1y, t1z, rx, ry, rz, noise)
+        n22 = _quad_kernel(t2x, t2y, t2z, rx, ry, rz, noise)
+        n12 = 0.5 * (_quad_kernel(t1x + t2x, t1y + t2y, t1z + t2z, rx, ry, rz, noise) - n11 - n22)
+        c11, c12, c22 = p11 - k * n11, p12 - k * n12, p22 - k * n22
+        # smallest eigenvector of [[c11, c12], [c12, c22]] in closed form (square roots
         # only, correctly rounded in both back ends; each branch free of cancellation)
-        half = 0.5 * (p11 - p22)
-        root = xp.sqrt(half * half + p12 * p12)
-        big = p11 >= p22
-        v1 = xp.where(big, p12, half - root)
-        v2 = xp.where(big, -half - root, p12)
+        half = 0.5 * (c11 - c22)
+        root = xp.sqrt(half * half + c12 * c12)
+        big = c11 >= c22
+        v1 = xp.where(big, c12, half - root)
+        v2 = xp.where(big, -half - root, c12)
         vn = xp.sqrt(v1 * v1 + v2 * v2)
         u1, u2 = xp.div(v1, vn), xp.div(v2, vn)
         dx, dy, dz = u1 * t1x + u2 * t2x, u1 * t1y + u2 * t2y, u1 * t1z + u2 * t2z
         ex, ey, ez = _cross(nx, ny, nz, dx, dy, dz)
         s = xp.div(u1 * g1 + u2 * g2, scc)
-        # conditioning of (angle, offset) at this linearisation point; e = n × d is
-        # (−u2, u1) in the tangent basis, so its sums come from those of t1 and t2
+        # conditioning of (angle, offset): the excitation of τ = e·q beyond what noise gives
+        # (the larger eigenvalue, less 3 standard deviations of its noise part), against
+        # Σ τ²; e = n × d is (−u2, u1) in the tangent basis
         stt = u2 * u2 * q11 - 2.0 * u1 * u2 * q12 + u1 * u1 * q22
-        stc = u1 * g2 - u2 * g1
-        rho2 = xp.div(stc * stc, stt * scc)
-        arho = xp.sqrt(rho2)
-        cond = xp.div(1.0 - arho, 1.0 + arho)
         var = _quad_kernel(dx, dy, dz, rx, ry, rz, noise)  # residual noise per sample
-        lack = xp.maximum(1.0 - rho2, 0.0)  # ρ² may round above 1
-        angle_std = xp.sqrt(xp.div(var, stt * lack))
-        offset_std = xp.sqrt(xp.div(var, scc * lack))
-        # the cost at the minimum is P's smallest eigenvalue, det / largest (no cancellation)
-        cost = xp.div(p11 * p22 - p12 * p12, 0.5 * (p11 + p22) + root)
-        residual = xp.sqrt(xp.div(xp.maximum(cost, 0.0), (count - 2.0) * var))
+        var_t = _quad_kernel(ex, ey, ez, rx, ry, rz, noise)
+        excess = 0.5 * (c11 + c22) + root - 3.0 * var_t * xp.sqrt(2.0 * xp.maximum(k, 0.0) * corr)
+        excess = xp.maximum(excess, 0.0)
+        arho = xp.sqrt(xp.maximum(1.0 - xp.div(excess, stt), 0.0))
+        cond = xp.div(1.0 - arho, 1.0 + arho)
+        angle_std = xp.sqrt(xp.div(var, excess))
+        offset_std = xp.sqrt(xp.div(var * stt, scc * excess))
+        # the fit's residual: the cost of d in the uncorrected P
+        cost = u1 * u1 * p11 + 2.0 * u1 * u2 * p12 + u2 * u2 * p22
+        residual = xp.where(count > 2.0, xp.sqrt(xp.div(xp.maximum(cost, 0.0), (count - 2.0) * var)), xp.nan)
         # step across the line; along it, back to the start's coordinate (not observable)
         mx, my, mz = rx + s * ex, ry + s * ey, rz + s * ez
         along = (mx - r0x) * dx + (my - r0y) * dy + (mz - r0z) * dz

@@ -38,9 +38,10 @@ softtip's extensions (issue 5), each an :class:`EstimatorConfig` field:
   across the line to where a window of the last ``joint_window`` seconds fits the line
   contact model (:mod:`softtip.joint`). A window is accepted when its standard deviations
   of line angle and offset are below ``joint_max_angle_std`` and ``joint_max_offset_std``
-  and its fit residual below ``joint_max_residual`` noise standard deviations;
-  between accepted windows the last accepted point of the contact is held, and before the
-  first one the latched point is used and ``joint_fallback`` set. The coordinate along the
+  and its fit residual below ``joint_max_residual`` noise standard deviations. The point
+  held is the accepted window of the contact with the smallest standard deviation aged by
+  ``joint_drift``; before the first one the latched point is used and ``joint_fallback``
+  set. The coordinate along the
   line is the latch's: a line contact does not tell it.
 """
 
@@ -122,6 +123,10 @@ class EstimatorConfig:
         default 2°) and of its offset across the line (m, default 0.2 mm) are at most these.
     joint_max_residual : float
         ... and the RMS residual of its fit is at most this many noise standard deviations.
+    joint_drift : float
+        m/√s; how fast the contact may wander unseen: the point held is the accepted window
+        with the smallest ``offset_std² + joint_drift² · age`` (default 0.03 mm/√s), so a
+        precise window is kept over later, weaker ones, but not for ever.
     joint_iterations : int
         Gauss–Newton steps of each window's solve.
     """
@@ -145,6 +150,7 @@ class EstimatorConfig:
     joint_max_angle_std: float = math.radians(2.0)
     joint_max_offset_std: float = 2e-4
     joint_max_residual: float = 3.0
+    joint_drift: float = 3e-5
     joint_iterations: int = 2
 
     def __post_init__(self) -> None:
@@ -161,11 +167,13 @@ class EstimatorConfig:
         if not (0.0 <= lo < hi):
             raise ValueError(f"latch_window must be (low, high) with 0 <= low < high, in N; got {self.latch_window!r}")
         object.__setattr__(self, "latch_window", (lo, hi))
-        for name in ("joint_window", "joint_max_angle_std", "joint_max_offset_std", "joint_max_residual"):
+        for name in ("joint_window", "joint_max_angle_std", "joint_max_offset_std", "joint_max_residual", "joint_drift"):
             v = float(getattr(self, name))
             if not (math.isfinite(v) and v > 0.0):
                 raise ValueError(f"{name} must be a positive number, got {getattr(self, name)!r}")
             object.__setattr__(self, name, v)
+        if self.contact_point == "joint" and not any(self.noise.force_std + self.noise.moment_std):
+            raise ValueError("contact_point='joint' needs a sensor noise model (noise is all zero)")
         if int(self.joint_iterations) < 1:
             raise ValueError(f"joint_iterations must be at least 1, got {self.joint_iterations!r}")
         object.__setattr__(self, "joint_iterations", int(self.joint_iterations))
@@ -374,6 +382,11 @@ def _effective_noise(config: EstimatorConfig, sos) -> SensorNoise:
     return config.noise if sos is None else config.noise.scaled(noise_gain(sos))
 
 
+def _noise_correlation(sos) -> float:
+    """Samples per independent noise sample after the filter (1 without one)."""
+    return 1.0 if sos is None else 1.0 / noise_gain(sos) ** 2
+
+
 def _infer_rate(t: NDArray) -> float:
     if len(t) < 2:
         raise ValueError("a low-pass filter needs at least two samples to infer the sample rate")
@@ -478,14 +491,14 @@ def _latch_points(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig):
     return point, latched, fallback, relatched
 
 
-def _joint_points(t, c, contact, sc, base, relatched, tip: Fingertip, config: EstimatorConfig, noise: SensorNoise):
+def _joint_points(t, c, contact, sc, base, relatched, tip: Fingertip, config: EstimatorConfig, noise: SensorNoise, corr):
     """``joint`` mode over a whole log, vectorised within each contact.
 
     ``c`` are the six wrench components, ``sc`` the soft-finger solutions, ``base`` the
     latched points (N, 3) (start of each solve; their coordinate along the line is kept).
-    Returns ``(point (N, 3), stats (4, N), accepted (N,), held (N,))``: the joint point
-    where a window is accepted, the last accepted one of the contact where ``held``, the
-    latched one elsewhere.
+    Returns ``(point (N, 3), stats (4, N), used (N,), moved (N,))``: ``used`` marks the
+    windows that became the held point, ``moved`` the samples whose point is a joint one
+    (the latched one elsewhere).
     """
     n = len(t)
     valid = contact & np.asarray(sc[7], dtype=bool)
@@ -508,21 +521,29 @@ def _joint_points(t, c, contact, sc, base, relatched, tip: Fingertip, config: Es
             sums.append(cz[last] - cz[first])
         ok = np.all(np.isfinite(base[v]), axis=-1)
         count = (last - first).astype(float)
-        out = joint_solve_kernel(sums, count, *base[v].T, *anchor, tip, config.joint_iterations, noise, NP)
+        out = joint_solve_kernel(sums, count, *base[v].T, *anchor, tip, config.joint_iterations, noise, corr, NP)
         jp[v[ok]] = np.stack(out[:3], axis=-1)[ok]
         stats[:, v[ok]] = np.stack(out[6:10])[:, ok]
     with np.errstate(invalid="ignore"):
         accept = valid & _joint_accept(*stats, config) & np.all(np.isfinite(jp), axis=-1)
-    # between accepted windows hold the last accepted point of the segment (a held grasp has
-    # nothing to identify it from); a segment starts at contact onset and at every re-latch
-    i = np.arange(n)
+    # the point held is the accepted window with the smallest offset_std² + drift² · age: an
+    # accepted window replaces it when key = offset_std² − drift² (t − t_segment) sets a new
+    # minimum (as the stream decides, sample by sample). A segment starts at contact onset
+    # and at every re-latch.
     begin = np.concatenate((contact[:1], contact[1:] & ~contact[:-1])) | (relatched & contact)
-    seg0 = np.maximum.accumulate(np.where(begin, i, 0)) if n else i
-    prev = np.maximum.accumulate(np.where(accept, i, -1)) if n else i
-    held = contact & ~accept & (prev >= seg0)
-    point = np.where(accept[:, None], jp, base)
-    point[held] = jp[prev[held]]
-    return point, stats, accept, held
+    use = np.zeros(n, dtype=bool)
+    held_at = np.full(n, -1)
+    starts = np.flatnonzero(begin)
+    for a, b in zip(starts, np.append(starts[1:], n)):
+        with np.errstate(invalid="ignore"):
+            key = np.where(accept[a:b], stats[2, a:b] ** 2 - config.joint_drift**2 * (t[a:b] - t[a]), np.inf)
+        best = np.concatenate(([np.inf], np.minimum.accumulate(key)[:-1]))
+        use[a:b] = key < best
+        held_at[a:b] = np.maximum.accumulate(np.where(use[a:b], np.arange(a, b), -1))
+    moved = contact & (held_at >= 0)
+    point = base.copy()
+    point[moved] = jp[held_at[moved]]
+    return point, stats, use, moved
 
 
 def estimate(
@@ -598,10 +619,9 @@ def estimate(
         else:
             point, latched, fallback, relatched = _latch_points(t, fn, contact, sc, tip, config)
             if config.contact_point == "joint":
-                point, joint_stats, accept, held = _joint_points(
-                    t, c, contact, sc, point, relatched, tip, config, noise
+                point, joint_stats, _, moved = _joint_points(
+                    t, c, contact, sc, point, relatched, tip, config, noise, _noise_correlation(sos)
                 )
-                moved = accept | held
                 latched, fallback, joint_fb = latched & ~moved, fallback & ~moved, contact & ~moved
             normal = tip.normal(point)
             has = np.all(np.isfinite(point), axis=-1)
@@ -684,6 +704,7 @@ class Estimator:
                 raise ValueError("streaming with a low-pass filter needs config.sample_rate (Hz)")
             self._sos = lowpass_sos(cfg.lowpass_hz, cfg.sample_rate, cfg.lowpass_order)
         self._noise = _effective_noise(cfg, self._sos)
+        self._corr = _noise_correlation(self._sos)
         self._track = cfg.contact_point == "track"
         self._joint = cfg.contact_point == "joint"
         self.reset()
@@ -714,6 +735,8 @@ class Estimator:
         self._latch: tuple[float, float, float] | None = None
         self._latch_is_fallback = False
         self._joint_held: tuple[float, float, float] | None = None
+        self._joint_key = math.inf
+        self._t_segment = t
 
     def _start_joint(self) -> None:
         """At contact onset: running sums of the joint products, and for each valid sample
@@ -883,20 +906,24 @@ class Estimator:
             hist = self._hist
             hist.append((t, self._cum))
             self._cum = [c + p for c, p in zip(self._cum, joint_products(x[0], x[1], x[2], *qa))]
-            while hist[0][0] <= t - cfg.joint_window:
+            start = t - cfg.joint_window
+            while hist and hist[0][0] <= start:
                 hist.popleft()
             if point is not None:
-                sums = [c - o for c, o in zip(self._cum, hist[0][1])]
+                # an empty window (t − T rounds to t) has zero sums, as in the batch
+                sums = [c - o for c, o in zip(self._cum, hist[0][1] if hist else self._cum)]
                 out = joint_solve_kernel(
-                    sums, float(len(hist)), *point, ax, ay, az, self.tip, cfg.joint_iterations, self._noise, PY
-                )
+                    sums, float(len(hist)), *point, ax, ay, az, self.tip, cfg.joint_iterations, self._noise,
+                    self._corr, PY,
+                )  # fmt: skip
                 stats = out[6:10]
                 if _joint_accept(*stats, cfg) and math.isfinite(out[0] + out[1] + out[2]):
-                    accepted = True
-                    self._joint_held = out[:3]
+                    key = stats[2] ** 2 - cfg.joint_drift**2 * (t - self._t_segment)
+                    if key < self._joint_key:
+                        self._joint_key, self._joint_held = key, out[:3]
         if self._joint_held is not None:
             return self._joint_held, stats, True
-        return point, stats, accepted
+        return point, stats, False
 
     def _mean(self, total: list[float], count: int) -> tuple[float, float, float]:
         return self.tip._project_kernel(total[0] / count, total[1] / count, total[2] / count, PY)
