@@ -58,12 +58,12 @@ TIP = murakami2006()
 HELD = 6.0  # s: the grasp is held (disturbances done) from here
 
 
-def _dir_err(est, log, sel) -> tuple[float, float]:
+def _dir_err(est, truth_angle, sel) -> tuple[float, float]:
     """Median axial direction error (deg) over ``sel`` & line, and the line coverage."""
     line = sel & (est.state == 2)
     if not line.any():
         return math.nan, 0.0
-    err = np.degrees(np.abs(axial_difference(est.angle[line], log.truth.angle[line])))
+    err = np.degrees(np.abs(axial_difference(est.angle[line], truth_angle[line])))
     return float(np.median(err)), float(line.sum() / max(sel.sum(), 1))
 
 
@@ -71,6 +71,12 @@ def _point_err(est, truth_point, sel) -> float:
     """Median contact-point error (mm) over ``sel`` & in contact."""
     m = sel & (est.state > 0)
     return float(np.median(np.linalg.norm(est.point[m] - truth_point[m], axis=1)) * 1e3) if m.any() else math.nan
+
+
+def _cell(est, truth_angle, truth_point, sel) -> str:
+    """``point error, direction error (line coverage)`` of one estimate."""
+    e_, cov = _dir_err(est, truth_angle, sel)
+    return f"{_point_err(est, truth_point, sel):.2f} mm, {e_:.1f}° ({cov:.0%})"
 
 
 def _row(cond: str, *cells: str) -> None:
@@ -99,7 +105,7 @@ def depth_section(seed: int = 1) -> None:
                 out = []
                 for cfg in DEPTH_CONFIGS:
                     est = estimate(log.t, log.wrench, TIP, cfg)
-                    e_, cov = _dir_err(est, log, sel)
+                    e_, cov = _dir_err(est, log.truth.angle, sel)
                     out.append(f"{e_:.1f}° ({cov:.0%}), {_point_err(est, log.truth.contact_point, sel):.2f} mm")
                 _row(f"{name} {ang:+.0f}°, f_t = {ratio:.2f} f_n across", *out)
 
@@ -146,9 +152,8 @@ def slide_section(seed: int = 1) -> None:
             cells = []
             for cfg in configs:
                 est = estimate(log.t, log.wrench, TIP, cfg)
-                e_, cov = _dir_err(est, log, sel)
                 extra = f", {int(est.relatched.sum())} re-latch" if cfg.relatch_distance else ""
-                cells.append(f"{_point_err(est, truth, sel):.2f} mm, {e_:.1f}° ({cov:.0%}){extra}")
+                cells.append(_cell(est, log.truth.angle, truth, sel) + extra)
             _row(f"{name} {ang:+.0f}°, {force_kgf} kgf", *cells)
 
 
@@ -163,10 +168,9 @@ def papers_section(seed: int = 2006) -> None:
             cells = []
             for cfg in (EstimatorConfig(), EstimatorConfig(contact_point="joint")):
                 est = estimate(log.t, log.wrench, TIP, cfg)
-                e_, cov = _dir_err(est, log, sel)
                 m = sel & (est.state > 0)
                 extra = f"; {est.joint_fallback[m].mean():.0%} on the latch" if cfg.contact_point == "joint" else ""
-                cells.append(f"{_point_err(est, log.truth.contact_point, sel):.2f} mm, {e_:.1f}° ({cov:.0%}){extra}")
+                cells.append(_cell(est, log.truth.angle, log.truth.contact_point, sel) + extra)
             _row(f"{name} {ang:+.0f}°", *cells)
 
 
@@ -179,16 +183,13 @@ def start_section(seed: int = 1) -> None:
             scn = paper_scenario(math.radians(ang), disturbance_timing="during_rise")
             log = simulate_grasp(TIP, obj, scn, rng=seed)
             whole = estimate(log.t, log.wrench, TIP)
-            e_, cov = _dir_err(whole, log, log.t > HELD)
-            cells = [f"{_point_err(whole, log.truth.contact_point, log.t > HELD):.2f} mm, {e_:.1f}° ({cov:.0%})"]
+            cells = [_cell(whole, log.truth.angle, log.truth.contact_point, log.t > HELD)]
             cut = log.t >= 4.5
             t, angle, point = log.t[cut], log.truth.angle[cut], log.truth.contact_point[cut]
             sel = t > HELD
             for mode in ("latch", "track", "joint"):
                 est = estimate(t, log.wrench[cut], TIP, EstimatorConfig(contact_point=mode, bias=log.sensor.bias))
-                line = sel & (est.state == 2)
-                e_ = np.median(np.degrees(np.abs(axial_difference(est.angle[line], angle[line])))) if line.any() else math.nan
-                cells.append(f"{_point_err(est, point, sel):.2f} mm, {e_:.1f}° ({line.sum() / sel.sum():.0%})")
+                cells.append(_cell(est, angle, point, sel))
             _row(f"{name} {ang:+.0f}°", *cells)
 
 
