@@ -264,3 +264,9 @@ def test_joint_mode_columns(tmp_path):
                      ("rx", est.point[:, 0])):  # fmt: skip
         np.testing.assert_allclose([float(r[key]) for r in rows], ref, rtol=1e-9, equal_nan=True)
     assert np.isfinite(est.joint_conditioning).any()
+    assert "exceeds the noise model" not in out.stderr
+    # a noise model well below the sensor's: joint mode would take the rest for excitation
+    low = run("estimate", "--example", "--contact-point", "joint", "--force-noise", "0.003", "-o", tmp_path / "k.csv")
+    assert low.returncode == 0 and "exceeds the noise model (0.003 N)" in low.stderr
+    latch = run("estimate", "--example", "--force-noise", "0.003", "-o", tmp_path / "l.csv")
+    assert "exceeds the noise model" not in latch.stderr

@@ -199,6 +199,8 @@ def test_config_rejects_nonsense():
         EstimatorConfig(joint_max_angle_std=math.nan)
     with pytest.raises(ValueError, match="joint_iterations"):
         EstimatorConfig(joint_iterations=0)
+    with pytest.raises(ValueError, match="joint_drift"):
+        EstimatorConfig(joint_drift=3e-5 * 1e6)  # µm/√s mistaken for m/√s
     with pytest.raises(ValueError, match="relatch_distance"):
         EstimatorConfig(relatch_distance=-1.0)
     with pytest.raises(ValueError, match="depth"):

@@ -16,6 +16,7 @@ from softtip.axial import axial_median
 from softtip.errors import InputError
 from softtip.fingertip import PRESETS, load_fingertip
 from softtip.depth import MURAKAMI2006_DEPTH, DepthLaw
+from softtip.joint import MODEL_MARGIN
 from softtip.noise import NANO17, SensorNoise
 from softtip.pipeline import STATES, EstimatorConfig
 from softtip.pipeline import estimate as run_estimate
@@ -402,6 +403,19 @@ def _tare_warnings(est, config: EstimatorConfig) -> None:
             f"above the sensor noise ({max(config.noise.force_std):g} N): was the fingertip touched in the first "
             f"{config.tare_duration:g} s? The bias, and every estimate, would then be wrong (--tare-duration 0 for a "
             "log that is already tared)",
+            err=True,
+        )
+        return
+    # joint mode counts as excitation only what exceeds the noise model by MODEL_MARGIN (in
+    # variance); two standard errors of the tare's own estimate of the noise on top
+    n_tare = int(est.taring.sum())
+    model = max(config.noise.force_std)
+    limit = model * math.sqrt(1.0 + MODEL_MARGIN) * (1.0 + 2.0 / math.sqrt(2.0 * max(n_tare - 1, 1)))
+    if config.contact_point == "joint" and n_tare > 1 and est.tare_force_std > limit:
+        click.echo(
+            f"softtip: warning: the force noise while taring ({est.tare_force_std:.3g} N standard deviation) exceeds "
+            f"the noise model ({model:g} N); --contact-point joint would take the excess noise for excitation at "
+            "high sample rates: give this sensor's --force-noise and --moment-noise",
             err=True,
         )
 

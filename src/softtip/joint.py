@@ -32,20 +32,25 @@ exactly as well as the true contact. What separates them is a change of the mome
 ``n × d`` that the normal force does not follow: a disturbance of the held object, a
 tangential load changing at depth, a changing force direction. Noise alone also makes
 ``τ_k`` vary, and at high sample rates a window holds enough samples for that to look like
-excitation (errors in variables): the direction would then be the quietest noise direction.
-So the solve subtracts what the noise puts into ``P``, ``(N − 1)`` times the noise
-covariance of the tangential moment (from the sensor noise model at ``r``), before taking
-its smallest eigenvector, and the excitation counted is the larger eigenvalue of that
-corrected ``P`` less three standard deviations of its noise part,
-``E = λ_max − 3 σ_τ² √(2 (N − 1) L)`` (``L`` samples per independent noise sample: 1
-unfiltered, more after a low-pass). The window reports
+excitation (errors in variables): the direction would then be the quietest noise direction,
+and noise correlated between ``c_k`` and ``τ_k`` (off the sensor's axis, ``q_A`` carries the
+force noise through ``r_A × f``) would shift the point. So the solve first subtracts from
+all 21 sums ``N`` times the noise covariance of ``(q_A, f)`` from the sensor noise model,
+which leaves unbiased second moments of the noise-free wrench. The excitation counted is
+the larger eigenvalue of the corrected ``P`` less a margin for what the noise still puts
+there: three standard deviations of its scatter plus :data:`MODEL_MARGIN` of its expected
+share, ``E = λ_max − σ_τ² (3 √(2 (N − 1) L) + 0.25 (N − 1))`` (``L`` samples per
+independent noise sample: 1 unfiltered, more after a low-pass), so that a noise model up to
+about 12 % low in standard deviation is not taken for excitation. The window reports
 
 * ``conditioning = (1 − |ρ|) / (1 + |ρ|)`` with ``ρ² = 1 − E / Σ τ²``: the reciprocal
   condition number of the unit-diagonal normal matrix of ``(θ, s)``, counting only
   excitation beyond noise, in [0, 1];
-* ``angle_std = σ / √E`` and ``offset_std = σ √(Σ τ² / (Σ c² E))``: the first-order standard
-  deviations of ``θ`` (rad) and ``s`` (m) for a residual noise ``σ`` per sample (the sensor
-  noise model projected on ``d`` at ``r``); infinite without excitation;
+* ``angle_std = σ √(κ / E)`` and ``offset_std = σ √(κ Σ τ² / (Σ c² E))``: the first-order
+  standard deviations of ``θ`` (rad) and ``s`` (m) for a residual noise ``σ`` per sample
+  (the sensor noise model projected on ``d`` at ``r``), inflated by
+  ``κ = 1 + (N − 1) σ_τ² / E`` for the noise in ``τ`` itself (errors in variables);
+  infinite without excitation;
 * ``residual``: the root-mean-square residual of the fit in units of ``σ`` (about 1 when
   the window is a line contact; far above, the window is not one: the contact moved
   within it, or the model's other assumptions fail).
@@ -96,6 +101,33 @@ def _sym(s, ux, uy, uz, vx, vy, vz):
         ux * (sxx * vx + sxy * vy + sxz * vz)
         + uy * (sxy * vx + syy * vy + syz * vz)
         + uz * (sxz * vx + syz * vy + szz * vz)
+    )
+
+
+#: Share of the noise's expected contribution to a window that must be exceeded besides its
+#: scatter: tolerates a sensor noise model up to about 12 % low in standard deviation.
+MODEL_MARGIN = 0.25
+
+
+def _without_noise(sums, count, ax, ay, az, noise: SensorNoise):
+    """The window sums less their expected noise: ``count`` times the noise covariance of
+    ``(q_A, f)``, with ``q_A = m − a × f`` (``a`` the anchor), for the unbiased second
+    moments of the noise-free wrench (errors in variables)."""
+    (fx, fy, fz), (mx, my, mz) = ((s * s for s in noise.force_std), (s * s for s in noise.moment_std))
+    # q_A = m − A f with A = [a]×: cov(q_A) = Σ_m + A Σ_f Aᵀ, cov(q_A, f) = −A Σ_f
+    a = ((0.0, -az, ay), (az, 0.0, -ax), (-ay, ax, 0.0))
+    sf = (fx, fy, fz)
+
+    def aa(i, j):
+        return a[i][0] * a[j][0] * fx + a[i][1] * a[j][1] * fy + a[i][2] * a[j][2] * fz
+
+    noise_qq = (mx + aa(0, 0), aa(0, 1), aa(0, 2), my + aa(1, 1), aa(1, 2), mz + aa(2, 2))
+    noise_qf = tuple(-a[i][j] * sf[j] for i in range(3) for j in range(3))
+    noise_ff = (fx, 0.0, 0.0, fy, 0.0, fz)
+    return (
+        [v - count * w for v, w in zip(sums[0:6], noise_qq)],
+        [v - count * w for v, w in zip(sums[6:15], noise_qf)],
+        [v - count * w for v, w in zip(sums[15:21], noise_ff)],
     )
 
 
@@ -161,7 +193,7 @@ def joint_solve_kernel(sums, count, r0x, r0y, r0z, ax, ay, az, tip, iterations, 
         and the root-mean-square residual of the fit in units of the noise, all at the last
         linearisation point (NaN or inf when undefined).
     """
-    qq, qf, ff = sums[0:6], sums[6:15], sums[15:21]
+    qq, qf, ff = _without_noise(sums, count, ax, ay, az, noise)
     rx, ry, rz = r0x, r0y, r0z
     dx = dy = dz = cond = angle_std = offset_std = residual = None
     for _ in range(iterations):
@@ -182,39 +214,35 @@ def joint_solve_kernel(sums, count, r0x, r0y, r0z, ax, ay, az, tip, iterations, 
         p11 = q11 - xp.div(g1 * g1, scc)
         p12 = q12 - xp.div(g1 * g2, scc)
         p22 = q22 - xp.div(g2 * g2, scc)
-        # minus what the noise alone puts in P, (count − 1) times its tangential covariance,
-        # so that the line is not the quietest noise direction (errors in variables)
-        k = count - 1.0
-        n11 = _quad_kernel(t1x, t1y, t1z, rx, ry, rz, noise)
-        n22 = _quad_kernel(t2x, t2y, t2z, rx, ry, rz, noise)
-        n12 = 0.5 * (_quad_kernel(t1x + t2x, t1y + t2y, t1z + t2z, rx, ry, rz, noise) - n11 - n22)
-        c11, c12, c22 = p11 - k * n11, p12 - k * n12, p22 - k * n22
-        # smallest eigenvector of [[c11, c12], [c12, c22]] in closed form (square roots
+        # smallest eigenvector of [[p11, p12], [p12, p22]] in closed form (square roots
         # only, correctly rounded in both back ends; each branch free of cancellation)
-        half = 0.5 * (c11 - c22)
-        root = xp.sqrt(half * half + c12 * c12)
-        big = c11 >= c22
-        v1 = xp.where(big, c12, half - root)
-        v2 = xp.where(big, -half - root, c12)
+        half = 0.5 * (p11 - p22)
+        root = xp.sqrt(half * half + p12 * p12)
+        big = p11 >= p22
+        v1 = xp.where(big, p12, half - root)
+        v2 = xp.where(big, -half - root, p12)
         vn = xp.sqrt(v1 * v1 + v2 * v2)
         u1, u2 = xp.div(v1, vn), xp.div(v2, vn)
         dx, dy, dz = u1 * t1x + u2 * t2x, u1 * t1y + u2 * t2y, u1 * t1z + u2 * t2z
         ex, ey, ez = _cross(nx, ny, nz, dx, dy, dz)
         s = xp.div(u1 * g1 + u2 * g2, scc)
-        # conditioning of (angle, offset): the excitation of τ = e·q beyond what noise gives
-        # (the larger eigenvalue, less 3 standard deviations of its noise part), against
-        # Σ τ²; e = n × d is (−u2, u1) in the tangent basis
+        # conditioning of (angle, offset): the excitation of τ = e·q (the larger eigenvalue,
+        # the noise's expected share already removed) less a margin for the noise's own
+        # scatter and for a noise model a little low; e = n × d is (−u2, u1) in the basis
         stt = u2 * u2 * q11 - 2.0 * u1 * u2 * q12 + u1 * u1 * q22
         var = _quad_kernel(dx, dy, dz, rx, ry, rz, noise)  # residual noise per sample
-        var_t = _quad_kernel(ex, ey, ez, rx, ry, rz, noise)
-        excess = 0.5 * (c11 + c22) + root - 3.0 * var_t * xp.sqrt(2.0 * xp.maximum(k, 0.0) * corr)
+        var_t = _quad_kernel(ex, ey, ez, rx, ry, rz, noise)  # noise of τ per sample
+        k = xp.maximum(count - 1.0, 0.0)
+        excess = 0.5 * (p11 + p22) + root - var_t * (3.0 * xp.sqrt(2.0 * k * corr) + MODEL_MARGIN * k)
         excess = xp.maximum(excess, 0.0)
         arho = xp.sqrt(xp.maximum(1.0 - xp.div(excess, stt), 0.0))
         cond = xp.div(1.0 - arho, 1.0 + arho)
-        angle_std = xp.sqrt(xp.div(var, excess))
-        offset_std = xp.sqrt(xp.div(var * stt, scc * excess))
-        # the fit's residual: the cost of d in the uncorrected P
-        cost = u1 * u1 * p11 + 2.0 * u1 * u2 * p12 + u2 * u2 * p22
+        # first order, inflated by the noise in τ itself (errors in variables)
+        inflate = 1.0 + xp.div(k * var_t, excess)
+        angle_std = xp.sqrt(xp.div(var * inflate, excess))
+        offset_std = xp.sqrt(xp.div(var * stt * inflate, scc * excess))
+        # the fit's residual: the cost of d, plus the noise's share taken out of the sums
+        cost = u1 * u1 * p11 + 2.0 * u1 * u2 * p12 + u2 * u2 * p22 + count * var
         residual = xp.where(count > 2.0, xp.sqrt(xp.div(xp.maximum(cost, 0.0), (count - 2.0) * var)), xp.nan)
         # step across the line; along it, back to the start's coordinate (not observable)
         mx, my, mz = rx + s * ex, ry + s * ey, rz + s * ez

@@ -39,10 +39,10 @@ softtip's extensions (issue 5), each an :class:`EstimatorConfig` field:
   contact model (:mod:`softtip.joint`). A window is accepted when its standard deviations
   of line angle and offset are below ``joint_max_angle_std`` and ``joint_max_offset_std``
   and its fit residual below ``joint_max_residual`` noise standard deviations. The point
-  held is the accepted window of the contact with the smallest standard deviation aged by
-  ``joint_drift``; before the first one the latched point is used and ``joint_fallback``
-  set. The coordinate along the
-  line is the latch's: a line contact does not tell it.
+  held is the accepted window since contact onset (or the last re-latch) with the
+  smallest standard deviation aged by ``joint_drift``; before the first one the latched
+  point is used and ``joint_fallback`` set. The coordinate along the line is the latch's:
+  a line contact does not tell it.
 """
 
 from __future__ import annotations
@@ -126,7 +126,7 @@ class EstimatorConfig:
     joint_drift : float
         m/√s; how fast the contact may wander unseen: the point held is the accepted window
         with the smallest ``offset_std² + joint_drift² · age`` (default 0.03 mm/√s), so a
-        precise window is kept over later, weaker ones, but not for ever.
+        precise window is kept over later, weaker ones, but not for ever (positive, at most 1).
     joint_iterations : int
         Gauss–Newton steps of each window's solve.
     """
@@ -172,6 +172,8 @@ class EstimatorConfig:
             if not (math.isfinite(v) and v > 0.0):
                 raise ValueError(f"{name} must be a positive number, got {getattr(self, name)!r}")
             object.__setattr__(self, name, v)
+        if self.joint_drift > 1.0:
+            raise ValueError(f"joint_drift must be at most 1 m/√s, got {self.joint_drift!r}")
         if self.contact_point == "joint" and not any(self.noise.force_std + self.noise.moment_std):
             raise ValueError("contact_point='joint' needs a sensor noise model (noise is all zero)")
         if int(self.joint_iterations) < 1:
@@ -357,8 +359,9 @@ def _measure(fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, noise, h_sigmas, h_
 def _joint_moment(fx, fy, fz, mx, my, mz, nx, ny, nz, ax, ay, az, law, xp):
     """Moment about the anchor ``a`` that enters the joint sums, component-wise.
 
-    With a depth law the moment is first moved to the undeformed surface with this
-    sample's soft-finger normal, ``m + δ n × f``, so that the surface point is fitted.
+    With a depth law the moment is first moved to the undeformed surface, ``m + δ n × f``,
+    so that the surface point is fitted; ``n`` is the normal at the latched point (the
+    sample's own soft-finger normal before there is one), which carries no sensor noise.
     """
     if law is not None:
         delta = depth_kernel(-(fx * nx + fy * ny + fz * nz), law, xp)
@@ -510,7 +513,11 @@ def _joint_points(t, c, contact, sc, base, relatched, tip: Fingertip, config: Es
         if not len(v):
             continue
         anchor = [float(sc[i][v[0]]) for i in range(3)]  # first soft-finger point of the contact
-        qa = _joint_moment(*(ci[v] for ci in c), *(sc[i][v] for i in (3, 4, 5)), *anchor, config.depth, NP)
+        normal = np.stack([sc[i][v] for i in (3, 4, 5)], axis=-1)
+        if config.depth is not None:
+            has = np.all(np.isfinite(base[v]), axis=-1)
+            normal[has] = tip.normal(base[v][has])
+        qa = _joint_moment(*(ci[v] for ci in c), *normal.T, *anchor, config.depth, NP)
         tv = t[v]
         # window of sample k: the valid samples i with t_i > t_k − T (the stream's test)
         first = np.searchsorted(tv, tv - config.joint_window, side="right")
@@ -902,7 +909,10 @@ class Estimator:
             if self._anchor is None:
                 self._anchor = (sc[0], sc[1], sc[2])
             ax, ay, az = self._anchor
-            qa = _joint_moment(*x, sc[3], sc[4], sc[5], ax, ay, az, cfg.depth, PY)
+            nx, ny, nz = sc[3], sc[4], sc[5]
+            if cfg.depth is not None and point is not None:
+                nx, ny, nz = self.tip._normal_kernel(*point, PY)
+            qa = _joint_moment(*x, nx, ny, nz, ax, ay, az, cfg.depth, PY)
             hist = self._hist
             hist.append((t, self._cum))
             self._cum = [c + p for c, p in zip(self._cum, joint_products(x[0], x[1], x[2], *qa))]
