@@ -38,10 +38,13 @@ force noise through ``r_A × f``) would shift the point. So the solve first subt
 all 21 sums ``N`` times the noise covariance of ``(q_A, f)`` from the sensor noise model,
 which leaves unbiased second moments of the noise-free wrench. The excitation counted is
 the larger eigenvalue of the corrected ``P`` less a margin for what the noise still puts
-there: three standard deviations of its scatter plus :data:`MODEL_MARGIN` of its expected
-share, ``E = λ_max − σ_τ² (3 √(2 (N − 1) L) + 0.25 (N − 1))`` (``L`` samples per
-independent noise sample: 1 unfiltered, more after a low-pass), so that a noise model up to
-about 12 % low in standard deviation is not taken for excitation. The window reports
+there: the upper 3 σ tail of its scatter plus :data:`MODEL_MARGIN` of its expected share,
+``E = λ_max − σ_τ² (L (χ²_ν − ν) + 0.25 (N − 1))``. Here ``L`` is the number of samples
+per independent noise sample (1 unfiltered, ``1 / g²`` after a low-pass of white-noise gain
+``g``), ``ν = (N − 1) / L`` the independent samples of the window and ``χ²_ν`` the upper
+3 σ quantile of a χ² with ``ν`` degrees of freedom (Wilson–Hilferty; ``≈ ν + 3 √(2ν)``
+for large ``ν``, but right-skewed when a low-pass leaves few). A noise model up to about
+12 % low in standard deviation is then not taken for excitation. The window reports
 
 * ``conditioning = (1 − |ρ|) / (1 + |ρ|)`` with ``ρ² = 1 − E / Σ τ²``: the reciprocal
   condition number of the unit-diagonal normal matrix of ``(θ, s)``, counting only
@@ -49,15 +52,15 @@ about 12 % low in standard deviation is not taken for excitation. The window rep
 * ``angle_std = σ √(κ / E)`` and ``offset_std = σ √(κ Σ τ² / (Σ c² E))``: the first-order
   standard deviations of ``θ`` (rad) and ``s`` (m) for a residual noise ``σ`` per sample
   (the sensor noise model projected on ``d`` at ``r``), inflated by
-  ``κ = 1 + (N − 1) σ_τ² / E`` for the noise in ``τ`` itself (errors in variables);
+  ``κ = L (1 + (N − 1) σ_τ² / E)``: for the noise in ``τ`` itself (errors in variables) and
+  for the correlation of filtered noise, against which the excitation varies slowly;
   infinite without excitation;
 * ``residual``: the root-mean-square residual of the fit in units of ``σ`` (about 1 when
   the window is a line contact; far above, the window is not one: the contact moved
   within it, or the model's other assumptions fail).
 
 The pipeline accepts a window only when both standard deviations and the residual are
-small. With a low-pass filter the noise model is the filtered one; the standard deviations
-still count every sample as independent, so they are optimistic there.
+small. With a low-pass filter the noise model is the filtered one.
 """
 
 from __future__ import annotations
@@ -131,6 +134,20 @@ def _without_noise(sums, count, ax, ay, az, noise: SensorNoise):
     )
 
 
+#: Standard normal quantile of the noise-only excitation that is not counted (≈ 3 σ).
+EXCITATION_Z = 3.0
+
+
+def _chi2_excess(nu, xp):
+    """Upper :data:`EXCITATION_Z` quantile of a χ² with ``nu`` degrees of freedom less its
+    mean (Wilson–Hilferty), ``≈ z √(2ν)`` for large ``nu``: the right-skewed tail matters
+    when a low-pass leaves a window few independent samples."""
+    nu = xp.maximum(nu, 1e-9)
+    c = 2.0 / (9.0 * nu)
+    b = 1.0 - c + EXCITATION_Z * xp.sqrt(c)
+    return nu * (b * b * b - 1.0)
+
+
 def _dot(a, x, y, z):
     return a[0] * x + a[1] * y + a[2] * z
 
@@ -180,7 +197,8 @@ def joint_solve_kernel(sums, count, r0x, r0y, r0z, ax, ay, az, tip, iterations, 
         Per-sample noise of the wrench the sums were made from.
     corr : float
         Samples per independent noise sample (1 for white noise; ``1 / g²`` after a filter
-        of white-noise gain ``g``), for the margin on the noise excitation.
+        of white-noise gain ``g``), for the margin on the noise excitation and the
+        standard deviations.
     xp : namespace
         :data:`softtip._xp.NP` or :data:`softtip._xp.PY`.
 
@@ -233,12 +251,13 @@ def joint_solve_kernel(sums, count, r0x, r0y, r0z, ax, ay, az, tip, iterations, 
         var = _quad_kernel(dx, dy, dz, rx, ry, rz, noise)  # residual noise per sample
         var_t = _quad_kernel(ex, ey, ez, rx, ry, rz, noise)  # noise of τ per sample
         k = xp.maximum(count - 1.0, 0.0)
-        excess = 0.5 * (p11 + p22) + root - var_t * (3.0 * xp.sqrt(2.0 * k * corr) + MODEL_MARGIN * k)
+        excess = 0.5 * (p11 + p22) + root - var_t * (corr * _chi2_excess(k / corr, xp) + MODEL_MARGIN * k)
         excess = xp.maximum(excess, 0.0)
         arho = xp.sqrt(xp.maximum(1.0 - xp.div(excess, stt), 0.0))
         cond = xp.div(1.0 - arho, 1.0 + arho)
-        # first order, inflated by the noise in τ itself (errors in variables)
-        inflate = 1.0 + xp.div(k * var_t, excess)
+        # first order, inflated by the noise in τ itself (errors in variables) and by the
+        # noise's correlation after a low-pass (the regressors vary slowly against it)
+        inflate = corr * (1.0 + xp.div(k * var_t, excess))
         angle_std = xp.sqrt(xp.div(var * inflate, excess))
         offset_std = xp.sqrt(xp.div(var * stt * inflate, scc * excess))
         # the fit's residual: the cost of d, plus the noise's share taken out of the sums
