@@ -141,7 +141,8 @@ EXCITATION_Z = 3.0
 def _chi2_excess(nu, xp):
     """Upper :data:`EXCITATION_Z` quantile of a χ² with ``nu`` degrees of freedom less its
     mean (Wilson–Hilferty), ``≈ z √(2ν)`` for large ``nu``: the right-skewed tail matters
-    when a low-pass leaves a window few independent samples."""
+    when a low-pass leaves a window few independent samples. A closed form rather than
+    ``scipy.stats.chi2.ppf``: the stream calls it per sample, in both back ends alike."""
     nu = xp.maximum(nu, 1e-9)
     c = 2.0 / (9.0 * nu)
     b = 1.0 - c + EXCITATION_Z * xp.sqrt(c)
