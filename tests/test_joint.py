@@ -27,6 +27,12 @@ def _rotate(v, axis, angle):
     return v * math.cos(angle) + np.cross(axis, v) * math.sin(angle) + axis * np.dot(axis, v) * (1 - math.cos(angle))
 
 
+def _cap_point(tip, polar_deg):
+    """The point of the capsule's cap ``polar_deg`` from its axis, in the x–z plane."""
+    a = math.radians(polar_deg)
+    return np.array([0.0, 0.0, tip.length]) + tip.radius * np.array([math.sin(a), 0.0, math.cos(a)])
+
+
 def _window(r, n, d, rng, k=40, proportional=None, noise=None):
     """Forces and moments of ``k`` samples of a line contact at ``r`` along ``d``, with
     sensor noise of the :class:`SensorNoise` ``noise`` added."""
@@ -235,7 +241,7 @@ def test_noise_off_the_axis_with_depth_compensation_is_not_excitation():
     from softtip.synthetic import synthetic_grasp
 
     tip = murakami2006()
-    point = np.array([0.0, 0.0, tip.length]) + tip.radius * np.array([math.sqrt(0.5), 0.0, math.sqrt(0.5)])
+    point = _cap_point(tip, 45.0)
     g = synthetic_grasp(tip, angle_deg=45.0, point=point, rate=7000.0, duration=8.0, seed=0)
     est = estimate(g.t, g.wrench, tip, EstimatorConfig(contact_point="joint", depth=MURAKAMI2006_DEPTH))
     rising = (g.t > 2.5) & (g.t < 4.4)
@@ -292,7 +298,7 @@ def test_low_pass_noise_in_a_proportional_dip_is_not_excitation():
     from softtip.synthetic import synthetic_grasp
 
     tip = murakami2006()
-    point = np.array([0.0, 0.0, tip.length]) + tip.radius * np.array([math.sqrt(0.5), 0.0, math.sqrt(0.5)])
+    point = _cap_point(tip, 45.0)
     rate = 7000.0
     for seed in range(3):
         g = synthetic_grasp(tip, point=point, rate=rate, duration=13.0, noise=None, seed=seed)
