@@ -71,7 +71,7 @@ def estimate(
     >>> from softtip import estimate, load_example
     >>> log = load_example()
     >>> est = estimate(log.t, log.wrench, "murakami2006")
-    >>> sorted(set(est.state_names))
+    >>> sorted(set(est.state_names.tolist()))
     ['line', 'none', 'point']
     """
     tip = load_fingertip(tip)
