@@ -35,7 +35,7 @@ from scipy.spatial.transform import Rotation
 from softtip.errors import InputError
 from softtip.fingertip import Fingertip
 
-__all__ = ["Mounted", "mount_from_mapping"]
+__all__ = ["Mounted", "mount_from_mapping", "pose_from_table"]
 
 
 @dataclass(frozen=True)
@@ -130,38 +130,44 @@ class Mounted(Fingertip):
         return f"{self.tip.to_toml()}\n[fingertip.mount]\ntranslation = [{t}]\nquaternion = [{quat}]\n"
 
 
-def _numbers(value, n: int, key: str, source: str) -> list[float]:
+def _numbers(value, n: int, key: str, where: str) -> list[float]:
     ok = isinstance(value, list) and len(value) == n
     ok = ok and all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in value)
     if not ok:
-        raise InputError(f"{source}: [fingertip.mount] {key} = {value!r}; expected a list of {n} finite numbers")
+        raise InputError(f"{where} {key} = {value!r}; expected a list of {n} finite numbers")
     return [float(v) for v in value]
 
 
-def mount_from_mapping(tip: Fingertip, table: dict, source: str) -> Mounted:
-    """A :class:`Mounted` fingertip from a ``[fingertip.mount]`` table (keys ``translation``
-    in m, and ``rpy_deg`` or ``quaternion`` ``[w, x, y, z]``)."""
+def pose_from_table(table: dict, where: str) -> tuple[Rotation, tuple[float, float, float]]:
+    """A rigid pose from a TOML table with ``translation`` (m) and ``rpy_deg`` (roll, pitch,
+    yaw about the fixed x, y, z axes) or ``quaternion`` (``[w, x, y, z]``); both optional.
+
+    ``where`` names the table in messages (file and section).
+    """
     if not isinstance(table, dict):
-        raise InputError(f"{source}: [fingertip] mount must be a table ([fingertip.mount])")
+        raise InputError(f"{where} must be a table")
     unknown = sorted(set(table) - {"translation", "rpy_deg", "quaternion"})
     if unknown:
-        raise InputError(
-            f"{source}: [fingertip.mount] unknown key(s) {', '.join(unknown)}; expected translation and "
-            "rpy_deg or quaternion"
-        )
+        raise InputError(f"{where} unknown key(s) {', '.join(unknown)}; expected translation and rpy_deg or quaternion")
     if "rpy_deg" in table and "quaternion" in table:
-        raise InputError(f"{source}: [fingertip.mount] give rpy_deg or quaternion, not both")
-    translation = _numbers(table.get("translation", [0.0, 0.0, 0.0]), 3, "translation", source)
+        raise InputError(f"{where} give rpy_deg or quaternion, not both")
+    translation = _numbers(table.get("translation", [0.0, 0.0, 0.0]), 3, "translation", where)
     if max(abs(v) for v in translation) > 1.0:
-        raise InputError(
-            f"{source}: [fingertip.mount] translation = {translation!r} m is over 1 m; expected metres"
-        )
+        raise InputError(f"{where} translation = {translation!r} m is over 1 m; expected metres")
     if "quaternion" in table:
-        w, x, y, z = _numbers(table["quaternion"], 4, "quaternion", source)
+        w, x, y, z = _numbers(table["quaternion"], 4, "quaternion", where)
         norm = math.sqrt(w * w + x * x + y * y + z * z)
         if not 0.99 < norm < 1.01:
-            raise InputError(f"{source}: [fingertip.mount] quaternion has norm {norm:g}; expected a unit [w, x, y, z]")
+            raise InputError(f"{where} quaternion has norm {norm:g}; expected a unit [w, x, y, z]")
         rotation = Rotation.from_quat([x, y, z, w])
     else:
-        rotation = Rotation.from_euler("xyz", _numbers(table.get("rpy_deg", [0.0, 0.0, 0.0]), 3, "rpy_deg", source), degrees=True)
+        rpy = _numbers(table.get("rpy_deg", [0.0, 0.0, 0.0]), 3, "rpy_deg", where)
+        rotation = Rotation.from_euler("xyz", rpy, degrees=True)
+    return rotation, (translation[0], translation[1], translation[2])
+
+
+def mount_from_mapping(tip: Fingertip, table: dict, source: str) -> Mounted:
+    """A :class:`Mounted` fingertip from a ``[fingertip.mount]`` table of file ``source``
+    (see :func:`pose_from_table`)."""
+    rotation, translation = pose_from_table(table, f"{source}: [fingertip.mount]")
     return Mounted(tip, rotation, translation)
