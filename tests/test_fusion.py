@@ -174,8 +174,12 @@ def simulated(tmp_path_factory):
 
 def test_fuse_command_on_csv_and_on_a_bag_agree(simulated):
     g, out = simulated
-    a = _run("fuse", out / "grasp/right.csv", out / "grasp/left.csv", "--hand", out / "grasp/hand.toml", "-o", out / "a.csv")
+    a = _run(
+        "fuse", out / "grasp/right.csv", out / "grasp/left.csv", "--hand", out / "grasp/hand.toml", "-o", out / "a.csv",
+        "--plot", out / "a.png",
+    )  # fmt: skip
     assert a.returncode == 0, a.stderr
+    assert (out / "a.png").stat().st_size > 10_000
     assert "parallel lines: median direction" in a.stderr
     b = _run("fuse", out / "bag", "--topics", "/right/wrench", "/left/wrench", "--frame", "hand", "-o", out / "b.csv")
     assert b.returncode == 0, b.stderr

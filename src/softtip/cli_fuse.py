@@ -44,7 +44,7 @@ def _summary(fused) -> list[str]:
     return lines
 
 
-def _register(main, estimator_options, make_config, optional):
+def _register(main, estimator_options, make_config, optional, check_figure_path):
     @main.command(
         "fuse",
         help="""Fuse two fingertips into the grasped object's local geometry, in a common frame.
@@ -72,8 +72,9 @@ an area contact). Writes CSV (standard output without -o); a summary on standard
     @click.option("--object-mass", type=float, metavar="KG", help="The object's mass for the force balance (default: unknown; any weight along gravity allowed).")
     @click.option("--gravity", nargs=3, type=float, default=(0.0, 0.0, -9.80665), show_default=True, metavar="X Y Z", help="Gravity in the common frame, m/s².")
     @click.option("--point-std", type=float, default=0.2, show_default=True, metavar="MM", help="Standard deviation of a contact point per axis, mm (for the plane normal).")
+    @click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Also draw both forces, the grasp reading and the fused angles across the grasp to this PNG/PDF/SVG.")
     @estimator_options
-    def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, point_std, tip, **estimator_opts):
+    def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, point_std, plot_path, tip, **estimator_opts):
         from softtip.fingertip import load_fingertip
         from softtip.fusion import fuse_logs, poses_from_columns, read_hand_file
         from softtip.io import read_log, write_table
@@ -84,6 +85,8 @@ an area contact). Writes CSV (standard output without -o); a summary on standard
             raise click.BadParameter(f"{point_std!r}: expected a positive length in mm", param_hint="--point-std")
         if not np.all(np.isfinite(gravity)):
             raise click.BadParameter("expected three finite numbers, m/s²", param_hint="--gravity")
+        if plot_path is not None:
+            check_figure_path(plot_path)
         fingertip = load_fingertip(tip)
         config = make_config(estimator_opts)
         if len(inputs) == 1:
@@ -119,12 +122,17 @@ an area contact). Writes CSV (standard output without -o); a summary on standard
         else:
             raise click.UsageError(f"expected two CSV logs or one bag, got {len(inputs)} inputs")
         try:
-            fused, _ = fuse_logs(
+            fused, fingers = fuse_logs(
                 logs, fingertip, config, object_mass=object_mass, gravity=gravity, point_std=point_std * 1e-3
             )
         except ValueError as exc:
             raise click.UsageError(str(exc)) from None
         write_table(fused.columns(), output)
+        if plot_path is not None:
+            from softtip.fusion.plot import plot_fused
+
+            up = -np.asarray(gravity) if np.linalg.norm(gravity) > 0 else (0.0, 0.0, 1.0)
+            plot_fused(fused, fingers, plot_path, up=up)
         for line in _summary(fused):
             click.echo(f"softtip: {line}", err=True)
 
@@ -135,4 +143,4 @@ def register(main) -> None:
     """Add ``softtip fuse`` to the ``main`` group (shared estimator options)."""
     from softtip import cli
 
-    _register(main, cli._estimator_options, cli._make_config, cli._optional)
+    _register(main, cli._estimator_options, cli._make_config, cli._optional, cli._check_figure_path)

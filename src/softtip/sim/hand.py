@@ -65,19 +65,30 @@ class TwoFingerGrasp:
         """(N, 3) ``side``'s nominal contact point in the hand frame, m."""
         return self.sensor_poses[side].apply(self.logs[side].truth.contact_point)
 
-    def truth_line(self) -> NDArray[np.float64]:
+    def truth_line(self, projected: bool = True) -> NDArray[np.float64]:
         """(N, 3) the object's line: the axial mean of both fingers' true lines (one where
-        the other touches a plane)."""
+        the other touches a plane).
+
+        ``projected`` (default): projected on the plane across the grasp (normal to the line
+        between the contacts), as each fingertip measures it in its tangent plane. The
+        object's tilt toward the fingers — the very rotation about the axis across the strip
+        that makes ``h`` observable, a few degrees in the papers' grasp — is in neither
+        fingertip's measurement.
+        """
         a, b = self.truth_direction("right"), self.truth_direction("left")
         b = np.where((np.sum(a * b, axis=-1) < 0)[:, None], -b, b)
         m = np.where(np.isfinite(a), a, 0.0) + np.where(np.isfinite(b), b, 0.0)
+        if projected:
+            base = self.truth_point("left") - self.truth_point("right")
+            base /= np.linalg.norm(base, axis=-1, keepdims=True)
+            m = m - np.sum(m * base, axis=-1, keepdims=True) * base
         with np.errstate(invalid="ignore"):
             return m / np.linalg.norm(m, axis=-1, keepdims=True)
 
     def truth_plane_normal(self) -> NDArray[np.float64]:
         """(N, 3) normal of the plane through both true contact lines (a plate's face)."""
         base = self.truth_point("left") - self.truth_point("right")
-        c = np.cross(self.truth_line(), base)
+        c = np.cross(self.truth_line(projected=False), base)
         with np.errstate(invalid="ignore"):
             return c / np.linalg.norm(c, axis=-1, keepdims=True)
 
@@ -91,6 +102,7 @@ def simulate_two_finger(
     rng: int = 0,
     object_mass: float = 0.01,
     n_elements: int | None = None,
+    model=None,
     **scenario_kwargs,
 ) -> TwoFingerGrasp:
     """Simulate the papers' grasp with both fingertips.
@@ -111,6 +123,10 @@ def simulate_two_finger(
         Seed; the left finger uses ``rng + 1``.
     object_mass : float
         kg; each finger carries half the weight.
+    n_elements : int, optional
+        Skin elements (default that of :func:`~softtip.sim.simulate.simulate_grasp`).
+    model : ContactModel, optional
+        A prebuilt skin model of ``tip``, reused for both fingers (skips the discretisation).
     **scenario_kwargs
         Other :func:`~softtip.sim.scenario.paper_scenario` arguments.
     """
@@ -120,6 +136,8 @@ def simulate_two_finger(
     if set(objs) != set(SIDES):
         raise ValueError(f"objects must name 'right' and 'left', got {sorted(objs)}")
     kw = {} if n_elements is None else {"n_elements": n_elements}
+    if model is not None:
+        kw = {"model": model}
     logs, poses = {}, {}
     for k, side in enumerate(SIDES):
         a = angle if side == "right" else -angle
