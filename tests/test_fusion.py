@@ -207,3 +207,29 @@ def test_fuse_command_errors(simulated, tmp_path):
     assert r.returncode == 2 and "missing pose column" in r.stderr
     r = _run("fuse", out / "grasp/right.csv", out / "grasp/left.csv", "--hand", out / "grasp/hand.toml", "--object-mass", "-1")
     assert r.returncode == 2 and "--object-mass" in r.stderr
+
+
+# -- gravity from the robot's transforms -----------------------------------------------------------
+
+
+def test_gravity_compensation_with_orientation_from_tf_and_from_a_callback():
+    from softtip.payload import CompensatedSource, Payload, compensate_payload
+
+    payload = Payload(mass=0.02, com=(0.0, 0.0, 0.02))
+    tree = TfTree("robot")
+    t = np.arange(50) * 0.02
+    stamps = (t * 1e9).astype(np.int64)
+    # the wrist turns 90° about world x in a second; the sensor is fixed on it
+    for ns, a in zip(stamps, np.linspace(0.0, 90.0, len(t))):
+        tree.add("world", "wrist", int(ns), (0.0, 0.0, 0.5), Rotation.from_euler("x", a, degrees=True).as_quat(), False)
+    tree.add("wrist", "ft_sensor", 0, (0.0, 0.0, 0.05), (0.0, 0.0, 0.0, 1.0), True)
+    q = tree.orientations("world", "ft_sensor", stamps)
+    assert_allclose(q[-1], Rotation.from_euler("x", 90.0, degrees=True).as_quat(scalar_first=True), atol=1e-12)
+    raw = np.zeros((len(t), 6))
+    expected = compensate_payload(raw, q, payload)
+    # the same, live: a callback gives the orientation at each sample's time
+    src = CompensatedSource(list(zip(t, raw)), lambda ti: tuple(tree.orientations("world", "ft_sensor", [int(round(ti * 1e9))])[0]), payload)
+    live = np.array([r.wrench for r in src])
+    assert_allclose(live, expected, atol=1e-12)
+    # at first the sensor is upright: the fingertip's weight pulls along its −z
+    assert_allclose(-expected[0, :3], [0.0, 0.0, -0.02 * 9.80665], atol=1e-12)

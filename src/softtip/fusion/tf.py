@@ -134,6 +134,13 @@ class TfTree:
         tr = inv.apply(t_up - t_dn)
         return rot, tr
 
+    def orientations(self, world: str, frame: str, stamps_ns: ArrayLike, max_gap: float = 0.1) -> NDArray[np.float64]:
+        """``qw, qx, qy, qz`` (N, 4) of ``frame`` in ``world`` at ``stamps_ns``: the sensor's
+        orientation for gravity compensation (``world`` with ``z`` up)."""
+        rot, _ = self.lookup(world, frame, stamps_ns, max_gap)
+        x, y, z, w = rot.as_quat().T
+        return np.stack([w, x, y, z], axis=-1)
+
     def poses(
         self, target: str, frame: str, stamps_ns: ArrayLike, origin_ns: int | None = None, max_gap: float = 0.1
     ) -> PoseSeries:
