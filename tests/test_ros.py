@@ -113,3 +113,9 @@ def test_node_without_ros_says_what_to_do():
             main([])
     else:  # pragma: no cover - a machine with ROS 2
         pytest.skip("rclpy is installed here")
+
+
+def test_payload_needs_an_orientation_topic():
+    with pytest.raises(ValueError, match="payload and orientation_topic go together"):
+        config_from_parameters({"payload": "payload.toml"})
+    config_from_parameters({"payload": "p.toml", "orientation_topic": "/ft_sensor/orientation"})

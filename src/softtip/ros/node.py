@@ -34,6 +34,8 @@ PARAMETERS: dict[str, Any] = {
     "force_noise": 0.0,  # N per axis; 0 → Nano17-class default
     "moment_noise": 0.0,  # N·m per axis; 0 → Nano17-class default
     "publish_markers": True,
+    "payload": "",  # payload TOML (softtip calibrate-payload): remove the fingertip's weight
+    "orientation_topic": "",  # geometry_msgs/msg/QuaternionStamped: the sensor frame in a z-up world
 }
 
 
@@ -46,6 +48,8 @@ def config_from_parameters(params: dict[str, Any]) -> EstimatorConfig:
         An unknown parameter or a value out of range, naming the parameter.
     """
     unknown = set(params) - set(PARAMETERS)
+    if bool(params.get("payload")) != bool(params.get("orientation_topic")):
+        raise ValueError("payload and orientation_topic go together: the weight's direction needs the orientation")
     if unknown:
         raise ValueError(f"unknown parameter(s) {', '.join(sorted(unknown))}; expected some of {', '.join(PARAMETERS)}")
     p = {**PARAMETERS, **params}
@@ -75,7 +79,7 @@ def main(args: list[str] | None = None) -> None:  # pragma: no cover - needs a R
     """Run the node until shut down."""
     try:
         import rclpy
-        from geometry_msgs.msg import PointStamped, Vector3Stamped, WrenchStamped
+        from geometry_msgs.msg import PointStamped, QuaternionStamped, Vector3Stamped, WrenchStamped
         from rclpy.node import Node
         from std_msgs.msg import String
         from std_srvs.srv import Trigger
@@ -106,6 +110,12 @@ def main(args: list[str] | None = None) -> None:  # pragma: no cover - needs a R
                 "edge_direction": self.create_publisher(Vector3Stamped, sr.TOPICS["edge_direction"], 10),
                 "markers": self.create_publisher(MarkerArray, sr.MARKER_TOPIC, 10),
             }
+            self.compensate = self.orientation = None
+            if params["payload"]:
+                from softtip.payload import PayloadCompensator, load_payload
+
+                self.compensate = PayloadCompensator(load_payload(params["payload"]))
+                self.create_subscription(QuaternionStamped, params["orientation_topic"], self.on_orientation, 10)
             self.create_subscription(WrenchStamped, params["wrench_topic"], self.on_wrench, 100)
             self.create_service(Trigger, "~/tare", self.on_tare)
 
@@ -115,9 +125,18 @@ def main(args: list[str] | None = None) -> None:  # pragma: no cover - needs a R
             response.message = "re-taring from the next samples: keep the fingertip untouched"
             return response
 
+        def on_orientation(self, msg):
+            q = msg.quaternion
+            self.orientation = (q.w, q.x, q.y, q.z)
+
         def on_wrench(self, msg):
             now = self.get_clock().now().nanoseconds * 1e-9
             t, w = sr.wrench_sample(msg, fallback_time=now)
+            if self.compensate is not None:
+                if self.orientation is None:
+                    self.get_logger().warning("no orientation yet: sample skipped (payload compensation)", once=True)
+                    return
+                w = self.compensate(w, self.orientation)
             try:
                 est = self.estimator.update(t, w)
             except ValueError as exc:  # time going back: a restarted bag or driver
