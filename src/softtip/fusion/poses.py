@@ -13,7 +13,6 @@ log (:func:`poses_from_columns`: ``px, py, pz, qw, qx, qy, qz``) or a ROS bag's 
 from __future__ import annotations
 
 import math
-import sys
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -24,11 +23,7 @@ from scipy.spatial.transform import Rotation, Slerp
 
 from softtip.errors import InputError
 from softtip.mounting import pose_from_table
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover - exercised on Python 3.10 only
-    import tomli as tomllib
+from softtip.tomlfile import read_toml
 
 __all__ = ["POSE_COLUMNS", "PoseSeries", "poses_from_columns", "read_hand_file", "HandFile"]
 
@@ -162,12 +157,7 @@ def read_hand_file(path: str | Path) -> HandFile:
         # or quaternion = [w, x, y, z]
     """
     path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{path}: malformed TOML: {exc}") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{path}: cannot read the hand file: {exc}") from None
+    data = read_toml(path, "hand")
     hand = data.get("hand", {})
     frame = hand.get("frame", "hand") if isinstance(hand, dict) else None
     if not isinstance(frame, str) or not frame:
