@@ -402,7 +402,8 @@ class RDTTracker:
         self.received += 1
         sf, st = self.force_scale, self.torque_scale
         return (
-            Reading(t, (a * sf, b * sf, c * sf, d * st, e * st, f * st), u, gap, arrival_ns, status, host_ns * 1e-9),
+            Reading(t, (a * sf, b * sf, c * sf, d * st, e * st, f * st), u, gap, arrival_ns, status,
+                    host_ns * 1e-9 if host_ns else math.nan),
         )
 
     def _behind(self, u: int) -> tuple[()]:

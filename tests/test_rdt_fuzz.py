@@ -1,0 +1,171 @@
+"""RDT packet handling (softtip.netft.RDTTracker) under what networks and sensors do.
+
+Hypothesis builds a device stream (any start sequence, so the 32-bit wrap is crossed),
+then a network that loses, duplicates, delays and reorders records, inserts zero-length and
+garbage datagrams and sets status words; a simple reference model (sets, no windows)
+says what should come out. Every loop is bounded by the drawn sizes.
+"""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from softtip.netft import FAULTS, RDT_RECORD, RDTTracker, StreamFault
+
+RATE = 1000.0
+MS = 1_000_000  # ns
+
+
+def record(seq, ft, status=0, k=0):
+    # the wrench encodes the device index k, so every output can be traced to its record
+    return RDT_RECORD.pack(seq & 0xFFFFFFFF, ft & 0xFFFFFFFF, status, k, -k, 2 * k, 3, 4, 5)
+
+
+@st.composite
+def network(draw):
+    n = draw(st.integers(2, 120))
+    start = draw(st.one_of(st.integers(0, 2**32 - 1), st.integers(2**32 - 60, 2**32 - 1)))
+    ft0 = draw(st.integers(0, 2**32 - 1))
+    statuses = draw(st.lists(st.sampled_from([0, 0, 0, 0x80010000, 0x80000001]), min_size=n, max_size=n))
+    items = []  # (arrival order key, datagram, device index or None)
+    for k in range(n):
+        fate = draw(st.sampled_from(["send", "send", "send", "lose", "dup", "delay"]))
+        data = record(start + k, ft0 + 3 * k, statuses[k], k)
+        if fate == "lose":
+            continue
+        delay = draw(st.integers(1, 6)) if fate == "delay" else 0
+        items.append((k + delay + 0.5 * (delay > 0), data, k))
+        if fate == "dup":
+            items.append((k + draw(st.integers(0, 8)) + 0.25, data, k))
+        if draw(st.integers(0, 9)) == 0:
+            junk = draw(st.sampled_from([b"", b"\x12\x34", bytes(35), bytes(37), bytes(72)]))
+            items.append((k + 0.1, junk, None))
+    items.sort(key=lambda x: x[0])
+    return start, statuses, [(d, k) for _, d, k in items]
+
+
+def reference(delivered):
+    """What the tracker should do, from device indices (None: not a record)."""
+    out, late, dup, malformed = [], 0, 0, 0
+    seen, first, top = set(), None, None
+    for _, k in delivered:
+        if k is None:
+            malformed += 1
+        elif top is None or k > top:
+            first = k if first is None else first
+            top = k
+            seen.add(k)
+            out.append(k)
+        elif k in seen:
+            dup += 1
+        else:
+            seen.add(k)
+            late += 1
+    if top is None:
+        return out, late, dup, malformed, 0
+    lost = (top - first + 1) - len(out) - sum(1 for k in seen if first < k < top and k not in out)
+    return out, late, dup, malformed, lost
+
+
+@settings(max_examples=300, deadline=None)
+@given(network())
+def test_tracker_against_reference(net):
+    start, statuses, delivered = net
+    tr = RDTTracker(RATE, 1e-6, 1e-3)
+    got = []
+    for i, (data, _) in enumerate(delivered):
+        got += tr.feed(data, host_ns=1_700_000_000 * 10**9 + i * MS, arrival_ns=10**12 + i * MS)
+    out, late, dup, malformed, lost = reference(delivered)
+    ks = [round(r.wrench[0] / 1e-6) for r in got]
+    assert ks == out  # each record once, in device order, nothing invented
+    assert (tr.late, tr.duplicates, tr.malformed, tr.lost, tr.restarts) == (late, dup, malformed, lost, 0)
+    assert tr.received == len(out)
+    if got:
+        # device clock across the 32-bit wrap: t is exactly (index - first index) / rate
+        np.testing.assert_allclose([r.t for r in got], (np.array(out) - out[0]) / RATE, rtol=0, atol=1e-9)
+        assert [r.status for r in got] == [statuses[k] for k in out]
+        assert sum(r.lost for r in got) == out[-1] - out[0] + 1 - len(out)
+        assert all(1.7e9 <= r.host_time < 1.7e9 + 1 for r in got)  # host clock, s since the epoch
+    nonzero = {statuses[k] for k in out} - {0}
+    assert tr.status_records == sum(1 for k in out if statuses[k])
+    assert len([w for w in tr.warnings if "status word" in w]) == len(nonzero)
+
+
+def test_pre_wrap_packet_after_the_wrap_is_late_not_a_jump():
+    tr = RDTTracker(RATE, 1.0, 1.0)
+    seqs = [2**32 - 3, 2**32 - 2, 0, 1, 2**32 - 1, 2, 3]  # 2^32 - 1 arrives after the wrap
+    got = [r for i, s in enumerate(seqs) for r in tr.feed(record(s, s + 7), arrival_ns=10**9 + i * MS)]
+    assert [r.t for r in got] == pytest.approx([0.0, 0.001, 0.003, 0.004, 0.005, 0.006])
+    assert (tr.late, tr.lost) == (1, 0)
+
+
+def test_device_restart_resynchronises_on_the_host_clock():
+    tr = RDTTracker(RATE, 1.0, 1.0)
+    got = []
+    for i in range(1, 301):  # 0.3 s of stream
+        got += tr.feed(record(i, 7 * i), arrival_ns=10**9 + i * MS)
+    # the device reboots: 2 s of silence, then both sequences start again from 1
+    for i in range(1, 101):
+        got += tr.feed(record(i, i), arrival_ns=10**9 + 2300 * MS + i * MS)
+    t = np.array([r.t for r in got])
+    assert len(got) == 400 and tr.restarts == 1 and tr.lost == tr.duplicates == 0
+    assert np.all(np.diff(t) > 0)
+    assert t[300] - t[299] == pytest.approx(2.001, abs=1e-6)  # the silence, by the host clock
+    assert any("restarted" in w for w in tr.warnings)
+
+
+def test_rdt_stream_restart_without_silence():
+    # a new streaming request restarts the RDT sequence; the F/T sequence goes on
+    tr = RDTTracker(RATE, 1.0, 1.0)
+    got = [r for i in range(1, 51) for r in tr.feed(record(1000 + i, 7 * i), arrival_ns=10**9 + i * MS)]
+    got += [r for i in range(1, 51) for r in tr.feed(record(i, 7 * (50 + i)), arrival_ns=10**9 + (50 + i) * MS)]
+    assert len(got) == 100 and tr.restarts == 1 and tr.duplicates == 0
+    assert np.all(np.diff([r.t for r in got]) > 0)
+
+
+def test_stall_and_status_are_counted_and_strict_makes_them_fatal():
+    tr = RDTTracker(RATE, 1.0, 1.0)
+    for i in range(1, 11):
+        assert len(tr.feed(record(i, 5 if i > 3 else i, 0x80010000 if i == 7 else 0))) == 1
+    assert tr.stalls == 6 and tr.status_records == 1  # F/T sequence 1, 2, 3, 5, then 5 six more times
+    assert sum("stalled" in w for w in tr.warnings) == 1
+    for kind, datagrams in [
+        ("stall", [record(1, 1), record(2, 1)]),
+        ("status", [record(1, 1), record(2, 2, 0x40000000)]),
+        ("duplicate", [record(1, 1), record(1, 1)]),
+        ("late", [record(1, 1), record(3, 3), record(2, 2)]),
+        ("lost", [record(1, 1), record(3, 3)]),
+        ("malformed", [record(1, 1), b""]),
+        ("restart", [record(1, 9), record(2, 1)]),
+    ]:
+        relaxed, strict = RDTTracker(RATE, 1.0, 1.0), RDTTracker(RATE, 1.0, 1.0, strict=[kind])
+        for d in datagrams:
+            relaxed.feed(d)
+        with pytest.raises(StreamFault, match=f"--strict {kind}"):
+            for d in datagrams:
+                strict.feed(d)
+    with pytest.raises(ValueError, match="unknown faults"):
+        RDTTracker(RATE, 1.0, 1.0, strict=["typo"])
+    assert "dropped" in FAULTS
+
+
+def test_queue_drops_are_not_network_loss():
+    tr = RDTTracker(RATE, 1.0, 1.0)
+    tr.feed(record(1, 1))
+    tr.local_drops.update({2, 3, 5})  # softtip's queue dropped these; 4 never arrived
+    got = tr.feed(record(6, 6))
+    assert got[0].lost == 4 and (tr.dropped, tr.lost) == (3, 1)
+    assert not tr.local_drops
+
+
+def test_rate_disagreeing_with_the_host_clock_is_warned():
+    tr = RDTTracker(1000.0, 1.0, 1.0, rate_check_s=1.0)
+    for i in range(1, 1500):  # records really arrive at 1100 Hz
+        tr.feed(record(i, i), arrival_ns=10**9 + round(i * 1e9 / 1100))
+    assert tr.measured_rate_hz == pytest.approx(1100, rel=1e-3)
+    assert any("1100" in w and "+10.0 %" in w for w in tr.warnings)
+    ok = RDTTracker(1000.0, 1.0, 1.0, rate_check_s=1.0)
+    for i in range(1, 1500):
+        ok.feed(record(i, i), arrival_ns=10**9 + i * MS + (i % 7) * 50_000)  # jitter only
+    assert ok.warnings == []
