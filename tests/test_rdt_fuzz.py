@@ -49,6 +49,7 @@ def reference(delivered):
     """What the tracker should do, from device indices (None: not a record)."""
     out, late, dup, malformed = [], 0, 0, 0
     seen, first, top = set(), None, None
+    rows, mark = [], (0, 0, 0)  # per sample: late, duplicates, malformed since the previous
     for _, k in delivered:
         if k is None:
             malformed += 1
@@ -57,15 +58,17 @@ def reference(delivered):
             top = k
             seen.add(k)
             out.append(k)
+            rows.append((late - mark[0], dup - mark[1], malformed - mark[2]))
+            mark = (late, dup, malformed)
         elif k in seen:
             dup += 1
         else:
             seen.add(k)
             late += 1
     if top is None:
-        return out, late, dup, malformed, 0
+        return out, late, dup, malformed, 0, rows
     lost = (top - first + 1) - len(out) - sum(1 for k in seen if first < k < top and k not in out)
-    return out, late, dup, malformed, lost
+    return out, late, dup, malformed, lost, rows
 
 
 @settings(max_examples=300, deadline=None)
@@ -76,7 +79,7 @@ def test_tracker_against_reference(net):
     got = []
     for i, (data, _) in enumerate(delivered):
         got += tr.feed(data, host_ns=1_700_000_000 * 10**9 + i * MS, arrival_ns=10**12 + i * MS)
-    out, late, dup, malformed, lost = reference(delivered)
+    out, late, dup, malformed, lost, rows = reference(delivered)
     ks = [round(r.wrench[0] / 1e-6) for r in got]
     assert ks == out  # each record once, in device order, nothing invented
     assert (tr.late, tr.duplicates, tr.malformed, tr.lost, tr.restarts) == (late, dup, malformed, lost, 0)
@@ -86,6 +89,8 @@ def test_tracker_against_reference(net):
         np.testing.assert_allclose([r.t for r in got], (np.array(out) - out[0]) / RATE, rtol=0, atol=1e-9)
         assert [r.status for r in got] == [statuses[k] for k in out]
         assert sum(r.lost for r in got) == out[-1] - out[0] + 1 - len(out)
+        assert [(r.late, r.duplicates, r.malformed) for r in got] == rows
+        assert all(r.dropped == 0 for r in got)
         assert all(1.7e9 <= r.host_time < 1.7e9 + 1 for r in got)  # host clock, s since the epoch
     nonzero = {statuses[k] for k in out} - {0}
     assert tr.status_records == sum(1 for k in out if statuses[k])
@@ -155,7 +160,8 @@ def test_queue_drops_are_not_network_loss():
     tr.feed(record(1, 1))
     tr.local_drops.update({2, 3, 5})  # softtip's queue dropped these; 4 never arrived
     got = tr.feed(record(6, 6))
-    assert got[0].lost == 4 and (tr.dropped, tr.lost) == (3, 1)
+    assert (got[0].lost, got[0].dropped) == (1, 3) and (tr.dropped, tr.lost) == (3, 1)
+    assert tr.feed(record(3, 3)) == () and tr.duplicates == 1  # a copy of a dropped one
     assert not tr.local_drops
 
 
@@ -165,7 +171,11 @@ def test_rate_disagreeing_with_the_host_clock_is_warned():
         tr.feed(record(i, i), arrival_ns=10**9 + round(i * 1e9 / 1100))
     assert tr.measured_rate_hz == pytest.approx(1100, rel=1e-3)
     assert any("1100" in w and "+10.0 %" in w for w in tr.warnings)
+    rng = np.random.default_rng(8380)
+    delay = rng.exponential(0.3 * MS, 3000).astype(int)
+    delay[rng.integers(0, 3000, 30)] += 60 * MS  # a loaded host: some arrive 60 ms late
     ok = RDTTracker(1000.0, 1.0, 1.0, rate_check_s=1.0)
-    for i in range(1, 1500):
-        ok.feed(record(i, i), arrival_ns=10**9 + i * MS + (i % 7) * 50_000)  # jitter only
+    for i in range(1, 3000):
+        ok.feed(record(i, i), arrival_ns=10**9 + i * MS + int(delay[i]))
+    assert ok.measured_rate_hz == pytest.approx(1000, rel=1e-3)
     assert ok.warnings == []

@@ -49,17 +49,22 @@ __all__ = [
 #: wrench ``fx … mz``: a recording is a log that ``softtip estimate`` and ``--replay`` read
 #: as it is, and that reproduces the recorded estimates), then the estimates with the
 #: columns of ``softtip estimate`` (its tared wrench as ``fx_tared … mz_tared``), then the
-#: stream's bookkeeping: the source's sequence number, records missing just before this
-#: one, the device's status word and the host receive time (s since the Unix epoch).
+#: stream's bookkeeping (see :class:`~softtip.sources.Reading`): the source's sequence
+#: number; records missing just before this one (``lost``: network, or late) and dropped by
+#: softtip's queue (``dropped``); late packets, duplicates and malformed datagrams
+#: discarded since the previous row; the device's status word; the host receive time (s
+#: since the Unix epoch). Column sums give the totals (network loss: ``lost − late``).
 RECORD_COLUMNS: tuple[str, ...] = (
     "t", "fx", "fy", "fz", "mx", "my", "mz",
     "state", "fx_tared", "fy_tared", "fz_tared", "mx_tared", "my_tared", "mz_tared",
     "rx", "ry", "rz", "nx", "ny", "nz", "sigma",
     "hx", "hy", "hz", "h_norm", "dx", "dy", "dz", "angle_deg", "h_std", "angle_std_deg", "latched",
     "latch_fallback", "relatched", "depth", "joint_conditioning", "joint_angle_std_deg", "joint_offset_std",
-    "joint_residual", "joint_fallback", "seq", "lost", "status", "host_time",
+    "joint_residual", "joint_fallback", "seq", "lost", "dropped", "late", "duplicates", "malformed",
+    "status", "host_time",
 )  # fmt: skip
-_INT_COLUMNS = ("latched", "latch_fallback", "relatched", "joint_fallback", "seq", "lost", "status")
+_INT_COLUMNS = ("latched", "latch_fallback", "relatched", "joint_fallback", "seq", "lost", "dropped", "late",
+                "duplicates", "malformed", "status")  # fmt: skip
 # Time and raw wrench exactly (shortest repr: re-reading the file gives the same doubles),
 # the host time to the microsecond, the rest as softtip.io.write_table formats numbers.
 _FORMATS = {"t": "%r", "fx": "%r", "fy": "%r", "fz": "%r", "mx": "%r", "my": "%r", "mz": "%r",
@@ -77,7 +82,7 @@ def estimate_row(e: SampleEstimate, r: Reading) -> tuple:
         e.state, *e.wrench, *e.point, *e.normal, e.sigma, *e.h, e.h_norm, *e.direction,
         e.angle * _DEG, e.h_std, e.angle_std * _DEG, e.latched, e.latch_fallback, e.relatched, e.depth,
         e.joint_conditioning, e.joint_angle_std * _DEG, e.joint_offset_std, e.joint_residual, e.joint_fallback,
-        r.seq, r.lost, r.status, r.host_time,
+        r.seq, r.lost, r.dropped, r.late, r.duplicates, r.malformed, r.status, r.host_time,
     )  # fmt: skip
 
 

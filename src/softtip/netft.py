@@ -33,8 +33,9 @@ What happens on :meth:`NetFTSource.open`:
      re-synchronises: time goes on from the last sample plus the host-clock gap;
    * a silent device is asked again to stream (every ``resend_s``), so a device that
      rebooted streams again;
-   * the rate in the XML is checked against the host clock over the first seconds: a
-     difference of more than 2 % is warned about (time would be rescaled by it).
+   * the rate in the XML is checked against the host clock (from 2 s on, by the lower
+     envelope of arrival times, so late packets do not count): a difference of more than
+     2 % is warned about, since ``t`` would be rescaled by it.
 
    Only the faults named in ``strict`` end the stream (:class:`StreamFault`).
 
@@ -201,7 +202,8 @@ class RDTTracker:
     restart_silence_s : float
         A packet from the past after at least this much silence (host clock) is a restart.
     rate_check_s : float
-        Host-clock seconds after which the device rate is checked (then every such span).
+        Host-clock seconds after which the device rate is checked against the host clock
+        (from then on, every quarter of it, over the whole span).
     rate_tolerance : float
         Relative difference between ``rate_hz`` and the arrival rate that is warned about.
     where : str
@@ -262,6 +264,7 @@ class RDTTracker:
         self.local_drops: set[int] = set()
         self.drop_lock = threading.Lock()
         self._statuses_seen: set[int] = set()
+        self._mark = (0, 0, 0)  # late, duplicates, malformed at the previous sample
         self._stalled = False
         self._rate_warned = False
         self._h: int | None = None  # newest accepted sequence, unwrapped, this epoch
@@ -274,7 +277,9 @@ class RDTTracker:
         self._seq_base = 0
         self._last_t = -math.inf
         self._last_arrival = 0
-        self._rate_anchor: tuple[int, int] | None = None  # (sequence, arrival ns)
+        self._period_ns = 1e9 / rate_hz if rate_hz else 0.0
+        self._rate_anchor: tuple[float, int, int] | None = None  # (min phase, its sequence, block start)
+        self._rate_block: list | None = None  # [block start, min phase, its sequence]
         self._t0_arrival: int | None = None
 
     # -- warnings and faults ---------------------------------------------------------
@@ -362,12 +367,13 @@ class RDTTracker:
                 gap = step - 1
                 if _signed(ft - self._last_ft) < 0:  # F/T counter reset: the device restarted
                     restart = True
+        dropped = 0
         if restart:
             self._restart(raw, arrival_ns)
             u = raw
             gap = 0
         elif gap:
-            self._account_gap(h, gap)
+            dropped = self._account_gap(h, gap)
         # accepted
         self._h = u
         self._last_raw = raw
@@ -401,10 +407,14 @@ class RDTTracker:
             self._last_arrival = arrival_ns
         self.received += 1
         sf, st = self.force_scale, self.torque_scale
+        # what was discarded since the previous sample, for this sample's row
+        late, dups, bad = self.late, self.duplicates, self.malformed
+        mark = self._mark
+        self._mark = (late, dups, bad)
         return (
-            Reading(t, (a * sf, b * sf, c * sf, d * st, e * st, f * st), u, gap, arrival_ns, status,
-                    host_ns * 1e-9 if host_ns else math.nan),
-        )
+            Reading(t, (a * sf, b * sf, c * sf, d * st, e * st, f * st), u, gap - dropped, arrival_ns, status,
+                    host_ns * 1e-9 if host_ns else math.nan, dropped, late - mark[0], dups - mark[1], bad - mark[2]),
+        )  # fmt: skip
 
     def _behind(self, u: int) -> tuple[()]:
         """A packet at or behind the newest one: late if it fills a gap, else a duplicate."""
@@ -423,9 +433,13 @@ class RDTTracker:
             self._fault("duplicate", f"a duplicate packet (sequence {u})")
         return ()
 
-    def _account_gap(self, h: int, gap: int) -> None:
-        """``gap`` records missing after sequence ``h``: softtip's own drops, or lost."""
-        dropped = self._take_local_drops(self._last_raw, gap) if self.local_drops else 0
+    def _account_gap(self, h: int, gap: int) -> int:
+        """``gap`` records missing after sequence ``h``: softtip's own drops, or lost.
+
+        Returns how many softtip dropped.
+        """
+        hits = self._take_local_drops(self._last_raw, gap) if self.local_drops else []
+        dropped = len(hits)
         lost = gap - dropped
         self.dropped += dropped
         self.lost += lost
@@ -433,6 +447,8 @@ class RDTTracker:
             missing = self._missing
             lo = max(h + 1, h + gap + 1 - self.window)
             missing.update(range(lo, h + gap + 1))
+            if hits:  # a copy of a record softtip dropped is a duplicate, not late
+                missing.difference_update(h + ((s - self._last_raw) & _MASK) for s in hits)
             if len(missing) > 2 * self.window:  # forget gaps too old to be filled
                 floor = h + gap - self.window
                 self._missing = {s for s in missing if s > floor}
@@ -440,9 +456,10 @@ class RDTTracker:
             self._fault("dropped", f"{dropped} record(s) dropped by softtip's receive queue (the consumer did not keep up)")
         if lost:
             self._fault("lost", f"{lost} record(s) lost before sequence {h + gap + 1}")
+        return dropped
 
-    def _take_local_drops(self, last_raw: int, gap: int) -> int:
-        """How many of the raw sequences after ``last_raw`` (``gap`` of them) softtip dropped."""
+    def _take_local_drops(self, last_raw: int, gap: int) -> list[int]:
+        """Which of the raw sequences after ``last_raw`` (``gap`` of them) softtip dropped."""
         drops = self.local_drops
         with self.drop_lock:
             if gap <= len(drops):
@@ -450,7 +467,7 @@ class RDTTracker:
             else:
                 hits = [s for s in drops if 0 < ((s - last_raw) & _MASK) <= gap]
             drops.difference_update(hits)
-        return len(hits)
+        return hits
 
     def _restart(self, raw: int, arrival_ns: int) -> None:
         """Re-synchronise on a new RDT epoch starting at ``raw``."""
@@ -462,7 +479,7 @@ class RDTTracker:
         self._first = raw
         self._missing = set()
         self._before_first = set()
-        self._rate_anchor = None
+        self._rate_anchor = self._rate_block = None
         self._stalled = False
         self._warn(
             f"{self.where}: the device restarted its stream (RDT sequence {raw}); "
@@ -471,16 +488,33 @@ class RDTTracker:
         self._fault("restart", f"the device restarted its stream (RDT sequence {raw})")
 
     def _check_rate(self, u: int, arrival_ns: int) -> None:
-        anchor = self._rate_anchor
-        if anchor is None:
-            self._rate_anchor = (u, arrival_ns)
+        """Compare the device rate with the host clock, robust to late arrivals.
+
+        A record arrives at ``T0 + u·P' + delay`` with ``delay >= 0``. Against the nominal
+        period ``P``, the phase ``arrival - u·P`` drifts by ``P' - P`` per record; its lower
+        envelope (the minimum over blocks of a quarter of ``rate_check_s``) ignores network
+        and scheduling delays. The slope between the first block and the latest gives P'.
+        """
+        phase = arrival_ns - u * self._period_ns
+        blk = self._rate_block
+        if blk is None:
+            self._rate_block = [arrival_ns, phase, u]
             return
-        span = arrival_ns - anchor[1]
-        if span < self.rate_check_ns:
+        if phase < blk[1]:
+            blk[1], blk[2] = phase, u
+        if arrival_ns - blk[0] < self.rate_check_ns // 4:
             return
-        measured = (u - anchor[0]) / (span * 1e-9)
+        self._rate_block = [arrival_ns, phase, u]
+        ref = self._rate_anchor
+        if ref is None:
+            self._rate_anchor = (blk[1], blk[2], blk[0])
+            return
+        m0, u0, start = ref
+        if arrival_ns - start < self.rate_check_ns or blk[2] <= u0:
+            return
+        slope = (blk[1] - m0) / (blk[2] - u0)  # ns per record
+        measured = 1e9 / (self._period_ns + slope)
         self.measured_rate_hz = measured
-        self._rate_anchor = (u, arrival_ns)
         if not self._rate_warned and abs(measured / self.rate_hz - 1.0) > self.rate_tolerance:
             self._rate_warned = True
             self._warn(

@@ -64,8 +64,9 @@ class Reading(NamedTuple):
     seq : int
         The source's sequence number (RDT sequence for a Net F/T, row index for a log).
     lost : int
-        Samples missing just before this one (gaps in ``seq``, whatever the cause: lost on
-        the network, dropped by softtip's queue, or arriving late afterwards); 0 for a log.
+        Records missing just before this one (a gap in ``seq``) that softtip did not drop
+        itself: lost on the network, or to arrive late (then counted in ``late`` of a later
+        reading); 0 for a log.
     arrival_ns : int
         When the sample reached this host, ``time.monotonic_ns()`` clock; 0 if unknown.
     status : int
@@ -73,6 +74,11 @@ class Reading(NamedTuple):
     host_time : float
         When the sample reached this host, s since the Unix epoch (for syncing with other
         logs); NaN if unknown.
+    dropped : int
+        Records just before this one that softtip's own receive queue dropped (the consumer
+        did not keep up).
+    late, duplicates, malformed : int
+        Late packets, duplicates and malformed datagrams discarded since the previous reading.
     """
 
     t: float
@@ -82,6 +88,10 @@ class Reading(NamedTuple):
     arrival_ns: int = 0
     status: int = 0
     host_time: float = math.nan
+    dropped: int = 0
+    late: int = 0
+    duplicates: int = 0
+    malformed: int = 0
 
 
 def readings(source: Iterable) -> Iterator[Reading]:
@@ -92,7 +102,7 @@ def readings(source: Iterable) -> Iterator[Reading]:
         else:
             t, w = item[0], item[1]
             w = w.tolist() if isinstance(w, np.ndarray) else w
-            yield Reading(float(t), tuple(float(v) for v in w), seq, 0, 0, 0, math.nan)
+            yield Reading(float(t), tuple(float(v) for v in w), seq, 0, 0, 0, math.nan, 0, 0, 0, 0)
 
 
 def run(
@@ -200,7 +210,7 @@ class LogSource:
         stop = self.stop_event
         if self.speed == 0 or not ts:
             for k, (t, w) in enumerate(zip(ts, ws)):
-                yield Reading(t, w, k, 0, clock(), 0, wall() * 1e-9)
+                yield Reading(t, w, k, 0, clock(), 0, wall() * 1e-9, 0, 0, 0, 0)
             return
         start = time.monotonic()
         t0, speed = ts[0], self.speed
@@ -211,4 +221,4 @@ class LogSource:
                     time.sleep(wait)
                 elif stop.wait(wait):
                     return
-            yield Reading(t, w, k, 0, clock(), 0, wall() * 1e-9)
+            yield Reading(t, w, k, 0, clock(), 0, wall() * 1e-9, 0, 0, 0, 0)
