@@ -258,3 +258,19 @@ def test_queue_overflow_is_counted_as_dropped_not_lost():
             c = src.counters()
     assert c["dropped"] >= 500 and c["lost"] == 0, c
     assert src.tracker.dropped == c["dropped"] - len(src.tracker.local_drops)
+
+
+def test_the_view_shows_every_counter_the_status_and_the_latest_warning():
+    import io
+
+    from softtip.live import LiveStats, TerminalView
+
+    counters = {"lost": 4, "dropped": 7, "duplicates": 2, "late": 3, "malformed": 5, "restarts": 1, "stalls": 6,
+                "status_records": 9}  # fmt: skip
+    stats = LiveStats(received=996, counters=lambda: counters, warnings=lambda: ["first", "device status word 0x80010000"],
+                      status=0, last_nonzero_status=0x80010000)  # fmt: skip
+    text = "\n".join(TerminalView(stats, out=io.StringIO()).render())
+    for part in ("lost 4 (0.40 %)", "late 3", "duplicates 2", "malformed 5", "dropped by softtip 7",
+                 "status 0x00000000", "nonzero in 9 samples (last 0x80010000)", "restarts 1", "stalled 6",
+                 "warning  device status word 0x80010000  (+1 more)"):  # fmt: skip
+        assert part in text, (part, text)

@@ -471,7 +471,7 @@ def _optional(module: str, extra: str):
 
 With --netft HOST softtip reads the calibration (counts per force and torque unit, units)
 from the sensor over HTTP (/netftapi2.xml), streams RDT records over UDP, converts them to
-SI and runs the streaming estimator on every sample (needs softtip[netft]). With --replay
+SI and runs the streaming estimator on every sample. With --replay
 LOG.csv the log is fed through the same path at its recorded rate times --speed (0: as
 fast as possible).
 
@@ -613,9 +613,8 @@ def stream(
             click.echo("softtip: interrupted before the first sample; nothing recorded", err=True)
             return
         except SourceError as exc:
-            warned = getattr(source, "warnings", None) or []
-            for w in warned:
-                click.echo(f"softtip: warning: {w}", err=True)
+            for w in getattr(source, "warnings", None) or []:
+                click.echo(f"softtip: warning: {source.name}: {w}", err=True)
             click.echo(f"softtip: error: {exc}", err=True)
             ctx.exit(1)
     finally:
@@ -626,7 +625,7 @@ def stream(
         if recorder is not None:
             recorder.close()
     for w in summary.warnings:
-        click.echo(f"softtip: warning: {w}", err=True)
+        click.echo(f"softtip: warning: {source.name}: {w}", err=True)
     rate = summary.samples / summary.seconds if summary.seconds > 0 else 0.0
     why = {"end": "end of log", "duration": "duration reached", "interrupt": "interrupted"}[summary.reason]
     c = summary.counters

@@ -107,6 +107,8 @@ class LiveStats:
         Returns the source's warnings so far (list of str).
     status : int
         Status word of the newest sample.
+    last_nonzero_status : int
+        The newest nonzero status word (0: none yet).
     started : float
         ``time.monotonic()`` at the first sample.
     latest : SampleEstimate or None
@@ -122,6 +124,7 @@ class LiveStats:
     counters: Callable[[], dict[str, int]] | None = None
     warnings: Callable[[], list[str]] | None = None
     status: int = 0
+    last_nonzero_status: int = 0
     rate_window: collections.deque = field(
         default_factory=lambda: collections.deque(maxlen=8)
     )
@@ -317,16 +320,19 @@ class TerminalView:
         c = s.totals()
         lost = c["lost"]
         pct = 100.0 * lost / (s.received + lost) if s.received + lost > 0 else 0.0
-        lines.append(f"rate     {rate:8.1f} Hz     samples {s.received}")
-        lines.append(
-            f"network  lost {lost} ({pct:.2f} %)   late {c.get('late', 0)}   duplicates {c.get('duplicates', 0)}"
-            f"   malformed {c.get('malformed', 0)}   dropped by softtip {c['dropped']}"
-        )
-        if s.counters is not None:
+        if s.counters is None:  # a log or a user's source: only what its readings say
             lines.append(
-                f"device   status 0x{s.status:08x}   nonzero {c.get('status_records', 0)}"
-                f"   restarts {c.get('restarts', 0)}   stalled {c.get('stalls', 0)}"
+                f"rate     {rate:8.1f} Hz     samples {s.received}   lost {lost} ({pct:.2f} %)   dropped {c['dropped']}"
             )
+        else:  # a sensor: what the network and the device did
+            lines += [
+                f"rate     {rate:8.1f} Hz     samples {s.received}",
+                f"network  lost {lost} ({pct:.2f} %)   late {c.get('late', 0)}   duplicates {c.get('duplicates', 0)}"
+                f"   malformed {c.get('malformed', 0)}   dropped by softtip {c['dropped']}",
+                f"device   status 0x{s.status:08x}   nonzero in {c.get('status_records', 0)} samples"
+                + (f" (last 0x{s.last_nonzero_status:08x})" if s.last_nonzero_status else "")
+                + f"   restarts {c.get('restarts', 0)}   stalled {c.get('stalls', 0)}",
+            ]
         warnings = s.warnings() if s.warnings else []
         if warnings:
             lines.append(f"warning  {warnings[-1]}" + (f"  (+{len(warnings) - 1} more)" if len(warnings) > 1 else ""))
@@ -416,6 +422,8 @@ def run_live(
             e = update(r.t, r.wrench)
             stats.received += 1
             stats.lost += r.lost
+            if r.status:
+                stats.last_nonzero_status = r.status
             stats.status = r.status
             stats.latest = e
             if add is not None:

@@ -222,7 +222,8 @@ class RDTTracker:
     measured_rate_hz : float or None
         Records per second by the host clock (device sequence over host time), once known.
     warnings : list of str
-        What was warned about, in order (at most 20, then a last one saying so).
+        What was warned about, in order (at most 20, then a last one saying so); the
+        device is not named in them (``where`` names it in errors).
     """
 
     def __init__(
@@ -381,7 +382,7 @@ class RDTTracker:
             self.stalls += 1
             if not self._stalled:
                 self._stalled = True
-                self._warn(f"{self.where}: the F/T sequence stalled at {ft} (the device repeats stale data)")
+                self._warn(f"the F/T sequence stalled at {ft} (the device repeats stale data)")
             self._fault("stall", f"the F/T sequence stalled at {ft}")
         else:
             self._stalled = False
@@ -390,7 +391,7 @@ class RDTTracker:
             self.status_records += 1
             if status not in self._statuses_seen and len(self._statuses_seen) < 64:
                 self._statuses_seen.add(status)
-                self._warn(f"{self.where}: device status word 0x{status:08x} (0 is healthy)")
+                self._warn(f"device status word 0x{status:08x} (0 is healthy)")
             self._fault("status", f"device status word 0x{status:08x}")
         self.last_status = status
         rate = self.rate_hz
@@ -482,7 +483,7 @@ class RDTTracker:
         self._rate_anchor = self._rate_block = None
         self._stalled = False
         self._warn(
-            f"{self.where}: the device restarted its stream (RDT sequence {raw}); "
+            f"the device restarted its stream (RDT sequence {raw}); "
             f"re-synchronised at t = {self._t_base:.3f} s by the host clock"
         )
         self._fault("restart", f"the device restarted its stream (RDT sequence {raw})")
@@ -518,7 +519,7 @@ class RDTTracker:
         if not self._rate_warned and abs(measured / self.rate_hz - 1.0) > self.rate_tolerance:
             self._rate_warned = True
             self._warn(
-                f"{self.where}: the device says it streams at {self.rate_hz:g} Hz (comrdtrate), but records "
+                f"the device says it streams at {self.rate_hz:g} Hz (comrdtrate), but records "
                 f"arrive at {measured:.1f} Hz by the host clock; t (device clock) is off by "
                 f"{100 * (measured / self.rate_hz - 1):+.1f} %"
             )
