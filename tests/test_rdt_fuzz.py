@@ -41,7 +41,13 @@ def network(draw):
         if draw(st.integers(0, 9)) == 0:
             junk = draw(st.sampled_from([b"", b"\x12\x34", bytes(35), bytes(37), bytes(72)]))
             items.append((k + 0.1, junk, None))
+        if draw(st.integers(0, 19)) == 0:  # a stray record far from the stream, either way
+            off = draw(st.integers(2**17, 2**31 - 1)) * draw(st.sampled_from([1, -1]))
+            stray = record(start + k + off, draw(st.integers(0, 2**32 - 1)), 0, 10**6)
+            items.append((k + 0.2, stray, "stray"))
     items.sort(key=lambda x: x[0])
+    while items and items[0][2] == "stray":  # a stray first would be the stream's start
+        items.pop(0)
     return start, statuses, [(d, k) for _, d, k in items]
 
 
@@ -50,9 +56,16 @@ def reference(delivered):
     out, late, dup, malformed = [], 0, 0, 0
     seen, first, top = set(), None, None
     rows, mark = [], (0, 0, 0)  # per sample: late, duplicates, malformed since the previous
-    for _, k in delivered:
+    stray = False
+    for data, k in delivered:
         if k is None:
             malformed += 1
+            continue
+        if stray:  # held, then shown up by the next record
+            malformed += 1
+            stray = False
+        if k == "stray":
+            stray = True
         elif top is None or k > top:
             first = k if first is None else first
             top = k
@@ -65,6 +78,7 @@ def reference(delivered):
         else:
             seen.add(k)
             late += 1
+    malformed += stray  # still held at the end
     if top is None:
         return out, late, dup, malformed, 0, rows
     lost = (top - first + 1) - len(out) - sum(1 for k in seen if first < k < top and k not in out)
@@ -82,7 +96,7 @@ def test_tracker_against_reference(net):
     out, late, dup, malformed, lost, rows = reference(delivered)
     ks = [round(r.wrench[0] / 1e-6) for r in got]
     assert ks == out  # each record once, in device order, nothing invented
-    assert (tr.late, tr.duplicates, tr.malformed, tr.lost, tr.restarts) == (late, dup, malformed, lost, 0)
+    assert (tr.late, tr.duplicates, tr.malformed + tr.held, tr.lost, tr.restarts) == (late, dup, malformed, lost, 0)
     assert tr.received == len(out)
     if got:
         # device clock across the 32-bit wrap: t is exactly (index - first index) / rate
@@ -142,7 +156,7 @@ def test_stall_and_status_are_counted_and_strict_makes_them_fatal():
         ("late", [record(1, 1), record(3, 3), record(2, 2)]),
         ("lost", [record(1, 1), record(3, 3)]),
         ("malformed", [record(1, 1), b""]),
-        ("restart", [record(1, 9), record(2, 1)]),
+        ("restart", [record(1, 9), record(2, 1), record(3, 2)]),  # the third confirms it
     ]:
         relaxed, strict = RDTTracker(RATE, 1.0, 1.0), RDTTracker(RATE, 1.0, 1.0, strict=[kind])
         for d in datagrams:
@@ -179,3 +193,12 @@ def test_rate_disagreeing_with_the_host_clock_is_warned():
         ok.feed(record(i, i), arrival_ns=10**9 + i * MS + int(delay[i]))
     assert ok.measured_rate_hz == pytest.approx(1000, rel=1e-3)
     assert ok.warnings == []
+
+
+def test_a_stray_record_is_not_taken_for_a_restart():
+    tr = RDTTracker(RATE, 1.0, 1.0)
+    got = [r for i in range(1, 11) for r in tr.feed(record(i, i), arrival_ns=10**9 + i * MS)]
+    assert tr.feed(record(2**31 + 5, 77), arrival_ns=10**9 + 11 * MS) == () and tr.held
+    got += tr.feed(record(11, 11), arrival_ns=10**9 + 12 * MS)
+    assert [r.seq for r in got] == list(range(1, 12)) and (tr.malformed, tr.restarts) == (1, 0)
+    assert got[-1].malformed == 1

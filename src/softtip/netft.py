@@ -29,8 +29,10 @@ What happens on :meth:`NetFTSource.open`:
    * an F/T sequence that stops advancing while records keep coming is a **stall** (the
      device is repeating stale data): counted and warned;
    * a **restart** of the device or of its RDT stream (the F/T sequence going back, or the
-     RDT sequence starting again, after a silence or with the F/T sequence still advancing)
-     re-synchronises: time goes on from the last sample plus the host-clock gap;
+     RDT sequence starting again, after a silence or with the F/T sequence still advancing,
+     or jumping further than the host clock allows) re-synchronises once the next record
+     confirms it: time goes on from the last sample plus the host-clock gap. A record that
+     no other follows (a stray datagram of the right size) is counted as malformed;
    * a silent device is asked again to stream (every ``resend_s``), so a device that
      rebooted streams again;
    * the rate in the XML is checked against the host clock (from 2 s on, by the lower
@@ -101,6 +103,7 @@ _MASK, _HALF = 2**32 - 1, 2**31
 #: Faults ``strict`` can make fatal.
 FAULTS = ("status", "restart", "stall", "lost", "duplicate", "late", "malformed", "dropped")
 _MAX_WARNINGS = 20
+_CONFIRM = 64  # a restart is confirmed by a record at most this far after its first
 _SO_TIMESTAMPNS = 35  # Linux: kernel receive time stamps (SOL_SOCKET level, CLOCK_REALTIME)
 
 
@@ -266,6 +269,7 @@ class RDTTracker:
         self.drop_lock = threading.Lock()
         self._statuses_seen: set[int] = set()
         self._mark = (0, 0, 0)  # late, duplicates, malformed at the previous sample
+        self._pending: tuple | None = None  # a record that may start a new stream
         self._stalled = False
         self._rate_warned = False
         self._h: int | None = None  # newest accepted sequence, unwrapped, this epoch
@@ -295,6 +299,11 @@ class RDTTracker:
     def _fault(self, kind: str, message: str) -> None:
         if kind in self.strict:
             raise StreamFault(f"{self.where}: {message} (fatal: --strict {kind})")
+
+    @property
+    def held(self) -> bool:
+        """A record is held back until the next one confirms a restart."""
+        return self._pending is not None
 
     def counters(self) -> dict[str, int]:
         """All counters by name (``received``, ``lost``, ``dropped``, ``duplicates``, ...)."""
@@ -326,8 +335,9 @@ class RDTTracker:
         Returns
         -------
         tuple of Reading
-            The sample this datagram carries, or nothing (dropped: malformed, duplicate,
-            late).
+            The sample this datagram carries; nothing when it is dropped (malformed,
+            duplicate, late) or held (it may start a restarted stream: the next record
+            confirms it); two when it confirms a held one.
 
         Raises
         ------
@@ -339,10 +349,25 @@ class RDTTracker:
             self._fault("malformed", f"a datagram of {len(data)} bytes (expected one 36-byte RDT record)")
             return ()
         raw, ft, status, a, b, c, d, e, f = RDT_RECORD.unpack(data)
+        pending = self._pending
+        if pending is not None:  # a restart waits for the next record to confirm it
+            self._pending = None
+            if 1 <= _signed(raw - pending[0]) <= _CONFIRM:
+                return self._record(*pending, confirmed=True) + self._record(raw, ft, status, (a, b, c, d, e, f), host_ns, arrival_ns)
+            self.malformed += 1  # a stray record that fits neither the old nor a new stream
+            self._fault("malformed", f"a stray record (RDT sequence {pending[0]}) that no other record follows")
+        return self._record(raw, ft, status, (a, b, c, d, e, f), host_ns, arrival_ns)
+
+    def _record(
+        self, raw: int, ft: int, status: int, w: tuple, host_ns: int, arrival_ns: int, confirmed: bool = False
+    ) -> tuple[Reading, ...]:
+        """Handle one record (``feed`` after parsing); ``confirmed``: a restart starts here."""
         h = self._h
-        restart = False
+        restart = confirmed
         gap = 0
-        if h is None:  # first record
+        if confirmed:
+            pass
+        elif h is None:  # first record
             u = raw
             self._first = u
             self._seq_base = u
@@ -369,6 +394,9 @@ class RDTTracker:
                 if _signed(ft - self._last_ft) < 0:  # F/T counter reset: the device restarted
                     restart = True
         dropped = 0
+        if restart and not confirmed:
+            self._pending = (raw, ft, status, w, host_ns, arrival_ns)
+            return ()
         if restart:
             self._restart(raw, arrival_ns)
             u = raw
@@ -408,6 +436,7 @@ class RDTTracker:
             self._last_arrival = arrival_ns
         self.received += 1
         sf, st = self.force_scale, self.torque_scale
+        a, b, c, d, e, f = w
         # what was discarded since the previous sample, for this sample's row
         late, dups, bad = self.late, self.duplicates, self.malformed
         mark = self._mark
