@@ -31,8 +31,9 @@ What happens on :meth:`NetFTSource.open`:
    * a **restart** of the device or of its RDT stream (the F/T sequence going back, or the
      RDT sequence starting again, after a silence or with the F/T sequence still advancing,
      or jumping further than the host clock allows) re-synchronises once the next record
-     confirms it: time goes on from the last sample plus the host-clock gap. A record that
-     no other follows (a stray datagram of the right size) is counted as malformed;
+     confirms it: time goes on from the last sample plus the host-clock gap. The first
+     record, too, waits for the next to confirm it. A record that no other follows (a stray
+     datagram of the right size) is counted as malformed;
    * a silent device is asked again to stream (every ``resend_s``), so a device that
      rebooted streams again;
    * the rate in the XML is checked against the host clock (from 2 s on, by the lower
@@ -350,9 +351,14 @@ class RDTTracker:
             return ()
         raw, ft, status, a, b, c, d, e, f = RDT_RECORD.unpack(data)
         pending = self._pending
-        if pending is not None:  # a restart waits for the next record to confirm it
+        if pending is not None:  # the first record, or a restart, waits for the next to confirm it
+            step = _signed(raw - pending[0])
+            if step == 0:
+                self.duplicates += 1
+                self._fault("duplicate", f"a duplicate packet (sequence {raw})")
+                return ()
             self._pending = None
-            if 1 <= _signed(raw - pending[0]) <= _CONFIRM:
+            if 1 <= step <= _CONFIRM or (self._h is None and -self.window <= step <= self.window):
                 return self._record(*pending, confirmed=True) + self._record(raw, ft, status, (a, b, c, d, e, f), host_ns, arrival_ns)
             self.malformed += 1  # a stray record that fits neither the old nor a new stream
             self._fault("malformed", f"a stray record (RDT sequence {pending[0]}) that no other record follows")
@@ -363,17 +369,18 @@ class RDTTracker:
     ) -> tuple[Reading, ...]:
         """Handle one record (``feed`` after parsing); ``confirmed``: a restart starts here."""
         h = self._h
-        restart = confirmed
+        restart = confirmed and h is not None
         gap = 0
-        if confirmed:
-            pass
-        elif h is None:  # first record
+        if h is None:  # the first record, once the next one confirms it
+            if not confirmed:
+                self._pending = (raw, ft, status, w, host_ns, arrival_ns)
+                return ()
             u = raw
             self._first = u
             self._seq_base = u
             self._t_base = 0.0
             self._t0_arrival = arrival_ns
-        else:
+        elif not confirmed:
             step = _signed(raw - self._last_raw)
             u = h + step
             if step == 0:
