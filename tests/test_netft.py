@@ -5,7 +5,9 @@ run with --duration / --timeout, and every subprocess has a time limit.
 """
 
 import csv
+import select
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -209,10 +211,14 @@ def test_strict_ends_the_session_on_the_named_fault(tmp_path):
     assert out.returncode == 2 and "--strict: unknown fault(s) statuss" in out.stderr
 
 
-def _stop_quickly(args, sig, after_s, tmp_path):
+def _stop_when(args, sig, ready):
+    """Run ``args``; once ``ready()`` (polled, at most 20 s), send ``sig``; how it ended."""
     proc = subprocess.Popen(args, stderr=subprocess.PIPE, text=True)
     try:
-        time.sleep(after_s)
+        deadline = time.monotonic() + 20
+        while not ready() and time.monotonic() < deadline and proc.poll() is None:
+            time.sleep(0.05)
+        assert ready(), "the command never got there"
         t0 = time.monotonic()
         proc.send_signal(sig)
         _, err = proc.communicate(timeout=15)
@@ -223,12 +229,13 @@ def _stop_quickly(args, sig, after_s, tmp_path):
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
 def test_a_stop_during_discovery_is_immediate(tmp_path, sig):
-    dev = FakeNetFT(rate_hz=1000)  # bound but never started: HTTP accepts, never answers
-    try:
-        code, err, waited = _stop_quickly(stream_args(dev, "--timeout", 30, "--record", tmp_path / "r.csv"), sig, 1.5, tmp_path)
-    finally:
-        dev._http.server_close()
-        dev._udp.close()
+    # an HTTP port that accepts connections and never answers
+    with socket.create_server(("127.0.0.1", 0)) as http, socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as udp:
+        udp.bind(("127.0.0.1", 0))
+        args = [SOFTTIP, "stream", "--netft", "127.0.0.1", "--rdt-port", udp.getsockname()[1],
+                "--http-port", http.getsockname()[1], "--timeout", 30, "--record", tmp_path / "r.csv"]  # fmt: skip
+        asked = lambda: bool(select.select([http], [], [], 0)[0])  # softtip connected: discovery
+        code, err, waited = _stop_when([str(a) for a in args], sig, asked)
     assert code == 0 and "interrupted before the first sample" in err, err
     assert waited < 5  # not the 30 s time-out
     assert not (tmp_path / "r.csv").exists()
@@ -238,7 +245,8 @@ def test_a_stop_during_a_silent_stream_is_immediate(tmp_path):
     rec = tmp_path / "rec.csv"
     # the device goes quiet after 300 records; the time-out is far away
     with FakeNetFT(rate_hz=1000, mangle=lambda seq, r: [r] if seq <= 300 else []) as dev:
-        code, err, waited = _stop_quickly(stream_args(dev, "--timeout", 30, "--record", rec), signal.SIGINT, 2.0, tmp_path)
+        silent = lambda: rec.exists() and rec.read_text().count("\n") == 301
+        code, err, waited = _stop_when(stream_args(dev, "--timeout", 30, "--record", rec), signal.SIGINT, silent)
     assert code == 0 and "interrupted" in err, err
     assert waited < 5
     assert len(read_rows(rec)) == 300 and rec.read_text().endswith("\n")
