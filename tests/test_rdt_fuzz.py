@@ -189,6 +189,9 @@ def test_queue_drops_are_not_network_loss():
     got = tr.feed(record(6, 6))  # the first record comes out with it
     assert (got[-1].lost, got[-1].dropped) == (1, 3) and (tr.dropped, tr.lost) == (3, 1)
     assert tr.feed(record(3, 3)) == () and tr.duplicates == 1  # a copy of a dropped one
+    # the socket's buffer overflowed (the kernel says how many, not which) before record 9
+    got = tr.feed(record(9, 9), host_drops=2)
+    assert (got[-1].lost, got[-1].dropped) == (0, 2) and (tr.dropped, tr.lost) == (5, 1)
     assert not tr.local_drops
 
 

@@ -20,8 +20,9 @@ What happens on :meth:`NetFTSource.open`:
    * a **duplicate** (a sequence number already taken) and a **late** packet (one that
      arrives after a later one: its place is already a gap) are dropped and counted;
    * a datagram that is not one 36-byte record is **malformed**: counted, skipped;
-   * packets missing from the sequence are **lost** (network), unless softtip's own queue
-     dropped them because the consumer did not keep up (**dropped**, counted apart);
+   * packets missing from the sequence are **lost** (network), unless this host dropped
+     them (**dropped**, counted apart): softtip's queue was full because the consumer did
+     not keep up, or (Linux, ``SO_RXQ_OVFL``) the socket's buffer overflowed;
    * the 32-bit sequence wraps at 2^32 and is unwrapped relative to the newest packet, so a
      packet from before the wrap arriving after it is simply late;
    * the **status word** of every record is kept (``Reading.status``); a nonzero word is
@@ -106,6 +107,7 @@ FAULTS = ("status", "restart", "stall", "lost", "duplicate", "late", "malformed"
 _MAX_WARNINGS = 20
 _CONFIRM = 64  # a restart is confirmed by a record at most this far after its first
 _SO_TIMESTAMPNS = 35  # Linux: kernel receive time stamps (SOL_SOCKET level, CLOCK_REALTIME)
+_SO_RXQ_OVFL = 40  # Linux: datagrams the socket's buffer dropped so far, with each datagram
 
 
 class StreamFault(SourceError):
@@ -271,6 +273,7 @@ class RDTTracker:
         self._statuses_seen: set[int] = set()
         self._mark = (0, 0, 0)  # late, duplicates, malformed at the previous sample
         self._pending: tuple | None = None  # a record that may start a new stream
+        self._host_drops = 0  # socket-buffer drops not yet matched with a gap
         self._stalled = False
         self._rate_warned = False
         self._h: int | None = None  # newest accepted sequence, unwrapped, this epoch
@@ -321,7 +324,7 @@ class RDTTracker:
         }
 
     # -- the packet handling -----------------------------------------------------------
-    def feed(self, data: bytes, host_ns: int = 0, arrival_ns: int = 0) -> tuple[Reading, ...]:
+    def feed(self, data: bytes, host_ns: int = 0, arrival_ns: int = 0, host_drops: int = 0) -> tuple[Reading, ...]:
         """Handle one datagram.
 
         Parameters
@@ -332,6 +335,9 @@ class RDTTracker:
             Host receive time, ns since the Unix epoch (0: unknown).
         arrival_ns : int
             Host receive time, ``time.monotonic_ns()`` clock (0: unknown).
+        host_drops : int
+            Datagrams this host dropped just before this one (its socket buffer overflowed:
+            softtip did not read in time); the next gap counts them as dropped, not lost.
 
         Returns
         -------
@@ -345,6 +351,8 @@ class RDTTracker:
         StreamFault
             A fault named in ``strict``.
         """
+        if host_drops:
+            self._host_drops += host_drops
         if len(data) != 36:
             self.malformed += 1
             self._fault("malformed", f"a datagram of {len(data)} bytes (expected one 36-byte RDT record)")
@@ -477,6 +485,10 @@ class RDTTracker:
         """
         hits = self._take_local_drops(self._last_raw, gap) if self.local_drops else []
         dropped = len(hits)
+        if self._host_drops:  # the socket buffer's drops: some of this gap, softtip's own
+            host = min(self._host_drops, gap - dropped)
+            self._host_drops -= host
+            dropped += host
         lost = gap - dropped
         self.dropped += dropped
         self.lost += lost
@@ -666,6 +678,7 @@ class NetFTSource:
         self._rx: threading.Thread | None = None
         self._rx_error: BaseException | None = None
         self._rx_dropped = 0
+        self._host_overflow = 0  # socket-buffer drops not yet handed to the tracker
         self._last_request = 0.0
 
     @property
@@ -688,7 +701,8 @@ class NetFTSource:
 
     @property
     def dropped(self) -> int:
-        """Datagrams softtip's receive queue dropped because the consumer did not keep up."""
+        """Datagrams this host dropped: softtip's receive queue was full (the consumer did not
+        keep up), or the socket's buffer overflowed (the receive thread was starved; Linux)."""
         return self._rx_dropped
 
     @property
@@ -764,14 +778,17 @@ class NetFTSource:
         if sys.platform.startswith("linux"):
             try:
                 sock.setsockopt(socket.SOL_SOCKET, _SO_TIMESTAMPNS, 1)
+                sock.setsockopt(socket.SOL_SOCKET, _SO_RXQ_OVFL, 1)
                 self._stamps = True
-            except OSError:  # pragma: no cover - every Linux has it
+            except OSError:  # pragma: no cover - every Linux has them
                 pass
         try:
             sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 22)
         except OSError:  # pragma: no cover - capped by the OS instead
             pass
-        sock.settimeout(0.05)
+        # blocking: the receive thread waits in the kernel with the GIL released, and takes
+        # the GIL once per datagram (a time-out would take it twice, a wait each when busy)
+        sock.settimeout(None)
         self._sock = sock
         self._closing = False
         self._rx = threading.Thread(target=self._receive, daemon=True, name="softtip-rdt-receive")
@@ -806,14 +823,14 @@ class NetFTSource:
         tracker = self.tracker
         assert tracker is not None
         recvmsg, mono, wall = sock.recvmsg, time.monotonic_ns, time.time_ns
-        ancsize = socket.CMSG_SPACE(16) if self._stamps else 0
+        ancsize = socket.CMSG_SPACE(16) + socket.CMSG_SPACE(4) if self._stamps else 0
         unpack_stamp = struct.Struct("=qq").unpack_from
+        unpack_count = struct.Struct("=I").unpack_from
+        overflows = 0  # the socket buffer's drop count so far
         append, wake = queue.append, self._wake
-        while not self._closing:
+        while True:
             try:
                 data, anc, _flags, _addr = recvmsg(2048, ancsize)
-            except TimeoutError:
-                continue
             except (ConnectionRefusedError, InterruptedError):  # ICMP: nobody there (yet)
                 continue
             except OSError as exc:
@@ -821,21 +838,36 @@ class NetFTSource:
                     self._rx_error = exc
                     wake.set()
                 return
-            arrival = mono()
+            if self._closing:  # woken by close()
+                return
+            arrival, now = mono(), wall()
             host = 0
             for level, kind, payload in anc:
                 if level == socket.SOL_SOCKET and kind == _SO_TIMESTAMPNS and len(payload) >= 16:
                     sec, nsec = unpack_stamp(payload)
                     host = sec * 1_000_000_000 + nsec
-            if not host:
-                host = wall()
+                elif level == socket.SOL_SOCKET and kind == _SO_RXQ_OVFL and len(payload) >= 4:
+                    # this host dropped datagrams before this one: this thread was starved
+                    (count,) = unpack_count(payload)
+                    if count != overflows:
+                        self._rx_dropped += (count - overflows) & _MASK
+                        self._host_overflow += (count - overflows) & _MASK
+                        overflows = count
+            if host and 0 <= now - host < 10**9:  # the kernel's stamp: arrival on the socket
+                arrival -= now - host
+            else:
+                host = now
             if len(queue) >= cap:  # the consumer is not keeping up: softtip drops, counted
                 self._rx_dropped += 1
                 if len(data) == 36:
                     with tracker.drop_lock:
                         tracker.local_drops.add(int.from_bytes(data[:4], "big"))
                 continue
-            append((data, host, arrival))
+            if self._host_overflow:
+                data_drops, self._host_overflow = self._host_overflow, 0
+                append((data, host, arrival, data_drops))
+            else:
+                append((data, host, arrival, 0))
             if self._waiting:
                 wake.set()
 
@@ -846,6 +878,10 @@ class NetFTSource:
             return
         self._request(_CMD_STOP)
         self._closing = True
+        try:
+            sock.shutdown(socket.SHUT_RDWR)  # wakes the receive thread's blocking recvmsg
+        except OSError:  # pragma: no cover - not connected: nothing to wake
+            pass
         if self._rx is not None and self._rx is not threading.current_thread():
             self._rx.join(1.0)
         self._sock = None
@@ -879,9 +915,9 @@ class NetFTSource:
         last_ns = time.monotonic_ns()
         while True:
             if queue:
-                data, host, arrival = popleft()
+                data, host, arrival, overflow = popleft()
                 last_ns = arrival
-                for r in feed(data, host, arrival):
+                for r in feed(data, host, arrival, overflow):
                     yield r
                 continue
             # nothing queued: check for the end, a silence, then wait a little
