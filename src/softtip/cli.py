@@ -485,16 +485,18 @@ stream went through: packets lost on the network, late and duplicate packets (dr
 malformed datagrams, samples dropped by softtip's own queue, the device's status word,
 restarts and F/T-sequence stalls, and the latest warning; the device's rate (comrdtrate)
 is checked against the host clock (a difference over 2 % is warned about). None of these
-ends the stream unless named in --strict (then exit 1). --record FILE.csv writes every sample as it comes
-(flushed every 0.05 s, always whole lines): t and the raw wrench fx..mz first (the file is
-a log that `softtip estimate` and --replay read as it is), then the columns of `softtip
-estimate` with its tared wrench as fx_tared..mz_tared, then seq (RDT sequence or row),
-lost and dropped (records missing just before this one: on the network or still to come
-late / dropped by this host), late, duplicates and malformed (discarded since the previous
-row), status (the device's status word) and host_time (host receive time, s since the Unix
-epoch). Ctrl-C, SIGTERM and SIGHUP stop cleanly (exit
-0, every row taken written), also during discovery or a silent stream; so do --duration
-and the end of a replayed log. No data for --timeout seconds is an error (exit 1).
+ends the stream unless named in --strict (then exit 1).
+
+--record FILE.csv writes every sample as it comes (flushed every 0.05 s, always whole
+lines): t and the raw wrench fx..mz first (the file is a log that `softtip estimate` and
+--replay read as it is), then the columns of `softtip estimate` with its tared wrench as
+fx_tared..mz_tared, then seq (RDT sequence or row), lost and dropped (records missing just
+before this one: on the network or still to come late / dropped by this host), late,
+duplicates and malformed (discarded since the previous row), status (the device's status
+word) and host_time (host receive time, s since the Unix epoch). Ctrl-C, SIGTERM and
+SIGHUP stop cleanly (exit 0, every row taken written), also during discovery or a silent
+stream; so do --duration and the end of a replayed log. No data for --timeout seconds is
+an error (exit 1).
 
 """
     + FRAMES_HELP
