@@ -180,7 +180,7 @@ def test_a_session_survives_network_and_device_faults(tmp_path):
     assert np.all(np.diff(host) >= 0) and abs(host[-1] - time.time()) < 60
     # one restart: the sequence starts again, time goes on by the silence
     (k,) = np.nonzero(np.diff(seq) < 0)[0]
-    assert seq[k + 1] == 1 and 0.6 <= t[k + 1] - t[k] <= 2.0
+    assert seq[k + 1] == 1 and 0.6 <= t[k + 1] - t[k] <= 3.0  # 0.6 s deaf, then the next request
     assert set(status[seq % 500 == 0]) == {0x80010000} and set(status[seq % 500 != 0]) == {0}
     # each fault was counted, none ended the session; the columns add up to the totals
     col = {c: np.array([int(r[c]) for r in rows]) for c in ("lost", "dropped", "late", "duplicates", "malformed")}
