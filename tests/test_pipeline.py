@@ -7,6 +7,7 @@ from numpy.testing import assert_allclose
 
 from softtip import Capsule, Estimator, EstimatorConfig, Sphere, axial_difference, estimate
 from softtip.depth import MURAKAMI2006_DEPTH
+from softtip.estimator.results import EstimatorWarning
 from softtip.synthetic import synthetic_grasp
 from softtip.units import KGF, KGF_MM
 
@@ -235,5 +236,7 @@ def test_repeated_stamps_batch_equals_stream():
 
 def test_log_shorter_than_the_tare_is_all_taring():
     t = np.arange(5) / 50.0
-    est = estimate(t, np.zeros((5, 6)), Capsule(0.016, 0.02))
+    with pytest.warns(EstimatorWarning, match="whole log lies within the first 0.2 s"):
+        est = estimate(t, np.zeros((5, 6)), Capsule(0.016, 0.02))
     assert est.taring.all() and (est.state == 0).all()
+    assert any("whole log" in m for m in est.warnings)

@@ -13,10 +13,12 @@ from softtip.filtering import lowpass_sos
 from softtip.noise import NANO17, SensorNoise
 from softtip.units import KGF
 
-__all__ = ["CONTACT_POINT_MODES", "EstimatorConfig"]
+__all__ = ["CONTACT_POINT_MODES", "TARE_METHODS", "EstimatorConfig"]
 
 #: Values of :attr:`EstimatorConfig.contact_point`.
 CONTACT_POINT_MODES = ("latch", "track", "joint")
+#: Values of :attr:`EstimatorConfig.tare_method`.
+TARE_METHODS = ("median", "mean")
 
 
 @dataclass(frozen=True)
@@ -74,6 +76,26 @@ class EstimatorConfig:
         precise window is kept over later, weaker ones, but not for ever (positive, at most 1).
     joint_iterations : int
         Gauss–Newton steps of each window's solve.
+    tare_method : {"median", "mean"}
+        How the tare samples make the bias: their median per component (default; a spike
+        among them does not move it) or their mean.
+    contact_hysteresis : float
+        Contact starts at ``|f| ≥ contact_threshold`` and ends below the release threshold
+        ``max(contact_threshold − contact_hysteresis · σ_f, contact_threshold / 2)``, with
+        ``σ_f`` the noise of ``|f|`` (root sum of squares of the force noise model, after the
+        filter); 0 for a single threshold.
+    contact_min_duration : float
+        s; a contact is reported once ``|f|`` has stayed above the release threshold for this
+        long since it first reached ``contact_threshold`` (0: at once). A spike shorter than
+        this is not a contact.
+    drift_time_constant : float
+        s; while untouched (no contact and ``|f|`` below the release threshold) the bias is
+        tracked by an exponential moving average with this time constant (default 10 s: a
+        drift of r N/s is followed with a lag of r · 10 s; a touch that builds up slower than
+        that is taken for drift).
+    track_drift : bool
+        Subtract the tracked drift (default). ``False`` (the papers' comparison): the drift
+        is still estimated and reported, not subtracted.
     """
 
     contact_point: Literal["latch", "track", "joint"] = "latch"
@@ -97,6 +119,11 @@ class EstimatorConfig:
     joint_max_residual: float = 3.0
     joint_drift: float = 3e-5
     joint_iterations: int = 2
+    tare_method: Literal["median", "mean"] = "median"
+    contact_hysteresis: float = 3.0
+    contact_min_duration: float = 0.0
+    drift_time_constant: float = 10.0
+    track_drift: bool = True
 
     def __post_init__(self) -> None:
         if self.contact_point not in CONTACT_POINT_MODES:
@@ -124,7 +151,15 @@ class EstimatorConfig:
         if int(self.joint_iterations) < 1:
             raise ValueError(f"joint_iterations must be at least 1, got {self.joint_iterations!r}")
         object.__setattr__(self, "joint_iterations", int(self.joint_iterations))
-        for name in ("contact_threshold", "stall_time", "h_sigmas", "h_min", "tare_duration"):
+        if self.tare_method not in TARE_METHODS:
+            raise ValueError(f"tare_method must be one of {', '.join(TARE_METHODS)}, got {self.tare_method!r}")
+        v = float(self.drift_time_constant)
+        if not (math.isfinite(v) and v > 0.0):
+            raise ValueError(f"drift_time_constant must be a positive number of s, got {self.drift_time_constant!r}")
+        object.__setattr__(self, "drift_time_constant", v)
+        object.__setattr__(self, "track_drift", bool(self.track_drift))
+        for name in ("contact_threshold", "stall_time", "h_sigmas", "h_min", "tare_duration", "contact_hysteresis",
+                     "contact_min_duration"):  # fmt: skip
             v = float(getattr(self, name))
             if not (math.isfinite(v) and v >= 0.0):
                 raise ValueError(f"{name} must be a non-negative number, got {getattr(self, name)!r}")

@@ -1,0 +1,278 @@
+"""Contact onset and release with hysteresis, contact counting, and bias drift tracking.
+
+Per sample after the tare, with ``b`` the drift tracked so far and ``f`` the force of the
+tared (filtered) wrench minus ``b`` (minus nothing when ``track_drift`` is off):
+
+- **Hysteresis.** A contact starts when ``|f| ≥ contact_threshold`` (the onset threshold)
+  and ends at the first sample with ``|f|`` below the release threshold
+  ``max(contact_threshold − contact_hysteresis · σ_f, contact_threshold / 2)``, ``σ_f`` the
+  noise of ``|f|`` from the noise model (after the filter). A rising grasp force crossing
+  the onset threshold in noise no longer makes several contacts, each resetting the latch.
+- **Minimum duration.** From the first sample at or above the onset threshold the contact is
+  pending (reported ``none``) until ``contact_min_duration`` s have passed with ``|f|``
+  above the release threshold; a spike shorter than that is not a contact.
+- **Contact count.** Each contact gets the next number, 1, 2, … (``contact_id``; 0 out of
+  contact): contacts as a user would count them.
+- **Drift.** While untouched (no contact pending or held and the drift-corrected force below
+  the release threshold), ``b ← b + α (w − b)`` with ``α = min(Δt / drift_time_constant,
+  0.5)``: an exponential moving average of the untouched wrench, all six components. It is
+  reported per sample (the ``b`` subtracted from that sample) and, with ``track_drift``,
+  subtracted. A drift of the force beyond the contact threshold since the last tare is
+  flagged (:attr:`ContactTrack.drift_alarm`).
+
+:func:`track_contacts` does it for a whole log, vectorised (one iteration per contact, per
+run of samples between the thresholds, and per block of ~4000 untouched samples);
+:class:`ContactTracker` one sample at a time with O(1) float work.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from softtip.estimator.config import EstimatorConfig
+from softtip.noise import SensorNoise
+
+__all__ = ["contact_thresholds", "ContactTrack", "track_contacts", "ContactTracker", "START_PULL_TIME"]
+
+#: Largest weight of one sample in the drift average.
+_MAX_ALPHA = 0.5
+#: The drift average runs in blocks of untouched samples (a block ends at a sample that is
+#: not untouched, after _BLOCK samples, or once the product of the (1 − α) falls below
+#: _TINY), in the closed form ``b_j = P_j (b_0 + Σ_{k ≤ j} α_k w_k / P_k)``,
+#: ``P_j = Π_{k ≤ j} (1 − α_k)``: only products, quotients and running sums, so the batch
+#: (cumprod, cumsum) and the stream give the same bits.
+_BLOCK = 4096
+_TINY = 1e-100
+#: s; the first contact after a tare that pulls (no pushing contact point) this long says the
+#: fingertip was touched while taring (the release then reads as a pull).
+START_PULL_TIME = 0.1
+
+
+def contact_thresholds(config: EstimatorConfig, noise: SensorNoise) -> tuple[float, float]:
+    """The onset and release thresholds of ``|f|``, N, for the (filtered) noise ``noise``."""
+    on = config.contact_threshold
+    sigma = math.sqrt(sum(s * s for s in noise.force_std))
+    return on, max(on - config.contact_hysteresis * sigma, 0.5 * on) if config.contact_hysteresis > 0 else on
+
+
+def drift_weights(t: NDArray, config: EstimatorConfig) -> NDArray:
+    """``α`` per sample (the first sample has none)."""
+    a = np.zeros(len(t))
+    a[1:] = np.minimum(np.diff(t) / config.drift_time_constant, _MAX_ALPHA)
+    return a
+
+
+class ContactTrack(NamedTuple):
+    """Contacts and drift of a whole log (:func:`track_contacts`)."""
+
+    wrench: NDArray[np.float64]  #: (N, 6) the wrench with the drift subtracted (as given without tracking)
+    drift: NDArray[np.float64]  #: (N, 6) drift tracked before each sample, N and N·m
+    contact: NDArray[np.bool_]  #: (N,) in contact (onset confirmed, not released)
+    contact_id: NDArray[np.int64]  #: (N,) 1, 2, … per contact; 0 out of contact
+    drift_alarm: int  #: first sample whose drift force exceeds the contact threshold; -1 if none
+
+
+def _ema_block(b: NDArray, x: NDArray, alpha: NDArray) -> tuple[NDArray, NDArray]:
+    """Drift before each sample of one block ``x`` (k, 6) if all are untouched, and after
+    the last: ``b ← (1 − α) b + α x`` in the closed form of :data:`_BLOCK`."""
+    p = np.cumprod(1.0 - alpha)
+    acc = np.cumsum((alpha / p)[:, None] * x, axis=0)
+    after = p[:, None] * (b + acc)
+    before = np.concatenate((b[None, :], after[:-1]), axis=0)
+    return before, after[-1]
+
+
+def _first(cond, a: int, n: int) -> int:
+    """First index ``j ≥ a`` where ``cond(lo, hi)`` (a boolean array over ``[lo, hi)``) holds, or ``n``."""
+    size = 1024
+    while a < n:
+        hi = min(n, a + size)
+        c = cond(a, hi)
+        if c.any():
+            return a + int(np.argmax(c))
+        a, size = hi, size * 2
+    return n
+
+
+def _norm3(v: NDArray) -> NDArray:
+    return np.sqrt(v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1] + v[:, 2] * v[:, 2])
+
+
+def track_contacts(t: NDArray, x: NDArray, start: int, config: EstimatorConfig, noise: SensorNoise) -> ContactTrack:
+    """Contacts and drift of the tared (filtered) wrench ``x`` (N, 6) at ``t`` (N,), from
+    sample ``start`` on (the samples before it are the tare's: no contact, no drift)."""
+    n = len(t)
+    on, off = contact_thresholds(config, noise)
+    track, min_dur = config.track_drift, config.contact_min_duration
+    alpha = drift_weights(t, config)
+    drift = np.zeros((n, 6))
+    contact = np.zeros(n, dtype=bool)
+    cid = np.zeros(n, dtype=np.int64)
+    b = np.zeros(6)
+    count = 0
+
+    def fn(lo, hi):  # |f| for the contact decisions, drift frozen at b
+        return _norm3(x[lo:hi, :3] - b[:3]) if track else _norm3(x[lo:hi, :3])
+
+    i = start
+    while i < n:
+        # untouched from i: the drift follows every sample up to the first that is not quiet
+        e = min(n, i + _BLOCK)
+        small = np.cumprod(1.0 - alpha[i:e]) < _TINY
+        if small.any():
+            e = i + int(np.argmax(small)) + 1
+        before, after = _ema_block(b, x[i:e], alpha[i:e])
+        dev = _norm3(x[i:e, :3] - before[:, :3])
+        f = dev if track else _norm3(x[i:e, :3])
+        event = (dev >= off) | (f >= on)
+        if not event.any():
+            drift[i:e], b, i = before, after, e
+            continue
+        j = i + int(np.argmax(event))
+        drift[i:j] = before[: j - i]
+        b = before[j - i].copy()
+        if fn(j, j + 1)[0] < on:
+            # between the thresholds (or, without tracking, far from the drift): none, drift held
+            k = _first(lambda lo, hi: (_norm3(x[lo:hi, :3] - b[:3]) < off) & (fn(lo, hi) < on) | (fn(lo, hi) >= on), j + 1, n)
+            drift[j:k] = b
+            i = k
+            if k < n and fn(k, k + 1)[0] < on:
+                continue
+            if k >= n:
+                break
+            j = k
+        # onset candidate at j; the drift is held while pending or in contact
+        m = _first(lambda lo, hi: fn(lo, hi) < off, j + 1, n)
+        drift[j:m] = b
+        ok = t[j:m] - t[j] >= min_dur
+        if ok.any():
+            c = j + int(np.argmax(ok))
+            count += 1
+            contact[c:m] = True
+            cid[c:m] = count
+        i = m
+
+    y = x - drift if track else x
+    over = _norm3(drift[:, :3]) > on
+    alarm = int(np.argmax(over)) if over.any() else -1
+    return ContactTrack(y, drift, contact, cid, alarm)
+
+
+class ContactTracker:
+    """:func:`track_contacts` one sample at a time.
+
+    Call :meth:`step` for every sample after the tare; :meth:`reset` after a (re-)tare.
+    """
+
+    def __init__(self, config: EstimatorConfig, noise: SensorNoise):
+        self.config = config
+        self.on, self.off = contact_thresholds(config, noise)
+        self.count = 0  #: contacts so far (not reset by a re-tare)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the drift and the contact (a new tare)."""
+        self.drift = self.drift_before = [0.0] * 6
+        self._block = 0  # samples in the open block of the drift average (0: none open)
+        self.in_contact = False
+        self.contact_id = 0
+        self._pending: float | None = None
+        self.drift_alarm = False
+
+    def step(self, t: float, dt: float, x: list[float]) -> tuple[list[float], int]:
+        """Sample ``x`` (tared, filtered) at ``t``, ``dt`` s after the previous sample.
+
+        Returns the wrench with the drift subtracted (when tracked) and ``0`` (no contact),
+        ``1`` (in contact) or ``2`` (a new contact starts at this sample).
+        """
+        cfg = self.config
+        self.drift_before = b = self.drift
+        if not self.drift_alarm and b[0] * b[0] + b[1] * b[1] + b[2] * b[2] > self.on * self.on:
+            self.drift_alarm = True
+        fx, fy, fz = x[0] - b[0], x[1] - b[1], x[2] - b[2]
+        dev = math.sqrt(fx * fx + fy * fy + fz * fz)
+        if cfg.track_drift:
+            y = [x[0] - b[0], x[1] - b[1], x[2] - b[2], x[3] - b[3], x[4] - b[4], x[5] - b[5]]
+            f = dev
+        else:
+            y = x
+            f = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
+        if self.in_contact:
+            if f >= self.off:
+                self._block = 0
+                return y, 1
+            self.in_contact = False
+            self.contact_id = 0
+        elif self._pending is not None:
+            if f >= self.off:
+                self._block = 0
+                if t - self._pending >= cfg.contact_min_duration:
+                    return y, self._start()
+                return y, 0
+            self._pending = None
+        elif f >= self.on:
+            self._block = 0
+            self._pending = t
+            if 0.0 >= cfg.contact_min_duration:
+                return y, self._start()
+            return y, 0
+        if dev < self.off and f < self.on:  # untouched: follow the drift
+            self._follow(min(dt / cfg.drift_time_constant, _MAX_ALPHA), x)
+        else:
+            self._block = 0
+        return y, 0
+
+    def _follow(self, a: float, x: list[float]) -> None:
+        if not self._block:
+            self._b0, self._p, self._acc = self.drift, 1.0, [0.0] * 6
+        self._block += 1
+        self._p = p = self._p * (1.0 - a)
+        w = a / p
+        acc, b0 = self._acc, self._b0
+        for k in range(6):
+            acc[k] = acc[k] + w * x[k]
+        self.drift = [p * (b0[k] + acc[k]) for k in range(6)]
+        if self._block >= _BLOCK or p < _TINY:
+            self._block = 0
+
+    def _start(self) -> int:
+        self._pending = None
+        self.in_contact = True
+        self.count += 1
+        self.contact_id = self.count
+        return 2
+
+
+def first_contact_pulls(t: NDArray, pulling: NDArray, contact_id: NDArray) -> bool:
+    """The first contact after the tare pulls from its onset on for at least
+    :data:`START_PULL_TIME` s (the stream raises the flag at the same sample): the signature
+    of a tare taken in contact, whose release reads as a pull."""
+    idx = np.flatnonzero(contact_id == 1)
+    if not len(idx):
+        return False
+    lead = pulling[idx]
+    run = len(lead) if lead.all() else int(np.argmin(lead))
+    return run > 0 and bool(t[idx[run - 1]] - t[idx[0]] >= START_PULL_TIME)
+
+
+def started_in_contact_message(config: EstimatorConfig) -> str:
+    """The warning for a log or stream that (probably) started in contact."""
+    return (
+        f"the first contact after the tare pulls (no contact point where the force pushes in) for {START_PULL_TIME:g} s "
+        "or more: the fingertip was probably in contact while taring, so the tare holds the contact force and the "
+        "release reads as a pull. Tare with the fingertip untouched (Estimator.tare(), the t key of the live view), "
+        "or give a bias (--bias FILE)"
+    )
+
+
+def drift_message(config: EstimatorConfig, t: float) -> str:
+    """The warning for a drift of the force beyond the contact threshold since the tare."""
+    what = "tracked and subtracted" if config.track_drift else "not subtracted (track_drift off): contacts may be false"
+    return (
+        f"the sensor bias drifted by more than the contact threshold ({config.contact_threshold:g} N) since the tare "
+        f"(at t = {t:.6g} s); the drift is {what}; re-tare when you can"
+    )
