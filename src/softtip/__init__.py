@@ -21,6 +21,7 @@ from softtip.fingertip import (
     murakami2006,
 )
 from softtip.noise import NANO17, SensorNoise, direction_angle_std, tangential_spin_torque_std
+from softtip.estimator import EstimatorWarning
 from softtip.pipeline import STATES, Estimates, Estimator, EstimatorConfig, SampleEstimate, estimate
 from softtip.sources import run
 from softtip.spin import direction_angle, edge_direction, spin_torque, tangent_frame, tangential_spin_torque
@@ -36,6 +37,7 @@ __all__ = [
     "Estimates",
     "Estimator",
     "EstimatorConfig",
+    "EstimatorWarning",
     "Fingertip",
     "ImplicitSurface",
     "InputError",

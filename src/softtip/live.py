@@ -36,6 +36,7 @@ from softtip.sources import Reading, readings
 
 __all__ = [
     "RECORD_COLUMNS",
+    "KeyReader",
     "LiveStats",
     "Recorder",
     "TerminalView",
@@ -214,6 +215,8 @@ class TerminalView:
         ``h_min`` of the configuration, N·m, shown next to ``|h|``.
     recorder : Recorder, optional
         Its row count is shown.
+    estimator : Estimator, optional
+        Its tare, drift, contact count and warnings are shown.
     """
 
     def __init__(
@@ -223,9 +226,10 @@ class TerminalView:
         interval: float = 0.2,
         h_threshold: float = 5e-4,
         recorder: Recorder | None = None,
+        estimator: Estimator | None = None,
     ) -> None:
         self.stats, self.out, self.interval = stats, out or sys.stderr, interval
-        self.h_threshold, self.recorder = h_threshold, recorder
+        self.h_threshold, self.recorder, self.estimator = h_threshold, recorder, estimator
         self._lines = 0
         self._stop = threading.Event()
         self._thread = threading.Thread(
@@ -285,7 +289,18 @@ class TerminalView:
         )
         if self.recorder is not None:
             lines.append(f"record   {self.recorder.path}  {self.recorder.rows} rows")
-        lines.append("Ctrl-C to stop")
+        est = self.estimator
+        if est is not None:
+            rep = est.tare_report
+            if rep is not None:
+                d = est.drift
+                lines.append(
+                    f"tare     {rep.source if rep.source != 'tare' else rep.method} {rep.n_samples} samples, "
+                    f"{rep.spikes} spike(s)   drift {math.sqrt(d[0] ** 2 + d[1] ** 2 + d[2] ** 2) * 1e3:.1f} mN   "
+                    f"contacts {est.contacts}"
+                )
+            lines += [f"warning  {w[:150]}" for w in list(dict.fromkeys(est.warnings))[-3:]]
+        lines.append("t: tare again (untouched)   Ctrl-C to stop" if est is not None else "Ctrl-C to stop")
         return lines
 
     def draw(self) -> None:
@@ -299,6 +314,56 @@ class TerminalView:
             self.out.flush()
         except (OSError, ValueError):  # terminal gone
             pass
+
+
+class KeyReader:
+    """Calls ``actions[key]`` for each key pressed on a terminal, from a thread.
+
+    The terminal is put in cbreak mode (keys arrive unbuffered, Ctrl-C still interrupts)
+    until :meth:`close`. Does nothing when ``stream`` is not a terminal.
+    """
+
+    def __init__(self, actions: dict[str, Callable[[], None]], stream: TextIO | None = None) -> None:
+        self.actions, self.stream = actions, stream or sys.stdin
+        self._stop = threading.Event()
+        self._saved = None
+        self._thread = None
+        try:
+            import termios
+            import tty
+
+            fd = self.stream.fileno()
+            if not os.isatty(fd):
+                return
+            self._saved = termios.tcgetattr(fd)
+            tty.setcbreak(fd)
+        except (ImportError, OSError, ValueError, AttributeError):  # no terminal (or no termios)
+            self._saved = None
+            return
+        self._thread = threading.Thread(target=self._loop, args=(fd,), daemon=True, name="softtip-keys")
+        self._thread.start()
+
+    def _loop(self, fd: int) -> None:
+        import select
+
+        while not self._stop.is_set():
+            ready, _, _ = select.select([fd], [], [], 0.1)
+            if ready:
+                key = os.read(fd, 1).decode(errors="ignore").lower()
+                action = self.actions.get(key)
+                if action is not None:
+                    action()
+
+    def close(self) -> None:
+        """Stop reading keys and give the terminal back as it was."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
+        if self._saved is not None:
+            import termios
+
+            termios.tcsetattr(self.stream.fileno(), termios.TCSADRAIN, self._saved)
+            self._saved = None
 
 
 @dataclass
@@ -323,6 +388,7 @@ def run_live(
     duration: float | None = None,
     stop: threading.Event | None = None,
     on_estimate: Callable[[SampleEstimate, Reading], None] | None = None,
+    tare_request: threading.Event | None = None,
 ) -> LiveSummary:
     """Run ``source`` through ``estimator`` until it ends, ``duration`` passes or ``stop`` is set.
 
@@ -342,6 +408,8 @@ def run_live(
         Set it (e.g. from a SIGINT handler) to end the run cleanly.
     on_estimate : callable, optional
         Called with each estimate and its reading, in the loop.
+    tare_request : threading.Event, optional
+        Set it (e.g. from a key) to re-tare (:meth:`Estimator.tare`) from the next sample.
 
     Returns
     -------
@@ -361,6 +429,9 @@ def run_live(
                 stats.started = time.monotonic()
                 if duration is not None:
                     deadline = stats.started + duration
+            if tare_request is not None and tare_request.is_set():
+                tare_request.clear()
+                estimator.tare()
             e = update(r.t, r.wrench)
             stats.received += 1
             stats.lost += r.lost

@@ -18,7 +18,7 @@ __all__ = ["CONTACT_POINT_MODES", "TARE_METHODS", "EstimatorConfig"]
 #: Values of :attr:`EstimatorConfig.contact_point`.
 CONTACT_POINT_MODES = ("latch", "track", "joint")
 #: Values of :attr:`EstimatorConfig.tare_method`.
-TARE_METHODS = ("median", "mean")
+TARE_METHODS = ("robust", "median", "mean")
 
 
 @dataclass(frozen=True)
@@ -76,14 +76,17 @@ class EstimatorConfig:
         precise window is kept over later, weaker ones, but not for ever (positive, at most 1).
     joint_iterations : int
         Gauss–Newton steps of each window's solve.
-    tare_method : {"median", "mean"}
-        How the tare samples make the bias: their median per component (default; a spike
-        among them does not move it) or their mean.
+    tare_method : {"robust", "median", "mean"}
+        How the tare samples make the bias: ``robust`` (default), the mean of the samples that
+        are not spikes (farther than 8 standard deviations from the median; the plain mean
+        when there is none); ``median``, per component; ``mean``, of all samples (a −20 N
+        spike among ten samples moves it by 2 N).
     contact_hysteresis : float
         Contact starts at ``|f| ≥ contact_threshold`` and ends below the release threshold
-        ``max(contact_threshold − contact_hysteresis · σ_f, contact_threshold / 2)``, with
-        ``σ_f`` the noise of ``|f|`` (root sum of squares of the force noise model, after the
-        filter); 0 for a single threshold.
+        ``max(contact_threshold − contact_hysteresis · σ_f, min(contact_threshold, 2.5 σ_f))``,
+        with ``σ_f`` the noise of ``|f|`` (root sum of squares of the force noise model, after
+        the filter; an untouched sensor's ``|f|`` is below ``2.5 σ_f`` 90 % of the time);
+        0 for a single threshold.
     contact_min_duration : float
         s; a contact is reported once ``|f|`` has stayed above the release threshold for this
         long since it first reached ``contact_threshold`` (0: at once). A spike shorter than
@@ -119,7 +122,7 @@ class EstimatorConfig:
     joint_max_residual: float = 3.0
     joint_drift: float = 3e-5
     joint_iterations: int = 2
-    tare_method: Literal["median", "mean"] = "median"
+    tare_method: Literal["robust", "median", "mean"] = "robust"
     contact_hysteresis: float = 3.0
     contact_min_duration: float = 0.0
     drift_time_constant: float = 10.0

@@ -5,16 +5,18 @@ tared (filtered) wrench minus ``b`` (minus nothing when ``track_drift`` is off):
 
 - **Hysteresis.** A contact starts when ``|f| ≥ contact_threshold`` (the onset threshold)
   and ends at the first sample with ``|f|`` below the release threshold
-  ``max(contact_threshold − contact_hysteresis · σ_f, contact_threshold / 2)``, ``σ_f`` the
-  noise of ``|f|`` from the noise model (after the filter). A rising grasp force crossing
+  ``max(contact_threshold − contact_hysteresis · σ_f, min(contact_threshold, 2.5 σ_f))``,
+  ``σ_f`` the noise of ``|f|`` from the noise model (root sum of squares of the force
+  noise, after the filter): the release threshold stays where an untouched sensor's noise
+  lies below it 90 % of the time. A rising grasp force crossing
   the onset threshold in noise no longer makes several contacts, each resetting the latch.
 - **Minimum duration.** From the first sample at or above the onset threshold the contact is
   pending (reported ``none``) until ``contact_min_duration`` s have passed with ``|f|``
   above the release threshold; a spike shorter than that is not a contact.
 - **Contact count.** Each contact gets the next number, 1, 2, … (``contact_id``; 0 out of
   contact): contacts as a user would count them.
-- **Drift.** While untouched (no contact pending or held and the drift-corrected force below
-  the release threshold), ``b ← b + α (w − b)`` with ``α = min(Δt / drift_time_constant,
+- **Drift.** While untouched (the drift-corrected force below the release threshold; with
+  tracking that also means no contact pending or held), ``b ← b + α (w − b)`` with ``α = min(Δt / drift_time_constant,
   0.5)``: an exponential moving average of the untouched wrench, all six components. It is
   reported per sample (the ``b`` subtracted from that sample) and, with ``track_drift``,
   subtracted. A drift of the force beyond the contact threshold since the last tare is
@@ -36,8 +38,11 @@ from numpy.typing import NDArray
 from softtip.estimator.config import EstimatorConfig
 from softtip.noise import SensorNoise
 
-__all__ = ["contact_thresholds", "ContactTrack", "track_contacts", "ContactTracker", "START_PULL_TIME"]
+__all__ = ["RELEASE_FLOOR", "contact_thresholds", "ContactTrack", "track_contacts", "ContactTracker", "START_PULL_TIME"]
 
+#: The release threshold is at least this many ``σ_f``: an untouched sensor's ``|f|`` (noise
+#: only, a χ distribution with 3 degrees of freedom) is below it 90 % of the time.
+RELEASE_FLOOR = 2.5
 #: Largest weight of one sample in the drift average.
 _MAX_ALPHA = 0.5
 #: The drift average runs in blocks of untouched samples (a block ends at a sample that is
@@ -56,7 +61,7 @@ def contact_thresholds(config: EstimatorConfig, noise: SensorNoise) -> tuple[flo
     """The onset and release thresholds of ``|f|``, N, for the (filtered) noise ``noise``."""
     on = config.contact_threshold
     sigma = math.sqrt(sum(s * s for s in noise.force_std))
-    return on, max(on - config.contact_hysteresis * sigma, 0.5 * on) if config.contact_hysteresis > 0 else on
+    return on, max(on - config.contact_hysteresis * sigma, min(on, RELEASE_FLOOR * sigma))
 
 
 def drift_weights(t: NDArray, config: EstimatorConfig) -> NDArray:
@@ -102,64 +107,103 @@ def _norm3(v: NDArray) -> NDArray:
     return np.sqrt(v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1] + v[:, 2] * v[:, 2])
 
 
+def _block_end(alpha: NDArray, i: int, n: int) -> int:
+    """End of the drift block starting at ``i`` (:data:`_BLOCK`)."""
+    e = min(n, i + _BLOCK)
+    small = np.cumprod(1.0 - alpha[i:e]) < _TINY
+    return i + int(np.argmax(small)) + 1 if small.any() else e
+
+
+def _follow_drift(t: NDArray, x: NDArray, start: int, alpha: NDArray, off: float) -> NDArray:
+    """The drift alone (``track_drift`` off): it follows every sample within ``off`` of it."""
+    n = len(t)
+    drift = np.zeros((n, 6))
+    b = np.zeros(6)
+    i = start
+    while i < n:
+        e = _block_end(alpha, i, n)
+        before, after = _ema_block(b, x[i:e], alpha[i:e])
+        far = _norm3(x[i:e, :3] - before[:, :3]) >= off
+        if not far.any():
+            drift[i:e], b, i = before, after, e
+            continue
+        j = i + int(np.argmax(far))
+        drift[i:j] = before[: j - i]
+        b = before[j - i].copy()
+        k = _first(lambda lo, hi: _norm3(x[lo:hi, :3] - b[:3]) < off, j + 1, n)
+        drift[j:k] = b
+        i = k
+    return drift
+
+
+def _hysteresis(t: NDArray, f: NDArray, start: int, on: float, off: float, min_dur: float, cid: NDArray) -> None:
+    """Contacts of a given ``|f|`` (N,), from ``start`` on, numbered into ``cid``."""
+    n, count, i = len(t), 0, start
+    while i < n:
+        j = _first(lambda lo, hi: f[lo:hi] >= on, i, n)
+        if j >= n:
+            break
+        m = _first(lambda lo, hi: f[lo:hi] < off, j + 1, n)
+        ok = t[j:m] - t[j] >= min_dur
+        if ok.any():
+            count += 1
+            cid[j + int(np.argmax(ok)) : m] = count
+        i = m
+
+
 def track_contacts(t: NDArray, x: NDArray, start: int, config: EstimatorConfig, noise: SensorNoise) -> ContactTrack:
     """Contacts and drift of the tared (filtered) wrench ``x`` (N, 6) at ``t`` (N,), from
     sample ``start`` on (the samples before it are the tare's: no contact, no drift)."""
     n = len(t)
     on, off = contact_thresholds(config, noise)
-    track, min_dur = config.track_drift, config.contact_min_duration
+    min_dur = config.contact_min_duration
     alpha = drift_weights(t, config)
-    drift = np.zeros((n, 6))
-    contact = np.zeros(n, dtype=bool)
     cid = np.zeros(n, dtype=np.int64)
-    b = np.zeros(6)
-    count = 0
+    if not config.track_drift:
+        drift = _follow_drift(t, x, start, alpha, off)
+        _hysteresis(t, _norm3(x[:, :3]), start, on, off, min_dur, cid)
+        y = x
+    else:
+        # the contact decisions see the drift subtracted, and the drift follows only while
+        # untouched: one loop, an iteration per contact, per run between the thresholds and
+        # per block of untouched samples
+        drift = np.zeros((n, 6))
+        b = np.zeros(6)
+        count = 0
 
-    def fn(lo, hi):  # |f| for the contact decisions, drift frozen at b
-        return _norm3(x[lo:hi, :3] - b[:3]) if track else _norm3(x[lo:hi, :3])
+        def fn(lo, hi):  # |f| with the drift held at b
+            return _norm3(x[lo:hi, :3] - b[:3])
 
-    i = start
-    while i < n:
-        # untouched from i: the drift follows every sample up to the first that is not quiet
-        e = min(n, i + _BLOCK)
-        small = np.cumprod(1.0 - alpha[i:e]) < _TINY
-        if small.any():
-            e = i + int(np.argmax(small)) + 1
-        before, after = _ema_block(b, x[i:e], alpha[i:e])
-        dev = _norm3(x[i:e, :3] - before[:, :3])
-        f = dev if track else _norm3(x[i:e, :3])
-        event = (dev >= off) | (f >= on)
-        if not event.any():
-            drift[i:e], b, i = before, after, e
-            continue
-        j = i + int(np.argmax(event))
-        drift[i:j] = before[: j - i]
-        b = before[j - i].copy()
-        if fn(j, j + 1)[0] < on:
-            # between the thresholds (or, without tracking, far from the drift): none, drift held
-            k = _first(lambda lo, hi: (_norm3(x[lo:hi, :3] - b[:3]) < off) & (fn(lo, hi) < on) | (fn(lo, hi) >= on), j + 1, n)
-            drift[j:k] = b
-            i = k
-            if k < n and fn(k, k + 1)[0] < on:
+        i = start
+        while i < n:
+            e = _block_end(alpha, i, n)
+            before, after = _ema_block(b, x[i:e], alpha[i:e])
+            far = _norm3(x[i:e, :3] - before[:, :3]) >= off
+            if not far.any():
+                drift[i:e], b, i = before, after, e
                 continue
-            if k >= n:
-                break
-            j = k
-        # onset candidate at j; the drift is held while pending or in contact
-        m = _first(lambda lo, hi: fn(lo, hi) < off, j + 1, n)
-        drift[j:m] = b
-        ok = t[j:m] - t[j] >= min_dur
-        if ok.any():
-            c = j + int(np.argmax(ok))
-            count += 1
-            contact[c:m] = True
-            cid[c:m] = count
-        i = m
-
-    y = x - drift if track else x
+            j = i + int(np.argmax(far))
+            drift[i:j] = before[: j - i]
+            b = before[j - i].copy()
+            if fn(j, j + 1)[0] < on:  # between the thresholds: none, drift held
+                k = _first(lambda lo, hi: (fn(lo, hi) < off) | (fn(lo, hi) >= on), j + 1, n)
+                drift[j:k] = b
+                i = k
+                if k >= n or fn(k, k + 1)[0] < on:
+                    continue
+                j = k
+            # onset at j; the drift is held while the contact is pending or held
+            m = _first(lambda lo, hi: fn(lo, hi) < off, j + 1, n)
+            drift[j:m] = b
+            ok = t[j:m] - t[j] >= min_dur
+            if ok.any():
+                count += 1
+                cid[j + int(np.argmax(ok)) : m] = count
+            i = m
+        y = x - drift
     over = _norm3(drift[:, :3]) > on
     alarm = int(np.argmax(over)) if over.any() else -1
-    return ContactTrack(y, drift, contact, cid, alarm)
+    return ContactTrack(y, drift, cid > 0, cid, alarm)
 
 
 class ContactTracker:
@@ -196,35 +240,32 @@ class ContactTracker:
         fx, fy, fz = x[0] - b[0], x[1] - b[1], x[2] - b[2]
         dev = math.sqrt(fx * fx + fy * fy + fz * fz)
         if cfg.track_drift:
-            y = [x[0] - b[0], x[1] - b[1], x[2] - b[2], x[3] - b[3], x[4] - b[4], x[5] - b[5]]
+            y = [fx, fy, fz, x[3] - b[3], x[4] - b[4], x[5] - b[5]]
             f = dev
         else:
             y = x
             f = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
+        code = 0
         if self.in_contact:
             if f >= self.off:
-                self._block = 0
-                return y, 1
-            self.in_contact = False
-            self.contact_id = 0
+                code = 1
+            else:
+                self.in_contact = False
+                self.contact_id = 0
         elif self._pending is not None:
-            if f >= self.off:
-                self._block = 0
-                if t - self._pending >= cfg.contact_min_duration:
-                    return y, self._start()
-                return y, 0
-            self._pending = None
+            if f < self.off:
+                self._pending = None
+            elif t - self._pending >= cfg.contact_min_duration:
+                code = self._start()
         elif f >= self.on:
-            self._block = 0
             self._pending = t
             if 0.0 >= cfg.contact_min_duration:
-                return y, self._start()
-            return y, 0
-        if dev < self.off and f < self.on:  # untouched: follow the drift
+                code = self._start()
+        if dev < self.off:  # untouched (with tracking, that is no contact): follow the drift
             self._follow(min(dt / cfg.drift_time_constant, _MAX_ALPHA), x)
         else:
             self._block = 0
-        return y, 0
+        return y, code
 
     def _follow(self, a: float, x: list[float]) -> None:
         if not self._block:

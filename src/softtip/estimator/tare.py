@@ -1,8 +1,9 @@
 """Tare: the sensor bias from the first samples, while the fingertip is untouched, checked.
 
 Unless a bias is given, the samples in the first ``tare_duration`` seconds make the bias
-(their median per component, ``tare_method="median"``, the default, or their mean); those
-samples are reported as ``none`` (``taring``). :func:`tare_log` does it for a whole log,
+(``tare_method``: ``robust``, the default, the mean of those that are not spikes;
+``median``, per component; ``mean``, of all); those samples are reported as ``none``
+(``taring``). :func:`tare_log` does it for a whole log,
 :class:`StreamTare` one sample at a time; both use the same comparison
 ``t − t₀ < tare_duration`` so they agree on the boundary sample, and the same
 :func:`tare_from_samples`, which also checks the samples against the noise model
@@ -10,8 +11,8 @@ samples are reported as ``none`` (``taring``). :func:`tare_log` does it for a wh
 
 - **spikes**: a sample farther than :data:`SPIKE_SIGMAS` standard deviations from the median
   (the larger of the noise model and the samples' own robust spread) in any component; the
-  median ignores it, the mean does not (one −20 N spike among ten samples moves a mean bias
-  by 2 N);
+  robust and median tares ignore it, the mean does not (one −20 N spike among ten samples
+  moves a mean bias by 2 N);
 - **touched while taring**: the standard deviation of the other samples above
   :data:`TOUCHED_RATIO` times the noise model, in force or in moment;
 - in ``joint`` mode, force noise above the noise model by more than the margin joint mode
@@ -53,6 +54,9 @@ SPIKE_SIGMAS = 8.0
 TOUCHED_RATIO = 5.0
 
 
+_LABELS = {"robust": "mean without spikes", "median": "median", "mean": "mean"}
+
+
 @dataclass(frozen=True)
 class TareReport:
     """What the tare did, and whether it can have been right. SI units.
@@ -63,7 +67,7 @@ class TareReport:
     source : {"tare", "given", "none"}
         ``tare``: from the samples; ``given``: ``config.bias`` (or a bias file); ``none``:
         ``tare_duration`` 0, the input is taken as tared.
-    method : {"median", "mean"}
+    method : {"robust", "median", "mean"}
     n_samples : int
         Samples the bias was made of (0 unless ``source == "tare"``).
     duration : float
@@ -77,15 +81,15 @@ class TareReport:
     spikes : int
         Tare samples more than :data:`SPIKE_SIGMAS` standard deviations from the median.
     spike_shift : float
-        N; how far the spikes moved the bias's force from the median's (0 for the median
-        tare, which ignores them).
+        N; how far the spikes moved the force of a ``mean`` bias (0 for the others, which
+        ignore them).
     warnings : tuple of str
         Plain-language warnings (also in :attr:`softtip.Estimates.warnings`).
     """
 
     bias: NDArray[np.float64]
     source: str = "tare"
-    method: str = "median"
+    method: str = "robust"
     n_samples: int = 0
     duration: float = 0.0
     force_std: NDArray[np.float64] = field(default_factory=lambda: np.full(3, np.nan))
@@ -99,7 +103,7 @@ class TareReport:
         """One line: where the bias came from and its value (N, N·mm)."""
         f, m = self.bias[:3], self.bias[3:] * 1e3
         what = {
-            "tare": f"{self.method} of the first {self.duration:g} s ({self.n_samples} samples)",
+            "tare": f"from the first {self.duration:g} s ({self.n_samples} samples, {_LABELS[self.method]})",
             "given": "given",
             "none": "none (input already tared)",
         }[self.source]
@@ -139,12 +143,13 @@ def tare_from_samples(samples: NDArray, config: EstimatorConfig, duration: float
     scale = np.maximum(np.maximum(model, spread), 1e-12 * (1.0 + np.abs(med)))
     spike = np.any(dev > SPIKE_SIGMAS * scale, axis=1)
     clean = s[~spike]
-    bias = med if config.tare_method == "median" else np.mean(s, axis=0)
+    robust = np.mean(clean, axis=0) if len(clean) else med
+    bias = {"robust": robust, "median": med, "mean": np.mean(s, axis=0)}[config.tare_method]
     std = np.std(clean, axis=0, ddof=1) if len(clean) > 1 else np.full(6, np.nan)
     with np.errstate(invalid="ignore", divide="ignore"):
         ratio = np.where(model > 0, std / np.where(model > 0, model, 1.0), np.nan)
     noise_ratio = float(np.nanmax(ratio)) if np.any(np.isfinite(ratio)) else math.nan
-    shift = float(np.linalg.norm(bias[:3] - med[:3])) if config.tare_method == "mean" else 0.0
+    shift = float(np.linalg.norm(bias[:3] - robust[:3])) if config.tare_method == "mean" else 0.0
     n_spikes = int(np.count_nonzero(spike))
 
     warn = []
@@ -153,11 +158,11 @@ def tare_from_samples(samples: NDArray, config: EstimatorConfig, duration: float
         what = f"{n_spikes} spike(s) among the {k} tare samples" + (f" (up to {largest:.3g} N off the median)" if largest else "")
         if config.tare_method == "mean":
             warn.append(
-                f"{what}: the mean bias is {shift:.3g} N off the median in force, and every estimate with it; "
-                "use the median tare (tare_method='median', --tare-method median) or re-tare"
+                f"{what}: the mean bias is {shift:.3g} N off in force (from the mean without them), and every "
+                "estimate with it; use the robust tare (tare_method='robust', --tare-method robust) or re-tare"
             )
         else:
-            warn.append(f"{what}, ignored by the median tare")
+            warn.append(f"{what}, left out of the {config.tare_method} tare")
     for name, sl, unit, fmt in (("force", slice(0, 3), "N", 1.0), ("moment", slice(3, 6), "N·mm", 1e3)):
         r = ratio[sl]
         if np.any(r > TOUCHED_RATIO):
