@@ -92,8 +92,7 @@ class EstimatorConfig:
         long since it first reached ``contact_threshold`` (0: at once). A spike shorter than
         this is not a contact.
     drift_time_constant : float
-        s; while untouched (no contact and ``|f|`` below the release threshold) the bias is
-        tracked by an exponential moving average with this time constant (default 10 s: a
+        s; while untouched (no contact pending or held) the bias is tracked by an exponential moving average with this time constant (default 10 s: a
         drift of r N/s is followed with a lag of r · 10 s; a touch that builds up slower than
         that is taken for drift).
     track_drift : bool

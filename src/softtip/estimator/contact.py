@@ -15,8 +15,8 @@ tared (filtered) wrench minus ``b`` (minus nothing when ``track_drift`` is off):
   above the release threshold; a spike shorter than that is not a contact.
 - **Contact count.** Each contact gets the next number, 1, 2, … (``contact_id``; 0 out of
   contact): contacts as a user would count them.
-- **Drift.** While untouched (the drift-corrected force below the release threshold; with
-  tracking that also means no contact pending or held), ``b ← b + α (w − b)`` with ``α = min(Δt / drift_time_constant,
+- **Drift.** While untouched (no contact pending or held: the drift-corrected force below
+  the onset threshold, or below the release threshold since a contact), ``b ← b + α (w − b)`` with ``α = min(Δt / drift_time_constant,
   0.5)``: an exponential moving average of the untouched wrench, all six components. It is
   reported per sample (the ``b`` subtracted from that sample) and, with ``track_drift``,
   subtracted. A drift of the force beyond the contact threshold since the last tare is
@@ -81,14 +81,50 @@ class ContactTrack(NamedTuple):
     drift_alarm: int  #: first sample whose drift force exceeds the contact threshold; -1 if none
 
 
-def _ema_block(b: NDArray, x: NDArray, alpha: NDArray) -> tuple[NDArray, NDArray]:
-    """Drift before each sample of one block ``x`` (k, 6) if all are untouched, and after
-    the last: ``b ← (1 − α) b + α x`` in the closed form of :data:`_BLOCK`."""
-    p = np.cumprod(1.0 - alpha)
-    acc = np.cumsum((alpha / p)[:, None] * x, axis=0)
-    after = p[:, None] * (b + acc)
-    before = np.concatenate((b[None, :], after[:-1]), axis=0)
-    return before, after[-1]
+class _DriftAverage:
+    """The drift average of :class:`ContactTracker` over a whole log, in chunks.
+
+    :meth:`follow` tries the closed form of :data:`_BLOCK` on the next samples as if all were
+    untouched; :meth:`keep` keeps the first ``k`` of them (all: the block goes on; fewer: the
+    sample after them is not untouched and ends the block, as in the stream). Chunks start
+    small after such an event and double, so the work is proportional to the samples.
+    """
+
+    def __init__(self, x: NDArray, alpha: NDArray):
+        self.x, self.alpha = x, alpha
+        self.b = np.zeros(6)
+        self.open = False
+        self.size = 32
+
+    def follow(self, i: int, n: int) -> tuple[int, NDArray]:
+        """``(e, before)``: the drift before each sample of ``[i, e)`` if all are untouched."""
+        if not self.open:
+            self.b0, self.p0, self.acc0, self.count, self.open = self.b, 1.0, np.zeros(6), 0, True
+        e = min(n, i + self.size, i + _BLOCK - self.count)
+        a = self.alpha[i:e]
+        p = np.cumprod(np.concatenate(([self.p0], 1.0 - a)))[1:]
+        small = p < _TINY
+        if small.any():
+            k = int(np.argmax(small)) + 1
+            e, a, p = i + k, a[:k], p[:k]
+        acc = np.cumsum(np.concatenate((self.acc0[None, :], (a / p)[:, None] * self.x[i:e])), axis=0)[1:]
+        self._p, self._acc = p, acc
+        self._after = after = p[:, None] * (self.b0 + acc)
+        return e, np.concatenate((self.b[None, :], after[:-1]), axis=0)
+
+    def keep(self, k: int) -> None:
+        """Keep the first ``k`` samples of the last :meth:`follow`."""
+        if k == len(self._p):
+            self.b, self.p0, self.acc0 = self._after[-1], float(self._p[-1]), self._acc[-1]
+            self.count += k
+            if self.count >= _BLOCK or self.p0 < _TINY:
+                self.open = False
+            self.size = min(2 * self.size, _BLOCK)
+        else:
+            if k:
+                self.b = self._after[k - 1]
+            self.open = False
+            self.size = 32
 
 
 def _first(cond, a: int, n: int) -> int:
@@ -107,32 +143,26 @@ def _norm3(v: NDArray) -> NDArray:
     return np.sqrt(v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1] + v[:, 2] * v[:, 2])
 
 
-def _block_end(alpha: NDArray, i: int, n: int) -> int:
-    """End of the drift block starting at ``i`` (:data:`_BLOCK`)."""
-    e = min(n, i + _BLOCK)
-    small = np.cumprod(1.0 - alpha[i:e]) < _TINY
-    return i + int(np.argmax(small)) + 1 if small.any() else e
-
-
-def _follow_drift(t: NDArray, x: NDArray, start: int, alpha: NDArray, off: float) -> NDArray:
-    """The drift alone (``track_drift`` off): it follows every sample within ``off`` of it."""
+def _follow_drift(t: NDArray, x: NDArray, start: int, alpha: NDArray, on: float) -> NDArray:
+    """The drift alone (``track_drift`` off): it follows every sample whose force is within
+    ``on`` of it."""
     n = len(t)
     drift = np.zeros((n, 6))
-    b = np.zeros(6)
+    avg = _DriftAverage(x, alpha)
     i = start
     while i < n:
-        e = _block_end(alpha, i, n)
-        before, after = _ema_block(b, x[i:e], alpha[i:e])
-        far = _norm3(x[i:e, :3] - before[:, :3]) >= off
-        if not far.any():
-            drift[i:e], b, i = before, after, e
+        e, before = avg.follow(i, n)
+        far = _norm3(x[i:e, :3] - before[:, :3]) >= on
+        k = int(np.argmax(far)) if far.any() else e - i
+        drift[i : i + k] = before[:k]
+        avg.keep(k)
+        if k == e - i:
+            i = e
             continue
-        j = i + int(np.argmax(far))
-        drift[i:j] = before[: j - i]
-        b = before[j - i].copy()
-        k = _first(lambda lo, hi: _norm3(x[lo:hi, :3] - b[:3]) < off, j + 1, n)
-        drift[j:k] = b
-        i = k
+        j = i + k
+        b = avg.b
+        i = _first(lambda lo, hi: _norm3(x[lo:hi, :3] - b[:3]) < on, j + 1, n)
+        drift[j:i] = b
     return drift
 
 
@@ -160,41 +190,33 @@ def track_contacts(t: NDArray, x: NDArray, start: int, config: EstimatorConfig, 
     alpha = drift_weights(t, config)
     cid = np.zeros(n, dtype=np.int64)
     if not config.track_drift:
-        drift = _follow_drift(t, x, start, alpha, off)
+        drift = _follow_drift(t, x, start, alpha, on)
         _hysteresis(t, _norm3(x[:, :3]), start, on, off, min_dur, cid)
         y = x
     else:
         # the contact decisions see the drift subtracted, and the drift follows only while
-        # untouched: one loop, an iteration per contact, per run between the thresholds and
-        # per block of untouched samples
+        # untouched: one loop, an iteration per contact and per chunk of untouched samples
         drift = np.zeros((n, 6))
-        b = np.zeros(6)
+        avg = _DriftAverage(x, alpha)
         count = 0
 
-        def fn(lo, hi):  # |f| with the drift held at b
-            return _norm3(x[lo:hi, :3] - b[:3])
+        def fn(lo, hi):  # |f| with the drift held at avg.b
+            return _norm3(x[lo:hi, :3] - avg.b[:3])
 
         i = start
         while i < n:
-            e = _block_end(alpha, i, n)
-            before, after = _ema_block(b, x[i:e], alpha[i:e])
-            far = _norm3(x[i:e, :3] - before[:, :3]) >= off
-            if not far.any():
-                drift[i:e], b, i = before, after, e
+            e, before = avg.follow(i, n)
+            far = _norm3(x[i:e, :3] - before[:, :3]) >= on
+            k = int(np.argmax(far)) if far.any() else e - i
+            drift[i : i + k] = before[:k]
+            avg.keep(k)
+            if k == e - i:
+                i = e
                 continue
-            j = i + int(np.argmax(far))
-            drift[i:j] = before[: j - i]
-            b = before[j - i].copy()
-            if fn(j, j + 1)[0] < on:  # between the thresholds: none, drift held
-                k = _first(lambda lo, hi: (fn(lo, hi) < off) | (fn(lo, hi) >= on), j + 1, n)
-                drift[j:k] = b
-                i = k
-                if k >= n or fn(k, k + 1)[0] < on:
-                    continue
-                j = k
+            j = i + k
             # onset at j; the drift is held while the contact is pending or held
             m = _first(lambda lo, hi: fn(lo, hi) < off, j + 1, n)
-            drift[j:m] = b
+            drift[j:m] = avg.b
             ok = t[j:m] - t[j] >= min_dur
             if ok.any():
                 count += 1
@@ -220,7 +242,7 @@ class ContactTracker:
 
     def reset(self) -> None:
         """Forget the drift and the contact (a new tare)."""
-        self.drift = self.drift_before = [0.0] * 6
+        self.drift = self.drift_before = (0.0,) * 6
         self._block = 0  # samples in the open block of the drift average (0: none open)
         self.in_contact = False
         self.contact_id = 0
@@ -261,7 +283,7 @@ class ContactTracker:
             self._pending = t
             if 0.0 >= cfg.contact_min_duration:
                 code = self._start()
-        if dev < self.off:  # untouched (with tracking, that is no contact): follow the drift
+        if (not code and self._pending is None) if cfg.track_drift else dev < self.on:  # untouched
             self._follow(min(dt / cfg.drift_time_constant, _MAX_ALPHA), x)
         else:
             self._block = 0
@@ -274,9 +296,14 @@ class ContactTracker:
         self._p = p = self._p * (1.0 - a)
         w = a / p
         acc, b0 = self._acc, self._b0
-        for k in range(6):
-            acc[k] = acc[k] + w * x[k]
-        self.drift = [p * (b0[k] + acc[k]) for k in range(6)]
+        acc[0] += w * x[0]
+        acc[1] += w * x[1]
+        acc[2] += w * x[2]
+        acc[3] += w * x[3]
+        acc[4] += w * x[4]
+        acc[5] += w * x[5]
+        self.drift = (p * (b0[0] + acc[0]), p * (b0[1] + acc[1]), p * (b0[2] + acc[2]),
+                      p * (b0[3] + acc[3]), p * (b0[4] + acc[4]), p * (b0[5] + acc[5]))  # fmt: skip
         if self._block >= _BLOCK or p < _TINY:
             self._block = 0
 

@@ -101,7 +101,7 @@ class Estimator:
     @property
     def drift(self) -> tuple[float, ...]:
         """Bias drift tracked since the last tare (N, N·m)."""
-        return tuple(self._contacts.drift)
+        return self._contacts.drift
 
     @property
     def contacts(self) -> int:
@@ -206,7 +206,7 @@ class Estimator:
                 self._lead = False
         return SampleEstimate(
             t, "none", tuple(x), _NAN3, _NAN3, nan, _NAN3, nan, nan, _NAN3, nan, nan, False, False, pulling, taring,
-            relatched, nan, nan, nan, nan, nan, False, cid, _NAN6 if taring else tuple(self._contacts.drift_before),
+            relatched, nan, nan, nan, nan, nan, False, cid, _NAN6 if taring else self._contacts.drift_before,
         )  # fmt: skip
 
     def _pulled(self, t: float, pulling: bool) -> None:
@@ -287,7 +287,7 @@ class Estimator:
         return SampleEstimate(
             t, state, tuple(x), (rx, ry, rz), (nx, ny, nz), ms.sigma, (ms.hx, ms.hy, ms.hz), ms.h_norm, ms.h_std, d,
             angle, angle_std, latched, fallback, False, False, relatched, ms.depth, *stats, joint_fb,
-            contacts.contact_id, tuple(contacts.drift_before),
+            contacts.contact_id, contacts.drift_before,
         )  # fmt: skip
 
     def process(self, t: ArrayLike, wrench: ArrayLike) -> list[SampleEstimate]:
