@@ -364,3 +364,15 @@ def test_example_grasp_unchanged_in_substance():
     assert est.warnings == () and est.n_contacts == 1
     line = est.state == 2
     assert abs(np.degrees(np.median(est.angle[line])) - 45.0) < 3.0
+
+
+def test_cli_stream_prints_the_tare_and_takes_a_bias_file(tmp_path):
+    g, w = spiked_grasp()
+    write_log(tmp_path / "log.csv", g.t, w)
+    r = run_cli("stream", "--replay", "log.csv", "--speed", "0", "--no-view", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert "1 contact(s)" in r.stderr and "warning: 1 spike(s) among the 10 tare samples" in r.stderr
+    (tmp_path / "bias.toml").write_text(bias_to_toml(g.bias))
+    r = run_cli("stream", "--replay", "log.csv", "--speed", "0", "--no-view", "--bias", "bias.toml", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert "bias given" in r.stderr and "warning" not in r.stderr

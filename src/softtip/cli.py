@@ -615,12 +615,16 @@ def stream(
             tare_request = threading.Event()
             stats = LiveStats(source_name=source.name, info=info, dropped=(lambda: source.dropped) if hasattr(type(source), "dropped") else None)
             show = sys.stderr.isatty() if view is None else view
-            term = TerminalView(stats, interval=0.2, h_threshold=config.h_min, recorder=recorder, estimator=estimator) if show else None
-            keys = KeyReader({"t": tare_request.set}) if show and sys.stdin.isatty() else None
+            tare_key = show and sys.stdin.isatty()
+            term = TerminalView(
+                stats, interval=0.2, h_threshold=config.h_min, recorder=recorder, estimator=estimator,
+                tare_key=tare_key,
+            ) if show else None  # fmt: skip
             on_estimate = None
             if viz is not None:
                 logger = viz.RerunLogger(fingertip, save=rerun_save, spawn=rerun_spawn)
                 on_estimate = lambda e, r: logger.log_sample(e)
+            keys = KeyReader({"t": tare_request.set}) if tare_key else None
             try:
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore", EstimatorWarning)  # shown in the view and below

@@ -218,6 +218,8 @@ class TerminalView:
         Its row count is shown.
     estimator : Estimator, optional
         Its tare, drift, contact count and warnings are shown.
+    tare_key : bool
+        Say that the ``t`` key tares again (:class:`KeyReader` is listening).
     """
 
     def __init__(
@@ -228,9 +230,10 @@ class TerminalView:
         h_threshold: float = 5e-4,
         recorder: Recorder | None = None,
         estimator: Estimator | None = None,
+        tare_key: bool = False,
     ) -> None:
         self.stats, self.out, self.interval = stats, out or sys.stderr, interval
-        self.h_threshold, self.recorder, self.estimator = h_threshold, recorder, estimator
+        self.h_threshold, self.recorder, self.estimator, self.tare_key = h_threshold, recorder, estimator, tare_key
         self._lines = 0
         self._stop = threading.Event()
         self._thread = threading.Thread(
@@ -301,7 +304,7 @@ class TerminalView:
                     f"contacts {est.contacts}"
                 )
             lines += [f"warning  {w[:150]}" for w in list(dict.fromkeys(est.warnings))[-3:]]
-        lines.append("t: tare again (untouched)   Ctrl-C to stop" if est is not None else "Ctrl-C to stop")
+        lines.append("t: tare again (untouched)   Ctrl-C to stop" if self.tare_key else "Ctrl-C to stop")
         return lines
 
     def draw(self) -> None:
