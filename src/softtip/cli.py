@@ -241,7 +241,9 @@ angle_std_deg, latched, latch_fallback, relatched (a new latch starts here), dep
 joint_offset_std (m), joint_residual and joint_fallback (the sliding window of
 --contact-point joint: reciprocal condition number, standard deviations of its line angle
 and offset, RMS fit residual in noise standard deviations, and whether the latched point
-is used because no window has been accepted yet), then the input's extra columns. r, n, h are empty
+is used because no window has been accepted yet), contact_id (1, 2, ... per contact, 0
+out of contact), drift_fx..drift_mz (the bias drift followed while untouched since the
+tare, N and N·m), then the input's extra columns. r, n, h are empty
 (nan) when state is none; d and the angle only for line contacts, where |h| stands out of
 the noise.
 
