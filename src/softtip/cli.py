@@ -144,11 +144,11 @@ _ESTIMATOR_OPTIONS = [
     click.option(
         "--min-contact-duration",
         type=NON_NEGATIVE,
-        default=0.0,
+        default=0.005,
         show_default=True,
         metavar="S",
-        help="A contact is reported once |f| has stayed above the release threshold this long (a shorter spike is "
-        "no contact).",
+        help="A contact is reported once |f| has stayed above the release threshold this long, each sample counting "
+        "for its sampling interval (a shorter spike is no contact).",
     ),
     click.option(
         "--drift-time-constant",

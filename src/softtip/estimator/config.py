@@ -89,8 +89,9 @@ class EstimatorConfig:
         0 for a single threshold.
     contact_min_duration : float
         s; a contact is reported once ``|f|`` has stayed above the release threshold for this
-        long since it first reached ``contact_threshold`` (0: at once). A spike shorter than
-        this is not a contact.
+        long since it first reached ``contact_threshold``, each sample counting for its
+        sampling interval (default 5 ms: at once at 50 Hz, five samples at 1 kHz; 0: at
+        once). A spike shorter than this is not a contact.
     drift_time_constant : float
         s; while untouched (no contact pending or held) the bias is tracked by an exponential moving average with this time constant (default 10 s: a
         drift of r N/s is followed with a lag of r · 10 s; a touch that builds up slower than
@@ -123,7 +124,7 @@ class EstimatorConfig:
     joint_iterations: int = 2
     tare_method: Literal["robust", "median", "mean"] = "robust"
     contact_hysteresis: float = 3.0
-    contact_min_duration: float = 0.0
+    contact_min_duration: float = 0.005
     drift_time_constant: float = 10.0
     track_drift: bool = True
 

@@ -11,8 +11,10 @@ tared (filtered) wrench minus ``b`` (minus nothing when ``track_drift`` is off):
   lies below it 90 % of the time. A rising grasp force crossing
   the onset threshold in noise no longer makes several contacts, each resetting the latch.
 - **Minimum duration.** From the first sample at or above the onset threshold the contact is
-  pending (reported ``none``) until ``contact_min_duration`` s have passed with ``|f|``
-  above the release threshold; a spike shorter than that is not a contact.
+  pending (reported ``none``) until ``|f|`` has stayed above the release threshold for
+  ``contact_min_duration`` s, each sample counting for its sampling interval (so at 50 Hz
+  one sample covers the default 5 ms, at 1 kHz five samples are needed); a spike shorter
+  than that is not a contact.
 - **Contact count.** Each contact gets the next number, 1, 2, … (``contact_id``; 0 out of
   contact): contacts as a user would count them.
 - **Drift.** While untouched (no contact pending or held: the drift-corrected force below
@@ -166,7 +168,13 @@ def _follow_drift(t: NDArray, x: NDArray, start: int, alpha: NDArray, on: float)
     return drift
 
 
-def _hysteresis(t: NDArray, f: NDArray, start: int, on: float, off: float, min_dur: float, cid: NDArray) -> None:
+def _held(t: NDArray, dt: NDArray, j: int, m: int, min_dur: float) -> NDArray:
+    """Samples of ``[j, m)`` by which ``|f|`` has stayed up ``min_dur`` since sample ``j``,
+    each sample counting for its interval ``dt``."""
+    return (t[j:m] - t[j]) + dt[j:m] >= min_dur
+
+
+def _hysteresis(t: NDArray, dt: NDArray, f: NDArray, start: int, on: float, off: float, min_dur: float, cid: NDArray) -> None:
     """Contacts of a given ``|f|`` (N,), from ``start`` on, numbered into ``cid``."""
     n, count, i = len(t), 0, start
     while i < n:
@@ -174,7 +182,7 @@ def _hysteresis(t: NDArray, f: NDArray, start: int, on: float, off: float, min_d
         if j >= n:
             break
         m = _first(lambda lo, hi: f[lo:hi] < off, j + 1, n)
-        ok = t[j:m] - t[j] >= min_dur
+        ok = _held(t, dt, j, m, min_dur)
         if ok.any():
             count += 1
             cid[j + int(np.argmax(ok)) : m] = count
@@ -188,10 +196,12 @@ def track_contacts(t: NDArray, x: NDArray, start: int, config: EstimatorConfig, 
     on, off = contact_thresholds(config, noise)
     min_dur = config.contact_min_duration
     alpha = drift_weights(t, config)
+    dt = np.zeros(n)
+    dt[1:] = np.diff(t)
     cid = np.zeros(n, dtype=np.int64)
     if not config.track_drift:
         drift = _follow_drift(t, x, start, alpha, on)
-        _hysteresis(t, _norm3(x[:, :3]), start, on, off, min_dur, cid)
+        _hysteresis(t, dt, _norm3(x[:, :3]), start, on, off, min_dur, cid)
         y = x
     else:
         # the contact decisions see the drift subtracted, and the drift follows only while
@@ -217,7 +227,7 @@ def track_contacts(t: NDArray, x: NDArray, start: int, config: EstimatorConfig, 
             # onset at j; the drift is held while the contact is pending or held
             m = _first(lambda lo, hi: fn(lo, hi) < off, j + 1, n)
             drift[j:m] = avg.b
-            ok = t[j:m] - t[j] >= min_dur
+            ok = _held(t, dt, j, m, min_dur)
             if ok.any():
                 count += 1
                 cid[j + int(np.argmax(ok)) : m] = count
@@ -277,11 +287,11 @@ class ContactTracker:
         elif self._pending is not None:
             if f < self.off:
                 self._pending = None
-            elif t - self._pending >= cfg.contact_min_duration:
+            elif (t - self._pending) + dt >= cfg.contact_min_duration:
                 code = self._start()
         elif f >= self.on:
             self._pending = t
-            if 0.0 >= cfg.contact_min_duration:
+            if dt >= cfg.contact_min_duration:  # (t − t) + dt, as in the batch
                 code = self._start()
         if (not code and self._pending is None) if cfg.track_drift else dev < self.on:  # untouched
             self._follow(min(dt / cfg.drift_time_constant, _MAX_ALPHA), x)
