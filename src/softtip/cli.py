@@ -669,7 +669,7 @@ def stream(
 Every condition (edges of different sharpness, the 1 mm plate at −45°, 0°, 45°, 90°, plates
 1–15 mm, cylinders Ø 4–14 mm, the fringe of a Ø 40 mm cylinder bottom, contact position)
 is simulated with the papers' grasp and measured by the same pipeline as `softtip
-estimate` (default options). Writes to --out one figure per experiment laid out like the
+estimate` (default options, --no-drift-tracking as in the papers). Writes to --out one figure per experiment laid out like the
 papers' (e1_edges.png … e6_contact_position.png) and the summary table summary.md /
 summary.csv: per condition the median axial direction error (degrees), the share of
 samples with a reported direction, the contact-position error (mm), the published outcome
