@@ -162,8 +162,9 @@ def test_tare_on_demand_re_tares_from_the_next_samples():
     assert all(o.contact_id == 0 and o.state == "none" for o in out if 4.2 <= o.t < 6.0)  # after: untouched
     angles = np.array([o.angle for o in out if o.state == "line"])
     assert np.median(np.degrees(np.abs(axial_difference(angles, g.angle)))) < 3.0
-    with pytest.raises(ValueError, match="tare duration"):
-        est.tare(-1.0)
+    for bad in (-1.0, 0.0, float("nan")):
+        with pytest.raises(ValueError, match="tare duration"):
+            est.tare(bad)
 
 
 def test_tare_on_demand_overrides_a_given_bias_and_counts_contacts_on():

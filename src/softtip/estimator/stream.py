@@ -130,8 +130,7 @@ class Estimator:
             Those samples are reported as ``none`` (``taring``); the filter, the contact and
             the drift start again, the contact count goes on.
         """
-        d = self.config.tare_duration if duration is None else duration
-        d = float(d) if d else 0.2
+        d = (self.config.tare_duration or 0.2) if duration is None else float(duration)
         if not (math.isfinite(d) and d > 0.0):
             raise ValueError(f"tare duration must be a positive number of s, got {duration!r}")
         self._tare.reset(d)
@@ -147,6 +146,7 @@ class Estimator:
 
     @property
     def drift_alarm(self) -> bool:
+        """The tracked drift of the force exceeded the contact threshold since the last tare."""
         return self._contacts.drift_alarm
 
     def _warn(self, msg: str) -> None:
