@@ -22,7 +22,7 @@ from softtip.fingertip import (
 )
 from softtip.mounting import Mounted
 from softtip.noise import NANO17, SensorNoise, direction_angle_std, tangential_spin_torque_std
-from softtip.estimator import STATES, Estimates, Estimator, EstimatorConfig, SampleEstimate, estimate
+from softtip.estimator import STATES, Estimates, Estimator, EstimatorConfig, EstimatorWarning, SampleEstimate, estimate
 from softtip.sources import run
 from softtip.spin import direction_angle, edge_direction, spin_torque, tangent_frame, tangential_spin_torque
 from softtip.units import KGF, KGF_MM, wrench_from_si, wrench_to_si
@@ -37,6 +37,7 @@ __all__ = [
     "Estimates",
     "Estimator",
     "EstimatorConfig",
+    "EstimatorWarning",
     "Fingertip",
     "ImplicitSurface",
     "InputError",

@@ -6,6 +6,7 @@ import math
 import os
 import shutil
 import sys
+import warnings
 from pathlib import Path
 
 import click
@@ -16,7 +17,8 @@ from softtip.axial import axial_median
 from softtip.errors import InputError
 from softtip.fingertip import PRESETS, load_fingertip
 from softtip.depth import MURAKAMI2006_DEPTH, DepthLaw
-from softtip.joint import MODEL_MARGIN
+from softtip.estimator.results import DRIFT_COLUMNS, EstimatorWarning
+from softtip.estimator.tare import bias_to_toml, load_bias
 from softtip.noise import NANO17, SensorNoise
 from softtip.pipeline import STATES, EstimatorConfig
 from softtip.pipeline import estimate as run_estimate
@@ -43,8 +45,8 @@ class _Number(click.FloatRange):
 NON_NEGATIVE = _Number(min=0.0)
 POSITIVE = _Number(min=0.0, min_open=True)
 
-_FORCE_COLUMNS = ("fx", "fy", "fz")
-_MOMENT_COLUMNS = ("mx", "my", "mz", "sigma", "hx", "hy", "hz", "h_norm", "h_std")
+_FORCE_COLUMNS = ("fx", "fy", "fz") + DRIFT_COLUMNS[:3]
+_MOMENT_COLUMNS = ("mx", "my", "mz", "sigma", "hx", "hy", "hz", "h_norm", "h_std") + DRIFT_COLUMNS[3:]
 
 
 class _Group(click.Group):
@@ -112,7 +114,55 @@ _ESTIMATOR_OPTIONS = [
         default=0.2,
         show_default=True,
         metavar="S",
-        help="Average the first S seconds (fingertip untouched) as the sensor bias; 0 if INPUT is already tared.",
+        help="Take the first S seconds (fingertip untouched) as the sensor bias; 0 if INPUT is already tared.",
+    ),
+    click.option(
+        "--tare-method",
+        type=click.Choice(["robust", "median", "mean"]),
+        default="robust",
+        show_default=True,
+        help="How the tare samples make the bias: robust (the mean of the samples that are not spikes), median, "
+        "or mean (of all: a spike moves it).",
+    ),
+    click.option(
+        "--bias",
+        "bias_file",
+        type=click.Path(dir_okay=False),
+        metavar="FILE.toml",
+        help="Subtract this sensor bias instead of taring ([bias] force = [N, N, N], moment = [N·m, N·m, N·m]; "
+        "written by --save-bias or calibrate-payload).",
+    ),
+    click.option(
+        "--hysteresis",
+        type=NON_NEGATIVE,
+        default=3.0,
+        show_default=True,
+        metavar="SIGMAS",
+        help="Contact ends below --contact-threshold minus this many standard deviations of the noise of |f| "
+        "(from --force-noise, after --lowpass; at least half the threshold); 0: one threshold.",
+    ),
+    click.option(
+        "--min-contact-duration",
+        type=NON_NEGATIVE,
+        default=0.005,
+        show_default=True,
+        metavar="S",
+        help="A contact is reported once |f| has stayed above the release threshold this long, each sample counting "
+        "for its sampling interval (a shorter spike is no contact).",
+    ),
+    click.option(
+        "--drift-time-constant",
+        type=POSITIVE,
+        default=10.0,
+        show_default=True,
+        metavar="S",
+        help="While untouched, follow the sensor's bias drift with a moving average of this time constant.",
+    ),
+    click.option(
+        "--drift-tracking/--no-drift-tracking",
+        default=True,
+        show_default=True,
+        help="Subtract the drift followed while untouched (--no-drift-tracking: report it only, the papers').",
     ),
     click.option("--contact-threshold", type=NON_NEGATIVE, default=0.05, show_default=True, metavar="N", help="In contact while |f| is at least this, N."),
     click.option(
@@ -191,7 +241,9 @@ angle_std_deg, latched, latch_fallback, relatched (a new latch starts here), dep
 joint_offset_std (m), joint_residual and joint_fallback (the sliding window of
 --contact-point joint: reciprocal condition number, standard deviations of its line angle
 and offset, RMS fit residual in noise standard deviations, and whether the latched point
-is used because no window has been accepted yet), then the input's extra columns. r, n, h are empty
+is used because no window has been accepted yet), contact_id (1, 2, ... per contact, 0
+out of contact), drift_fx..drift_mz (the bias drift followed while untouched since the
+tare, N and N·m), then the input's extra columns. r, n, h are empty
 (nan) when state is none; d and the angle only for line contacts, where |h| stands out of
 the noise.
 
@@ -230,6 +282,7 @@ the raw wrench; with --to-bag and no -o no CSV is written.
 @click.option("--rerun", "rerun_spawn", is_flag=True, help="Show the fingertip, force, contact point, normal and edge in a Rerun viewer (softtip[viz]).")
 @click.option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save the Rerun 3-D view and time series to FILE.rrd (open with `rerun FILE.rrd`).")
 @click.option("--payload", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Remove the fingertip's weight ([payload] mass kg, com m; see calibrate-payload) before taring, using INPUT's qw, qx, qy, qz columns (sensor frame in a z-up world frame).")
+@click.option("--save-bias", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Write the bias used (the tare's) to FILE.toml, for --bias of a later run.")
 @_estimator_options
 def estimate(
     input_path,
@@ -245,6 +298,7 @@ def estimate(
     rerun_save,
     tip,
     payload=None,
+    save_bias=None,
     **estimator_opts,
 ):
     from softtip.examples import EXAMPLE_PATH
@@ -289,7 +343,9 @@ def estimate(
 
         log = compensate_log(log, payload)
     try:
-        est = run_estimate(log.t, log.wrench, fingertip, config)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", EstimatorWarning)  # printed below, from est.warnings
+            est = run_estimate(log.t, log.wrench, fingertip, config)
     except ValueError as exc:  # e.g. a low-pass cutoff above Nyquist for this log's rate
         raise click.UsageError(str(exc)) from None
 
@@ -351,7 +407,16 @@ def estimate(
             shutil.rmtree(to_bag, ignore_errors=True)
 
     counts = {name: int(np.count_nonzero(est.state == code)) for code, name in enumerate(STATES)}
-    _tare_warnings(est, config)
+    _tare_warnings(est)
+    if save_bias is not None:
+        if any(p is not None and Path(p).resolve() == Path(save_bias).resolve() for p in (input_path, output, plot_path)):
+            raise InputError(f"--save-bias {save_bias}: is also an input or output of this run")
+        if not np.all(np.isfinite(est.bias)):
+            raise InputError(f"--save-bias {save_bias}: no bias: the whole log lies within the tare")
+        from softtip.calibration import atomic_write_text
+
+        atomic_write_text(save_bias, bias_to_toml(est.bias, f"softtip sensor bias ({est.tare.summary()})"))
+        click.echo(f"softtip: bias -> {save_bias}", err=True)
     if est.n_pulling:
         click.echo(
             f"softtip: warning: {est.n_pulling} sample(s) in contact by force had no contact point where the force "
@@ -361,7 +426,10 @@ def estimate(
     targets = [p for p in (output, to_bag, rerun_save) if p is not None]
     if targets:
         summary = ", ".join(f"{v} {k}" for k, v in counts.items())
-        click.echo(f"softtip: {len(est)} samples ({summary}) -> {', '.join(map(str, targets))}", err=True)
+        click.echo(
+            f"softtip: {len(est)} samples ({summary}; {est.n_contacts} contact(s)) -> {', '.join(map(str, targets))}",
+            err=True,
+        )
         if counts["line"]:
             line = est.state == 2
             ang = np.degrees(axial_median(est.angle[line]))
@@ -380,44 +448,12 @@ def _check_figure_path(path: str) -> None:
         raise InputError(f"{path}: folder {str(p.parent)!r} does not exist")
 
 
-def _tare_warnings(est, config: EstimatorConfig) -> None:
-    """Say what the tare did, and when it cannot have been right."""
-    if not est.taring.any():
-        return
-    if est.taring.all():
-        click.echo(
-            f"softtip: warning: the whole log lies within the first {config.tare_duration:g} s used to tare the "
-            "sensor; nothing was estimated (give --tare-duration 0 for a log that is already tared)",
-            err=True,
-        )
-        return
-    f, m = est.bias[:3], est.bias[3:] * 1e3
-    click.echo(
-        f"softtip: bias from the first {config.tare_duration:g} s: force ({f[0]:+.4f}, {f[1]:+.4f}, {f[2]:+.4f}) N, "
-        f"moment ({m[0]:+.4f}, {m[1]:+.4f}, {m[2]:+.4f}) N·mm",
-        err=True,
-    )
-    if est.tare_force_std > 5.0 * max(config.noise.force_std):
-        click.echo(
-            f"softtip: warning: the force varied by {est.tare_force_std:.3g} N (standard deviation) while taring, far "
-            f"above the sensor noise ({max(config.noise.force_std):g} N): was the fingertip touched in the first "
-            f"{config.tare_duration:g} s? The bias, and every estimate, would then be wrong (--tare-duration 0 for a "
-            "log that is already tared)",
-            err=True,
-        )
-        return
-    # joint mode counts as excitation only what exceeds the noise model by MODEL_MARGIN (in
-    # variance); two standard errors of the tare's own estimate of the noise on top
-    n_tare = int(est.taring.sum())
-    model = max(config.noise.force_std)
-    limit = model * math.sqrt(1.0 + MODEL_MARGIN) * (1.0 + 2.0 / math.sqrt(2.0 * max(n_tare - 1, 1)))
-    if config.contact_point == "joint" and n_tare > 1 and est.tare_force_std > limit:
-        click.echo(
-            f"softtip: warning: the force noise while taring ({est.tare_force_std:.3g} N standard deviation) exceeds "
-            f"the noise model ({model:g} N); --contact-point joint would take the excess noise for excitation at "
-            "high sample rates: give this sensor's --force-noise and --moment-noise",
-            err=True,
-        )
+def _tare_warnings(est) -> None:
+    """Say what the tare did, and every warning of the estimator (all from the library)."""
+    if est.tare is not None and est.tare.source != "none" and np.all(np.isfinite(est.bias)):
+        click.echo(f"softtip: {est.tare.summary()}", err=True)
+    for msg in est.warnings:
+        click.echo(f"softtip: warning: {msg}", err=True)
 
 
 def _make_config(opts: dict, sample_rate: float | None = None) -> EstimatorConfig:
@@ -437,6 +473,12 @@ def _make_config(opts: dict, sample_rate: float | None = None) -> EstimatorConfi
             lowpass_hz=opts["lowpass"],
             sample_rate=sample_rate,
             tare_duration=opts["tare_duration"],
+            tare_method=opts["tare_method"],
+            bias=None if opts["bias_file"] is None else load_bias(opts["bias_file"]),
+            contact_hysteresis=opts["hysteresis"],
+            contact_min_duration=opts["min_contact_duration"],
+            drift_time_constant=opts["drift_time_constant"],
+            track_drift=opts["drift_tracking"],
             relatch_distance=None if relatch is None else relatch * 1e-3,
             depth=depth,
             joint_window=opts["joint_window"],
@@ -475,9 +517,12 @@ SI and runs the streaming estimator on every sample. With --replay
 LOG.csv the log is fed through the same path at its recorded rate times --speed (0: as
 fast as possible).
 
-Taring: the first --tare-duration seconds (0.2 s) are averaged as the sensor bias, so keep
-the fingertip untouched when the stream starts; --device-bias also zeroes the sensor
-itself first.
+Taring: the first --tare-duration seconds (0.2 s) make the sensor bias, so keep
+the fingertip untouched when the stream starts (or give --bias FILE); the t key of the
+terminal view tares again from the next samples; --device-bias also zeroes the sensor
+itself first. The tare is checked (spikes, noise above the noise model, a stream that
+starts in contact) and the drift followed while untouched; warnings are shown in the view
+and at the end.
 
 The terminal view (standard error, redrawn a few times a second when it is a terminal)
 shows the state, contact point, normal, |h|, edge angle ± std, sample rate, and what the
@@ -541,7 +586,7 @@ def stream(
     import signal
     import threading
 
-    from softtip.live import LiveStats, Recorder, TerminalView, run_live
+    from softtip.live import KeyReader, LiveStats, Recorder, TerminalView, run_live
     from softtip.netft import FAULTS
     from softtip.pipeline import Estimator
     from softtip.sources import Interrupted, LogSource, SourceError
@@ -597,6 +642,7 @@ def stream(
             if lowpass is not None and source.rate_hz is None:
                 raise click.UsageError("--lowpass needs the sample rate, which this source does not report")
             estimator = Estimator(fingertip, config)
+            tare_request = threading.Event()
             stats = LiveStats(
                 source_name=source.name,
                 info=info,
@@ -605,12 +651,26 @@ def stream(
                 warnings=(lambda: source.warnings) if hasattr(type(source), "warnings") else None,
             )
             show = sys.stderr.isatty() if view is None else view
-            term = TerminalView(stats, interval=0.2, h_threshold=config.h_min, recorder=recorder) if show else None
+            tare_key = show and sys.stdin.isatty()
+            term = TerminalView(
+                stats, interval=0.2, h_threshold=config.h_min, recorder=recorder, estimator=estimator,
+                tare_key=tare_key,
+            ) if show else None  # fmt: skip
             on_estimate = None
             if viz is not None:
                 logger = viz.RerunLogger(fingertip, save=rerun_save, spawn=rerun_spawn)
                 on_estimate = lambda e, r: logger.log_sample(e)
-            summary = run_live(source, estimator, recorder=recorder, view=term, stats=stats, duration=duration, stop=stop, on_estimate=on_estimate)
+            keys = KeyReader({"t": tare_request.set}) if tare_key else None
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", EstimatorWarning)  # shown in the view and below
+                    summary = run_live(
+                        source, estimator, recorder=recorder, view=term, stats=stats, duration=duration, stop=stop,
+                        on_estimate=on_estimate, tare_request=tare_request,
+                    )  # fmt: skip
+            finally:
+                if keys is not None:
+                    keys.close()
             recorder = None  # closed by run_live
             if viz is not None:
                 logger.close()
@@ -638,9 +698,14 @@ def stream(
     device = "".join(f", {c[k]} {name}" for k, name in (("restarts", "restarts"), ("stalls", "stalled records"), ("status_records", "with a nonzero status")) if c.get(k))
     click.echo(
         f"softtip: {summary.samples} samples in {summary.seconds:.2f} s ({rate:.1f} Hz), {summary.lost} lost, {more}"
-        f"{summary.dropped} dropped by softtip{device}; {why}" + (f"; recorded -> {record}" if record else ""),
+        f"{summary.dropped} dropped by softtip{device}; {estimator.contacts} contact(s); {why}"
+        + (f"; recorded -> {record}" if record else ""),
         err=True,
     )
+    if estimator.tare_report is not None and estimator.tare_report.source != "none":
+        click.echo(f"softtip: {estimator.tare_report.summary()}", err=True)
+    for msg in dict.fromkeys(estimator.warnings):
+        click.echo(f"softtip: warning: {msg}", err=True)
 
 
 @main.command(
@@ -649,7 +714,7 @@ def stream(
 Every condition (edges of different sharpness, the 1 mm plate at −45°, 0°, 45°, 90°, plates
 1–15 mm, cylinders Ø 4–14 mm, the fringe of a Ø 40 mm cylinder bottom, contact position)
 is simulated with the papers' grasp and measured by the same pipeline as `softtip
-estimate` (default options). Writes to --out one figure per experiment laid out like the
+estimate` (default options, --no-drift-tracking as in the papers). Writes to --out one figure per experiment laid out like the
 papers' (e1_edges.png … e6_contact_position.png) and the summary table summary.md /
 summary.csv: per condition the median axial direction error (degrees), the share of
 samples with a reported direction, the contact-position error (mm), the published outcome

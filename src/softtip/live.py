@@ -38,6 +38,7 @@ from softtip.sources import Reading, readings
 
 __all__ = [
     "RECORD_COLUMNS",
+    "KeyReader",
     "LiveStats",
     "Recorder",
     "TerminalView",
@@ -60,10 +61,11 @@ RECORD_COLUMNS: tuple[str, ...] = (
     "rx", "ry", "rz", "nx", "ny", "nz", "sigma",
     "hx", "hy", "hz", "h_norm", "dx", "dy", "dz", "angle_deg", "h_std", "angle_std_deg", "latched",
     "latch_fallback", "relatched", "depth", "joint_conditioning", "joint_angle_std_deg", "joint_offset_std",
-    "joint_residual", "joint_fallback", "seq", "lost", "dropped", "late", "duplicates", "malformed",
+    "joint_residual", "joint_fallback", "contact_id", "drift_fx", "drift_fy", "drift_fz", "drift_mx",
+    "drift_my", "drift_mz", "seq", "lost", "dropped", "late", "duplicates", "malformed",
     "status", "host_time",
 )  # fmt: skip
-_INT_COLUMNS = ("latched", "latch_fallback", "relatched", "joint_fallback", "seq", "lost", "dropped", "late",
+_INT_COLUMNS = ("latched", "latch_fallback", "relatched", "joint_fallback", "contact_id", "seq", "lost", "dropped", "late",
                 "duplicates", "malformed", "status")  # fmt: skip
 # Time and raw wrench exactly (shortest repr: re-reading the file gives the same doubles),
 # the host time to the microsecond, the rest as softtip.io.write_table formats numbers.
@@ -82,7 +84,7 @@ def estimate_row(e: SampleEstimate, r: Reading) -> tuple:
         e.state, *e.wrench, *e.point, *e.normal, e.sigma, *e.h, e.h_norm, *e.direction,
         e.angle * _DEG, e.h_std, e.angle_std * _DEG, e.latched, e.latch_fallback, e.relatched, e.depth,
         e.joint_conditioning, e.joint_angle_std * _DEG, e.joint_offset_std, e.joint_residual, e.joint_fallback,
-        r.seq, r.lost, r.dropped, r.late, r.duplicates, r.malformed, r.status, r.host_time,
+        e.contact_id, *e.drift, r.seq, r.lost, r.dropped, r.late, r.duplicates, r.malformed, r.status, r.host_time,
     )  # fmt: skip
 
 
@@ -253,6 +255,10 @@ class TerminalView:
         ``h_min`` of the configuration, N·m, shown next to ``|h|``.
     recorder : Recorder, optional
         Its row count is shown.
+    estimator : Estimator, optional
+        Its tare, drift, contact count and warnings are shown.
+    tare_key : bool
+        Say that the ``t`` key tares again (:class:`KeyReader` is listening).
     """
 
     def __init__(
@@ -262,9 +268,11 @@ class TerminalView:
         interval: float = 0.2,
         h_threshold: float = 5e-4,
         recorder: Recorder | None = None,
+        estimator: Estimator | None = None,
+        tare_key: bool = False,
     ) -> None:
         self.stats, self.out, self.interval = stats, out or sys.stderr, interval
-        self.h_threshold, self.recorder = h_threshold, recorder
+        self.h_threshold, self.recorder, self.estimator, self.tare_key = h_threshold, recorder, estimator, tare_key
         self._lines = 0
         self._stop = threading.Event()
         self._thread = threading.Thread(
@@ -338,7 +346,18 @@ class TerminalView:
             lines.append(f"warning  {warnings[-1]}" + (f"  (+{len(warnings) - 1} more)" if len(warnings) > 1 else ""))
         if self.recorder is not None:
             lines.append(f"record   {self.recorder.path}  {self.recorder.rows} rows")
-        lines.append("Ctrl-C to stop")
+        est = self.estimator
+        if est is not None:
+            rep = est.tare_report
+            if rep is not None:
+                d = est.drift
+                lines.append(
+                    f"tare     {rep.source if rep.source != 'tare' else rep.method} {rep.n_samples} samples, "
+                    f"{rep.spikes} spike(s)   drift {math.sqrt(d[0] ** 2 + d[1] ** 2 + d[2] ** 2) * 1e3:.1f} mN   "
+                    f"contacts {est.contacts}"
+                )
+            lines += [f"warning  {w[:150]}" for w in list(dict.fromkeys(est.warnings))[-3:]]
+        lines.append("t: tare again (untouched)   Ctrl-C to stop" if self.tare_key else "Ctrl-C to stop")
         return lines
 
     def draw(self) -> None:
@@ -352,6 +371,56 @@ class TerminalView:
             self.out.flush()
         except (OSError, ValueError):  # terminal gone
             pass
+
+
+class KeyReader:
+    """Calls ``actions[key]`` for each key pressed on a terminal, from a thread.
+
+    The terminal is put in cbreak mode (keys arrive unbuffered, Ctrl-C still interrupts)
+    until :meth:`close`. Does nothing when ``stream`` is not a terminal.
+    """
+
+    def __init__(self, actions: dict[str, Callable[[], None]], stream: TextIO | None = None) -> None:
+        self.actions, self.stream = actions, stream or sys.stdin
+        self._stop = threading.Event()
+        self._saved = None
+        self._thread = None
+        try:
+            import termios
+            import tty
+
+            fd = self.stream.fileno()
+            if not os.isatty(fd):
+                return
+            self._saved = termios.tcgetattr(fd)
+            tty.setcbreak(fd)
+        except (ImportError, OSError, ValueError, AttributeError):  # no terminal (or no termios)
+            self._saved = None
+            return
+        self._thread = threading.Thread(target=self._loop, args=(fd,), daemon=True, name="softtip-keys")
+        self._thread.start()
+
+    def _loop(self, fd: int) -> None:
+        import select
+
+        while not self._stop.is_set():
+            ready, _, _ = select.select([fd], [], [], 0.1)
+            if ready:
+                key = os.read(fd, 1).decode(errors="ignore").lower()
+                action = self.actions.get(key)
+                if action is not None:
+                    action()
+
+    def close(self) -> None:
+        """Stop reading keys and give the terminal back as it was."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
+        if self._saved is not None:
+            import termios
+
+            termios.tcsetattr(self.stream.fileno(), termios.TCSADRAIN, self._saved)
+            self._saved = None
 
 
 @dataclass
@@ -381,6 +450,7 @@ def run_live(
     duration: float | None = None,
     stop: threading.Event | None = None,
     on_estimate: Callable[[SampleEstimate, Reading], None] | None = None,
+    tare_request: threading.Event | None = None,
 ) -> LiveSummary:
     """Run ``source`` through ``estimator`` until it ends, ``duration`` passes or ``stop`` is set.
 
@@ -400,6 +470,8 @@ def run_live(
         Set it (e.g. from a SIGINT handler) to end the run cleanly.
     on_estimate : callable, optional
         Called with each estimate and its reading, in the loop.
+    tare_request : threading.Event, optional
+        Set it (e.g. from a key) to re-tare (:meth:`Estimator.tare`) from the next sample.
 
     Returns
     -------
@@ -419,6 +491,9 @@ def run_live(
                 stats.started = time.monotonic()
                 if duration is not None:
                     deadline = stats.started + duration
+            if tare_request is not None and tare_request.is_set():
+                tare_request.clear()
+                estimator.tare()
             e = update(r.t, r.wrench)
             stats.received += 1
             stats.lost += r.lost

@@ -9,11 +9,19 @@ agree to rounding.
 
 Per sample (SPEC §3):
 
-1. **Tare.** Unless a bias is given, the mean of the samples in the first ``tare_duration``
-   seconds is the bias; those samples are reported as ``none`` (``taring``). The fingertip
-   must not be touched then.
+1. **Tare** (:mod:`.tare`). Unless a bias is given, the samples in the first
+   ``tare_duration`` seconds make the bias (``tare_method``: by default their mean without
+   spikes); those samples are reported as ``none`` (``taring``). The fingertip must not be
+   touched then: the tare is checked against the noise model (spikes, force and moment
+   noise) and a first contact that pulls from its onset (the release of a tare taken in
+   contact) is flagged; :attr:`Estimates.tare` / :attr:`Estimator.tare_report` say what
+   happened, :attr:`Estimates.warnings` (also issued as :class:`EstimatorWarning`) what is
+   wrong. :meth:`Estimator.tare` tares again on demand.
 2. **Filter** (optional): causal Butterworth low-pass, steady state at the first sample.
-3. **Contact** while ``|f| ≥ contact_threshold``.
+3. **Contact** (:mod:`.contact`): onset at ``|f| ≥ contact_threshold``, release below a
+   threshold lower by ``contact_hysteresis`` noise standard deviations, after at least
+   ``contact_min_duration``; contacts numbered (``contact_id``). While untouched the bias
+   drift is followed (``drift_time_constant``) and, with ``track_drift``, subtracted.
 4. **Contact point.** ``track``: the soft-finger solution of every sample. ``latch`` (the
    papers'): during the first rise of the force after onset (until ``|f|`` first exceeds the
    light-force window, or sets no new maximum for ``stall_time``), the soft-finger solutions
@@ -50,10 +58,10 @@ softtip's extensions (issue 5), each an :class:`EstimatorConfig` field:
 
 from softtip.estimator.batch import estimate
 from softtip.estimator.config import CONTACT_POINT_MODES, EstimatorConfig
-from softtip.estimator.results import LINE, NONE, POINT, STATES, Estimates, SampleEstimate
+from softtip.estimator.results import LINE, NONE, POINT, STATES, Estimates, EstimatorWarning, SampleEstimate
 from softtip.estimator.stream import Estimator
 
 __all__ = [
     "STATES", "NONE", "POINT", "LINE", "CONTACT_POINT_MODES", "EstimatorConfig", "Estimates", "SampleEstimate",
-    "Estimator", "estimate",
+    "Estimator", "estimate", "EstimatorWarning",
 ]  # fmt: skip

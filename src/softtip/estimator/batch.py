@@ -2,16 +2,20 @@
 
 from __future__ import annotations
 
+import math
+import warnings
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from softtip._xp import NP
 from softtip.contact import contact_arrays
 from softtip.estimator.config import EstimatorConfig
+from softtip.estimator.contact import drift_message, first_contact_pulls, started_in_contact_message, track_contacts
 from softtip.estimator.joint import joint_points
 from softtip.estimator.latch import latch_points
 from softtip.estimator.measure import effective_noise, measure, noise_correlation
-from softtip.estimator.results import LINE, NONE, POINT, Estimates
+from softtip.estimator.results import LINE, NONE, POINT, Estimates, EstimatorWarning
 from softtip.estimator.tare import tare_log
 from softtip.filtering import lowpass_sos, sosfilt_batch
 from softtip.fingertip import Fingertip, load_fingertip
@@ -79,7 +83,7 @@ def estimate(
     t, w = validate_log(t, wrench)
     n = len(t)
 
-    bias, taring, tare_force_std = tare_log(t, w, config)
+    bias, taring, tare_report = tare_log(t, w, config)
     x = w - bias
 
     sos = None
@@ -88,10 +92,12 @@ def estimate(
         sos = lowpass_sos(config.lowpass_hz, rate, config.lowpass_order)
         x = sosfilt_batch(sos, x) if np.all(np.isfinite(bias)) else x
     noise = effective_noise(config.noise, sos)
+    ct = track_contacts(t, x, int(np.count_nonzero(taring)), config, noise)
+    x = ct.wrench
 
     c = [np.ascontiguousarray(x[:, i]) for i in range(6)]
     fn = np.sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2])
-    contact = (fn >= config.contact_threshold) & ~taring
+    contact = ct.contact
     relatched = np.zeros(n, dtype=bool)
     joint_stats = np.full((4, n), np.nan)
     joint_fb = np.zeros(n, dtype=bool)
@@ -116,6 +122,14 @@ def estimate(
     located = contact & has & ms.pushing
     pulling = contact & ~located
     is_line = located & ms.line
+    started_in_contact = tare_report.source == "tare" and first_contact_pulls(t, pulling, ct.contact_id)
+    warn = list(tare_report.warnings)
+    if started_in_contact:
+        warn.append(started_in_contact_message(config))
+    if ct.drift_alarm >= 0:
+        warn.append(drift_message(config, float(t[ct.drift_alarm])))
+    for msg in warn:
+        warnings.warn(msg, EstimatorWarning, stacklevel=2)
     state = np.where(located, np.where(is_line, LINE, POINT), NONE).astype(np.int8)
 
     def keep(a, mask):
@@ -141,7 +155,7 @@ def estimate(
         pulling=pulling,
         taring=taring,
         bias=bias,
-        tare_force_std=tare_force_std,
+        tare_force_std=float(np.nanmax(tare_report.force_std)) if np.any(np.isfinite(tare_report.force_std)) else math.nan,
         relatched=relatched,
         depth=keep(ms.depth, located),
         joint_conditioning=keep(joint_stats[0], located),
@@ -150,4 +164,10 @@ def estimate(
         joint_residual=keep(joint_stats[3], located),
         joint_fallback=joint_fb & located,
         repeated_stamps=int(np.count_nonzero(np.diff(t) == 0)),
+        contact_id=ct.contact_id,
+        drift=keep(ct.drift, ~taring),
+        tare=tare_report,
+        started_in_contact=started_in_contact,
+        drift_alarm=ct.drift_alarm >= 0,
+        warnings=tuple(warn),
     )

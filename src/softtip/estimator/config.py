@@ -13,10 +13,12 @@ from softtip.filtering import lowpass_sos
 from softtip.noise import NANO17, SensorNoise
 from softtip.units import KGF
 
-__all__ = ["CONTACT_POINT_MODES", "EstimatorConfig"]
+__all__ = ["CONTACT_POINT_MODES", "TARE_METHODS", "EstimatorConfig"]
 
 #: Values of :attr:`EstimatorConfig.contact_point`.
 CONTACT_POINT_MODES = ("latch", "track", "joint")
+#: Values of :attr:`EstimatorConfig.tare_method`.
+TARE_METHODS = ("robust", "median", "mean")
 
 
 @dataclass(frozen=True)
@@ -74,6 +76,29 @@ class EstimatorConfig:
         precise window is kept over later, weaker ones, but not for ever (positive, at most 1).
     joint_iterations : int
         Gauss–Newton steps of each window's solve.
+    tare_method : {"robust", "median", "mean"}
+        How the tare samples make the bias: ``robust`` (default), the mean of the samples that
+        are not spikes (farther than 8 standard deviations from the median; the plain mean
+        when there is none); ``median``, per component; ``mean``, of all samples (a −20 N
+        spike among ten samples moves it by 2 N).
+    contact_hysteresis : float
+        Contact starts at ``|f| ≥ contact_threshold`` and ends below the release threshold
+        ``max(contact_threshold − contact_hysteresis · σ_f, min(contact_threshold, 2.5 σ_f))``,
+        with ``σ_f`` the noise of ``|f|`` (root sum of squares of the force noise model, after
+        the filter; an untouched sensor's ``|f|`` is below ``2.5 σ_f`` 90 % of the time);
+        0 for a single threshold.
+    contact_min_duration : float
+        s; a contact is reported once ``|f|`` has stayed above the release threshold for this
+        long since it first reached ``contact_threshold``, each sample counting for its
+        sampling interval (default 5 ms: at once at 50 Hz, five samples at 1 kHz; 0: at
+        once). A spike shorter than this is not a contact.
+    drift_time_constant : float
+        s; while untouched (no contact pending or held) the bias is tracked by an exponential moving average with this time constant (default 10 s: a
+        drift of r N/s is followed with a lag of r · 10 s; a touch that builds up slower than
+        that is taken for drift).
+    track_drift : bool
+        Subtract the tracked drift (default). ``False`` (the papers' comparison): the drift
+        is still estimated and reported, not subtracted.
     """
 
     contact_point: Literal["latch", "track", "joint"] = "latch"
@@ -97,6 +122,11 @@ class EstimatorConfig:
     joint_max_residual: float = 3.0
     joint_drift: float = 3e-5
     joint_iterations: int = 2
+    tare_method: Literal["robust", "median", "mean"] = "robust"
+    contact_hysteresis: float = 3.0
+    contact_min_duration: float = 0.005
+    drift_time_constant: float = 10.0
+    track_drift: bool = True
 
     def __post_init__(self) -> None:
         if self.contact_point not in CONTACT_POINT_MODES:
@@ -124,7 +154,15 @@ class EstimatorConfig:
         if int(self.joint_iterations) < 1:
             raise ValueError(f"joint_iterations must be at least 1, got {self.joint_iterations!r}")
         object.__setattr__(self, "joint_iterations", int(self.joint_iterations))
-        for name in ("contact_threshold", "stall_time", "h_sigmas", "h_min", "tare_duration"):
+        if self.tare_method not in TARE_METHODS:
+            raise ValueError(f"tare_method must be one of {', '.join(TARE_METHODS)}, got {self.tare_method!r}")
+        v = float(self.drift_time_constant)
+        if not (math.isfinite(v) and v > 0.0):
+            raise ValueError(f"drift_time_constant must be a positive number of s, got {self.drift_time_constant!r}")
+        object.__setattr__(self, "drift_time_constant", v)
+        object.__setattr__(self, "track_drift", bool(self.track_drift))
+        for name in ("contact_threshold", "stall_time", "h_sigmas", "h_min", "tare_duration", "contact_hysteresis",
+                     "contact_min_duration"):  # fmt: skip
             v = float(getattr(self, name))
             if not (math.isfinite(v) and v >= 0.0):
                 raise ValueError(f"{name} must be a non-negative number, got {getattr(self, name)!r}")

@@ -5,16 +5,25 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["STATES", "NONE", "POINT", "LINE", "Estimates", "SampleEstimate"]
+__all__ = ["STATES", "NONE", "POINT", "LINE", "EstimatorWarning", "Estimates", "SampleEstimate"]
 
 #: Contact states, indexed by the integer codes in :attr:`Estimates.state`.
 STATES = ("none", "point", "line")
 NONE, POINT, LINE = 0, 1, 2
+#: Names of the drift columns (:meth:`Estimates.columns`).
+DRIFT_COLUMNS = ("drift_fx", "drift_fy", "drift_fz", "drift_mx", "drift_my", "drift_mz")
+
+
+class EstimatorWarning(UserWarning):
+    """The estimates may be wrong: a bad tare, a log that starts in contact, a drifting bias.
+
+    The same messages are in :attr:`Estimates.warnings` and :attr:`softtip.Estimator.warnings`.
+    """
 
 
 @dataclass(frozen=True)
@@ -54,6 +63,21 @@ class Estimates:
         point is the latched one
     repeated_stamps : int
         samples whose time equals the previous sample's (accepted; time must not go back)
+    contact_id : (N,) 1, 2, … for the first, second, … contact (onset above the contact
+        threshold, release below the release threshold); 0 out of contact. A contact may have
+        ``none`` samples (pulling, no contact point yet)
+    drift : (N, 6) bias drift tracked while untouched since the tare, N and N·m: subtracted
+        from this sample's wrench unless ``track_drift`` is off
+    tare : TareReport or None
+        what the tare did and its checks (:class:`~softtip.estimator.tare.TareReport`)
+    started_in_contact : bool
+        the first contact after the tare pulled for at least 0.1 s: the fingertip was
+        probably touched while taring (the release reads as a pull)
+    drift_alarm : bool
+        the tracked drift of the force exceeded the contact threshold
+    warnings : tuple of str
+        every warning about these estimates, in plain language (also issued as
+        :class:`EstimatorWarning`)
     """
 
     t: NDArray[np.float64]
@@ -82,6 +106,12 @@ class Estimates:
     joint_fallback: NDArray[np.bool_]
     tare_force_std: float = math.nan
     repeated_stamps: int = 0
+    contact_id: NDArray[np.int64] | None = None
+    drift: NDArray[np.float64] | None = None
+    tare: Any = None
+    started_in_contact: bool = False
+    drift_alarm: bool = False
+    warnings: tuple[str, ...] = ()
 
     def __len__(self) -> int:
         return len(self.t)
@@ -90,6 +120,11 @@ class Estimates:
     def state_names(self) -> NDArray[np.str_]:
         """``state`` as strings, shape (N,)."""
         return np.asarray(STATES)[self.state]
+
+    @property
+    def n_contacts(self) -> int:
+        """Contacts in the log (each onset counted once, however long it lasts)."""
+        return int(self.contact_id.max()) if self.contact_id is not None and len(self.contact_id) else 0
 
     @property
     def n_pulling(self) -> int:
@@ -122,6 +157,8 @@ class Estimates:
             "joint_offset_std": self.joint_offset_std,
             "joint_residual": self.joint_residual,
             "joint_fallback": self.joint_fallback,
+            **({"contact_id": self.contact_id} if self.contact_id is not None else {}),
+            **({k: self.drift[:, i] for i, k in enumerate(DRIFT_COLUMNS)} if self.drift is not None else {}),
         }  # fmt: skip
 
 
@@ -154,4 +191,6 @@ class SampleEstimate(NamedTuple):
     joint_offset_std: float = math.nan
     joint_residual: float = math.nan
     joint_fallback: bool = False
+    contact_id: int = 0
+    drift: tuple[float, ...] = (0.0,) * 6
 
