@@ -303,11 +303,12 @@ def test_empty_extra_cell_is_fine(tmp_path: Path) -> None:
     assert log.extra == {"note": [""]}
 
 
-@pytest.mark.parametrize("t3", ["0.1", "0.05"])
-def test_t_not_strictly_increasing(tmp_path: Path, t3: str) -> None:
+@pytest.mark.parametrize("t3", ["0.09", "0.05"])
+def test_t_going_back(tmp_path: Path, t3: str) -> None:
     path = _write(tmp_path, f"{HEADER}\n0,1,2,3,4,5,6\n0.1,1,2,3,4,5,6\n{t3},1,2,3,4,5,6\n")
     assert _error(path) == (
-        f"{path}:4: column 't': expected t strictly increasing, got t = {t3} on line 4 after t = 0.1 on line 3"
+        f"{path}:4: column 't': expected t non-decreasing (a stamp may repeat, not go back), "
+        f"got t = {t3} on line 4 after t = 0.1 on line 3"
     )
 
 
@@ -316,7 +317,8 @@ def test_t_decreasing_across_block_boundary(tmp_path: Path, monkeypatch: pytest.
     rows = "".join(f"{t},1,2,3,4,5,6\n" for t in ["0", "1", "2", "1.5", "3"])
     path = _write(tmp_path, f"{HEADER}\n{rows}")
     assert _error(path) == (
-        f"{path}:5: column 't': expected t strictly increasing, got t = 1.5 on line 5 after t = 2 on line 4"
+        f"{path}:5: column 't': expected t non-decreasing (a stamp may repeat, not go back), "
+        "got t = 1.5 on line 5 after t = 2 on line 4"
     )
 
 
@@ -331,7 +333,7 @@ def test_blank_line_between_data_rows(tmp_path: Path) -> None:
 def test_first_error_in_file_order_wins(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(sio, "_CHUNK_ROWS", 2)  # the errors sit in different blocks
     good = "".join(f"{t},1,2,3,4,5,6\n" for t in range(3))
-    # Line 5: wrong cell count; line 6: non-numeric; line 7: non-increasing t.
+    # Line 5: wrong cell count; line 6: non-numeric; line 7: t going back.
     path = _write(tmp_path, f"{HEADER}\n{good}3,1,2\n4,x,2,3,4,5,6\n0,1,2,3,4,5,6\n")
     assert _error(path) == f"{path}:5: expected 7 cells (one per header column), got 3"
 
@@ -341,7 +343,8 @@ def test_first_error_in_file_order_wins(tmp_path: Path, monkeypatch: pytest.Monk
     # ... and here after it.
     path = _write(tmp_path, "t,fx,fy,mx,my,mz,fz\n0,1,2,4,5,6,1\n-1,1,2,4,5,6,bad\n")
     assert _error(path) == (
-        f"{path}:3: column 't': expected t strictly increasing, got t = -1 on line 3 after t = 0 on line 2"
+        f"{path}:3: column 't': expected t non-decreasing (a stamp may repeat, not go back), "
+        "got t = -1 on line 3 after t = 0 on line 2"
     )
 
 
@@ -349,7 +352,7 @@ _CORRUPTIONS = {
     "text": lambda i: f"{i},1,2,x,4,5,6,n",
     "cells": lambda i: f"{i},1,2",
     "blank": lambda i: f"\n\n{i},1,2,3,4,5,6,n",
-    "t": lambda i: f"{i - 1},1,2,3,4,5,6,n",
+    "t": lambda i: f"{i - 2},1,2,3,4,5,6,n",
     "nan": lambda i: f"{i},1,2,3,4,5,nan,n",
 }
 
