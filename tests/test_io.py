@@ -398,16 +398,57 @@ def test_write_formats_each_kind(tmp_path: Path) -> None:
             "ok": np.array([True, False]),
             "n": [3, -4],
             "angle_deg": [45.0, np.nan],
-            "note": ['a,b', 'say "hi"'],
-            "obj": [None, 1.5],
+            "big": [1e20, -np.inf],
+            "note": ["plain", " spaced "],
         },
         path,
     )
     assert path.read_text() == (
-        "t,state,ok,n,angle_deg,note,obj\n"
-        '0,line,1,3,45,"a,b",None\n'
-        '0.02,none,0,-4,nan,"say ""hi""",1.5\n'
+        "t,state,ok,n,angle_deg,big,note\n"
+        "0,line,1,3,45,1e+20,plain\n"
+        "0.02,none,0,-4,nan,-inf, spaced \n"
     )
+
+
+def test_write_quotes_text_cells_when_any_needs_it(tmp_path: Path) -> None:
+    path = tmp_path / "t.csv"
+    notes = ["a,b", 'say "hi"']
+    write_table({"t": [0.0, 1.0], "state": ["line", "none"], "note": notes, "obj": [None, 1.5]}, path)
+    assert path.read_text() == (
+        "t,state,note,obj\n"
+        '0,"line","a,b","None"\n'
+        '1,"none","say ""hi""","1.5"\n'
+    )
+    assert read_log  # the csv module reads the quoted cells back verbatim:
+    import csv
+
+    assert list(csv.reader(io.StringIO(path.read_text()))) == [
+        ["t", "state", "note", "obj"], ["0", "line", "a,b", "None"], ["1", "none", 'say "hi"', "1.5"]
+    ]  # fmt: skip
+
+
+@pytest.mark.parametrize("digits", [1, 3, 10, 15, 17])
+def test_write_rounds_to_the_format_digits(digits: int) -> None:
+    """``%.<d>g`` through pyarrow: each value reads back as printf's rounding of it."""
+    rng = np.random.default_rng(digits)
+    x = np.concatenate(
+        [rng.normal(size=300) * 10.0 ** rng.integers(-30, 30, 300), [0.0, -0.0, 1.0, 0.5, 123456789012.0, 1e-300]]
+    )
+    buf = io.StringIO()
+    write_table({"x": x}, buf, float_format=f"%.{digits}g")
+    written = np.array([float(v) for v in buf.getvalue().split()[1:]])
+    expected = np.array([float(f"%.{digits}g" % v) for v in x])
+    # within one unit of the last digit (x * 10**k may round across a tie) ...
+    np.testing.assert_allclose(written, expected, rtol=1.01 * 10.0 ** (1 - digits), atol=0)
+    # ... nearly always equal where 10**k is exact, for up to 12 digits (more: x * 10**k
+    # carries a rounding error near the last digit) ...
+    rounded = (np.abs(x) >= 10.0 ** (digits - 23)) & (np.abs(x) < 10.0 ** (digits + 22)) & (x != 0)
+    if digits <= 12:
+        assert np.mean(written[rounded] == expected[rounded]) > 0.99
+    # ... and the rest (tiny, huge) is written exactly
+    np.testing.assert_array_equal(written[~rounded], x[~rounded])
+    if digits == 17:
+        np.testing.assert_array_equal(written, x)
 
 
 def test_write_float_format(tmp_path: Path) -> None:

@@ -30,6 +30,7 @@ import io
 import itertools
 import math
 import os
+import re
 import secrets
 import sys
 from collections.abc import Callable, Mapping, Sequence
@@ -780,24 +781,39 @@ def write_table(
     dest: str | os.PathLike[str] | None | TextIO,
     *,
     float_format: str = "%.10g",
+    metadata: Mapping[str, str] | None = None,
+    progress: Callable[[int], object] | None = None,
 ) -> None:
-    """Write columns as a CSV table with a header row.
+    """Write columns as a CSV table with a header row, or as Parquet.
 
     Parameters
     ----------
     columns : mapping of str to 1-D sequence or array, each of length N
-        Header names (in mapping order) and their values. Floating-point columns are
-        formatted with ``float_format`` (NaN as ``nan``); booleans as ``0``/``1``; integers,
-        strings and anything else with ``str``. Cells containing a comma, quote or line
-        break are quoted as CSV requires. Values are written as given: convert units first.
+        Header names (in mapping order) and their values. Values are written as given:
+        convert units first.
     dest : str, path-like, text stream or None
-        ``None`` writes to ``sys.stdout``; a stream is written to and left open; a path is
-        written atomically (a temporary file in the same directory, then ``os.replace``):
-        on any failure the temporary file is removed and an existing file at ``dest`` is
-        left untouched.
+        ``None`` writes CSV to ``sys.stdout``; a stream is written to and left open; a path
+        is written atomically (a temporary file in the same directory, then
+        ``os.replace``): on any failure the temporary file is removed and an existing file
+        at ``dest`` is left untouched. A path ending in ``.parquet`` is written as Parquet
+        (pyarrow; values exactly, booleans as booleans, text as strings, ``metadata`` in
+        the schema's key-value metadata).
     float_format : str
-        A printf-style format for one float, e.g. ``"%.10g"`` (default) or ``"%.17g"``
-        (round-trips float64 exactly).
+        CSV only: a printf-style format for one float. ``"%.<d>g"`` with ``d`` ≤ 17 (the
+        default ``"%.10g"``; ``"%.17g"`` round-trips float64 exactly) writes each value
+        rounded to ``d`` significant digits as the shortest text that reads back to it
+        (pyarrow's writer: ``1e-05`` may come out as ``0.00001``, ``45.0`` as ``45``);
+        any other format is applied by Python, cell by cell (slower).
+    metadata : mapping of str to str, optional
+        Parquet only: key-value metadata stored with the schema (softtip writes the units
+        and the fingertip; see :data:`PARQUET_UNITS_KEY`, :data:`PARQUET_FINGERTIP_KEY`).
+    progress : callable, optional
+        Called with the number of rows written after each block (e.g. ``tqdm.update``).
+
+    CSV cells: NaN as ``nan``, infinities as ``inf``/``-inf``; booleans as ``0``/``1``;
+    integers, strings and anything else with ``str``. When any text cell contains a comma,
+    quote or line break, text cells are quoted as CSV requires (with the pyarrow writer:
+    all text cells of the table).
 
     Raises
     ------
@@ -809,11 +825,15 @@ def write_table(
         directory at ``dest``). It is a ``ValueError`` too.
     """
     plan = _plan_table(columns, float_format)
+    plan.progress = progress
     if dest is None:
         _write_rows(sys.stdout, plan)
     elif hasattr(dest, "write"):
         _write_rows(dest, plan)  # type: ignore[arg-type]
     else:
+        if _is_parquet(dest):  # type: ignore[arg-type]
+            plan.parquet = True
+            plan.metadata = dict(metadata or {})
         _write_atomic(os.fspath(dest), plan)  # type: ignore[arg-type]
 
 
@@ -824,6 +844,12 @@ class _Plan:
     converters: list[Callable[[np.ndarray], list[Any]]]
     arrays: list[np.ndarray]
     n: int
+    names: list[str]
+    digits: int | None = None  # pyarrow writer, floats rounded to this many digits; None: Python's %
+    quoting: str = "none"  # pyarrow's quoting_style
+    parquet: bool = False
+    metadata: dict[str, str] | None = None
+    progress: Callable[[int], object] | None = None
 
 
 def _plan_table(columns: Mapping[str, Sequence[Any] | np.ndarray], float_format: str) -> _Plan:
@@ -845,6 +871,7 @@ def _plan_table(columns: Mapping[str, Sequence[Any] | np.ndarray], float_format:
     specs: list[str] = []
     converters: list[Callable[[np.ndarray], list[Any]]] = []
     lengths: dict[str, int] = {}
+    quoting = "none"
     for name, values in columns.items():
         arr = np.asarray(values)
         if arr.ndim != 1:
@@ -856,7 +883,6 @@ def _plan_table(columns: Mapping[str, Sequence[Any] | np.ndarray], float_format:
             specs.append(float_format)
             converters.append(_to_list)
         elif kind == "b":
-            arr = arr.astype(np.int8)
             specs.append("%d")
             converters.append(_to_list)
         elif kind in "iu":
@@ -865,15 +891,47 @@ def _plan_table(columns: Mapping[str, Sequence[Any] | np.ndarray], float_format:
         elif kind == "U":
             specs.append("%s")
             converters.append(_str_cells)
+            if _needs_quotes(arr):
+                quoting = "needed"
         else:  # bytes, objects, complex, datetimes: their str(), quoted when needed
             specs.append("%s")
             converters.append(_object_cells)
+            quoting = "needed"  # not known before the cells are made
         arrays.append(arr)
     if len(set(lengths.values())) > 1:
         detail = ", ".join(f"{k!r}: {v}" for k, v in lengths.items())
         raise ValueError(f"columns have different lengths ({detail}); expected all the same")
-    header = ",".join(_quote(str(name)) for name in columns) + "\n"
-    return _Plan(header, ",".join(specs) + "\n", converters, arrays, next(iter(lengths.values())))
+    names = [str(name) for name in columns]
+    header = ",".join(_quote(name) for name in names) + "\n"
+    match = re.fullmatch(r"%\.(\d+)g", float_format)
+    digits = int(match.group(1)) if match and 1 <= int(match.group(1)) <= 17 else None
+    return _Plan(
+        header, ",".join(specs) + "\n", converters, arrays, next(iter(lengths.values())), names, digits, quoting
+    )
+
+
+def _needs_quotes(arr: np.ndarray) -> bool:
+    """Whether any cell of a numpy string column holds a comma, quote or line break."""
+    codes = np.ascontiguousarray(arr).view(np.uint32)
+    return bool(np.isin(codes, [ord(ch) for ch in _CSV_SPECIAL]).any())
+
+
+def _round_significant(x: np.ndarray, digits: int) -> np.ndarray:
+    """``x`` rounded to ``digits`` significant decimal digits, as the nearest float64.
+
+    ``m / 10**k`` (or ``m * 10**k``) with ``10**k`` exact is correctly rounded, so the
+    result's shortest text has at most ``digits`` digits. Zeros, NaN, infinities and values
+    below 1e-22 · 10**digits are left as they are.
+    """
+    if digits >= 17:
+        return x
+    with np.errstate(all="ignore"):
+        k = (digits - 1) - np.floor(np.log10(np.abs(x)))
+        up = (k >= 0) & (k <= 22)
+        down = (k < 0) & (k >= -22)
+        scale = 10.0 ** np.where(up, k, np.where(down, -k, 0.0))
+        out = np.where(up, np.round(x * scale) / scale, x)
+        return np.where(down, np.round(x / scale) * scale, out)
 
 
 def _to_list(a: np.ndarray) -> list[Any]:
@@ -901,17 +959,93 @@ def _object_cells(a: np.ndarray) -> list[str]:
 
 
 def _write_rows(out: TextIO, plan: _Plan) -> None:
-    """Write header and rows in blocks.
+    """Write the table to a text stream (Parquet: to its binary buffer), in blocks."""
+    if plan.parquet:
+        _write_parquet(out, plan)
+        return
+    out.write(plan.header)
+    if plan.digits is None:
+        _write_rows_printf(out, plan)
+        return
+    from pyarrow import csv as pacsv
+
+    options = pacsv.WriteOptions(include_header=False, quoting_style=plan.quoting)
+    binary = getattr(out, "buffer", None)
+    if binary is not None:
+        out.flush()  # the header first
+    for start in range(0, plan.n, _CHUNK_ROWS):
+        stop = min(start + _CHUNK_ROWS, plan.n)
+        table = _arrow_block(plan, start, stop, rounded=True)
+        if binary is not None:
+            pacsv.write_csv(table, binary, options)
+        else:
+            sink = io.BytesIO()
+            pacsv.write_csv(table, sink, options)
+            out.write(sink.getvalue().decode("utf-8"))
+        if plan.progress is not None:
+            plan.progress(stop - start)
+    if binary is not None:
+        binary.flush()
+
+
+def _arrow_block(plan: _Plan, start: int, stop: int, *, rounded: bool) -> Any:
+    """Rows ``start:stop`` as a pyarrow table: floats rounded for CSV, booleans 0/1 for CSV."""
+    import pyarrow as pa
+
+    cols = []
+    for conv, arr in zip(plan.converters, plan.arrays):
+        a = arr[start:stop]
+        kind = a.dtype.kind
+        if kind == "f":
+            cols.append(pa.array(_round_significant(a, plan.digits) if rounded and plan.digits else a))
+        elif kind == "b":
+            cols.append(pa.array(a if plan.parquet else a.astype(np.int8)))
+        elif kind in "iuU":
+            cols.append(pa.array(a))
+        else:
+            cols.append(pa.array(conv(a), type=pa.string()))
+    return pa.Table.from_arrays(cols, names=plan.names)
+
+
+def _write_rows_printf(out: TextIO, plan: _Plan) -> None:
+    """Rows with Python's ``%``, in blocks.
 
     Each block is formatted by one ``%`` on a repeated row format: the loop over cells
     runs in C, which beats per-cell Python formatting and ``np.char.mod``.
     """
-    out.write(plan.header)
     for start in range(0, plan.n, _CHUNK_ROWS):
         stop = min(start + _CHUNK_ROWS, plan.n)
         cols = [conv(a[start:stop]) for conv, a in zip(plan.converters, plan.arrays)]
         cells = tuple(itertools.chain.from_iterable(zip(*cols)))
         out.write((plan.row_format * (stop - start)) % cells)
+        if plan.progress is not None:
+            plan.progress(stop - start)
+
+
+# Rows per Parquet row group (and per progress step).
+_PARQUET_ROWS = 1 << 18
+
+
+def _write_parquet(out: TextIO, plan: _Plan) -> None:
+    import pyarrow.parquet as pq
+
+    binary = getattr(out, "buffer", out)
+    out.flush()
+    writer = None
+    try:
+        for start in range(0, max(plan.n, 1), _PARQUET_ROWS):
+            stop = min(start + _PARQUET_ROWS, plan.n)
+            table = _arrow_block(plan, start, stop, rounded=False)
+            if writer is None:
+                schema = table.schema.with_metadata(plan.metadata or {})
+                writer = pq.ParquetWriter(binary, schema)
+            writer.write_table(table.cast(schema))
+            if plan.progress is not None and stop > start:
+                plan.progress(stop - start)
+    finally:
+        if writer is not None:
+            writer.close()
+    binary.flush()
 
 
 def _write_atomic(path: str, plan: _Plan) -> None:
