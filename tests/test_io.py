@@ -586,3 +586,130 @@ def test_write_to_stream_leaves_it_open() -> None:
     buf = io.StringIO()
     write_table({"t": [0.5]}, buf)
     assert not buf.closed and buf.getvalue() == "t\n0.5\n"
+
+
+# ------------------------------------------------------------- time: repeats, scale, cuts
+
+
+def _log_text(t: np.ndarray, extra: str = "") -> str:
+    rng = np.random.default_rng(11)
+    w = rng.normal(size=(len(t), 6)) * 0.1
+    rows = "".join(f"{ti!r},{','.join(repr(x) for x in wi)}{extra}\n" for ti, wi in zip(t.tolist(), w.tolist()))
+    return f"{HEADER}{',note' if extra else ''}\n{rows}"
+
+
+def test_repeated_stamps_are_kept_counted_and_located(tmp_path: Path) -> None:
+    t = np.arange(50) * 1e-3
+    t[[10, 11, 30]] = t[[9, 9, 29]]  # lines 11, 12 and 31 repeat the stamp before
+    path = _write(tmp_path, _log_text(t))
+    log = read_log(path)
+    np.testing.assert_array_equal(log.t, t)
+    assert log.repeated_t == 3
+    assert log.warnings == (
+        f"{path}: 3 repeated time stamps (the first on line 12: t = 0.009 s as on the line before); kept in file order",
+    )
+
+
+def test_repeated_stamp_in_a_file_with_quoted_cells_names_the_row(tmp_path: Path) -> None:
+    path = _write(tmp_path, f'{HEADER},note\n0,1,2,3,4,5,6,"a\nb"\n0.001,1,2,3,4,5,6,x\n0.001,1,2,3,4,5,6,x\n')
+    log = read_log(path)
+    assert log.repeated_t == 1
+    assert "(the first on data row 3: t = 0.001 s as on the row before)" in log.warnings[0]
+
+
+def test_slow_parser_also_accepts_repeats(tmp_path: Path) -> None:
+    # a text cell the fast path cannot take ("1_0" is a number to Python, not to pyarrow)
+    path = _write(tmp_path, f"{HEADER}\n0,1_0,2,3,4,5,6\n0,1,2,3,4,5,6\n1,1,2,3,4,5,6\n")
+    log = read_log(path)
+    np.testing.assert_array_equal(log.wrench[:, 0], [10, 1, 1])
+    assert log.repeated_t == 1 and "line 3" in log.warnings[0]
+
+
+@pytest.mark.parametrize("rate", [10.0, 50.0, 1000.0, 7000.0, 20000.0])
+def test_plausible_time_scale_gives_no_warning(tmp_path: Path, rate: float) -> None:
+    t = 1.7e9 + np.arange(40) / rate  # epoch seconds are seconds
+    assert read_log(_write(tmp_path, _log_text(t))).warnings == ()
+
+
+@pytest.mark.parametrize(
+    ("scale", "rate", "guess"),
+    [
+        (1e3, 1000.0, "if t is in milliseconds 1e+03 Hz"),
+        (1e3, 50.0, "if t is in milliseconds 50 Hz"),
+        (1e6, 1000.0, "in microseconds 1e+03 Hz"),
+        (1e9, 7000.0, "in nanoseconds 7e+03 Hz"),
+    ],
+)
+def test_time_in_ms_us_or_ns_is_reported(tmp_path: Path, scale: float, rate: float, guess: str) -> None:
+    t = np.arange(40) / rate * scale + (1.7e18 if scale == 1e9 else 0.0)  # epoch ns
+    path = _write(tmp_path, _log_text(t))
+    (note,) = read_log(path).warnings
+    assert note.startswith(f"{path}: column 't': median step ")
+    assert "implausible for a force/torque log (expected 2 Hz to 100 kHz with t in seconds)" in note
+    assert guess in note, note
+    assert note.endswith("Give t in seconds: the tare duration and every time window are in seconds")
+
+
+def test_log_cut_inside_its_last_number_is_reported(tmp_path: Path) -> None:
+    text = _log_text(np.arange(30) * 1e-3)
+    whole = _write(tmp_path, text.rstrip("\n"), "whole.csv")  # no final line break, nothing cut
+    assert read_log(whole).warnings == ()
+    last = text.rstrip("\n").rsplit("\n", 1)[1]
+    cut_text = text.rstrip("\n")[: -(len(last.rsplit(",", 1)[1]) - 3)]  # the last number keeps 3 characters
+    cut = _write(tmp_path, cut_text, "cut.csv")
+    log = read_log(cut)
+    assert len(log.t) == 30  # the row is kept ...
+    (note,) = log.warnings  # ... and said
+    assert note.startswith(f"{cut}:31: the file ends inside this line (no line break after it) and its last cell ")
+    assert "the log was probably cut while being written" in note
+
+
+def test_log_cut_inside_its_last_row_is_an_error_that_says_so(tmp_path: Path) -> None:
+    text = _log_text(np.arange(30) * 1e-3).rstrip("\n")
+    path = _write(tmp_path, text[: text.rfind(",") - 2])
+    assert _error(path) == (
+        f"{path}:31: expected 7 cells (one per header column), got 6 "
+        "(the file ends inside line 31, with no line break after it: was it cut while being written?)"
+    )
+    path = _write(tmp_path, text[: text.rfind(",") + 2] + "e")  # "0.e"-like: a number cut after its e
+    assert _error(path).endswith("(the file ends inside line 31, with no line break after it: was it cut while being written?)")
+
+
+# ----------------------------------------------------- the fast path accepts what the careful one does
+
+_CELLS = st.one_of(
+    st.floats(allow_nan=False, allow_infinity=False).map(repr),
+    st.floats(-1e6, 1e6).map(lambda x: f"{x:.6g}"),
+    st.sampled_from(
+        ["1", "+1", "-0", ".5", "5.", "1e5", "1E-5", "1e", " 1", "1 ", "1_0", "0x10", "inf", "-nan", "NaN", "",
+         "1,5", '"2.5"', "1e400", "1e-400", "١", "1d5", "--1", "0001.5", "+.5e+3", "nan", "NA", "null"]
+    ),  # fmt: skip
+)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.lists(_CELLS, min_size=7, max_size=7), min_size=1, max_size=6), st.booleans())
+def test_fast_and_careful_parsers_agree(tmp_path_factory: pytest.TempPathFactory, rows: list[list[str]], increasing: bool) -> None:
+    """pyarrow's reader never accepts what the row-by-row parser rejects, nor reads another value."""
+    if increasing:
+        for i, row in enumerate(rows):
+            row[0] = str(i)
+    path = _write(tmp_path_factory.mktemp("agree"), f"{HEADER},note\n" + "".join(",".join(r) + ",x\n" for r in rows))
+    careful: Log | str
+    try:
+        text = Path(path).read_text()
+        t, w, extra, _, _ = sio._parse(text, path)
+        careful = Log(t=t, wrench=w, extra=extra, source=path, units="si")
+    except InputError as exc:
+        careful = str(exc)
+    try:
+        fast: Log | str = read_log(path)
+    except InputError as exc:
+        fast = str(exc)
+    if isinstance(careful, str):
+        assert fast == careful
+    else:
+        assert isinstance(fast, Log), fast
+        np.testing.assert_array_equal(fast.t, careful.t)
+        np.testing.assert_array_equal(fast.wrench, careful.wrench)
+        assert fast.extra == careful.extra

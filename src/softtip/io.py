@@ -400,7 +400,7 @@ def _time_notes(t: NDArray[np.float64], source: str, first_line: int | None) -> 
         i = int(np.argmax(repeated)) + 1
         notes.append(
             f"{source}: {n_repeated} repeated time stamp{'s' if n_repeated > 1 else ''} (the first on {where(i)}: "
-            f"t = {t[i]!r} s as on the line before); kept in file order"
+            f"t = {float(t[i]):.10g} s as on the {'line' if first_line is not None else 'row'} before); kept in file order"
         )
     moving = step[step > 0]
     if len(moving) >= 2:
@@ -511,14 +511,14 @@ def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None) 
         bad = ~np.isfinite(block[:, i])
         if bad.any():
             row = int(np.argmax(bad))
-            raise InputError(f"{where}, row {row + 1}: expected a finite number, got {block[row, i]!r}")
+            raise InputError(f"{where}, row {row + 1}: expected a finite number, got {float(block[row, i])!r}")
     t = block[:, 0]
     back = np.diff(t) < 0
     if back.any():
         row = int(np.argmax(back)) + 1
         raise InputError(
             f"{source}: column 't', row {row + 1}: expected t non-decreasing (a stamp may repeat, not go back), "
-            f"got t = {t[row]!r} at row {row + 1} after t = {t[row - 1]!r} at row {row}"
+            f"got t = {float(t[row])!r} at row {row + 1} after t = {float(t[row - 1])!r} at row {row}"
         )
     extra = {
         names[j]: table.column(j).to_numpy(zero_copy_only=False) for j in range(len(names)) if j not in index.values()
