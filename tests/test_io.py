@@ -669,10 +669,14 @@ def test_log_cut_inside_its_last_row_is_an_error_that_says_so(tmp_path: Path) ->
     path = _write(tmp_path, text[: text.rfind(",") - 2])
     assert _error(path) == (
         f"{path}:31: expected 7 cells (one per header column), got 6 "
-        "(the file ends inside line 31, with no line break after it: was it cut while being written?)"
+        "(the file ends inside line 31, with no line break after it: was it cut while being written? "
+        "Delete that line to use the rest)"
     )
     path = _write(tmp_path, text[: text.rfind(",") + 2] + "e")  # "0.e"-like: a number cut after its e
-    assert _error(path).endswith("(the file ends inside line 31, with no line break after it: was it cut while being written?)")
+    assert _error(path).endswith(
+        "(the file ends inside line 31, with no line break after it: was it cut while being written? "
+        "Delete that line to use the rest)"
+    )
 
 
 # ----------------------------------------------------- the fast path accepts what the careful one does
