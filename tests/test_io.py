@@ -717,3 +717,55 @@ def test_fast_and_careful_parsers_agree(tmp_path_factory: pytest.TempPathFactory
         np.testing.assert_array_equal(fast.t, careful.t)
         np.testing.assert_array_equal(fast.wrench, careful.wrench)
         assert fast.extra == careful.extra
+
+
+_GOOD = _log_text(np.arange(12) * 1e-3, ',"a, ""b"""')
+
+
+@settings(max_examples=80, deadline=None)
+@given(
+    st.lists(
+        st.tuples(
+            st.sampled_from(["delete", "insert", "replace", "cut", "dup-line"]),
+            st.integers(0, len(_GOOD) - 1),
+            st.sampled_from(list(',"\n\r -.e9x\x00\ufeff#') + ["nan", "\u00e9"]),
+        ),
+        min_size=1,
+        max_size=4,
+    )
+)
+def test_mutated_logs_read_cleanly_or_fail_cleanly(tmp_path_factory: pytest.TempPathFactory, edits: list) -> None:
+    """Random damage to a good log: an InputError or a valid Log, identical to the careful parser's."""
+    text = _GOOD
+    for kind, at, piece in edits:
+        at = min(at, len(text))
+        if kind == "delete":
+            text = text[:at] + text[at + 1 :]
+        elif kind == "insert":
+            text = text[:at] + piece + text[at:]
+        elif kind == "replace":
+            text = text[:at] + piece + text[at + 1 :]
+        elif kind == "cut":
+            text = text[: max(at, 1)]
+        else:
+            start = text.rfind("\n", 0, at) + 1
+            end = text.find("\n", at)
+            end = len(text) if end < 0 else end + 1
+            text = text[:end] + text[start:end] + text[end:]
+    path = _write(tmp_path_factory.mktemp("mut"), text)
+    try:
+        log = read_log(path)
+    except InputError as exc:
+        message = str(exc)
+        assert message.startswith(path + ":"), message
+        return
+    assert np.isfinite(log.t).all() and np.isfinite(log.wrench).all() and (np.diff(log.t) >= 0).all()
+    t, w, extra, _, _ = sio._parse(_decode_for_test(path), path)
+    np.testing.assert_array_equal(log.t, t)
+    np.testing.assert_array_equal(log.wrench, w)
+    assert log.extra == extra
+    assert log.repeated_t == int(np.count_nonzero(np.diff(t) == 0))
+
+
+def _decode_for_test(path: str) -> str:
+    return sio._decode(Path(path).read_bytes(), path)

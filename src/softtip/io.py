@@ -350,7 +350,10 @@ def _parse_arrow(
     if end <= start:
         return None  # header only: the text parser words it
     breaks = [i for i in (data.find(b"\n", end), data.find(b"\r", end)) if i >= 0]
-    end = min(breaks) if breaks else len(data)
+    if data.find(b'"', max(data.rfind(b"\n", 0, end), data.rfind(b"\r", 0, end), start), end) >= 0:
+        end = len(data)  # a quote on the last line may be open: leave the end to the parsers
+    else:
+        end = min(breaks) if breaks else len(data)
     names = header.names
     types = {name: pa.float64() if j in index.values() else pa.string() for j, name in enumerate(names)}
     try:
