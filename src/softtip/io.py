@@ -938,9 +938,11 @@ def _needs_quotes(arr: np.ndarray) -> bool:
 def _round_significant(x: np.ndarray, digits: int) -> np.ndarray:
     """``x`` rounded to ``digits`` significant decimal digits, as the nearest float64.
 
-    ``m / 10**k`` (or ``m * 10**k``) with ``10**k`` exact is correctly rounded, so the
-    result's shortest text has at most ``digits`` digits. Zeros, NaN, infinities and values
-    below 1e-22 · 10**digits are left as they are.
+    ``m / 10**k`` (or ``m * 10**k``) with ``10**k`` exact (``|k|`` ≤ 22) is correctly
+    rounded, so the result's shortest text has at most ``digits`` digits; values beyond
+    that range (below 1e-13 or from 1e32 on, for 10 digits) go through Python's printf one
+    by one. Zeros, NaN and infinities are left as they are. Where ``x * 10**k`` lands within
+    its rounding error of a tie the last digit may differ from printf's by one.
     """
     if digits >= 17:
         return x
@@ -950,7 +952,11 @@ def _round_significant(x: np.ndarray, digits: int) -> np.ndarray:
         down = (k < 0) & (k >= -22)
         scale = 10.0 ** np.where(up, k, np.where(down, -k, 0.0))
         out = np.where(up, np.round(x * scale) / scale, x)
-        return np.where(down, np.round(x / scale) * scale, out)
+        out = np.where(down, np.round(x / scale) * scale, out)
+        far = np.isfinite(k) & ~up & ~down
+    if far.any():
+        out[far] = [float(f"%.{digits}g" % v) for v in x[far].tolist()]
+    return out
 
 
 def _to_list(a: np.ndarray) -> list[Any]:
@@ -1012,7 +1018,7 @@ def _arrow_block(plan: _Plan, start: int, stop: int, *, rounded: bool) -> Any:
     import pyarrow as pa
 
     cols = []
-    for conv, arr in zip(plan.converters, plan.arrays):
+    for arr in plan.arrays:
         a = arr[start:stop]
         kind = a.dtype.kind
         if kind == "f":
@@ -1021,8 +1027,9 @@ def _arrow_block(plan: _Plan, start: int, stop: int, *, rounded: bool) -> Any:
             cols.append(pa.array(a if plan.parquet else a.astype(np.int8)))
         elif kind in "iuU":
             cols.append(pa.array(a))
-        else:
-            cols.append(pa.array(conv(a), type=pa.string()))
+        else:  # their text, unquoted: pyarrow quotes
+            cells = [x.decode("utf-8", "replace") if isinstance(x, bytes) else str(x) for x in a.tolist()]
+            cols.append(pa.array(cells, type=pa.string()))
     return pa.Table.from_arrays(cols, names=plan.names)
 
 
