@@ -768,3 +768,20 @@ def test_mutated_logs_read_cleanly_or_fail_cleanly(tmp_path_factory: pytest.Temp
 
 def _decode_for_test(path: str) -> str:
     return sio._decode(Path(path).read_bytes(), path)
+
+
+@pytest.mark.parametrize("name", ["t.csv", "t.parquet"])
+def test_rows_go_to_a_binary_file_too(tmp_path: Path, name: str) -> None:
+    """What an atomic writer hands over may be a binary file: same bytes as a text one."""
+    cols = {"t": np.arange(3.0) / 7, "state": np.array(["none", "line", "point"]), "ok": np.array([1, 0, 1]) > 0}
+    plan = sio._plan_table(cols, "%.10g")
+    plan.parquet = name.endswith(".parquet")
+    with open(tmp_path / ("b" + name), "wb") as fh:
+        sio._write_rows(fh, plan)
+    write_table(cols, tmp_path / name)
+    if plan.parquet:
+        import pyarrow.parquet as pq
+
+        assert pq.read_table(tmp_path / ("b" + name)).equals(pq.read_table(tmp_path / name))
+    else:
+        assert (tmp_path / ("b" + name)).read_bytes() == (tmp_path / name).read_bytes()
