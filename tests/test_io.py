@@ -785,3 +785,13 @@ def test_rows_go_to_a_binary_file_too(tmp_path: Path, name: str) -> None:
         assert pq.read_table(tmp_path / ("b" + name)).equals(pq.read_table(tmp_path / name))
     else:
         assert (tmp_path / ("b" + name)).read_bytes() == (tmp_path / name).read_bytes()
+
+
+def test_read_reports_progress_in_bytes(tmp_path: Path) -> None:
+    text = _log_text(np.arange(300) * 1e-3)
+    path = _write(tmp_path, text)
+    steps: list[int] = []
+    log = read_log(path, progress=steps.append)
+    assert len(log.t) == 300
+    # every byte between the header line and the last line break
+    assert sum(steps) == len(text.encode()) - len(HEADER) - 2

@@ -284,7 +284,9 @@ def estimate(
     else:
         if os.path.isdir(input_path):
             raise InputError(f"{input_path}: is a directory but not a ROS bag (no metadata.yaml); expected a CSV log or a bag")
-        log = read_log(input_path, units=units)
+        size = os.path.getsize(input_path) if os.path.isfile(input_path) else 0
+        with _progress_bar(size, "reading", unit="B") as bar:
+            log = read_log(input_path, units=units, progress=bar.update)
     for note in log.warnings:  # repeated stamps, an implausible time scale, a cut last line
         click.echo(f"softtip: warning: {note}", err=True)
     if topic is not None and bag_log is None:
@@ -374,13 +376,13 @@ def estimate(
             click.echo(f"softtip: median direction of line samples {ang:+.1f} deg", err=True)
 
 
-def _progress_bar(total: int, what: str, *, file=None, delay: float = 2.0):
+def _progress_bar(total: int, what: str, *, unit: str = " rows", file=None, delay: float = 2.0):
     """A tqdm bar on standard error, shown only on a terminal and only after ``delay`` s."""
     from tqdm import tqdm
 
     file = sys.stderr if file is None else file
     return tqdm(
-        total=total, desc=f"softtip: {what}", unit=" rows", unit_scale=True, file=file, delay=delay,
+        total=total, desc=f"softtip: {what}", unit=unit, unit_scale=True, file=file, delay=delay,
         disable=not file.isatty(), leave=False,
     )  # fmt: skip
 

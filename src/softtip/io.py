@@ -118,7 +118,12 @@ class Log:
 # reading
 
 
-def read_log(path: str | os.PathLike[str] | TextIO, units: str | None = None) -> Log:
+def read_log(
+    path: str | os.PathLike[str] | TextIO,
+    units: str | None = None,
+    *,
+    progress: Callable[[int], object] | None = None,
+) -> Log:
     """Read a force/torque log from a CSV or Parquet file, or a CSV text stream.
 
     Parameters
@@ -132,6 +137,9 @@ def read_log(path: str | os.PathLike[str] | TextIO, units: str | None = None) ->
         kgf·mm; 1 kgf = 9.80665 N). ``t`` is always in seconds. ``None`` (default): SI, or
         for Parquet the units its metadata names (``softtip.units``); a Parquet file whose
         metadata names other units than ``units`` is an error.
+    progress : callable, optional
+        Called with the number of bytes parsed after each block of a CSV file (e.g.
+        ``tqdm.update`` with the file's size as total).
 
     Returns
     -------
@@ -161,7 +169,7 @@ def read_log(path: str | os.PathLike[str] | TextIO, units: str | None = None) ->
         return _read_parquet(path, source, units)  # type: ignore[arg-type]
     units = units or "si"
     data = _read_data(path, source)
-    parsed = _parse_arrow(data, source) if isinstance(data, bytes) else None
+    parsed = _parse_arrow(data, source, progress) if isinstance(data, bytes) else None
     if parsed is None:  # something is off (or a stream that is not UTF-8-encodable): say what
         text = _decode(data, source) if isinstance(data, bytes) else _strip_bom(data)
         parsed = _parse(text, source)
@@ -317,7 +325,7 @@ _HEADER_PREFIX = 1 << 16
 
 
 def _parse_arrow(
-    data: bytes, source: str
+    data: bytes, source: str, progress: Callable[[int], object] | None = None
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], dict[str, list[str]], int, bool] | None:
     """Parse a well-formed CSV log with pyarrow; ``None`` at the first oddity of any kind.
 
@@ -354,9 +362,10 @@ def _parse_arrow(
         end = min(breaks) if breaks else len(data)
     names = header.names
     types = {name: pa.float64() if j in index.values() else pa.string() for j, name in enumerate(names)}
+    body = _Counting(memoryview(data)[start:end], progress)
     try:
-        table = pacsv.read_csv(
-            pa.py_buffer(memoryview(data)[start:end]),
+        reader = pacsv.open_csv(  # block by block, so that progress can be shown
+            body,
             # one thread: faster than pyarrow's default threads on a busy 2-core machine
             read_options=pacsv.ReadOptions(column_names=names, use_threads=False),
             parse_options=pacsv.ParseOptions(newlines_in_values=True, ignore_empty_lines=False),
@@ -364,6 +373,7 @@ def _parse_arrow(
                 column_types=types, check_utf8=True, strings_can_be_null=False, quoted_strings_can_be_null=False
             ),
         )
+        table = pa.Table.from_batches(list(reader), schema=reader.schema)
     except (pa.ArrowException, ValueError):
         return None
     n = table.num_rows
@@ -380,6 +390,25 @@ def _parse_arrow(
     extra = {names[j]: table.column(j).to_pylist() for j in range(len(names)) if j not in index.values()}
     quoted = data.find(b'"', start, end) >= 0
     return t, wrench, extra, header.data_base + 1, quoted
+
+
+class _Counting(io.RawIOBase):
+    """A read-only view of bytes that reports how many were read."""
+
+    def __init__(self, view: memoryview, progress: Callable[[int], object] | None) -> None:
+        super().__init__()
+        self._view, self._pos, self._progress = view, 0, progress
+
+    def readable(self) -> bool:
+        return True
+
+    def read(self, size: int = -1) -> bytes:
+        end = len(self._view) if size is None or size < 0 else min(len(self._view), self._pos + size)
+        chunk = bytes(self._view[self._pos : end])
+        self._pos = end
+        if self._progress is not None and chunk:
+            self._progress(len(chunk))
+        return chunk
 
 
 def _end_of_content(data: bytes) -> int:
