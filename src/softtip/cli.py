@@ -381,9 +381,16 @@ def _progress_bar(total: int, what: str, *, unit: str = " rows", file=None, dela
     from tqdm import tqdm
 
     file = sys.stderr if file is None else file
+    tty = file.isatty()
+    size = {}
+    try:
+        if tty and os.get_terminal_size(file.fileno()).lines <= 0:  # a pty with no size: tqdm would draw nothing
+            size = {"ncols": 80, "nrows": 20}
+    except (OSError, ValueError, AttributeError):
+        size = {"ncols": 80, "nrows": 20}
     return tqdm(
         total=total, desc=f"softtip: {what}", unit=unit, unit_scale=True, file=file, delay=delay,
-        disable=not file.isatty(), leave=False,
+        disable=not tty, leave=False, **size,
     )  # fmt: skip
 
 
