@@ -213,11 +213,24 @@ def test_config_rejects_nonsense():
         Estimator("murakami2006", EstimatorConfig(lowpass_hz=5.0))
 
 
-def test_stream_rejects_time_going_back():
+def test_stream_accepts_repeated_time_and_rejects_time_going_back():
     est = Estimator("murakami2006")
     est.update(0.0, np.zeros(6))
-    with pytest.raises(ValueError, match="time must increase"):
-        est.update(0.0, np.zeros(6))
+    est.update(0.0, np.zeros(6))  # a repeated stamp (a driver's duplicate) is accepted and counted
+    assert est.repeated_stamps == 1
+    with pytest.raises(ValueError, match="time must not go back"):
+        est.update(-0.001, np.zeros(6))
+
+
+def test_repeated_stamps_batch_equals_stream():
+    g = synthetic_grasp(angle_deg=30.0, seed=3)
+    t = g.t.copy()
+    t[[100, 250, 251]] = t[[99, 249, 249]]  # three repeated stamps, one of them twice in a row
+    for config in (EstimatorConfig(), EstimatorConfig(lowpass_hz=10.0, sample_rate=50.0)):
+        assert_stream_equals_batch(t, g.wrench, "murakami2006", config)
+    assert estimate(t, g.wrench).repeated_stamps == 3
+    with pytest.raises(ValueError, match="time must not go back: sample 11"):
+        estimate(np.r_[t[:11], t[9], t[12:]], g.wrench)
 
 
 def test_log_shorter_than_the_tare_is_all_taring():

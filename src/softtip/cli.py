@@ -695,6 +695,9 @@ def _register_commands() -> None:
 
     for command in (simulate, calibrate, calibrate_payload):
         main.add_command(command)
+    from softtip.cli_fuse import register
+
+    register(main)
 
 
 _register_commands()

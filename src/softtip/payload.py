@@ -30,7 +30,7 @@ from __future__ import annotations
 import math
 import os
 import sys
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -485,12 +485,14 @@ class CompensatedSource:
     ----------
     source : iterable of Reading or (t, wrench)
         The raw source (its ``rate_hz``, ``name`` and ``close`` are passed through).
-    orientations : iterable of 4 floats
-        ``qw, qx, qy, qz`` of each sample, in step with ``source``.
+    orientations : iterable of 4 floats, or a callable
+        ``qw, qx, qy, qz`` of each sample, in step with ``source``; or a function of the
+        sample's time ``t`` (s) returning them — the robot's current sensor orientation from
+        its joint states, an IMU, or a transform listener.
     payload : Payload
     """
 
-    def __init__(self, source, orientations: Iterable, payload: Payload) -> None:
+    def __init__(self, source, orientations: Iterable | Callable[[float], Sequence[float]], payload: Payload) -> None:
         self.source = source
         self.orientations = orientations
         self.compensate = PayloadCompensator(payload)
@@ -501,6 +503,11 @@ class CompensatedSource:
         from softtip.sources import readings
 
         comp = self.compensate
+        if callable(self.orientations):
+            orientation = self.orientations
+            for reading in readings(self.source):
+                yield reading._replace(wrench=comp(reading.wrench, orientation(reading.t)))
+            return
         for reading, q in zip(readings(self.source), self.orientations):
             yield reading._replace(wrench=comp(reading.wrench, q))
 
