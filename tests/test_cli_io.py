@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import io
 import os
+import select
 import subprocess
 import sys
 from pathlib import Path
@@ -99,12 +100,14 @@ def test_progress_bar_only_on_a_terminal() -> None:
     assert plain.getvalue() == ""
 
     master, slave = os.openpty()
+    shown = ""
     try:
         with open(slave, "w", closefd=False) as tty, _progress_bar(100, "writing", file=tty, delay=0.0) as bar:
             bar.update(40)
             bar.refresh()
             tty.flush()
-            shown = os.read(master, 4096).decode()
+            while "40.0/100" not in shown and select.select([master], [], [], 5.0)[0]:
+                shown += os.read(master, 4096).decode()
     finally:
         os.close(master)
         os.close(slave)
