@@ -663,6 +663,12 @@ def test_log_cut_inside_its_last_number_is_reported(tmp_path: Path) -> None:
     assert "the log was probably cut while being written" in note
 
 
+def test_short_last_cell_of_a_counter_column_is_not_a_cut(tmp_path: Path) -> None:
+    rows = "".join(f"{i * 1e-3!r},0.1234,0.1,0.1,0.1,0.1,0.1,{10 + i}\n" for i in range(20))
+    path = _write(tmp_path, f"{HEADER},trial\n{rows}0.02,0.1234,0.1,0.1,0.1,0.1,0.1,9")  # no final line break
+    assert read_log(path).warnings == ()
+
+
 def test_log_cut_inside_its_last_row_is_an_error_that_says_so(tmp_path: Path) -> None:
     text = _log_text(np.arange(30) * 1e-3).rstrip("\n")
     path = _write(tmp_path, text[: text.rfind(",") - 2])

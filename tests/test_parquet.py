@@ -10,7 +10,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from softtip.errors import InputError
-from softtip.io import PARQUET_FINGERTIP_KEY, PARQUET_UNITS_KEY, read_log, write_table
+from softtip.io import PARQUET_UNITS_KEY, read_log, write_table
 from softtip.units import KGF, KGF_MM
 
 WRENCH = ("fx", "fy", "fz", "mx", "my", "mz")

@@ -478,9 +478,14 @@ def _cut_last_line(data: bytes, source: str, n_rows: int) -> str | None:
     # the lines before (a window of bytes; its first line may be partial, or the header)
     before = data[max(0, last_break - 200 * (len(last) + 1)) : last_break + 1].splitlines()[1:][-100:]
     ncells = last.count(b",") + 1
-    lengths = [len(line.rsplit(b",", 1)[-1].strip()) for line in before if line.count(b",") + 1 == ncells]
+    cells = [line.rsplit(b",", 1)[-1].strip() for line in before if line.count(b",") + 1 == ncells]
     cell = last.rsplit(b",", 1)[-1].strip()
-    if len(lengths) < 3 or len(cell) >= min(lengths):
+    # only a column of measured values (a decimal point or an exponent in every cell), not
+    # counters, flags or text, whose lengths vary by nature
+    if len(cells) < 3 or not all(b"." in c or b"e" in c.lower() for c in cells):
+        return None
+    lengths = [len(c) for c in cells]
+    if len(cell) >= min(lengths):
         return None
     line = data.count(b"\n") + 1
     return (
