@@ -27,9 +27,11 @@ work, so ranges): pyarrow's C++ CSV reader on one thread parses it in 0.27–0.3
 default threads 0.37–0.47 s, pandas' C engine 0.27–0.47 s, softtip's former hand-written
 Python reader 3.8–4.3 s. pyarrow is needed for Parquet anyway and pandas is not otherwise
 used, so CSV goes through pyarrow; the Python parser stays only to word an error (and for
-the odd cell pyarrow does not take but Python's ``float`` does, such as ``1_000``). Writing
-the 34 columns of ``softtip estimate`` for 1e6 rows costs about 3.6 s of CPU with pyarrow
-against 17 s with the former Python writer (``benchmarks/bench_core.py`` prints both).
+the odd cell pyarrow does not take but Python's ``float`` does, such as ``1_000``). In one
+run of ``python benchmarks/bench_core.py --only end-to-end`` (same machine, busy) reading
+that log took 0.60 s of CPU against 2.67 s for the former reader, and writing the 34
+columns of ``softtip estimate`` for it 3.49 s against 8.19 s for the former writer
+(Parquet: 0.18 s and 0.67 s).
 
 Output tables are written atomically when going to a path: a failure never leaves a
 partial file behind and never touches an existing file at the destination.
