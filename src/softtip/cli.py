@@ -509,7 +509,7 @@ def _optional(module: str, extra: str):
 
 With --netft HOST softtip reads the calibration (counts per force and torque unit, units)
 from the sensor over HTTP (/netftapi2.xml), streams RDT records over UDP, converts them to
-SI and runs the streaming estimator on every sample (needs softtip[netft]). With --replay
+SI and runs the streaming estimator on every sample. With --replay
 LOG.csv the log is fed through the same path at its recorded rate times --speed (0: as
 fast as possible).
 
@@ -518,12 +518,23 @@ the fingertip untouched when the stream starts; --device-bias also zeroes the se
 itself first.
 
 The terminal view (standard error, redrawn a few times a second when it is a terminal)
-shows the state, contact point, normal, |h|, edge angle ± std, sample rate, lost packets
-(gaps in the RDT sequence) and samples dropped by softtip itself. --record FILE.csv writes
-every sample as it comes (flushed every 0.05 s) with the columns of `softtip estimate`,
-then raw_fx..raw_mz (the untared wrench), seq (RDT sequence or row) and lost (packets
-missing just before this one). Ctrl-C stops cleanly (exit 0); so do --duration and the end
-of a replayed log. No data for --timeout seconds is an error (exit 1).
+shows the state, contact point, normal, |h|, edge angle ± std, sample rate, and what the
+stream went through: packets lost on the network, late and duplicate packets (dropped),
+malformed datagrams, samples dropped by softtip's own queue, the device's status word,
+restarts and F/T-sequence stalls, and the latest warning; the device's rate (comrdtrate)
+is checked against the host clock (a difference over 2 % is warned about). None of these
+ends the stream unless named in --strict (then exit 1).
+
+--record FILE.csv writes every sample as it comes (flushed every 0.05 s, always whole
+lines): t and the raw wrench fx..mz first (the file is a log that `softtip estimate` and
+--replay read as it is), then the columns of `softtip estimate` with its tared wrench as
+fx_tared..mz_tared, then seq (RDT sequence or row), lost and dropped (records missing just
+before this one: on the network or still to come late / dropped by this host), late,
+duplicates and malformed (discarded since the previous row), status (the device's status
+word) and host_time (host receive time, s since the Unix epoch). Ctrl-C, SIGTERM and
+SIGHUP stop cleanly (exit 0, every row taken written), also during discovery or a silent
+stream; so do --duration and the end of a replayed log. No data for --timeout seconds is
+an error (exit 1).
 
 """
     + FRAMES_HELP
@@ -536,6 +547,7 @@ of a replayed log. No data for --timeout seconds is an error (exit 1).
 @click.option("--http-port", type=int, default=80, show_default=True, help="HTTP port of the sensor's web server (calibration).")
 @click.option("--timeout", type=float, default=2.0, show_default=True, metavar="S", help="Give up after S seconds without data from the sensor.")
 @click.option("--device-bias", is_flag=True, help="Send the sensor's own bias (zero) command at start, before softtip's tare.")
+@click.option("--strict", metavar="FAULTS", default="", help="Comma-separated faults that end the stream (exit 1): status, restart, stall, lost, duplicate, late, malformed, dropped, or all. Default: none (counted, warned).")
 @click.option("--duration", type=float, metavar="S", help="Stop after S seconds (default: until Ctrl-C or the end of the replayed log).")
 @click.option("--record", type=click.Path(dir_okay=False), metavar="FILE.csv", help="Record raw samples and estimates to FILE.csv as they come.")
 @click.option("--view/--no-view", default=None, help="Live terminal view (default: when standard error is a terminal).")
@@ -554,6 +566,7 @@ def stream(
     http_port,
     timeout,
     device_bias,
+    strict,
     duration,
     record,
     view,
@@ -567,8 +580,9 @@ def stream(
     import threading
 
     from softtip.live import LiveStats, Recorder, TerminalView, run_live
+    from softtip.netft import FAULTS
     from softtip.pipeline import Estimator
-    from softtip.sources import LogSource, SourceError
+    from softtip.sources import Interrupted, LogSource, SourceError
 
     if (host is None) == (replay is None):
         raise click.UsageError("give either --netft HOST or --replay LOG.csv")
@@ -578,27 +592,41 @@ def stream(
         raise click.UsageError(f"--duration must be positive, got {duration}")
     if not speed >= 0:
         raise click.UsageError(f"--speed must be 0 (as fast as possible) or positive, got {speed}")
+    faults = {f.strip() for f in strict.split(",") if f.strip()}
+    if "all" in faults:
+        faults = set(FAULTS)
+    if faults - set(FAULTS):
+        raise click.UsageError(f"--strict: unknown fault(s) {', '.join(sorted(faults - set(FAULTS)))}; expected some of {', '.join(FAULTS)} or all")
+    if faults and host is None:
+        raise click.UsageError("--strict applies to a live sensor (--netft HOST)")
     fingertip = load_fingertip(tip)
     recorder = Recorder(record) if record is not None else None
     viz = _optional("softtip.viz", "viz") if (rerun_spawn or rerun_save) else None
-    netft = _optional("softtip.netft", "netft") if host is not None else None
 
     stop = threading.Event()
-    # Ctrl-C ends the loop between two samples: the recording stays complete
-    previous = signal.signal(signal.SIGINT, lambda *_: stop.set())
+    # Ctrl-C, SIGTERM and SIGHUP end the loop between two samples (or a wait for one): the
+    # recording stays complete, on a whole line
+    stop_signals = [signal.SIGINT, signal.SIGTERM] + ([signal.SIGHUP] if hasattr(signal, "SIGHUP") else [])
+    previous = {sig: signal.signal(sig, lambda *_: stop.set()) for sig in stop_signals}
     source = None
     try:
         try:
             if replay is not None:
                 if payload is None:
-                    source = LogSource.from_csv(replay, units=units, speed=speed)
+                    source = LogSource.from_csv(replay, units=units, speed=speed, stop=stop)
                 else:
                     from softtip.payload import replay_source
 
                     source = replay_source(replay, units, speed, payload)
                 info = f"(replay x{speed:g})" if speed else "(replay, as fast as possible)"
             else:
-                source = netft.NetFTSource(host, rdt_port=rdt_port, http_port=http_port, timeout=timeout, device_bias=device_bias).open()
+                from softtip.netft import NetFTSource
+
+                try:
+                    source = NetFTSource(host, rdt_port=rdt_port, http_port=http_port, timeout=timeout, device_bias=device_bias, strict=faults, stop=stop)
+                except ValueError as exc:
+                    raise click.UsageError(str(exc)) from None
+                source.open()
                 d = source.info
                 rate = f"{d.rate_hz:g} Hz" if d.rate_hz else "rate unknown"
                 info = f"({d.product}, {d.force_unit} / {d.torque_unit}, {rate})"
@@ -607,7 +635,13 @@ def stream(
             if lowpass is not None and source.rate_hz is None:
                 raise click.UsageError("--lowpass needs the sample rate, which this source does not report")
             estimator = Estimator(fingertip, config)
-            stats = LiveStats(source_name=source.name, info=info, dropped=(lambda: source.dropped) if hasattr(type(source), "dropped") else None)
+            stats = LiveStats(
+                source_name=source.name,
+                info=info,
+                dropped=(lambda: source.dropped) if hasattr(type(source), "dropped") else None,
+                counters=getattr(source, "counters", None),
+                warnings=(lambda: source.warnings) if hasattr(type(source), "warnings") else None,
+            )
             show = sys.stderr.isatty() if view is None else view
             term = TerminalView(stats, interval=0.2, h_threshold=config.h_min, recorder=recorder) if show else None
             on_estimate = None
@@ -618,20 +652,31 @@ def stream(
             recorder = None  # closed by run_live
             if viz is not None:
                 logger.close()
+        except Interrupted:
+            click.echo("softtip: interrupted before the first sample; nothing recorded", err=True)
+            return
         except SourceError as exc:
+            for w in getattr(source, "warnings", None) or []:
+                click.echo(f"softtip: warning: {source.name}: {w}", err=True)
             click.echo(f"softtip: error: {exc}", err=True)
             ctx.exit(1)
     finally:
-        signal.signal(signal.SIGINT, previous)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
         if source is not None and hasattr(source, "close"):
             source.close()
         if recorder is not None:
             recorder.close()
+    for w in summary.warnings:
+        click.echo(f"softtip: warning: {source.name}: {w}", err=True)
     rate = summary.samples / summary.seconds if summary.seconds > 0 else 0.0
     why = {"end": "end of log", "duration": "duration reached", "interrupt": "interrupted"}[summary.reason]
+    c = summary.counters
+    more = "".join(f"{c[k]} {k}, " for k in ("late", "duplicates", "malformed") if k in c)
+    device = "".join(f", {c[k]} {name}" for k, name in (("restarts", "restarts"), ("stalls", "stalled records"), ("status_records", "with a nonzero status")) if c.get(k))
     click.echo(
-        f"softtip: {summary.samples} samples in {summary.seconds:.2f} s ({rate:.1f} Hz), {summary.lost} lost, "
-        f"{summary.dropped} dropped by softtip; {why}" + (f"; recorded -> {record}" if record else ""),
+        f"softtip: {summary.samples} samples in {summary.seconds:.2f} s ({rate:.1f} Hz), {summary.lost} lost, {more}"
+        f"{summary.dropped} dropped by softtip{device}; {why}" + (f"; recorded -> {record}" if record else ""),
         err=True,
     )
 
