@@ -176,3 +176,25 @@ def test_write_zero_rows_and_progress(tmp_path: Path, monkeypatch: pytest.Monkey
     assert steps == [16, 16, 16, 2]
     assert pq.ParquetFile(tmp_path / "p.parquet").num_row_groups == 4
     np.testing.assert_array_equal(read_log(tmp_path / "p.parquet").t, cols["t"])
+
+
+def test_orientation_columns_of_a_parquet_log(tmp_path: Path) -> None:
+    """Gravity compensation reads numeric extra columns; its errors name the row."""
+    from softtip.payload import compensate_log
+
+    n = 50
+    cols = {**_table(n), "qw": np.ones(n), "qx": np.zeros(n), "qy": np.zeros(n), "qz": np.zeros(n)}
+    payload = tmp_path / "p.toml"
+    payload.write_text("[payload]\nmass = 0.01\ncom = [0, 0, 0.01]\n")
+    path = tmp_path / "q.parquet"
+    write_table(cols, path)
+    compensated = compensate_log(read_log(path), payload)
+    np.testing.assert_allclose(compensated.wrench[:, 2] - read_log(path).wrench[:, 2], 0.01 * 9.80665, rtol=1e-3)
+    cols["qw"][6] = 2.0
+    write_table(cols, path)
+    with pytest.raises(InputError) as info:
+        compensate_log(read_log(path), payload)
+    assert str(info.value) == (
+        f"{path}: data row 7: column 'qw': qw, qx, qy, qz = 2.0, 0.0, 0.0, 0.0 has norm 2; expected a unit "
+        "quaternion (norm within 0.001 of 1)"
+    )
