@@ -227,10 +227,13 @@ def _estimator_options(f):
 from a force/torque log.
 
 INPUT is a CSV file with a header row and columns t, fx, fy, fz, mx, my, mz (t in s,
-increasing; extra columns are kept and copied to the output). '-' reads standard input.
-With --example, softtip's shipped example grasp is used instead.
+non-decreasing: repeated stamps are counted and reported; extra columns are kept and copied
+to the output), or a Parquet file with those columns (name ending in .parquet; its
+softtip.units metadata gives the units). '-' reads CSV from standard input. With
+--example, softtip's shipped example grasp is used instead.
 
-The output CSV (standard output unless -o) has the columns t, state (none|point|line),
+The output CSV (standard output unless -o; Parquet when -o ends in .parquet, with the
+units and the fingertip in its key-value metadata) has the columns t, state (none|point|line),
 fx..mz (the wrench after bias removal and filtering, the one the estimates come from),
 rx, ry, rz (contact point, m), nx, ny, nz (outward normal), sigma (spin torque about the
 normal, N·m), hx, hy, hz, h_norm (tangential spin torque, N·m), dx, dy, dz (direction of
@@ -260,13 +263,12 @@ the raw wrench; with --to-bag and no -o no CSV is written.
 )
 @click.argument("input_path", metavar="INPUT", required=False, type=click.Path(allow_dash=True))
 @click.option("--example", is_flag=True, help="Use the shipped example grasp (a 45° line contact, murakami2006 tip) as INPUT.")
-@click.option("-o", "--output", type=click.Path(dir_okay=False, writable=True), help="Output CSV (default: standard output).")
+@click.option("-o", "--output", type=click.Path(dir_okay=False, writable=True), help="Output CSV, or Parquet for a name ending in .parquet (default: CSV on standard output).")
 @click.option(
     "--units",
     type=click.Choice(UNIT_SYSTEMS),
-    default="si",
-    show_default=True,
-    help="Units of the input wrench: si (N, N·m) or kgf-mm (kgf, kgf·mm, the papers').",
+    default=None,
+    help="Units of the input wrench: si (N, N·m) or kgf-mm (kgf, kgf·mm, the papers').  [default: si, or a Parquet INPUT's own]",
 )
 @click.option(
     "--output-units",
@@ -306,7 +308,7 @@ def estimate(
 
     if example == (input_path is not None):
         raise click.UsageError("give either INPUT or --example")
-    if example and units != "si":
+    if example and units not in (None, "si"):
         raise click.UsageError("--units applies to INPUT; the example grasp is in SI")
     if plot_path is not None:
         _check_figure_path(plot_path)
@@ -323,6 +325,7 @@ def estimate(
         bag_log = bag.read_bag(input_path, topic)
         # t counts from the first message; the absolute stamps go along as an extra column
         extra = {"stamp_ns": [str(v) for v in bag_log.stamps_ns.tolist()]}
+        units = units or "si"
         log = Log(t=bag_log.t, wrench=wrench_to_si(bag_log.wrench, units), extra=extra, source=bag_log.source, units=units)
         frames = ", ".join(repr(f) for f in bag_log.frame_ids)
         click.echo(
@@ -335,7 +338,11 @@ def estimate(
     else:
         if os.path.isdir(input_path):
             raise InputError(f"{input_path}: is a directory but not a ROS bag (no metadata.yaml); expected a CSV log or a bag")
-        log = read_log(input_path, units=units)
+        size = os.path.getsize(input_path) if os.path.isfile(input_path) else 0
+        with _progress_bar(size, "reading", unit="B") as bar:
+            log = read_log(input_path, units=units, progress=bar.update)
+    for note in log.warnings:  # repeated stamps, an implausible time scale, a cut last line
+        click.echo(f"softtip: warning: {note}", err=True)
     if topic is not None and bag_log is None:
         raise click.UsageError("--topic applies to bag input only")
     if payload is not None:  # gravity compensation first: the tare then removes only the sensor bias
@@ -390,7 +397,8 @@ def estimate(
                 bag.write_estimates_bag(to_bag, est, log.wrench)
             bag_written = True
         if output is not None or to_bag is None:
-            write_table(columns, output)
+            with _progress_bar(len(est), "writing") as bar:
+                write_table(columns, output, metadata=_parquet_metadata(fingertip, tip, output_units, log), progress=bar.update)
         if plot_tmp is not None:
             os.replace(plot_tmp, plot_path)
             plot_tmp = None
@@ -434,6 +442,36 @@ def estimate(
             line = est.state == 2
             ang = np.degrees(axial_median(est.angle[line]))
             click.echo(f"softtip: median direction of line samples {ang:+.1f} deg", err=True)
+
+
+def _progress_bar(total: int, what: str, *, unit: str = " rows", file=None, delay: float = 2.0):
+    """A tqdm bar on standard error, shown only on a terminal and only after ``delay`` s."""
+    from tqdm import tqdm
+
+    file = sys.stderr if file is None else file
+    tty = file.isatty()
+    size = {}
+    try:
+        if tty and os.get_terminal_size(file.fileno()).lines <= 0:  # a pty with no size: tqdm would draw nothing
+            size = {"ncols": 80, "nrows": 20}
+    except (OSError, ValueError, AttributeError):
+        size = {"ncols": 80, "nrows": 20}
+    return tqdm(
+        total=total, desc=f"softtip: {what}", unit=unit, unit_scale=True, file=file, delay=delay,
+        disable=not tty, leave=False, **size,
+    )  # fmt: skip
+
+
+def _parquet_metadata(fingertip, tip: str, output_units: str, log) -> dict[str, str]:
+    """Key-value metadata of a Parquet output: units, fingertip, input, softtip's version."""
+    from softtip.io import PARQUET_FINGERTIP_KEY, PARQUET_UNITS_KEY
+
+    meta = {PARQUET_UNITS_KEY: output_units, "softtip.tip": str(tip), "softtip.input": log.source, "softtip.version": __version__}
+    try:
+        meta[PARQUET_FINGERTIP_KEY] = fingertip.to_toml()
+    except (NotImplementedError, AttributeError, TypeError, ValueError):  # e.g. a callable surface
+        pass
+    return meta
 
 
 def _check_figure_path(path: str) -> None:

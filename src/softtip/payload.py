@@ -426,7 +426,8 @@ def read_orientation(log, tolerance: float = UNIT_TOLERANCE) -> NDArray[np.float
             f"{log.source}: missing orientation column(s) {', '.join(missing)}; gravity compensation needs "
             f"qw, qx, qy, qz (unit quaternion of the sensor frame in a z-up world frame); extra columns present: {have}"
         )
-    header = _header_line(log.source) if os.path.isfile(log.source) else None
+    csv_file = os.path.isfile(log.source) and not log.source.lower().endswith(".parquet")
+    header = _header_line(log.source) if csv_file else None  # Parquet: rows by number
 
     def where(i: int, col: str) -> str:
         line = f"{log.source}:{header + 1 + i}" if header is not None else f"{log.source}: data row {i + 1}"
@@ -455,7 +456,7 @@ def read_orientation(log, tolerance: float = UNIT_TOLERANCE) -> NDArray[np.float
     if bad.any():
         i = int(np.argmax(bad))
         raise InputError(
-            f"{where(i, 'qw')}: qw, qx, qy, qz = {', '.join(log.extra[c][i].strip() for c in QUATERNION_COLUMNS)} "
+            f"{where(i, 'qw')}: qw, qx, qy, qz = {', '.join(str(log.extra[c][i]).strip() for c in QUATERNION_COLUMNS)} "
             f"has norm {norm[i]:.6g}; expected a unit quaternion (norm within {tolerance:g} of 1)"
         )
     return q / norm[:, None]
