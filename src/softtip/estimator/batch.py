@@ -8,6 +8,7 @@ from numpy.typing import ArrayLike, NDArray
 from softtip._xp import NP
 from softtip.contact import contact_arrays
 from softtip.estimator.config import EstimatorConfig
+from softtip.estimator.depth import depth_points, resolve_depth
 from softtip.estimator.joint import joint_points
 from softtip.estimator.latch import latch_points
 from softtip.estimator.measure import effective_noise, measure, noise_correlation
@@ -75,7 +76,7 @@ def estimate(
     ['line', 'none', 'point']
     """
     tip = load_fingertip(tip)
-    config = config or EstimatorConfig()
+    config = resolve_depth(config or EstimatorConfig(), tip)
     t, w = validate_log(t, wrench)
     n = len(t)
 
@@ -111,7 +112,10 @@ def estimate(
                 latched, fallback, joint_fb = latched & ~moved, fallback & ~moved, contact & ~moved
             normal = tip.normal(point)
             has = np.all(np.isfinite(point), axis=-1)
-        ms = measure(*c, *point.T, *normal.T, noise, config.h_sigmas, config.h_min, config.depth, NP)
+        # depth: friction acts at r − δ n, inside the skin
+        delta, delta_std, from_data = depth_points(t, c, contact, point, normal, config, noise, noise_correlation(sos))
+        eff = point - delta[:, None] * normal
+        ms = measure(*c, *eff.T, *normal.T, noise, config.h_sigmas, config.h_min, None, NP)
 
     located = contact & has & ms.pushing
     pulling = contact & ~located
@@ -143,11 +147,13 @@ def estimate(
         bias=bias,
         tare_force_std=tare_force_std,
         relatched=relatched,
-        depth=keep(ms.depth, located),
+        depth=keep(delta, located),
         joint_conditioning=keep(joint_stats[0], located),
         joint_angle_std=keep(joint_stats[1], located),
         joint_offset_std=keep(joint_stats[2], located),
         joint_residual=keep(joint_stats[3], located),
         joint_fallback=joint_fb & located,
         repeated_stamps=int(np.count_nonzero(np.diff(t) == 0)),
+        depth_std=keep(delta_std, located),
+        depth_from_data=from_data & located,
     )

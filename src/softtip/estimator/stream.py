@@ -16,6 +16,7 @@ from numpy.typing import ArrayLike
 from softtip._xp import PY
 from softtip.contact import contact_kernel
 from softtip.estimator.config import EstimatorConfig
+from softtip.estimator.depth import DepthTracker, resolve_depth
 from softtip.estimator.joint import JointTracker
 from softtip.estimator.latch import LatchTracker
 from softtip.estimator.measure import effective_noise, measure, noise_correlation
@@ -57,7 +58,7 @@ class Estimator:
 
     def __init__(self, tip: Fingertip | str = "murakami2006", config: EstimatorConfig | None = None):
         self.tip = load_fingertip(tip)
-        self.config = config or EstimatorConfig()
+        self.config = resolve_depth(config or EstimatorConfig(), self.tip)
         cfg = self.config
         self._sos = None
         if cfg.lowpass_hz is not None:
@@ -71,6 +72,7 @@ class Estimator:
         self._joint = None
         if cfg.contact_point == "joint":
             self._joint = JointTracker(self.tip, cfg, self._noise, noise_correlation(self._sos))
+        self._depth = None if cfg.depth is None else DepthTracker(cfg, self._noise, noise_correlation(self._sos))
         self.reset()
 
     @property
@@ -83,6 +85,7 @@ class Estimator:
         self._tare.reset()
         self._filter = SosStream(self._sos) if self._sos is not None else None
         self._in_contact = False
+        self._depth_contact = False
         self._had_latch = False
         self._t_prev: float | None = None
         self.repeated_stamps = 0
@@ -143,8 +146,12 @@ class Estimator:
         fx, fy, fz, mx, my, mz = x
         fn = math.sqrt(fx * fx + fy * fy + fz * fz)
         if fn < cfg.contact_threshold:
-            self._in_contact = False
+            self._in_contact = self._depth_contact = False
             return self._none(t, x)
+        depth = self._depth
+        if depth is not None and not self._depth_contact:
+            self._depth_contact = True
+            depth.start_contact()
 
         tip = self.tip
         latched = fallback = relatched = joint_fb = False
@@ -152,6 +159,8 @@ class Estimator:
         if self._track:
             rx, ry, rz, nx, ny, nz, _, valid = contact_kernel(tip, *x, xp=PY)
             if not valid:
+                if depth is not None:
+                    depth.gap()
                 return self._none(t, x, pulling=True)
         else:
             sc = None
@@ -175,11 +184,19 @@ class Estimator:
                     latched = fallback = False
                 joint_fb = not moved
             if point is None:
+                if depth is not None:
+                    depth.gap()
                 return self._none(t, x, pulling=True, relatched=relatched)
             rx, ry, rz = point
             nx, ny, nz = tip._normal_kernel(rx, ry, rz, PY)
 
-        ms = measure(fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, self._noise, cfg.h_sigmas, cfg.h_min, cfg.depth, PY)
+        if depth is None:
+            delta, delta_std, from_data = 0.0, 0.0, False
+            ex, ey, ez = rx, ry, rz
+        else:  # friction acts at r − δ n, inside the skin
+            delta, delta_std, from_data = depth.step(t, x, (rx, ry, rz), (nx, ny, nz))
+            ex, ey, ez = rx - delta * nx, ry - delta * ny, rz - delta * nz
+        ms = measure(fx, fy, fz, mx, my, mz, ex, ey, ez, nx, ny, nz, self._noise, cfg.h_sigmas, cfg.h_min, None, PY)
         if not ms.pushing:
             return self._none(t, x, pulling=True, relatched=relatched)
         if ms.line:
@@ -188,7 +205,7 @@ class Estimator:
             state, d, angle, angle_std = "point", _NAN3, math.nan, math.nan
         return SampleEstimate(
             t, state, tuple(x), (rx, ry, rz), (nx, ny, nz), ms.sigma, (ms.hx, ms.hy, ms.hz), ms.h_norm, ms.h_std, d,
-            angle, angle_std, latched, fallback, False, False, relatched, ms.depth, *stats, joint_fb,
+            angle, angle_std, latched, fallback, False, False, relatched, delta, *stats, joint_fb, delta_std, from_data,
         )  # fmt: skip
 
     def process(self, t: ArrayLike, wrench: ArrayLike) -> list[SampleEstimate]:

@@ -296,6 +296,7 @@ def simulate_grasp(
     direction = np.zeros((n, 3))
     centre = np.full((n, 3), np.nan)
     area, depth, push, slipf = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
+    friction_depth = np.full(n, np.nan)
     in_contact = np.zeros(n, dtype=bool)
     target = np.where(t >= scenario.t_contact, scenario.force_target(t), 0.0)
 
@@ -337,6 +338,7 @@ def simulate_grasp(
         centre[i] = res.pressure_centre
         area[i], depth[i], push[i], slipf[i] = res.contact_area, res.max_depth, x[0], res.slip_fraction
         in_contact[i] = res.in_contact
+        friction_depth[i] = res.friction_depth
         i += 1
 
     truth = GroundTruth(
@@ -352,6 +354,7 @@ def simulate_grasp(
         force_target=target,
         in_contact=in_contact,
         slip_fraction=slipf,
+        friction_depth=friction_depth,
     )
     return SimLog(
         t=t,
