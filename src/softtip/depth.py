@@ -158,7 +158,8 @@ def skin_depth_law(thickness: float) -> DepthLaw:
 def depth_kernel(normal_force, law: DepthLaw, xp):
     """``δ = min((max(F_n, 0) / k)^(1/p), δ_max)`` component-wise (numpy or float)."""
     fn = xp.where(normal_force > 0.0, normal_force, 0.0 * normal_force)
-    d = xp.pow(fn / law.stiffness, 1.0 / law.exponent)
+    # a square root where p = 2 (correctly rounded in both back ends, and cheaper)
+    d = xp.sqrt(fn / law.stiffness) if law.exponent == 2.0 else xp.pow(fn / law.stiffness, 1.0 / law.exponent)
     return xp.where(d > law.max_depth, law.max_depth + 0.0 * d, d)
 
 
@@ -254,11 +255,22 @@ def depth_noise_kernel(frame, noise: SensorNoise):
     )  # fmt: skip
 
 
+#: Largest depth factor a linearisation point may take (the skin's cap bounds δ anyway),
+#: and the steps of the grid the solve starts from.
+KAPPA_MAX = 4.0
+KAPPA_GRID = 16
 #: Fewest samples of a window that may inform the depth.
 MIN_DEPTH_SAMPLES = 5
+#: Relative standard deviation of the depth factor a window determines, for what the
+#: line-contact model leaves out: the lever of the tangential force also carries the
+#: contact's own shift under the load and the object's rolling, not only the depth.
+DEPTH_MODEL_STD = 0.1
+#: rad; how far off the estimated line may be when the tangential force varies along it
+#: (its variation along the line then leaks into the regressor across it).
+DEPTH_MISALIGNMENT = 0.1
 
 
-def depth_solve_kernel(sums, count, cov, prior_std, corr, iterations, xp):
+def depth_solve_kernel(sums, count, cov, corr, iterations, xp):
     """The data's own depth factor ``κ`` of a window, and its variance (module docs).
 
     Parameters
@@ -269,12 +281,11 @@ def depth_solve_kernel(sums, count, cov, prior_std, corr, iterations, xp):
         Samples in the window.
     cov : sequence of 10
         Per-sample noise covariances of :func:`depth_noise_kernel`.
-    prior_std : float
-        Standard deviation of the prior factor (mean 1); the linearisation point of each
-        Gauss–Newton step is the posterior.
     corr : float
         Samples per independent noise sample (1 for white noise).
     iterations : int
+        Gauss–Newton steps, from the best factor of a grid over ``[0, KAPPA_MAX]``, each
+        from the last one's estimate.
     xp : namespace
         :data:`softtip._xp.NP` or :data:`softtip._xp.PY`.
 
@@ -294,8 +305,22 @@ def depth_solve_kernel(sums, count, cov, prior_std, corr, iterations, xp):
     md0, md02 = xp.div(sd0, n), xp.div(sd02, n)
     k1 = xp.maximum(n - 1.0, 0.0)
     margin = corr * _chi2_excess(k1 / corr, xp) + MODEL_MARGIN * k1
-    w0 = 1.0 / (prior_std * prior_std)
+    # start: the factor on a coarse grid whose best line leaves the least residual (the
+    # linearisation about a far-off factor can diverge when the load's lever dominates h)
     kc = 1.0 + 0.0 * n
+    best = None
+    for j in range(KAPPA_GRID + 1):
+        k = KAPPA_MAX * j / KAPPA_GRID
+        m11 = a11 + 2.0 * k * b11 + k * k * c11
+        m12 = a12 + k * (b12 + b21) + k * k * c12
+        m22 = a22 + 2.0 * k * b22 + k * k * c22
+        half = 0.5 * (m11 - m22)
+        low = 0.5 * (m11 + m22) - xp.sqrt(half * half + m12 * m12)
+        if best is None:
+            kc, best = k + 0.0 * n, low
+        else:
+            better = low < best
+            kc, best = xp.where(better, k + 0.0 * n, kc), xp.where(better, low, best)
     kw = var = None
     for _ in range(iterations):
         m11 = a11 + 2.0 * kc * b11 + kc * kc * c11
@@ -326,9 +351,21 @@ def depth_solve_kernel(sums, count, cov, prior_std, corr, iterations, xp):
         var_a = md02 * (u1 * u1 * cgg11 + 2.0 * u1 * u2 * cgg12 + u2 * u2 * cgg22)
         excess = xp.maximum(info_raw - var_a * margin, 0.0)
         info = xp.div(excess, var_r * corr * (1.0 + xp.div(k1 * var_a, excess)))
+        # the residual beyond the noise after the fit (the model's own error) widens it
+        cost = u1 * u1 * m11 + 2.0 * u1 * u2 * m12 + u2 * u2 * m22 - xp.div(say * say, info_raw)
+        info = xp.div(info, 1.0 + xp.div(xp.maximum(cost, 0.0), xp.maximum(n - 2.0, 1.0) * var_r))
         has = xp.logical_and(info > 0.0, n >= MIN_DEPTH_SAMPLES)
         kw = xp.where(has, kc + xp.div(say, info_raw), xp.nan)
-        var = xp.where(has, xp.div(1.0, info), math.inf)
-        post = xp.where(has, xp.div(info * kw + w0, info + w0), 1.0 + 0.0 * n)
-        kc = xp.maximum(post, 0.0)
+        # model error: DEPTH_MODEL_STD, and the tangential force along the line seen across
+        # it through a direction off by DEPTH_MISALIGNMENT (its variation relative to the
+        # variation across the line that informs κ)
+        sgg_e = e1 * e1 * c11 + 2.0 * e1 * e2 * c12 + e2 * e2 * c22
+        sge = e1 * (k11 * e1 + k12 * e2) + e2 * (k21 * e1 + k22 * e2)
+        along = xp.maximum(sgg_e - xp.div(sge * sge, sbb), 0.0)
+        model = DEPTH_MODEL_STD * DEPTH_MODEL_STD + DEPTH_MISALIGNMENT * DEPTH_MISALIGNMENT * xp.div(along, info_raw)
+        var = xp.where(has, xp.div(1.0, info) + model, math.inf)
+        # next linearisation point: the window's own estimate (the posterior would hold it
+        # back toward the prior), within what the skin allows
+        kc = xp.where(has, xp.maximum(kw, 0.0), 1.0 + 0.0 * n)
+        kc = xp.where(kc > KAPPA_MAX, KAPPA_MAX + 0.0 * n, kc)
     return kw, var

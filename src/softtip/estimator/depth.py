@@ -13,7 +13,8 @@ one and the same contact point (a new segment at contact onset and whenever the 
 changes: during the latch's first rise, at a re-latch, at a move of ``joint`` mode). The
 window is solved on a grid of ``depth_window / 10`` from the segment's start (and at its
 first sample); the factor held is the solved window of the segment with the smallest
-variance aged by ``depth_drift``, combined with the prior ``1 ± depth_prior_std``. Between
+variance aged by ``depth_drift``, combined with the prior ``1 ± depth_prior_std`` (at each
+solve; the factor and its relative standard deviation hold until the next). Between
 solves only the sums and ``δ₀`` are updated, so the stream costs O(1) per sample.
 
 ``depth_mode="law"`` is the fixed law (``κ = 1``, no standard deviation); ``"off"`` the
@@ -50,7 +51,7 @@ __all__ = ["tip_depth_law", "resolve_depth", "depth_points", "DepthTracker", "SO
 #: Solves per window length (the grid of the window solves).
 SOLVES_PER_WINDOW = 10
 #: Gauss–Newton steps of a window solve.
-DEPTH_ITERATIONS = 2
+DEPTH_ITERATIONS = 4
 
 
 def tip_depth_law(tip: Fingertip) -> DepthLaw | None:
@@ -86,15 +87,12 @@ def resolve_depth(config: EstimatorConfig, tip: Fingertip) -> EstimatorConfig:
     return dataclasses.replace(config, depth=law, depth_mode="online" if mode == "auto" else mode)
 
 
-def _combine(kappa_h, var_h, prior_std, d0, max_depth, xp):
-    """``(δ, δ_std, from_data)`` from the held factor (NaN/inf: none) and the prior."""
+def _combine(kappa_h, var_h, prior_std, xp):
+    """``(κ, relative std, from_data)`` from the held factor (NaN and inf: none) and the prior."""
     w0 = 1.0 / (prior_std * prior_std)
     wh = xp.where(var_h < math.inf, xp.div(1.0, var_h), 0.0)
     kappa = xp.where(wh > 0.0, xp.div(wh * kappa_h + w0, wh + w0), 1.0)
-    kappa = xp.maximum(kappa, 0.0)
-    delta = kappa * d0
-    delta = xp.where(delta > max_depth, max_depth + 0.0 * delta, delta)
-    return delta, xp.sqrt(xp.div(1.0, wh + w0)) * d0, wh > w0
+    return xp.maximum(kappa, 0.0), xp.sqrt(xp.div(1.0, wh + w0)), wh > w0
 
 
 def depth_points(t, c, contact, point, normal, config: EstimatorConfig, noise: SensorNoise, corr):
@@ -117,8 +115,9 @@ def depth_points(t, c, contact, point, normal, config: EstimatorConfig, noise: S
     if config.depth_mode == "law":
         return d0, zero.copy(), np.zeros(n, dtype=bool)
 
-    kappa_h = np.full(n, np.nan)
-    var_h = np.full(n, np.inf)
+    kappa = np.ones(n)
+    rel = np.full(n, config.depth_prior_std)
+    from_data = np.zeros(n, dtype=bool)
     same = np.zeros(n, dtype=bool)
     same[1:] = has[1:] & has[:-1] & np.all(point[1:] == point[:-1], axis=-1)
     seg_start = has & ~same
@@ -151,7 +150,7 @@ def depth_points(t, c, contact, point, normal, config: EstimatorConfig, noise: S
         sums = [cz[last[k]] - cz[first[k]] for cz in cums]
         count = (last[k] - first[k]).astype(float)
         cov = depth_noise_kernel(tuple(f[s:e][k] for f in frame), noise)
-        kw, var = depth_solve_kernel(sums, count, cov, config.depth_prior_std, corr, DEPTH_ITERATIONS, NP)
+        kw, var = depth_solve_kernel(sums, count, cov, corr, DEPTH_ITERATIONS, NP)
         # held: the solved window of the segment with the smallest aged variance; it
         # replaces the one held when var − drift² (t − t_segment) sets a new minimum
         key = np.full(e - s, np.inf)
@@ -167,12 +166,20 @@ def depth_points(t, c, contact, point, normal, config: EstimatorConfig, noise: S
             best = np.concatenate(([np.inf], np.minimum.accumulate(kk)[:-1]))
             use = kk < best
             held[a:b] = np.maximum.accumulate(np.where(use, np.arange(a, b), -1))
-        got = ok & (held >= 0)
-        hi = held[got]
-        kappa_h[idx[got]] = kap[hi]
-        var_h[idx[got]] = key[hi] + config.depth_drift**2 * (tt[got] - t_seg[got])
-    delta, std, from_data = _combine(kappa_h, var_h, config.depth_prior_std, d0, law.max_depth, NP)
-    return np.where(has, delta, 0.0), np.where(has, std, 0.0), from_data & has
+        # the combination at each solve holds until the next one (of the same segment)
+        got = held[k] >= 0
+        hi = held[k][got]
+        kh = np.full(len(k), np.nan)
+        vh = np.full(len(k), np.inf)
+        kh[got] = kap[hi]
+        vh[got] = key[hi] + config.depth_drift**2 * (tt[k][got] - t_seg[k][got])
+        kc, rc, fc = _combine(kh, vh, config.depth_prior_std, NP)
+        last_solve = np.maximum.accumulate(np.where(solve, np.arange(e - s), -1))
+        pos = np.searchsorted(k, last_solve[ok])
+        kappa[idx[ok]], rel[idx[ok]], from_data[idx[ok]] = kc[pos], rc[pos], fc[pos]
+    delta = kappa * d0
+    delta = np.where(delta > law.max_depth, law.max_depth, delta)
+    return np.where(has, delta, 0.0), np.where(has, rel * d0, 0.0), from_data & has
 
 
 class DepthTracker:
@@ -190,6 +197,8 @@ class DepthTracker:
         self.noise = noise
         self.corr = corr
         self._step = config.depth_window / SOLVES_PER_WINDOW
+        self._window = config.depth_window
+        self._sqrt_law = self.law is not None and self.law.exponent == 2.0
         self.start_contact()
 
     def start_contact(self) -> None:
@@ -204,45 +213,68 @@ class DepthTracker:
 
     def step(self, t: float, x: list[float], point, normal):
         """``(depth, depth_std, from_data)`` of a sample in contact with contact point
-        ``point`` and its normal ``normal``."""
+        ``point`` and its normal ``normal``.
+
+        The hot path is written out (the same operations, in the same order, as
+        :func:`softtip.depth.depth_kernel` and :func:`softtip.depth.depth_products`):
+        plain float arithmetic is several times cheaper than calls and ``map``."""
         law = self.law
-        fx, fy, fz = x[0], x[1], x[2]
+        fx, fy, fz, mx, my, mz = x
         nx, ny, nz = normal
-        d0 = depth_kernel(-(fx * nx + fy * ny + fz * nz), law, PY)
+        if self._sqrt_law:
+            fn = -(fx * nx + fy * ny + fz * nz)
+            d0 = math.sqrt(fn / law.stiffness) if fn > 0.0 else 0.0
+            if d0 > law.max_depth:
+                d0 = law.max_depth
+        else:
+            d0 = depth_kernel(-(fx * nx + fy * ny + fz * nz), law, PY)
         if not self.online:
             return d0, 0.0, False
-        cfg = self.config
         if point != self._point:  # a new segment
-            self._point = point
-            self._frame = depth_frame_kernel(*point, nx, ny, nz, PY)
-            self._cov = None
-            self._hist.clear()
-            self._t_seg = t
-            self._cell = None
-            self._key = math.inf
-            self._kappa = math.nan
-            self._t_held = t
+            self._new_segment(t, point, normal)
         cum = self._cum
         hist = self._hist
         hist.append((t, cum))
-        self._cum = tuple(map(float.__add__, cum, depth_products(fx, fy, fz, x[3], x[4], x[5], self._frame, d0)))
-        start = t - cfg.depth_window
-        while hist[0][0] <= start:
+        t1x, t1y, t1z, t2x, t2y, t2z, a1x, a1y, a1z, a2x, a2y, a2z = self._frame
+        h1 = t1x * mx + t1y * my + t1z * mz - (a1x * fx + a1y * fy + a1z * fz)
+        h2 = t2x * mx + t2y * my + t2z * mz - (a2x * fx + a2y * fy + a2z * fz)
+        g1 = -d0 * (t2x * fx + t2y * fy + t2z * fz)
+        g2 = d0 * (t1x * fx + t1y * fy + t1z * fz)
+        c0, c1, c2, c3, c4, c5, c6, c7, c8, c9, c10, c11 = cum
+        self._cum = (
+            c0 + h1 * h1, c1 + h1 * h2, c2 + h2 * h2, c3 + h1 * g1, c4 + h1 * g2, c5 + h2 * g1, c6 + h2 * g2,
+            c7 + g1 * g1, c8 + g1 * g2, c9 + g2 * g2, c10 + d0, c11 + d0 * d0,
+        )  # fmt: skip
+        start = t - self._window
+        while hist and hist[0][0] <= start:
             hist.popleft()
-            if not hist:
-                break
         cell = math.floor((t - self._t_seg) / self._step)
         if cell != self._cell:
             self._cell = cell
-            if self._cov is None:
-                self._cov = depth_noise_kernel(self._frame, self.noise)
-            old = hist[0][1] if hist else self._cum
-            sums = [a - b for a, b in zip(self._cum, old)]
-            kw, var = depth_solve_kernel(
-                sums, float(len(hist)), self._cov, cfg.depth_prior_std, self.corr, DEPTH_ITERATIONS, PY
-            )
-            key = var - cfg.depth_drift**2 * (t - self._t_seg) if var < math.inf else math.inf
-            if key < self._key:
-                self._key, self._kappa = key, kw
-        var_h = self._key + cfg.depth_drift**2 * (t - self._t_seg) if self._key < math.inf else math.inf
-        return _combine(self._kappa, var_h, cfg.depth_prior_std, d0, law.max_depth, PY)
+            self._solve(t)
+        kappa, rel, from_data = self._held
+        delta = kappa * d0
+        return (law.max_depth if delta > law.max_depth else delta), rel * d0, from_data
+
+    def _new_segment(self, t: float, point, normal) -> None:
+        self._point = point
+        self._frame = depth_frame_kernel(*point, *normal, PY)
+        self._cov = depth_noise_kernel(self._frame, self.noise)
+        self._hist.clear()
+        self._t_seg = t
+        self._cell = None
+        self._key = math.inf
+        self._kappa = math.nan
+
+    def _solve(self, t: float) -> None:
+        cfg = self.config
+        hist = self._hist
+        old = hist[0][1] if hist else self._cum
+        sums = [a - b for a, b in zip(self._cum, old)]
+        kw, var = depth_solve_kernel(sums, float(len(hist)), self._cov, self.corr, DEPTH_ITERATIONS, PY)
+        drift2 = cfg.depth_drift**2
+        key = var - drift2 * (t - self._t_seg) if var < math.inf else math.inf
+        if key < self._key:
+            self._key, self._kappa = key, kw
+        var_h = self._key + drift2 * (t - self._t_seg) if self._key < math.inf else math.inf
+        self._held = _combine(self._kappa, var_h, cfg.depth_prior_std, PY)
