@@ -38,6 +38,10 @@ method | error with softtip's extension``. Sections:
   samples after the load (t > 7 s for a push and a slip, t > 9.5 s for a drag).
   ``--sections friction`` (about 5 minutes on a quiet 2-core machine).
 
+Every section but **friction** and **cost** runs without depth compensation
+(``depth_mode="off"``, or the fixed law where a column says so), as they were measured
+before the online depth became the default.
+
 Room is left for other sections (calibration and gravity: ``bench_calibration.py``).
 """
 
@@ -128,11 +132,11 @@ def depth_section(seed: int = 1) -> None:
 
 
 DEPTH_CONFIGS = (
-    EstimatorConfig(),
-    EstimatorConfig(depth=MURAKAMI2006_DEPTH),
-    EstimatorConfig(contact_point="track"),
-    EstimatorConfig(contact_point="joint"),
-    EstimatorConfig(contact_point="joint", depth=MURAKAMI2006_DEPTH),
+    EstimatorConfig(depth_mode="off"),
+    EstimatorConfig(depth_mode="law"),
+    EstimatorConfig(depth_mode="off", contact_point="track"),
+    EstimatorConfig(depth_mode="off", contact_point="joint"),
+    EstimatorConfig(contact_point="joint", depth_mode="law"),
 )
 
 
@@ -147,12 +151,12 @@ def slide_section(seed: int = 1) -> None:
     model = ContactModel(discretise_skin(TIP, 10000), ContactParams()).prepare()
     std = np.asarray(SIM_SENSOR.noise_std)
     configs = (
-        EstimatorConfig(),
-        EstimatorConfig(relatch_distance=3e-3),
-        EstimatorConfig(contact_point="track"),
-        EstimatorConfig(contact_point="joint"),
-        EstimatorConfig(contact_point="joint", joint_max_angle_std=math.radians(3.0)),
-        EstimatorConfig(contact_point="joint", noise=SensorNoise(tuple(std[:3]), tuple(std[3:]))),
+        EstimatorConfig(depth_mode="off"),
+        EstimatorConfig(depth_mode="off", relatch_distance=3e-3),
+        EstimatorConfig(depth_mode="off", contact_point="track"),
+        EstimatorConfig(depth_mode="off", contact_point="joint"),
+        EstimatorConfig(depth_mode="off", contact_point="joint", joint_max_angle_std=math.radians(3.0)),
+        EstimatorConfig(depth_mode="off", contact_point="joint", noise=SensorNoise(tuple(std[:3]), tuple(std[3:]))),
     )
     for name, obj, ang in (("plate 1 mm", Plate(0.001), 0.0), ("plate 1 mm", Plate(0.001), 45.0),
                            ("plate 1 mm", Plate(0.001), -45.0), ("plate 2 mm", Plate(0.002), 0.0)):  # fmt: skip
@@ -193,7 +197,7 @@ def papers_section(seed: int = 2006) -> None:
             log = simulate_grasp(TIP, obj, paper_scenario(math.radians(ang)), rng=seed)
             sel = log.t > HELD
             cells = []
-            for cfg in (EstimatorConfig(), EstimatorConfig(contact_point="joint")):
+            for cfg in (EstimatorConfig(depth_mode="off"), EstimatorConfig(depth_mode="off", contact_point="joint")):
                 est = estimate(log.t, log.wrench, TIP, cfg)
                 m = sel & (est.state > 0)
                 extra = f"; {est.joint_fallback[m].mean():.0%} on the latch" if cfg.contact_point == "joint" else ""
@@ -215,7 +219,7 @@ def start_section(seed: int = 1) -> None:
             t, angle, point = log.t[cut], log.truth.angle[cut], log.truth.contact_point[cut]
             sel = t > HELD
             for mode in ("latch", "track", "joint"):
-                est = estimate(t, log.wrench[cut], TIP, EstimatorConfig(contact_point=mode, bias=log.sensor.bias))
+                est = estimate(t, log.wrench[cut], TIP, EstimatorConfig(depth_mode="off", contact_point=mode, bias=log.sensor.bias))
                 cells.append(_cell(est, angle, point, sel))
             _row(f"{name} {ang:+.0f}°", *cells)
 
@@ -241,7 +245,7 @@ def noise_section() -> None:
             shares, errors = [], []
             for seed in range(3):
                 g = synthetic_grasp(tip, point=cap(polar), rate=7000.0, duration=8.0, noise=real, seed=seed)
-                est = estimate(g.t, g.wrench, tip, EstimatorConfig(contact_point="joint"))
+                est = estimate(g.t, g.wrench, tip, EstimatorConfig(depth_mode="off", contact_point="joint"))
                 squeeze = (g.t > 2.5) & (g.t < 4.4) & (est.state > 0)
                 shares.append(1.0 - est.joint_fallback[squeeze].mean())
                 errors.append(np.max(np.linalg.norm(est.point[g.t > 6.5] - g.point, axis=1)) * 1e3)
@@ -259,7 +263,7 @@ def noise_section() -> None:
         for seed in range(seeds):
             g = synthetic_grasp(tip, point=cap(30.0), rate=rate, seed=seed)
             kw = {} if cutoff is None else {"lowpass_hz": cutoff, "sample_rate": rate}
-            est = estimate(g.t, g.wrench, tip, EstimatorConfig(contact_point="joint", **kw))
+            est = estimate(g.t, g.wrench, tip, EstimatorConfig(depth_mode="off", contact_point="joint", **kw))
             # the held window is the sample where the final point was taken up
             same = np.all(est.point == est.point[-1], axis=1)
             k = len(same) - int(np.argmin(same[::-1])) if not same.all() else 0
@@ -297,11 +301,12 @@ def stream_cost() -> None:
 
     g = synthetic_grasp(angle_deg=30.0, seed=1)
     for label, cfg in (
-        ("latch (default)", EstimatorConfig()),
-        ("latch, re-latch at 3 mm", EstimatorConfig(relatch_distance=3e-3)),
-        ("latch + depth", EstimatorConfig(depth=MURAKAMI2006_DEPTH)),
-        ("track", EstimatorConfig(contact_point="track")),
-        ("joint", EstimatorConfig(contact_point="joint")),
+        ("latch, the papers' method", EstimatorConfig(depth_mode="off")),
+        ("latch + online depth (default)", EstimatorConfig()),
+        ("latch, re-latch at 3 mm", EstimatorConfig(depth_mode="off", relatch_distance=3e-3)),
+        ("latch + fixed depth law", EstimatorConfig(depth_mode="law")),
+        ("track", EstimatorConfig(depth_mode="off", contact_point="track")),
+        ("joint", EstimatorConfig(depth_mode="off", contact_point="joint")),
     ):
         times = []
         for _ in range(3):

@@ -67,6 +67,7 @@ CASES = {
         depth_window=0.3, depth_prior_std=0.5, depth_drift=0.5, relatch_distance=3e-3, lowpass_hz=8.0, sample_rate=50.0
     ),
     "online-given-law": EstimatorConfig(depth=MURAKAMI2006_DEPTH, depth_mode="online", depth_window=2.0),
+    "joint-online-relatch": EstimatorConfig(contact_point="joint", depth_mode="online", relatch_distance=3e-3),
     "latch-relatch": EstimatorConfig(relatch_distance=3e-3),
     "latch-relatch-tight": EstimatorConfig(relatch_distance=0.3e-3),
     "latch-depth": EstimatorConfig(depth=MURAKAMI2006_DEPTH),

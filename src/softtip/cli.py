@@ -154,7 +154,7 @@ _ESTIMATOR_OPTIONS = [
         help="Take the moment about the point inside the skin where friction acts, removing the spurious "
         "tangential moment of a tangential force. Its depth is learnt per contact from the data, the skin law "
         "(--skin-law) the prior; the depth, depth_std and depth_from_data columns report it. Default: on when "
-        "the fingertip gives a skin (the murakami2006 preset, a file with skin_thickness). "
+        "the fingertip gives a skin (the murakami2006 preset, a file with skin_thickness), in latch mode. "
         "--no-depth-compensation: the papers' method.",
     ),
     click.option(

@@ -67,7 +67,8 @@ class EstimatorConfig:
         ``online``: the depth learnt per contact from the data, the law its prior
         (:mod:`softtip.estimator.depth`); ``law``: the law's depth at the normal force
         (fixed); ``off``: the papers' undeformed contact point. ``auto`` (default):
-        ``online`` when there is a law (``depth`` or the fingertip's), else ``off``.
+        ``online`` in ``latch`` mode when there is a law (``depth`` or the fingertip's),
+        else ``off``.
     depth_window : float
         s; sliding window of the online depth (default 1 s).
     depth_prior_std : float
