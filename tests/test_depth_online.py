@@ -262,3 +262,32 @@ def test_cli_depth_options():
     assert float(d["depth_std"]) > 0.0 and d["depth_from_data"] in ("0", "1")
     bad = _cli("--fixed-depth", "--no-depth-compensation")
     assert bad.returncode == 2 and "contradict" in bad.stderr and not bad.stdout
+
+
+def test_cli_simulates_a_friction_grasp_with_its_truth(tmp_path):
+    import json
+
+    out = tmp_path / "fr.csv"
+    r = subprocess.run(
+        [SOFTTIP, "simulate", "--scenario", "friction", "--object", "plate", "--size",
+         "2mm", "--angle", "30", "--load", "0.4", "--elements", "2500", "--shear-modulus", "2e6", "-o", str(out)],
+        capture_output=True, text=True,
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    truth = json.loads((tmp_path / "fr.truth.json").read_text())
+    assert truth["scenario"]["name"] == "friction-push"
+    fd = [v for v in truth["samples"]["friction_depth_m"] if v is not None]
+    assert 0.5e-3 < fd[-1] < 2.5e-3
+    est = subprocess.run([SOFTTIP, "estimate", str(out)], capture_output=True, text=True)
+    assert est.returncode == 0, est.stderr
+    last = _last_row(est.stdout)
+    assert last["state"] == "line" and last["depth_from_data"] == "1"
+    assert abs(float(last["depth"]) - fd[-1]) < 3 * float(last["depth_std"])
+    # a load the soft default skin cannot hold across a wedge: a clear error, no files
+    bad = subprocess.run(
+        [SOFTTIP, "simulate", "--scenario", "friction", "--object", "wedge", "--load", "0.5", "--elements", "2500",
+         "-o", str(tmp_path / "bad.csv")],
+        capture_output=True, text=True,
+    )  # fmt: skip
+    assert bad.returncode == 2 and "cannot be held" in bad.stderr
+    assert not (tmp_path / "bad.csv").exists() and not (tmp_path / "bad.truth.json").exists()
