@@ -33,6 +33,7 @@ import numpy as np
 
 from softtip._xp import NP, PY
 from softtip.depth import (
+    MIN_DEPTH_SAMPLES,
     N_DEPTH_SUMS,
     DepthLaw,
     depth_frame_kernel,
@@ -150,10 +151,16 @@ def depth_points(t, c, contact, point, normal, config: EstimatorConfig, noise: S
         k = np.flatnonzero(solve)
         if not len(k):
             continue
-        sums = [cz[last[k]] - cz[first[k]] for cz in cums]
         count = (last[k] - first[k]).astype(float)
-        cov = depth_noise_kernel(tuple(f[s:e][k] for f in frame), noise)
-        kw, var = depth_solve_kernel(sums, count, cov, corr, DEPTH_ITERATIONS, NP)
+        # windows too short to inform the depth are not solved (as in the stream)
+        big = count >= MIN_DEPTH_SAMPLES
+        kb = k[big]
+        kw = np.full(len(k), np.nan)
+        var = np.full(len(k), np.inf)
+        if len(kb):
+            sums = [cz[last[kb]] - cz[first[kb]] for cz in cums]
+            cov = depth_noise_kernel(tuple(f[s:e][kb] for f in frame), noise)
+            kw[big], var[big] = depth_solve_kernel(sums, count[big], cov, corr, DEPTH_ITERATIONS, NP)
         # held: the solved window of the segment with the smallest aged variance; it
         # replaces the one held when var − drift² (t − t_segment) sets a new minimum
         key = np.full(e - s, np.inf)
@@ -162,10 +169,11 @@ def depth_points(t, c, contact, point, normal, config: EstimatorConfig, noise: S
         kap = np.full(e - s, np.nan)
         kap[k] = kw
         held = np.full(e - s, -1)
-        for a, b in zip(starts, np.append(starts[1:], e - s)):
+        ends = np.append(starts[1:], e - s)
+        seg_id = np.cumsum(seg_start[s:e]) - 1
+        for sid in np.unique(seg_id[np.isfinite(key)]):
+            a, b = starts[sid], ends[sid]
             kk = key[a:b]
-            if not np.isfinite(kk).any():
-                continue
             best = np.concatenate(([np.inf], np.minimum.accumulate(kk)[:-1]))
             use = kk < best
             held[a:b] = np.maximum.accumulate(np.where(use, np.arange(a, b), -1))
@@ -272,9 +280,11 @@ class DepthTracker:
     def _solve(self, t: float) -> None:
         cfg = self.config
         hist = self._hist
-        old = hist[0][1] if hist else self._cum
-        sums = [a - b for a, b in zip(self._cum, old)]
-        kw, var = depth_solve_kernel(sums, float(len(hist)), self._cov, self.corr, DEPTH_ITERATIONS, PY)
+        kw, var = math.nan, math.inf
+        if len(hist) >= MIN_DEPTH_SAMPLES:  # shorter windows cannot inform the depth
+            old = hist[0][1]
+            sums = [a - b for a, b in zip(self._cum, old)]
+            kw, var = depth_solve_kernel(sums, float(len(hist)), self._cov, self.corr, DEPTH_ITERATIONS, PY)
         drift2 = cfg.depth_drift**2
         key = var - drift2 * (t - self._t_seg) if var < math.inf else math.inf
         if key < self._key:
