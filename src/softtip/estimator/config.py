@@ -68,7 +68,8 @@ class EstimatorConfig:
         (:mod:`softtip.estimator.depth`); ``law``: the law's depth at the normal force
         (fixed); ``off``: the papers' undeformed contact point. ``auto`` (default):
         ``online`` in ``latch`` mode when there is a law (``depth`` or the fingertip's),
-        else ``off``.
+        else ``off``; in ``track`` and ``joint`` mode ``law`` when ``depth`` is given, else
+        ``off``.
     depth_window : float
         s; sliding window of the online depth (default 1 s).
     depth_prior_std : float

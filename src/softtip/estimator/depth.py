@@ -65,7 +65,8 @@ def tip_depth_law(tip: Fingertip) -> DepthLaw | None:
 def resolve_depth(config: EstimatorConfig, tip: Fingertip) -> EstimatorConfig:
     """``config`` with ``depth_mode`` decided (``online``, ``law`` or ``off``) and ``depth``
     the law it uses (``None`` when off). ``auto`` is ``online`` with a law in ``latch``
-    mode, else ``off`` (``track`` and ``joint`` take the depth only when asked).
+    mode; in ``track`` and ``joint`` mode it is ``law`` when ``config.depth`` is given,
+    else ``off``.
 
     Raises
     ------
@@ -76,9 +77,9 @@ def resolve_depth(config: EstimatorConfig, tip: Fingertip) -> EstimatorConfig:
     mode = config.depth_mode
     if mode == "auto" and config.contact_point != "latch":
         # track mode has no tangential spin torque; joint mode moves the point under a
-        # tangential load (a slide), where the prior alone turned a measured slide case
-        # by 26° (README, Accuracy): both keep the papers' point unless asked
-        mode = "off"
+        # tangential load (a slide), where the depth prior alone turned a measured slide
+        # case by 26°: both keep the papers' point unless asked (a law given is used as is)
+        mode = "off" if config.depth is None else "law"
     if mode == "off":
         return dataclasses.replace(config, depth=None, depth_mode="off")
     law = config.depth if config.depth is not None else tip_depth_law(tip)
