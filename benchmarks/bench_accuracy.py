@@ -33,7 +33,8 @@ method | error with softtip's extension``. Sections:
   the line), across or along the line, 0.2 and 0.5 of the normal force, on thin plates,
   Ø 4–6 mm cylinders, 60° and 90° wedges (and the fringe, outside the summary), at 0°, +30°
   and −45°; direction error with the papers' method, the fixed skin law (``--fixed-depth``)
-  and the default online depth, and the online depth against the simulator's
+  and the default online depth (and with the simulator's true depth, an oracle not
+  available to softtip), and the online depth against the simulator's
   ``friction_depth`` (within its reported standard deviation or not). Medians over the
   samples after the load (t > 7 s for a push and a slip, t > 9.5 s for a drag).
   ``--sections friction`` (about 5 minutes on a quiet 2-core machine).
@@ -57,6 +58,7 @@ import numpy as np
 from softtip import EstimatorConfig, axial_difference, estimate, murakami2006
 from softtip.depth import MURAKAMI2006_DEPTH, DepthLaw, lever_depth
 from softtip.noise import NANO17, SensorNoise
+from softtip.spin import direction_angle
 from softtip.sim import NANO17 as SIM_SENSOR
 from softtip.sim import (
     ContactModel,
@@ -339,10 +341,22 @@ def _median_dir_err(est, truth_angle, sel) -> float:
     return float(np.median(np.degrees(np.abs(axial_difference(est.angle[line], truth_angle[line])))))
 
 
+def _oracle_dir_err(est, log, sel) -> float:
+    """Direction error with the simulator's true friction depth (an oracle, not available
+    to softtip), at the papers' contact point ``est``."""
+    line = sel & (est.state > 0)
+    r, n, w = est.point, est.normal, est.wrench
+    q = w[:, 3:] - np.cross(r - log.truth.friction_depth[:, None] * n, w[:, :3])
+    h = q - np.sum(q * n, -1, keepdims=True) * n
+    ang = direction_angle(np.cross(n[line], h[line]), n[line])
+    return float(np.median(np.degrees(np.abs(axial_difference(ang, log.truth.angle[line])))))
+
+
 def friction_section(seed: int = 1, angles=(0.0, 30.0, -45.0)) -> None:
     print("\n### friction deep in the skin (issue 11): direction error, median over the held samples after the load\n")
-    print("| object, angle, load | papers' method | fixed law | online (default) | depth: truth / online ± std (from data) | within std |")
-    print("| --- | --- | --- | --- | --- | --- |")
+    print("| object, angle, load | papers' method | fixed law | online (default) | true depth (oracle) "
+          "| depth: truth / online ± std (from data) | within std |")
+    print("| --- | --- | --- | --- | --- | --- | --- |")
     model = ContactModel(discretise_skin(TIP, 10000), ContactParams(shear_modulus=2e6)).prepare()
     cases = []
     for name, obj in FRICTION_OBJECTS + (("fringe Ø 40 mm", CylinderRim(0.040)),):
@@ -357,11 +371,12 @@ def friction_section(seed: int = 1, angles=(0.0, 30.0, -45.0)) -> None:
                 try:
                     log = simulate_grasp(TIP, obj, scn, rng=seed, model=model)
                 except RuntimeError:
-                    _row(label, "simulator cannot hold it", "", "", "", "")
+                    _row(label, "simulator cannot hold it", "", "", "", "", "")
                     continue
                 sel = log.t > (9.5 if profile == "drag" else 7.0)
                 ests = [estimate(log.t, log.wrench, TIP, cfg) for cfg in FRICTION_CONFIGS]
                 errs = [_median_dir_err(e, log.truth.angle, sel) for e in ests]
+                errs.append(_oracle_dir_err(ests[0], log, sel))
                 on = ests[-1]
                 m = sel & (on.state > 0) & np.isfinite(log.truth.friction_depth)
                 truth = float(np.median(log.truth.friction_depth[m]))
@@ -375,7 +390,7 @@ def friction_section(seed: int = 1, angles=(0.0, 30.0, -45.0)) -> None:
     print()
     push = [c for c in cases if c[2] != "slip" and c[3] <= 0.5]
     err = np.array([c[0] for c in push])
-    for i, label in enumerate(("papers' method", "fixed law", "online (default)")):
+    for i, label in enumerate(("papers' method", "fixed law", "online (default)", "true depth (oracle)")):
         print(f"{label}: median {np.nanmedian(err[:, i]):.1f}°, worst {np.nanmax(err[:, i]):.1f}° over {len(push)} grasps "
               f"(push and drag, plates, cylinders, wedges)")  # fmt: skip
     print(f"online depth within its std of the truth (in most held samples): {np.mean([c[1] for c in cases]):.0%} "
