@@ -15,7 +15,8 @@ import numpy as np
 from softtip import __version__
 from softtip.axial import axial_median
 from softtip.errors import InputError
-from softtip.fingertip import PRESETS, load_fingertip
+from softtip.estimator.depth import tip_depth_law
+from softtip.fingertip import PRESETS, Fingertip, load_fingertip
 from softtip.depth import MURAKAMI2006_DEPTH, DepthLaw
 from softtip.estimator.results import DRIFT_COLUMNS, EstimatorWarning
 from softtip.estimator.tare import bias_to_toml, load_bias
@@ -198,19 +199,27 @@ _ESTIMATOR_OPTIONS = [
         "latched one, mm (default: only when contact is lost and regained, the papers').",
     ),
     click.option(
-        "--depth-compensation",
+        "--depth-compensation/--no-depth-compensation",
+        default=None,
+        help="Take the moment about the point inside the skin where friction acts, removing the spurious "
+        "tangential moment of a tangential force. Its depth is learnt per contact from the data, the skin law "
+        "(--skin-law) the prior; the depth, depth_std and depth_from_data columns report it. Default: on when "
+        "the fingertip gives a skin (the murakami2006 preset, a file with skin_thickness), in latch mode. "
+        "--no-depth-compensation: the papers' method.",
+    ),
+    click.option(
+        "--fixed-depth",
         is_flag=True,
-        help="Take the moment about the point inside the skin where friction acts, at the depth the normal force "
-        "gives by the skin law (--skin-law); removes the spurious tangential moment of a tangential force.",
+        help="Depth compensation at the skin law's depth as it is, not learnt from the data.",
     ),
     click.option(
         "--skin-law",
         type=(float, float, float),
-        default=(MURAKAMI2006_DEPTH.stiffness, MURAKAMI2006_DEPTH.exponent, MURAKAMI2006_DEPTH.max_depth * 1e3),
-        show_default=True,
+        default=None,
         metavar="K P MAX_MM",
-        help="Skin law of --depth-compensation: normal force = K·depth^P (N, m), depth at most MAX_MM mm "
-        "(default: the murakami2006 skin, fitted on softtip's simulator).",
+        help="Skin law of the depth compensation: normal force = K·depth^P (N, m), depth at most MAX_MM mm "
+        "(default: the fingertip's skin; else the murakami2006 skin, "
+        f"{MURAKAMI2006_DEPTH.stiffness:g} {MURAKAMI2006_DEPTH.exponent:g} {MURAKAMI2006_DEPTH.max_depth * 1e3:g}).",
     ),
 ]
 
@@ -244,9 +253,10 @@ angle_std_deg, latched, latch_fallback, relatched (a new latch starts here), dep
 joint_offset_std (m), joint_residual and joint_fallback (the sliding window of
 --contact-point joint: reciprocal condition number, standard deviations of its line angle
 and offset, RMS fit residual in noise standard deviations, and whether the latched point
-is used because no window has been accepted yet), contact_id (1, 2, ... per contact, 0
-out of contact), drift_fx..drift_mz (the bias drift followed while untouched since the
-tare, N and N·m), then the input's extra columns. r, n, h are empty
+is used because no window has been accepted yet), depth_std (m, the depth's standard
+deviation), depth_from_data (the contact's own data, not the skin law, determined it),
+contact_id (1, 2, ... per contact, 0 out of contact), drift_fx..drift_mz (the bias drift
+followed while untouched since the tare, N and N·m), then the input's extra columns. r, n, h are empty
 (nan) when state is none; d and the angle only for line contacts, where |h| stands out of
 the noise.
 
@@ -313,7 +323,7 @@ def estimate(
     if plot_path is not None:
         _check_figure_path(plot_path)
     fingertip = load_fingertip(tip)
-    config = _make_config(estimator_opts)
+    config = _make_config(estimator_opts, tip=fingertip)
 
     bag_log = None
     if example:
@@ -444,12 +454,34 @@ def estimate(
             click.echo(f"softtip: median direction of line samples {ang:+.1f} deg", err=True)
 
 
+class _NoProgress:
+    """What :func:`_progress_bar` gives when standard error is not a terminal."""
+
+    def update(self, n: int = 1) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        pass
+
+
 def _progress_bar(total: int, what: str, *, unit: str = " rows", file=None, delay: float = 2.0):
     """A tqdm bar on standard error, shown only on a terminal and only after ``delay`` s."""
     from tqdm import tqdm
 
     file = sys.stderr if file is None else file
     tty = file.isatty()
+    if not tty:
+        return _NoProgress()
+    # no monitor thread: a daemon thread alive at interpreter exit, with pyarrow loaded,
+    # aborted the process ("terminate called without an active exception") in ~half the
+    # runs that ended on an error
+    tqdm.monitor_interval = 0
     size = {}
     try:
         if tty and os.get_terminal_size(file.fileno()).lines <= 0:  # a pty with no size: tqdm would draw nothing
@@ -494,13 +526,23 @@ def _tare_warnings(est) -> None:
         click.echo(f"softtip: warning: {msg}", err=True)
 
 
-def _make_config(opts: dict, sample_rate: float | None = None) -> EstimatorConfig:
+def _make_config(opts: dict, sample_rate: float | None = None, tip: Fingertip | None = None) -> EstimatorConfig:
     """The :class:`EstimatorConfig` of the shared estimator options (CLI units → SI)."""
     try:
+        comp, fixed = opts["depth_compensation"], opts["fixed_depth"]
+        if comp is False and fixed:
+            raise click.UsageError("--fixed-depth and --no-depth-compensation contradict each other")
         depth = None
-        if opts["depth_compensation"]:
+        if opts["skin_law"] is not None:
             k, p, max_mm = opts["skin_law"]
             depth = DepthLaw(k, p, max_mm * 1e-3)
+        depth_mode = "auto"
+        if comp is False:
+            depth_mode = "off"
+        elif comp or fixed:
+            depth_mode = "law" if fixed else "online"
+            if depth is None and (tip is None or tip_depth_law(tip) is None):
+                depth = MURAKAMI2006_DEPTH
         relatch = opts["relatch_distance"]
         return EstimatorConfig(
             contact_point=opts["contact_point"],
@@ -519,6 +561,7 @@ def _make_config(opts: dict, sample_rate: float | None = None) -> EstimatorConfi
             track_drift=opts["drift_tracking"],
             relatch_distance=None if relatch is None else relatch * 1e-3,
             depth=depth,
+            depth_mode=depth_mode,
             joint_window=opts["joint_window"],
             joint_max_angle_std=math.radians(opts["joint_max_std"][0]),
             joint_max_offset_std=opts["joint_max_std"][1] * 1e-3,
@@ -676,7 +719,9 @@ def stream(
                 rate = f"{d.rate_hz:g} Hz" if d.rate_hz else "rate unknown"
                 info = f"({d.product}, {d.force_unit} / {d.torque_unit}, {rate})"
             lowpass = estimator_opts["lowpass"]
-            config = _make_config(estimator_opts, sample_rate=source.rate_hz if lowpass is not None else None)
+            config = _make_config(
+                estimator_opts, sample_rate=source.rate_hz if lowpass is not None else None, tip=fingertip
+            )
             if lowpass is not None and source.rate_hz is None:
                 raise click.UsageError("--lowpass needs the sample rate, which this source does not report")
             estimator = Estimator(fingertip, config)

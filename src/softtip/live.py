@@ -61,11 +61,11 @@ RECORD_COLUMNS: tuple[str, ...] = (
     "rx", "ry", "rz", "nx", "ny", "nz", "sigma",
     "hx", "hy", "hz", "h_norm", "dx", "dy", "dz", "angle_deg", "h_std", "angle_std_deg", "latched",
     "latch_fallback", "relatched", "depth", "joint_conditioning", "joint_angle_std_deg", "joint_offset_std",
-    "joint_residual", "joint_fallback", "contact_id", "drift_fx", "drift_fy", "drift_fz", "drift_mx",
+    "joint_residual", "joint_fallback", "depth_std", "depth_from_data", "contact_id", "drift_fx", "drift_fy", "drift_fz", "drift_mx",
     "drift_my", "drift_mz", "seq", "lost", "dropped", "late", "duplicates", "malformed",
     "status", "host_time",
 )  # fmt: skip
-_INT_COLUMNS = ("latched", "latch_fallback", "relatched", "joint_fallback", "contact_id", "seq", "lost", "dropped", "late",
+_INT_COLUMNS = ("latched", "latch_fallback", "relatched", "joint_fallback", "depth_from_data", "contact_id", "seq", "lost", "dropped", "late",
                 "duplicates", "malformed", "status")  # fmt: skip
 # Time and raw wrench exactly (shortest repr: re-reading the file gives the same doubles),
 # the host time to the microsecond, the rest as softtip.io.write_table formats numbers.
@@ -84,7 +84,8 @@ def estimate_row(e: SampleEstimate, r: Reading) -> tuple:
         e.state, *e.wrench, *e.point, *e.normal, e.sigma, *e.h, e.h_norm, *e.direction,
         e.angle * _DEG, e.h_std, e.angle_std * _DEG, e.latched, e.latch_fallback, e.relatched, e.depth,
         e.joint_conditioning, e.joint_angle_std * _DEG, e.joint_offset_std, e.joint_residual, e.joint_fallback,
-        e.contact_id, *e.drift, r.seq, r.lost, r.dropped, r.late, r.duplicates, r.malformed, r.status, r.host_time,
+        e.depth_std, e.depth_from_data, e.contact_id, *e.drift, r.seq, r.lost, r.dropped, r.late, r.duplicates, r.malformed, r.status,
+        r.host_time,
     )  # fmt: skip
 
 

@@ -12,6 +12,7 @@ from softtip._xp import NP
 from softtip.contact import contact_arrays
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.contact import drift_message, first_contact_pulls, started_in_contact_message, track_contacts
+from softtip.estimator.depth import depth_points, resolve_depth
 from softtip.estimator.joint import joint_points
 from softtip.estimator.latch import latch_points
 from softtip.estimator.measure import effective_noise, measure, noise_correlation
@@ -79,7 +80,7 @@ def estimate(
     ['line', 'none', 'point']
     """
     tip = load_fingertip(tip)
-    config = config or EstimatorConfig()
+    config = resolve_depth(config or EstimatorConfig(), tip)
     t, w = validate_log(t, wrench)
     n = len(t)
 
@@ -117,7 +118,10 @@ def estimate(
                 latched, fallback, joint_fb = latched & ~moved, fallback & ~moved, contact & ~moved
             normal = tip.normal(point)
             has = np.all(np.isfinite(point), axis=-1)
-        ms = measure(*c, *point.T, *normal.T, noise, config.h_sigmas, config.h_min, config.depth, NP)
+        # depth: friction acts at r − δ n, inside the skin
+        delta, delta_std, from_data = depth_points(t, c, contact, point, normal, config, noise, noise_correlation(sos))
+        eff = point - delta[:, None] * normal
+        ms = measure(*c, *eff.T, *normal.T, noise, config.h_sigmas, config.h_min, None, NP)
 
     located = contact & has & ms.pushing
     pulling = contact & ~located
@@ -157,7 +161,7 @@ def estimate(
         bias=bias,
         tare_force_std=float(np.nanmax(tare_report.force_std)) if np.any(np.isfinite(tare_report.force_std)) else math.nan,
         relatched=relatched,
-        depth=keep(ms.depth, located),
+        depth=keep(delta, located),
         joint_conditioning=keep(joint_stats[0], located),
         joint_angle_std=keep(joint_stats[1], located),
         joint_offset_std=keep(joint_stats[2], located),
@@ -170,4 +174,6 @@ def estimate(
         started_in_contact=started_in_contact,
         drift_alarm=ct.drift_alarm >= 0,
         warnings=tuple(warn),
+        depth_std=keep(delta_std, located),
+        depth_from_data=from_data & located,
     )

@@ -53,7 +53,10 @@ class Estimates:
         was touched while taring and the bias is wrong.
     relatched : (N,) a new latch starts at this sample, replacing an earlier one (drift at
         light force, or contact regained after a latched contact); an event, not masked
-    depth : (N,) depth compensation ``δ`` used, m (0 without a depth law); NaN when ``none``
+    depth : (N,) depth compensation ``δ`` used, m (0 with the papers' method); NaN when ``none``
+    depth_std : (N,) its standard deviation, m (online depth; 0 for a fixed law or none)
+    depth_from_data : (N,) online depth: the contact's own data, not the skin law (the
+        prior), determined it (the data's information on it exceeds the prior's)
     joint_conditioning, joint_angle_std, joint_offset_std, joint_residual : (N,) the
         ``joint`` window ending at this sample (:mod:`softtip.joint`): reciprocal condition
         number in [0, 1], standard deviations of its line angle (rad) and of its offset
@@ -112,6 +115,8 @@ class Estimates:
     started_in_contact: bool = False
     drift_alarm: bool = False
     warnings: tuple[str, ...] = ()
+    depth_std: NDArray[np.float64] | None = None
+    depth_from_data: NDArray[np.bool_] | None = None
 
     def __len__(self) -> int:
         return len(self.t)
@@ -159,6 +164,8 @@ class Estimates:
             "joint_fallback": self.joint_fallback,
             **({"contact_id": self.contact_id} if self.contact_id is not None else {}),
             **({k: self.drift[:, i] for i, k in enumerate(DRIFT_COLUMNS)} if self.drift is not None else {}),
+            "depth_std": self.depth_std,
+            "depth_from_data": self.depth_from_data,
         }  # fmt: skip
 
 
@@ -193,4 +200,6 @@ class SampleEstimate(NamedTuple):
     joint_fallback: bool = False
     contact_id: int = 0
     drift: tuple[float, ...] = (0.0,) * 6
+    depth_std: float = math.nan
+    depth_from_data: bool = False
 

@@ -23,6 +23,7 @@ from softtip.estimator.contact import (
     drift_message,
     started_in_contact_message,
 )
+from softtip.estimator.depth import DepthTracker, resolve_depth
 from softtip.estimator.joint import JointTracker
 from softtip.estimator.latch import LatchTracker
 from softtip.estimator.measure import effective_noise, measure, noise_correlation
@@ -70,7 +71,7 @@ class Estimator:
 
     def __init__(self, tip: Fingertip | str = "murakami2006", config: EstimatorConfig | None = None):
         self.tip = load_fingertip(tip)
-        self.config = config or EstimatorConfig()
+        self.config = resolve_depth(config or EstimatorConfig(), self.tip)
         cfg = self.config
         self._sos = None
         if cfg.lowpass_hz is not None:
@@ -85,6 +86,7 @@ class Estimator:
         if cfg.contact_point == "joint":
             self._joint = JointTracker(self.tip, cfg, self._noise, noise_correlation(self._sos))
         self._contacts = ContactTracker(cfg, self._noise)
+        self._depth = None if cfg.depth is None else DepthTracker(cfg, self._noise, noise_correlation(self._sos))
         self.reset()
 
     @property
@@ -242,6 +244,9 @@ class Estimator:
             self._lead = self._tare.report.source == "tare"
         fx, fy, fz, mx, my, mz = x
         fn = math.sqrt(fx * fx + fy * fy + fz * fz)
+        depth = self._depth
+        if depth is not None and code == 2:
+            depth.start_contact()
 
         tip = self.tip
         latched = fallback = relatched = joint_fb = False
@@ -249,6 +254,8 @@ class Estimator:
         if self._track:
             rx, ry, rz, nx, ny, nz, _, valid = contact_kernel(tip, *x, xp=PY)
             if not valid:
+                if depth is not None:
+                    depth.gap()
                 return self._none(t, x, pulling=True)
         else:
             sc = None
@@ -271,11 +278,19 @@ class Estimator:
                     latched = fallback = False
                 joint_fb = not moved
             if point is None:
+                if depth is not None:
+                    depth.gap()
                 return self._none(t, x, pulling=True, relatched=relatched)
             rx, ry, rz = point
             nx, ny, nz = tip._normal_kernel(rx, ry, rz, PY)
 
-        ms = measure(fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, self._noise, cfg.h_sigmas, cfg.h_min, cfg.depth, PY)
+        if depth is None:
+            delta, delta_std, from_data = 0.0, 0.0, False
+            ex, ey, ez = rx, ry, rz
+        else:  # friction acts at r − δ n, inside the skin
+            delta, delta_std, from_data = depth.step(t, x, (rx, ry, rz), (nx, ny, nz))
+            ex, ey, ez = rx - delta * nx, ry - delta * ny, rz - delta * nz
+        ms = measure(fx, fy, fz, mx, my, mz, ex, ey, ez, nx, ny, nz, self._noise, cfg.h_sigmas, cfg.h_min, None, PY)
         if not ms.pushing:
             return self._none(t, x, pulling=True, relatched=relatched)
         if ms.line:
@@ -286,8 +301,8 @@ class Estimator:
             self._lead = False
         return SampleEstimate(
             t, state, tuple(x), (rx, ry, rz), (nx, ny, nz), ms.sigma, (ms.hx, ms.hy, ms.hz), ms.h_norm, ms.h_std, d,
-            angle, angle_std, latched, fallback, False, False, relatched, ms.depth, *stats, joint_fb,
-            contacts.contact_id, contacts.drift_before,
+            angle, angle_std, latched, fallback, False, False, relatched, delta, *stats, joint_fb,
+            contacts.contact_id, contacts.drift_before, delta_std, from_data,
         )  # fmt: skip
 
     def process(self, t: ArrayLike, wrench: ArrayLike) -> list[SampleEstimate]:

@@ -15,7 +15,7 @@ import click
 
 from softtip.errors import InputError
 from softtip.sim.objects import OBJECT_KINDS
-from softtip.sim.scenario import DISTURBANCE_TIMINGS, JOINT_ROTATION_DEG, OBJECT_MASS
+from softtip.sim.scenario import DISTURBANCE_TIMINGS, FRICTION_PROFILES, JOINT_ROTATION_DEG, OBJECT_MASS
 from softtip.sim.simulate import log_csv_text, run_simulation, write_log_csv, write_truth_json
 from softtip.sim.skin import DEFAULT_ELEMENTS
 from softtip.units import KGF, UNIT_SYSTEMS
@@ -88,9 +88,17 @@ LENGTH, FORCE = _Length(), _Force()
 @click.option("--angle", "angle_deg", type=float, default=0.0, show_default=True,
               help="Direction of the edge/axis/fringe at the contact, degrees from the sensor x axis "
                    "(SPEC §3.4 tangent frame; 90 = along the hand's joint axes).")
-@click.option("--scenario", type=click.Choice(["paper", "push"]), default="paper", show_default=True,
+@click.option("--scenario", type=click.Choice(["paper", "push", "friction"]), default="paper", show_default=True,
               help="paper: the papers' two-fingered grasp with joint and gravity disturbances; "
-                   "push: a plain push.")
+                   "push: a plain push; friction: the papers' grasp (weightless object) with a friction load "
+                   "during the hold (--load, --load-direction, --load-profile).")
+@click.option("--load", "load_ratio", type=click.FloatRange(0.0), default=0.25, show_default=True,
+              help="friction scenario: tangential load, a fraction of the grasp force.")
+@click.option("--load-direction", type=click.Choice(["across", "along"]), default="across", show_default=True,
+              help="friction scenario: load across the line or along it.")
+@click.option("--load-profile", type=click.Choice(FRICTION_PROFILES), default="push", show_default=True,
+              help="friction scenario: push (ramped in at 6-6.5 s, held), drag (slowly, 5.5-9.5 s) or slip "
+                   "(the object slides 1.5 mm at 6-7 s, friction at the Coulomb limit).")
 @click.option("--tip", default="murakami2006", show_default=True, help="Fingertip preset or TOML file.")
 @click.option("--edge-radius", type=LENGTH, default=0.0, show_default=True,
               help="Plate corner radius or wedge tip radius (length).")
@@ -135,7 +143,8 @@ def simulate(output: Path | None, truth: Path | None, units: str, **options) -> 
 
     The log is the SPEC §4 input of `softtip estimate`; the truth file holds the object's
     line direction and angle, the nominal and pressure-centre contact points, contact area,
-    depth and normal force per sample, and every parameter of the run.
+    depth, the depth at which friction acts and normal force per sample, and every parameter
+    of the run.
     """
     if truth is None and output is not None:
         truth = output.with_name(output.stem + ".truth.json")
@@ -148,6 +157,9 @@ def simulate(output: Path | None, truth: Path | None, units: str, **options) -> 
         raise click.BadParameter(str(exc), param_hint="--tip") from None
     except ValueError as exc:
         raise click.UsageError(str(exc)) from None
+    except RuntimeError as exc:  # the solve found no equilibrium: the load cannot be held
+        hint = "; a stiffer shear layer (e.g. --shear-modulus 2e6) holds larger loads" if options["scenario"] == "friction" else ""
+        raise click.UsageError(f"{exc}{hint}") from None
     if output is None:
         sys.stdout.write(log_csv_text(log, units))
     else:

@@ -99,6 +99,8 @@ __all__ = [
     "Disturbance",
     "HandFrame",
     "GraspScenario",
+    "FRICTION_PROFILES",
+    "friction_scenario",
     "paper_scenario",
     "push_scenario",
     "smoothstep",
@@ -521,3 +523,68 @@ def paper_scenario(
         **timing,
         **kwargs,
     )
+
+
+#: Load profiles accepted by :func:`friction_scenario`.
+FRICTION_PROFILES = ("push", "drag", "slip")
+
+
+def friction_scenario(
+    tip: Fingertip,
+    angle: float = 0.0,
+    ratio: float = 0.25,
+    *,
+    across: bool = True,
+    profile: str = "push",
+    slip_distance: float = 1.5e-3,
+    **kwargs,
+) -> GraspScenario:
+    """The papers' grasp (:func:`paper_scenario`, weightless object) with a friction load
+    during the hold.
+
+    After the joint disturbance has come in (4 → 5.5 s), the object is loaded tangentially,
+    across the line (along ``n × d``) or along it (``d``), at the nominal contact normal
+    ``n`` of ``tip``. Friction then acts inside the skin, at the depth recorded as
+    :attr:`~softtip.sim.truth.GroundTruth.friction_depth`.
+
+    Parameters
+    ----------
+    tip : Fingertip
+        For the contact normal that defines "across" and "along".
+    angle : float
+        Line direction, rad (SPEC §3.4 tangent frame).
+    ratio : float
+        Tangential load as a fraction of the grasp force (``push`` and ``drag``).
+    across : bool
+        Load across the line (True) or along it.
+    profile : {"push", "drag", "slip"}
+        ``push``: the load ramps in over 6 → 6.5 s and is held. ``drag``: it ramps slowly,
+        over 5.5 → 9.5 s. ``slip``: no force target across the push axis; the object is
+        moved ``slip_distance`` (m) over 6 → 7 s, so the skin slides under it at the
+        Coulomb limit, then sticks (the load is whatever friction gives, ``ratio`` unused).
+    slip_distance : float
+        m, for ``slip``.
+    **kwargs
+        Other :func:`paper_scenario` arguments (``force``, ``joint_rotation``, ...).
+    """
+    if profile not in FRICTION_PROFILES:
+        raise ValueError(f"unknown friction profile {profile!r}; expected one of {', '.join(FRICTION_PROFILES)}")
+    if not (math.isfinite(ratio) and ratio >= 0.0):
+        raise ValueError(f"ratio must be a non-negative fraction of the grasp force, got {ratio!r}")
+    kwargs.setdefault("object_mass", 0.0)
+    base = paper_scenario(angle, name=f"friction-{profile}", **kwargs)
+    _, n_c, _ = base.nominal_contact(tip)
+    e1, e2 = tangent_frame(n_c)
+    d = math.cos(angle) * e1 + math.sin(angle) * e2
+    way = np.cross(n_c, d) if across else d
+    if profile == "slip":
+        slide = Disturbance(translation=tuple(slip_distance * way), start=6.0, end=7.0, label="slip")
+        return GraspScenario(**{**_fields(base), "disturbances": base.disturbances + (slide,),
+                                "tangential_force": None})  # fmt: skip
+    start, end = (6.0, 6.5) if profile == "push" else (5.5, 9.5)
+    load = ratio * base.force * way
+    return GraspScenario(**{**_fields(base), "tangential_force": tuple(load), "load_start": start, "load_end": end})
+
+
+def _fields(s: GraspScenario) -> dict:
+    return {f: getattr(s, f) for f in s.__dataclass_fields__}

@@ -29,7 +29,14 @@ from softtip.fingertip import Fingertip, load_fingertip
 from softtip.sim.contact import ContactModel, ContactParams, ContactResult, FrictionState
 from softtip.sim.objects import RigidObject, make_object
 from softtip.sim.pose import Pose
-from softtip.sim.scenario import JOINT_ROTATION_DEG, OBJECT_MASS, GraspScenario, paper_scenario, push_scenario
+from softtip.sim.scenario import (
+    JOINT_ROTATION_DEG,
+    OBJECT_MASS,
+    GraspScenario,
+    friction_scenario,
+    paper_scenario,
+    push_scenario,
+)
 from softtip.sim.sensor import SensorModel
 from softtip.sim.skin import DEFAULT_ELEMENTS, discretise_skin
 from softtip.sim.truth import GroundTruth, line_angle, tangent_frame
@@ -296,6 +303,7 @@ def simulate_grasp(
     direction = np.zeros((n, 3))
     centre = np.full((n, 3), np.nan)
     area, depth, push, slipf = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
+    friction_depth = np.full(n, np.nan)
     in_contact = np.zeros(n, dtype=bool)
     target = np.where(t >= scenario.t_contact, scenario.force_target(t), 0.0)
 
@@ -337,6 +345,7 @@ def simulate_grasp(
         centre[i] = res.pressure_centre
         area[i], depth[i], push[i], slipf[i] = res.contact_area, res.max_depth, x[0], res.slip_fraction
         in_contact[i] = res.in_contact
+        friction_depth[i] = res.friction_depth
         i += 1
 
     truth = GroundTruth(
@@ -352,6 +361,7 @@ def simulate_grasp(
         force_target=target,
         in_contact=in_contact,
         slip_fraction=slipf,
+        friction_depth=friction_depth,
     )
     return SimLog(
         t=t,
@@ -447,12 +457,17 @@ def run_simulation(
     output: str | os.PathLike | None = None,
     truth: str | os.PathLike | None = None,
     units: str = "si",
+    load_ratio: float = 0.25,
+    load_direction: str = "across",
+    load_profile: str = "push",
 ) -> SimLog:
     """Simulate from plain parameters (the ``softtip simulate`` command) and write files.
 
     Lengths in m, forces in N, angles in degrees, rates in Hz, moduli in Pa. ``scenario``
-    is ``"paper"`` (the papers' hand, with joint and gravity disturbances) or ``"push"``
-    (a plain push, no disturbance). Writes the log CSV to ``output`` and the ground truth
+    is ``"paper"`` (the papers' hand, with joint and gravity disturbances), ``"push"``
+    (a plain push, no disturbance) or ``"friction"`` (:func:`~softtip.sim.scenario.friction_scenario`:
+    ``load_ratio`` of the grasp force, ``load_direction`` ``across`` or ``along`` the line,
+    ``load_profile`` ``push``, ``drag`` or ``slip``; ``object_mass`` is ignored). Writes the log CSV to ``output`` and the ground truth
     to ``truth`` when given; returns the log.
     """
     tipo = load_fingertip(tip)
@@ -471,8 +486,16 @@ def run_simulation(
         )
     elif scenario == "push":
         scn = push_scenario(math.radians(angle_deg), **timing)
+    elif scenario == "friction":
+        if load_direction not in ("across", "along"):
+            raise ValueError(f"load_direction must be across or along, got {load_direction!r}")
+        scn = friction_scenario(
+            tipo, math.radians(angle_deg), load_ratio, across=load_direction == "across", profile=load_profile,
+            joint_rotation=math.radians(joint_rotation_deg), gravity_spin=math.radians(gravity_spin_deg),
+            misalignment=math.radians(misalignment_deg), disturbance_timing=disturbance_timing, **timing,
+        )  # fmt: skip
     else:
-        raise ValueError(f"unknown scenario {scenario!r}; expected paper or push")
+        raise ValueError(f"unknown scenario {scenario!r}; expected paper, push or friction")
     sensor = SensorModel(rate=rate) if noise else SensorModel.ideal(rate)
     params = ContactParams(thickness=thickness, modulus=modulus, shear_modulus=shear_modulus, friction=friction)
     log = simulate_grasp(tipo, obj, scn, sensor, seed, params=params, n_elements=n_elements)
