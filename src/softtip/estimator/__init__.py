@@ -21,8 +21,12 @@ Per sample (SPEC §3):
    contact point from then on, until contact ends. Before the first window sample the
    current soft-finger solution is used. With no window sample in the whole rise, the mean
    of the first ``fallback_samples`` solutions of the contact is latched and flagged.
-5. **Measurement**: spin torque, its tangential part ``h``, the noise level of ``h``, the
-   state ``point`` or ``line`` and, for ``line`` only, the direction and its angle with a
+5. **Measurement**: spin torque, its tangential part ``h``, the noise level of ``h`` and
+   whether ``|h|`` is significant.
+6. **Line evidence** (:mod:`.evidence`): over a sliding window, the state ``point``,
+   ``line`` or ``area``, the line's ``line_evidence`` (``confirmed`` once the contact was
+   excited about two tangent axes and ``h`` stayed on one, else ``unconfirmed``) and, for
+   ``line`` only, the direction (under confirmed evidence the window's) and its angle with a
    standard deviation.
 
 In ``track`` mode ``h`` is zero by construction (the soft-finger model puts all of ``q``
@@ -50,10 +54,10 @@ softtip's extensions (issue 5), each an :class:`EstimatorConfig` field:
 
 from softtip.estimator.batch import estimate
 from softtip.estimator.config import CONTACT_POINT_MODES, EstimatorConfig
-from softtip.estimator.results import LINE, NONE, POINT, STATES, Estimates, SampleEstimate
+from softtip.estimator.results import AREA, EVIDENCE, LINE, NONE, POINT, STATES, Estimates, SampleEstimate
 from softtip.estimator.stream import Estimator
 
 __all__ = [
-    "STATES", "NONE", "POINT", "LINE", "CONTACT_POINT_MODES", "EstimatorConfig", "Estimates", "SampleEstimate",
+    "STATES", "NONE", "POINT", "LINE", "AREA", "EVIDENCE", "CONTACT_POINT_MODES", "EstimatorConfig", "Estimates", "SampleEstimate",
     "Estimator", "estimate",
 ]  # fmt: skip

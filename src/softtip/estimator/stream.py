@@ -16,6 +16,7 @@ from numpy.typing import ArrayLike
 from softtip._xp import PY
 from softtip.contact import contact_kernel
 from softtip.estimator.config import EstimatorConfig
+from softtip.estimator.evidence import EvidenceTracker
 from softtip.estimator.joint import JointTracker
 from softtip.estimator.latch import LatchTracker
 from softtip.estimator.measure import effective_noise, measure, noise_correlation
@@ -68,6 +69,7 @@ class Estimator:
         self._track = cfg.contact_point == "track"
         self._tare = StreamTare(cfg)
         self._latch = LatchTracker(self.tip, cfg)
+        self._evidence = EvidenceTracker(cfg, self._noise, noise_correlation(self._sos))
         self._joint = None
         if cfg.contact_point == "joint":
             self._joint = JointTracker(self.tip, cfg, self._noise, noise_correlation(self._sos))
@@ -135,6 +137,7 @@ class Estimator:
     def _start_segment(self, fn: float, t: float) -> None:
         """A new first rise: at contact onset, and at a re-latch."""
         self._latch.start(fn, t)
+        self._evidence.start_segment()
         if self._joint is not None:
             self._joint.start_segment(t)
 
@@ -150,6 +153,9 @@ class Estimator:
         latched = fallback = relatched = joint_fb = False
         stats = _NAN4
         if self._track:
+            if not self._in_contact:
+                self._in_contact = True
+                self._evidence.start_segment()
             rx, ry, rz, nx, ny, nz, _, valid = contact_kernel(tip, *x, xp=PY)
             if not valid:
                 return self._none(t, x, pulling=True)
@@ -182,13 +188,14 @@ class Estimator:
         ms = measure(fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, self._noise, cfg.h_sigmas, cfg.h_min, cfg.depth, PY)
         if not ms.pushing:
             return self._none(t, x, pulling=True, relatched=relatched)
-        if ms.line:
-            state, d, angle, angle_std = "line", (ms.dx, ms.dy, ms.dz), ms.angle, ms.angle_std
-        else:
-            state, d, angle, angle_std = "point", _NAN3, math.nan, math.nan
+        h = (ms.hx, ms.hy, ms.hz)
+        state, evidence, d, angle, angle_std, h_ratio, f_ratio = self._evidence.step(
+            t, (rx, ry, rz), (nx, ny, nz), h, (fx, fy, fz), ms
+        )
         return SampleEstimate(
-            t, state, tuple(x), (rx, ry, rz), (nx, ny, nz), ms.sigma, (ms.hx, ms.hy, ms.hz), ms.h_norm, ms.h_std, d,
-            angle, angle_std, latched, fallback, False, False, relatched, ms.depth, *stats, joint_fb,
+            t, state, tuple(x), (rx, ry, rz), (nx, ny, nz), ms.sigma, h, ms.h_norm, ms.h_std, d,
+            angle, angle_std, latched, fallback, False, False, relatched, ms.depth, *stats, joint_fb, evidence, h_ratio,
+            f_ratio,
         )  # fmt: skip
 
     def process(self, t: ArrayLike, wrench: ArrayLike) -> list[SampleEstimate]:

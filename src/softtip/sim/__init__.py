@@ -45,6 +45,7 @@ from softtip.sim.scenario import (
     HandFrame,
     paper_scenario,
     push_scenario,
+    rock_scenario,
     smoothstep,
 )
 from softtip.sim.sensor import NANO17, SensorModel
@@ -77,6 +78,7 @@ __all__ = [
     "HandFrame",
     "paper_scenario",
     "push_scenario",
+    "rock_scenario",
     "smoothstep",
     "NANO17",
     "SensorModel",

@@ -301,7 +301,8 @@ def simulate_grasp(
 
     e1, e2 = tangent_frame(-u)
     axes = np.stack((u, e1, e2))
-    n_free = 1 if scenario.tangential_force is None else 3
+    loads = any(any(d.load) for d in scenario.disturbances)
+    n_free = 1 if scenario.tangential_force is None and not loads else 3
     load = np.zeros(3) if scenario.tangential_force is None else axes @ np.asarray(scenario.tangential_force)
     # before contact the object is free: no tangential load
     ramp = np.where(t >= scenario.t_contact, scenario.load_ramp(t), 0.0)
@@ -320,6 +321,8 @@ def simulate_grasp(
             if len(history) >= 2:
                 x0 += history[-1] - history[-2]
             goal = np.array([target[i], ramp[i] * load[1], ramp[i] * load[2]])
+            if loads:
+                goal[1:] += (axes @ scenario.disturbance_load(ti))[1:]
             x, res = sample.solve(x0, goal, n_free)
         if res.in_contact:
             far = np.max(np.linalg.norm(res.centre - r_c, axis=1))

@@ -1,0 +1,164 @@
+"""Line or area: what a window of samples says about the contact's type (the maths, no state).
+
+A strip contact (a thin plate's edge, a wedge, a thin cylinder) transmits tangential moment
+about one tangent axis only, ``e = n × d``: the object rolls about its own edge. A plane or a
+thick object pressed into the skin transmits it about both. From one axis of excitation the
+two cannot be told apart (a tilted plane and a tilted thin plate give the same wrench); once
+the contact has been excited about two axes, the 2×2 covariance of ``h`` in the tangent
+plane over a window separates them: its eigenvalues stay far apart for a line and close for
+an area.
+
+Per sample, in the tangent frame ``(e1, e2)`` at the contact point (SPEC §3.4 convention):
+``h`` and the tangential load ``f_t`` (the force projected on the tangent plane; the push
+that tilts the object turns with the tilt axis) give :data:`N_SUMS` products
+(:func:`evidence_products`); the batch cumulates them, the stream keeps running sums, and
+window sums are differences of the two. :func:`window_kernel` turns window sums into
+
+* the covariance of ``h`` and of ``f_t`` over the window with the noise's expected share
+  removed (``(1 − L / N) Σ``, ``Σ`` the 2×2 noise covariance from the sensor noise model at
+  the contact point, ``L`` samples per independent noise sample: 1 unfiltered, ``1 / g²``
+  after a low-pass of white-noise gain ``g``, ``N`` samples in the window), as eigenvalues
+  ``major ≥ minor`` (clamped at zero);
+* a noise level for each: what the noise alone may still leave in an eigenvalue, the upper
+  3 σ tail of a χ² with ``ν = (N − 1) / L`` degrees of freedom (Wilson–Hilferty, as in
+  :mod:`softtip.joint`) plus a 25 % model margin, times the largest noise variance;
+* the window's line direction ``d = n × v`` with ``v`` the principal axis of ``h``'s
+  variation, as an angle in the tangent frame, and its first-order standard deviation: the
+  principal axis of a 2×2 covariance turns by ``C₁₂ / (λ₁ − λ₂)`` for an off-diagonal error
+  ``C₁₂``, whose variance over ``ν`` independent samples is ``(λ₁ + s²)(λ₂ + s²) / ν``
+  (``s²`` the noise variance): the across-axis spread ``λ₂`` the window shows beyond the
+  noise (the contact model's error, a line that is not quite one) counts like noise.
+
+The decisions (thresholds, hysteresis, held verdicts) are the estimator's
+(:mod:`softtip.estimator.evidence`). All kernels are component-wise for both back ends of
+:mod:`softtip._xp`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, NamedTuple
+
+from softtip.joint import MODEL_MARGIN, _chi2_excess
+from softtip.noise import SensorNoise
+
+__all__ = ["N_SUMS", "Window", "evidence_products", "tangent_noise_kernel", "window_kernel"]
+
+#: Number of window sums: ``Σ h1, Σ h2, Σ h1², Σ h1 h2, Σ h2²`` and the same for ``f_t``.
+N_SUMS = 10
+
+
+def evidence_products(h1, h2, f1, f2):
+    """The :data:`N_SUMS` per-sample products whose window sums :func:`window_kernel` needs.
+
+    Parameters
+    ----------
+    h1, h2 : float or array
+        ``h`` in the tangent frame, N·m.
+    f1, f2 : float or array
+        Tangential load in the tangent frame, N.
+    """
+    return (h1, h2, h1 * h1, h1 * h2, h2 * h2, f1, f2, f1 * f1, f1 * f2, f2 * f2)
+
+
+def tangent_noise_kernel(rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, noise: SensorNoise):
+    """Noise covariance of ``h`` (N²·m²) and of ``f_t`` (N²) in the tangent frame at ``r``.
+
+    Returns ``(h11, h12, h22, f11, f12, f22)``: ``Σ_h = P Σ_m P + P [r]× Σ_f [r]×ᵀ P`` and
+    ``Σ_f`` projected on ``(e1, e2)`` (:mod:`softtip.noise`).
+    """
+    sfx, sfy, sfz = (s * s for s in noise.force_std)
+    smx, smy, smz = (s * s for s in noise.moment_std)
+    # u × r for u = e1, e2
+    ax, ay, az = e1y * rz - e1z * ry, e1z * rx - e1x * rz, e1x * ry - e1y * rx
+    bx, by, bz = e2y * rz - e2z * ry, e2z * rx - e2x * rz, e2x * ry - e2y * rx
+    h11 = smx * e1x * e1x + smy * e1y * e1y + smz * e1z * e1z + sfx * ax * ax + sfy * ay * ay + sfz * az * az
+    h12 = smx * e1x * e2x + smy * e1y * e2y + smz * e1z * e2z + sfx * ax * bx + sfy * ay * by + sfz * az * bz
+    h22 = smx * e2x * e2x + smy * e2y * e2y + smz * e2z * e2z + sfx * bx * bx + sfy * by * by + sfz * bz * bz
+    f11 = sfx * e1x * e1x + sfy * e1y * e1y + sfz * e1z * e1z
+    f12 = sfx * e1x * e2x + sfy * e1y * e2y + sfz * e1z * e2z
+    f22 = sfx * e2x * e2x + sfy * e2y * e2y + sfz * e2z * e2z
+    return h11, h12, h22, f11, f12, f22
+
+
+class Window(NamedTuple):
+    """What one window says, component-wise (floats or arrays of one shape)."""
+
+    h_major: Any  #: larger eigenvalue of h's covariance, noise removed, N²·m²
+    h_minor: Any  #: smaller one (≥ 0), N²·m²
+    h_noise: Any  #: what noise alone may leave in an eigenvalue of h's covariance, N²·m²
+    f_major: Any  #: the same for the tangential load, N²
+    f_minor: Any
+    f_noise: Any
+    angle: Any  #: window line direction ``n × (principal axis of h)``, rad in (−π/2, π/2]
+    angle_std: Any  #: its standard deviation, rad (inf when h did not vary)
+
+
+def _eig2(c11, c12, c22, xp):
+    half = 0.5 * (c11 - c22)
+    mean = 0.5 * (c11 + c22)
+    root = xp.sqrt(half * half + c12 * c12)
+    return mean + root, mean - root, half, root
+
+
+def _covariance(s1, s2, s11, s12, s22, count, n11, n12, n22, keep, xp):
+    """Window covariance less ``keep`` times the noise covariance: (c11, c12, c22)."""
+    m1, m2 = xp.div(s1, count), xp.div(s2, count)
+    c11 = xp.div(s11, count) - m1 * m1 - keep * n11
+    c12 = xp.div(s12, count) - m1 * m2 - keep * n12
+    c22 = xp.div(s22, count) - m2 * m2 - keep * n22
+    return c11, c12, c22
+
+
+_HALF_PI = 0.5 * math.pi
+
+
+def window_kernel(sums, count, h11, h12, h22, f11, f12, f22, corr: float, xp) -> Window:
+    """What a window says, from its sums (:func:`evidence_products`) and the noise.
+
+    Parameters
+    ----------
+    sums : sequence of 10 floats or arrays
+        Window sums.
+    count : float or array
+        Samples in the window (positive).
+    h11, h12, h22, f11, f12, f22 : float or array
+        Per-sample noise covariances (:func:`tangent_noise_kernel`).
+    corr : float
+        Samples per independent noise sample (1 unfiltered).
+    xp : namespace
+        :data:`softtip._xp.NP` or :data:`softtip._xp.PY`.
+
+    Returns
+    -------
+    Window
+    """
+    keep = xp.maximum(1.0 - xp.div(corr, count), 0.0)
+    nu = xp.maximum(count - 1.0, 0.0) / corr
+    tail = xp.div(_chi2_excess(nu, xp), nu) + MODEL_MARGIN
+    c11, c12, c22 = _covariance(*sums[0:5], count, h11, h12, h22, keep, xp)
+    big, small, half, root = _eig2(c11, c12, c22, xp)
+    s_big, s_small, _, _ = _eig2(h11, h12, h22, xp)
+    h_noise = tail * s_big
+    g11, g12, g22 = _covariance(*sums[5:10], count, f11, f12, f22, keep, xp)
+    f_big, f_small, _, _ = _eig2(g11, g12, g22, xp)
+    f_n, _, _, _ = _eig2(f11, f12, f22, xp)
+    # principal axis v of h's variation at angle phi; d = n × v is at phi + 90°
+    phi = 0.5 * xp.atan2(2.0 * c12, 2.0 * half)
+    a = phi + _HALF_PI
+    a = a - math.pi * (a > _HALF_PI)
+    small = xp.maximum(small, 0.0)
+    big = xp.maximum(big, 0.0)
+    s2 = 0.5 * (s_big + s_small)
+    gap = big - small
+    # noise (over ν independent samples) and model error: an across-axis spread of h (the
+    # line resisting a roll about its own edge a little) turns the axis by as much of
+    # √(minor / major) as the window's excitation about the two axes is correlated, which
+    # the tangential load tells: its correlation ρ between the axis and across it
+    cp, sp = xp.div(c11 - c22, 2.0 * root), xp.div(c12, root)  # cos 2φ, sin 2φ
+    fm, fd = 0.5 * (g11 + g22), 0.5 * (g11 - g22)
+    f_vv, f_ww, f_vw = fm + fd * cp + g12 * sp, fm - fd * cp - g12 * sp, g12 * cp - fd * sp
+    rho2 = xp.div(f_vw * f_vw, xp.maximum(f_vv, 0.0) * xp.maximum(f_ww, 0.0))
+    model = xp.div(small, big) * xp.div(rho2, xp.maximum(1.0 - rho2, 0.0))
+    angle_std = xp.sqrt(xp.div(corr * (big + s2) * (small + s2), nu * gap * gap) + model)
+    return Window(big, small, h_noise, xp.maximum(f_big, 0.0), xp.maximum(f_small, 0.0), tail * f_n, a, angle_std)
