@@ -42,7 +42,10 @@ from typing import Any, NamedTuple
 from softtip.joint import MODEL_MARGIN, _chi2_excess
 from softtip.noise import SensorNoise
 
-__all__ = ["N_SUMS", "Window", "evidence_products", "tangent_noise_kernel", "window_kernel"]
+__all__ = [
+    "N_SUMS", "Window", "evidence_products", "tangent_noise_kernel", "window_kernel", "window_floats", "window_constants", "window_eigen_floats",
+    "window_direction_floats", "noise_constants",
+]
 
 #: Number of window sums: ``Σ h1, Σ h2, Σ h1², Σ h1 h2, Σ h2²`` and the same for ``f_t``.
 N_SUMS = 10
@@ -162,3 +165,98 @@ def window_kernel(sums, count, h11, h12, h22, f11, f12, f22, corr: float, xp) ->
     model = xp.div(small, big) * xp.div(rho2, xp.maximum(1.0 - rho2, 0.0))
     angle_std = xp.sqrt(xp.div(corr * (big + s2) * (small + s2), nu * gap * gap) + model)
     return Window(big, small, h_noise, xp.maximum(f_big, 0.0), xp.maximum(f_small, 0.0), tail * f_n, a, angle_std)
+
+
+def window_floats(sums, count: float, noise_terms, tail: float, keep: float, nu: float, corr: float):
+    """:func:`window_kernel` for one window of Python floats, unrolled for the stream (the
+    same operations, so the same results to rounding; no function call per operation).
+
+    ``tail``, ``keep`` and ``nu`` are :func:`window_constants` of ``count``. Returns the
+    fields of :class:`Window` as a plain tuple.
+    """
+    h11, h12, h22, f11, f12, f22 = noise_terms
+    s_big, s2, f_n = noise_constants(noise_terms)
+    e = window_eigen_floats(sums, count, noise_terms, keep)
+    big, small = e[0], e[1]
+    f_big, f_small = e[8], e[9]
+    angle, angle_std = window_direction_floats(e, s2, nu, corr)
+    return big, small, tail * s_big, f_big, f_small, tail * f_n, angle, angle_std
+
+
+def noise_constants(noise_terms):
+    """``(largest noise variance of h, mean noise variance of h, largest of f_t)``."""
+    h11, h12, h22, f11, f12, f22 = noise_terms
+    nh = 0.5 * (h11 - h22)
+    nm = 0.5 * (h11 + h22)
+    nr = math.sqrt(nh * nh + h12 * h12)
+    s_big, s_small = nm + nr, nm - nr
+    fh = 0.5 * (f11 - f22)
+    f_n = 0.5 * (f11 + f22) + math.sqrt(fh * fh + f12 * f12)
+    return s_big, 0.5 * (s_big + s_small), f_n
+
+
+def window_eigen_floats(sums, count: float, noise_terms, keep: float):
+    """The eigenvalues of a window's covariances (floats), with what the direction needs:
+    ``(big, small, c11, c12, c22, root, g11, g12, f_big, f_small, g22)`` less the last."""
+    h11, h12, h22, f11, f12, f22 = noise_terms
+    s1, s2_, s11, s12, s22, t1, t2, t11, t12, t22 = sums
+    m1, m2 = s1 / count, s2_ / count
+    c11 = s11 / count - m1 * m1 - keep * h11
+    c12 = s12 / count - m1 * m2 - keep * h12
+    c22 = s22 / count - m2 * m2 - keep * h22
+    half = 0.5 * (c11 - c22)
+    mean = 0.5 * (c11 + c22)
+    root = math.sqrt(half * half + c12 * c12)
+    big, small = mean + root, mean - root
+    n1, n2 = t1 / count, t2 / count
+    g11 = t11 / count - n1 * n1 - keep * f11
+    g12 = t12 / count - n1 * n2 - keep * f12
+    g22 = t22 / count - n2 * n2 - keep * f22
+    gh = 0.5 * (g11 - g22)
+    gm = 0.5 * (g11 + g22)
+    gr = math.sqrt(gh * gh + g12 * g12)
+    f_big, f_small = gm + gr, gm - gr
+    return (
+        big if big > 0.0 else 0.0, small if small > 0.0 else 0.0, c11, c12, c22, root, g11, g12,
+        f_big if f_big > 0.0 else 0.0, f_small if f_small > 0.0 else 0.0, g22, half,
+    )  # fmt: skip
+
+
+def window_direction_floats(e, s2: float, nu: float, corr: float):
+    """``(angle, angle_std)`` of a window from :func:`window_eigen_floats`."""
+    big, small, c11, c12, c22, root, g11, g12, _, _, g22, half = e
+    a = 0.5 * math.atan2(2.0 * c12, 2.0 * half) + _HALF_PI
+    if a > _HALF_PI:
+        a -= math.pi
+    gap = big - small
+    if root != 0.0:
+        cp, sp = (c11 - c22) / (2.0 * root), c12 / root
+        fd = 0.5 * (g11 - g22)
+        fm = 0.5 * (g11 + g22)
+        f_vv, f_ww, f_vw = fm + fd * cp + g12 * sp, fm - fd * cp - g12 * sp, g12 * cp - fd * sp
+        den = (f_vv if f_vv > 0.0 else 0.0) * (f_ww if f_ww > 0.0 else 0.0)
+        rho2 = _div(f_vw * f_vw, den)
+        one = 1.0 - rho2
+        model = _div(small, big) * _div(rho2, one if one > 0.0 else 0.0)
+    else:
+        model = math.nan
+    v = _div(corr * (big + s2) * (small + s2), nu * gap * gap) + model
+    return a, (math.sqrt(v) if v >= 0.0 else math.nan)
+
+
+def window_constants(count: float, corr: float, xp=None):
+    """``(tail, keep, nu)`` of a window of ``count`` samples (floats; see :func:`window_kernel`)."""
+    from softtip._xp import PY
+
+    keep = max(1.0 - _div(corr, count), 0.0)
+    nu = max(count - 1.0, 0.0) / corr
+    tail = _div(_chi2_excess(nu, PY), nu) + MODEL_MARGIN
+    return tail, keep, nu
+
+
+def _div(a: float, b: float) -> float:
+    if b != 0.0:
+        return a / b
+    if a != a or a == 0.0:
+        return math.nan
+    return math.copysign(math.inf, a) * math.copysign(1.0, b)

@@ -39,7 +39,10 @@ import numpy as np
 
 from softtip._xp import NP, PY
 from softtip.estimator.config import EstimatorConfig
-from softtip.evidence import N_SUMS, evidence_products, tangent_noise_kernel, window_kernel
+from softtip.evidence import (
+    N_SUMS, _div, evidence_products, noise_constants, tangent_noise_kernel, window_constants, window_direction_floats,
+    window_eigen_floats, window_kernel,
+)  # fmt: skip
 from softtip.noise import SensorNoise
 from softtip.spin import tangent_frame_kernel
 
@@ -202,15 +205,22 @@ class EvidenceTracker:
 
     Running sums of the products since the segment's start and, for each sample of the last
     ``evidence_window`` seconds, its time and the sums before it: window sums are
-    differences, as in the batch.
+    differences, as in the batch. Plain float arithmetic (:func:`softtip.evidence.window_floats`),
+    O(1) per sample.
     """
 
     def __init__(self, config: EstimatorConfig, noise: SensorNoise, corr: float):
         self.config = config
         self.noise = noise
         self.corr = corr
-        self._noise_at: tuple | None = None
+        self._at: tuple | None = None
+        self._point: tuple | None = None
+        self._frame: tuple = ()
         self._noise_terms: tuple = ()
+        self._constants: dict[float, tuple[float, float, float]] = {}
+        enter, leave = config.area_ratio
+        self._enter, self._leave = enter, leave
+        self._fmin2 = config.excitation_min * config.excitation_min
         self.start_segment()
 
     def start_segment(self) -> None:
@@ -229,17 +239,18 @@ class EvidenceTracker:
             if ms.line:
                 return "line", "unconfirmed", (ms.dx, ms.dy, ms.dz), ms.angle, ms.angle_std, math.nan, math.nan
             return "point", "", _NAN3, math.nan, math.nan, math.nan, math.nan
-        e1x, e1y, e1z, e2x, e2y, e2z = frame = tangent_frame_kernel(*normal, PY)
+        if normal != self._at or point != self._point:  # the point is held: once per latch
+            self._at, self._point = normal, point
+            self._frame = tangent_frame_kernel(*normal, PY)
+            self._noise_terms = tangent_noise_kernel(*point, *self._frame, self.noise)
+            self._noise_k = noise_constants(self._noise_terms)
+        e1x, e1y, e1z, e2x, e2y, e2z = self._frame
         hx, hy, hz = h
         fx, fy, fz = force
         h1 = hx * e1x + hy * e1y + hz * e1z
         h2 = hx * e2x + hy * e2y + hz * e2z
         f1 = fx * e1x + fy * e1y + fz * e1z
         f2 = fx * e2x + fy * e2y + fz * e2z
-        key = (point, normal)
-        if key != self._noise_at:  # the point is held: computed once per latch
-            self._noise_at = key
-            self._noise_terms = tangent_noise_kernel(*point, *frame, self.noise)
         hist = self._hist
         cum = self._cum
         hist.append((t, cum))
@@ -258,19 +269,35 @@ class EvidenceTracker:
             )  # fmt: skip
         else:  # an empty window (t − T rounds to t) has zero sums, as in the batch
             sums = (0.0,) * N_SUMS
-        win = window_kernel(sums, float(len(hist)), *self._noise_terms, self.corr, PY)
-        area_now, line_now, resolved, h_ratio, f_ratio = _decide(win, cfg, PY)
-        if area_now:
+        count = float(len(hist))
+        k = self._constants.get(count)
+        if k is None:
+            k = self._constants[count] = window_constants(count, self.corr)
+        tail, keep, nu = k
+        s_big, s2, f_n = self._noise_k
+        e = window_eigen_floats(sums, count, self._noise_terms, keep)
+        major, minor, f_major, f_minor = e[0], e[1], e[8], e[9]
+        h_noise, f_noise = tail * s_big, tail * f_n
+        # _decide, unrolled (NaN comparisons are False, as in the batch)
+        varied = major > h_noise
+        h_ratio = _div(minor, major) if varied else math.nan
+        f_ratio = _div(f_minor, f_major) if f_major > f_noise else math.nan
+        if minor > h_noise and h_ratio >= self._enter:
             self._verdict = _AREA
-        elif line_now:
+        elif (
+            varied and h_ratio < self._leave and f_minor > f_noise
+            and f_minor >= cfg.excitation_ratio * f_major and f_minor >= self._fmin2
+        ):  # fmt: skip
             self._verdict = _LINE
-        if resolved:
-            self._held = (win.angle, win.angle_std)
+            w_angle, w_std = window_direction_floats(e, s2, nu, self.corr)
+            if w_std <= cfg.evidence_max_angle_std:
+                self._held = (w_angle, w_std)
+        hn = ms.h_norm
         thr = cfg.h_sigmas * ms.h_std
         thr = thr if thr > cfg.h_min else cfg.h_min
-        if ms.h_norm > thr:
+        if hn > thr:
             self._sig = True
-        elif ms.h_norm <= SIG_LEAVE * thr:
+        elif hn <= SIG_LEAVE * thr:
             self._sig = False
         verdict = self._verdict
         if verdict == _AREA:
@@ -282,7 +309,9 @@ class EvidenceTracker:
             return "line", "confirmed", d, angle, angle_std, h_ratio, f_ratio
         if not self._sig:
             return "point", "", _NAN3, math.nan, math.nan, h_ratio, f_ratio
-        std = _sample_std(ms.angle_std, ms.h_norm, win.h_minor, PY)
+        a = ms.angle_std
+        v = a * a + _div(minor, hn * hn)
+        std = math.sqrt(v) if v >= 0.0 else math.nan
         return (
             "line", "confirmed" if verdict == _LINE else "unconfirmed", (ms.dx, ms.dy, ms.dz), ms.angle, std, h_ratio,
             f_ratio,
