@@ -4,6 +4,7 @@ import math
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
+from rocking import rocking_log
 
 from softtip import Capsule, Estimator, EstimatorConfig, Sphere, axial_difference, estimate
 from softtip.depth import MURAKAMI2006_DEPTH
@@ -12,7 +13,7 @@ from softtip.units import KGF, KGF_MM
 
 FIELDS_3 = ("wrench", "point", "normal", "h", "direction")
 FIELDS_1 = ("sigma", "h_norm", "h_std", "angle", "angle_std", "depth", "joint_conditioning", "joint_angle_std",
-            "joint_offset_std", "joint_residual")  # fmt: skip
+            "joint_offset_std", "joint_residual", "h_ratio", "excitation_ratio")  # fmt: skip
 FLAGS = ("latched", "latch_fallback", "pulling", "taring", "relatched", "joint_fallback")
 
 
@@ -26,6 +27,7 @@ def assert_stream_equals_batch(t, w, tip, config):
     for name in FLAGS:
         got = np.array([getattr(s, name) for s in stream])
         assert (got == getattr(batch, name)).all(), name
+    assert [s.line_evidence for s in stream] == list(batch.columns()["line_evidence"])
     return batch
 
 
@@ -75,13 +77,22 @@ CASES = {
     "joint-depth-relatch-lowpass": EstimatorConfig(
         contact_point="joint", depth=MURAKAMI2006_DEPTH, relatch_distance=3e-3, lowpass_hz=8.0, sample_rate=50.0
     ),
+    "evidence-off": EstimatorConfig(line_evidence=False),
+    "evidence-short-window-loose": EstimatorConfig(
+        evidence_window=0.3, area_ratio=(0.05, 0.02), excitation_ratio=0.05, excitation_min=1e-4
+    ),
+    "evidence-joint-depth-relatch": EstimatorConfig(
+        contact_point="joint", depth=MURAKAMI2006_DEPTH, relatch_distance=3e-3, evidence_window=1.0
+    ),
 }
 
 
 @pytest.mark.parametrize("name", CASES)
-@pytest.mark.parametrize("log", ["single", "two-contacts", "impact", "sliding"])
+@pytest.mark.parametrize("log", ["single", "two-contacts", "impact", "sliding", "rocking"])
 def test_stream_agrees_with_batch(name, log):
-    if log == "sliding":
+    if log == "rocking":
+        t, w, _ = rocking_log("line", 40.0, seed=2)
+    elif log == "sliding":
         t, w = sliding_grasp()
     elif log == "single":
         g = synthetic_grasp(angle_deg=45.0, seed=1)

@@ -161,8 +161,10 @@ def window_kernel(sums, count, h11, h12, h22, f11, f12, f22, corr: float, xp) ->
     cp, sp = xp.div(c11 - c22, 2.0 * root), xp.div(c12, root)  # cos 2φ, sin 2φ
     fm, fd = 0.5 * (g11 + g22), 0.5 * (g11 - g22)
     f_vv, f_ww, f_vw = fm + fd * cp + g12 * sp, fm - fd * cp - g12 * sp, g12 * cp - fd * sp
-    rho2 = xp.div(f_vw * f_vw, xp.maximum(f_vv, 0.0) * xp.maximum(f_ww, 0.0))
-    model = xp.div(small, big) * xp.div(rho2, xp.maximum(1.0 - rho2, 0.0))
+    den = xp.maximum(f_vv, 0.0) * xp.maximum(f_ww, 0.0)
+    rho2 = xp.div(f_vw * f_vw, den)
+    # without load variation about both axes the correlation is unknown: count it as ρ² = ½
+    model = xp.div(small, big) * xp.where(den > 0.0, xp.div(rho2, xp.maximum(1.0 - rho2, 0.0)), 1.0)
     angle_std = xp.sqrt(xp.div(corr * (big + s2) * (small + s2), nu * gap * gap) + model)
     return Window(big, small, h_noise, xp.maximum(f_big, 0.0), xp.maximum(f_small, 0.0), tail * f_n, a, angle_std)
 
@@ -235,9 +237,12 @@ def window_direction_floats(e, s2: float, nu: float, corr: float):
         fm = 0.5 * (g11 + g22)
         f_vv, f_ww, f_vw = fm + fd * cp + g12 * sp, fm - fd * cp - g12 * sp, g12 * cp - fd * sp
         den = (f_vv if f_vv > 0.0 else 0.0) * (f_ww if f_ww > 0.0 else 0.0)
-        rho2 = _div(f_vw * f_vw, den)
-        one = 1.0 - rho2
-        model = _div(small, big) * _div(rho2, one if one > 0.0 else 0.0)
+        if den > 0.0:
+            rho2 = f_vw * f_vw / den
+            one = 1.0 - rho2
+            model = _div(small, big) * _div(rho2, one if one > 0.0 else 0.0)
+        else:
+            model = _div(small, big) * 1.0
     else:
         model = math.nan
     v = _div(corr * (big + s2) * (small + s2), nu * gap * gap) + model
