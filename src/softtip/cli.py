@@ -162,6 +162,42 @@ _ESTIMATOR_OPTIONS = [
         help="Skin law of --depth-compensation: normal force = K·depth^P (N, m), depth at most MAX_MM mm "
         "(default: the murakami2006 skin, fitted on softtip's simulator).",
     ),
+    click.option(
+        "--line-evidence",
+        type=click.Choice(["on", "off"]),
+        default="on",
+        show_default=True,
+        help="on: tell a line from an area over a sliding window (state area; line_evidence confirmed once the "
+        "contact was excited about two tangent axes and h stayed on one, else unconfirmed; under confirmed "
+        "evidence the direction comes from the window); off: the papers' per-sample line/point.",
+    ),
+    click.option("--evidence-window", type=POSITIVE, default=2.0, show_default=True, metavar="S", help="Sliding window of the line evidence, s."),
+    click.option(
+        "--area-ratio",
+        type=(POSITIVE, POSITIVE),
+        default=(0.2, 0.1),
+        show_default=True,
+        metavar="ENTER LEAVE",
+        help="area when the smaller/larger eigenvalue ratio of h's window covariance (noise removed) reaches ENTER; "
+        "a confirmed line again only below LEAVE.",
+    ),
+    click.option(
+        "--excitation",
+        type=(POSITIVE, POSITIVE),
+        default=(0.5, 0.01),
+        show_default=True,
+        metavar="RATIO MIN_N",
+        help="Excited about two tangent axes when the tangential load's window covariance has its smaller eigenvalue "
+        "beyond the noise, at least RATIO times the larger and at least MIN_N² (N).",
+    ),
+    click.option(
+        "--evidence-max-std",
+        type=POSITIVE,
+        default=10.0,
+        show_default=True,
+        metavar="DEG",
+        help="A window's line direction is used only when its standard deviation is at most this, degrees.",
+    ),
 ]
 
 
@@ -180,7 +216,7 @@ INPUT is a CSV file with a header row and columns t, fx, fy, fz, mx, my, mz (t i
 increasing; extra columns are kept and copied to the output). '-' reads standard input.
 With --example, softtip's shipped example grasp is used instead.
 
-The output CSV (standard output unless -o) has the columns t, state (none|point|line),
+The output CSV (standard output unless -o) has the columns t, state (none|point|line|area),
 fx..mz (the wrench after bias removal and filtering, the one the estimates come from),
 rx, ry, rz (contact point, m), nx, ny, nz (outward normal), sigma (spin torque about the
 normal, N·m), hx, hy, hz, h_norm (tangential spin torque, N·m), dx, dy, dz (direction of
@@ -191,7 +227,10 @@ angle_std_deg, latched, latch_fallback, relatched (a new latch starts here), dep
 joint_offset_std (m), joint_residual and joint_fallback (the sliding window of
 --contact-point joint: reciprocal condition number, standard deviations of its line angle
 and offset, RMS fit residual in noise standard deviations, and whether the latched point
-is used because no window has been accepted yet), then the input's extra columns. r, n, h are empty
+is used because no window has been accepted yet), line_evidence (confirmed|unconfirmed on
+line samples: whether the contact was excited about two tangent axes with h staying on one),
+h_ratio and excitation_ratio (smaller/larger eigenvalue of the evidence window's covariance
+of h and of the tangential load, noise removed), then the input's extra columns. r, n, h are empty
 (nan) when state is none; d and the angle only for line contacts, where |h| stands out of
 the noise.
 
@@ -360,7 +399,8 @@ def estimate(
         )
     targets = [p for p in (output, to_bag, rerun_save) if p is not None]
     if targets:
-        summary = ", ".join(f"{v} {k}" for k, v in counts.items())
+        confirmed = int(np.count_nonzero(est.line_evidence == 2))
+        summary = ", ".join(f"{v} {k}" + (f" ({confirmed} confirmed)" if k == "line" else "") for k, v in counts.items())
         click.echo(f"softtip: {len(est)} samples ({summary}) -> {', '.join(map(str, targets))}", err=True)
         if counts["line"]:
             line = est.state == 2
@@ -443,6 +483,12 @@ def _make_config(opts: dict, sample_rate: float | None = None) -> EstimatorConfi
             joint_max_angle_std=math.radians(opts["joint_max_std"][0]),
             joint_max_offset_std=opts["joint_max_std"][1] * 1e-3,
             joint_max_residual=opts["joint_max_residual"],
+            line_evidence=opts["line_evidence"] == "on",
+            evidence_window=opts["evidence_window"],
+            area_ratio=opts["area_ratio"],
+            excitation_ratio=opts["excitation"][0],
+            excitation_min=opts["excitation"][1],
+            evidence_max_angle_std=math.radians(opts["evidence_max_std"]),
         )
     except ValueError as exc:
         raise click.UsageError(str(exc)) from None

@@ -267,7 +267,8 @@ class TerminalView:
                 if on
             )
             state = (
-                "taring (keep the fingertip untouched)" if e.taring else e.state.upper()
+                "taring (keep the fingertip untouched)" if e.taring
+                else e.state.upper() + (f" ({e.line_evidence})" if e.line_evidence else "")
             )
             lines += [
                 f"t        {e.t:10.3f} s",

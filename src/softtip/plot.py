@@ -75,8 +75,14 @@ def plot_estimates(
     if units not in _UNITS:
         raise ValueError(f"units must be one of {', '.join(_UNITS)}, got {units!r}")
     fscale, mscale, funit, munit = _UNITS[units]
-    fig, axes = plt.subplots(2, 2, figsize=(10, 6.5), sharex=True, constrained_layout=True)
-    (ax_f, ax_h), (ax_m, ax_d) = axes
+    fig = plt.figure(figsize=(10, 7.0), constrained_layout=True)
+    grid = fig.add_gridspec(3, 2, height_ratios=[1.0, 1.0, 0.12 + 0.08 * len(runs)])
+    ax_f = fig.add_subplot(grid[0, 0])
+    ax_m = fig.add_subplot(grid[1:, 0], sharex=ax_f)
+    ax_h = fig.add_subplot(grid[0, 1], sharex=ax_f)
+    ax_d = fig.add_subplot(grid[1, 1], sharex=ax_f)
+    ax_s = fig.add_subplot(grid[2, 1], sharex=ax_f)
+    axes = np.array([ax_f, ax_h, ax_m, ax_d])
 
     first = runs[0]
     for i, (name, color) in enumerate(zip("xyz", ("tab:red", "tab:green", "tab:blue"))):
@@ -105,14 +111,45 @@ def plot_estimates(
     ax_d.set_yticks([-90, -45, 0, 45, 90])
     if labels is not None or h_threshold is not None:
         ax_h.legend(loc="upper left", fontsize=8)
-    for ax in (ax_m, ax_d):
+    state_band(ax_s, runs, labels)
+    for ax in (ax_m, ax_s):
         ax.set_xlabel("time [s]")
+    ax_d.tick_params(labelbottom=False)
     for ax in axes.flat:
         ax.grid(True, alpha=0.3)
     if title:
         fig.suptitle(title)
     _save(fig, plt, path)
     return fig
+
+
+#: Colours of the state band: none, point, line (unconfirmed), line (confirmed), area.
+STATE_COLORS = ("white", "0.8", "#a6dba0", "#1b7837", "#e08214")
+STATE_BAND_LABELS = ("none", "point", "line unconfirmed", "line confirmed", "area")
+
+
+def state_band(ax, runs: Sequence[Estimates], labels: Sequence[str] | None = None) -> None:
+    """The contact state over time as a colour band, one row per log (line split into
+    unconfirmed and confirmed evidence; :data:`STATE_COLORS`)."""
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+    from matplotlib.patches import Patch
+
+    cmap = ListedColormap(STATE_COLORS)
+    norm = BoundaryNorm(np.arange(-0.5, len(STATE_COLORS)), cmap.N)
+    for k, est in enumerate(runs):
+        code = np.where(est.state == 3, 4, np.where((est.state == 2) & (est.line_evidence == 2), 3, est.state))
+        t = est.t
+        if len(t) < 2:
+            continue
+        mid = 0.5 * (t[1:] + t[:-1])
+        edges = np.concatenate(([t[0]], mid, [t[-1]]))
+        ax.pcolormesh(edges, [k, k + 1], code[None, :].astype(float), cmap=cmap, norm=norm, shading="flat")
+    ax.set_ylim(len(runs), 0)
+    ax.set_yticks(np.arange(len(runs)) + 0.5)
+    ax.set_yticklabels(list(labels) if labels is not None else [""] * len(runs), fontsize=7)
+    ax.set_ylabel("state", fontsize=8)
+    handles = [Patch(facecolor=c, edgecolor="0.5", label=n) for c, n in zip(STATE_COLORS, STATE_BAND_LABELS)]
+    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.9), ncol=5, fontsize=7, frameon=False)
 
 
 def figure_formats() -> set[str]:

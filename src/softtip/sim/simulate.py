@@ -29,7 +29,16 @@ from softtip.fingertip import Fingertip, load_fingertip
 from softtip.sim.contact import ContactModel, ContactParams, ContactResult, FrictionState
 from softtip.sim.objects import RigidObject, make_object
 from softtip.sim.pose import Pose
-from softtip.sim.scenario import JOINT_ROTATION_DEG, OBJECT_MASS, GraspScenario, paper_scenario, push_scenario
+from softtip.sim.scenario import (
+    JOINT_ROTATION_DEG,
+    OBJECT_MASS,
+    ROCK_AMPLITUDE_DEG,
+    ROCK_LOAD,
+    GraspScenario,
+    paper_scenario,
+    push_scenario,
+    rock_scenario,
+)
 from softtip.sim.sensor import SensorModel
 from softtip.sim.skin import DEFAULT_ELEMENTS, discretise_skin
 from softtip.sim.truth import GroundTruth, line_angle, tangent_frame
@@ -431,7 +440,7 @@ def run_simulation(
     apex_angle_deg: float = 90.0,
     tilt_deg: float = 45.0,
     force: float = 0.5 * 9.80665,
-    duration: float = 10.0,
+    duration: float | None = None,
     t_contact: float = 2.0,
     t_stable: float = 4.0,
     rate: float = 50.0,
@@ -440,6 +449,10 @@ def run_simulation(
     object_mass: float = OBJECT_MASS,
     misalignment_deg: float = 0.0,
     disturbance_timing: str = "after_grasp",
+    rock: bool = False,
+    rock_amplitude_deg: float = ROCK_AMPLITUDE_DEG,
+    rock_period: float = 1.0,
+    rock_load: float = ROCK_LOAD,
     n_elements: int = DEFAULT_ELEMENTS,
     modulus: float = 0.6e6,
     shear_modulus: float | None = None,
@@ -455,14 +468,35 @@ def run_simulation(
 
     Lengths in m, forces in N, angles in degrees, rates in Hz, moduli in Pa. ``scenario``
     is ``"paper"`` (the papers' hand, with joint and gravity disturbances) or ``"push"``
-    (a plain push, no disturbance). Writes the log CSV to ``output`` and the ground truth
+    (a plain push, no disturbance); ``rock`` adds the rocking of
+    :func:`~softtip.sim.scenario.rock_scenario` to the paper scenario (``duration``
+    defaults to its end; otherwise 10 s). Writes the log CSV to ``output`` and the ground truth
     to ``truth`` when given; returns the log.
     """
     tipo = load_fingertip(tip)
     obj = make_object(object_kind, size, edge_radius=edge_radius, apex_angle=math.radians(apex_angle_deg),
                       tilt=math.radians(tilt_deg))
-    timing = dict(force=force, duration=duration, t_contact=t_contact, t_stable=t_stable)
-    if scenario == "paper":
+    timing = dict(force=force, t_contact=t_contact, t_stable=t_stable)
+    if duration is not None:
+        timing["duration"] = duration
+    elif not (rock and scenario == "paper"):
+        timing["duration"] = 10.0
+    if rock and scenario != "paper":
+        raise ValueError("--rock needs the paper scenario")
+    if rock:
+        scn = rock_scenario(
+            math.radians(angle_deg),
+            rock_amplitude=math.radians(rock_amplitude_deg),
+            rock_period=rock_period,
+            rock_load=rock_load,
+            joint_rotation=math.radians(joint_rotation_deg),
+            gravity_spin=math.radians(gravity_spin_deg),
+            object_mass=object_mass,
+            misalignment=math.radians(misalignment_deg),
+            disturbance_timing=disturbance_timing,
+            **timing,
+        )
+    elif scenario == "paper":
         scn = paper_scenario(
             math.radians(angle_deg),
             joint_rotation=math.radians(joint_rotation_deg),
