@@ -27,6 +27,12 @@ method | error with softtip's extension``. Sections:
 * **noise** (item 4, synthetic grasps at up to 7 kHz): ``joint`` with a sensor noisier
   than its noise model, and whether its reported standard deviations hold with and
   without a low-pass.
+* **evidence** (issue 10, line or area): per object (lines: plates ≤ 3 mm, wedges,
+  cylinders Ø ≤ 6 mm; in between: Ø 10–14 mm; areas: plates ≥ 10 mm and a plane), with the
+  rocking scenario (:func:`~softtip.sim.rock_scenario`, after both axes were excited) and
+  without (the papers' grasp, t > 6 s), over three object angles and three noise seeds:
+  share of samples line / area / point, confirmed share of the line samples, median
+  direction error and RMS of error / reported standard deviation.
 * **cost**: streaming time per sample of each mode.
 
 Room is left for other sections (calibration and gravity: ``bench_calibration.py``).
@@ -50,12 +56,14 @@ from softtip.sim import (
     Cylinder,
     ContactParams,
     Disturbance,
+    HalfSpace,
     Plate,
     SensorModel,
     Wedge,
     discretise_skin,
     paper_scenario,
     push_scenario,
+    rock_scenario,
     simulate_grasp,
 )
 from softtip.units import KGF
@@ -259,6 +267,65 @@ def noise_section() -> None:
              f"{reported:.1f} µm", f"{spread / reported:.2f}")  # fmt: skip
 
 
+#: Objects of the evidence section: (label, object, kind); lines, in between, areas.
+EVIDENCE_OBJECTS = (
+    ("plate 1 mm", lambda: Plate(0.001), "line"),
+    ("plate 2 mm", lambda: Plate(0.002), "line"),
+    ("plate 3 mm", lambda: Plate(0.003), "line"),
+    ("90° wedge", lambda: Wedge(math.pi / 2), "line"),
+    ("60° wedge", lambda: Wedge(math.pi / 3), "line"),
+    ("cylinder Ø 4 mm", lambda: Cylinder(0.004), "line"),
+    ("cylinder Ø 6 mm", lambda: Cylinder(0.006), "line"),
+    ("cylinder Ø 10 mm", lambda: Cylinder(0.010), "between"),
+    ("cylinder Ø 14 mm", lambda: Cylinder(0.014), "between"),
+    ("plate 10 mm", lambda: Plate(0.010), "area"),
+    ("plate 15 mm", lambda: Plate(0.015), "area"),
+    ("plane", lambda: HalfSpace(), "area"),
+)
+
+
+def evidence_section(angles=(-35.0, 25.0, 70.0), noise_seeds=(101, 102, 103)) -> None:
+    """Line or area (issue 10): per object, with and without rocking, over object angles and
+    sensor-noise seeds; states after both axes were excited (1 s into the second rocking
+    segment) or, without rocking, in the held grasp (t > 6 s)."""
+    print(
+        "\n### line or area (line evidence): share of samples line / area / point (confirmed share of the line "
+        "samples), median direction error, RMS of error / reported std\n"
+    )
+    print(f"object angles {', '.join(f'{a:+.0f}°' for a in angles)}, sensor noise seeds {', '.join(map(str, noise_seeds))}")
+    print("| object | rocking: line / area / point (confirmed) | rocking: direction error, err/std | "
+          "papers' grasp: line / area / point (confirmed) | papers' grasp: direction error, err/std |")  # fmt: skip
+    print("| --- | --- | --- | --- | --- |")
+    sensor = SensorModel()
+    for label, make, _kind in EVIDENCE_OBJECTS:
+        cells = []
+        for rock in (True, False):
+            states, conf, errs, ratios = [], [], [], []
+            for ang in angles:
+                scn = rock_scenario(math.radians(ang)) if rock else paper_scenario(math.radians(ang))
+                log = simulate_grasp(TIP, make(), scn, sensor, rng=noise_seeds[0])
+                if rock:
+                    a2 = next(d for d in scn.disturbances if d.label == "rock-a2")
+                    sel = log.t >= a2.start + a2.period
+                else:
+                    sel = log.t > HELD
+                for seed in noise_seeds:
+                    w = sensor.measure(log.wrench_true, np.random.default_rng(seed))
+                    est = estimate(log.t, w, TIP)
+                    states.append(est.state[sel])
+                    line = sel & (est.state == 2)
+                    conf.append(est.line_evidence[line] == 2)
+                    err = np.degrees(np.abs(axial_difference(est.angle[line], log.truth.angle[line])))
+                    errs.append(err)
+                    ratios.append(err / np.degrees(est.angle_std[line]))
+            st, cf = np.concatenate(states), np.concatenate(conf)
+            er, ra = np.concatenate(errs), np.concatenate(ratios)
+            share = "/".join(f"{np.mean(st == c):.0%}" for c in (2, 3, 1))
+            cells.append(f"{share} ({np.mean(cf):.0%})" if len(cf) else f"{share} (—)")
+            cells.append(f"{np.median(er):.1f}°, {np.sqrt(np.mean(ra**2)):.2f}" if len(er) else "—")
+        _row(label, *cells)
+
+
 def fit_depth() -> DepthLaw:
     """Refit :data:`MURAKAMI2006_DEPTH` from simulated calibration presses."""
     model = ContactModel(discretise_skin(TIP, 10000), ContactParams(shear_modulus=2e6)).prepare()
@@ -307,7 +374,7 @@ def stream_cost() -> None:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--fit-depth", action="store_true", help="refit the default depth law and stop")
-    ap.add_argument("--sections", nargs="*", default=["depth", "slide", "papers", "start", "noise", "cost"])
+    ap.add_argument("--sections", nargs="*", default=["depth", "slide", "papers", "start", "noise", "evidence", "cost"])
     args = ap.parse_args()
     if args.fit_depth:
         fit_depth()
@@ -315,7 +382,7 @@ def main() -> None:
     print("murakami2006 tip (capsule R 16 mm, cylinder 20 mm), simulator with friction (μ = 1) and Nano17-class noise, 50 Hz")
     for name in args.sections:
         {"depth": depth_section, "slide": slide_section, "papers": papers_section, "start": start_section,
-         "noise": noise_section, "cost": stream_cost}[name]()  # fmt: skip
+         "noise": noise_section, "evidence": evidence_section, "cost": stream_cost}[name]()  # fmt: skip
 
 
 if __name__ == "__main__":
