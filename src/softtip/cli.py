@@ -653,8 +653,10 @@ is simulated with the papers' grasp and measured by the same pipeline as `softti
 estimate` (default options). Writes to --out one figure per experiment laid out like the
 papers' (e1_edges.png … e6_contact_position.png) and the summary table summary.md /
 summary.csv: per condition the median axial direction error (degrees), the share of
-samples with a reported direction, the contact-position error (mm), the published outcome
-and whether ours agrees.
+samples with a reported direction, the contact-position error (mm), the line evidence, the
+published outcome and whether ours agrees. X1, softtip's extension, rocks thin and thick
+objects about two tangent axes and judges line or area (x1_line_or_area.png: h in the
+tangent plane as a trace, and the state over time).
 
 """
     + FRAMES_HELP
@@ -663,7 +665,7 @@ and whether ours agrees.
 @click.option(
     "--only",
     metavar="E1,E2,...",
-    help="Run only these experiments (comma-separated ids E1–E6).",
+    help="Run only these experiments (comma-separated ids E1–E6, X1).",
 )
 @click.option("--seed", type=int, default=2006, show_default=True, help="Seed of the simulated sensor noise.")
 @click.option(

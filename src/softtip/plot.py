@@ -149,7 +149,72 @@ def state_band(ax, runs: Sequence[Estimates], labels: Sequence[str] | None = Non
     ax.set_yticklabels(list(labels) if labels is not None else [""] * len(runs), fontsize=7)
     ax.set_ylabel("state", fontsize=8)
     handles = [Patch(facecolor=c, edgecolor="0.5", label=n) for c, n in zip(STATE_COLORS, STATE_BAND_LABELS)]
-    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.9), ncol=5, fontsize=7, frameon=False)
+    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -1.5), ncol=5, fontsize=7, frameon=False)
+
+
+def plot_line_or_area(rows: Sequence[tuple[str, Estimates]], path=None, *, title: str | None = None, t_from: float = 4.0):
+    """Line or area, one row per log: ``h`` in the tangent plane as a trace (left; N·mm,
+    tangent frame at the contact point: a line for a strip, a blob for an area contact) and
+    its components and the state over time (right, with the state band below).
+
+    Parameters
+    ----------
+    rows : sequence of (label, Estimates)
+    path : str or PathLike, optional
+    title : str, optional
+    t_from : float
+        s; the trace starts here (after the grasp force rise).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from softtip.spin import tangent_frame_kernel
+    from softtip._xp import NP
+
+    plt = _figure_module()
+    if not rows:
+        raise ValueError("nothing to plot")
+    fig = plt.figure(figsize=(10, 2.3 * len(rows) + 0.8), constrained_layout=True)
+    grid = fig.add_gridspec(2 * len(rows), 2, width_ratios=[1.0, 2.6], height_ratios=[1.0, 0.22] * len(rows))
+    ax_last = None
+    for k, (label, est) in enumerate(rows):
+        ax_tr = fig.add_subplot(grid[2 * k : 2 * k + 2, 0])
+        ax_ts = fig.add_subplot(grid[2 * k, 1], sharex=ax_last)
+        ax_st = fig.add_subplot(grid[2 * k + 1, 1], sharex=ax_ts)
+        ax_last = ax_ts
+        sel = (est.t >= t_from) & (est.state > 0)
+        with np.errstate(invalid="ignore"):
+            e1x, e1y, e1z, e2x, e2y, e2z = tangent_frame_kernel(*est.normal.T, NP)
+            h1 = (est.h[:, 0] * e1x + est.h[:, 1] * e1y + est.h[:, 2] * e1z) * 1e3
+            h2 = (est.h[:, 0] * e2x + est.h[:, 1] * e2y + est.h[:, 2] * e2z) * 1e3
+        ax_tr.plot(h1[sel], h2[sel], lw=0.6, color="tab:purple")
+        ax_tr.plot([0], [0], "+", color="0.3")
+        lim = max(1.0, float(np.nanmax(np.abs(np.concatenate((h1[sel], h2[sel]))))) if sel.any() else 1.0) * 1.1
+        ax_tr.set_xlim(-lim, lim)
+        ax_tr.set_ylim(-lim, lim)
+        ax_tr.set_aspect("equal")
+        ax_tr.set_xlabel("h·e1 [N·mm]", fontsize=8)
+        ax_tr.set_ylabel("h·e2 [N·mm]", fontsize=8)
+        ax_tr.set_title(label, fontsize=9)
+        ax_ts.plot(est.t, h1, lw=0.8, label="h·e1")
+        ax_ts.plot(est.t, h2, lw=0.8, label="h·e2")
+        ax_ts.set_ylabel("h [N·mm]", fontsize=8)
+        ax_ts.tick_params(labelbottom=False)
+        ax_ts.grid(True, alpha=0.3)
+        if k == 0:
+            ax_ts.legend(loc="upper left", fontsize=7)
+        state_band(ax_st, [est])
+        ax_st.set_yticks([])
+        if k != len(rows) - 1:
+            ax_st.get_legend().remove()
+            ax_st.tick_params(labelbottom=False)
+        else:
+            ax_st.set_xlabel("time [s]")
+    if title:
+        fig.suptitle(title)
+    _save(fig, plt, path)
+    return fig
 
 
 def figure_formats() -> set[str]:
