@@ -50,11 +50,11 @@ RECORD_COLUMNS: tuple[str, ...] = (
     "t", "state", "fx", "fy", "fz", "mx", "my", "mz", "rx", "ry", "rz", "nx", "ny", "nz", "sigma",
     "hx", "hy", "hz", "h_norm", "dx", "dy", "dz", "angle_deg", "h_std", "angle_std_deg", "latched",
     "latch_fallback", "relatched", "depth", "joint_conditioning", "joint_angle_std_deg", "joint_offset_std",
-    "joint_residual", "joint_fallback", "raw_fx", "raw_fy", "raw_fz", "raw_mx", "raw_my", "raw_mz", "seq", "lost",
+    "joint_residual", "joint_fallback", "line_evidence", "h_ratio", "excitation_ratio", "raw_fx", "raw_fy", "raw_fz", "raw_mx", "raw_my", "raw_mz", "seq", "lost",
 )  # fmt: skip
 # Same number formatting as softtip.io.write_table (so a recording matches `softtip estimate`).
 _F = "%.10g"
-_ROW_FORMAT = ",".join(["%s" if c == "state" else "%d" if c in ("latched", "latch_fallback", "relatched", "joint_fallback", "seq", "lost") else _F
+_ROW_FORMAT = ",".join(["%s" if c in ("state", "line_evidence") else "%d" if c in ("latched", "latch_fallback", "relatched", "joint_fallback", "seq", "lost") else _F
                         for c in RECORD_COLUMNS]) + "\n"  # fmt: skip
 _DEG = 180.0 / math.pi
 _BLOCK = 32  # rows formatted per call by the recorder
@@ -66,7 +66,7 @@ def estimate_row(e: SampleEstimate, r: Reading) -> tuple:
         e.t, e.state, *e.wrench, *e.point, *e.normal, e.sigma, *e.h, e.h_norm, *e.direction,
         e.angle * _DEG, e.h_std, e.angle_std * _DEG, e.latched, e.latch_fallback, e.relatched, e.depth,
         e.joint_conditioning, e.joint_angle_std * _DEG, e.joint_offset_std, e.joint_residual, e.joint_fallback,
-        *r.wrench, r.seq, r.lost,
+        e.line_evidence, e.h_ratio, e.excitation_ratio, *r.wrench, r.seq, r.lost,
     )  # fmt: skip
 
 
