@@ -149,7 +149,7 @@ def state_band(ax, runs: Sequence[Estimates], labels: Sequence[str] | None = Non
     ax.set_yticklabels(list(labels) if labels is not None else [""] * len(runs), fontsize=7)
     ax.set_ylabel("state", fontsize=8)
     handles = [Patch(facecolor=c, edgecolor="0.5", label=n) for c, n in zip(STATE_COLORS, STATE_BAND_LABELS)]
-    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -1.5), ncol=5, fontsize=7, frameon=False)
+    ax.legend(handles=handles, loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=5, fontsize=7, frameon=False, borderaxespad=0.1)
 
 
 def plot_line_or_area(rows: Sequence[tuple[str, Estimates]], path=None, *, title: str | None = None, t_from: float = 4.0):
