@@ -316,8 +316,9 @@ def evidence_section(angles=(-35.0, 25.0, 70.0), noise_seeds=(101, 102, 103)) ->
                     line = sel & (est.state == 2)
                     conf.append(est.line_evidence[line] == 2)
                     err = np.degrees(np.abs(axial_difference(est.angle[line], log.truth.angle[line])))
-                    errs.append(err)
-                    ratios.append(err / np.degrees(est.angle_std[line]))
+                    known = np.isfinite(err)  # a plane has no line direction
+                    errs.append(err[known])
+                    ratios.append(err[known] / np.degrees(est.angle_std[line][known]))
             st, cf = np.concatenate(states), np.concatenate(conf)
             er, ra = np.concatenate(errs), np.concatenate(ratios)
             share = "/".join(f"{np.mean(st == c):.0%}" for c in (2, 3, 1))
