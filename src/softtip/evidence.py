@@ -8,7 +8,8 @@ the contact has been excited about two axes, the 2×2 covariance of ``h`` in the
 plane over a window separates them: its eigenvalues stay far apart for a line and close for
 an area.
 
-Per sample, in the tangent frame ``(e1, e2)`` at the contact point (SPEC §3.4 convention):
+Per sample, in the tangent frame ``(e1, e2)`` at the contact point (the angle convention of
+the manual: ``e1`` the sensor x axis projected on the tangent plane):
 ``h`` and the tangential load ``f_t`` (the force projected on the tangent plane; the push
 that tilts the object turns with the tilt axis) give :data:`N_SUMS` products
 (:func:`evidence_products`); the batch cumulates them, the stream keeps running sums, and

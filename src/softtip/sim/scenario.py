@@ -572,7 +572,7 @@ def rock_scenario(
        for ``2 rock_period · max(1, rock_cycles // 2)``,
 
     each segment a whole number of sine periods, so it averages to zero tilt. ``a₁`` is the
-    tangent frame's ``e1`` (SPEC §3.4) turned by ``rock_axes`` about the normal. A tilt
+    tangent frame's ``e1`` (the sensor x axis projected on the tangent plane) turned by ``rock_axes`` about the normal. A tilt
     about ``a`` comes with a tangential load ``rock_load`` along ``n × a`` (the push that
     rocks the object; it turns with the tilt axis).
 
