@@ -44,9 +44,9 @@ from softtip.joint import MODEL_MARGIN, _chi2_excess
 from softtip.noise import SensorNoise
 
 __all__ = [
-    "N_SUMS", "Window", "evidence_products", "tangent_noise_kernel", "window_kernel", "window_floats", "window_constants", "window_eigen_floats",
-    "window_direction_floats", "noise_constants",
-]
+    "N_SUMS", "Window", "evidence_products", "tangent_noise_kernel", "window_kernel", "window_floats",
+    "window_constants", "window_eigen_floats", "window_direction_floats", "noise_constants",
+]  # fmt: skip
 
 #: Number of window sums: ``Σ h1, Σ h2, Σ h1², Σ h1 h2, Σ h2²`` and the same for ``f_t``.
 N_SUMS = 10

@@ -19,12 +19,14 @@ changes; otherwise a sample with significant ``|h|`` is ``line`` ``confirmed`` o
 ``unconfirmed``, and one below significance ``point``, except inside a confirmed line with a
 window direction held: ``h`` passing through zero while the object rocks does not make a
 line or an area a point. Significance has hysteresis too: once above the measurement's
-threshold, ``|h|`` stays significant down to :data:`SIG_LEAVE` of it. In a confirmed line the direction is the latest window's of this segment that
-confirmed the line (two-axis excitation, ``h`` on one axis) with an angle standard deviation
-at most ``evidence_max_angle_std`` (``d = n × principal axis``); before there is one, the
-sample's own. A window excited about one axis only would bias the axis: a line's small
-resistance to rolling about its own edge follows the same excitation. A sample's own angle standard deviation counts the window's across-axis spread beyond
-the noise as model error: ``sqrt(σ_d² + minor) / |h|``.
+threshold, ``|h|`` stays significant down to :data:`SIG_LEAVE` of it. In a confirmed line
+the direction is the latest window's of this segment that confirmed the line (two-axis
+excitation, ``h`` on one axis) with an angle standard deviation at most
+``evidence_max_angle_std`` (``d = n × principal axis``); before there is one, the sample's
+own. A window excited about one axis only would bias the axis: a line's small resistance to
+rolling about its own edge follows the same excitation. A sample's own angle standard
+deviation counts the window's across-axis spread beyond the noise as model error:
+``sqrt(σ_d² + minor) / |h|``.
 
 :func:`evidence_states` does it for a whole log, :class:`EvidenceTracker` one sample at a
 time (running sums, O(1) per sample, as :mod:`softtip.estimator.joint`).
