@@ -27,8 +27,11 @@ window sums are differences of the two. :func:`window_kernel` turns window sums 
   variation, as an angle in the tangent frame, and its first-order standard deviation: the
   principal axis of a 2×2 covariance turns by ``C₁₂ / (λ₁ − λ₂)`` for an off-diagonal error
   ``C₁₂``, whose variance over ``ν`` independent samples is ``(λ₁ + s²)(λ₂ + s²) / ν``
-  (``s²`` the noise variance): the across-axis spread ``λ₂`` the window shows beyond the
-  noise (the contact model's error, a line that is not quite one) counts like noise.
+  (``s²`` the noise variance), plus the model error: an across-axis spread ``λ₂`` (a line
+  that is not quite one; at least the share of the noise that the correction may hide,
+  25 % of ``s²``) turns the axis by as much of ``√(λ₂ / λ₁)`` as the excitation about the
+  two axes is correlated over the window, which the tangential load tells (``ρ²/(1 − ρ²)``
+  of its correlation across the axis; ½ when the load did not vary).
 
 The decisions (thresholds, hysteresis, held verdicts) are the estimator's
 (:mod:`softtip.estimator.evidence`). All kernels are component-wise for both back ends of
@@ -165,7 +168,9 @@ def window_kernel(sums, count, h11, h12, h22, f11, f12, f22, corr: float, xp) ->
     den = xp.maximum(f_vv, 0.0) * xp.maximum(f_ww, 0.0)
     rho2 = xp.div(f_vw * f_vw, den)
     # without load variation about both axes the correlation is unknown: count it as ρ² = ½
-    model = xp.div(small, big) * xp.where(den > 0.0, xp.div(rho2, xp.maximum(1.0 - rho2, 0.0)), 1.0)
+    # the spread the noise correction may hide (its model margin) counts as well
+    hidden = xp.maximum(small, MODEL_MARGIN * s2)
+    model = xp.div(hidden, big) * xp.where(den > 0.0, xp.div(rho2, xp.maximum(1.0 - rho2, 0.0)), 1.0)
     angle_std = xp.sqrt(xp.div(corr * (big + s2) * (small + s2), nu * gap * gap) + model)
     return Window(big, small, h_noise, xp.maximum(f_big, 0.0), xp.maximum(f_small, 0.0), tail * f_n, a, angle_std)
 
@@ -232,6 +237,7 @@ def window_direction_floats(e, s2: float, nu: float, corr: float):
     if a > _HALF_PI:
         a -= math.pi
     gap = big - small
+    hidden = small if small > MODEL_MARGIN * s2 else MODEL_MARGIN * s2
     if root != 0.0:
         cp, sp = (c11 - c22) / (2.0 * root), c12 / root
         fd = 0.5 * (g11 - g22)
@@ -241,9 +247,9 @@ def window_direction_floats(e, s2: float, nu: float, corr: float):
         if den > 0.0:
             rho2 = f_vw * f_vw / den
             one = 1.0 - rho2
-            model = _div(small, big) * _div(rho2, one if one > 0.0 else 0.0)
+            model = _div(hidden, big) * _div(rho2, one if one > 0.0 else 0.0)
         else:
-            model = _div(small, big) * 1.0
+            model = _div(hidden, big) * 1.0
     else:
         model = math.nan
     v = _div(corr * (big + s2) * (small + s2), nu * gap * gap) + model
