@@ -77,12 +77,17 @@ def test_window_direction_is_n_cross_the_principal_axis():
     tau = np.sin(np.linspace(0.0, 4 * math.pi, 200)) * 4e-3
     e = np.array([-math.sin(a), math.cos(a)])  # n × d at n = z
     h = tau[:, None] * e
-    sums = [float(np.sum(p)) for p in evidence_products(h[:, 0], h[:, 1], 0 * tau, 0 * tau)]
+    turn = np.linspace(0.0, 6 * math.pi, 200, endpoint=False)  # the load turns evenly: uncorrelated
+    f = 0.03 * np.stack((np.cos(turn), np.sin(turn)), axis=-1)
+    sums = [float(np.sum(p)) for p in evidence_products(h[:, 0], h[:, 1], f[:, 0], f[:, 1])]
     nt = tangent_noise_kernel(0.0, 0.0, 0.036, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, NANO17)
     w = window_kernel(sums, 200.0, *nt, 1.0, PY)
     assert axial_error_deg(w.angle, a) < 1e-6
     assert w.angle_std < math.radians(0.5)
     assert w.h_minor == 0.0
+    # without a turning load the correlation of the excitation is unknown: a wider std
+    still = [float(np.sum(p)) for p in evidence_products(h[:, 0], h[:, 1], 0 * tau, 0 * tau)]
+    assert window_kernel(still, 200.0, *nt, 1.0, PY).angle_std > 2.0 * w.angle_std
 
 
 # -- the stage on synthetic rocking grasps -------------------------------------------------

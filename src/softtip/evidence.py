@@ -250,8 +250,8 @@ def window_direction_floats(e, s2: float, nu: float, corr: float):
             model = _div(hidden, big) * _div(rho2, one if one > 0.0 else 0.0)
         else:
             model = _div(hidden, big) * 1.0
-    else:
-        model = math.nan
+    else:  # no principal axis: the load's correlation is undefined, as in the kernel
+        model = _div(hidden, big) * 1.0
     v = _div(corr * (big + s2) * (small + s2), nu * gap * gap) + model
     return a, (math.sqrt(v) if v >= 0.0 else math.nan)
 
