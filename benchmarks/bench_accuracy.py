@@ -1,6 +1,6 @@
 """Accuracy of softtip's extensions against the papers' method, on the simulator.
 
-    python benchmarks/bench_accuracy.py            # all sections (~1 min on a quiet 2-core machine)
+    python benchmarks/bench_accuracy.py            # all sections (~3 min on a quiet 2-core machine)
     python benchmarks/bench_accuracy.py --fit-depth  # refit the default depth law
 
 Every case is a simulated grasp (Winkler skin with the Coulomb-limited tangential layer,
