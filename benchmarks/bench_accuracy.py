@@ -69,6 +69,13 @@ from softtip.sim import (
 from softtip.units import KGF
 
 TIP = murakami2006()
+
+
+def per_sample(**kwargs) -> EstimatorConfig:
+    """A configuration with the papers' per-sample line/point (``line_evidence=False``): the
+    sections other than ``evidence`` compare contact-point methods by their per-sample
+    directions, as they were measured before the line evidence existed."""
+    return EstimatorConfig(line_evidence=False, **kwargs)
 HELD = 6.0  # s: the grasp is held (disturbances done) from here
 
 
@@ -125,11 +132,11 @@ def depth_section(seed: int = 1) -> None:
 
 
 DEPTH_CONFIGS = (
-    EstimatorConfig(),
-    EstimatorConfig(depth=MURAKAMI2006_DEPTH),
-    EstimatorConfig(contact_point="track"),
-    EstimatorConfig(contact_point="joint"),
-    EstimatorConfig(contact_point="joint", depth=MURAKAMI2006_DEPTH),
+    per_sample(),
+    per_sample(depth=MURAKAMI2006_DEPTH),
+    per_sample(contact_point="track"),
+    per_sample(contact_point="joint"),
+    per_sample(contact_point="joint", depth=MURAKAMI2006_DEPTH),
 )
 
 
@@ -144,12 +151,12 @@ def slide_section(seed: int = 1) -> None:
     model = ContactModel(discretise_skin(TIP, 10000), ContactParams()).prepare()
     std = np.asarray(SIM_SENSOR.noise_std)
     configs = (
-        EstimatorConfig(),
-        EstimatorConfig(relatch_distance=3e-3),
-        EstimatorConfig(contact_point="track"),
-        EstimatorConfig(contact_point="joint"),
-        EstimatorConfig(contact_point="joint", joint_max_angle_std=math.radians(3.0)),
-        EstimatorConfig(contact_point="joint", noise=SensorNoise(tuple(std[:3]), tuple(std[3:]))),
+        per_sample(),
+        per_sample(relatch_distance=3e-3),
+        per_sample(contact_point="track"),
+        per_sample(contact_point="joint"),
+        per_sample(contact_point="joint", joint_max_angle_std=math.radians(3.0)),
+        per_sample(contact_point="joint", noise=SensorNoise(tuple(std[:3]), tuple(std[3:]))),
     )
     for name, obj, ang in (("plate 1 mm", Plate(0.001), 0.0), ("plate 1 mm", Plate(0.001), 45.0),
                            ("plate 1 mm", Plate(0.001), -45.0), ("plate 2 mm", Plate(0.002), 0.0)):  # fmt: skip
@@ -190,7 +197,7 @@ def papers_section(seed: int = 2006) -> None:
             log = simulate_grasp(TIP, obj, paper_scenario(math.radians(ang)), rng=seed)
             sel = log.t > HELD
             cells = []
-            for cfg in (EstimatorConfig(), EstimatorConfig(contact_point="joint")):
+            for cfg in (per_sample(), per_sample(contact_point="joint")):
                 est = estimate(log.t, log.wrench, TIP, cfg)
                 m = sel & (est.state > 0)
                 extra = f"; {est.joint_fallback[m].mean():.0%} on the latch" if cfg.contact_point == "joint" else ""
@@ -206,13 +213,13 @@ def start_section(seed: int = 1) -> None:
         for ang in (0.0, 45.0, -45.0):
             scn = paper_scenario(math.radians(ang), disturbance_timing="during_rise")
             log = simulate_grasp(TIP, obj, scn, rng=seed)
-            whole = estimate(log.t, log.wrench, TIP)
+            whole = estimate(log.t, log.wrench, TIP, per_sample())
             cells = [_cell(whole, log.truth.angle, log.truth.contact_point, log.t > HELD)]
             cut = log.t >= 4.5
             t, angle, point = log.t[cut], log.truth.angle[cut], log.truth.contact_point[cut]
             sel = t > HELD
             for mode in ("latch", "track", "joint"):
-                est = estimate(t, log.wrench[cut], TIP, EstimatorConfig(contact_point=mode, bias=log.sensor.bias))
+                est = estimate(t, log.wrench[cut], TIP, per_sample(contact_point=mode, bias=log.sensor.bias))
                 cells.append(_cell(est, angle, point, sel))
             _row(f"{name} {ang:+.0f}°", *cells)
 
@@ -238,7 +245,7 @@ def noise_section() -> None:
             shares, errors = [], []
             for seed in range(3):
                 g = synthetic_grasp(tip, point=cap(polar), rate=7000.0, duration=8.0, noise=real, seed=seed)
-                est = estimate(g.t, g.wrench, tip, EstimatorConfig(contact_point="joint"))
+                est = estimate(g.t, g.wrench, tip, per_sample(contact_point="joint"))
                 squeeze = (g.t > 2.5) & (g.t < 4.4) & (est.state > 0)
                 shares.append(1.0 - est.joint_fallback[squeeze].mean())
                 errors.append(np.max(np.linalg.norm(est.point[g.t > 6.5] - g.point, axis=1)) * 1e3)
@@ -256,7 +263,7 @@ def noise_section() -> None:
         for seed in range(seeds):
             g = synthetic_grasp(tip, point=cap(30.0), rate=rate, seed=seed)
             kw = {} if cutoff is None else {"lowpass_hz": cutoff, "sample_rate": rate}
-            est = estimate(g.t, g.wrench, tip, EstimatorConfig(contact_point="joint", **kw))
+            est = estimate(g.t, g.wrench, tip, per_sample(contact_point="joint", **kw))
             # the held window is the sample where the final point was taken up
             same = np.all(est.point == est.point[-1], axis=1)
             k = len(same) - int(np.argmin(same[::-1])) if not same.all() else 0

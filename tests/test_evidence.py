@@ -153,6 +153,22 @@ def test_the_window_restarts_at_a_new_contact():
     assert np.any(est.state[second] == 2)
 
 
+def test_a_moved_contact_point_starts_the_evidence_afresh():
+    from test_joint import slide_across_log
+
+    # the contact slides 4 mm across the line after the latch: about the stale latched
+    # point h spans both axes (area, no direction rather than a wrong one); the joint
+    # point follows the contact and, once it has moved, the evidence starts again: a line
+    t, w, _, _ = slide_across_log()
+    late = t > 8.5
+    latch = estimate(t, w, "murakami2006", EstimatorConfig(tare_duration=0.0))
+    assert np.all(latch.state[late] != 2)
+    joint = estimate(t, w, "murakami2006", EstimatorConfig(contact_point="joint", tare_duration=0.0))
+    assert np.mean(joint.state[late] == 2) > 0.7 and not np.any(joint.state[late] == 3)
+    stream = Estimator("murakami2006", EstimatorConfig(contact_point="joint", tare_duration=0.0)).process(t, w)
+    assert [s.state for s in stream] == list(joint.state_names)
+
+
 def test_stream_equals_batch_on_rocking_grasps():
     for kind in ("line", "area"):
         t, w, _ = rocking_log(kind, 20.0, seed=11)
@@ -177,6 +193,7 @@ def test_stream_equals_batch_on_rocking_grasps():
         dict(excitation_ratio=-1.0),
         dict(excitation_min=math.nan),
         dict(evidence_max_angle_std=0.0),
+        dict(evidence_reset_distance=-1e-3),
     ],
 )
 def test_config_rejects_bad_evidence_settings(bad):

@@ -98,6 +98,10 @@ class EstimatorConfig:
     evidence_max_angle_std : float
         rad; a window's line direction is used (and held) only when its standard deviation
         is at most this (default 10°).
+    evidence_reset_distance : float
+        m; the evidence starts afresh (window, verdict, held direction) when the contact
+        point moves farther than this from where it started (default 1 mm): what a window
+        said about another point does not hold for the new one.
     """
 
     contact_point: Literal["latch", "track", "joint"] = "latch"
@@ -127,6 +131,7 @@ class EstimatorConfig:
     excitation_ratio: float = 0.5
     excitation_min: float = 0.01
     evidence_max_angle_std: float = math.radians(10.0)
+    evidence_reset_distance: float = 1e-3
 
     def __post_init__(self) -> None:
         if self.contact_point not in CONTACT_POINT_MODES:
@@ -159,7 +164,8 @@ class EstimatorConfig:
             if not (math.isfinite(v) and v >= 0.0):
                 raise ValueError(f"{name} must be a non-negative number, got {getattr(self, name)!r}")
             object.__setattr__(self, name, v)
-        for name in ("evidence_window", "evidence_max_angle_std", "excitation_ratio", "excitation_min"):
+        for name in ("evidence_window", "evidence_max_angle_std", "excitation_ratio", "excitation_min",
+                     "evidence_reset_distance"):  # fmt: skip
             v = float(getattr(self, name))
             if not (math.isfinite(v) and v > 0.0):
                 raise ValueError(f"{name} must be a positive number, got {getattr(self, name)!r}")

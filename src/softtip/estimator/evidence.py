@@ -1,8 +1,9 @@
 """The line-evidence stage: ``line`` or ``area``, and the direction from the window; batch and
 stream side by side (the window maths is in :mod:`softtip.evidence`).
 
-Over a sliding window of ``evidence_window`` seconds (restarted at contact onset and at every
-re-latch) of the located samples, with ``major ≥ minor`` the eigenvalues of ``h``'s
+Over a sliding window of ``evidence_window`` seconds (restarted at contact onset, at every
+re-latch and when the contact point has moved farther than ``evidence_reset_distance`` from
+where the window started, e.g. a ``joint`` point found) of the located samples, with ``major ≥ minor`` the eigenvalues of ``h``'s
 covariance (noise removed) and ``ratio = minor / major``:
 
 * the window **spans both axes** when ``minor`` is beyond the noise and
@@ -92,6 +93,24 @@ def _sample_std(angle_std, h_norm, minor, xp):
     return xp.sqrt(angle_std * angle_std + xp.div(minor, h_norm * h_norm))
 
 
+def _point_moves(begin, located, point, distance: float):
+    """``begin`` with a new segment wherever the contact point has moved farther than
+    ``distance`` from the first located point of its segment (one pass per move)."""
+    begin = begin.copy()
+    idx = np.flatnonzero(begin | located)
+    seg = np.cumsum(begin)[idx]
+    for part in np.split(idx, np.flatnonzero(np.diff(seg)) + 1):
+        v = part[located[part]]
+        while len(v):
+            d = point[v] - point[v[0]]
+            far = np.flatnonzero(np.einsum("ij,ij->i", d, d) > distance * distance)
+            if not len(far):
+                break
+            begin[v[far[0]]] = True
+            v = v[far[0] :]
+    return begin
+
+
 def evidence_states(t, located, begin, point, normal, h, force, ms, noise: SensorNoise, corr: float,
                     config: EstimatorConfig):  # fmt: skip
     """The evidence stage over a whole log, vectorised within each segment.
@@ -128,6 +147,8 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
     """
     n = len(t)
     sig = located & np.asarray(ms.line, dtype=bool)
+    if config.line_evidence:
+        begin = _point_moves(begin, located, point, config.evidence_reset_distance)
     if not config.line_evidence:
         d = np.stack((ms.dx, ms.dy, ms.dz), axis=-1)
         nan = np.full(n, np.nan)
@@ -223,6 +244,7 @@ class EvidenceTracker:
         enter, leave = config.area_ratio
         self._enter, self._leave = enter, leave
         self._fmin2 = config.excitation_min * config.excitation_min
+        self._reset2 = config.evidence_reset_distance * config.evidence_reset_distance
         self.start_segment()
 
     def start_segment(self) -> None:
@@ -232,6 +254,7 @@ class EvidenceTracker:
         self._verdict = _UNKNOWN
         self._held: tuple[float, float] | None = None
         self._sig = False
+        self._anchor: tuple | None = None
 
     def step(self, t, point, normal, h, force, ms):
         """``(state, evidence, direction, angle, angle_std, h_ratio, f_ratio)`` of a located
@@ -241,6 +264,14 @@ class EvidenceTracker:
             if ms.line:
                 return "line", "unconfirmed", (ms.dx, ms.dy, ms.dz), ms.angle, ms.angle_std, math.nan, math.nan
             return "point", "", _NAN3, math.nan, math.nan, math.nan, math.nan
+        anchor = self._anchor
+        if anchor is None:
+            self._anchor = point
+        else:
+            dx, dy, dz = point[0] - anchor[0], point[1] - anchor[1], point[2] - anchor[2]
+            if dx * dx + dy * dy + dz * dz > self._reset2:  # the contact moved: a new segment
+                self.start_segment()
+                self._anchor = point
         if normal != self._at or point != self._point:  # the point is held: once per latch
             self._at, self._point = normal, point
             self._frame = tangent_frame_kernel(*normal, PY)
