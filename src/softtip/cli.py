@@ -191,6 +191,14 @@ _ESTIMATOR_OPTIONS = [
         "beyond the noise, at least RATIO times the larger and at least MIN_N² (N).",
     ),
     click.option(
+        "--evidence-reset-distance",
+        type=POSITIVE,
+        default=1.0,
+        show_default=True,
+        metavar="MM",
+        help="The line evidence starts afresh when the contact point moves farther than this, mm.",
+    ),
+    click.option(
         "--evidence-max-std",
         type=POSITIVE,
         default=10.0,
@@ -489,6 +497,7 @@ def _make_config(opts: dict, sample_rate: float | None = None) -> EstimatorConfi
             excitation_ratio=opts["excitation"][0],
             excitation_min=opts["excitation"][1],
             evidence_max_angle_std=math.radians(opts["evidence_max_std"]),
+            evidence_reset_distance=opts["evidence_reset_distance"] * 1e-3,
         )
     except ValueError as exc:
         raise click.UsageError(str(exc)) from None
