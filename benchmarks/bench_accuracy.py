@@ -1,6 +1,6 @@
 """Accuracy of softtip's extensions against the papers' method, on the simulator.
 
-    python benchmarks/bench_accuracy.py            # all sections (~1 min on a quiet 2-core machine)
+    python benchmarks/bench_accuracy.py            # all sections (~3 min on a quiet 2-core machine)
     python benchmarks/bench_accuracy.py --fit-depth  # refit the default depth law
 
 Every case is a simulated grasp (Winkler skin with the Coulomb-limited tangential layer,
@@ -27,6 +27,12 @@ method | error with softtip's extension``. Sections:
 * **noise** (item 4, synthetic grasps at up to 7 kHz): ``joint`` with a sensor noisier
   than its noise model, and whether its reported standard deviations hold with and
   without a low-pass.
+* **evidence** (issue 10, line or area): per object (lines: plates ≤ 3 mm, wedges,
+  cylinders Ø ≤ 6 mm; in between: Ø 10–14 mm; areas: plates ≥ 10 mm and a plane), with the
+  rocking scenario (:func:`~softtip.sim.rock_scenario`, after both axes were excited) and
+  without (the papers' grasp, t > 6 s), over three object angles and three noise seeds:
+  share of samples line / area / point, confirmed share of the line samples, median
+  direction error and RMS of error / reported standard deviation.
 * **cost**: streaming time per sample of each mode.
 * **friction** (issue 11): a friction load during the hold (:func:`softtip.sim.friction_scenario`:
   a push ramped in over 6 → 6.5 s, a slow drag over 5.5 → 9.5 s, or a slip of 1.5 mm along
@@ -67,17 +73,28 @@ from softtip.sim import (
     Cylinder,
     ContactParams,
     Disturbance,
+    HalfSpace,
     Plate,
     SensorModel,
     Wedge,
     discretise_skin,
     paper_scenario,
     push_scenario,
+    rock_scenario,
     simulate_grasp,
 )
 from softtip.units import KGF
 
+from bench_fusion import fusion_section  # noqa: E402  (benchmarks/ is the script's folder)
+
 TIP = murakami2006()
+
+
+def per_sample(**kwargs) -> EstimatorConfig:
+    """A configuration with the papers' per-sample line/point (``line_evidence=False``): the
+    sections other than ``evidence`` compare contact-point methods by their per-sample
+    directions, as they were measured before the line evidence existed."""
+    return EstimatorConfig(line_evidence=False, **kwargs)
 HELD = 6.0  # s: the grasp is held (disturbances done) from here
 
 
@@ -134,11 +151,11 @@ def depth_section(seed: int = 1) -> None:
 
 
 DEPTH_CONFIGS = (
-    EstimatorConfig(depth_mode="off"),
-    EstimatorConfig(depth_mode="law"),
-    EstimatorConfig(depth_mode="off", contact_point="track"),
-    EstimatorConfig(depth_mode="off", contact_point="joint"),
-    EstimatorConfig(contact_point="joint", depth_mode="law"),
+    per_sample(depth_mode="off"),
+    per_sample(depth_mode="law"),
+    per_sample(depth_mode="off", contact_point="track"),
+    per_sample(depth_mode="off", contact_point="joint"),
+    per_sample(contact_point="joint", depth_mode="law"),
 )
 
 
@@ -153,12 +170,12 @@ def slide_section(seed: int = 1) -> None:
     model = ContactModel(discretise_skin(TIP, 10000), ContactParams()).prepare()
     std = np.asarray(SIM_SENSOR.noise_std)
     configs = (
-        EstimatorConfig(depth_mode="off"),
-        EstimatorConfig(depth_mode="off", relatch_distance=3e-3),
-        EstimatorConfig(depth_mode="off", contact_point="track"),
-        EstimatorConfig(depth_mode="off", contact_point="joint"),
-        EstimatorConfig(depth_mode="off", contact_point="joint", joint_max_angle_std=math.radians(3.0)),
-        EstimatorConfig(depth_mode="off", contact_point="joint", noise=SensorNoise(tuple(std[:3]), tuple(std[3:]))),
+        per_sample(depth_mode="off"),
+        per_sample(depth_mode="off", relatch_distance=3e-3),
+        per_sample(depth_mode="off", contact_point="track"),
+        per_sample(depth_mode="off", contact_point="joint"),
+        per_sample(depth_mode="off", contact_point="joint", joint_max_angle_std=math.radians(3.0)),
+        per_sample(depth_mode="off", contact_point="joint", noise=SensorNoise(tuple(std[:3]), tuple(std[3:]))),
     )
     for name, obj, ang in (("plate 1 mm", Plate(0.001), 0.0), ("plate 1 mm", Plate(0.001), 45.0),
                            ("plate 1 mm", Plate(0.001), -45.0), ("plate 2 mm", Plate(0.002), 0.0)):  # fmt: skip
@@ -199,7 +216,7 @@ def papers_section(seed: int = 2006) -> None:
             log = simulate_grasp(TIP, obj, paper_scenario(math.radians(ang)), rng=seed)
             sel = log.t > HELD
             cells = []
-            for cfg in (EstimatorConfig(depth_mode="off"), EstimatorConfig(depth_mode="off", contact_point="joint")):
+            for cfg in (per_sample(depth_mode="off"), per_sample(depth_mode="off", contact_point="joint")):
                 est = estimate(log.t, log.wrench, TIP, cfg)
                 m = sel & (est.state > 0)
                 extra = f"; {est.joint_fallback[m].mean():.0%} on the latch" if cfg.contact_point == "joint" else ""
@@ -215,13 +232,13 @@ def start_section(seed: int = 1) -> None:
         for ang in (0.0, 45.0, -45.0):
             scn = paper_scenario(math.radians(ang), disturbance_timing="during_rise")
             log = simulate_grasp(TIP, obj, scn, rng=seed)
-            whole = estimate(log.t, log.wrench, TIP)
+            whole = estimate(log.t, log.wrench, TIP, per_sample())
             cells = [_cell(whole, log.truth.angle, log.truth.contact_point, log.t > HELD)]
             cut = log.t >= 4.5
             t, angle, point = log.t[cut], log.truth.angle[cut], log.truth.contact_point[cut]
             sel = t > HELD
             for mode in ("latch", "track", "joint"):
-                est = estimate(t, log.wrench[cut], TIP, EstimatorConfig(depth_mode="off", contact_point=mode, bias=log.sensor.bias))
+                est = estimate(t, log.wrench[cut], TIP, per_sample(depth_mode="off", contact_point=mode, bias=log.sensor.bias))
                 cells.append(_cell(est, angle, point, sel))
             _row(f"{name} {ang:+.0f}°", *cells)
 
@@ -247,7 +264,7 @@ def noise_section() -> None:
             shares, errors = [], []
             for seed in range(3):
                 g = synthetic_grasp(tip, point=cap(polar), rate=7000.0, duration=8.0, noise=real, seed=seed)
-                est = estimate(g.t, g.wrench, tip, EstimatorConfig(depth_mode="off", contact_point="joint"))
+                est = estimate(g.t, g.wrench, tip, per_sample(depth_mode="off", contact_point="joint"))
                 squeeze = (g.t > 2.5) & (g.t < 4.4) & (est.state > 0)
                 shares.append(1.0 - est.joint_fallback[squeeze].mean())
                 errors.append(np.max(np.linalg.norm(est.point[g.t > 6.5] - g.point, axis=1)) * 1e3)
@@ -265,7 +282,7 @@ def noise_section() -> None:
         for seed in range(seeds):
             g = synthetic_grasp(tip, point=cap(30.0), rate=rate, seed=seed)
             kw = {} if cutoff is None else {"lowpass_hz": cutoff, "sample_rate": rate}
-            est = estimate(g.t, g.wrench, tip, EstimatorConfig(depth_mode="off", contact_point="joint", **kw))
+            est = estimate(g.t, g.wrench, tip, per_sample(depth_mode="off", contact_point="joint", **kw))
             # the held window is the sample where the final point was taken up
             same = np.all(est.point == est.point[-1], axis=1)
             k = len(same) - int(np.argmin(same[::-1])) if not same.all() else 0
@@ -274,6 +291,66 @@ def noise_section() -> None:
         spread, reported = np.std(errors) * 1e6, np.median(stds) * 1e6
         _row(f"{rate:.0f} Hz", "none" if cutoff is None else f"{cutoff:g} Hz", str(seeds), f"{spread:.1f} µm",
              f"{reported:.1f} µm", f"{spread / reported:.2f}")  # fmt: skip
+
+
+#: Objects of the evidence section: (label, object, kind); lines, in between, areas.
+EVIDENCE_OBJECTS = (
+    ("plate 1 mm", lambda: Plate(0.001), "line"),
+    ("plate 2 mm", lambda: Plate(0.002), "line"),
+    ("plate 3 mm", lambda: Plate(0.003), "line"),
+    ("90° wedge", lambda: Wedge(math.pi / 2), "line"),
+    ("60° wedge", lambda: Wedge(math.pi / 3), "line"),
+    ("cylinder Ø 4 mm", lambda: Cylinder(0.004), "line"),
+    ("cylinder Ø 6 mm", lambda: Cylinder(0.006), "line"),
+    ("cylinder Ø 10 mm", lambda: Cylinder(0.010), "between"),
+    ("cylinder Ø 14 mm", lambda: Cylinder(0.014), "between"),
+    ("plate 10 mm", lambda: Plate(0.010), "area"),
+    ("plate 15 mm", lambda: Plate(0.015), "area"),
+    ("plane", lambda: HalfSpace(), "area"),
+)
+
+
+def evidence_section(angles=(-35.0, 25.0, 70.0), noise_seeds=(101, 102, 103)) -> None:
+    """Line or area (issue 10): per object, with and without rocking, over object angles and
+    sensor-noise seeds; states after both axes were excited (1 s into the second rocking
+    segment) or, without rocking, in the held grasp (t > 6 s)."""
+    print(
+        "\n### line or area (line evidence): share of samples line / area / point (confirmed share of the line "
+        "samples), median direction error, RMS of error / reported std\n"
+    )
+    print(f"object angles {', '.join(f'{a:+.0f}°' for a in angles)}, sensor noise seeds {', '.join(map(str, noise_seeds))}")
+    print("| object | rocking: line / area / point (confirmed) | rocking: direction error, err/std | "
+          "papers' grasp: line / area / point (confirmed) | papers' grasp: direction error, err/std |")  # fmt: skip
+    print("| --- | --- | --- | --- | --- |")
+    sensor = SensorModel()
+    for label, make, _kind in EVIDENCE_OBJECTS:
+        cells = []
+        for rock in (True, False):
+            states, conf, errs, ratios = [], [], [], []
+            for ang in angles:
+                scn = rock_scenario(math.radians(ang)) if rock else paper_scenario(math.radians(ang))
+                log = simulate_grasp(TIP, make(), scn, sensor, rng=noise_seeds[0])
+                if rock:
+                    a2 = next(d for d in scn.disturbances if d.label == "rock-a2")
+                    sel = log.t >= a2.start + a2.period
+                else:
+                    sel = log.t > HELD
+                for seed in noise_seeds:
+                    w = sensor.measure(log.wrench_true, np.random.default_rng(seed))
+                    est = estimate(log.t, w, TIP)
+                    states.append(est.state[sel])
+                    line = sel & (est.state == 2)
+                    conf.append(est.line_evidence[line] == 2)
+                    err = np.degrees(np.abs(axial_difference(est.angle[line], log.truth.angle[line])))
+                    known = np.isfinite(err)  # a plane has no line direction
+                    errs.append(err[known])
+                    ratios.append(err[known] / np.degrees(est.angle_std[line][known]))
+            st, cf = np.concatenate(states), np.concatenate(conf)
+            er, ra = np.concatenate(errs), np.concatenate(ratios)
+            share = "/".join(f"{np.mean(st == c):.0%}" for c in (2, 3, 1))
+            cells.append(f"{share} ({np.mean(cf):.0%})" if len(cf) else f"{share} (—)")
+            cells.append(f"{np.median(er):.1f}°, {np.sqrt(np.mean(ra**2)):.2f}" if len(er) else "—")
+        _row(label, *cells)
 
 
 def fit_depth() -> DepthLaw:
@@ -400,7 +477,10 @@ def friction_section(seed: int = 1, angles=(0.0, 30.0, -45.0)) -> None:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--fit-depth", action="store_true", help="refit the default depth law and stop")
-    ap.add_argument("--sections", nargs="*", default=["depth", "slide", "papers", "start", "noise", "cost"])
+    ap.add_argument(
+        "--sections", nargs="*",
+        default=["depth", "slide", "papers", "start", "noise", "evidence", "friction", "fusion", "cost"],
+    )  # fmt: skip
     args = ap.parse_args()
     if args.fit_depth:
         fit_depth()
@@ -408,7 +488,8 @@ def main() -> None:
     print("murakami2006 tip (capsule R 16 mm, cylinder 20 mm), simulator with friction (μ = 1) and Nano17-class noise, 50 Hz")
     for name in args.sections:
         {"depth": depth_section, "slide": slide_section, "papers": papers_section, "start": start_section,
-         "noise": noise_section, "cost": stream_cost, "friction": friction_section}[name]()  # fmt: skip
+         "noise": noise_section, "evidence": evidence_section, "cost": stream_cost, "friction": friction_section,
+         "fusion": fusion_section}[name]()  # fmt: skip
 
 
 if __name__ == "__main__":

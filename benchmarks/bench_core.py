@@ -102,6 +102,7 @@ def main() -> None:
     for label, cfg in (
         ("latch, no filter (online depth)", EstimatorConfig()),
         ("latch, the papers' method", EstimatorConfig(depth_mode="off")),
+        ("latch, --line-evidence off", EstimatorConfig(line_evidence=False)),
         ("latch, 4th-order low-pass", EstimatorConfig(lowpass_hz=30.0, sample_rate=1000.0, lowpass_order=4)),
         ("track", EstimatorConfig(contact_point="track")),
     ):

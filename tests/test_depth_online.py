@@ -31,7 +31,7 @@ from softtip.sim import ContactModel, ContactParams, Plate, Wedge, discretise_sk
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 TIP = murakami2006()
-PAPERS = EstimatorConfig(depth_mode="off")
+PAPERS = EstimatorConfig(depth_mode="off", line_evidence=False)  # the papers: per sample, on the surface
 
 
 @functools.lru_cache(maxsize=None)

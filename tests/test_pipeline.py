@@ -4,6 +4,7 @@ import math
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
+from rocking import rocking_log
 
 from softtip import Capsule, Estimator, EstimatorConfig, Sphere, axial_difference, estimate
 from softtip.depth import MURAKAMI2006_DEPTH
@@ -13,7 +14,7 @@ from softtip.units import KGF, KGF_MM
 
 FIELDS_3 = ("wrench", "point", "normal", "h", "direction")
 FIELDS_1 = ("sigma", "h_norm", "h_std", "angle", "angle_std", "depth", "depth_std", "joint_conditioning", "joint_angle_std",
-            "joint_offset_std", "joint_residual")  # fmt: skip
+            "joint_offset_std", "joint_residual", "h_ratio", "excitation_ratio")  # fmt: skip
 FLAGS = ("latched", "latch_fallback", "pulling", "taring", "relatched", "joint_fallback", "depth_from_data", "contact_id")
 #: The papers' method (no depth compensation): the synthetic grasps put the tangential force
 #: on the undeformed skin surface, as the papers' model does, so the tests of the papers'
@@ -33,6 +34,7 @@ def assert_stream_equals_batch(t, w, tip, config):
         assert (got == getattr(batch, name)).all(), name
     drift = np.array([s.drift for s in stream], dtype=float)
     assert_allclose(drift, batch.drift, rtol=1e-12, atol=1e-300, equal_nan=True, err_msg="drift")
+    assert [s.line_evidence for s in stream] == list(batch.columns()["line_evidence"])
     return batch
 
 
@@ -95,6 +97,13 @@ CASES = {
     "min-duration-fast-drift": EstimatorConfig(contact_min_duration=0.05, drift_time_constant=0.3),
     "fast-drift-lowpass": EstimatorConfig(drift_time_constant=0.2, lowpass_hz=8.0, sample_rate=50.0),
     "drift-reported-only": EstimatorConfig(track_drift=False, drift_time_constant=0.5),
+    "evidence-off": EstimatorConfig(line_evidence=False),
+    "evidence-short-window-loose": EstimatorConfig(
+        evidence_window=0.3, area_ratio=(0.05, 0.02), excitation_ratio=0.05, excitation_min=1e-4
+    ),
+    "evidence-joint-depth-relatch": EstimatorConfig(
+        contact_point="joint", depth=MURAKAMI2006_DEPTH, relatch_distance=3e-3, evidence_window=1.0
+    ),
 }
 
 
@@ -130,11 +139,13 @@ NEW_LOG_CASES = ["latch", "latch-lowpass", "track", "joint", "given-bias", "mean
 
 @pytest.mark.parametrize(
     "name, log",
-    [(name, log) for log in ("single", "two-contacts", "impact", "sliding") for name in CASES]
+    [(name, log) for log in ("single", "two-contacts", "impact", "sliding", "rocking") for name in CASES]
     + [(name, log) for log in ("drifting", "tare-in-contact") for name in NEW_LOG_CASES],
 )
 def test_stream_agrees_with_batch(name, log, recwarn):
-    if log == "drifting":
+    if log == "rocking":
+        t, w, _ = rocking_log("line", 40.0, seed=2)
+    elif log == "drifting":
         t, w = drifting_grasp()
     elif log == "tare-in-contact":
         t, w = tare_in_contact()

@@ -298,7 +298,9 @@ def test_a_grasp_after_drift_is_measured():
     g = synthetic_grasp(angle_deg=-30.0, seed=3, duration=10.0, noise=None)
     k = t >= 30.0
     w[k] += g.wrench_true[: k.sum()]
-    est = quiet_estimate(t, w)
+    # the synthetic grasp puts its tangential force on the skin's surface, so the depth
+    # compensation (a lever for friction inside the skin) is not for it
+    est = quiet_estimate(t, w, EstimatorConfig(depth_mode="off"))
     assert est.n_contacts == 1
     assert line_error_deg(est, g.angle) < 3.0
 

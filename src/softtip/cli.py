@@ -221,6 +221,50 @@ _ESTIMATOR_OPTIONS = [
         "(default: the fingertip's skin; else the murakami2006 skin, "
         f"{MURAKAMI2006_DEPTH.stiffness:g} {MURAKAMI2006_DEPTH.exponent:g} {MURAKAMI2006_DEPTH.max_depth * 1e3:g}).",
     ),
+    click.option(
+        "--line-evidence",
+        type=click.Choice(["on", "off"]),
+        default="on",
+        show_default=True,
+        help="on: tell a line from an area over a sliding window (state area; line_evidence confirmed once the "
+        "contact was excited about two tangent axes and h stayed on one, else unconfirmed; under confirmed "
+        "evidence the direction comes from the window); off: the papers' per-sample line/point.",
+    ),
+    click.option("--evidence-window", type=POSITIVE, default=2.0, show_default=True, metavar="S", help="Sliding window of the line evidence, s."),
+    click.option(
+        "--area-ratio",
+        type=(POSITIVE, POSITIVE),
+        default=(0.2, 0.1),
+        show_default=True,
+        metavar="ENTER LEAVE",
+        help="area when the smaller/larger eigenvalue ratio of h's window covariance (noise removed) reaches ENTER; "
+        "a confirmed line again only below LEAVE.",
+    ),
+    click.option(
+        "--excitation",
+        type=(POSITIVE, POSITIVE),
+        default=(0.5, 0.01),
+        show_default=True,
+        metavar="RATIO MIN_N",
+        help="Excited about two tangent axes when the tangential load's window covariance has its smaller eigenvalue "
+        "beyond the noise, at least RATIO times the larger and at least MIN_N² (N).",
+    ),
+    click.option(
+        "--evidence-reset-distance",
+        type=POSITIVE,
+        default=1.0,
+        show_default=True,
+        metavar="MM",
+        help="The line evidence starts afresh when the contact point moves farther than this, mm.",
+    ),
+    click.option(
+        "--evidence-max-std",
+        type=POSITIVE,
+        default=10.0,
+        show_default=True,
+        metavar="DEG",
+        help="A window's line direction is used only when its standard deviation is at most this, degrees.",
+    ),
 ]
 
 
@@ -242,7 +286,7 @@ softtip.units metadata gives the units). '-' reads CSV from standard input. With
 --example, softtip's shipped example grasp is used instead.
 
 The output CSV (standard output unless -o; Parquet when -o ends in .parquet, with the
-units and the fingertip in its key-value metadata) has the columns t, state (none|point|line),
+units and the fingertip in its key-value metadata) has the columns t, state (none|point|line|area),
 fx..mz (the wrench after bias removal and filtering, the one the estimates come from),
 rx, ry, rz (contact point, m), nx, ny, nz (outward normal), sigma (spin torque about the
 normal, N·m), hx, hy, hz, h_norm (tangential spin torque, N·m), dx, dy, dz (direction of
@@ -256,7 +300,10 @@ and offset, RMS fit residual in noise standard deviations, and whether the latch
 is used because no window has been accepted yet), depth_std (m, the depth's standard
 deviation), depth_from_data (the contact's own data, not the skin law, determined it),
 contact_id (1, 2, ... per contact, 0 out of contact), drift_fx..drift_mz (the bias drift
-followed while untouched since the tare, N and N·m), then the input's extra columns. r, n, h are empty
+followed while untouched since the tare, N and N·m), line_evidence (confirmed|unconfirmed on
+line samples: whether the contact was excited about two tangent axes with h staying on one),
+h_ratio and excitation_ratio (smaller/larger eigenvalue of the evidence window's covariance
+of h and of the tangential load, noise removed), then the input's extra columns. r, n, h are empty
 (nan) when state is none; d and the angle only for line contacts, where |h| stands out of
 the noise.
 
@@ -443,7 +490,8 @@ def estimate(
         )
     targets = [p for p in (output, to_bag, rerun_save) if p is not None]
     if targets:
-        summary = ", ".join(f"{v} {k}" for k, v in counts.items())
+        confirmed = int(np.count_nonzero(est.line_evidence == 2))
+        summary = ", ".join(f"{v} {k}" + (f" ({confirmed} confirmed)" if k == "line" else "") for k, v in counts.items())
         click.echo(
             f"softtip: {len(est)} samples ({summary}; {est.n_contacts} contact(s)) -> {', '.join(map(str, targets))}",
             err=True,
@@ -566,6 +614,13 @@ def _make_config(opts: dict, sample_rate: float | None = None, tip: Fingertip | 
             joint_max_angle_std=math.radians(opts["joint_max_std"][0]),
             joint_max_offset_std=opts["joint_max_std"][1] * 1e-3,
             joint_max_residual=opts["joint_max_residual"],
+            line_evidence=opts["line_evidence"] == "on",
+            evidence_window=opts["evidence_window"],
+            area_ratio=opts["area_ratio"],
+            excitation_ratio=opts["excitation"][0],
+            excitation_min=opts["excitation"][1],
+            evidence_max_angle_std=math.radians(opts["evidence_max_std"]),
+            evidence_reset_distance=opts["evidence_reset_distance"] * 1e-3,
         )
     except ValueError as exc:
         raise click.UsageError(str(exc)) from None
@@ -800,8 +855,10 @@ is simulated with the papers' grasp and measured by the same pipeline as `softti
 estimate` (default options, --no-drift-tracking as in the papers). Writes to --out one figure per experiment laid out like the
 papers' (e1_edges.png … e6_contact_position.png) and the summary table summary.md /
 summary.csv: per condition the median axial direction error (degrees), the share of
-samples with a reported direction, the contact-position error (mm), the published outcome
-and whether ours agrees.
+samples with a reported direction, the contact-position error (mm), the line evidence, the
+published outcome and whether ours agrees. X1, softtip's extension, rocks thin and thick
+objects about two tangent axes and judges line or area (x1_line_or_area.png: h in the
+tangent plane as a trace, and the state over time).
 
 """
     + FRAMES_HELP
@@ -810,7 +867,7 @@ and whether ours agrees.
 @click.option(
     "--only",
     metavar="E1,E2,...",
-    help="Run only these experiments (comma-separated ids E1–E6).",
+    help="Run only these experiments (comma-separated ids E1–E6, X1).",
 )
 @click.option("--seed", type=int, default=2006, show_default=True, help="Seed of the simulated sensor noise.")
 @click.option(

@@ -35,8 +35,12 @@ Per sample (SPEC §3):
    (``depth_mode="online"``, the default then), or the law's as it is (``"law"``);
    ``"off"`` is the papers' undeformed point. ``depth``, ``depth_std`` and
    ``depth_from_data`` report it.
-6. **Measurement**: spin torque, its tangential part ``h``, the noise level of ``h``, the
-   state ``point`` or ``line`` and, for ``line`` only, the direction and its angle with a
+6. **Measurement**: spin torque, its tangential part ``h``, the noise level of ``h`` and
+   whether ``|h|`` is significant.
+7. **Line evidence** (:mod:`.evidence`): over a sliding window, the state ``point``,
+   ``line`` or ``area``, the line's ``line_evidence`` (``confirmed`` once the contact was
+   excited about two tangent axes and ``h`` stayed on one, else ``unconfirmed``) and, for
+   ``line`` only, the direction (under confirmed evidence the window's) and its angle with a
    standard deviation.
 
 In ``track`` mode ``h`` is zero by construction (the soft-finger model puts all of ``q``
@@ -62,10 +66,10 @@ softtip's extensions (issue 5), each an :class:`EstimatorConfig` field:
 
 from softtip.estimator.batch import estimate
 from softtip.estimator.config import CONTACT_POINT_MODES, EstimatorConfig
-from softtip.estimator.results import LINE, NONE, POINT, STATES, Estimates, EstimatorWarning, SampleEstimate
+from softtip.estimator.results import AREA, EVIDENCE, LINE, NONE, POINT, STATES, Estimates, EstimatorWarning, SampleEstimate
 from softtip.estimator.stream import Estimator
 
 __all__ = [
-    "STATES", "NONE", "POINT", "LINE", "CONTACT_POINT_MODES", "EstimatorConfig", "Estimates", "SampleEstimate",
-    "Estimator", "estimate", "EstimatorWarning",
+    "STATES", "NONE", "POINT", "LINE", "AREA", "EVIDENCE", "CONTACT_POINT_MODES", "EstimatorConfig", "Estimates",
+    "SampleEstimate", "Estimator", "estimate", "EstimatorWarning",
 ]  # fmt: skip

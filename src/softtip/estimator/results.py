@@ -10,11 +10,13 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["STATES", "NONE", "POINT", "LINE", "EstimatorWarning", "Estimates", "SampleEstimate"]
+__all__ = ["STATES", "NONE", "POINT", "LINE", "AREA", "EVIDENCE", "EstimatorWarning", "Estimates", "SampleEstimate"]
 
 #: Contact states, indexed by the integer codes in :attr:`Estimates.state`.
-STATES = ("none", "point", "line")
-NONE, POINT, LINE = 0, 1, 2
+STATES = ("none", "point", "line", "area")
+NONE, POINT, LINE, AREA = 0, 1, 2, 3
+#: Line evidence, indexed by the codes in :attr:`Estimates.line_evidence` (``""`` unless ``line``).
+EVIDENCE = ("", "unconfirmed", "confirmed")
 #: Names of the drift columns (:meth:`Estimates.columns`).
 DRIFT_COLUMNS = ("drift_fx", "drift_fy", "drift_fz", "drift_mx", "drift_my", "drift_mz")
 
@@ -33,7 +35,7 @@ class Estimates:
     Attributes
     ----------
     t : (N,) s
-    state : (N,) int8 codes into :data:`STATES` (``none``, ``point``, ``line``)
+    state : (N,) int8 codes into :data:`STATES` (``none``, ``point``, ``line``, ``area``)
     wrench : (N, 6) the tared (and filtered) wrench the estimates come from, N and N·m;
         NaN while taring
     point, normal : (N, 3) contact point (m) and outward normal; NaN when ``none``
@@ -81,6 +83,12 @@ class Estimates:
     warnings : tuple of str
         every warning about these estimates, in plain language (also issued as
         :class:`EstimatorWarning`)
+    line_evidence : (N,) int8 codes into :data:`EVIDENCE`: ``confirmed`` when the contact
+        was excited about two tangent axes and ``h`` stayed on one, ``unconfirmed`` when the
+        excitation so far cannot tell a line from an area; 0 (empty) unless ``line``
+    h_ratio : (N,) smaller / larger eigenvalue of ``h``'s covariance over the evidence
+        window (noise removed; NaN where ``h`` did not vary beyond the noise or ``none``)
+    excitation_ratio : (N,) the same for the tangential load (how far it turned)
     """
 
     t: NDArray[np.float64]
@@ -107,6 +115,9 @@ class Estimates:
     joint_offset_std: NDArray[np.float64]
     joint_residual: NDArray[np.float64]
     joint_fallback: NDArray[np.bool_]
+    line_evidence: NDArray[np.int8]
+    h_ratio: NDArray[np.float64]
+    excitation_ratio: NDArray[np.float64]
     tare_force_std: float = math.nan
     repeated_stamps: int = 0
     contact_id: NDArray[np.int64] | None = None
@@ -166,6 +177,9 @@ class Estimates:
             **({k: self.drift[:, i] for i, k in enumerate(DRIFT_COLUMNS)} if self.drift is not None else {}),
             "depth_std": self.depth_std,
             "depth_from_data": self.depth_from_data,
+            "line_evidence": np.asarray(EVIDENCE)[self.line_evidence],
+            "h_ratio": self.h_ratio,
+            "excitation_ratio": self.excitation_ratio,
         }  # fmt: skip
 
 
@@ -202,4 +216,7 @@ class SampleEstimate(NamedTuple):
     drift: tuple[float, ...] = (0.0,) * 6
     depth_std: float = math.nan
     depth_from_data: bool = False
+    line_evidence: str = ""
+    h_ratio: float = math.nan
+    excitation_ratio: float = math.nan
 

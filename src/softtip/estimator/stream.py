@@ -24,6 +24,7 @@ from softtip.estimator.contact import (
     started_in_contact_message,
 )
 from softtip.estimator.depth import DepthTracker, resolve_depth
+from softtip.estimator.evidence import EvidenceTracker
 from softtip.estimator.joint import JointTracker
 from softtip.estimator.latch import LatchTracker
 from softtip.estimator.measure import effective_noise, measure, noise_correlation
@@ -82,6 +83,7 @@ class Estimator:
         self._track = cfg.contact_point == "track"
         self._tare = StreamTare(cfg)
         self._latch = LatchTracker(self.tip, cfg)
+        self._evidence = EvidenceTracker(cfg, self._noise, noise_correlation(self._sos))
         self._joint = None
         if cfg.contact_point == "joint":
             self._joint = JointTracker(self.tip, cfg, self._noise, noise_correlation(self._sos))
@@ -227,6 +229,7 @@ class Estimator:
     def _start_segment(self, fn: float, t: float) -> None:
         """A new first rise: at contact onset, and at a re-latch."""
         self._latch.start(fn, t)
+        self._evidence.start_segment()
         if self._joint is not None:
             self._joint.start_segment(t)
 
@@ -252,6 +255,8 @@ class Estimator:
         latched = fallback = relatched = joint_fb = False
         stats = _NAN4
         if self._track:
+            if code == 2:
+                self._evidence.start_segment()
             rx, ry, rz, nx, ny, nz, _, valid = contact_kernel(tip, *x, xp=PY)
             if not valid:
                 if depth is not None:
@@ -293,16 +298,16 @@ class Estimator:
         ms = measure(fx, fy, fz, mx, my, mz, ex, ey, ez, nx, ny, nz, self._noise, cfg.h_sigmas, cfg.h_min, None, PY)
         if not ms.pushing:
             return self._none(t, x, pulling=True, relatched=relatched)
-        if ms.line:
-            state, d, angle, angle_std = "line", (ms.dx, ms.dy, ms.dz), ms.angle, ms.angle_std
-        else:
-            state, d, angle, angle_std = "point", _NAN3, math.nan, math.nan
+        h = (ms.hx, ms.hy, ms.hz)
+        state, evidence, d, angle, angle_std, h_ratio, f_ratio = self._evidence.step(
+            t, (rx, ry, rz), (nx, ny, nz), h, (fx, fy, fz), ms
+        )
         if self._lead:
             self._lead = False
         return SampleEstimate(
-            t, state, tuple(x), (rx, ry, rz), (nx, ny, nz), ms.sigma, (ms.hx, ms.hy, ms.hz), ms.h_norm, ms.h_std, d,
+            t, state, tuple(x), (rx, ry, rz), (nx, ny, nz), ms.sigma, h, ms.h_norm, ms.h_std, d,
             angle, angle_std, latched, fallback, False, False, relatched, delta, *stats, joint_fb,
-            contacts.contact_id, contacts.drift_before, delta_std, from_data,
+            contacts.contact_id, contacts.drift_before, delta_std, from_data, evidence, h_ratio, f_ratio,
         )  # fmt: skip
 
     def process(self, t: ArrayLike, wrench: ArrayLike) -> list[SampleEstimate]:

@@ -47,6 +47,7 @@ from softtip.sim.scenario import (
     HandFrame,
     paper_scenario,
     push_scenario,
+    rock_scenario,
     smoothstep,
 )
 from softtip.sim.sensor import NANO17, SensorModel
@@ -81,6 +82,7 @@ __all__ = [
     "HandFrame",
     "paper_scenario",
     "push_scenario",
+    "rock_scenario",
     "smoothstep",
     "NANO17",
     "SensorModel",

@@ -15,7 +15,14 @@ import click
 
 from softtip.errors import InputError
 from softtip.sim.objects import OBJECT_KINDS
-from softtip.sim.scenario import DISTURBANCE_TIMINGS, FRICTION_PROFILES, JOINT_ROTATION_DEG, OBJECT_MASS
+from softtip.sim.scenario import (
+    DISTURBANCE_TIMINGS,
+    FRICTION_PROFILES,
+    JOINT_ROTATION_DEG,
+    OBJECT_MASS,
+    ROCK_AMPLITUDE_DEG,
+    ROCK_LOAD,
+)
 from softtip.sim.simulate import log_csv_text, run_simulation, write_log_csv, write_truth_json
 from softtip.sim.skin import DEFAULT_ELEMENTS
 from softtip.units import KGF, UNIT_SYSTEMS
@@ -107,7 +114,7 @@ LENGTH, FORCE = _Length(), _Force()
 @click.option("--tilt", "tilt_deg", type=float, default=45.0, show_default=True,
               help="Fringe: contact normal's angle from the cylinder side toward its bottom face, degrees.")
 @click.option("--force", type=FORCE, default="0.5kgf", show_default=True, help="Held grasp force (N or kgf).")
-@click.option("--duration", type=float, default=10.0, show_default=True, help="Recorded time, s.")
+@click.option("--duration", type=float, default=None, help="Recorded time, s [default: 10, or the end of --rock].")
 @click.option("--t-contact", type=float, default=2.0, show_default=True, help="Time of first touch, s.")
 @click.option("--t-stable", type=float, default=4.0, show_default=True, help="End of the force ramp, s.")
 @click.option("--rate", type=float, default=50.0, show_default=True, help="Sample rate, Hz.")
@@ -123,6 +130,15 @@ LENGTH, FORCE = _Length(), _Force()
                    "is established) or during_rise (together with the force rise; harder for the latch).")
 @click.option("--misalignment", "misalignment_deg", type=float, default=0.0, show_default=True,
               help="paper: fixed alignment error about the hand z axis, degrees.")
+@click.option("--rock", is_flag=True,
+              help="paper: after the grasp, rock the object about two tangent axes and then in a figure-eight "
+                   "(each segment averaging to zero tilt), the excitation that tells a line from an area; "
+                   "--duration defaults to the end of the rocking.")
+@click.option("--rock-amplitude", "rock_amplitude_deg", type=float, default=ROCK_AMPLITUDE_DEG, show_default=True,
+              help="--rock: tilt amplitude, degrees.")
+@click.option("--rock-period", type=float, default=1.0, show_default=True, help="--rock: period of the rocking, s.")
+@click.option("--rock-load", type=FORCE, default=str(ROCK_LOAD), show_default=True,
+              help="--rock: tangential load that comes with the tilt (N or kgf), turning with the tilt axis.")
 @click.option("--elements", "n_elements", type=click.IntRange(50), default=DEFAULT_ELEMENTS, show_default=True,
               help="Skin surface elements.")
 @click.option("--modulus", type=float, default=0.6e6, show_default=True, help="Skin Winkler modulus, Pa.")

@@ -32,10 +32,13 @@ from softtip.sim.pose import Pose
 from softtip.sim.scenario import (
     JOINT_ROTATION_DEG,
     OBJECT_MASS,
+    ROCK_AMPLITUDE_DEG,
+    ROCK_LOAD,
     GraspScenario,
     friction_scenario,
     paper_scenario,
     push_scenario,
+    rock_scenario,
 )
 from softtip.sim.sensor import SensorModel
 from softtip.sim.skin import DEFAULT_ELEMENTS, discretise_skin
@@ -309,7 +312,8 @@ def simulate_grasp(
 
     e1, e2 = tangent_frame(-u)
     axes = np.stack((u, e1, e2))
-    n_free = 1 if scenario.tangential_force is None else 3
+    loads = any(any(d.load) for d in scenario.disturbances)
+    n_free = 1 if scenario.tangential_force is None and not loads else 3
     load = np.zeros(3) if scenario.tangential_force is None else axes @ np.asarray(scenario.tangential_force)
     # before contact the object is free: no tangential load
     ramp = np.where(t >= scenario.t_contact, scenario.load_ramp(t), 0.0)
@@ -328,6 +332,8 @@ def simulate_grasp(
             if len(history) >= 2:
                 x0 += history[-1] - history[-2]
             goal = np.array([target[i], ramp[i] * load[1], ramp[i] * load[2]])
+            if loads:
+                goal[1:] += (axes @ scenario.disturbance_load(ti))[1:]
             x, res = sample.solve(x0, goal, n_free)
         if res.in_contact:
             far = np.max(np.linalg.norm(res.centre - r_c, axis=1))
@@ -438,7 +444,7 @@ def run_simulation(
     apex_angle_deg: float = 90.0,
     tilt_deg: float = 45.0,
     force: float = 0.5 * 9.80665,
-    duration: float = 10.0,
+    duration: float | None = None,
     t_contact: float = 2.0,
     t_stable: float = 4.0,
     rate: float = 50.0,
@@ -447,6 +453,10 @@ def run_simulation(
     object_mass: float = OBJECT_MASS,
     misalignment_deg: float = 0.0,
     disturbance_timing: str = "after_grasp",
+    rock: bool = False,
+    rock_amplitude_deg: float = ROCK_AMPLITUDE_DEG,
+    rock_period: float = 1.0,
+    rock_load: float = ROCK_LOAD,
     n_elements: int = DEFAULT_ELEMENTS,
     modulus: float = 0.6e6,
     shear_modulus: float | None = None,
@@ -467,14 +477,35 @@ def run_simulation(
     is ``"paper"`` (the papers' hand, with joint and gravity disturbances), ``"push"``
     (a plain push, no disturbance) or ``"friction"`` (:func:`~softtip.sim.scenario.friction_scenario`:
     ``load_ratio`` of the grasp force, ``load_direction`` ``across`` or ``along`` the line,
-    ``load_profile`` ``push``, ``drag`` or ``slip``; ``object_mass`` is ignored). Writes the log CSV to ``output`` and the ground truth
+    ``load_profile`` ``push``, ``drag`` or ``slip``; ``object_mass`` is ignored); ``rock`` adds the
+    rocking of :func:`~softtip.sim.scenario.rock_scenario` to the paper scenario (``duration``
+    defaults to its end; otherwise 10 s). Writes the log CSV to ``output`` and the ground truth
     to ``truth`` when given; returns the log.
     """
     tipo = load_fingertip(tip)
     obj = make_object(object_kind, size, edge_radius=edge_radius, apex_angle=math.radians(apex_angle_deg),
                       tilt=math.radians(tilt_deg))
-    timing = dict(force=force, duration=duration, t_contact=t_contact, t_stable=t_stable)
-    if scenario == "paper":
+    timing = dict(force=force, t_contact=t_contact, t_stable=t_stable)
+    if duration is not None:
+        timing["duration"] = duration
+    elif not (rock and scenario == "paper"):
+        timing["duration"] = 10.0
+    if rock and scenario != "paper":
+        raise ValueError("--rock needs the paper scenario")
+    if rock:
+        scn = rock_scenario(
+            math.radians(angle_deg),
+            rock_amplitude=math.radians(rock_amplitude_deg),
+            rock_period=rock_period,
+            rock_load=rock_load,
+            joint_rotation=math.radians(joint_rotation_deg),
+            gravity_spin=math.radians(gravity_spin_deg),
+            object_mass=object_mass,
+            misalignment=math.radians(misalignment_deg),
+            disturbance_timing=disturbance_timing,
+            **timing,
+        )
+    elif scenario == "paper":
         scn = paper_scenario(
             math.radians(angle_deg),
             joint_rotation=math.radians(joint_rotation_deg),
