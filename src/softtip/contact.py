@@ -149,6 +149,9 @@ def contact_kernel(tip: Fingertip, fx, fy, fz, mx, my, mz, xp=NP):
 
     Returns ``(rx, ry, rz, nx, ny, nz, sigma, valid)``.
     """
+    own = getattr(tip, "_contact_kernel", None)
+    if own is not None:  # shapes with their own solver (softtip.mesh.MeshFingertip)
+        return own(fx, fy, fz, mx, my, mz, xp)
     if isinstance(tip, Capsule):
         return _capsule_kernel(fx, fy, fz, mx, my, mz, tip.radius, tip.length, xp)
     if isinstance(tip, Sphere):

@@ -403,9 +403,14 @@ def fingertip_from_mapping(data: dict, source: str = "<fingertip>") -> Fingertip
     if not isinstance(table, dict):
         raise InputError(f"{source}: expected a [fingertip] table")
     shape = table.get("shape")
+    if shape == "mesh" or (shape is None and "mesh" in table):
+        # a triangle mesh file (softtip.mesh; trimesh is imported only then)
+        from softtip.mesh import mesh_fingertip_from_table
+
+        return mesh_fingertip_from_table(table, source)
     if shape not in _FIELDS:
         raise InputError(
-            f"{source}: [fingertip] shape = {shape!r}; expected one of {', '.join(_FIELDS)}"
+            f"{source}: [fingertip] shape = {shape!r}; expected one of {', '.join((*_FIELDS, 'mesh'))}"
         )
     fields = _FIELDS[shape]
     unknown = sorted(set(table) - set(fields) - {"shape"})
