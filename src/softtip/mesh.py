@@ -57,6 +57,7 @@ _MAX_CROSS = 64  # triangles one Newton step may cross
 _STEP_TOL = 1e-9  # converged when a step moves the point less than this × the tip's size (and is taken)
 _RES_TOL = 1e-6  # and a solution is kept when |F| (before the last step) ≤ this × |f| × size
 _CAST_BLOCK = 256
+_SIDE_TOL = 1e-13  # Plücker side products within this × |f| × size² of zero count as on the edge
 
 
 def rotation_from_rpy(roll: float, pitch: float, yaw: float) -> NDArray[np.float64]:
@@ -551,13 +552,16 @@ class MeshFingertip(Fingertip):
         nf = len(self.faces)
         cc, cc2, rho2 = d["sup_centre"], d["sup_centre2"], d["sup_radius2"]
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            f2 = np.einsum("ij,ij->i", f, f)
-            fh = f / np.sqrt(f2)[:, None]
-            mu = np.einsum("ij,ij->i", f, m) / f2
-            line = np.concatenate((f, m - mu[:, None] * f), axis=1)  # Plücker (d, p × d)
-            base = _cross_rows(f, m) / f2[:, None]
+            # term by term, in the order of _cast_one (batch and stream agree to the last bit)
+            fx, fy, fz, mx, my, mz = f[:, 0], f[:, 1], f[:, 2], m[:, 0], m[:, 1], m[:, 2]
+            f2 = fx * fx + fy * fy + fz * fz
+            inv = 1.0 / np.sqrt(f2)
+            fh = np.column_stack((fx * inv, fy * inv, fz * inv))
+            mu = (fx * mx + fy * my + fz * mz) / f2
+            line = np.column_stack((fx, fy, fz, mx - mu * fx, my - mu * fy, mz - mu * fz))  # Plücker (d, p × d)
+            base = np.column_stack(((fy * mz - fz * my) / f2, (fz * mx - fx * mz) / f2, (fx * my - fy * mx) / f2))
             bb = np.einsum("ij,ij->i", base, base)
-            bf = np.einsum("ij,ij->i", base, fh)
+            bf = base[:, 0] * fh[:, 0] + base[:, 1] * fh[:, 1] + base[:, 2] * fh[:, 2]
             for start in range(0, n, _CAST_BLOCK):
                 sl = slice(start, start + _CAST_BLOCK)
                 # squared distance of the super-cluster centres from the axis, (rays, supers)
@@ -579,15 +583,23 @@ class MeshFingertip(Fingertip):
                 s = np.einsum("pqkj,pj->pqk", d["plucker"][tris], line[sl][ray])
                 s0, s1, s2 = s[..., 0], s[..., 1], s[..., 2]
                 total = s0 + s1 + s2
-                hit = (np.maximum(np.maximum(s0, s1), s2) <= 0.0) & (total < 0.0)
+                # a rounding-size margin: a line exactly through a vertex is not lost in its fan
+                tol = (_SIDE_TOL * d["radius"] ** 2) * np.sqrt(f2[sl][ray])[:, None]
+                hit = (np.maximum(np.maximum(s0, s1), s2) <= tol) & (total < 0.0)
                 pi, qi = np.nonzero(hit)
                 if pi.size == 0:
                     continue
-                who, tris, s, total = ray[pi], tris[pi, qi], s[pi, qi], total[pi, qi]
-                w1, w2 = s[:, 1] / total, s[:, 2] / total
-                g = d["geom"][tris]
-                r = g[:, 0:3] + w1[:, None] * g[:, 3:6] + w2[:, None] * g[:, 6:9]
-                t = np.einsum("ij,ij->i", r - base[sl][who], fh[sl][who])
+                who, tris = ray[pi], tris[pi, qi]
+                s0, s1, s2 = _sides(d["plucker"][tris], line[sl][who].T)
+                total = s0 + s1 + s2
+                w1, w2 = s1 / total, s2 / total
+                g = d["geom"][tris].T
+                bw, hw = base[sl][who].T, fh[sl][who].T
+                t = (
+                    (g[0] + w1 * g[3] + w2 * g[6] - bw[0]) * hw[0]
+                    + (g[1] + w1 * g[4] + w2 * g[7] - bw[1]) * hw[1]
+                    + (g[2] + w1 * g[5] + w2 * g[8] - bw[2]) * hw[2]
+                )
                 if len(t) == 1:
                     sel = np.zeros(1, dtype=np.int64)
                 else:
@@ -617,13 +629,15 @@ class MeshFingertip(Fingertip):
         tris = d["members"][np.flatnonzero(dist2 <= d["cl_radius2"])].ravel()
         s = (d["plucker18"][tris].reshape(-1, 6) @ line).reshape(-1, 3)
         s0, s1, s2 = s[:, 0], s[:, 1], s[:, 2]
-        hit = np.flatnonzero((np.maximum(np.maximum(s0, s1), s2) <= 0.0) & (s0 + s1 + s2 < 0.0))
+        tol = (_SIDE_TOL * d["radius"] ** 2) * math.sqrt(f2)
+        hit = np.flatnonzero((np.maximum(np.maximum(s0, s1), s2) <= tol) & (s0 + s1 + s2 < 0.0))
         best = (math.inf, -1, 0.0, 0.0)
+        lf = line.tolist()
         for j in hit.tolist():  # one hit on a convex patch, a few where the axis crosses the skin again
-            s0, s1, s2 = s[j].tolist()
+            face = int(tris[j])
+            s0, s1, s2 = _sides(d["plucker"][face].tolist(), lf)
             total = s0 + s1 + s2
             w1, w2 = s1 / total, s2 / total
-            face = int(tris[j])
             g = d["geom_py"][face]
             t = (
                 (g[0] + w1 * g[3] + w2 * g[6] - bx) * hx
@@ -859,15 +873,27 @@ class MeshFingertip(Fingertip):
         return tuple(out[:7]) + (out[7] == 1.0,)
 
 
+def _sides(p, line):
+    """Plücker side products of a line with a triangle's three edges, term by term (the same
+    operations on floats and on arrays): ``p`` rows (3, 6) (or arrays (n, 3, 6)), ``line`` 6 values."""
+    if isinstance(p, np.ndarray):
+        p = [[p[:, k, j] for j in range(6)] for k in range(3)]
+    return tuple(
+        row[0] * line[0] + row[1] * line[1] + row[2] * line[2] + row[3] * line[3] + row[4] * line[4] + row[5] * line[5]
+        for row in p
+    )
+
+
 def _exit(b1, b2, db1, db2, xp):
     """Where a barycentric step leaves its triangle: the edge ``k`` (opposite local vertex
     ``k``) and the fraction ``t`` of the step (``≥ 1``: it stays inside)."""
     b0 = 1.0 - b1 - b2
     n1, n2 = b1 + db1, b2 + db2
     n0 = 1.0 - n1 - n2
-    t0 = xp.where(n0 < 0.0, xp.div(b0, b0 - n0), 2.0)
-    t1 = xp.where(n1 < 0.0, xp.div(b1, b1 - n1), 2.0)
-    t2 = xp.where(n2 < 0.0, xp.div(b2, b2 - n2), 2.0)
+    # a step that starts on (or a rounding error beyond) an edge and goes out leaves at once
+    t0 = xp.where(n0 < 0.0, xp.where(b0 > 0.0, xp.div(b0, b0 - n0), 0.0), 2.0)
+    t1 = xp.where(n1 < 0.0, xp.where(b1 > 0.0, xp.div(b1, b1 - n1), 0.0), 2.0)
+    t2 = xp.where(n2 < 0.0, xp.where(b2 > 0.0, xp.div(b2, b2 - n2), 0.0), 2.0)
     k = xp.where(t1 < t0, xp.where(t2 < t1, 2, 1), xp.where(t2 < t0, 2, 0))
     return k, xp.where(k == 0, t0, xp.where(k == 1, t1, t2))
 
