@@ -29,6 +29,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.spatial import cKDTree
 
 from softtip._xp import NP, PY
 from softtip.errors import InputError
@@ -57,6 +58,7 @@ _MAX_CROSS = 64  # triangles one Newton step may cross
 _STEP_TOL = 1e-9  # converged when a step moves the point less than this × the tip's size (and is taken)
 _RES_TOL = 1e-6  # and a solution is kept when |F| (before the last step) ≤ this × |f| × size
 _CAST_BLOCK = 256
+_NEAR_K = 32  # nearest triangle centroids tried first by the closest-point query
 _SIDE_TOL = 1e-13  # Plücker side products within this × |f| × size² of zero count as on the edge
 
 
@@ -164,42 +166,56 @@ def _closest_on_triangles(p: NDArray, v0: NDArray, v1: NDArray, v2: NDArray) -> 
     """Closest points of triangles to points (pairwise, shape (P, 3) each).
 
     Returns the squared distance (P,), and the barycentric coordinates ``b1, b2`` (P,) of
-    the closest point.
+    the closest point. Works in cache-sized blocks on per-axis components.
     """
-    e1, e2 = v1 - v0, v2 - v0
-    d = p - v0
-    a11 = np.sum(e1 * e1, axis=1)
-    a12 = np.sum(e1 * e2, axis=1)
-    a22 = np.sum(e2 * e2, axis=1)
-    r1 = np.sum(e1 * d, axis=1)
-    r2 = np.sum(e2 * d, axis=1)
+    n = len(p)
+    dist, b1, b2 = np.empty(n), np.empty(n), np.empty(n)
+    for start in range(0, n, 8192):
+        sl = slice(start, start + 8192)
+        dist[sl], b1[sl], b2[sl] = _closest_block(*p[sl].T, *v0[sl].T, *v1[sl].T, *v2[sl].T)
+    return dist, b1, b2
+
+
+def _closest_block(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz):
+    e1x, e1y, e1z = bx - ax, by - ay, bz - az
+    e2x, e2y, e2z = cx - ax, cy - ay, cz - az
+    dx, dy, dz = px - ax, py - ay, pz - az
+    a11 = e1x * e1x + e1y * e1y + e1z * e1z
+    a12 = e1x * e2x + e1y * e2y + e1z * e2z
+    a22 = e2x * e2x + e2y * e2y + e2z * e2z
+    r1 = e1x * dx + e1y * dy + e1z * dz
+    r2 = e2x * dx + e2y * dy + e2z * dz
     det = a11 * a22 - a12 * a12
     with np.errstate(divide="ignore", invalid="ignore"):
-        b1 = (a22 * r1 - a12 * r2) / det
-        b2 = (a11 * r2 - a12 * r1) / det
-    inside = (b1 >= 0.0) & (b2 >= 0.0) & (b1 + b2 <= 1.0) & (det > 0.0)
-    best_b1 = np.where(inside, b1, 0.0)
-    best_b2 = np.where(inside, b2, 0.0)
-    q = v0 + best_b1[:, None] * e1 + best_b2[:, None] * e2
-    best = np.where(inside, np.sum((p - q) ** 2, axis=1), np.inf)
-    # the three edges: (v0→v1), (v0→v2), (v1→v2), each with its barycentric parametrisation
-    for a, e, to_b in (
-        (v0, e1, lambda s: (s, 0.0 * s)),
-        (v0, e2, lambda s: (0.0 * s, s)),
-        (v1, v2 - v1, lambda s: (1.0 - s, s)),
+        u = (a22 * r1 - a12 * r2) / det
+        v = (a11 * r2 - a12 * r1) / det
+    inside = (u >= 0.0) & (v >= 0.0) & (u + v <= 1.0) & (det > 0.0)
+    bu = np.where(inside, u, 0.0)
+    bv = np.where(inside, v, 0.0)
+    qx, qy, qz = dx - bu * e1x - bv * e2x, dy - bu * e1y - bv * e2y, dz - bu * e1z - bv * e2z
+    best = np.where(inside, qx * qx + qy * qy + qz * qz, np.inf)
+    # the three edges: v0→v1 (b = (s, 0)), v0→v2 (b = (0, s)), v1→v2 (b = (1 − s, s))
+    e3x, e3y, e3z = cx - bx, cy - by, cz - bz
+    for ex, ey, ez, ox, oy, oz, kind in (
+        (e1x, e1y, e1z, dx, dy, dz, 0),
+        (e2x, e2y, e2z, dx, dy, dz, 1),
+        (e3x, e3y, e3z, px - bx, py - by, pz - bz, 2),
     ):
-        ee = np.sum(e * e, axis=1)
+        ee = ex * ex + ey * ey + ez * ez
         with np.errstate(divide="ignore", invalid="ignore"):
-            s = np.clip(np.sum((p - a) * e, axis=1) / ee, 0.0, 1.0)
-        s = np.where(ee > 0.0, s, 0.0)
-        q = a + s[:, None] * e
-        dist = np.sum((p - q) ** 2, axis=1)
-        eb1, eb2 = to_b(s)
-        closer = dist < best
-        best = np.where(closer, dist, best)
-        best_b1 = np.where(closer, eb1, best_b1)
-        best_b2 = np.where(closer, eb2, best_b2)
-    return best, best_b1, best_b2
+            t = np.clip((ox * ex + oy * ey + oz * ez) / ee, 0.0, 1.0)
+        t = np.where(ee > 0.0, t, 0.0)
+        qx, qy, qz = ox - t * ex, oy - t * ey, oz - t * ez
+        dd = qx * qx + qy * qy + qz * qz
+        closer = dd < best
+        best = np.where(closer, dd, best)
+        if kind == 0:
+            bu, bv = np.where(closer, t, bu), np.where(closer, 0.0, bv)
+        elif kind == 1:
+            bu, bv = np.where(closer, 0.0, bu), np.where(closer, t, bv)
+        else:
+            bu, bv = np.where(closer, 1.0 - t, bu), np.where(closer, t, bv)
+    return best, bu, bv
 
 
 @dataclass(frozen=True, eq=False)
@@ -381,6 +397,10 @@ class MeshFingertip(Fingertip):
             centre=centre_bb,
             radius=radius_bb,
             volume=volume,
+            centroid_tree=cKDTree(centroids),
+            tri9=np.concatenate((v0, v1, v2), axis=1),
+            last_batch=(None, None),
+            reach=float(np.max(np.linalg.norm(np.stack((v0, v1, v2)) - centroids, axis=2))) * (1 + 1e-9),
             last_normal=(None, None),
             last_project=(None, None),
         )
@@ -413,19 +433,38 @@ class MeshFingertip(Fingertip):
         dist = np.full(n, np.nan)
         d = self._d
         ok = np.all(np.isfinite(p), axis=1)
+        # fast path: the triangles with the K nearest centroids; the answer is certain when no
+        # other triangle can come closer (its centroid is farther than the K-th by more than
+        # any triangle's reach)
+        k = min(_NEAR_K, len(self.faces))
+        safe = np.where(ok[:, None], p, 0.0)
+        best = np.empty(n)
+        sure = np.zeros(n, dtype=bool)
         for start in range(0, n, 1024):
-            sl = slice(start, start + 1024)
-            pb = p[sl]
-            okb = ok[sl]
-            if not okb.any():
-                continue
-            # upper bound: the nearest cluster centre's farthest point; then every cluster
-            # that can hold a closer point
-            dc = np.sqrt(np.sum((pb[:, None, :] - d["cl_centre"][None]) ** 2, axis=2))
-            upper = np.min(dc + d["cl_radius"][None], axis=1)
-            cand = (dc - d["cl_radius"][None]) <= upper[:, None] * (1 + 1e-12)
-            cand &= okb[:, None]
-            ray, cl = np.nonzero(cand)
+            blk = slice(start, start + 1024)
+            nb = len(safe[blk])
+            dk, ik = d["centroid_tree"].query(safe[blk], k=k)
+            dk, ik = dk.reshape(nb, k), ik.reshape(nb, k)
+            flat = ik.ravel()
+            t9 = d["tri9"][flat]
+            dd, bb1, bb2 = _closest_on_triangles(np.repeat(safe[blk], k, axis=0), t9[:, 0:3], t9[:, 3:6], t9[:, 6:9])
+            dd, bb1, bb2 = dd.reshape(nb, k), bb1.reshape(nb, k), bb2.reshape(nb, k)
+            j = np.argmin(dd, axis=1)
+            rows = np.arange(nb)
+            bst = dd[rows, j]
+            sb = ok[blk] & (np.sqrt(bst) <= dk[:, -1] - d["reach"])
+            best[blk], sure[blk] = bst, sb
+            out = start + np.flatnonzero(sb)
+            face[out], b1[out], b2[out], dist[out] = ik[rows, j][sb], bb1[rows, j][sb], bb2[rows, j][sb], np.sqrt(bst[sb])
+        todo = np.flatnonzero(ok & ~sure)
+        for start in range(0, len(todo), 256):
+            pts = todo[start : start + 256]
+            pb = p[pts]
+            # upper bound: the nearest of the K triangles; then every cluster that can hold a
+            # closer point
+            upper = np.sqrt(best[pts])
+            dc = np.sqrt(np.maximum(d["cl_centre2"][None] - 2.0 * (pb @ d["cl_centre"].T) + np.sum(pb * pb, axis=1)[:, None], 0.0))
+            ray, cl = np.nonzero((dc - d["cl_radius"][None]) <= upper[:, None] * (1 + 1e-9) + 1e-12 * d["extent"])
             tris = d["members"][cl].ravel()
             who = np.repeat(ray, _LEAF)
             real = tris < len(self.faces)
@@ -434,7 +473,7 @@ class MeshFingertip(Fingertip):
             order = np.lexsort((tris, dd, who))
             first = np.r_[True, who[order][1:] != who[order][:-1]]
             sel = order[first]
-            rows = start + who[sel]
+            rows = pts[who[sel]]
             face[rows], b1[rows], b2[rows], dist[rows] = tris[sel], bb1[sel], bb2[sel], np.sqrt(dd[sel])
         return face.reshape(shape), b1.reshape(shape), b2.reshape(shape), dist.reshape(shape)
 
@@ -459,8 +498,18 @@ class MeshFingertip(Fingertip):
         flat = pts.reshape(-1, 3)
         # one query per distinct point (the batch estimator asks for the latched point per sample)
         uniq, inverse = np.unique(flat, axis=0, return_inverse=True)
-        face, b1, b2, dist = self.closest(uniq)
+        key = hash(uniq.tobytes())
+        cached_key, cached = self._d["last_batch"]
+        if cached_key == key and np.array_equal(cached[0], uniq):
+            face, b1, b2, dist = cached[1]
+        else:
+            face, b1, b2, dist = self.closest(uniq)
         point, nrm = self._interp(face, b1, b2)
+        if what == "project" and xp is NP:
+            # the projected points are on the skin, on the same triangles: a normal() of them
+            # (the usual next call) needs no search
+            pu, pinv = np.unique(point, axis=0, return_index=True)
+            self._d["last_batch"] = (hash(pu.tobytes()), (pu, (face[pinv], b1[pinv], b2[pinv], np.zeros(len(pinv)))))
         if what == "normal":
             out = nrm[inverse.ravel()]
         elif what == "project":
