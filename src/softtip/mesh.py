@@ -53,8 +53,8 @@ _SIZE_RANGE = (0.002, 0.5)
 
 _LEAF = 32  # at most this many triangles per cluster of the cast's pre-filter
 _BRANCH = 16  # at most this many clusters per super-cluster
-_MAX_ITER = 40  # Newton steps
-_MAX_CROSS = 64  # triangles one Newton step may cross
+_MAX_ITER = 30  # Newton steps
+_MAX_CROSS = 16  # triangles one Newton step may cross (the next step goes on)
 _STEP_TOL = 1e-9  # converged when a step moves the point less than this × the tip's size (and is taken)
 _RES_TOL = 1e-6  # and a solution is kept when |F| (before the last step) ≤ this × |f| × size
 _CAST_BLOCK = 256
@@ -159,6 +159,20 @@ def _clusters(centroids: NDArray, leaf: int) -> list[NDArray]:
         half = len(idx) // 2
         stack.append(idx[order[:half]])
         stack.append(idx[order[half:]])
+    return out
+
+
+def _near_classes(centroids: NDArray, corners: NDArray) -> list:
+    """KD-trees of face centroids in two size classes, for :meth:`MeshFingertip._near`."""
+    reach = np.max(np.linalg.norm(corners - centroids, axis=2), axis=0) * (1 + 1e-9)
+    small = reach <= 1.5 * np.median(reach)
+    out = []
+    for sel in (small, ~small):
+        members = np.flatnonzero(sel)
+        if members.size == 0:
+            continue
+        k = _NEAR_K if sel is small else _NEAR_K // 4
+        out.append((cKDTree(centroids[members]), members, float(reach[members].max()), min(k, members.size)))
     return out
 
 
@@ -397,10 +411,8 @@ class MeshFingertip(Fingertip):
             centre=centre_bb,
             radius=radius_bb,
             volume=volume,
-            centroid_tree=cKDTree(centroids),
+            near_classes=_near_classes(centroids, np.stack((v0, v1, v2))),
             tri9=np.concatenate((v0, v1, v2), axis=1),
-            last_batch=(None, None),
-            reach=float(np.max(np.linalg.norm(np.stack((v0, v1, v2)) - centroids, axis=2))) * (1 + 1e-9),
             last_normal=(None, None),
             last_project=(None, None),
         )
@@ -443,8 +455,8 @@ class MeshFingertip(Fingertip):
         for start in range(0, n, 1024):
             blk = slice(start, start + 1024)
             nb = len(safe[blk])
-            dk, ik = d["centroid_tree"].query(safe[blk], k=k)
-            dk, ik = dk.reshape(nb, k), ik.reshape(nb, k)
+            ik, bound = self._near(safe[blk])
+            k = ik.shape[1]
             flat = ik.ravel()
             t9 = d["tri9"][flat]
             dd, bb1, bb2 = _closest_on_triangles(np.repeat(safe[blk], k, axis=0), t9[:, 0:3], t9[:, 3:6], t9[:, 6:9])
@@ -452,7 +464,7 @@ class MeshFingertip(Fingertip):
             j = np.argmin(dd, axis=1)
             rows = np.arange(nb)
             bst = dd[rows, j]
-            sb = ok[blk] & (np.sqrt(bst) <= dk[:, -1] - d["reach"])
+            sb = ok[blk] & (np.sqrt(bst) <= bound)
             best[blk], sure[blk] = bst, sb
             out = start + np.flatnonzero(sb)
             face[out], b1[out], b2[out], dist[out] = ik[rows, j][sb], bb1[rows, j][sb], bb2[rows, j][sb], np.sqrt(bst[sb])
@@ -477,6 +489,47 @@ class MeshFingertip(Fingertip):
             face[rows], b1[rows], b2[rows], dist[rows] = tris[sel], bb1[sel], bb2[sel], np.sqrt(dd[sel])
         return face.reshape(shape), b1.reshape(shape), b2.reshape(shape), dist.reshape(shape)
 
+    def _near(self, pts: NDArray) -> tuple[NDArray, NDArray]:
+        """Candidate faces (n, K) for the closest point of each of ``pts`` (n, 3), and a
+        distance below which the best of them is certainly the closest of the mesh.
+
+        The faces are split by size (their reach: centroid to farthest vertex); each class
+        gives its nearest centroids, and no face outside them is nearer than its K-th
+        centroid less the class's largest reach.
+        """
+        ids, bound = [], np.full(len(pts), np.inf)
+        for tree, members, reach, k in self._d["near_classes"]:
+            if k >= len(members):  # a small class: all of its faces
+                ids.append(np.broadcast_to(members, (len(pts), len(members))))
+                continue
+            dk, ik = tree.query(pts, k=k)
+            ids.append(members[ik.reshape(len(pts), k)])
+            bound = np.minimum(bound, dk.reshape(len(pts), k)[:, -1] - reach)
+        return np.concatenate(ids, axis=1), bound
+
+    def _closest_one(self, x: float, y: float, z: float):
+        """:meth:`closest` for one point given as floats, as arrays of length 1 (fewest numpy calls)."""
+        d = self._d
+        if not math.isfinite(x + y + z):
+            return self.closest(np.array([[x, y, z]]))
+        ik, bound = self._near(np.array([[x, y, z]]))
+        ik = ik[0]
+        t9 = d["tri9"][ik].T
+        dd, bb1, bb2 = _closest_block(x, y, z, *t9)
+        j = int(np.argmin(dd))
+        upper = math.sqrt(dd[j])
+        if upper <= bound[0]:
+            return ik[j : j + 1], bb1[j : j + 1], bb2[j : j + 1], np.sqrt(dd[j : j + 1])
+        # every cluster that can hold a point nearer than the best so far (as in closest())
+        pb = np.array([[x, y, z]])
+        dc = np.sqrt(np.maximum(d["cl_centre2"] - 2.0 * (d["cl_centre"] @ pb[0]) + (x * x + y * y + z * z), 0.0))
+        cl = np.flatnonzero((dc - d["cl_radius"]) <= upper * (1 + 1e-9) + 1e-12 * d["extent"])
+        tris = d["members"][cl].ravel()
+        tris = tris[tris < len(self.faces)]
+        dd, bb1, bb2 = _closest_on_triangles(np.repeat(pb, len(tris), axis=0), *np.split(d["tri9"][tris], 3, axis=1))
+        j = np.lexsort((tris, dd))[0]
+        return tris[j : j + 1], bb1[j : j + 1], bb2[j : j + 1], np.sqrt(dd[j : j + 1])
+
     def _interp(self, face: NDArray, b1: NDArray, b2: NDArray) -> tuple[NDArray, NDArray]:
         g = self._d["geom"][face]
         b1, b2 = b1[..., None], b2[..., None]
@@ -491,25 +544,23 @@ class MeshFingertip(Fingertip):
             cached_key, value = self._d["last_" + what] if what != "surface" else (None, None)
             if cached_key == key:
                 return value
-            pts = np.array([[x, y, z]], dtype=float)
+            face, b1, b2, dist = self._closest_one(x, y, z)
+            point, nrm = self._interp(face, b1, b2)
+            if what == "surface":
+                side = (x - point[0, 0]) * nrm[0, 0] + (y - point[0, 1]) * nrm[0, 1] + (z - point[0, 2]) * nrm[0, 2]
+                return -float(dist[0]) if side < 0.0 else float(dist[0])
+            out = nrm if what == "normal" else point
+            value = (float(out[0, 0]), float(out[0, 1]), float(out[0, 2]))
+            self._d["last_" + what] = (key, value)
+            return value
         else:
             pts = np.stack(np.broadcast_arrays(x, y, z), axis=-1).astype(float)
         shape = pts.shape[:-1]
         flat = pts.reshape(-1, 3)
         # one query per distinct point (the batch estimator asks for the latched point per sample)
         uniq, inverse = np.unique(flat, axis=0, return_inverse=True)
-        key = hash(uniq.tobytes())
-        cached_key, cached = self._d["last_batch"]
-        if cached_key == key and np.array_equal(cached[0], uniq):
-            face, b1, b2, dist = cached[1]
-        else:
-            face, b1, b2, dist = self.closest(uniq)
+        face, b1, b2, dist = self.closest(uniq)
         point, nrm = self._interp(face, b1, b2)
-        if what == "project" and xp is NP:
-            # the projected points are on the skin, on the same triangles: a normal() of them
-            # (the usual next call) needs no search
-            pu, pinv = np.unique(point, axis=0, return_index=True)
-            self._d["last_batch"] = (hash(pu.tobytes()), (pu, (face[pinv], b1[pinv], b2[pinv], np.zeros(len(pinv)))))
         if what == "normal":
             out = nrm[inverse.ravel()]
         elif what == "project":
