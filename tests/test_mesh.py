@@ -352,3 +352,40 @@ def test_cli_bad_mesh_exits_2_without_output(tmp_path):
     assert out.returncode == 2
     assert "tip.toml" in out.stderr and "inverted normals" in out.stderr
     assert not (tmp_path / "est.csv").exists()
+
+
+def test_cli_stream_with_a_mesh_tip_matches_estimate(tmp_path):
+    # the live path (replay source, streaming estimator, recorder) and the batch command give
+    # the same numbers, formatted the same way, on a mesh fingertip
+    from softtip import EXAMPLE_PATH
+
+    rec = tmp_path / "rec.csv"
+    out = run("stream", "--replay", EXAMPLE_PATH, "--speed", "0", "--tip", NAIL_TOML, "--record", rec)
+    assert out.returncode == 0, out.stderr
+    est = run("estimate", EXAMPLE_PATH, "--tip", NAIL_TOML, "-o", tmp_path / "est.csv")
+    assert est.returncode == 0, est.stderr
+    import csv
+
+    with open(rec, newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    with open(tmp_path / "est.csv", newline="") as fh:
+        expected = list(csv.DictReader(fh))
+    assert len(rows) == len(expected) == 500
+    for r, e in zip(rows, expected):
+        assert {k: r[k] for k in e} == e
+    assert sum(e["state"] == "line" for e in expected) > 200
+
+
+def test_cli_stream_from_a_fake_netft_with_a_mesh_tip(tmp_path):
+    pytest.importorskip("pynetft")
+    from softtip.netft_fake import FakeNetFT
+
+    with FakeNetFT(rate_hz=500) as dev:
+        out = subprocess.run(
+            [SOFTTIP, "stream", "--netft", "127.0.0.1", "--rdt-port", str(dev.rdt_port), "--http-port",
+             str(dev.http_port), "--tip", str(NAIL_TOML), "--duration", "1.5", "--record", str(tmp_path / "rec.csv")],
+            capture_output=True, text=True, timeout=60,
+        )  # fmt: skip
+    assert out.returncode == 0, out.stderr
+    rows = (tmp_path / "rec.csv").read_text().splitlines()
+    assert len(rows) > 500

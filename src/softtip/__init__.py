@@ -20,6 +20,7 @@ from softtip.fingertip import (
     load_fingertip,
     murakami2006,
 )
+from softtip.mesh import MeshFingertip
 from softtip.noise import NANO17, SensorNoise, direction_angle_std, tangential_spin_torque_std
 from softtip.pipeline import STATES, Estimates, Estimator, EstimatorConfig, SampleEstimate, estimate
 from softtip.sources import run
@@ -41,6 +42,7 @@ __all__ = [
     "InputError",
     "KGF",
     "KGF_MM",
+    "MeshFingertip",
     "NANO17",
     "PRESETS",
     "STATES",

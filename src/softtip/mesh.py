@@ -3,7 +3,7 @@
 The skin is the closed triangle mesh; its outward normal ``n(r)`` is the barycentric
 interpolation of per-corner normals (angle-weighted averages of the faces around each vertex,
 split at crease edges sharper than ``crease_angle_deg``), so ``n`` is continuous across
-smooth edges. The soft-finger solution ``m = r × f + σ n(r)`` (SPEC §3.2) is found in two
+smooth edges. The soft-finger solution ``m = r × f + σ n(r)`` is found in two
 steps:
 
 1. **Cast.** The wrench's central axis (the points ``p`` with ``m = p × f + μ f``) is cast
@@ -29,7 +29,6 @@ from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial import cKDTree
 
 from softtip._xp import NP, PY
 from softtip.errors import InputError
@@ -164,6 +163,7 @@ def _clusters(centroids: NDArray, leaf: int) -> list[NDArray]:
 
 def _near_classes(centroids: NDArray, corners: NDArray) -> list:
     """KD-trees of face centroids in two size classes, for :meth:`MeshFingertip._near`."""
+    from scipy.spatial import cKDTree  # imported here: `import softtip` stays light
     reach = np.max(np.linalg.norm(corners - centroids, axis=2), axis=0) * (1 + 1e-9)
     small = reach <= 1.5 * np.median(reach)
     out = []
