@@ -9,15 +9,18 @@ press (the surface slides or the finger rocks).
 Method
 ------
 1. **Press points.** Per press ``k`` the contact normal ``n_k`` is constant (the table does
-   not turn) and ``m_i = r_k × f_i + σ_i n_k``. The point ``r_k`` and normal ``n_k`` are
-   fitted by nonlinear least squares on the tangential part of ``m_i − r_k × f_i`` (two
-   numbers per sample; ``σ_i`` free), with the covariance of ``r_k`` from the Jacobian.
+   not turn) and ``m_i = (r_k − κ √F_i n_k) × f_i + σ_i n_k``. With ``n_k`` the normal of the
+   skin as last fitted (first: against the mean force) the tangential part of that equation
+   (two numbers per sample; ``σ_i`` free) is linear in ``r_k``: least squares, with the
+   covariance of ``r_k`` from the residual scatter. (Fitting ``n_k`` from the moments too
+   turns it toward the noise: the component along ``n_k`` is the one left free.)
 2. **Registration.** The press points must lie on the posed mesh, indented by the skin's
    compression ``κ √F_k`` along the normal (``F_k`` the press's mean normal force; for a
    Winkler skin pressed by a plane the depth grows as √F). Gauss–Newton on the
    point-to-surface distances ``(r_k − q_k) · ν_k + κ √F_k`` (``q_k`` the closest point of
    the posed mesh, ``ν_k`` its normal), weighted by each point's variance along ``ν_k``,
    for the translation ``t`` (and with ``rotation=True`` a small rotation ``ω``) and ``κ``.
+   Steps 1 and 2 alternate four times (the points depend on ``κ`` and the normals).
 3. **Honesty.** Standard deviations are ``(JᵀWJ)⁻¹`` scaled by the reduced χ² when it
    exceeds 1; directions the presses do not constrain (a capsule's roll about its own axis,
    one spot) are refused by the conditioning of ``JᵀWJ``.
