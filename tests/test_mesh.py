@@ -332,16 +332,17 @@ def run(*args, cwd=None):
     return subprocess.run([SOFTTIP, *map(str, args)], capture_output=True, text=True, cwd=cwd, timeout=120)
 
 
-def test_cli_estimate_with_a_mesh_tip(tmp_path):
-    out = run("estimate", "--example", "--tip", NAIL_TOML, "-o", tmp_path / "mesh.csv")
-    assert out.returncode == 0, out.stderr
-    ref = run("estimate", "--example", "-o", tmp_path / "capsule.csv")
-    assert ref.returncode == 0, ref.stderr
-    a = np.genfromtxt(tmp_path / "mesh.csv", delimiter=",", names=True, dtype=None, encoding="utf-8")
-    b = np.genfromtxt(tmp_path / "capsule.csv", delimiter=",", names=True, dtype=None, encoding="utf-8")
-    assert (a["state"] == b["state"]).all()
-    dist = np.hypot(np.hypot(a["rx"] - b["rx"], a["ry"] - b["ry"]), a["rz"] - b["rz"])
-    assert np.nanmax(dist) < 0.05e-3
+def test_example_grasp_on_the_mesh_tip_matches_the_capsule(nail):
+    # the shipped example grasp (at the apex, away from the nail) on the mesh and on the capsule;
+    # the command line path is checked against this library call in the stream test below
+    from softtip import estimate, load_example
+
+    log = load_example()
+    a = estimate(log.t, log.wrench, nail)
+    b = estimate(log.t, log.wrench, "murakami2006")
+    assert (a.state == b.state).all() and (a.state == 2).sum() > 200
+    assert np.nanmax(np.linalg.norm(a.point - b.point, axis=1)) < 0.05e-3
+    assert np.nanmax(np.abs(a.angle - b.angle)) < math.radians(0.1)
 
 
 def test_cli_bad_mesh_exits_2_without_output(tmp_path):
