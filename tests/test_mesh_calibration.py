@@ -83,3 +83,28 @@ def test_calibrate_command_writes_a_mesh_fingertip(tmp_path):
         capture_output=True, text=True, timeout=120,
     )  # fmt: skip
     assert bad.returncode == 2 and "--mesh-units" in bad.stderr and not (tmp_path / "bad.toml").exists()
+
+
+def test_fitted_shift_is_composed_with_the_files_transform(tmp_path):
+    # a mesh drawn in a rotated, shifted CAD frame, placed by its file's transform; the fitted
+    # shift goes into the transform that the written file holds
+    import trimesh
+    from scipy.spatial.transform import Rotation
+
+    from softtip.calibration_mesh import calibrate_mesh_file
+
+    rot = Rotation.from_euler("xyz", [10.0, -5.0, 30.0], degrees=True)
+    offset = np.array([0.001, -0.002, 0.003])
+    trimesh.Trimesh(rot.inv().apply(V - offset) * 1e3, F, process=False).export(tmp_path / "cad.stl")
+    (tmp_path / "tip.toml").write_text(
+        '[fingertip]\nmesh = "cad.stl"\nmesh_units = "mm"\n[fingertip.transform]\n'
+        "translation = [0.001, -0.002, 0.003]\nrpy_deg = [10.0, -5.0, 30.0]\n"
+    )
+    shift = np.array([0.2e-3, -0.3e-3, 0.25e-3])
+    t, w = mesh_probing_log(shifted(shift), 16, np.random.default_rng(7))
+    cal = calibrate_mesh_file(t, w, str(tmp_path / "tip.toml"))
+    assert_allclose(cal.translation, shift, atol=1e-6)
+    (tmp_path / "fitted.toml").write_text(cal.tip.to_toml())
+    again = load_fingertip(tmp_path / "fitted.toml")
+    assert_allclose(again.vertices, cal.tip.vertices, atol=1e-9)
+    assert_allclose(np.sort(again.vertices, axis=0), np.sort(V + shift, axis=0), atol=2e-6)
