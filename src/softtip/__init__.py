@@ -20,6 +20,7 @@ from softtip.fingertip import (
     load_fingertip,
     murakami2006,
 )
+from softtip.mesh import MeshFingertip
 from softtip.mounting import Mounted
 from softtip.noise import NANO17, SensorNoise, direction_angle_std, tangential_spin_torque_std
 from softtip.estimator import STATES, Estimates, Estimator, EstimatorConfig, EstimatorWarning, SampleEstimate, estimate
@@ -44,6 +45,7 @@ __all__ = [
     "KGF",
     "KGF_MM",
     "Mounted",
+    "MeshFingertip",
     "NANO17",
     "PRESETS",
     "STATES",

@@ -45,16 +45,42 @@ warned about when significant).
 """,
 )
 @click.argument("input_path", metavar="LOG", type=click.Path(allow_dash=True, dir_okay=False))
-@click.option("--shape", type=click.Choice(["sphere", "capsule"]), required=True, help="Fingertip shape to fit.")
+@click.option("--shape", type=click.Choice(["sphere", "capsule", "mesh"]), required=True, help="Fingertip shape to fit (mesh: the placement of --mesh on the sensor).")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Fingertip TOML file to write (default: standard output).")
 @click.option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the log's wrench.")
 @click.option("--tare-duration", type=float, default=0.2, show_default=True, metavar="S", help="Average the first S seconds (untouched) as the sensor bias; 0 if LOG is tared.")
 @click.option("--contact-threshold", type=float, default=0.05, show_default=True, metavar="N", help="A press lasts while |f| is at least this, N.")
 @click.option("--min-force", type=float, default=0.5, show_default=True, metavar="N", help="Only samples with |f| at least this enter the fit, N.")
 @click.option("--rigid", is_flag=True, help="Do not fit the skin's indentation (radius then comes out short by about the indentation).")
+@click.option("--mesh", "mesh_path", type=click.Path(dir_okay=False), help="--shape mesh: the fingertip mesh (a mesh fingertip .toml, or .stl/.obj/.ply with --mesh-units); its shift on the sensor is fitted.")
+@click.option("--mesh-units", type=click.Choice(["m", "cm", "mm", "um", "in"]), help="Length unit of a bare --mesh file.")
+@click.option("--rotation", is_flag=True, help="--shape mesh: fit a small rotation as well as the shift (6 DOF).")
 @click.pass_context
-def calibrate(ctx, input_path, shape, output, units, tare_duration, contact_threshold, min_force, rigid):
+def calibrate(ctx, input_path, shape, output, units, tare_duration, contact_threshold, min_force, rigid, mesh_path, mesh_units, rotation):
     from softtip.calibration import calibrate_fingertip, write_fingertip_toml
+
+    if shape == "mesh" or mesh_path is not None:  # mesh fingertips: softtip.calibration_mesh
+        from softtip.calibration import atomic_write_text
+        from softtip.calibration_mesh import calibrate_mesh_file
+
+        try:
+            if shape != "mesh" or mesh_path is None or rigid:
+                raise InputError("--shape mesh goes with --mesh FILE (and without --rigid)")
+            log = _read(input_path, units)
+            cal = calibrate_mesh_file(
+                log.t, log.wrench, mesh_path, mesh_units, rotation=rotation, tare_duration=tare_duration,
+                contact_threshold=contact_threshold, min_force=min_force,
+            )  # fmt: skip
+            if output is not None:
+                atomic_write_text(output, cal.tip.to_toml())
+                click.echo(cal.summary())
+                click.echo(f"softtip: fingertip -> {output}", err=True)
+            else:
+                click.echo(cal.summary(), err=True)
+                click.echo(cal.tip.to_toml(), nl=False)
+        except InputError as exc:
+            _fail(ctx, exc)
+        return
 
     try:
         log = _read(input_path, units)

@@ -150,6 +150,9 @@ def contact_kernel(tip: Fingertip, fx, fy, fz, mx, my, mz, xp=NP):
 
     Returns ``(rx, ry, rz, nx, ny, nz, sigma, valid)``.
     """
+    own = getattr(tip, "_contact_kernel", None)
+    if own is not None:  # shapes with their own solver (softtip.mesh.MeshFingertip)
+        return own(fx, fy, fz, mx, my, mz, xp)
     if isinstance(tip, Mounted):
         # the shape's own solution for the wrench in its frame, mapped back to the sensor frame
         rx, ry, rz, nx, ny, nz, sigma, valid = contact_kernel(tip.tip, *tip.wrench_in_tip_frame(fx, fy, fz, mx, my, mz), xp=xp)

@@ -422,15 +422,21 @@ def fingertip_from_mapping(data: dict, source: str = "<fingertip>") -> Fingertip
     if not isinstance(table, dict):
         raise InputError(f"{source}: expected a [fingertip] table")
     mount = table.get("mount")
-    if mount is not None:  # [fingertip.mount]: the tip's pose in the sensor frame
+    if mount is not None and table.get("shape", "mesh" if "mesh" in table else None) != "mesh":
+        # [fingertip.mount]: the tip's pose in the sensor frame (a mesh applies it to its vertices)
         from softtip.mounting import mount_from_mapping
 
         inner = {k: v for k, v in table.items() if k != "mount"}
         return mount_from_mapping(fingertip_from_mapping({"fingertip": inner}, source), mount, source)
     shape = table.get("shape")
+    if shape == "mesh" or (shape is None and "mesh" in table):
+        # a triangle mesh file (softtip.mesh; trimesh is imported only then)
+        from softtip.mesh import mesh_fingertip_from_table
+
+        return mesh_fingertip_from_table(table, source)
     if shape not in _FIELDS:
         raise InputError(
-            f"{source}: [fingertip] shape = {shape!r}; expected one of {', '.join(_FIELDS)}"
+            f"{source}: [fingertip] shape = {shape!r}; expected one of {', '.join((*_FIELDS, 'mesh'))}"
         )
     fields = _FIELDS[shape]
     unknown = sorted(set(table) - set(fields) - {"shape"})

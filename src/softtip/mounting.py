@@ -83,6 +83,11 @@ class Mounted(Fingertip):
         object.__setattr__(self, "rotation", tuple(tuple(float(v) for v in row) for row in m))
         object.__setattr__(self, "translation", tuple(float(v) for v in t))
 
+    @property
+    def skin_thickness(self) -> float | None:
+        """The mounted shape's skin thickness (m; ``None`` when it gives none)."""
+        return getattr(self.tip, "skin_thickness", None)
+
     # sensor → fingertip frame and back, component-wise (floats or arrays)
     def _to_tip(self, x, y, z):
         (a, b, c), (d, e, f), (g, h, i) = self.rotation

@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 
 from softtip.fingertip import Capsule, Fingertip, Sphere
 
-__all__ = ["SkinMesh", "discretise_skin", "DEFAULT_ELEMENTS"]
+__all__ = ["SkinMesh", "discretise_skin", "discretise_mesh_skin", "DEFAULT_ELEMENTS"]
 
 #: Default number of skin elements (the brief asks for at least 10 000).
 DEFAULT_ELEMENTS = 12_000
@@ -81,8 +81,8 @@ def discretise_skin(tip: Fingertip, n_elements: int = DEFAULT_ELEMENTS, z_min: f
 
     Parameters
     ----------
-    tip : Capsule or Sphere
-        The fingertip (sensor frame).
+    tip : Capsule, Sphere or MeshFingertip
+        The fingertip (sensor frame); a mesh goes to :func:`discretise_mesh_skin`.
     n_elements : int
         Target element count (the result is within a few elements of it).
     z_min : float, optional
@@ -130,8 +130,61 @@ def discretise_skin(tip: Fingertip, n_elements: int = DEFAULT_ELEMENTS, z_min: f
             raise ValueError(f"z_min {zc} m leaves no skin on the sphere")
         u, w = _fibonacci_cap(n_elements, cos_min)
         c, n, a = cen + r * u, u, w * r * r
+    elif getattr(tip, "kind", "") == "mesh":
+        return discretise_mesh_skin(tip, n_elements, z_min)
     else:
         raise TypeError(
-            f"the simulator discretises capsule and sphere fingertips; got {type(tip).__name__}"
+            f"the simulator discretises capsule, sphere and mesh fingertips; got {type(tip).__name__}"
         )
     return SkinMesh(c, n, a, np.sqrt(a), tip)
+
+
+def discretise_mesh_skin(tip, n_elements: int = DEFAULT_ELEMENTS, z_min: float | None = None) -> SkinMesh:
+    """Skin elements of a triangle-mesh fingertip (:class:`softtip.mesh.MeshFingertip`).
+
+    Every triangle above ``z_min`` becomes one element or, when it is larger than the target
+    element area (the covered area over ``n_elements``), ``k²`` equal sub-triangles on a
+    barycentric grid. Element centres lie on the mesh; normals are the mesh's interpolated
+    normals there, as the estimator sees them. A mesh finer than ``n_elements`` keeps one
+    element per triangle (more elements than asked).
+
+    Parameters
+    ----------
+    tip : MeshFingertip
+    n_elements : int
+        Target element count (at least).
+    z_min : float, optional
+        Lowest covered height, m (default 0: the face where the fingertip is mounted on the
+        sensor, and anything below it, is not skin). A triangle is covered when its centroid
+        is above ``z_min``.
+    """
+    n_elements = int(n_elements)
+    if n_elements < 50:
+        raise ValueError(f"n_elements must be at least 50, got {n_elements}")
+    z0 = 0.0 if z_min is None else float(z_min)
+    v, f = tip.vertices, tip.faces
+    tri = v[f]
+    centroid_z = tri[:, :, 2].mean(axis=1)
+    keep = np.flatnonzero(centroid_z > z0 + 1e-9 * tip.bounding_sphere[1])
+    if keep.size == 0:
+        raise ValueError(f"z_min {z0} m leaves no skin on the mesh")
+    area = 0.5 * np.linalg.norm(np.cross(tri[keep, 1] - tri[keep, 0], tri[keep, 2] - tri[keep, 0]), axis=1)
+    target = area.sum() / n_elements
+    k = np.maximum(1, np.ceil(np.sqrt(area / target) - 1e-9)).astype(int)
+    faces, b1s, b2s, areas = [], [], [], []
+    for kk in np.unique(k):
+        sel = keep[k == kk]
+        # centroids of the k² sub-triangles, barycentric (b1, b2): upward and downward ones
+        i, j = np.meshgrid(np.arange(kk), np.arange(kk), indexing="ij")
+        up = (i + j) <= kk - 1
+        down = (i + j) <= kk - 2
+        sb1 = np.concatenate(((i[up] + 1 / 3) / kk, (i[down] + 2 / 3) / kk))
+        sb2 = np.concatenate(((j[up] + 1 / 3) / kk, (j[down] + 2 / 3) / kk))
+        faces.append(np.repeat(sel, len(sb1)))
+        b1s.append(np.tile(sb1, len(sel)))
+        b2s.append(np.tile(sb2, len(sel)))
+        areas.append(np.repeat(area[np.searchsorted(keep, sel)] / kk**2, len(sb1)))
+    face = np.concatenate(faces)
+    centres, normals = tip._interp(face, np.concatenate(b1s), np.concatenate(b2s))
+    a = np.concatenate(areas)
+    return SkinMesh(centres, normals, a, np.sqrt(a), tip)

@@ -1,0 +1,110 @@
+"""Calibration of a mesh fingertip's placement from plane presses (softtip.calibration_mesh)."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from softtip import InputError, load_fingertip
+from softtip.calibration_mesh import calibrate_mesh, mesh_probing_log
+from softtip.io import write_table
+from softtip.mesh import MeshFingertip, capsule_mesh
+from softtip.noise import NANO17
+
+SOFTTIP = str(Path(sys.executable).with_name("softtip"))
+V, F = capsule_mesh(0.016, 0.020, segments=64)
+
+
+@pytest.fixture(scope="module")
+def nominal():
+    return MeshFingertip(V, F)
+
+
+def shifted(shift):
+    return MeshFingertip(V + shift, F)
+
+
+def test_noise_free_presses_give_the_shift_and_the_compliance(nominal):
+    shift = np.array([0.4e-3, -0.3e-3, 0.5e-3])
+    t, w = mesh_probing_log(shifted(shift), 16, np.random.default_rng(1), compliance=2e-4)
+    cal = calibrate_mesh(t, w, nominal)
+    assert_allclose(cal.translation, shift, atol=1e-7)
+    assert cal.compliance == pytest.approx(2e-4, abs=1e-7)
+    assert cal.n_presses == 16 and cal.n_skipped == 0
+    # the moved fingertip is the shifted one
+    assert_allclose(cal.tip.vertices, V + cal.translation, atol=1e-12)
+
+
+@pytest.mark.parametrize("seed", [2, 3])
+def test_noisy_presses_are_within_their_standard_deviations(nominal, seed):
+    rng = np.random.default_rng(seed)
+    shift = rng.normal(scale=0.5e-3, size=3)
+    t, w = mesh_probing_log(shifted(shift), 20, rng, noise=NANO17)
+    cal = calibrate_mesh(t, w, nominal)
+    assert np.all(cal.translation_std > 0) and np.all(cal.translation_std < 0.5e-3)
+    assert np.all(np.abs(cal.translation - shift) < 4.0 * cal.translation_std)
+
+
+def test_a_round_tips_roll_is_refused(nominal):
+    t, w = mesh_probing_log(shifted(np.zeros(3)), 16, np.random.default_rng(4))
+    with pytest.raises(InputError, match="undetermined"):
+        calibrate_mesh(t, w, nominal, rotation=True)
+
+
+def test_too_few_presses_are_refused(nominal):
+    t, w = mesh_probing_log(shifted(np.zeros(3)), 4, np.random.default_rng(5))
+    with pytest.raises(InputError, match="4 usable presses"):
+        calibrate_mesh(t, w, nominal)
+
+
+def test_calibrate_command_writes_a_mesh_fingertip(tmp_path):
+    import trimesh
+
+    trimesh.Trimesh(V * 1e3, F, process=False).export(tmp_path / "tip.stl")
+    shift = np.array([0.3e-3, 0.2e-3, -0.4e-3])
+    t, w = mesh_probing_log(shifted(shift), 16, np.random.default_rng(6))
+    cols = dict(zip(("fx", "fy", "fz", "mx", "my", "mz"), w.T))
+    write_table({"t": t, **cols}, tmp_path / "probe.csv")
+    out = subprocess.run(
+        [SOFTTIP, "calibrate", tmp_path / "probe.csv", "--shape", "mesh", "--mesh", tmp_path / "tip.stl",
+         "--mesh-units", "mm", "-o", tmp_path / "tip.toml"],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert out.returncode == 0, out.stderr
+    assert "mesh shift" in out.stdout
+    tip = load_fingertip(tmp_path / "tip.toml")
+    assert_allclose(np.sort(tip.vertices, axis=0), np.sort(V + shift, axis=0), atol=1e-6)
+    bad = subprocess.run(
+        [SOFTTIP, "calibrate", tmp_path / "probe.csv", "--shape", "mesh", "--mesh", tmp_path / "tip.stl",
+         "-o", tmp_path / "bad.toml"],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert bad.returncode == 2 and "--mesh-units" in bad.stderr and not (tmp_path / "bad.toml").exists()
+
+
+def test_fitted_shift_is_composed_with_the_files_transform(tmp_path):
+    # a mesh drawn in a rotated, shifted CAD frame, placed by its file's transform; the fitted
+    # shift goes into the transform that the written file holds
+    import trimesh
+    from scipy.spatial.transform import Rotation
+
+    from softtip.calibration_mesh import calibrate_mesh_file
+
+    rot = Rotation.from_euler("xyz", [10.0, -5.0, 30.0], degrees=True)
+    offset = np.array([0.001, -0.002, 0.003])
+    trimesh.Trimesh(rot.inv().apply(V - offset) * 1e3, F, process=False).export(tmp_path / "cad.stl")
+    (tmp_path / "tip.toml").write_text(
+        '[fingertip]\nmesh = "cad.stl"\nmesh_units = "mm"\n[fingertip.mount]\n'
+        "translation = [0.001, -0.002, 0.003]\nrpy_deg = [10.0, -5.0, 30.0]\n"
+    )
+    shift = np.array([0.2e-3, -0.3e-3, 0.25e-3])
+    t, w = mesh_probing_log(shifted(shift), 16, np.random.default_rng(7))
+    cal = calibrate_mesh_file(t, w, str(tmp_path / "tip.toml"))
+    assert_allclose(cal.translation, shift, atol=1e-6)
+    (tmp_path / "fitted.toml").write_text(cal.tip.to_toml())
+    again = load_fingertip(tmp_path / "fitted.toml")
+    assert_allclose(again.vertices, cal.tip.vertices, atol=1e-9)
+    assert_allclose(np.sort(again.vertices, axis=0), np.sort(V + shift, axis=0), atol=2e-6)
