@@ -7,6 +7,8 @@ import sys
 import click
 
 from softtip.errors import InputError
+from softtip.examples import EXAMPLE_PROBING_PATH, EXAMPLE_STILL_PATH
+from softtip.noise import NANO17
 from softtip.units import UNIT_SYSTEMS
 
 __all__ = ["calibrate", "calibrate_payload"]
@@ -16,6 +18,14 @@ def _read(input_path: str, units: str):
     from softtip.io import read_log
 
     return read_log(sys.stdin if input_path == "-" else input_path, units=units)
+
+
+def _example_or_log(input_path, example: bool, units: str, path, what: str) -> str:
+    if example == (input_path is not None):
+        raise click.UsageError(f"give either LOG or --example (the shipped example {what})")
+    if example and units != "si":
+        raise click.UsageError(f"--units applies to LOG; the example {what} is in SI")
+    return str(path) if example else input_path
 
 
 def _fail(ctx: click.Context, exc: InputError) -> None:
@@ -29,38 +39,53 @@ def _fail(ctx: click.Context, exc: InputError) -> None:
     help="""Calibrate the fingertip geometry from a probing log of plane presses.
 
 LOG is a CSV log (t, fx, fy, fz, mx, my, mz; '-' reads standard input) of the fingertip
-pressed against a flat, rigid surface at many points spread over the skin (15 or more,
-±60° around the tip; untouched for the first --tare-duration seconds). During each press
-the surface must not rotate relative to the fingertip, and it should slide a little (or
-the finger rock) so that the friction force turns by 10° or more: that is what pins each
-contact point. softtip fits the centre (sphere) or the cap centre (capsule: axis along z,
+pressed against a flat, rigid surface at many points spread over the skin (20 or more,
+±60° around the tip; untouched for the first --tare-duration seconds), for instance
+recorded by `softtip stream --netft ADDRESS --record probe.csv`. During each press the
+surface must not tilt relative to the fingertip, and it should slide a little sideways so
+that the friction force turns (40° or more): that is what pins each contact point.
+--guide prints the procedure step by step; --example runs on a shipped simulated log. softtip fits the centre (sphere) or the cap centre (capsule: axis along z,
 cap centre height = length) and the radius by nonlinear least squares over every sample,
 with the skin's indentation (∝ √force) as a nuisance parameter, and prints the estimates
-with standard deviations and the residual. Refuses (exit 2) when the presses do not
-excite enough directions.
+with standard deviations and the residual. Each sample is weighted by its noise, propagated
+from the sensor noise model (--force-noise, --moment-noise) through the lever arm, so the
+force noise does not bias the geometry; the standard deviations are scaled by the
+residual's ratio to that model. Refuses (exit 2) when the presses do not excite enough
+directions.
 
-Writes a SPEC §2 fingertip TOML file (-o, atomically; standard output otherwise) for
---tip. A capsule's x, y axis offset cannot be stored in the file: it is reported (and
-warned about when significant).
+Writes a fingertip TOML file (-o, atomically; standard output otherwise) for --tip; a
+capsule's offset of its axis from the sensor's z axis is its axis_offset.
 """,
 )
-@click.argument("input_path", metavar="LOG", type=click.Path(allow_dash=True, dir_okay=False))
-@click.option("--shape", type=click.Choice(["sphere", "capsule"]), required=True, help="Fingertip shape to fit.")
+@click.argument("input_path", metavar="LOG", required=False, type=click.Path(allow_dash=True, dir_okay=False))
+@click.option("--shape", type=click.Choice(["sphere", "capsule"]), help="Fingertip shape to fit (required unless --guide).")
+@click.option("--example", is_flag=True, help="Use the shipped example probing log (simulated: 30 presses on a 16 mm sphere centred at 0.3, -0.2, 20.0 mm) as LOG.")
+@click.option("--guide", is_flag=True, help="Print how to record a probing log (where, how hard and how to press) and exit.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Fingertip TOML file to write (default: standard output).")
 @click.option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the log's wrench.")
 @click.option("--tare-duration", type=float, default=0.2, show_default=True, metavar="S", help="Average the first S seconds (untouched) as the sensor bias; 0 if LOG is tared.")
 @click.option("--contact-threshold", type=float, default=0.05, show_default=True, metavar="N", help="A press lasts while |f| is at least this, N.")
 @click.option("--min-force", type=float, default=0.5, show_default=True, metavar="N", help="Only samples with |f| at least this enter the fit, N.")
 @click.option("--rigid", is_flag=True, help="Do not fit the skin's indentation (radius then comes out short by about the indentation).")
+@click.option("--force-noise", type=click.FloatRange(min=0.0, min_open=True), default=NANO17.force_std[0], show_default=True, metavar="N", help="Per-axis standard deviation of the sensor's force noise, N (Nano17-class default).")
+@click.option("--moment-noise", type=click.FloatRange(min=0.0, min_open=True), default=NANO17.moment_std[0] * 1e3, show_default=True, metavar="N·mm", help="Per-axis standard deviation of the sensor's moment noise, N·mm.")
 @click.pass_context
-def calibrate(ctx, input_path, shape, output, units, tare_duration, contact_threshold, min_force, rigid):
-    from softtip.calibration import calibrate_fingertip, write_fingertip_toml
+def calibrate(ctx, input_path, shape, output, units, tare_duration, contact_threshold, min_force, rigid, force_noise, moment_noise, example, guide):
+    from softtip.calibration import PROBING_GUIDE, calibrate_fingertip, write_fingertip_toml
+    from softtip.noise import SensorNoise
 
+    if guide:
+        click.echo(PROBING_GUIDE)
+        return
+    if shape is None:
+        raise click.UsageError("Missing option '--shape' (sphere or capsule).")
+    input_path = _example_or_log(input_path, example, units, EXAMPLE_PROBING_PATH, "probing log")
     try:
         log = _read(input_path, units)
         cal = calibrate_fingertip(
             log.t, log.wrench, shape, tare_duration=tare_duration, contact_threshold=contact_threshold,
             min_force=min_force, compliance=not rigid, source=log.source,
+            noise=SensorNoise((force_noise,) * 3, (moment_noise * 1e-3,) * 3),
         )  # fmt: skip
         report = cal.summary()
         if output is not None:
@@ -73,11 +98,11 @@ def calibrate(ctx, input_path, shape, output, units, tare_duration, contact_thre
     except InputError as exc:
         _fail(ctx, exc)
         return
-    if shape == "capsule" and cal.axis_offset_significant():
-        x, y = cal.axis_offset * 1e3
+    if not 0.5 <= cal.noise_ratio <= 2.0:
         click.echo(
-            f"softtip: warning: the capsule's axis is offset by x = {x:+.3f} mm, y = {y:+.3f} mm from the sensor z axis; "
-            "a SPEC §2 capsule file cannot hold it (not applied): check the mounting, or calibrate as a sphere",
+            f"softtip: warning: the residual is {cal.noise_ratio:.2f} times the noise model's (--force-noise {force_noise:g} N, "
+            f"--moment-noise {moment_noise:g} N·mm); the standard deviations allow for it, but the weights are best with this "
+            "sensor's noise (the standard deviation of each axis in the untouched part of the log)",
             err=True,
         )
 
@@ -97,15 +122,17 @@ Writes a payload TOML file ([payload] mass = kg, com = [x, y, z] m; -o, atomical
 standard output otherwise) for `softtip estimate --payload` and `softtip stream --payload`.
 """,
 )
-@click.argument("input_path", metavar="LOG", type=click.Path(allow_dash=True, dir_okay=False))
+@click.argument("input_path", metavar="LOG", required=False, type=click.Path(allow_dash=True, dir_okay=False))
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Payload TOML file to write (default: standard output).")
 @click.option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the log's wrench.")
+@click.option("--example", is_flag=True, help="Use the shipped example still log (simulated: a 20 g fingertip, centre of mass 1, -0.5, 20 mm, in 12 orientations) as LOG.")
 @click.pass_context
-def calibrate_payload(ctx, input_path, output, units):
+def calibrate_payload(ctx, input_path, output, units, example):
     from softtip.calibration import atomic_write_text
     from softtip.payload import calibrate_payload as fit_payload
     from softtip.payload import read_orientation
 
+    input_path = _example_or_log(input_path, example, units, EXAMPLE_STILL_PATH, "still log")
     try:
         log = _read(input_path, units)
         fit = fit_payload(log.wrench, read_orientation(log), source=log.source)
