@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 
 from softtip.calibration import PROBING_GUIDE, calibrate_fingertip, find_presses, simulate_probing
 from softtip.errors import InputError
+from softtip.examples import EXAMPLE_PROBING_PATH
 from softtip.fingertip import Capsule, Sphere, load_fingertip
 from softtip.io import write_table
 from softtip.noise import SensorNoise
@@ -253,3 +254,24 @@ def test_cli_guide_and_example(tmp_path):
 def test_cli_refuses_a_non_positive_noise(tmp_path):
     res = run("calibrate", "--example", "--shape", "sphere", "--force-noise", "0")
     assert res.returncode == 2 and "--force-noise" in res.stderr
+
+
+def test_cli_calibrates_a_stream_recording(tmp_path):
+    # the documented path: softtip stream ... --record probe.csv, then softtip calibrate probe.csv
+    # (a recording's fx..mz are NaN during the stream's tare; its raw_fx..raw_mz are fitted)
+    rec = tmp_path / "probe.csv"
+    res = run("stream", "--replay", EXAMPLE_PROBING_PATH, "--speed", "0", "--record", rec)
+    assert res.returncode == 0, res.stderr
+    out = tmp_path / "tip.toml"
+    res = run("calibrate", rec, "--shape", "sphere", "-o", out)
+    assert res.returncode == 0, res.stderr
+    direct = calibrate_fingertip(*_example(), "sphere")
+    tip = load_fingertip(out)
+    assert np.allclose(tip.center, direct.center, atol=1e-9) and abs(tip.radius - direct.radius) < 1e-9
+
+
+def _example():
+    from softtip.io import read_log
+
+    log = read_log(EXAMPLE_PROBING_PATH)
+    return log.t, log.wrench

@@ -20,6 +20,42 @@ def _read(input_path: str, units: str):
     return read_log(sys.stdin if input_path == "-" else input_path, units=units)
 
 
+_WRENCH = ("fx", "fy", "fz", "mx", "my", "mz")
+
+
+def _read_probing(input_path: str, units: str):
+    """A probing log; a `softtip stream --record` file is read through its raw (untared) wrench.
+
+    A recording's fx..mz are the stream's tared estimates (NaN during its tare); its
+    raw_fx..raw_mz columns hold what the sensor gave, which is what calibration fits.
+    """
+    import csv
+    import io
+
+    from softtip.io import read_log
+
+    if input_path == "-":
+        return _read(input_path, units)
+    try:
+        with open(input_path, encoding="utf-8-sig", newline="") as fh:
+            text = fh.read()
+    except (OSError, UnicodeDecodeError):
+        return _read(input_path, units)  # read_log says what is wrong
+    lines = text.splitlines(keepends=True)
+    k = next((i for i, line in enumerate(lines) if line.strip() and not line.lstrip().startswith("#")), None)
+    if k is None:
+        return _read(input_path, units)
+    header = next(csv.reader([lines[k]]))
+    names = [h.strip() for h in header]
+    if not all(f"raw_{c}" in names for c in _WRENCH):
+        return _read(input_path, units)
+    rename = {c: f"tared_{c}" for c in _WRENCH} | {f"raw_{c}": c for c in _WRENCH}
+    lines[k] = ",".join(rename.get(h, h) for h in names) + "\n"
+    stream = io.StringIO("".join(lines))
+    stream.name = input_path
+    return read_log(stream, units=units)
+
+
 def _example_or_log(input_path, example: bool, units: str, path, what: str) -> str:
     if example == (input_path is not None):
         raise click.UsageError(f"give either LOG or --example (the shipped example {what})")
@@ -41,7 +77,8 @@ def _fail(ctx: click.Context, exc: InputError) -> None:
 LOG is a CSV log (t, fx, fy, fz, mx, my, mz; '-' reads standard input) of the fingertip
 pressed against a flat, rigid surface at many points spread over the skin (20 or more,
 ±60° around the tip; untouched for the first --tare-duration seconds), for instance
-recorded by `softtip stream --netft ADDRESS --record probe.csv`. During each press the
+recorded by `softtip stream --netft ADDRESS --record probe.csv` (of a recording, the raw
+columns raw_fx..raw_mz are used). During each press the
 surface must not tilt relative to the fingertip, and it should slide a little sideways so
 that the friction force turns (40° or more): that is what pins each contact point.
 --guide prints the procedure step by step; --example runs on a shipped simulated log. softtip fits the centre (sphere) or the cap centre (capsule: axis along z,
@@ -81,7 +118,7 @@ def calibrate(ctx, input_path, shape, output, units, tare_duration, contact_thre
         raise click.UsageError("Missing option '--shape' (sphere or capsule).")
     input_path = _example_or_log(input_path, example, units, EXAMPLE_PROBING_PATH, "probing log")
     try:
-        log = _read(input_path, units)
+        log = _read_probing(input_path, units)
         cal = calibrate_fingertip(
             log.t, log.wrench, shape, tare_duration=tare_duration, contact_threshold=contact_threshold,
             min_force=min_force, compliance=not rigid, source=log.source,
