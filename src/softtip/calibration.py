@@ -269,7 +269,11 @@ def _press_point(f: NDArray, m: NDArray, force_var: NDArray) -> NDArray:
     noise does not pull the point towards the sensor origin.
     """
     a = -_skew(f).reshape(-1, 3)  # r × f = −f × r
-    ata = a.T @ a - len(f) * (np.sum(force_var) * np.eye(3) - np.diag(force_var))
+    ata = a.T @ a
+    corrected = ata - len(f) * (np.sum(force_var) * np.eye(3) - np.diag(force_var))
+    # the correction is an expectation: where it would eat most of the signal, keep plain least squares
+    if np.linalg.eigvalsh(corrected)[0] > 0.25 * np.linalg.eigvalsh(ata)[0]:
+        ata = corrected
     return np.linalg.solve(ata, a.T @ m.reshape(-1))
 
 

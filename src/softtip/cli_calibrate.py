@@ -81,7 +81,9 @@ recorded by `softtip stream --netft ADDRESS --record probe.csv` (of a recording,
 columns raw_fx..raw_mz are used). During each press the
 surface must not tilt relative to the fingertip, and it should slide a little sideways so
 that the friction force turns (40° or more): that is what pins each contact point.
---guide prints the procedure step by step; --example runs on a shipped simulated log. softtip fits the centre (sphere) or the cap centre (capsule: axis along z,
+--guide prints the procedure step by step; --example runs on a shipped simulated log.
+
+softtip fits the centre (sphere) or the cap centre (capsule: axis parallel to z,
 cap centre height = length) and the radius by nonlinear least squares over every sample,
 with the skin's indentation (∝ √force) as a nuisance parameter, and prints the estimates
 with standard deviations and the residual. Each sample is weighted by its noise, propagated
