@@ -17,7 +17,7 @@
    without softtip's simulator: the friction turns only while the force ramps), with plain
    least squares for comparison.
 
-    python benchmarks/bench_calibration.py [--seed N] [--seeds 20]
+    python benchmarks/bench_calibration.py [--seed N] [--seeds 20] [--honesty-only]
 """
 
 from __future__ import annotations
@@ -207,14 +207,18 @@ def honesty_rows(seeds: int, seed0: int) -> list[str]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seed", type=int, default=3)
-    ap.add_argument("--seeds", type=int, default=20, help="probing logs per noise level in the honesty section")
+    ap.add_argument("--seeds", type=int, default=20, help="probing logs per noise level in the honesty section (0: skip it)")
+    ap.add_argument("--honesty-only", action="store_true", help="print only the calibration-under-noise section")
     args = ap.parse_args()
-    rows = calibration_rows(args.seed) + gravity_rows(args.seed)
-    print("| condition | papers' method | softtip |")
-    print("| --- | --- | --- |")
-    for r in rows:
-        print(f"| {r[0]} | {r[1]} | {r[2]} |")
-    print()
+    if not args.honesty_only:
+        rows = calibration_rows(args.seed) + gravity_rows(args.seed)
+        print("| condition | papers' method | softtip |")
+        print("| --- | --- | --- |")
+        for r in rows:
+            print(f"| {r[0]} | {r[1]} | {r[2]} |")
+        print()
+    if args.seeds < 1:
+        return
     print(f"Calibration under sensor noise, {args.seeds} logs per row, sphere r = 16 mm at (0.3, -0.2, 20) mm; "
           "each cell x / y / z / radius (errors and std in mm)")
     print()

@@ -123,9 +123,11 @@ steel or glass plate; not foam, rubber or cloth) that you can press it against.
      softtip calibrate probe.csv --shape sphere -o my_tip.toml
    with --force-noise and --moment-noise set to your sensor's noise (the standard
    deviation of each axis while untouched; defaults: a Nano17).
-4. Check the report: standard deviations well below 0.1 mm, and a residual about 1-1.5
-   times the noise model's. A press-free stretch, presses at one spot, or a force that
-   never turns within a press are refused with a message saying which.
+4. Check the report: the standard deviations (a Nano17 and 30 presses: a few hundredths
+   of a mm; noisier sensors need more or harder presses), and a residual near 1 times
+   the noise model's (a warning below 0.5 or above 2 means the noise options do not fit
+   the sensor). A log without presses, presses at one spot, or a force that never turns
+   within a press are refused with a message saying which.
 
 Try it without hardware: softtip calibrate --example --shape sphere
 """
