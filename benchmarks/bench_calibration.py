@@ -171,6 +171,8 @@ def _honesty_row(label, truth, fits) -> str:
         return " / ".join(format(x, fmt) for x in v)
 
     refused = f" ({len(fits) - len(ok)} refused)" if len(ok) < len(fits) else ""
+    warned = sum(bool(c.warning) for c in ok)
+    refused += f" ({warned} of {len(ok)} with a warning)" if warned else ""
     return (
         f"| {label}{refused} | {cells(err.mean(0), '+.3f')} | {cells(np.sqrt((err**2).mean(0)), '.3f')} | "
         f"{cells(np.abs(err).max(0), '.3f')} | {cells(np.median(std, 0), '.3f')} | {cells(z.mean(0), '+.2f')} | {cells(z.std(0), '.2f')} |"

@@ -220,6 +220,18 @@ def test_force_noise_no_longer_biases_the_geometry():
     assert np.all(np.abs(z) < 3.5) and np.all(np.abs(z.mean(axis=0)) < 1.5), z
 
 
+def test_warns_when_presses_excite_too_little_for_the_noise():
+    # the issue's weak presses with a Nano25-class noise: the fit lands several standard
+    # deviations off and far from the start sphere through the presses' contact points
+    noise = SensorNoise((1 / 32,) * 3, (0.76e-3,) * 3)
+    t, w = press_log(5, noise=(1 / 32, 0.76e-3))
+    cal = calibrate_fingertip(t, w, "sphere", noise=noise)
+    assert cal.start_shift > 3.0 and "excite too little" in cal.warning
+    # ... the same presses with a Nano17-class noise give none
+    t, w = press_log(5)
+    assert calibrate_fingertip(t, w, "sphere", noise=SensorNoise((0.005,) * 3, (0.05e-3,) * 3)).warning == ""
+
+
 def test_capsule_cli_writes_the_axis_offset(tmp_path, capsule_log):
     log = tmp_path / "probe.csv"
     write_log(log, *capsule_log)
@@ -239,6 +251,7 @@ def test_cli_guide_and_example(tmp_path):
     out = tmp_path / "tip.toml"
     res = run("calibrate", "--example", "--shape", "sphere", "-o", out)
     assert res.returncode == 0, res.stderr
+    assert "warning" not in res.stderr
     tip = load_fingertip(out)  # the example's true tip: radius 16 mm at (0.3, -0.2, 20.0) mm
     assert abs(tip.radius - 0.016) <= 0.1 * MM
     assert np.linalg.norm(np.subtract(tip.center, (0.3e-3, -0.2e-3, 20e-3))) <= 0.1 * MM

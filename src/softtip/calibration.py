@@ -61,11 +61,12 @@ constant factor still gives honest standard deviations.
 
 Limits: the weighting removes the first-order bias; a second-order one remains where the
 presses excite little compared with the noise (friction turning only while the force
-ramps, 0.1–0.3 of the normal force, a Nano25's noise): there the fit can be off by a few
-reported standard deviations. Presses held at 2–6 N while the surface slides (the
-procedure of :data:`PROBING_GUIDE`) are well inside the honest regime; ``bench_calibration.py``
-prints both. The sensor's noise is taken as white and the tare (the mean of the first
-``tare_duration`` s) as exact.
+ramps, 0.1–0.3 of the normal force, a Nano25's noise): there the fit can be off by several
+reported standard deviations. Such fits end far from the start sphere, and
+:attr:`Calibration.warning` says so. Presses held at 2–6 N while the surface slides (the
+procedure of :data:`PROBING_GUIDE`) are well inside the honest regime;
+``benchmarks/bench_calibration.py`` prints both. The sensor's noise is taken as white and
+the tare (the mean of the first ``tare_duration`` s) as exact.
 """
 
 from __future__ import annotations
@@ -88,6 +89,7 @@ from softtip.fingertip import Capsule, Fingertip, Sphere
 from softtip.noise import NANO17, SensorNoise
 
 __all__ = [
+    "MAX_START_SHIFT",
     "PROBING_GUIDE",
     "SHAPES",
     "Calibration",
@@ -141,6 +143,8 @@ _CAP_MIN_NZ = math.sin(math.radians(20.0))
 # The fit is refused when the correlation matrix of the geometry parameters has a
 # condition number above this (a combination of them is undetermined by the data).
 _MAX_CONDITION = 1e4
+#: Largest :attr:`Calibration.start_shift` without a warning (healthy simulated logs: ≤ 2).
+MAX_START_SHIFT = 3.0
 # ... and when the start-value sphere through the presses' contact points has a radius
 # deviation above this fraction of the radius (the points do not span a cap).
 _MAX_START_SPREAD = 0.1
@@ -179,6 +183,13 @@ class Calibration:
         Samples in the fit.
     condition : float
         Condition number of the geometry parameters' correlation matrix.
+    start_shift : float
+        Distance of the fitted centre from the centre of the start sphere (through the
+        presses' contact points located one press at a time), in standard deviations of
+        that sphere's radius. Up to about 2 on logs where the standard deviations are
+        honest; above :data:`MAX_START_SHIFT` the presses excite too little for the
+        sensor's noise and the result may be off by several standard deviations
+        (:attr:`warning` says so).
     normals : ndarray, shape (K, 3)
         Fitted contact normal of each press used.
     """
@@ -196,6 +207,7 @@ class Calibration:
     n_skipped: int
     n_samples: int
     condition: float
+    start_shift: float
     normals: NDArray[np.float64] = field(repr=False)
 
     @property
@@ -207,6 +219,17 @@ class Calibration:
     def axis_offset(self) -> NDArray[np.float64]:
         """Capsule: ``(x, y)`` of the cap centre, m (the capsule's ``axis_offset``)."""
         return self.center[:2].copy()
+
+    @property
+    def warning(self) -> str:
+        """Why the result may be off by more than its standard deviations, or ``""``."""
+        if self.start_shift <= MAX_START_SHIFT:
+            return ""
+        return (
+            f"the fit ended {self.start_shift:.1f} standard deviations from the sphere through the presses' own contact "
+            "points: the presses excite too little for the sensor's noise, and the result may be off by several standard "
+            "deviations; press harder (2-6 N) and slide the surface while holding each press (softtip calibrate --guide)"
+        )
 
     def summary(self) -> str:
         """Human-readable report, mm."""
@@ -444,7 +467,8 @@ def calibrate_fingertip(
         tip: Fingertip = Capsule(radius=sol["radius"], length=sol["center"][2], axis_offset=tuple(sol["center"][:2]))
     else:
         tip = Sphere(radius=sol["radius"], center=tuple(sol["center"]))
-    return Calibration(tip=tip, n_skipped=n_skipped, **sol)
+    start_shift = float(np.linalg.norm(sol["center"] - c0) / r0_std) if r0_std > 0 else 0.0
+    return Calibration(tip=tip, n_skipped=n_skipped, start_shift=start_shift, **sol)
 
 
 def _press_normal(f: NDArray, m: NDArray, c: NDArray, radius: float) -> NDArray:
@@ -599,6 +623,8 @@ def write_fingertip_toml(cal: Calibration, path: str | os.PathLike[str], source:
         + ", ".join(f"{v * mm:.4f}" for v in cal.center_std)
         + f" mm; residual {cal.residual_rms * mm:.4f} N·mm RMS",
     ]
+    if cal.warning:
+        header.append(f"# warning: {cal.warning}")
     text = "\n".join(header) + "\n" + cal.tip.to_toml()
     atomic_write_text(path, text)
 

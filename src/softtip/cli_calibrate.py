@@ -137,6 +137,8 @@ def calibrate(ctx, input_path, shape, output, units, tare_duration, contact_thre
     except InputError as exc:
         _fail(ctx, exc)
         return
+    if cal.warning:
+        click.echo(f"softtip: warning: {cal.warning}", err=True)
     if not 0.5 <= cal.noise_ratio <= 2.0:
         click.echo(
             f"softtip: warning: the residual is {cal.noise_ratio:.2f} times the noise model's (--force-noise {force_noise:g} N, "
