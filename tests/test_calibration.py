@@ -227,6 +227,8 @@ def test_warns_when_presses_excite_too_little_for_the_noise():
     t, w = press_log(5, noise=(1 / 32, 0.76e-3))
     cal = calibrate_fingertip(t, w, "sphere", noise=noise)
     assert cal.start_shift > 3.0 and "excite too little" in cal.warning
+    # the noise (|noise| ≈ 0.06 N untouched) does not make presses of its own
+    assert cal.n_presses == 30 and cal.n_skipped == 0
     # ... the same presses with a Nano17-class noise give none
     t, w = press_log(5)
     assert calibrate_fingertip(t, w, "sphere", noise=SensorNoise((0.005,) * 3, (0.05e-3,) * 3)).warning == ""

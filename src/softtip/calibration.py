@@ -372,7 +372,9 @@ def calibrate_fingertip(
         The mean of the first ``tare_duration`` s (fingertip untouched) is the bias; 0 if
         the log is already tared.
     contact_threshold : float
-        N; presses are the runs with ``|f|`` at least this.
+        N; presses are the runs with ``|f|`` at least this (raised to 4 times the force
+        noise's magnitude ``sqrt(Σ σ_f²)`` when that is larger, so that noise alone does not
+        make presses).
     min_force : float
         N; only samples with ``|f| ≥ min_force`` enter the fit (the soft-finger model and
         the signal-to-noise ratio are poor at the very first touch).
@@ -419,7 +421,9 @@ def calibrate_fingertip(
 
     presses = []
     n_skipped = 0
-    for idx in find_presses(fn_all, contact_threshold):
+    # noise alone must not make presses: |noise| is about sqrt(Σ σ_f²) while untouched
+    threshold = max(contact_threshold, 4.0 * math.sqrt(float(np.sum(np.square(noise.force_std)))))
+    for idx in find_presses(fn_all, threshold):
         keep = idx[fn_all[idx] >= min_force]
         if len(keep) < 5:
             n_skipped += 1
