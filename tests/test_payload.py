@@ -188,3 +188,30 @@ def test_cli_payload_errors_name_file_and_column(tmp_path):
     res = run("estimate", bad, "--payload", ptoml, "-o", out)
     assert res.returncode == 2 and "bad.csv:4" in res.stderr and "'qz'" in res.stderr
     assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "noise_std",
+    [
+        (5e-3, 5e-3, 5e-3, 5e-5, 5e-5, 5e-5),  # Nano17 class, the same on every axis
+        (1 / 48, 1 / 48, 1 / 16, 1 / 1320, 1 / 1320, 1 / 1320),  # Nano25 class: fz three times fx
+    ],
+)
+def test_payload_standard_deviations_are_honest(noise_std):
+    # Monte Carlo: error / reported std over 200 seeded logs has mean ≈ 0 and spread ≈ 1 for
+    # every estimate (mass, com, bias), also when the noise differs per axis (a pooled
+    # residual variance gave the fz bias 1.5 times and the fx bias 0.55 times its std)
+    truth = np.r_[PAYLOAD.mass, PAYLOAD.com, BIAS]
+    z = []
+    for seed in range(200):
+        rng = np.random.default_rng(7100 + seed)
+        q = free_orientations(150, rng)
+        w = payload_wrench(q, PAYLOAD) + BIAS + rng.standard_normal((150, 6)) * np.asarray(noise_std)
+        fit = calibrate_payload(w, q)
+        est = np.r_[fit.payload.mass, fit.payload.com, fit.bias]
+        std = np.r_[fit.mass_std, fit.com_std, fit.bias_std]
+        z.append((est - truth) / std)
+    z = np.array(z)
+    # 200 draws: the mean of z has std 0.07 and the spread about 5 %
+    assert np.all(np.abs(z.mean(axis=0)) < 0.3), z.mean(axis=0)
+    assert np.all((z.std(axis=0) > 0.85) & (z.std(axis=0) < 1.15)), z.std(axis=0)

@@ -37,14 +37,36 @@ Pure normal presses (``f ∥ n``, as on a frictionless surface) put every wrench
 undetermined. Both are refused (:class:`~softtip.errors.InputError`): per press the spread
 of the force direction is checked, and after the fit the conditioning of the Jacobian.
 
-The capsule's cylinder axis is along ``z`` (SPEC §2); its cap centre ``(x, y, length)`` and
+The capsule's cylinder axis is parallel to ``z``; its cap centre ``(x, y, length)`` and
 radius are fitted from presses on the cap (contact normals at least 20° above the equator;
-others are counted and left out). SPEC §2 capsule files cannot hold an axis offset in x
-and y; the fit reports it (:attr:`Calibration.axis_offset`) and the command line warns when
-it is significant.
+others are counted and left out), and ``(x, y)`` becomes the capsule's ``axis_offset``.
 
-Standard deviations come from the Jacobian at the solution scaled by the residual
-variance (``cov = s² (JᵀJ)⁻¹``, ``s² = Σ res² / (n_res − n_par)``).
+Noise: errors in variables
+--------------------------
+The force is measured with noise too, and in ``m − r × f`` that noise is multiplied by the
+lever arm ``r`` (30–40 mm). Plain least squares then prefers a shorter lever arm: with an
+ordinary Nano17's noise and presses whose friction turns while the force ramps, the centre
+came out about 1 mm too far from the sensor and the radius 1 mm too small, at 5–13
+reported standard deviations. Each sample's two tangential residuals are therefore
+whitened by their noise covariance propagated from the sensor noise model through the
+current lever arm (:func:`_whiten`); the objective's noise share is then two per sample
+whatever the trial geometry, so its minimum is not pulled towards shorter lever arms. The
+start values (the point of each press) use least squares with the normal matrix corrected
+for the force noise's expected share.
+
+Standard deviations come from the Jacobian of the whitened residuals at the solution,
+``cov = s² (JᵀJ)⁻¹``, scaled by ``s² = Σ res² / (n_res − n_par)`` (about 1 when the noise
+model is right; reported as :attr:`Calibration.noise_ratio`), so a noise model off by a
+constant factor still gives honest standard deviations.
+
+Limits: the weighting removes the first-order bias; a second-order one remains where the
+presses excite little compared with the noise (friction turning only while the force
+ramps, 0.1–0.3 of the normal force, a Nano25's noise): there the fit can be off by several
+reported standard deviations. Such fits end far from the start sphere, and
+:attr:`Calibration.warning` says so. Presses held at 2–6 N while the surface slides (the
+procedure of :data:`PROBING_GUIDE`) are well inside the honest regime;
+``benchmarks/bench_calibration.py`` prints both. The sensor's noise is taken as white and
+the tare (the mean of the first ``tare_duration`` s) as exact.
 """
 
 from __future__ import annotations
@@ -64,8 +86,11 @@ from softtip._vec import skew as _skew
 from softtip._xp import NP
 from softtip.errors import InputError
 from softtip.fingertip import Capsule, Fingertip, Sphere
+from softtip.noise import NANO17, SensorNoise
 
 __all__ = [
+    "MAX_START_SHIFT",
+    "PROBING_GUIDE",
     "SHAPES",
     "Calibration",
     "calibrate_fingertip",
@@ -74,6 +99,40 @@ __all__ = [
     "probing_presses",
     "simulate_probing",
 ]
+
+#: How to record a probing log (``softtip calibrate --guide`` prints it).
+PROBING_GUIDE = """\
+How to record a probing log for `softtip calibrate`
+
+You need: the fingertip on its sensor, and a flat, rigid, dry surface (a table top, a
+steel or glass plate; not foam, rubber or cloth) that you can press it against.
+
+1. Start recording and keep the fingertip untouched for the first second (the tare):
+     softtip stream --netft ADDRESS --record probe.csv
+   (or any logger writing t, fx, fy, fz, mx, my, mz).
+2. Press 20 to 40 times, each at a different spot of the skin:
+   - where: spread the spots evenly over the part that touches things, from the very tip
+     out to 60° from it, all the way round (a capsule: only the rounded cap, not lower
+     than 20° above where the cap meets the cylinder);
+   - how hard: push to 2-6 N (200-600 g on a kitchen scale) and hold for 1-2 s;
+   - how to move while holding: slide the surface (or the finger) sideways by about half
+     a millimetre one way, then across, or in a small circle, so that the friction force
+     turns by 40° or more. Do not tilt the surface relative to the finger and do not roll
+     the finger (the contact spot must stay the same during a press); twisting about the
+     contact normal does no harm;
+   - between presses, lift off completely (below 0.05 N) for a moment.
+3. Stop the recording (Ctrl-C), then fit the geometry:
+     softtip calibrate probe.csv --shape sphere -o my_tip.toml
+   with --force-noise and --moment-noise set to your sensor's noise (the standard
+   deviation of each axis while untouched; defaults: a Nano17).
+4. Check the report: the standard deviations (a Nano17 and 30 presses: a few hundredths
+   of a mm; noisier sensors need more or harder presses), and a residual near 1 times
+   the noise model's (a warning below 0.5 or above 2 means the noise options do not fit
+   the sensor). A log without presses, presses at one spot, or a force that never turns
+   within a press are refused with a message saying which.
+
+Try it without hardware: softtip calibrate --example --shape sphere
+"""
 
 #: Shapes :func:`calibrate_fingertip` can fit.
 SHAPES = ("sphere", "capsule")
@@ -84,6 +143,8 @@ _CAP_MIN_NZ = math.sin(math.radians(20.0))
 # The fit is refused when the correlation matrix of the geometry parameters has a
 # condition number above this (a combination of them is undetermined by the data).
 _MAX_CONDITION = 1e4
+#: Largest :attr:`Calibration.start_shift` without a warning (healthy simulated logs: ≤ 2).
+MAX_START_SHIFT = 3.0
 # ... and when the start-value sphere through the presses' contact points has a radius
 # deviation above this fraction of the radius (the points do not span a cap).
 _MAX_START_SPREAD = 0.1
@@ -96,7 +157,7 @@ class Calibration:
     Attributes
     ----------
     tip : Sphere or Capsule
-        The calibrated fingertip (SPEC §2).
+        The calibrated fingertip.
     center : ndarray, shape (3,)
         Sphere centre, or the capsule's cap centre ``(x, y, length)``, m, sensor frame.
     radius : float
@@ -109,6 +170,10 @@ class Calibration:
         Standard deviations, m and m/√N.
     residual_rms : float
         RMS of the tangential moment residual, N·m.
+    noise_ratio : float
+        RMS of the residual in units of its noise predicted by the sensor noise model
+        (about 1 when the model fits and the noise model is right; the standard
+        deviations are scaled by it).
     n_presses : int
         Presses used in the fit.
     n_skipped : int
@@ -118,6 +183,13 @@ class Calibration:
         Samples in the fit.
     condition : float
         Condition number of the geometry parameters' correlation matrix.
+    start_shift : float
+        Distance of the fitted centre from the centre of the start sphere (through the
+        presses' contact points located one press at a time), in standard deviations of
+        that sphere's radius. Up to about 2 on logs where the standard deviations are
+        honest; above :data:`MAX_START_SHIFT` the presses excite too little for the
+        sensor's noise and the result may be off by several standard deviations
+        (:attr:`warning` says so).
     normals : ndarray, shape (K, 3)
         Fitted contact normal of each press used.
     """
@@ -130,10 +202,12 @@ class Calibration:
     radius_std: float
     compliance_std: float
     residual_rms: float
+    noise_ratio: float
     n_presses: int
     n_skipped: int
     n_samples: int
     condition: float
+    start_shift: float
     normals: NDArray[np.float64] = field(repr=False)
 
     @property
@@ -143,14 +217,19 @@ class Calibration:
 
     @property
     def axis_offset(self) -> NDArray[np.float64]:
-        """Capsule: ``(x, y)`` of the cap centre, m (a SPEC §2 capsule has it at 0)."""
+        """Capsule: ``(x, y)`` of the cap centre, m (the capsule's ``axis_offset``)."""
         return self.center[:2].copy()
 
-    def axis_offset_significant(self, tolerance: float = 1e-4) -> bool:
-        """Capsule axis offset larger than ``tolerance`` (m) and than 3 standard deviations."""
-        off = np.hypot(*self.center[:2])
-        std = np.hypot(*self.center_std[:2])
-        return bool(off > max(tolerance, 3.0 * std))
+    @property
+    def warning(self) -> str:
+        """Why the result may be off by more than its standard deviations, or ``""``."""
+        if self.start_shift <= MAX_START_SHIFT:
+            return ""
+        return (
+            f"the fit ended {self.start_shift:.1f} standard deviations from the sphere through the presses' own contact "
+            "points: the presses excite too little for the sensor's noise, and the result may be off by several standard "
+            "deviations; press harder (2-6 N) and slide the surface while holding each press (softtip calibrate --guide)"
+        )
 
     def summary(self) -> str:
         """Human-readable report, mm."""
@@ -164,10 +243,11 @@ class Calibration:
             f"  radius     {self.radius * mm:.3f} ± {self.radius_std * mm:.3f} mm",
             f"  indentation {self.compliance * mm:.4f} ± {self.compliance_std * mm:.4f} mm/√N "
             f"({self.compliance * mm * 2.0:.3f} mm at 4 N)",
-            f"  residual   {self.residual_rms * mm:.4f} N·mm RMS (tangential moment), condition {self.condition:.3g}",
+            f"  residual   {self.residual_rms * mm:.4f} N·mm RMS (tangential moment), {self.noise_ratio:.2f} × the sensor "
+            f"noise model's, condition {self.condition:.3g}",
         ]
         if self.shape == "capsule":
-            lines.append(f"  length     {c[2]:.3f} ± {cs[2]:.3f} mm (cap centre height)")
+            lines.append(f"  length     {c[2]:.3f} ± {cs[2]:.3f} mm (cap centre height); axis offset x, y = cap centre x, y")
         return "\n".join(lines)
 
 
@@ -206,11 +286,20 @@ def _force_spread(f: NDArray) -> float:
     return float(math.sqrt(max(lam[1], 0.0) / lam[2]))
 
 
-def _press_point(f: NDArray, m: NDArray) -> NDArray:
-    """Least-squares point ``r`` with ``m ≈ r × f`` over a press (spin ignored: start value only)."""
+def _press_point(f: NDArray, m: NDArray, force_var: NDArray) -> NDArray:
+    """Point ``r`` with ``m ≈ r × f`` over a press (spin ignored: start value only).
+
+    Least squares on ``A r = m`` with ``A = −[f]×``, its normal matrix corrected for the
+    force noise's expected share (``E[[ε]×ᵀ[ε]×] = tr(Σ_f) I − Σ_f`` per sample), so that
+    noise does not pull the point towards the sensor origin.
+    """
     a = -_skew(f).reshape(-1, 3)  # r × f = −f × r
-    r, *_ = np.linalg.lstsq(a, m.reshape(-1), rcond=None)
-    return r
+    ata = a.T @ a
+    corrected = ata - len(f) * (np.sum(force_var) * np.eye(3) - np.diag(force_var))
+    # the correction is an expectation: where it would eat most of the signal, keep plain least squares
+    if np.linalg.eigvalsh(corrected)[0] > 0.25 * np.linalg.eigvalsh(ata)[0]:
+        ata = corrected
+    return np.linalg.solve(ata, a.T @ m.reshape(-1))
 
 
 def _sphere_fit(points: NDArray) -> tuple[NDArray, float, float]:
@@ -266,6 +355,7 @@ def calibrate_fingertip(
     min_force: float = 0.5,
     min_spread: float = math.sin(math.radians(3.0)),
     compliance: bool = True,
+    noise: SensorNoise = NANO17,
     source: str = "<log>",
 ) -> Calibration:
     """Fit the fingertip's centre and radius to a probing log of plane presses.
@@ -282,7 +372,9 @@ def calibrate_fingertip(
         The mean of the first ``tare_duration`` s (fingertip untouched) is the bias; 0 if
         the log is already tared.
     contact_threshold : float
-        N; presses are the runs with ``|f|`` at least this.
+        N; presses are the runs with ``|f|`` at least this (raised to 4 times the force
+        noise's magnitude ``sqrt(Σ σ_f²)`` when that is larger, so that noise alone does not
+        make presses).
     min_force : float
         N; only samples with ``|f| ≥ min_force`` enter the fit (the soft-finger model and
         the signal-to-noise ratio are poor at the very first touch).
@@ -291,6 +383,10 @@ def calibrate_fingertip(
         locate its contact point in 3-D (start values; such presses must number ≥ 4).
     compliance : bool
         Fit the indentation ``κ √F_n`` (module docs); False assumes a rigid skin.
+    noise : SensorNoise
+        The sensor's per-axis noise (default Nano17 class). Each sample is weighted by the
+        noise of its residual propagated from it; what matters for the weights is the
+        ratio of force to moment noise (the overall scale is taken from the residual).
     source : str
         Name used in error messages.
 
@@ -300,6 +396,8 @@ def calibrate_fingertip(
 
     Raises
     ------
+    ValueError
+        A noise model without moment noise on some axis.
     InputError
         Unknown shape, too few presses, presses that do not excite enough directions (force
         direction does not turn within presses, presses not spread over the skin), or an
@@ -307,6 +405,8 @@ def calibrate_fingertip(
     """
     if shape not in SHAPES:
         raise InputError(f"unknown shape {shape!r}; expected one of {', '.join(SHAPES)}")
+    if not min(noise.moment_std) > 0.0:
+        raise ValueError(f"noise.moment_std must be positive on every axis (it sets the weights), got {noise.moment_std!r}")
     t = np.asarray(t, dtype=float)
     w = np.asarray(wrench, dtype=float)
     if t.ndim != 1 or w.shape != (len(t), 6):
@@ -321,7 +421,9 @@ def calibrate_fingertip(
 
     presses = []
     n_skipped = 0
-    for idx in find_presses(fn_all, contact_threshold):
+    # noise alone must not make presses: |noise| is about sqrt(Σ σ_f²) while untouched
+    threshold = max(contact_threshold, 4.0 * math.sqrt(float(np.sum(np.square(noise.force_std)))))
+    for idx in find_presses(fn_all, threshold):
         keep = idx[fn_all[idx] >= min_force]
         if len(keep) < 5:
             n_skipped += 1
@@ -341,7 +443,8 @@ def calibrate_fingertip(
             f"{math.degrees(math.asin(min_spread)):.0f}° (largest turn {math.degrees(math.asin(min(spread.max(), 1.0))):.1f}°); "
             "expected at least 4"
         )
-    points = np.array([_press_point(f_all[presses[k]], m_all[presses[k]]) for k in located])
+    force_var = np.square(noise.force_std)
+    points = np.array([_press_point(f_all[presses[k]], m_all[presses[k]], force_var) for k in located])
     c0, r0, r0_std = _sphere_fit(points)
     if not (math.isfinite(r0) and r0_std <= _MAX_START_SPREAD * r0):
         detail = f"±{r0_std * 1e3:.2g} mm on {r0 * 1e3:.3g} mm" if math.isfinite(r0) else "no sphere"
@@ -361,14 +464,15 @@ def calibrate_fingertip(
                 f"{len(presses)} presses of {source} are on the capsule's cap (contact normal ≥ 20° above the equator); expected at least 4"
             )
 
-    sol = _fit(f_all, m_all, presses, normals0, c0, r0, compliance)
+    sol = _fit(f_all, m_all, presses, normals0, c0, r0, compliance, noise)
     if shape == "capsule":
         if not sol["center"][2] >= 0.0:
             raise InputError(f"{source}: the fitted cap centre is at z = {sol['center'][2] * 1e3:.3f} mm, below the sensor; expected ≥ 0")
-        tip: Fingertip = Capsule(radius=sol["radius"], length=sol["center"][2])
+        tip: Fingertip = Capsule(radius=sol["radius"], length=sol["center"][2], axis_offset=tuple(sol["center"][:2]))
     else:
         tip = Sphere(radius=sol["radius"], center=tuple(sol["center"]))
-    return Calibration(tip=tip, n_skipped=n_skipped, **sol)
+    start_shift = float(np.linalg.norm(sol["center"] - c0) / r0_std) if r0_std > 0 else 0.0
+    return Calibration(tip=tip, n_skipped=n_skipped, start_shift=start_shift, **sol)
 
 
 def _press_normal(f: NDArray, m: NDArray, c: NDArray, radius: float) -> NDArray:
@@ -381,13 +485,38 @@ def _press_normal(f: NDArray, m: NDArray, c: NDArray, radius: float) -> NDArray:
     return n / np.linalg.norm(n)
 
 
-def _fit(f_all, m_all, presses, normals0, c0, r0, compliance: bool) -> dict:
-    """Joint nonlinear least squares; lengths in mm and moments in N·mm inside (scaled)."""
+def _whiten(e: NDArray, u1: NDArray, u2: NDArray, r: NDArray, force_var: NDArray, moment_var: NDArray) -> NDArray:
+    """Whitened tangential residuals, shape (2 N,): ``L⁻¹ (e·u1, e·u2)`` with ``L Lᵀ`` their noise covariance.
+
+    The noise of ``e = m − r × f`` along a unit vector ``u`` is ``u·ε_m − (u × r)·ε_f``, so
+    the 2 × 2 covariance of ``(e·u1, e·u2)`` is
+    ``S_jl = Σ_a σ_m,a² u_j,a u_l,a + Σ_a σ_f,a² (u_j × r)_a (u_l × r)_a`` (per-axis
+    variances ``force_var``, ``moment_var``; lengths in mm, moments in N·mm).
+    """
+    w1, w2 = _cross(u1, r), _cross(u2, r)
+    a = (u1 * u1) @ moment_var + (w1 * w1) @ force_var
+    b = (u1 * u2) @ moment_var + (w1 * w2) @ force_var
+    c = (u2 * u2) @ moment_var + (w2 * w2) @ force_var
+    e1, e2 = np.sum(e * u1, axis=1), np.sum(e * u2, axis=1)
+    sa = np.sqrt(a)
+    return np.concatenate((e1 / sa, (e2 - b / a * e1) / np.sqrt(c - b * b / a)))
+
+
+def _fit(f_all, m_all, presses, normals0, c0, r0, compliance: bool, noise: SensorNoise) -> dict:
+    """Noise-weighted nonlinear least squares; lengths in mm and moments in N·mm inside (scaled).
+
+    Each sample's tangential residual is whitened by its noise covariance at the current
+    parameters (the force noise enters through the lever arm ``r``), so the objective's
+    expected noise share is the same (two per sample) for every trial geometry: the
+    estimate is consistent, unlike plain least squares, which prefers a shorter lever arm.
+    """
     k = len(presses)
     idx = np.concatenate(presses)
     press_of = np.concatenate([np.full(len(p), j) for j, p in enumerate(presses)])
     f = f_all[idx]
     m = m_all[idx] * 1e3  # N·mm
+    force_var = np.square(noise.force_std)
+    moment_var = np.square(np.asarray(noise.moment_std) * 1e3)  # (N·mm)²
     t1, t2 = _tangent_basis(normals0)
     n_geo = 5 if compliance else 4
 
@@ -399,7 +528,7 @@ def _fit(f_all, m_all, presses, normals0, c0, r0, compliance: bool) -> dict:
         n = n / np.linalg.norm(n, axis=1, keepdims=True)
         return c, radius, kappa, n
 
-    def residual(x):
+    def residual(x, whiten=True):
         c, radius, kappa, n = unpack(x)
         ns = n[press_of]
         fn = np.maximum(-np.sum(f * ns, axis=1), 0.0)
@@ -410,13 +539,40 @@ def _fit(f_all, m_all, presses, normals0, c0, r0, compliance: bool) -> dict:
         u1 = t1[press_of] - np.sum(t1[press_of] * ns, axis=1, keepdims=True) * ns
         u1 /= np.linalg.norm(u1, axis=1, keepdims=True)
         u2 = _cross(ns, u1)
-        return np.concatenate((np.sum(e * u1, axis=1), np.sum(e * u2, axis=1)))
+        if not whiten:
+            return np.concatenate((np.sum(e * u1, axis=1), np.sum(e * u2, axis=1)))
+        return _whiten(e, u1, u2, r, force_var, moment_var)
+
+    # a press's normal moves only its own samples' residuals: central differences that
+    # perturb one normal coordinate of every press at once (2 (n_geo + 2) evaluations)
+    n_par = n_geo + 2 * k
+    rows = np.arange(2 * len(idx))
+    col_of_row = np.concatenate((press_of, press_of))
+
+    def jacobian(x):
+        jac = np.zeros((2 * len(idx), n_par))
+        for j in range(n_geo + 2):
+            step = np.zeros(n_par)
+            if j < n_geo:
+                step[j] = 1.0
+            else:
+                step[j::2][: k] = 1.0
+            h = 1e-6 * max(1.0, float(np.max(np.abs(x[step > 0]))))
+            d = (residual(x + h * step) - residual(x - h * step)) / (2.0 * h)
+            if j < n_geo:
+                jac[:, j] = d
+            else:
+                jac[rows, n_geo + 2 * col_of_row + (j - n_geo)] = d
+        return jac
 
     x0 = np.concatenate((c0 * 1e3, [r0 * 1e3], [0.1] if compliance else [], np.zeros(2 * k)))
-    res = least_squares(residual, x0, method="trf", x_scale="jac", jac="3-point", xtol=1e-12, ftol=1e-12, gtol=1e-12)
+    res = least_squares(residual, x0, method="lm", x_scale="jac", jac=jacobian, xtol=1e-12, ftol=1e-12, gtol=1e-12)
     jac = res.jac
-    n_res, n_par = jac.shape
+    n_res = jac.shape[0]
     dof = max(n_res - n_par, 1)
+    # the residuals are in units of the noise model: s² ≈ 1 when the model is right; the
+    # covariance is scaled by it so that a noise model off by a constant factor (or model
+    # error on top of the noise) still gives honest standard deviations
     s2 = float(res.fun @ res.fun) / dof
     jtj = jac.T @ jac
     cov = s2 * np.linalg.pinv(jtj)
@@ -440,7 +596,8 @@ def _fit(f_all, m_all, presses, normals0, c0, r0, compliance: bool) -> dict:
         "center_std": std[:3] * 1e-3,
         "radius_std": float(std[3]) * 1e-3,
         "compliance_std": float(std[4]) * 1e-3 if compliance else 0.0,
-        "residual_rms": math.sqrt(float(res.fun @ res.fun) / n_res) * 1e-3,
+        "residual_rms": math.sqrt(float(np.mean(np.square(residual(res.x, whiten=False))))) * 1e-3,
+        "noise_ratio": math.sqrt(s2),
         "n_presses": k,
         "n_samples": len(idx),
         "condition": condition,
@@ -453,9 +610,10 @@ def _fit(f_all, m_all, presses, normals0, c0, r0, compliance: bool) -> dict:
 
 
 def write_fingertip_toml(cal: Calibration, path: str | os.PathLike[str], source: str = "") -> None:
-    """Write the calibrated fingertip as a SPEC §2 TOML file, atomically.
+    """Write the calibrated fingertip as a fingertip TOML file, atomically.
 
-    The fit's standard deviations go in comments; the keys are exactly SPEC §2's.
+    The fit's standard deviations go in comments; a capsule's axis offset is its
+    ``axis_offset`` key.
 
     Raises
     ------
@@ -469,11 +627,8 @@ def write_fingertip_toml(cal: Calibration, path: str | os.PathLike[str], source:
         + ", ".join(f"{v * mm:.4f}" for v in cal.center_std)
         + f" mm; residual {cal.residual_rms * mm:.4f} N·mm RMS",
     ]
-    if cal.shape == "capsule":
-        header.append(
-            f"# cap centre x, y = {cal.center[0] * mm:+.4f}, {cal.center[1] * mm:+.4f} mm "
-            "(a SPEC §2 capsule has its axis on z: not representable, not applied)"
-        )
+    if cal.warning:
+        header.append(f"# warning: {cal.warning}")
     text = "\n".join(header) + "\n" + cal.tip.to_toml()
     atomic_write_text(path, text)
 
@@ -542,7 +697,6 @@ def simulate_probing(
     duration: float = 30.0,
     *,
     press_duration: float = 1.5,
-    axis_offset: ArrayLike = (0.0, 0.0),
     slide: bool = True,
     max_tilt: float = math.radians(60.0),
     sensor=None,
@@ -559,12 +713,9 @@ def simulate_probing(
     Parameters
     ----------
     tip : Sphere or Capsule
-        The true fingertip (capsule: presses on the cap only).
+        The true fingertip (capsule: presses on the cap only; its ``axis_offset`` is simulated).
     duration : float
         s; ``duration / press_duration`` presses.
-    axis_offset : 2 floats
-        Capsule only: the true axis passes through ``(x, y)`` (m) instead of the sensor
-        origin (the moments are shifted accordingly).
     slide : bool
         False: pure normal presses (a degenerate log: the radius is unobservable).
     max_tilt : float
@@ -586,8 +737,7 @@ def simulate_probing(
     rng = np.random.default_rng(rng)
     sensor = SensorModel() if sensor is None else sensor
     model = ContactModel(discretise_skin(tip, n_elements), ContactParams(), 2).prepare()
-    centre = np.array(tip.center) if isinstance(tip, Sphere) else np.array([0.0, 0.0, tip.length])
-    offset = np.array([*np.asarray(axis_offset, dtype=float), 0.0])
+    centre = np.array(tip.center) if isinstance(tip, Sphere) else np.array([*tip.axis_offset, tip.length])
     n_presses = max(1, int(round(duration / press_duration)))
     ts, ws = [], []
     for k, plan in enumerate(probing_presses(n_presses, rng, max_tilt)):
@@ -604,8 +754,6 @@ def simulate_probing(
             t_contact=0.3, t_stable=0.6, disturbances=dist, name=f"press {k}",
         )  # fmt: skip
         log = simulate_grasp(tip, HalfSpace(), sc, SensorModel.ideal(sensor.rate), model=model)
-        true = log.wrench_true.copy()
-        true[:, 3:] += _cross(offset, true[:, :3])  # moment about the sensor origin
         ts.append(log.t + k * press_duration)
-        ws.append(sensor.measure(true, rng))
+        ws.append(sensor.measure(log.wrench_true, rng))
     return np.concatenate(ts), np.concatenate(ws)

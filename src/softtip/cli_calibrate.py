@@ -7,6 +7,8 @@ import sys
 import click
 
 from softtip.errors import InputError
+from softtip.examples import EXAMPLE_PROBING_PATH, EXAMPLE_STILL_PATH
+from softtip.noise import NANO17
 from softtip.units import UNIT_SYSTEMS
 
 __all__ = ["calibrate", "calibrate_payload"]
@@ -16,6 +18,50 @@ def _read(input_path: str, units: str):
     from softtip.io import read_log
 
     return read_log(sys.stdin if input_path == "-" else input_path, units=units)
+
+
+_WRENCH = ("fx", "fy", "fz", "mx", "my", "mz")
+
+
+def _read_probing(input_path: str, units: str):
+    """A probing log; a `softtip stream --record` file is read through its raw (untared) wrench.
+
+    A recording's fx..mz are the stream's tared estimates (NaN during its tare); its
+    raw_fx..raw_mz columns hold what the sensor gave, which is what calibration fits.
+    """
+    import csv
+    import io
+
+    from softtip.io import read_log
+
+    if input_path == "-":
+        return _read(input_path, units)
+    try:
+        with open(input_path, encoding="utf-8-sig", newline="") as fh:
+            text = fh.read()
+    except (OSError, UnicodeDecodeError):
+        return _read(input_path, units)  # read_log says what is wrong
+    lines = text.splitlines(keepends=True)
+    k = next((i for i, line in enumerate(lines) if line.strip() and not line.lstrip().startswith("#")), None)
+    if k is None:
+        return _read(input_path, units)
+    header = next(csv.reader([lines[k]]))
+    names = [h.strip() for h in header]
+    if not all(f"raw_{c}" in names for c in _WRENCH):
+        return _read(input_path, units)
+    rename = {c: f"tared_{c}" for c in _WRENCH} | {f"raw_{c}": c for c in _WRENCH}
+    lines[k] = ",".join(rename.get(h, h) for h in names) + "\n"
+    stream = io.StringIO("".join(lines))
+    stream.name = input_path
+    return read_log(stream, units=units)
+
+
+def _example_or_log(input_path, example: bool, units: str, path, what: str) -> str:
+    if example == (input_path is not None):
+        raise click.UsageError(f"give either LOG or --example (the shipped example {what})")
+    if example and units != "si":
+        raise click.UsageError(f"--units applies to LOG; the example {what} is in SI")
+    return str(path) if example else input_path
 
 
 def _fail(ctx: click.Context, exc: InputError) -> None:
@@ -29,37 +75,58 @@ def _fail(ctx: click.Context, exc: InputError) -> None:
     help="""Calibrate the fingertip geometry from a probing log of plane presses.
 
 LOG is a CSV log (t, fx, fy, fz, mx, my, mz; '-' reads standard input) of the fingertip
-pressed against a flat, rigid surface at many points spread over the skin (15 or more,
-±60° around the tip; untouched for the first --tare-duration seconds). During each press
-the surface must not rotate relative to the fingertip, and it should slide a little (or
-the finger rock) so that the friction force turns by 10° or more: that is what pins each
-contact point. softtip fits the centre (sphere) or the cap centre (capsule: axis along z,
+pressed against a flat, rigid surface at many points spread over the skin (20 or more,
+±60° around the tip; untouched for the first --tare-duration seconds), for instance
+recorded by `softtip stream --netft ADDRESS --record probe.csv` (of a recording, the raw
+columns raw_fx..raw_mz are used). During each press the
+surface must not tilt relative to the fingertip, and it should slide a little sideways so
+that the friction force turns (40° or more): that is what pins each contact point.
+--guide prints the procedure step by step; --example runs on a shipped simulated log.
+
+softtip fits the centre (sphere) or the cap centre (capsule: axis parallel to z,
 cap centre height = length) and the radius by nonlinear least squares over every sample,
 with the skin's indentation (∝ √force) as a nuisance parameter, and prints the estimates
-with standard deviations and the residual. Refuses (exit 2) when the presses do not
-excite enough directions.
+with standard deviations and the residual. Each sample is weighted by its noise, propagated
+from the sensor noise model (--force-noise, --moment-noise) through the lever arm, so the
+force noise does not bias the geometry; the standard deviations are scaled by the
+residual's ratio to that model. Refuses (exit 2) when the presses do not excite enough
+directions.
 
-Writes a SPEC §2 fingertip TOML file (-o, atomically; standard output otherwise) for
---tip. A capsule's x, y axis offset cannot be stored in the file: it is reported (and
-warned about when significant).
+Writes a fingertip TOML file (-o, atomically; standard output otherwise) for --tip; a
+capsule's offset of its axis from the sensor's z axis is its axis_offset.
 """,
 )
-@click.argument("input_path", metavar="LOG", type=click.Path(allow_dash=True, dir_okay=False))
-@click.option("--shape", type=click.Choice(["sphere", "capsule", "mesh"]), required=True, help="Fingertip shape to fit (mesh: the placement of --mesh on the sensor).")
+@click.argument("input_path", metavar="LOG", required=False, type=click.Path(allow_dash=True, dir_okay=False))
+@click.option("--shape", type=click.Choice(["sphere", "capsule", "mesh"]), help="Fingertip shape to fit (required unless --guide; mesh: the placement of --mesh on the sensor).")
+@click.option("--example", is_flag=True, help="Use the shipped example probing log (simulated: 30 presses on a 16 mm sphere centred at 0.3, -0.2, 20.0 mm) as LOG.")
+@click.option("--guide", is_flag=True, help="Print how to record a probing log (where, how hard and how to press) and exit.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Fingertip TOML file to write (default: standard output).")
 @click.option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the log's wrench.")
 @click.option("--tare-duration", type=float, default=0.2, show_default=True, metavar="S", help="Average the first S seconds (untouched) as the sensor bias; 0 if LOG is tared.")
-@click.option("--contact-threshold", type=float, default=0.05, show_default=True, metavar="N", help="A press lasts while |f| is at least this, N.")
+@click.option("--contact-threshold", type=float, default=0.05, show_default=True, metavar="N", help="A press lasts while |f| is at least this (at least 4 times the force noise's magnitude), N.")
 @click.option("--min-force", type=float, default=0.5, show_default=True, metavar="N", help="Only samples with |f| at least this enter the fit, N.")
 @click.option("--rigid", is_flag=True, help="Do not fit the skin's indentation (radius then comes out short by about the indentation).")
 @click.option("--mesh", "mesh_path", type=click.Path(dir_okay=False), help="--shape mesh: the fingertip mesh (a mesh fingertip .toml, or .stl/.obj/.ply with --mesh-units); its shift on the sensor is fitted.")
 @click.option("--mesh-units", type=click.Choice(["m", "cm", "mm", "um", "in"]), help="Length unit of a bare --mesh file.")
 @click.option("--rotation", is_flag=True, help="--shape mesh: fit a small rotation as well as the shift (6 DOF).")
+@click.option("--force-noise", type=click.FloatRange(min=0.0, min_open=True), default=NANO17.force_std[0], show_default=True, metavar="N", help="Per-axis standard deviation of the sensor's force noise, N (Nano17-class default).")
+@click.option("--moment-noise", type=click.FloatRange(min=0.0, min_open=True), default=NANO17.moment_std[0] * 1e3, show_default=True, metavar="N·mm", help="Per-axis standard deviation of the sensor's moment noise, N·mm.")
 @click.pass_context
-def calibrate(ctx, input_path, shape, output, units, tare_duration, contact_threshold, min_force, rigid, mesh_path, mesh_units, rotation):
-    from softtip.calibration import calibrate_fingertip, write_fingertip_toml
+def calibrate(
+    ctx, input_path, shape, output, units, tare_duration, contact_threshold, min_force, rigid, force_noise, moment_noise,
+    example, guide, mesh_path, mesh_units, rotation,
+):
+    from softtip.calibration import PROBING_GUIDE, calibrate_fingertip, write_fingertip_toml
+    from softtip.noise import SensorNoise
 
+    if guide:
+        click.echo(PROBING_GUIDE)
+        return
+    if shape is None:
+        raise click.UsageError("Missing option '--shape' (sphere, capsule or mesh).")
     if shape == "mesh" or mesh_path is not None:  # mesh fingertips: softtip.calibration_mesh
+        if example or input_path is None:
+            raise click.UsageError("--shape mesh needs a probing LOG of the mesh fingertip (the example is a sphere's)")
         from softtip.calibration import atomic_write_text
         from softtip.calibration_mesh import calibrate_mesh_file
 
@@ -81,12 +148,13 @@ def calibrate(ctx, input_path, shape, output, units, tare_duration, contact_thre
         except InputError as exc:
             _fail(ctx, exc)
         return
-
+    input_path = _example_or_log(input_path, example, units, EXAMPLE_PROBING_PATH, "probing log")
     try:
-        log = _read(input_path, units)
+        log = _read_probing(input_path, units)
         cal = calibrate_fingertip(
             log.t, log.wrench, shape, tare_duration=tare_duration, contact_threshold=contact_threshold,
             min_force=min_force, compliance=not rigid, source=log.source,
+            noise=SensorNoise((force_noise,) * 3, (moment_noise * 1e-3,) * 3),
         )  # fmt: skip
         report = cal.summary()
         if output is not None:
@@ -99,11 +167,13 @@ def calibrate(ctx, input_path, shape, output, units, tare_duration, contact_thre
     except InputError as exc:
         _fail(ctx, exc)
         return
-    if shape == "capsule" and cal.axis_offset_significant():
-        x, y = cal.axis_offset * 1e3
+    if cal.warning:
+        click.echo(f"softtip: warning: {cal.warning}", err=True)
+    if not 0.5 <= cal.noise_ratio <= 2.0:
         click.echo(
-            f"softtip: warning: the capsule's axis is offset by x = {x:+.3f} mm, y = {y:+.3f} mm from the sensor z axis; "
-            "a SPEC §2 capsule file cannot hold it (not applied): check the mounting, or calibrate as a sphere",
+            f"softtip: warning: the residual is {cal.noise_ratio:.2f} times the noise model's (--force-noise {force_noise:g} N, "
+            f"--moment-noise {moment_noise:g} N·mm); the standard deviations allow for it, but the weights are best with this "
+            "sensor's noise (the standard deviation of each axis in the untouched part of the log)",
             err=True,
         )
 
@@ -125,16 +195,18 @@ its [bias] table is the sensor bias without the fingertip's weight, for --bias F
 together with --payload (no tare needed).
 """,
 )
-@click.argument("input_path", metavar="LOG", type=click.Path(allow_dash=True, dir_okay=False))
+@click.argument("input_path", metavar="LOG", required=False, type=click.Path(allow_dash=True, dir_okay=False))
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Payload TOML file to write (default: standard output).")
 @click.option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the log's wrench.")
+@click.option("--example", is_flag=True, help="Use the shipped example still log (simulated: a 20 g fingertip, centre of mass 1, -0.5, 20 mm, in 12 orientations) as LOG.")
 @click.pass_context
-def calibrate_payload(ctx, input_path, output, units):
+def calibrate_payload(ctx, input_path, output, units, example):
     from softtip.calibration import atomic_write_text
     from softtip.estimator.tare import bias_to_toml
     from softtip.payload import calibrate_payload as fit_payload
     from softtip.payload import read_orientation
 
+    input_path = _example_or_log(input_path, example, units, EXAMPLE_STILL_PATH, "still log")
     try:
         log = _read(input_path, units)
         fit = fit_payload(log.wrench, read_orientation(log), source=log.source)

@@ -85,7 +85,16 @@ def _sphere_kernel(fx, fy, fz, mx, my, mz, radius, cx, cy, cz, xp):
     return cx + px, cy + py, cz + pz, px * inv_r, py * inv_r, pz * inv_r, k * radius, valid
 
 
-def _capsule_kernel(fx, fy, fz, mx, my, mz, radius, length, xp):
+def _capsule_kernel(fx, fy, fz, mx, my, mz, radius, length, ox, oy, xp):
+    # an axis through (ox, oy): solve about that point (m' = m − o × f), then shift back
+    mx = mx - oy * fz  # o × f = (oy fz, −ox fz, ox fy − oy fx)
+    my = my + ox * fz
+    mz = mz - (ox * fy - oy * fx)
+    rx, ry, rz, nx, ny, nz, sig, valid = _centred_capsule_kernel(fx, fy, fz, mx, my, mz, radius, length, xp)
+    return rx + ox, ry + oy, rz, nx, ny, nz, sig, valid
+
+
+def _centred_capsule_kernel(fx, fy, fz, mx, my, mz, radius, length, xp):
     # hemisphere first (SPEC §3.2)
     sx, sy, sz, snx, sny, snz, ssig, sval = _sphere_kernel(fx, fy, fz, mx, my, mz, radius, 0.0, 0.0, length, xp)
     on_cap = xp.logical_and(sval, sz >= length)
@@ -158,7 +167,7 @@ def contact_kernel(tip: Fingertip, fx, fy, fz, mx, my, mz, xp=NP):
         rx, ry, rz, nx, ny, nz, sigma, valid = contact_kernel(tip.tip, *tip.wrench_in_tip_frame(fx, fy, fz, mx, my, mz), xp=xp)
         return (*tip._from_tip(rx, ry, rz), *tip._rotate(nx, ny, nz), sigma, valid)
     if isinstance(tip, Capsule):
-        return _capsule_kernel(fx, fy, fz, mx, my, mz, tip.radius, tip.length, xp)
+        return _capsule_kernel(fx, fy, fz, mx, my, mz, tip.radius, tip.length, *tip.axis_offset, xp)
     if isinstance(tip, Sphere):
         return _sphere_kernel(fx, fy, fz, mx, my, mz, tip.radius, *tip.center, xp)
     if isinstance(tip, Ellipsoid):

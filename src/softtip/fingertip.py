@@ -172,14 +172,17 @@ class Sphere(Fingertip):
 @dataclass(frozen=True)
 class Capsule(Fingertip):
     """The papers' fingertip: cylinder of ``radius`` along +z from ``z = 0`` to ``length``,
-    capped by a hemisphere centred at ``(0, 0, length)``. Both in metres.
+    capped by a hemisphere centred at ``(x₀, y₀, length)``. Both in metres.
 
-    The skin below ``z = 0`` (where the fingertip meets the sensor) does not exist; ``S``
-    there is that of the infinite cylinder.
+    ``axis_offset = (x₀, y₀)`` (m, default ``(0, 0)``) shifts the axis in the sensor's
+    x–y plane: a fingertip mounted off-centre (``softtip calibrate --shape capsule``
+    measures it). The skin below ``z = 0`` (where the fingertip meets the sensor) does not
+    exist; ``S`` there is that of the infinite cylinder.
     """
 
     radius: float
     length: float
+    axis_offset: tuple[float, float] = (0.0, 0.0)
     skin_thickness: float | None = field(default=None, compare=False)
     kind: ClassVar[str] = "capsule"
 
@@ -190,18 +193,24 @@ class Capsule(Fingertip):
         if not (math.isfinite(length) and length >= 0.0):
             raise ValueError(f"length must be a non-negative length in metres, got {self.length!r}")
         object.__setattr__(self, "length", length)
+        off = np.asarray(self.axis_offset, dtype=float)
+        if off.shape != (2,) or not np.all(np.isfinite(off)):
+            raise ValueError(f"axis_offset must be 2 finite numbers (x, y) in metres, got {self.axis_offset!r}")
+        object.__setattr__(self, "axis_offset", (float(off[0]), float(off[1])))
 
-    def _axis_offset(self, z, xp):
+    def _height_above_cap(self, z, xp):
         # distance along the axis above the cap centre, 0 on the cylinder part
         dz = z - self.length
         return xp.where(dz > 0.0, dz, 0.0 * dz)
 
     def _surface_kernel(self, x, y, z, xp):
-        dz = self._axis_offset(z, xp)
+        x, y = x - self.axis_offset[0], y - self.axis_offset[1]
+        dz = self._height_above_cap(z, xp)
         return xp.sqrt(x * x + y * y + dz * dz) - self.radius
 
     def _normal_kernel(self, x, y, z, xp):
-        dz = self._axis_offset(z, xp)
+        x, y = x - self.axis_offset[0], y - self.axis_offset[1]
+        dz = self._height_above_cap(z, xp)
         norm = xp.sqrt(x * x + y * y + dz * dz)
         return xp.div(x, norm), xp.div(y, norm), xp.div(dz, norm)
 
@@ -209,18 +218,18 @@ class Capsule(Fingertip):
         nx, ny, nz = self._normal_kernel(x, y, z, xp)
         r = self.radius
         zc = xp.where(z > self.length, self.length + 0.0 * z, z)
-        return r * nx, r * ny, zc + r * nz
+        return self.axis_offset[0] + r * nx, self.axis_offset[1] + r * ny, zc + r * nz
 
     @property
     def bounding_sphere(self) -> tuple[NDArray[np.float64], float]:
         half = 0.5 * (self.length + self.radius)
-        return np.array([0.0, 0.0, half]), math.hypot(self.radius, half)
+        return np.array([*self.axis_offset, half]), math.hypot(self.radius, half)
 
     def to_toml(self) -> str:
-        return (
-            f'[fingertip]\nshape = "capsule"\nradius = {_fmt(self.radius)}\n'
-            f"length = {_fmt(self.length)}\n"
-        ) + _skin_toml(self)
+        text = f'[fingertip]\nshape = "capsule"\nradius = {_fmt(self.radius)}\nlength = {_fmt(self.length)}\n'
+        if self.axis_offset != (0.0, 0.0):
+            text += f"axis_offset = [{', '.join(_fmt(v) for v in self.axis_offset)}]\n"
+        return text + _skin_toml(self)
 
 
 @dataclass(frozen=True)
@@ -369,7 +378,7 @@ PRESETS: dict[str, Callable[[], Fingertip]] = {"murakami2006": murakami2006}
 
 _FIELDS = {
     "sphere": {"radius": True, "center": False, "skin_thickness": False},
-    "capsule": {"radius": True, "length": True, "skin_thickness": False},
+    "capsule": {"radius": True, "length": True, "axis_offset": False, "skin_thickness": False},
     "ellipsoid": {"semi_axes": True, "center": False, "skin_thickness": False},
 }
 
@@ -451,10 +460,14 @@ def fingertip_from_mapping(data: dict, source: str = "<fingertip>") -> Fingertip
     kwargs = {k: table[k] for k in fields if k in table}
     for key, value in kwargs.items():
         ok = isinstance(value, (int, float)) and not isinstance(value, bool)
+        size = 2 if key == "axis_offset" else 3
         if isinstance(value, list):
-            ok = len(value) == 3 and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
+            ok = len(value) == size and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
+        elif key == "axis_offset":
+            ok = False
         if not ok:
-            raise InputError(f"{source}: [fingertip] {key} = {value!r} is not a number (or a list of 3) in metres")
+            what = "a list of 2 numbers [x, y]" if key == "axis_offset" else "a number (or a list of 3)"
+            raise InputError(f"{source}: [fingertip] {key} = {value!r} is not {what} in metres")
     cls = {"sphere": Sphere, "capsule": Capsule, "ellipsoid": Ellipsoid}[shape]
     try:
         return cls(**kwargs)

@@ -287,15 +287,35 @@ class PayloadFit:
 
 
 def _solve_block(a: NDArray, b: NDArray) -> tuple[NDArray, NDArray, float, float]:
-    """Least squares ``a x ≈ b``: solution, covariance (residual-variance scaled), RMS, condition."""
+    """Least squares ``a x ≈ b`` over rows ``x, y, z`` of each sample, each axis weighted by its noise.
+
+    The sensor's noise differs per axis (an ATI Nano25's ``fz`` noise is three times its
+    ``fx``), so one pooled residual variance would make some standard deviations too small
+    and others too large. Two passes: ordinary least squares, then per-axis residual
+    variances ``s_a²`` weight the rows (feasible generalised least squares) and the
+    covariance is ``(Aᵀ W A)⁻¹`` with ``W = diag(1 / s_a²)``.
+
+    Returns
+    -------
+    x, covariance, RMS residual per axis (unweighted), condition number of the column-scaled ``a``.
+    """
     scale = np.linalg.norm(a, axis=0)
     scale = np.where(scale > 0, scale, 1.0)
     s = np.linalg.svd(a / scale, compute_uv=False)
     cond = float(s[0] / s[-1]) if s[-1] > 0 else math.inf
     x, *_ = np.linalg.lstsq(a, b, rcond=None)
+    n = len(b) // 3
+    dof = max(n - a.shape[1] / 3.0, 1.0)
+    var = np.sum(np.square(b - a @ x).reshape(n, 3), axis=0) / dof
+    var = np.maximum(var, 1e-30 + 1e-12 * float(var.max()))
+    wt = np.tile(1.0 / np.sqrt(var), n)
+    x, *_ = np.linalg.lstsq(a * wt[:, None], b * wt, rcond=None)
     r = b - a @ x
-    dof = max(len(b) - a.shape[1], 1)
-    cov = (r @ r) / dof * np.linalg.pinv(a.T @ a)
+    var = np.sum(np.square(r).reshape(n, 3), axis=0) / dof
+    var = np.maximum(var, 1e-30 + 1e-12 * float(var.max()))
+    wt = np.tile(1.0 / np.sqrt(var), n)
+    aw = a * wt[:, None]
+    cov = np.linalg.pinv(aw.T @ aw)
     return x, cov, math.sqrt(float(r @ r) / len(b)), cond
 
 

@@ -70,8 +70,8 @@ def surface_mesh(
         z = np.concatenate((z_cyl, tip.length + tip.radius * np.cos(a)))
         pts = np.stack(
             [
-                rho[:, None] * np.cos(phi),
-                rho[:, None] * np.sin(phi),
+                tip.axis_offset[0] + rho[:, None] * np.cos(phi),
+                tip.axis_offset[1] + rho[:, None] * np.sin(phi),
                 np.broadcast_to(z[:, None], (len(z), n_around)),
             ],
             axis=-1,

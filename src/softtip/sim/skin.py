@@ -106,7 +106,8 @@ def discretise_skin(tip: Fingertip, n_elements: int = DEFAULT_ELEMENTS, z_min: f
         h = math.sqrt((a_cap + a_side) / n_elements)
         n_cap = max(1, round(a_cap / (h * h)))
         u, w = _fibonacci_cap(n_cap, 0.0)
-        centres = [u * r + np.array([0.0, 0.0, length])]
+        ox, oy = tip.axis_offset
+        centres = [u * r + np.array([ox, oy, length])]
         normals = [u]
         areas = [w * r * r]
         if a_side > 0.0:
@@ -117,7 +118,7 @@ def discretise_skin(tip: Fingertip, n_elements: int = DEFAULT_ELEMENTS, z_min: f
             phi = (i + 0.5 * (j % 2)).ravel() * dphi  # staggered rows: a brick pattern
             z = z0 + (j.ravel() + 0.5) * dz
             nrm = np.column_stack((np.cos(phi), np.sin(phi), np.zeros_like(phi)))
-            centres.append(np.column_stack((r * nrm[:, 0], r * nrm[:, 1], z)))
+            centres.append(np.column_stack((ox + r * nrm[:, 0], oy + r * nrm[:, 1], z)))
             normals.append(nrm)
             areas.append(np.full(len(phi), r * dphi * dz))
         c, n, a = np.concatenate(centres), np.concatenate(normals), np.concatenate(areas)
