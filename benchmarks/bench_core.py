@@ -4,7 +4,7 @@
 
 Prints batch samples/s for each fingertip shape (one core: numpy runs these kernels on one
 thread) and the median and 99th-percentile time of one sample through the streaming
-estimator. SPEC §6 targets: capsule batch >= 5 M samples/s; streaming median <= 20 us.
+estimator. Targets (manual §6): capsule batch >= 5 M samples/s; streaming median <= 20 us.
 
 Then `softtip estimate` end to end on a --samples-row log (the 1 kHz example grasp
 repeated), CSV and Parquet side by side: read (softtip.io.read_log), the pipeline
@@ -12,7 +12,7 @@ repeated), CSV and Parquet side by side: read (softtip.io.read_log), the pipelin
 command itself (a new process: Python start-up and imports included), in rows/s; also the
 hand-written Python CSV reader and writer that softtip used before, on the same files.
 Rates are rows per second of CPU time (the process's own, or the command's): on a shared
-machine that is the steady figure; the wall-clock time is printed beside it. SPEC §6 targets end to end: CSV >= 2 M rows/s, Parquet >= 10 M rows/s.
+machine that is the steady figure; the wall-clock time is printed beside it. Targets (manual §6) end to end: CSV >= 2 M rows/s, Parquet >= 10 M rows/s.
 Only this part: --only end-to-end.
 
 Mesh rows: the shipped mesh fingertip (the papers' capsule with a nail, 21.6k triangles),

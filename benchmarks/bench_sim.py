@@ -1,6 +1,6 @@
 """Simulator benchmark: a 10 s, 50 Hz grasp (500 samples) with >= 10 000 skin elements.
 
-Target (SPEC §6): <= 2 s on one core. Prints the best of a few runs per object, excluding
+Target (manual §6): <= 2 s on one core. Prints the best of a few runs per object, excluding
 the one-off skin discretisation (reported separately).
 
     python benchmarks/bench_sim.py [--elements N] [--repeat K]

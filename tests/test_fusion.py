@@ -237,3 +237,25 @@ def test_gravity_compensation_with_orientation_from_tf_and_from_a_callback():
     assert_allclose(live, expected, atol=1e-12)
     # at first the sensor is upright: the fingertip's weight pulls along its −z
     assert_allclose(-expected[0, :3], [0.0, 0.0, -0.02 * 9.80665], atol=1e-12)
+
+
+def test_a_plane_against_an_edge_is_flagged_once_rocked_and_unconfirmed_before(tmp_path):
+    """The edge of a 1 mm plate on the right fingertip, a flat face on the left: before the
+    object is rocked no reading can tell this from two edges (every line unconfirmed); once
+    rocked about two axes the left contact is an area and the grasp is flagged."""
+    r = _run(
+        "simulate", "--hand", "two-finger", "--object", "plate", "--size", "1mm", "--angle", "30", "--rock",
+        "--left-object", "plane", "--elements", "6000", "-o", tmp_path / "g",
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert sorted(p.name for p in (tmp_path / "g").iterdir()) == ["hand.toml", "left.csv", "right.csv", "truth.json"]
+    r = _run("fuse", tmp_path / "g/right.csv", tmp_path / "g/left.csv", "--hand", tmp_path / "g/hand.toml", "-o", tmp_path / "f.csv")
+    assert r.returncode == 0, r.stderr
+    f = np.genfromtxt(tmp_path / "f.csv", delimiter=",", names=True, dtype=None, encoding=None)
+    before = (f["t"] > 4.6) & (f["t"] < 5.5)  # the papers' disturbances only: one axis
+    assert not np.any(np.char.find(f["flag"][before].astype(str), "area") >= 0)
+    assert set(f["evidence"][before]) <= {"unconfirmed", ""}
+    after = f["t"] > 8.0  # rocked about both axes
+    assert np.mean(np.char.find(f["flag"][after].astype(str), "area") >= 0) > 0.9
+    assert np.mean(f["grasp"][after] == "line_and_face") > 0.9
+    assert "flagged area" in r.stderr

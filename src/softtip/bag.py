@@ -1,6 +1,6 @@
 """ROS bags in and out: rosbag2 (sqlite3 or MCAP) and ROS 1, without a ROS installation.
 
-Needs the ``ros`` extra (``pip install 'softtip[ros]'``, the pure-Python ``rosbags`` package).
+Needs the pure-Python ``rosbags`` package (``pip install rosbags``; the ``ros`` extra).
 
 **Reading** (:func:`read_bag`): the samples are the ``geometry_msgs/msg/WrenchStamped``
 messages of one topic. The time of a sample is its ``header.stamp``, or the time the
@@ -73,7 +73,8 @@ def import_rosbags():
         import rosbags.typesys
     except ImportError as exc:
         raise ImportError(
-            "ROS bag input and output need the 'rosbags' package: pip install 'softtip[ros]'"
+            "ROS bag input and output need the 'rosbags' package: pip install 'rosbags>=0.10' "
+            "(or, from a softtip checkout, pip install -e '.[ros]')"
         ) from exc
     return rosbags
 

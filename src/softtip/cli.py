@@ -308,7 +308,7 @@ of h and of the tangential load, noise removed), then the input's extra columns.
 the noise.
 
 INPUT may also be a ROS bag (rosbag2 directory with sqlite3 or MCAP storage, a .mcap or
-.db3 file, or a ROS 1 .bag; needs softtip[ros]): the samples are the
+.db3 file, or a ROS 1 .bag; needs the rosbags package): the samples are the
 geometry_msgs/msg/WrenchStamped messages of --topic, timed by header.stamp (t counts
 from the first message; the stamps are copied to a stamp_ns column). --to-bag
 writes the estimates as a rosbag2 (MCAP) with standard messages on /softtip/state,
@@ -338,7 +338,7 @@ the raw wrench; with --to-bag and no -o no CSV is written.
 @click.option("--plot-units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the plot's force and moment axes.")
 @click.option("--topic", metavar="TOPIC", help="Bag input: the geometry_msgs/msg/WrenchStamped topic (default: the bag's only one).")
 @click.option("--to-bag", "to_bag", type=click.Path(file_okay=False), metavar="DIR", help="Also write the estimates as a rosbag2 directory (MCAP storage); DIR must not exist.")
-@click.option("--rerun", "rerun_spawn", is_flag=True, help="Show the fingertip, force, contact point, normal and edge in a Rerun viewer (softtip[viz]).")
+@click.option("--rerun", "rerun_spawn", is_flag=True, help="Show the fingertip, force, contact point, normal and edge in a Rerun viewer (needs the rerun-sdk package).")
 @click.option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save the Rerun 3-D view and time series to FILE.rrd (open with `rerun FILE.rrd`).")
 @click.option("--payload", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Remove the fingertip's weight ([payload] mass kg, com m; see calibrate-payload) before taring, using INPUT's qw, qx, qy, qz columns (sensor frame in a z-up world frame).")
 @click.option("--save-bias", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Write the bias used (the tare's) to FILE.toml, for --bias of a later run.")
@@ -638,9 +638,9 @@ def _optional(module: str, extra: str):
 
     try:
         mod = importlib.import_module(module)
-        getattr(mod, {"ros": "import_rosbags", "netft": "import_pynetft", "viz": "import_rerun"}[extra])()
-    except ImportError as exc:
-        raise InputError(f"{exc} (optional extra '{extra}' not installed: pip install 'softtip[{extra}]')") from None
+        getattr(mod, {"ros": "import_rosbags", "viz": "import_rerun"}[extra])()
+    except ImportError as exc:  # the message names the package to install
+        raise InputError(str(exc)) from None
     return mod
 
 
@@ -694,7 +694,7 @@ an error (exit 1).
 @click.option("--duration", type=float, metavar="S", help="Stop after S seconds (default: until Ctrl-C or the end of the replayed log).")
 @click.option("--record", type=click.Path(dir_okay=False), metavar="FILE.csv", help="Record raw samples and estimates to FILE.csv as they come.")
 @click.option("--view/--no-view", default=None, help="Live terminal view (default: when standard error is a terminal).")
-@click.option("--rerun", "rerun_spawn", is_flag=True, help="Show the 3-D view live in a Rerun viewer (softtip[viz]; at most 50 samples/s are drawn).")
+@click.option("--rerun", "rerun_spawn", is_flag=True, help="Show the 3-D view live in a Rerun viewer (needs the rerun-sdk package; at most 50 samples/s are drawn).")
 @click.option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save the 3-D view and time series to FILE.rrd.")
 @click.option("--payload", type=click.Path(dir_okay=False), metavar="FILE.toml", help="With --replay: remove the fingertip's weight per sample, using the log's qw, qx, qy, qz columns (recorded raw_* columns are then compensated).")
 @_estimator_options
@@ -847,7 +847,7 @@ def stream(
 
 
 @main.command(
-    help="""Reproduce the papers' experiments (SPEC §5, E1–E6) on the simulator.
+    help="""Reproduce the papers' experiments (manual §5, E1–E6) on the simulator.
 
 Every condition (edges of different sharpness, the 1 mm plate at −45°, 0°, 45°, 90°, plates
 1–15 mm, cylinders Ø 4–14 mm, the fringe of a Ø 40 mm cylinder bottom, contact position)

@@ -60,11 +60,12 @@ per time step of the first log: parallel_lines (a plate or a stick pinched acros
 common direction and the plane through both lines), crossing_lines (two edges: both, their
 angle and closest approach), line_and_face, faces, single or none; with the evidence of the
 lines (confirmed once the object was rocked about two axes) and flags (unbalanced forces,
-an area contact). Writes CSV (standard output without -o); a summary on standard error.
+an area contact). Writes CSV (standard output without -o) or Parquet (-o ending in .parquet);
+a summary on standard error.
 """,
     )
     @click.argument("inputs", nargs=-1, required=True, type=click.Path(exists=False))
-    @click.option("-o", "--output", type=click.Path(dir_okay=False, writable=True), help="Output CSV (default: standard output).")
+    @click.option("-o", "--output", type=click.Path(dir_okay=False, writable=True), help="Output CSV, or Parquet for a name ending in .parquet (default: CSV on standard output).")
     @click.option("--hand", "hand_file", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Fingertip poses in the common frame ([hand] frame, [finger.NAME] translation m, rpy_deg or quaternion).")
     @click.option("--topics", nargs=2, metavar="TOPIC TOPIC", help="Bag input: the two fingertips' wrench topics.")
     @click.option("--frame", metavar="FRAME", help="Bag input: the common frame (e.g. hand, base_link).")

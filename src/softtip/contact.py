@@ -2,7 +2,7 @@
 
 Assume the moment about the contact point is a pure spin about the skin normal,
 ``q = σ n(r)``, and solve ``m = r × f + σ n(r)``, ``S(r) = 0`` for ``r`` and ``σ``
-(SPEC §3.2). Of the two roots the one where the force pushes in (``f · n < 0``) is kept;
+(manual §3.2). Of the two roots the one where the force pushes in (``f · n < 0``) is kept;
 a sample with no pushing root on the skin is reported as invalid, not raised.
 
 Closed forms for the sphere (exact to rounding), the capsule (hemisphere, then the cylinder
@@ -95,7 +95,7 @@ def _capsule_kernel(fx, fy, fz, mx, my, mz, radius, length, ox, oy, xp):
 
 
 def _centred_capsule_kernel(fx, fy, fz, mx, my, mz, radius, length, xp):
-    # hemisphere first (SPEC §3.2)
+    # hemisphere first (manual §3.2)
     sx, sy, sz, snx, sny, snz, ssig, sval = _sphere_kernel(fx, fy, fz, mx, my, mz, radius, 0.0, 0.0, length, xp)
     on_cap = xp.logical_and(sval, sz >= length)
 
@@ -299,7 +299,7 @@ def _implicit_contact(w: NDArray, tip: ImplicitSurface, max_iter: int = 60, tol:
 
 
 def contact_from_wrench(wrench: ArrayLike, tip: Fingertip | str) -> Contact:
-    """Contact point, normal and spin of a soft-finger contact from the wrench (SPEC §3.2).
+    """Contact point, normal and spin of a soft-finger contact from the wrench (manual §3.2).
 
     Parameters
     ----------

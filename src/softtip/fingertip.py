@@ -1,6 +1,6 @@
 """Fingertip geometry: the outer skin surface ``S(r) = 0`` in the sensor frame.
 
-Shapes (SPEC §2): :class:`Sphere`, :class:`Capsule` (the papers' fingertip: a cylinder
+Shapes (manual §2): :class:`Sphere`, :class:`Capsule` (the papers' fingertip: a cylinder
 along +z from ``z = 0`` capped by a hemisphere centred at ``(0, 0, length)``),
 :class:`Ellipsoid` (axis-aligned, Bicchi's quadric case) and :class:`ImplicitSurface`
 (any callable ``S`` with its gradient). ``S < 0`` inside, ``S > 0`` outside; the outward
@@ -110,7 +110,7 @@ class Fingertip(abc.ABC):
 
     @abc.abstractmethod
     def to_toml(self) -> str:
-        """The fingertip as a SPEC §2 TOML file."""
+        """The fingertip as a fingertip TOML file (manual §2)."""
 
 
 def _fmt(v: float) -> str:
@@ -367,7 +367,7 @@ class ImplicitSurface(Fingertip):
 def murakami2006() -> Capsule:
     """The papers' fingertip: capsule of radius 16 mm (11 mm aluminium shell + 5 mm skin).
 
-    The papers do not give the cylinder length; 20 mm is softtip's choice (SPEC §2). The
+    The papers do not give the cylinder length; 20 mm is softtip's choice (manual §2). The
     5 mm skin switches on the online depth compensation (:mod:`softtip.estimator.depth`).
     """
     return Capsule(radius=0.016, length=0.020, skin_thickness=0.005)
@@ -384,7 +384,7 @@ _FIELDS = {
 
 
 def load_fingertip(spec: str | Path | Fingertip) -> Fingertip:
-    """A fingertip from a preset name or a SPEC §2 TOML file.
+    """A fingertip from a preset name or a fingertip TOML file (manual §2).
 
     Parameters
     ----------

@@ -12,7 +12,7 @@ softtip reports
 
 - ``h_std = sqrt(trace Σ_h)``: the root-mean-square magnitude of the noise in ``h``, i.e.
   what ``|h|`` looks like when the true ``h`` is zero; ``|h|`` is significant above
-  ``max(k · h_std, h_min)`` (SPEC §3.5, ``k = 3``);
+  ``max(k · h_std, h_min)`` (manual §3.5, ``k = 3``);
 - ``angle_std = sqrt(tᵀ Σ_h t) / |h|`` with ``t = d``: the first-order standard deviation of
   the direction angle, radians.
 """

@@ -3,7 +3,7 @@
 The F/T sensor carries the fingertip: its weight is an external force on the sensor like
 the contact's. With the sensor frame's orientation ``R`` in a gravity-aligned world frame
 (world ``z`` up; ``v_world = R v_sensor``), the fingertip of mass ``m`` with centre of mass
-``c`` (sensor frame, m) adds, in SPEC §1's convention (what acts on the fingertip)::
+``c`` (sensor frame, m) adds, in the manual's convention (§1) (what acts on the fingertip)::
 
     f_g = m g_s,    m_g = c × f_g,    g_s = Rᵀ (0, 0, −9.80665)
 

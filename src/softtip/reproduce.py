@@ -1,4 +1,4 @@
-"""Reproduction of the papers' experiments (SPEC §5, E1–E6) on the simulator.
+"""Reproduction of the papers' experiments (manual §5, E1–E6) on the simulator.
 
 Every condition is simulated (:mod:`softtip.sim`: the papers' grasp, Nano17-class sensor)
 and then measured with exactly what ``softtip estimate`` runs (:func:`softtip.estimate` with
@@ -56,7 +56,7 @@ __all__ = [
     "run_reproduction",
 ]
 
-#: Median axial error (deg) within which a direction counts as measured (SPEC §6 target).
+#: Median axial error (deg) within which a direction counts as measured (the manual's §6 target).
 TOLERANCE_DEG = 3.0
 #: Median axial error (deg) above which a direction counts as a large error.
 LARGE_ERROR_DEG = 10.0
@@ -87,7 +87,7 @@ class Condition:
     size : float or None
         m: plate thickness, cylinder diameter, fringe cylinder diameter.
     angle_deg : float
-        Direction of the object at the contact, degrees (SPEC §3.4).
+        Direction of the object at the contact, degrees (manual §3.4).
     expect_measured : bool or None
         The papers' outcome: direction measured (True), not measured (False), or no
         separate verdict (None).

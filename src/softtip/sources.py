@@ -194,7 +194,7 @@ class LogSource:
         speed: float = 1.0,
         stop: threading.Event | None = None,
     ) -> LogSource:
-        """Read a SPEC §4 CSV log (columns ``t, fx, fy, fz, mx, my, mz``); see :func:`softtip.io.read_log`."""
+        """Read a CSV log (manual §4) (columns ``t, fx, fy, fz, mx, my, mz``); see :func:`softtip.io.read_log`."""
         from softtip.io import read_log
 
         log = read_log(path, units=units)

@@ -1,6 +1,6 @@
 """Spin torque, its tangential component and the direction of the touched geometry.
 
-Paper Eqs. 1–3 and SPEC §3.1, §3.3, §3.4:
+Paper Eqs. 1–3 and manual §3.1, §3.3, §3.4:
 
 - spin torque (moment about the contact point) ``q = m − r × f``;
 - tangential spin torque ``h = q − (q · n) n``;
@@ -64,7 +64,7 @@ def direction_kernel(hx, hy, hz, nx, ny, nz, xp):
 
 
 def tangent_frame_kernel(nx, ny, nz, xp):
-    """Tangent frame ``(e1, e2)`` at normal ``n`` (SPEC §3.4); returns 6 components."""
+    """Tangent frame ``(e1, e2)`` at normal ``n`` (manual §3.4); returns 6 components."""
     # |x × n| = sqrt(ny² + nz²); below 0.1 the projected x axis is ill-defined, use y
     use_y = ny * ny + nz * nz < 0.01
     ax = xp.where(use_y, 0.0 * nx, 1.0 + 0.0 * nx)
@@ -154,7 +154,7 @@ def edge_direction(h: ArrayLike, normal: ArrayLike) -> NDArray[np.float64]:
 
 
 def tangent_frame(normal: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """The SPEC §3.4 tangent frame ``(e1, e2)`` at ``normal``, each shape ``(..., 3)``."""
+    """The manual §3.4 tangent frame ``(e1, e2)`` at ``normal``, each shape ``(..., 3)``."""
     c = tangent_frame_kernel(*_comp(normal, "normal"), NP)
     return np.stack(c[:3], axis=-1), np.stack(c[3:], axis=-1)
 

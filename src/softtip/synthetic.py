@@ -2,7 +2,7 @@
 
 :func:`synthetic_grasp` builds a grasp like the papers' (contact at 2 s, force rising to
 about 0.5 kgf by 4 s, held to 10 s, 50 Hz) by writing the wrench that the line-contact
-model of SPEC §3 predicts: ``m = r × f + σ n + h`` with ``h`` perpendicular to the touched
+model of the manual (§3) predicts: ``m = r × f + σ n + h`` with ``h`` perpendicular to the touched
 line. During the light-force phase ``h = 0`` (a soft-finger contact); the tangential spin
 torque builds up after the force has settled, as the disturbance moments from the finger
 joints and gravity do in the papers. It exercises the estimator with a known answer; the
@@ -37,7 +37,7 @@ class SyntheticGrasp:
     point : (3,) contact point, m
     normal : (3,) outward normal at the contact
     direction : (3,) unit direction of the touched line
-    angle : float, rad, in the SPEC §3.4 tangent frame
+    angle : float, rad, in the tangent frame of the manual (§3.4)
     bias : (6,)
     """
 

@@ -1,6 +1,6 @@
 """3-D view of the estimates with Rerun: live (``softtip stream --rerun``) or offline.
 
-Needs the ``viz`` extra (``pip install 'softtip[viz]'``, the ``rerun-sdk`` package). What
+Needs the ``rerun-sdk`` package (``pip install rerun-sdk``; the ``viz`` extra). What
 is logged, sensor frame, metres, on the timeline ``t`` (s of the log):
 
 * ``tip/skin`` (static): the fingertip's skin, a triangle mesh from its geometry;
@@ -38,7 +38,8 @@ def import_rerun():
         import rerun
     except ImportError as exc:
         raise ImportError(
-            "the 3-D view needs the 'rerun-sdk' package: pip install 'softtip[viz]'"
+            "the 3-D view needs the 'rerun-sdk' package: pip install 'rerun-sdk>=0.23' "
+            "(or, from a softtip checkout, pip install -e '.[viz]')"
         ) from exc
     return rerun
 

@@ -7,7 +7,7 @@ stream form side by side in one module: :mod:`.tare`, :mod:`.latch`, :mod:`.join
 the same kernels (:mod:`softtip.contact`, :mod:`softtip.spin`, :mod:`softtip.noise`) and
 agree to rounding.
 
-Per sample (SPEC §3):
+Per sample (manual §3):
 
 1. **Tare** (:mod:`.tare`). Unless a bias is given, the samples in the first
    ``tare_duration`` seconds make the bias (``tare_method``: by default their mean without

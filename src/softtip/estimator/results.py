@@ -43,10 +43,10 @@ class Estimates:
     h : (N, 3) tangential spin torque, N·m; ``h_norm`` its magnitude
     h_std : (N,) noise level of ``h`` (``sqrt(trace Σ_h)``), N·m
     direction : (N, 3) unit direction of the edge / strip; NaN unless ``line``
-    angle, angle_std : (N,) its angle in the SPEC §3.4 tangent frame and the angle's
+    angle, angle_std : (N,) its angle in the tangent frame of the manual (§3.4) and the angle's
         standard deviation, rad; NaN unless ``line``
     latched : (N,) the contact point is the latched one (not this sample's own solution)
-    latch_fallback : (N,) that latch had no light-force sample (SPEC §3.6)
+    latch_fallback : (N,) that latch had no light-force sample (manual §3.6)
     pulling : (N,) in contact by force but no pushing contact point (reported ``none``)
     taring : (N,) sample used for the bias (reported ``none``)
     bias : (6,) the bias subtracted, N and N·m
@@ -148,7 +148,7 @@ class Estimates:
         return int(np.count_nonzero(self.pulling))
 
     def columns(self) -> dict[str, NDArray]:
-        """The SPEC §4 output columns (SI, angles in degrees), in order, then softtip's extras."""
+        """The output columns (manual §4) (SI, angles in degrees), in order, then softtip's extras."""
         w, p, n, h, d = self.wrench, self.point, self.normal, self.h, self.direction
         return {
             "t": self.t,

@@ -3,7 +3,7 @@
 A quasi-static elastic-foundation (Winkler) model of the 5 mm silicone skin over the rigid
 shell, with a Coulomb-limited elastic tangential layer, touched by rigid objects given as
 signed distance functions (plane, thin plate, wedge, cylinder/stick, cylinder-bottom
-fringe). Scenarios reproduce the papers' grasps (SPEC §5); the sensor model adds bias,
+fringe). Scenarios reproduce the papers' grasps (manual §5); the sensor model adds bias,
 noise and quantisation.
 
 Modules: :mod:`~softtip.sim.skin` (surface elements), :mod:`~softtip.sim.objects` (SDF

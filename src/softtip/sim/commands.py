@@ -94,7 +94,7 @@ LENGTH, FORCE = _Length(), _Force()
                    "cylinder 6mm, stick 4mm, fringe 40mm.")
 @click.option("--angle", "angle_deg", type=float, default=0.0, show_default=True,
               help="Direction of the edge/axis/fringe at the contact, degrees from the sensor x axis "
-                   "(SPEC §3.4 tangent frame; 90 = along the hand's joint axes).")
+                   "(manual §3.4 tangent frame; 90 = along the hand's joint axes).")
 @click.option("--scenario", type=click.Choice(["paper", "push", "friction"]), default="paper", show_default=True,
               help="paper: the papers' two-fingered grasp with joint and gravity disturbances; "
                    "push: a plain push; friction: the papers' grasp (weightless object) with a friction load "
@@ -150,18 +150,38 @@ LENGTH, FORCE = _Length(), _Force()
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the noise generator.")
 @click.option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True,
               help="Units of the written log: si (N, N·m) or kgf-mm.")
-@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="Log CSV (t,fx,fy,fz,mx,my,mz) [default: stdout].")
+@click.option("--hand", type=click.Choice(["one-finger", "two-finger"]), default="one-finger", show_default=True,
+              help="two-finger: both fingertips of the papers' hand on one object (the paper scenario, --rock "
+                   "optional): -o is then a new directory for right.csv, left.csv, hand.toml (their poses in the "
+                   "hand frame) and truth.json (the object's line and plate normal in the hand frame), for "
+                   "`softtip fuse`.")
+@click.option("--left-object", type=click.Choice(OBJECT_KINDS), default=None,
+              help="--hand two-finger: what the left fingertip touches [default: --object, its other side].")
+@click.option("--width", type=LENGTH, default="30mm", show_default=True,
+              help="--hand two-finger: the object's width between the two contacts.")
+@click.option("--to-bag", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="--hand two-finger: also a rosbag2 (MCAP) with /right/wrench, /left/wrench and the fingertips' "
+                   "poses on /tf_static and /tf (DIR must not exist).")
+@click.option("-o", "--output", type=click.Path(path_type=Path), default=None,
+              help="Log CSV (t,fx,fy,fz,mx,my,mz) [default: stdout]; --hand two-finger: a new directory.")
 @click.option("--truth", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Ground truth JSON [default: OUTPUT with suffix .truth.json; none when writing to stdout].")
-def simulate(output: Path | None, truth: Path | None, units: str, **options) -> None:
+def simulate(
+    output: Path | None, truth: Path | None, units: str, hand: str, left_object: str | None, width: float,
+    to_bag: Path | None, **options,
+) -> None:
     """Simulate a grasp of an object by the soft fingertip and write the F/T log.
 
-    The log is the SPEC §4 input of `softtip estimate`; the truth file holds the object's
+    The log is the input log (manual §4) of `softtip estimate`; the truth file holds the object's
     line direction and angle, the nominal and pressure-centre contact points, contact area,
     depth, the depth at which friction acts and normal force per sample, and every parameter
     of the run.
     """
+    if hand == "two-finger":
+        _simulate_hand(output, truth, units, left_object, width, to_bag, options)
+        return
+    if left_object is not None or to_bag is not None:
+        raise click.UsageError("--left-object and --to-bag go with --hand two-finger")
     if truth is None and output is not None:
         truth = output.with_name(output.stem + ".truth.json")
     for path in (output, truth):
@@ -182,3 +202,43 @@ def simulate(output: Path | None, truth: Path | None, units: str, **options) -> 
         write_log_csv(log, output, units)
     if truth is not None:
         write_truth_json(log, truth)
+
+
+def _simulate_hand(output, truth, units, left_object, width, to_bag, options) -> None:
+    """``softtip simulate --hand two-finger``: both fingertips, files for ``softtip fuse``."""
+    from softtip.fingertip import load_fingertip
+    from softtip.sim.hand import simulate_two_finger, write_two_finger, write_two_finger_bag
+    from softtip.sim.objects import make_object
+
+    if output is None:
+        raise click.UsageError("--hand two-finger writes several files: give -o DIR (a new directory)")
+    if truth is not None or units != "si" or options["scenario"] != "paper":
+        raise click.UsageError("--hand two-finger writes SI logs of the paper scenario (no --truth, --units, --scenario)")
+    if output.exists():
+        raise click.BadParameter(f"{output} exists; expected a new directory", param_hint="-o")
+    if to_bag is not None and to_bag.exists():
+        raise click.BadParameter(f"{to_bag} exists; expected a new directory for the bag", param_hint="--to-bag")
+    if not (0.0 < width <= 0.3):
+        raise click.BadParameter(f"{width * 1e3:g} mm; expected a width between 0 and 300 mm", param_hint="--width")
+    kind = options["object_kind"]
+    shape = dict(edge_radius=options["edge_radius"], apex_angle=math.radians(options["apex_angle_deg"]),
+                 tilt=math.radians(options["tilt_deg"]))  # fmt: skip
+    objs = {"right": make_object(kind, options["size"], **shape),
+            "left": make_object(left_object or kind, options["size"] if left_object in (None, kind) else None, **shape)}  # fmt: skip
+    try:
+        tip = load_fingertip(options["tip"])
+        grasp = simulate_two_finger(
+            tip, objs, math.radians(options["angle_deg"]), width=width, rng=options["seed"],
+            object_mass=options["object_mass"], n_elements=options["n_elements"], rock=options["rock"],
+            force=options["force"], joint_rotation=math.radians(options["joint_rotation_deg"]),
+            gravity_spin=math.radians(options["gravity_spin_deg"]),
+        )  # fmt: skip
+    except InputError as exc:
+        raise click.BadParameter(str(exc), param_hint="--tip") from None
+    except (ValueError, RuntimeError) as exc:
+        raise click.UsageError(str(exc)) from None
+    paths = write_two_finger(grasp, output)
+    if to_bag is not None:
+        write_two_finger_bag(grasp, to_bag)
+        paths.append(to_bag)
+    click.echo(f"softtip: two-finger grasp ({len(grasp.t)} samples per finger) -> {', '.join(map(str, paths))}", err=True)

@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 from softtip.fingertip import Fingertip
 from softtip.sim.objects import RigidObject
 from softtip.sim.pose import Pose
-from softtip.sim.scenario import HandFrame, paper_scenario
+from softtip.sim.scenario import HandFrame, paper_scenario, rock_scenario
 from softtip.sim.simulate import SimLog, simulate_grasp
 
 __all__ = ["SIDES", "TwoFingerGrasp", "simulate_two_finger", "sensor_pose_in_hand"]
@@ -103,6 +103,7 @@ def simulate_two_finger(
     object_mass: float = 0.01,
     n_elements: int | None = None,
     model=None,
+    rock: bool = False,
     **scenario_kwargs,
 ) -> TwoFingerGrasp:
     """Simulate the papers' grasp with both fingertips.
@@ -127,6 +128,10 @@ def simulate_two_finger(
         Skin elements (default that of :func:`~softtip.sim.simulate.simulate_grasp`).
     model : ContactModel, optional
         A prebuilt skin model of ``tip``, reused for both fingers (skips the discretisation).
+    rock : bool
+        After the grasp, rock the object about two axes and in a figure-eight
+        (:func:`~softtip.sim.scenario.rock_scenario`: the same rotations in the hand for both
+        fingers), which lets each fingertip tell a line from an area.
     **scenario_kwargs
         Other :func:`~softtip.sim.scenario.paper_scenario` arguments.
     """
@@ -141,7 +146,8 @@ def simulate_two_finger(
     logs, poses = {}, {}
     for k, side in enumerate(SIDES):
         a = angle if side == "right" else -angle
-        scenario = paper_scenario(a, side=side, object_mass=object_mass, **scenario_kwargs)
+        make = rock_scenario if rock else paper_scenario
+        scenario = make(a, side=side, object_mass=object_mass, **scenario_kwargs)
         logs[side] = simulate_grasp(tip, objs[side], scenario, rng=rng + k, **kw)
         poses[side] = sensor_pose_in_hand(tip, side, width, scenario_kwargs.get("finger_pitch", 0.0))
     return TwoFingerGrasp(logs, poses, float(width), float(object_mass))

@@ -2,7 +2,7 @@
 
 A scenario places the object's contact frame (see :mod:`softtip.sim.objects`) at the
 *nominal contact point* ``r_c`` on the skin with its outward normal along the *push axis*
-``u`` (into the fingertip) and its line direction at ``angle`` in the SPEC §3.4 tangent
+``u`` (into the fingertip) and its line direction at ``angle`` in the manual §3.4 tangent
 frame. The object then
 
 1. approaches along ``u`` at ``approach_speed`` and touches at ``t_contact``;
@@ -26,7 +26,7 @@ along the hand's ``x``. The sensor frame of the right fingertip is mapped to the
 
     sensor x = hand z (up),   sensor y = hand y (joint axes),   sensor z = -hand x,
 
-so that a plate at 90° (SPEC §3.4: angle from sensor x at the tip) lies along the joint
+so that a plate at 90° (manual §3.4: angle from sensor x at the tip) lies along the joint
 axes, as in the paper. Disturbances come only from the joints (rotation about hand ``y``)
 and gravity (rotation about the grasp axis, hand ``x``, from an off-axis centre of mass,
 and half the object's weight as a tangential load along hand ``-z``): nothing rotates the
@@ -292,7 +292,7 @@ class GraspScenario:
     Parameters
     ----------
     angle : float
-        Line direction of the object at the nominal contact, rad, in the SPEC §3.4 tangent
+        Line direction of the object at the nominal contact, rad, in the manual §3.4 tangent
         frame (at the apex: from the sensor x axis).
     force : float
         Held grasp force along the push axis, N (default 0.5 kgf).
@@ -463,12 +463,12 @@ def paper_scenario(
     side: str = "right",
     **kwargs,
 ) -> GraspScenario:
-    """The papers' grasp with the right fingertip of the two-fingered hand (SPEC §5).
+    """The papers' grasp with the right fingertip of the two-fingered hand (manual §5).
 
     Parameters
     ----------
     angle : float
-        Object direction at the apex, rad (SPEC §3.4; 90° is along the joint axes).
+        Object direction at the apex, rad (manual §3.4; 90° is along the joint axes).
     joint_rotation : float
         Rotation of the object relative to the fingertip about the joint axis (hand ``y``)
         once the object is released into the grasp (finger compliance, joint servo error),
@@ -582,7 +582,7 @@ def friction_scenario(
     tip : Fingertip
         For the contact normal that defines "across" and "along".
     angle : float
-        Line direction, rad (SPEC §3.4 tangent frame).
+        Line direction, rad (manual §3.4 tangent frame).
     ratio : float
         Tangential load as a fraction of the grasp force (``push`` and ``drag``).
     across : bool

@@ -400,7 +400,7 @@ def _atomic_write(path: str | os.PathLike, text: str) -> None:
 
 
 def log_csv_text(log: SimLog, units: str = "si") -> str:
-    """The SPEC §4 input log as text: header ``t,fx,fy,fz,mx,my,mz`` and one row per sample."""
+    """The input log (manual §4) as text: header ``t,fx,fy,fz,mx,my,mz`` and one row per sample."""
     w = wrench_from_si(log.wrench, units)
     rows = ["t,fx,fy,fz,mx,my,mz"]
     rows += [",".join([f"{ti:.6f}"] + [f"{v:.10g}" for v in wi]) for ti, wi in zip(log.t, w, strict=True)]
@@ -408,7 +408,7 @@ def log_csv_text(log: SimLog, units: str = "si") -> str:
 
 
 def write_log_csv(log: SimLog, path: str | os.PathLike, units: str = "si") -> None:
-    """Write the SPEC §4 input log (CSV, header ``t,fx,fy,fz,mx,my,mz``).
+    """Write the input log (manual §4) (CSV, header ``t,fx,fy,fz,mx,my,mz``).
 
     Parameters
     ----------

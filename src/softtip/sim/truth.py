@@ -1,4 +1,4 @@
-"""Ground truth of a simulated grasp and the SPEC §3.4 angle convention."""
+"""Ground truth of a simulated grasp and the angle convention of the manual (§3.4)."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ __all__ = ["GroundTruth", "tangent_frame", "line_angle"]
 
 
 def line_angle(direction: ArrayLike, normal: ArrayLike) -> NDArray[np.float64]:
-    """Angle (rad) of the axis ``direction`` (..., 3) in the SPEC §3.4 tangent frame at
+    """Angle (rad) of the axis ``direction`` (..., 3) in the tangent frame of the manual (§3.4) at
     ``normal`` (..., 3): the estimator's own convention (:func:`softtip.spin.direction_angle`)."""
     return direction_angle(direction, normal)
 
@@ -29,7 +29,7 @@ class GroundTruth:
         Unit line direction of the object (edge, axis, fringe tangent) at the nominal
         contact point; NaN for a plane. An axis (sign is arbitrary).
     angle : (N,)
-        Its angle (rad) in the SPEC §3.4 tangent frame at the nominal contact normal,
+        Its angle (rad) in the tangent frame of the manual (§3.4) at the nominal contact normal,
         in ``(-π/2, π/2]``.
     contact_point : (N, 3)
         Nominal contact point: where the push axis meets the undeformed skin, m.
