@@ -38,10 +38,12 @@ def plot_estimates(
     h_threshold: float | np.ndarray | None = None,
     reference_angles: Sequence[float] | None = None,
     fmt: str | None = None,
+    detail: int = 0,
 ):
     """Draw the four panels of the papers' figures (e.g. 2006 Figs. 8–11).
 
-    Upper left force, lower left moment (the first log's, per axis), upper right ``|h|``,
+    Upper left force, lower left moment (of log ``detail``, per axis; named in the panels'
+    titles when there are several logs), upper right ``|h|``,
     lower right the measured direction in degrees (``line`` samples only, with its ±1σ
     band). Several logs (e.g. one per plate angle) share the right-hand panels, one trace
     each.
@@ -58,6 +60,8 @@ def plot_estimates(
     title : str, optional
     fmt : str, optional
         File format (e.g. ``"png"``); default from the extension of ``path``.
+    detail : int
+        Index of the log whose force and moment are drawn (default the first).
     reference_angles : sequence of float, optional
         True directions (degrees), one per log, drawn as dashed lines in its colour.
     h_threshold : float or array of shape (N,), optional
@@ -84,12 +88,14 @@ def plot_estimates(
     ax_s = fig.add_subplot(grid[2, 1], sharex=ax_f)
     axes = np.array([ax_f, ax_h, ax_m, ax_d])
 
-    first = runs[0]
+    first = runs[detail]
     for i, (name, color) in enumerate(zip("xyz", ("tab:red", "tab:green", "tab:blue"))):
         ax_f.plot(first.t, first.wrench[:, i] * fscale, color=color, lw=1, label=f"force {name}")
         ax_m.plot(first.t, first.wrench[:, 3 + i] * mscale, color=color, lw=1, label=f"moment {name}")
     ax_f.set_ylabel(f"force [{funit}]")
     ax_m.set_ylabel(f"moment [{munit}]")
+    if len(runs) > 1 and labels is not None:  # say whose force and moment these are
+        ax_f.set_title(f"force and moment of the {labels[detail]} grasp", fontsize=9)
     ax_f.legend(loc="upper left", fontsize=8)
     ax_m.legend(loc="upper left", fontsize=8)
 
@@ -107,7 +113,7 @@ def plot_estimates(
         ax_h.plot(first.t, level * mscale, ls="--", color="0.4", lw=1, label="significance")
     ax_h.set_ylabel(f"|h| tangential spin torque [{munit}]")
     ax_d.set_ylabel("measured direction [deg]")
-    ax_d.set_ylim(-90, 90)
+    ax_d.set_ylim(-95, 95)  # a true direction at ±90° stays off the frame
     ax_d.set_yticks([-90, -45, 0, 45, 90])
     if labels is not None or h_threshold is not None:
         ax_h.legend(loc="upper left", fontsize=8)
@@ -263,7 +269,7 @@ def plot_direction_chart(
             ax_d.axhline(truth, ls="--", lw=0.8, color=ln.get_color())
         ax_h.set_ylabel("|h| [N·mm]")
         ax_h.set_title(name, fontsize=9, loc="left")
-        ax_d.set_ylim(-90, 90)
+        ax_d.set_ylim(-95, 95)  # a true direction at ±90° stays off the frame
         ax_d.set_yticks([-90, -45, 0, 45, 90])
         ax_d.set_ylabel("direction [deg]")
         ax_h.legend(loc="upper left", fontsize=7, ncol=len(labels))

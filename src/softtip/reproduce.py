@@ -447,14 +447,17 @@ def write_figures(results: Sequence[ConditionResult], out: Path) -> None:
         title = f"{exp}: {EXPERIMENTS[exp][0]} ({EXPERIMENTS[exp][1]}), simulated"
         path = out / _FIGURES[exp]
         if exp in ("E2", "E5"):
-            # force and moment of the 0° grasp, |h| and direction of every angle
-            order = sorted(rs, key=lambda r: (r.condition.angle_deg != 0.0, r.condition.angle_deg))
+            # force and moment of the 0° grasp, |h| and direction of every angle, in the
+            # angle order (and so the colours) of the other experiments' figures
+            order = sorted(rs, key=lambda r: r.condition.angle_deg)
+            zero = next((k for k, r in enumerate(order) if r.condition.angle_deg == 0.0), 0)
             plot_estimates(
                 [r.estimates for r in order],
                 path,
                 labels=[f"{r.condition.angle_deg:g}°" for r in order],
                 title=title,
                 reference_angles=[r.truth_angle_deg for r in order],
+                detail=zero,
             )
         elif exp == "X1":
             plot_line_or_area([(r.condition.variant, r.estimates) for r in rs], path, title=title)
