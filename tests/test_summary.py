@@ -35,3 +35,23 @@ def test_no_contact():
     est = softtip.estimate(t, np.zeros((100, 6)))
     assert summarise_contacts(est) == []
     assert format_summary([]) == ["no contact"]
+
+
+def test_the_command_prints_a_summary_per_contact_on_standard_error_unless_quiet(tmp_path):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    softtip_cmd = str(Path(sys.executable).with_name("softtip"))
+    g1 = synthetic_grasp(angle_deg=-45.0, duration=7.0, seed=3)
+    g2 = synthetic_grasp(angle_deg=45.0, duration=7.0, seed=4)
+    t = np.concatenate((g1.t, g2.t + 7.0))
+    w = np.concatenate((g1.wrench, g2.wrench))
+    np.savetxt(tmp_path / "log.csv", np.c_[t, w], delimiter=",", header="t,fx,fy,fz,mx,my,mz", comments="", fmt="%.12g")
+    r = subprocess.run([softtip_cmd, "estimate", tmp_path / "log.csv"], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0 and r.stdout.startswith("t,")  # estimates on stdout, the summary on stderr
+    assert "contact 1:" in r.stderr and "direction -4" in r.stderr
+    assert "contact 2:" in r.stderr and "direction +4" in r.stderr
+    assert "-> standard output" in r.stderr
+    q = subprocess.run([softtip_cmd, "estimate", tmp_path / "log.csv", "-q"], capture_output=True, text=True, timeout=120)
+    assert q.returncode == 0 and "contact 1:" not in q.stderr and q.stdout == r.stdout

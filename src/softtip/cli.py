@@ -13,7 +13,6 @@ import click
 import numpy as np
 
 from softtip import __version__
-from softtip.axial import axial_median
 from softtip.errors import InputError
 from softtip.estimator.depth import tip_depth_law
 from softtip.fingertip import PRESETS, Fingertip, load_fingertip
@@ -341,6 +340,7 @@ the raw wrench; with --to-bag and no -o no CSV is written.
 @click.option("--rerun", "rerun_spawn", is_flag=True, help="Show the fingertip, force, contact point, normal and edge in a Rerun viewer (needs the rerun-sdk package).")
 @click.option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save the Rerun 3-D view and time series to FILE.rrd (open with `rerun FILE.rrd`).")
 @click.option("--payload", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Remove the fingertip's weight ([payload] mass kg, com m; see calibrate-payload) before taring, using INPUT's qw, qx, qy, qz columns (sensor frame in a z-up world frame).")
+@click.option("-q", "--quiet", is_flag=True, help="No summary on standard error (warnings and errors still are).")
 @click.option("--save-bias", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Write the bias used (the tare's) to FILE.toml, for --bias of a later run.")
 @_estimator_options
 def estimate(
@@ -358,6 +358,7 @@ def estimate(
     tip,
     payload=None,
     save_bias=None,
+    quiet=False,
     **estimator_opts,
 ):
     from softtip.examples import EXAMPLE_PATH
@@ -488,18 +489,21 @@ def estimate(
             "pushes into the fingertip; reported as none",
             err=True,
         )
-    targets = [p for p in (output, to_bag, rerun_save) if p is not None]
-    if targets:
-        confirmed = int(np.count_nonzero(est.line_evidence == 2))
-        summary = ", ".join(f"{v} {k}" + (f" ({confirmed} confirmed)" if k == "line" else "") for k, v in counts.items())
-        click.echo(
-            f"softtip: {len(est)} samples ({summary}; {est.n_contacts} contact(s)) -> {', '.join(map(str, targets))}",
-            err=True,
-        )
-        if counts["line"]:
-            line = est.state == 2
-            ang = np.degrees(axial_median(est.angle[line]))
-            click.echo(f"softtip: median direction of line samples {ang:+.1f} deg", err=True)
+    if quiet:
+        return
+    # the summary goes to standard error whatever the output: per contact, since samples
+    # pooled over several contacts (a -45° grasp, then a +45° one) have no common direction
+    from softtip.summary import format_summary, summarise_contacts
+
+    targets = [p for p in (output, to_bag, rerun_save) if p is not None] or ["standard output"]
+    confirmed = int(np.count_nonzero(est.line_evidence == 2))
+    summary = ", ".join(f"{v} {k}" + (f" ({confirmed} confirmed)" if k == "line" else "") for k, v in counts.items())
+    click.echo(
+        f"softtip: {len(est)} samples ({summary}; {est.n_contacts} contact(s)) -> {', '.join(map(str, targets))}",
+        err=True,
+    )
+    for line in format_summary(summarise_contacts(est)):
+        click.echo(f"softtip: {line}", err=True)
 
 
 class _NoProgress:
