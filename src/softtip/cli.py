@@ -49,11 +49,26 @@ _MOMENT_COLUMNS = ("mx", "my", "mz", "sigma", "hx", "hy", "hz", "h_norm", "h_std
 
 class _Group(click.Group):
     def invoke(self, ctx):
+        from softtip.atomic import cannot_write, silence_stdout
+        from softtip.interrupt import Interrupted, exit_code, terminate_like_ctrl_c
+
         try:
-            return super().invoke(ctx)
+            with terminate_like_ctrl_c():
+                result = super().invoke(ctx)
+                try:
+                    sys.stdout.flush()  # a full device or a closed pipe shows here at the latest
+                except OSError as exc:
+                    silence_stdout()
+                    raise cannot_write("standard output", exc) from None
+                return result
         except InputError as exc:
             click.echo(f"softtip: error: {exc}", err=True)
             ctx.exit(2)
+        except KeyboardInterrupt as exc:
+            # Ctrl-C, SIGTERM, SIGHUP: every temporary file is gone by now (unwound like an error)
+            name = exc.signal_name if isinstance(exc, Interrupted) else "SIGINT"
+            click.echo(f"softtip: interrupted ({name})", err=True)
+            ctx.exit(exit_code(exc))
 
 
 @click.group(cls=_Group, help="softtip: intrinsic tactile sensing with a soft fingertip on a six-axis F/T sensor.\n\n" + FRAMES_HELP)
@@ -248,7 +263,7 @@ def estimate(
     **estimator_opts,
 ):
     from softtip.examples import EXAMPLE_PATH
-    from softtip.io import Log, read_log, write_table
+    from softtip.io import Log, read_log
 
     if example == (input_path is not None):
         raise click.UsageError("give either INPUT or --example")
@@ -256,6 +271,10 @@ def estimate(
         raise click.UsageError("--units applies to INPUT; the example grasp is in SI")
     if plot_path is not None:
         _check_figure_path(plot_path)
+    _check_outputs(
+        [("INPUT", None if example else input_path), ("--payload", payload), ("--tip", tip if os.path.isfile(tip) else None)],
+        [("-o", output), ("--plot", plot_path), ("--to-bag", to_bag), ("--rerun-save", rerun_save)],
+    )
     fingertip = load_fingertip(tip)
     config = _make_config(estimator_opts)
 
@@ -302,53 +321,12 @@ def estimate(
     for name, values in log.extra.items():
         columns[name if name not in columns else f"input_{name}"] = np.asarray(values)
 
-    viz = rerun_tmp = None
-    if rerun_spawn or rerun_save:
-        viz = _optional("softtip.viz", "viz")
-        if rerun_save:
-            rerun_tmp = Path(rerun_save).with_name(f".{Path(rerun_save).name}.partial")
-    plot_tmp = None
-    bag_written = False
-    try:
-        if plot_path is not None:
-            from softtip.plot import plot_estimates
-
-            # drawn to a temporary file first: a failure leaves neither output behind
-            plot_path = Path(plot_path)
-            plot_tmp = plot_path.with_name(f".{plot_path.name}.partial{plot_path.suffix}")
-            source = "example grasp" if example else Path(log.source).name
-            threshold = np.maximum(config.h_sigmas * est.h_std, config.h_min)
-            plot_estimates(
-                est, plot_tmp, units=plot_units, title=f"softtip: {source}", h_threshold=threshold,
-                fmt=plot_path.suffix.lower().lstrip("."),
-            )  # fmt: skip
-        if viz is not None:
-            logger = viz.RerunLogger(fingertip, save=rerun_tmp, spawn=rerun_spawn)
-            logger.log_estimates(est)
-            logger.close()
-        if to_bag is not None:
-            bag = _optional("softtip.bag", "ros")
-            if bag_log is not None:
-                bag.write_estimates_bag(to_bag, est, bag_log.wrench, bag_log.stamps_ns, bag_log.frame_id, bag_log.topic)
-            else:
-                bag.write_estimates_bag(to_bag, est, log.wrench)
-            bag_written = True
-        if output is not None or to_bag is None:
-            write_table(columns, output)
-        if plot_tmp is not None:
-            os.replace(plot_tmp, plot_path)
-            plot_tmp = None
-        if rerun_tmp is not None:
-            os.replace(rerun_tmp, rerun_save)
-            rerun_tmp = None
-        bag_written = False  # every output is in place: keep the bag
-    finally:
-        if plot_tmp is not None:
-            plot_tmp.unlink(missing_ok=True)
-        if rerun_tmp is not None:
-            rerun_tmp.unlink(missing_ok=True)
-        if bag_written:
-            shutil.rmtree(to_bag, ignore_errors=True)
+    source = "example grasp" if example else Path(log.source).name
+    _write_estimate_outputs(
+        est, columns, log, bag_log, config, fingertip,
+        output=output, plot_path=plot_path, plot_units=plot_units, title=f"softtip: {source}",
+        to_bag=to_bag, rerun_spawn=rerun_spawn, rerun_save=rerun_save,
+    )  # fmt: skip
 
     counts = {name: int(np.count_nonzero(est.state == code)) for code, name in enumerate(STATES)}
     _tare_warnings(est, config)
@@ -366,6 +344,74 @@ def estimate(
             line = est.state == 2
             ang = np.degrees(axial_median(est.angle[line]))
             click.echo(f"softtip: median direction of line samples {ang:+.1f} deg", err=True)
+
+
+def _check_outputs(inputs, outputs) -> None:
+    """Exit 2 when an output is an input or another output of the run (:func:`softtip.atomic.check_distinct`)."""
+    from softtip.atomic import check_distinct
+
+    check_distinct(inputs, outputs)
+
+
+def _write_estimate_outputs(
+    est, columns, log, bag_log, config, fingertip, *, output, plot_path, plot_units, title, to_bag, rerun_spawn, rerun_save
+) -> None:
+    """Write every output of ``estimate``; all appear together, or none (and no temporary file stays)."""
+    import io as _io
+
+    from softtip.atomic import AtomicFile, cannot_write, commit_all, write_stdout
+    from softtip.io import write_table
+
+    viz = _optional("softtip.viz", "viz") if (rerun_spawn or rerun_save) else None
+    pending: list[AtomicFile] = []
+    bag_written = False
+    try:
+        if plot_path is not None:
+            from softtip.plot import plot_estimates
+
+            # drawn in memory first: a full disk then gives the OS's reason, not the image writer's
+            image = _io.BytesIO()
+            threshold = np.maximum(config.h_sigmas * est.h_std, config.h_min)
+            plot_estimates(
+                est, image, units=plot_units, title=title, h_threshold=threshold,
+                fmt=Path(plot_path).suffix.lower().lstrip("."),
+            )  # fmt: skip
+            pending.append(AtomicFile(plot_path))
+            try:
+                with pending[-1].open("wb") as fh:
+                    fh.write(image.getbuffer())
+            except OSError as exc:
+                raise cannot_write(plot_path, exc) from None
+        if viz is not None:
+            rerun_file = None
+            if rerun_save:
+                pending.append(rerun_file := AtomicFile(rerun_save))
+            logger = viz.RerunLogger(fingertip, save=None if rerun_file is None else rerun_file.tmp, spawn=rerun_spawn)
+            logger.log_estimates(est)
+            logger.close()
+        if to_bag is not None:
+            bag = _optional("softtip.bag", "ros")
+            if bag_log is not None:
+                bag.write_estimates_bag(to_bag, est, bag_log.wrench, bag_log.stamps_ns, bag_log.frame_id, bag_log.topic)
+            else:
+                bag.write_estimates_bag(to_bag, est, log.wrench)
+            bag_written = True
+        if output is not None:
+            pending.append(AtomicFile(output))
+            try:
+                with pending[-1].open() as fh:
+                    write_table(columns, fh)
+            except OSError as exc:
+                raise cannot_write(output, exc) from None
+        elif to_bag is None:
+            write_stdout(lambda out: write_table(columns, out))
+        commit_all(pending)
+        bag_written = False  # every output is in place: keep the bag
+    finally:
+        for f in pending:
+            f.discard()
+        if bag_written:
+            shutil.rmtree(to_bag, ignore_errors=True)
 
 
 def _check_figure_path(path: str) -> None:
@@ -540,6 +586,10 @@ def stream(
         raise click.UsageError(f"--duration must be positive, got {duration}")
     if not speed >= 0:
         raise click.UsageError(f"--speed must be 0 (as fast as possible) or positive, got {speed}")
+    _check_outputs(
+        [("--replay", replay), ("--payload", payload), ("--tip", tip if os.path.isfile(tip) else None)],
+        [("--record", record), ("--rerun-save", rerun_save)],
+    )
     fingertip = load_fingertip(tip)
     recorder = Recorder(record) if record is not None else None
     viz = _optional("softtip.viz", "viz") if (rerun_spawn or rerun_save) else None

@@ -6,6 +6,7 @@ import sys
 
 import click
 
+from softtip.atomic import write_stdout
 from softtip.errors import InputError
 from softtip.units import UNIT_SYSTEMS
 
@@ -16,6 +17,12 @@ def _read(input_path: str, units: str):
     from softtip.io import read_log
 
     return read_log(sys.stdin if input_path == "-" else input_path, units=units)
+
+
+def _check_output(input_path: str, output: str | None) -> None:
+    from softtip.atomic import check_distinct
+
+    check_distinct([("LOG", input_path)], [("-o", output)])
 
 
 def _fail(ctx: click.Context, exc: InputError) -> None:
@@ -57,6 +64,7 @@ def calibrate(ctx, input_path, shape, output, units, tare_duration, contact_thre
     from softtip.calibration import calibrate_fingertip, write_fingertip_toml
 
     try:
+        _check_output(input_path, output)
         log = _read(input_path, units)
         cal = calibrate_fingertip(
             log.t, log.wrench, shape, tare_duration=tare_duration, contact_threshold=contact_threshold,
@@ -69,7 +77,7 @@ def calibrate(ctx, input_path, shape, output, units, tare_duration, contact_thre
             click.echo(f"softtip: fingertip -> {output}", err=True)
         else:
             click.echo(report, err=True)
-            click.echo(cal.tip.to_toml(), nl=False)
+            write_stdout(cal.tip.to_toml())
     except InputError as exc:
         _fail(ctx, exc)
         return
@@ -107,6 +115,7 @@ def calibrate_payload(ctx, input_path, output, units):
     from softtip.payload import read_orientation
 
     try:
+        _check_output(input_path, output)
         log = _read(input_path, units)
         fit = fit_payload(log.wrench, read_orientation(log), source=log.source)
         b = fit.bias
@@ -123,6 +132,6 @@ def calibrate_payload(ctx, input_path, output, units):
             click.echo(f"softtip: payload -> {output}", err=True)
         else:
             click.echo(fit.summary(), err=True)
-            click.echo(text, nl=False)
+            write_stdout(text)
     except InputError as exc:
         _fail(ctx, exc)

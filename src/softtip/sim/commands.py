@@ -7,16 +7,17 @@ metres); forces accept ``N`` or ``kgf`` (``0.5kgf``; bare: newtons); angles are 
 from __future__ import annotations
 
 import math
+import os
 import re
-import sys
 from pathlib import Path
 
 import click
 
+from softtip.atomic import AtomicFile, cannot_write, check_distinct, commit_all, write_stdout
 from softtip.errors import InputError
 from softtip.sim.objects import OBJECT_KINDS
 from softtip.sim.scenario import DISTURBANCE_TIMINGS, JOINT_ROTATION_DEG, OBJECT_MASS
-from softtip.sim.simulate import log_csv_text, run_simulation, write_log_csv, write_truth_json
+from softtip.sim.simulate import log_csv_text, run_simulation, truth_json_text
 from softtip.sim.skin import DEFAULT_ELEMENTS
 from softtip.units import KGF, UNIT_SYSTEMS
 
@@ -139,6 +140,10 @@ def simulate(output: Path | None, truth: Path | None, units: str, **options) -> 
     """
     if truth is None and output is not None:
         truth = output.with_name(output.stem + ".truth.json")
+    tip = options["tip"]
+    check_distinct(
+        [("--tip", tip if os.path.isfile(tip) else None)], [("-o", output), ("--truth", truth)]
+    )
     for path in (output, truth):
         if path is not None and not path.parent.exists():
             raise click.BadParameter(f"directory {path.parent} does not exist", param_hint=str(path))
@@ -148,9 +153,19 @@ def simulate(output: Path | None, truth: Path | None, units: str, **options) -> 
         raise click.BadParameter(str(exc), param_hint="--tip") from None
     except ValueError as exc:
         raise click.UsageError(str(exc)) from None
-    if output is None:
-        sys.stdout.write(log_csv_text(log, units))
-    else:
-        write_log_csv(log, output, units)
-    if truth is not None:
-        write_truth_json(log, truth)
+    # both files appear together or neither does (and no temporary file stays behind)
+    files = {name: AtomicFile(path) for name, path in (("log", output), ("truth", truth)) if path is not None}
+    try:
+        texts = {"log": lambda: log_csv_text(log, units), "truth": lambda: truth_json_text(log)}
+        if output is None:
+            write_stdout(texts["log"]())
+        for name, f in files.items():
+            try:
+                with f.open() as fh:
+                    fh.write(texts[name]())
+            except OSError as exc:
+                raise cannot_write(f.path, exc) from None
+        commit_all(files.values())
+    finally:
+        for f in files.values():
+            f.discard()
