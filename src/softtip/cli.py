@@ -241,6 +241,7 @@ the raw wrench; with --to-bag and no -o no CSV is written.
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Also draw the papers' four panels (force, moment, |h|, direction) to this PNG/PDF/SVG.")
 @click.option("--plot-units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the plot's force and moment axes.")
 @click.option("--topic", metavar="TOPIC", help="Bag input: the geometry_msgs/msg/WrenchStamped topic (default: the bag's only one).")
+@click.option("--allow-partial", is_flag=True, help="Bag input: use a damaged bag's readable messages (with a warning) instead of stopping.")
 @click.option("--to-bag", "to_bag", type=click.Path(file_okay=False), metavar="DIR", help="Also write the estimates as a rosbag2 directory (MCAP storage); DIR must not exist.")
 @click.option("--rerun", "rerun_spawn", is_flag=True, help="Show the fingertip, force, contact point, normal and edge in a Rerun viewer (softtip[viz]).")
 @click.option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save the Rerun 3-D view and time series to FILE.rrd (open with `rerun FILE.rrd`).")
@@ -260,6 +261,7 @@ def estimate(
     rerun_save,
     tip,
     payload=None,
+    allow_partial=False,
     **estimator_opts,
 ):
     from softtip.examples import EXAMPLE_PATH
@@ -285,7 +287,8 @@ def estimate(
         log = read_log(sys.stdin, units=units)
     elif _is_bag(input_path):
         bag = _optional("softtip.bag", "ros")
-        bag_log = bag.read_bag(input_path, topic)
+        bag_log = bag.read_bag(input_path, topic, allow_partial=allow_partial)
+        _bag_warnings(input_path, bag_log)
         # t counts from the first message; the absolute stamps go along as an extra column
         extra = {"stamp_ns": [str(v) for v in bag_log.stamps_ns.tolist()]}
         log = Log(t=bag_log.t, wrench=wrench_to_si(bag_log.wrench, units), extra=extra, source=bag_log.source, units=units)
@@ -303,6 +306,8 @@ def estimate(
         log = read_log(input_path, units=units)
     if topic is not None and bag_log is None:
         raise click.UsageError("--topic applies to bag input only")
+    if allow_partial and bag_log is None:
+        raise click.UsageError("--allow-partial applies to bag input only")
     if payload is not None:  # gravity compensation first: the tare then removes only the sensor bias
         from softtip.payload import compensate_log
 
@@ -344,6 +349,16 @@ def estimate(
             line = est.state == 2
             ang = np.degrees(axial_median(est.angle[line]))
             click.echo(f"softtip: median direction of line samples {ang:+.1f} deg", err=True)
+
+
+def _bag_warnings(path: str, bag_log) -> None:
+    """Say what was odd about a bag that was read anyway (damaged with --allow-partial; repeated stamps)."""
+    if bag_log.damage:
+        click.echo(f"softtip: warning: {path}: damaged bag, {len(bag_log.t)} samples used: {bag_log.damage}", err=True)
+    if bag_log.repeated_stamps:
+        click.echo(
+            f"softtip: {path}: {bag_log.repeated_stamps} message(s) repeat the previous header.stamp (kept)", err=True
+        )
 
 
 def _check_outputs(inputs, outputs) -> None:
