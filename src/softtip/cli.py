@@ -13,6 +13,7 @@ import numpy as np
 
 from softtip import __version__
 from softtip.axial import axial_median
+from softtip.cli_types import PORT, Number, check_lowpass, check_pair_increasing
 from softtip.errors import InputError
 from softtip.fingertip import PRESETS, load_fingertip
 from softtip.depth import MURAKAMI2006_DEPTH, DepthLaw
@@ -30,18 +31,17 @@ are the force and moment the touched object exerts on the fingertip, moment abou
 sensor origin; in contact f pushes into the fingertip.
 """
 
-class _Number(click.FloatRange):
-    """A finite number in a range (click's FloatRange lets NaN through)."""
-
-    def convert(self, value, param, ctx):
-        v = super().convert(value, param, ctx)
-        if not math.isfinite(v):
-            self.fail(f"{value!r} is not a finite number", param, ctx)
-        return v
+def NON_NEGATIVE(unit: str) -> Number:  # noqa: N802 - reads as a type
+    return Number(unit, 0.0)
 
 
-NON_NEGATIVE = _Number(min=0.0)
-POSITIVE = _Number(min=0.0, min_open=True)
+def POSITIVE(unit: str) -> Number:  # noqa: N802
+    return Number(unit, 0.0, min_open=True)
+
+#: stream --speed: 0 (as fast as possible) or within these factors of real time
+MIN_SPEED, MAX_SPEED = 1e-3, 1e6
+#: stream --timeout upper bound, s (a day; longer waits overflow the host's timers)
+MAX_TIMEOUT = 86400.0
 
 _FORCE_COLUMNS = ("fx", "fy", "fz")
 _MOMENT_COLUMNS = ("mx", "my", "mz", "sigma", "hx", "hy", "hz", "h_norm", "h_std")
@@ -97,7 +97,7 @@ _ESTIMATOR_OPTIONS = [
     ),
     click.option(
         "--joint-window",
-        type=POSITIVE,
+        type=POSITIVE("s"),
         default=1.0,
         show_default=True,
         metavar="S",
@@ -105,7 +105,7 @@ _ESTIMATOR_OPTIONS = [
     ),
     click.option(
         "--joint-max-std",
-        type=(POSITIVE, POSITIVE),
+        type=(POSITIVE("deg"), POSITIVE("mm")),
         default=(2.0, 0.2),
         show_default=True,
         metavar="DEG MM",
@@ -114,34 +114,34 @@ _ESTIMATOR_OPTIONS = [
     ),
     click.option(
         "--joint-max-residual",
-        type=POSITIVE,
+        type=POSITIVE("noise standard deviations"),
         default=3.0,
         show_default=True,
         metavar="SIGMAS",
         help="... and the RMS residual of its fit is at most this many noise standard deviations.",
     ),
-    click.option("--lowpass", type=POSITIVE, metavar="HZ", help="Causal Butterworth low-pass cutoff in Hz (default: no filter)."),
+    click.option("--lowpass", type=POSITIVE("Hz"), metavar="HZ", help="Causal Butterworth low-pass cutoff in Hz (default: no filter)."),
     click.option(
         "--tare-duration",
-        type=NON_NEGATIVE,
+        type=NON_NEGATIVE("s"),
         default=0.2,
         show_default=True,
         metavar="S",
         help="Average the first S seconds (fingertip untouched) as the sensor bias; 0 if INPUT is already tared.",
     ),
-    click.option("--contact-threshold", type=NON_NEGATIVE, default=0.05, show_default=True, metavar="N", help="In contact while |f| is at least this, N."),
+    click.option("--contact-threshold", type=NON_NEGATIVE("N"), default=0.05, show_default=True, metavar="N", help="In contact while |f| is at least this, N."),
     click.option(
         "--latch-window",
-        type=(float, float),
+        type=(NON_NEGATIVE("N"), NON_NEGATIVE("N")),
         default=(0.2 * KGF, 0.5 * KGF),
         show_default=True,
         metavar="LOW HIGH",
         help="Light-force window for latching the contact point, N (default 0.2–0.5 kgf).",
     ),
-    click.option("--h-min", type=NON_NEGATIVE, default=0.5, show_default=True, metavar="N·mm", help="Smallest |h| reported as a line contact, N·mm."),
+    click.option("--h-min", type=NON_NEGATIVE("N·mm"), default=0.5, show_default=True, metavar="N·mm", help="Smallest |h| reported as a line contact, N·mm."),
     click.option(
         "--force-noise",
-        type=NON_NEGATIVE,
+        type=NON_NEGATIVE("N"),
         default=NANO17.force_std[0],
         show_default=True,
         metavar="N",
@@ -149,7 +149,7 @@ _ESTIMATOR_OPTIONS = [
     ),
     click.option(
         "--moment-noise",
-        type=NON_NEGATIVE,
+        type=NON_NEGATIVE("N·mm"),
         default=NANO17.moment_std[0] * 1e3,
         show_default=True,
         metavar="N·mm",
@@ -157,7 +157,7 @@ _ESTIMATOR_OPTIONS = [
     ),
     click.option(
         "--relatch-distance",
-        type=POSITIVE,
+        type=POSITIVE("mm"),
         metavar="MM",
         help="Latch again when, at light force, the soft-finger contact point moves farther than this from the "
         "latched one, mm (default: only when contact is lost and regained, the papers').",
@@ -170,7 +170,7 @@ _ESTIMATOR_OPTIONS = [
     ),
     click.option(
         "--skin-law",
-        type=(float, float, float),
+        type=(POSITIVE("N/m^P"), POSITIVE(""), POSITIVE("mm")),
         default=(MURAKAMI2006_DEPTH.stiffness, MURAKAMI2006_DEPTH.exponent, MURAKAMI2006_DEPTH.max_depth * 1e3),
         show_default=True,
         metavar="K P MAX_MM",
@@ -312,6 +312,7 @@ def estimate(
         from softtip.payload import compensate_log
 
         log = compensate_log(log, payload)
+    check_lowpass(estimator_opts["lowpass"], log.t)
     try:
         est = run_estimate(log.t, log.wrench, fingertip, config)
     except ValueError as exc:  # e.g. a low-pass cutoff above Nyquist for this log's rate
@@ -483,6 +484,7 @@ def _tare_warnings(est, config: EstimatorConfig) -> None:
 
 def _make_config(opts: dict, sample_rate: float | None = None) -> EstimatorConfig:
     """The :class:`EstimatorConfig` of the shared estimator options (CLI units → SI)."""
+    check_pair_increasing("--latch-window", opts["latch_window"], "N")
     try:
         depth = None
         if opts["depth_compensation"]:
@@ -553,13 +555,13 @@ of a replayed log. No data for --timeout seconds is an error (exit 1).
 )
 @click.option("--netft", "host", metavar="HOST", help="Address of the Net F/T / Axia.")
 @click.option("--replay", "replay", type=click.Path(dir_okay=False), metavar="LOG.csv", help="Replay a recorded CSV log (columns t, fx, fy, fz, mx, my, mz) instead.")
-@click.option("--speed", type=float, default=1.0, show_default=True, help="Replay speed: 1 real time, 2 twice as fast, 0 as fast as possible.")
+@click.option("--speed", type=Number("× real time", 0.0, MAX_SPEED), default=1.0, show_default=True, help="Replay speed: 1 real time, 2 twice as fast, 0 as fast as possible.")
 @click.option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the replayed log's wrench.")
-@click.option("--rdt-port", type=int, default=49152, show_default=True, help="UDP port of the sensor's RDT server.")
-@click.option("--http-port", type=int, default=80, show_default=True, help="HTTP port of the sensor's web server (calibration).")
-@click.option("--timeout", type=float, default=2.0, show_default=True, metavar="S", help="Give up after S seconds without data from the sensor.")
+@click.option("--rdt-port", type=PORT, default=49152, show_default=True, help="UDP port of the sensor's RDT server.")
+@click.option("--http-port", type=PORT, default=80, show_default=True, help="HTTP port of the sensor's web server (calibration).")
+@click.option("--timeout", type=Number("s", 0.0, MAX_TIMEOUT, min_open=True), default=2.0, show_default=True, metavar="S", help="Give up after S seconds without data from the sensor.")
 @click.option("--device-bias", is_flag=True, help="Send the sensor's own bias (zero) command at start, before softtip's tare.")
-@click.option("--duration", type=float, metavar="S", help="Stop after S seconds (default: until Ctrl-C or the end of the replayed log).")
+@click.option("--duration", type=POSITIVE("s"), metavar="S", help="Stop after S seconds (default: until Ctrl-C or the end of the replayed log).")
 @click.option("--record", type=click.Path(dir_okay=False), metavar="FILE.csv", help="Record raw samples and estimates to FILE.csv as they come.")
 @click.option("--view/--no-view", default=None, help="Live terminal view (default: when standard error is a terminal).")
 @click.option("--rerun", "rerun_spawn", is_flag=True, help="Show the 3-D view live in a Rerun viewer (softtip[viz]; at most 50 samples/s are drawn).")
@@ -597,10 +599,11 @@ def stream(
         raise click.UsageError("give either --netft HOST or --replay LOG.csv")
     if payload is not None and replay is None:
         raise click.UsageError("--payload needs the orientation columns of a replayed log (--replay LOG.csv)")
-    if duration is not None and not duration > 0:
-        raise click.UsageError(f"--duration must be positive, got {duration}")
-    if not speed >= 0:
-        raise click.UsageError(f"--speed must be 0 (as fast as possible) or positive, got {speed}")
+    if 0 < speed < MIN_SPEED:
+        raise click.BadParameter(
+            f"{speed:g}; expected 0 (as fast as possible) or a number in [{MIN_SPEED:g}, {MAX_SPEED:g}] × real time",
+            param_hint="'--speed'",
+        )
     _check_outputs(
         [("--replay", replay), ("--payload", payload), ("--tip", tip if os.path.isfile(tip) else None)],
         [("--record", record), ("--rerun-save", rerun_save)],
@@ -630,6 +633,8 @@ def stream(
                 rate = f"{d.rate_hz:g} Hz" if d.rate_hz else "rate unknown"
                 info = f"({d.product}, {d.force_unit} / {d.torque_unit}, {rate})"
             lowpass = estimator_opts["lowpass"]
+            if lowpass is not None and source.rate_hz is not None:
+                check_lowpass(lowpass, source.rate_hz)
             config = _make_config(estimator_opts, sample_rate=source.rate_hz if lowpass is not None else None)
             if lowpass is not None and source.rate_hz is None:
                 raise click.UsageError("--lowpass needs the sample rate, which this source does not report")

@@ -7,6 +7,7 @@ import sys
 import click
 
 from softtip.atomic import write_stdout
+from softtip.cli_types import Number
 from softtip.errors import InputError
 from softtip.units import UNIT_SYSTEMS
 
@@ -55,9 +56,9 @@ warned about when significant).
 @click.option("--shape", type=click.Choice(["sphere", "capsule"]), required=True, help="Fingertip shape to fit.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Fingertip TOML file to write (default: standard output).")
 @click.option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the log's wrench.")
-@click.option("--tare-duration", type=float, default=0.2, show_default=True, metavar="S", help="Average the first S seconds (untouched) as the sensor bias; 0 if LOG is tared.")
-@click.option("--contact-threshold", type=float, default=0.05, show_default=True, metavar="N", help="A press lasts while |f| is at least this, N.")
-@click.option("--min-force", type=float, default=0.5, show_default=True, metavar="N", help="Only samples with |f| at least this enter the fit, N.")
+@click.option("--tare-duration", type=Number("s", 0.0), default=0.2, show_default=True, metavar="S", help="Average the first S seconds (untouched) as the sensor bias; 0 if LOG is tared.")
+@click.option("--contact-threshold", type=Number("N", 0.0, min_open=True), default=0.05, show_default=True, metavar="N", help="A press lasts while |f| is at least this, N.")
+@click.option("--min-force", type=Number("N", 0.0), default=0.5, show_default=True, metavar="N", help="Only samples with |f| at least this enter the fit, N.")
 @click.option("--rigid", is_flag=True, help="Do not fit the skin's indentation (radius then comes out short by about the indentation).")
 @click.pass_context
 def calibrate(ctx, input_path, shape, output, units, tare_duration, contact_threshold, min_force, rigid):

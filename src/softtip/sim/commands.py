@@ -14,6 +14,7 @@ from pathlib import Path
 import click
 
 from softtip.atomic import AtomicFile, cannot_write, check_distinct, commit_all, write_stdout
+from softtip.cli_types import Number
 from softtip.errors import InputError
 from softtip.sim.objects import OBJECT_KINDS
 from softtip.sim.scenario import DISTURBANCE_TIMINGS, JOINT_ROTATION_DEG, OBJECT_MASS
@@ -22,6 +23,12 @@ from softtip.sim.skin import DEFAULT_ELEMENTS
 from softtip.units import KGF, UNIT_SYSTEMS
 
 __all__ = ["simulate", "parse_length", "parse_force"]
+
+#: Ranges of the simulation's size options (a larger run would not fit in memory)
+MAX_RATE = 100_000.0  # Hz
+MAX_SAMPLES = 10_000_000
+MAX_ELEMENTS = 200_000
+MAX_FRICTION = 10.0
 
 _LENGTH_UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6, "µm": 1e-6}
 _FORCE_UNITS = {"n": 1.0, "kgf": KGF}
@@ -80,13 +87,40 @@ class _Force(click.ParamType):
 LENGTH, FORCE = _Length(), _Force()
 
 
+def _check_sizes(options: dict) -> None:
+    """Sample count and skin thickness: a run that cannot fit in memory, or a skin thicker than the fingertip."""
+    n = options["rate"] * options["duration"]
+    if n > MAX_SAMPLES:
+        raise click.BadParameter(
+            f"{options['rate']:g} Hz for {options['duration']:g} s is {n:.3g} samples; expected at most {MAX_SAMPLES:g} "
+            "(lower --rate or --duration)",
+            param_hint="'--rate'",
+        )
+    if options["size"] is not None and not options["size"] > 0:
+        raise click.BadParameter(f"{options['size'] * 1e3:g} mm; expected a positive length", param_hint="'--size'")
+    if not options["force"] > 0:
+        raise click.BadParameter(f"{options['force']:g} N; expected a positive force (N or kgf)", param_hint="'--force'")
+    thickness = options["thickness"]
+    try:
+        from softtip.fingertip import load_fingertip
+
+        _, reach = load_fingertip(options["tip"]).bounding_sphere
+    except (InputError, ValueError, OSError):
+        return  # run_simulation names the problem with --tip
+    if not 0.0 < thickness < reach:
+        raise click.BadParameter(
+            f"{thickness * 1e3:g} mm; expected a skin thickness in (0, {reach * 1e3:g}) mm, less than the fingertip's size",
+            param_hint="'--thickness'",
+        )
+
+
 @click.command("simulate")
 @click.option("--object", "object_kind", type=click.Choice(OBJECT_KINDS), default="plate", show_default=True,
               help="What the fingertip touches.")
 @click.option("--size", type=LENGTH, default=None,
               help="Plate thickness, or cylinder/stick/fringe diameter (e.g. 2mm). Defaults: plate 1mm, "
                    "cylinder 6mm, stick 4mm, fringe 40mm.")
-@click.option("--angle", "angle_deg", type=float, default=0.0, show_default=True,
+@click.option("--angle", "angle_deg", type=Number("deg"), default=0.0, show_default=True,
               help="Direction of the edge/axis/fringe at the contact, degrees from the sensor x axis "
                    "(SPEC §3.4 tangent frame; 90 = along the hand's joint axes).")
 @click.option("--scenario", type=click.Choice(["paper", "push"]), default="paper", show_default=True,
@@ -95,36 +129,36 @@ LENGTH, FORCE = _Length(), _Force()
 @click.option("--tip", default="murakami2006", show_default=True, help="Fingertip preset or TOML file.")
 @click.option("--edge-radius", type=LENGTH, default=0.0, show_default=True,
               help="Plate corner radius or wedge tip radius (length).")
-@click.option("--apex-angle", "apex_angle_deg", type=float, default=90.0, show_default=True,
+@click.option("--apex-angle", "apex_angle_deg", type=Number("deg", 0.0, 180.0, min_open=True, max_open=True), default=90.0, show_default=True,
               help="Wedge apex angle, degrees.")
-@click.option("--tilt", "tilt_deg", type=float, default=45.0, show_default=True,
+@click.option("--tilt", "tilt_deg", type=Number("deg", 0.0, 90.0), default=45.0, show_default=True,
               help="Fringe: contact normal's angle from the cylinder side toward its bottom face, degrees.")
 @click.option("--force", type=FORCE, default="0.5kgf", show_default=True, help="Held grasp force (N or kgf).")
-@click.option("--duration", type=float, default=10.0, show_default=True, help="Recorded time, s.")
-@click.option("--t-contact", type=float, default=2.0, show_default=True, help="Time of first touch, s.")
-@click.option("--t-stable", type=float, default=4.0, show_default=True, help="End of the force ramp, s.")
-@click.option("--rate", type=float, default=50.0, show_default=True, help="Sample rate, Hz.")
-@click.option("--joint-rotation", "joint_rotation_deg", type=float, default=JOINT_ROTATION_DEG, show_default=True,
+@click.option("--duration", type=Number("s", 0.0, min_open=True), default=10.0, show_default=True, help="Recorded time, s.")
+@click.option("--t-contact", type=Number("s", 0.0), default=2.0, show_default=True, help="Time of first touch, s.")
+@click.option("--t-stable", type=Number("s", 0.0, min_open=True), default=4.0, show_default=True, help="End of the force ramp, s.")
+@click.option("--rate", type=Number("Hz", 0.0, MAX_RATE, min_open=True), default=50.0, show_default=True, help="Sample rate, Hz.")
+@click.option("--joint-rotation", "joint_rotation_deg", type=Number("deg", -90.0, 90.0), default=JOINT_ROTATION_DEG, show_default=True,
               help="paper: object rotation about the joint axis once the grasp holds it, degrees.")
-@click.option("--gravity-spin", "gravity_spin_deg", type=float, default=1.0, show_default=True,
+@click.option("--gravity-spin", "gravity_spin_deg", type=Number("deg", -90.0, 90.0), default=1.0, show_default=True,
               help="paper: object rotation about the grasp axis from its weight, degrees.")
-@click.option("--mass", "object_mass", type=float, default=OBJECT_MASS, show_default=True,
+@click.option("--mass", "object_mass", type=Number("kg", 0.0), default=OBJECT_MASS, show_default=True,
               help="paper: object mass, kg (half its weight loads each finger tangentially).")
 @click.option("--disturbance-timing", type=click.Choice(DISTURBANCE_TIMINGS), default="after_grasp",
               show_default=True,
               help="paper: after_grasp (the papers' procedure: disturbances ramp in after the grasp force "
                    "is established) or during_rise (together with the force rise; harder for the latch).")
-@click.option("--misalignment", "misalignment_deg", type=float, default=0.0, show_default=True,
+@click.option("--misalignment", "misalignment_deg", type=Number("deg", -90.0, 90.0), default=0.0, show_default=True,
               help="paper: fixed alignment error about the hand z axis, degrees.")
-@click.option("--elements", "n_elements", type=click.IntRange(50), default=DEFAULT_ELEMENTS, show_default=True,
+@click.option("--elements", "n_elements", type=click.IntRange(50, MAX_ELEMENTS), default=DEFAULT_ELEMENTS, show_default=True,
               help="Skin surface elements.")
-@click.option("--modulus", type=float, default=0.6e6, show_default=True, help="Skin Winkler modulus, Pa.")
-@click.option("--shear-modulus", type=float, default=None, help="Skin shear modulus, Pa [default: modulus/3].")
-@click.option("--friction", type=float, default=1.0, show_default=True, help="Coulomb friction coefficient.")
+@click.option("--modulus", type=Number("Pa", 0.0, min_open=True), default=0.6e6, show_default=True, help="Skin Winkler modulus, Pa.")
+@click.option("--shear-modulus", type=Number("Pa", 0.0, min_open=True), default=None, help="Skin shear modulus, Pa [default: modulus/3].")
+@click.option("--friction", type=Number("", 0.0, MAX_FRICTION, min_open=True), default=1.0, show_default=True, help="Coulomb friction coefficient.")
 @click.option("--thickness", type=LENGTH, default="5mm", show_default=True, help="Skin thickness (length).")
 @click.option("--noise/--no-noise", default=True, show_default=True,
               help="Apply the sensor model (ATI Nano17 class noise and quantisation) or write the true wrench.")
-@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the noise generator.")
+@click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Seed of the noise generator.")
 @click.option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True,
               help="Units of the written log: si (N, N·m) or kgf-mm.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), default=None,
@@ -147,12 +181,18 @@ def simulate(output: Path | None, truth: Path | None, units: str, **options) -> 
     for path in (output, truth):
         if path is not None and not path.parent.exists():
             raise click.BadParameter(f"directory {path.parent} does not exist", param_hint=str(path))
+    _check_sizes(options)
     try:
         log = run_simulation(**options)
     except InputError as exc:
         raise click.BadParameter(str(exc), param_hint="--tip") from None
     except ValueError as exc:
         raise click.UsageError(str(exc)) from None
+    except RuntimeError as exc:  # the contact solve found no equilibrium for these options
+        raise click.UsageError(
+            f"the simulated grasp has no equilibrium with these options ({exc}); a larger --friction or --force, "
+            "a smaller --mass, or a thinner --thickness helps"
+        ) from None
     # both files appear together or neither does (and no temporary file stays behind)
     files = {name: AtomicFile(path) for name, path in (("log", output), ("truth", truth)) if path is not None}
     try:
