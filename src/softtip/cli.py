@@ -317,6 +317,7 @@ def estimate(
         est = run_estimate(log.t, log.wrench, fingertip, config)
     except ValueError as exc:  # e.g. a low-pass cutoff above Nyquist for this log's rate
         raise click.UsageError(str(exc)) from None
+    _check_units(est, fingertip, config, units, log.source)
 
     columns = est.columns()
     if output_units == "kgf-mm":
@@ -350,6 +351,15 @@ def estimate(
             line = est.state == 2
             ang = np.degrees(axial_median(est.angle[line]))
             click.echo(f"softtip: median direction of line samples {ang:+.1f} deg", err=True)
+
+
+def _check_units(est, fingertip, config: EstimatorConfig, units: str, source: str) -> None:
+    """Exit 2 when the moment-to-force ratio puts the force far outside the fingertip (wrong --units or --tip)."""
+    from softtip.lever import check_force_lever
+
+    check_force_lever(
+        est.wrench[~est.taring], fingertip, units=units, source=source, min_force=max(0.1, config.contact_threshold)
+    )
 
 
 def _bag_warnings(path: str, bag_log) -> None:
