@@ -251,7 +251,7 @@ def _interrupt_while_blocked(tmp_path, argv, sig, expect_tmp):
 
 
 @posix_only
-@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP], ids=["SIGTERM", "SIGHUP"])
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP, signal.SIGINT], ids=["SIGTERM", "SIGHUP", "SIGINT"])
 def test_estimate_interrupted_leaves_no_temporary_file(tmp_path, log, sig):
     fifo = tmp_path / "pipe"
     os.mkfifo(fifo)
