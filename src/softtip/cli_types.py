@@ -59,7 +59,9 @@ class Number(click.ParamType):
             v = float(value)
         except (TypeError, ValueError):
             self.fail(f"{value!r} is not a number; expected {self.expected()}", param, ctx)
-        if not (math.isfinite(v) and self._inside(v)):
+        if not math.isfinite(v):
+            self.fail(f"{value!r} is not a finite number; expected {self.expected()}", param, ctx)
+        if not self._inside(v):
             self.fail(f"{value!r}; expected {self.expected()}", param, ctx)
         return v
 
