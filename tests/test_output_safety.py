@@ -10,6 +10,7 @@ import os
 import resource
 import shutil
 import signal
+import stat
 import subprocess
 import sys
 import threading
@@ -202,18 +203,28 @@ def test_file_too_large_exits_2_and_leaves_nothing(tmp_path, log, args, names):
 
 
 @posix_only
-@pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full")
-@pytest.mark.parametrize(
-    "args",
-    [("estimate", "--example"), ("simulate", "--rate", "20", "--duration", "5"), ("estimate", "--example", "-o", "/dev/full")],
-)
-def test_full_device_exits_2(args):
+@pytest.mark.skipif(not Path("/dev/full").is_char_device(), reason="needs /dev/full")
+@pytest.mark.parametrize("args", [("estimate", "--example"), ("simulate", "--rate", "20", "--duration", "5")])
+def test_standard_output_on_a_full_device_exits_2(args):
     with open("/dev/full", "w") as full:
         out = subprocess.run([SOFTTIP, *args], stdout=full, stderr=subprocess.PIPE, text=True, timeout=120)
     assert out.returncode == 2, out.stderr
-    assert "No space left on device" in out.stderr and "Traceback" not in out.stderr
-    assert ("/dev/full" if "-o" in args else "standard output") in out.stderr
-    assert Path("/dev/full").is_char_device()
+    assert "standard output" in out.stderr and "No space left on device" in out.stderr and "Traceback" not in out.stderr
+
+
+@posix_only
+@pytest.mark.skipif(not hasattr(os, "geteuid") or os.geteuid() != 0, reason="creating device nodes needs root")
+def test_output_onto_a_device_node_is_written_into(tmp_path):
+    # our own nodes of the null and full devices (never the system's: a rename would replace them)
+    null, full = tmp_path / "null", tmp_path / "full"
+    os.mknod(null, 0o666 | stat.S_IFCHR, os.makedev(1, 3))
+    os.mknod(full, 0o666 | stat.S_IFCHR, os.makedev(1, 7))
+    out = run("estimate", "--example", "-o", null)
+    assert out.returncode == 0, out.stderr
+    out = run("estimate", "--example", "-o", full)
+    assert out.returncode == 2 and f"{full}: cannot write (No space left on device)" in out.stderr, out.stderr
+    assert null.is_char_device() and full.is_char_device()
+    assert listing(tmp_path) == ["full", "null"]
 
 
 @posix_only
