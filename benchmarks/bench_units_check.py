@@ -32,3 +32,6 @@ for (tname, tip), kind, angle, scen in itertools.product(tips.items(), ["plane",
     print(*rows[-1], flush=True)
 si_ok = sum(r[5] for r in rows); mis_caught = sum(not r[7] for r in rows)
 print(f"{len(rows)} grasps: SI accepted {si_ok}/{len(rows)}, kgf-mm read as SI refused {mis_caught}/{len(rows)}; max SI lever/reach {max(r[4]/r[8] for r in rows):.3f}, min misread lever/reach {min(r[6]/r[8] for r in rows):.2f}")
+for scen in ("paper", "push"):
+    sub = [r for r in rows if r[3] == scen]
+    print(f"{scen}: {len(sub)} grasps, SI accepted {sum(r[5] for r in sub)}, kgf-mm read as SI refused {sum(not r[7] for r in sub)}")

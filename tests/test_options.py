@@ -73,6 +73,9 @@ BAD = [
     (["simulate", "--size", "0mm"], "--size", "length"),
     (["simulate", "--force", "0"], "--force", "N"),
     (["simulate", "--seed", "-1"], "--seed", "x>=0"),
+    # reproduce
+    (["reproduce", "--seed", "-1"], "--seed", "x>=0"),
+    (["reproduce", "--jobs", "1000"], "--jobs", "64"),
     # calibrate
     (["calibrate", "--shape", "sphere", LOG, "--tare-duration", "nan"], "--tare-duration", " s"),
     (["calibrate", "--shape", "sphere", LOG, "--tare-duration", "-1"], "--tare-duration", " s"),

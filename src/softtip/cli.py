@@ -699,10 +699,10 @@ and whether ours agrees.
     metavar="E1,E2,...",
     help="Run only these experiments (comma-separated ids E1–E6).",
 )
-@click.option("--seed", type=int, default=2006, show_default=True, help="Seed of the simulated sensor noise.")
+@click.option("--seed", type=click.IntRange(min=0), default=2006, show_default=True, help="Seed of the simulated sensor noise.")
 @click.option(
     "--jobs",
-    type=click.IntRange(min=1),
+    type=click.IntRange(1, 64),
     default=min(4, os.cpu_count() or 1),
     show_default="min(4, CPUs)",
     help="Worker processes.",
