@@ -19,9 +19,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from click.testing import CliRunner
 
 from softtip import EXAMPLE_PATH
 from softtip.atomic import AtomicFile, atomic_write_text, check_distinct
+from softtip.cli import main
 from softtip.errors import InputError
 from softtip.io import write_table
 
@@ -31,6 +33,12 @@ posix_only = pytest.mark.skipif(os.name != "posix", reason="FIFOs, rlimits and s
 
 def run(*args, cwd=None, **kw):
     return subprocess.run([SOFTTIP, *map(str, args)], capture_output=True, text=True, timeout=120, cwd=cwd, **kw)
+
+
+def run_here(*args):
+    """The command in-process (click's runner): (exit code, everything it printed)."""
+    result = CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
+    return result.exit_code, result.output
 
 
 def listing(folder):
@@ -64,7 +72,7 @@ def payload_log(path, n=200):
 
 
 @pytest.mark.parametrize("how", ["same", "relative", "symlink", "hardlink"])
-def test_estimate_refuses_to_overwrite_its_input(tmp_path, log, how):
+def test_estimate_refuses_to_overwrite_its_input(tmp_path, log, how, monkeypatch):
     before = log.read_bytes()
     target = {"same": log, "relative": Path("sub/../grasp.csv"), "symlink": tmp_path / "link.csv", "hardlink": tmp_path / "hard.csv"}[how]
     (tmp_path / "sub").mkdir()
@@ -72,18 +80,23 @@ def test_estimate_refuses_to_overwrite_its_input(tmp_path, log, how):
         target.symlink_to(log)
     elif how == "hardlink":
         os.link(log, target)
-    out = run("estimate", "grasp.csv", "-o", target, cwd=tmp_path)
-    assert out.returncode == 2, out.stderr
-    assert "grasp.csv" in out.stderr and str(target) in out.stderr and "Traceback" not in out.stderr
+    if how == "same":  # once through the installed command
+        out = run("estimate", "grasp.csv", "-o", target, cwd=tmp_path)
+        code, message = out.returncode, out.stderr
+    else:
+        monkeypatch.chdir(tmp_path)
+        code, message = run_here("estimate", "grasp.csv", "-o", target)
+    assert code == 2, message
+    assert "grasp.csv" in message and str(target) in message and "Traceback" not in message
     assert log.read_bytes() == before
 
 
 def test_plot_onto_output_and_outputs_onto_each_other(tmp_path, log):
-    out = run("estimate", log, "-o", tmp_path / "e.png", "--plot", tmp_path / "e.png")
-    assert out.returncode == 2 and "--plot" in out.stderr and "-o" in out.stderr
+    code, message = run_here("estimate", log, "-o", tmp_path / "e.png", "--plot", tmp_path / "e.png")
+    assert code == 2 and "--plot" in message and "-o" in message
     assert listing(tmp_path) == ["grasp.csv"]
-    out = run("estimate", log, "--plot", log.with_suffix(".png"), "--rerun-save", log.with_suffix(".png"))
-    assert out.returncode == 2 and "--rerun-save" in out.stderr
+    code, message = run_here("estimate", log, "--plot", log.with_suffix(".png"), "--rerun-save", log.with_suffix(".png"))
+    assert code == 2 and "--rerun-save" in message
     assert listing(tmp_path) == ["grasp.csv"]
 
 
@@ -97,20 +110,20 @@ def test_every_command_refuses_its_input_as_output(tmp_path, log):
     ]
     for args, victim in cases:
         before = victim.read_bytes()
-        out = run(*args)
-        assert out.returncode == 2, (args, out.stderr)
-        assert str(victim) in out.stderr and "refusing" in out.stderr, out.stderr
+        code, message = run_here(*args)
+        assert code == 2, (args, message)
+        assert str(victim) in message and "refusing" in message, message
         assert victim.read_bytes() == before
     assert listing(tmp_path) == ["free.csv", "grasp.csv"]
 
 
 def test_simulate_truth_onto_its_log_or_its_tip(tmp_path):
-    out = run("simulate", "--rate", "20", "--duration", "5", "-o", tmp_path / "s.csv", "--truth", tmp_path / "s.csv")
-    assert out.returncode == 2 and "--truth" in out.stderr and "-o" in out.stderr
+    code, message = run_here("simulate", "--rate", "20", "--duration", "5", "-o", tmp_path / "s.csv", "--truth", tmp_path / "s.csv")
+    assert code == 2 and "--truth" in message and "-o" in message
     tip = tmp_path / "tip.toml"
     tip.write_text('[fingertip]\nshape = "sphere"\nradius = 0.016\ncenter = [0, 0, 0.02]\n')
-    out = run("simulate", "--rate", "20", "--duration", "5", "--tip", tip, "-o", tmp_path / "s.csv", "--truth", tip)
-    assert out.returncode == 2 and "--tip" in out.stderr
+    code, message = run_here("simulate", "--rate", "20", "--duration", "5", "--tip", tip, "-o", tmp_path / "s.csv", "--truth", tip)
+    assert code == 2 and "--tip" in message
     assert listing(tmp_path) == ["tip.toml"]
 
 
