@@ -1,6 +1,7 @@
 # Quick start: `make demo` reproduces the papers' experiments on the simulator and runs
 # softtip on the shipped example grasp; `make test` runs the tests.
-# Both create ./.venv on first use.
+# Both create ./.venv on first use: `demo` installs softtip alone, `test` adds the test tools
+# and every optional extra (ROS bags, Net F/T, the Rerun viewer: about 1 GB).
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
@@ -8,22 +9,32 @@ OUT ?= demo-output
 
 .PHONY: demo test bench clean
 
-$(BIN)/softtip: pyproject.toml
+$(BIN)/python:
+	@echo "creating $(VENV) with $(PYTHON)"
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
-	$(BIN)/pip install --quiet -e '.[test]'
+
+# one stamp per install set, so that `make demo` never pulls the test extras
+$(VENV)/.demo-installed: pyproject.toml | $(BIN)/python
+	@echo "installing softtip and numpy, scipy, matplotlib, click, tqdm into $(VENV) (about 250 MB, a minute on first use)"
+	$(BIN)/pip install --quiet -e .
 	touch $@
 
-demo: $(BIN)/softtip
+$(VENV)/.test-installed: pyproject.toml | $(BIN)/python
+	@echo "installing softtip with pytest, hypothesis and every extra into $(VENV) (about 1 GB, a few minutes on first use)"
+	$(BIN)/pip install --quiet -e '.[test]'
+	touch $@ $(VENV)/.demo-installed
+
+demo: $(VENV)/.demo-installed
 	mkdir -p $(OUT)
 	$(BIN)/softtip reproduce --out $(OUT)/reproduction
 	$(BIN)/softtip estimate --example -o $(OUT)/estimates.csv --plot $(OUT)/estimates.png
 	@echo "wrote $(OUT)/reproduction/ (figures, summary.md) and $(OUT)/estimates.csv, .png"
 
-test: $(BIN)/softtip
+test: $(VENV)/.test-installed
 	$(BIN)/python -m pytest -q
 
-bench: $(BIN)/softtip
+bench: $(VENV)/.test-installed
 	$(BIN)/python benchmarks/bench_core.py
 	$(BIN)/python benchmarks/bench_sim.py
 	$(BIN)/python benchmarks/bench_live.py

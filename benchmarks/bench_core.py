@@ -5,13 +5,28 @@
 Prints batch samples/s for each fingertip shape (one core: numpy runs these kernels on one
 thread) and the median and 99th-percentile time of one sample through the streaming
 estimator. SPEC §6 targets: capsule batch >= 5 M samples/s; streaming median <= 20 us.
+
+Then `softtip estimate` end to end on a --samples-row log (the 1 kHz example grasp
+repeated), CSV and Parquet side by side: read (softtip.io.read_log), the pipeline
+(softtip.estimate), write (softtip.io.write_table), their total, and the `softtip estimate`
+command itself (a new process: Python start-up and imports included), in rows/s; also the
+hand-written Python CSV reader and writer that softtip used before, on the same files.
+Rates are rows per second of CPU time (the process's own, or the command's): on a shared
+machine that is the steady figure; the wall-clock time is printed beside it. SPEC §6 targets end to end: CSV >= 2 M rows/s, Parquet >= 10 M rows/s.
+Only this part: --only end-to-end.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import platform
+import resource
+import subprocess
+import sys
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -44,10 +59,14 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--samples", type=int, default=1_000_000)
     ap.add_argument("--stream-samples", type=int, default=20_000)
+    ap.add_argument("--only", choices=["end-to-end"], help="Run only this part.")
     args = ap.parse_args()
     rng = np.random.default_rng(6)
     n = args.samples
     print(f"softtip core benchmark | python {platform.python_version()} | numpy {np.__version__} | {platform.machine()}")
+    if args.only == "end-to-end":
+        end_to_end(n)
+        return
     print(f"batch contact location, {n:,} samples (best of 3; general solver: 1 run)")
 
     capsule = Capsule(0.016, 0.020)
@@ -99,6 +118,79 @@ def main() -> None:
             f"  {label:30s} median {np.median(per) * 1e6:6.1f} us   p99 {np.percentile(per, 99) * 1e6:6.1f} us"
             f"   (in contact: median {np.median(per[contact]) * 1e6:6.1f} us)"
         )
+    end_to_end(n)
+
+
+def timed(fn, repeats=2):
+    """Best wall-clock and best CPU time of ``repeats`` calls, and the last result."""
+    wall, cpu, out = [], [], None
+    for _ in range(repeats):
+        w0, c0 = time.perf_counter(), time.process_time()
+        out = fn()
+        wall.append(time.perf_counter() - w0)
+        cpu.append(time.process_time() - c0)
+    return min(wall), min(cpu), out
+
+
+def end_to_end(n: int) -> None:
+    import pyarrow
+
+    import softtip.io as sio
+    from softtip.io import read_log, write_table
+
+    g = synthetic_grasp("murakami2006", angle_deg=45.0, duration=10.0, rate=1000.0, seed=1)
+    reps = max(1, n // len(g.t))
+    t = np.arange(reps * len(g.t)) * 1e-3
+    w = np.tile(g.wrench, (reps, 1))
+    n = len(t)
+    log_columns = {"t": t, **{name: w[:, i] for i, name in enumerate(("fx", "fy", "fz", "mx", "my", "mz"))}}
+    print(f"softtip estimate end to end, {n:,}-row log (1 kHz grasp repeated), pyarrow {pyarrow.__version__}; best of 2")
+    print(f"  {'stage':34s} {'CSV: rows per CPU second':>36s} {'Parquet':>36s}")
+
+    def cell(wall, cpu):
+        return f"{n / cpu / 1e6:6.2f} M/s (CPU {cpu:5.2f} s; wall {wall:5.2f} s)"
+
+    with tempfile.TemporaryDirectory() as tmp:
+        rows: dict[str, list[str]] = {}
+        totals = {}
+        for fmt in ("csv", "parquet"):
+            src, dest = Path(tmp, f"in.{fmt}"), Path(tmp, f"out.{fmt}")
+            write_table(log_columns, src)
+            wr, cr, log = timed(lambda: read_log(src))
+            we, ce, est = timed(lambda: estimate(log.t, log.wrench, "murakami2006"))
+            cols = est.columns()
+            ww, cw, _ = timed(lambda: write_table(cols, dest))
+            size = os.path.getsize(dest) / 1e6
+            totals[fmt] = (wr + we + ww, cr + ce + cw)
+            rows.setdefault("read (read_log)", []).append(cell(wr, cr))
+            rows.setdefault("pipeline (softtip.estimate)", []).append(cell(we, ce))
+            rows.setdefault(f"write (write_table, {len(cols)} columns)", []).append(cell(ww, cw))
+            rows.setdefault("total of the three", []).append(cell(*totals[fmt]))
+            rows.setdefault("I/O alone (read + write)", []).append(cell(wr + ww, cr + cw))
+            cmd = [str(Path(sys.executable).with_name("softtip")), "estimate", str(src), "-o", str(dest)]
+            w0, c0 = time.perf_counter(), resource.getrusage(resource.RUSAGE_CHILDREN)
+            done = subprocess.run(cmd, capture_output=True, text=True)
+            wall, c1 = time.perf_counter() - w0, resource.getrusage(resource.RUSAGE_CHILDREN)
+            if done.returncode != 0:
+                raise SystemExit(done.stderr)
+            rows.setdefault("`softtip estimate` command", []).append(cell(wall, c1.ru_utime + c1.ru_stime - c0.ru_utime - c0.ru_stime))
+            rows.setdefault("output file size", []).append(f"{size:8.1f} MB".ljust(36))
+        for label, cells in rows.items():
+            print(f"  {label:34s} {cells[0]:>36s} {cells[1]:>36s}")
+
+        # the hand-written Python reader and writer softtip used before pyarrow, same files
+        src = Path(tmp, "in.csv")
+        wr, cr, _ = timed(lambda: sio._parse(sio._decode(src.read_bytes(), str(src)), str(src)))
+
+        def old_write():
+            plan = sio._plan_table(cols, "%.10g")
+            with open(Path(tmp, "old.csv"), "w", newline="") as fh:
+                fh.write(plan.header)
+                sio._write_rows_printf(fh, plan)
+
+        ww, cw, _ = timed(old_write, repeats=1)
+        print(f"  {'before: Python CSV reader':34s} {cell(wr, cr):>36s}")
+        print(f"  {'before: Python CSV writer':34s} {cell(ww, cw):>36s}")
 
 
 if __name__ == "__main__":

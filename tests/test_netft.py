@@ -5,7 +5,9 @@ run with --duration / --timeout, and every subprocess has a time limit.
 """
 
 import csv
+import select
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -14,7 +16,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-pytest.importorskip("pynetft")
 from softtip.live import RECORD_COLUMNS
 from softtip.netft import NetFTSource
 from softtip.netft_fake import FakeNetFT
@@ -118,7 +119,7 @@ def test_silent_device_times_out(tmp_path):
 def test_unreachable_device(tmp_path):
     dev = FakeNetFT(rate_hz=1000)  # bound but never started: HTTP does not answer
     try:
-        with pytest.raises(SourceError, match="cannot read the calibration"):
+        with pytest.raises(SourceError, match="expected a reachable Net F/T serving /netftapi2.xml"):
             NetFTSource(
                 "127.0.0.1", rdt_port=dev.rdt_port, http_port=dev.http_port, timeout=0.5
             ).open()
@@ -127,7 +128,8 @@ def test_unreachable_device(tmp_path):
         dev._udp.close()
 
 
-def test_sigint_keeps_every_row(tmp_path):
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
+def test_stop_signals_keep_every_row(tmp_path, sig):
     rec = tmp_path / "rec.csv"
     with FakeNetFT(rate_hz=1000) as dev:
         proc = subprocess.Popen(
@@ -142,7 +144,7 @@ def test_sigint_keeps_every_row(tmp_path):
                 time.sleep(0.05)
                 seen = rec.read_text().count("\n") - 1 if rec.exists() else 0
             assert seen >= 500, "no recording appeared"
-            proc.send_signal(signal.SIGINT)
+            proc.send_signal(sig)
             _, err = proc.communicate(timeout=15)
         finally:
             proc.kill()
@@ -155,3 +157,128 @@ def test_sigint_keeps_every_row(tmp_path):
     assert all(len(r) == len(RECORD_COLUMNS) and None not in r.values() for r in rows)
     seq = [int(r["seq"]) for r in rows]
     assert seq == list(range(seq[0], seq[0] + len(seq)))  # nothing missing on loopback
+
+
+def test_a_session_survives_network_and_device_faults(tmp_path):
+    rec = tmp_path / "rec.csv"
+    faults = dict(duplicate_every=97, reorder_every=89, malformed_every=83, status_every=500,
+                  drop_every=101, reboot_after_s=1.0, reboot_silence_s=0.6)  # fmt: skip
+    with FakeNetFT(rate_hz=1000, **faults) as dev:
+        out = subprocess.run(
+            stream_args(dev, "--duration", 2.5, "--record", rec),
+            capture_output=True,
+            text=True,
+            timeout=30,
+        )
+    assert out.returncode == 0, out.stderr
+    rows = read_rows(rec)
+    t = np.array([float(r["t"]) for r in rows])
+    seq = np.array([int(r["seq"]) for r in rows])
+    status = np.array([int(r["status"]) for r in rows])
+    host = np.array([float(r["host_time"]) for r in rows])
+    assert np.all(np.diff(t) > 0)
+    assert np.all(np.diff(host) >= 0) and abs(host[-1] - time.time()) < 60
+    # one restart: the sequence starts again, time goes on by the silence
+    (k,) = np.nonzero(np.diff(seq) < 0)[0]
+    assert seq[k + 1] == 1 and 0.6 <= t[k + 1] - t[k] <= 3.0  # 0.6 s deaf, then the next request
+    assert set(status[seq % 500 == 0]) == {0x80010000} and set(status[seq % 500 != 0]) == {0}
+    # each fault was counted, none ended the session; the columns add up to the totals
+    col = {c: np.array([int(r[c]) for r in rows]) for c in ("lost", "dropped", "late", "duplicates", "malformed")}
+    for what in ("lost", "late", "duplicates", "malformed"):
+        n = int(out.stderr.split(f" {what}")[0].rsplit(" ", 1)[-1])
+        assert n >= 5, (what, out.stderr)
+        assert n == col[what].sum() - (col["late"].sum() if what == "lost" else 0), what
+    assert "1 restarts" in out.stderr and "0 dropped by softtip" in out.stderr
+    assert "status word 0x80010000" in out.stderr and "restarted its stream" in out.stderr
+    # duplicates and late packets never reach the recording
+    assert len(set(seq[: k + 1])) == k + 1 and len(set(seq[k + 1 :])) == len(seq) - k - 1
+
+
+def test_strict_ends_the_session_on_the_named_fault(tmp_path):
+    rec = tmp_path / "rec.csv"
+    with FakeNetFT(rate_hz=1000, status_every=300, duplicate_every=50) as dev:
+        out = subprocess.run(
+            stream_args(dev, "--duration", 5, "--strict", "status", "--record", rec),
+            capture_output=True,
+            text=True,
+            timeout=30,
+        )
+    assert out.returncode == 1
+    assert "device status word 0x80010000 (fatal: --strict status)" in out.stderr
+    rows = read_rows(rec)  # what came before is kept
+    assert 250 <= len(rows) <= 299 and int(rows[-1]["seq"]) == 299
+    out = subprocess.run([*stream_args(dev, "--strict", "statuss")], capture_output=True, text=True, timeout=30)
+    assert out.returncode == 2 and "--strict: unknown fault(s) statuss" in out.stderr
+
+
+def _stop_when(args, sig, ready):
+    """Run ``args``; once ``ready()`` (polled, at most 20 s), send ``sig``; how it ended."""
+    proc = subprocess.Popen(args, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 20
+        while not ready() and time.monotonic() < deadline and proc.poll() is None:
+            time.sleep(0.05)
+        assert ready(), "the command never got there"
+        t0 = time.monotonic()
+        proc.send_signal(sig)
+        _, err = proc.communicate(timeout=15)
+        return proc.returncode, err, time.monotonic() - t0
+    finally:
+        proc.kill()
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_a_stop_during_discovery_is_immediate(tmp_path, sig):
+    # an HTTP port that accepts connections and never answers
+    with socket.create_server(("127.0.0.1", 0)) as http, socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as udp:
+        udp.bind(("127.0.0.1", 0))
+        args = [SOFTTIP, "stream", "--netft", "127.0.0.1", "--rdt-port", udp.getsockname()[1],
+                "--http-port", http.getsockname()[1], "--timeout", 30, "--record", tmp_path / "r.csv"]  # fmt: skip
+        asked = lambda: bool(select.select([http], [], [], 0)[0])  # softtip connected: discovery
+        code, err, waited = _stop_when([str(a) for a in args], sig, asked)
+    assert code == 0 and "interrupted before the first sample" in err, err
+    assert waited < 5  # not the 30 s time-out
+    assert not (tmp_path / "r.csv").exists()
+
+
+def test_a_stop_during_a_silent_stream_is_immediate(tmp_path):
+    rec = tmp_path / "rec.csv"
+    # the device goes quiet after 300 records; the time-out is far away
+    with FakeNetFT(rate_hz=1000, mangle=lambda seq, r: [r] if seq <= 300 else []) as dev:
+        silent = lambda: rec.exists() and rec.read_text().count("\n") == 301
+        code, err, waited = _stop_when(stream_args(dev, "--timeout", 30, "--record", rec), signal.SIGINT, silent)
+    assert code == 0 and "interrupted" in err, err
+    assert waited < 5
+    assert len(read_rows(rec)) == 300 and rec.read_text().endswith("\n")
+
+
+def test_queue_overflow_is_counted_as_dropped_not_lost():
+    with FakeNetFT(rate_hz=2000) as dev:
+        with NetFTSource("127.0.0.1", rdt_port=dev.rdt_port, http_port=dev.http_port, timeout=2.0,
+                         buffer_s=0.05, max_rate_hz=2000) as src:  # fmt: skip
+            n = 0
+            for r in src:
+                n += 1
+                if n == 10:
+                    time.sleep(0.5)  # a stalled consumer: the 100-record queue overflows
+                if n == 1200:
+                    break
+            c = src.counters()
+    assert c["dropped"] >= 500 and c["lost"] == 0, c
+    assert src.tracker.dropped == c["dropped"] - len(src.tracker.local_drops)
+
+
+def test_the_view_shows_every_counter_the_status_and_the_latest_warning():
+    import io
+
+    from softtip.live import LiveStats, TerminalView
+
+    counters = {"lost": 4, "dropped": 7, "duplicates": 2, "late": 3, "malformed": 5, "restarts": 1, "stalls": 6,
+                "status_records": 9}  # fmt: skip
+    stats = LiveStats(received=996, counters=lambda: counters, warnings=lambda: ["first", "device status word 0x80010000"],
+                      status=0, last_nonzero_status=0x80010000)  # fmt: skip
+    text = "\n".join(TerminalView(stats, out=io.StringIO()).render())
+    for part in ("lost 4 (0.40 %)", "late 3", "duplicates 2", "malformed 5", "dropped by softtip 7",
+                 "status 0x00000000", "nonzero in 9 samples (last 0x80010000)", "restarts 1", "stalled 6",
+                 "warning  device status word 0x80010000  (+1 more)"):  # fmt: skip
+        assert part in text, (part, text)

@@ -7,13 +7,14 @@ from numpy.testing import assert_allclose
 
 from softtip import Capsule, Estimator, EstimatorConfig, Sphere, axial_difference, estimate
 from softtip.depth import MURAKAMI2006_DEPTH
+from softtip.estimator.results import EstimatorWarning
 from softtip.synthetic import synthetic_grasp
 from softtip.units import KGF, KGF_MM
 
 FIELDS_3 = ("wrench", "point", "normal", "h", "direction")
 FIELDS_1 = ("sigma", "h_norm", "h_std", "angle", "angle_std", "depth", "joint_conditioning", "joint_angle_std",
             "joint_offset_std", "joint_residual")  # fmt: skip
-FLAGS = ("latched", "latch_fallback", "pulling", "taring", "relatched", "joint_fallback")
+FLAGS = ("latched", "latch_fallback", "pulling", "taring", "relatched", "joint_fallback", "contact_id")
 
 
 def assert_stream_equals_batch(t, w, tip, config):
@@ -26,6 +27,8 @@ def assert_stream_equals_batch(t, w, tip, config):
     for name in FLAGS:
         got = np.array([getattr(s, name) for s in stream])
         assert (got == getattr(batch, name)).all(), name
+    drift = np.array([s.drift for s in stream], dtype=float)
+    assert_allclose(drift, batch.drift, rtol=1e-12, atol=1e-300, equal_nan=True, err_msg="drift")
     return batch
 
 
@@ -75,13 +78,56 @@ CASES = {
     "joint-depth-relatch-lowpass": EstimatorConfig(
         contact_point="joint", depth=MURAKAMI2006_DEPTH, relatch_distance=3e-3, lowpass_hz=8.0, sample_rate=50.0
     ),
+    # tare, drift and hysteresis (issue 13 items 9, 10, 14)
+    "mean-tare": EstimatorConfig(tare_method="mean"),
+    "single-threshold": EstimatorConfig(contact_hysteresis=0.0),
+    "min-duration-fast-drift": EstimatorConfig(contact_min_duration=0.05, drift_time_constant=0.3),
+    "fast-drift-lowpass": EstimatorConfig(drift_time_constant=0.2, lowpass_hz=8.0, sample_rate=50.0),
+    "drift-reported-only": EstimatorConfig(track_drift=False, drift_time_constant=0.5),
 }
 
 
-@pytest.mark.parametrize("name", CASES)
-@pytest.mark.parametrize("log", ["single", "two-contacts", "impact", "sliding"])
-def test_stream_agrees_with_batch(name, log):
-    if log == "sliding":
+def drifting_grasp():
+    # untouched for 12 s while the bias drifts 5.4 mN/s (and the moment 1 µN·m/s), with 1 N
+    # spikes of one and two samples; then a grasp, released at 22 s; untouched again to 30 s
+    rng = np.random.default_rng(10)
+    t = np.arange(1500) / 50.0
+    g = synthetic_grasp(angle_deg=30.0, seed=None, noise=None, duration=10.0)
+    w = g.bias + rng.normal(size=(len(t), 6)) * np.r_[[0.006] * 3, [3e-5] * 3]
+    w[:, :3] += np.array([-4e-3, 2e-3, -3e-3]) * t[:, None]
+    w[:, 3:] += 1e-6 * t[:, None]
+    w[[150, 250, 251], 2] += 1.0
+    w[600:1100] += g.wrench_true
+    return t, w
+
+
+def tare_in_contact():
+    # the log starts in contact (held grasp) with a spike among the tare samples, then releases
+    g = synthetic_grasp(angle_deg=45.0, seed=9, duration=14.0, h_start=1.0)
+    w = g.wrench.copy()
+    late = g.t > 10.0
+    w[late] = g.bias + (w[late] - g.wrench_true[late] - g.bias)
+    k = g.t >= 5.0
+    w = w[k]
+    w[3, 0] -= 20.0
+    return g.t[k] - 5.0, w
+
+
+NEW_LOG_CASES = ["latch", "latch-lowpass", "track", "joint", "given-bias", "mean-tare", "single-threshold",
+                 "min-duration-fast-drift", "fast-drift-lowpass", "drift-reported-only"]  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    "name, log",
+    [(name, log) for log in ("single", "two-contacts", "impact", "sliding") for name in CASES]
+    + [(name, log) for log in ("drifting", "tare-in-contact") for name in NEW_LOG_CASES],
+)
+def test_stream_agrees_with_batch(name, log, recwarn):
+    if log == "drifting":
+        t, w = drifting_grasp()
+    elif log == "tare-in-contact":
+        t, w = tare_in_contact()
+    elif log == "sliding":
         t, w = sliding_grasp()
     elif log == "single":
         g = synthetic_grasp(angle_deg=45.0, seed=1)
@@ -90,7 +136,12 @@ def test_stream_agrees_with_batch(name, log):
         t, w = grasp_with_two_contacts()
     else:
         t, w = impact_grasp()
-    assert_stream_equals_batch(t, w, "murakami2006", CASES[name])
+    batch = assert_stream_equals_batch(t, w, "murakami2006", CASES[name])
+    stream = Estimator("murakami2006", CASES[name])
+    stream.process(t, w)
+    assert stream.warnings == list(batch.warnings)
+    assert (stream.started_in_contact, stream.drift_alarm) == (batch.started_in_contact, batch.drift_alarm)
+    assert stream.contacts == batch.n_contacts
 
 
 def test_stream_agrees_with_batch_on_a_sphere_with_pulling_samples(rng):
@@ -213,14 +264,29 @@ def test_config_rejects_nonsense():
         Estimator("murakami2006", EstimatorConfig(lowpass_hz=5.0))
 
 
-def test_stream_rejects_time_going_back():
+def test_stream_accepts_repeated_time_and_rejects_time_going_back():
     est = Estimator("murakami2006")
     est.update(0.0, np.zeros(6))
-    with pytest.raises(ValueError, match="time must increase"):
-        est.update(0.0, np.zeros(6))
+    est.update(0.0, np.zeros(6))  # a repeated stamp (a driver's duplicate) is accepted and counted
+    assert est.repeated_stamps == 1
+    with pytest.raises(ValueError, match="time must not go back"):
+        est.update(-0.001, np.zeros(6))
+
+
+def test_repeated_stamps_batch_equals_stream():
+    g = synthetic_grasp(angle_deg=30.0, seed=3)
+    t = g.t.copy()
+    t[[100, 250, 251]] = t[[99, 249, 249]]  # three repeated stamps, one of them twice in a row
+    for config in (EstimatorConfig(), EstimatorConfig(lowpass_hz=10.0, sample_rate=50.0)):
+        assert_stream_equals_batch(t, g.wrench, "murakami2006", config)
+    assert estimate(t, g.wrench).repeated_stamps == 3
+    with pytest.raises(ValueError, match="time must not go back: sample 11"):
+        estimate(np.r_[t[:11], t[9], t[12:]], g.wrench)
 
 
 def test_log_shorter_than_the_tare_is_all_taring():
     t = np.arange(5) / 50.0
-    est = estimate(t, np.zeros((5, 6)), Capsule(0.016, 0.02))
+    with pytest.warns(EstimatorWarning, match="whole log lies within the first 0.2 s"):
+        est = estimate(t, np.zeros((5, 6)), Capsule(0.016, 0.02))
     assert est.taring.all() and (est.state == 0).all()
+    assert any("whole log" in m for m in est.warnings)

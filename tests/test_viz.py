@@ -111,7 +111,6 @@ main({args!r})
     "module, args, extra",
     [
         ("rosbags", ["estimate", "--example", "--to-bag", "{tmp}/b"], "ros"),
-        ("pynetft", ["stream", "--netft", "127.0.0.1", "--timeout", "0.2"], "netft"),
         ("rerun", ["estimate", "--example", "--rerun-save", "{tmp}/v.rrd"], "viz"),
     ],
 )

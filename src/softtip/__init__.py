@@ -20,8 +20,9 @@ from softtip.fingertip import (
     load_fingertip,
     murakami2006,
 )
+from softtip.mounting import Mounted
 from softtip.noise import NANO17, SensorNoise, direction_angle_std, tangential_spin_torque_std
-from softtip.pipeline import STATES, Estimates, Estimator, EstimatorConfig, SampleEstimate, estimate
+from softtip.estimator import STATES, Estimates, Estimator, EstimatorConfig, EstimatorWarning, SampleEstimate, estimate
 from softtip.sources import run
 from softtip.spin import direction_angle, edge_direction, spin_torque, tangent_frame, tangential_spin_torque
 from softtip.units import KGF, KGF_MM, wrench_from_si, wrench_to_si
@@ -36,11 +37,13 @@ __all__ = [
     "Estimates",
     "Estimator",
     "EstimatorConfig",
+    "EstimatorWarning",
     "Fingertip",
     "ImplicitSurface",
     "InputError",
     "KGF",
     "KGF_MM",
+    "Mounted",
     "NANO17",
     "PRESETS",
     "STATES",

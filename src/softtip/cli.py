@@ -6,6 +6,7 @@ import math
 import os
 import shutil
 import sys
+import warnings
 from pathlib import Path
 
 import click
@@ -17,7 +18,8 @@ from softtip.cli_types import PORT, Number, check_lowpass, check_pair_increasing
 from softtip.errors import InputError
 from softtip.fingertip import PRESETS, load_fingertip
 from softtip.depth import MURAKAMI2006_DEPTH, DepthLaw
-from softtip.joint import MODEL_MARGIN
+from softtip.estimator.results import DRIFT_COLUMNS, EstimatorWarning
+from softtip.estimator.tare import bias_to_toml, load_bias
 from softtip.noise import NANO17, SensorNoise
 from softtip.pipeline import STATES, EstimatorConfig
 from softtip.pipeline import estimate as run_estimate
@@ -43,8 +45,8 @@ MIN_SPEED, MAX_SPEED = 1e-3, 1e6
 #: stream --timeout upper bound, s (a day; longer waits overflow the host's timers)
 MAX_TIMEOUT = 86400.0
 
-_FORCE_COLUMNS = ("fx", "fy", "fz")
-_MOMENT_COLUMNS = ("mx", "my", "mz", "sigma", "hx", "hy", "hz", "h_norm", "h_std")
+_FORCE_COLUMNS = ("fx", "fy", "fz") + DRIFT_COLUMNS[:3]
+_MOMENT_COLUMNS = ("mx", "my", "mz", "sigma", "hx", "hy", "hz", "h_norm", "h_std") + DRIFT_COLUMNS[3:]
 
 
 class _Group(click.Group):
@@ -127,7 +129,55 @@ _ESTIMATOR_OPTIONS = [
         default=0.2,
         show_default=True,
         metavar="S",
-        help="Average the first S seconds (fingertip untouched) as the sensor bias; 0 if INPUT is already tared.",
+        help="Take the first S seconds (fingertip untouched) as the sensor bias; 0 if INPUT is already tared.",
+    ),
+    click.option(
+        "--tare-method",
+        type=click.Choice(["robust", "median", "mean"]),
+        default="robust",
+        show_default=True,
+        help="How the tare samples make the bias: robust (the mean of the samples that are not spikes), median, "
+        "or mean (of all: a spike moves it).",
+    ),
+    click.option(
+        "--bias",
+        "bias_file",
+        type=click.Path(dir_okay=False),
+        metavar="FILE.toml",
+        help="Subtract this sensor bias instead of taring ([bias] force = [N, N, N], moment = [N·m, N·m, N·m]; "
+        "written by --save-bias or calibrate-payload).",
+    ),
+    click.option(
+        "--hysteresis",
+        type=NON_NEGATIVE("noise standard deviations"),
+        default=3.0,
+        show_default=True,
+        metavar="SIGMAS",
+        help="Contact ends below --contact-threshold minus this many standard deviations of the noise of |f| "
+        "(from --force-noise, after --lowpass; at least half the threshold); 0: one threshold.",
+    ),
+    click.option(
+        "--min-contact-duration",
+        type=NON_NEGATIVE("s"),
+        default=0.005,
+        show_default=True,
+        metavar="S",
+        help="A contact is reported once |f| has stayed above the release threshold this long, each sample counting "
+        "for its sampling interval (a shorter spike is no contact).",
+    ),
+    click.option(
+        "--drift-time-constant",
+        type=POSITIVE("s"),
+        default=10.0,
+        show_default=True,
+        metavar="S",
+        help="While untouched, follow the sensor's bias drift with a moving average of this time constant.",
+    ),
+    click.option(
+        "--drift-tracking/--no-drift-tracking",
+        default=True,
+        show_default=True,
+        help="Subtract the drift followed while untouched (--no-drift-tracking: report it only, the papers').",
     ),
     click.option("--contact-threshold", type=NON_NEGATIVE("N"), default=0.05, show_default=True, metavar="N", help="In contact while |f| is at least this, N."),
     click.option(
@@ -192,10 +242,13 @@ def _estimator_options(f):
 from a force/torque log.
 
 INPUT is a CSV file with a header row and columns t, fx, fy, fz, mx, my, mz (t in s,
-increasing; extra columns are kept and copied to the output). '-' reads standard input.
-With --example, softtip's shipped example grasp is used instead.
+non-decreasing: repeated stamps are counted and reported; extra columns are kept and copied
+to the output), or a Parquet file with those columns (name ending in .parquet; its
+softtip.units metadata gives the units). '-' reads CSV from standard input. With
+--example, softtip's shipped example grasp is used instead.
 
-The output CSV (standard output unless -o) has the columns t, state (none|point|line),
+The output CSV (standard output unless -o; Parquet when -o ends in .parquet, with the
+units and the fingertip in its key-value metadata) has the columns t, state (none|point|line),
 fx..mz (the wrench after bias removal and filtering, the one the estimates come from),
 rx, ry, rz (contact point, m), nx, ny, nz (outward normal), sigma (spin torque about the
 normal, N·m), hx, hy, hz, h_norm (tangential spin torque, N·m), dx, dy, dz (direction of
@@ -206,7 +259,9 @@ angle_std_deg, latched, latch_fallback, relatched (a new latch starts here), dep
 joint_offset_std (m), joint_residual and joint_fallback (the sliding window of
 --contact-point joint: reciprocal condition number, standard deviations of its line angle
 and offset, RMS fit residual in noise standard deviations, and whether the latched point
-is used because no window has been accepted yet), then the input's extra columns. r, n, h are empty
+is used because no window has been accepted yet), contact_id (1, 2, ... per contact, 0
+out of contact), drift_fx..drift_mz (the bias drift followed while untouched since the
+tare, N and N·m), then the input's extra columns. r, n, h are empty
 (nan) when state is none; d and the angle only for line contacts, where |h| stands out of
 the noise.
 
@@ -223,13 +278,12 @@ the raw wrench; with --to-bag and no -o no CSV is written.
 )
 @click.argument("input_path", metavar="INPUT", required=False, type=click.Path(allow_dash=True))
 @click.option("--example", is_flag=True, help="Use the shipped example grasp (a 45° line contact, murakami2006 tip) as INPUT.")
-@click.option("-o", "--output", type=click.Path(dir_okay=False, writable=True), help="Output CSV (default: standard output).")
+@click.option("-o", "--output", type=click.Path(dir_okay=False, writable=True), help="Output CSV, or Parquet for a name ending in .parquet (default: CSV on standard output).")
 @click.option(
     "--units",
     type=click.Choice(UNIT_SYSTEMS),
-    default="si",
-    show_default=True,
-    help="Units of the input wrench: si (N, N·m) or kgf-mm (kgf, kgf·mm, the papers').",
+    default=None,
+    help="Units of the input wrench: si (N, N·m) or kgf-mm (kgf, kgf·mm, the papers').  [default: si, or a Parquet INPUT's own]",
 )
 @click.option(
     "--output-units",
@@ -246,6 +300,7 @@ the raw wrench; with --to-bag and no -o no CSV is written.
 @click.option("--rerun", "rerun_spawn", is_flag=True, help="Show the fingertip, force, contact point, normal and edge in a Rerun viewer (softtip[viz]).")
 @click.option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save the Rerun 3-D view and time series to FILE.rrd (open with `rerun FILE.rrd`).")
 @click.option("--payload", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Remove the fingertip's weight ([payload] mass kg, com m; see calibrate-payload) before taring, using INPUT's qw, qx, qy, qz columns (sensor frame in a z-up world frame).")
+@click.option("--save-bias", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Write the bias used (the tare's) to FILE.toml, for --bias of a later run.")
 @_estimator_options
 def estimate(
     input_path,
@@ -261,6 +316,7 @@ def estimate(
     rerun_save,
     tip,
     payload=None,
+    save_bias=None,
     allow_partial=False,
     **estimator_opts,
 ):
@@ -269,13 +325,14 @@ def estimate(
 
     if example == (input_path is not None):
         raise click.UsageError("give either INPUT or --example")
-    if example and units != "si":
+    if example and units not in (None, "si"):
         raise click.UsageError("--units applies to INPUT; the example grasp is in SI")
     if plot_path is not None:
         _check_figure_path(plot_path)
     _check_outputs(
-        [("INPUT", None if example else input_path), ("--payload", payload), ("--tip", tip if os.path.isfile(tip) else None)],
-        [("-o", output), ("--plot", plot_path), ("--to-bag", to_bag), ("--rerun-save", rerun_save)],
+        [("INPUT", None if example else input_path), ("--payload", payload), ("--tip", tip if os.path.isfile(tip) else None),
+         ("--bias", estimator_opts.get("bias_file"))],
+        [("-o", output), ("--plot", plot_path), ("--to-bag", to_bag), ("--rerun-save", rerun_save), ("--save-bias", save_bias)],
     )
     fingertip = load_fingertip(tip)
     config = _make_config(estimator_opts)
@@ -291,6 +348,7 @@ def estimate(
         _bag_warnings(input_path, bag_log)
         # t counts from the first message; the absolute stamps go along as an extra column
         extra = {"stamp_ns": [str(v) for v in bag_log.stamps_ns.tolist()]}
+        units = units or "si"
         log = Log(t=bag_log.t, wrench=wrench_to_si(bag_log.wrench, units), extra=extra, source=bag_log.source, units=units)
         frames = ", ".join(repr(f) for f in bag_log.frame_ids)
         click.echo(
@@ -303,7 +361,11 @@ def estimate(
     else:
         if os.path.isdir(input_path):
             raise InputError(f"{input_path}: is a directory but not a ROS bag (no metadata.yaml); expected a CSV log or a bag")
-        log = read_log(input_path, units=units)
+        size = os.path.getsize(input_path) if os.path.isfile(input_path) else 0
+        with _progress_bar(size, "reading", unit="B") as bar:
+            log = read_log(input_path, units=units, progress=bar.update)
+    for note in log.warnings:  # repeated stamps, an implausible time scale, a cut last line
+        click.echo(f"softtip: warning: {note}", err=True)
     if topic is not None and bag_log is None:
         raise click.UsageError("--topic applies to bag input only")
     if allow_partial and bag_log is None:
@@ -314,10 +376,12 @@ def estimate(
         log = compensate_log(log, payload)
     check_lowpass(estimator_opts["lowpass"], log.t)
     try:
-        est = run_estimate(log.t, log.wrench, fingertip, config)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", EstimatorWarning)  # printed below, from est.warnings
+            est = run_estimate(log.t, log.wrench, fingertip, config)
     except ValueError as exc:  # e.g. a low-pass cutoff above Nyquist for this log's rate
         raise click.UsageError(str(exc)) from None
-    _check_units(est, fingertip, config, units, log.source)
+    _check_units(est, fingertip, config, log.units, log.source)
 
     columns = est.columns()
     if output_units == "kgf-mm":
@@ -333,10 +397,20 @@ def estimate(
         est, columns, log, bag_log, config, fingertip,
         output=output, plot_path=plot_path, plot_units=plot_units, title=f"softtip: {source}",
         to_bag=to_bag, rerun_spawn=rerun_spawn, rerun_save=rerun_save,
+        metadata=_parquet_metadata(fingertip, tip, output_units, log),
     )  # fmt: skip
 
     counts = {name: int(np.count_nonzero(est.state == code)) for code, name in enumerate(STATES)}
-    _tare_warnings(est, config)
+    _tare_warnings(est)
+    if save_bias is not None:
+        if any(p is not None and Path(p).resolve() == Path(save_bias).resolve() for p in (input_path, output, plot_path)):
+            raise InputError(f"--save-bias {save_bias}: is also an input or output of this run")
+        if not np.all(np.isfinite(est.bias)):
+            raise InputError(f"--save-bias {save_bias}: no bias: the whole log lies within the tare")
+        from softtip.calibration import atomic_write_text
+
+        atomic_write_text(save_bias, bias_to_toml(est.bias, f"softtip sensor bias ({est.tare.summary()})"))
+        click.echo(f"softtip: bias -> {save_bias}", err=True)
     if est.n_pulling:
         click.echo(
             f"softtip: warning: {est.n_pulling} sample(s) in contact by force had no contact point where the force "
@@ -346,7 +420,10 @@ def estimate(
     targets = [p for p in (output, to_bag, rerun_save) if p is not None]
     if targets:
         summary = ", ".join(f"{v} {k}" for k, v in counts.items())
-        click.echo(f"softtip: {len(est)} samples ({summary}) -> {', '.join(map(str, targets))}", err=True)
+        click.echo(
+            f"softtip: {len(est)} samples ({summary}; {est.n_contacts} contact(s)) -> {', '.join(map(str, targets))}",
+            err=True,
+        )
         if counts["line"]:
             line = est.state == 2
             ang = np.degrees(axial_median(est.angle[line]))
@@ -380,7 +457,8 @@ def _check_outputs(inputs, outputs) -> None:
 
 
 def _write_estimate_outputs(
-    est, columns, log, bag_log, config, fingertip, *, output, plot_path, plot_units, title, to_bag, rerun_spawn, rerun_save
+    est, columns, log, bag_log, config, fingertip, *, output, plot_path, plot_units, title, to_bag, rerun_spawn, rerun_save,
+    metadata,
 ) -> None:
     """Write every output of ``estimate``; all appear together, or none (and no temporary file stays)."""
     import io as _io
@@ -422,15 +500,13 @@ def _write_estimate_outputs(
             else:
                 bag.write_estimates_bag(to_bag, est, log.wrench)
             bag_written = True
+        # the table last, atomically (softtip.atomic, through write_table); then the others are put in place
         if output is not None:
-            pending.append(AtomicFile(output))
-            try:
-                with pending[-1].open() as fh:
-                    write_table(columns, fh)
-            except OSError as exc:
-                raise cannot_write(output, exc) from None
+            with _progress_bar(len(est), "writing") as bar:
+                write_table(columns, output, metadata=metadata, progress=bar.update)
         elif to_bag is None:
-            write_stdout(lambda out: write_table(columns, out))
+            with _progress_bar(len(est), "writing") as bar:
+                write_stdout(lambda out: write_table(columns, out, progress=bar.update))
         commit_all(pending)
         bag_written = False  # every output is in place: keep the bag
     finally:
@@ -438,6 +514,36 @@ def _write_estimate_outputs(
             f.discard()
         if bag_written:
             shutil.rmtree(to_bag, ignore_errors=True)
+
+
+def _progress_bar(total: int, what: str, *, unit: str = " rows", file=None, delay: float = 2.0):
+    """A tqdm bar on standard error, shown only on a terminal and only after ``delay`` s."""
+    from tqdm import tqdm
+
+    file = sys.stderr if file is None else file
+    tty = file.isatty()
+    size = {}
+    try:
+        if tty and os.get_terminal_size(file.fileno()).lines <= 0:  # a pty with no size: tqdm would draw nothing
+            size = {"ncols": 80, "nrows": 20}
+    except (OSError, ValueError, AttributeError):
+        size = {"ncols": 80, "nrows": 20}
+    return tqdm(
+        total=total, desc=f"softtip: {what}", unit=unit, unit_scale=True, file=file, delay=delay,
+        disable=not tty, leave=False, **size,
+    )  # fmt: skip
+
+
+def _parquet_metadata(fingertip, tip: str, output_units: str, log) -> dict[str, str]:
+    """Key-value metadata of a Parquet output: units, fingertip, input, softtip's version."""
+    from softtip.io import PARQUET_FINGERTIP_KEY, PARQUET_UNITS_KEY
+
+    meta = {PARQUET_UNITS_KEY: output_units, "softtip.tip": str(tip), "softtip.input": log.source, "softtip.version": __version__}
+    try:
+        meta[PARQUET_FINGERTIP_KEY] = fingertip.to_toml()
+    except (NotImplementedError, AttributeError, TypeError, ValueError):  # e.g. a callable surface
+        pass
+    return meta
 
 
 def _check_figure_path(path: str) -> None:
@@ -452,44 +558,12 @@ def _check_figure_path(path: str) -> None:
         raise InputError(f"{path}: folder {str(p.parent)!r} does not exist")
 
 
-def _tare_warnings(est, config: EstimatorConfig) -> None:
-    """Say what the tare did, and when it cannot have been right."""
-    if not est.taring.any():
-        return
-    if est.taring.all():
-        click.echo(
-            f"softtip: warning: the whole log lies within the first {config.tare_duration:g} s used to tare the "
-            "sensor; nothing was estimated (give --tare-duration 0 for a log that is already tared)",
-            err=True,
-        )
-        return
-    f, m = est.bias[:3], est.bias[3:] * 1e3
-    click.echo(
-        f"softtip: bias from the first {config.tare_duration:g} s: force ({f[0]:+.4f}, {f[1]:+.4f}, {f[2]:+.4f}) N, "
-        f"moment ({m[0]:+.4f}, {m[1]:+.4f}, {m[2]:+.4f}) N·mm",
-        err=True,
-    )
-    if est.tare_force_std > 5.0 * max(config.noise.force_std):
-        click.echo(
-            f"softtip: warning: the force varied by {est.tare_force_std:.3g} N (standard deviation) while taring, far "
-            f"above the sensor noise ({max(config.noise.force_std):g} N): was the fingertip touched in the first "
-            f"{config.tare_duration:g} s? The bias, and every estimate, would then be wrong (--tare-duration 0 for a "
-            "log that is already tared)",
-            err=True,
-        )
-        return
-    # joint mode counts as excitation only what exceeds the noise model by MODEL_MARGIN (in
-    # variance); two standard errors of the tare's own estimate of the noise on top
-    n_tare = int(est.taring.sum())
-    model = max(config.noise.force_std)
-    limit = model * math.sqrt(1.0 + MODEL_MARGIN) * (1.0 + 2.0 / math.sqrt(2.0 * max(n_tare - 1, 1)))
-    if config.contact_point == "joint" and n_tare > 1 and est.tare_force_std > limit:
-        click.echo(
-            f"softtip: warning: the force noise while taring ({est.tare_force_std:.3g} N standard deviation) exceeds "
-            f"the noise model ({model:g} N); --contact-point joint would take the excess noise for excitation at "
-            "high sample rates: give this sensor's --force-noise and --moment-noise",
-            err=True,
-        )
+def _tare_warnings(est) -> None:
+    """Say what the tare did, and every warning of the estimator (all from the library)."""
+    if est.tare is not None and est.tare.source != "none" and np.all(np.isfinite(est.bias)):
+        click.echo(f"softtip: {est.tare.summary()}", err=True)
+    for msg in est.warnings:
+        click.echo(f"softtip: warning: {msg}", err=True)
 
 
 def _make_config(opts: dict, sample_rate: float | None = None) -> EstimatorConfig:
@@ -510,6 +584,12 @@ def _make_config(opts: dict, sample_rate: float | None = None) -> EstimatorConfi
             lowpass_hz=opts["lowpass"],
             sample_rate=sample_rate,
             tare_duration=opts["tare_duration"],
+            tare_method=opts["tare_method"],
+            bias=None if opts["bias_file"] is None else load_bias(opts["bias_file"]),
+            contact_hysteresis=opts["hysteresis"],
+            contact_min_duration=opts["min_contact_duration"],
+            drift_time_constant=opts["drift_time_constant"],
+            track_drift=opts["drift_tracking"],
             relatch_distance=None if relatch is None else relatch * 1e-3,
             depth=depth,
             joint_window=opts["joint_window"],
@@ -544,21 +624,35 @@ def _optional(module: str, extra: str):
 
 With --netft HOST softtip reads the calibration (counts per force and torque unit, units)
 from the sensor over HTTP (/netftapi2.xml), streams RDT records over UDP, converts them to
-SI and runs the streaming estimator on every sample (needs softtip[netft]). With --replay
+SI and runs the streaming estimator on every sample. With --replay
 LOG.csv the log is fed through the same path at its recorded rate times --speed (0: as
 fast as possible).
 
-Taring: the first --tare-duration seconds (0.2 s) are averaged as the sensor bias, so keep
-the fingertip untouched when the stream starts; --device-bias also zeroes the sensor
-itself first.
+Taring: the first --tare-duration seconds (0.2 s) make the sensor bias, so keep
+the fingertip untouched when the stream starts (or give --bias FILE); the t key of the
+terminal view tares again from the next samples; --device-bias also zeroes the sensor
+itself first. The tare is checked (spikes, noise above the noise model, a stream that
+starts in contact) and the drift followed while untouched; warnings are shown in the view
+and at the end.
 
 The terminal view (standard error, redrawn a few times a second when it is a terminal)
-shows the state, contact point, normal, |h|, edge angle ± std, sample rate, lost packets
-(gaps in the RDT sequence) and samples dropped by softtip itself. --record FILE.csv writes
-every sample as it comes (flushed every 0.05 s) with the columns of `softtip estimate`,
-then raw_fx..raw_mz (the untared wrench), seq (RDT sequence or row) and lost (packets
-missing just before this one). Ctrl-C stops cleanly (exit 0); so do --duration and the end
-of a replayed log. No data for --timeout seconds is an error (exit 1).
+shows the state, contact point, normal, |h|, edge angle ± std, sample rate, and what the
+stream went through: packets lost on the network, late and duplicate packets (dropped),
+malformed datagrams, samples dropped by softtip's own queue, the device's status word,
+restarts and F/T-sequence stalls, and the latest warning; the device's rate (comrdtrate)
+is checked against the host clock (a difference over 2 % is warned about). None of these
+ends the stream unless named in --strict (then exit 1).
+
+--record FILE.csv writes every sample as it comes (flushed every 0.05 s, always whole
+lines): t and the raw wrench fx..mz first (the file is a log that `softtip estimate` and
+--replay read as it is), then the columns of `softtip estimate` with its tared wrench as
+fx_tared..mz_tared, then seq (RDT sequence or row), lost and dropped (records missing just
+before this one: on the network or still to come late / dropped by this host), late,
+duplicates and malformed (discarded since the previous row), status (the device's status
+word) and host_time (host receive time, s since the Unix epoch). Ctrl-C, SIGTERM and
+SIGHUP stop cleanly (exit 0, every row taken written), also during discovery or a silent
+stream; so do --duration and the end of a replayed log. No data for --timeout seconds is
+an error (exit 1).
 
 """
     + FRAMES_HELP
@@ -571,6 +665,7 @@ of a replayed log. No data for --timeout seconds is an error (exit 1).
 @click.option("--http-port", type=PORT, default=80, show_default=True, help="HTTP port of the sensor's web server (calibration).")
 @click.option("--timeout", type=Number("s", 0.0, MAX_TIMEOUT, min_open=True), default=2.0, show_default=True, metavar="S", help="Give up after S seconds without data from the sensor.")
 @click.option("--device-bias", is_flag=True, help="Send the sensor's own bias (zero) command at start, before softtip's tare.")
+@click.option("--strict", metavar="FAULTS", default="", help="Comma-separated faults that end the stream (exit 1): status, restart, stall, lost, duplicate, late, malformed, dropped, or all. Default: none (counted, warned).")
 @click.option("--duration", type=POSITIVE("s"), metavar="S", help="Stop after S seconds (default: until Ctrl-C or the end of the replayed log).")
 @click.option("--record", type=click.Path(dir_okay=False), metavar="FILE.csv", help="Record raw samples and estimates to FILE.csv as they come.")
 @click.option("--view/--no-view", default=None, help="Live terminal view (default: when standard error is a terminal).")
@@ -589,6 +684,7 @@ def stream(
     http_port,
     timeout,
     device_bias,
+    strict,
     duration,
     record,
     view,
@@ -601,9 +697,10 @@ def stream(
     import signal
     import threading
 
-    from softtip.live import LiveStats, Recorder, TerminalView, run_live
+    from softtip.live import KeyReader, LiveStats, Recorder, TerminalView, run_live
+    from softtip.netft import FAULTS
     from softtip.pipeline import Estimator
-    from softtip.sources import LogSource, SourceError
+    from softtip.sources import Interrupted, LogSource, SourceError
 
     if (host is None) == (replay is None):
         raise click.UsageError("give either --netft HOST or --replay LOG.csv")
@@ -614,31 +711,46 @@ def stream(
             f"{speed:g}; expected 0 (as fast as possible) or a number in [{MIN_SPEED:g}, {MAX_SPEED:g}] × real time",
             param_hint="'--speed'",
         )
+    faults = {f.strip() for f in strict.split(",") if f.strip()}
+    if "all" in faults:
+        faults = set(FAULTS)
+    if faults - set(FAULTS):
+        raise click.UsageError(f"--strict: unknown fault(s) {', '.join(sorted(faults - set(FAULTS)))}; expected some of {', '.join(FAULTS)} or all")
+    if faults and host is None:
+        raise click.UsageError("--strict applies to a live sensor (--netft HOST)")
     _check_outputs(
-        [("--replay", replay), ("--payload", payload), ("--tip", tip if os.path.isfile(tip) else None)],
+        [("--replay", replay), ("--payload", payload), ("--tip", tip if os.path.isfile(tip) else None),
+         ("--bias", estimator_opts.get("bias_file"))],
         [("--record", record), ("--rerun-save", rerun_save)],
     )
     fingertip = load_fingertip(tip)
     recorder = Recorder(record) if record is not None else None
     viz = _optional("softtip.viz", "viz") if (rerun_spawn or rerun_save) else None
-    netft = _optional("softtip.netft", "netft") if host is not None else None
 
     stop = threading.Event()
-    # Ctrl-C ends the loop between two samples: the recording stays complete
-    previous = signal.signal(signal.SIGINT, lambda *_: stop.set())
+    # Ctrl-C, SIGTERM and SIGHUP end the loop between two samples (or a wait for one): the
+    # recording stays complete, on a whole line
+    stop_signals = [signal.SIGINT, signal.SIGTERM] + ([signal.SIGHUP] if hasattr(signal, "SIGHUP") else [])
+    previous = {sig: signal.signal(sig, lambda *_: stop.set()) for sig in stop_signals}
     source = None
     try:
         try:
             if replay is not None:
                 if payload is None:
-                    source = LogSource.from_csv(replay, units=units, speed=speed)
+                    source = LogSource.from_csv(replay, units=units, speed=speed, stop=stop)
                 else:
                     from softtip.payload import replay_source
 
                     source = replay_source(replay, units, speed, payload)
                 info = f"(replay x{speed:g})" if speed else "(replay, as fast as possible)"
             else:
-                source = netft.NetFTSource(host, rdt_port=rdt_port, http_port=http_port, timeout=timeout, device_bias=device_bias).open()
+                from softtip.netft import NetFTSource
+
+                try:
+                    source = NetFTSource(host, rdt_port=rdt_port, http_port=http_port, timeout=timeout, device_bias=device_bias, strict=faults, stop=stop)
+                except ValueError as exc:
+                    raise click.UsageError(str(exc)) from None
+                source.open()
                 d = source.info
                 rate = f"{d.rate_hz:g} Hz" if d.rate_hz else "rate unknown"
                 info = f"({d.product}, {d.force_unit} / {d.torque_unit}, {rate})"
@@ -649,33 +761,70 @@ def stream(
             if lowpass is not None and source.rate_hz is None:
                 raise click.UsageError("--lowpass needs the sample rate, which this source does not report")
             estimator = Estimator(fingertip, config)
-            stats = LiveStats(source_name=source.name, info=info, dropped=(lambda: source.dropped) if hasattr(type(source), "dropped") else None)
+            tare_request = threading.Event()
+            stats = LiveStats(
+                source_name=source.name,
+                info=info,
+                dropped=(lambda: source.dropped) if hasattr(type(source), "dropped") else None,
+                counters=getattr(source, "counters", None),
+                warnings=(lambda: source.warnings) if hasattr(type(source), "warnings") else None,
+            )
             show = sys.stderr.isatty() if view is None else view
-            term = TerminalView(stats, interval=0.2, h_threshold=config.h_min, recorder=recorder) if show else None
+            tare_key = show and sys.stdin.isatty()
+            term = TerminalView(
+                stats, interval=0.2, h_threshold=config.h_min, recorder=recorder, estimator=estimator,
+                tare_key=tare_key,
+            ) if show else None  # fmt: skip
             on_estimate = None
             if viz is not None:
                 logger = viz.RerunLogger(fingertip, save=rerun_save, spawn=rerun_spawn)
                 on_estimate = lambda e, r: logger.log_sample(e)
-            summary = run_live(source, estimator, recorder=recorder, view=term, stats=stats, duration=duration, stop=stop, on_estimate=on_estimate)
+            keys = KeyReader({"t": tare_request.set}) if tare_key else None
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", EstimatorWarning)  # shown in the view and below
+                    summary = run_live(
+                        source, estimator, recorder=recorder, view=term, stats=stats, duration=duration, stop=stop,
+                        on_estimate=on_estimate, tare_request=tare_request,
+                    )  # fmt: skip
+            finally:
+                if keys is not None:
+                    keys.close()
             recorder = None  # closed by run_live
             if viz is not None:
                 logger.close()
+        except Interrupted:
+            click.echo("softtip: interrupted before the first sample; nothing recorded", err=True)
+            return
         except SourceError as exc:
+            for w in getattr(source, "warnings", None) or []:
+                click.echo(f"softtip: warning: {source.name}: {w}", err=True)
             click.echo(f"softtip: error: {exc}", err=True)
             ctx.exit(1)
     finally:
-        signal.signal(signal.SIGINT, previous)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
         if source is not None and hasattr(source, "close"):
             source.close()
         if recorder is not None:
             recorder.close()
+    for w in summary.warnings:
+        click.echo(f"softtip: warning: {source.name}: {w}", err=True)
     rate = summary.samples / summary.seconds if summary.seconds > 0 else 0.0
     why = {"end": "end of log", "duration": "duration reached", "interrupt": "interrupted"}[summary.reason]
+    c = summary.counters
+    more = "".join(f"{c[k]} {k}, " for k in ("late", "duplicates", "malformed") if k in c)
+    device = "".join(f", {c[k]} {name}" for k, name in (("restarts", "restarts"), ("stalls", "stalled records"), ("status_records", "with a nonzero status")) if c.get(k))
     click.echo(
-        f"softtip: {summary.samples} samples in {summary.seconds:.2f} s ({rate:.1f} Hz), {summary.lost} lost, "
-        f"{summary.dropped} dropped by softtip; {why}" + (f"; recorded -> {record}" if record else ""),
+        f"softtip: {summary.samples} samples in {summary.seconds:.2f} s ({rate:.1f} Hz), {summary.lost} lost, {more}"
+        f"{summary.dropped} dropped by softtip{device}; {estimator.contacts} contact(s); {why}"
+        + (f"; recorded -> {record}" if record else ""),
         err=True,
     )
+    if estimator.tare_report is not None and estimator.tare_report.source != "none":
+        click.echo(f"softtip: {estimator.tare_report.summary()}", err=True)
+    for msg in dict.fromkeys(estimator.warnings):
+        click.echo(f"softtip: warning: {msg}", err=True)
 
 
 @main.command(
@@ -684,7 +833,7 @@ def stream(
 Every condition (edges of different sharpness, the 1 mm plate at −45°, 0°, 45°, 90°, plates
 1–15 mm, cylinders Ø 4–14 mm, the fringe of a Ø 40 mm cylinder bottom, contact position)
 is simulated with the papers' grasp and measured by the same pipeline as `softtip
-estimate` (default options). Writes to --out one figure per experiment laid out like the
+estimate` (default options, --no-drift-tracking as in the papers). Writes to --out one figure per experiment laid out like the
 papers' (e1_edges.png … e6_contact_position.png) and the summary table summary.md /
 summary.csv: per condition the median axial direction error (degrees), the share of
 samples with a reported direction, the contact-position error (mm), the published outcome
@@ -737,6 +886,9 @@ def _register_commands() -> None:
 
     for command in (simulate, calibrate, calibrate_payload):
         main.add_command(command)
+    from softtip.cli_fuse import register
+
+    register(main)
 
 
 _register_commands()

@@ -103,7 +103,9 @@ wrench = bias + (m g_s, c × m g_s), g_s = Rᵀ (0, 0, −9.80665); prints the e
 standard deviations and refuses (exit 2) when the orientations do not vary enough.
 
 Writes a payload TOML file ([payload] mass = kg, com = [x, y, z] m; -o, atomically;
-standard output otherwise) for `softtip estimate --payload` and `softtip stream --payload`.
+standard output otherwise) for `softtip estimate --payload` and `softtip stream --payload`;
+its [bias] table is the sensor bias without the fingertip's weight, for --bias FILE
+together with --payload (no tare needed).
 """,
 )
 @click.argument("input_path", metavar="LOG", type=click.Path(allow_dash=True, dir_okay=False))
@@ -112,6 +114,7 @@ standard output otherwise) for `softtip estimate --payload` and `softtip stream 
 @click.pass_context
 def calibrate_payload(ctx, input_path, output, units):
     from softtip.calibration import atomic_write_text
+    from softtip.estimator.tare import bias_to_toml
     from softtip.payload import calibrate_payload as fit_payload
     from softtip.payload import read_orientation
 
@@ -126,6 +129,8 @@ def calibrate_payload(ctx, input_path, output, units):
             "# sensor bias (removed by the tare, not used): force "
             + ", ".join(f"{v:.5g}" for v in b[:3]) + " N, moment " + ", ".join(f"{v:.5g}" for v in b[3:]) + " N·m\n"
             + fit.payload.to_toml()
+            + "# the sensor bias without the fingertip's weight: for --bias together with --payload\n"
+            + bias_to_toml(b)
         )
         if output is not None:
             atomic_write_text(output, text)

@@ -21,6 +21,7 @@ from softtip._vec import cross as _cross
 from softtip._vec import skew as _skew
 from softtip._xp import NP
 from softtip.fingertip import Capsule, Ellipsoid, Fingertip, ImplicitSurface, Sphere, load_fingertip
+from softtip.mounting import Mounted
 
 __all__ = ["Contact", "contact_from_wrench"]
 
@@ -149,6 +150,10 @@ def contact_kernel(tip: Fingertip, fx, fy, fz, mx, my, mz, xp=NP):
 
     Returns ``(rx, ry, rz, nx, ny, nz, sigma, valid)``.
     """
+    if isinstance(tip, Mounted):
+        # the shape's own solution for the wrench in its frame, mapped back to the sensor frame
+        rx, ry, rz, nx, ny, nz, sigma, valid = contact_kernel(tip.tip, *tip.wrench_in_tip_frame(fx, fy, fz, mx, my, mz), xp=xp)
+        return (*tip._from_tip(rx, ry, rz), *tip._rotate(nx, ny, nz), sigma, valid)
     if isinstance(tip, Capsule):
         return _capsule_kernel(fx, fy, fz, mx, my, mz, tip.radius, tip.length, xp)
     if isinstance(tip, Sphere):

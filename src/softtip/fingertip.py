@@ -402,6 +402,12 @@ def fingertip_from_mapping(data: dict, source: str = "<fingertip>") -> Fingertip
     table = data.get("fingertip")
     if not isinstance(table, dict):
         raise InputError(f"{source}: expected a [fingertip] table")
+    mount = table.get("mount")
+    if mount is not None:  # [fingertip.mount]: the tip's pose in the sensor frame
+        from softtip.mounting import mount_from_mapping
+
+        inner = {k: v for k, v in table.items() if k != "mount"}
+        return mount_from_mapping(fingertip_from_mapping({"fingertip": inner}, source), mount, source)
     shape = table.get("shape")
     if shape not in _FIELDS:
         raise InputError(

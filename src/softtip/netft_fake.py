@@ -13,8 +13,14 @@ It speaks the two protocols softtip uses, on the loopback interface by default:
 
 The wrench it streams is a given SI array, cycled; by default softtip's example grasp
 resampled to the stream rate (fingertip untouched for the first 2 s, so taring works).
-Records can be dropped on purpose (``drop``) to test loss accounting, and the device can
-be ``silent`` (HTTP answers, UDP never does) to test time-outs.
+Faults can be injected to test that a session survives them: records dropped (``drop``,
+``drop_every``), duplicated (``duplicate_every``), swapped with the next one
+(``reorder_every``), malformed datagrams sent between records (``malformed_every``:
+zero-length and 7-byte ones in turn), a nonzero status word (``status_every``), a device
+restart (``reboot_after_s``: silent for ``reboot_silence_s``, then the RDT and F/T sequences
+start again from 1 once streaming is requested again), or any datagram sequence at all
+(``mangle``). The device can be ``silent`` (HTTP answers, UDP never does) to test
+time-outs.
 
 Run ``python -m softtip.netft_fake --rate 1000`` for a device to point ``softtip stream
 --netft 127.0.0.1 --rdt-port ... --http-port ...`` at; it prints its ports.
@@ -28,7 +34,7 @@ import socket
 import struct
 import threading
 import time
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable, Sequence
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 
 import numpy as np
@@ -87,6 +93,18 @@ class FakeNetFT:
     silent : bool
         Never answer on UDP.
     product_name : str
+    duplicate_every, reorder_every, malformed_every, status_every, drop_every : int
+        Every n-th record (0: never) is sent twice / sent after the next one / preceded by
+        a malformed datagram / sent with status word ``status_word`` / not sent.
+    status_word : int
+        The status word of the records ``status_every`` picks.
+    reboot_after_s : float, optional
+        Restart once, this many seconds after streaming started.
+    reboot_silence_s : float
+        How long the restart keeps the device silent.
+    mangle : callable, optional
+        ``mangle(seq, record) -> datagrams``: what to send in place of each record (after
+        the faults above); may keep state (hold a record back, send it later).
     """
 
     def __init__(
@@ -103,6 +121,16 @@ class FakeNetFT:
         drop: Iterable[int] = (),
         silent: bool = False,
         product_name: str = "softtip fake Net F/T",
+        *,
+        duplicate_every: int = 0,
+        reorder_every: int = 0,
+        malformed_every: int = 0,
+        status_every: int = 0,
+        status_word: int = 0x80010000,
+        drop_every: int = 0,
+        reboot_after_s: float | None = None,
+        reboot_silence_s: float = 1.0,
+        mangle: Callable[[int, bytes], Sequence[bytes]] | None = None,
     ) -> None:
         if force_unit not in _FORCE_UNIT_SI or torque_unit not in _TORQUE_UNIT_SI:
             raise ValueError(f"unknown units {force_unit!r} / {torque_unit!r}")
@@ -126,6 +154,12 @@ class FakeNetFT:
         self.drop = frozenset(int(d) for d in drop)
         self.silent = silent
         self.product_name = product_name
+        self.duplicate_every, self.reorder_every = duplicate_every, reorder_every
+        self.malformed_every, self.status_every = malformed_every, status_every
+        self.status_word, self.drop_every = status_word, drop_every
+        self.reboot_after_s, self.reboot_silence_s = reboot_after_s, reboot_silence_s
+        self.mangle = mangle
+        self.reboots = 0
         self.sent = 0  # records sent
         self.requests: list[tuple[int, int]] = []  # (command, count) received
         self._bias = np.zeros(6, dtype=np.int64)
@@ -200,9 +234,21 @@ class FakeNetFT:
         n = len(self.counts)
         period = 1.0 / self.rate_hz
         t0 = k0 = 0
+        held: bytes | None = None  # a record held back to be sent after the next one
+        ft = 0
+        started = None
+        deaf_until = 0.0  # restarting: no answer until then
         while not self._stop.is_set():
+            if self.reboot_after_s is not None and started is not None and not self.reboots:
+                if time.perf_counter() - started >= self.reboot_after_s:
+                    self.reboots += 1
+                    remaining, seq, ft, held = 0, 0, 0, None
+                    deaf_until = time.perf_counter() + self.reboot_silence_s
             # while streaming, poll for commands without blocking the schedule
             ready, _, _ = select.select([sock], [], [], 0.0 if remaining else 0.05)
+            if ready and time.perf_counter() < deaf_until:
+                sock.recvfrom(64)  # rebooting: requests go unanswered
+                continue
             if ready:
                 data, addr = sock.recvfrom(64)
                 if len(data) >= RDT_REQUEST.size:
@@ -212,6 +258,7 @@ class FakeNetFT:
                         if command == CMD_START and not self.silent:
                             peer, remaining = addr, (count if count else -1)
                             t0, k0 = time.perf_counter(), seq
+                            started = started if started is not None else t0
                         elif command == CMD_STOP:
                             remaining = 0
                         elif command == CMD_BIAS:
@@ -223,20 +270,42 @@ class FakeNetFT:
             due = k0 + int((time.perf_counter() - t0) * self.rate_hz) + 1
             while seq < due and remaining:
                 seq += 1
+                ft += 1
                 c = self.counts[(seq - 1) % n] - self._bias
-                if seq not in self.drop:
-                    try:
-                        sock.sendto(RDT_RECORD.pack(seq, seq, 0, *c.tolist()), peer)
-                    except OSError:  # the client went away
-                        remaining = 0
-                        break
-                    self.sent += 1
+                status = self.status_word if _every(self.status_every, seq) else 0
+                record = RDT_RECORD.pack(seq & 0xFFFFFFFF, ft & 0xFFFFFFFF, status, *c.tolist())
+                out: list[bytes] = []
+                if _every(self.malformed_every, seq):
+                    out.append(b"" if (seq // self.malformed_every) % 2 else b"garbage")
+                if seq not in self.drop and not _every(self.drop_every, seq):
+                    if _every(self.reorder_every, seq) and held is None:
+                        held = record
+                    else:
+                        out.append(record)
+                        if _every(self.duplicate_every, seq):
+                            out.append(record)
+                        if held is not None:
+                            out.append(held)
+                            held = None
+                if self.mangle is not None:
+                    out = [d for r in out for d in (self.mangle(seq, r) if len(r) == RDT_RECORD.size else [r])]
+                try:
+                    for datagram in out:
+                        sock.sendto(datagram, peer)
+                        self.sent += 1
+                except OSError:  # the client went away
+                    remaining = 0
+                    break
                 if remaining > 0:
                     remaining -= 1
             wait = (seq - k0) * period - (
                 time.perf_counter() - t0
             )  # until the next record is due
             time.sleep(min(max(wait, 0.0), period, 0.001))
+
+
+def _every(n: int, seq: int) -> bool:
+    return n > 0 and seq % n == 0
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -264,6 +333,15 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument(
         "--duration", type=float, default=None, help="stop after this many seconds"
     )
+    for name, what in (
+        ("duplicate", "send every N-th record twice"),
+        ("reorder", "send every N-th record after the next one"),
+        ("malformed", "send a malformed datagram before every N-th record"),
+        ("status", "set the status word of every N-th record"),
+        ("drop", "do not send every N-th record"),
+    ):
+        p.add_argument(f"--{name}-every", type=int, default=0, metavar="N", help=what + " (0: never)")
+    p.add_argument("--reboot-after", type=float, default=None, metavar="S", help="restart once after S s of streaming")
     args = p.parse_args(argv)
     dev = FakeNetFT(
         rate_hz=args.rate,
@@ -271,6 +349,12 @@ def main(argv: list[str] | None = None) -> None:
         rdt_port=args.rdt_port,
         http_port=args.http_port,
         drop=args.drop,
+        duplicate_every=args.duplicate_every,
+        reorder_every=args.reorder_every,
+        malformed_every=args.malformed_every,
+        status_every=args.status_every,
+        drop_every=args.drop_every,
+        reboot_after_s=args.reboot_after,
     )
     with dev:
         print(

@@ -30,7 +30,7 @@ from __future__ import annotations
 import math
 import os
 import sys
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -426,7 +426,8 @@ def read_orientation(log, tolerance: float = UNIT_TOLERANCE) -> NDArray[np.float
             f"{log.source}: missing orientation column(s) {', '.join(missing)}; gravity compensation needs "
             f"qw, qx, qy, qz (unit quaternion of the sensor frame in a z-up world frame); extra columns present: {have}"
         )
-    header = _header_line(log.source) if os.path.isfile(log.source) else None
+    csv_file = os.path.isfile(log.source) and not log.source.lower().endswith(".parquet")
+    header = _header_line(log.source) if csv_file else None  # Parquet: rows by number
 
     def where(i: int, col: str) -> str:
         line = f"{log.source}:{header + 1 + i}" if header is not None else f"{log.source}: data row {i + 1}"
@@ -455,7 +456,7 @@ def read_orientation(log, tolerance: float = UNIT_TOLERANCE) -> NDArray[np.float
     if bad.any():
         i = int(np.argmax(bad))
         raise InputError(
-            f"{where(i, 'qw')}: qw, qx, qy, qz = {', '.join(log.extra[c][i].strip() for c in QUATERNION_COLUMNS)} "
+            f"{where(i, 'qw')}: qw, qx, qy, qz = {', '.join(str(log.extra[c][i]).strip() for c in QUATERNION_COLUMNS)} "
             f"has norm {norm[i]:.6g}; expected a unit quaternion (norm within {tolerance:g} of 1)"
         )
     return q / norm[:, None]
@@ -485,12 +486,14 @@ class CompensatedSource:
     ----------
     source : iterable of Reading or (t, wrench)
         The raw source (its ``rate_hz``, ``name`` and ``close`` are passed through).
-    orientations : iterable of 4 floats
-        ``qw, qx, qy, qz`` of each sample, in step with ``source``.
+    orientations : iterable of 4 floats, or a callable
+        ``qw, qx, qy, qz`` of each sample, in step with ``source``; or a function of the
+        sample's time ``t`` (s) returning them — the robot's current sensor orientation from
+        its joint states, an IMU, or a transform listener.
     payload : Payload
     """
 
-    def __init__(self, source, orientations: Iterable, payload: Payload) -> None:
+    def __init__(self, source, orientations: Iterable | Callable[[float], Sequence[float]], payload: Payload) -> None:
         self.source = source
         self.orientations = orientations
         self.compensate = PayloadCompensator(payload)
@@ -501,6 +504,11 @@ class CompensatedSource:
         from softtip.sources import readings
 
         comp = self.compensate
+        if callable(self.orientations):
+            orientation = self.orientations
+            for reading in readings(self.source):
+                yield reading._replace(wrench=comp(reading.wrench, orientation(reading.t)))
+            return
         for reading, q in zip(readings(self.source), self.orientations):
             yield reading._replace(wrench=comp(reading.wrench, q))
 

@@ -18,13 +18,15 @@ number, packets lost before this one, arrival time). A plain generator works as 
             print(est.angle)              # rad
 
 Sources here: :class:`LogSource` (a recorded log, replayed at its recorded rate, faster,
-or as fast as possible) and, with the ``netft`` extra, :class:`softtip.netft.NetFTSource`
+or as fast as possible) and :class:`softtip.netft.NetFTSource`
 (an ATI Net F/T or Axia over RDT/UDP).
 """
 
 from __future__ import annotations
 
+import math
 import os
+import threading
 import time
 from collections.abc import Iterable, Iterator
 from typing import NamedTuple
@@ -35,7 +37,7 @@ from numpy.typing import ArrayLike
 from softtip.fingertip import Fingertip
 from softtip.pipeline import Estimator, EstimatorConfig, SampleEstimate
 
-__all__ = ["LogSource", "Reading", "SourceError", "readings", "run"]
+__all__ = ["Interrupted", "LogSource", "Reading", "SourceError", "readings", "run"]
 
 
 class SourceError(RuntimeError):
@@ -44,6 +46,10 @@ class SourceError(RuntimeError):
     Not bad input (that is :class:`~softtip.errors.InputError`): the command line exits
     with code 1 and the message.
     """
+
+
+class Interrupted(Exception):
+    """A source was asked to stop (Ctrl-C, SIGTERM) before its first sample."""
 
 
 class Reading(NamedTuple):
@@ -58,9 +64,21 @@ class Reading(NamedTuple):
     seq : int
         The source's sequence number (RDT sequence for a Net F/T, row index for a log).
     lost : int
-        Samples missing just before this one (gaps in ``seq``); 0 for a log.
+        Records missing just before this one (a gap in ``seq``) that softtip did not drop
+        itself: lost on the network, or to arrive late (then counted in ``late`` of a later
+        reading); 0 for a log.
     arrival_ns : int
         When the sample reached this host, ``time.monotonic_ns()`` clock; 0 if unknown.
+    status : int
+        The device's status word (0 healthy; a Net F/T's RDT status); 0 for a log.
+    host_time : float
+        When the sample reached this host, s since the Unix epoch (for syncing with other
+        logs); NaN if unknown.
+    dropped : int
+        Records just before this one that softtip's own receive queue dropped (the consumer
+        did not keep up).
+    late, duplicates, malformed : int
+        Late packets, duplicates and malformed datagrams discarded since the previous reading.
     """
 
     t: float
@@ -68,6 +86,12 @@ class Reading(NamedTuple):
     seq: int = 0
     lost: int = 0
     arrival_ns: int = 0
+    status: int = 0
+    host_time: float = math.nan
+    dropped: int = 0
+    late: int = 0
+    duplicates: int = 0
+    malformed: int = 0
 
 
 def readings(source: Iterable) -> Iterator[Reading]:
@@ -78,7 +102,7 @@ def readings(source: Iterable) -> Iterator[Reading]:
         else:
             t, w = item[0], item[1]
             w = w.tolist() if isinstance(w, np.ndarray) else w
-            yield Reading(float(t), tuple(float(v) for v in w), seq, 0, 0)
+            yield Reading(float(t), tuple(float(v) for v in w), seq, 0, 0, 0, math.nan, 0, 0, 0, 0)
 
 
 def run(
@@ -91,7 +115,7 @@ def run(
     Parameters
     ----------
     source : iterable of (t, wrench) or Reading
-        ``t`` in s, strictly increasing; ``wrench`` raw, shape (6,), N and N·m.
+        ``t`` in s, increasing; ``wrench`` raw, shape (6,), N and N·m.
     tip : Fingertip or str
         Fingertip, preset name or TOML path.
     config : EstimatorConfig, optional
@@ -128,6 +152,8 @@ class LogSource:
         Replay speed: 1 is the recorded rate, 2 twice as fast, 0 as fast as possible.
     name : str
         Shown in the live view.
+    stop : threading.Event, optional
+        Set it to end the replay at once, also while it waits for the next sample.
 
     Notes
     -----
@@ -136,7 +162,12 @@ class LogSource:
     """
 
     def __init__(
-        self, t: ArrayLike, wrench: ArrayLike, speed: float = 1.0, name: str = "log"
+        self,
+        t: ArrayLike,
+        wrench: ArrayLike,
+        speed: float = 1.0,
+        name: str = "log",
+        stop: threading.Event | None = None,
     ) -> None:
         self.t = np.asarray(t, dtype=float)
         self.wrench = np.asarray(wrench, dtype=float)
@@ -150,19 +181,24 @@ class LogSource:
             )
         self.speed = float(speed)
         self.name = name
+        self.stop_event = stop
         dt = np.diff(self.t)
         #: Recorded sample rate, Hz (median step); None for fewer than two samples.
         self.rate_hz: float | None = float(1.0 / np.median(dt)) if len(dt) else None
 
     @classmethod
     def from_csv(
-        cls, path: str | os.PathLike[str], units: str = "si", speed: float = 1.0
+        cls,
+        path: str | os.PathLike[str],
+        units: str = "si",
+        speed: float = 1.0,
+        stop: threading.Event | None = None,
     ) -> LogSource:
         """Read a SPEC §4 CSV log (columns ``t, fx, fy, fz, mx, my, mz``); see :func:`softtip.io.read_log`."""
         from softtip.io import read_log
 
         log = read_log(path, units=units)
-        return cls(log.t, log.wrench, speed=speed, name=os.path.basename(log.source))
+        return cls(log.t, log.wrench, speed=speed, name=os.path.basename(log.source), stop=stop)
 
     def __len__(self) -> int:
         return len(self.t)
@@ -170,15 +206,19 @@ class LogSource:
     def __iter__(self) -> Iterator[Reading]:
         ts = self.t.tolist()
         ws = [tuple(row) for row in self.wrench.tolist()]
-        clock = time.monotonic_ns
+        clock, wall = time.monotonic_ns, time.time_ns
+        stop = self.stop_event
         if self.speed == 0 or not ts:
             for k, (t, w) in enumerate(zip(ts, ws)):
-                yield Reading(t, w, k, 0, clock())
+                yield Reading(t, w, k, 0, clock(), 0, wall() * 1e-9, 0, 0, 0, 0)
             return
         start = time.monotonic()
         t0, speed = ts[0], self.speed
         for k, (t, w) in enumerate(zip(ts, ws)):
             wait = start + (t - t0) / speed - time.monotonic()
             if wait > 0:
-                time.sleep(wait)
-            yield Reading(t, w, k, 0, clock())
+                if stop is None:
+                    time.sleep(wait)
+                elif stop.wait(wait):
+                    return
+            yield Reading(t, w, k, 0, clock(), 0, wall() * 1e-9, 0, 0, 0, 0)

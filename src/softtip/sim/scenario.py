@@ -212,14 +212,19 @@ class HandFrame:
         object.__setattr__(self, "rotation", r)
 
     @classmethod
-    def paper(cls, finger_pitch: float = 0.0) -> HandFrame:
+    def paper(cls, finger_pitch: float = 0.0, side: str = "right") -> HandFrame:
         """The mapping used for the papers' experiments.
 
-        ``sensor x = hand z``, ``sensor y = hand y``, ``sensor z = -hand x`` when
-        ``finger_pitch = 0``; ``finger_pitch`` (rad) rotates the finger about the joint
-        axis (sensor ``y``), tilting the fingertip axis in the hand's x–z plane.
+        Right finger: ``sensor x = hand z``, ``sensor y = hand y``, ``sensor z = -hand x``
+        when ``finger_pitch = 0``; ``finger_pitch`` (rad) rotates the finger about the joint
+        axis (sensor ``y``), tilting the fingertip axis in the hand's x–z plane. The left
+        finger faces it: ``sensor x = hand z``, ``sensor y = -hand y``, ``sensor z = hand x``.
         """
+        if side not in ("right", "left"):
+            raise ValueError(f"side must be 'right' or 'left', got {side!r}")
         base = np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]])
+        if side == "left":
+            base = np.array([[0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0]])
         c, s = math.cos(finger_pitch), math.sin(finger_pitch)
         pitch = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
         return cls(pitch @ base)
@@ -423,6 +428,7 @@ def paper_scenario(
     disturbance_timing: str = "after_grasp",
     disturbance_start: float | None = None,
     disturbance_end: float | None = None,
+    side: str = "right",
     **kwargs,
 ) -> GraspScenario:
     """The papers' grasp with the right fingertip of the two-fingered hand (SPEC §5).
@@ -468,6 +474,9 @@ def paper_scenario(
     disturbance_start, disturbance_end : float, optional
         Explicit ramp interval of the joint rotation and the gravity spin, s; override the
         ``disturbance_timing`` defaults (either may be given alone).
+    side : {"right", "left"}
+        Which finger of the hand (:meth:`HandFrame.paper`); the disturbances are the same
+        rotations of the object in the hand, seen from that finger.
     **kwargs
         Other :class:`GraspScenario` fields (force, timing, ...).
 
@@ -494,7 +503,7 @@ def paper_scenario(
         end = float(disturbance_end)
     if not (math.isfinite(start) and math.isfinite(end) and start >= 0.0 and end >= start):
         raise ValueError(f"need 0 <= disturbance_start <= disturbance_end, got {start!r}, {end!r} s")
-    hand = HandFrame.paper(finger_pitch)
+    hand = HandFrame.paper(finger_pitch, side)
     dist = [
         Disturbance(axis=tuple(hand.joint_axis), angle=joint_rotation, start=start, end=end, label="joint"),
         Disturbance(axis=tuple(hand.grasp_axis), angle=gravity_spin, start=start, end=end, label="gravity-spin"),

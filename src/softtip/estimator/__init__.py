@@ -1,0 +1,67 @@
+"""The estimator: tare, filter, contact onset, contact point, measurement.
+
+:func:`estimate` runs it over a whole log, vectorised (:mod:`.batch`); :class:`Estimator`
+runs it one sample at a time for live use (:mod:`.stream`). Each stage has its batch and its
+stream form side by side in one module: :mod:`.tare`, :mod:`.latch`, :mod:`.joint`,
+:mod:`.measure`; settings are in :mod:`.config`, results in :mod:`.results`. Both forms call
+the same kernels (:mod:`softtip.contact`, :mod:`softtip.spin`, :mod:`softtip.noise`) and
+agree to rounding.
+
+Per sample (SPEC §3):
+
+1. **Tare** (:mod:`.tare`). Unless a bias is given, the samples in the first
+   ``tare_duration`` seconds make the bias (``tare_method``: by default their mean without
+   spikes); those samples are reported as ``none`` (``taring``). The fingertip must not be
+   touched then: the tare is checked against the noise model (spikes, force and moment
+   noise) and a first contact that pulls from its onset (the release of a tare taken in
+   contact) is flagged; :attr:`Estimates.tare` / :attr:`Estimator.tare_report` say what
+   happened, :attr:`Estimates.warnings` (also issued as :class:`EstimatorWarning`) what is
+   wrong. :meth:`Estimator.tare` tares again on demand.
+2. **Filter** (optional): causal Butterworth low-pass, steady state at the first sample.
+3. **Contact** (:mod:`.contact`): onset at ``|f| ≥ contact_threshold``, release below a
+   threshold lower by ``contact_hysteresis`` noise standard deviations, after at least
+   ``contact_min_duration``; contacts numbered (``contact_id``). While untouched the bias
+   drift is followed (``drift_time_constant``) and, with ``track_drift``, subtracted.
+4. **Contact point.** ``track``: the soft-finger solution of every sample. ``latch`` (the
+   papers'): during the first rise of the force after onset (until ``|f|`` first exceeds the
+   light-force window, or sets no new maximum for ``stall_time``), the soft-finger solutions
+   of the samples inside the window are averaged; that mean, put back on the skin, is the
+   contact point from then on, until contact ends. Before the first window sample the
+   current soft-finger solution is used. With no window sample in the whole rise, the mean
+   of the first ``fallback_samples`` solutions of the contact is latched and flagged.
+5. **Measurement**: spin torque, its tangential part ``h``, the noise level of ``h``, the
+   state ``point`` or ``line`` and, for ``line`` only, the direction and its angle with a
+   standard deviation.
+
+In ``track`` mode ``h`` is zero by construction (the soft-finger model puts all of ``q``
+along ``n``), so only ``point`` contacts are reported: use ``latch`` for directions.
+
+softtip's extensions (issue 5), each an :class:`EstimatorConfig` field:
+
+- ``relatch_distance``: once the latch is held, a sample at light force (inside the
+  window) whose soft-finger solution lies farther than this from the latched point starts
+  a new latch (a new first rise, from that sample); ``relatched`` flags that sample, and
+  the first sample of every contact that follows a latched one (contact lost and regained).
+- ``depth``: a :class:`~softtip.depth.DepthLaw`; the moment is taken about the effective
+  contact point ``r − δ(F_n) n`` inside the skin, where friction acts
+  (:mod:`softtip.depth`); ``depth`` reports ``δ``.
+- ``contact_point="joint"``: the latch of ``latch`` mode, then the contact point moved
+  across the line to where a window of the last ``joint_window`` seconds fits the line
+  contact model (:mod:`softtip.joint`). A window is accepted when its standard deviations
+  of line angle and offset are below ``joint_max_angle_std`` and ``joint_max_offset_std``
+  and its fit residual below ``joint_max_residual`` noise standard deviations. The point
+  held is the accepted window since contact onset (or the last re-latch) with the
+  smallest standard deviation aged by ``joint_drift``; before the first one the latched
+  point is used and ``joint_fallback`` set. The coordinate along the line is the latch's:
+  a line contact does not tell it.
+"""
+
+from softtip.estimator.batch import estimate
+from softtip.estimator.config import CONTACT_POINT_MODES, EstimatorConfig
+from softtip.estimator.results import LINE, NONE, POINT, STATES, Estimates, EstimatorWarning, SampleEstimate
+from softtip.estimator.stream import Estimator
+
+__all__ = [
+    "STATES", "NONE", "POINT", "LINE", "CONTACT_POINT_MODES", "EstimatorConfig", "Estimates", "SampleEstimate",
+    "Estimator", "estimate", "EstimatorWarning",
+]  # fmt: skip

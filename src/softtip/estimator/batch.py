@@ -1,0 +1,173 @@
+"""The estimator over a whole log, vectorised: :func:`estimate`."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from softtip._xp import NP
+from softtip.contact import contact_arrays
+from softtip.estimator.config import EstimatorConfig
+from softtip.estimator.contact import drift_message, first_contact_pulls, started_in_contact_message, track_contacts
+from softtip.estimator.joint import joint_points
+from softtip.estimator.latch import latch_points
+from softtip.estimator.measure import effective_noise, measure, noise_correlation
+from softtip.estimator.results import LINE, NONE, POINT, Estimates, EstimatorWarning
+from softtip.estimator.tare import tare_log
+from softtip.filtering import lowpass_sos, sosfilt_batch
+from softtip.fingertip import Fingertip, load_fingertip
+
+__all__ = ["estimate"]
+
+
+def validate_log(t: ArrayLike, wrench: ArrayLike) -> tuple[NDArray, NDArray]:
+    """``t`` (N,) and ``wrench`` (N, 6) as float arrays, checked: finite, time non-decreasing."""
+    t = np.asarray(t, dtype=float)
+    w = np.asarray(wrench, dtype=float)
+    if t.ndim != 1 or w.shape != (len(t), 6):
+        raise ValueError(f"expected t of shape (N,) and wrench of shape (N, 6), got {t.shape} and {w.shape}")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(w))):
+        raise ValueError("t and wrench must be finite")
+    back = np.flatnonzero(np.diff(t) < 0)
+    if len(back):
+        i = int(back[0]) + 1
+        raise ValueError(f"time must not go back: sample {i} at {t[i]!r} s follows {t[i - 1]!r} s")
+    return t, w
+
+
+def infer_rate(t: NDArray) -> float:
+    """Sample rate, Hz, from the median of the positive time steps (repeated stamps ignored)."""
+    dt = np.diff(t)
+    dt = dt[dt > 0]
+    if not len(dt):
+        raise ValueError("a low-pass filter needs at least two distinct sample times to infer the sample rate")
+    return 1.0 / float(np.median(dt))
+
+
+def estimate(
+    t: ArrayLike,
+    wrench: ArrayLike,
+    tip: Fingertip | str = "murakami2006",
+    config: EstimatorConfig | None = None,
+) -> Estimates:
+    """Run the estimator over a whole log.
+
+    Parameters
+    ----------
+    t : array-like, shape (N,)
+        Sample times, s, non-decreasing (repeated stamps are accepted and counted in
+        :attr:`Estimates.repeated_stamps`).
+    wrench : array-like, shape (N, 6)
+        Raw sensor wrench ``fx, fy, fz`` (N), ``mx, my, mz`` (N·m), sensor frame.
+    tip : Fingertip or str
+        Fingertip, preset name or TOML path.
+    config : EstimatorConfig, optional
+
+    Returns
+    -------
+    Estimates
+
+    Examples
+    --------
+    >>> from softtip import estimate, load_example
+    >>> log = load_example()
+    >>> est = estimate(log.t, log.wrench, "murakami2006")
+    >>> sorted(set(est.state_names.tolist()))
+    ['line', 'none', 'point']
+    """
+    tip = load_fingertip(tip)
+    config = config or EstimatorConfig()
+    t, w = validate_log(t, wrench)
+    n = len(t)
+
+    bias, taring, tare_report = tare_log(t, w, config)
+    x = w - bias
+
+    sos = None
+    if config.lowpass_hz is not None:
+        rate = config.sample_rate or infer_rate(t)
+        sos = lowpass_sos(config.lowpass_hz, rate, config.lowpass_order)
+        x = sosfilt_batch(sos, x) if np.all(np.isfinite(bias)) else x
+    noise = effective_noise(config.noise, sos)
+    ct = track_contacts(t, x, int(np.count_nonzero(taring)), config, noise)
+    x = ct.wrench
+
+    c = [np.ascontiguousarray(x[:, i]) for i in range(6)]
+    fn = np.sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2])
+    contact = ct.contact
+    relatched = np.zeros(n, dtype=bool)
+    joint_stats = np.full((4, n), np.nan)
+    joint_fb = np.zeros(n, dtype=bool)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        sc = contact_arrays(tip, *c)
+        if config.contact_point == "track":
+            point = np.stack(sc[:3], axis=-1)
+            normal = np.stack(sc[3:6], axis=-1)
+            has = np.asarray(sc[7], dtype=bool)
+            latched = fallback = np.zeros(n, dtype=bool)
+        else:
+            point, latched, fallback, relatched = latch_points(t, fn, contact, sc, tip, config)
+            if config.contact_point == "joint":
+                point, joint_stats, _, moved = joint_points(
+                    t, c, contact, sc, point, relatched, tip, config, noise, noise_correlation(sos)
+                )
+                latched, fallback, joint_fb = latched & ~moved, fallback & ~moved, contact & ~moved
+            normal = tip.normal(point)
+            has = np.all(np.isfinite(point), axis=-1)
+        ms = measure(*c, *point.T, *normal.T, noise, config.h_sigmas, config.h_min, config.depth, NP)
+
+    located = contact & has & ms.pushing
+    pulling = contact & ~located
+    is_line = located & ms.line
+    started_in_contact = tare_report.source == "tare" and first_contact_pulls(t, pulling, ct.contact_id)
+    warn = list(tare_report.warnings)
+    if started_in_contact:
+        warn.append(started_in_contact_message(config))
+    if ct.drift_alarm >= 0:
+        warn.append(drift_message(config, float(t[ct.drift_alarm])))
+    for msg in warn:
+        warnings.warn(msg, EstimatorWarning, stacklevel=2)
+    state = np.where(located, np.where(is_line, LINE, POINT), NONE).astype(np.int8)
+
+    def keep(a, mask):
+        a = np.asarray(a, dtype=float)
+        return np.where(mask.reshape(mask.shape + (1,) * (a.ndim - 1)), a, np.nan)
+
+    return Estimates(
+        t=t,
+        state=state,
+        # the bias is not known while taring, so neither is the tared wrench (as in the stream)
+        wrench=keep(x, ~taring),
+        point=keep(point, located),
+        normal=keep(normal, located),
+        sigma=keep(ms.sigma, located),
+        h=keep(np.stack((ms.hx, ms.hy, ms.hz), axis=-1), located),
+        h_norm=keep(ms.h_norm, located),
+        h_std=keep(ms.h_std, located),
+        direction=keep(np.stack((ms.dx, ms.dy, ms.dz), axis=-1), is_line),
+        angle=keep(ms.angle, is_line),
+        angle_std=keep(ms.angle_std, is_line),
+        latched=latched & located,
+        latch_fallback=fallback & located,
+        pulling=pulling,
+        taring=taring,
+        bias=bias,
+        tare_force_std=float(np.nanmax(tare_report.force_std)) if np.any(np.isfinite(tare_report.force_std)) else math.nan,
+        relatched=relatched,
+        depth=keep(ms.depth, located),
+        joint_conditioning=keep(joint_stats[0], located),
+        joint_angle_std=keep(joint_stats[1], located),
+        joint_offset_std=keep(joint_stats[2], located),
+        joint_residual=keep(joint_stats[3], located),
+        joint_fallback=joint_fb & located,
+        repeated_stamps=int(np.count_nonzero(np.diff(t) == 0)),
+        contact_id=ct.contact_id,
+        drift=keep(ct.drift, ~taring),
+        tare=tare_report,
+        started_in_contact=started_in_contact,
+        drift_alarm=ct.drift_alarm >= 0,
+        warnings=tuple(warn),
+    )

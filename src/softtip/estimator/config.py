@@ -1,0 +1,180 @@
+"""Settings of the estimator (:class:`EstimatorConfig`)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+
+from softtip.depth import DepthLaw
+from softtip.filtering import lowpass_sos
+from softtip.noise import NANO17, SensorNoise
+from softtip.units import KGF
+
+__all__ = ["CONTACT_POINT_MODES", "TARE_METHODS", "EstimatorConfig"]
+
+#: Values of :attr:`EstimatorConfig.contact_point`.
+CONTACT_POINT_MODES = ("latch", "track", "joint")
+#: Values of :attr:`EstimatorConfig.tare_method`.
+TARE_METHODS = ("robust", "median", "mean")
+
+
+@dataclass(frozen=True)
+class EstimatorConfig:
+    """Settings of the pipeline. SI units.
+
+    Parameters
+    ----------
+    contact_point : {"latch", "track", "joint"}
+        How the contact point is obtained (module docstring).
+    contact_threshold : float
+        N; in contact while ``|f|`` (tared, filtered) is at least this.
+    latch_window : (float, float)
+        N; light-force window of the latch (default 0.2–0.5 kgf).
+    stall_time : float
+        s; the first rise ends when ``|f|`` has set no new maximum for this long.
+    fallback_samples : int
+        Samples averaged for a latch when the rise has no sample in the window.
+    noise : SensorNoise
+        Standard deviations of the unfiltered sensor noise.
+    h_sigmas, h_min : float
+        ``|h|`` is significant (a ``line`` contact) above ``max(h_sigmas · h_std, h_min)``;
+        ``h_min`` in N·m (default 0.5 N·mm).
+    lowpass_hz : float or None
+        Cutoff of the causal Butterworth low-pass, Hz; ``None`` for no filter.
+    lowpass_order : int
+    sample_rate : float or None
+        Hz. Needed with ``lowpass_hz``; :func:`estimate` infers it from the median time step
+        when absent.
+    bias : 6 floats or None
+        Sensor bias (N, N·m) to subtract; ``None`` to tare from the first samples.
+    tare_duration : float
+        s of samples averaged for the bias when ``bias`` is ``None``; 0 disables taring
+        (the input is already tared).
+    relatch_distance : float or None
+        m; re-latch when, with the latch held and ``|f|`` inside ``latch_window``, the
+        soft-finger solution lies farther than this from the latched point. ``None``
+        (default, the papers'): only on contact loss. A few mm (e.g. 3 mm) is beyond the
+        soft-finger bias of the papers' line contacts at light force (≈ |h| / |f| ≤ 1 mm).
+    depth : DepthLaw or None
+        Depth compensation (:mod:`softtip.depth`); ``None`` (default): off, the papers'
+        undeformed contact point. :data:`softtip.depth.MURAKAMI2006_DEPTH` is the
+        murakami2006 skin.
+    joint_window : float
+        s; length of the sliding window of ``joint`` mode (default 1 s: 50 samples at the
+        papers' 50 Hz).
+    joint_max_angle_std, joint_max_offset_std : float
+        ``joint`` mode accepts a window when the standard deviations of its line angle (rad,
+        default 2°) and of its offset across the line (m, default 0.2 mm) are at most these.
+    joint_max_residual : float
+        ... and the RMS residual of its fit is at most this many noise standard deviations.
+    joint_drift : float
+        m/√s; how fast the contact may wander unseen: the point held is the accepted window
+        with the smallest ``offset_std² + joint_drift² · age`` (default 0.03 mm/√s), so a
+        precise window is kept over later, weaker ones, but not for ever (positive, at most 1).
+    joint_iterations : int
+        Gauss–Newton steps of each window's solve.
+    tare_method : {"robust", "median", "mean"}
+        How the tare samples make the bias: ``robust`` (default), the mean of the samples that
+        are not spikes (farther than 8 standard deviations from the median; the plain mean
+        when there is none); ``median``, per component; ``mean``, of all samples (a −20 N
+        spike among ten samples moves it by 2 N).
+    contact_hysteresis : float
+        Contact starts at ``|f| ≥ contact_threshold`` and ends below the release threshold
+        ``max(contact_threshold − contact_hysteresis · σ_f, min(contact_threshold, 2.5 σ_f))``,
+        with ``σ_f`` the noise of ``|f|`` (root sum of squares of the force noise model, after
+        the filter; an untouched sensor's ``|f|`` is below ``2.5 σ_f`` 90 % of the time);
+        0 for a single threshold.
+    contact_min_duration : float
+        s; a contact is reported once ``|f|`` has stayed above the release threshold for this
+        long since it first reached ``contact_threshold``, each sample counting for its
+        sampling interval (default 5 ms: at once at 50 Hz, five samples at 1 kHz; 0: at
+        once). A spike shorter than this is not a contact.
+    drift_time_constant : float
+        s; while untouched (no contact pending or held) the bias is tracked by an exponential moving average with this time constant (default 10 s: a
+        drift of r N/s is followed with a lag of r · 10 s; a touch that builds up slower than
+        that is taken for drift).
+    track_drift : bool
+        Subtract the tracked drift (default). ``False`` (the papers' comparison): the drift
+        is still estimated and reported, not subtracted.
+    """
+
+    contact_point: Literal["latch", "track", "joint"] = "latch"
+    contact_threshold: float = 0.05
+    latch_window: tuple[float, float] = (0.2 * KGF, 0.5 * KGF)
+    stall_time: float = 0.1
+    fallback_samples: int = 5
+    noise: SensorNoise = field(default=NANO17)
+    h_sigmas: float = 3.0
+    h_min: float = 5e-4
+    lowpass_hz: float | None = None
+    lowpass_order: int = 2
+    sample_rate: float | None = None
+    bias: tuple[float, ...] | None = None
+    tare_duration: float = 0.2
+    relatch_distance: float | None = None
+    depth: DepthLaw | None = None
+    joint_window: float = 1.0
+    joint_max_angle_std: float = math.radians(2.0)
+    joint_max_offset_std: float = 2e-4
+    joint_max_residual: float = 3.0
+    joint_drift: float = 3e-5
+    joint_iterations: int = 2
+    tare_method: Literal["robust", "median", "mean"] = "robust"
+    contact_hysteresis: float = 3.0
+    contact_min_duration: float = 0.005
+    drift_time_constant: float = 10.0
+    track_drift: bool = True
+
+    def __post_init__(self) -> None:
+        if self.contact_point not in CONTACT_POINT_MODES:
+            raise ValueError(f"contact_point must be one of {', '.join(CONTACT_POINT_MODES)}, got {self.contact_point!r}")
+        if self.relatch_distance is not None:
+            v = float(self.relatch_distance)
+            if not (math.isfinite(v) and v > 0.0):
+                raise ValueError(f"relatch_distance must be a positive distance in m or None, got {self.relatch_distance!r}")
+            object.__setattr__(self, "relatch_distance", v)
+        if self.depth is not None and not isinstance(self.depth, DepthLaw):
+            raise ValueError(f"depth must be a softtip.depth.DepthLaw or None, got {self.depth!r}")
+        lo, hi = (float(v) for v in self.latch_window)
+        if not (0.0 <= lo < hi):
+            raise ValueError(f"latch_window must be (low, high) with 0 <= low < high, in N; got {self.latch_window!r}")
+        object.__setattr__(self, "latch_window", (lo, hi))
+        for name in ("joint_window", "joint_max_angle_std", "joint_max_offset_std", "joint_max_residual", "joint_drift"):
+            v = float(getattr(self, name))
+            if not (math.isfinite(v) and v > 0.0):
+                raise ValueError(f"{name} must be a positive number, got {getattr(self, name)!r}")
+            object.__setattr__(self, name, v)
+        if self.joint_drift > 1.0:
+            raise ValueError(f"joint_drift must be at most 1 m/√s, got {self.joint_drift!r}")
+        if self.contact_point == "joint" and not any(self.noise.force_std + self.noise.moment_std):
+            raise ValueError("contact_point='joint' needs a sensor noise model (noise is all zero)")
+        if int(self.joint_iterations) < 1:
+            raise ValueError(f"joint_iterations must be at least 1, got {self.joint_iterations!r}")
+        object.__setattr__(self, "joint_iterations", int(self.joint_iterations))
+        if self.tare_method not in TARE_METHODS:
+            raise ValueError(f"tare_method must be one of {', '.join(TARE_METHODS)}, got {self.tare_method!r}")
+        v = float(self.drift_time_constant)
+        if not (math.isfinite(v) and v > 0.0):
+            raise ValueError(f"drift_time_constant must be a positive number of s, got {self.drift_time_constant!r}")
+        object.__setattr__(self, "drift_time_constant", v)
+        object.__setattr__(self, "track_drift", bool(self.track_drift))
+        for name in ("contact_threshold", "stall_time", "h_sigmas", "h_min", "tare_duration", "contact_hysteresis",
+                     "contact_min_duration"):  # fmt: skip
+            v = float(getattr(self, name))
+            if not (math.isfinite(v) and v >= 0.0):
+                raise ValueError(f"{name} must be a non-negative number, got {getattr(self, name)!r}")
+            object.__setattr__(self, name, v)
+        if int(self.fallback_samples) < 1:
+            raise ValueError(f"fallback_samples must be at least 1, got {self.fallback_samples!r}")
+        if self.bias is not None:
+            b = np.asarray(self.bias, dtype=float)
+            if b.shape != (6,) or not np.all(np.isfinite(b)):
+                raise ValueError(f"bias must be 6 finite numbers (N, N·m), got {self.bias!r}")
+            object.__setattr__(self, "bias", tuple(float(v) for v in b))
+        if self.lowpass_hz is not None and self.sample_rate is not None:
+            lowpass_sos(self.lowpass_hz, self.sample_rate, self.lowpass_order)  # validates
+
+

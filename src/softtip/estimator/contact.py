@@ -1,0 +1,356 @@
+"""Contact onset and release with hysteresis, contact counting, and bias drift tracking.
+
+Per sample after the tare, with ``b`` the drift tracked so far and ``f`` the force of the
+tared (filtered) wrench minus ``b`` (minus nothing when ``track_drift`` is off):
+
+- **Hysteresis.** A contact starts when ``|f| ≥ contact_threshold`` (the onset threshold)
+  and ends at the first sample with ``|f|`` below the release threshold
+  ``max(contact_threshold − contact_hysteresis · σ_f, min(contact_threshold, 2.5 σ_f))``,
+  ``σ_f`` the noise of ``|f|`` from the noise model (root sum of squares of the force
+  noise, after the filter): the release threshold stays where an untouched sensor's noise
+  lies below it 90 % of the time. A rising grasp force crossing
+  the onset threshold in noise no longer makes several contacts, each resetting the latch.
+- **Minimum duration.** From the first sample at or above the onset threshold the contact is
+  pending (reported ``none``) until ``|f|`` has stayed above the release threshold for
+  ``contact_min_duration`` s, each sample counting for its sampling interval (so at 50 Hz
+  one sample covers the default 5 ms, at 1 kHz five samples are needed); a spike shorter
+  than that is not a contact.
+- **Contact count.** Each contact gets the next number, 1, 2, … (``contact_id``; 0 out of
+  contact): contacts as a user would count them.
+- **Drift.** While untouched (no contact pending or held: the drift-corrected force below
+  the onset threshold, or below the release threshold since a contact), ``b ← b + α (w − b)`` with ``α = min(Δt / drift_time_constant,
+  0.5)``: an exponential moving average of the untouched wrench, all six components. It is
+  reported per sample (the ``b`` subtracted from that sample) and, with ``track_drift``,
+  subtracted. A drift of the force beyond the contact threshold since the last tare is
+  flagged (:attr:`ContactTrack.drift_alarm`).
+
+:func:`track_contacts` does it for a whole log, vectorised (one iteration per contact, per
+run of samples between the thresholds, and per block of ~4000 untouched samples);
+:class:`ContactTracker` one sample at a time with O(1) float work.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from softtip.estimator.config import EstimatorConfig
+from softtip.noise import SensorNoise
+
+__all__ = ["RELEASE_FLOOR", "contact_thresholds", "ContactTrack", "track_contacts", "ContactTracker", "START_PULL_TIME"]
+
+#: The release threshold is at least this many ``σ_f``: an untouched sensor's ``|f|`` (noise
+#: only, a χ distribution with 3 degrees of freedom) is below it 90 % of the time.
+RELEASE_FLOOR = 2.5
+#: Largest weight of one sample in the drift average.
+_MAX_ALPHA = 0.5
+#: The drift average runs in blocks of untouched samples (a block ends at a sample that is
+#: not untouched, after _BLOCK samples, or once the product of the (1 − α) falls below
+#: _TINY), in the closed form ``b_j = P_j (b_0 + Σ_{k ≤ j} α_k w_k / P_k)``,
+#: ``P_j = Π_{k ≤ j} (1 − α_k)``: only products, quotients and running sums, so the batch
+#: (cumprod, cumsum) and the stream give the same bits.
+_BLOCK = 4096
+_TINY = 1e-100
+#: s; the first contact after a tare that pulls (no pushing contact point) this long says the
+#: fingertip was touched while taring (the release then reads as a pull).
+START_PULL_TIME = 0.1
+
+
+def contact_thresholds(config: EstimatorConfig, noise: SensorNoise) -> tuple[float, float]:
+    """The onset and release thresholds of ``|f|``, N, for the (filtered) noise ``noise``."""
+    on = config.contact_threshold
+    sigma = math.sqrt(sum(s * s for s in noise.force_std))
+    return on, max(on - config.contact_hysteresis * sigma, min(on, RELEASE_FLOOR * sigma))
+
+
+def drift_weights(t: NDArray, config: EstimatorConfig) -> NDArray:
+    """``α`` per sample (the first sample has none)."""
+    a = np.zeros(len(t))
+    a[1:] = np.minimum(np.diff(t) / config.drift_time_constant, _MAX_ALPHA)
+    return a
+
+
+class ContactTrack(NamedTuple):
+    """Contacts and drift of a whole log (:func:`track_contacts`)."""
+
+    wrench: NDArray[np.float64]  #: (N, 6) the wrench with the drift subtracted (as given without tracking)
+    drift: NDArray[np.float64]  #: (N, 6) drift tracked before each sample, N and N·m
+    contact: NDArray[np.bool_]  #: (N,) in contact (onset confirmed, not released)
+    contact_id: NDArray[np.int64]  #: (N,) 1, 2, … per contact; 0 out of contact
+    drift_alarm: int  #: first sample whose drift force exceeds the contact threshold; -1 if none
+
+
+class _DriftAverage:
+    """The drift average of :class:`ContactTracker` over a whole log, in chunks.
+
+    :meth:`follow` tries the closed form of :data:`_BLOCK` on the next samples as if all were
+    untouched; :meth:`keep` keeps the first ``k`` of them (all: the block goes on; fewer: the
+    sample after them is not untouched and ends the block, as in the stream). Chunks start
+    small after such an event and double, so the work is proportional to the samples.
+    """
+
+    def __init__(self, x: NDArray, alpha: NDArray):
+        self.x, self.alpha = x, alpha
+        self.b = np.zeros(6)
+        self.open = False
+        self.size = 32
+
+    def follow(self, i: int, n: int) -> tuple[int, NDArray]:
+        """``(e, before)``: the drift before each sample of ``[i, e)`` if all are untouched."""
+        if not self.open:
+            self.b0, self.p0, self.acc0, self.count, self.open = self.b, 1.0, np.zeros(6), 0, True
+        e = min(n, i + self.size, i + _BLOCK - self.count)
+        a = self.alpha[i:e]
+        p = np.cumprod(np.concatenate(([self.p0], 1.0 - a)))[1:]
+        small = p < _TINY
+        if small.any():
+            k = int(np.argmax(small)) + 1
+            e, a, p = i + k, a[:k], p[:k]
+        acc = np.cumsum(np.concatenate((self.acc0[None, :], (a / p)[:, None] * self.x[i:e])), axis=0)[1:]
+        self._p, self._acc = p, acc
+        self._after = after = p[:, None] * (self.b0 + acc)
+        return e, np.concatenate((self.b[None, :], after[:-1]), axis=0)
+
+    def keep(self, k: int) -> None:
+        """Keep the first ``k`` samples of the last :meth:`follow`."""
+        if k == len(self._p):
+            self.b, self.p0, self.acc0 = self._after[-1], float(self._p[-1]), self._acc[-1]
+            self.count += k
+            if self.count >= _BLOCK or self.p0 < _TINY:
+                self.open = False
+            self.size = min(2 * self.size, _BLOCK)
+        else:
+            if k:
+                self.b = self._after[k - 1]
+            self.open = False
+            self.size = 32
+
+
+def _first(cond, a: int, n: int) -> int:
+    """First index ``j ≥ a`` where ``cond(lo, hi)`` (a boolean array over ``[lo, hi)``) holds, or ``n``."""
+    size = 1024
+    while a < n:
+        hi = min(n, a + size)
+        c = cond(a, hi)
+        if c.any():
+            return a + int(np.argmax(c))
+        a, size = hi, size * 2
+    return n
+
+
+def _norm3(v: NDArray) -> NDArray:
+    return np.sqrt(v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1] + v[:, 2] * v[:, 2])
+
+
+def _follow_drift(t: NDArray, x: NDArray, start: int, alpha: NDArray, on: float) -> NDArray:
+    """The drift alone (``track_drift`` off): it follows every sample whose force is within
+    ``on`` of it."""
+    n = len(t)
+    drift = np.zeros((n, 6))
+    avg = _DriftAverage(x, alpha)
+    i = start
+    while i < n:
+        e, before = avg.follow(i, n)
+        far = _norm3(x[i:e, :3] - before[:, :3]) >= on
+        k = int(np.argmax(far)) if far.any() else e - i
+        drift[i : i + k] = before[:k]
+        avg.keep(k)
+        if k == e - i:
+            i = e
+            continue
+        j = i + k
+        b = avg.b
+        i = _first(lambda lo, hi: _norm3(x[lo:hi, :3] - b[:3]) < on, j + 1, n)
+        drift[j:i] = b
+    return drift
+
+
+def _held(t: NDArray, dt: NDArray, j: int, m: int, min_dur: float) -> NDArray:
+    """Samples of ``[j, m)`` by which ``|f|`` has stayed up ``min_dur`` since sample ``j``,
+    each sample counting for its interval ``dt``."""
+    return (t[j:m] - t[j]) + dt[j:m] >= min_dur
+
+
+def _hysteresis(t: NDArray, dt: NDArray, f: NDArray, start: int, on: float, off: float, min_dur: float, cid: NDArray) -> None:
+    """Contacts of a given ``|f|`` (N,), from ``start`` on, numbered into ``cid``."""
+    n, count, i = len(t), 0, start
+    while i < n:
+        j = _first(lambda lo, hi: f[lo:hi] >= on, i, n)
+        if j >= n:
+            break
+        m = _first(lambda lo, hi: f[lo:hi] < off, j + 1, n)
+        ok = _held(t, dt, j, m, min_dur)
+        if ok.any():
+            count += 1
+            cid[j + int(np.argmax(ok)) : m] = count
+        i = m
+
+
+def track_contacts(t: NDArray, x: NDArray, start: int, config: EstimatorConfig, noise: SensorNoise) -> ContactTrack:
+    """Contacts and drift of the tared (filtered) wrench ``x`` (N, 6) at ``t`` (N,), from
+    sample ``start`` on (the samples before it are the tare's: no contact, no drift)."""
+    n = len(t)
+    on, off = contact_thresholds(config, noise)
+    min_dur = config.contact_min_duration
+    alpha = drift_weights(t, config)
+    dt = np.zeros(n)
+    dt[1:] = np.diff(t)
+    cid = np.zeros(n, dtype=np.int64)
+    if not config.track_drift:
+        drift = _follow_drift(t, x, start, alpha, on)
+        _hysteresis(t, dt, _norm3(x[:, :3]), start, on, off, min_dur, cid)
+        y = x
+    else:
+        # the contact decisions see the drift subtracted, and the drift follows only while
+        # untouched: one loop, an iteration per contact and per chunk of untouched samples
+        drift = np.zeros((n, 6))
+        avg = _DriftAverage(x, alpha)
+        count = 0
+
+        def fn(lo, hi):  # |f| with the drift held at avg.b
+            return _norm3(x[lo:hi, :3] - avg.b[:3])
+
+        i = start
+        while i < n:
+            e, before = avg.follow(i, n)
+            far = _norm3(x[i:e, :3] - before[:, :3]) >= on
+            k = int(np.argmax(far)) if far.any() else e - i
+            drift[i : i + k] = before[:k]
+            avg.keep(k)
+            if k == e - i:
+                i = e
+                continue
+            j = i + k
+            # onset at j; the drift is held while the contact is pending or held
+            m = _first(lambda lo, hi: fn(lo, hi) < off, j + 1, n)
+            drift[j:m] = avg.b
+            ok = _held(t, dt, j, m, min_dur)
+            if ok.any():
+                count += 1
+                cid[j + int(np.argmax(ok)) : m] = count
+            i = m
+        y = x - drift
+    over = _norm3(drift[:, :3]) > on
+    alarm = int(np.argmax(over)) if over.any() else -1
+    return ContactTrack(y, drift, cid > 0, cid, alarm)
+
+
+class ContactTracker:
+    """:func:`track_contacts` one sample at a time.
+
+    Call :meth:`step` for every sample after the tare; :meth:`reset` after a (re-)tare.
+    """
+
+    def __init__(self, config: EstimatorConfig, noise: SensorNoise):
+        self.config = config
+        self.on, self.off = contact_thresholds(config, noise)
+        self.count = 0  #: contacts so far (not reset by a re-tare)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the drift and the contact (a new tare)."""
+        self.drift = self.drift_before = (0.0,) * 6
+        self._block = 0  # samples in the open block of the drift average (0: none open)
+        self.in_contact = False
+        self.contact_id = 0
+        self._pending: float | None = None
+        self.drift_alarm = False
+
+    def step(self, t: float, dt: float, x: list[float]) -> tuple[list[float], int]:
+        """Sample ``x`` (tared, filtered) at ``t``, ``dt`` s after the previous sample.
+
+        Returns the wrench with the drift subtracted (when tracked) and ``0`` (no contact),
+        ``1`` (in contact) or ``2`` (a new contact starts at this sample).
+        """
+        cfg = self.config
+        self.drift_before = b = self.drift
+        if not self.drift_alarm and b[0] * b[0] + b[1] * b[1] + b[2] * b[2] > self.on * self.on:
+            self.drift_alarm = True
+        fx, fy, fz = x[0] - b[0], x[1] - b[1], x[2] - b[2]
+        dev = math.sqrt(fx * fx + fy * fy + fz * fz)
+        if cfg.track_drift:
+            y = [fx, fy, fz, x[3] - b[3], x[4] - b[4], x[5] - b[5]]
+            f = dev
+        else:
+            y = x
+            f = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
+        code = 0
+        if self.in_contact:
+            if f >= self.off:
+                code = 1
+            else:
+                self.in_contact = False
+                self.contact_id = 0
+        elif self._pending is not None:
+            if f < self.off:
+                self._pending = None
+            elif (t - self._pending) + dt >= cfg.contact_min_duration:
+                code = self._start()
+        elif f >= self.on:
+            self._pending = t
+            if dt >= cfg.contact_min_duration:  # (t − t) + dt, as in the batch
+                code = self._start()
+        if (not code and self._pending is None) if cfg.track_drift else dev < self.on:  # untouched
+            self._follow(min(dt / cfg.drift_time_constant, _MAX_ALPHA), x)
+        else:
+            self._block = 0
+        return y, code
+
+    def _follow(self, a: float, x: list[float]) -> None:
+        if not self._block:
+            self._b0, self._p, self._acc = self.drift, 1.0, [0.0] * 6
+        self._block += 1
+        self._p = p = self._p * (1.0 - a)
+        w = a / p
+        acc, b0 = self._acc, self._b0
+        acc[0] += w * x[0]
+        acc[1] += w * x[1]
+        acc[2] += w * x[2]
+        acc[3] += w * x[3]
+        acc[4] += w * x[4]
+        acc[5] += w * x[5]
+        self.drift = (p * (b0[0] + acc[0]), p * (b0[1] + acc[1]), p * (b0[2] + acc[2]),
+                      p * (b0[3] + acc[3]), p * (b0[4] + acc[4]), p * (b0[5] + acc[5]))  # fmt: skip
+        if self._block >= _BLOCK or p < _TINY:
+            self._block = 0
+
+    def _start(self) -> int:
+        self._pending = None
+        self.in_contact = True
+        self.count += 1
+        self.contact_id = self.count
+        return 2
+
+
+def first_contact_pulls(t: NDArray, pulling: NDArray, contact_id: NDArray) -> bool:
+    """The first contact after the tare pulls from its onset on for at least
+    :data:`START_PULL_TIME` s (the stream raises the flag at the same sample): the signature
+    of a tare taken in contact, whose release reads as a pull."""
+    idx = np.flatnonzero(contact_id == 1)
+    if not len(idx):
+        return False
+    lead = pulling[idx]
+    run = len(lead) if lead.all() else int(np.argmin(lead))
+    return run > 0 and bool(t[idx[run - 1]] - t[idx[0]] >= START_PULL_TIME)
+
+
+def started_in_contact_message(config: EstimatorConfig) -> str:
+    """The warning for a log or stream that (probably) started in contact."""
+    return (
+        f"the first contact after the tare pulls (no contact point where the force pushes in) for {START_PULL_TIME:g} s "
+        "or more: the fingertip was probably in contact while taring, so the tare holds the contact force and the "
+        "release reads as a pull. Tare with the fingertip untouched (Estimator.tare(), the t key of the live view), "
+        "or give a bias (--bias FILE)"
+    )
+
+
+def drift_message(config: EstimatorConfig, t: float) -> str:
+    """The warning for a drift of the force beyond the contact threshold since the tare."""
+    what = "tracked and subtracted" if config.track_drift else "not subtracted (track_drift off): contacts may be false"
+    return (
+        f"the sensor bias drifted by more than the contact threshold ({config.contact_threshold:g} N) since the tare "
+        f"(at t = {t:.6g} s); the drift is {what}; re-tare when you can"
+    )

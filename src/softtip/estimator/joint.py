@@ -1,0 +1,183 @@
+"""The ``joint`` contact-point stage, batch and stream side by side.
+
+The latch, then the contact point moved across the line to where a window of the last
+``joint_window`` seconds fits the line-contact model (the maths is in
+:mod:`softtip.joint`). A window is accepted when its standard deviations of line angle and
+offset are below ``joint_max_angle_std`` and ``joint_max_offset_std`` and its fit residual
+below ``joint_max_residual`` noise standard deviations. The point held is the accepted
+window since contact onset (or the last re-latch) with the smallest standard deviation aged
+by ``joint_drift``; before the first one the latched point is used. The coordinate along
+the line is the latch's: a line contact does not tell it.
+
+:func:`joint_points` does it for a whole log, :class:`JointTracker` one sample at a time.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+
+import numpy as np
+
+from softtip._xp import NP, PY
+from softtip.contact import contact_kernel
+from softtip.depth import depth_kernel
+from softtip.estimator.config import EstimatorConfig
+from softtip.fingertip import Fingertip
+from softtip.joint import N_SUMS, joint_products, joint_solve_kernel
+from softtip.noise import SensorNoise
+from softtip.spin import spin_torque_kernel
+
+__all__ = ["joint_points", "JointTracker", "joint_accept", "joint_moment"]
+
+_NAN4 = (math.nan,) * 4
+
+
+def joint_moment(fx, fy, fz, mx, my, mz, nx, ny, nz, ax, ay, az, law, xp):
+    """Moment about the anchor ``a`` that enters the joint sums, component-wise.
+
+    With a depth law the moment is first moved to the undeformed surface, ``m + δ n × f``,
+    so that the surface point is fitted; ``n`` is the normal at the latched point (the
+    sample's own soft-finger normal before there is one), which carries no sensor noise.
+    """
+    if law is not None:
+        delta = depth_kernel(-(fx * nx + fy * ny + fz * nz), law, xp)
+        mx = mx + delta * (ny * fz - nz * fy)
+        my = my + delta * (nz * fx - nx * fz)
+        mz = mz + delta * (nx * fy - ny * fx)
+    return spin_torque_kernel(fx, fy, fz, mx, my, mz, ax, ay, az)
+
+
+def joint_accept(cond, angle_std, offset_std, residual, config: EstimatorConfig):
+    # written so that NaN (undefined window) is never accepted, in both back ends
+    return (
+        (angle_std <= config.joint_max_angle_std)
+        & (offset_std <= config.joint_max_offset_std)
+        & (residual <= config.joint_max_residual)
+        & (cond >= 0.0)
+    )
+
+
+
+def joint_points(t, c, contact, sc, base, relatched, tip: Fingertip, config: EstimatorConfig, noise: SensorNoise, corr):
+    """``joint`` mode over a whole log, vectorised within each contact.
+
+    ``c`` are the six wrench components, ``sc`` the soft-finger solutions, ``base`` the
+    latched points (N, 3) (start of each solve; their coordinate along the line is kept).
+    Returns ``(point (N, 3), stats (4, N), used (N,), moved (N,))``: ``used`` marks the
+    windows that became the held point, ``moved`` the samples whose point is a joint one
+    (the latched one elsewhere).
+    """
+    n = len(t)
+    valid = contact & np.asarray(sc[7], dtype=bool)
+    stats = np.full((4, n), np.nan)
+    jp = np.full((n, 3), np.nan)
+    edges = np.diff(np.concatenate(([False], contact, [False])).astype(np.int8))
+    for s, e in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
+        v = np.flatnonzero(valid[s:e]) + s
+        if not len(v):
+            continue
+        anchor = [float(sc[i][v[0]]) for i in range(3)]  # first soft-finger point of the contact
+        normal = np.stack([sc[i][v] for i in (3, 4, 5)], axis=-1)
+        if config.depth is not None:
+            has = np.all(np.isfinite(base[v]), axis=-1)
+            normal[has] = tip.normal(base[v][has])
+        qa = joint_moment(*(ci[v] for ci in c), *normal.T, *anchor, config.depth, NP)
+        tv = t[v]
+        # window of sample k: the valid samples i with t_i > t_k − T (the stream's test)
+        first = np.searchsorted(tv, tv - config.joint_window, side="right")
+        last = np.arange(1, len(v) + 1)
+        sums = []
+        for p in joint_products(c[0][v], c[1][v], c[2][v], *qa):
+            cz = np.concatenate(([0.0], np.cumsum(p)))  # sequential, as the stream's running sums
+            sums.append(cz[last] - cz[first])
+        ok = np.all(np.isfinite(base[v]), axis=-1)
+        count = (last - first).astype(float)
+        out = joint_solve_kernel(sums, count, *base[v].T, *anchor, tip, config.joint_iterations, noise, corr, NP)
+        jp[v[ok]] = np.stack(out[:3], axis=-1)[ok]
+        stats[:, v[ok]] = np.stack(out[6:10])[:, ok]
+    with np.errstate(invalid="ignore"):
+        accept = valid & joint_accept(*stats, config) & np.all(np.isfinite(jp), axis=-1)
+    # the point held is the accepted window with the smallest offset_std² + drift² · age: an
+    # accepted window replaces it when key = offset_std² − drift² (t − t_segment) sets a new
+    # minimum (as the stream decides, sample by sample). A segment starts at contact onset
+    # and at every re-latch.
+    begin = np.concatenate((contact[:1], contact[1:] & ~contact[:-1])) | (relatched & contact)
+    use = np.zeros(n, dtype=bool)
+    held_at = np.full(n, -1)
+    starts = np.flatnonzero(begin)
+    for a, b in zip(starts, np.append(starts[1:], n)):
+        with np.errstate(invalid="ignore"):
+            key = np.where(accept[a:b], stats[2, a:b] ** 2 - config.joint_drift**2 * (t[a:b] - t[a]), np.inf)
+        best = np.concatenate(([np.inf], np.minimum.accumulate(key)[:-1]))
+        use[a:b] = key < best
+        held_at[a:b] = np.maximum.accumulate(np.where(use[a:b], np.arange(a, b), -1))
+    moved = contact & (held_at >= 0)
+    point = base.copy()
+    point[moved] = jp[held_at[moved]]
+    return point, stats, use, moved
+
+
+class JointTracker:
+    """The ``joint`` stage of :func:`joint_points`, one sample at a time.
+
+    Running sums of the joint products since contact onset and, for each valid sample of the
+    last ``joint_window`` seconds, its time and the sums before it: window sums are
+    differences, as in the batch.
+    """
+
+    def __init__(self, tip: Fingertip, config: EstimatorConfig, noise: SensorNoise, corr: float):
+        self.tip = tip
+        self.config = config
+        self.noise = noise
+        self.corr = corr
+
+    def start_contact(self) -> None:
+        """At contact onset: empty sums and window."""
+        self._anchor: tuple[float, float, float] | None = None
+        self._cum = [0.0] * N_SUMS
+        self._hist: deque[tuple[float, list[float]]] = deque()
+
+    def start_segment(self, t: float) -> None:
+        """At contact onset and at a re-latch: no window held yet."""
+        self._held: tuple[float, float, float] | None = None
+        self._key = math.inf
+        self._t_segment = t
+
+    def step(self, t: float, x: list[float], point, sc):
+        """``(point, (conditioning, angle_std, offset_std, residual), moved)`` of a sample in
+        contact whose latch stage gave ``point`` (or ``None``); ``sc`` as in
+        :meth:`softtip.estimator.latch.LatchTracker.step`."""
+        cfg = self.config
+        stats = _NAN4
+        if sc is None:
+            sc = contact_kernel(self.tip, *x, xp=PY)
+        if sc[7]:
+            if self._anchor is None:
+                self._anchor = (sc[0], sc[1], sc[2])
+            ax, ay, az = self._anchor
+            nx, ny, nz = sc[3], sc[4], sc[5]
+            if cfg.depth is not None and point is not None:
+                nx, ny, nz = self.tip._normal_kernel(*point, PY)
+            qa = joint_moment(*x, nx, ny, nz, ax, ay, az, cfg.depth, PY)
+            hist = self._hist
+            hist.append((t, self._cum))
+            self._cum = [c + p for c, p in zip(self._cum, joint_products(x[0], x[1], x[2], *qa))]
+            start = t - cfg.joint_window
+            while hist and hist[0][0] <= start:
+                hist.popleft()
+            if point is not None:
+                # an empty window (t − T rounds to t) has zero sums, as in the batch
+                sums = [c - o for c, o in zip(self._cum, hist[0][1] if hist else self._cum)]
+                out = joint_solve_kernel(
+                    sums, float(len(hist)), *point, ax, ay, az, self.tip, cfg.joint_iterations, self.noise,
+                    self.corr, PY,
+                )  # fmt: skip
+                stats = out[6:10]
+                if joint_accept(*stats, cfg) and math.isfinite(out[0] + out[1] + out[2]):
+                    key = stats[2] ** 2 - cfg.joint_drift**2 * (t - self._t_segment)
+                    if key < self._key:
+                        self._key, self._held = key, out[:3]
+        if self._held is not None:
+            return self._held, stats, True
+        return point, stats, False

@@ -1,0 +1,193 @@
+"""The latched contact point (paper III-C), batch and stream side by side.
+
+During the first rise of the force after onset (until ``|f|`` first exceeds the light-force
+window, or sets no new maximum for ``stall_time``), the soft-finger solutions of the samples
+inside the window are averaged; that mean, put back on the skin, is the contact point from
+then on, until contact ends. Before the first window sample the current soft-finger solution
+is used. With no window sample in the whole rise, the mean of the first ``fallback_samples``
+solutions of the contact is latched and flagged.
+
+Re-latching (``relatch_distance``): once the latch is held, a sample at light force whose
+soft-finger solution lies farther than this from the latched point starts a new first rise.
+
+:func:`latch_points` does it for a whole log (vectorised within each contact);
+:class:`LatchTracker` one sample at a time.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from softtip._xp import PY
+from softtip.contact import contact_kernel
+from softtip.estimator.config import EstimatorConfig
+from softtip.fingertip import Fingertip
+
+__all__ = ["latch_points", "LatchTracker"]
+
+
+def _latch_segment(t, fn, valid, r_sc, tip: Fingertip, config: EstimatorConfig):
+    """The latch of one segment (a contact, or its rest after a re-latch), vectorised.
+
+    The segment's first sample starts a first rise. Returns ``(point (k, 3), latched (k,),
+    fallback (k,), held (k,), latch point (3,))``, where ``held`` marks the samples that
+    start with the latch already fixed (where a drift re-latch may happen).
+    """
+    k = len(t)
+    lo, hi = config.latch_window
+    idx = np.arange(k)
+    prev_peak = np.concatenate(([-np.inf], np.maximum.accumulate(fn)[:-1]))
+    t_peak = t[np.maximum.accumulate(np.where(fn > prev_peak, idx, 0))]
+    rise_over = (fn > hi) | (t - t_peak > config.stall_time)
+    end = int(np.argmax(rise_over)) if rise_over.any() else k
+    win = (idx < end) & (fn >= lo) & (fn <= hi) & valid
+    n_win = np.cumsum(win)
+    sum_win = np.cumsum(np.where(win[:, None], r_sc, 0.0), axis=0)
+    fb = valid & (np.cumsum(valid) <= config.fallback_samples)
+    n_fb = np.cumsum(fb)
+    sum_fb = np.cumsum(np.where(fb[:, None], r_sc, 0.0), axis=0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean_win = tip.project(sum_win / n_win[:, None])
+        mean_fb = tip.project(sum_fb / n_fb[:, None])
+    total_win = n_win[end - 1] if end > 0 else 0
+    rising = idx < end
+    pe = np.where((rising & (n_win > 0))[:, None], mean_win, r_sc)
+    if total_win > 0:
+        pe[~rising] = mean_win[end - 1]
+        lat = rising & (n_win > 0) | ~rising
+        fbk = np.zeros(k, dtype=bool)
+        fixed, latch = end, mean_win[end - 1]
+    else:
+        after = ~rising
+        pe[after] = np.where((n_fb[after] > 0)[:, None], mean_fb[after], np.nan)
+        lat = after & (n_fb > 0)
+        fbk = lat
+        # the stream fixes the fallback latch once it has all its samples
+        done = after & (n_fb >= config.fallback_samples)
+        fixed = int(np.argmax(done)) if done.any() else k
+        latch = mean_fb[fixed] if fixed < k else np.full(3, np.nan)
+    return pe, lat, fbk, idx > fixed, latch
+
+
+def latch_points(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig):
+    """Contact point per sample in ``latch`` mode, with re-latching.
+
+    Returns ``(point (N, 3), latched, fallback, relatched)``. One iteration per contact and
+    per re-latch (a handful per log), vectorised within each.
+    """
+    n = len(t)
+    point = np.full((n, 3), np.nan)
+    latched = np.zeros(n, dtype=bool)
+    fallback = np.zeros(n, dtype=bool)
+    relatched = np.zeros(n, dtype=bool)
+    valid = np.asarray(sc[7], dtype=bool)
+    r_sc = np.where(valid[:, None], np.stack(sc[:3], axis=-1), np.nan)
+    lo, hi = config.latch_window
+    dist = config.relatch_distance
+    edges = np.diff(np.concatenate(([False], contact, [False])).astype(np.int8))
+    starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    had_latch = False
+    for s, e in zip(starts, stops):
+        relatched[s] = had_latch  # contact regained after a latched one
+        a = s
+        while True:
+            pe, lat, fbk, held, latch = _latch_segment(t[a:e], fn[a:e], valid[a:e], r_sc[a:e], tip, config)
+            stop = e - a
+            if dist is not None and held.any():
+                fe = fn[a:e]
+                dx, dy, dz = (r_sc[a:e, i] - latch[i] for i in range(3))
+                with np.errstate(invalid="ignore"):
+                    drift = held & valid[a:e] & (fe >= lo) & (fe <= hi) & (dx * dx + dy * dy + dz * dz > dist * dist)
+                if drift.any():
+                    stop = int(np.argmax(drift))
+            point[a : a + stop], latched[a : a + stop], fallback[a : a + stop] = pe[:stop], lat[:stop], fbk[:stop]
+            if stop == e - a:
+                break
+            a += stop
+            relatched[a] = True
+        had_latch = had_latch or bool(latched[s:e].any())
+    return point, latched, fallback, relatched
+
+
+
+class LatchTracker:
+    """The latch of :func:`latch_points` for one contact, one sample at a time.
+
+    Call :meth:`start` at contact onset (and at a re-latch), then :meth:`step` for every
+    sample in contact. Soft-finger solutions (``sc``, the 8-tuple of
+    :func:`softtip.contact.contact_kernel`) are computed only when needed and handed back
+    for reuse.
+    """
+
+    def __init__(self, tip: Fingertip, config: EstimatorConfig):
+        self.tip = tip
+        self.config = config
+        self.point: tuple[float, float, float] | None = None
+        self.is_fallback = False
+
+    def start(self, fn: float, t: float) -> None:
+        """A new first rise at force ``fn`` (N) and time ``t`` (s)."""
+        self.rising = True
+        self._peak = fn
+        self._t_peak = t
+        self._n_win = 0
+        self._sum_win = [0.0, 0.0, 0.0]
+        self._n_fb = 0
+        self._sum_fb = [0.0, 0.0, 0.0]
+        self.point = None  # the latched point once fixed
+        self.is_fallback = False
+
+    def drifted(self, fn: float, x: list[float], sc):
+        """Re-latch test of a held latch: ``(moved, sc)``; ``moved`` when, at light force,
+        this sample's soft-finger solution lies farther than ``relatch_distance`` from it."""
+        dist = self.config.relatch_distance
+        lo, hi = self.config.latch_window
+        if self.point is None or dist is None or not lo <= fn <= hi:
+            return False, sc
+        sc = contact_kernel(self.tip, *x, xp=PY)
+        if not sc[7]:
+            return False, sc
+        lx, ly, lz = self.point
+        dx, dy, dz = sc[0] - lx, sc[1] - ly, sc[2] - lz
+        return dx * dx + dy * dy + dz * dz > dist * dist, sc
+
+    def step(self, t: float, fn: float, x: list[float], sc):
+        """The contact point of a sample in contact: ``(point, latched, fallback, sc)``.
+
+        ``point`` is ``None`` when there is none yet (no valid soft-finger solution)."""
+        cfg = self.config
+        if self.rising and fn > self._peak:
+            self._peak, self._t_peak = fn, t
+        point = self.point
+        if point is not None:
+            return point, True, self.is_fallback, sc
+        if sc is None:
+            sc = contact_kernel(self.tip, *x, xp=PY)
+        fallback = False
+        valid = sc[7]
+        if valid and self._n_fb < cfg.fallback_samples:
+            self._n_fb += 1
+            self._sum_fb = [s + v for s, v in zip(self._sum_fb, sc[:3])]
+        lo, hi = cfg.latch_window
+        if self.rising and (fn > hi or t - self._t_peak > cfg.stall_time):
+            self.rising = False
+            if self._n_win > 0:
+                self.point = point = self._mean(self._sum_win, self._n_win)
+        if self.rising:
+            if valid and lo <= fn <= hi:
+                self._n_win += 1
+                self._sum_win = [s + v for s, v in zip(self._sum_win, sc[:3])]
+            if self._n_win > 0:
+                point = self._mean(self._sum_win, self._n_win)
+            elif valid:
+                point = (sc[0], sc[1], sc[2])
+        elif point is None and self._n_fb > 0:
+            point = self._mean(self._sum_fb, self._n_fb)
+            fallback = True
+            if self._n_fb >= cfg.fallback_samples:
+                self.point, self.is_fallback = point, True
+        latched = point is not None and (self._n_win > 0 or fallback)
+        return point, latched, fallback, sc
+
+    def _mean(self, total: list[float], count: int) -> tuple[float, float, float]:
+        return self.tip._project_kernel(total[0] / count, total[1] / count, total[2] / count, PY)

@@ -1,0 +1,73 @@
+"""The measurement stage, shared by batch and stream: from the wrench and a contact point to
+the spin torque, ``h``, its noise level, the line test, the direction and its angle.
+
+:func:`measure` is component-wise: the batch calls it on numpy arrays (back end
+:data:`softtip._xp.NP`), the stream on Python floats (:data:`softtip._xp.PY`), so both agree
+to rounding.
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+from softtip.depth import DepthLaw, depth_kernel
+from softtip.filtering import noise_gain
+from softtip.noise import SensorNoise, angle_std_kernel, h_std_kernel
+from softtip.spin import angle_kernel, direction_kernel, spin_torque_kernel, tangent_frame_kernel, tangential_kernel
+
+__all__ = ["Measurement", "measure", "effective_noise", "noise_correlation"]
+
+
+class Measurement(NamedTuple):
+    """One measurement, component-wise (floats or arrays of one shape). SI units."""
+
+    sigma: Any  #: spin torque about the normal, N·m
+    hx: Any  #: tangential spin torque ``h``, N·m
+    hy: Any
+    hz: Any
+    h_norm: Any  #: ``|h|``, N·m
+    h_std: Any  #: noise level of ``h`` (``sqrt(trace Σ_h)``), N·m
+    dx: Any  #: unit direction ``n × h / |n × h|`` (an axis)
+    dy: Any
+    dz: Any
+    angle: Any  #: angle of ``d`` in the tangent frame, rad
+    angle_std: Any  #: its first-order standard deviation from the sensor noise, rad
+    line: Any  #: ``|h|`` significant: ``|h| > max(h_sigmas · h_std, h_min)``
+    pushing: Any  #: the force pushes into the skin (``f · n < 0``)
+    depth: Any  #: depth ``δ`` of the point the moment is taken about, m (0 without a law)
+
+
+def measure(
+    fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz,
+    noise: SensorNoise, h_sigmas: float, h_min: float, law: DepthLaw | None, xp,
+) -> Measurement:  # fmt: skip
+    """Spin torque, ``h``, noise, direction and the line test for a contact point ``r``
+    with outward normal ``n``.
+
+    With a depth law the moment is taken about ``r − δ n`` (friction acts inside the skin).
+    """
+    pushing = fx * nx + fy * ny + fz * nz < 0.0
+    if law is None:
+        delta = 0.0 * fx
+    else:
+        delta = depth_kernel(-(fx * nx + fy * ny + fz * nz), law, xp)
+        rx, ry, rz = rx - delta * nx, ry - delta * ny, rz - delta * nz
+    qx, qy, qz = spin_torque_kernel(fx, fy, fz, mx, my, mz, rx, ry, rz)
+    sigma, hx, hy, hz = tangential_kernel(qx, qy, qz, nx, ny, nz)
+    hn, dx, dy, dz = direction_kernel(hx, hy, hz, nx, ny, nz, xp)
+    frame = tangent_frame_kernel(nx, ny, nz, xp)
+    h_std = h_std_kernel(rx, ry, rz, *frame, noise, xp)
+    line = hn > xp.maximum(h_sigmas * h_std, h_min)
+    angle = angle_kernel(dx, dy, dz, *frame, xp)
+    angle_std = angle_std_kernel(dx, dy, dz, hn, rx, ry, rz, noise, xp)
+    return Measurement(sigma, hx, hy, hz, hn, h_std, dx, dy, dz, angle, angle_std, line, pushing, delta)
+
+
+def effective_noise(noise: SensorNoise, sos) -> SensorNoise:
+    """The sensor noise after the low-pass ``sos`` (unchanged without one)."""
+    return noise if sos is None else noise.scaled(noise_gain(sos))
+
+
+def noise_correlation(sos) -> float:
+    """Samples per independent noise sample after the filter ``sos`` (1 without one)."""
+    return 1.0 if sos is None else 1.0 / noise_gain(sos) ** 2

@@ -1,0 +1,196 @@
+"""What the estimator returns: :class:`Estimates` (a whole log) and :class:`SampleEstimate`
+(one sample), with the one list of output columns."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["STATES", "NONE", "POINT", "LINE", "EstimatorWarning", "Estimates", "SampleEstimate"]
+
+#: Contact states, indexed by the integer codes in :attr:`Estimates.state`.
+STATES = ("none", "point", "line")
+NONE, POINT, LINE = 0, 1, 2
+#: Names of the drift columns (:meth:`Estimates.columns`).
+DRIFT_COLUMNS = ("drift_fx", "drift_fy", "drift_fz", "drift_mx", "drift_my", "drift_mz")
+
+
+class EstimatorWarning(UserWarning):
+    """The estimates may be wrong: a bad tare, a log that starts in contact, a drifting bias.
+
+    The same messages are in :attr:`Estimates.warnings` and :attr:`softtip.Estimator.warnings`.
+    """
+
+
+@dataclass(frozen=True)
+class Estimates:
+    """Per-sample output of :func:`estimate`. SI units, sensor frame; ``N`` samples.
+
+    Attributes
+    ----------
+    t : (N,) s
+    state : (N,) int8 codes into :data:`STATES` (``none``, ``point``, ``line``)
+    wrench : (N, 6) the tared (and filtered) wrench the estimates come from, N and N·m;
+        NaN while taring
+    point, normal : (N, 3) contact point (m) and outward normal; NaN when ``none``
+    sigma : (N,) spin torque about the normal, N·m
+    h : (N, 3) tangential spin torque, N·m; ``h_norm`` its magnitude
+    h_std : (N,) noise level of ``h`` (``sqrt(trace Σ_h)``), N·m
+    direction : (N, 3) unit direction of the edge / strip; NaN unless ``line``
+    angle, angle_std : (N,) its angle in the SPEC §3.4 tangent frame and the angle's
+        standard deviation, rad; NaN unless ``line``
+    latched : (N,) the contact point is the latched one (not this sample's own solution)
+    latch_fallback : (N,) that latch had no light-force sample (SPEC §3.6)
+    pulling : (N,) in contact by force but no pushing contact point (reported ``none``)
+    taring : (N,) sample used for the bias (reported ``none``)
+    bias : (6,) the bias subtracted, N and N·m
+    tare_force_std : float, N: the largest standard deviation of a force component over
+        the tare samples (NaN without a tare). Far above the sensor noise, the fingertip
+        was touched while taring and the bias is wrong.
+    relatched : (N,) a new latch starts at this sample, replacing an earlier one (drift at
+        light force, or contact regained after a latched contact); an event, not masked
+    depth : (N,) depth compensation ``δ`` used, m (0 without a depth law); NaN when ``none``
+    joint_conditioning, joint_angle_std, joint_offset_std, joint_residual : (N,) the
+        ``joint`` window ending at this sample (:mod:`softtip.joint`): reciprocal condition
+        number in [0, 1], standard deviations of its line angle (rad) and of its offset
+        across the line (m), and the fit's RMS residual in units of the noise; NaN where no
+        window was solved (other modes, ``none``, or no soft-finger solution)
+    joint_fallback : (N,) ``joint`` mode: no window of this contact accepted yet, so the
+        point is the latched one
+    repeated_stamps : int
+        samples whose time equals the previous sample's (accepted; time must not go back)
+    contact_id : (N,) 1, 2, … for the first, second, … contact (onset above the contact
+        threshold, release below the release threshold); 0 out of contact. A contact may have
+        ``none`` samples (pulling, no contact point yet)
+    drift : (N, 6) bias drift tracked while untouched since the tare, N and N·m: subtracted
+        from this sample's wrench unless ``track_drift`` is off
+    tare : TareReport or None
+        what the tare did and its checks (:class:`~softtip.estimator.tare.TareReport`)
+    started_in_contact : bool
+        the first contact after the tare pulled for at least 0.1 s: the fingertip was
+        probably touched while taring (the release reads as a pull)
+    drift_alarm : bool
+        the tracked drift of the force exceeded the contact threshold
+    warnings : tuple of str
+        every warning about these estimates, in plain language (also issued as
+        :class:`EstimatorWarning`)
+    """
+
+    t: NDArray[np.float64]
+    state: NDArray[np.int8]
+    wrench: NDArray[np.float64]
+    point: NDArray[np.float64]
+    normal: NDArray[np.float64]
+    sigma: NDArray[np.float64]
+    h: NDArray[np.float64]
+    h_norm: NDArray[np.float64]
+    h_std: NDArray[np.float64]
+    direction: NDArray[np.float64]
+    angle: NDArray[np.float64]
+    angle_std: NDArray[np.float64]
+    latched: NDArray[np.bool_]
+    latch_fallback: NDArray[np.bool_]
+    pulling: NDArray[np.bool_]
+    taring: NDArray[np.bool_]
+    bias: NDArray[np.float64]
+    relatched: NDArray[np.bool_]
+    depth: NDArray[np.float64]
+    joint_conditioning: NDArray[np.float64]
+    joint_angle_std: NDArray[np.float64]
+    joint_offset_std: NDArray[np.float64]
+    joint_residual: NDArray[np.float64]
+    joint_fallback: NDArray[np.bool_]
+    tare_force_std: float = math.nan
+    repeated_stamps: int = 0
+    contact_id: NDArray[np.int64] | None = None
+    drift: NDArray[np.float64] | None = None
+    tare: Any = None
+    started_in_contact: bool = False
+    drift_alarm: bool = False
+    warnings: tuple[str, ...] = ()
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    @property
+    def state_names(self) -> NDArray[np.str_]:
+        """``state`` as strings, shape (N,)."""
+        return np.asarray(STATES)[self.state]
+
+    @property
+    def n_contacts(self) -> int:
+        """Contacts in the log (each onset counted once, however long it lasts)."""
+        return int(self.contact_id.max()) if self.contact_id is not None and len(self.contact_id) else 0
+
+    @property
+    def n_pulling(self) -> int:
+        """Samples in contact by force whose force pulls at every root (reported ``none``)."""
+        return int(np.count_nonzero(self.pulling))
+
+    def columns(self) -> dict[str, NDArray]:
+        """The SPEC §4 output columns (SI, angles in degrees), in order, then softtip's extras."""
+        w, p, n, h, d = self.wrench, self.point, self.normal, self.h, self.direction
+        return {
+            "t": self.t,
+            "state": self.state_names,
+            "fx": w[:, 0], "fy": w[:, 1], "fz": w[:, 2],
+            "mx": w[:, 3], "my": w[:, 4], "mz": w[:, 5],
+            "rx": p[:, 0], "ry": p[:, 1], "rz": p[:, 2],
+            "nx": n[:, 0], "ny": n[:, 1], "nz": n[:, 2],
+            "sigma": self.sigma,
+            "hx": h[:, 0], "hy": h[:, 1], "hz": h[:, 2],
+            "h_norm": self.h_norm,
+            "dx": d[:, 0], "dy": d[:, 1], "dz": d[:, 2],
+            "angle_deg": np.degrees(self.angle),
+            "h_std": self.h_std,
+            "angle_std_deg": np.degrees(self.angle_std),
+            "latched": self.latched,
+            "latch_fallback": self.latch_fallback,
+            "relatched": self.relatched,
+            "depth": self.depth,
+            "joint_conditioning": self.joint_conditioning,
+            "joint_angle_std_deg": np.degrees(self.joint_angle_std),
+            "joint_offset_std": self.joint_offset_std,
+            "joint_residual": self.joint_residual,
+            "joint_fallback": self.joint_fallback,
+            **({"contact_id": self.contact_id} if self.contact_id is not None else {}),
+            **({k: self.drift[:, i] for i, k in enumerate(DRIFT_COLUMNS)} if self.drift is not None else {}),
+        }  # fmt: skip
+
+
+class SampleEstimate(NamedTuple):
+    """One sample of :class:`Estimator` output; fields as in :class:`Estimates` (floats).
+
+    A named tuple: cheap to create at sensor rate, immutable.
+    """
+
+    t: float
+    state: str
+    wrench: tuple[float, ...]
+    point: tuple[float, float, float]
+    normal: tuple[float, float, float]
+    sigma: float
+    h: tuple[float, float, float]
+    h_norm: float
+    h_std: float
+    direction: tuple[float, float, float]
+    angle: float
+    angle_std: float
+    latched: bool
+    latch_fallback: bool
+    pulling: bool
+    taring: bool
+    relatched: bool = False
+    depth: float = math.nan
+    joint_conditioning: float = math.nan
+    joint_angle_std: float = math.nan
+    joint_offset_std: float = math.nan
+    joint_residual: float = math.nan
+    joint_fallback: bool = False
+    contact_id: int = 0
+    drift: tuple[float, ...] = (0.0,) * 6
+

@@ -1,0 +1,295 @@
+"""The estimator one sample at a time, for live use: :class:`Estimator`.
+
+Each stage is the stream form of the batch stage beside it (:mod:`~softtip.estimator.tare`,
+:mod:`~softtip.estimator.latch`, :mod:`~softtip.estimator.joint`,
+:mod:`~softtip.estimator.measure`), so :class:`Estimator` and
+:func:`~softtip.estimator.batch.estimate` agree to rounding.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from softtip._xp import PY
+from softtip.contact import contact_kernel
+from softtip.estimator.config import EstimatorConfig
+from softtip.estimator.contact import (
+    START_PULL_TIME,
+    ContactTracker,
+    drift_message,
+    started_in_contact_message,
+)
+from softtip.estimator.joint import JointTracker
+from softtip.estimator.latch import LatchTracker
+from softtip.estimator.measure import effective_noise, measure, noise_correlation
+from softtip.estimator.results import EstimatorWarning, SampleEstimate
+from softtip.estimator.tare import StreamTare, TareReport
+from softtip.filtering import SosStream, lowpass_sos
+from softtip.fingertip import Fingertip, load_fingertip
+
+__all__ = ["Estimator"]
+
+_NAN3 = (math.nan, math.nan, math.nan)
+_NAN4 = (math.nan,) * 4
+_NAN6 = (math.nan,) * 6
+
+
+class Estimator:
+    """The estimator of :func:`~softtip.estimate`, one sample at a time (live use).
+
+    Parameters
+    ----------
+    tip : Fingertip or str
+        Fingertip, preset name or TOML path.
+    config : EstimatorConfig, optional
+        With ``lowpass_hz`` set, ``config.sample_rate`` is required.
+
+    Attributes
+    ----------
+    repeated_stamps : int
+        Samples whose time equalled the previous one's (accepted).
+    warnings : list of str
+        Warnings so far, as in :attr:`softtip.Estimates.warnings` (each also issued once as
+        :class:`~softtip.estimator.results.EstimatorWarning`).
+    started_in_contact, drift_alarm : bool
+        As in :class:`~softtip.Estimates`, since the last tare.
+
+    Examples
+    --------
+    >>> from softtip import Estimator, load_example
+    >>> log = load_example()
+    >>> est = Estimator("murakami2006")
+    >>> out = [est.update(t, w) for t, w in zip(log.t, log.wrench)]
+    >>> out[-1].state
+    'line'
+    """
+
+    def __init__(self, tip: Fingertip | str = "murakami2006", config: EstimatorConfig | None = None):
+        self.tip = load_fingertip(tip)
+        self.config = config or EstimatorConfig()
+        cfg = self.config
+        self._sos = None
+        if cfg.lowpass_hz is not None:
+            if cfg.sample_rate is None:
+                raise ValueError("streaming with a low-pass filter needs config.sample_rate (Hz)")
+            self._sos = lowpass_sos(cfg.lowpass_hz, cfg.sample_rate, cfg.lowpass_order)
+        self._noise = effective_noise(cfg.noise, self._sos)
+        self._track = cfg.contact_point == "track"
+        self._tare = StreamTare(cfg)
+        self._latch = LatchTracker(self.tip, cfg)
+        self._joint = None
+        if cfg.contact_point == "joint":
+            self._joint = JointTracker(self.tip, cfg, self._noise, noise_correlation(self._sos))
+        self._contacts = ContactTracker(cfg, self._noise)
+        self.reset()
+
+    @property
+    def bias(self) -> tuple[float, ...] | None:
+        """The sensor bias subtracted (N, N·m); ``None`` while taring. The tracked drift
+        (:attr:`drift`) comes on top."""
+        return self._tare.bias
+
+    @property
+    def tare_report(self) -> TareReport | None:
+        """What the last tare did and its checks; ``None`` while taring."""
+        return self._tare.report
+
+    @property
+    def drift(self) -> tuple[float, ...]:
+        """Bias drift tracked since the last tare (N, N·m)."""
+        return self._contacts.drift
+
+    @property
+    def contacts(self) -> int:
+        """Contacts so far (onsets, each counted once)."""
+        return self._contacts.count
+
+    def reset(self) -> None:
+        """Forget everything: bias (unless given), filter state, drift, contacts."""
+        self._tare.reset()
+        self._filter = SosStream(self._sos) if self._sos is not None else None
+        self._contacts.reset()
+        self._contacts.count = 0
+        self._had_latch = False
+        self._t_prev: float | None = None
+        self.repeated_stamps = 0
+        self.warnings: list[str] = []
+        self._after_tare()
+
+    def tare(self, duration: float | None = None) -> None:
+        """Tare again from the next samples (the fingertip untouched), even with a given bias.
+
+        Parameters
+        ----------
+        duration : float, optional
+            s of samples to tare from; default ``config.tare_duration`` (0.2 s when that is 0).
+            Those samples are reported as ``none`` (``taring``); the filter, the contact and
+            the drift start again, the contact count goes on.
+        """
+        d = (self.config.tare_duration or 0.2) if duration is None else float(duration)
+        if not (math.isfinite(d) and d > 0.0):
+            raise ValueError(f"tare duration must be a positive number of s, got {duration!r}")
+        self._tare.reset(d)
+        self._filter = SosStream(self._sos) if self._sos is not None else None
+        self._contacts.reset()
+        self._after_tare()
+
+    def _after_tare(self) -> None:
+        self.started_in_contact = False
+        self._first_contact = 0  # id of the first contact after the tare (0: none yet)
+        self._lead = False  # in the first contact after the tare, pulling since its onset
+        self._t_pull: float | None = None
+
+    @property
+    def drift_alarm(self) -> bool:
+        """The tracked drift of the force exceeded the contact threshold since the last tare."""
+        return self._contacts.drift_alarm
+
+    def _warn(self, msg: str) -> None:
+        self.warnings.append(msg)
+        warnings.warn(msg, EstimatorWarning, stacklevel=3)
+
+    def update(self, t: float, wrench: ArrayLike) -> SampleEstimate:
+        """Process one raw sample.
+
+        Parameters
+        ----------
+        t : float
+            s; must not go back from call to call (a repeated time is accepted and counted
+            in :attr:`repeated_stamps`).
+        wrench : array-like, shape (6,)
+            Raw ``fx, fy, fz`` (N), ``mx, my, mz`` (N·m).
+        """
+        t = float(t)
+        try:
+            w = [float(v) for v in (wrench.tolist() if isinstance(wrench, np.ndarray) else wrench)]
+        except (TypeError, ValueError):
+            w = []
+        if len(w) != 6 or not all(math.isfinite(v) for v in w) or not math.isfinite(t):
+            raise ValueError(f"expected a finite time and 6 finite wrench components, got t={t!r}, wrench={wrench!r}")
+        dt = 0.0
+        if self._t_prev is not None:
+            if t < self._t_prev:
+                raise ValueError(f"time must not go back: {t!r} s after {self._t_prev!r} s")
+            if t == self._t_prev:
+                self.repeated_stamps += 1
+            dt = t - self._t_prev
+        self._t_prev = t
+
+        tare = self._tare
+        was_taring = tare.bias is None
+        bias = tare.update(t, w)
+        if bias is None:
+            return self._none(t, (math.nan,) * 6, taring=True)
+        if was_taring:
+            for msg in tare.report.warnings:
+                self._warn(msg)
+            if self._filter is not None:  # the tare samples prime the filter, as in the batch
+                for b in tare.release():
+                    self._filter([v - bb for v, bb in zip(b, bias)])
+        x = [v - b for v, b in zip(w, bias)]
+        if self._filter is not None:
+            x = self._filter(x)
+        return self._step(t, dt, x)
+
+    def _none(self, t, x, taring=False, pulling=False, relatched=False) -> SampleEstimate:
+        nan = math.nan
+        cid = self._contacts.contact_id
+        if self._lead:
+            if cid:
+                self._pulled(t, pulling)
+            else:  # the first contact ended
+                self._lead = False
+        return SampleEstimate(
+            t, "none", tuple(x), _NAN3, _NAN3, nan, _NAN3, nan, nan, _NAN3, nan, nan, False, False, pulling, taring,
+            relatched, nan, nan, nan, nan, nan, False, cid, _NAN6 if taring else self._contacts.drift_before,
+        )  # fmt: skip
+
+    def _pulled(self, t: float, pulling: bool) -> None:
+        """A sample of the first contact after the tare, still pulling from its onset on: is
+        it a release (the tare taken in contact)?"""
+        if not pulling:
+            self._lead = False
+            return
+        if self._t_pull is None:
+            self._t_pull = t
+        if t - self._t_pull >= START_PULL_TIME:
+            self._lead = False
+            self.started_in_contact = True
+            self._warn(started_in_contact_message(self.config))
+
+    def _start_segment(self, fn: float, t: float) -> None:
+        """A new first rise: at contact onset, and at a re-latch."""
+        self._latch.start(fn, t)
+        if self._joint is not None:
+            self._joint.start_segment(t)
+
+    def _step(self, t: float, dt: float, x: list[float]) -> SampleEstimate:
+        cfg = self.config
+        contacts = self._contacts
+        alarm = contacts.drift_alarm
+        x, code = contacts.step(t, dt, x)
+        if contacts.drift_alarm and not alarm:
+            self._warn(drift_message(cfg, t))
+        if not code:
+            return self._none(t, x)
+        if code == 2 and not self._first_contact:
+            self._first_contact = contacts.contact_id
+            self._lead = self._tare.report.source == "tare"
+        fx, fy, fz, mx, my, mz = x
+        fn = math.sqrt(fx * fx + fy * fy + fz * fz)
+
+        tip = self.tip
+        latched = fallback = relatched = joint_fb = False
+        stats = _NAN4
+        if self._track:
+            rx, ry, rz, nx, ny, nz, _, valid = contact_kernel(tip, *x, xp=PY)
+            if not valid:
+                return self._none(t, x, pulling=True)
+        else:
+            sc = None
+            if code == 2:
+                relatched = self._had_latch  # contact regained after a latched one
+                self._start_segment(fn, t)
+                if self._joint is not None:
+                    self._joint.start_contact()
+            else:
+                moved, sc = self._latch.drifted(fn, x, sc)
+                if moved:
+                    relatched = True
+                    self._start_segment(fn, t)
+            point, latched, fallback, sc = self._latch.step(t, fn, x, sc)
+            if latched:
+                self._had_latch = True
+            if self._joint is not None:
+                point, stats, moved = self._joint.step(t, x, point, sc)
+                if moved:
+                    latched = fallback = False
+                joint_fb = not moved
+            if point is None:
+                return self._none(t, x, pulling=True, relatched=relatched)
+            rx, ry, rz = point
+            nx, ny, nz = tip._normal_kernel(rx, ry, rz, PY)
+
+        ms = measure(fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, self._noise, cfg.h_sigmas, cfg.h_min, cfg.depth, PY)
+        if not ms.pushing:
+            return self._none(t, x, pulling=True, relatched=relatched)
+        if ms.line:
+            state, d, angle, angle_std = "line", (ms.dx, ms.dy, ms.dz), ms.angle, ms.angle_std
+        else:
+            state, d, angle, angle_std = "point", _NAN3, math.nan, math.nan
+        if self._lead:
+            self._lead = False
+        return SampleEstimate(
+            t, state, tuple(x), (rx, ry, rz), (nx, ny, nz), ms.sigma, (ms.hx, ms.hy, ms.hz), ms.h_norm, ms.h_std, d,
+            angle, angle_std, latched, fallback, False, False, relatched, ms.depth, *stats, joint_fb,
+            contacts.contact_id, contacts.drift_before,
+        )  # fmt: skip
+
+    def process(self, t: ArrayLike, wrench: ArrayLike) -> list[SampleEstimate]:
+        """Feed a sequence of samples through :meth:`update`; returns one estimate each."""
+        return [self.update(ti, wi) for ti, wi in zip(np.asarray(t, dtype=float), np.asarray(wrench, dtype=float))]

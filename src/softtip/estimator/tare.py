@@ -1,0 +1,311 @@
+"""Tare: the sensor bias from the first samples, while the fingertip is untouched, checked.
+
+Unless a bias is given, the samples in the first ``tare_duration`` seconds make the bias
+(``tare_method``: ``robust``, the default, the mean of those that are not spikes;
+``median``, per component; ``mean``, of all); those samples are reported as ``none``
+(``taring``). :func:`tare_log` does it for a whole log,
+:class:`StreamTare` one sample at a time; both use the same comparison
+``t − t₀ < tare_duration`` so they agree on the boundary sample, and the same
+:func:`tare_from_samples`, which also checks the samples against the noise model
+(:class:`TareReport`):
+
+- **spikes**: a sample farther than :data:`SPIKE_SIGMAS` standard deviations from the median
+  (the larger of the noise model and the samples' own robust spread) in any component; the
+  robust and median tares ignore it, the mean does not (one −20 N spike among ten samples
+  moves a mean bias by 2 N);
+- **touched while taring**: the standard deviation of the other samples above
+  :data:`TOUCHED_RATIO` times the noise model, in force or in moment;
+- in ``joint`` mode, force noise above the noise model by more than the margin joint mode
+  allows for (it would take the excess for excitation).
+
+:meth:`softtip.Estimator.tare` re-tares on demand from the next samples;
+:func:`load_bias` reads a bias file (``--bias FILE``).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from softtip.errors import InputError
+from softtip.estimator.config import EstimatorConfig
+from softtip.joint import MODEL_MARGIN
+
+__all__ = [
+    "SPIKE_SIGMAS",
+    "TOUCHED_RATIO",
+    "TareReport",
+    "tare_from_samples",
+    "tare_log",
+    "StreamTare",
+    "load_bias",
+    "bias_to_toml",
+]
+
+#: A tare sample this many standard deviations from the median (in any component) is a spike.
+SPIKE_SIGMAS = 8.0
+#: The tare's noise this many times the noise model: the fingertip was touched while taring.
+TOUCHED_RATIO = 5.0
+
+
+_LABELS = {"robust": "mean without spikes", "median": "median", "mean": "mean"}
+
+
+@dataclass(frozen=True)
+class TareReport:
+    """What the tare did, and whether it can have been right. SI units.
+
+    Attributes
+    ----------
+    bias : (6,) N and N·m; NaN when a log never leaves the tare period
+    source : {"tare", "given", "none"}
+        ``tare``: from the samples; ``given``: ``config.bias`` (or a bias file); ``none``:
+        ``tare_duration`` 0, the input is taken as tared.
+    method : {"robust", "median", "mean"}
+    n_samples : int
+        Samples the bias was made of (0 unless ``source == "tare"``).
+    duration : float
+        s, ``tare_duration`` asked for.
+    force_std, moment_std : (3,) N and N·m
+        Standard deviation of each component over the tare samples, spikes left out (NaN
+        with fewer than two samples).
+    noise_ratio : float
+        Largest ratio of ``force_std`` / ``moment_std`` to the noise model (NaN without a
+        model or samples).
+    spikes : int
+        Tare samples more than :data:`SPIKE_SIGMAS` standard deviations from the median.
+    spike_shift : float
+        N; how far the spikes moved the force of a ``mean`` bias (0 for the others, which
+        ignore them).
+    warnings : tuple of str
+        Plain-language warnings (also in :attr:`softtip.Estimates.warnings`).
+    """
+
+    bias: NDArray[np.float64]
+    source: str = "tare"
+    method: str = "robust"
+    n_samples: int = 0
+    duration: float = 0.0
+    force_std: NDArray[np.float64] = field(default_factory=lambda: np.full(3, np.nan))
+    moment_std: NDArray[np.float64] = field(default_factory=lambda: np.full(3, np.nan))
+    noise_ratio: float = math.nan
+    spikes: int = 0
+    spike_shift: float = 0.0
+    warnings: tuple[str, ...] = ()
+
+    def summary(self) -> str:
+        """One line: where the bias came from and its value (N, N·mm)."""
+        f, m = self.bias[:3], self.bias[3:] * 1e3
+        what = {
+            "tare": f"from the first {self.duration:g} s ({self.n_samples} samples, {_LABELS[self.method]})",
+            "given": "given",
+            "none": "none (input already tared)",
+        }[self.source]
+        return (
+            f"bias {what}: force ({f[0]:+.4f}, {f[1]:+.4f}, {f[2]:+.4f}) N, "
+            f"moment ({m[0]:+.4f}, {m[1]:+.4f}, {m[2]:+.4f}) N·mm"
+        )
+
+
+def _given(config: EstimatorConfig) -> TareReport:
+    if config.bias is not None:
+        return TareReport(np.asarray(config.bias, dtype=float), "given", config.tare_method, 0, config.tare_duration)
+    return TareReport(np.zeros(6), "none", config.tare_method, 0, 0.0)
+
+
+def tare_from_samples(samples: NDArray, config: EstimatorConfig, duration: float | None = None) -> TareReport:
+    """The bias of the tare samples ``samples`` (k, 6), with its checks.
+
+    Parameters
+    ----------
+    samples : ndarray, shape (k, 6)
+        Raw wrench while taring, N and N·m.
+    config : EstimatorConfig
+        ``tare_method``, the noise model and, for the joint-mode check, ``contact_point``.
+    duration : float, optional
+        s of the tare (default ``config.tare_duration``), for the messages.
+    """
+    s = np.asarray(samples, dtype=float).reshape(-1, 6)
+    duration = config.tare_duration if duration is None else float(duration)
+    k = len(s)
+    if not k:
+        return TareReport(np.full(6, np.nan), "tare", config.tare_method, 0, duration)
+    med = np.median(s, axis=0)
+    model = np.array(config.noise.force_std + config.noise.moment_std)
+    dev = np.abs(s - med)
+    spread = 1.4826 * np.median(dev, axis=0)
+    scale = np.maximum(np.maximum(model, spread), 1e-12 * (1.0 + np.abs(med)))
+    spike = np.any(dev > SPIKE_SIGMAS * scale, axis=1)
+    clean = s[~spike]
+    robust = np.mean(clean, axis=0) if len(clean) else med
+    bias = {"robust": robust, "median": med, "mean": np.mean(s, axis=0)}[config.tare_method]
+    std = np.std(clean, axis=0, ddof=1) if len(clean) > 1 else np.full(6, np.nan)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = np.where(model > 0, std / np.where(model > 0, model, 1.0), np.nan)
+    noise_ratio = float(np.nanmax(ratio)) if np.any(np.isfinite(ratio)) else math.nan
+    shift = float(np.linalg.norm(bias[:3] - robust[:3])) if config.tare_method == "mean" else 0.0
+    n_spikes = int(np.count_nonzero(spike))
+
+    warn = []
+    if n_spikes:
+        largest = float(np.max(dev[spike, :3])) if np.any(dev[spike, :3] > SPIKE_SIGMAS * scale[:3]) else 0.0
+        what = f"{n_spikes} spike(s) among the {k} tare samples" + (f" (up to {largest:.3g} N off the median)" if largest else "")
+        if config.tare_method == "mean":
+            warn.append(
+                f"{what}: the mean bias is {shift:.3g} N off in force (from the mean without them), and every "
+                "estimate with it; use the robust tare (tare_method='robust', --tare-method robust) or re-tare"
+            )
+        else:
+            warn.append(f"{what}, left out of the {config.tare_method} tare")
+    for name, sl, unit, fmt in (("force", slice(0, 3), "N", 1.0), ("moment", slice(3, 6), "N·mm", 1e3)):
+        r = ratio[sl]
+        if np.any(r > TOUCHED_RATIO):
+            warn.append(
+                f"the {name} varied by {np.nanmax(std[sl]) * fmt:.3g} {unit} (standard deviation) while taring, "
+                f"{np.nanmax(r):.3g} times the noise model ({np.max(model[sl]) * fmt:g} {unit}): was the fingertip "
+                f"touched in the first {duration:g} s? The bias, and every estimate, would then be wrong "
+                "(tare again untouched, give a bias, or tare_duration 0 for an input that is already tared)"
+            )
+    fstd = float(np.nanmax(std[:3])) if k > 1 else math.nan
+    fmodel = float(np.max(model[:3]))
+    if (
+        config.contact_point == "joint"
+        and k > 2
+        and fmodel > 0
+        and fstd <= TOUCHED_RATIO * fmodel
+        and fstd > fmodel * math.sqrt(1.0 + MODEL_MARGIN) * (1.0 + 2.0 / math.sqrt(2.0 * (len(clean) - 1)))
+    ):
+        # two standard errors of the tare's own estimate of the noise on top of the margin
+        warn.append(
+            f"the force noise while taring ({fstd:.3g} N standard deviation) exceeds the noise model "
+            f"({fmodel:g} N); contact_point='joint' would take the excess noise for excitation at high sample "
+            "rates: give this sensor's noise model (--force-noise, --moment-noise)"
+        )
+    return TareReport(
+        bias, "tare", config.tare_method, k, duration, std[:3], std[3:], noise_ratio, n_spikes, shift, tuple(warn)
+    )
+
+
+def tare_log(t: NDArray, w: NDArray, config: EstimatorConfig) -> tuple[NDArray, NDArray, TareReport]:
+    """The bias of a whole log ``w`` (N, 6) sampled at ``t`` (N,).
+
+    Returns ``(bias (6,), taring (N,) bool, report)``; the bias is NaN when the log never
+    leaves the tare period (as in the stream).
+    """
+    n = len(t)
+    taring = np.zeros(n, dtype=bool)
+    if config.bias is not None or config.tare_duration <= 0 or not n:
+        rep = _given(config)
+        return rep.bias, taring, rep
+    n_tare = int(np.count_nonzero(t - t[0] < config.tare_duration))
+    taring[:n_tare] = True
+    rep = tare_from_samples(w[:n_tare], config)
+    if n_tare == n:
+        msg = (
+            f"the whole log lies within the first {config.tare_duration:g} s used to tare the sensor; nothing was "
+            "estimated (tare_duration 0, --tare-duration 0, for a log that is already tared)"
+        )
+        rep = TareReport(np.full(6, np.nan), **{**_fields(rep), "warnings": rep.warnings + (msg,)})
+    return rep.bias, taring, rep
+
+
+def _fields(rep: TareReport) -> dict:
+    return {k: getattr(rep, k) for k in TareReport.__dataclass_fields__ if k != "bias"}
+
+
+class StreamTare:
+    """The tare of :func:`tare_log`, one sample at a time.
+
+    :meth:`update` returns ``None`` while taring, then the bias; the samples it was made of
+    are in :attr:`samples` until :meth:`release` (the stream primes its filter with them, as
+    the batch filters the whole log). :attr:`report` is the :class:`TareReport` once the
+    bias is known.
+    """
+
+    def __init__(self, config: EstimatorConfig):
+        self.config = config
+        self.reset()
+
+    def reset(self, duration: float | None = None) -> None:
+        """Forget the bias and start taring again: from the next ``duration`` s of samples
+        when given (tare on demand, even with a given bias), else as the config says."""
+        cfg = self.config
+        self.samples: list[tuple[float, ...]] = []
+        self._t0: float | None = None
+        self._duration = cfg.tare_duration if duration is None else float(duration)
+        self.bias: tuple[float, ...] | None = None
+        self.report: TareReport | None = None
+        if duration is None and (cfg.bias is not None or cfg.tare_duration <= 0):
+            self.report = _given(cfg)
+            self.bias = tuple(float(v) for v in self.report.bias)
+
+    def update(self, t: float, w: list[float]) -> tuple[float, ...] | None:
+        """The bias, or ``None`` while sample ``w`` at ``t`` is one of the tare's."""
+        if self.bias is not None:
+            return self.bias
+        if self._t0 is None:
+            self._t0 = t
+        if t - self._t0 < self._duration:
+            self.samples.append(tuple(w))
+            return None
+        self.report = tare_from_samples(np.array(self.samples), self.config, self._duration)
+        self.bias = tuple(self.report.bias.tolist())
+        return self.bias
+
+    def release(self) -> list[tuple[float, ...]]:
+        """The tare's samples (once; the buffer is emptied)."""
+        s, self.samples = self.samples, []
+        return s
+
+
+def load_bias(path: str | os.PathLike[str]) -> tuple[float, ...]:
+    """Read a sensor bias file: TOML with a ``[bias]`` table, ``force = [fx, fy, fz]`` (N) and
+    ``moment = [mx, my, mz]`` (N·m), as written by :func:`bias_to_toml`,
+    ``softtip estimate --save-bias`` or ``softtip calibrate-payload``.
+
+    Raises
+    ------
+    InputError
+        Missing or unreadable file, malformed TOML, missing or invalid keys; the message
+        names the file and the key.
+    """
+    name = os.fspath(path)
+    try:
+        data = tomllib.loads(Path(name).read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise InputError(f"{name}: bias file not found") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{name}: malformed TOML: {exc}") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{name}: cannot read bias file: {exc}") from None
+    table = data.get("bias")
+    if not isinstance(table, dict):
+        raise InputError(f"{name}: expected a [bias] table with force = [fx, fy, fz] (N) and moment = [mx, my, mz] (N·m)")
+    unknown = sorted(set(table) - {"force", "moment"})
+    if unknown:
+        raise InputError(f"{name}: [bias] unknown key(s) {', '.join(unknown)}; expected force, moment")
+    out: list[float] = []
+    for key, unit in (("force", "N"), ("moment", "N·m")):
+        v = table.get(key)
+        ok = isinstance(v, list) and len(v) == 3
+        ok = ok and all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in v)
+        if not ok:
+            raise InputError(f"{name}: [bias] {key} = {v!r}: expected a list of 3 finite numbers in {unit}")
+        out.extend(float(x) for x in v)
+    return tuple(out)
+
+
+def bias_to_toml(bias, comment: str = "") -> str:
+    """A sensor bias (6,) (N, N·m) as the TOML of :func:`load_bias`."""
+    b = [float(v) for v in bias]
+    head = f"# {comment}\n" if comment else ""
+    return (
+        f"{head}[bias]\nforce = [{', '.join(repr(v) for v in b[:3])}]  # N, sensor frame\n"
+        f"moment = [{', '.join(repr(v) for v in b[3:])}]  # N·m, sensor frame\n"
+    )

@@ -1,0 +1,339 @@
+"""Two fingertips, one object: contacts and edge directions fused in a common frame.
+
+Each fingertip's estimates (its sensor frame) are put into the common frame with the
+fingertip's pose, and the pair of contacts is read as a grasp:
+
+``parallel_lines``
+    Both contacts are lines whose directions agree within their uncertainty (the axial angle
+    between them at most ``agree_sigmas`` times its standard deviation): a plate or a stick
+    pinched across. The common direction is the weighted axial mean; the plane through both
+    contact lines has the normal ``d × (r₂ − r₁)`` (a plate's face; for a stick, the plane
+    through its axis).
+``crossing_lines``
+    Both are lines that disagree: two different edges (a wedge's two faces meeting the
+    fingers, a cube's edges). Both lines are reported, with the angle between them and their
+    closest approach.
+``line_and_face``
+    One line; the other contact is a ``point`` or an ``area``: a face. Its outward normal on
+    the object is minus the fingertip's normal.
+``faces``
+    No line: two faces.
+``single`` / ``none``
+    One contact, or none.
+
+Flags (``flag``, several joined by ``+``):
+
+``unbalanced``
+    The contact forces do not balance the object's weight (``object_mass`` along
+    ``gravity``; without a mass any weight along gravity is allowed) beyond the sensors'
+    noise and ``balance_tolerance`` of the grasp force: one of the estimates (or a pose) is
+    wrong.
+``area``
+    A contact's evidence says ``area``: it is a face, never fused as a line.
+
+``evidence`` is ``confirmed`` when every line fused was confirmed by excitation about two
+axes, ``unconfirmed`` otherwise. A flat face pressed against one finger while the object is
+only tilted about one axis reports the same line as the edge on the other finger (its force
+turns the same way): no method can tell that grasp from a plate pinched across until the
+object is rocked about two axes, and until then the fusion says ``parallel_lines``,
+``unconfirmed``.
+
+Standard deviations (first order): the fused direction's from the fingers' angle
+standard deviations; the plane normal's from the direction's and from the contact points'
+(``point_std`` per axis, m: the estimator does not report one; the latch is good to about
+0.2 mm, the manual §3.6) over the distance between the contacts.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from softtip.estimator import Estimates
+from softtip.fusion.poses import PoseSeries
+from softtip.noise import NANO17, SensorNoise
+
+__all__ = ["GRASPS", "Finger", "FusedGrasp", "fuse"]
+
+#: Grasp readings, indexed by the codes in :attr:`FusedGrasp.grasp`.
+GRASPS = ("none", "single", "parallel_lines", "crossing_lines", "line_and_face", "faces")
+_NONE, _SINGLE, _PARALLEL, _CROSSING, _LINE_FACE, _FACES = range(6)
+STANDARD_GRAVITY = 9.80665
+
+
+@dataclass(frozen=True, eq=False)
+class Finger:
+    """One fingertip's estimates and where its sensor is.
+
+    Parameters
+    ----------
+    name : str
+    estimates : Estimates
+        From :func:`softtip.estimate` on this fingertip's log (sensor frame).
+    pose : PoseSeries
+        The sensor frame's pose in the common frame over the log's time (``estimates.t``).
+    noise : SensorNoise
+        The sensor's noise model (for the force balance).
+    """
+
+    name: str
+    estimates: Estimates
+    pose: PoseSeries
+    noise: SensorNoise = field(default=NANO17)
+
+
+@dataclass(frozen=True, eq=False)
+class FusedGrasp:
+    """Per time step of the first finger's log: the grasp in the common frame (SI; NaN where
+    undefined). Angles and their standard deviations in rad."""
+
+    t: NDArray[np.float64]
+    grasp: NDArray[np.int8]  #: codes into :data:`GRASPS`
+    evidence: NDArray[np.str_]  #: ``confirmed``, ``unconfirmed`` or ``""`` (no line)
+    flag: NDArray[np.str_]  #: ``""``, ``unbalanced``, ``area`` or both joined by ``+``
+    point_a: NDArray[np.float64]  #: (N, 3) contact points
+    point_b: NDArray[np.float64]
+    direction: NDArray[np.float64]  #: (N, 3) the (common) line direction, an axis
+    direction_std: NDArray[np.float64]  #: (N,)
+    direction_b: NDArray[np.float64]  #: (N, 3) the second line (``crossing_lines``)
+    line_angle: NDArray[np.float64]  #: (N,) axial angle between the two lines
+    line_angle_std: NDArray[np.float64]
+    closest_approach: NDArray[np.float64]  #: (N,) m, ``crossing_lines``
+    plane_normal: NDArray[np.float64]  #: (N, 3) plane through both lines (``parallel_lines``)
+    plane_normal_std: NDArray[np.float64]  #: (N,)
+    face_normal: NDArray[np.float64]  #: (N, 3) the face's outward normal on the object (``line_and_face``)
+    force_residual: NDArray[np.float64]  #: (N, 3) N, ``f_a + f_b − m g``
+    balance_chi2: NDArray[np.float64]  #: (N,) the residual's χ² against the noise and tolerance
+    names: tuple[str, str] = ("a", "b")
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    @property
+    def grasp_names(self) -> NDArray[np.str_]:
+        return np.asarray(GRASPS)[self.grasp]
+
+    def columns(self) -> dict[str, NDArray]:
+        """Output columns (SI, angles in degrees), in order."""
+        a, b = self.names
+        out: dict[str, NDArray] = {"t": self.t, "grasp": self.grasp_names, "evidence": self.evidence, "flag": self.flag}
+        for key, arr in ((f"r{a}", self.point_a), (f"r{b}", self.point_b)):
+            for i, ax in enumerate("xyz"):
+                out[f"{key}_{ax}"] = arr[:, i]
+        for key, arr in (("d", self.direction), ("d2", self.direction_b), ("plane_n", self.plane_normal), ("face_n", self.face_normal)):
+            for i, ax in enumerate("xyz"):
+                out[f"{key}{ax}"] = arr[:, i]
+        out["direction_std_deg"] = np.degrees(self.direction_std)
+        out["line_angle_deg"] = np.degrees(self.line_angle)
+        out["line_angle_std_deg"] = np.degrees(self.line_angle_std)
+        out["closest_approach"] = self.closest_approach
+        out["plane_normal_std_deg"] = np.degrees(self.plane_normal_std)
+        for i, ax in enumerate("xyz"):
+            out[f"residual_f{ax}"] = self.force_residual[:, i]
+        out["balance_chi2"] = self.balance_chi2
+        return out
+
+
+def _hold(t_src: NDArray, t: NDArray, max_age: float) -> tuple[NDArray[np.intp], NDArray[np.bool_]]:
+    """Index of the latest source sample at or before each ``t``, and whether it is fresh."""
+    k = np.searchsorted(t_src, t, side="right") - 1
+    ok = k >= 0
+    kc = np.clip(k, 0, len(t_src) - 1)
+    ok &= (t - t_src[kc]) <= max_age
+    return kc, ok
+
+
+def _in_common(f: Finger, t: NDArray, idx: NDArray, ok: NDArray):
+    """The finger's contact quantities at ``idx`` of its log, in the common frame."""
+    est = f.estimates
+    n = len(t)
+    state = np.where(ok, est.state_names[idx], "none")
+    if hasattr(est, "line_evidence"):
+        from softtip.estimator.results import EVIDENCE
+
+        evidence = np.where(ok, np.asarray(EVIDENCE)[est.line_evidence[idx]], "")
+    else:
+        evidence = np.where(state == "line", "unconfirmed", "")
+    rot, tr = f.pose.at(est.t[idx])
+    point = rot.apply(np.nan_to_num(est.point[idx])) + tr
+    normal = rot.apply(np.nan_to_num(est.normal[idx]))
+    direction = rot.apply(np.nan_to_num(est.direction[idx]))
+    force = rot.apply(np.nan_to_num(est.wrench[idx, :3]))
+    # the force noise of each sensor, rotated: Σ = R diag(s²) Rᵀ
+    s2 = np.asarray(f.noise.force_std) ** 2
+    m = rot.as_matrix()
+    cov = np.einsum("nij,j,nkj->nik", m, s2, m)
+    contact = state != "none"
+    nan3 = np.full((n, 3), np.nan)
+    return {
+        "state": state,
+        "evidence": evidence,
+        "point": np.where(contact[:, None], point, nan3),
+        "normal": np.where(contact[:, None], normal, nan3),
+        "direction": np.where((state == "line")[:, None], direction, nan3),
+        "angle_std": np.where(state == "line", est.angle_std[idx], np.nan),
+        "force": np.where(ok[:, None], force, 0.0),
+        "force_cov": cov,
+    }
+
+
+def _unit(v: NDArray) -> NDArray:
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def fuse(
+    fingers: Sequence[Finger],
+    *,
+    object_mass: float | None = None,
+    gravity: ArrayLike = (0.0, 0.0, -STANDARD_GRAVITY),
+    point_std: float = 2e-4,
+    agree_sigmas: float = 3.0,
+    balance_tolerance: float = 0.05,
+    balance_chi2: float = 16.27,
+    max_age: float | None = None,
+) -> FusedGrasp:
+    """Fuse two fingertips' estimates into the grasped object's local geometry.
+
+    Parameters
+    ----------
+    fingers : two Finger
+        The first finger's samples are the time steps of the result; the second's latest
+        sample at or before each (within ``max_age``) is paired with it.
+    object_mass : float, optional
+        kg; the object's weight enters the force balance. None: unknown (any weight along
+        ``gravity`` is allowed).
+    gravity : 3 floats
+        m/s², in the common frame (default ``−z``, 9.80665).
+    point_std : float
+        m, standard deviation of a contact point per axis (for the plane normal).
+    agree_sigmas : float
+        Two lines agree when their axial angle is at most this many standard deviations.
+    balance_tolerance : float
+        Fraction of the grasp force allowed as unbalanced (dynamics, friction hysteresis).
+    balance_chi2 : float
+        χ² (3 degrees of freedom; 16.27 is the 99.9 % point) above which the forces are
+        ``unbalanced``.
+    max_age : float, optional
+        s; default two median sample periods of the second finger.
+
+    Returns
+    -------
+    FusedGrasp
+    """
+    if len(fingers) != 2:
+        raise ValueError(f"fuse takes two fingers, got {len(fingers)}")
+    fa, fb = fingers
+    t = np.asarray(fa.estimates.t, dtype=float)
+    tb = np.asarray(fb.estimates.t, dtype=float)
+    if max_age is None:
+        dt = np.diff(tb)
+        dt = dt[dt > 0]
+        max_age = 2.0 * float(np.median(dt)) if len(dt) else 0.0
+    n = len(t)
+    ia = np.arange(n)
+    ib, okb = _hold(tb, t, max_age)
+    A = _in_common(fa, t, ia, np.ones(n, dtype=bool))
+    B = _in_common(fb, t, ib, okb)
+    g = np.asarray(gravity, dtype=float).reshape(3)
+
+    line_a, line_b = A["state"] == "line", B["state"] == "line"
+    has_a, has_b = A["state"] != "none", B["state"] != "none"
+    area = (A["state"] == "area") | (B["state"] == "area")
+    nan3 = np.full((n, 3), np.nan)
+    nan1 = np.full(n, np.nan)
+
+    # -- two lines: agreement, the common direction, the plane --------------------------------
+    da, db = A["direction"], B["direction"]
+    sgn = np.where(np.sum(da * db, axis=-1) < 0, -1.0, 1.0)
+    dbs = db * sgn[:, None]
+    with np.errstate(invalid="ignore"):
+        angle = np.arccos(np.clip(np.abs(np.sum(da * db, axis=-1)), 0.0, 1.0))
+        sa2, sb2 = A["angle_std"] ** 2, B["angle_std"] ** 2
+        angle_std = np.sqrt(sa2 + sb2)
+        both = line_a & line_b
+        agree = both & (angle <= agree_sigmas * angle_std)
+        wa, wb = 1.0 / sa2, 1.0 / sb2
+        u = _unit(wa[:, None] * da + wb[:, None] * dbs)
+        u_std = 1.0 / np.sqrt(wa + wb)
+        base = B["point"] - A["point"]
+        length = np.linalg.norm(base, axis=-1)
+        cross = np.cross(u, base / length[:, None])
+        sin = np.linalg.norm(cross, axis=-1)
+        plane_n = cross / sin[:, None]
+        # the plane tilts about the base line with the out-of-plane part of the direction's
+        # error (each finger's error is a rotation about its own normal: along n × d), and
+        # about the direction with the contact points' errors across it
+        ea = np.cross(A["normal"], da)
+        eb = np.cross(B["normal"], dbs)
+        tilt = ((wa * np.sum(ea * plane_n, axis=-1)) ** 2 * sa2 + (wb * np.sum(eb * plane_n, axis=-1)) ** 2 * sb2) / (wa + wb) ** 2
+        plane_std = np.sqrt(tilt + 2.0 * point_std**2 / length**2) / sin
+        # closest approach of two lines that disagree
+        dxd = np.cross(da, db)
+        closest = np.abs(np.sum(base * dxd, axis=-1)) / np.linalg.norm(dxd, axis=-1)
+
+    one_line = (line_a ^ line_b) & has_a & has_b
+    grasp = np.full(n, _NONE, dtype=np.int8)
+    grasp[has_a ^ has_b] = _SINGLE
+    grasp[has_a & has_b] = _FACES
+    grasp[one_line] = _LINE_FACE
+    grasp[both & ~agree] = _CROSSING
+    grasp[agree] = _PARALLEL
+
+    direction = np.where(agree[:, None], u, np.where(line_a[:, None], da, np.where(line_b[:, None], db, nan3)))
+    direction_std = np.where(agree, u_std, np.where(line_a, A["angle_std"], np.where(line_b, B["angle_std"], nan1)))
+    direction_b = np.where((both & ~agree)[:, None], db, nan3)
+    face_normal = np.where(
+        (one_line & line_a)[:, None], -B["normal"], np.where((one_line & line_b)[:, None], -A["normal"], nan3)
+    )
+    # evidence of the lines fused
+    ev_a = np.where(line_a, A["evidence"], "confirmed")
+    ev_b = np.where(line_b, B["evidence"], "confirmed")
+    any_line = line_a | line_b
+    confirmed = (ev_a == "confirmed") & (ev_b == "confirmed")
+    evidence = np.where(any_line, np.where(confirmed, "confirmed", "unconfirmed"), "")
+
+    # -- force balance ------------------------------------------------------------------------
+    res = A["force"] + B["force"]
+    if object_mass is not None:
+        res = res - float(object_mass) * g
+    fmag = np.maximum(np.linalg.norm(A["force"], axis=-1), np.linalg.norm(B["force"], axis=-1))
+    cov = A["force_cov"] + np.where(okb[:, None, None], B["force_cov"], 0.0)
+    cov = cov + (balance_tolerance * fmag)[:, None, None] ** 2 * np.eye(3) / 3.0
+    if object_mass is None and np.linalg.norm(g) > 0:
+        # an unknown weight: allow any residual along gravity (the object's weight pulls down)
+        gh = g / np.linalg.norm(g)
+        along = res @ gh
+        res_t = res - np.maximum(along, 0.0)[:, None] * gh
+    else:
+        res_t = res
+    with np.errstate(invalid="ignore"):
+        chi2 = np.einsum("ni,ni->n", res_t, np.linalg.solve(cov, res_t[..., None])[..., 0])
+    both_in = has_a & has_b
+    unbalanced = both_in & (chi2 > balance_chi2)
+    flag = np.where(unbalanced & area, "unbalanced+area", np.where(unbalanced, "unbalanced", np.where(area, "area", "")))
+
+    return FusedGrasp(
+        t=t,
+        grasp=grasp,
+        evidence=evidence,
+        flag=flag,
+        point_a=A["point"],
+        point_b=B["point"],
+        direction=direction,
+        direction_std=direction_std,
+        direction_b=direction_b,
+        line_angle=np.where(both, angle, nan1),
+        line_angle_std=np.where(both, angle_std, nan1),
+        closest_approach=np.where(both & ~agree, closest, nan1),
+        plane_normal=np.where(agree[:, None], plane_n, nan3),
+        plane_normal_std=np.where(agree, plane_std, nan1),
+        face_normal=face_normal,
+        force_residual=np.where(both_in[:, None], res, nan3),
+        balance_chi2=np.where(both_in, chi2, nan1),
+        names=(fa.name, fb.name),
+    )

@@ -1,0 +1,235 @@
+"""Two fingertips in a common frame: poses, /tf, the fused grasp, and `softtip fuse`."""
+
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+from scipy.spatial.transform import Rotation
+
+import softtip
+from softtip import InputError
+from softtip.fusion import Finger, PoseSeries, fuse, fuse_logs, poses_from_columns, read_hand_file
+from softtip.fusion.tf import TfTree
+from softtip.synthetic import synthetic_grasp
+
+SOFTTIP = str(Path(sys.executable).with_name("softtip"))
+HAND_X = np.array([1.0, 0.0, 0.0])
+
+
+# -- poses ------------------------------------------------------------------------------------
+
+
+def test_pose_series_interpolates_and_refuses_stale_times():
+    r0, r1 = Rotation.identity(), Rotation.from_euler("z", 90, degrees=True)
+    ps = PoseSeries(np.array([0.0, 1.0]), Rotation.concatenate([r0, r1]), np.array([[0, 0, 0], [1.0, 0, 0]]), max_gap=0.1)
+    rot, tr = ps.at([0.5])
+    assert_allclose(rot.as_euler("xyz", degrees=True)[0], [0, 0, 45], atol=1e-9)
+    assert_allclose(tr, [[0.5, 0, 0]])
+    assert_allclose(ps.apply([1.0], [[1.0, 0.0, 0.0]]), [[1.0, 1.0, 0.0]], atol=1e-12)
+    ps.at([1.05])  # within max_gap: held at the last pose
+    with pytest.raises(InputError, match="no pose of sensor at t = 1.200000 s.*missing or stale"):
+        ps.at([1.2])
+
+
+def test_pose_columns_and_their_errors():
+    t = np.arange(3) * 0.1
+    cols = {"px": [0, 0, 0], "py": [0, 0, 0], "pz": [0.1] * 3, "qw": [1, 1, 1], "qx": [0] * 3, "qy": [0] * 3, "qz": [0] * 3}
+    ps = poses_from_columns(t, cols)
+    assert_allclose(ps.apply(t, np.zeros((3, 3))), [[0, 0, 0.1]] * 3)
+    with pytest.raises(InputError, match="missing pose column.*qz"):
+        poses_from_columns(t, {k: v for k, v in cols.items() if k != "qz"}, source="log.csv")
+    with pytest.raises(InputError, match="row 2: pose quaternion .* norm 2"):
+        poses_from_columns(t, {**cols, "qw": [1, 2, 1]})
+
+
+def test_hand_file(tmp_path):
+    p = tmp_path / "hand.toml"
+    p.write_text('[hand]\nframe = "palm"\n\n[finger.a]\ntranslation = [0.05, 0, 0]\nrpy_deg = [0, -90, 0]\n\n[finger.b]\nquaternion = [1, 0, 0, 0]\n')
+    hand = read_hand_file(p)
+    assert hand.frame == "palm" and list(hand.fingers) == ["a", "b"]
+    # the sensor's z axis (toward the tip) points along −x of the hand
+    assert_allclose(hand.fingers["a"].rotate([0.0], [[0, 0, 1.0]]), [[-1.0, 0, 0]], atol=1e-12)
+    p.write_text('[finger.a]\nrpy_deg = [0, 0]\n')
+    with pytest.raises(InputError, match=r"\[finger.a\] rpy_deg"):
+        read_hand_file(p)
+
+
+def test_tf_tree_composes_static_and_moving_edges():
+    tree = TfTree("test.bag")
+    q = Rotation.from_euler("z", 90, degrees=True).as_quat()
+    tree.add("world", "hand", 0, (1.0, 0.0, 0.0), q, static=True)
+    for k in range(11):  # the finger slides along hand x at 1 m/s, sampled at 10 Hz
+        tree.add("hand", "finger", k * 100_000_000, (0.1 * k, 0.0, 0.0), (0, 0, 0, 1), static=False)
+    rot, tr = tree.lookup("world", "finger", [250_000_000])
+    # finger at hand x = 0.25, hand rotated 90° about z in world and offset by 1 m along x
+    assert_allclose(tr, [[1.0, 0.25, 0.0]], atol=1e-12)
+    assert_allclose(rot.as_matrix()[0], Rotation.from_quat(q).as_matrix(), atol=1e-12)
+    # and the other way round
+    rot2, tr2 = tree.lookup("finger", "world", [250_000_000])
+    assert_allclose(rot2.apply([1.0, 0.25, 0.0]) + tr2, [[0.0, 0.0, 0.0]], atol=1e-12)
+    with pytest.raises(InputError, match="'elbow' is not connected to 'world'.*frames present: finger, hand, world"):
+        tree.lookup("world", "elbow", [0])
+    with pytest.raises(InputError, match="'hand' → 'finger'.*missing or stale"):
+        tree.lookup("world", "finger", [3_000_000_000])
+
+
+# -- fusion of synthetic fingertips --------------------------------------------------------------
+
+R_RIGHT = Rotation.from_matrix(np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]]).T)
+R_LEFT = Rotation.from_matrix(np.array([[0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0]]).T)
+
+
+def _finger(name, rot, angle_deg, width=0.03, seed=0, **kw):
+    """A synthetic grasp on the papers' tip whose sensor sits at the hand's ±x, apex at ±width/2."""
+    g = synthetic_grasp(angle_deg=angle_deg, seed=seed, tangential_ratio=0.0, **kw)
+    apex = rot.apply(g.point)
+    side = 1.0 if name == "right" else -1.0
+    pose = PoseSeries.fixed(rot, side * 0.5 * width * HAND_X - apex, name)
+    return g, pose
+
+
+def _fuse(right_angle, left_angle, left_kw=None, **options):
+    gr, pr = _finger("right", R_RIGHT, right_angle, seed=1)
+    gl, pl = _finger("left", R_LEFT, left_angle, seed=2, **(left_kw or {}))
+    fused, fingers = fuse_logs([("right", gr.t, gr.wrench, pr), ("left", gl.t, gl.wrench, pl)], "murakami2006", **options)
+    return fused, gr, pr, gl, pl
+
+
+def test_a_plate_pinched_across_gives_one_line_and_its_plane():
+    # the same line seen by both fingers: +30° at the right apex is −30° at the left one
+    fused, gr, pr, gl, pl = _fuse(30.0, -30.0)
+    late = fused.t > 7.0
+    assert (fused.grasp_names[late] == "parallel_lines").all()
+    truth = pr.rotate([0.0], gr.direction[None])[0]
+    err = np.degrees(np.arccos(np.abs(fused.direction[late] @ truth)))
+    assert np.median(err) < 1.0
+    # the plane through both lines contains the line and the grasp axis
+    plane = np.cross(truth, HAND_X)
+    nerr = np.degrees(np.arccos(np.abs(fused.plane_normal[late] @ plane)))
+    assert np.median(nerr) < 1.5
+    assert (fused.evidence[late] != "").all() and (fused.flag[late] == "").all()
+    # the fused direction's standard deviation: that of two independent fingers
+    sa = fused.direction_std[late]
+    assert np.all(sa > 0) and np.all(np.isfinite(fused.plane_normal_std[late]))
+
+
+def test_two_different_edges_cross():
+    fused, gr, pr, gl, pl = _fuse(45.0, 45.0)  # in the hand: +45° and −45°, 90° apart
+    late = fused.t > 7.0
+    assert (fused.grasp_names[late] == "crossing_lines").all()
+    assert np.median(np.degrees(fused.line_angle[late])) == pytest.approx(90.0, abs=2.0)
+    # closest approach of the two lines: the distance between the contacts along the grasp axis
+    assert np.median(fused.closest_approach[late]) == pytest.approx(0.03, abs=1e-3)
+
+
+def test_a_line_and_a_face():
+    fused, gr, pr, gl, pl = _fuse(0.0, 0.0, left_kw={"h_peak": 0.0})
+    late = fused.t > 7.0
+    assert (fused.grasp_names[late] == "line_and_face").all()
+    # the face under the left finger: its outward normal on the object points at the left finger (−x)
+    assert_allclose(np.median(fused.face_normal[late], axis=0), -HAND_X, atol=0.02)
+
+
+def test_forces_that_do_not_balance_are_flagged():
+    fused, *_ = _fuse(30.0, -30.0, left_kw={"force": 2.0 * 0.55 * 9.80665})
+    late = fused.t > 7.0
+    assert (fused.flag[late] == "unbalanced").all()
+    # and a known weight that the fingers do not carry
+    fused, *_ = _fuse(30.0, -30.0, object_mass=0.5)
+    assert (fused.flag[fused.t > 7.0] == "unbalanced").all()
+    fused, *_ = _fuse(30.0, -30.0, object_mass=0.0)
+    assert (fused.flag[fused.t > 7.0] == "").all()
+
+
+def test_fuse_needs_two_fingers():
+    gr, pr = _finger("right", R_RIGHT, 0.0)
+    est = softtip.estimate(gr.t, gr.wrench)
+    with pytest.raises(ValueError, match="two fingers"):
+        fuse([Finger("right", est, pr)])
+
+
+# -- the command, on CSV logs with a hand file and on a bag with /tf --------------------------------
+
+
+def _run(*args):
+    return subprocess.run([SOFTTIP, *map(str, args)], capture_output=True, text=True, timeout=120)
+
+
+@pytest.fixture(scope="module")
+def simulated(tmp_path_factory):
+    from softtip.sim import Plate
+    from softtip.sim.hand import simulate_two_finger, write_two_finger, write_two_finger_bag
+
+    out = tmp_path_factory.mktemp("hand")
+    g = simulate_two_finger(softtip.murakami2006(), Plate(0.001), math.radians(-45), n_elements=6000, duration=7.0)
+    write_two_finger(g, out / "grasp")
+    pytest.importorskip("rosbags")
+    write_two_finger_bag(g, out / "bag")
+    return g, out
+
+
+def test_fuse_command_on_csv_and_on_a_bag_agree(simulated):
+    g, out = simulated
+    a = _run(
+        "fuse", out / "grasp/right.csv", out / "grasp/left.csv", "--hand", out / "grasp/hand.toml", "-o", out / "a.csv",
+        "--plot", out / "a.png",
+    )  # fmt: skip
+    assert a.returncode == 0, a.stderr
+    assert (out / "a.png").stat().st_size > 10_000
+    assert "parallel lines: median direction" in a.stderr
+    b = _run("fuse", out / "bag", "--topics", "/right/wrench", "/left/wrench", "--frame", "hand", "-o", out / "b.csv")
+    assert b.returncode == 0, b.stderr
+    ta = np.genfromtxt(out / "a.csv", delimiter=",", names=True, dtype=None, encoding=None)
+    tb = np.genfromtxt(out / "b.csv", delimiter=",", names=True, dtype=None, encoding=None)
+    assert (ta["grasp"] == tb["grasp"]).all()
+    for c in ("dx", "dy", "dz", "plane_nx", "plane_ny", "plane_nz"):
+        assert_allclose(ta[c], tb[c], atol=1e-9, equal_nan=True)
+    held = (ta["t"] > 6.0) & (ta["grasp"] == "parallel_lines")
+    assert held.sum() > 0.5 * np.count_nonzero(ta["t"] > 6.0)
+    d = np.stack([ta["dx"], ta["dy"], ta["dz"]], axis=-1)[held]
+    truth = g.truth_line()[held]
+    err = np.degrees(np.arccos(np.clip(np.abs(np.sum(d * truth, axis=-1)), 0, 1)))
+    assert np.median(err) < 4.0
+
+
+def test_fuse_command_errors(simulated, tmp_path):
+    g, out = simulated
+    r = _run("fuse", out / "bag", "--topics", "/right/wrench", "/left/wrench", "--frame", "elbow", "-o", tmp_path / "x.csv")
+    assert r.returncode == 2 and "'right_sensor' is not connected to 'elbow'" in r.stderr
+    assert not (tmp_path / "x.csv").exists()
+    r = _run("fuse", out / "bag", "--topics", "/right/wrench", "/left/wrench")
+    assert r.returncode == 2 and "--frame" in r.stderr
+    r = _run("fuse", out / "grasp/right.csv", out / "grasp/left.csv")
+    assert r.returncode == 2 and "missing pose column" in r.stderr
+    r = _run("fuse", out / "grasp/right.csv", out / "grasp/left.csv", "--hand", out / "grasp/hand.toml", "--object-mass", "-1")
+    assert r.returncode == 2 and "--object-mass" in r.stderr
+
+
+# -- gravity from the robot's transforms -----------------------------------------------------------
+
+
+def test_gravity_compensation_with_orientation_from_tf_and_from_a_callback():
+    from softtip.payload import CompensatedSource, Payload, compensate_payload
+
+    payload = Payload(mass=0.02, com=(0.0, 0.0, 0.02))
+    tree = TfTree("robot")
+    t = np.arange(50) * 0.02
+    stamps = (t * 1e9).astype(np.int64)
+    # the wrist turns 90° about world x in a second; the sensor is fixed on it
+    for ns, a in zip(stamps, np.linspace(0.0, 90.0, len(t))):
+        tree.add("world", "wrist", int(ns), (0.0, 0.0, 0.5), Rotation.from_euler("x", a, degrees=True).as_quat(), False)
+    tree.add("wrist", "ft_sensor", 0, (0.0, 0.0, 0.05), (0.0, 0.0, 0.0, 1.0), True)
+    q = tree.orientations("world", "ft_sensor", stamps)
+    assert_allclose(q[-1], Rotation.from_euler("x", 90.0, degrees=True).as_quat(scalar_first=True), atol=1e-12)
+    raw = np.zeros((len(t), 6))
+    expected = compensate_payload(raw, q, payload)
+    # the same, live: a callback gives the orientation at each sample's time
+    src = CompensatedSource(list(zip(t, raw)), lambda ti: tuple(tree.orientations("world", "ft_sensor", [int(round(ti * 1e9))])[0]), payload)
+    live = np.array([r.wrench for r in src])
+    assert_allclose(live, expected, atol=1e-12)
+    # at first the sensor is upright: the fingertip's weight pulls along its −z
+    assert_allclose(-expected[0, :3], [0.0, 0.0, -0.02 * 9.80665], atol=1e-12)

@@ -1,0 +1,200 @@
+"""Parquet logs: the columns, checks and located errors of CSV, units and fingertip in the metadata."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pytest
+
+from softtip.errors import InputError
+from softtip.io import PARQUET_UNITS_KEY, read_log, write_table
+from softtip.units import KGF, KGF_MM
+
+WRENCH = ("fx", "fy", "fz", "mx", "my", "mz")
+
+
+def _table(n: int = 50, seed: int = 3) -> dict[str, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    t = np.cumsum(rng.uniform(1e-4, 2e-3, n))
+    w = rng.normal(size=(n, 6)) * np.array([1, 10, 1e-3, 1e-6, 0.3, 1e3])
+    return {"t": t, **{name: w[:, i] for i, name in enumerate(WRENCH)}}
+
+
+def _error(path: Path, **kw: str) -> str:
+    with pytest.raises(InputError) as info:
+        read_log(path, **kw)
+    return str(info.value)
+
+
+def _write_pq(path: Path, columns: dict, metadata: dict | None = None) -> Path:
+    table = pa.table(columns)
+    if metadata:
+        table = table.replace_schema_metadata(metadata)
+    pq.write_table(table, path)
+    return path
+
+
+def test_round_trip_is_exact_and_keeps_extras_and_metadata(tmp_path: Path) -> None:
+    cols = _table()
+    extras = {"tag": np.array([f"r{i}" for i in range(50)]), "qw": np.linspace(0, 1, 50), "ok": np.arange(50) % 2 == 0}
+    path = tmp_path / "log.parquet"
+    write_table({**extras, **cols}, path, metadata={PARQUET_UNITS_KEY: "si", "note": "hello"})
+    meta = pq.read_schema(path).metadata
+    assert meta[b"note"] == b"hello" and meta[PARQUET_UNITS_KEY.encode()] == b"si"
+    log = read_log(path)
+    np.testing.assert_array_equal(log.t, cols["t"])
+    np.testing.assert_array_equal(log.wrench, np.column_stack([cols[c] for c in WRENCH]))
+    assert list(log.extra) == ["tag", "qw", "ok"]
+    np.testing.assert_array_equal(log.extra["qw"], extras["qw"])
+    assert log.extra["tag"].tolist() == extras["tag"].tolist()
+    assert log.extra["ok"].dtype == bool and log.extra["ok"].tolist() == extras["ok"].tolist()
+    assert log.units == "si" and log.warnings == () and log.repeated_t == 0
+
+
+def test_integer_columns_and_any_order(tmp_path: Path) -> None:
+    cols = {name: np.arange(5, dtype=np.int32) for name in reversed(("t",) + WRENCH)}
+    log = read_log(_write_pq(tmp_path / "i.parquet", cols))
+    np.testing.assert_array_equal(log.t, np.arange(5.0))
+    assert log.wrench.dtype == np.float64 and log.wrench.shape == (5, 6)
+
+
+def test_units_from_metadata_and_conflicts(tmp_path: Path) -> None:
+    cols = _table()
+    path = _write_pq(tmp_path / "k.parquet", cols, {PARQUET_UNITS_KEY: "kgf-mm"})
+    log = read_log(path)
+    assert log.units == "kgf-mm"
+    np.testing.assert_allclose(log.wrench[:, 0], cols["fx"] * KGF)
+    np.testing.assert_allclose(log.wrench[:, 3], cols["mx"] * KGF_MM)
+    assert read_log(path, units="kgf-mm").units == "kgf-mm"
+    assert _error(path, units="si") == (
+        f"{path}: the file's metadata says its wrench is in kgf-mm, but si was asked for; expected the units to "
+        "agree (leave them out to use the file's)"
+    )
+    plain = _write_pq(tmp_path / "s.parquet", cols)
+    assert read_log(plain).units == "si" and read_log(plain, units="kgf-mm").units == "kgf-mm"
+    odd = _write_pq(tmp_path / "o.parquet", cols, {PARQUET_UNITS_KEY: "furlongs"})
+    assert _error(odd) == f"{odd}: metadata softtip.units = 'furlongs'; expected one of: si, kgf-mm"
+
+
+def test_missing_and_misspelled_columns(tmp_path: Path) -> None:
+    cols = _table()
+    cols["Fx"] = cols.pop("fx")
+    path = _write_pq(tmp_path / "m.parquet", cols)
+    assert _error(path) == (
+        f"{path}: missing column 'fx'; expected a header with columns t, fx, fy, fz, mx, my, mz (any order, exact "
+        "case). Column 7 is 'Fx': did you mean 'fx'?"
+    )
+
+
+@pytest.mark.parametrize(
+    ("column", "row", "value", "expected"),
+    [
+        ("fz", 7, None, "column 'fz', row 7: empty (null); expected a number"),
+        ("my", 3, float("nan"), "column 'my', row 3: expected a finite number, got nan"),
+        ("t", 1, float("inf"), "column 't', row 1: expected a finite number, got inf"),
+    ],
+)
+def test_bad_cells_name_column_and_row(tmp_path: Path, column: str, row: int, value: float | None, expected: str) -> None:
+    cols = {k: v.tolist() for k, v in _table().items()}
+    cols[column][row - 1] = value
+    path = _write_pq(tmp_path / "b.parquet", cols)
+    assert _error(path) == f"{path}: {expected}"
+
+
+def test_text_column_is_an_error(tmp_path: Path) -> None:
+    cols = _table()
+    cols["mx"] = cols["mx"].astype(str)
+    path = _write_pq(tmp_path / "s.parquet", cols)
+    assert _error(path) == f"{path}: column 'mx': expected numbers, got type string"
+
+
+def test_time_going_back_and_repeating(tmp_path: Path) -> None:
+    cols = _table()
+    cols["t"][20] = cols["t"][18]
+    path = _write_pq(tmp_path / "back.parquet", cols)
+    t = cols["t"]
+    assert _error(path) == (
+        f"{path}: column 't', row 21: expected t non-decreasing (a stamp may repeat, not go back), "
+        f"got t = {float(t[20])!r} at row 21 after t = {float(t[19])!r} at row 20"
+    )
+    cols = _table()
+    cols["t"][[20, 30]] = cols["t"][[19, 29]]
+    log = read_log(_write_pq(tmp_path / "rep.parquet", cols))
+    assert log.repeated_t == 2
+    assert "2 repeated time stamps (the first on data row 21:" in log.warnings[0]
+
+
+def test_time_in_milliseconds_is_reported(tmp_path: Path) -> None:
+    cols = _table()
+    cols["t"] = np.arange(50) * 1.0  # 1 kHz, in ms
+    (note,) = read_log(_write_pq(tmp_path / "ms.parquet", cols)).warnings
+    assert "median step 1 s, i.e. 1 samples/s: implausible" in note and "if t is in milliseconds 1e+03 Hz" in note
+
+
+@pytest.mark.parametrize("content", [b"", b"t,fx\n0,1\n", b"PAR1garbagePAR1"])
+def test_not_parquet(tmp_path: Path, content: bytes) -> None:
+    path = tmp_path / "x.parquet"
+    path.write_bytes(content)
+    message = _error(path)
+    assert message.startswith(f"{path}: not a readable Parquet file (")
+    assert message.endswith("); expected a Parquet log file")
+
+
+def test_missing_file_and_empty_table(tmp_path: Path) -> None:
+    missing = tmp_path / "none.parquet"
+    assert _error(missing) == f"{missing}: file not found; expected an existing Parquet log file"
+    empty = _write_pq(tmp_path / "e.parquet", {k: v[:0] for k, v in _table().items()})
+    assert _error(empty) == f"{empty}: no rows; expected at least one row of t, fx, fy, fz, mx, my, mz"
+
+
+def test_write_is_atomic_and_keeps_an_existing_file_on_failure(tmp_path: Path) -> None:
+    class Explodes:
+        def __str__(self) -> str:
+            raise RuntimeError("boom")
+
+    path = tmp_path / "out.parquet"
+    path.write_bytes(b"precious")
+    with pytest.raises(RuntimeError, match="boom"):
+        write_table({"t": [0.0, 1.0], "obj": ["a", Explodes()]}, path)
+    assert path.read_bytes() == b"precious"
+    assert [p.name for p in tmp_path.iterdir()] == ["out.parquet"]
+
+
+def test_write_zero_rows_and_progress(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import softtip.io as sio
+
+    path = tmp_path / "z.parquet"
+    write_table({"t": np.empty(0), "state": np.array([], dtype=str)}, path)
+    assert pq.read_table(path).num_rows == 0
+    monkeypatch.setattr(sio, "_PARQUET_ROWS", 16)
+    steps: list[int] = []
+    cols = _table(50)
+    write_table(cols, tmp_path / "p.parquet", progress=steps.append)
+    assert steps == [16, 16, 16, 2]
+    assert pq.ParquetFile(tmp_path / "p.parquet").num_row_groups == 4
+    np.testing.assert_array_equal(read_log(tmp_path / "p.parquet").t, cols["t"])
+
+
+def test_orientation_columns_of_a_parquet_log(tmp_path: Path) -> None:
+    """Gravity compensation reads numeric extra columns; its errors name the row."""
+    from softtip.payload import compensate_log
+
+    n = 50
+    cols = {**_table(n), "qw": np.ones(n), "qx": np.zeros(n), "qy": np.zeros(n), "qz": np.zeros(n)}
+    payload = tmp_path / "p.toml"
+    payload.write_text("[payload]\nmass = 0.01\ncom = [0, 0, 0.01]\n")
+    path = tmp_path / "q.parquet"
+    write_table(cols, path)
+    compensated = compensate_log(read_log(path), payload)
+    np.testing.assert_allclose(compensated.wrench[:, 2] - read_log(path).wrench[:, 2], 0.01 * 9.80665, rtol=1e-3)
+    cols["qw"][6] = 2.0
+    write_table(cols, path)
+    with pytest.raises(InputError) as info:
+        compensate_log(read_log(path), payload)
+    assert str(info.value) == (
+        f"{path}: data row 7: column 'qw': qw, qx, qy, qz = 2.0, 0.0, 0.0, 0.0 has norm 2; expected a unit "
+        "quaternion (norm within 0.001 of 1)"
+    )

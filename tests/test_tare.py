@@ -1,0 +1,383 @@
+"""Tare checks, robust tare, tare on demand, bias files, drift tracking and contact
+hysteresis (issue 13 items 9, 10, 14)."""
+
+import os
+import subprocess
+import sys
+import threading
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from softtip import Estimator, EstimatorConfig, InputError, axial_difference, estimate
+from softtip.estimator.contact import contact_thresholds
+from softtip.estimator.results import EstimatorWarning
+from softtip.estimator.tare import bias_to_toml, load_bias
+from softtip.live import KeyReader, run_live
+from softtip.noise import NANO17
+from softtip.synthetic import synthetic_grasp
+
+SOFTTIP = str(Path(sys.executable).with_name("softtip"))
+NOISE = np.r_[NANO17.force_std, NANO17.moment_std]
+
+
+def quiet_estimate(t, w, config=None):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", EstimatorWarning)
+        return estimate(t, w, "murakami2006", config)
+
+
+def line_error_deg(est, angle):
+    line = est.state == 2
+    assert line.sum() > 100
+    return float(np.median(np.degrees(np.abs(axial_difference(est.angle[line], angle)))))
+
+
+def segments(mask):
+    return int(np.count_nonzero(np.diff(np.r_[0, mask.astype(np.int8)]) == 1))
+
+
+# ---------------------------------------------------------------- item 9: the tare
+
+
+def spiked_grasp(seed=1, spike=-20.0, at=5):
+    g = synthetic_grasp(angle_deg=45.0, seed=seed)
+    w = g.wrench.copy()
+    w[at, 2] += spike  # one sample of the 0.2 s tare
+    return g, w
+
+
+@pytest.mark.parametrize("method", ["robust", "median"])
+def test_a_spike_in_the_tare_is_left_out_by_the_robust_tares_and_reported(method):
+    g, w = spiked_grasp()
+    with pytest.warns(EstimatorWarning, match=f"1 spike.*left out of the {method} tare"):
+        est = estimate(g.t, w, "murakami2006", EstimatorConfig(tare_method=method))
+    assert est.tare.spikes == 1 and est.tare.method == method
+    assert_allclose(est.bias, g.bias, atol=4 * 0.006)
+    assert line_error_deg(est, g.angle) < 3.0  # 88° off before (a mean bias 2 N off)
+
+
+def test_the_robust_tare_is_the_mean_when_there_is_no_spike():
+    g = synthetic_grasp(angle_deg=0.0, seed=2)
+    est = estimate(g.t, g.wrench)
+    assert_allclose(est.bias, g.wrench[:10].mean(axis=0), rtol=1e-15)
+
+
+def test_a_spike_in_a_mean_tare_is_a_warning_with_the_size_of_the_error():
+    g, w = spiked_grasp()
+    with pytest.warns(EstimatorWarning) as caught:
+        est = estimate(g.t, w, "murakami2006", EstimatorConfig(tare_method="mean"))
+    assert "mean bias is 2 N off in force" in str(caught[0].message)
+    assert est.tare.spike_shift == pytest.approx(2.0, rel=0.01)
+    # the 2 N error makes the release-like pull of a tare taken in contact: said too
+    assert est.started_in_contact and len(est.warnings) == 2
+
+
+def test_the_stream_checks_its_tare_too():
+    g, w = spiked_grasp(seed=3, spike=15.0, at=2)
+    est = Estimator("murakami2006")
+    with pytest.warns(EstimatorWarning, match="spike"):
+        out = est.process(g.t, w)
+    assert est.tare_report.spikes == 1 and len(est.warnings) == 1
+    angles = np.array([o.angle for o in out if o.state == "line"])
+    assert np.median(np.degrees(np.abs(axial_difference(angles, g.angle)))) < 3.0
+
+
+@pytest.mark.parametrize("rate", [50.0, 1000.0])
+def test_a_clean_tare_gives_no_warning(rate):
+    # no false alarms: many seeds, both rates, median and mean
+    for seed in range(12 if rate == 50.0 else 3):
+        g = synthetic_grasp(angle_deg=30.0, rate=rate, seed=seed, duration=5.0)
+        for method in ("median", "mean"):
+            with warnings.catch_warnings():
+                warnings.simplefilter("error", EstimatorWarning)
+                est = estimate(g.t, g.wrench, "murakami2006", EstimatorConfig(tare_method=method))
+            assert est.warnings == () and est.tare.spikes == 0
+            assert est.tare.noise_ratio < 2.0
+
+
+@pytest.mark.parametrize("part, factor", [("force", 8.0), ("moment", 8.0)])
+def test_noise_far_above_the_model_while_taring_says_touched(part, factor):
+    g = synthetic_grasp(angle_deg=0.0, seed=4)
+    w = g.wrench.copy()
+    rng = np.random.default_rng(4)
+    cols = slice(0, 3) if part == "force" else slice(3, 6)
+    w[:10, cols] += rng.normal(size=(10, 3)) * factor * NOISE[cols]
+    with pytest.warns(EstimatorWarning, match=f"the {part} varied .* touched"):
+        est = estimate(g.t, w)
+    assert est.tare.noise_ratio > 5.0
+
+
+def held_then_released(seed=5):
+    # a log that starts while the fingertip is held in contact, released at 5 s
+    g = synthetic_grasp(angle_deg=45.0, seed=seed, duration=14.0, h_start=1.0)
+    w = g.wrench.copy()
+    late = g.t > 10.0
+    w[late] = w[late] - g.wrench_true[late]
+    k = g.t >= 5.0
+    return g.t[k] - 5.0, w[k]
+
+
+def test_a_log_that_starts_in_contact_is_reported():
+    t, w = held_then_released()
+    with pytest.warns(EstimatorWarning, match="in contact while taring"):
+        est = estimate(t, w)
+    assert est.started_in_contact
+    assert (est.state == 0).all()  # as before: nothing to measure, but no longer silent
+    stream = Estimator("murakami2006")
+    with pytest.warns(EstimatorWarning, match="in contact while taring"):
+        stream.process(t, w)
+    assert stream.started_in_contact
+
+
+def test_a_pull_inside_a_pushing_contact_is_not_a_tare_in_contact():
+    g = synthetic_grasp(angle_deg=-20.0, seed=7)
+    w = g.wrench.copy()
+    w[300:310, :3] *= -1.0
+    est = quiet_estimate(g.t, w)
+    assert est.n_pulling >= 10 and not est.started_in_contact
+
+
+def test_tare_on_demand_re_tares_from_the_next_samples():
+    # the bias jumps by 0.4 N (a cable moved) while untouched; re-taring removes it
+    g = synthetic_grasp(angle_deg=45.0, seed=6, duration=14.0, contact_time=6.0, settle_time=8.0, h_start=8.5)
+    w = g.wrench.copy()
+    jump = np.array([0.0, 0.0, 0.4, 0.0, 0.0, 0.0])
+    w[g.t >= 3.0] += jump
+    est = Estimator("murakami2006", EstimatorConfig(track_drift=False))
+    out = []
+    with pytest.warns(EstimatorWarning, match="in contact while taring"):  # the jump pulls, as a release does
+        for ti, wi in zip(g.t, w):
+            if ti == 4.0:
+                est.tare()
+            out.append(est.update(ti, wi))
+    taring = np.array([o.taring for o in out])
+    assert taring[(g.t >= 4.0) & (g.t < 4.2)].all() and not taring[g.t >= 4.2].any()
+    assert_allclose(est.bias, g.bias + jump, atol=4 * 0.006)
+    assert all(o.contact_id == 1 for o in out if 3.0 <= o.t < 4.0)  # before: a false contact
+    assert all(o.contact_id == 0 and o.state == "none" for o in out if 4.2 <= o.t < 6.0)  # after: untouched
+    angles = np.array([o.angle for o in out if o.state == "line"])
+    assert np.median(np.degrees(np.abs(axial_difference(angles, g.angle)))) < 3.0
+    for bad in (-1.0, 0.0, float("nan")):
+        with pytest.raises(ValueError, match="tare duration"):
+            est.tare(bad)
+
+
+def test_tare_on_demand_overrides_a_given_bias_and_counts_contacts_on():
+    g = synthetic_grasp(angle_deg=10.0, seed=2)
+    est = Estimator("murakami2006", EstimatorConfig(bias=tuple(g.bias)))
+    est.process(g.t, g.wrench)
+    assert est.contacts == 1 and est.tare_report.source == "given"
+    est.tare(0.11)
+    est.process(g.t + 10.0, g.wrench)
+    assert est.tare_report.source == "tare" and est.tare_report.n_samples == 6
+    assert est.contacts == 2
+
+
+def test_bias_file_round_trip_and_errors(tmp_path):
+    b = (0.1, -0.2, 0.3, 1e-3, -2e-3, 3e-3)
+    p = tmp_path / "b.toml"
+    p.write_text(bias_to_toml(b, "test"))
+    assert load_bias(p) == b
+    p.write_text("[bias]\nforce = [1, 2]\nmoment = [0, 0, 0]\n")
+    with pytest.raises(InputError, match=r"b.toml: \[bias\] force = \[1, 2\]: expected a list of 3"):
+        load_bias(p)
+    p.write_text("[bias]\nforce = [1, 2, 3]\nmoment = [0, 0, 0]\nunits = 'kgf'\n")
+    with pytest.raises(InputError, match="unknown key"):
+        load_bias(p)
+    with pytest.raises(InputError, match="not found"):
+        load_bias(tmp_path / "missing.toml")
+
+
+def run_cli(*args, cwd):
+    return subprocess.run([SOFTTIP, *map(str, args)], capture_output=True, text=True, cwd=cwd)
+
+
+def write_log(path, t, w):
+    np.savetxt(path, np.c_[t, w], delimiter=",", header="t,fx,fy,fz,mx,my,mz", comments="", fmt="%.12g")
+
+
+def test_cli_prints_the_library_warnings_and_saves_and_reuses_the_bias(tmp_path):
+    g, w = spiked_grasp()
+    write_log(tmp_path / "log.csv", g.t, w)
+    r = run_cli("estimate", "log.csv", "-o", "a.csv", "--save-bias", "bias.toml", "--no-drift-tracking", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert "bias from the first 0.2 s (10 samples, mean without spikes)" in r.stderr
+    assert "warning: 1 spike(s) among the 10 tare samples" in r.stderr
+    assert "(105 none, 137 point, 258 line; 1 contact(s))" in r.stderr
+    assert_allclose(load_bias(tmp_path / "bias.toml"), quiet_estimate(g.t, w).bias, rtol=1e-9)
+    r = run_cli("estimate", "log.csv", "-o", "b.csv", "--bias", "bias.toml", "--no-drift-tracking", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert "bias given" in r.stderr and "warning" not in r.stderr
+    a = np.genfromtxt(tmp_path / "a.csv", delimiter=",", names=True, dtype=None, encoding="utf-8")
+    b = np.genfromtxt(tmp_path / "b.csv", delimiter=",", names=True, dtype=None, encoding="utf-8")
+    assert (a["state"][10:] == b["state"][10:]).all()  # the same estimates, without the tare samples
+    assert_allclose(a["angle_deg"][10:], b["angle_deg"][10:], rtol=1e-9, equal_nan=True)
+    assert "contact_id" in a.dtype.names and "drift_fz" in a.dtype.names
+    (tmp_path / "bad.toml").write_text("[bias]\nforce = 1\n")
+    r = run_cli("estimate", "log.csv", "--bias", "bad.toml", cwd=tmp_path)
+    assert r.returncode == 2 and "bad.toml: [bias] force = 1" in r.stderr and not r.stdout
+    r = run_cli("estimate", "log.csv", "-o", "c.csv", "--save-bias", "log.csv", cwd=tmp_path)
+    assert r.returncode == 2 and "--save-bias" in r.stderr
+
+
+def test_run_live_re_tares_when_asked():
+    g = synthetic_grasp(angle_deg=45.0, seed=1, duration=3.0)
+    request = threading.Event()
+
+    def source():
+        for i, (ti, wi) in enumerate(zip(g.t, g.wrench)):
+            if i == 110:  # 2.2 s: the force is rising
+                request.set()
+            yield ti, wi
+
+    est = Estimator("murakami2006")
+    with pytest.warns(EstimatorWarning, match="touched"):
+        run_live(source(), est, tare_request=request)
+    assert not request.is_set() and est.tare_report.n_samples in (10, 11)
+    assert est.tare_report.force_std[2] > 0.05  # re-tared at 1 s, into the rising force: flagged
+    assert any("touched" in m for m in est.warnings)
+
+
+@pytest.mark.skipif(not hasattr(os, "openpty"), reason="needs a pseudo-terminal")
+def test_key_reader_calls_the_action_of_a_key():
+    master, slave = os.openpty()
+    pressed = threading.Event()
+    with os.fdopen(slave, "r") as tty:
+        keys = KeyReader({"t": pressed.set}, stream=tty)
+        try:
+            os.write(master, b"xT")
+            assert pressed.wait(5.0)
+        finally:
+            keys.close()
+    os.close(master)
+
+
+# ---------------------------------------------------------------- item 10: drift
+
+
+def drifting_untouched(seconds=80.0, rate=50.0, slope=-1e-3, seed=0):
+    rng = np.random.default_rng(seed)
+    t = np.arange(int(seconds * rate)) / rate
+    w = rng.normal(size=(len(t), 6)) * NOISE + np.array([0.1, -0.05, 0.3, 2e-3, -1e-3, 5e-4])
+    w[:, 2] += slope * t
+    return t, w
+
+
+@pytest.mark.parametrize("rate, seed", [(50.0, 0), (50.0, 1), (200.0, 2)])
+def test_a_slowly_drifting_untouched_sensor_gives_no_false_contact(rate, seed):
+    t, w = drifting_untouched(rate=rate, seed=seed)
+    with pytest.warns(EstimatorWarning, match="drifted by more than the contact threshold"):
+        est = estimate(t, w)
+    assert (est.state == 0).all() and est.n_contacts == 0  # before: point from 34 s on
+    assert est.drift_alarm
+    # the drift follows the truth with the moving average's lag, slope · 10 s, within noise
+    after = t > 30.0
+    truth = -1e-3 * (t[after] - 0.1)  # from the tare, centred at 0.1 s
+    assert_allclose(est.drift[after, 2], truth + 1e-3 * 10.0, atol=4e-3)
+
+
+def test_without_drift_tracking_the_drift_is_reported_not_subtracted():
+    t, w = drifting_untouched()
+    with pytest.warns(EstimatorWarning, match="not subtracted"):
+        est = estimate(t, w, "murakami2006", EstimatorConfig(track_drift=False))
+    assert est.n_contacts >= 1 and (est.state > 0).any()  # the papers' behaviour
+    first = int(np.argmax(est.state > 0))
+    assert 30.0 < t[first] < 40.0
+    assert np.nanmin(est.drift[:, 2]) < -0.03
+
+
+def test_a_grasp_after_drift_is_measured():
+    t, w = drifting_untouched(seconds=40.0, slope=-1e-3, seed=3)
+    g = synthetic_grasp(angle_deg=-30.0, seed=3, duration=10.0, noise=None)
+    k = t >= 30.0
+    w[k] += g.wrench_true[: k.sum()]
+    est = quiet_estimate(t, w)
+    assert est.n_contacts == 1
+    assert line_error_deg(est, g.angle) < 3.0
+
+
+# ---------------------------------------------------------------- item 14: flicker
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_rising_grasp_force_is_one_contact_at_1khz(seed):
+    g = synthetic_grasp(angle_deg=45.0, rate=1000.0, seed=seed, duration=6.0)
+    est = quiet_estimate(g.t, g.wrench)
+    assert est.n_contacts == 1 and segments(est.contact_id > 0) == 1  # before: 3–7 per grasp
+    assert line_error_deg(est, g.angle) < 3.0
+    single = quiet_estimate(g.t, g.wrench, EstimatorConfig(contact_hysteresis=0.0))
+    assert single.n_contacts >= 1
+
+
+def test_a_single_threshold_flickers_so_the_test_can_fail():
+    counts = [quiet_estimate(g.t, g.wrench, EstimatorConfig(contact_hysteresis=0.0, contact_min_duration=0.0)).n_contacts
+              for g in (synthetic_grasp(rate=1000.0, seed=s, duration=4.0) for s in range(4))]  # fmt: skip
+    assert np.mean(counts) > 2.0
+
+
+def test_release_threshold_follows_the_noise_model_and_filter():
+    sigma = 0.006 * np.sqrt(3)  # noise of |f|, Nano17
+    on, off = contact_thresholds(EstimatorConfig(), NANO17)
+    assert on == 0.05 and off == pytest.approx(2.5 * sigma)  # 0.05 − 3σ would be below the noise
+    _, off = contact_thresholds(EstimatorConfig(contact_hysteresis=1.0), NANO17)
+    assert off == pytest.approx(0.05 - sigma)
+    _, off = contact_thresholds(EstimatorConfig(), NANO17.scaled(0.1))  # e.g. after a low-pass
+    assert off == pytest.approx(0.05 - 3 * 0.1 * sigma)
+    _, off = contact_thresholds(EstimatorConfig(), NANO17.scaled(10.0))  # threshold inside the noise
+    assert off == 0.05
+    _, off = contact_thresholds(EstimatorConfig(contact_hysteresis=0.0), NANO17)
+    assert off == 0.05
+
+
+def test_min_duration_rejects_a_spike_but_not_a_grasp():
+    g = synthetic_grasp(angle_deg=20.0, rate=1000.0, seed=9, duration=5.0)
+    w = g.wrench.copy()
+    w[1000:1003, 0] += 0.8  # 3 ms spike while untouched
+    plain = quiet_estimate(g.t, w, EstimatorConfig(contact_min_duration=0.0))
+    debounced = quiet_estimate(g.t, w)  # 5 ms by default
+    assert plain.n_contacts == 2 and debounced.n_contacts == 1
+    assert (debounced.state[990:1010] == 0).all()
+    onset = int(np.argmax(debounced.contact_id > 0))
+    assert g.t[onset] - g.t[int(np.argmax(plain.contact_id == 2))] == pytest.approx(0.004)  # five samples
+    slow = synthetic_grasp(angle_deg=20.0, rate=50.0, seed=9, duration=5.0)  # one sample covers 5 ms at 50 Hz
+    a = quiet_estimate(slow.t, slow.wrench, EstimatorConfig(contact_min_duration=0.0))
+    b = quiet_estimate(slow.t, slow.wrench)
+    assert (a.contact_id == b.contact_id).all() and (a.state == b.state).all()
+
+
+def test_contacts_are_numbered():
+    g1 = synthetic_grasp(angle_deg=30.0, duration=6.0, seed=3)
+    g2 = synthetic_grasp(angle_deg=-60.0, duration=6.0, seed=4)
+    t = np.concatenate((g1.t, g2.t + 6.0))
+    w = np.concatenate((g1.wrench, g2.wrench))
+    est = quiet_estimate(t, w)
+    assert est.n_contacts == 2
+    assert set(np.unique(est.contact_id)) == {0, 1, 2}
+    assert (est.contact_id[t < 6.0] <= 1).all() and (est.contact_id[t >= 6.0] != 1).all()
+
+
+def test_example_grasp_unchanged_in_substance():
+    from softtip import load_example
+
+    log = load_example()
+    est = quiet_estimate(log.t, log.wrench)
+    assert est.warnings == () and est.n_contacts == 1
+    line = est.state == 2
+    assert abs(np.degrees(np.median(est.angle[line])) - 45.0) < 3.0
+
+
+def test_cli_stream_prints_the_tare_and_takes_a_bias_file(tmp_path):
+    g, w = spiked_grasp()
+    write_log(tmp_path / "log.csv", g.t, w)
+    r = run_cli("stream", "--replay", "log.csv", "--speed", "0", "--no-view", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert "1 contact(s)" in r.stderr and "warning: 1 spike(s) among the 10 tare samples" in r.stderr
+    (tmp_path / "bias.toml").write_text(bias_to_toml(g.bias))
+    r = run_cli("stream", "--replay", "log.csv", "--speed", "0", "--no-view", "--bias", "bias.toml", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert "bias given" in r.stderr and "warning" not in r.stderr
