@@ -331,3 +331,14 @@ def test_metadata_message_count_negative_or_huge(tmp_path, example, count):
     out = run("estimate", bag)
     assert out.returncode == 2, out.stderr
     assert "Traceback" not in out.stderr and "metadata" in out.stderr and count in out.stderr
+
+
+def test_bag_with_a_repeated_stamp_is_estimated_whole(tmp_path, example):
+    t = example.t.copy()
+    t[100] = t[99]
+    bag = write_bag2(tmp_path / "dup", _with_t(example, t), StoragePlugin.MCAP)
+    out = run("estimate", bag, "-o", tmp_path / "e.csv")
+    assert out.returncode == 0, out.stderr
+    assert "1 message(s) repeat the previous header.stamp" in out.stderr
+    with open(tmp_path / "e.csv") as fh:
+        assert len(fh.readlines()) == len(t) + 1
