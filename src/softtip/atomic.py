@@ -225,11 +225,11 @@ def atomic_write(path: PathLike, mode: str = "w", **kwargs: Any) -> Iterator[IO[
 
     Examples
     --------
-    >>> import tempfile, os
-    >>> path = os.path.join(tempfile.mkdtemp(), "out.txt")
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "out.txt"
     >>> with atomic_write(path) as fh:
     ...     _ = fh.write("hello\\n")
-    >>> open(path).read()
+    >>> path.read_text()
     'hello\\n'
     """
     with AtomicFile(path) as af:
