@@ -183,6 +183,7 @@ def test_to_bag_round_trip(tmp_path, example, csv_twin):
             TOPICS["contact_point"]: "geometry_msgs/msg/PointStamped",
             TOPICS["normal"]: "geometry_msgs/msg/Vector3Stamped",
             TOPICS["edge_direction"]: "geometry_msgs/msg/Vector3Stamped",
+            TOPICS["line_evidence"]: "std_msgs/msg/String",
         }
         assert "mcap" in {p.suffix.lstrip(".") for p in out_bag.iterdir()}
         for conn, ts, raw in reader.messages():
@@ -207,6 +208,7 @@ def test_to_bag_round_trip(tmp_path, example, csv_twin):
     dirs = msgs[TOPICS["edge_direction"]]
     assert len(dirs) == len(lines) > 0
     assert dirs[-1][1].vector.x == pytest.approx(float(lines[-1]["dx"]), abs=1e-9)
+    assert [m.data for _, m in msgs[TOPICS["line_evidence"]]] == [r["line_evidence"] for r in lines]
     raw = msgs["/ft_sensor/wrench"]
     assert np.array_equal([m.wrench.force.z for _, m in raw], example.wrench[:, 2])
     # the written bag reads back as input, with the same result

@@ -90,3 +90,21 @@ def test_experiment_selection():
     with pytest.raises(ValueError, match="E7"):
         conditions(["E7"])
     assert len(conditions()) == len({(c.experiment, c.variant, c.angle_deg) for c in conditions()})
+
+
+def test_papers_lines_stay_lines_now_unconfirmed():
+    # one axis of excitation (the papers' grasp): published outcome kept, evidence unconfirmed
+    r = run_condition(cond("E2", "plate", 1e-3, 45.0))
+    assert r.outcome == "measured"
+    assert r.confirmed_share == 0.0 and r.area_share == 0.0
+
+
+def test_extension_x1_is_judged_line_or_area():
+    xs = conditions(["X1"])
+    assert {c.kind for c in xs if c.expect_measured} == {"plate", "cylinder"}
+    assert {c.kind for c in xs if c.expect_measured is False} == {"plate", "plane"}
+    assert all(c.size is None or c.size >= 10e-3 for c in xs if c.expect_measured is False)
+    from softtip.reproduce import _measured
+
+    assert _measured(True, "line") and not _measured(True, "area") and not _measured(True, "line, biased")
+    assert _measured(False, "area") and not _measured(False, "line") and not _measured(False, "neither")

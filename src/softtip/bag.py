@@ -15,7 +15,8 @@ topic                          type                           when
 =============================  =============================  ==================================
 (the input topic)              geometry_msgs/msg/WrenchStamped every sample: the raw wrench, copied
 ``/softtip/wrench``            geometry_msgs/msg/WrenchStamped tared (and filtered), after taring
-``/softtip/state``             std_msgs/msg/String            every sample: none, point or line
+``/softtip/state``             std_msgs/msg/String            every sample: none, point, line or area
+``/softtip/line_evidence``     std_msgs/msg/String            line contacts: confirmed or unconfirmed
 ``/softtip/contact_point``     geometry_msgs/msg/PointStamped in contact (point, line); m
 ``/softtip/normal``            geometry_msgs/msg/Vector3Stamped in contact: outward unit normal
 ``/softtip/edge_direction``    geometry_msgs/msg/Vector3Stamped line contacts: unit direction (an axis)
@@ -57,6 +58,7 @@ TOPICS = {
     "contact_point": "/softtip/contact_point",
     "normal": "/softtip/normal",
     "edge_direction": "/softtip/edge_direction",
+    "line_evidence": "/softtip/line_evidence",
 }
 #: Topic of the raw wrench in an output bag when the input was not a bag.
 DEFAULT_RAW_TOPIC = "/softtip/wrench_raw"
@@ -377,6 +379,7 @@ def write_estimates_bag(
         return ser(msg, WRENCH_TYPE)
 
     names = est.state_names.tolist()
+    evidence = est.columns()["line_evidence"].tolist()
     tared, point, normal, direction = (
         est.wrench.tolist(),
         est.point.tolist(),
@@ -404,6 +407,7 @@ def write_estimates_bag(
                         TOPICS["edge_direction"],
                         "geometry_msgs/msg/Vector3Stamped",
                     ),
+                    ("line_evidence", TOPICS["line_evidence"], "std_msgs/msg/String"),
                 )
             }
             for k in range(n):
@@ -435,6 +439,9 @@ def write_estimates_bag(
                         ),
                     )
                     if names[k] == "line":
+                        writer.write(
+                            conn["line_evidence"], ns, ser(String(data=evidence[k]), "std_msgs/msg/String")
+                        )
                         x, y, z = direction[k]
                         writer.write(
                             conn["edge_direction"],

@@ -16,7 +16,8 @@ from softtip import __version__
 from softtip.axial import axial_median
 from softtip.cli_types import PORT, Number, check_lowpass, check_pair_increasing
 from softtip.errors import InputError
-from softtip.fingertip import PRESETS, load_fingertip
+from softtip.estimator.depth import tip_depth_law
+from softtip.fingertip import PRESETS, Fingertip, load_fingertip
 from softtip.depth import MURAKAMI2006_DEPTH, DepthLaw
 from softtip.estimator.results import DRIFT_COLUMNS, EstimatorWarning
 from softtip.estimator.tare import bias_to_toml, load_bias
@@ -213,19 +214,71 @@ _ESTIMATOR_OPTIONS = [
         "latched one, mm (default: only when contact is lost and regained, the papers').",
     ),
     click.option(
-        "--depth-compensation",
+        "--depth-compensation/--no-depth-compensation",
+        default=None,
+        help="Take the moment about the point inside the skin where friction acts, removing the spurious "
+        "tangential moment of a tangential force. Its depth is learnt per contact from the data, the skin law "
+        "(--skin-law) the prior; the depth, depth_std and depth_from_data columns report it. Default: on when "
+        "the fingertip gives a skin (the murakami2006 preset, a file with skin_thickness), in latch mode. "
+        "--no-depth-compensation: the papers' method.",
+    ),
+    click.option(
+        "--fixed-depth",
         is_flag=True,
-        help="Take the moment about the point inside the skin where friction acts, at the depth the normal force "
-        "gives by the skin law (--skin-law); removes the spurious tangential moment of a tangential force.",
+        help="Depth compensation at the skin law's depth as it is, not learnt from the data.",
     ),
     click.option(
         "--skin-law",
         type=(POSITIVE("N/m^P"), POSITIVE(""), POSITIVE("mm")),
-        default=(MURAKAMI2006_DEPTH.stiffness, MURAKAMI2006_DEPTH.exponent, MURAKAMI2006_DEPTH.max_depth * 1e3),
-        show_default=True,
+        default=None,
         metavar="K P MAX_MM",
-        help="Skin law of --depth-compensation: normal force = K·depth^P (N, m), depth at most MAX_MM mm "
-        "(default: the murakami2006 skin, fitted on softtip's simulator).",
+        help="Skin law of the depth compensation: normal force = K·depth^P (N, m), depth at most MAX_MM mm "
+        "(default: the fingertip's skin; else the murakami2006 skin, "
+        f"{MURAKAMI2006_DEPTH.stiffness:g} {MURAKAMI2006_DEPTH.exponent:g} {MURAKAMI2006_DEPTH.max_depth * 1e3:g}).",
+    ),
+    click.option(
+        "--line-evidence",
+        type=click.Choice(["on", "off"]),
+        default="on",
+        show_default=True,
+        help="on: tell a line from an area over a sliding window (state area; line_evidence confirmed once the "
+        "contact was excited about two tangent axes and h stayed on one, else unconfirmed; under confirmed "
+        "evidence the direction comes from the window); off: the papers' per-sample line/point.",
+    ),
+    click.option("--evidence-window", type=POSITIVE("s"), default=2.0, show_default=True, metavar="S", help="Sliding window of the line evidence, s."),
+    click.option(
+        "--area-ratio",
+        type=(POSITIVE("(eigenvalue ratio)"), POSITIVE("(eigenvalue ratio)")),
+        default=(0.2, 0.1),
+        show_default=True,
+        metavar="ENTER LEAVE",
+        help="area when the smaller/larger eigenvalue ratio of h's window covariance (noise removed) reaches ENTER; "
+        "a confirmed line again only below LEAVE.",
+    ),
+    click.option(
+        "--excitation",
+        type=(POSITIVE("(eigenvalue ratio)"), POSITIVE("N")),
+        default=(0.5, 0.01),
+        show_default=True,
+        metavar="RATIO MIN_N",
+        help="Excited about two tangent axes when the tangential load's window covariance has its smaller eigenvalue "
+        "beyond the noise, at least RATIO times the larger and at least MIN_N² (N).",
+    ),
+    click.option(
+        "--evidence-reset-distance",
+        type=POSITIVE("mm"),
+        default=1.0,
+        show_default=True,
+        metavar="MM",
+        help="The line evidence starts afresh when the contact point moves farther than this, mm.",
+    ),
+    click.option(
+        "--evidence-max-std",
+        type=POSITIVE("deg"),
+        default=10.0,
+        show_default=True,
+        metavar="DEG",
+        help="A window's line direction is used only when its standard deviation is at most this, degrees.",
     ),
 ]
 
@@ -248,7 +301,7 @@ softtip.units metadata gives the units). '-' reads CSV from standard input. With
 --example, softtip's shipped example grasp is used instead.
 
 The output CSV (standard output unless -o; Parquet when -o ends in .parquet, with the
-units and the fingertip in its key-value metadata) has the columns t, state (none|point|line),
+units and the fingertip in its key-value metadata) has the columns t, state (none|point|line|area),
 fx..mz (the wrench after bias removal and filtering, the one the estimates come from),
 rx, ry, rz (contact point, m), nx, ny, nz (outward normal), sigma (spin torque about the
 normal, N·m), hx, hy, hz, h_norm (tangential spin torque, N·m), dx, dy, dz (direction of
@@ -259,9 +312,13 @@ angle_std_deg, latched, latch_fallback, relatched (a new latch starts here), dep
 joint_offset_std (m), joint_residual and joint_fallback (the sliding window of
 --contact-point joint: reciprocal condition number, standard deviations of its line angle
 and offset, RMS fit residual in noise standard deviations, and whether the latched point
-is used because no window has been accepted yet), contact_id (1, 2, ... per contact, 0
-out of contact), drift_fx..drift_mz (the bias drift followed while untouched since the
-tare, N and N·m), then the input's extra columns. r, n, h are empty
+is used because no window has been accepted yet), depth_std (m, the depth's standard
+deviation), depth_from_data (the contact's own data, not the skin law, determined it),
+contact_id (1, 2, ... per contact, 0 out of contact), drift_fx..drift_mz (the bias drift
+followed while untouched since the tare, N and N·m), line_evidence (confirmed|unconfirmed on
+line samples: whether the contact was excited about two tangent axes with h staying on one),
+h_ratio and excitation_ratio (smaller/larger eigenvalue of the evidence window's covariance
+of h and of the tangential load, noise removed), then the input's extra columns. r, n, h are empty
 (nan) when state is none; d and the angle only for line contacts, where |h| stands out of
 the noise.
 
@@ -335,7 +392,7 @@ def estimate(
         [("-o", output), ("--plot", plot_path), ("--to-bag", to_bag), ("--rerun-save", rerun_save), ("--save-bias", save_bias)],
     )
     fingertip = load_fingertip(tip)
-    config = _make_config(estimator_opts)
+    config = _make_config(estimator_opts, tip=fingertip)
 
     bag_log = None
     if example:
@@ -419,7 +476,8 @@ def estimate(
         )
     targets = [p for p in (output, to_bag, rerun_save) if p is not None]
     if targets:
-        summary = ", ".join(f"{v} {k}" for k, v in counts.items())
+        confirmed = int(np.count_nonzero(est.line_evidence == 2))
+        summary = ", ".join(f"{v} {k}" + (f" ({confirmed} confirmed)" if k == "line" else "") for k, v in counts.items())
         click.echo(
             f"softtip: {len(est)} samples ({summary}; {est.n_contacts} contact(s)) -> {', '.join(map(str, targets))}",
             err=True,
@@ -516,12 +574,34 @@ def _write_estimate_outputs(
             shutil.rmtree(to_bag, ignore_errors=True)
 
 
+class _NoProgress:
+    """What :func:`_progress_bar` gives when standard error is not a terminal."""
+
+    def update(self, n: int = 1) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        pass
+
+
 def _progress_bar(total: int, what: str, *, unit: str = " rows", file=None, delay: float = 2.0):
     """A tqdm bar on standard error, shown only on a terminal and only after ``delay`` s."""
     from tqdm import tqdm
 
     file = sys.stderr if file is None else file
     tty = file.isatty()
+    if not tty:
+        return _NoProgress()
+    # no monitor thread: a daemon thread alive at interpreter exit, with pyarrow loaded,
+    # aborted the process ("terminate called without an active exception") in ~half the
+    # runs that ended on an error
+    tqdm.monitor_interval = 0
     size = {}
     try:
         if tty and os.get_terminal_size(file.fileno()).lines <= 0:  # a pty with no size: tqdm would draw nothing
@@ -566,14 +646,24 @@ def _tare_warnings(est) -> None:
         click.echo(f"softtip: warning: {msg}", err=True)
 
 
-def _make_config(opts: dict, sample_rate: float | None = None) -> EstimatorConfig:
+def _make_config(opts: dict, sample_rate: float | None = None, tip: Fingertip | None = None) -> EstimatorConfig:
     """The :class:`EstimatorConfig` of the shared estimator options (CLI units → SI)."""
     check_pair_increasing("--latch-window", opts["latch_window"], "N")
     try:
+        comp, fixed = opts["depth_compensation"], opts["fixed_depth"]
+        if comp is False and fixed:
+            raise click.UsageError("--fixed-depth and --no-depth-compensation contradict each other")
         depth = None
-        if opts["depth_compensation"]:
+        if opts["skin_law"] is not None:
             k, p, max_mm = opts["skin_law"]
             depth = DepthLaw(k, p, max_mm * 1e-3)
+        depth_mode = "auto"
+        if comp is False:
+            depth_mode = "off"
+        elif comp or fixed:
+            depth_mode = "law" if fixed else "online"
+            if depth is None and (tip is None or tip_depth_law(tip) is None):
+                depth = MURAKAMI2006_DEPTH
         relatch = opts["relatch_distance"]
         return EstimatorConfig(
             contact_point=opts["contact_point"],
@@ -592,10 +682,18 @@ def _make_config(opts: dict, sample_rate: float | None = None) -> EstimatorConfi
             track_drift=opts["drift_tracking"],
             relatch_distance=None if relatch is None else relatch * 1e-3,
             depth=depth,
+            depth_mode=depth_mode,
             joint_window=opts["joint_window"],
             joint_max_angle_std=math.radians(opts["joint_max_std"][0]),
             joint_max_offset_std=opts["joint_max_std"][1] * 1e-3,
             joint_max_residual=opts["joint_max_residual"],
+            line_evidence=opts["line_evidence"] == "on",
+            evidence_window=opts["evidence_window"],
+            area_ratio=opts["area_ratio"],
+            excitation_ratio=opts["excitation"][0],
+            excitation_min=opts["excitation"][1],
+            evidence_max_angle_std=math.radians(opts["evidence_max_std"]),
+            evidence_reset_distance=opts["evidence_reset_distance"] * 1e-3,
         )
     except ValueError as exc:
         raise click.UsageError(str(exc)) from None
@@ -757,7 +855,9 @@ def stream(
             lowpass = estimator_opts["lowpass"]
             if lowpass is not None and source.rate_hz is not None:
                 check_lowpass(lowpass, source.rate_hz)
-            config = _make_config(estimator_opts, sample_rate=source.rate_hz if lowpass is not None else None)
+            config = _make_config(
+                estimator_opts, sample_rate=source.rate_hz if lowpass is not None else None, tip=fingertip
+            )
             if lowpass is not None and source.rate_hz is None:
                 raise click.UsageError("--lowpass needs the sample rate, which this source does not report")
             estimator = Estimator(fingertip, config)
@@ -836,8 +936,10 @@ is simulated with the papers' grasp and measured by the same pipeline as `softti
 estimate` (default options, --no-drift-tracking as in the papers). Writes to --out one figure per experiment laid out like the
 papers' (e1_edges.png … e6_contact_position.png) and the summary table summary.md /
 summary.csv: per condition the median axial direction error (degrees), the share of
-samples with a reported direction, the contact-position error (mm), the published outcome
-and whether ours agrees.
+samples with a reported direction, the contact-position error (mm), the line evidence, the
+published outcome and whether ours agrees. X1, softtip's extension, rocks thin and thick
+objects about two tangent axes and judges line or area (x1_line_or_area.png: h in the
+tangent plane as a trace, and the state over time).
 
 """
     + FRAMES_HELP
@@ -846,7 +948,7 @@ and whether ours agrees.
 @click.option(
     "--only",
     metavar="E1,E2,...",
-    help="Run only these experiments (comma-separated ids E1–E6).",
+    help="Run only these experiments (comma-separated ids E1–E6, X1).",
 )
 @click.option("--seed", type=click.IntRange(min=0), default=2006, show_default=True, help="Seed of the simulated sensor noise.")
 @click.option(

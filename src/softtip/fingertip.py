@@ -117,15 +117,29 @@ def _fmt(v: float) -> str:
     return repr(float(v))
 
 
+def _skin(tip) -> None:
+    """Validate the optional ``skin_thickness`` (m) of a fingertip dataclass."""
+    h = tip.skin_thickness
+    if h is not None:
+        object.__setattr__(tip, "skin_thickness", _positive(h, "skin_thickness"))
+
+
+def _skin_toml(tip) -> str:
+    h = getattr(tip, "skin_thickness", None)
+    return "" if h is None else f"skin_thickness = {_fmt(h)}\n"
+
+
 @dataclass(frozen=True)
 class Sphere(Fingertip):
     """Spherical skin of ``radius`` (m) centred at ``center`` (m, sensor frame)."""
 
     radius: float
     center: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    skin_thickness: float | None = field(default=None, compare=False)
     kind: ClassVar[str] = "sphere"
 
     def __post_init__(self) -> None:
+        _skin(self)
         object.__setattr__(self, "radius", _positive(self.radius, "radius"))
         object.__setattr__(self, "center", _vec3(self.center, "center"))
 
@@ -152,7 +166,7 @@ class Sphere(Fingertip):
 
     def to_toml(self) -> str:
         c = ", ".join(_fmt(v) for v in self.center)
-        return f'[fingertip]\nshape = "sphere"\nradius = {_fmt(self.radius)}\ncenter = [{c}]\n'
+        return f'[fingertip]\nshape = "sphere"\nradius = {_fmt(self.radius)}\ncenter = [{c}]\n' + _skin_toml(self)
 
 
 @dataclass(frozen=True)
@@ -166,9 +180,11 @@ class Capsule(Fingertip):
 
     radius: float
     length: float
+    skin_thickness: float | None = field(default=None, compare=False)
     kind: ClassVar[str] = "capsule"
 
     def __post_init__(self) -> None:
+        _skin(self)
         object.__setattr__(self, "radius", _positive(self.radius, "radius"))
         length = float(self.length)
         if not (math.isfinite(length) and length >= 0.0):
@@ -204,7 +220,7 @@ class Capsule(Fingertip):
         return (
             f'[fingertip]\nshape = "capsule"\nradius = {_fmt(self.radius)}\n'
             f"length = {_fmt(self.length)}\n"
-        )
+        ) + _skin_toml(self)
 
 
 @dataclass(frozen=True)
@@ -213,9 +229,11 @@ class Ellipsoid(Fingertip):
 
     semi_axes: tuple[float, float, float]
     center: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    skin_thickness: float | None = field(default=None, compare=False)
     kind: ClassVar[str] = "ellipsoid"
 
     def __post_init__(self) -> None:
+        _skin(self)
         axes = _vec3(self.semi_axes, "semi_axes")
         for a in axes:
             _positive(a, "each of semi_axes")
@@ -253,7 +271,7 @@ class Ellipsoid(Fingertip):
     def to_toml(self) -> str:
         a = ", ".join(_fmt(v) for v in self.semi_axes)
         c = ", ".join(_fmt(v) for v in self.center)
-        return f'[fingertip]\nshape = "ellipsoid"\nsemi_axes = [{a}]\ncenter = [{c}]\n'
+        return f'[fingertip]\nshape = "ellipsoid"\nsemi_axes = [{a}]\ncenter = [{c}]\n' + _skin_toml(self)
 
 
 @dataclass(frozen=True)
@@ -340,18 +358,19 @@ class ImplicitSurface(Fingertip):
 def murakami2006() -> Capsule:
     """The papers' fingertip: capsule of radius 16 mm (11 mm aluminium shell + 5 mm skin).
 
-    The papers do not give the cylinder length; 20 mm is softtip's choice (SPEC §2).
+    The papers do not give the cylinder length; 20 mm is softtip's choice (SPEC §2). The
+    5 mm skin switches on the online depth compensation (:mod:`softtip.estimator.depth`).
     """
-    return Capsule(radius=0.016, length=0.020)
+    return Capsule(radius=0.016, length=0.020, skin_thickness=0.005)
 
 
 #: Named fingertips accepted wherever a fingertip file is.
 PRESETS: dict[str, Callable[[], Fingertip]] = {"murakami2006": murakami2006}
 
 _FIELDS = {
-    "sphere": {"radius": True, "center": False},
-    "capsule": {"radius": True, "length": True},
-    "ellipsoid": {"semi_axes": True, "center": False},
+    "sphere": {"radius": True, "center": False, "skin_thickness": False},
+    "capsule": {"radius": True, "length": True, "skin_thickness": False},
+    "ellipsoid": {"semi_axes": True, "center": False, "skin_thickness": False},
 }
 
 

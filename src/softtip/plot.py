@@ -75,8 +75,14 @@ def plot_estimates(
     if units not in _UNITS:
         raise ValueError(f"units must be one of {', '.join(_UNITS)}, got {units!r}")
     fscale, mscale, funit, munit = _UNITS[units]
-    fig, axes = plt.subplots(2, 2, figsize=(10, 6.5), sharex=True, constrained_layout=True)
-    (ax_f, ax_h), (ax_m, ax_d) = axes
+    fig = plt.figure(figsize=(10, 7.0), constrained_layout=True)
+    grid = fig.add_gridspec(3, 2, height_ratios=[1.0, 1.0, 0.12 + 0.08 * len(runs)])
+    ax_f = fig.add_subplot(grid[0, 0])
+    ax_m = fig.add_subplot(grid[1:, 0], sharex=ax_f)
+    ax_h = fig.add_subplot(grid[0, 1], sharex=ax_f)
+    ax_d = fig.add_subplot(grid[1, 1], sharex=ax_f)
+    ax_s = fig.add_subplot(grid[2, 1], sharex=ax_f)
+    axes = np.array([ax_f, ax_h, ax_m, ax_d])
 
     first = runs[0]
     for i, (name, color) in enumerate(zip("xyz", ("tab:red", "tab:green", "tab:blue"))):
@@ -105,10 +111,106 @@ def plot_estimates(
     ax_d.set_yticks([-90, -45, 0, 45, 90])
     if labels is not None or h_threshold is not None:
         ax_h.legend(loc="upper left", fontsize=8)
-    for ax in (ax_m, ax_d):
+    state_band(ax_s, runs, labels)
+    for ax in (ax_m, ax_s):
         ax.set_xlabel("time [s]")
+    ax_d.tick_params(labelbottom=False)
     for ax in axes.flat:
         ax.grid(True, alpha=0.3)
+    if title:
+        fig.suptitle(title)
+    _save(fig, plt, path)
+    return fig
+
+
+#: Colours of the state band: none, point, line (unconfirmed), line (confirmed), area.
+STATE_COLORS = ("white", "0.8", "#a6dba0", "#1b7837", "#e08214")
+STATE_BAND_LABELS = ("none", "point", "line unconfirmed", "line confirmed", "area")
+
+
+def state_band(ax, runs: Sequence[Estimates], labels: Sequence[str] | None = None) -> None:
+    """The contact state over time as a colour band, one row per log (line split into
+    unconfirmed and confirmed evidence; :data:`STATE_COLORS`)."""
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+    from matplotlib.patches import Patch
+
+    cmap = ListedColormap(STATE_COLORS)
+    norm = BoundaryNorm(np.arange(-0.5, len(STATE_COLORS)), cmap.N)
+    for k, est in enumerate(runs):
+        code = np.where(est.state == 3, 4, np.where((est.state == 2) & (est.line_evidence == 2), 3, est.state))
+        t = est.t
+        if len(t) < 2:
+            continue
+        mid = 0.5 * (t[1:] + t[:-1])
+        edges = np.concatenate(([t[0]], mid, [t[-1]]))
+        ax.pcolormesh(edges, [k, k + 1], code[None, :].astype(float), cmap=cmap, norm=norm, shading="flat")
+    ax.set_ylim(len(runs), 0)
+    ax.set_yticks(np.arange(len(runs)) + 0.5)
+    ax.set_yticklabels(list(labels) if labels is not None else [""] * len(runs), fontsize=7)
+    ax.set_ylabel("state", fontsize=8)
+    handles = [Patch(facecolor=c, edgecolor="0.5", label=n) for c, n in zip(STATE_COLORS, STATE_BAND_LABELS)]
+    ax.legend(handles=handles, loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=5, fontsize=7, frameon=False, borderaxespad=0.1)
+
+
+def plot_line_or_area(rows: Sequence[tuple[str, Estimates]], path=None, *, title: str | None = None, t_from: float = 4.0):
+    """Line or area, one row per log: ``h`` in the tangent plane as a trace (left; N·mm,
+    tangent frame at the contact point: a line for a strip, a blob for an area contact) and
+    its components and the state over time (right, with the state band below).
+
+    Parameters
+    ----------
+    rows : sequence of (label, Estimates)
+    path : str or PathLike, optional
+    title : str, optional
+    t_from : float
+        s; the trace starts here (after the grasp force rise).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from softtip.spin import tangent_frame_kernel
+    from softtip._xp import NP
+
+    plt = _figure_module()
+    if not rows:
+        raise ValueError("nothing to plot")
+    fig = plt.figure(figsize=(10, 2.3 * len(rows) + 0.8), constrained_layout=True)
+    grid = fig.add_gridspec(2 * len(rows), 2, width_ratios=[1.0, 2.6], height_ratios=[1.0, 0.22] * len(rows))
+    ax_last = None
+    for k, (label, est) in enumerate(rows):
+        ax_tr = fig.add_subplot(grid[2 * k : 2 * k + 2, 0])
+        ax_ts = fig.add_subplot(grid[2 * k, 1], sharex=ax_last)
+        ax_st = fig.add_subplot(grid[2 * k + 1, 1], sharex=ax_ts)
+        ax_last = ax_ts
+        sel = (est.t >= t_from) & (est.state > 0)
+        with np.errstate(invalid="ignore"):
+            e1x, e1y, e1z, e2x, e2y, e2z = tangent_frame_kernel(*est.normal.T, NP)
+            h1 = (est.h[:, 0] * e1x + est.h[:, 1] * e1y + est.h[:, 2] * e1z) * 1e3
+            h2 = (est.h[:, 0] * e2x + est.h[:, 1] * e2y + est.h[:, 2] * e2z) * 1e3
+        ax_tr.plot(h1[sel], h2[sel], lw=0.6, color="tab:purple")
+        ax_tr.plot([0], [0], "+", color="0.3")
+        lim = max(1.0, float(np.nanmax(np.abs(np.concatenate((h1[sel], h2[sel]))))) if sel.any() else 1.0) * 1.1
+        ax_tr.set_xlim(-lim, lim)
+        ax_tr.set_ylim(-lim, lim)
+        ax_tr.set_aspect("equal")
+        ax_tr.set_xlabel("h·e1 [N·mm]", fontsize=8)
+        ax_tr.set_ylabel("h·e2 [N·mm]", fontsize=8)
+        ax_tr.set_title(label, fontsize=9)
+        ax_ts.plot(est.t, h1, lw=0.8, label="h·e1")
+        ax_ts.plot(est.t, h2, lw=0.8, label="h·e2")
+        ax_ts.set_ylabel("h [N·mm]", fontsize=8)
+        ax_ts.tick_params(labelbottom=False)
+        ax_ts.grid(True, alpha=0.3)
+        if k == 0:
+            ax_ts.legend(loc="upper left", fontsize=7)
+        state_band(ax_st, [est])
+        ax_st.set_yticks([])
+        if k != len(rows) - 1:
+            ax_st.get_legend().remove()
+            ax_st.tick_params(labelbottom=False)
+        else:
+            ax_st.set_xlabel("time [s]")
     if title:
         fig.suptitle(title)
     _save(fig, plt, path)

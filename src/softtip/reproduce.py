@@ -17,6 +17,15 @@ A condition agrees with the papers when the papers measured it and ours is ``mea
 or the papers could not measure it and ours is ``large error`` or ``unobservable``.
 E6 (contact position) is judged on the soft-finger position error while the pushing force
 exceeds 0.2 kgf, against the papers' 0.5 mm.
+
+Each condition also reports the line evidence of its line samples: the papers' grasps excite
+the contact about one axis only, so their lines are ``unconfirmed`` (a tilted plane would
+give the same wrench). The extension experiment X1 (not in the papers) rocks the grasped
+object about two tangent axes and in a figure-eight (:func:`softtip.sim.rock_scenario`) and
+is judged after both axes were excited: a line (thin plate, thin cylinder) agrees when it
+is reported ``line`` on at least :data:`X1_LINE_SHARE` of the samples with a median error
+within :data:`TOLERANCE_DEG`; an area (thick plate, plane) when ``line`` on at most
+:data:`X1_AREA_LINE_SHARE`.
 """
 
 from __future__ import annotations
@@ -32,7 +41,7 @@ import numpy as np
 
 from softtip.axial import axial_difference
 from softtip.fingertip import Fingertip, murakami2006
-from softtip.pipeline import LINE, EstimatorConfig, Estimates, estimate
+from softtip.estimator import AREA, LINE, EstimatorConfig, Estimates, estimate
 from softtip.units import KGF
 
 __all__ = [
@@ -57,6 +66,12 @@ EVAL_FROM = 6.0
 MIN_SHARE = 0.5
 #: E6: the papers' bound on the contact-position error above 0.2 kgf (m).
 POSITION_BOUND = 0.5e-3
+#: X1: least share of ``line`` samples of a line contact, most of an area contact.
+X1_LINE_SHARE = 0.9
+X1_AREA_LINE_SHARE = 0.05
+#: X1: period of the rocking (s) and the object angle (deg).
+X1_PERIOD = 0.5
+X1_ANGLE = 30.0
 
 
 @dataclass(frozen=True)
@@ -106,12 +121,13 @@ class Condition:
             return f"fringe of Ø {self.size * 1e3:g} mm cylinder"
         if self.kind == "plane":
             p = self.contact_point
-            return "plane at the apex" if p is None else f"plane at ({p[0] * 1e3:.1f}, {p[1] * 1e3:.1f}, {p[2] * 1e3:.1f}) mm"
+            return "plane" if self.experiment == "X1" else "plane at the apex" if p is None else f"plane at ({p[0] * 1e3:.1f}, {p[1] * 1e3:.1f}, {p[2] * 1e3:.1f}) mm"
         return self.kind
 
     @property
     def label(self) -> str:
-        return f"{self.experiment} {self.variant}" + ("" if self.kind == "plane" else f" at {self.angle_deg:g}°")
+        plane = self.kind == "plane" and self.experiment != "X1"
+        return f"{self.experiment} {self.variant}" + ("" if plane else f" at {self.angle_deg:g}°")
 
 
 @dataclass(frozen=True)
@@ -129,11 +145,15 @@ class ConditionResult:
     truth_angle_deg: float = math.nan
     force_norm: np.ndarray | None = field(default=None, repr=False)
     position_error: np.ndarray | None = field(default=None, repr=False)
+    confirmed_share: float = math.nan
+    area_share: float = math.nan
 
 
 def _measured(expect: bool | None, outcome: str) -> bool | None:
     if expect is None:
         return None
+    if outcome in ("line", "area", "line, biased", "neither"):  # X1: line (True) or area (False)
+        return outcome == ("line" if expect else "area")
     if expect:
         return outcome == "measured"
     return outcome in ("large error", "unobservable")
@@ -169,6 +189,9 @@ def conditions(experiments: Sequence[str] | None = None) -> list[Condition]:
         out.append(Condition("E6", "plane", None, 0.0, None, "position error < 0.5 mm above 0.2 kgf", contact_point=point))
     # (not the cylinder side: a plane meets a cylinder along a line, where no single contact
     # point exists)
+    for kind, size, line in (("plate", 1e-3, True), ("cylinder", 4e-3, True), ("plate", 15e-3, False), ("plane", None, False)):
+        text = "(softtip extension) line, confirmed" if line else "(softtip extension) area"
+        out.append(Condition("X1", kind, size, X1_ANGLE, line, text))
     if experiments is not None:
         wanted = {e.upper() for e in experiments}
         unknown = wanted - set(EXPERIMENTS)
@@ -179,11 +202,13 @@ def conditions(experiments: Sequence[str] | None = None) -> list[Condition]:
 
 
 def _simulate(condition: Condition, tip: Fingertip, seed: int):
-    from softtip.sim import make_object, paper_scenario, push_scenario, simulate_grasp
+    from softtip.sim import make_object, paper_scenario, push_scenario, rock_scenario, simulate_grasp
 
     obj = make_object(condition.kind, condition.size, edge_radius=condition.edge_radius)
     angle = math.radians(condition.angle_deg)
-    if condition.experiment == "E6":
+    if condition.experiment == "X1":
+        scenario = rock_scenario(angle, rock_period=X1_PERIOD)
+    elif condition.experiment == "E6":
         scenario = push_scenario(angle, contact_point=condition.contact_point)
     else:
         scenario = paper_scenario(angle)
@@ -215,13 +240,23 @@ def run_condition(condition: Condition, *, seed: int = 2006, config: EstimatorCo
 
     est = estimate(log.t, log.wrench, tip, PAPERS_CONFIG if config is None else config)
     held = log.t >= EVAL_FROM
+    if condition.experiment == "X1":  # after both axes were excited
+        a2 = next(d for d in log.scenario.disturbances if d.label == "rock-a2")
+        held = log.t >= a2.start + a2.period
     line = held & (est.state == LINE)
     share = float(np.count_nonzero(line) / max(1, np.count_nonzero(held)))
+    confirmed = float(np.mean(est.line_evidence[line] == 2)) if line.any() else math.nan
+    area = float(np.count_nonzero(held & (est.state == AREA)) / max(1, np.count_nonzero(held)))
     err = np.degrees(np.abs(axial_difference(est.angle[line], truth.angle[line])))
     median_error = float(np.median(err)) if err.size else math.nan
     contact_error = float(np.nanmedian(np.linalg.norm(est.point[held] - truth.contact_point[held], axis=1)))
     median_h = float(np.nanmedian(est.h_norm[held]))
-    if share < MIN_SHARE:
+    if condition.experiment == "X1":
+        if share >= X1_LINE_SHARE:
+            outcome = "line" if median_error <= TOLERANCE_DEG else "line, biased"
+        else:
+            outcome = "area" if share <= X1_AREA_LINE_SHARE and area > MIN_SHARE else "neither"
+    elif share < MIN_SHARE:
         outcome = "unobservable"
     elif median_error <= TOLERANCE_DEG:
         outcome = "measured"
@@ -229,10 +264,11 @@ def run_condition(condition: Condition, *, seed: int = 2006, config: EstimatorCo
         outcome = "biased"
     else:
         outcome = "large error"
-    truth_angle = float(np.degrees(np.nanmedian(truth.angle[held])))
+    ta = truth.angle[held]
+    truth_angle = float(np.degrees(np.median(ta[np.isfinite(ta)]))) if np.isfinite(ta).any() else math.nan
     return ConditionResult(
         condition, median_error, share, contact_error, median_h, outcome,
-        _measured(condition.expect_measured, outcome), est, truth_angle,
+        _measured(condition.expect_measured, outcome), est, truth_angle, confirmed_share=confirmed, area_share=area,
     )  # fmt: skip
 
 
@@ -253,6 +289,7 @@ EXPERIMENTS: dict[str, tuple[str, str]] = {
     "E4": ("Cylinders Ø 4–14 mm", "2006 IV-D, Figs. 19–22"),
     "E5": ("Fringe of a Ø 40 mm cylinder bottom", "2006 IV-E, Fig. 24"),
     "E6": ("Contact position above 0.2 kgf", "2006 IV-A, Fig. 7"),
+    "X1": ("Line or area under two-axis rocking", "softtip extension"),
 }
 
 
@@ -316,6 +353,7 @@ _FIGURES = {
     "E4": "e4_cylinders.png",
     "E5": "e5_fringe.png",
     "E6": "e6_contact_position.png",
+    "X1": "x1_line_or_area.png",
 }
 
 
@@ -340,9 +378,25 @@ def summary_rows(results: Sequence[ConditionResult]) -> list[dict[str, str]]:
                 "share_reported": _fmt(r.share_reported, 2),
                 "contact_error_mm": _fmt(r.contact_error * 1e3, 2),
                 "median_h_nmm": _fmt(r.median_h * 1e3, 2),
+                "line_evidence": _evidence_text(r),
             }
         )
     return rows
+
+
+def _evidence_text(r: ConditionResult) -> str:
+    """Line evidence of a condition's line samples (and its area share when any)."""
+    if not np.isfinite(r.confirmed_share):
+        text = "–"
+    elif r.confirmed_share == 0.0:
+        text = "unconfirmed"
+    elif r.confirmed_share == 1.0:
+        text = "confirmed"
+    else:
+        text = f"{r.confirmed_share:.0%} confirmed"
+    if np.isfinite(r.area_share) and r.area_share > 0.0:
+        text += f"; area {r.area_share:.0%}"
+    return text
 
 
 def write_summary(results: Sequence[ConditionResult], out: Path) -> None:
@@ -355,7 +409,7 @@ def write_summary(results: Sequence[ConditionResult], out: Path) -> None:
     write_table({k: [row[k] for row in rows] for k in rows[0]}, out / "summary.csv")
     head = (
         "| exp. | object | angle (°) | published | ours | agrees | median error (°) "
-        "| share reported | contact error (mm) | median \\|h\\| (N·mm) |"
+        "| share reported | contact error (mm) | median \\|h\\| (N·mm) | line evidence |"
     )
     lines = [
         "# softtip reproduction of the papers' experiments",
@@ -364,10 +418,14 @@ def write_summary(results: Sequence[ConditionResult], out: Path) -> None:
         f"`softtip estimate` pipeline (`--no-drift-tracking`, as in the papers). Judged on t ≥ {EVAL_FROM:g} s: *measured* = direction reported on "
         f"≥ {MIN_SHARE:.0%} of the samples with median axial error ≤ {TOLERANCE_DEG:g}°; *biased* ≤ "
         f"{LARGE_ERROR_DEG:g}°; *large error* beyond; *unobservable* = reported on fewer samples. "
-        "Contact error: latched point vs the nominal contact point (E6: worst soft-finger error above 0.2 kgf).",
+        "Contact error: latched point vs the nominal contact point (E6: worst soft-finger error above 0.2 kgf). "
+        "Line evidence: whether the line samples were confirmed by excitation about two tangent axes (the papers' "
+        f"grasps excite one: unconfirmed). X1 (softtip's extension, not in the papers): the object rocked about two "
+        f"tangent axes, judged after both were excited: *line* = reported line on ≥ {X1_LINE_SHARE:.0%} of the "
+        f"samples with median error ≤ {TOLERANCE_DEG:g}°; *area* = line on ≤ {X1_AREA_LINE_SHARE:.0%}.",
         "",
         head,
-        "|" + "---|" * 10,
+        "|" + "---|" * 11,
     ]
     for row in rows:
         lines.append("| " + " | ".join(row.values()) + " |")
@@ -380,7 +438,7 @@ def write_summary(results: Sequence[ConditionResult], out: Path) -> None:
 
 def write_figures(results: Sequence[ConditionResult], out: Path) -> None:
     """One figure per experiment present in ``results``, laid out like the papers'."""
-    from softtip.plot import plot_direction_chart, plot_estimates, plot_position_error
+    from softtip.plot import plot_direction_chart, plot_estimates, plot_line_or_area, plot_position_error
 
     by_exp: dict[str, list[ConditionResult]] = {}
     for r in results:
@@ -398,6 +456,8 @@ def write_figures(results: Sequence[ConditionResult], out: Path) -> None:
                 title=title,
                 reference_angles=[r.truth_angle_deg for r in order],
             )
+        elif exp == "X1":
+            plot_line_or_area([(r.condition.variant, r.estimates) for r in rs], path, title=title)
         elif exp == "E6":
             plot_position_error(
                 [(r.condition.variant, r.force_norm, r.position_error) for r in rs],

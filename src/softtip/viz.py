@@ -7,9 +7,12 @@ is logged, sensor frame, metres, on the timeline ``t`` (s of the log):
 * ``tip/contact``: the contact point; ``tip/normal``: the outward normal there (arrow,
   1 cm); ``tip/force``: the force the object exerts, drawn *ending* at the contact point
   (``force_scale`` m per N); ``tip/edge``: the edge direction as a line on the skin
-  through the contact point (``line`` contacts only); all cleared when there is no contact;
+  through the contact point (``line`` contacts only); ``tip/h_trace``: the trace of the
+  tangential spin torque ``h`` over the last ``trace_samples`` logged samples, drawn from
+  the contact point (``h_scale`` m per N·m): a line for a strip, a blob for an area
+  contact; all cleared when there is no contact;
 * ``series/...``: time series of force, moment, ``|h|`` with its significance level, the
-  edge angle (degrees) and the state code (0 none, 1 point, 2 line).
+  edge angle (degrees) and the state code (0 none, 1 point, 2 line, 3 area).
 
 ``rerun FILE.rrd`` opens a saved recording.
 """
@@ -18,12 +21,13 @@ from __future__ import annotations
 
 import math
 import os
+from collections import deque
 
 import numpy as np
 from numpy.typing import NDArray
 
 from softtip.fingertip import Capsule, Ellipsoid, Fingertip, Sphere
-from softtip.pipeline import Estimates, SampleEstimate
+from softtip.pipeline import STATES, Estimates, SampleEstimate
 
 __all__ = ["RerunLogger", "import_rerun", "surface_mesh"]
 
@@ -139,9 +143,13 @@ class RerunLogger:
         force_scale: float = 0.005,
         max_rate_hz: float = 50.0,
         application_id: str = "softtip",
+        h_scale: float = 1.0,
+        trace_samples: int = 100,
     ) -> None:
         rr = import_rerun()
         self.rr, self.tip = rr, tip
+        self.h_scale = h_scale
+        self._trace: deque[NDArray[np.float64]] = deque(maxlen=trace_samples)
         self.force_scale, self.min_dt = force_scale, 1.0 / max_rate_hz
         self.rec = rr.RecordingStream(application_id)
         sinks = [rr.FileSink(os.fspath(save))] if save is not None else []
@@ -175,7 +183,7 @@ class RerunLogger:
         self._last_t = e.t
         rr, rec = self.rr, self.rec
         rec.set_time("t", duration=e.t)
-        self._log_geometry(e.state, e.point, e.normal, e.wrench[:3], e.direction)
+        self._log_geometry(e.state, e.point, e.normal, e.wrench[:3], e.direction, e.h)
         f, m = e.wrench[:3], e.wrench[3:]
         for name, value in zip(("fx", "fy", "fz"), f):
             rec.log(f"series/force/{name}", rr.Scalars(value))
@@ -183,14 +191,19 @@ class RerunLogger:
             rec.log(f"series/moment/{name}", rr.Scalars(value))
         rec.log("series/h_norm", rr.Scalars(e.h_norm))
         rec.log("series/angle_deg", rr.Scalars(math.degrees(e.angle)))
-        rec.log("series/state", rr.Scalars(("none", "point", "line").index(e.state)))
+        rec.log("series/state", rr.Scalars(STATES.index(e.state)))
 
-    def _log_geometry(self, state: str, r, n, f, d) -> None:
+    def _log_geometry(self, state: str, r, n, f, d, h=None) -> None:
         rr, rec = self.rr, self.rec
         if state == "none" or any(math.isnan(x) for x in r):
-            for path in ("tip/contact", "tip/normal", "tip/force", "tip/edge"):
+            for path in ("tip/contact", "tip/normal", "tip/force", "tip/edge", "tip/h_trace"):
                 rec.log(path, rr.Clear(recursive=False))
+            self._trace.clear()
             return
+        if h is not None and not any(math.isnan(x) for x in h):
+            self._trace.append(np.asarray(r) + self.h_scale * np.asarray(h))
+            if len(self._trace) > 1:
+                rec.log("tip/h_trace", rr.LineStrips3D([np.array(self._trace)], radii=0.0002, colors=[[200, 80, 220]]))
         r, n, f = np.asarray(r), np.asarray(n), np.asarray(f)
         vf = f * self.force_scale
         rec.log("tip/contact", rr.Points3D([r], radii=0.0008, colors=[[255, 200, 0]]))
@@ -245,6 +258,7 @@ class RerunLogger:
                 est.normal[k],
                 est.wrench[k, :3],
                 est.direction[k],
+                est.h[k],
             )
 
     def close(self) -> None:

@@ -3,7 +3,7 @@
 :func:`estimate` runs it over a whole log, vectorised (:mod:`.batch`); :class:`Estimator`
 runs it one sample at a time for live use (:mod:`.stream`). Each stage has its batch and its
 stream form side by side in one module: :mod:`.tare`, :mod:`.latch`, :mod:`.joint`,
-:mod:`.measure`; settings are in :mod:`.config`, results in :mod:`.results`. Both forms call
+:mod:`.depth`, :mod:`.measure`; settings are in :mod:`.config`, results in :mod:`.results`. Both forms call
 the same kernels (:mod:`softtip.contact`, :mod:`softtip.spin`, :mod:`softtip.noise`) and
 agree to rounding.
 
@@ -29,8 +29,18 @@ Per sample (SPEC §3):
    contact point from then on, until contact ends. Before the first window sample the
    current soft-finger solution is used. With no window sample in the whole rise, the mean
    of the first ``fallback_samples`` solutions of the contact is latched and flagged.
-5. **Measurement**: spin torque, its tangential part ``h``, the noise level of ``h``, the
-   state ``point`` or ``line`` and, for ``line`` only, the direction and its angle with a
+5. **Depth** (:mod:`.depth`, softtip's, issue 11): friction acts inside the skin, so the
+   moment is taken about ``r − δ n``; with a skin law (the fingertip's ``skin_thickness``,
+   or ``depth``) ``δ`` is learnt per contact from a window of the data, the law its prior
+   (``depth_mode="online"``, the default then), or the law's as it is (``"law"``);
+   ``"off"`` is the papers' undeformed point. ``depth``, ``depth_std`` and
+   ``depth_from_data`` report it.
+6. **Measurement**: spin torque, its tangential part ``h``, the noise level of ``h`` and
+   whether ``|h|`` is significant.
+7. **Line evidence** (:mod:`.evidence`): over a sliding window, the state ``point``,
+   ``line`` or ``area``, the line's ``line_evidence`` (``confirmed`` once the contact was
+   excited about two tangent axes and ``h`` stayed on one, else ``unconfirmed``) and, for
+   ``line`` only, the direction (under confirmed evidence the window's) and its angle with a
    standard deviation.
 
 In ``track`` mode ``h`` is zero by construction (the soft-finger model puts all of ``q``
@@ -42,9 +52,7 @@ softtip's extensions (issue 5), each an :class:`EstimatorConfig` field:
   window) whose soft-finger solution lies farther than this from the latched point starts
   a new latch (a new first rise, from that sample); ``relatched`` flags that sample, and
   the first sample of every contact that follows a latched one (contact lost and regained).
-- ``depth``: a :class:`~softtip.depth.DepthLaw`; the moment is taken about the effective
-  contact point ``r − δ(F_n) n`` inside the skin, where friction acts
-  (:mod:`softtip.depth`); ``depth`` reports ``δ``.
+- ``depth``, ``depth_mode``: see step 5 (:mod:`softtip.depth`, :mod:`.depth`).
 - ``contact_point="joint"``: the latch of ``latch`` mode, then the contact point moved
   across the line to where a window of the last ``joint_window`` seconds fits the line
   contact model (:mod:`softtip.joint`). A window is accepted when its standard deviations
@@ -58,10 +66,10 @@ softtip's extensions (issue 5), each an :class:`EstimatorConfig` field:
 
 from softtip.estimator.batch import estimate
 from softtip.estimator.config import CONTACT_POINT_MODES, EstimatorConfig
-from softtip.estimator.results import LINE, NONE, POINT, STATES, Estimates, EstimatorWarning, SampleEstimate
+from softtip.estimator.results import AREA, EVIDENCE, LINE, NONE, POINT, STATES, Estimates, EstimatorWarning, SampleEstimate
 from softtip.estimator.stream import Estimator
 
 __all__ = [
-    "STATES", "NONE", "POINT", "LINE", "CONTACT_POINT_MODES", "EstimatorConfig", "Estimates", "SampleEstimate",
-    "Estimator", "estimate", "EstimatorWarning",
+    "STATES", "NONE", "POINT", "LINE", "AREA", "EVIDENCE", "CONTACT_POINT_MODES", "EstimatorConfig", "Estimates",
+    "SampleEstimate", "Estimator", "estimate", "EstimatorWarning",
 ]  # fmt: skip

@@ -12,10 +12,12 @@ from softtip._xp import NP
 from softtip.contact import contact_arrays
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.contact import drift_message, first_contact_pulls, started_in_contact_message, track_contacts
+from softtip.estimator.depth import depth_points, resolve_depth
+from softtip.estimator.evidence import evidence_states
 from softtip.estimator.joint import joint_points
 from softtip.estimator.latch import latch_points
 from softtip.estimator.measure import effective_noise, measure, noise_correlation
-from softtip.estimator.results import LINE, NONE, POINT, Estimates, EstimatorWarning
+from softtip.estimator.results import LINE, NONE, Estimates, EstimatorWarning
 from softtip.estimator.tare import tare_log
 from softtip.filtering import lowpass_sos, sosfilt_batch
 from softtip.fingertip import Fingertip, load_fingertip
@@ -79,7 +81,7 @@ def estimate(
     ['line', 'none', 'point']
     """
     tip = load_fingertip(tip)
-    config = config or EstimatorConfig()
+    config = resolve_depth(config or EstimatorConfig(), tip)
     t, w = validate_log(t, wrench)
     n = len(t)
 
@@ -117,11 +119,21 @@ def estimate(
                 latched, fallback, joint_fb = latched & ~moved, fallback & ~moved, contact & ~moved
             normal = tip.normal(point)
             has = np.all(np.isfinite(point), axis=-1)
-        ms = measure(*c, *point.T, *normal.T, noise, config.h_sigmas, config.h_min, config.depth, NP)
+        # depth: friction acts at r − δ n, inside the skin
+        delta, delta_std, from_data = depth_points(t, c, contact, point, normal, config, noise, noise_correlation(sos))
+        eff = point - delta[:, None] * normal
+        ms = measure(*c, *eff.T, *normal.T, noise, config.h_sigmas, config.h_min, None, NP)
 
     located = contact & has & ms.pushing
     pulling = contact & ~located
-    is_line = located & ms.line
+    # line or area (evidence window): segments start at contact onset and at every re-latch
+    begin = contact & ~np.concatenate(([False], contact[:-1])) | (relatched & contact)
+    ev_state, evidence, direction, angle, angle_std, h_ratio, f_ratio = evidence_states(
+        t, located, begin, point, normal, np.stack((ms.hx, ms.hy, ms.hz), axis=-1), x[:, :3], ms, noise,
+        noise_correlation(sos), config,
+    )
+    state = np.where(located, ev_state, NONE).astype(np.int8)
+    is_line = state == LINE
     started_in_contact = tare_report.source == "tare" and first_contact_pulls(t, pulling, ct.contact_id)
     warn = list(tare_report.warnings)
     if started_in_contact:
@@ -130,7 +142,6 @@ def estimate(
         warn.append(drift_message(config, float(t[ct.drift_alarm])))
     for msg in warn:
         warnings.warn(msg, EstimatorWarning, stacklevel=2)
-    state = np.where(located, np.where(is_line, LINE, POINT), NONE).astype(np.int8)
 
     def keep(a, mask):
         a = np.asarray(a, dtype=float)
@@ -147,9 +158,9 @@ def estimate(
         h=keep(np.stack((ms.hx, ms.hy, ms.hz), axis=-1), located),
         h_norm=keep(ms.h_norm, located),
         h_std=keep(ms.h_std, located),
-        direction=keep(np.stack((ms.dx, ms.dy, ms.dz), axis=-1), is_line),
-        angle=keep(ms.angle, is_line),
-        angle_std=keep(ms.angle_std, is_line),
+        direction=keep(direction, is_line),
+        angle=keep(angle, is_line),
+        angle_std=keep(angle_std, is_line),
         latched=latched & located,
         latch_fallback=fallback & located,
         pulling=pulling,
@@ -157,12 +168,15 @@ def estimate(
         bias=bias,
         tare_force_std=float(np.nanmax(tare_report.force_std)) if np.any(np.isfinite(tare_report.force_std)) else math.nan,
         relatched=relatched,
-        depth=keep(ms.depth, located),
+        depth=keep(delta, located),
         joint_conditioning=keep(joint_stats[0], located),
         joint_angle_std=keep(joint_stats[1], located),
         joint_offset_std=keep(joint_stats[2], located),
         joint_residual=keep(joint_stats[3], located),
         joint_fallback=joint_fb & located,
+        line_evidence=np.where(is_line, evidence, 0).astype(np.int8),
+        h_ratio=keep(h_ratio, located),
+        excitation_ratio=keep(f_ratio, located),
         repeated_stamps=int(np.count_nonzero(np.diff(t) == 0)),
         contact_id=ct.contact_id,
         drift=keep(ct.drift, ~taring),
@@ -170,4 +184,6 @@ def estimate(
         started_in_contact=started_in_contact,
         drift_alarm=ct.drift_alarm >= 0,
         warnings=tuple(warn),
+        depth_std=keep(delta_std, located),
+        depth_from_data=from_data & located,
     )

@@ -13,12 +13,14 @@ from softtip.filtering import lowpass_sos
 from softtip.noise import NANO17, SensorNoise
 from softtip.units import KGF
 
-__all__ = ["CONTACT_POINT_MODES", "TARE_METHODS", "EstimatorConfig"]
+__all__ = ["CONTACT_POINT_MODES", "DEPTH_MODES", "TARE_METHODS", "EstimatorConfig"]
 
 #: Values of :attr:`EstimatorConfig.contact_point`.
 CONTACT_POINT_MODES = ("latch", "track", "joint")
 #: Values of :attr:`EstimatorConfig.tare_method`.
 TARE_METHODS = ("robust", "median", "mean")
+#: Values of :attr:`EstimatorConfig.depth_mode`.
+DEPTH_MODES = ("auto", "online", "law", "off")
 
 
 @dataclass(frozen=True)
@@ -59,9 +61,25 @@ class EstimatorConfig:
         (default, the papers'): only on contact loss. A few mm (e.g. 3 mm) is beyond the
         soft-finger bias of the papers' line contacts at light force (≈ |h| / |f| ≤ 1 mm).
     depth : DepthLaw or None
-        Depth compensation (:mod:`softtip.depth`); ``None`` (default): off, the papers'
-        undeformed contact point. :data:`softtip.depth.MURAKAMI2006_DEPTH` is the
-        murakami2006 skin.
+        Skin law of the depth compensation (:mod:`softtip.depth`): the fixed law of
+        ``depth_mode="law"``, the prior of ``"online"``. ``None`` (default): the
+        fingertip's own (:func:`softtip.estimator.depth.tip_depth_law`: the murakami2006
+        preset and any fingertip file with a ``skin_thickness``).
+    depth_mode : {"auto", "online", "law", "off"}
+        ``online``: the depth learnt per contact from the data, the law its prior
+        (:mod:`softtip.estimator.depth`); ``law``: the law's depth at the normal force
+        (fixed); ``off``: the papers' undeformed contact point. ``auto`` (default):
+        ``online`` in ``latch`` mode when there is a law (``depth`` or the fingertip's),
+        else ``off``; in ``track`` and ``joint`` mode ``law`` when ``depth`` is given, else
+        ``off``.
+    depth_window : float
+        s; sliding window of the online depth (default 1 s).
+    depth_prior_std : float
+        Standard deviation of the prior depth factor (mean 1), relative (default 0.5: one law
+        does not fit every object; a thin plate sinks about 1.5 times deeper than a round stick).
+    depth_drift : float
+        1/√s; how fast the held factor of a contact ages (default 0.02/√s): the factor held
+        is the window with the smallest ``variance + depth_drift² · age``.
     joint_window : float
         s; length of the sliding window of ``joint`` mode (default 1 s: 50 samples at the
         papers' 50 Hz).
@@ -99,6 +117,34 @@ class EstimatorConfig:
     track_drift : bool
         Subtract the tracked drift (default). ``False`` (the papers' comparison): the drift
         is still estimated and reported, not subtracted.
+    line_evidence : bool
+        Tell a line from an area over a sliding window (:mod:`softtip.estimator.evidence`;
+        default on). ``False``: the papers' per-sample behaviour (``line`` whenever ``|h|``
+        is significant, marked ``unconfirmed``; never ``area``).
+    evidence_window : float
+        s; length of that window (default 2 s: 100 samples at 50 Hz, two periods of a 1 Hz
+        rocking motion).
+    area_ratio : (float, float)
+        ``(enter, leave)``: the contact becomes ``area`` when the smaller eigenvalue of
+        ``h``'s window covariance is beyond the noise and at least ``enter`` times the
+        larger, and a confirmed ``line`` again only when the ratio is below ``leave``
+        (hysteresis; default 0.2, 0.1).
+    excitation_ratio : float
+        The contact counts as excited about two tangent axes when the tangential load's
+        window covariance has its smaller eigenvalue beyond the noise and at least this
+        times the larger (default 0.5: turned about the two axes nearly alike; a window
+        excited mostly about one axis biases the line's axis).
+    excitation_min : float
+        N; ... and that smaller eigenvalue at least this squared (the load's standard
+        deviation about its weaker axis; default 0.01 N): a load turning by less is not
+        taken for the trace of a tilt (a low-pass's slow transients are not excitation).
+    evidence_max_angle_std : float
+        rad; a window's line direction is used (and held) only when its standard deviation
+        is at most this (default 10°).
+    evidence_reset_distance : float
+        m; the evidence starts afresh (window, verdict, held direction) when the contact
+        point moves farther than this from where it started (default 1 mm): what a window
+        said about another point does not hold for the new one.
     """
 
     contact_point: Literal["latch", "track", "joint"] = "latch"
@@ -127,8 +173,26 @@ class EstimatorConfig:
     contact_min_duration: float = 0.005
     drift_time_constant: float = 10.0
     track_drift: bool = True
+    depth_mode: Literal["auto", "online", "law", "off"] = "auto"
+    depth_window: float = 1.0
+    depth_prior_std: float = 0.5
+    depth_drift: float = 0.02
+    line_evidence: bool = True
+    evidence_window: float = 2.0
+    area_ratio: tuple[float, float] = (0.2, 0.1)
+    excitation_ratio: float = 0.5
+    excitation_min: float = 0.01
+    evidence_max_angle_std: float = math.radians(10.0)
+    evidence_reset_distance: float = 1e-3
 
     def __post_init__(self) -> None:
+        if self.depth_mode not in DEPTH_MODES:
+            raise ValueError(f"depth_mode must be one of {', '.join(DEPTH_MODES)}, got {self.depth_mode!r}")
+        for name in ("depth_window", "depth_prior_std", "depth_drift"):
+            v = float(getattr(self, name))
+            if not (math.isfinite(v) and v > 0.0):
+                raise ValueError(f"{name} must be a positive number, got {getattr(self, name)!r}")
+            object.__setattr__(self, name, v)
         if self.contact_point not in CONTACT_POINT_MODES:
             raise ValueError(f"contact_point must be one of {', '.join(CONTACT_POINT_MODES)}, got {self.contact_point!r}")
         if self.relatch_distance is not None:
@@ -167,6 +231,17 @@ class EstimatorConfig:
             if not (math.isfinite(v) and v >= 0.0):
                 raise ValueError(f"{name} must be a non-negative number, got {getattr(self, name)!r}")
             object.__setattr__(self, name, v)
+        for name in ("evidence_window", "evidence_max_angle_std", "excitation_ratio", "excitation_min",
+                     "evidence_reset_distance"):  # fmt: skip
+            v = float(getattr(self, name))
+            if not (math.isfinite(v) and v > 0.0):
+                raise ValueError(f"{name} must be a positive number, got {getattr(self, name)!r}")
+            object.__setattr__(self, name, v)
+        enter, leave = (float(v) for v in self.area_ratio)
+        if not (0.0 < leave <= enter <= 1.0):
+            raise ValueError(f"area_ratio must be (enter, leave) with 0 < leave <= enter <= 1, got {self.area_ratio!r}")
+        object.__setattr__(self, "area_ratio", (enter, leave))
+        object.__setattr__(self, "line_evidence", bool(self.line_evidence))
         if int(self.fallback_samples) < 1:
             raise ValueError(f"fallback_samples must be at least 1, got {self.fallback_samples!r}")
         if self.bias is not None:

@@ -10,11 +10,13 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["STATES", "NONE", "POINT", "LINE", "EstimatorWarning", "Estimates", "SampleEstimate"]
+__all__ = ["STATES", "NONE", "POINT", "LINE", "AREA", "EVIDENCE", "EstimatorWarning", "Estimates", "SampleEstimate"]
 
 #: Contact states, indexed by the integer codes in :attr:`Estimates.state`.
-STATES = ("none", "point", "line")
-NONE, POINT, LINE = 0, 1, 2
+STATES = ("none", "point", "line", "area")
+NONE, POINT, LINE, AREA = 0, 1, 2, 3
+#: Line evidence, indexed by the codes in :attr:`Estimates.line_evidence` (``""`` unless ``line``).
+EVIDENCE = ("", "unconfirmed", "confirmed")
 #: Names of the drift columns (:meth:`Estimates.columns`).
 DRIFT_COLUMNS = ("drift_fx", "drift_fy", "drift_fz", "drift_mx", "drift_my", "drift_mz")
 
@@ -33,7 +35,7 @@ class Estimates:
     Attributes
     ----------
     t : (N,) s
-    state : (N,) int8 codes into :data:`STATES` (``none``, ``point``, ``line``)
+    state : (N,) int8 codes into :data:`STATES` (``none``, ``point``, ``line``, ``area``)
     wrench : (N, 6) the tared (and filtered) wrench the estimates come from, N and N·m;
         NaN while taring
     point, normal : (N, 3) contact point (m) and outward normal; NaN when ``none``
@@ -53,7 +55,10 @@ class Estimates:
         was touched while taring and the bias is wrong.
     relatched : (N,) a new latch starts at this sample, replacing an earlier one (drift at
         light force, or contact regained after a latched contact); an event, not masked
-    depth : (N,) depth compensation ``δ`` used, m (0 without a depth law); NaN when ``none``
+    depth : (N,) depth compensation ``δ`` used, m (0 with the papers' method); NaN when ``none``
+    depth_std : (N,) its standard deviation, m (online depth; 0 for a fixed law or none)
+    depth_from_data : (N,) online depth: the contact's own data, not the skin law (the
+        prior), determined it (the data's information on it exceeds the prior's)
     joint_conditioning, joint_angle_std, joint_offset_std, joint_residual : (N,) the
         ``joint`` window ending at this sample (:mod:`softtip.joint`): reciprocal condition
         number in [0, 1], standard deviations of its line angle (rad) and of its offset
@@ -78,6 +83,12 @@ class Estimates:
     warnings : tuple of str
         every warning about these estimates, in plain language (also issued as
         :class:`EstimatorWarning`)
+    line_evidence : (N,) int8 codes into :data:`EVIDENCE`: ``confirmed`` when the contact
+        was excited about two tangent axes and ``h`` stayed on one, ``unconfirmed`` when the
+        excitation so far cannot tell a line from an area; 0 (empty) unless ``line``
+    h_ratio : (N,) smaller / larger eigenvalue of ``h``'s covariance over the evidence
+        window (noise removed; NaN where ``h`` did not vary beyond the noise or ``none``)
+    excitation_ratio : (N,) the same for the tangential load (how far it turned)
     """
 
     t: NDArray[np.float64]
@@ -104,6 +115,9 @@ class Estimates:
     joint_offset_std: NDArray[np.float64]
     joint_residual: NDArray[np.float64]
     joint_fallback: NDArray[np.bool_]
+    line_evidence: NDArray[np.int8]
+    h_ratio: NDArray[np.float64]
+    excitation_ratio: NDArray[np.float64]
     tare_force_std: float = math.nan
     repeated_stamps: int = 0
     contact_id: NDArray[np.int64] | None = None
@@ -112,6 +126,8 @@ class Estimates:
     started_in_contact: bool = False
     drift_alarm: bool = False
     warnings: tuple[str, ...] = ()
+    depth_std: NDArray[np.float64] | None = None
+    depth_from_data: NDArray[np.bool_] | None = None
 
     def __len__(self) -> int:
         return len(self.t)
@@ -159,6 +175,11 @@ class Estimates:
             "joint_fallback": self.joint_fallback,
             **({"contact_id": self.contact_id} if self.contact_id is not None else {}),
             **({k: self.drift[:, i] for i, k in enumerate(DRIFT_COLUMNS)} if self.drift is not None else {}),
+            "depth_std": self.depth_std,
+            "depth_from_data": self.depth_from_data,
+            "line_evidence": np.asarray(EVIDENCE)[self.line_evidence],
+            "h_ratio": self.h_ratio,
+            "excitation_ratio": self.excitation_ratio,
         }  # fmt: skip
 
 
@@ -193,4 +214,9 @@ class SampleEstimate(NamedTuple):
     joint_fallback: bool = False
     contact_id: int = 0
     drift: tuple[float, ...] = (0.0,) * 6
+    depth_std: float = math.nan
+    depth_from_data: bool = False
+    line_evidence: str = ""
+    h_ratio: float = math.nan
+    excitation_ratio: float = math.nan
 

@@ -23,6 +23,8 @@ from softtip.estimator.contact import (
     drift_message,
     started_in_contact_message,
 )
+from softtip.estimator.depth import DepthTracker, resolve_depth
+from softtip.estimator.evidence import EvidenceTracker
 from softtip.estimator.joint import JointTracker
 from softtip.estimator.latch import LatchTracker
 from softtip.estimator.measure import effective_noise, measure, noise_correlation
@@ -70,7 +72,7 @@ class Estimator:
 
     def __init__(self, tip: Fingertip | str = "murakami2006", config: EstimatorConfig | None = None):
         self.tip = load_fingertip(tip)
-        self.config = config or EstimatorConfig()
+        self.config = resolve_depth(config or EstimatorConfig(), self.tip)
         cfg = self.config
         self._sos = None
         if cfg.lowpass_hz is not None:
@@ -81,10 +83,12 @@ class Estimator:
         self._track = cfg.contact_point == "track"
         self._tare = StreamTare(cfg)
         self._latch = LatchTracker(self.tip, cfg)
+        self._evidence = EvidenceTracker(cfg, self._noise, noise_correlation(self._sos))
         self._joint = None
         if cfg.contact_point == "joint":
             self._joint = JointTracker(self.tip, cfg, self._noise, noise_correlation(self._sos))
         self._contacts = ContactTracker(cfg, self._noise)
+        self._depth = None if cfg.depth is None else DepthTracker(cfg, self._noise, noise_correlation(self._sos))
         self.reset()
 
     @property
@@ -225,6 +229,7 @@ class Estimator:
     def _start_segment(self, fn: float, t: float) -> None:
         """A new first rise: at contact onset, and at a re-latch."""
         self._latch.start(fn, t)
+        self._evidence.start_segment()
         if self._joint is not None:
             self._joint.start_segment(t)
 
@@ -242,13 +247,20 @@ class Estimator:
             self._lead = self._tare.report.source == "tare"
         fx, fy, fz, mx, my, mz = x
         fn = math.sqrt(fx * fx + fy * fy + fz * fz)
+        depth = self._depth
+        if depth is not None and code == 2:
+            depth.start_contact()
 
         tip = self.tip
         latched = fallback = relatched = joint_fb = False
         stats = _NAN4
         if self._track:
+            if code == 2:
+                self._evidence.start_segment()
             rx, ry, rz, nx, ny, nz, _, valid = contact_kernel(tip, *x, xp=PY)
             if not valid:
+                if depth is not None:
+                    depth.gap()
                 return self._none(t, x, pulling=True)
         else:
             sc = None
@@ -271,23 +283,31 @@ class Estimator:
                     latched = fallback = False
                 joint_fb = not moved
             if point is None:
+                if depth is not None:
+                    depth.gap()
                 return self._none(t, x, pulling=True, relatched=relatched)
             rx, ry, rz = point
             nx, ny, nz = tip._normal_kernel(rx, ry, rz, PY)
 
-        ms = measure(fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, self._noise, cfg.h_sigmas, cfg.h_min, cfg.depth, PY)
+        if depth is None:
+            delta, delta_std, from_data = 0.0, 0.0, False
+            ex, ey, ez = rx, ry, rz
+        else:  # friction acts at r − δ n, inside the skin
+            delta, delta_std, from_data = depth.step(t, x, (rx, ry, rz), (nx, ny, nz))
+            ex, ey, ez = rx - delta * nx, ry - delta * ny, rz - delta * nz
+        ms = measure(fx, fy, fz, mx, my, mz, ex, ey, ez, nx, ny, nz, self._noise, cfg.h_sigmas, cfg.h_min, None, PY)
         if not ms.pushing:
             return self._none(t, x, pulling=True, relatched=relatched)
-        if ms.line:
-            state, d, angle, angle_std = "line", (ms.dx, ms.dy, ms.dz), ms.angle, ms.angle_std
-        else:
-            state, d, angle, angle_std = "point", _NAN3, math.nan, math.nan
+        h = (ms.hx, ms.hy, ms.hz)
+        state, evidence, d, angle, angle_std, h_ratio, f_ratio = self._evidence.step(
+            t, (rx, ry, rz), (nx, ny, nz), h, (fx, fy, fz), ms
+        )
         if self._lead:
             self._lead = False
         return SampleEstimate(
-            t, state, tuple(x), (rx, ry, rz), (nx, ny, nz), ms.sigma, (ms.hx, ms.hy, ms.hz), ms.h_norm, ms.h_std, d,
-            angle, angle_std, latched, fallback, False, False, relatched, ms.depth, *stats, joint_fb,
-            contacts.contact_id, contacts.drift_before,
+            t, state, tuple(x), (rx, ry, rz), (nx, ny, nz), ms.sigma, h, ms.h_norm, ms.h_std, d,
+            angle, angle_std, latched, fallback, False, False, relatched, delta, *stats, joint_fb,
+            contacts.contact_id, contacts.drift_before, delta_std, from_data, evidence, h_ratio, f_ratio,
         )  # fmt: skip
 
     def process(self, t: ArrayLike, wrench: ArrayLike) -> list[SampleEstimate]:

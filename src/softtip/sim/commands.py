@@ -17,7 +17,14 @@ from softtip.atomic import AtomicFile, cannot_write, check_distinct, commit_all,
 from softtip.cli_types import Number
 from softtip.errors import InputError
 from softtip.sim.objects import OBJECT_KINDS
-from softtip.sim.scenario import DISTURBANCE_TIMINGS, JOINT_ROTATION_DEG, OBJECT_MASS
+from softtip.sim.scenario import (
+    DISTURBANCE_TIMINGS,
+    FRICTION_PROFILES,
+    JOINT_ROTATION_DEG,
+    OBJECT_MASS,
+    ROCK_AMPLITUDE_DEG,
+    ROCK_LOAD,
+)
 from softtip.sim.simulate import log_csv_text, run_simulation, truth_json_text
 from softtip.sim.skin import DEFAULT_ELEMENTS
 from softtip.units import KGF, UNIT_SYSTEMS
@@ -89,10 +96,11 @@ LENGTH, FORCE = _Length(), _Force()
 
 def _check_sizes(options: dict) -> None:
     """Sample count and skin thickness: a run that cannot fit in memory, or a skin thicker than the fingertip."""
-    n = options["rate"] * options["duration"]
+    duration = 10.0 if options["duration"] is None else options["duration"]
+    n = options["rate"] * duration
     if n > MAX_SAMPLES:
         raise click.BadParameter(
-            f"{options['rate']:g} Hz for {options['duration']:g} s is {n:.3g} samples; expected at most {MAX_SAMPLES:g} "
+            f"{options['rate']:g} Hz for {duration:g} s is {n:.3g} samples; expected at most {MAX_SAMPLES:g} "
             "(lower --rate or --duration)",
             param_hint="'--rate'",
         )
@@ -123,9 +131,17 @@ def _check_sizes(options: dict) -> None:
 @click.option("--angle", "angle_deg", type=Number("deg"), default=0.0, show_default=True,
               help="Direction of the edge/axis/fringe at the contact, degrees from the sensor x axis "
                    "(SPEC §3.4 tangent frame; 90 = along the hand's joint axes).")
-@click.option("--scenario", type=click.Choice(["paper", "push"]), default="paper", show_default=True,
+@click.option("--scenario", type=click.Choice(["paper", "push", "friction"]), default="paper", show_default=True,
               help="paper: the papers' two-fingered grasp with joint and gravity disturbances; "
-                   "push: a plain push.")
+                   "push: a plain push; friction: the papers' grasp (weightless object) with a friction load "
+                   "during the hold (--load, --load-direction, --load-profile).")
+@click.option("--load", "load_ratio", type=Number("(fraction of the grasp force)", 0.0), default=0.25, show_default=True,
+              help="friction scenario: tangential load, a fraction of the grasp force.")
+@click.option("--load-direction", type=click.Choice(["across", "along"]), default="across", show_default=True,
+              help="friction scenario: load across the line or along it.")
+@click.option("--load-profile", type=click.Choice(FRICTION_PROFILES), default="push", show_default=True,
+              help="friction scenario: push (ramped in at 6-6.5 s, held), drag (slowly, 5.5-9.5 s) or slip "
+                   "(the object slides 1.5 mm at 6-7 s, friction at the Coulomb limit).")
 @click.option("--tip", default="murakami2006", show_default=True, help="Fingertip preset or TOML file.")
 @click.option("--edge-radius", type=LENGTH, default=0.0, show_default=True,
               help="Plate corner radius or wedge tip radius (length).")
@@ -134,7 +150,7 @@ def _check_sizes(options: dict) -> None:
 @click.option("--tilt", "tilt_deg", type=Number("deg", 0.0, 90.0), default=45.0, show_default=True,
               help="Fringe: contact normal's angle from the cylinder side toward its bottom face, degrees.")
 @click.option("--force", type=FORCE, default="0.5kgf", show_default=True, help="Held grasp force (N or kgf).")
-@click.option("--duration", type=Number("s", 0.0, min_open=True), default=10.0, show_default=True, help="Recorded time, s.")
+@click.option("--duration", type=Number("s", 0.0, min_open=True), default=None, help="Recorded time, s [default: 10, or the end of --rock].")
 @click.option("--t-contact", type=Number("s", 0.0), default=2.0, show_default=True, help="Time of first touch, s.")
 @click.option("--t-stable", type=Number("s", 0.0, min_open=True), default=4.0, show_default=True, help="End of the force ramp, s.")
 @click.option("--rate", type=Number("Hz", 0.0, MAX_RATE, min_open=True), default=50.0, show_default=True, help="Sample rate, Hz.")
@@ -150,6 +166,15 @@ def _check_sizes(options: dict) -> None:
                    "is established) or during_rise (together with the force rise; harder for the latch).")
 @click.option("--misalignment", "misalignment_deg", type=Number("deg", -90.0, 90.0), default=0.0, show_default=True,
               help="paper: fixed alignment error about the hand z axis, degrees.")
+@click.option("--rock", is_flag=True,
+              help="paper: after the grasp, rock the object about two tangent axes and then in a figure-eight "
+                   "(each segment averaging to zero tilt), the excitation that tells a line from an area; "
+                   "--duration defaults to the end of the rocking.")
+@click.option("--rock-amplitude", "rock_amplitude_deg", type=Number("deg", 0.0, 90.0, min_open=True), default=ROCK_AMPLITUDE_DEG, show_default=True,
+              help="--rock: tilt amplitude, degrees.")
+@click.option("--rock-period", type=Number("s", 0.0, min_open=True), default=1.0, show_default=True, help="--rock: period of the rocking, s.")
+@click.option("--rock-load", type=FORCE, default=str(ROCK_LOAD), show_default=True,
+              help="--rock: tangential load that comes with the tilt (N or kgf), turning with the tilt axis.")
 @click.option("--elements", "n_elements", type=click.IntRange(50, MAX_ELEMENTS), default=DEFAULT_ELEMENTS, show_default=True,
               help="Skin surface elements.")
 @click.option("--modulus", type=Number("Pa", 0.0, min_open=True), default=0.6e6, show_default=True, help="Skin Winkler modulus, Pa.")
@@ -170,7 +195,8 @@ def simulate(output: Path | None, truth: Path | None, units: str, **options) -> 
 
     The log is the SPEC §4 input of `softtip estimate`; the truth file holds the object's
     line direction and angle, the nominal and pressure-centre contact points, contact area,
-    depth and normal force per sample, and every parameter of the run.
+    depth, the depth at which friction acts and normal force per sample, and every parameter
+    of the run.
     """
     if truth is None and output is not None:
         truth = output.with_name(output.stem + ".truth.json")
@@ -189,10 +215,11 @@ def simulate(output: Path | None, truth: Path | None, units: str, **options) -> 
     except ValueError as exc:
         raise click.UsageError(str(exc)) from None
     except RuntimeError as exc:  # the contact solve found no equilibrium for these options
-        raise click.UsageError(
-            f"the simulated grasp has no equilibrium with these options ({exc}); a larger --friction or --force, "
-            "a smaller --mass, or a thinner --thickness helps"
-        ) from None
+        hint = (
+            "a stiffer shear layer (e.g. --shear-modulus 2e6) holds larger loads" if options["scenario"] == "friction"
+            else "a larger --friction or --force, a smaller --mass, or a thinner --thickness helps"
+        )
+        raise click.UsageError(f"the simulated grasp has no equilibrium with these options ({exc}); {hint}") from None
     # both files appear together or neither does (and no temporary file stays behind)
     files = {name: AtomicFile(path) for name, path in (("log", output), ("truth", truth)) if path is not None}
     try:

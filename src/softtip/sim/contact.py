@@ -274,6 +274,19 @@ class ContactResult:
             return np.full(3, np.nan)
         return (w @ self.centre) / s
 
+    @property
+    def friction_depth(self) -> float:
+        """Depth at which the tangential tractions act, m: ``F_t · Σ δ_i F_t,i / |F_t|²``
+        with ``F_t,i`` the elements' tangential forces and ``F_t`` their sum; NaN without
+        contact or when ``|F_t|`` is below 1 % of the normal force."""
+        ft = self.area[:, None] * self.traction
+        total = ft.sum(axis=0)
+        tt = float(total @ total)
+        fn = float(np.sum(self.area * self.pressure))
+        if not len(self.depth) or tt <= (0.01 * fn) ** 2:
+            return math.nan
+        return float(total @ (self.depth @ ft)) / tt
+
     def moment_about(self, point: ArrayLike) -> NDArray[np.float64]:
         """Moment about ``point`` (m, (3,)): ``m - point × f``, N·m."""
         return self.moment - np.cross(np.asarray(point, dtype=float), self.force)

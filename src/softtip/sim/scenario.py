@@ -80,7 +80,7 @@ Known limits of the contact model (measured, not fixed)
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -99,8 +99,13 @@ __all__ = [
     "Disturbance",
     "HandFrame",
     "GraspScenario",
+    "FRICTION_PROFILES",
+    "friction_scenario",
     "paper_scenario",
     "push_scenario",
+    "rock_scenario",
+    "ROCK_AMPLITUDE_DEG",
+    "ROCK_LOAD",
     "smoothstep",
 ]
 
@@ -142,6 +147,13 @@ class Disturbance:
         Ramp interval, s; None: the scenario's ``t_contact`` / ``t_stable``.
     label : str
         Name shown in ``truth.json``.
+    period : float, optional
+        s; a rocking motion instead of a ramp: the amplitude is
+        ``sin(2π (t − start) / period)`` from ``start`` to ``end`` and zero outside (give
+        both, ``end − start`` a whole number of periods so that it averages to zero).
+    load : 3 floats
+        Tangential load on the fingertip at full amplitude, N, sensor frame (the push that
+        rocks the object); added to the scenario's ``tangential_force``.
     """
 
     axis: tuple[float, float, float] | None = None
@@ -151,6 +163,8 @@ class Disturbance:
     start: float | None = None
     end: float | None = None
     label: str = ""
+    period: float | None = None
+    load: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "axis", None if self.axis is None else tuple(unit(self.axis, "axis")))
@@ -160,11 +174,19 @@ class Disturbance:
             raise ValueError(f"angle must be finite, got {self.angle!r}")
         if self.start is not None and self.end is not None and self.end < self.start:
             raise ValueError(f"disturbance {self.label!r}: end {self.end} s is before start {self.start} s")
+        object.__setattr__(self, "load", _opt_vec(self.load))
+        if self.period is not None:
+            if not (math.isfinite(self.period) and self.period > 0.0):
+                raise ValueError(f"disturbance {self.label!r}: period must be positive (s), got {self.period!r}")
+            if self.start is None or self.end is None:
+                raise ValueError(f"disturbance {self.label!r}: a rocking motion (period) needs start and end")
 
     def amplitude(self, t: float, t_contact: float, t_stable: float) -> float:
         """Fraction of the full disturbance applied at time ``t`` (s)."""
         a = t_contact if self.start is None else self.start
         b = t_stable if self.end is None else self.end
+        if self.period is not None:
+            return math.sin(2.0 * math.pi * (t - a) / self.period) if a <= t < b else 0.0
         if b <= a:
             return 1.0 if t >= a else 0.0
         return float(smoothstep((t - a) / (b - a)))
@@ -188,6 +210,8 @@ class Disturbance:
             "pivot_m": None if self.pivot is None else list(self.pivot),
             "start_s": self.start,
             "end_s": self.end,
+            "period_s": self.period,
+            "load_N": list(self.load),
         }
 
 
@@ -377,6 +401,14 @@ class GraspScenario:
             return np.where(t >= a, 1.0, 0.0)
         return smoothstep((t - a) / (b - a))
 
+    def disturbance_load(self, t: float) -> NDArray[np.float64]:
+        """Tangential load of the disturbances at time ``t`` (s), N, sensor frame."""
+        out = np.zeros(3)
+        for d in self.disturbances:
+            if any(d.load):
+                out += d.amplitude(t, self.t_contact, self.t_stable) * np.asarray(d.load)
+        return out
+
     def disturbance_pose(self, t: float, contact_point: ArrayLike) -> Pose:
         """``D(t)``: all disturbances composed in order."""
         out = Pose.identity()
@@ -521,3 +553,154 @@ def paper_scenario(
         **timing,
         **kwargs,
     )
+
+
+#: Load profiles accepted by :func:`friction_scenario`.
+FRICTION_PROFILES = ("push", "drag", "slip")
+
+
+def friction_scenario(
+    tip: Fingertip,
+    angle: float = 0.0,
+    ratio: float = 0.25,
+    *,
+    across: bool = True,
+    profile: str = "push",
+    slip_distance: float = 1.5e-3,
+    **kwargs,
+) -> GraspScenario:
+    """The papers' grasp (:func:`paper_scenario`, weightless object) with a friction load
+    during the hold.
+
+    After the joint disturbance has come in (4 → 5.5 s), the object is loaded tangentially,
+    across the line (along ``n × d``) or along it (``d``), at the nominal contact normal
+    ``n`` of ``tip``. Friction then acts inside the skin, at the depth recorded as
+    :attr:`~softtip.sim.truth.GroundTruth.friction_depth`.
+
+    Parameters
+    ----------
+    tip : Fingertip
+        For the contact normal that defines "across" and "along".
+    angle : float
+        Line direction, rad (SPEC §3.4 tangent frame).
+    ratio : float
+        Tangential load as a fraction of the grasp force (``push`` and ``drag``).
+    across : bool
+        Load across the line (True) or along it.
+    profile : {"push", "drag", "slip"}
+        ``push``: the load ramps in over 6 → 6.5 s and is held. ``drag``: it ramps slowly,
+        over 5.5 → 9.5 s. ``slip``: no force target across the push axis; the object is
+        moved ``slip_distance`` (m) over 6 → 7 s, so the skin slides under it at the
+        Coulomb limit, then sticks (the load is whatever friction gives, ``ratio`` unused).
+    slip_distance : float
+        m, for ``slip``.
+    **kwargs
+        Other :func:`paper_scenario` arguments (``force``, ``joint_rotation``, ...).
+    """
+    if profile not in FRICTION_PROFILES:
+        raise ValueError(f"unknown friction profile {profile!r}; expected one of {', '.join(FRICTION_PROFILES)}")
+    if not (math.isfinite(ratio) and ratio >= 0.0):
+        raise ValueError(f"ratio must be a non-negative fraction of the grasp force, got {ratio!r}")
+    kwargs.setdefault("object_mass", 0.0)
+    base = paper_scenario(angle, name=f"friction-{profile}", **kwargs)
+    _, n_c, _ = base.nominal_contact(tip)
+    e1, e2 = tangent_frame(n_c)
+    d = math.cos(angle) * e1 + math.sin(angle) * e2
+    way = np.cross(n_c, d) if across else d
+    if profile == "slip":
+        slide = Disturbance(translation=tuple(slip_distance * way), start=6.0, end=7.0, label="slip")
+        return GraspScenario(**{**_fields(base), "disturbances": base.disturbances + (slide,),
+                                "tangential_force": None})  # fmt: skip
+    start, end = (6.0, 6.5) if profile == "push" else (5.5, 9.5)
+    load = ratio * base.force * way
+    return GraspScenario(**{**_fields(base), "tangential_force": tuple(load), "load_start": start, "load_end": end})
+
+
+def _fields(s: GraspScenario) -> dict:
+    return {f: getattr(s, f) for f in s.__dataclass_fields__}
+
+
+#: Default rocking amplitude of :func:`rock_scenario`, degrees.
+ROCK_AMPLITUDE_DEG = 3.0
+#: Default tangential load that accompanies the rocking in :func:`rock_scenario`, N.
+ROCK_LOAD = 0.03
+
+
+def rock_scenario(
+    angle: float = 0.0,
+    *,
+    rock_amplitude: float = math.radians(ROCK_AMPLITUDE_DEG),
+    rock_load: float = ROCK_LOAD,
+    rock_period: float = 1.0,
+    rock_axes: float = 0.0,
+    rock_cycles: int = 2,
+    **kwargs,
+) -> GraspScenario:
+    """The papers' grasp (:func:`paper_scenario`), then the object rocked about two tangent
+    axes and in a figure-eight: the two-axis excitation that tells a line from an area.
+
+    After the grasp and its disturbances have settled, the object is rocked (pivot: the
+    nominal contact point) by ``± rock_amplitude``
+
+    1. about the tangent axis ``a₁`` for ``rock_cycles`` periods,
+    2. about ``a₂ = n × a₁`` for as long,
+    3. in a figure-eight: about ``a₁`` at half the frequency and ``a₂`` at the full one,
+       for ``2 rock_period · max(1, rock_cycles // 2)``,
+
+    each segment a whole number of sine periods, so it averages to zero tilt. ``a₁`` is the
+    tangent frame's ``e1`` (the sensor x axis projected on the tangent plane) turned by ``rock_axes`` about the normal. A tilt
+    about ``a`` comes with a tangential load ``rock_load`` along ``n × a`` (the push that
+    rocks the object; it turns with the tilt axis).
+
+    Parameters
+    ----------
+    angle : float
+        Object direction at the apex, rad.
+    rock_amplitude : float
+        rad (default :data:`ROCK_AMPLITUDE_DEG`).
+    rock_load : float
+        N (default :data:`ROCK_LOAD`).
+    rock_period : float
+        s, of segments 1 and 2.
+    rock_axes : float
+        rad.
+    rock_cycles : int
+        Periods per segment.
+    **kwargs
+        :func:`paper_scenario` arguments and :class:`GraspScenario` fields; ``duration``
+        defaults to the end of the figure-eight plus 0.5 s.
+    """
+    if not (math.isfinite(rock_period) and rock_period > 0.0):
+        raise ValueError(f"rock_period must be positive (s), got {rock_period!r}")
+    if int(rock_cycles) < 1:
+        raise ValueError(f"rock_cycles must be at least 1, got {rock_cycles!r}")
+    for nm, v in (("rock_amplitude", rock_amplitude), ("rock_load", rock_load), ("rock_axes", rock_axes)):
+        if not math.isfinite(v):
+            raise ValueError(f"{nm} must be finite, got {v!r}")
+    t_stable = float(kwargs.get("t_stable", GraspScenario.t_stable))
+    start = kwargs.get("disturbance_end")
+    start = t_stable + DISTURBANCE_RAMP if start is None else float(start)
+    cycles = int(rock_cycles)
+    seg = cycles * rock_period
+    eight = 2.0 * rock_period * max(1, cycles // 2)
+    end = start + 2.0 * seg + eight
+    kwargs.setdefault("duration", end + 0.5)
+    kwargs.setdefault("name", "rock")
+    base = paper_scenario(angle, **kwargs)
+    hand = base.hand
+    n = -hand.grasp_axis  # outward normal at the apex, where the papers' grasp touches
+    a1 = math.cos(rock_axes) * hand.up + math.sin(rock_axes) * hand.joint_axis
+    a2 = np.cross(n, a1)
+
+    def rock(axis, t0, t1, period, label):
+        load = tuple(rock_load * np.cross(n, axis))
+        return Disturbance(axis=tuple(axis), angle=rock_amplitude, start=t0, end=t1, period=period, load=load, label=label)
+
+    t1, t2 = start + seg, start + 2.0 * seg
+    rocking = (
+        rock(a1, start, t1, rock_period, "rock-a1"),
+        rock(a2, t1, t2, rock_period, "rock-a2"),
+        rock(a1, t2, end, 2.0 * rock_period, "eight-a1"),
+        rock(a2, t2, end, rock_period, "eight-a2"),
+    )
+    return replace(base, disturbances=base.disturbances + rocking)

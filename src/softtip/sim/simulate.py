@@ -27,7 +27,17 @@ from softtip.fingertip import Fingertip, load_fingertip
 from softtip.sim.contact import ContactModel, ContactParams, ContactResult, FrictionState
 from softtip.sim.objects import RigidObject, make_object
 from softtip.sim.pose import Pose
-from softtip.sim.scenario import JOINT_ROTATION_DEG, OBJECT_MASS, GraspScenario, paper_scenario, push_scenario
+from softtip.sim.scenario import (
+    JOINT_ROTATION_DEG,
+    OBJECT_MASS,
+    ROCK_AMPLITUDE_DEG,
+    ROCK_LOAD,
+    GraspScenario,
+    friction_scenario,
+    paper_scenario,
+    push_scenario,
+    rock_scenario,
+)
 from softtip.sim.sensor import SensorModel
 from softtip.sim.skin import DEFAULT_ELEMENTS, discretise_skin
 from softtip.sim.truth import GroundTruth, line_angle, tangent_frame
@@ -294,12 +304,14 @@ def simulate_grasp(
     direction = np.zeros((n, 3))
     centre = np.full((n, 3), np.nan)
     area, depth, push, slipf = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
+    friction_depth = np.full(n, np.nan)
     in_contact = np.zeros(n, dtype=bool)
     target = np.where(t >= scenario.t_contact, scenario.force_target(t), 0.0)
 
     e1, e2 = tangent_frame(-u)
     axes = np.stack((u, e1, e2))
-    n_free = 1 if scenario.tangential_force is None else 3
+    loads = any(any(d.load) for d in scenario.disturbances)
+    n_free = 1 if scenario.tangential_force is None and not loads else 3
     load = np.zeros(3) if scenario.tangential_force is None else axes @ np.asarray(scenario.tangential_force)
     # before contact the object is free: no tangential load
     ramp = np.where(t >= scenario.t_contact, scenario.load_ramp(t), 0.0)
@@ -318,6 +330,8 @@ def simulate_grasp(
             if len(history) >= 2:
                 x0 += history[-1] - history[-2]
             goal = np.array([target[i], ramp[i] * load[1], ramp[i] * load[2]])
+            if loads:
+                goal[1:] += (axes @ scenario.disturbance_load(ti))[1:]
             x, res = sample.solve(x0, goal, n_free)
         if res.in_contact:
             far = np.max(np.linalg.norm(res.centre - r_c, axis=1))
@@ -335,6 +349,7 @@ def simulate_grasp(
         centre[i] = res.pressure_centre
         area[i], depth[i], push[i], slipf[i] = res.contact_area, res.max_depth, x[0], res.slip_fraction
         in_contact[i] = res.in_contact
+        friction_depth[i] = res.friction_depth
         i += 1
 
     truth = GroundTruth(
@@ -350,6 +365,7 @@ def simulate_grasp(
         force_target=target,
         in_contact=in_contact,
         slip_fraction=slipf,
+        friction_depth=friction_depth,
     )
     return SimLog(
         t=t,
@@ -424,7 +440,7 @@ def run_simulation(
     apex_angle_deg: float = 90.0,
     tilt_deg: float = 45.0,
     force: float = 0.5 * 9.80665,
-    duration: float = 10.0,
+    duration: float | None = None,
     t_contact: float = 2.0,
     t_stable: float = 4.0,
     rate: float = 50.0,
@@ -433,6 +449,10 @@ def run_simulation(
     object_mass: float = OBJECT_MASS,
     misalignment_deg: float = 0.0,
     disturbance_timing: str = "after_grasp",
+    rock: bool = False,
+    rock_amplitude_deg: float = ROCK_AMPLITUDE_DEG,
+    rock_period: float = 1.0,
+    rock_load: float = ROCK_LOAD,
     n_elements: int = DEFAULT_ELEMENTS,
     modulus: float = 0.6e6,
     shear_modulus: float | None = None,
@@ -443,19 +463,45 @@ def run_simulation(
     output: str | os.PathLike | None = None,
     truth: str | os.PathLike | None = None,
     units: str = "si",
+    load_ratio: float = 0.25,
+    load_direction: str = "across",
+    load_profile: str = "push",
 ) -> SimLog:
     """Simulate from plain parameters (the ``softtip simulate`` command) and write files.
 
     Lengths in m, forces in N, angles in degrees, rates in Hz, moduli in Pa. ``scenario``
-    is ``"paper"`` (the papers' hand, with joint and gravity disturbances) or ``"push"``
-    (a plain push, no disturbance). Writes the log CSV to ``output`` and the ground truth
+    is ``"paper"`` (the papers' hand, with joint and gravity disturbances), ``"push"``
+    (a plain push, no disturbance) or ``"friction"`` (:func:`~softtip.sim.scenario.friction_scenario`:
+    ``load_ratio`` of the grasp force, ``load_direction`` ``across`` or ``along`` the line,
+    ``load_profile`` ``push``, ``drag`` or ``slip``; ``object_mass`` is ignored); ``rock`` adds the
+    rocking of :func:`~softtip.sim.scenario.rock_scenario` to the paper scenario (``duration``
+    defaults to its end; otherwise 10 s). Writes the log CSV to ``output`` and the ground truth
     to ``truth`` when given; returns the log.
     """
     tipo = load_fingertip(tip)
     obj = make_object(object_kind, size, edge_radius=edge_radius, apex_angle=math.radians(apex_angle_deg),
                       tilt=math.radians(tilt_deg))
-    timing = dict(force=force, duration=duration, t_contact=t_contact, t_stable=t_stable)
-    if scenario == "paper":
+    timing = dict(force=force, t_contact=t_contact, t_stable=t_stable)
+    if duration is not None:
+        timing["duration"] = duration
+    elif not (rock and scenario == "paper"):
+        timing["duration"] = 10.0
+    if rock and scenario != "paper":
+        raise ValueError("--rock needs the paper scenario")
+    if rock:
+        scn = rock_scenario(
+            math.radians(angle_deg),
+            rock_amplitude=math.radians(rock_amplitude_deg),
+            rock_period=rock_period,
+            rock_load=rock_load,
+            joint_rotation=math.radians(joint_rotation_deg),
+            gravity_spin=math.radians(gravity_spin_deg),
+            object_mass=object_mass,
+            misalignment=math.radians(misalignment_deg),
+            disturbance_timing=disturbance_timing,
+            **timing,
+        )
+    elif scenario == "paper":
         scn = paper_scenario(
             math.radians(angle_deg),
             joint_rotation=math.radians(joint_rotation_deg),
@@ -467,8 +513,16 @@ def run_simulation(
         )
     elif scenario == "push":
         scn = push_scenario(math.radians(angle_deg), **timing)
+    elif scenario == "friction":
+        if load_direction not in ("across", "along"):
+            raise ValueError(f"load_direction must be across or along, got {load_direction!r}")
+        scn = friction_scenario(
+            tipo, math.radians(angle_deg), load_ratio, across=load_direction == "across", profile=load_profile,
+            joint_rotation=math.radians(joint_rotation_deg), gravity_spin=math.radians(gravity_spin_deg),
+            misalignment=math.radians(misalignment_deg), disturbance_timing=disturbance_timing, **timing,
+        )  # fmt: skip
     else:
-        raise ValueError(f"unknown scenario {scenario!r}; expected paper or push")
+        raise ValueError(f"unknown scenario {scenario!r}; expected paper, push or friction")
     sensor = SensorModel(rate=rate) if noise else SensorModel.ideal(rate)
     params = ContactParams(thickness=thickness, modulus=modulus, shear_modulus=shear_modulus, friction=friction)
     log = simulate_grasp(tipo, obj, scn, sensor, seed, params=params, n_elements=n_elements)

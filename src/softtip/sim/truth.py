@@ -52,6 +52,11 @@ class GroundTruth:
         Whether any skin point is compressed.
     slip_fraction : (N,)
         Fraction of the contact area at the Coulomb limit.
+    friction_depth : (N,)
+        Depth below the undeformed skin at which the tangential (friction) tractions act,
+        m: their compressions weighted by their part along the total tangential force,
+        ``F_t · Σ δ_i F_t,i / |F_t|²`` (the lever of ``F_t`` about the surface point);
+        NaN without contact or when ``|F_t|`` is below 1 % of the normal force.
     """
 
     direction: NDArray[np.float64]
@@ -66,8 +71,11 @@ class GroundTruth:
     force_target: NDArray[np.float64]
     in_contact: NDArray[np.bool_]
     slip_fraction: NDArray[np.float64]
+    friction_depth: NDArray[np.float64] | None = None
 
     def __post_init__(self) -> None:
+        if self.friction_depth is None:
+            object.__setattr__(self, "friction_depth", np.full(len(self.angle), np.nan))
         for f in fields(self):
             a = np.ascontiguousarray(getattr(self, f.name))
             a.setflags(write=False)
@@ -93,6 +101,7 @@ class GroundTruth:
             "force_target": "N",
             "in_contact": "bool",
             "slip_fraction": "1",
+            "friction_depth": "m",
         }
         out = {}
         for f in fields(self):

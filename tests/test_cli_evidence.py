@@ -1,0 +1,69 @@
+"""The line evidence through the installed ``softtip`` command: simulate --rock, estimate
+with and without it, and its options' errors."""
+
+import csv
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+SOFTTIP = str(Path(sys.executable).with_name("softtip"))
+
+
+def run(*args):
+    return subprocess.run([SOFTTIP, *map(str, args)], capture_output=True, text=True, timeout=120)
+
+
+def read_csv(path):
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+@pytest.fixture(scope="module")
+def rocked_plane(tmp_path_factory):
+    d = tmp_path_factory.mktemp("rock")
+    log = d / "plane.csv"
+    out = run("simulate", "--object", "plane", "--rock", "--rock-period", "0.5", "--angle", "15", "--elements", "1200",
+              "--seed", "5", "-o", log)  # fmt: skip
+    assert out.returncode == 0, out.stderr
+    return log
+
+
+def test_rocked_plane_is_an_area_and_off_gives_the_papers_lines(rocked_plane, tmp_path):
+    out = run("estimate", rocked_plane, "-o", tmp_path / "on.csv")
+    assert out.returncode == 0, out.stderr
+    rows = read_csv(tmp_path / "on.csv")
+    states = [r["state"] for r in rows]
+    assert states.count("area") > len(states) // 3
+    assert all(r["line_evidence"] in ("confirmed", "unconfirmed") for r in rows if r["state"] == "line")
+    assert all(r["line_evidence"] == "" and r["angle_deg"] == "nan" for r in rows if r["state"] != "line")
+    assert " area" in out.stderr and "confirmed)" in out.stderr
+    off = run("estimate", rocked_plane, "-o", tmp_path / "off.csv", "--line-evidence", "off")
+    assert off.returncode == 0, off.stderr
+    rows = read_csv(tmp_path / "off.csv")
+    assert not any(r["state"] == "area" for r in rows)
+    assert {r["line_evidence"] for r in rows if r["state"] == "line"} == {"unconfirmed"}
+
+
+@pytest.mark.parametrize(
+    "args, word",
+    [
+        (["--area-ratio", "0.1", "0.3"], "area_ratio"),
+        (["--line-evidence", "maybe"], "--line-evidence"),
+        (["--evidence-window", "0"], "--evidence-window"),
+        (["--excitation", "0.5"], "--excitation"),
+        (["--evidence-reset-distance", "-1"], "--evidence-reset-distance"),
+    ],
+)
+def test_bad_evidence_options_exit_2_naming_them(args, word, tmp_path):
+    out = run("estimate", "--example", "-o", tmp_path / "x.csv", *args)
+    assert out.returncode == 2
+    assert word in out.stderr
+    assert not (tmp_path / "x.csv").exists()
+
+
+def test_rock_needs_the_paper_scenario(tmp_path):
+    out = run("simulate", "--rock", "--scenario", "push", "-o", tmp_path / "x.csv")
+    assert out.returncode == 2 and "--rock" in out.stderr
+    assert not (tmp_path / "x.csv").exists()

@@ -1,0 +1,243 @@
+"""Line or area (line evidence): the window maths, the stage on synthetic rocking grasps, and
+the simulator's rocking scenario."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from numpy.testing import assert_allclose
+from rocking import rocking_log
+
+from softtip import Estimator, EstimatorConfig, estimate, murakami2006
+from softtip._xp import NP, PY
+from softtip.evidence import (
+    evidence_products,
+    noise_constants,
+    tangent_noise_kernel,
+    window_constants,
+    window_floats,
+    window_kernel,
+)
+from softtip.noise import NANO17
+from softtip.sim import make_object, rock_scenario, simulate_grasp
+from softtip.sim.scenario import Disturbance
+
+
+def axial_error_deg(angle, truth):
+    return np.degrees(np.abs((np.asarray(angle) - truth + np.pi / 2) % np.pi - np.pi / 2))
+
+
+def state_changes(states):
+    s = np.asarray(states)
+    return int(np.count_nonzero(s[1:] != s[:-1]))
+
+
+# -- the window maths ----------------------------------------------------------------------
+
+finite = st.floats(-1.0, 1.0, allow_nan=False)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    h=st.lists(st.tuples(finite, finite, finite, finite), min_size=3, max_size=40),
+    corr=st.floats(1.0, 5.0),
+)
+def test_float_window_equals_the_kernel_in_both_back_ends(h, corr):
+    a = np.array(h) * np.array([5e-3, 5e-3, 0.1, 0.1])
+    sums = [float(np.sum(p)) for p in evidence_products(*a.T)]
+    count = float(len(a))
+    nt = tangent_noise_kernel(0.001, -0.002, 0.036, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, NANO17)
+    py = window_kernel(sums, count, *nt, corr, PY)
+    with np.errstate(all="ignore"):  # degenerate windows give NaN / inf, as the Python floats do
+        npk = window_kernel(np.array(sums)[:, None], np.array([count]), *nt, corr, NP)
+    fl = window_floats(sums, count, nt, *window_constants(count, corr), corr)
+    for name, x, y, z in zip(py._fields, py, npk, fl):
+        assert_allclose(float(y[0]), x, rtol=1e-12, atol=1e-300, equal_nan=True, err_msg=name)
+        assert_allclose(z, x, rtol=1e-12, atol=1e-300, equal_nan=True, err_msg=name)
+
+
+def test_noise_only_window_is_neither_varied_nor_spread():
+    rng = np.random.default_rng(4)
+    nt = tangent_noise_kernel(0.0, 0.0, 0.036, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, NANO17)
+    s_big, _, f_n = noise_constants(nt)
+    for n in (20, 100, 5000):
+        # white noise of exactly the model's covariance, in h and in f_t
+        h = rng.normal(size=(n, 2)) * math.sqrt(nt[0])
+        f = rng.normal(size=(n, 2)) * math.sqrt(nt[3])
+        sums = [float(np.sum(p)) for p in evidence_products(h[:, 0], h[:, 1], f[:, 0], f[:, 1])]
+        w = window_kernel(sums, float(n), *nt, 1.0, PY)
+        assert w.h_major < w.h_noise and w.f_major < w.f_noise
+
+
+def test_window_direction_is_n_cross_the_principal_axis():
+    # h varying along e = n × d (d at 30°) gives d back, with a small standard deviation
+    a = math.radians(30.0)
+    tau = np.sin(np.linspace(0.0, 4 * math.pi, 200)) * 4e-3
+    e = np.array([-math.sin(a), math.cos(a)])  # n × d at n = z
+    h = tau[:, None] * e
+    turn = np.linspace(0.0, 6 * math.pi, 200, endpoint=False)  # the load turns evenly: uncorrelated
+    f = 0.03 * np.stack((np.cos(turn), np.sin(turn)), axis=-1)
+    sums = [float(np.sum(p)) for p in evidence_products(h[:, 0], h[:, 1], f[:, 0], f[:, 1])]
+    nt = tangent_noise_kernel(0.0, 0.0, 0.036, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, NANO17)
+    w = window_kernel(sums, 200.0, *nt, 1.0, PY)
+    assert axial_error_deg(w.angle, a) < 1e-6
+    assert w.angle_std < math.radians(0.5)
+    assert w.h_minor == 0.0
+    # without a turning load the correlation of the excitation is unknown: a wider std
+    still = [float(np.sum(p)) for p in evidence_products(h[:, 0], h[:, 1], 0 * tau, 0 * tau)]
+    assert window_kernel(still, 200.0, *nt, 1.0, PY).angle_std > 2.0 * w.angle_std
+
+
+# -- the stage on synthetic rocking grasps -------------------------------------------------
+
+
+@pytest.mark.parametrize("angle", [-60.0, 0.0, 30.0, 75.0])
+def test_two_axis_rocking_confirms_a_line_and_takes_its_direction_from_the_window(angle):
+    t, w, truth = rocking_log("line", angle, seed=int(angle) + 100)
+    est = estimate(t, w, "murakami2006")
+    after = t >= 6.0  # both axes excited
+    assert np.mean(est.state_names[after] == "line") >= 0.9
+    assert np.all(est.line_evidence[after & (est.state == 2)] == 2)
+    err = axial_error_deg(est.angle[after], truth)
+    assert np.nanmedian(err) <= 1.5
+    # calibrated: the errors are within a few reported standard deviations
+    ratio = err / np.degrees(est.angle_std[after])
+    assert np.nanmax(ratio) < 4.0
+
+
+@pytest.mark.parametrize("angle", [-60.0, 30.0])
+def test_two_axis_rocking_of_an_area_is_area(angle):
+    t, w, _ = rocking_log("area", angle, seed=7)
+    est = estimate(t, w, "murakami2006")
+    after = t >= 6.0
+    assert np.mean(est.state_names[after] == "line") <= 0.05
+    assert np.mean(est.state_names[after] == "area") >= 0.9
+    assert np.all(np.isnan(est.angle[est.state == 3]))
+    assert state_changes(est.state_names[t >= 3.0]) <= 2
+
+
+@pytest.mark.parametrize("kind", ["line", "area"])
+def test_one_axis_excitation_cannot_tell_and_says_unconfirmed(kind):
+    t, w, _ = rocking_log(kind, 30.0, excite="one", seed=3)
+    est = estimate(t, w, "murakami2006")
+    assert not np.any(est.state == 3)
+    line = est.state == 2
+    assert line[t >= 6.0].mean() >= 0.8
+    assert np.all(est.line_evidence[line] == 1)
+    assert np.all(est.line_evidence[~line] == 0)
+
+
+def test_line_evidence_off_is_the_papers_per_sample_behaviour():
+    t, w, _ = rocking_log("area", 30.0, seed=5)
+    on = estimate(t, w, "murakami2006")
+    off = estimate(t, w, "murakami2006", EstimatorConfig(line_evidence=False))
+    assert not np.any(off.state == 3) and np.any(on.state == 3)
+    line = off.state == 2
+    assert np.array_equal(line, off.h_norm > np.maximum(3.0 * off.h_std, 5e-4))
+    assert np.all(off.line_evidence[line] == 1)
+    assert list(off.columns()["line_evidence"][line][:1]) == ["unconfirmed"]
+
+
+def test_the_window_restarts_at_a_new_contact():
+    # an area, contact lost, then a line held still: the new contact is not an area
+    t1, w1, _ = rocking_log("area", 30.0, seed=1)
+    t2, w2, _ = rocking_log("line", 30.0, excite="one", seed=2, duration=4.0)
+    t = np.concatenate((t1, t1[-1] + 0.02 + t2))
+    w = np.concatenate((w1, w2))
+    est = estimate(t, w, "murakami2006")
+    second = t > t1[-1] + 1.0
+    assert np.any(est.state[~second] == 3)
+    assert not np.any(est.state[second] == 3)
+    assert np.any(est.state[second] == 2)
+
+
+def test_a_moved_contact_point_starts_the_evidence_afresh():
+    from test_joint import slide_across_log
+
+    # the contact slides 4 mm across the line after the latch: about the stale latched
+    # point h spans both axes (area, no direction rather than a wrong one); the joint
+    # point follows the contact and, once it has moved, the evidence starts again: a line
+    t, w, _, _ = slide_across_log()
+    late = t > 8.5
+    latch = estimate(t, w, "murakami2006", EstimatorConfig(tare_duration=0.0))
+    assert np.all(latch.state[late] != 2)
+    joint = estimate(t, w, "murakami2006", EstimatorConfig(contact_point="joint", tare_duration=0.0))
+    assert np.mean(joint.state[late] == 2) > 0.7 and not np.any(joint.state[late] == 3)
+    stream = Estimator("murakami2006", EstimatorConfig(contact_point="joint", tare_duration=0.0)).process(t, w)
+    assert [s.state for s in stream] == list(joint.state_names)
+
+
+def test_stream_equals_batch_on_rocking_grasps():
+    for kind in ("line", "area"):
+        t, w, _ = rocking_log(kind, 20.0, seed=11)
+        for cfg in (EstimatorConfig(), EstimatorConfig(lowpass_hz=8.0, sample_rate=50.0, evidence_window=1.0)):
+            batch = estimate(t, w, "murakami2006", cfg)
+            stream = Estimator("murakami2006", cfg).process(t, w)
+            assert [s.state for s in stream] == list(batch.state_names)
+            assert [s.line_evidence for s in stream] == list(batch.columns()["line_evidence"])
+            for name in ("angle", "angle_std", "h_ratio", "excitation_ratio"):
+                got = np.array([getattr(s, name) for s in stream], dtype=float)
+                assert_allclose(got, getattr(batch, name), rtol=1e-12, atol=1e-300, equal_nan=True, err_msg=name)
+            d = np.array([s.direction for s in stream], dtype=float)
+            assert_allclose(d, batch.direction, rtol=1e-12, atol=1e-15, equal_nan=True)
+
+
+@pytest.mark.parametrize(
+    "bad",
+    [
+        dict(evidence_window=0.0),
+        dict(area_ratio=(0.1, 0.2)),
+        dict(area_ratio=(1.5, 0.1)),
+        dict(excitation_ratio=-1.0),
+        dict(excitation_min=math.nan),
+        dict(evidence_max_angle_std=0.0),
+        dict(evidence_reset_distance=-1e-3),
+    ],
+)
+def test_config_rejects_bad_evidence_settings(bad):
+    with pytest.raises(ValueError):
+        EstimatorConfig(**bad)
+
+
+# -- the simulator's rocking scenario ------------------------------------------------------
+
+
+def test_rocking_segments_average_to_zero_tilt_and_carry_a_turning_load():
+    scn = rock_scenario(math.radians(20.0))
+    rocks = [d for d in scn.disturbances if d.period is not None]
+    assert len(rocks) == 4
+    for d in rocks:
+        tt = np.linspace(d.start, d.end, 2001)[:-1]
+        amp = np.array([d.amplitude(x, scn.t_contact, scn.t_stable) for x in tt])
+        assert abs(amp.mean()) < 1e-3 and amp.max() > 0.99
+        assert abs(np.dot(d.load, d.axis)) < 1e-12 and np.linalg.norm(d.load) > 0
+    assert scn.duration > rocks[-1].end
+    with pytest.raises(ValueError):
+        Disturbance(axis=(1, 0, 0), angle=0.1, period=1.0)  # no start / end
+
+
+@pytest.fixture(scope="module")
+def rocked():
+    tip = murakami2006()
+    scn = rock_scenario(math.radians(30.0), rock_period=0.5)
+    logs = {
+        kind: simulate_grasp(tip, make_object(kind, size), scn, rng=9, n_elements=1500)
+        for kind, size in (("plate", 0.001), ("plane", None))
+    }
+    return tip, scn, logs
+
+
+def test_simulated_rocking_tells_a_thin_plate_from_a_plane(rocked):
+    tip, scn, logs = rocked
+    both = [d for d in scn.disturbances if d.label == "rock-a2"][0].start + 0.5  # both axes excited
+    plate = estimate(logs["plate"].t, logs["plate"].wrench, tip)
+    after = plate.t >= both
+    assert np.mean(plate.state_names[after] == "line") >= 0.9
+    assert np.median(axial_error_deg(plate.angle[after], logs["plate"].truth.angle[after])) <= 3.0
+    assert state_changes(plate.state_names[plate.t >= 4.0]) <= 4
+    plane = estimate(logs["plane"].t, logs["plane"].wrench, tip)
+    assert np.mean(plane.state_names[after] == "line") <= 0.05
+    assert np.mean(plane.state_names[after] == "area") >= 0.9
+    assert state_changes(plane.state_names[plane.t >= 4.0]) <= 4
