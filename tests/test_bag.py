@@ -240,3 +240,107 @@ def test_csv_input_to_bag(tmp_path):
     assert out.stdout == ""  # the bag is the output
     with AnyReader([tmp_path / "ex"]) as reader:
         assert reader.topics["/softtip/wrench_raw"].msgcount == 500
+
+
+# --- damaged bags, repeated stamps (issue 13, items 11 and 13) ----------------------------
+
+
+def _with_t(example, t):
+    from types import SimpleNamespace
+
+    return SimpleNamespace(t=np.asarray(t), wrench=example.wrench)
+
+
+def test_repeated_stamps_are_kept_and_counted_and_a_stamp_going_back_is_an_error(tmp_path, example):
+    t = example.t.copy()
+    t[100] = t[99]  # a driver that stamped two samples alike
+    log = read_bag(write_bag2(tmp_path / "dup", _with_t(example, t), StoragePlugin.MCAP))
+    assert len(log.t) == len(example.t) and log.repeated_stamps == 1
+    np.testing.assert_array_equal(log.wrench, example.wrench)
+    t[200] = t[198]  # a header stamp back in time (recorded in order)
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    with Writer(tmp_path / "back", version=9, storage_plugin=StoragePlugin.MCAP) as w:
+        c = w.add_connection("/ft_sensor/wrench", WRENCH, typestore=ts)
+        for k, (_, msg) in enumerate(wrench_msgs(ts, _with_t(example, t))):
+            w.write(c, T0_NS + k, ts.serialize_cdr(msg, WRENCH))
+    with pytest.raises(InputError, match=r"message 201 has time .* before message 200 .*non-decreasing"):
+        read_bag(tmp_path / "back")
+
+
+def _drop_half_of_the_rows(bag):
+    import sqlite3
+
+    (db,) = bag.glob("*.db3")
+    with sqlite3.connect(db) as con:
+        con.execute("DELETE FROM messages WHERE id % 2 = 0 AND topic_id = (SELECT id FROM topics WHERE name = '/ft_sensor/wrench')")
+    con.close()
+
+
+def _skip_one_mcap_record(bag, stamp_ns):
+    """Damage the opcode of the MCAP message record logged at ``stamp_ns``: readers skip it."""
+    import struct
+
+    (mcap,) = bag.glob("*.mcap")
+    data = bytearray(mcap.read_bytes())
+    at = data.find(struct.pack("<Q", stamp_ns) * 2)  # log_time, publish_time
+    opcode = at - 15  # opcode (1), record length (8), channel id (2), sequence (4)
+    assert at > 0 and data[opcode] == 0x05
+    data[opcode] = 0x7E
+    mcap.write_bytes(bytes(data))
+
+
+@pytest.mark.parametrize("kind", ["sqlite3", "mcap"])
+def test_damaged_bag_stops_unless_allow_partial(tmp_path, example, kind):
+    if kind == "sqlite3":
+        bag = write_bag2(tmp_path / "b", example, StoragePlugin.SQLITE3)
+        _drop_half_of_the_rows(bag)
+        n = 250
+    else:
+        bag = write_bag2(tmp_path / "b", example, StoragePlugin.MCAP)
+        _skip_one_mcap_record(bag, int(stamps_ns(example.t)[321]))
+        n = 499
+    out = run("estimate", bag, "-o", tmp_path / "e.csv")
+    assert out.returncode == 2, out.stderr
+    assert f"read {n} messages, but the bag's metadata lists 500" in out.stderr and "--allow-partial" in out.stderr
+    assert not (tmp_path / "e.csv").exists()
+    out = run("estimate", bag, "--allow-partial", "-o", tmp_path / "e.csv")
+    assert out.returncode == 0, out.stderr
+    assert f"damaged bag, {n} samples used" in out.stderr
+    with open(tmp_path / "e.csv") as fh:
+        assert len(fh.readlines()) == n + 1
+
+
+def test_unreadable_message_stops_unless_allow_partial(tmp_path, example):
+    bag = write_bag2(tmp_path / "b", example, StoragePlugin.SQLITE3, extra_topic=False)
+    import sqlite3
+
+    (db,) = bag.glob("*.db3")
+    with sqlite3.connect(db) as con:
+        con.execute("UPDATE messages SET data = X'00ff00ff' WHERE id = 301")
+    con.close()
+    with pytest.raises(InputError, match=r"cannot read message 301 .*--allow-partial uses the 300 messages before it"):
+        read_bag(bag)
+    log = read_bag(bag, allow_partial=True)
+    assert len(log.t) == 300 and log.partial and "message 301" in log.damage
+    np.testing.assert_array_equal(log.wrench, example.wrench[:300])
+
+
+@pytest.mark.parametrize("count", ["-5", "10000000000000000000", "100000000000"])
+def test_metadata_message_count_negative_or_huge(tmp_path, example, count):
+    bag = write_bag2(tmp_path / "b", example, StoragePlugin.MCAP, extra_topic=False)
+    meta = bag / "metadata.yaml"
+    meta.write_text(meta.read_text().replace("message_count: 500", f"message_count: {count}"))
+    out = run("estimate", bag)
+    assert out.returncode == 2, out.stderr
+    assert "Traceback" not in out.stderr and "metadata" in out.stderr and count in out.stderr
+
+
+def test_bag_with_a_repeated_stamp_is_estimated_whole(tmp_path, example):
+    t = example.t.copy()
+    t[100] = t[99]
+    bag = write_bag2(tmp_path / "dup", _with_t(example, t), StoragePlugin.MCAP)
+    out = run("estimate", bag, "-o", tmp_path / "e.csv")
+    assert out.returncode == 0, out.stderr
+    assert "1 message(s) repeat the previous header.stamp" in out.stderr
+    with open(tmp_path / "e.csv") as fh:
+        assert len(fh.readlines()) == len(t) + 1

@@ -102,6 +102,10 @@ class BagLog:
     frame_ids : tuple of str, the distinct ``header.frame_id`` values, in order of appearance
     topic, source : str
     record_time_used : int, samples whose stamp was zero (time of recording used instead)
+    expected : int, the number of messages the bag's metadata lists for the topic
+    repeated_stamps : int, samples whose stamp equals the previous one (kept)
+    damage : str, why reading stopped early ("" when every listed message was read); only
+        with ``allow_partial``, otherwise a damaged bag raises
     """
 
     t: NDArray[np.float64]
@@ -111,6 +115,14 @@ class BagLog:
     topic: str
     source: str
     record_time_used: int
+    expected: int = 0
+    repeated_stamps: int = 0
+    damage: str = ""
+
+    @property
+    def partial(self) -> bool:
+        """Fewer messages were read than the metadata lists, or a damaged message ended the reading."""
+        return bool(self.damage)
 
     @property
     def frame_id(self) -> str:
@@ -134,7 +146,11 @@ def _topic_list(topics) -> str:
     return f"the bag has: {items}"
 
 
-def read_bag(path: str | os.PathLike[str], topic: str | None = None) -> BagLog:
+#: Messages held in memory before growing (a metadata count is not trusted for the allocation).
+_INITIAL_CAPACITY = 1 << 14
+
+
+def read_bag(path: str | os.PathLike[str], topic: str | None = None, *, allow_partial: bool = False) -> BagLog:
     """Read the ``WrenchStamped`` messages of one topic of a bag.
 
     Parameters
@@ -144,6 +160,10 @@ def read_bag(path: str | os.PathLike[str], topic: str | None = None) -> BagLog:
         a ROS 1 ``.bag`` file.
     topic : str, optional
         The wrench topic. Default: the bag's only ``WrenchStamped`` topic.
+    allow_partial : bool
+        Accept a damaged bag: keep the messages read before a message that cannot be
+        read, and fewer messages than the metadata lists (``BagLog.damage`` says what was
+        wrong). Default: a damaged bag raises.
 
     Returns
     -------
@@ -153,7 +173,10 @@ def read_bag(path: str | os.PathLike[str], topic: str | None = None) -> BagLog:
     ------
     InputError
         Unreadable bag; topic missing or of another type (the message lists the bag's topics
-        with their types); no messages; time not strictly increasing; non-finite values.
+        with their types); no messages; a message count in the metadata that is negative, or
+        larger than the messages in the bag, or a message that cannot be read (unless
+        ``allow_partial``); a stamp earlier than the one before (equal stamps are accepted and
+        counted); non-finite values.
     """
     import_rosbags()
     from rosbags.highlevel import AnyReader
@@ -193,11 +216,18 @@ def read_bag(path: str | os.PathLike[str], topic: str | None = None) -> BagLog:
             raise InputError(
                 f"{source}: topic {topic!r} has type {info.msgtype}; expected {WRENCH_TYPE}; {_topic_list(topics)}"
             )
-        n = info.msgcount
-        wrench = np.empty((n, 6))
-        stamps = np.empty(n, dtype=np.int64)
+        expected = int(info.msgcount)
+        if expected < 0:
+            raise InputError(
+                f"{source}: topic {topic!r}: the bag's metadata lists {expected} messages; expected a count of "
+                "0 or more (the metadata is damaged)"
+            )
+        capacity = min(expected, _INITIAL_CAPACITY) or _INITIAL_CAPACITY
+        wrench = np.empty((capacity, 6))
+        stamps = np.empty(capacity, dtype=np.int64)
         frame_ids: dict[str, None] = {}
         record_time_used = 0
+        damage = ""
         k = 0
         try:
             for conn, timestamp, raw in reader.messages(connections=info.connections):
@@ -208,36 +238,47 @@ def read_bag(path: str | os.PathLike[str], topic: str | None = None) -> BagLog:
                     ns = timestamp
                     record_time_used += 1
                 f, m = msg.wrench.force, msg.wrench.torque
-                if k >= n:  # msgcount in the metadata was short; grow
-                    wrench = np.concatenate((wrench, np.empty((n, 6))))
-                    stamps = np.concatenate((stamps, np.empty(n, dtype=np.int64)))
-                    n *= 2
+                if k >= len(stamps):  # grow geometrically
+                    wrench = np.concatenate((wrench, np.empty_like(wrench)))
+                    stamps = np.concatenate((stamps, np.empty_like(stamps)))
                 wrench[k] = (f.x, f.y, f.z, m.x, m.y, m.z)
                 stamps[k] = ns
                 frame_ids.setdefault(msg.header.frame_id, None)
                 k += 1
         except Exception as exc:  # noqa: BLE001 - a corrupt message can fail in many ways
-            raise InputError(
-                f"{source}: topic {topic!r}: cannot read message {k + 1} ({exc})"
-            ) from None
+            damage = f"message {k + 1} cannot be read ({exc})"
+            if not allow_partial:
+                raise InputError(
+                    f"{source}: topic {topic!r}: cannot read message {k + 1} ({exc}); the bag is damaged "
+                    f"(--allow-partial uses the {k} messages before it)"
+                ) from None
     finally:
         reader.close()
     wrench, stamps = wrench[:k], stamps[:k]
     if k == 0:
         raise InputError(
             f"{source}: topic {topic!r} has no messages; expected {WRENCH_TYPE} samples"
+            + (f" ({damage})" if damage else "")
         )
+    if k < expected and not damage:
+        damage = f"{k} of the {expected} messages its metadata lists were found"
+        if not allow_partial:
+            raise InputError(
+                f"{source}: topic {topic!r}: read {k} messages, but the bag's metadata lists {expected}; the bag "
+                f"is damaged or was cut short (--allow-partial uses the {k} messages read)"
+            )
     bad = np.flatnonzero(~np.all(np.isfinite(wrench), axis=1))
     if len(bad):
         raise InputError(
             f"{source}: topic {topic!r}: message {bad[0] + 1} has a NaN or infinite wrench component; expected finite values"
         )
-    back = np.flatnonzero(np.diff(stamps) <= 0)
+    step = np.diff(stamps)
+    back = np.flatnonzero(step < 0)
     if len(back):
         i = back[0] + 1
         raise InputError(
-            f"{source}: topic {topic!r}: message {i + 1} has time {stamps[i] * 1e-9:.9f} s, not after message {i} "
-            f"({stamps[i - 1] * 1e-9:.9f} s); expected strictly increasing header stamps"
+            f"{source}: topic {topic!r}: message {i + 1} has time {stamps[i] * 1e-9:.9f} s, before message {i} "
+            f"({stamps[i - 1] * 1e-9:.9f} s); expected non-decreasing header stamps"
         )
     return BagLog(
         t=(stamps - stamps[0]) * 1e-9,
@@ -247,6 +288,9 @@ def read_bag(path: str | os.PathLike[str], topic: str | None = None) -> BagLog:
         topic=topic,
         source=source,
         record_time_used=record_time_used,
+        expected=expected,
+        repeated_stamps=int(np.count_nonzero(step == 0)),
+        damage=damage,
     )
 
 

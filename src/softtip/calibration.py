@@ -73,7 +73,6 @@ from __future__ import annotations
 
 import math
 import os
-import secrets
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -634,24 +633,10 @@ def write_fingertip_toml(cal: Calibration, path: str | os.PathLike[str], source:
 
 
 def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
-    """Write ``text`` to ``path`` via a temporary file and ``os.replace``; nothing partial is left."""
-    path = os.fspath(path)
-    if os.path.isdir(path):
-        raise InputError(f"{path}: is a directory; expected a file name for the output")
-    directory, name = os.path.split(os.path.abspath(path))
-    tmp = os.path.join(directory, f".{name}.{secrets.token_hex(4)}.tmp")
-    try:
-        with open(tmp, "x", encoding="utf-8") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except OSError as exc:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise InputError(f"{path}: cannot write ({exc.strerror or exc}); expected a writable location") from None
+    """Write ``text`` to ``path`` atomically (:func:`softtip.atomic.atomic_write_text`); nothing partial is left."""
+    from softtip.atomic import atomic_write_text as write
+
+    write(path, text)
 
 
 # --------------------------------------------------------------------------------------

@@ -13,6 +13,7 @@ import click
 import numpy as np
 
 from softtip import __version__
+from softtip.cli_types import PORT, Number, check_lowpass, check_pair_increasing
 from softtip.errors import InputError
 from softtip.estimator.depth import tip_depth_law
 from softtip.fingertip import PRESETS, Fingertip, load_fingertip
@@ -32,18 +33,17 @@ are the force and moment the touched object exerts on the fingertip, moment abou
 sensor origin; in contact f pushes into the fingertip.
 """
 
-class _Number(click.FloatRange):
-    """A finite number in a range (click's FloatRange lets NaN through)."""
-
-    def convert(self, value, param, ctx):
-        v = super().convert(value, param, ctx)
-        if not math.isfinite(v):
-            self.fail(f"{value!r} is not a finite number", param, ctx)
-        return v
+def NON_NEGATIVE(unit: str) -> Number:  # noqa: N802 - reads as a type
+    return Number(unit, 0.0)
 
 
-NON_NEGATIVE = _Number(min=0.0)
-POSITIVE = _Number(min=0.0, min_open=True)
+def POSITIVE(unit: str) -> Number:  # noqa: N802
+    return Number(unit, 0.0, min_open=True)
+
+#: stream --speed: 0 (as fast as possible) or within these factors of real time
+MIN_SPEED, MAX_SPEED = 1e-3, 1e6
+#: stream --timeout upper bound, s (a day; longer waits overflow the host's timers)
+MAX_TIMEOUT = 86400.0
 
 _FORCE_COLUMNS = ("fx", "fy", "fz") + DRIFT_COLUMNS[:3]
 _MOMENT_COLUMNS = ("mx", "my", "mz", "sigma", "hx", "hy", "hz", "h_norm", "h_std") + DRIFT_COLUMNS[3:]
@@ -51,11 +51,26 @@ _MOMENT_COLUMNS = ("mx", "my", "mz", "sigma", "hx", "hy", "hz", "h_norm", "h_std
 
 class _Group(click.Group):
     def invoke(self, ctx):
+        from softtip.atomic import cannot_write, silence_stdout
+        from softtip.interrupt import Interrupted, exit_code, terminate_like_ctrl_c
+
         try:
-            return super().invoke(ctx)
+            with terminate_like_ctrl_c():
+                result = super().invoke(ctx)
+                try:
+                    sys.stdout.flush()  # a full device or a closed pipe shows here at the latest
+                except OSError as exc:
+                    silence_stdout()
+                    raise cannot_write("standard output", exc) from None
+                return result
         except InputError as exc:
             click.echo(f"softtip: error: {exc}", err=True)
             ctx.exit(2)
+        except KeyboardInterrupt as exc:
+            # Ctrl-C, SIGTERM, SIGHUP: every temporary file is gone by now (unwound like an error)
+            name = exc.signal_name if isinstance(exc, Interrupted) else "SIGINT"
+            click.echo(f"softtip: interrupted ({name})", err=True)
+            ctx.exit(exit_code(exc))
 
 
 @click.group(cls=_Group, help="softtip: intrinsic tactile sensing with a soft fingertip on a six-axis F/T sensor.\n\n" + FRAMES_HELP)
@@ -84,7 +99,7 @@ _ESTIMATOR_OPTIONS = [
     ),
     click.option(
         "--joint-window",
-        type=POSITIVE,
+        type=POSITIVE("s"),
         default=1.0,
         show_default=True,
         metavar="S",
@@ -92,7 +107,7 @@ _ESTIMATOR_OPTIONS = [
     ),
     click.option(
         "--joint-max-std",
-        type=(POSITIVE, POSITIVE),
+        type=(POSITIVE("deg"), POSITIVE("mm")),
         default=(2.0, 0.2),
         show_default=True,
         metavar="DEG MM",
@@ -101,16 +116,16 @@ _ESTIMATOR_OPTIONS = [
     ),
     click.option(
         "--joint-max-residual",
-        type=POSITIVE,
+        type=POSITIVE("noise standard deviations"),
         default=3.0,
         show_default=True,
         metavar="SIGMAS",
         help="... and the RMS residual of its fit is at most this many noise standard deviations.",
     ),
-    click.option("--lowpass", type=POSITIVE, metavar="HZ", help="Causal Butterworth low-pass cutoff in Hz (default: no filter)."),
+    click.option("--lowpass", type=POSITIVE("Hz"), metavar="HZ", help="Causal Butterworth low-pass cutoff in Hz (default: no filter)."),
     click.option(
         "--tare-duration",
-        type=NON_NEGATIVE,
+        type=NON_NEGATIVE("s"),
         default=0.2,
         show_default=True,
         metavar="S",
@@ -134,7 +149,7 @@ _ESTIMATOR_OPTIONS = [
     ),
     click.option(
         "--hysteresis",
-        type=NON_NEGATIVE,
+        type=NON_NEGATIVE("noise standard deviations"),
         default=3.0,
         show_default=True,
         metavar="SIGMAS",
@@ -143,7 +158,7 @@ _ESTIMATOR_OPTIONS = [
     ),
     click.option(
         "--min-contact-duration",
-        type=NON_NEGATIVE,
+        type=NON_NEGATIVE("s"),
         default=0.005,
         show_default=True,
         metavar="S",
@@ -152,7 +167,7 @@ _ESTIMATOR_OPTIONS = [
     ),
     click.option(
         "--drift-time-constant",
-        type=POSITIVE,
+        type=POSITIVE("s"),
         default=10.0,
         show_default=True,
         metavar="S",
@@ -164,19 +179,19 @@ _ESTIMATOR_OPTIONS = [
         show_default=True,
         help="Subtract the drift followed while untouched (--no-drift-tracking: report it only, the papers').",
     ),
-    click.option("--contact-threshold", type=NON_NEGATIVE, default=0.05, show_default=True, metavar="N", help="In contact while |f| is at least this, N."),
+    click.option("--contact-threshold", type=NON_NEGATIVE("N"), default=0.05, show_default=True, metavar="N", help="In contact while |f| is at least this, N."),
     click.option(
         "--latch-window",
-        type=(float, float),
+        type=(NON_NEGATIVE("N"), NON_NEGATIVE("N")),
         default=(0.2 * KGF, 0.5 * KGF),
         show_default=True,
         metavar="LOW HIGH",
         help="Light-force window for latching the contact point, N (default 0.2–0.5 kgf).",
     ),
-    click.option("--h-min", type=NON_NEGATIVE, default=0.5, show_default=True, metavar="N·mm", help="Smallest |h| reported as a line contact, N·mm."),
+    click.option("--h-min", type=NON_NEGATIVE("N·mm"), default=0.5, show_default=True, metavar="N·mm", help="Smallest |h| reported as a line contact, N·mm."),
     click.option(
         "--force-noise",
-        type=NON_NEGATIVE,
+        type=NON_NEGATIVE("N"),
         default=NANO17.force_std[0],
         show_default=True,
         metavar="N",
@@ -184,7 +199,7 @@ _ESTIMATOR_OPTIONS = [
     ),
     click.option(
         "--moment-noise",
-        type=NON_NEGATIVE,
+        type=NON_NEGATIVE("N·mm"),
         default=NANO17.moment_std[0] * 1e3,
         show_default=True,
         metavar="N·mm",
@@ -192,7 +207,7 @@ _ESTIMATOR_OPTIONS = [
     ),
     click.option(
         "--relatch-distance",
-        type=POSITIVE,
+        type=POSITIVE("mm"),
         metavar="MM",
         help="Latch again when, at light force, the soft-finger contact point moves farther than this from the "
         "latched one, mm (default: only when contact is lost and regained, the papers').",
@@ -213,7 +228,7 @@ _ESTIMATOR_OPTIONS = [
     ),
     click.option(
         "--skin-law",
-        type=(float, float, float),
+        type=(POSITIVE("N/m^P"), POSITIVE(""), POSITIVE("mm")),
         default=None,
         metavar="K P MAX_MM",
         help="Skin law of the depth compensation: normal force = K·depth^P (N, m), depth at most MAX_MM mm "
@@ -229,10 +244,10 @@ _ESTIMATOR_OPTIONS = [
         "contact was excited about two tangent axes and h stayed on one, else unconfirmed; under confirmed "
         "evidence the direction comes from the window); off: the papers' per-sample line/point.",
     ),
-    click.option("--evidence-window", type=POSITIVE, default=2.0, show_default=True, metavar="S", help="Sliding window of the line evidence, s."),
+    click.option("--evidence-window", type=POSITIVE("s"), default=2.0, show_default=True, metavar="S", help="Sliding window of the line evidence, s."),
     click.option(
         "--area-ratio",
-        type=(POSITIVE, POSITIVE),
+        type=(POSITIVE("(eigenvalue ratio)"), POSITIVE("(eigenvalue ratio)")),
         default=(0.2, 0.1),
         show_default=True,
         metavar="ENTER LEAVE",
@@ -241,7 +256,7 @@ _ESTIMATOR_OPTIONS = [
     ),
     click.option(
         "--excitation",
-        type=(POSITIVE, POSITIVE),
+        type=(POSITIVE("(eigenvalue ratio)"), POSITIVE("N")),
         default=(0.5, 0.01),
         show_default=True,
         metavar="RATIO MIN_N",
@@ -250,7 +265,7 @@ _ESTIMATOR_OPTIONS = [
     ),
     click.option(
         "--evidence-reset-distance",
-        type=POSITIVE,
+        type=POSITIVE("mm"),
         default=1.0,
         show_default=True,
         metavar="MM",
@@ -258,7 +273,7 @@ _ESTIMATOR_OPTIONS = [
     ),
     click.option(
         "--evidence-max-std",
-        type=POSITIVE,
+        type=POSITIVE("deg"),
         default=10.0,
         show_default=True,
         metavar="DEG",
@@ -336,6 +351,7 @@ the raw wrench; with --to-bag and no -o no CSV is written.
 @click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Also draw the papers' four panels (force, moment, |h|, direction) to this PNG/PDF/SVG.")
 @click.option("--plot-units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the plot's force and moment axes.")
 @click.option("--topic", metavar="TOPIC", help="Bag input: the geometry_msgs/msg/WrenchStamped topic (default: the bag's only one).")
+@click.option("--allow-partial", is_flag=True, help="Bag input: use a damaged bag's readable messages (with a warning) instead of stopping.")
 @click.option("--to-bag", "to_bag", type=click.Path(file_okay=False), metavar="DIR", help="Also write the estimates as a rosbag2 directory (MCAP storage); DIR must not exist.")
 @click.option("--rerun", "rerun_spawn", is_flag=True, help="Show the fingertip, force, contact point, normal and edge in a Rerun viewer (needs the rerun-sdk package).")
 @click.option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save the Rerun 3-D view and time series to FILE.rrd (open with `rerun FILE.rrd`).")
@@ -359,10 +375,11 @@ def estimate(
     payload=None,
     save_bias=None,
     quiet=False,
+    allow_partial=False,
     **estimator_opts,
 ):
     from softtip.examples import EXAMPLE_PATH
-    from softtip.io import Log, read_log, write_table
+    from softtip.io import Log, read_log
 
     if example == (input_path is not None):
         raise click.UsageError("give either INPUT or --example")
@@ -370,6 +387,11 @@ def estimate(
         raise click.UsageError("--units applies to INPUT; the example grasp is in SI")
     if plot_path is not None:
         _check_figure_path(plot_path)
+    _check_outputs(
+        [("INPUT", None if example else input_path), ("--payload", payload), ("--tip", tip if os.path.isfile(tip) else None),
+         ("--bias", estimator_opts.get("bias_file"))],
+        [("-o", output), ("--plot", plot_path), ("--to-bag", to_bag), ("--rerun-save", rerun_save), ("--save-bias", save_bias)],
+    )
     fingertip = load_fingertip(tip)
     config = _make_config(estimator_opts, tip=fingertip)
 
@@ -380,7 +402,8 @@ def estimate(
         log = read_log(sys.stdin, units=units)
     elif _is_bag(input_path):
         bag = _optional("softtip.bag", "ros")
-        bag_log = bag.read_bag(input_path, topic)
+        bag_log = bag.read_bag(input_path, topic, allow_partial=allow_partial)
+        _bag_warnings(input_path, bag_log)
         # t counts from the first message; the absolute stamps go along as an extra column
         extra = {"stamp_ns": [str(v) for v in bag_log.stamps_ns.tolist()]}
         units = units or "si"
@@ -403,16 +426,20 @@ def estimate(
         click.echo(f"softtip: warning: {note}", err=True)
     if topic is not None and bag_log is None:
         raise click.UsageError("--topic applies to bag input only")
+    if allow_partial and bag_log is None:
+        raise click.UsageError("--allow-partial applies to bag input only")
     if payload is not None:  # gravity compensation first: the tare then removes only the sensor bias
         from softtip.payload import compensate_log
 
         log = compensate_log(log, payload)
+    check_lowpass(estimator_opts["lowpass"], log.t)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", EstimatorWarning)  # printed below, from est.warnings
             est = run_estimate(log.t, log.wrench, fingertip, config)
     except ValueError as exc:  # e.g. a low-pass cutoff above Nyquist for this log's rate
         raise click.UsageError(str(exc)) from None
+    _check_units(est, fingertip, config, log.units, log.source)
 
     columns = est.columns()
     if output_units == "kgf-mm":
@@ -423,54 +450,13 @@ def estimate(
     for name, values in log.extra.items():
         columns[name if name not in columns else f"input_{name}"] = np.asarray(values)
 
-    viz = rerun_tmp = None
-    if rerun_spawn or rerun_save:
-        viz = _optional("softtip.viz", "viz")
-        if rerun_save:
-            rerun_tmp = Path(rerun_save).with_name(f".{Path(rerun_save).name}.partial")
-    plot_tmp = None
-    bag_written = False
-    try:
-        if plot_path is not None:
-            from softtip.plot import plot_estimates
-
-            # drawn to a temporary file first: a failure leaves neither output behind
-            plot_path = Path(plot_path)
-            plot_tmp = plot_path.with_name(f".{plot_path.name}.partial{plot_path.suffix}")
-            source = "example grasp" if example else Path(log.source).name
-            threshold = np.maximum(config.h_sigmas * est.h_std, config.h_min)
-            plot_estimates(
-                est, plot_tmp, units=plot_units, title=f"softtip: {source}", h_threshold=threshold,
-                fmt=plot_path.suffix.lower().lstrip("."),
-            )  # fmt: skip
-        if viz is not None:
-            logger = viz.RerunLogger(fingertip, save=rerun_tmp, spawn=rerun_spawn)
-            logger.log_estimates(est)
-            logger.close()
-        if to_bag is not None:
-            bag = _optional("softtip.bag", "ros")
-            if bag_log is not None:
-                bag.write_estimates_bag(to_bag, est, bag_log.wrench, bag_log.stamps_ns, bag_log.frame_id, bag_log.topic)
-            else:
-                bag.write_estimates_bag(to_bag, est, log.wrench)
-            bag_written = True
-        if output is not None or to_bag is None:
-            with _progress_bar(len(est), "writing") as bar:
-                write_table(columns, output, metadata=_parquet_metadata(fingertip, tip, output_units, log), progress=bar.update)
-        if plot_tmp is not None:
-            os.replace(plot_tmp, plot_path)
-            plot_tmp = None
-        if rerun_tmp is not None:
-            os.replace(rerun_tmp, rerun_save)
-            rerun_tmp = None
-        bag_written = False  # every output is in place: keep the bag
-    finally:
-        if plot_tmp is not None:
-            plot_tmp.unlink(missing_ok=True)
-        if rerun_tmp is not None:
-            rerun_tmp.unlink(missing_ok=True)
-        if bag_written:
-            shutil.rmtree(to_bag, ignore_errors=True)
+    source = "example grasp" if example else Path(log.source).name
+    _write_estimate_outputs(
+        est, columns, log, bag_log, config, fingertip,
+        output=output, plot_path=plot_path, plot_units=plot_units, title=f"softtip: {source}",
+        to_bag=to_bag, rerun_spawn=rerun_spawn, rerun_save=rerun_save,
+        metadata=_parquet_metadata(fingertip, tip, output_units, log),
+    )  # fmt: skip
 
     counts = {name: int(np.count_nonzero(est.state == code)) for code, name in enumerate(STATES)}
     _tare_warnings(est)
@@ -504,6 +490,92 @@ def estimate(
     )
     for line in format_summary(summarise_contacts(est)):
         click.echo(f"softtip: {line}", err=True)
+
+
+def _check_units(est, fingertip, config: EstimatorConfig, units: str, source: str) -> None:
+    """Exit 2 when the moment-to-force ratio puts the force far outside the fingertip (wrong --units or --tip)."""
+    from softtip.lever import check_force_lever
+
+    check_force_lever(
+        est.wrench[~est.taring], fingertip, units=units, source=source, min_force=max(0.1, config.contact_threshold)
+    )
+
+
+def _bag_warnings(path: str, bag_log) -> None:
+    """Say what was odd about a bag that was read anyway (damaged with --allow-partial; repeated stamps)."""
+    if bag_log.damage:
+        click.echo(f"softtip: warning: {path}: damaged bag, {len(bag_log.t)} samples used: {bag_log.damage}", err=True)
+    if bag_log.repeated_stamps:
+        click.echo(
+            f"softtip: {path}: {bag_log.repeated_stamps} message(s) repeat the previous header.stamp (kept)", err=True
+        )
+
+
+def _check_outputs(inputs, outputs) -> None:
+    """Exit 2 when an output is an input or another output of the run (:func:`softtip.atomic.check_distinct`)."""
+    from softtip.atomic import check_distinct
+
+    check_distinct(inputs, outputs)
+
+
+def _write_estimate_outputs(
+    est, columns, log, bag_log, config, fingertip, *, output, plot_path, plot_units, title, to_bag, rerun_spawn, rerun_save,
+    metadata,
+) -> None:
+    """Write every output of ``estimate``; all appear together, or none (and no temporary file stays)."""
+    import io as _io
+
+    from softtip.atomic import AtomicFile, cannot_write, commit_all, write_stdout
+    from softtip.io import write_table
+
+    viz = _optional("softtip.viz", "viz") if (rerun_spawn or rerun_save) else None
+    pending: list[AtomicFile] = []
+    bag_written = False
+    try:
+        if plot_path is not None:
+            from softtip.plot import plot_estimates
+
+            # drawn in memory first: a full disk then gives the OS's reason, not the image writer's
+            image = _io.BytesIO()
+            threshold = np.maximum(config.h_sigmas * est.h_std, config.h_min)
+            plot_estimates(
+                est, image, units=plot_units, title=title, h_threshold=threshold,
+                fmt=Path(plot_path).suffix.lower().lstrip("."),
+            )  # fmt: skip
+            pending.append(AtomicFile(plot_path))
+            try:
+                with pending[-1].open("wb") as fh:
+                    fh.write(image.getbuffer())
+            except OSError as exc:
+                raise cannot_write(plot_path, exc) from None
+        if viz is not None:
+            rerun_file = None
+            if rerun_save:
+                pending.append(rerun_file := AtomicFile(rerun_save))
+            logger = viz.RerunLogger(fingertip, save=None if rerun_file is None else rerun_file.tmp, spawn=rerun_spawn)
+            logger.log_estimates(est)
+            logger.close()
+        if to_bag is not None:
+            bag = _optional("softtip.bag", "ros")
+            if bag_log is not None:
+                bag.write_estimates_bag(to_bag, est, bag_log.wrench, bag_log.stamps_ns, bag_log.frame_id, bag_log.topic)
+            else:
+                bag.write_estimates_bag(to_bag, est, log.wrench)
+            bag_written = True
+        # the table last, atomically (softtip.atomic, through write_table); then the others are put in place
+        if output is not None:
+            with _progress_bar(len(est), "writing") as bar:
+                write_table(columns, output, metadata=metadata, progress=bar.update)
+        elif to_bag is None:
+            with _progress_bar(len(est), "writing") as bar:
+                write_stdout(lambda out: write_table(columns, out, progress=bar.update))
+        commit_all(pending)
+        bag_written = False  # every output is in place: keep the bag
+    finally:
+        for f in pending:
+            f.discard()
+        if bag_written:
+            shutil.rmtree(to_bag, ignore_errors=True)
 
 
 class _NoProgress:
@@ -580,6 +652,7 @@ def _tare_warnings(est) -> None:
 
 def _make_config(opts: dict, sample_rate: float | None = None, tip: Fingertip | None = None) -> EstimatorConfig:
     """The :class:`EstimatorConfig` of the shared estimator options (CLI units → SI)."""
+    check_pair_increasing("--latch-window", opts["latch_window"], "N")
     try:
         comp, fixed = opts["depth_compensation"], opts["fixed_depth"]
         if comp is False and fixed:
@@ -688,14 +761,14 @@ an error (exit 1).
 )
 @click.option("--netft", "host", metavar="HOST", help="Address of the Net F/T / Axia.")
 @click.option("--replay", "replay", type=click.Path(dir_okay=False), metavar="LOG.csv", help="Replay a recorded CSV log (columns t, fx, fy, fz, mx, my, mz) instead.")
-@click.option("--speed", type=float, default=1.0, show_default=True, help="Replay speed: 1 real time, 2 twice as fast, 0 as fast as possible.")
+@click.option("--speed", type=Number("× real time", 0.0, MAX_SPEED), default=1.0, show_default=True, help="Replay speed: 1 real time, 2 twice as fast, 0 as fast as possible.")
 @click.option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the replayed log's wrench.")
-@click.option("--rdt-port", type=int, default=49152, show_default=True, help="UDP port of the sensor's RDT server.")
-@click.option("--http-port", type=int, default=80, show_default=True, help="HTTP port of the sensor's web server (calibration).")
-@click.option("--timeout", type=float, default=2.0, show_default=True, metavar="S", help="Give up after S seconds without data from the sensor.")
+@click.option("--rdt-port", type=PORT, default=49152, show_default=True, help="UDP port of the sensor's RDT server.")
+@click.option("--http-port", type=PORT, default=80, show_default=True, help="HTTP port of the sensor's web server (calibration).")
+@click.option("--timeout", type=Number("s", 0.0, MAX_TIMEOUT, min_open=True), default=2.0, show_default=True, metavar="S", help="Give up after S seconds without data from the sensor.")
 @click.option("--device-bias", is_flag=True, help="Send the sensor's own bias (zero) command at start, before softtip's tare.")
 @click.option("--strict", metavar="FAULTS", default="", help="Comma-separated faults that end the stream (exit 1): status, restart, stall, lost, duplicate, late, malformed, dropped, or all. Default: none (counted, warned).")
-@click.option("--duration", type=float, metavar="S", help="Stop after S seconds (default: until Ctrl-C or the end of the replayed log).")
+@click.option("--duration", type=POSITIVE("s"), metavar="S", help="Stop after S seconds (default: until Ctrl-C or the end of the replayed log).")
 @click.option("--record", type=click.Path(dir_okay=False), metavar="FILE.csv", help="Record raw samples and estimates to FILE.csv as they come.")
 @click.option("--view/--no-view", default=None, help="Live terminal view (default: when standard error is a terminal).")
 @click.option("--rerun", "rerun_spawn", is_flag=True, help="Show the 3-D view live in a Rerun viewer (needs the rerun-sdk package; at most 50 samples/s are drawn).")
@@ -735,10 +808,11 @@ def stream(
         raise click.UsageError("give either --netft HOST or --replay LOG.csv")
     if payload is not None and replay is None:
         raise click.UsageError("--payload needs the orientation columns of a replayed log (--replay LOG.csv)")
-    if duration is not None and not duration > 0:
-        raise click.UsageError(f"--duration must be positive, got {duration}")
-    if not speed >= 0:
-        raise click.UsageError(f"--speed must be 0 (as fast as possible) or positive, got {speed}")
+    if 0 < speed < MIN_SPEED:
+        raise click.BadParameter(
+            f"{speed:g}; expected 0 (as fast as possible) or a number in [{MIN_SPEED:g}, {MAX_SPEED:g}] × real time",
+            param_hint="'--speed'",
+        )
     faults = {f.strip() for f in strict.split(",") if f.strip()}
     if "all" in faults:
         faults = set(FAULTS)
@@ -746,6 +820,11 @@ def stream(
         raise click.UsageError(f"--strict: unknown fault(s) {', '.join(sorted(faults - set(FAULTS)))}; expected some of {', '.join(FAULTS)} or all")
     if faults and host is None:
         raise click.UsageError("--strict applies to a live sensor (--netft HOST)")
+    _check_outputs(
+        [("--replay", replay), ("--payload", payload), ("--tip", tip if os.path.isfile(tip) else None),
+         ("--bias", estimator_opts.get("bias_file"))],
+        [("--record", record), ("--rerun-save", rerun_save)],
+    )
     fingertip = load_fingertip(tip)
     recorder = Recorder(record) if record is not None else None
     viz = _optional("softtip.viz", "viz") if (rerun_spawn or rerun_save) else None
@@ -778,6 +857,8 @@ def stream(
                 rate = f"{d.rate_hz:g} Hz" if d.rate_hz else "rate unknown"
                 info = f"({d.product}, {d.force_unit} / {d.torque_unit}, {rate})"
             lowpass = estimator_opts["lowpass"]
+            if lowpass is not None and source.rate_hz is not None:
+                check_lowpass(lowpass, source.rate_hz)
             config = _make_config(
                 estimator_opts, sample_rate=source.rate_hz if lowpass is not None else None, tip=fingertip
             )
@@ -873,10 +954,10 @@ tangent plane as a trace, and the state over time).
     metavar="E1,E2,...",
     help="Run only these experiments (comma-separated ids E1–E6, X1).",
 )
-@click.option("--seed", type=int, default=2006, show_default=True, help="Seed of the simulated sensor noise.")
+@click.option("--seed", type=click.IntRange(min=0), default=2006, show_default=True, help="Seed of the simulated sensor noise.")
 @click.option(
     "--jobs",
-    type=click.IntRange(min=1),
+    type=click.IntRange(1, 64),
     default=min(4, os.cpu_count() or 1),
     show_default="min(4, CPUs)",
     help="Worker processes.",

@@ -6,6 +6,8 @@ import sys
 
 import click
 
+from softtip.atomic import write_stdout
+from softtip.cli_types import Number
 from softtip.errors import InputError
 from softtip.examples import EXAMPLE_PROBING_PATH, EXAMPLE_STILL_PATH
 from softtip.noise import NANO17
@@ -64,6 +66,12 @@ def _example_or_log(input_path, example: bool, units: str, path, what: str) -> s
     return str(path) if example else input_path
 
 
+def _check_output(input_path: str, output: str | None) -> None:
+    from softtip.atomic import check_distinct
+
+    check_distinct([("LOG", input_path)], [("-o", output)])
+
+
 def _fail(ctx: click.Context, exc: InputError) -> None:
     # the same message and exit code as the main group gives, also when called on its own
     click.echo(f"softtip: error: {exc}", err=True)
@@ -102,9 +110,9 @@ capsule's offset of its axis from the sensor's z axis is its axis_offset.
 @click.option("--guide", is_flag=True, help="Print how to record a probing log (where, how hard and how to press) and exit.")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="Fingertip TOML file to write (default: standard output).")
 @click.option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the log's wrench.")
-@click.option("--tare-duration", type=float, default=0.2, show_default=True, metavar="S", help="Average the first S seconds (untouched) as the sensor bias; 0 if LOG is tared.")
-@click.option("--contact-threshold", type=float, default=0.05, show_default=True, metavar="N", help="A press lasts while |f| is at least this (at least 4 times the force noise's magnitude), N.")
-@click.option("--min-force", type=float, default=0.5, show_default=True, metavar="N", help="Only samples with |f| at least this enter the fit, N.")
+@click.option("--tare-duration", type=Number("s", 0.0), default=0.2, show_default=True, metavar="S", help="Average the first S seconds (untouched) as the sensor bias; 0 if LOG is tared.")
+@click.option("--contact-threshold", type=Number("N", 0.0, min_open=True), default=0.05, show_default=True, metavar="N", help="A press lasts while |f| is at least this (at least 4 times the force noise's magnitude), N.")
+@click.option("--min-force", type=Number("N", 0.0), default=0.5, show_default=True, metavar="N", help="Only samples with |f| at least this enter the fit, N.")
 @click.option("--rigid", is_flag=True, help="Do not fit the skin's indentation (radius then comes out short by about the indentation).")
 @click.option("--mesh", "mesh_path", type=click.Path(dir_okay=False), help="--shape mesh: the fingertip mesh (a mesh fingertip .toml, or .stl/.obj/.ply with --mesh-units); its shift on the sensor is fitted.")
 @click.option("--mesh-units", type=click.Choice(["m", "cm", "mm", "um", "in"]), help="Length unit of a bare --mesh file.")
@@ -150,6 +158,7 @@ def calibrate(
         return
     input_path = _example_or_log(input_path, example, units, EXAMPLE_PROBING_PATH, "probing log")
     try:
+        _check_output(input_path, output)
         log = _read_probing(input_path, units)
         cal = calibrate_fingertip(
             log.t, log.wrench, shape, tare_duration=tare_duration, contact_threshold=contact_threshold,
@@ -163,7 +172,7 @@ def calibrate(
             click.echo(f"softtip: fingertip -> {output}", err=True)
         else:
             click.echo(report, err=True)
-            click.echo(cal.tip.to_toml(), nl=False)
+            write_stdout(cal.tip.to_toml())
     except InputError as exc:
         _fail(ctx, exc)
         return
@@ -208,6 +217,7 @@ def calibrate_payload(ctx, input_path, output, units, example):
 
     input_path = _example_or_log(input_path, example, units, EXAMPLE_STILL_PATH, "still log")
     try:
+        _check_output(input_path, output)
         log = _read(input_path, units)
         fit = fit_payload(log.wrench, read_orientation(log), source=log.source)
         b = fit.bias
@@ -226,6 +236,6 @@ def calibrate_payload(ctx, input_path, output, units, example):
             click.echo(f"softtip: payload -> {output}", err=True)
         else:
             click.echo(fit.summary(), err=True)
-            click.echo(text, nl=False)
+            write_stdout(text)
     except InputError as exc:
         _fail(ctx, exc)

@@ -88,6 +88,12 @@ a summary on standard error.
             raise click.BadParameter("expected three finite numbers, m/s²", param_hint="--gravity")
         if plot_path is not None:
             check_figure_path(plot_path)
+        from softtip.atomic import check_distinct
+
+        check_distinct(
+            [("INPUT", p) for p in inputs] + [("--hand", hand_file), ("--bias", estimator_opts.get("bias_file"))],
+            [("-o", output), ("--plot", plot_path)],
+        )
         fingertip = load_fingertip(tip)
         config = make_config(estimator_opts)
         if len(inputs) == 1:

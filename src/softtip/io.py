@@ -39,7 +39,6 @@ partial file behind and never touches an existing file at the destination.
 
 from __future__ import annotations
 
-import contextlib
 import csv
 import difflib
 import gc
@@ -48,7 +47,6 @@ import itertools
 import math
 import os
 import re
-import secrets
 import sys
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -1113,30 +1111,7 @@ def _write_parquet(out: TextIO, plan: _Plan) -> None:
 
 
 def _write_atomic(path: str, plan: _Plan) -> None:
-    if os.path.isdir(path):
-        raise InputError(f"{path}: is a directory; expected a file name for the output")
-    directory, name = os.path.split(os.path.abspath(path))
-    tmp = os.path.join(directory, f".{name}.{secrets.token_hex(4)}.tmp")
-    try:
-        # os.open with 0o666 lets the umask decide the mode, as a plain open(path, "w")
-        # would (tempfile would make it 0o600).
-        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
-    except OSError as exc:
-        raise _cannot_write(path, exc) from None
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
-            _write_rows(fh, plan)
-            fh.flush()
-            os.fsync(fh.fileno())
-        try:
-            os.replace(tmp, path)
-        except OSError as exc:
-            raise _cannot_write(path, exc) from None
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
+    from softtip.atomic import atomic_write
 
-
-def _cannot_write(path: str, exc: OSError) -> InputError:
-    return InputError(f"{path}: cannot write ({exc.strerror or exc}); expected a writable location")
+    with atomic_write(path) as fh:
+        _write_rows(fh, plan)

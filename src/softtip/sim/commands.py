@@ -7,12 +7,14 @@ metres); forces accept ``N`` or ``kgf`` (``0.5kgf``; bare: newtons); angles are 
 from __future__ import annotations
 
 import math
+import os
 import re
-import sys
 from pathlib import Path
 
 import click
 
+from softtip.atomic import AtomicFile, cannot_write, check_distinct, commit_all, write_stdout
+from softtip.cli_types import Number
 from softtip.errors import InputError
 from softtip.sim.objects import OBJECT_KINDS
 from softtip.sim.scenario import (
@@ -23,11 +25,17 @@ from softtip.sim.scenario import (
     ROCK_AMPLITUDE_DEG,
     ROCK_LOAD,
 )
-from softtip.sim.simulate import log_csv_text, run_simulation, write_log_csv, write_truth_json
+from softtip.sim.simulate import log_csv_text, run_simulation, truth_json_text
 from softtip.sim.skin import DEFAULT_ELEMENTS
 from softtip.units import KGF, UNIT_SYSTEMS
 
 __all__ = ["simulate", "parse_length", "parse_force"]
+
+#: Ranges of the simulation's size options (a larger run would not fit in memory)
+MAX_RATE = 100_000.0  # Hz
+MAX_SAMPLES = 10_000_000
+MAX_ELEMENTS = 200_000
+MAX_FRICTION = 10.0
 
 _LENGTH_UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6, "µm": 1e-6}
 _FORCE_UNITS = {"n": 1.0, "kgf": KGF}
@@ -86,20 +94,48 @@ class _Force(click.ParamType):
 LENGTH, FORCE = _Length(), _Force()
 
 
+def _check_sizes(options: dict) -> None:
+    """Sample count and skin thickness: a run that cannot fit in memory, or a skin thicker than the fingertip."""
+    duration = 10.0 if options["duration"] is None else options["duration"]
+    n = options["rate"] * duration
+    if n > MAX_SAMPLES:
+        raise click.BadParameter(
+            f"{options['rate']:g} Hz for {duration:g} s is {n:.3g} samples; expected at most {MAX_SAMPLES:g} "
+            "(lower --rate or --duration)",
+            param_hint="'--rate'",
+        )
+    if options["size"] is not None and not options["size"] > 0:
+        raise click.BadParameter(f"{options['size'] * 1e3:g} mm; expected a positive length", param_hint="'--size'")
+    if not options["force"] > 0:
+        raise click.BadParameter(f"{options['force']:g} N; expected a positive force (N or kgf)", param_hint="'--force'")
+    thickness = options["thickness"]
+    try:
+        from softtip.fingertip import load_fingertip
+
+        _, reach = load_fingertip(options["tip"]).bounding_sphere
+    except (InputError, ValueError, OSError):
+        return  # run_simulation names the problem with --tip
+    if not 0.0 < thickness < reach:
+        raise click.BadParameter(
+            f"{thickness * 1e3:g} mm; expected a skin thickness in (0, {reach * 1e3:g}) mm, less than the fingertip's size",
+            param_hint="'--thickness'",
+        )
+
+
 @click.command("simulate")
 @click.option("--object", "object_kind", type=click.Choice(OBJECT_KINDS), default="plate", show_default=True,
               help="What the fingertip touches.")
 @click.option("--size", type=LENGTH, default=None,
               help="Plate thickness, or cylinder/stick/fringe diameter (e.g. 2mm). Defaults: plate 1mm, "
                    "cylinder 6mm, stick 4mm, fringe 40mm.")
-@click.option("--angle", "angle_deg", type=float, default=0.0, show_default=True,
+@click.option("--angle", "angle_deg", type=Number("deg"), default=0.0, show_default=True,
               help="Direction of the edge/axis/fringe at the contact, degrees from the sensor x axis "
                    "(manual §3.4 tangent frame; 90 = along the hand's joint axes).")
 @click.option("--scenario", type=click.Choice(["paper", "push", "friction"]), default="paper", show_default=True,
               help="paper: the papers' two-fingered grasp with joint and gravity disturbances; "
                    "push: a plain push; friction: the papers' grasp (weightless object) with a friction load "
                    "during the hold (--load, --load-direction, --load-profile).")
-@click.option("--load", "load_ratio", type=click.FloatRange(0.0), default=0.25, show_default=True,
+@click.option("--load", "load_ratio", type=Number("(fraction of the grasp force)", 0.0), default=0.25, show_default=True,
               help="friction scenario: tangential load, a fraction of the grasp force.")
 @click.option("--load-direction", type=click.Choice(["across", "along"]), default="across", show_default=True,
               help="friction scenario: load across the line or along it.")
@@ -109,45 +145,45 @@ LENGTH, FORCE = _Length(), _Force()
 @click.option("--tip", default="murakami2006", show_default=True, help="Fingertip preset or TOML file.")
 @click.option("--edge-radius", type=LENGTH, default=0.0, show_default=True,
               help="Plate corner radius or wedge tip radius (length).")
-@click.option("--apex-angle", "apex_angle_deg", type=float, default=90.0, show_default=True,
+@click.option("--apex-angle", "apex_angle_deg", type=Number("deg", 0.0, 180.0, min_open=True, max_open=True), default=90.0, show_default=True,
               help="Wedge apex angle, degrees.")
-@click.option("--tilt", "tilt_deg", type=float, default=45.0, show_default=True,
+@click.option("--tilt", "tilt_deg", type=Number("deg", 0.0, 90.0), default=45.0, show_default=True,
               help="Fringe: contact normal's angle from the cylinder side toward its bottom face, degrees.")
 @click.option("--force", type=FORCE, default="0.5kgf", show_default=True, help="Held grasp force (N or kgf).")
-@click.option("--duration", type=float, default=None, help="Recorded time, s [default: 10, or the end of --rock].")
-@click.option("--t-contact", type=float, default=2.0, show_default=True, help="Time of first touch, s.")
-@click.option("--t-stable", type=float, default=4.0, show_default=True, help="End of the force ramp, s.")
-@click.option("--rate", type=float, default=50.0, show_default=True, help="Sample rate, Hz.")
-@click.option("--joint-rotation", "joint_rotation_deg", type=float, default=JOINT_ROTATION_DEG, show_default=True,
+@click.option("--duration", type=Number("s", 0.0, min_open=True), default=None, help="Recorded time, s [default: 10, or the end of --rock].")
+@click.option("--t-contact", type=Number("s", 0.0), default=2.0, show_default=True, help="Time of first touch, s.")
+@click.option("--t-stable", type=Number("s", 0.0, min_open=True), default=4.0, show_default=True, help="End of the force ramp, s.")
+@click.option("--rate", type=Number("Hz", 0.0, MAX_RATE, min_open=True), default=50.0, show_default=True, help="Sample rate, Hz.")
+@click.option("--joint-rotation", "joint_rotation_deg", type=Number("deg", -90.0, 90.0), default=JOINT_ROTATION_DEG, show_default=True,
               help="paper: object rotation about the joint axis once the grasp holds it, degrees.")
-@click.option("--gravity-spin", "gravity_spin_deg", type=float, default=1.0, show_default=True,
+@click.option("--gravity-spin", "gravity_spin_deg", type=Number("deg", -90.0, 90.0), default=1.0, show_default=True,
               help="paper: object rotation about the grasp axis from its weight, degrees.")
-@click.option("--mass", "object_mass", type=float, default=OBJECT_MASS, show_default=True,
+@click.option("--mass", "object_mass", type=Number("kg", 0.0), default=OBJECT_MASS, show_default=True,
               help="paper: object mass, kg (half its weight loads each finger tangentially).")
 @click.option("--disturbance-timing", type=click.Choice(DISTURBANCE_TIMINGS), default="after_grasp",
               show_default=True,
               help="paper: after_grasp (the papers' procedure: disturbances ramp in after the grasp force "
                    "is established) or during_rise (together with the force rise; harder for the latch).")
-@click.option("--misalignment", "misalignment_deg", type=float, default=0.0, show_default=True,
+@click.option("--misalignment", "misalignment_deg", type=Number("deg", -90.0, 90.0), default=0.0, show_default=True,
               help="paper: fixed alignment error about the hand z axis, degrees.")
 @click.option("--rock", is_flag=True,
               help="paper: after the grasp, rock the object about two tangent axes and then in a figure-eight "
                    "(each segment averaging to zero tilt), the excitation that tells a line from an area; "
                    "--duration defaults to the end of the rocking.")
-@click.option("--rock-amplitude", "rock_amplitude_deg", type=float, default=ROCK_AMPLITUDE_DEG, show_default=True,
+@click.option("--rock-amplitude", "rock_amplitude_deg", type=Number("deg", 0.0, 90.0, min_open=True), default=ROCK_AMPLITUDE_DEG, show_default=True,
               help="--rock: tilt amplitude, degrees.")
-@click.option("--rock-period", type=float, default=1.0, show_default=True, help="--rock: period of the rocking, s.")
+@click.option("--rock-period", type=Number("s", 0.0, min_open=True), default=1.0, show_default=True, help="--rock: period of the rocking, s.")
 @click.option("--rock-load", type=FORCE, default=str(ROCK_LOAD), show_default=True,
               help="--rock: tangential load that comes with the tilt (N or kgf), turning with the tilt axis.")
-@click.option("--elements", "n_elements", type=click.IntRange(50), default=DEFAULT_ELEMENTS, show_default=True,
+@click.option("--elements", "n_elements", type=click.IntRange(50, MAX_ELEMENTS), default=DEFAULT_ELEMENTS, show_default=True,
               help="Skin surface elements.")
-@click.option("--modulus", type=float, default=0.6e6, show_default=True, help="Skin Winkler modulus, Pa.")
-@click.option("--shear-modulus", type=float, default=None, help="Skin shear modulus, Pa [default: modulus/3].")
-@click.option("--friction", type=float, default=1.0, show_default=True, help="Coulomb friction coefficient.")
+@click.option("--modulus", type=Number("Pa", 0.0, min_open=True), default=0.6e6, show_default=True, help="Skin Winkler modulus, Pa.")
+@click.option("--shear-modulus", type=Number("Pa", 0.0, min_open=True), default=None, help="Skin shear modulus, Pa [default: modulus/3].")
+@click.option("--friction", type=Number("", 0.0, MAX_FRICTION, min_open=True), default=1.0, show_default=True, help="Coulomb friction coefficient.")
 @click.option("--thickness", type=LENGTH, default="5mm", show_default=True, help="Skin thickness (length).")
 @click.option("--noise/--no-noise", default=True, show_default=True,
               help="Apply the sensor model (ATI Nano17 class noise and quantisation) or write the true wrench.")
-@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the noise generator.")
+@click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Seed of the noise generator.")
 @click.option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True,
               help="Units of the written log: si (N, N·m) or kgf-mm.")
 @click.option("--hand", type=click.Choice(["one-finger", "two-finger"]), default="one-finger", show_default=True,
@@ -184,24 +220,42 @@ def simulate(
         raise click.UsageError("--left-object and --to-bag go with --hand two-finger")
     if truth is None and output is not None:
         truth = output.with_name(output.stem + ".truth.json")
+    tip = options["tip"]
+    check_distinct(
+        [("--tip", tip if os.path.isfile(tip) else None)], [("-o", output), ("--truth", truth)]
+    )
     for path in (output, truth):
         if path is not None and not path.parent.exists():
             raise click.BadParameter(f"directory {path.parent} does not exist", param_hint=str(path))
+    _check_sizes(options)
     try:
         log = run_simulation(**options)
     except InputError as exc:
         raise click.BadParameter(str(exc), param_hint="--tip") from None
     except ValueError as exc:
         raise click.UsageError(str(exc)) from None
-    except RuntimeError as exc:  # the solve found no equilibrium: the load cannot be held
-        hint = "; a stiffer shear layer (e.g. --shear-modulus 2e6) holds larger loads" if options["scenario"] == "friction" else ""
-        raise click.UsageError(f"{exc}{hint}") from None
-    if output is None:
-        sys.stdout.write(log_csv_text(log, units))
-    else:
-        write_log_csv(log, output, units)
-    if truth is not None:
-        write_truth_json(log, truth)
+    except RuntimeError as exc:  # the contact solve found no equilibrium for these options
+        hint = (
+            "a stiffer shear layer (e.g. --shear-modulus 2e6) holds larger loads" if options["scenario"] == "friction"
+            else "a larger --friction or --force, a smaller --mass, or a thinner --thickness helps"
+        )
+        raise click.UsageError(f"the simulated grasp has no equilibrium with these options ({exc}); {hint}") from None
+    # both files appear together or neither does (and no temporary file stays behind)
+    files = {name: AtomicFile(path) for name, path in (("log", output), ("truth", truth)) if path is not None}
+    try:
+        texts = {"log": lambda: log_csv_text(log, units), "truth": lambda: truth_json_text(log)}
+        if output is None:
+            write_stdout(texts["log"]())
+        for name, f in files.items():
+            try:
+                with f.open() as fh:
+                    fh.write(texts[name]())
+            except OSError as exc:
+                raise cannot_write(f.path, exc) from None
+        commit_all(files.values())
+    finally:
+        for f in files.values():
+            f.discard()
 
 
 def _simulate_hand(output, truth, units, left_object, width, to_bag, options) -> None:
@@ -220,6 +274,7 @@ def _simulate_hand(output, truth, units, left_object, width, to_bag, options) ->
         raise click.BadParameter(f"{to_bag} exists; expected a new directory for the bag", param_hint="--to-bag")
     if not (0.0 < width <= 0.3):
         raise click.BadParameter(f"{width * 1e3:g} mm; expected a width between 0 and 300 mm", param_hint="--width")
+    _check_sizes(options)
     kind = options["object_kind"]
     shape = dict(edge_radius=options["edge_radius"], apex_angle=math.radians(options["apex_angle_deg"]),
                  tilt=math.radians(options["tilt_deg"]))  # fmt: skip

@@ -204,24 +204,32 @@ def truth_hand_dict(grasp: TwoFingerGrasp) -> dict:
 
 def write_two_finger(grasp: TwoFingerGrasp, out_dir) -> list:
     """Write ``right.csv``, ``left.csv`` (each finger's raw log), ``hand.toml`` (the sensor
-    poses) and ``truth.json`` (hand-frame truth) into ``out_dir`` (created; it must not exist
-    or be empty). Returns the paths written."""
+    poses) and ``truth.json`` (hand-frame truth) into the new directory ``out_dir`` (all of
+    them or, on any failure, none). Returns the paths written."""
     import json
+    import os
     from pathlib import Path
 
     from softtip.sim.simulate import write_log_csv
 
+    import shutil
+    import tempfile
+
     out = Path(out_dir)
-    if out.exists() and (not out.is_dir() or any(out.iterdir())):
-        raise FileExistsError(f"{out}: exists and is not an empty directory")
-    out.mkdir(parents=False, exist_ok=True)
-    paths = []
-    for side in SIDES:
-        write_log_csv(grasp.logs[side], out / f"{side}.csv")
-        paths.append(out / f"{side}.csv")
-    (out / "hand.toml").write_text(hand_toml(grasp), encoding="utf-8")
-    (out / "truth.json").write_text(json.dumps(truth_hand_dict(grasp), indent=1, allow_nan=False) + "\n", encoding="utf-8")
-    return paths + [out / "hand.toml", out / "truth.json"]
+    if out.exists():
+        raise FileExistsError(f"{out}: exists; expected a new directory")
+    # written in a hidden folder beside it and renamed into place: all files or none
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".partial", dir=out.parent if str(out.parent) else "."))
+    try:
+        for side in SIDES:
+            write_log_csv(grasp.logs[side], tmp / f"{side}.csv")
+        (tmp / "hand.toml").write_text(hand_toml(grasp), encoding="utf-8")
+        (tmp / "truth.json").write_text(json.dumps(truth_hand_dict(grasp), indent=1, allow_nan=False) + "\n", encoding="utf-8")
+        os.rename(tmp, out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return [out / "right.csv", out / "left.csv", out / "hand.toml", out / "truth.json"]
 
 
 def write_two_finger_bag(grasp: TwoFingerGrasp, dest, tf_rate: float = 25.0) -> None:

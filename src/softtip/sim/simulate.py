@@ -18,9 +18,7 @@ from __future__ import annotations
 import json
 import math
 import os
-import tempfile
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
@@ -386,17 +384,10 @@ def simulate_grasp(
 
 
 def _atomic_write(path: str | os.PathLike, text: str) -> None:
-    # write next to the target and rename, so a failure never leaves a partial file
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".", prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    # one writer for every output (softtip.atomic): a failure never leaves a partial file
+    from softtip.atomic import atomic_write_text
+
+    atomic_write_text(path, text)
 
 
 def log_csv_text(log: SimLog, units: str = "si") -> str:
@@ -428,9 +419,14 @@ def truth_dict(log: SimLog) -> dict:
     return out
 
 
+def truth_json_text(log: SimLog) -> str:
+    """The content of ``truth.json`` as text (see :func:`truth_dict`)."""
+    return json.dumps(truth_dict(log), indent=1, allow_nan=False) + "\n"
+
+
 def write_truth_json(log: SimLog, path: str | os.PathLike) -> None:
     """Write ``truth.json`` (see :func:`truth_dict`), replaced atomically."""
-    _atomic_write(path, json.dumps(truth_dict(log), indent=1, allow_nan=False) + "\n")
+    _atomic_write(path, truth_json_text(log))
 
 
 def run_simulation(

@@ -1,0 +1,275 @@
+"""Writing output files safely: atomically, never over an input, never leaving a partial file.
+
+Every file softtip writes (result tables, figures, fingertip and payload TOML files,
+simulated logs and their truth, Rerun recordings) goes through :class:`AtomicFile`:
+
+* a **regular file** (or a new name) is written to a hidden temporary file in the same
+  folder (``.NAME.XXXXXXXX.tmp``), flushed to disk and renamed over the destination only
+  when everything succeeded: a failure, Ctrl-C, SIGTERM or SIGHUP leaves the destination
+  as it was and removes the temporary file. An existing file keeps its permission bits. A
+  symbolic link is followed: its target is replaced and the link stays a link.
+* an existing **character device or FIFO** (``/dev/null``, ``/dev/stdout``, a named pipe)
+  is never renamed over: the content is prepared in a temporary file in the system's
+  temporary folder and then copied into the device. A **block device** or a socket is
+  refused.
+* every operating-system failure (disk full, file too large, no permission, broken pipe)
+  becomes an :class:`~softtip.errors.InputError` naming the path and the system's reason.
+
+:func:`check_distinct` refuses, before anything is computed, an output that is the same
+file as an input or as another output of the same run (same path after following links,
+or the same file under another name: a hard link).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import secrets
+import shutil
+import stat
+import sys
+import tempfile
+from collections.abc import Callable, Iterable, Iterator
+from pathlib import Path
+from typing import IO, Any
+
+from softtip.errors import InputError
+
+__all__ = ["AtomicFile", "atomic_write", "atomic_write_text", "cannot_write", "check_distinct", "commit_all", "write_stdout"]
+
+PathLike = str | os.PathLike[str]
+
+
+def cannot_write(path: PathLike | str, exc: OSError) -> InputError:
+    """The :class:`InputError` for an OS failure while writing ``path`` (path and the OS's reason)."""
+    reason = exc.strerror or str(exc)
+    if path == "standard output":
+        return InputError(f"standard output: cannot write ({reason}); the output is incomplete")
+    return InputError(f"{os.fspath(path)}: cannot write ({reason}); nothing was written there")
+
+
+def _identity(path: str) -> tuple[str, tuple[int, int] | None]:
+    """(real path, (device, inode) when the file exists)."""
+    real = os.path.realpath(path)
+    try:
+        st = os.stat(real)
+    except OSError:
+        return real, None
+    return real, (st.st_dev, st.st_ino)
+
+
+def check_distinct(inputs: Iterable[tuple[str, PathLike | None]], outputs: Iterable[tuple[str, PathLike | None]]) -> None:
+    """Refuse an output that is an input or another output of the same run.
+
+    Parameters
+    ----------
+    inputs, outputs : iterable of (label, path)
+        ``label`` names the option (``"INPUT"``, ``"-o"``, ``"--plot"``); ``path`` may be
+        ``None`` or ``"-"`` (standard input/output), which are skipped. An input that is a
+        directory (a ROS bag) also protects every file inside it.
+
+    Raises
+    ------
+    InputError
+        Naming both options and both paths. Exit code 2 on the command line.
+    """
+    seen: list[tuple[str, str, str, tuple[int, int] | None, bool]] = []
+    for label, path in inputs:
+        if path is None or os.fspath(path) == "-":
+            continue
+        p = os.fspath(path)
+        real, ident = _identity(p)
+        seen.append((label, p, real, ident, os.path.isdir(real)))
+    n_inputs = len(seen)
+    for label, path in outputs:
+        if path is None or os.fspath(path) == "-":
+            continue
+        p = os.fspath(path)
+        real, ident = _identity(p)
+        for k, (other_label, other, other_real, other_ident, is_dir) in enumerate(seen):
+            same = real == other_real or (ident is not None and ident == other_ident)
+            inside = is_dir and k < n_inputs and real.startswith(other_real.rstrip(os.sep) + os.sep)
+            if same or inside:
+                what = "input" if k < n_inputs else "output"
+                where = "inside the" if inside and not same else "the same file as the"
+                raise InputError(
+                    f"{label} {p}: is {where} {what} {other_label} {other}; refusing to overwrite it "
+                    "(give another output file name)"
+                )
+        seen.append((label, p, real, ident, False))
+
+
+class AtomicFile:
+    """One output file, written to a temporary file and put in place by :meth:`commit`.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The destination.
+
+    Attributes
+    ----------
+    path : str
+        The destination as given.
+    tmp : pathlib.Path
+        Where to write (keeps the destination's suffix, so writers that pick a format from
+        the name, e.g. matplotlib, still do).
+
+    Raises
+    ------
+    InputError
+        The destination is a directory, a block device or a socket, or the temporary file
+        cannot be created (missing folder, no permission).
+
+    Notes
+    -----
+    Use as a context manager: leaving the ``with`` block by an exception (including
+    ``KeyboardInterrupt``) removes the temporary file. :meth:`commit` may be called inside
+    the block, or later (several outputs committed together), followed by :meth:`discard`
+    on failure.
+    """
+
+    def __init__(self, path: PathLike) -> None:
+        self.path = os.fspath(path)
+        target = os.path.realpath(self.path)  # a symlink's target is replaced, not the link
+        try:
+            st = os.stat(target)
+        except FileNotFoundError:
+            st = None
+        except OSError as exc:
+            raise cannot_write(self.path, exc) from None
+        self._device = st is not None and not stat.S_ISREG(st.st_mode)
+        if st is not None:
+            if stat.S_ISDIR(st.st_mode):
+                raise InputError(f"{self.path}: is a directory; expected a file name for the output")
+            if stat.S_ISBLK(st.st_mode) or stat.S_ISSOCK(st.st_mode):
+                kind = "a block device" if stat.S_ISBLK(st.st_mode) else "a socket"
+                raise InputError(f"{self.path}: is {kind}; refusing to write there (expected a file name)")
+        self._target = target
+        self._mode = None if st is None or self._device else stat.S_IMODE(st.st_mode)
+        directory, name = os.path.split(target)
+        suffix = Path(name).suffix
+        if self._device:
+            directory = tempfile.gettempdir()
+        self.tmp = Path(directory) / f".{name}.{secrets.token_hex(4)}.tmp{suffix}"
+        try:
+            # 0o666: the umask decides the mode, as a plain open(path, "w") would
+            fd = os.open(self.tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666 if self._mode is None else 0o600)
+        except OSError as exc:
+            raise cannot_write(self.path, exc) from None
+        os.close(fd)
+        self._done = False
+
+    @property
+    def is_device(self) -> bool:
+        """The destination is an existing character device or FIFO (written into, not renamed over)."""
+        return self._device
+
+    def open(self, mode: str = "w", **kwargs: Any) -> IO[Any]:
+        """Open the temporary file (text mode: UTF-8, no newline translation unless given)."""
+        if "b" not in mode:
+            kwargs.setdefault("encoding", "utf-8")
+            kwargs.setdefault("newline", "")
+        return open(self.tmp, mode, **kwargs)
+
+    def commit(self) -> None:
+        """Put the content in place (rename, or copy into a device); the temporary file goes."""
+        if self._done:
+            return
+        try:
+            if self._device:
+                with open(self.tmp, "rb") as src, open(self._target, "wb") as dst:
+                    shutil.copyfileobj(src, dst, 1 << 20)
+                os.unlink(self.tmp)
+            else:
+                with open(self.tmp, "rb+") as fh:
+                    os.fsync(fh.fileno())
+                if self._mode is not None:
+                    os.chmod(self.tmp, self._mode)
+                os.replace(self.tmp, self._target)
+        except OSError as exc:
+            self.discard()
+            raise cannot_write(self.path, exc) from None
+        self._done = True
+
+    def discard(self) -> None:
+        """Remove the temporary file (the destination is untouched). Safe to call twice."""
+        self._done = True
+        with contextlib.suppress(OSError):
+            os.unlink(self.tmp)
+
+    def __enter__(self) -> AtomicFile:
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is not None:
+            self.discard()
+            if isinstance(exc, OSError) and not isinstance(exc, InputError):
+                raise cannot_write(self.path, exc) from None
+
+
+def commit_all(files: Iterable[AtomicFile]) -> None:
+    """Put several outputs in place: devices and pipes first (they can block or fail), then the renames.
+
+    A failure (or an interrupt) while writing into a device leaves every regular file
+    untouched; the renames that follow do not fail in practice.
+    """
+    files = list(files)
+    for f in sorted(files, key=lambda f: not f.is_device):
+        f.commit()
+
+
+@contextlib.contextmanager
+def atomic_write(path: PathLike, mode: str = "w", **kwargs: Any) -> Iterator[IO[Any]]:
+    """Open ``path`` for writing, atomically: the content appears only if the block succeeds.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "out.txt"
+    >>> with atomic_write(path) as fh:
+    ...     _ = fh.write("hello\\n")
+    >>> path.read_text()
+    'hello\\n'
+    """
+    with AtomicFile(path) as af:
+        try:
+            with af.open(mode, **kwargs) as fh:
+                yield fh
+        except OSError as exc:
+            raise cannot_write(path, exc) from None
+        af.commit()
+
+
+def atomic_write_text(path: PathLike, text: str) -> None:
+    """Write ``text`` (UTF-8) to ``path`` atomically (see :class:`AtomicFile`)."""
+    with atomic_write(path) as fh:
+        fh.write(text)
+
+
+def write_stdout(write: Callable[[IO[str]], None] | str) -> None:
+    """Write to standard output; a full device or a closed pipe becomes an :class:`InputError`.
+
+    Parameters
+    ----------
+    write : str or callable
+        The text, or a function that writes to the stream it is given.
+    """
+    try:
+        if isinstance(write, str):
+            sys.stdout.write(write)
+        else:
+            write(sys.stdout)
+        sys.stdout.flush()
+    except OSError as exc:
+        silence_stdout()
+        raise cannot_write("standard output", exc) from None
+
+
+def silence_stdout() -> None:
+    """Point file descriptor 1 at the null device, so Python's final flush cannot fail again."""
+    with contextlib.suppress(OSError, ValueError):
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+

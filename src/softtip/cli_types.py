@@ -1,0 +1,117 @@
+"""Option value types of the ``softtip`` command: every number range-checked, with its unit.
+
+A bad value exits 2 with click's ``Invalid value for '--OPTION'`` followed by what was
+expected, unit included (``expected a number > 0 s``); NaN and infinity are refused
+everywhere unless an option says otherwise.
+"""
+
+from __future__ import annotations
+
+import math
+
+import click
+import numpy as np
+
+__all__ = ["Number", "PORT", "check_lowpass", "check_pair_increasing"]
+
+#: Lowest low-pass cutoff as a fraction of the Nyquist frequency: below it the Butterworth
+#: sections lose their precision (the filter's initial state and its noise gain go wrong,
+#: then the design itself fails with "Singular matrix").
+MIN_LOWPASS_FRACTION = 1e-4
+
+
+class Number(click.ParamType):
+    """A finite float in a range, reported with its unit.
+
+    Parameters
+    ----------
+    unit : str
+        Printed after the bounds (``"s"``, ``"N"``, ``"Hz"``, ``"deg"``; ``""`` for none).
+    min, max : float, optional
+        Bounds.
+    min_open, max_open : bool
+        Whether the bound itself is excluded.
+    """
+
+    name = "NUMBER"
+
+    def __init__(
+        self, unit: str = "", min: float | None = None, max: float | None = None, *, min_open: bool = False, max_open: bool = False
+    ) -> None:
+        self.unit, self.min, self.max, self.min_open, self.max_open = unit, min, max, min_open, max_open
+
+    def expected(self) -> str:
+        """What the option accepts, e.g. ``"a number in (0, 86400] s"``."""
+        unit = f" {self.unit}" if self.unit else ""
+        if self.min is not None and self.max is not None:
+            lb, rb = "(" if self.min_open else "[", ")" if self.max_open else "]"
+            return f"a number in {lb}{self.min:g}, {self.max:g}{rb}{unit}"
+        if self.min is not None:
+            return f"a number {'>' if self.min_open else '≥'} {self.min:g}{unit}"
+        if self.max is not None:
+            return f"a number {'<' if self.max_open else '≤'} {self.max:g}{unit}"
+        return f"a finite number{unit}"
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, float) and math.isfinite(value) and self._inside(value):
+            return value
+        try:
+            v = float(value)
+        except (TypeError, ValueError):
+            self.fail(f"{value!r} is not a number; expected {self.expected()}", param, ctx)
+        if not math.isfinite(v):
+            self.fail(f"{value!r} is not a finite number; expected {self.expected()}", param, ctx)
+        if not self._inside(v):
+            self.fail(f"{value!r}; expected {self.expected()}", param, ctx)
+        return v
+
+    def _inside(self, v: float) -> bool:
+        if self.min is not None and (v < self.min or (self.min_open and v == self.min)):
+            return False
+        if self.max is not None and (v > self.max or (self.max_open and v == self.max)):
+            return False
+        return True
+
+    def __repr__(self) -> str:
+        return f"Number({self.expected()!r})"
+
+
+#: A TCP/UDP port.
+PORT = click.IntRange(1, 65535)
+
+
+def check_pair_increasing(option: str, pair: tuple[float, float], unit: str) -> None:
+    """``LOW HIGH`` with LOW < HIGH, or a :class:`click.BadParameter` naming the option."""
+    low, high = pair
+    if not low < high:
+        raise click.BadParameter(f"{low:g} {high:g}; expected LOW < HIGH, {unit}", param_hint=f"'{option}'")
+
+
+def check_lowpass(cutoff_hz: float | None, t_or_rate, option: str = "--lowpass") -> None:
+    """A low-pass cutoff between ``MIN_LOWPASS_FRACTION`` of the Nyquist frequency and the Nyquist frequency.
+
+    Parameters
+    ----------
+    cutoff_hz : float or None
+        The option's value, Hz (``None``: no filter, nothing to check).
+    t_or_rate : array-like of sample times (s) or a sample rate (Hz)
+    """
+    if cutoff_hz is None:
+        return
+    if np.ndim(t_or_rate) == 0:
+        rate = float(t_or_rate)
+    else:
+        dt = np.diff(np.asarray(t_or_rate, dtype=float))
+        dt = dt[dt > 0]
+        if not len(dt):
+            return  # one sample, or no time step: the estimator says what is wrong
+        rate = 1.0 / float(np.median(dt))
+    nyquist = 0.5 * rate
+    low = MIN_LOWPASS_FRACTION * nyquist
+    if not (low <= cutoff_hz < nyquist):
+        raise click.BadParameter(
+            f"{cutoff_hz:g} Hz; expected a cutoff in [{low:.3g}, {nyquist:g}) Hz for this sample rate ({rate:g} Hz): "
+            f"at most the Nyquist frequency, at least {MIN_LOWPASS_FRACTION:g} of it (lower cutoffs are not "
+            "computed accurately)",
+            param_hint=f"'{option}'",
+        )

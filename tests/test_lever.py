@@ -1,0 +1,66 @@
+"""The moment-to-force ratio catches a log read in the wrong units (issue 13, item 12)."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from softtip import load_example, murakami2006
+from softtip.errors import InputError
+from softtip.fingertip import Capsule, Ellipsoid, Sphere
+from softtip.io import write_table
+from softtip.lever import LEVER_MARGIN, check_force_lever, force_lever
+from softtip.units import KGF, KGF_MM
+
+SOFTTIP = str(Path(sys.executable).with_name("softtip"))
+AXES = ("fx", "fy", "fz", "mx", "my", "mz")
+
+
+def in_kgf_mm(wrench):
+    w = np.asarray(wrench)
+    return np.concatenate([w[:, :3] / KGF, w[:, 3:] / KGF_MM], axis=1)
+
+
+@pytest.mark.parametrize("tip", [murakami2006(), Sphere(0.008, (0.0, 0.0, 0.01)), Ellipsoid((0.01, 0.012, 0.02), (0.0, 0.0, 0.015)), Capsule(0.01, 0.03)])
+def test_any_contact_on_the_skin_is_plausible(tip, rng):
+    # random skin points, forces pushing in within a friction cone of 1, spin torques up to 2 N·mm
+    n = 2000
+    r = tip.project(rng.normal(size=(n, 3)) * 0.05 + tip.bounding_sphere[0])
+    normal = tip.normal(r)
+    tangent = rng.normal(size=(n, 3))
+    tangent -= np.einsum("ij,ij->i", tangent, normal)[:, None] * normal
+    f = -normal * rng.uniform(0.2, 10.0, (n, 1)) + tangent * rng.uniform(0.0, 1.0, (n, 1)) * 0.2
+    m = np.cross(r, f) + normal * rng.uniform(-2e-3, 2e-3, (n, 1))
+    for k in range(0, n, 100):  # every batch of 100 contacts, as a log's contact samples
+        lever = force_lever(np.hstack([f, m])[k : k + 100], tip)
+        assert lever.plausible and lever.median <= lever.reach
+        assert not force_lever(in_kgf_mm(np.hstack([f, m])[k : k + 100]), tip).plausible or lever.median < LEVER_MARGIN * lever.reach / 100
+
+
+def test_example_in_kgf_mm_read_as_si_is_refused():
+    ex = load_example()
+    tared = ex.wrench - ex.wrench[:10].mean(axis=0)
+    assert check_force_lever(tared, murakami2006(), units="si").median < 0.005
+    with pytest.raises(InputError, match=r"grasp.csv: the forces act 2\d{3} mm .* --units kgf-mm"):
+        check_force_lever(in_kgf_mm(tared), murakami2006(), units="si", source="grasp.csv")
+
+
+def test_too_few_samples_decide_nothing():
+    w = np.zeros((4, 6))
+    w[:, 2], w[:, 3] = -1.0, 5.0  # 5 m lever, but only four samples
+    assert force_lever(w, murakami2006()).plausible
+
+
+def test_cli_stops_a_kgf_mm_log_read_as_si(tmp_path):
+    ex = load_example()
+    w = in_kgf_mm(ex.wrench)
+    log = tmp_path / "kgf.csv"
+    write_table({"t": ex.t, **{c: w[:, i] for i, c in enumerate(AXES)}}, log, float_format="%.17g")
+    out = subprocess.run([SOFTTIP, "estimate", log, "-o", tmp_path / "e.csv"], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 2, out.stderr
+    assert "--units kgf-mm" in out.stderr and "kgf.csv" in out.stderr and "Traceback" not in out.stderr
+    assert not (tmp_path / "e.csv").exists()
+    out = subprocess.run([SOFTTIP, "estimate", log, "--units", "kgf-mm", "-o", tmp_path / "e.csv"], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr

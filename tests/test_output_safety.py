@@ -1,0 +1,300 @@
+"""Nothing the user gave is destroyed; every failure to write is a clear exit 2 with nothing left behind.
+
+Output onto an input (also through a symlink or a hard link), onto another output, onto a
+FIFO; disk full and file too large (RLIMIT_FSIZE); standard output on a full device or a
+closed pipe; SIGTERM and SIGHUP in the middle of writing. All through the installed
+``softtip`` command.
+"""
+
+import os
+import resource
+import shutil
+import signal
+import stat
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from softtip import EXAMPLE_PATH
+from softtip.atomic import AtomicFile, atomic_write_text, check_distinct
+from softtip.cli import main
+from softtip.errors import InputError
+from softtip.io import write_table
+
+SOFTTIP = str(Path(sys.executable).with_name("softtip"))
+posix_only = pytest.mark.skipif(os.name != "posix", reason="FIFOs, rlimits and signals are POSIX")
+
+
+def run(*args, cwd=None, **kw):
+    return subprocess.run([SOFTTIP, *map(str, args)], capture_output=True, text=True, timeout=120, cwd=cwd, **kw)
+
+
+def run_here(*args):
+    """The command in-process (click's runner): (exit code, everything it printed)."""
+    result = CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
+    return result.exit_code, result.output
+
+
+def listing(folder):
+    return sorted(p.name for p in Path(folder).iterdir())
+
+
+@pytest.fixture
+def log(tmp_path):
+    path = tmp_path / "grasp.csv"
+    shutil.copy(EXAMPLE_PATH, path)
+    return path
+
+
+def payload_log(path, n=200):
+    """A contact-free log with varied orientations: input of ``calibrate-payload``."""
+    from scipy.spatial.transform import Rotation
+
+    from softtip.payload import Payload, payload_wrench
+
+    rng = np.random.default_rng(5)
+    q = Rotation.from_rotvec(rng.normal(size=(n, 3)) * 0.8).as_quat(scalar_first=True)
+    w = payload_wrench(q, Payload(0.02, (0.001, -0.0005, 0.02))) + rng.normal(scale=1e-3, size=(n, 6)) * [1, 1, 1, 1e-3, 1e-3, 1e-3]
+    cols = {"t": np.arange(n) * 0.02, **{c: w[:, i] for i, c in enumerate(("fx", "fy", "fz", "mx", "my", "mz"))}}
+    cols.update({c: q[:, i] for i, c in enumerate(("qw", "qx", "qy", "qz"))})
+    write_table(cols, path, float_format="%.17g")
+    return path
+
+
+# ---------------------------------------------------------------------------------------
+# 1. never an output onto an input or onto another output
+
+
+@pytest.mark.parametrize("how", ["same", "relative", "symlink", "hardlink"])
+def test_estimate_refuses_to_overwrite_its_input(tmp_path, log, how, monkeypatch):
+    before = log.read_bytes()
+    target = {"same": log, "relative": Path("sub/../grasp.csv"), "symlink": tmp_path / "link.csv", "hardlink": tmp_path / "hard.csv"}[how]
+    (tmp_path / "sub").mkdir()
+    if how == "symlink":
+        target.symlink_to(log)
+    elif how == "hardlink":
+        os.link(log, target)
+    if how == "same":  # once through the installed command
+        out = run("estimate", "grasp.csv", "-o", target, cwd=tmp_path)
+        code, message = out.returncode, out.stderr
+    else:
+        monkeypatch.chdir(tmp_path)
+        code, message = run_here("estimate", "grasp.csv", "-o", target)
+    assert code == 2, message
+    assert "grasp.csv" in message and str(target) in message and "Traceback" not in message
+    assert log.read_bytes() == before
+
+
+def test_plot_onto_output_and_outputs_onto_each_other(tmp_path, log):
+    code, message = run_here("estimate", log, "-o", tmp_path / "e.png", "--plot", tmp_path / "e.png")
+    assert code == 2 and "--plot" in message and "-o" in message
+    assert listing(tmp_path) == ["grasp.csv"]
+    code, message = run_here("estimate", log, "--plot", log.with_suffix(".png"), "--rerun-save", log.with_suffix(".png"))
+    assert code == 2 and "--rerun-save" in message
+    assert listing(tmp_path) == ["grasp.csv"]
+
+
+def test_every_command_refuses_its_input_as_output(tmp_path, log):
+    free = payload_log(tmp_path / "free.csv")
+    cases = [
+        (("stream", "--replay", log, "--record", log, "--speed", "0", "--no-view"), log),
+        (("calibrate", "--shape", "sphere", log, "-o", log), log),
+        (("calibrate-payload", free, "-o", free), free),
+        (("estimate", log, "--payload", free, "-o", free), free),
+    ]
+    for args, victim in cases:
+        before = victim.read_bytes()
+        code, message = run_here(*args)
+        assert code == 2, (args, message)
+        assert str(victim) in message and "refusing" in message, message
+        assert victim.read_bytes() == before
+    assert listing(tmp_path) == ["free.csv", "grasp.csv"]
+
+
+def test_simulate_truth_onto_its_log_or_its_tip(tmp_path):
+    code, message = run_here("simulate", "--rate", "20", "--duration", "5", "-o", tmp_path / "s.csv", "--truth", tmp_path / "s.csv")
+    assert code == 2 and "--truth" in message and "-o" in message
+    tip = tmp_path / "tip.toml"
+    tip.write_text('[fingertip]\nshape = "sphere"\nradius = 0.016\ncenter = [0, 0, 0.02]\n')
+    code, message = run_here("simulate", "--rate", "20", "--duration", "5", "--tip", tip, "-o", tmp_path / "s.csv", "--truth", tip)
+    assert code == 2 and "--tip" in message
+    assert listing(tmp_path) == ["tip.toml"]
+
+
+def test_bag_input_protects_its_files(tmp_path):
+    bag = tmp_path / "bag"
+    bag.mkdir()
+    (bag / "metadata.yaml").write_text("x\n")
+    with pytest.raises(InputError, match="inside the input INPUT"):
+        check_distinct([("INPUT", bag)], [("-o", bag / "metadata.yaml")])
+    check_distinct([("INPUT", bag)], [("-o", tmp_path / "bag.csv"), ("--plot", None), ("-o", "-")])
+
+
+# ---------------------------------------------------------------------------------------
+# 2. devices and FIFOs are written into, never renamed over
+
+
+@posix_only
+def test_output_onto_a_fifo_stays_a_fifo(tmp_path, log):
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    got = []
+    reader = threading.Thread(target=lambda: got.append(fifo.read_bytes()), daemon=True)
+    reader.start()
+    out = run("estimate", log, "-o", fifo)
+    if fifo.is_fifo() and reader.is_alive():  # nobody wrote into the pipe: release the reader
+        os.close(os.open(fifo, os.O_WRONLY | os.O_NONBLOCK))
+    reader.join(timeout=60)
+    assert out.returncode == 0, out.stderr
+    assert fifo.is_fifo()
+    assert got[0].decode() == run("estimate", log).stdout
+    assert listing(tmp_path) == ["grasp.csv", "pipe"]
+
+
+def test_atomic_file_follows_a_symlink_and_keeps_the_mode(tmp_path):
+    real = tmp_path / "real.txt"
+    real.write_text("old\n")
+    real.chmod(0o640)
+    link = tmp_path / "link.txt"
+    link.symlink_to(real)
+    atomic_write_text(link, "new\n")
+    assert link.is_symlink() and real.read_text() == "new\n"
+    assert real.stat().st_mode & 0o777 == 0o640
+    assert listing(tmp_path) == ["link.txt", "real.txt"]
+
+
+def test_atomic_file_refuses_a_directory_and_discards_on_error(tmp_path):
+    with pytest.raises(InputError, match="is a directory"):
+        AtomicFile(tmp_path)
+    with pytest.raises(RuntimeError):
+        with AtomicFile(tmp_path / "x.csv") as f:
+            f.tmp.write_text("partial")
+            raise RuntimeError("boom")
+    assert listing(tmp_path) == []
+
+
+# ---------------------------------------------------------------------------------------
+# 3. disk full, file too large, standard output on a full device or a closed pipe
+
+
+def _limit_file_size(limit):
+    def preexec():
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # write() then fails with EFBIG
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+    return preexec
+
+
+@posix_only
+@pytest.mark.parametrize(
+    "args, names",
+    [
+        (("estimate", "{log}", "-o", "{d}/e.csv"), ["e.csv"]),
+        (("estimate", "{log}", "-o", "{d}/e.csv", "--plot", "{d}/p.png"), ["e.csv", "p.png"]),
+        (("estimate", "{log}", "--to-bag", "{d}/out_bag"), ["out_bag"]),
+        (("simulate", "--rate", "50", "--duration", "6", "-o", "{d}/s.csv"), ["s.csv", "s.truth.json"]),
+    ],
+    ids=["estimate-o", "estimate-plot", "estimate-to-bag", "simulate"],
+)
+def test_file_too_large_exits_2_and_leaves_nothing(tmp_path, log, args, names):
+    if "--to-bag" in args:
+        pytest.importorskip("rosbags")
+    d = tmp_path / "out"
+    d.mkdir()
+    argv = [a.format(log=log, d=d) for a in args]
+    out = run(*argv, preexec_fn=_limit_file_size(30_000))
+    assert out.returncode == 2, out.stderr
+    assert "File too large" in out.stderr and "Traceback" not in out.stderr
+    assert any(str(d / n) in out.stderr for n in names), out.stderr
+    assert listing(d) == []
+
+
+@posix_only
+@pytest.mark.skipif(not Path("/dev/full").is_char_device(), reason="needs /dev/full")
+@pytest.mark.parametrize("args", [("estimate", "--example"), ("simulate", "--rate", "20", "--duration", "5")])
+def test_standard_output_on_a_full_device_exits_2(args):
+    with open("/dev/full", "w") as full:
+        out = subprocess.run([SOFTTIP, *args], stdout=full, stderr=subprocess.PIPE, text=True, timeout=120)
+    assert out.returncode == 2, out.stderr
+    assert "standard output" in out.stderr and "No space left on device" in out.stderr and "Traceback" not in out.stderr
+
+
+@posix_only
+@pytest.mark.skipif(not hasattr(os, "geteuid") or os.geteuid() != 0, reason="creating device nodes needs root")
+def test_output_onto_a_device_node_is_written_into(tmp_path):
+    # our own nodes of the null and full devices (never the system's: a rename would replace them)
+    null, full = tmp_path / "null", tmp_path / "full"
+    os.mknod(null, 0o666 | stat.S_IFCHR, os.makedev(1, 3))
+    os.mknod(full, 0o666 | stat.S_IFCHR, os.makedev(1, 7))
+    out = run("estimate", "--example", "-o", null)
+    assert out.returncode == 0, out.stderr
+    out = run("estimate", "--example", "-o", full)
+    assert out.returncode == 2 and f"{full}: cannot write (No space left on device)" in out.stderr, out.stderr
+    assert null.is_char_device() and full.is_char_device()
+    assert listing(tmp_path) == ["full", "null"]
+
+
+@posix_only
+def test_closed_pipe_exits_2():
+    with subprocess.Popen([SOFTTIP, "estimate", "--example"], stdout=subprocess.PIPE, stderr=subprocess.PIPE) as proc:
+        proc.stdout.readline()
+        proc.stdout.close()  # the reader went away, as `| head -1` does
+        err = proc.stderr.read().decode()
+        assert proc.wait(timeout=120) == 2, err
+    assert "standard output" in err and "Broken pipe" in err and "Traceback" not in err
+
+
+# ---------------------------------------------------------------------------------------
+# 4. SIGTERM and SIGHUP unwind like Ctrl-C: no temporary file stays, exit 128 + signal
+
+
+def _interrupt_while_blocked(tmp_path, argv, sig, expect_tmp):
+    """Run ``argv`` writing into a FIFO nobody reads: it blocks at the end, with its temporary
+    files in place; then send ``sig``."""
+    tmpdir = tmp_path / "tmpdir"
+    tmpdir.mkdir()
+    env = {**os.environ, "TMPDIR": str(tmpdir)}
+    proc = subprocess.Popen([SOFTTIP, *map(str, argv)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+    deadline = time.monotonic() + 90
+    while time.monotonic() < deadline and proc.poll() is None:
+        hidden = [p.name for d in (tmp_path, tmpdir) for p in d.iterdir() if p.name.startswith(".")]
+        if len(hidden) >= expect_tmp:
+            break
+        time.sleep(0.05)
+    assert proc.poll() is None, proc.stderr.read().decode()
+    time.sleep(0.3)
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    return proc.returncode, err.decode(), tmpdir
+
+
+@posix_only
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP, signal.SIGINT], ids=["SIGTERM", "SIGHUP", "SIGINT"])
+def test_estimate_interrupted_leaves_no_temporary_file(tmp_path, log, sig):
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    code, err, tmpdir = _interrupt_while_blocked(tmp_path, ["estimate", log, "-o", fifo, "--plot", tmp_path / "p.png"], sig, 2)
+    assert code == 128 + sig, err
+    assert f"interrupted ({signal.Signals(sig).name})" in err and "Traceback" not in err
+    assert listing(tmp_path) == ["grasp.csv", "pipe", "tmpdir"] and listing(tmpdir) == []
+
+
+@posix_only
+def test_simulate_and_calibrate_interrupted_leave_no_temporary_file(tmp_path):
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    argv = ["simulate", "--rate", "20", "--duration", "5", "-o", fifo, "--truth", tmp_path / "t.json"]
+    code, err, tmpdir = _interrupt_while_blocked(tmp_path, argv, signal.SIGTERM, 2)
+    assert code == 143, err
+    assert listing(tmp_path) == ["pipe", "tmpdir"] and listing(tmpdir) == []
+    shutil.rmtree(tmpdir)
+    free = payload_log(tmp_path / "free.csv")
+    code, err, tmpdir = _interrupt_while_blocked(tmp_path, ["calibrate-payload", free, "-o", fifo], signal.SIGTERM, 1)
+    assert code == 143, err
+    assert listing(tmp_path) == ["free.csv", "pipe", "tmpdir"] and listing(tmpdir) == []
