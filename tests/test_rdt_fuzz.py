@@ -48,11 +48,15 @@ def network(draw):
     items.sort(key=lambda x: x[0])
     # the first two records start the stream (the first waits for the second to confirm it):
     # a stray record among them costs a genuine one; not modelled here
-    records = [i for i, it in enumerate(items) if isinstance(it[2], int)]
-    if len(records) >= 2:
-        items = [it for i, it in enumerate(items) if it[2] != "stray" or i > records[1]]
-    else:
-        items = [it for it in items if it[2] != "stray"]
+    # (two distinct records: a duplicate of the first does not confirm it)
+    distinct, second = set(), None
+    for i, it in enumerate(items):
+        if isinstance(it[2], int):
+            distinct.add(it[2])
+            if len(distinct) == 2:
+                second = i
+                break
+    items = [it for i, it in enumerate(items) if it[2] != "stray" or (second is not None and i > second)]
     return start, statuses, [(d, k) for _, d, k in items]
 
 
