@@ -38,6 +38,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from softtip.errors import InputError
+from softtip.ros import TOPICS as ROS_TOPICS
 from softtip.pipeline import Estimates
 
 __all__ = [
@@ -51,15 +52,9 @@ __all__ = [
 ]
 
 WRENCH_TYPE = "geometry_msgs/msg/WrenchStamped"
-#: Output topics of :func:`write_estimates_bag` (the raw wrench keeps its input topic).
-TOPICS = {
-    "wrench": "/softtip/wrench",
-    "state": "/softtip/state",
-    "contact_point": "/softtip/contact_point",
-    "normal": "/softtip/normal",
-    "edge_direction": "/softtip/edge_direction",
-    "line_evidence": "/softtip/line_evidence",
-}
+#: Output topics of :func:`write_estimates_bag` (the raw wrench keeps its input topic): the
+#: ROS 2 node's (:data:`softtip.ros.TOPICS`).
+TOPICS = ROS_TOPICS
 #: Topic of the raw wrench in an output bag when the input was not a bag.
 DEFAULT_RAW_TOPIC = "/softtip/wrench_raw"
 _BAG_SUFFIXES = (".bag", ".mcap", ".db3")

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import abc
 import math
-import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, ClassVar
@@ -26,10 +25,6 @@ from numpy.typing import ArrayLike, NDArray
 from softtip._xp import NP, PY
 from softtip.errors import InputError
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover - exercised on Python 3.10 only
-    import tomli as tomllib
 
 __all__ = [
     "Fingertip",
@@ -411,13 +406,9 @@ def load_fingertip(spec: str | Path | Fingertip) -> Fingertip:
                 f"{', '.join(sorted(PRESETS))} or a path to a .toml fingertip file"
             )
         raise InputError(f"{name}: fingertip file not found")
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{path}: malformed TOML: {exc}") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{path}: cannot read fingertip file: {exc}") from None
-    return fingertip_from_mapping(data, source=str(path))
+    from softtip.tomlfile import read_toml
+
+    return fingertip_from_mapping(read_toml(path, "fingertip"), source=str(path))
 
 
 def _looks_like_name(name: str) -> bool:

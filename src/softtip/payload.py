@@ -29,22 +29,17 @@ from __future__ import annotations
 
 import math
 import os
-import sys
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, replace
-from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from softtip.errors import InputError
+from softtip.tomlfile import read_toml
 from softtip.units import STANDARD_GRAVITY
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover - Python 3.10 only
-    import tomli as tomllib
 
 __all__ = [
     "QUATERNION_COLUMNS",
@@ -107,14 +102,7 @@ def load_payload(path: str | os.PathLike[str] | Payload) -> Payload:
     if isinstance(path, Payload):
         return path
     name = os.fspath(path)
-    try:
-        data = tomllib.loads(Path(name).read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise InputError(f"{name}: payload file not found") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{name}: malformed TOML: {exc}") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{name}: cannot read payload file: {exc}") from None
+    data = read_toml(name, "payload")
     table = data.get("payload")
     if not isinstance(table, dict):
         raise InputError(f"{name}: expected a [payload] table with mass (kg) and com (m)")

@@ -24,10 +24,12 @@ def read_toml(path: str | os.PathLike[str], what: str) -> dict:
     InputError
         Unreadable file or malformed TOML (the message has the file, line and column).
     """
-    path = Path(path)
+    name = os.fspath(path)
     try:
-        return tomllib.loads(path.read_text(encoding="utf-8"))
+        return tomllib.loads(Path(name).read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise InputError(f"{name}: {what} file not found") from None
     except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{path}: malformed TOML: {exc}") from None
+        raise InputError(f"{name}: malformed TOML: {exc}") from None
     except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{path}: cannot read the {what} file: {exc}") from None
+        raise InputError(f"{name}: cannot read {what} file: {exc}") from None

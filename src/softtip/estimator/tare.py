@@ -26,14 +26,13 @@ from __future__ import annotations
 
 import math
 import os
-import tomllib
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
 from softtip.errors import InputError
+from softtip.tomlfile import read_toml
 from softtip.estimator.config import EstimatorConfig
 from softtip.joint import MODEL_MARGIN
 
@@ -276,14 +275,7 @@ def load_bias(path: str | os.PathLike[str]) -> tuple[float, ...]:
         names the file and the key.
     """
     name = os.fspath(path)
-    try:
-        data = tomllib.loads(Path(name).read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise InputError(f"{name}: bias file not found") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{name}: malformed TOML: {exc}") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{name}: cannot read bias file: {exc}") from None
+    data = read_toml(name, "bias")
     table = data.get("bias")
     if not isinstance(table, dict):
         raise InputError(f"{name}: expected a [bias] table with force = [fx, fy, fz] (N) and moment = [mx, my, mz] (N·m)")

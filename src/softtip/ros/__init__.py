@@ -39,6 +39,7 @@ TOPICS = {
     "contact_point": "/softtip/contact_point",
     "normal": "/softtip/normal",
     "edge_direction": "/softtip/edge_direction",
+    "line_evidence": "/softtip/line_evidence",
 }
 #: Topic of the RViz markers (``visualization_msgs/msg/MarkerArray``).
 MARKER_TOPIC = "/softtip/markers"
@@ -83,6 +84,7 @@ class Payloads(NamedTuple):
     contact_point: tuple[float, float, float] | None  #: m; in contact
     normal: tuple[float, float, float] | None  #: outward unit normal; in contact
     edge_direction: tuple[float, float, float] | None  #: unit axis; ``line`` only
+    line_evidence: str | None = None  #: ``confirmed`` or ``unconfirmed``; ``line`` only
 
 
 def _finite(v) -> tuple[float, ...] | None:
@@ -99,6 +101,7 @@ def payloads(est: SampleEstimate) -> Payloads:
         contact_point=_finite(est.point) if contact else None,
         normal=_finite(est.normal) if contact else None,
         edge_direction=_finite(est.direction) if est.state == "line" else None,
+        line_evidence=(getattr(est, "line_evidence", "") or "unconfirmed") if est.state == "line" else None,
     )
 
 

@@ -108,6 +108,7 @@ def main(args: list[str] | None = None) -> None:  # pragma: no cover - needs a R
                 "contact_point": self.create_publisher(PointStamped, sr.TOPICS["contact_point"], 10),
                 "normal": self.create_publisher(Vector3Stamped, sr.TOPICS["normal"], 10),
                 "edge_direction": self.create_publisher(Vector3Stamped, sr.TOPICS["edge_direction"], 10),
+                "line_evidence": self.create_publisher(String, sr.TOPICS["line_evidence"], 10),
                 "markers": self.create_publisher(MarkerArray, sr.MARKER_TOPIC, 10),
             }
             self.compensate = self.orientation = None
@@ -162,6 +163,7 @@ def main(args: list[str] | None = None) -> None:  # pragma: no cover - needs a R
                 out = Vector3Stamped(header=header)
                 out.vector.x, out.vector.y, out.vector.z = p.edge_direction
                 self.pub["edge_direction"].publish(out)
+                self.pub["line_evidence"].publish(String(data=p.line_evidence))
             if self.publish_markers:
                 arr = MarkerArray()
                 for m in sr.markers(est):
