@@ -260,7 +260,12 @@ def _interrupt_while_blocked(tmp_path, argv, sig, expect_tmp):
     tmpdir = tmp_path / "tmpdir"
     tmpdir.mkdir()
     env = {**os.environ, "TMPDIR": str(tmpdir)}
-    proc = subprocess.Popen([SOFTTIP, *map(str, argv)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+    # Ctrl-C as in a terminal: a job started in the background (as a CI runner may start the
+    # tests) inherits SIGINT ignored, and Python then leaves it ignored
+    proc = subprocess.Popen(
+        [SOFTTIP, *map(str, argv)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )  # fmt: skip
     deadline = time.monotonic() + 90
     while time.monotonic() < deadline and proc.poll() is None:
         hidden = [p.name for d in (tmp_path, tmpdir) for p in d.iterdir() if p.name.startswith(".")]
@@ -270,7 +275,12 @@ def _interrupt_while_blocked(tmp_path, argv, sig, expect_tmp):
     assert proc.poll() is None, proc.stderr.read().decode()
     time.sleep(0.3)
     proc.send_signal(sig)
-    _, err = proc.communicate(timeout=60)
+    try:
+        _, err = proc.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.communicate()
+        raise
     return proc.returncode, err.decode(), tmpdir
 
 
