@@ -385,7 +385,6 @@ def test_cli_stream_with_a_mesh_tip_matches_estimate(tmp_path):
 
 
 def test_cli_stream_from_a_fake_netft_with_a_mesh_tip(tmp_path):
-    pytest.importorskip("pynetft")
     from softtip.netft_fake import FakeNetFT
 
     with FakeNetFT(rate_hz=500) as dev:
