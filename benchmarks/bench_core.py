@@ -131,6 +131,7 @@ def main() -> None:
             f"   (in contact: median {np.median(per[contact]) * 1e6:6.1f} us)"
         )
     end_to_end(n)
+    mesh_rows(args, rng)
 
 
 def timed(fn, repeats=2):
@@ -203,9 +204,6 @@ def end_to_end(n: int) -> None:
         ww, cw, _ = timed(old_write, repeats=1)
         print(f"  {'before: Python CSV reader':34s} {cell(wr, cr):>36s}")
         print(f"  {'before: Python CSV writer':34s} {cell(ww, cw):>36s}")
-
-
-    mesh_rows(args, rng)
 
 
 def plausible_wrenches(tip, n, rng):

@@ -99,15 +99,21 @@ def _point_moves(begin, located, point, distance: float):
     begin = begin.copy()
     idx = np.flatnonzero(begin | located)
     seg = np.cumsum(begin)[idx]
+    block = 4096  # searched block by block: a move costs its distance to the next, not the log's length
     for part in np.split(idx, np.flatnonzero(np.diff(seg)) + 1):
         v = part[located[part]]
         while len(v):
-            d = point[v] - point[v[0]]
-            far = np.flatnonzero(np.einsum("ij,ij->i", d, d) > distance * distance)
-            if not len(far):
+            first = None
+            for s in range(0, len(v), block):
+                d = point[v[s : s + block]] - point[v[0]]
+                far = np.flatnonzero(np.einsum("ij,ij->i", d, d) > distance * distance)
+                if len(far):
+                    first = s + int(far[0])
+                    break
+            if first is None:
                 break
-            begin[v[far[0]]] = True
-            v = v[far[0] :]
+            begin[v[first]] = True
+            v = v[first:]
     return begin
 
 
