@@ -1,7 +1,7 @@
 """The softtip ROS 2 node: ``python -m softtip.ros`` in a sourced ROS 2 environment.
 
 Subscribes to a ``geometry_msgs/msg/WrenchStamped`` topic, runs the streaming estimator on
-every message (about 15 µs each) and publishes the topics of :data:`softtip.ros.TOPICS` and
+every message (about 25 µs each in CPython) and publishes the topics of :data:`softtip.ros.TOPICS` and
 RViz markers on :data:`softtip.ros.MARKER_TOPIC`; the service ``~/tare``
 (``std_srvs/srv/Trigger``) re-tares from the next samples (keep the fingertip untouched).
 
