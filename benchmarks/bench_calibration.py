@@ -31,6 +31,7 @@ from scipy.spatial.transform import Rotation
 from softtip import estimate, murakami2006
 from softtip.axial import axial_difference
 from softtip.calibration import calibrate_fingertip, simulate_probing
+from softtip.synthetic import sliding_presses
 from softtip.errors import InputError
 from softtip.fingertip import Capsule, Sphere
 from softtip.noise import SensorNoise
@@ -126,38 +127,6 @@ SENSORS = {
 HONEST_TIP = Sphere(0.016, (0.0003, -0.0002, 0.020))
 
 
-def press_log(rng, n_presses=30, center=(0.3e-3, -0.2e-3, 20e-3), radius=16e-3, kappa=0.2e-3):
-    """The issue's probing log without softtip's simulator, noise-free.
-
-    Rigid sphere plus an indentation ``kappa √F`` along the normal; presses within 65° of
-    the tip, each 1 s at 100 Hz with the normal force rising to 2–6 N and falling again and a
-    friction force of 0.1–0.3 of it turning through 40–120° meanwhile; 0.3 s untouched
-    between presses and 0.5 s first.
-    """
-    c, dt = np.asarray(center), 0.01
-    t, w = [np.arange(0.0, 0.5, dt)], [np.zeros((50, 6))]
-    t0 = 0.5
-    for _ in range(n_presses):
-        cz = rng.uniform(math.cos(math.radians(65.0)), 1.0)
-        phi = rng.uniform(0.0, 2.0 * math.pi)
-        n = np.array([math.sqrt(1 - cz * cz) * math.cos(phi), math.sqrt(1 - cz * cz) * math.sin(phi), cz])
-        a = np.cross([1.0, 0.0, 0.0], n)
-        a /= np.linalg.norm(a)
-        b = np.cross(n, a)
-        force, mu = rng.uniform(2.0, 6.0), rng.uniform(0.1, 0.3)
-        turn = math.radians(rng.uniform(40.0, 120.0)) * rng.choice([-1.0, 1.0])
-        s = np.arange(0.0, 1.0, dt)
-        fn = force * np.clip(np.minimum(s, 1.0 - s) / 0.5, 0.0, 1.0)
-        ang = rng.uniform(0.0, 2.0 * math.pi) + turn * s
-        f = -fn[:, None] * n + mu * fn[:, None] * (np.cos(ang)[:, None] * a + np.sin(ang)[:, None] * b)
-        r = c + (radius - kappa * np.sqrt(fn))[:, None] * n
-        m = np.cross(r, f) + (rng.normal(0.0, 0.2e-3) * fn)[:, None] * n
-        t += [t0 + s, t0 + 1.0 + np.arange(0.0, 0.3, dt)]
-        w += [np.column_stack((f, m)), np.zeros((30, 6))]
-        t0 += 1.3
-    return np.concatenate(t), np.concatenate(w)
-
-
 def _honesty_row(label, truth, fits) -> str:
     """Markdown row: bias, RMS and largest error (mm) and error/std mean and spread, for x, y, z, R."""
     ok = [f for f in fits if f is not None]
@@ -196,7 +165,7 @@ def honesty_rows(seeds: int, seed0: int) -> list[str]:
         fits = [_fit(t, model.measure(w, np.random.default_rng(seed0 + 1000 + k)), noise) for k, (t, w) in enumerate(logs)]
         rows.append(_honesty_row(f"softtip.sim, {name}", truth, fits))
     plain_noise = SensorNoise((1e-12,) * 3, (1e-4,) * 3)  # moment noise only: unweighted least squares
-    issue = [press_log(np.random.default_rng(seed0 + k)) for k in range(seeds)]
+    issue = [sliding_presses(np.random.default_rng(seed0 + k)) for k in range(seeds)]
     for name, (fs, ms) in SENSORS.items():
         sd = np.r_[fs, ms]
         noisy = [(t, w + np.random.default_rng(seed0 + 2000 + k).standard_normal(w.shape) * sd) for k, (t, w) in enumerate(issue)]

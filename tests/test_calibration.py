@@ -17,6 +17,7 @@ from softtip.fingertip import Capsule, Sphere, load_fingertip
 from softtip.io import write_table
 from softtip.noise import SensorNoise
 from softtip.sim import SensorModel
+from softtip.synthetic import sliding_presses
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 MM = 1e-3
@@ -172,30 +173,9 @@ def press_log(seed, n_presses=30, center=(0.3e-3, -0.2e-3, 20e-3), radius=16e-3,
     and 0.05 N·mm per axis; 0.5 s untouched first.
     """
     rng = np.random.default_rng(seed)
-    c, dt = np.asarray(center), 0.01
-    t, w = [np.arange(0.0, 0.5, dt)], [np.zeros((50, 6))]
-    t0 = 0.5
-    for _ in range(n_presses):
-        cz = rng.uniform(math.cos(math.radians(65.0)), 1.0)
-        phi = rng.uniform(0.0, 2.0 * math.pi)
-        n = np.array([math.sqrt(1 - cz * cz) * math.cos(phi), math.sqrt(1 - cz * cz) * math.sin(phi), cz])
-        a = np.cross([1.0, 0.0, 0.0], n)
-        a /= np.linalg.norm(a)
-        b = np.cross(n, a)
-        force, mu = rng.uniform(2.0, 6.0), rng.uniform(0.1, 0.3)
-        turn = math.radians(rng.uniform(40.0, 120.0)) * rng.choice([-1.0, 1.0])
-        s = np.arange(0.0, 1.0, dt)
-        fn = force * np.clip(np.minimum(s, 1.0 - s) / 0.5, 0.0, 1.0)
-        ang = rng.uniform(0.0, 2.0 * math.pi) + turn * s
-        f = -fn[:, None] * n + mu * fn[:, None] * (np.cos(ang)[:, None] * a + np.sin(ang)[:, None] * b)
-        r = c + (radius - 0.2e-3 * np.sqrt(fn))[:, None] * n
-        m = np.cross(r, f) + (rng.normal(0.0, 0.2e-3) * fn)[:, None] * n
-        t += [t0 + s, t0 + 1.0 + np.arange(0.0, 0.3, dt)]
-        w += [np.column_stack((f, m)), np.zeros((30, 6))]
-        t0 += 1.3
-    w = np.concatenate(w)
-    w += rng.standard_normal(w.shape) * np.repeat(noise, 3)
-    return np.concatenate(t), w
+    t, w = sliding_presses(rng, n_presses, center, radius)
+    w = w + rng.standard_normal(w.shape) * np.repeat(noise, 3)
+    return t, w
 
 
 def test_force_noise_no_longer_biases_the_geometry():

@@ -22,7 +22,7 @@ from softtip.noise import NANO17, SensorNoise
 from softtip.spin import tangent_frame
 from softtip.units import KGF, KGF_MM
 
-__all__ = ["SyntheticGrasp", "synthetic_grasp", "smoothstep"]
+__all__ = ["SyntheticGrasp", "synthetic_grasp", "sliding_presses", "smoothstep"]
 
 
 @dataclass(frozen=True)
@@ -129,3 +129,42 @@ def synthetic_grasp(
         std = np.concatenate((noise.force_std, noise.moment_std))
         w = w + rng.normal(size=w.shape) * std
     return SyntheticGrasp(t, w, w_true, r, n, d, math.atan2(float(d @ e2), float(d @ e1)), b)
+
+
+def sliding_presses(
+    rng: np.random.Generator,
+    n_presses: int = 30,
+    center=(0.3e-3, -0.2e-3, 20e-3),
+    radius: float = 16e-3,
+    kappa: float = 0.2e-3,
+) -> tuple[NDArray, NDArray]:
+    """A probing log of plane presses on a sphere, made without softtip's simulator and
+    noise-free: ``(t (N,), wrench (N, 6))``, SI.
+
+    Rigid sphere plus an indentation ``kappa √F`` along the normal; presses within 65° of
+    the tip, each 1 s at 100 Hz with the normal force rising to 2–6 N and falling again and a
+    friction force of 0.1–0.3 of it turning through 40–120° meanwhile; 0.3 s untouched
+    between presses and 0.5 s first. An independent check of ``softtip calibrate``.
+    """
+    c, dt = np.asarray(center), 0.01
+    t, w = [np.arange(0.0, 0.5, dt)], [np.zeros((50, 6))]
+    t0 = 0.5
+    for _ in range(n_presses):
+        cz = rng.uniform(math.cos(math.radians(65.0)), 1.0)
+        phi = rng.uniform(0.0, 2.0 * math.pi)
+        n = np.array([math.sqrt(1 - cz * cz) * math.cos(phi), math.sqrt(1 - cz * cz) * math.sin(phi), cz])
+        a = np.cross([1.0, 0.0, 0.0], n)
+        a /= np.linalg.norm(a)
+        b = np.cross(n, a)
+        force, mu = rng.uniform(2.0, 6.0), rng.uniform(0.1, 0.3)
+        turn = math.radians(rng.uniform(40.0, 120.0)) * rng.choice([-1.0, 1.0])
+        s = np.arange(0.0, 1.0, dt)
+        fn = force * np.clip(np.minimum(s, 1.0 - s) / 0.5, 0.0, 1.0)
+        ang = rng.uniform(0.0, 2.0 * math.pi) + turn * s
+        f = -fn[:, None] * n + mu * fn[:, None] * (np.cos(ang)[:, None] * a + np.sin(ang)[:, None] * b)
+        r = c + (radius - kappa * np.sqrt(fn))[:, None] * n
+        m = np.cross(r, f) + (rng.normal(0.0, 0.2e-3) * fn)[:, None] * n
+        t += [t0 + s, t0 + 1.0 + np.arange(0.0, 0.3, dt)]
+        w += [np.column_stack((f, m)), np.zeros((30, 6))]
+        t0 += 1.3
+    return np.concatenate(t), np.concatenate(w)
