@@ -10,6 +10,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 pytest.importorskip("rosbags")
 from rosbags.highlevel import AnyReader
@@ -23,6 +25,13 @@ from softtip import estimate, load_example
 from softtip.bag import TOPICS, write_estimates_bag
 from softtip.errors import InputError
 from softtip.ros.bagout import DISTROS, BagWriter, bag_format
+from softtip.ros.fused import (
+    FUSED_TOPICS,
+    fused_markers,
+    fused_poses,
+    quaternions_from_axes,
+    write_fused_bag,
+)
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 REFERENCE = Path(__file__).parent / "data" / "rosbag2"
@@ -96,7 +105,7 @@ def test_rosbag2_metadata_is_the_distributions(bags, distro):
 
 
 def test_humble_sqlite_schema_is_rosbag2_humbles(bags):
-    version, _, schema_version, statements = reference("humble")
+    _, _, schema_version, statements = reference("humble")
     assert len(statements) == 5
     db = next(bags["humble"].glob("*.db3"))
     with sqlite3.connect(db) as got, sqlite3.connect(":memory:") as want:
@@ -308,3 +317,110 @@ def test_gravity_frame_errors_name_the_frames(tmp_path):
     assert out.returncode == 2 and "no /tf or /tf_static" in out.stderr and "'world' → 'ft_link'" in out.stderr, out.stderr
     out = run("estimate", "--example", "--payload", tmp_path / "p.toml", "--gravity-frame", "world")
     assert out.returncode == 2 and "--gravity-frame needs --payload and a bag INPUT" in out.stderr
+
+
+# --- the fused grasp as messages -----------------------------------------------------------
+
+HAND_X = np.array([1.0, 0.0, 0.0])
+R_RIGHT = Rotation.from_matrix(np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]]).T)
+R_LEFT = Rotation.from_matrix(np.array([[0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0]]).T)
+vectors = st.lists(st.floats(-1.0, 1.0, allow_nan=False), min_size=3, max_size=3).filter(lambda v: np.linalg.norm(v) > 1e-3)
+
+
+@settings(max_examples=60, deadline=None)
+@given(vectors, vectors)
+def test_quaternions_from_axes(x, z):
+    x, z = np.array(x), np.array(z)
+    q = quaternions_from_axes(x, z)
+    if np.linalg.norm(np.cross(x, z)) < 1e-6 * np.linalg.norm(x) * np.linalg.norm(z):
+        return  # parallel: no z axis across x
+    m = Rotation.from_quat(q).as_matrix()
+    np.testing.assert_allclose(m[:, 0], x / np.linalg.norm(x), atol=1e-9)
+    zp = z - (z @ m[:, 0]) * m[:, 0]
+    np.testing.assert_allclose(m[:, 2], zp / np.linalg.norm(zp), atol=1e-9)
+    # without z: any z, but the x axis is x; a batch equals its rows; NaN stays NaN
+    many = quaternions_from_axes(np.stack([x, 2 * x, [np.nan] * 3]))
+    for row in many[:2]:
+        np.testing.assert_allclose(Rotation.from_quat(row).as_matrix()[:, 0], x / np.linalg.norm(x), atol=1e-9)
+    assert np.isnan(many[2]).all()
+
+
+def _synthetic_pair(right_angle, left_angle):
+    from softtip.fusion import PoseSeries, fuse_logs
+    from softtip.synthetic import synthetic_grasp
+
+    logs = []
+    for name, rot, angle, seed in (("right", R_RIGHT, right_angle, 1), ("left", R_LEFT, left_angle, 2)):
+        g = synthetic_grasp(angle_deg=angle, seed=seed, tangential_ratio=0.0)
+        side = 1.0 if name == "right" else -1.0
+        logs.append((name, g.t, g.wrench, PoseSeries.fixed(rot, side * 0.015 * HAND_X - rot.apply(g.point), name)))
+    return (*fuse_logs(logs, "murakami2006"), logs)
+
+
+@pytest.mark.parametrize("angles, grasp", [((30.0, -30.0), "parallel_lines"), ((45.0, 45.0), "crossing_lines")])
+def test_fused_bag_carries_the_line_and_plane_as_poses(tmp_path, angles, grasp):
+    fused, fingers, _ = _synthetic_pair(*angles)
+    stamps = T0_NS + np.rint(fused.t * 1e9).astype(np.int64)
+    write_fused_bag(tmp_path / "f", fused, fingers, stamps, "palm", distro="iron")
+    got = {}
+    with reader(tmp_path / "f") as r:
+        for c, t, d in r.messages():
+            got.setdefault(c.topic, []).append((t, r.deserialize(d, c.msgtype)))
+    names = fused.grasp_names
+    assert [m.data.split()[0] for _, m in got[FUSED_TOPICS["grasp"]]] == names.tolist()
+    assert len(got[FUSED_TOPICS["markers"]]) == len(fused)
+    k = int(np.flatnonzero(names == grasp)[-1])
+    stamp = int(stamps[k])
+    line = dict(got[FUSED_TOPICS["line"]])[stamp]
+    assert line.header.frame_id == "palm"
+    o = line.pose.orientation
+    axes = Rotation.from_quat([o.x, o.y, o.z, o.w]).as_matrix()
+    assert abs(axes[:, 0] @ fused.direction[k]) == pytest.approx(1.0, abs=1e-9)
+    p = line.pose.position
+    if grasp == "parallel_lines":
+        np.testing.assert_allclose([p.x, p.y, p.z], 0.5 * (fused.point_a[k] + fused.point_b[k]), atol=1e-12)
+        plane = dict(got[FUSED_TOPICS["plane"]])[stamp].pose.orientation
+        z = Rotation.from_quat([plane.x, plane.y, plane.z, plane.w]).as_matrix()[:, 2]
+        assert abs(z @ fused.plane_normal[k]) == pytest.approx(1.0, abs=1e-9)
+        assert len(got[FUSED_TOPICS["plane"]]) == np.count_nonzero(names == "parallel_lines")
+        assert FUSED_TOPICS["line2"] not in got
+    else:
+        np.testing.assert_allclose([p.x, p.y, p.z], fused.point_a[k], atol=1e-12)
+        second = dict(got[FUSED_TOPICS["line2"]])[stamp].pose.orientation
+        x2 = Rotation.from_quat([second.x, second.y, second.z, second.w]).as_matrix()[:, 0]
+        assert abs(x2 @ fused.direction_b[k]) == pytest.approx(1.0, abs=1e-9)
+        assert FUSED_TOPICS["plane"] not in got
+    ms = dict(got[FUSED_TOPICS["markers"]])[stamp].markers
+    assert [m.ns for m in ms] == ["contact_a", "contact_b", "line", "line2", "plane"]
+    assert [m.action == sr.MARKER_ADD for m in ms] == [True, True, True, grasp == "crossing_lines", grasp == "parallel_lines"]
+
+
+def test_fused_markers_without_contact_are_deleted():
+    fused, fingers, _ = _synthetic_pair(30.0, -30.0)
+    poses = fused_poses(fused, fingers[0].estimates.state_names == "line")
+    k = int(np.flatnonzero(fused.grasp_names == "none")[0])
+    assert [m.action for m in fused_markers(poses, k)] == [sr.MARKER_DELETE] * 5
+
+
+def test_fuse_command_writes_a_bag(tmp_path):
+    from softtip.io import write_table
+
+    _, _, logs = _synthetic_pair(30.0, -30.0)
+    hand = ['[hand]\nframe = "palm"\n']
+    for name, t, w, pose in logs:
+        cols = {"t": t, **{c: w[:, i] for i, c in enumerate(["fx", "fy", "fz", "mx", "my", "mz"])}}
+        write_table(cols, tmp_path / f"{name}.csv", float_format="%.17g")
+        rot, tr = pose.at(np.array([0.0]))
+        (qx, qy, qz, qw), tr = rot.as_quat()[0].tolist(), tr[0].tolist()
+        hand.append(f"[finger.{name}]\ntranslation = [{tr[0]!r}, {tr[1]!r}, {tr[2]!r}]\nquaternion = [{qw!r}, {qx!r}, {qy!r}, {qz!r}]\n")
+    (tmp_path / "hand.toml").write_text("\n".join(hand))
+    args = ("fuse", tmp_path / "right.csv", tmp_path / "left.csv", "--hand", tmp_path / "hand.toml")
+    out = run(*args, "--to-bag", tmp_path / "fused.bag")
+    assert out.returncode == 0, out.stderr
+    assert out.stdout == ""  # the bag is the output
+    with reader(tmp_path / "fused.bag") as r:
+        assert set(r.topics) >= {FUSED_TOPICS["grasp"], FUSED_TOPICS["line"], FUSED_TOPICS["plane"], FUSED_TOPICS["markers"]}
+        frames = {r.deserialize(d, c.msgtype).header.frame_id for c, _, d in r.messages() if c.topic == FUSED_TOPICS["line"]}
+    assert frames == {"palm"}
+    out = run(*args, "--ros-distro", "jazzy")
+    assert out.returncode == 2 and "apply to --to-bag" in out.stderr

@@ -28,6 +28,7 @@ __all__ = [
     "contact_markers",
     "MARKER_ARROW",
     "MARKER_SPHERE",
+    "MARKER_CUBE",
     "MARKER_LINE_LIST",
     "MARKER_ADD",
     "MARKER_DELETE",
@@ -48,7 +49,7 @@ MARKER_TOPIC = "/softtip/markers"
 DEFAULT_FRAME_ID = "ft_sensor"
 
 # visualization_msgs/msg/Marker constants
-MARKER_ARROW, MARKER_SPHERE, MARKER_LINE_LIST = 0, 2, 5
+MARKER_ARROW, MARKER_CUBE, MARKER_SPHERE, MARKER_LINE_LIST = 0, 1, 2, 5
 MARKER_ADD, MARKER_DELETE = 0, 2
 
 
@@ -111,12 +112,13 @@ class Marker(NamedTuple):
 
     ns: str
     id: int
-    type: int  #: :data:`MARKER_ARROW`, :data:`MARKER_SPHERE` or :data:`MARKER_LINE_LIST`
+    type: int  #: :data:`MARKER_ARROW`, :data:`MARKER_SPHERE`, :data:`MARKER_LINE_LIST` or :data:`MARKER_CUBE`
     action: int  #: :data:`MARKER_ADD` or :data:`MARKER_DELETE`
     points: tuple[tuple[float, float, float], ...]  #: arrow: tail, head; line list: pairs
-    position: tuple[float, float, float]  #: sphere centre (origin otherwise)
-    scale: tuple[float, float, float]  #: arrow: shaft Ø, head Ø, head length; sphere: Ø; line: width
+    position: tuple[float, float, float]  #: sphere or cube centre (origin otherwise)
+    scale: tuple[float, float, float]  #: arrow: shaft Ø, head Ø, head length; sphere: Ø; line: width; cube: sides
     color: tuple[float, float, float, float]  #: RGBA in [0, 1]
+    orientation: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)  #: x, y, z, w of the pose (a cube's)
 
 
 _ORIGIN = (0.0, 0.0, 0.0)

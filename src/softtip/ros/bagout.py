@@ -40,11 +40,11 @@ import numpy as np
 from softtip.errors import InputError
 
 __all__ = [
-    "DISTROS",
     "DEFAULT_DISTRO",
+    "DISTROS",
+    "HUMBLE_SQLITE_SCHEMA",
     "BagFormat",
     "BagWriter",
-    "HUMBLE_SQLITE_SCHEMA",
     "bag_format",
     "metadata_yaml",
     "remove_bag",
@@ -79,8 +79,10 @@ DEFAULT_DISTRO = "humble"
 HUMBLE_SQLITE_SCHEMA = (
     "CREATE TABLE schema(schema_version INTEGER PRIMARY KEY,ros_distro TEXT NOT NULL);",
     "CREATE TABLE metadata(id INTEGER PRIMARY KEY,metadata_version INTEGER NOT NULL,metadata TEXT NOT NULL);",
-    "CREATE TABLE topics(id INTEGER PRIMARY KEY,name TEXT NOT NULL,type TEXT NOT NULL,"
-    "serialization_format TEXT NOT NULL,offered_qos_profiles TEXT NOT NULL);",
+    (
+        "CREATE TABLE topics(id INTEGER PRIMARY KEY,name TEXT NOT NULL,type TEXT NOT NULL,"
+        "serialization_format TEXT NOT NULL,offered_qos_profiles TEXT NOT NULL);"
+    ),
     "CREATE TABLE messages(id INTEGER PRIMARY KEY,topic_id INTEGER NOT NULL,timestamp INTEGER NOT NULL, data BLOB NOT NULL);",
     "CREATE INDEX timestamp_idx ON messages (timestamp ASC);",
 )
@@ -214,9 +216,7 @@ class BagWriter:
             pose = msg(
                 "geometry_msgs/msg/Pose",
                 position=point(m.position),
-                orientation=msg("geometry_msgs/msg/Quaternion", x=m.orientation[0], y=m.orientation[1], z=m.orientation[2], w=m.orientation[3])
-                if hasattr(m, "orientation")
-                else msg("geometry_msgs/msg/Quaternion", w=1.0),
+                orientation=msg("geometry_msgs/msg/Quaternion", x=m.orientation[0], y=m.orientation[1], z=m.orientation[2], w=m.orientation[3]),
             )
             out.append(
                 msg(
@@ -225,7 +225,7 @@ class BagWriter:
                     scale=msg("geometry_msgs/msg/Vector3", x=m.scale[0], y=m.scale[1], z=m.scale[2]),
                     color=msg("std_msgs/msg/ColorRGBA", r=m.color[0], g=m.color[1], b=m.color[2], a=m.color[3]),
                     points=[point(p) for p in m.points],
-                )  # fmt: skip
+                )
             )
         return msg("visualization_msgs/msg/MarkerArray", markers=out)
 
@@ -280,7 +280,7 @@ class BagWriter:
 
     def write(self, key: int, stamp_ns: int, msg: Any) -> None:
         """Write one message (recorded at ``stamp_ns``, ns since the epoch)."""
-        topic, msgtype, conn = self._topics[key]
+        _, msgtype, conn = self._topics[key]
         if self.format.ros_version == 1:
             data = self.typestore.serialize_ros1(msg, msgtype)
         else:
@@ -315,8 +315,8 @@ class BagWriter:
                 else:
                     self._impl.close()
                 os.rename(target, self.dest)
-            except OSError as exc:
-                raise InputError(f"{self.dest}: cannot write the bag ({exc.strerror or exc})") from None
+            except OSError as err:
+                raise InputError(f"{self.dest}: cannot write the bag ({err.strerror or err})") from None
         finally:
             shutil.rmtree(self._tmp, ignore_errors=True)
 
@@ -325,9 +325,9 @@ class BagWriter:
         start = self._start if count else 0
         duration = self._end - self._start if count else 0
         topics = []
-        for (topic, msgtype, _), n in zip(self._topics, self._counts):
+        for (name, msgtype, _), n in zip(self._topics, self._counts):
             digest = self.typestore.hash_rihs01(msgtype) if self.format.metadata_version >= 7 else ""
-            topics.append((topic, msgtype, digest, n))
+            topics.append((name, msgtype, digest, n))
         return metadata_yaml(self.format, files=files, topics=topics, start_ns=start, duration_ns=duration)
 
 
