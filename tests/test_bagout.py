@@ -146,7 +146,7 @@ def test_markers_in_the_bag_follow_the_state(bags, example_estimates):
     names = est.state_names
     with reader(bags["humble"]) as r:
         arrays = [r.deserialize(d, c.msgtype) for c, _, d in r.messages() if c.topic == sr.MARKER_TOPIC]
-    assert len(arrays) == len(est)
+    assert len(arrays) == len(est)  # a 50 Hz log: every sample
     for k in (0, int(np.flatnonzero(names == "point")[0]), int(np.flatnonzero(names == "line")[-1])):
         ms = arrays[k].markers
         assert [(m.ns, m.id) for m in ms] == [("contact_point", 0), ("normal", 1), ("edge_direction", 2)]
@@ -165,6 +165,24 @@ def test_markers_in_the_bag_follow_the_state(bags, example_estimates):
         if names[k] == "line":
             a, b = (np.array([p.x, p.y, p.z]) for p in ms[2].points)
             np.testing.assert_allclose((b - a) / np.linalg.norm(b - a), est.direction[k], atol=1e-12)
+
+
+def test_markers_are_thinned_to_their_rate_but_follow_every_state_change(tmp_path, example_estimates):
+    log, est = example_estimates
+    stamps = T0_NS + np.rint(log.t * 1e9).astype(np.int64)
+    write_estimates_bag(tmp_path / "b", est, log.wrench, stamps, marker_rate=7.0)
+    with reader(tmp_path / "b") as r:
+        got = {t: r.deserialize(d, c.msgtype) for c, t, d in r.messages() if c.topic == sr.MARKER_TOPIC}
+    changes = stamps[1:][np.diff(est.state) != 0]
+    period = (stamps - stamps[0]) // (1e9 / 7.0)
+    starts = stamps[np.r_[True, np.diff(period) != 0]]
+    assert set(got) == set(changes) | set(starts) and len(changes) > 2
+    assert len(got) < len(est) / 5
+    names = dict(zip(stamps.tolist(), est.state_names.tolist()))
+    for t in changes.tolist():  # the sphere appears and disappears with the contact
+        assert (got[t].markers[0].action == sr.MARKER_ADD) == (names[t] != "none")
+    with pytest.raises(ValueError, match="marker_rate"):
+        write_estimates_bag(tmp_path / "c", est, log.wrench, stamps, marker_rate=0.0)
 
 
 def test_contact_markers_delete_what_is_undefined():

@@ -22,7 +22,7 @@ topic                          type                           when
 ``/softtip/contact_point``     geometry_msgs/msg/PointStamped in contact (point, line); m
 ``/softtip/normal``            geometry_msgs/msg/Vector3Stamped in contact: outward unit normal
 ``/softtip/edge_direction``    geometry_msgs/msg/Vector3Stamped line contacts: unit direction (an axis)
-``/softtip/markers``           visualization_msgs/msg/MarkerArray every sample: RViz markers (deleted out of contact)
+``/softtip/markers``           visualization_msgs/msg/MarkerArray up to 50 Hz and at state changes: RViz markers
 =============================  =============================  ==================================
 
 Nothing is published where a value is undefined (no NaN messages). The bag is written to a
@@ -301,6 +301,7 @@ def write_estimates_bag(
     *,
     distro: str | None = None,
     markers: bool = True,
+    marker_rate: float | None = 50.0,
 ) -> None:
     """Write estimates, RViz markers and the raw wrench as a bag a ROS distribution plays, atomically.
 
@@ -323,7 +324,12 @@ def write_estimates_bag(
         :mod:`softtip.ros.bagout`.
     markers : bool
         Also write ``visualization_msgs/msg/MarkerArray`` on :data:`softtip.ros.MARKER_TOPIC`
-        every sample (contact point, normal, edge direction; deleted when undefined).
+        (contact point, normal, edge direction; deleted when undefined).
+    marker_rate : float or None
+        Hz: the markers at most this often (the first sample of each 1/rate interval of the
+        stamps), and at every change of state, so that a marker appears and disappears
+        with the contact; None: every sample. RViz draws at display rate, and markers
+        cost twice the other messages to write.
 
     Raises
     ------
@@ -345,6 +351,14 @@ def write_estimates_bag(
         raise ValueError(
             f"expected {n} stamps and a ({n}, 6) raw wrench, got {stamps.shape} and {raw.shape}"
         )
+    if markers and marker_rate is not None:
+        if not marker_rate > 0:
+            raise ValueError(f"marker_rate must be positive (Hz) or None, got {marker_rate!r}")
+        interval = np.floor_divide(stamps - stamps[0], 1e9 / marker_rate) if n else np.zeros(0)
+        marked = np.ones(n, dtype=bool)
+        marked[1:] = (np.diff(interval) != 0) | (np.diff(est.state) != 0)
+    else:
+        marked = np.full(n, markers)
     names = est.state_names.tolist()
     evidence = est.columns()["line_evidence"].tolist()
     tared, point, normal, direction = (
@@ -401,7 +415,7 @@ def write_estimates_bag(
                 if names[k] == "line":
                     bag.write(topic["line_evidence"], ns, msg("std_msgs/msg/String", data=evidence[k]))
                     bag.write(topic["edge_direction"], ns, vector(h, direction[k]))
-            if markers:
+            if marked[k]:
                 marks = contact_markers(
                     _finite3(point[k]) if contact else None,
                     _finite3(normal[k]) if contact else None,

@@ -123,8 +123,8 @@ def remove_bag(path: str | os.PathLike[str]) -> None:
         p.unlink()
 
 
-def _default(ts, spec) -> Any:
-    """The default value of one field of a rosbags message definition."""
+def _default(ts, spec, cache: dict) -> Any:
+    """The default value of one field of a rosbags message definition (shared, never mutated)."""
     from rosbags.typesys.store import Nodetype
 
     kind, rest = spec
@@ -136,22 +136,24 @@ def _default(ts, spec) -> Any:
             return False
         return 0.0 if name.startswith("float") else 0
     if kind == Nodetype.NAME:
-        return _build(ts, rest, {})
+        return _build(ts, rest, {}, cache)
     sub, count = rest
     if sub[0] == Nodetype.BASE and sub[1][0] != "string":
         dtype = {"bool": np.bool_, "byte": np.uint8, "char": np.uint8, "octet": np.uint8}.get(sub[1][0], sub[1][0])
         return np.zeros(count if kind == Nodetype.ARRAY else 0, dtype=dtype)
-    return [_default(ts, sub) for _ in range(count if kind == Nodetype.ARRAY else 0)]
+    return [_default(ts, sub, cache) for _ in range(count if kind == Nodetype.ARRAY else 0)]
 
 
-def _build(ts, msgtype: str, fields: dict[str, Any]) -> Any:
-    cls = ts.types[msgtype]
-    _, defs = ts.fielddefs[msgtype]
-    values = {name: fields[name] if name in fields else _default(ts, spec) for name, spec in defs}
-    unknown = set(fields) - set(values)
-    if unknown:
-        raise TypeError(f"{msgtype} has no field(s) {', '.join(sorted(unknown))}")
-    return cls(**values)
+def _build(ts, msgtype: str, fields: dict[str, Any], cache: dict) -> Any:
+    """A message of ``msgtype``; fields not given take their defaults (cached per type in
+    ``cache``: building them is most of the cost of a marker)."""
+    defaults = cache.get(msgtype)
+    if defaults is None:
+        _, defs = ts.fielddefs[msgtype]
+        defaults = cache[msgtype] = {name: _default(ts, spec, cache) for name, spec in defs}
+    if not fields.keys() <= defaults.keys():
+        raise TypeError(f"{msgtype} has no field(s) {', '.join(sorted(set(fields) - set(defaults)))}")
+    return ts.types[msgtype](**{**defaults, **fields})
 
 
 class BagWriter:
@@ -186,6 +188,7 @@ class BagWriter:
         if self.dest.exists() or self.dest.is_symlink():
             raise InputError(f"{self.dest}: exists already; expected a new name for the output bag")
         self.typestore = get_typestore(getattr(Stores, self.format.store))
+        self._defaults: dict[str, dict[str, Any]] = {}
         self._topics: list[tuple[str, str, Any]] = []  # topic, type, connection
         self._counts: list[int] = []
         self._start, self._end = 2**63 - 1, 0
@@ -196,7 +199,7 @@ class BagWriter:
     def message(self, msgtype: str, **fields: Any) -> Any:
         """A message of ``msgtype`` (e.g. ``geometry_msgs/msg/PointStamped``) in this bag's
         message definitions; fields not given take their defaults (0, "", empty)."""
-        return _build(self.typestore, msgtype, fields)
+        return _build(self.typestore, msgtype, fields, self._defaults)
 
     def header(self, stamp_ns: int, frame_id: str) -> Any:
         """A ``std_msgs/msg/Header`` (ROS 1's ``seq`` left 0)."""
