@@ -138,7 +138,17 @@ def test_every_format_reads_back_the_same(bags, example_estimates, distro):
     assert all(a == b for a, b in ts) and ts[0][0] == T0_NS
     assert frames == {"ft_sensor"}
     if distro == "noetic":
-        assert bags[distro].is_file() and bags[distro].read_bytes()[:13] == b"#ROSBAG V2.0\n"
+        data = bags[distro].read_bytes()
+        assert bags[distro].is_file() and data[:13] == b"#ROSBAG V2.0\n"
+        # ROS 1 names and md5sums, as `rosmsg md5` gives them on Noetic
+        md5 = dict(re.findall(rb"type=([\w/]+).{1,8}?md5sum=([0-9a-f]{32})", data, re.S))
+        assert {k.decode(): v.decode() for k, v in md5.items()} == {
+            "geometry_msgs/WrenchStamped": "d78d3cb249ce23087ade7e7d0c40cfa7",
+            "geometry_msgs/PointStamped": "c63aecb41bfdfd6b7e1fac37c7cbe7bf",
+            "geometry_msgs/Vector3Stamped": "7b324c7325e683bf02a9b14b01090ec7",
+            "std_msgs/String": "992ce8a1687cec8c8bd883ec73ca41d1",
+            "visualization_msgs/MarkerArray": "d155b9ce5188fbaf89745847fd5882d7",
+        }
 
 
 def test_markers_in_the_bag_follow_the_state(bags, example_estimates):
@@ -236,6 +246,17 @@ def test_cli_distro_and_frame_id(tmp_path):
         out = run("estimate", "--example", *args)
         assert out.returncode == 2 and message in out.stderr, out.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["j", "one.bag"]
+
+
+def test_cli_bag_input_keeps_its_frame_unless_given(tmp_path):
+    _tilted_log_bag(tmp_path / "in", load_example(), (0.0, (0.0, 0.0, 0.0)), with_tf=False)
+    for extra, frame in (((), "ft_link"), (("--frame-id", "sensor_2"), "sensor_2")):
+        dest = tmp_path / f"out_{frame}"
+        out = run("estimate", tmp_path / "in", "--to-bag", dest, "--ros-distro", "iron", "-q", *extra)
+        assert out.returncode == 0, out.stderr
+        with reader(dest) as r:
+            frames = {r.deserialize(d, c.msgtype).header.frame_id for c, _, d in r.messages() if c.topic == TOPICS["contact_point"]}
+        assert frames == {frame}
 
 
 # --- gravity from /tf ---------------------------------------------------------------------
