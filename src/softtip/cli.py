@@ -355,7 +355,7 @@ from the bag's /tf.
 @click.option("--plot-units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the plot's force and moment axes.")
 @click.option("--topic", metavar="TOPIC", help="Bag input: the geometry_msgs/msg/WrenchStamped topic (default: the bag's only one).")
 @click.option("--allow-partial", is_flag=True, help="Bag input: use a damaged bag's readable messages (with a warning) instead of stopping.")
-@bag_output_options
+@bag_output_options()
 @click.option("--gravity-frame", metavar="FRAME", help="With --payload and a bag INPUT: the sensor's orientation from the bag's /tf and /tf_static, FRAME (z up, e.g. world) to the wrench's frame_id, at each stamp (instead of qw, qx, qy, qz columns).")
 @click.option("--rerun", "rerun_spawn", is_flag=True, help="Show the fingertip, force, contact point, normal and edge in a Rerun viewer (needs the rerun-sdk package).")
 @click.option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save the Rerun 3-D view and time series to FILE.rrd (open with `rerun FILE.rrd`).")

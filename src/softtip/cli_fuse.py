@@ -78,7 +78,7 @@ PointStamped and RViz markers, in the common frame, in the format --ros-distro p
     @click.option("--gravity", nargs=3, type=float, default=(0.0, 0.0, -9.80665), show_default=True, metavar="X Y Z", help="Gravity in the common frame, m/s².")
     @click.option("--point-std", type=float, default=0.2, show_default=True, metavar="MM", help="Standard deviation of a contact point per axis, mm (for the plane normal).")
     @click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Also draw both forces, the grasp reading and the fused angles across the grasp to this PNG/PDF/SVG.")
-    @bag_output_options
+    @bag_output_options(frame_default="the common frame: --frame, the hand file's, else hand")
     @estimator_options
     def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, point_std, plot_path, tip,
              to_bag=None, ros_distro=None, frame_id=None, **estimator_opts):  # fmt: skip

@@ -14,9 +14,10 @@ from softtip.ros.bagout import DEFAULT_DISTRO, DISTROS
 __all__ = ["bag_output_options", "output_frame_id"]
 
 
-def bag_output_options(f):
-    """``--to-bag PATH``, ``--ros-distro NAME`` and ``--frame-id FRAME`` (keyword arguments
-    ``to_bag``, ``ros_distro``, ``frame_id``; ``None`` when not given)."""
+def bag_output_options(frame_default: str = f"a bag input's own, else {DEFAULT_FRAME_ID}"):
+    """A decorator adding ``--to-bag PATH``, ``--ros-distro NAME`` and ``--frame-id FRAME``
+    (keyword arguments ``to_bag``, ``ros_distro``, ``frame_id``; ``None`` when not given);
+    ``frame_default`` says in ``--help`` what the frame is without ``--frame-id``."""
     options = [
         click.option(
             "--to-bag",
@@ -38,13 +39,16 @@ def bag_output_options(f):
             "--frame-id",
             metavar="FRAME",
             default=None,
-            help=f"header.frame_id of every message in the --to-bag output.  [default: a bag input's own, else "
-            f"{DEFAULT_FRAME_ID}]",
+            help=f"header.frame_id of every message in the --to-bag output.  [default: {frame_default}]",
         ),
     ]
-    for option in reversed(options):
-        f = option(f)
-    return f
+
+    def decorate(f):
+        for option in reversed(options):
+            f = option(f)
+        return f
+
+    return decorate
 
 
 def output_frame_id(frame_id: str | None, input_frame_id: str = "") -> str:
