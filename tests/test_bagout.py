@@ -465,3 +465,22 @@ def test_fuse_command_writes_a_bag(tmp_path):
     assert frames == {"palm"}
     out = run(*args, "--ros-distro", "jazzy")
     assert out.returncode == 2 and "apply to --to-bag" in out.stderr
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX file size limit")
+@pytest.mark.parametrize("name, distro", [("b", "jazzy"), ("b.bag", None)])
+def test_a_bag_that_cannot_be_written_says_why_and_leaves_nothing(tmp_path, name, distro):
+    import resource
+    import signal
+
+    def limit():
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (30_000, 30_000))
+
+    extra = ("--ros-distro", distro) if distro else ()
+    out = subprocess.run(
+        [SOFTTIP, "estimate", "--example", "-q", "--to-bag", str(tmp_path / name), *extra],
+        capture_output=True, text=True, timeout=120, preexec_fn=limit,
+    )  # fmt: skip
+    assert out.returncode == 2 and "cannot write the bag (File too large)" in out.stderr and "Traceback" not in out.stderr
+    assert list(tmp_path.iterdir()) == []

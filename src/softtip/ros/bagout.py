@@ -27,6 +27,7 @@ into place on success: a failure leaves nothing behind.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 import sqlite3
@@ -299,12 +300,15 @@ class BagWriter:
         target = self._tmp / self.dest.name
         try:
             if exc_type is not None:
-                if self.format.storage == "sqlite3":
-                    self._impl.close()
-                elif hasattr(self._impl, "abort"):  # rosbag2; a ROS 1 writer is only closed
-                    self._impl.abort()
-                else:
-                    self._impl.close()
+                with contextlib.suppress(Exception):
+                    if self.format.storage == "sqlite3":
+                        self._impl.close()
+                    elif hasattr(self._impl, "abort"):  # rosbag2; a ROS 1 writer is only closed
+                        self._impl.abort()
+                    else:
+                        self._impl.close()
+                if isinstance(exc, (OSError, sqlite3.Error)):
+                    raise self._cannot_write(exc) from None
                 return
             try:
                 if self.format.storage == "sqlite3":
@@ -318,10 +322,24 @@ class BagWriter:
                 else:
                     self._impl.close()
                 os.rename(target, self.dest)
-            except OSError as err:
-                raise InputError(f"{self.dest}: cannot write the bag ({err.strerror or err})") from None
+            except (OSError, sqlite3.Error) as err:
+                raise self._cannot_write(err) from None
         finally:
             shutil.rmtree(self._tmp, ignore_errors=True)
+
+    def _cannot_write(self, err: BaseException) -> InputError:
+        """The error to report; sqlite3 says only "disk I/O error", so the reason the system
+        gives for writing one more block to the (discarded) database file is reported."""
+        reason = getattr(err, "strerror", None) or str(err)
+        if isinstance(err, sqlite3.Error) and self.format.storage == "sqlite3":
+            try:
+                with open(self._tmp / self.dest.name / self._file, "ab") as probe:
+                    probe.write(bytes(1 << 16))
+                    probe.flush()
+                    os.fsync(probe.fileno())
+            except OSError as why:
+                reason = f"{why.strerror or why}; sqlite3: {err}"
+        return InputError(f"{self.dest}: cannot write the bag ({reason})")
 
     def _metadata(self, files: list[str]) -> str:
         count = sum(self._counts)
