@@ -19,9 +19,9 @@ from softtip.estimator.evidence import EvidenceTracker, evidence_states
 from softtip.estimator.latch import latch_points
 from softtip.estimator.measure import effective_noise, measure, noise_correlation
 from softtip.estimator.tare import StreamTare, tare_log
-from softtip.contact import contact_arrays
-from softtip._xp import NP, PY
-from softtip.synthetic import synthetic_grasp
+from softtip.core.contact import contact_arrays
+from softtip.core._xp import NP, PY
+from softtip.sim.synthetic import synthetic_grasp
 
 CLOSE = dict(rtol=1e-12, atol=1e-300, equal_nan=True)
 

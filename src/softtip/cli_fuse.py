@@ -9,7 +9,7 @@ import click
 import numpy as np
 
 from softtip.errors import InputError
-from softtip.units import UNIT_SYSTEMS, wrench_to_si
+from softtip.core.units import UNIT_SYSTEMS, wrench_to_si
 
 __all__ = ["fuse"]
 
@@ -76,9 +76,9 @@ a summary on standard error.
     @click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Also draw both forces, the grasp reading and the fused angles across the grasp to this PNG/PDF/SVG.")
     @estimator_options
     def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, point_std, plot_path, tip, **estimator_opts):
-        from softtip.fingertip import load_fingertip
+        from softtip.core.fingertip import load_fingertip
         from softtip.fusion import fuse_logs, poses_from_columns, read_hand_file
-        from softtip.io import read_log, write_table
+        from softtip.io.tables import read_log, write_table
 
         if object_mass is not None and not (np.isfinite(object_mass) and object_mass >= 0):
             raise click.BadParameter(f"{object_mass!r}: expected a mass in kg, 0 or more", param_hint="--object-mass")
@@ -88,7 +88,7 @@ a summary on standard error.
             raise click.BadParameter("expected three finite numbers, m/s²", param_hint="--gravity")
         if plot_path is not None:
             check_figure_path(plot_path)
-        from softtip.atomic import check_distinct
+        from softtip.io.atomic import check_distinct
 
         check_distinct(
             [("INPUT", p) for p in inputs] + [("--hand", hand_file), ("--bias", estimator_opts.get("bias_file"))],
@@ -101,7 +101,7 @@ a summary on standard error.
                 raise click.UsageError("a bag input needs --topics TOPIC TOPIC and --frame FRAME")
             if hand_file is not None:
                 raise click.UsageError("--hand applies to CSV inputs; a bag's poses come from its /tf")
-            bag = optional("softtip.bag", "ros")
+            bag = optional("softtip.io.bag", "ros")
             from softtip.fusion.tf import read_tf
 
             path = inputs[0]

@@ -8,10 +8,10 @@ from typing import Literal
 
 import numpy as np
 
-from softtip.depth import DepthLaw
-from softtip.filtering import lowpass_sos
-from softtip.noise import NANO17, SensorNoise
-from softtip.units import KGF
+from softtip.core.depth import DepthLaw
+from softtip.core.filtering import lowpass_sos
+from softtip.core.noise import NANO17, SensorNoise
+from softtip.core.units import KGF
 
 __all__ = ["CONTACT_POINT_MODES", "DEPTH_MODES", "TARE_METHODS", "EstimatorConfig"]
 
@@ -61,7 +61,7 @@ class EstimatorConfig:
         (default, the papers'): only on contact loss. A few mm (e.g. 3 mm) is beyond the
         soft-finger bias of the papers' line contacts at light force (≈ |h| / |f| ≤ 1 mm).
     depth : DepthLaw or None
-        Skin law of the depth compensation (:mod:`softtip.depth`): the fixed law of
+        Skin law of the depth compensation (:mod:`softtip.core.depth`): the fixed law of
         ``depth_mode="law"``, the prior of ``"online"``. ``None`` (default): the
         fingertip's own (:func:`softtip.estimator.depth.tip_depth_law`: the murakami2006
         preset and any fingertip file with a ``skin_thickness``).
@@ -201,7 +201,7 @@ class EstimatorConfig:
                 raise ValueError(f"relatch_distance must be a positive distance in m or None, got {self.relatch_distance!r}")
             object.__setattr__(self, "relatch_distance", v)
         if self.depth is not None and not isinstance(self.depth, DepthLaw):
-            raise ValueError(f"depth must be a softtip.depth.DepthLaw or None, got {self.depth!r}")
+            raise ValueError(f"depth must be a softtip.core.depth.DepthLaw or None, got {self.depth!r}")
         lo, hi = (float(v) for v in self.latch_window)
         if not (0.0 <= lo < hi):
             raise ValueError(f"latch_window must be (low, high) with 0 <= low < high, in N; got {self.latch_window!r}")

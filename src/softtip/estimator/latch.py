@@ -18,10 +18,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from softtip._xp import PY
-from softtip.contact import contact_kernel
+from softtip.core._xp import PY
+from softtip.core.contact import contact_kernel
 from softtip.estimator.config import EstimatorConfig
-from softtip.fingertip import Fingertip
+from softtip.core.fingertip import Fingertip
 
 __all__ = ["latch_points", "LatchTracker"]
 
@@ -115,7 +115,7 @@ class LatchTracker:
 
     Call :meth:`start` at contact onset (and at a re-latch), then :meth:`step` for every
     sample in contact. Soft-finger solutions (``sc``, the 8-tuple of
-    :func:`softtip.contact.contact_kernel`) are computed only when needed and handed back
+    :func:`softtip.core.contact.contact_kernel`) are computed only when needed and handed back
     for reuse.
     """
 

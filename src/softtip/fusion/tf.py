@@ -156,7 +156,7 @@ class TfTree:
 
 def read_tf(path: str | os.PathLike[str]) -> TfTree:
     """Every transform of a bag's ``/tf`` and ``/tf_static``."""
-    from softtip.bag import _typestore, import_rosbags
+    from softtip.io.bag import _typestore, import_rosbags
 
     import_rosbags()
     from rosbags.highlevel import AnyReader

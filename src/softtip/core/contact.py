@@ -7,7 +7,7 @@ a sample with no pushing root on the skin is reported as invalid, not raised.
 
 Closed forms for the sphere (exact to rounding), the capsule (hemisphere, then the cylinder
 side) and the axis-aligned ellipsoid (mapped onto the unit sphere); a damped Newton solver
-for any :class:`~softtip.fingertip.ImplicitSurface`.
+for any :class:`~softtip.core.fingertip.ImplicitSurface`.
 """
 
 from __future__ import annotations
@@ -17,11 +17,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from softtip._vec import cross as _cross
-from softtip._vec import skew as _skew
-from softtip._xp import NP
-from softtip.fingertip import Capsule, Ellipsoid, Fingertip, ImplicitSurface, Sphere, load_fingertip
-from softtip.mounting import Mounted
+from softtip.core._vec import cross as _cross
+from softtip.core._vec import skew as _skew
+from softtip.core._xp import NP
+from softtip.core.fingertip import Capsule, Ellipsoid, Fingertip, ImplicitSurface, Sphere, load_fingertip
+from softtip.core.mounting import Mounted
 
 __all__ = ["Contact", "contact_from_wrench"]
 
@@ -160,7 +160,7 @@ def contact_kernel(tip: Fingertip, fx, fy, fz, mx, my, mz, xp=NP):
     Returns ``(rx, ry, rz, nx, ny, nz, sigma, valid)``.
     """
     own = getattr(tip, "_contact_kernel", None)
-    if own is not None:  # shapes with their own solver (softtip.mesh.MeshFingertip)
+    if own is not None:  # shapes with their own solver (softtip.core.mesh.MeshFingertip)
         return own(fx, fy, fz, mx, my, mz, xp)
     if isinstance(tip, Mounted):
         # the shape's own solution for the wrench in its frame, mapped back to the sensor frame
@@ -306,7 +306,7 @@ def contact_from_wrench(wrench: ArrayLike, tip: Fingertip | str) -> Contact:
     wrench : array-like, shape (..., 6)
         ``fx, fy, fz`` (N), ``mx, my, mz`` (N·m) in the sensor frame, bias removed.
     tip : Fingertip or str
-        The fingertip, or a preset name / TOML path for :func:`~softtip.fingertip.load_fingertip`.
+        The fingertip, or a preset name / TOML path for :func:`~softtip.core.fingertip.load_fingertip`.
 
     Returns
     -------
