@@ -1,15 +1,5 @@
 """Logs (CSV, Parquet), the atomic writer, TOML files, bags, the Net F/T receiver, sources."""
 
-from softtip.io.tables import (
-    Log,
-    read_log,
-    write_table,
-    REQUIRED_COLUMNS,
-)
-
-__all__ = [
-    "Log",
-    "read_log",
-    "write_table",
-    "REQUIRED_COLUMNS",
-]
+# the public names of the former module softtip.io
+from softtip.io.tables import *  # noqa: F403
+from softtip.io.tables import __all__  # noqa: F401

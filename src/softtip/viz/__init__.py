@@ -1,13 +1,5 @@
 """Views: the Rerun 3-D view and the papers' plots."""
 
-from softtip.viz.rerun import (
-    RerunLogger,
-    import_rerun,
-    surface_mesh,
-)
-
-__all__ = [
-    "RerunLogger",
-    "import_rerun",
-    "surface_mesh",
-]
+# the public names of the former module softtip.viz
+from softtip.viz.rerun import *  # noqa: F403
+from softtip.viz.rerun import __all__  # noqa: F401
