@@ -65,7 +65,7 @@ from softtip import EstimatorConfig, axial_difference, estimate, murakami2006
 from softtip.core.depth import MURAKAMI2006_DEPTH, DepthLaw, lever_depth
 from softtip.core.noise import NANO17, SensorNoise
 from softtip.core.spin import direction_angle
-from softtip.sim import NANO17 as SIM_SENSOR
+from softtip.sim import NANO17_SENSOR as SIM_SENSOR
 from softtip.sim import (
     ContactModel,
     CylinderRim,

@@ -259,7 +259,8 @@ def test_filter_lowers_the_noise_level():
 
 def test_kgf_mm_config_values_are_si():
     cfg = EstimatorConfig()
-    assert cfg.latch_window == pytest.approx((0.2 * KGF, 0.5 * KGF))
+    assert cfg.latch_force_range == pytest.approx((0.2 * KGF, 0.5 * KGF))
+    assert cfg.latch_window == cfg.latch_force_range  # the former name still reads
     assert 0.5 * KGF_MM == pytest.approx(4.903325e-3)
 
 
@@ -278,7 +279,9 @@ def test_config_rejects_nonsense():
         EstimatorConfig(relatch_distance=-1.0)
     with pytest.raises(ValueError, match="depth"):
         EstimatorConfig(depth=2.0)
-    with pytest.raises(ValueError, match="latch_window"):
+    with pytest.raises(ValueError, match="latch_force_range"):
+        EstimatorConfig(latch_force_range=(5.0, 1.0))
+    with pytest.raises(ValueError, match="latch_force_range"):  # the former name is the same setting
         EstimatorConfig(latch_window=(5.0, 1.0))
     with pytest.raises(ValueError, match="Nyquist"):
         EstimatorConfig(lowpass_hz=30.0, sample_rate=50.0)

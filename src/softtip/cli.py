@@ -672,7 +672,7 @@ def _make_config(opts: dict, sample_rate: float | None = None, tip: Fingertip | 
         return EstimatorConfig(
             contact_point=opts["contact_point"],
             contact_threshold=opts["contact_threshold"],
-            latch_window=opts["latch_window"],
+            latch_force_range=opts["latch_window"],
             noise=SensorNoise((opts["force_noise"],) * 3, (opts["moment_noise"] * 1e-3,) * 3),
             h_min=opts["h_min"] * 1e-3,
             lowpass_hz=opts["lowpass"],

@@ -217,7 +217,7 @@ def _kappa_at(tip: ImplicitSurface, r: NDArray, f: NDArray, m: NDArray) -> NDArr
     return np.sum(g * (m - _cross(r, f)), axis=-1) / np.sum(g * g, axis=-1)
 
 
-def _newton(f, m, r, kappa, tip: ImplicitSurface, max_iter: int, tol: float):
+def _levenberg_marquardt(f, m, r, kappa, tip: ImplicitSurface, max_iter: int, tol: float):
     """Levenberg–Marquardt iterations on the samples still active; returns r, κ, converged."""
     fnorm = np.sqrt(np.sum(f * f, axis=-1))
     scale = tip.bounding_sphere[1]
@@ -277,7 +277,7 @@ def _implicit_contact(w: NDArray, tip: ImplicitSurface, max_iter: int = 60, tol:
     m = w[:, 3:]
 
     r = _wrench_axis_start(f, m, tip)
-    r, kappa, g, gn, conv = _newton(f, m, r, _kappa_at(tip, r, f, m), tip, max_iter, tol)
+    r, kappa, g, gn, conv = _levenberg_marquardt(f, m, r, _kappa_at(tip, r, f, m), tip, max_iter, tol)
     good = conv & (np.sum(f * g, axis=-1) < 0.0)
     retry = np.flatnonzero(~good)
     if retry.size:
@@ -285,7 +285,7 @@ def _implicit_contact(w: NDArray, tip: ImplicitSurface, max_iter: int = 60, tol:
         fr, mr = f[retry], m[retry]
         sx, sy, sz = _sphere_kernel(*fr.T, *mr.T, radius, cx, cy, cz, NP)[:3]
         r1 = tip.project(np.stack((sx, sy, sz), axis=-1))
-        r1, k1, g1, gn1, conv1 = _newton(fr, mr, r1, _kappa_at(tip, r1, fr, mr), tip, max_iter, tol)
+        r1, k1, g1, gn1, conv1 = _levenberg_marquardt(fr, mr, r1, _kappa_at(tip, r1, fr, mr), tip, max_iter, tol)
         better = conv1 & (np.sum(fr * g1, axis=-1) < 0.0)
         sel = retry[better]
         r[sel], kappa[sel], g[sel], gn[sel] = r1[better], k1[better], g1[better], gn1[better]
