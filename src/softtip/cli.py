@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 import os
-import shutil
 import sys
 import warnings
 from pathlib import Path
@@ -23,6 +22,7 @@ from softtip.estimator.tare import bias_to_toml, load_bias
 from softtip.core.noise import NANO17, SensorNoise
 from softtip.estimator import STATES, EstimatorConfig
 from softtip.estimator import estimate as run_estimate
+from softtip.ros.options import bag_output_options, output_frame_id
 from softtip.core.units import KGF, KGF_MM, UNIT_SYSTEMS, wrench_to_si
 
 FRAMES_HELP = """\
@@ -325,9 +325,12 @@ INPUT may also be a ROS bag (rosbag2 directory with sqlite3 or MCAP storage, a .
 .db3 file, or a ROS 1 .bag; needs the rosbags package): the samples are the
 geometry_msgs/msg/WrenchStamped messages of --topic, timed by header.stamp (t counts
 from the first message; the stamps are copied to a stamp_ns column). --to-bag
-writes the estimates as a rosbag2 (MCAP) with standard messages on /softtip/state,
-/softtip/contact_point, /softtip/normal, /softtip/edge_direction and /softtip/wrench, plus
-the raw wrench; with --to-bag and no -o no CSV is written.
+writes the estimates as a bag --ros-distro plays (default humble: rosbag2 metadata version
+5, sqlite3; a name ending in .bag: ROS 1) with standard messages on /softtip/state,
+/softtip/contact_point, /softtip/normal, /softtip/edge_direction, /softtip/wrench and RViz
+markers on /softtip/markers, plus the raw wrench, all with --frame-id; with --to-bag and
+no -o no CSV is written. With --payload, --gravity-frame takes the sensor's orientation
+from the bag's /tf.
 
 """
     + FRAMES_HELP
@@ -352,7 +355,8 @@ the raw wrench; with --to-bag and no -o no CSV is written.
 @click.option("--plot-units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the plot's force and moment axes.")
 @click.option("--topic", metavar="TOPIC", help="Bag input: the geometry_msgs/msg/WrenchStamped topic (default: the bag's only one).")
 @click.option("--allow-partial", is_flag=True, help="Bag input: use a damaged bag's readable messages (with a warning) instead of stopping.")
-@click.option("--to-bag", "to_bag", type=click.Path(file_okay=False), metavar="DIR", help="Also write the estimates as a rosbag2 directory (MCAP storage); DIR must not exist.")
+@bag_output_options
+@click.option("--gravity-frame", metavar="FRAME", help="With --payload and a bag INPUT: the sensor's orientation from the bag's /tf and /tf_static, FRAME (z up, e.g. world) to the wrench's frame_id, at each stamp (instead of qw, qx, qy, qz columns).")
 @click.option("--rerun", "rerun_spawn", is_flag=True, help="Show the fingertip, force, contact point, normal and edge in a Rerun viewer (needs the rerun-sdk package).")
 @click.option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save the Rerun 3-D view and time series to FILE.rrd (open with `rerun FILE.rrd`).")
 @click.option("--payload", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Remove the fingertip's weight ([payload] mass kg, com m; see calibrate-payload) before taring, using INPUT's qw, qx, qy, qz columns (sensor frame in a z-up world frame).")
@@ -376,6 +380,9 @@ def estimate(
     save_bias=None,
     quiet=False,
     allow_partial=False,
+    ros_distro=None,
+    frame_id=None,
+    gravity_frame=None,
     **estimator_opts,
 ):
     from softtip.io.examples import EXAMPLE_PATH
@@ -428,10 +435,26 @@ def estimate(
         raise click.UsageError("--topic applies to bag input only")
     if allow_partial and bag_log is None:
         raise click.UsageError("--allow-partial applies to bag input only")
-    if payload is not None:  # gravity compensation first: the tare then removes only the sensor bias
-        from softtip.calibration.payload import compensate_log
+    if to_bag is None and (ros_distro is not None or frame_id is not None):
+        raise click.UsageError("--ros-distro and --frame-id apply to --to-bag")
+    if to_bag is not None:
+        from softtip.ros.bagout import bag_format
 
-        log = compensate_log(log, payload)
+        bag_format(to_bag, ros_distro)  # a name that does not fit the distribution: stop before the work
+    if gravity_frame is not None and (payload is None or bag_log is None):
+        raise click.UsageError("--gravity-frame needs --payload and a bag INPUT (with /tf)")
+    if payload is not None:  # gravity compensation first: the tare then removes only the sensor bias
+        from softtip.calibration.payload import compensate_log, compensate_payload, load_payload
+
+        if gravity_frame is None:
+            log = compensate_log(log, payload)
+        else:  # the orientation from the bag's /tf
+            from dataclasses import replace
+
+            from softtip.fusion.tf import gravity_orientations
+
+            q = gravity_orientations(input_path, gravity_frame, bag_log.frame_ids, bag_log.stamps_ns, frame_id)
+            log = replace(log, wrench=compensate_payload(log.wrench, q, load_payload(payload)))
     check_lowpass(estimator_opts["lowpass"], log.t)
     try:
         with warnings.catch_warnings():
@@ -454,7 +477,7 @@ def estimate(
     _write_estimate_outputs(
         est, columns, log, bag_log, config, fingertip,
         output=output, plot_path=plot_path, plot_units=plot_units, title=f"softtip: {source}",
-        to_bag=to_bag, rerun_spawn=rerun_spawn, rerun_save=rerun_save,
+        to_bag=to_bag, rerun_spawn=rerun_spawn, rerun_save=rerun_save, ros_distro=ros_distro, frame_id=frame_id,
         metadata=_parquet_metadata(fingertip, tip, output_units, log),
     )  # fmt: skip
 
@@ -520,7 +543,7 @@ def _check_outputs(inputs, outputs) -> None:
 
 def _write_estimate_outputs(
     est, columns, log, bag_log, config, fingertip, *, output, plot_path, plot_units, title, to_bag, rerun_spawn, rerun_save,
-    metadata,
+    metadata, ros_distro=None, frame_id=None,
 ) -> None:
     """Write every output of ``estimate``; all appear together, or none (and no temporary file stays)."""
     import io as _io
@@ -557,10 +580,11 @@ def _write_estimate_outputs(
             logger.close()
         if to_bag is not None:
             bag = _optional("softtip.io.bag", "ros")
+            frame = output_frame_id(frame_id, bag_log.frame_id if bag_log is not None else "")
             if bag_log is not None:
-                bag.write_estimates_bag(to_bag, est, bag_log.wrench, bag_log.stamps_ns, bag_log.frame_id, bag_log.topic)
+                bag.write_estimates_bag(to_bag, est, bag_log.wrench, bag_log.stamps_ns, frame, bag_log.topic, distro=ros_distro)
             else:
-                bag.write_estimates_bag(to_bag, est, log.wrench)
+                bag.write_estimates_bag(to_bag, est, log.wrench, frame_id=frame, distro=ros_distro)
             bag_written = True
         # the table last, atomically (softtip.io.atomic, through write_table); then the others are put in place
         if output is not None:
@@ -575,7 +599,9 @@ def _write_estimate_outputs(
         for f in pending:
             f.discard()
         if bag_written:
-            shutil.rmtree(to_bag, ignore_errors=True)
+            from softtip.ros.bagout import remove_bag
+
+            remove_bag(to_bag)
 
 
 class _NoProgress:

@@ -9,6 +9,7 @@ import click
 import numpy as np
 
 from softtip.errors import InputError
+from softtip.ros.options import bag_output_options, output_frame_id
 from softtip.core.units import UNIT_SYSTEMS, wrench_to_si
 
 __all__ = ["fuse"]
@@ -61,7 +62,10 @@ common direction and the plane through both lines), crossing_lines (two edges: b
 angle and closest approach), line_and_face, faces, single or none; with the evidence of the
 lines (confirmed once the object was rocked about two axes) and flags (unbalanced forces,
 an area contact). Writes CSV (standard output without -o) or Parquet (-o ending in .parquet);
-a summary on standard error.
+a summary on standard error. --to-bag also writes the fused line and plane as
+geometry_msgs/msg/PoseStamped (x axis along the line, z axis the plane's normal), the contacts as
+PointStamped and RViz markers, in the common frame, in the format --ros-distro plays; with
+--to-bag and no -o no CSV is written.
 """,
     )
     @click.argument("inputs", nargs=-1, required=True, type=click.Path(exists=False))
@@ -74,8 +78,10 @@ a summary on standard error.
     @click.option("--gravity", nargs=3, type=float, default=(0.0, 0.0, -9.80665), show_default=True, metavar="X Y Z", help="Gravity in the common frame, m/s².")
     @click.option("--point-std", type=float, default=0.2, show_default=True, metavar="MM", help="Standard deviation of a contact point per axis, mm (for the plane normal).")
     @click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Also draw both forces, the grasp reading and the fused angles across the grasp to this PNG/PDF/SVG.")
+    @bag_output_options
     @estimator_options
-    def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, point_std, plot_path, tip, **estimator_opts):
+    def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, point_std, plot_path, tip,
+             to_bag=None, ros_distro=None, frame_id=None, **estimator_opts):  # fmt: skip
         from softtip.core.fingertip import load_fingertip
         from softtip.fusion import fuse_logs, poses_from_columns, read_hand_file
         from softtip.io.tables import read_log, write_table
@@ -92,8 +98,14 @@ a summary on standard error.
 
         check_distinct(
             [("INPUT", p) for p in inputs] + [("--hand", hand_file), ("--bias", estimator_opts.get("bias_file"))],
-            [("-o", output), ("--plot", plot_path)],
+            [("-o", output), ("--plot", plot_path), ("--to-bag", to_bag)],
         )
+        if to_bag is None and (ros_distro is not None or frame_id is not None):
+            raise click.UsageError("--ros-distro and --frame-id apply to --to-bag")
+        if to_bag is not None:
+            from softtip.ros.bagout import bag_format
+
+            bag_format(to_bag, ros_distro)
         fingertip = load_fingertip(tip)
         config = make_config(estimator_opts)
         if len(inputs) == 1:
@@ -108,6 +120,7 @@ a summary on standard error.
             blogs = [bag.read_bag(path, tp) for tp in topics]
             tree = read_tf(path)
             origin = min(int(b.stamps_ns[0]) for b in blogs)
+            common, stamps = frame, blogs[0].stamps_ns
             logs = []
             for b in blogs:
                 if not b.frame_id:
@@ -118,14 +131,17 @@ a summary on standard error.
             if topics is not None or frame is not None:
                 raise click.UsageError("--topics and --frame apply to a bag input")
             read = [read_log(p, units=units) for p in inputs]
+            common = "hand"  # pose columns name no frame
             if hand_file is not None:
                 hand = read_hand_file(hand_file)
                 if len(hand.fingers) != 2:
                     raise InputError(f"{hand_file}: {len(hand.fingers)} [finger.NAME] tables; expected two, in the order of the logs")
                 poses = list(hand.fingers.items())
+                common = hand.frame
             else:
                 poses = [(os.path.basename(p), poses_from_columns(log.t, log.extra, os.path.basename(p), p)) for p, log in zip(inputs, read)]
             logs = [(name, log.t, log.wrench, pose) for (name, pose), log in zip(poses, read)]
+            stamps = np.rint(read[0].t * 1e9).astype(np.int64)
         else:
             raise click.UsageError(f"expected two CSV logs or one bag, got {len(inputs)} inputs")
         try:
@@ -134,7 +150,18 @@ a summary on standard error.
             )
         except ValueError as exc:
             raise click.UsageError(str(exc)) from None
-        write_table(fused.columns(), output)
+        if to_bag is not None:  # the fused grasp as standard messages (softtip.ros.fused)
+            from softtip.ros.bagout import remove_bag
+            from softtip.ros.fused import write_fused_bag
+
+            write_fused_bag(to_bag, fused, fingers, stamps, output_frame_id(frame_id, common), distro=ros_distro)
+        try:
+            if output is not None or to_bag is None:
+                write_table(fused.columns(), output)
+        except BaseException:
+            if to_bag is not None:
+                remove_bag(to_bag)
+            raise
         if plot_path is not None:
             from softtip.fusion.plot import plot_fused
 

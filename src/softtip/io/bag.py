@@ -7,8 +7,10 @@ messages of one topic. The time of a sample is its ``header.stamp``, or the time
 message was recorded when the stamp is zero (drivers that do not stamp). ROS messages are
 SI (REP-103), as softtip is.
 
-**Writing** (:func:`write_estimates_bag`): a rosbag2 directory with MCAP storage and standard
-message types, each message stamped with its input sample's time and ``frame_id``:
+**Writing** (:func:`write_estimates_bag`): a bag in the default format of a ROS distribution
+(rosbag2 metadata version 5 with sqlite3 storage for Humble, the default; Iron, Jazzy, Rolling;
+or a ROS 1 ``.bag``: :mod:`softtip.ros.bagout`) with standard message types, each message
+stamped with its input sample's time and one ``frame_id`` (``ft_sensor`` by default):
 
 =============================  =============================  ==================================
 topic                          type                           when
@@ -20,6 +22,7 @@ topic                          type                           when
 ``/softtip/contact_point``     geometry_msgs/msg/PointStamped in contact (point, line); m
 ``/softtip/normal``            geometry_msgs/msg/Vector3Stamped in contact: outward unit normal
 ``/softtip/edge_direction``    geometry_msgs/msg/Vector3Stamped line contacts: unit direction (an axis)
+``/softtip/markers``           visualization_msgs/msg/MarkerArray up to 50 Hz and at state changes: RViz markers
 =============================  =============================  ==================================
 
 Nothing is published where a value is undefined (no NaN messages). The bag is written to a
@@ -29,8 +32,6 @@ temporary directory beside the destination and renamed into place: a failure lea
 from __future__ import annotations
 
 import os
-import shutil
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -38,6 +39,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from softtip.errors import InputError
+from softtip.ros import DEFAULT_FRAME_ID
 from softtip.ros import TOPICS as ROS_TOPICS
 from softtip.estimator import Estimates
 
@@ -68,7 +70,7 @@ def import_rosbags():
         import rosbags.typesys
     except ImportError as exc:
         raise ImportError(
-            "ROS bag input and output need the 'rosbags' package: pip install 'rosbags>=0.10' "
+            "ROS bag input and output need the 'rosbags' package: pip install 'rosbags>=0.11' "
             "(or, from a softtip checkout, pip install -e '.[ros]')"
         ) from exc
     return rosbags
@@ -294,47 +296,50 @@ def write_estimates_bag(
     est: Estimates,
     raw_wrench: ArrayLike,
     stamps_ns: ArrayLike | None = None,
-    frame_id: str = "",
+    frame_id: str = DEFAULT_FRAME_ID,
     raw_topic: str = DEFAULT_RAW_TOPIC,
+    *,
+    distro: str | None = None,
+    markers: bool = True,
+    marker_rate: float | None = 50.0,
 ) -> None:
-    """Write estimates and the raw wrench as a rosbag2 directory (MCAP storage), atomically.
+    """Write estimates, RViz markers and the raw wrench as a bag a ROS distribution plays, atomically.
 
     Parameters
     ----------
     dest : str or path-like
-        The bag directory to create; it must not exist.
+        The rosbag2 directory (or ROS 1 ``.bag`` file) to create; it must not exist.
     est : Estimates
     raw_wrench : array-like, shape (N, 6)
         The input wrench, N and N·m (copied to ``raw_topic``).
     stamps_ns : array-like of int, shape (N,), optional
         Message stamps, ns; default ``round(est.t · 1e9)``.
     frame_id : str
-        ``header.frame_id`` of every message (the input's).
+        ``header.frame_id`` of every stamped message (default ``ft_sensor``).
     raw_topic : str
         Topic of the raw wrench (the input topic when the input was a bag).
+    distro : str, optional
+        ``humble`` (default: rosbag2 metadata version 5, sqlite3), ``iron``, ``jazzy``,
+        ``rolling`` or ``noetic`` (ROS 1; the default for a name ending in ``.bag``); see
+        :mod:`softtip.ros.bagout`.
+    markers : bool
+        Also write ``visualization_msgs/msg/MarkerArray`` on :data:`softtip.ros.MARKER_TOPIC`
+        (contact point, normal, edge direction; deleted when undefined).
+    marker_rate : float or None
+        Hz: the markers at most this often (the first sample of each 1/rate interval of the
+        stamps), and at every change of state, so that a marker appears and disappears
+        with the contact; None: every sample. RViz draws at display rate, and markers
+        cost twice the other messages to write.
 
     Raises
     ------
     InputError
-        ``dest`` exists, or its directory is missing or not writable.
+        ``dest`` exists, its directory is missing or not writable, or the distribution is
+        unknown or does not fit the name.
     """
-    import_rosbags()
-    from rosbags.rosbag2 import StoragePlugin, Writer
+    from softtip.ros import MARKER_TOPIC, contact_markers
+    from softtip.ros.bagout import BagWriter
 
-    dest = Path(dest)
-    if dest.exists():
-        raise InputError(
-            f"{dest}: exists already; expected a new directory name for the output bag"
-        )
-    parent = dest.parent if str(dest.parent) else Path(".")
-    try:
-        tmp = Path(
-            tempfile.mkdtemp(prefix=f".{dest.name}.", suffix=".partial", dir=parent)
-        )
-    except OSError as exc:
-        raise InputError(
-            f"{dest}: cannot create the bag there ({exc.strerror or exc}); expected a writable directory"
-        ) from None
     n = len(est)
     stamps = (
         np.rint(est.t * 1e9).astype(np.int64)
@@ -346,34 +351,14 @@ def write_estimates_bag(
         raise ValueError(
             f"expected {n} stamps and a ({n}, 6) raw wrench, got {stamps.shape} and {raw.shape}"
         )
-    ts = _typestore()
-    T = ts.types
-    Header, Time = T["std_msgs/msg/Header"], T["builtin_interfaces/msg/Time"]
-    Vector3, Wrench = T["geometry_msgs/msg/Vector3"], T["geometry_msgs/msg/Wrench"]
-    WrenchStamped, String = T[WRENCH_TYPE], T["std_msgs/msg/String"]
-    PointStamped, Point = (
-        T["geometry_msgs/msg/PointStamped"],
-        T["geometry_msgs/msg/Point"],
-    )
-    Vector3Stamped = T["geometry_msgs/msg/Vector3Stamped"]
-    ser = ts.serialize_cdr
-
-    def header(ns: int):
-        return Header(
-            stamp=Time(sec=int(ns // 1_000_000_000), nanosec=int(ns % 1_000_000_000)),
-            frame_id=frame_id,
-        )
-
-    def wrench_msg(ns: int, w) -> bytes:
-        msg = WrenchStamped(
-            header=header(ns),
-            wrench=Wrench(
-                force=Vector3(x=w[0], y=w[1], z=w[2]),
-                torque=Vector3(x=w[3], y=w[4], z=w[5]),
-            ),
-        )
-        return ser(msg, WRENCH_TYPE)
-
+    if markers and marker_rate is not None:
+        if not marker_rate > 0:
+            raise ValueError(f"marker_rate must be positive (Hz) or None, got {marker_rate!r}")
+        interval = np.floor_divide(stamps - stamps[0], 1e9 / marker_rate) if n else np.zeros(0)
+        marked = np.ones(n, dtype=bool)
+        marked[1:] = (np.diff(interval) != 0) | (np.diff(est.state) != 0)
+    else:
+        marked = np.full(n, markers)
     names = est.state_names.tolist()
     evidence = est.columns()["line_evidence"].tolist()
     tared, point, normal, direction = (
@@ -382,75 +367,62 @@ def write_estimates_bag(
         est.normal.tolist(),
         est.direction.tolist(),
     )
-    try:
-        with Writer(
-            tmp / dest.name, version=9, storage_plugin=StoragePlugin.MCAP
-        ) as writer:
-            conn = {
-                key: writer.add_connection(topic, msgtype, typestore=ts)
-                for key, topic, msgtype in (
-                    ("raw", raw_topic, WRENCH_TYPE),
-                    ("wrench", TOPICS["wrench"], WRENCH_TYPE),
-                    ("state", TOPICS["state"], "std_msgs/msg/String"),
-                    (
-                        "contact_point",
-                        TOPICS["contact_point"],
-                        "geometry_msgs/msg/PointStamped",
-                    ),
-                    ("normal", TOPICS["normal"], "geometry_msgs/msg/Vector3Stamped"),
-                    (
-                        "edge_direction",
-                        TOPICS["edge_direction"],
-                        "geometry_msgs/msg/Vector3Stamped",
-                    ),
-                    ("line_evidence", TOPICS["line_evidence"], "std_msgs/msg/String"),
+    with BagWriter(dest, distro) as bag:
+        msg = bag.message
+
+        def wrench_msg(h, w):
+            return msg(
+                WRENCH_TYPE,
+                header=h,
+                wrench=msg(
+                    "geometry_msgs/msg/Wrench",
+                    force=msg("geometry_msgs/msg/Vector3", x=w[0], y=w[1], z=w[2]),
+                    torque=msg("geometry_msgs/msg/Vector3", x=w[3], y=w[4], z=w[5]),
+                ),
+            )
+
+        def vector(h, v):
+            return msg("geometry_msgs/msg/Vector3Stamped", header=h, vector=msg("geometry_msgs/msg/Vector3", x=v[0], y=v[1], z=v[2]))
+
+        topic = {
+            key: bag.add_topic(name, msgtype)
+            for key, name, msgtype in (
+                ("raw", raw_topic, WRENCH_TYPE),
+                ("wrench", TOPICS["wrench"], WRENCH_TYPE),
+                ("state", TOPICS["state"], "std_msgs/msg/String"),
+                ("contact_point", TOPICS["contact_point"], "geometry_msgs/msg/PointStamped"),
+                ("normal", TOPICS["normal"], "geometry_msgs/msg/Vector3Stamped"),
+                ("edge_direction", TOPICS["edge_direction"], "geometry_msgs/msg/Vector3Stamped"),
+                ("line_evidence", TOPICS["line_evidence"], "std_msgs/msg/String"),
+            )
+            + ((("markers", MARKER_TOPIC, "visualization_msgs/msg/MarkerArray"),) if markers else ())
+        }
+        for k in range(n):
+            ns = int(stamps[k])
+            h = bag.header(ns, frame_id)
+            bag.write(topic["raw"], ns, wrench_msg(h, raw[k].tolist()))
+            if not est.taring[k]:
+                bag.write(topic["wrench"], ns, wrench_msg(h, tared[k]))
+            bag.write(topic["state"], ns, msg("std_msgs/msg/String", data=names[k]))
+            contact = names[k] != "none"
+            if contact:
+                x, y, z = point[k]
+                bag.write(
+                    topic["contact_point"], ns,
+                    msg("geometry_msgs/msg/PointStamped", header=h, point=msg("geometry_msgs/msg/Point", x=x, y=y, z=z)),
+                )  # fmt: skip
+                bag.write(topic["normal"], ns, vector(h, normal[k]))
+                if names[k] == "line":
+                    bag.write(topic["line_evidence"], ns, msg("std_msgs/msg/String", data=evidence[k]))
+                    bag.write(topic["edge_direction"], ns, vector(h, direction[k]))
+            if marked[k]:
+                marks = contact_markers(
+                    _finite3(point[k]) if contact else None,
+                    _finite3(normal[k]) if contact else None,
+                    _finite3(direction[k]) if names[k] == "line" else None,
                 )
-            }
-            for k in range(n):
-                ns = int(stamps[k])
-                writer.write(conn["raw"], ns, wrench_msg(ns, raw[k].tolist()))
-                if not est.taring[k]:
-                    writer.write(conn["wrench"], ns, wrench_msg(ns, tared[k]))
-                writer.write(
-                    conn["state"], ns, ser(String(data=names[k]), "std_msgs/msg/String")
-                )
-                if names[k] != "none":
-                    h = header(ns)
-                    x, y, z = point[k]
-                    writer.write(
-                        conn["contact_point"],
-                        ns,
-                        ser(
-                            PointStamped(header=h, point=Point(x=x, y=y, z=z)),
-                            "geometry_msgs/msg/PointStamped",
-                        ),
-                    )
-                    x, y, z = normal[k]
-                    writer.write(
-                        conn["normal"],
-                        ns,
-                        ser(
-                            Vector3Stamped(header=h, vector=Vector3(x=x, y=y, z=z)),
-                            "geometry_msgs/msg/Vector3Stamped",
-                        ),
-                    )
-                    if names[k] == "line":
-                        writer.write(
-                            conn["line_evidence"], ns, ser(String(data=evidence[k]), "std_msgs/msg/String")
-                        )
-                        x, y, z = direction[k]
-                        writer.write(
-                            conn["edge_direction"],
-                            ns,
-                            ser(
-                                Vector3Stamped(header=h, vector=Vector3(x=x, y=y, z=z)),
-                                "geometry_msgs/msg/Vector3Stamped",
-                            ),
-                        )
-        os.rename(tmp / dest.name, dest)
-    except OSError as exc:
-        raise InputError(
-            f"{dest}: cannot write the bag ({exc.strerror or exc})"
-        ) from None
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
+                bag.write(topic["markers"], ns, bag.marker_array(marks, h))
+
+
+def _finite3(v) -> tuple[float, float, float] | None:
+    return (v[0], v[1], v[2]) if all(np.isfinite(v)) else None

@@ -169,7 +169,8 @@ def main(args: list[str] | None = None) -> None:  # pragma: no cover - needs a R
                 for m in sr.markers(est):
                     mk = MarkerMsg(header=header, ns=m.ns, id=m.id, type=m.type, action=m.action)
                     mk.pose.position.x, mk.pose.position.y, mk.pose.position.z = m.position
-                    mk.pose.orientation.w = 1.0
+                    (mk.pose.orientation.x, mk.pose.orientation.y, mk.pose.orientation.z,
+                     mk.pose.orientation.w) = m.orientation  # fmt: skip
                     mk.scale.x, mk.scale.y, mk.scale.z = m.scale
                     mk.color.r, mk.color.g, mk.color.b, mk.color.a = m.color
                     for x, y, z in m.points:
