@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from softtip import estimate, load_example
-from softtip.bag import write_estimates_bag
+from softtip.io.bag import write_estimates_bag
 
 
 def main() -> None:

@@ -15,9 +15,9 @@ from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 
 from softtip import load_example
-from softtip.bag import TOPICS, read_bag
+from softtip.io.bag import TOPICS, read_bag
 from softtip.errors import InputError
-from softtip.io import write_table
+from softtip.io.tables import write_table
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 WRENCH = "geometry_msgs/msg/WrenchStamped"

@@ -22,7 +22,7 @@ from scipy.spatial.transform import Rotation
 
 import softtip.ros as sr
 from softtip import estimate, load_example
-from softtip.bag import TOPICS, write_estimates_bag
+from softtip.io.bag import TOPICS, write_estimates_bag
 from softtip.errors import InputError
 from softtip.ros.bagout import DISTROS, BagWriter, bag_format
 from softtip.ros.fused import (
@@ -249,7 +249,7 @@ def test_cli_distro_and_frame_id(tmp_path):
 def _tilted_log_bag(path, log, payload, with_tf=True, tf_every=5):
     """The example grasp with a fingertip weight on a sensor that tilts about x and y over
     time (its /tf: world → wrist moving, wrist → ft_link static)."""
-    from softtip.payload import Payload, payload_wrench
+    from softtip.calibration.payload import Payload, payload_wrench
 
     n = len(log.t)
     rot = Rotation.from_euler("xy", np.stack([0.6 * np.sin(2.0 * log.t), 0.4 * np.cos(1.3 * log.t)], axis=-1))
@@ -326,7 +326,7 @@ def test_gravity_from_tf_removes_the_fingertips_weight(tmp_path):
 
 
 def test_gravity_orientations_interpolate_tf(tmp_path):
-    from softtip.bag import read_bag
+    from softtip.io.bag import read_bag
     from softtip.fusion.tf import gravity_orientations
 
     log = load_example()
@@ -388,7 +388,7 @@ def test_quaternions_from_axes(x, z):
 
 def _synthetic_pair(right_angle, left_angle):
     from softtip.fusion import PoseSeries, fuse_logs
-    from softtip.synthetic import synthetic_grasp
+    from softtip.sim.synthetic import synthetic_grasp
 
     logs = []
     for name, rot, angle, seed in (("right", R_RIGHT, right_angle, 1), ("left", R_LEFT, left_angle, 2)):
@@ -444,7 +444,7 @@ def test_fused_markers_without_contact_are_deleted():
 
 
 def test_fuse_command_writes_a_bag(tmp_path):
-    from softtip.io import write_table
+    from softtip.io.tables import write_table
 
     _, _, logs = _synthetic_pair(30.0, -30.0)
     hand = ['[hand]\nframe = "palm"\n']

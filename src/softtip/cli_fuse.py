@@ -10,7 +10,7 @@ import numpy as np
 
 from softtip.errors import InputError
 from softtip.ros.options import bag_output_options, output_frame_id
-from softtip.units import UNIT_SYSTEMS, wrench_to_si
+from softtip.core.units import UNIT_SYSTEMS, wrench_to_si
 
 __all__ = ["fuse"]
 
@@ -82,9 +82,9 @@ PointStamped and RViz markers, in the common frame, in the format --ros-distro p
     @estimator_options
     def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, point_std, plot_path, tip,
              to_bag=None, ros_distro=None, frame_id=None, **estimator_opts):  # fmt: skip
-        from softtip.fingertip import load_fingertip
+        from softtip.core.fingertip import load_fingertip
         from softtip.fusion import fuse_logs, poses_from_columns, read_hand_file
-        from softtip.io import read_log, write_table
+        from softtip.io.tables import read_log, write_table
 
         if object_mass is not None and not (np.isfinite(object_mass) and object_mass >= 0):
             raise click.BadParameter(f"{object_mass!r}: expected a mass in kg, 0 or more", param_hint="--object-mass")
@@ -94,7 +94,7 @@ PointStamped and RViz markers, in the common frame, in the format --ros-distro p
             raise click.BadParameter("expected three finite numbers, m/s²", param_hint="--gravity")
         if plot_path is not None:
             check_figure_path(plot_path)
-        from softtip.atomic import check_distinct
+        from softtip.io.atomic import check_distinct
 
         check_distinct(
             [("INPUT", p) for p in inputs] + [("--hand", hand_file), ("--bias", estimator_opts.get("bias_file"))],
@@ -113,7 +113,7 @@ PointStamped and RViz markers, in the common frame, in the format --ros-distro p
                 raise click.UsageError("a bag input needs --topics TOPIC TOPIC and --frame FRAME")
             if hand_file is not None:
                 raise click.UsageError("--hand applies to CSV inputs; a bag's poses come from its /tf")
-            bag = optional("softtip.bag", "ros")
+            bag = optional("softtip.io.bag", "ros")
             from softtip.fusion.tf import read_tf
 
             path = inputs[0]

@@ -158,7 +158,7 @@ class TfTree:
 def read_tf(path: str | os.PathLike[str], purpose: str = "give the fingertips' poses another way") -> TfTree:
     """Every transform of a bag's ``/tf`` and ``/tf_static`` (``purpose``: what the error of a
     bag without them suggests)."""
-    from softtip.bag import _typestore, import_rosbags
+    from softtip.io.bag import _typestore, import_rosbags
 
     import_rosbags()
     from rosbags.highlevel import AnyReader
@@ -215,7 +215,7 @@ def gravity_orientations(
 
     Returns
     -------
-    (N, 4) ``qw, qx, qy, qz``: the sensor frame in ``world``, as :mod:`softtip.payload` takes it.
+    (N, 4) ``qw, qx, qy, qz``: the sensor frame in ``world``, as :mod:`softtip.calibration.payload` takes it.
 
     Raises
     ------

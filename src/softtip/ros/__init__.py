@@ -3,7 +3,7 @@ publishes for one sample (topics, payloads, RViz markers) as plain Python data.
 
 The ROS 2 node (:mod:`softtip.ros.node`, run with ``python -m softtip.ros`` in a sourced ROS 2
 environment) is a thin shell over these functions, and the bag writer
-(:mod:`softtip.bag`) fills the same payloads into ``rosbags`` messages, so what a bag holds and
+(:mod:`softtip.io.bag`) fills the same payloads into ``rosbags`` messages, so what a bag holds and
 what the node publishes are the same. Everything here is tested without ROS.
 """
 

@@ -179,7 +179,7 @@ class BagWriter:
     """
 
     def __init__(self, dest: str | os.PathLike[str], distro: str | None = None) -> None:
-        from softtip.bag import import_rosbags
+        from softtip.io.bag import import_rosbags
 
         import_rosbags()
         from rosbags.typesys import Stores, get_typestore

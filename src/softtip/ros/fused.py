@@ -208,7 +208,7 @@ def write_fused_bag(
     frame_id : str
         The common frame.
     distro : str, optional
-        As :func:`softtip.bag.write_estimates_bag`.
+        As :func:`softtip.io.bag.write_estimates_bag`.
     """
     from softtip.ros.bagout import BagWriter
 

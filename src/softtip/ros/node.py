@@ -18,7 +18,7 @@ from __future__ import annotations
 from typing import Any
 
 from softtip.estimator import EstimatorConfig
-from softtip.noise import NANO17, SensorNoise
+from softtip.core.noise import NANO17, SensorNoise
 
 __all__ = ["PARAMETERS", "config_from_parameters", "main"]
 
@@ -113,7 +113,7 @@ def main(args: list[str] | None = None) -> None:  # pragma: no cover - needs a R
             }
             self.compensate = self.orientation = None
             if params["payload"]:
-                from softtip.payload import PayloadCompensator, load_payload
+                from softtip.calibration.payload import PayloadCompensator, load_payload
 
                 self.compensate = PayloadCompensator(load_payload(params["payload"]))
                 self.create_subscription(QuaternionStamped, params["orientation_topic"], self.on_orientation, 10)

@@ -61,7 +61,7 @@ import urllib.request
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 
-from softtip.sources import Interrupted, Reading, SourceError
+from softtip.io.sources import Interrupted, Reading, SourceError
 
 __all__ = [
     "FAULTS",
@@ -597,7 +597,7 @@ def _interruptible(fn: Callable[[], object], deadline: float, stop: threading.Ev
 
 
 class NetFTSource:
-    """An ATI Net F/T or Axia as a source of :class:`~softtip.sources.Reading`.
+    """An ATI Net F/T or Axia as a source of :class:`~softtip.io.sources.Reading`.
 
     Parameters
     ----------
@@ -606,7 +606,7 @@ class NetFTSource:
     rdt_port, http_port : int
         UDP port of RDT (49152 on the device) and HTTP port (80).
     timeout : float
-        s without a datagram before :class:`~softtip.sources.SourceError` (a silent sensor);
+        s without a datagram before :class:`~softtip.io.sources.SourceError` (a silent sensor);
         also the limit for the HTTP request.
     buffer_s : float
         Seconds of samples the receive queue holds at ``max_rate_hz``.
@@ -619,7 +619,7 @@ class NetFTSource:
         Faults of :data:`FAULTS` that end the stream (:class:`StreamFault`); none by default.
     stop : threading.Event, optional
         Set it to end discovery or the stream at once (within 0.05 s): :meth:`open` raises
-        :class:`~softtip.sources.Interrupted`, iteration ends.
+        :class:`~softtip.io.sources.Interrupted`, iteration ends.
     resend_s : float
         s of silence after which the streaming request is sent again.
     on_warning : callable, optional

@@ -23,7 +23,7 @@ about an anchor ``r_A`` near the contact (the first soft-finger point of the con
 that the sums carry no large cancelling ``r × f`` terms): :func:`joint_products` gives the
 per-sample products (cumulated by the batch, kept as running sums by the stream) and
 :func:`joint_solve_kernel` the solution from the window sums, component-wise for both
-back ends of :mod:`softtip._xp`.
+back ends of :mod:`softtip.core._xp`.
 
 **Identifiability.** ``θ`` and ``s`` are separable only when ``τ_k`` is not proportional to
 ``c_k`` over the window: a rotated line plus a shifted point explains a window in which the
@@ -65,8 +65,8 @@ small. With a low-pass filter the noise model is the filtered one.
 
 from __future__ import annotations
 
-from softtip.noise import SensorNoise, _quad_kernel
-from softtip.spin import tangent_frame_kernel
+from softtip.core.noise import SensorNoise, _quad_kernel
+from softtip.core.spin import tangent_frame_kernel
 
 __all__ = ["N_SUMS", "joint_products", "joint_solve_kernel"]
 
@@ -201,7 +201,7 @@ def joint_solve_kernel(sums, count, r0x, r0y, r0z, ax, ay, az, tip, iterations, 
         of white-noise gain ``g``), for the margin on the noise excitation and the
         standard deviations.
     xp : namespace
-        :data:`softtip._xp.NP` or :data:`softtip._xp.PY`.
+        :data:`softtip.core._xp.NP` or :data:`softtip.core._xp.PY`.
 
     Returns
     -------

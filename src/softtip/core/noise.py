@@ -24,8 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from softtip._xp import NP
-from softtip.spin import tangent_frame_kernel
+from softtip.core._xp import NP
+from softtip.core.spin import tangent_frame_kernel
 
 __all__ = ["SensorNoise", "NANO17", "tangential_spin_torque_std", "direction_angle_std"]
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from softtip.axial import axial_difference, axial_median
+from softtip.core.axial import axial_difference, axial_median
 from softtip.estimator import STATES, Estimates
 
 __all__ = ["ContactSummary", "contact_segments", "summarise_contacts", "format_summary"]

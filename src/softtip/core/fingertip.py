@@ -8,7 +8,7 @@ normal is ``∇S / |∇S|`` (paper Eq. 2). Lengths are in metres.
 
 Each shape exposes batch methods on arrays of shape ``(..., 3)`` and, for the streaming
 estimator, component-wise kernels (``_normal_kernel``, ``_project_kernel``) that take
-either numpy arrays or Python floats (see :mod:`softtip._xp`).
+either numpy arrays or Python floats (see :mod:`softtip.core._xp`).
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from typing import Callable, ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from softtip._xp import NP, PY
+from softtip.core._xp import NP, PY
 from softtip.errors import InputError
 
 
@@ -67,7 +67,7 @@ class Fingertip(abc.ABC):
 
     kind: ClassVar[str] = ""
 
-    # -- kernels (components in, components out; xp is softtip._xp.NP or PY) --------------
+    # -- kernels (components in, components out; xp is softtip.core._xp.NP or PY) --------------
     @abc.abstractmethod
     def _surface_kernel(self, x, y, z, xp):
         """``S`` at the point ``(x, y, z)``."""
@@ -406,7 +406,7 @@ def load_fingertip(spec: str | Path | Fingertip) -> Fingertip:
                 f"{', '.join(sorted(PRESETS))} or a path to a .toml fingertip file"
             )
         raise InputError(f"{name}: fingertip file not found")
-    from softtip.tomlfile import read_toml
+    from softtip.io.tomlfile import read_toml
 
     return fingertip_from_mapping(read_toml(path, "fingertip"), source=str(path))
 
@@ -424,14 +424,14 @@ def fingertip_from_mapping(data: dict, source: str = "<fingertip>") -> Fingertip
     mount = table.get("mount")
     if mount is not None and table.get("shape", "mesh" if "mesh" in table else None) != "mesh":
         # [fingertip.mount]: the tip's pose in the sensor frame (a mesh applies it to its vertices)
-        from softtip.mounting import mount_from_mapping
+        from softtip.core.mounting import mount_from_mapping
 
         inner = {k: v for k, v in table.items() if k != "mount"}
         return mount_from_mapping(fingertip_from_mapping({"fingertip": inner}, source), mount, source)
     shape = table.get("shape")
     if shape == "mesh" or (shape is None and "mesh" in table):
-        # a triangle mesh file (softtip.mesh; trimesh is imported only then)
-        from softtip.mesh import mesh_fingertip_from_table
+        # a triangle mesh file (softtip.core.mesh; trimesh is imported only then)
+        from softtip.core.mesh import mesh_fingertip_from_table
 
         return mesh_fingertip_from_table(table, source)
     if shape not in _FIELDS:

@@ -9,7 +9,7 @@ Paper Eqs. 1–3 and manual §3.1, §3.3, §3.4:
   ``|x × n| < 0.1``), ``e2 = n × e1``, ``atan2(d·e2, d·e1)`` wrapped into ``(−π/2, π/2]``.
 
 Batch functions take arrays with any leading shape; the ``*_kernel`` functions take per-axis
-components (numpy arrays or floats, see :mod:`softtip._xp`) and are what the streaming
+components (numpy arrays or floats, see :mod:`softtip.core._xp`) and are what the streaming
 estimator calls.
 """
 
@@ -20,7 +20,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from softtip._xp import NP
+from softtip.core._xp import NP
 
 __all__ = [
     "spin_torque",

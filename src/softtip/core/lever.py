@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from softtip.errors import InputError
-from softtip.fingertip import Fingertip
+from softtip.core.fingertip import Fingertip
 
 __all__ = ["LEVER_MARGIN", "ForceLever", "force_lever", "check_force_lever"]
 

@@ -18,7 +18,7 @@ number, packets lost before this one, arrival time). A plain generator works as 
             print(est.angle)              # rad
 
 Sources here: :class:`LogSource` (a recorded log, replayed at its recorded rate, faster,
-or as fast as possible) and :class:`softtip.netft.NetFTSource`
+or as fast as possible) and :class:`softtip.io.netft.NetFTSource`
 (an ATI Net F/T or Axia over RDT/UDP).
 """
 
@@ -34,8 +34,8 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-from softtip.fingertip import Fingertip
-from softtip.pipeline import Estimator, EstimatorConfig, SampleEstimate
+from softtip.core.fingertip import Fingertip
+from softtip.estimator import Estimator, EstimatorConfig, SampleEstimate
 
 __all__ = ["Interrupted", "LogSource", "Reading", "SourceError", "readings", "run"]
 
@@ -110,7 +110,7 @@ def run(
     tip: Fingertip | str = "murakami2006",
     config: EstimatorConfig | None = None,
 ) -> Iterator[SampleEstimate]:
-    """Run the streaming :class:`~softtip.pipeline.Estimator` over a source.
+    """Run the streaming :class:`~softtip.estimator.Estimator` over a source.
 
     Parameters
     ----------
@@ -194,8 +194,8 @@ class LogSource:
         speed: float = 1.0,
         stop: threading.Event | None = None,
     ) -> LogSource:
-        """Read a CSV log (manual §4) (columns ``t, fx, fy, fz, mx, my, mz``); see :func:`softtip.io.read_log`."""
-        from softtip.io import read_log
+        """Read a CSV log (manual §4) (columns ``t, fx, fy, fz, mx, my, mz``); see :func:`softtip.io.tables.read_log`."""
+        from softtip.io.tables import read_log
 
         log = read_log(path, units=units)
         return cls(log.t, log.wrench, speed=speed, name=os.path.basename(log.source), stop=stop)

@@ -1,4 +1,4 @@
-"""Triangle-mesh fingertips: a CAD mesh of the skin surface as a :class:`~softtip.fingertip.Fingertip`.
+"""Triangle-mesh fingertips: a CAD mesh of the skin surface as a :class:`~softtip.core.fingertip.Fingertip`.
 
 The skin is the closed triangle mesh; its outward normal ``n(r)`` is the barycentric
 interpolation of per-corner normals (angle-weighted averages of the faces around each vertex,
@@ -14,7 +14,7 @@ steps:
 2. **Refine.** Newton's method on ``F(b₁, b₂, σ) = r(b) × f + σ n(b) − m`` in the
    barycentric coordinates of the current triangle, walking into the neighbouring triangle
    when a step leaves it. It is written once for numpy arrays (batch) and Python floats
-   (stream), like the closed-form kernels (:mod:`softtip._xp`).
+   (stream), like the closed-form kernels (:mod:`softtip.core._xp`).
 
 Meshes are loaded with `trimesh <https://trimesh.org>`_ (STL, OBJ, PLY), imported only when a
 mesh fingertip is loaded.
@@ -30,9 +30,9 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from softtip._xp import NP, PY
+from softtip.core._xp import NP, PY
 from softtip.errors import InputError
-from softtip.fingertip import Fingertip
+from softtip.core.fingertip import Fingertip
 
 __all__ = [
     "MeshFingertip",
@@ -749,7 +749,7 @@ class MeshFingertip(Fingertip):
         return best[1], best[2], best[3]
 
     def _contact_kernel(self, fx, fy, fz, mx, my, mz, xp=NP):
-        """Soft-finger contact on the mesh, component-wise (see :func:`softtip.contact.contact_kernel`).
+        """Soft-finger contact on the mesh, component-wise (see :func:`softtip.core.contact.contact_kernel`).
 
         Returns ``(rx, ry, rz, nx, ny, nz, sigma, valid)``.
         """
@@ -1092,7 +1092,7 @@ def mesh_fingertip_from_table(table: dict, source: str = "<fingertip>") -> MeshF
     thickness = table.get("skin_thickness")
     thickness = None if thickness is None else number("skin_thickness", thickness)
     # the mesh frame's pose in the sensor frame: the [fingertip.mount] of every shape
-    from softtip.mounting import pose_from_table
+    from softtip.core.mounting import pose_from_table
 
     rotation, translation = pose_from_table(table.get("mount", {}), f"{source}: [fingertip.mount]")
     rpy = tuple(float(a) for a in rotation.as_euler("xyz"))
@@ -1124,7 +1124,7 @@ def mesh_fingertip_from_table(table: dict, source: str = "<fingertip>") -> MeshF
 
 def load_mesh_fingertip(path: str | Path) -> MeshFingertip:
     """A mesh fingertip from a TOML fingertip file (see :func:`mesh_fingertip_from_table`)."""
-    from softtip.fingertip import load_fingertip
+    from softtip.core.fingertip import load_fingertip
 
     tip = load_fingertip(Path(path))
     if not isinstance(tip, MeshFingertip):
@@ -1163,7 +1163,7 @@ def capsule_mesh(
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """A closed triangle mesh of a capsule fingertip, optionally with a nail (sensor frame, m).
 
-    The capsule of :class:`~softtip.fingertip.Capsule` (cylinder of ``radius`` along +z from
+    The capsule of :class:`~softtip.core.fingertip.Capsule` (cylinder of ``radius`` along +z from
     ``z = 0``, hemisphere at ``(0, 0, length)``), closed by a flat base at ``z = 0``. A nail
     is a raised plate of ``nail_height`` (m) on the back (``−x`` side), ``nail_half_width_deg``
     to either side, from ``z = nail_z[0]`` to ``nail_z[1]`` m past the cap's equator along the

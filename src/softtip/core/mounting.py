@@ -33,7 +33,7 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from softtip.errors import InputError
-from softtip.fingertip import Fingertip
+from softtip.core.fingertip import Fingertip
 
 __all__ = ["Mounted", "mount_from_mapping", "pose_from_table"]
 
@@ -57,7 +57,7 @@ class Mounted(Fingertip):
     >>> import numpy as np
     >>> from scipy.spatial.transform import Rotation
     >>> from softtip import Sphere, contact_from_wrench
-    >>> from softtip.mounting import Mounted
+    >>> from softtip.core.mounting import Mounted
     >>> tip = Mounted(Sphere(0.01, (0, 0, 0.02)), Rotation.from_euler("y", 90, degrees=True), (0, 0, 0.005))
     >>> (np.round(tip.normal([0.03, 0.0, 0.005]), 12) + 0.0).tolist()   # the sphere's top now faces +x
     [1.0, 0.0, 0.0]

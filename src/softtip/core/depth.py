@@ -47,7 +47,7 @@ not turn the direction).
 
 Errors in variables: the noise of ``f`` enters ``g`` (the regressor) and ``h``, and the two
 are correlated through ``r × f``, so the 12 window sums (:func:`depth_products`) are first
-corrected by their expected noise (:func:`depth_noise_kernel`), as in :mod:`softtip.joint`;
+corrected by their expected noise (:func:`depth_noise_kernel`), as in :mod:`softtip.core.joint`;
 the information counts only the excitation beyond the noise's scatter (the same χ² margin
 as the joint fit), and the standard deviation is inflated for the noise of ``a`` itself.
 :func:`depth_solve_kernel` returns the data's own estimate of ``κ`` and its variance; the
@@ -62,10 +62,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from softtip._xp import NP
-from softtip.joint import MODEL_MARGIN, _chi2_excess
-from softtip.noise import SensorNoise
-from softtip.spin import tangent_frame_kernel
+from softtip.core._xp import NP
+from softtip.core.joint import MODEL_MARGIN, _chi2_excess
+from softtip.core.noise import SensorNoise
+from softtip.core.spin import tangent_frame_kernel
 
 __all__ = [
     "DepthLaw", "MURAKAMI2006_DEPTH", "lever_depth", "depth_kernel", "skin_depth_law", "N_DEPTH_SUMS",
@@ -287,7 +287,7 @@ def depth_solve_kernel(sums, count, cov, corr, iterations, xp):
         Gauss–Newton steps, from the best factor of a grid over ``[0, KAPPA_MAX]``, each
         from the last one's estimate.
     xp : namespace
-        :data:`softtip._xp.NP` or :data:`softtip._xp.PY`.
+        :data:`softtip.core._xp.NP` or :data:`softtip.core._xp.PY`.
 
     Returns
     -------
@@ -326,7 +326,7 @@ def depth_solve_kernel(sums, count, cov, corr, iterations, xp):
         m11 = a11 + 2.0 * kc * b11 + kc * kc * c11
         m12 = a12 + kc * (b12 + b21) + kc * kc * c12
         m22 = a22 + 2.0 * kc * b22 + kc * kc * c22
-        # smallest eigenvector of [[m11, m12], [m12, m22]] (as in softtip.joint)
+        # smallest eigenvector of [[m11, m12], [m12, m22]] (as in softtip.core.joint)
         half = 0.5 * (m11 - m22)
         root = xp.sqrt(half * half + m12 * m12)
         big = m11 >= m22

@@ -1,8 +1,8 @@
 """The live path: a source through the streaming estimator to a terminal view and a recording.
 
 :func:`run_live` is what ``softtip stream`` runs, for a live sensor and for a replayed log
-alike. Its consumer loop takes each :class:`~softtip.sources.Reading` from the source, runs
-:meth:`Estimator.update <softtip.pipeline.Estimator.update>` on it and hands the result
+alike. Its consumer loop takes each :class:`~softtip.io.sources.Reading` from the source, runs
+:meth:`Estimator.update <softtip.estimator.Estimator.update>` on it and hands the result
 on without waiting for anything slow:
 
 * the :class:`Recorder` queues rows; its own thread formats and writes them in batches and
@@ -15,7 +15,7 @@ on without waiting for anything slow:
   be cheap (it decimates).
 
 Receiving itself happens before the loop: for a Net F/T in softtip's receive thread and
-queue (:mod:`softtip.netft`), so even a stalled loop does not lose packets until the queue
+queue (:mod:`softtip.io.netft`), so even a stalled loop does not lose packets until the queue
 is full, and those it then drops are counted apart from the network's losses.
 """
 
@@ -33,8 +33,8 @@ from dataclasses import dataclass, field
 from typing import TextIO
 
 from softtip.errors import InputError
-from softtip.pipeline import Estimator, SampleEstimate
-from softtip.sources import Reading, readings
+from softtip.estimator import Estimator, SampleEstimate
+from softtip.io.sources import Reading, readings
 
 __all__ = [
     "RECORD_COLUMNS",
@@ -50,7 +50,7 @@ __all__ = [
 #: wrench ``fx … mz``: a recording is a log that ``softtip estimate`` and ``--replay`` read
 #: as it is, and that reproduces the recorded estimates), then the estimates with the
 #: columns of ``softtip estimate`` (its tared wrench as ``fx_tared … mz_tared``), then the
-#: stream's bookkeeping (see :class:`~softtip.sources.Reading`): the source's sequence
+#: stream's bookkeeping (see :class:`~softtip.io.sources.Reading`): the source's sequence
 #: number; records missing just before this one (``lost``: network, or late) and dropped by
 #: softtip's queue (``dropped``); late packets, duplicates and malformed datagrams
 #: discarded since the previous row; the device's status word; the host receive time (s
@@ -69,7 +69,7 @@ RECORD_COLUMNS: tuple[str, ...] = (
 _INT_COLUMNS = ("latched", "latch_fallback", "relatched", "joint_fallback", "depth_from_data", "contact_id", "seq", "lost", "dropped", "late",
                 "duplicates", "malformed", "status")  # fmt: skip
 # Time and raw wrench exactly (shortest repr: re-reading the file gives the same doubles),
-# the host time to the microsecond, the rest as softtip.io.write_table formats numbers.
+# the host time to the microsecond, the rest as softtip.io.tables.write_table formats numbers.
 _FORMATS = {"t": "%r", "fx": "%r", "fy": "%r", "fz": "%r", "mx": "%r", "my": "%r", "mz": "%r",
             "state": "%s", "line_evidence": "%s", "host_time": "%.6f"}  # fmt: skip
 _ROW_FORMAT = ",".join(_FORMATS.get(c, "%d" if c in _INT_COLUMNS else "%.10g") for c in RECORD_COLUMNS) + "\n"
@@ -202,7 +202,7 @@ class Recorder:
             self._fh = open(self.path, "w", encoding="utf-8", newline="")
             self._fh.write(",".join(RECORD_COLUMNS) + "\n")
         rows = [pending.popleft() for _ in range(n)]
-        # one C-level format per block of rows (as softtip.io.write_table does); small blocks,
+        # one C-level format per block of rows (as softtip.io.tables.write_table does); small blocks,
         # because a format call holds the GIL and the consumer loop must not wait long for it
         for i in range(0, n, _BLOCK):
             block = rows[i : i + _BLOCK]

@@ -37,8 +37,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from softtip.errors import InputError
-from softtip.tomlfile import read_toml
-from softtip.units import STANDARD_GRAVITY
+from softtip.io.tomlfile import read_toml
+from softtip.core.units import STANDARD_GRAVITY
 
 
 __all__ = [
@@ -415,8 +415,8 @@ def read_orientation(log, tolerance: float = UNIT_TOLERANCE) -> NDArray[np.float
 
     Parameters
     ----------
-    log : softtip.io.Log
-        Read by :func:`softtip.io.read_log`; the quaternion columns are among its extra
+    log : softtip.io.tables.Log
+        Read by :func:`softtip.io.tables.read_log`; the quaternion columns are among its extra
         columns.
     tolerance : float
         Largest accepted ``| |q| − 1 |``; accepted quaternions are normalised.
@@ -475,12 +475,12 @@ def compensate_log(log, payload: Payload | str | os.PathLike[str]):
 
     Parameters
     ----------
-    log : softtip.io.Log
+    log : softtip.io.tables.Log
     payload : Payload or path of a payload TOML file
 
     Returns
     -------
-    softtip.io.Log
+    softtip.io.tables.Log
     """
     payload = load_payload(payload)
     q = read_orientation(log)
@@ -509,7 +509,7 @@ class CompensatedSource:
         self.name = getattr(source, "name", "source")
 
     def __iter__(self) -> Iterator:
-        from softtip.sources import readings
+        from softtip.io.sources import readings
 
         comp = self.compensate
         if callable(self.orientations):
@@ -528,8 +528,8 @@ class CompensatedSource:
 
 def replay_source(path: str | os.PathLike[str], units: str, speed: float, payload: Payload | str | os.PathLike[str]) -> CompensatedSource:
     """``softtip stream --replay LOG --payload FILE``: the log replayed with per-sample compensation."""
-    from softtip.io import read_log
-    from softtip.sources import LogSource
+    from softtip.io.tables import read_log
+    from softtip.io.sources import LogSource
 
     payload = load_payload(payload)
     log = read_log(path, units=units)

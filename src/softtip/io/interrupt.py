@@ -2,7 +2,7 @@
 
 A batch command (``estimate``, ``simulate``, ``calibrate``) killed by ``kill``, by a job
 scheduler's time limit or by closing its terminal must clean up as Ctrl-C does: the
-exception unwinds through every ``with``/``finally`` (:class:`softtip.atomic.AtomicFile`
+exception unwinds through every ``with``/``finally`` (:class:`softtip.io.atomic.AtomicFile`
 removes its temporary file) and the command exits with the shell's code for the signal:
 130 for SIGINT (Ctrl-C), 143 for SIGTERM, 129 for SIGHUP.
 """

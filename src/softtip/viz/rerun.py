@@ -26,8 +26,8 @@ from collections import deque
 import numpy as np
 from numpy.typing import NDArray
 
-from softtip.fingertip import Capsule, Ellipsoid, Fingertip, Sphere
-from softtip.pipeline import STATES, Estimates, SampleEstimate
+from softtip.core.fingertip import Capsule, Ellipsoid, Fingertip, Sphere
+from softtip.estimator import STATES, Estimates, SampleEstimate
 
 __all__ = ["RerunLogger", "import_rerun", "surface_mesh"]
 
@@ -231,7 +231,7 @@ class RerunLogger:
     # -- whole log (offline) ----------------------------------------------------------------
 
     def log_estimates(self, est: Estimates, max_frames: int = 5000) -> None:
-        """Log a whole :class:`~softtip.pipeline.Estimates`.
+        """Log a whole :class:`~softtip.estimator.Estimates`.
 
         Time series go in as columns (every sample); the 3-D view gets at most
         ``max_frames`` evenly spaced samples.

@@ -41,7 +41,7 @@ from numpy.typing import ArrayLike, NDArray
 from softtip.errors import InputError
 from softtip.ros import DEFAULT_FRAME_ID
 from softtip.ros import TOPICS as ROS_TOPICS
-from softtip.pipeline import Estimates
+from softtip.estimator import Estimates
 
 __all__ = [
     "TOPICS",

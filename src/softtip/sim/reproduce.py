@@ -39,10 +39,10 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from softtip.axial import axial_difference
-from softtip.fingertip import Fingertip, murakami2006
+from softtip.core.axial import axial_difference
+from softtip.core.fingertip import Fingertip, murakami2006
 from softtip.estimator import AREA, LINE, EstimatorConfig, Estimates, estimate
-from softtip.units import KGF
+from softtip.core.units import KGF
 
 __all__ = [
     "TOLERANCE_DEG",
@@ -401,7 +401,7 @@ def _evidence_text(r: ConditionResult) -> str:
 
 def write_summary(results: Sequence[ConditionResult], out: Path) -> None:
     """``summary.csv`` and ``summary.md`` in ``out``."""
-    from softtip.io import write_table
+    from softtip.io.tables import write_table
 
     rows = summary_rows(results)
     if not rows:
@@ -438,7 +438,7 @@ def write_summary(results: Sequence[ConditionResult], out: Path) -> None:
 
 def write_figures(results: Sequence[ConditionResult], out: Path) -> None:
     """One figure per experiment present in ``results``, laid out like the papers'."""
-    from softtip.plot import plot_direction_chart, plot_estimates, plot_line_or_area, plot_position_error
+    from softtip.viz.plot import plot_direction_chart, plot_estimates, plot_line_or_area, plot_position_error
 
     by_exp: dict[str, list[ConditionResult]] = {}
     for r in results:

@@ -7,7 +7,7 @@ a sample with no pushing root on the skin is reported as invalid, not raised.
 
 Closed forms for the sphere (exact to rounding), the capsule (hemisphere, then the cylinder
 side) and the axis-aligned ellipsoid (mapped onto the unit sphere); a damped Newton solver
-for any :class:`~softtip.fingertip.ImplicitSurface`.
+for any :class:`~softtip.core.fingertip.ImplicitSurface`.
 """
 
 from __future__ import annotations
@@ -17,11 +17,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from softtip._vec import cross as _cross
-from softtip._vec import skew as _skew
-from softtip._xp import NP
-from softtip.fingertip import Capsule, Ellipsoid, Fingertip, ImplicitSurface, Sphere, load_fingertip
-from softtip.mounting import Mounted
+from softtip.core._vec import cross as _cross
+from softtip.core._vec import skew as _skew
+from softtip.core._xp import NP
+from softtip.core.fingertip import Capsule, Ellipsoid, Fingertip, ImplicitSurface, Sphere, load_fingertip
+from softtip.core.mounting import Mounted
 
 __all__ = ["Contact", "contact_from_wrench"]
 
@@ -160,7 +160,7 @@ def contact_kernel(tip: Fingertip, fx, fy, fz, mx, my, mz, xp=NP):
     Returns ``(rx, ry, rz, nx, ny, nz, sigma, valid)``.
     """
     own = getattr(tip, "_contact_kernel", None)
-    if own is not None:  # shapes with their own solver (softtip.mesh.MeshFingertip)
+    if own is not None:  # shapes with their own solver (softtip.core.mesh.MeshFingertip)
         return own(fx, fy, fz, mx, my, mz, xp)
     if isinstance(tip, Mounted):
         # the shape's own solution for the wrench in its frame, mapped back to the sensor frame
@@ -217,7 +217,7 @@ def _kappa_at(tip: ImplicitSurface, r: NDArray, f: NDArray, m: NDArray) -> NDArr
     return np.sum(g * (m - _cross(r, f)), axis=-1) / np.sum(g * g, axis=-1)
 
 
-def _newton(f, m, r, kappa, tip: ImplicitSurface, max_iter: int, tol: float):
+def _levenberg_marquardt(f, m, r, kappa, tip: ImplicitSurface, max_iter: int, tol: float):
     """Levenberg–Marquardt iterations on the samples still active; returns r, κ, converged."""
     fnorm = np.sqrt(np.sum(f * f, axis=-1))
     scale = tip.bounding_sphere[1]
@@ -277,7 +277,7 @@ def _implicit_contact(w: NDArray, tip: ImplicitSurface, max_iter: int = 60, tol:
     m = w[:, 3:]
 
     r = _wrench_axis_start(f, m, tip)
-    r, kappa, g, gn, conv = _newton(f, m, r, _kappa_at(tip, r, f, m), tip, max_iter, tol)
+    r, kappa, g, gn, conv = _levenberg_marquardt(f, m, r, _kappa_at(tip, r, f, m), tip, max_iter, tol)
     good = conv & (np.sum(f * g, axis=-1) < 0.0)
     retry = np.flatnonzero(~good)
     if retry.size:
@@ -285,7 +285,7 @@ def _implicit_contact(w: NDArray, tip: ImplicitSurface, max_iter: int = 60, tol:
         fr, mr = f[retry], m[retry]
         sx, sy, sz = _sphere_kernel(*fr.T, *mr.T, radius, cx, cy, cz, NP)[:3]
         r1 = tip.project(np.stack((sx, sy, sz), axis=-1))
-        r1, k1, g1, gn1, conv1 = _newton(fr, mr, r1, _kappa_at(tip, r1, fr, mr), tip, max_iter, tol)
+        r1, k1, g1, gn1, conv1 = _levenberg_marquardt(fr, mr, r1, _kappa_at(tip, r1, fr, mr), tip, max_iter, tol)
         better = conv1 & (np.sum(fr * g1, axis=-1) < 0.0)
         sel = retry[better]
         r[sel], kappa[sel], g[sel], gn[sel] = r1[better], k1[better], g1[better], gn1[better]
@@ -306,7 +306,7 @@ def contact_from_wrench(wrench: ArrayLike, tip: Fingertip | str) -> Contact:
     wrench : array-like, shape (..., 6)
         ``fx, fy, fz`` (N), ``mx, my, mz`` (N·m) in the sensor frame, bias removed.
     tip : Fingertip or str
-        The fingertip, or a preset name / TOML path for :func:`~softtip.fingertip.load_fingertip`.
+        The fingertip, or a preset name / TOML path for :func:`~softtip.core.fingertip.load_fingertip`.
 
     Returns
     -------

@@ -22,7 +22,7 @@ start again from 1 once streaming is requested again), or any datagram sequence 
 (``mangle``). The device can be ``silent`` (HTTP answers, UDP never does) to test
 time-outs.
 
-Run ``python -m softtip.netft_fake --rate 1000`` for a device to point ``softtip stream
+Run ``python -m softtip.testing.netft_fake --rate 1000`` for a device to point ``softtip stream
 --netft 127.0.0.1 --rdt-port ... --http-port ...`` at; it prints its ports.
 """
 
@@ -63,7 +63,7 @@ _TORQUE_UNIT_SI = {"Nm": 1.0, "N-m": 1.0, "Nmm": 1e-3, "N-mm": 1e-3, "lbf-in": 0
 
 def example_wrench(rate_hz: float) -> NDArray[np.float64]:
     """softtip's example grasp (10 s) resampled to ``rate_hz``: shape (N, 6), N and N·m."""
-    from softtip.examples import load_example
+    from softtip.io.examples import load_example
 
     log = load_example()
     t = np.arange(0.0, log.t[-1], 1.0 / rate_hz)

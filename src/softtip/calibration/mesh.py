@@ -37,9 +37,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from softtip.calibration import _force_spread, _tangent_basis, find_presses, probing_presses
+from softtip.calibration.probing import _force_spread, _tangent_basis, find_presses, probing_presses
 from softtip.errors import InputError
-from softtip.mesh import MeshFingertip
+from softtip.core.mesh import MeshFingertip
 
 __all__ = ["MeshCalibration", "calibrate_mesh", "calibrate_mesh_file", "mesh_probing_log", "press_points"]
 
@@ -289,8 +289,8 @@ def calibrate_mesh_file(
     ``.stl`` / ``.obj`` / ``.ply`` with ``mesh_units`` (placed as drawn)."""
     from pathlib import Path
 
-    from softtip.fingertip import load_fingertip
-    from softtip.mesh import mesh_fingertip_from_table
+    from softtip.core.fingertip import load_fingertip
+    from softtip.core.mesh import mesh_fingertip_from_table
 
     path = Path(mesh)
     if path.suffix.lower() == ".toml":
@@ -322,7 +322,7 @@ def mesh_probing_log(
     vertex farthest that way), with the skin's interpolated normal there as the table's
     normal; the normal force rises and falls, the friction force (``friction`` × normal)
     turns through 90°, the skin indents by ``compliance √F``, and a small random spin is
-    added. 0.3 s untouched first (the tare). ``noise``: a :class:`~softtip.noise.SensorNoise`.
+    added. 0.3 s untouched first (the tare). ``noise``: a :class:`~softtip.core.noise.SensorNoise`.
 
     Returns
     -------

@@ -22,7 +22,7 @@ window sums are differences of the two. :func:`window_kernel` turns window sums 
   ``major ≥ minor`` (clamped at zero);
 * a noise level for each: what the noise alone may still leave in an eigenvalue, the upper
   3 σ tail of a χ² with ``ν = (N − 1) / L`` degrees of freedom (Wilson–Hilferty, as in
-  :mod:`softtip.joint`) plus a 25 % model margin, times the largest noise variance;
+  :mod:`softtip.core.joint`) plus a 25 % model margin, times the largest noise variance;
 * the window's line direction ``d = n × v`` with ``v`` the principal axis of ``h``'s
   variation, as an angle in the tangent frame, and its first-order standard deviation: the
   principal axis of a 2×2 covariance turns by ``C₁₂ / (λ₁ − λ₂)`` for an off-diagonal error
@@ -35,7 +35,7 @@ window sums are differences of the two. :func:`window_kernel` turns window sums 
 
 The decisions (thresholds, hysteresis, held verdicts) are the estimator's
 (:mod:`softtip.estimator.evidence`). All kernels are component-wise for both back ends of
-:mod:`softtip._xp`.
+:mod:`softtip.core._xp`.
 """
 
 from __future__ import annotations
@@ -43,8 +43,8 @@ from __future__ import annotations
 import math
 from typing import Any, NamedTuple
 
-from softtip.joint import MODEL_MARGIN, _chi2_excess
-from softtip.noise import SensorNoise
+from softtip.core.joint import MODEL_MARGIN, _chi2_excess
+from softtip.core.noise import SensorNoise
 
 __all__ = [
     "N_SUMS", "Window", "evidence_products", "tangent_noise_kernel", "window_kernel", "window_floats",
@@ -72,7 +72,7 @@ def tangent_noise_kernel(rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, noise: Sensor
     """Noise covariance of ``h`` (N²·m²) and of ``f_t`` (N²) in the tangent frame at ``r``.
 
     Returns ``(h11, h12, h22, f11, f12, f22)``: ``Σ_h = P Σ_m P + P [r]× Σ_f [r]×ᵀ P`` and
-    ``Σ_f`` projected on ``(e1, e2)`` (:mod:`softtip.noise`).
+    ``Σ_f`` projected on ``(e1, e2)`` (:mod:`softtip.core.noise`).
     """
     sfx, sfy, sfz = (s * s for s in noise.force_std)
     smx, smy, smz = (s * s for s in noise.moment_std)
@@ -134,7 +134,7 @@ def window_kernel(sums, count, h11, h12, h22, f11, f12, f22, corr: float, xp) ->
     corr : float
         Samples per independent noise sample (1 unfiltered).
     xp : namespace
-        :data:`softtip._xp.NP` or :data:`softtip._xp.PY`.
+        :data:`softtip.core._xp.NP` or :data:`softtip.core._xp.PY`.
 
     Returns
     -------
@@ -258,7 +258,7 @@ def window_direction_floats(e, s2: float, nu: float, corr: float):
 
 def window_constants(count: float, corr: float, xp=None):
     """``(tail, keep, nu)`` of a window of ``count`` samples (floats; see :func:`window_kernel`)."""
-    from softtip._xp import PY
+    from softtip.core._xp import PY
 
     keep = max(1.0 - _div(corr, count), 0.0)
     nu = max(count - 1.0, 0.0) / corr

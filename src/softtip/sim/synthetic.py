@@ -17,10 +17,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from softtip.fingertip import Fingertip, load_fingertip
-from softtip.noise import NANO17, SensorNoise
-from softtip.spin import tangent_frame
-from softtip.units import KGF, KGF_MM
+from softtip.core.fingertip import Fingertip, load_fingertip
+from softtip.core.noise import NANO17, SensorNoise
+from softtip.core.spin import tangent_frame
+from softtip.core.units import KGF, KGF_MM
 
 __all__ = ["SyntheticGrasp", "synthetic_grasp", "sliding_presses", "smoothstep"]
 

@@ -4,7 +4,7 @@ Why the obvious residual does not work
 --------------------------------------
 For one sample, Bicchi's soft-finger equations ``m − c × f = p × f + σ p / R``, ``|p| = R``
 have a solution for *any* trial centre ``c`` and radius ``R`` (that is what
-:func:`softtip.contact.contact_from_wrench` computes), so a single sample says nothing
+:func:`softtip.core.contact.contact_from_wrench` computes), so a single sample says nothing
 about the geometry. Information comes only from a constraint shared by several samples.
 
 The model used here
@@ -79,13 +79,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
 
-from softtip.contact import _sphere_kernel
-from softtip._vec import cross as _cross
-from softtip._vec import skew as _skew
-from softtip._xp import NP
+from softtip.core.contact import _sphere_kernel
+from softtip.core._vec import cross as _cross
+from softtip.core._vec import skew as _skew
+from softtip.core._xp import NP
 from softtip.errors import InputError
-from softtip.fingertip import Capsule, Fingertip, Sphere
-from softtip.noise import NANO17, SensorNoise
+from softtip.core.fingertip import Capsule, Fingertip, Sphere
+from softtip.core.noise import NANO17, SensorNoise
 
 __all__ = [
     "MAX_START_SHIFT",
@@ -633,8 +633,8 @@ def write_fingertip_toml(cal: Calibration, path: str | os.PathLike[str], source:
 
 
 def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
-    """Write ``text`` to ``path`` atomically (:func:`softtip.atomic.atomic_write_text`); nothing partial is left."""
-    from softtip.atomic import atomic_write_text as write
+    """Write ``text`` to ``path`` atomically (:func:`softtip.io.atomic.atomic_write_text`); nothing partial is left."""
+    from softtip.io.atomic import atomic_write_text as write
 
     write(path, text)
 
