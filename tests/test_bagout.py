@@ -312,7 +312,7 @@ def test_gravity_from_tf_removes_the_fingertips_weight(tmp_path):
     comp, ref = rows("c.csv"), rows("e.csv")
     fz = np.array([[float(r["fz"]) for r in x] for x in (comp, ref)])
     # the weight's change along z with the tilt, which the tare does not remove, ~0.02 N
-    from softtip.payload import Payload, payload_wrench
+    from softtip.calibration.payload import Payload, payload_wrench
 
     weight_fz = payload_wrench(q, Payload(*payload))[:, 2]
     assert np.ptp(weight_fz) > 0.015
@@ -346,7 +346,7 @@ def test_gravity_frame_errors_name_the_frames(tmp_path):
     (tmp_path / "p.toml").write_text("[payload]\nmass = 0.01\n")
     out = run("estimate", tmp_path / "tilt", "--payload", tmp_path / "p.toml", "--gravity-frame", "map")
     assert out.returncode == 2 and "'ft_link' is not connected to 'map'" in out.stderr, out.stderr
-    from softtip.bag import read_bag
+    from softtip.io.bag import read_bag
     from softtip.fusion.tf import gravity_orientations
 
     b = read_bag(tmp_path / "notf")
