@@ -104,6 +104,60 @@ def test_rosbag2_metadata_is_the_distributions(bags, distro):
     assert meta["message_count"] == sum(t["message_count"] for t in meta["topics_with_message_count"])
 
 
+@pytest.mark.parametrize("distro", ["iron", "jazzy", "rolling"])
+def test_mcap_files_read_with_the_mcap_library(bags, example_estimates, distro):
+    """An independent reader (Foxglove's mcap and mcap-ros2-support, which decode with the
+    message definitions in the file): CRCs, the ros2 profile, encodings, the QoS string of the
+    metadata version, every message."""
+    pytest.importorskip("mcap_ros2")
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    _, est = example_estimates
+    version = DISTROS[distro].metadata_version
+    (path,) = bags[distro].glob("*.mcap")
+    with path.open("rb") as fh:
+        r = make_reader(fh, decoder_factories=[DecoderFactory()], validate_crcs=True)
+        assert r.get_header().profile == "ros2"
+        summary = r.get_summary()
+        for channel in summary.channels.values():
+            assert channel.message_encoding == "cdr" and summary.schemas[channel.schema_id].encoding == "ros2msg"
+            assert channel.metadata["offered_qos_profiles"] == ("[]" if version >= 9 else "")
+        states = [m.data for _, _, _, m in r.iter_decoded_messages(topics=[TOPICS["state"]])]
+        points = [m for _, _, _, m in r.iter_decoded_messages(topics=[TOPICS["contact_point"]])]
+    assert states == est.state_names.tolist()
+    contact = est.state != 0
+    np.testing.assert_array_equal([[p.point.x, p.point.y, p.point.z] for p in points], est.point[contact])
+    assert {p.header.frame_id for p in points} == {"ft_sensor"}
+
+
+def test_humble_messages_decode_with_the_mcap_library(bags, example_estimates):
+    """The CDR payloads of the Humble database decoded by mcap-ros2-support, with the message
+    definitions the Jazzy MCAP file carries (these types have the same fields in both)."""
+    pytest.importorskip("mcap_ros2")
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    _, est = example_estimates
+    (path,) = bags["jazzy"].glob("*.mcap")
+    with path.open("rb") as fh:
+        schemas = {s.name: s for s in make_reader(fh).get_summary().schemas.values()}
+    factory = DecoderFactory()
+    (db,) = bags["humble"].glob("*.db3")
+    with sqlite3.connect(db) as con:
+        rows = con.execute(
+            "SELECT topics.name, topics.type, data FROM messages JOIN topics ON messages.topic_id = topics.id "
+            "ORDER BY messages.timestamp, messages.id"
+        ).fetchall()
+    decoded = {}
+    for topic, msgtype, data in rows:
+        decoder = factory.decoder_for("cdr", schemas[msgtype])
+        decoded.setdefault(topic, []).append(decoder(data))
+    assert [m.data for m in decoded[TOPICS["state"]]] == est.state_names.tolist()
+    marker = decoded[sr.MARKER_TOPIC][-1].markers[0]
+    assert marker.header.frame_id == "ft_sensor" and marker.ns == "contact_point"
+
+
 def test_humble_sqlite_schema_is_rosbag2_humbles(bags):
     _, _, schema_version, statements = reference("humble")
     assert len(statements) == 5
