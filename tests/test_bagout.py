@@ -292,6 +292,9 @@ def test_cli_distro_and_frame_id(tmp_path):
     out = run("estimate", "--example", "--to-bag", tmp_path / "one.bag", "-q")
     assert out.returncode == 0, out.stderr
     assert (tmp_path / "one.bag").read_bytes()[:13] == b"#ROSBAG V2.0\n"
+    with reader(tmp_path / "one.bag") as r:  # t = 0 recorded at ros::TIME_MIN, its stamp kept
+        first = next((t, r.deserialize(d, c.msgtype)) for c, t, d in r.messages() if c.topic == "/softtip/wrench_raw")
+    assert first[0] == 1 and (first[1].header.stamp.sec, first[1].header.stamp.nanosec) == (0, 0)
     out = run("estimate", "--example", "--to-bag", tmp_path / "x.bag", "--ros-distro", "humble")
     assert out.returncode == 2 and "ROS 1 bag, but --ros-distro humble" in out.stderr, out.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["j", "one.bag"]

@@ -291,6 +291,10 @@ class BagWriter:
             data = self.typestore.serialize_cdr(msg, msgtype)
         if self.format.storage == "sqlite3":
             self._impl.execute("INSERT INTO messages (timestamp, topic_id, data) VALUES (?, ?, ?)", (int(stamp_ns), conn, data))
+        elif self.format.ros_version == 1:
+            # ROS 1's rosbag refuses, and its views skip, record times before ros::TIME_MIN (1 ns):
+            # a CSV log's first sample (t = 0) is recorded at 1 ns; its header stamp stays 0
+            self._impl.write(conn, max(int(stamp_ns), 1), data)
         else:
             self._impl.write(conn, int(stamp_ns), data)
         self._counts[key] += 1
