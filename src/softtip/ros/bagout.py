@@ -263,9 +263,9 @@ class BagWriter:
 
                 self._impl = Writer1(target)
                 self._impl.open()
-        except OSError as exc:
+        except (OSError, sqlite3.Error) as exc:
             shutil.rmtree(self._tmp, ignore_errors=True)
-            raise InputError(f"{self.dest}: cannot write the bag ({exc.strerror or exc})") from None
+            raise InputError(f"{self.dest}: cannot write the bag ({getattr(exc, 'strerror', None) or exc})") from None
         return self
 
     def add_topic(self, topic: str, msgtype: str) -> int:
