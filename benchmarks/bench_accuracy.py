@@ -60,32 +60,31 @@ import math
 import time
 
 import numpy as np
+from bench_fusion import fusion_section  # noqa: E402  (benchmarks/ is the script's folder)
 
 from softtip import EstimatorConfig, axial_difference, estimate, murakami2006
 from softtip.core.depth import MURAKAMI2006_DEPTH, DepthLaw, lever_depth
 from softtip.core.noise import NANO17, SensorNoise
 from softtip.core.spin import direction_angle
+from softtip.core.units import KGF
 from softtip.sim import NANO17_SENSOR as SIM_SENSOR
 from softtip.sim import (
     ContactModel,
-    CylinderRim,
-    friction_scenario,
-    Cylinder,
     ContactParams,
+    Cylinder,
+    CylinderRim,
     Disturbance,
     HalfSpace,
     Plate,
     SensorModel,
     Wedge,
     discretise_skin,
+    friction_scenario,
     paper_scenario,
     push_scenario,
     rock_scenario,
     simulate_grasp,
 )
-from softtip.core.units import KGF
-
-from bench_fusion import fusion_section  # noqa: E402  (benchmarks/ is the script's folder)
 
 TIP = murakami2006()
 

@@ -29,14 +29,14 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from softtip import estimate, murakami2006
-from softtip.core.axial import axial_difference
+from softtip.calibration.payload import Payload, calibrate_payload, compensate_payload, payload_wrench
 from softtip.calibration.probing import calibrate_fingertip, simulate_probing
-from softtip.sim.synthetic import sliding_presses
-from softtip.errors import InputError
+from softtip.core.axial import axial_difference
 from softtip.core.fingertip import Capsule, Sphere
 from softtip.core.noise import SensorNoise
-from softtip.calibration.payload import Payload, calibrate_payload, compensate_payload, payload_wrench
+from softtip.errors import InputError
 from softtip.sim import HandFrame, SensorModel, Wedge, paper_scenario, simulate_grasp
+from softtip.sim.synthetic import sliding_presses
 
 MM = 1e3
 

@@ -35,7 +35,16 @@ from pathlib import Path
 
 import numpy as np
 
-from softtip import Capsule, Ellipsoid, EstimatorConfig, Estimator, ImplicitSurface, Sphere, contact_from_wrench, estimate
+from softtip import (
+    Capsule,
+    Ellipsoid,
+    Estimator,
+    EstimatorConfig,
+    ImplicitSurface,
+    Sphere,
+    contact_from_wrench,
+    estimate,
+)
 from softtip.sim.synthetic import synthetic_grasp
 
 
@@ -224,10 +233,10 @@ def plausible_wrenches(tip, n, rng):
 
 
 def mesh_rows(args, rng) -> None:
-    from softtip.core.contact import contact_kernel
     from softtip.core._xp import PY
-    from softtip.io.examples import EXAMPLE_PATH
+    from softtip.core.contact import contact_kernel
     from softtip.core.fingertip import load_fingertip
+    from softtip.io.examples import EXAMPLE_PATH
 
     t0 = time.perf_counter()
     tip = load_fingertip(EXAMPLE_PATH.with_name("murakami2006_nail.toml"))

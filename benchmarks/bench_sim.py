@@ -13,7 +13,16 @@ import math
 import time
 
 from softtip.core.fingertip import murakami2006
-from softtip.sim import ContactModel, ContactParams, Cylinder, Plate, Wedge, discretise_skin, paper_scenario, simulate_grasp
+from softtip.sim import (
+    ContactModel,
+    ContactParams,
+    Cylinder,
+    Plate,
+    Wedge,
+    discretise_skin,
+    paper_scenario,
+    simulate_grasp,
+)
 
 
 def main() -> None:

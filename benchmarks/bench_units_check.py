@@ -14,8 +14,8 @@ import numpy as np
 
 from softtip.core.fingertip import Sphere, load_fingertip
 from softtip.core.lever import force_lever
-from softtip.sim.simulate import run_simulation
 from softtip.core.units import KGF, KGF_MM
+from softtip.sim.simulate import run_simulation
 
 tips = {"murakami2006": load_fingertip("murakami2006"), "sphere10": Sphere(0.010, (0.0, 0.0, 0.012))}
 rows = []

@@ -15,8 +15,8 @@ from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 
 from softtip import load_example
-from softtip.io.bag import TOPICS, read_bag
 from softtip.errors import InputError
+from softtip.io.bag import TOPICS, read_bag
 from softtip.io.tables import write_table
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))

@@ -22,8 +22,8 @@ from scipy.spatial.transform import Rotation
 
 import softtip.ros as sr
 from softtip import estimate, load_example
-from softtip.io.bag import TOPICS, write_estimates_bag
 from softtip.errors import InputError
+from softtip.io.bag import TOPICS, write_estimates_bag
 from softtip.ros.bagout import DISTROS, BagWriter, bag_format
 from softtip.ros.fused import (
     FUSED_TOPICS,
@@ -383,8 +383,8 @@ def test_gravity_from_tf_removes_the_fingertips_weight(tmp_path):
 
 
 def test_gravity_orientations_interpolate_tf(tmp_path):
-    from softtip.io.bag import read_bag
     from softtip.fusion.tf import gravity_orientations
+    from softtip.io.bag import read_bag
 
     log = load_example()
     for every, tolerance_deg in ((1, 1e-5), (2, 1.0)):  # /tf at 50 and 25 Hz, the sensor turning up to ~1.3 rad/s
@@ -403,8 +403,8 @@ def test_gravity_frame_errors_name_the_frames(tmp_path):
     (tmp_path / "p.toml").write_text("[payload]\nmass = 0.01\n")
     out = run("estimate", tmp_path / "tilt", "--payload", tmp_path / "p.toml", "--gravity-frame", "map")
     assert out.returncode == 2 and "'ft_link' is not connected to 'map'" in out.stderr, out.stderr
-    from softtip.io.bag import read_bag
     from softtip.fusion.tf import gravity_orientations
+    from softtip.io.bag import read_bag
 
     b = read_bag(tmp_path / "notf")
     with pytest.raises(InputError, match="no /tf or /tf_static.*'world' → 'ft_link'"):

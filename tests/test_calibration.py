@@ -11,11 +11,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from softtip.calibration.probing import PROBING_GUIDE, calibrate_fingertip, find_presses, simulate_probing
+from softtip.core.fingertip import Capsule, Sphere, load_fingertip
+from softtip.core.noise import SensorNoise
 from softtip.errors import InputError
 from softtip.io.examples import EXAMPLE_PROBING_PATH
-from softtip.core.fingertip import Capsule, Sphere, load_fingertip
 from softtip.io.tables import write_table
-from softtip.core.noise import SensorNoise
 from softtip.sim import SensorModel
 from softtip.sim.synthetic import sliding_presses
 

@@ -5,8 +5,8 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from softtip import EstimatorConfig, axial_difference, estimate
-from softtip.core.depth import MURAKAMI2006_DEPTH, DepthLaw, depth_kernel, lever_depth
 from softtip.core._xp import NP, PY
+from softtip.core.depth import MURAKAMI2006_DEPTH, DepthLaw, depth_kernel, lever_depth
 from softtip.sim.synthetic import smoothstep, synthetic_grasp
 
 

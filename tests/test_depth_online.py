@@ -12,6 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from softtip import Capsule, EstimatorConfig, Sphere, axial_difference, estimate, murakami2006
+from softtip.core._xp import NP
 from softtip.core.depth import (
     MURAKAMI2006_DEPTH,
     depth_frame_kernel,
@@ -21,12 +22,11 @@ from softtip.core.depth import (
     depth_solve_kernel,
     skin_depth_law,
 )
-from softtip.core._xp import NP
-from softtip.errors import InputError
-from softtip.estimator.depth import DEPTH_ITERATIONS, resolve_depth, tip_depth_law
 from softtip.core.fingertip import load_fingertip
 from softtip.core.noise import NANO17, SensorNoise
 from softtip.core.spin import direction_angle
+from softtip.errors import InputError
+from softtip.estimator.depth import DEPTH_ITERATIONS, resolve_depth, tip_depth_law
 from softtip.sim import ContactModel, ContactParams, Plate, Wedge, discretise_skin, friction_scenario, simulate_grasp
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
@@ -34,14 +34,14 @@ TIP = murakami2006()
 PAPERS = EstimatorConfig(depth_mode="off", line_evidence=False)  # the papers: per sample, on the surface
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _model():
     # the stiff shear layer of the accuracy benchmark (side walls hold a load across a thin
     # plate); a coarser skin than the benchmark's to keep the tests fast
     return ContactModel(discretise_skin(TIP, 6000), ContactParams(shear_modulus=2e6)).prepare()
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def friction_log(obj_name: str, angle_deg: float, ratio: float, across: bool, profile: str = "push", seed: int = 3):
     obj = {"plate2": Plate(0.002), "wedge90": Wedge(math.pi / 2)}[obj_name]
     scn = friction_scenario(TIP, math.radians(angle_deg), ratio, across=across, profile=profile)

@@ -8,8 +8,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
-from rocking import rocking_log
 
+from rocking import rocking_log
 from softtip import Estimator, EstimatorConfig, estimate, murakami2006
 from softtip.core._xp import NP, PY
 from softtip.core.evidence import (

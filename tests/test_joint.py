@@ -13,7 +13,6 @@ from softtip.core.joint import joint_products, joint_solve_kernel
 from softtip.core.noise import NANO17, SensorNoise
 from softtip.pipeline import _joint_accept
 from softtip.sim.synthetic import smoothstep
-
 from strategies import unit_vectors
 from test_pipeline import assert_stream_equals_batch
 
@@ -182,8 +181,8 @@ def test_joint_keeps_the_latch_without_excitation():
 def test_simulated_slide_across_the_line_then_the_papers_disturbance():
     # the bench_accuracy "slide" case: 1 mm plate at 0°, 0.5 kgf, 4 mm slide across the
     # line at 4.5–6 s, then the papers' joint disturbance at 6.5–7.5 s
-    from softtip.sim import Disturbance, Plate, push_scenario, simulate_grasp
     from softtip.core.units import KGF
+    from softtip.sim import Disturbance, Plate, push_scenario, simulate_grasp
 
     tip = murakami2006()
     dist = (

@@ -12,11 +12,10 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from softtip import Capsule, EstimatorConfig, InputError, contact_from_wrench, load_fingertip
-from softtip.core.contact import contact_kernel
 from softtip.core._xp import PY
+from softtip.core.contact import contact_kernel
 from softtip.core.mesh import MeshFingertip, capsule_mesh, load_mesh_fingertip, rotation_from_rpy
 from softtip.sim.synthetic import synthetic_grasp
-
 from test_pipeline import assert_stream_equals_batch
 
 DATA = Path(__file__).resolve().parents[1] / "src" / "softtip" / "data"

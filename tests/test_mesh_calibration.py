@@ -10,9 +10,9 @@ from numpy.testing import assert_allclose
 
 from softtip import InputError, load_fingertip
 from softtip.calibration.mesh import calibrate_mesh, mesh_probing_log
-from softtip.io.tables import write_table
 from softtip.core.mesh import MeshFingertip, capsule_mesh
 from softtip.core.noise import NANO17
+from softtip.io.tables import write_table
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 V, F = capsule_mesh(0.016, 0.020, segments=64)

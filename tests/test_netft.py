@@ -18,8 +18,8 @@ import pytest
 
 from softtip.io.live import RECORD_COLUMNS
 from softtip.io.netft import NetFTSource
-from softtip.testing.netft_fake import FakeNetFT
 from softtip.io.sources import SourceError
+from softtip.testing.netft_fake import FakeNetFT
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 
@@ -257,7 +257,7 @@ def test_queue_overflow_is_counted_as_dropped_not_lost():
         with NetFTSource("127.0.0.1", rdt_port=dev.rdt_port, http_port=dev.http_port, timeout=2.0,
                          buffer_s=0.05, max_rate_hz=2000) as src:  # fmt: skip
             n = 0
-            for r in src:
+            for _ in src:
                 n += 1
                 if n == 10:
                     time.sleep(0.5)  # a stalled consumer: the 100-record queue overflows

@@ -22,9 +22,9 @@ import pytest
 from click.testing import CliRunner
 
 from softtip import EXAMPLE_PATH
-from softtip.io.atomic import AtomicFile, atomic_write_text, check_distinct
 from softtip.cli import main
 from softtip.errors import InputError
+from softtip.io.atomic import AtomicFile, atomic_write_text, check_distinct
 from softtip.io.tables import write_table
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))

@@ -9,9 +9,9 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
+from softtip.core.units import KGF, KGF_MM
 from softtip.errors import InputError
 from softtip.io.tables import PARQUET_UNITS_KEY, read_log, write_table
-from softtip.core.units import KGF, KGF_MM
 
 WRENCH = ("fx", "fy", "fz", "mx", "my", "mz")
 

@@ -13,10 +13,6 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 from softtip import estimate, murakami2006
-from softtip.core.axial import axial_difference
-from softtip.errors import InputError
-from softtip.estimator import EstimatorWarning
-from softtip.io.tables import write_table
 from softtip.calibration.payload import (
     Payload,
     PayloadCompensator,
@@ -26,8 +22,12 @@ from softtip.calibration.payload import (
     load_payload,
     payload_wrench,
 )
-from softtip.sim import HandFrame, SensorModel, Wedge, paper_scenario, simulate_grasp
+from softtip.core.axial import axial_difference
 from softtip.core.units import STANDARD_GRAVITY
+from softtip.errors import InputError
+from softtip.estimator import EstimatorWarning
+from softtip.io.tables import write_table
+from softtip.sim import HandFrame, SensorModel, Wedge, paper_scenario, simulate_grasp
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 AXES = ("fx", "fy", "fz", "mx", "my", "mz")

@@ -4,13 +4,13 @@ import math
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
-from rocking import rocking_log
 
+from rocking import rocking_log
 from softtip import Capsule, Estimator, EstimatorConfig, Sphere, axial_difference, estimate
 from softtip.core.depth import MURAKAMI2006_DEPTH
+from softtip.core.units import KGF, KGF_MM
 from softtip.estimator.results import EstimatorWarning
 from softtip.sim.synthetic import synthetic_grasp
-from softtip.core.units import KGF, KGF_MM
 
 FIELDS_3 = ("wrench", "point", "normal", "h", "direction")
 FIELDS_1 = ("sigma", "h_norm", "h_std", "angle", "angle_std", "depth", "depth_std", "joint_conditioning", "joint_angle_std",

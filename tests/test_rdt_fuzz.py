@@ -66,7 +66,7 @@ def reference(delivered):
     seen, first, top = set(), None, None
     rows, mark = [], (0, 0, 0)  # per sample: late, duplicates, malformed since the previous
     stray = held = False  # a stray record held; the first record held (until the next one)
-    for data, k in delivered:
+    for _data, k in delivered:
         if k is None:
             malformed += 1
             continue

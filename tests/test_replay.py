@@ -7,12 +7,11 @@ import time
 from pathlib import Path
 
 import numpy as np
-import pytest
 
 from softtip import EXAMPLE_PATH, Estimator, load_example
-from softtip.io.tables import write_table
 from softtip.io.live import RECORD_COLUMNS, LiveStats, Recorder, run_live
 from softtip.io.sources import LogSource, Reading, run
+from softtip.io.tables import write_table
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 
@@ -36,8 +35,7 @@ def test_run_accepts_any_iterable_of_t_wrench():
     expected = Estimator("murakami2006").process(log.t, log.wrench)
 
     def my_driver():  # a user's own source: a plain generator of (t, wrench)
-        for t, w in zip(log.t.tolist(), log.wrench.tolist()):
-            yield t, w
+        yield from zip(log.t.tolist(), log.wrench.tolist())
 
     assert list(run(my_driver(), "murakami2006")) == expected
     assert list(run(LogSource(log.t, log.wrench, speed=0))) == expected

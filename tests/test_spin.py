@@ -13,7 +13,6 @@ from softtip import (
     tangent_frame,
     tangential_spin_torque,
 )
-
 from strategies import unit_vectors
 
 

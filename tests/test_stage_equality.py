@@ -13,14 +13,14 @@ from numpy.testing import assert_allclose, assert_array_equal
 
 from rocking import rocking_log
 from softtip import EstimatorConfig, load_fingertip
+from softtip.core._xp import NP, PY
+from softtip.core.contact import contact_arrays
 from softtip.estimator.contact import ContactTracker, track_contacts
 from softtip.estimator.depth import DepthTracker, depth_points, resolve_depth
 from softtip.estimator.evidence import EvidenceTracker, evidence_states
 from softtip.estimator.latch import latch_points
 from softtip.estimator.measure import effective_noise, measure, noise_correlation
 from softtip.estimator.tare import StreamTare, tare_log
-from softtip.core.contact import contact_arrays
-from softtip.core._xp import NP, PY
 from softtip.sim.synthetic import synthetic_grasp
 
 CLOSE = dict(rtol=1e-12, atol=1e-300, equal_nan=True)

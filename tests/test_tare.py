@@ -5,7 +5,6 @@ import os
 import subprocess
 import sys
 import threading
-import time
 import warnings
 from pathlib import Path
 
@@ -14,11 +13,11 @@ import pytest
 from numpy.testing import assert_allclose
 
 from softtip import Estimator, EstimatorConfig, InputError, axial_difference, estimate
+from softtip.core.noise import NANO17
 from softtip.estimator.contact import contact_thresholds
 from softtip.estimator.results import EstimatorWarning
 from softtip.estimator.tare import bias_to_toml, load_bias
 from softtip.io.live import KeyReader, run_live
-from softtip.core.noise import NANO17
 from softtip.sim.synthetic import synthetic_grasp
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))

@@ -8,8 +8,6 @@ being touched (Murakami & Hasegawa 2004, 2006; Bicchi 1990). SI units, sensor fr
 
 from softtip.core.axial import axial_difference, axial_mean, axial_median
 from softtip.core.contact import Contact, contact_from_wrench
-from softtip.errors import InputError
-from softtip.io.examples import EXAMPLE_PATH, load_example
 from softtip.core.fingertip import (
     PRESETS,
     Capsule,
@@ -23,10 +21,12 @@ from softtip.core.fingertip import (
 from softtip.core.mesh import MeshFingertip
 from softtip.core.mounting import Mounted
 from softtip.core.noise import NANO17, SensorNoise, direction_angle_std, tangential_spin_torque_std
-from softtip.estimator import STATES, Estimates, Estimator, EstimatorConfig, EstimatorWarning, SampleEstimate, estimate
-from softtip.io.sources import run
 from softtip.core.spin import direction_angle, edge_direction, spin_torque, tangent_frame, tangential_spin_torque
 from softtip.core.units import KGF, KGF_MM, wrench_from_si, wrench_to_si
+from softtip.errors import InputError
+from softtip.estimator import STATES, Estimates, Estimator, EstimatorConfig, EstimatorWarning, SampleEstimate, estimate
+from softtip.io.examples import EXAMPLE_PATH, load_example
+from softtip.io.sources import run
 
 __version__ = "0.1.0"
 

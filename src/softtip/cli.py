@@ -13,17 +13,17 @@ import numpy as np
 
 from softtip import __version__
 from softtip.cli_types import PORT, Number, check_lowpass, check_pair_increasing
-from softtip.errors import InputError
-from softtip.estimator.depth import tip_depth_law
-from softtip.core.fingertip import PRESETS, Fingertip, load_fingertip
 from softtip.core.depth import MURAKAMI2006_DEPTH, DepthLaw
-from softtip.estimator.results import DRIFT_COLUMNS, EstimatorWarning
-from softtip.estimator.tare import bias_to_toml, load_bias
+from softtip.core.fingertip import PRESETS, Fingertip, load_fingertip
 from softtip.core.noise import NANO17, SensorNoise
+from softtip.core.units import KGF, KGF_MM, UNIT_SYSTEMS, wrench_to_si
+from softtip.errors import InputError
 from softtip.estimator import STATES, EstimatorConfig
 from softtip.estimator import estimate as run_estimate
+from softtip.estimator.depth import tip_depth_law
+from softtip.estimator.results import DRIFT_COLUMNS, EstimatorWarning
+from softtip.estimator.tare import bias_to_toml, load_bias
 from softtip.ros.options import bag_output_options, output_frame_id
-from softtip.core.units import KGF, KGF_MM, UNIT_SYSTEMS, wrench_to_si
 
 FRAMES_HELP = """\
 Frames and units: every vector is in the sensor frame (origin at the F/T sensor's
@@ -825,9 +825,9 @@ def stream(
     import signal
     import threading
 
+    from softtip.estimator import Estimator
     from softtip.io.live import KeyReader, LiveStats, Recorder, TerminalView, run_live
     from softtip.io.netft import FAULTS
-    from softtip.estimator import Estimator
     from softtip.io.sources import Interrupted, LogSource, SourceError
 
     if (host is None) == (replay is None):

@@ -6,12 +6,12 @@ import sys
 
 import click
 
-from softtip.io.atomic import write_stdout
 from softtip.cli_types import Number
-from softtip.errors import InputError
-from softtip.io.examples import EXAMPLE_PROBING_PATH, EXAMPLE_STILL_PATH
 from softtip.core.noise import NANO17
 from softtip.core.units import UNIT_SYSTEMS
+from softtip.errors import InputError
+from softtip.io.atomic import write_stdout
+from softtip.io.examples import EXAMPLE_PROBING_PATH, EXAMPLE_STILL_PATH
 
 __all__ = ["calibrate", "calibrate_payload"]
 
@@ -135,8 +135,8 @@ def calibrate(
     if shape == "mesh" or mesh_path is not None:  # mesh fingertips: softtip.calibration.mesh
         if example or input_path is None:
             raise click.UsageError("--shape mesh needs a probing LOG of the mesh fingertip (the example is a sphere's)")
-        from softtip.calibration.probing import atomic_write_text
         from softtip.calibration.mesh import calibrate_mesh_file
+        from softtip.calibration.probing import atomic_write_text
 
         try:
             if shape != "mesh" or mesh_path is None or rigid:
@@ -210,10 +210,10 @@ together with --payload (no tare needed).
 @click.option("--example", is_flag=True, help="Use the shipped example still log (simulated: a 20 g fingertip, centre of mass 1, -0.5, 20 mm, in 12 orientations) as LOG.")
 @click.pass_context
 def calibrate_payload(ctx, input_path, output, units, example):
-    from softtip.calibration.probing import atomic_write_text
-    from softtip.estimator.tare import bias_to_toml
     from softtip.calibration.payload import calibrate_payload as fit_payload
     from softtip.calibration.payload import read_orientation
+    from softtip.calibration.probing import atomic_write_text
+    from softtip.estimator.tare import bias_to_toml
 
     input_path = _example_or_log(input_path, example, units, EXAMPLE_STILL_PATH, "still log")
     try:

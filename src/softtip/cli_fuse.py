@@ -8,9 +8,9 @@ import os
 import click
 import numpy as np
 
+from softtip.core.units import UNIT_SYSTEMS, wrench_to_si
 from softtip.errors import InputError
 from softtip.ros.options import bag_output_options, output_frame_id
-from softtip.core.units import UNIT_SYSTEMS, wrench_to_si
 
 __all__ = ["fuse"]
 

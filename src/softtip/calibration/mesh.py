@@ -38,8 +38,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from softtip.calibration.probing import _force_spread, _tangent_basis, find_presses, probing_presses
-from softtip.errors import InputError
 from softtip.core.mesh import MeshFingertip
+from softtip.errors import InputError
 
 __all__ = ["MeshCalibration", "calibrate_mesh", "calibrate_mesh_file", "mesh_probing_log", "press_points"]
 

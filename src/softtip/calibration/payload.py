@@ -36,10 +36,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
+from softtip.core.units import STANDARD_GRAVITY
 from softtip.errors import InputError
 from softtip.io.tomlfile import read_toml
-from softtip.core.units import STANDARD_GRAVITY
-
 
 __all__ = [
     "QUATERNION_COLUMNS",
@@ -528,8 +527,8 @@ class CompensatedSource:
 
 def replay_source(path: str | os.PathLike[str], units: str, speed: float, payload: Payload | str | os.PathLike[str]) -> CompensatedSource:
     """``softtip stream --replay LOG --payload FILE``: the log replayed with per-sample compensation."""
-    from softtip.io.tables import read_log
     from softtip.io.sources import LogSource
+    from softtip.io.tables import read_log
 
     payload = load_payload(payload)
     log = read_log(path, units=units)

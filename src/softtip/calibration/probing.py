@@ -79,13 +79,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
 
-from softtip.core.contact import _sphere_kernel
 from softtip.core._vec import cross as _cross
 from softtip.core._vec import skew as _skew
 from softtip.core._xp import NP
-from softtip.errors import InputError
+from softtip.core.contact import _sphere_kernel
 from softtip.core.fingertip import Capsule, Fingertip, Sphere
 from softtip.core.noise import NANO17, SensorNoise
+from softtip.errors import InputError
 
 __all__ = [
     "MAX_START_SHIFT",
@@ -717,7 +717,16 @@ def simulate_probing(
     wrench : ndarray, shape (N, 6)
         Measured wrench, N and N·m.
     """
-    from softtip.sim import ContactModel, ContactParams, Disturbance, HalfSpace, SensorModel, discretise_skin, push_scenario, simulate_grasp
+    from softtip.sim import (
+        ContactModel,
+        ContactParams,
+        Disturbance,
+        HalfSpace,
+        SensorModel,
+        discretise_skin,
+        push_scenario,
+        simulate_grasp,
+    )
 
     rng = np.random.default_rng(rng)
     sensor = SensorModel() if sensor is None else sensor

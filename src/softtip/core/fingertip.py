@@ -15,16 +15,16 @@ from __future__ import annotations
 
 import abc
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, ClassVar
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from softtip.core._xp import NP, PY
 from softtip.errors import InputError
-
 
 __all__ = [
     "Fingertip",

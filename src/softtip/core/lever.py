@@ -21,8 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from softtip.errors import InputError
 from softtip.core.fingertip import Fingertip
+from softtip.errors import InputError
 
 __all__ = ["LEVER_MARGIN", "ForceLever", "force_lever", "check_force_lever"]
 

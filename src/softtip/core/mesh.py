@@ -31,8 +31,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from softtip.core._xp import NP, PY
-from softtip.errors import InputError
 from softtip.core.fingertip import Fingertip
+from softtip.errors import InputError
 
 __all__ = [
     "MeshFingertip",

@@ -32,8 +32,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from softtip.errors import InputError
 from softtip.core.fingertip import Fingertip
+from softtip.errors import InputError
 
 __all__ = ["Mounted", "mount_from_mapping", "pose_from_table"]
 

@@ -54,7 +54,7 @@ class SensorNoise:
                 raise ValueError(f"{name} must be 3 non-negative finite numbers, got {getattr(self, name)!r}")
             object.__setattr__(self, name, tuple(float(x) for x in v))
 
-    def scaled(self, factor: float) -> "SensorNoise":
+    def scaled(self, factor: float) -> SensorNoise:
         """The same model with every standard deviation multiplied by ``factor``."""
         return SensorNoise(
             tuple(factor * s for s in self.force_std), tuple(factor * s for s in self.moment_std)

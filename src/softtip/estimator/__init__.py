@@ -66,7 +66,17 @@ softtip's extensions (issue 5), each an :class:`EstimatorConfig` field:
 
 from softtip.estimator.batch import estimate
 from softtip.estimator.config import CONTACT_POINT_MODES, EstimatorConfig
-from softtip.estimator.results import AREA, EVIDENCE, LINE, NONE, POINT, STATES, Estimates, EstimatorWarning, SampleEstimate
+from softtip.estimator.results import (
+    AREA,
+    EVIDENCE,
+    LINE,
+    NONE,
+    POINT,
+    STATES,
+    Estimates,
+    EstimatorWarning,
+    SampleEstimate,
+)
 from softtip.estimator.stream import Estimator
 
 __all__ = [

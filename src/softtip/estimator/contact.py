@@ -37,8 +37,8 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from softtip.estimator.config import EstimatorConfig
 from softtip.core.noise import SensorNoise
+from softtip.estimator.config import EstimatorConfig
 
 __all__ = ["RELEASE_FLOOR", "contact_thresholds", "ContactTrack", "track_contacts", "ContactTracker", "START_PULL_TIME"]
 
@@ -163,7 +163,7 @@ def _follow_drift(t: NDArray, x: NDArray, start: int, alpha: NDArray, on: float)
             continue
         j = i + k
         b = avg.b
-        i = _first(lambda lo, hi: _norm3(x[lo:hi, :3] - b[:3]) < on, j + 1, n)
+        i = _first(lambda lo, hi, b=b: _norm3(x[lo:hi, :3] - b[:3]) < on, j + 1, n)
         drift[j:i] = b
     return drift
 

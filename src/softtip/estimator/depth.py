@@ -43,9 +43,9 @@ from softtip.core.depth import (
     depth_solve_kernel,
     skin_depth_law,
 )
-from softtip.estimator.config import EstimatorConfig
 from softtip.core.fingertip import Fingertip
 from softtip.core.noise import SensorNoise
+from softtip.estimator.config import EstimatorConfig
 
 __all__ = ["tip_depth_law", "resolve_depth", "depth_points", "DepthTracker", "SOLVES_PER_WINDOW"]
 

@@ -41,13 +41,20 @@ from collections import deque
 import numpy as np
 
 from softtip.core._xp import NP, PY
-from softtip.estimator.config import EstimatorConfig
 from softtip.core.evidence import (
-    N_SUMS, _div, evidence_products, noise_constants, tangent_noise_kernel, window_constants, window_direction_floats,
-    window_eigen_floats, window_kernel,
+    N_SUMS,
+    _div,
+    evidence_products,
+    noise_constants,
+    tangent_noise_kernel,
+    window_constants,
+    window_direction_floats,
+    window_eigen_floats,
+    window_kernel,
 )  # fmt: skip
 from softtip.core.noise import SensorNoise
 from softtip.core.spin import tangent_frame_kernel
+from softtip.estimator.config import EstimatorConfig
 
 __all__ = ["evidence_states", "EvidenceTracker"]
 

@@ -22,11 +22,11 @@ import numpy as np
 from softtip.core._xp import NP, PY
 from softtip.core.contact import contact_kernel
 from softtip.core.depth import depth_kernel
-from softtip.estimator.config import EstimatorConfig
 from softtip.core.fingertip import Fingertip
 from softtip.core.joint import N_SUMS, joint_products, joint_solve_kernel
 from softtip.core.noise import SensorNoise
 from softtip.core.spin import spin_torque_kernel
+from softtip.estimator.config import EstimatorConfig
 
 __all__ = ["joint_points", "JointTracker", "joint_accept", "joint_moment"]
 

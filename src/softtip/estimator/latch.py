@@ -20,8 +20,8 @@ import numpy as np
 
 from softtip.core._xp import PY
 from softtip.core.contact import contact_kernel
-from softtip.estimator.config import EstimatorConfig
 from softtip.core.fingertip import Fingertip
+from softtip.estimator.config import EstimatorConfig
 
 __all__ = ["latch_points", "LatchTracker"]
 

@@ -13,7 +13,13 @@ from typing import Any, NamedTuple
 from softtip.core.depth import DepthLaw, depth_kernel
 from softtip.core.filtering import noise_gain
 from softtip.core.noise import SensorNoise, angle_std_kernel, h_std_kernel
-from softtip.core.spin import angle_kernel, direction_kernel, spin_torque_kernel, tangent_frame_kernel, tangential_kernel
+from softtip.core.spin import (
+    angle_kernel,
+    direction_kernel,
+    spin_torque_kernel,
+    tangent_frame_kernel,
+    tangential_kernel,
+)
 
 __all__ = ["Measurement", "measure", "effective_noise", "noise_correlation"]
 

@@ -31,10 +31,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from softtip.errors import InputError
-from softtip.io.tomlfile import read_toml
-from softtip.estimator.config import EstimatorConfig
 from softtip.core.joint import MODEL_MARGIN
+from softtip.errors import InputError
+from softtip.estimator.config import EstimatorConfig
+from softtip.io.tomlfile import read_toml
 
 __all__ = [
     "SPIKE_SIGMAS",

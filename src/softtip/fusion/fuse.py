@@ -46,16 +46,15 @@ standard deviations; the plane normal's from the direction's and from the contac
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from softtip.core.noise import NANO17, SensorNoise
 from softtip.estimator import Estimates
 from softtip.fusion.poses import PoseSeries
-from softtip.core.noise import NANO17, SensorNoise
 
 __all__ = ["GRASPS", "Finger", "FusedGrasp", "fuse"]
 

@@ -83,7 +83,7 @@ def plot_fused(
         ax_f.legend(loc="upper left", fontsize=8)
 
     names = fused.grasp_names
-    for k, g in enumerate(GRASPS):
+    for g in GRASPS:
         sel = names == g
         if sel.any():
             ax_g.fill_between(t, 0, 0.7, where=sel, step="mid", color=_GRASP_COLORS[g], lw=0, label=g)

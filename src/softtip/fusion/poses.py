@@ -21,8 +21,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation, Slerp
 
-from softtip.errors import InputError
 from softtip.core.mounting import pose_from_table
+from softtip.errors import InputError
 from softtip.io.tomlfile import read_toml
 
 __all__ = ["POSE_COLUMNS", "PoseSeries", "poses_from_columns", "read_hand_file", "HandFile"]

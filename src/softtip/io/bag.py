@@ -39,9 +39,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from softtip.errors import InputError
+from softtip.estimator import Estimates
 from softtip.ros import DEFAULT_FRAME_ID
 from softtip.ros import TOPICS as ROS_TOPICS
-from softtip.estimator import Estimates
 
 __all__ = [
     "TOPICS",

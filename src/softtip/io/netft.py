@@ -917,8 +917,7 @@ class NetFTSource:
             if queue:
                 data, host, arrival, overflow = popleft()
                 last_ns = arrival
-                for r in feed(data, host, arrival, overflow):
-                    yield r
+                yield from feed(data, host, arrival, overflow)
                 continue
             # nothing queued: check for the end, a silence, then wait a little
             if self._sock is None or (stop is not None and stop.is_set()):

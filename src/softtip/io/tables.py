@@ -55,8 +55,8 @@ from typing import Any, BinaryIO, TextIO
 import numpy as np
 from numpy.typing import NDArray
 
-from softtip.errors import InputError
 from softtip.core.units import UNIT_SYSTEMS, wrench_to_si
+from softtip.errors import InputError
 
 __all__ = ["Log", "read_log", "write_table", "REQUIRED_COLUMNS"]
 

@@ -17,8 +17,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from softtip.estimator import EstimatorConfig
 from softtip.core.noise import NANO17, SensorNoise
+from softtip.estimator import EstimatorConfig
 
 __all__ = ["PARAMETERS", "config_from_parameters", "main"]
 

@@ -13,9 +13,10 @@ from pathlib import Path
 
 import click
 
-from softtip.io.atomic import AtomicFile, cannot_write, check_distinct, commit_all, write_stdout
 from softtip.cli_types import Number
+from softtip.core.units import KGF, UNIT_SYSTEMS
 from softtip.errors import InputError
+from softtip.io.atomic import AtomicFile, cannot_write, check_distinct, commit_all, write_stdout
 from softtip.sim.objects import OBJECT_KINDS
 from softtip.sim.scenario import (
     DISTURBANCE_TIMINGS,
@@ -27,7 +28,6 @@ from softtip.sim.scenario import (
 )
 from softtip.sim.simulate import log_csv_text, run_simulation, truth_json_text
 from softtip.sim.skin import DEFAULT_ELEMENTS
-from softtip.core.units import KGF, UNIT_SYSTEMS
 
 __all__ = ["simulate", "parse_length", "parse_force"]
 

@@ -208,12 +208,11 @@ def write_two_finger(grasp: TwoFingerGrasp, out_dir) -> list:
     them or, on any failure, none). Returns the paths written."""
     import json
     import os
+    import shutil
+    import tempfile
     from pathlib import Path
 
     from softtip.sim.simulate import write_log_csv
-
-    import shutil
-    import tempfile
 
     out = Path(out_dir)
     if out.exists():

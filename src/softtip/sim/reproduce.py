@@ -32,17 +32,17 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Callable, Sequence
 
 import numpy as np
 
 from softtip.core.axial import axial_difference
 from softtip.core.fingertip import Fingertip, murakami2006
-from softtip.estimator import AREA, LINE, EstimatorConfig, Estimates, estimate
 from softtip.core.units import KGF
+from softtip.estimator import AREA, LINE, Estimates, EstimatorConfig, estimate
 
 __all__ = [
     "TOLERANCE_DEG",

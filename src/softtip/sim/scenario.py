@@ -86,10 +86,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from softtip.core.fingertip import Fingertip
-from softtip.sim.pose import Pose, unit
-from softtip.sim.truth import tangent_frame
-from softtip.sim.synthetic import smoothstep
 from softtip.core.units import KGF, STANDARD_GRAVITY
+from softtip.sim.pose import Pose, unit
+from softtip.sim.synthetic import smoothstep
+from softtip.sim.truth import tangent_frame
 
 __all__ = [
     "DISTURBANCE_RAMP",

@@ -24,6 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from softtip.core.fingertip import Fingertip, load_fingertip
+from softtip.core.units import wrench_from_si
 from softtip.sim.contact import ContactModel, ContactParams, ContactResult, FrictionState
 from softtip.sim.objects import RigidObject, make_object
 from softtip.sim.pose import Pose
@@ -41,7 +42,6 @@ from softtip.sim.scenario import (
 from softtip.sim.sensor import SensorModel
 from softtip.sim.skin import DEFAULT_ELEMENTS, discretise_skin
 from softtip.sim.truth import GroundTruth, line_angle, tangent_frame
-from softtip.core.units import wrench_from_si
 
 __all__ = ["SimLog", "simulate_grasp", "write_log_csv", "write_truth_json", "run_simulation"]
 

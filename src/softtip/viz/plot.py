@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import os
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 
-from softtip.estimator import LINE, Estimates
 from softtip.core.units import KGF, KGF_MM
+from softtip.estimator import LINE, Estimates
 
 __all__ = ["plot_estimates", "plot_direction_chart", "plot_position_error", "figure_formats"]
 
@@ -175,8 +175,8 @@ def plot_line_or_area(rows: Sequence[tuple[str, Estimates]], path=None, *, title
     -------
     matplotlib.figure.Figure
     """
-    from softtip.core.spin import tangent_frame_kernel
     from softtip.core._xp import NP
+    from softtip.core.spin import tangent_frame_kernel
 
     plt = _figure_module()
     if not rows:
