@@ -267,15 +267,6 @@ class EvidenceTracker:
         self._sig = False
         self._anchor: tuple | None = None
 
-    def _own(self, geo: PointGeometry, ex, ey, ez, hx, hy, hz, hn, state, evidence, minor, h_ratio, f_ratio):
-        """A line with the sample's own direction; ``minor`` (or ``None``) the window's
-        across-axis spread, counted as model error."""
-        dx, dy, dz, angle, a = sample_direction(hx, hy, hz, hn, ex, ey, ez, geo, self._sq)
-        if minor is None:
-            return state, evidence, (dx, dy, dz), angle, a, h_ratio, f_ratio
-        v = a * a + _div(minor, hn * hn)
-        return state, evidence, (dx, dy, dz), angle, (sqrt(v) if v >= 0.0 else math.nan), h_ratio, f_ratio
-
     def step(self, t, geo: PointGeometry, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, h_std):
         """``(state, evidence, direction, angle, angle_std, h_ratio, f_ratio)`` of a located
         sample at the contact point of ``geo``, with ``h`` (N·m) taken about ``e`` (m; the
@@ -284,7 +275,8 @@ class EvidenceTracker:
         if not self._on:
             thr = self._h_sigmas * h_std
             if hn > (self._h_min if self._h_min > thr else thr):  # the measurement's line test
-                return self._own(geo, ex, ey, ez, hx, hy, hz, hn, "line", "unconfirmed", None, math.nan, math.nan)
+                dx, dy, dz, angle, a = sample_direction(hx, hy, hz, hn, ex, ey, ez, geo, self._sq)
+                return "line", "unconfirmed", (dx, dy, dz), angle, a, math.nan, math.nan
             return "point", "", _NAN3, math.nan, math.nan, math.nan, math.nan
         point = geo.point
         anchor = self._anchor
@@ -355,8 +347,14 @@ class EvidenceTracker:
         h_noise, f_noise = tail * s_big, tail * f_n
         # _decide, unrolled (NaN comparisons are False, as in the batch)
         varied = major > h_noise
-        h_ratio = _div(minor, major) if varied else math.nan
-        f_ratio = _div(f_minor, f_major) if f_major > f_noise else math.nan
+        if varied:
+            h_ratio = minor / major if major != 0.0 else _div(minor, major)
+        else:
+            h_ratio = math.nan
+        if f_major > f_noise:
+            f_ratio = f_minor / f_major if f_major != 0.0 else _div(f_minor, f_major)
+        else:
+            f_ratio = math.nan
         if minor > h_noise and h_ratio >= self._enter:
             self._verdict = _AREA
         elif (
@@ -384,5 +382,11 @@ class EvidenceTracker:
             return "line", "confirmed", d, angle, angle_std, h_ratio, f_ratio
         if not self._sig:
             return "point", "", _NAN3, math.nan, math.nan, h_ratio, f_ratio
-        evidence = "confirmed" if verdict == _LINE else "unconfirmed"
-        return self._own(geo, ex, ey, ez, hx, hy, hz, hn, "line", evidence, minor, h_ratio, f_ratio)
+        # the sample's own direction, the window's across-axis spread counted as model error
+        dx, dy, dz, angle, a = sample_direction(hx, hy, hz, hn, ex, ey, ez, geo, self._sq)
+        v = hn * hn
+        v = a * a + (minor / v if v != 0.0 else _div(minor, v))
+        return (
+            "line", "confirmed" if verdict == _LINE else "unconfirmed", (dx, dy, dz), angle,
+            sqrt(v) if v >= 0.0 else math.nan, h_ratio, f_ratio,
+        )  # fmt: skip

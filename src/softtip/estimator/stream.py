@@ -38,7 +38,6 @@ from softtip.fingertip import Fingertip, load_fingertip
 __all__ = ["Estimator"]
 
 _NAN3 = (math.nan, math.nan, math.nan)
-_NAN4 = (math.nan,) * 4
 _NAN6 = (math.nan,) * 6
 _new_estimate = tuple.__new__  # SampleEstimate with every field given, without its __new__'s frame
 
@@ -84,6 +83,7 @@ class Estimator:
             self._sos = lowpass_sos(cfg.lowpass_hz, cfg.sample_rate, cfg.lowpass_order)
         self._noise = effective_noise(cfg.noise, self._sos)
         self._track = cfg.contact_point == "track"
+        self._relatch = cfg.relatch_distance is not None
         self._tare = StreamTare(cfg)
         self._latch = LatchTracker(self.tip, cfg)
         self._evidence = EvidenceTracker(cfg, self._noise, noise_correlation(self._sos))
@@ -264,7 +264,7 @@ class Estimator:
 
         tip = self.tip
         latched = fallback = relatched = joint_fb = False
-        stats = _NAN4
+        j0 = j1 = j2 = j3 = math.nan
         if self._track:
             if code == 2:
                 self._evidence.start_segment()
@@ -281,16 +281,20 @@ class Estimator:
                 self._start_segment(fn, t)
                 if self._joint is not None:
                     self._joint.start_contact()
-            else:
+            elif self._relatch:
                 moved, sc = self._latch.drifted(fn, x, sc)
                 if moved:
                     relatched = True
                     self._start_segment(fn, t)
-            point, latched, fallback, sc = self._latch.step(t, fn, x, sc)
+            latch = self._latch
+            if latch.point is not None and sc is None:  # held (LatchTracker.step returns it as is)
+                point, latched, fallback = latch.point, True, latch.is_fallback
+            else:
+                point, latched, fallback, sc = latch.step(t, fn, x, sc)
             if latched:
                 self._had_latch = True
             if self._joint is not None:
-                point, stats, moved = self._joint.step(t, x, point, sc)
+                point, (j0, j1, j2, j3), moved = self._joint.step(t, x, point, sc)
                 if moved:
                     latched = fallback = False
                 joint_fb = not moved
@@ -337,7 +341,7 @@ class Estimator:
             self._lead = False
         return _new_estimate(SampleEstimate, (
             t, state, tuple(x), point, geo.normal, sigma, h, hn, h_std, d,
-            angle, angle_std, latched, fallback, False, False, relatched, delta, *stats, joint_fb,
+            angle, angle_std, latched, fallback, False, False, relatched, delta, j0, j1, j2, j3, joint_fb,
             contacts.contact_id, contacts.drift_before, delta_std, from_data, evidence, h_ratio, f_ratio,
         ))  # fmt: skip
 
