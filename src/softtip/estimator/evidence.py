@@ -236,8 +236,8 @@ class EvidenceTracker:
 
     Running sums of the products since the segment's start and, for each sample of the last
     ``evidence_window`` seconds, its time and the sums before it: window sums are
-    differences, as in the batch. Plain float arithmetic (:func:`softtip.evidence.window_floats`
-    written out), O(1) per sample.
+    differences, as in the batch. Plain float arithmetic (:func:`softtip.evidence.window_kernel`
+    written out: the same operations, so the same results to rounding), O(1) per sample.
     """
 
     def __init__(self, config: EstimatorConfig, noise: SensorNoise, corr: float):
@@ -312,7 +312,7 @@ class EvidenceTracker:
         tail, keep, nu = k
         s_big, s2, f_n = self._noise_k
         h11, h12, h22, f11, f12, f22 = self._noise_terms
-        # softtip.evidence.window_eigen_floats, written out; window sums are differences
+        # the covariances and eigenvalues of window_kernel; window sums are differences
         if hist:
             o = hist[0][1]
             s1, s2_, s11, s12, s22 = c0 - o[0], c1 - o[1], c2 - o[2], c3 - o[3], c4 - o[4]
@@ -335,7 +335,7 @@ class EvidenceTracker:
         gm = 0.5 * (g11 + g22)
         gr = sqrt(gh * gh + g12 * g12)
         f_major, f_minor = gm + gr, gm - gr
-        # clamped at zero (NaN too, as window_eigen_floats)
+        # clamped at zero (NaN too)
         if not major > 0.0:
             major = 0.0
         if not minor > 0.0:

@@ -308,7 +308,10 @@ class Estimator:
 
         geo = self._geo
         if point is not geo.point:  # a new point (while a latch holds: once per contact)
-            geo = self._geo = PointGeometry(point, normal, self._sq) if self._track else PointGeometry.on_tip(tip, point, self._sq)
+            if self._track:
+                geo = self._geo = PointGeometry(point, normal, self._sq)
+            else:
+                geo = self._geo = PointGeometry.on_tip(tip, point, self._sq)
         nx, ny, nz = geo.nx, geo.ny, geo.nz
         if depth is None:
             delta, delta_std, from_data = 0.0, 0.0, False
