@@ -47,8 +47,8 @@ from softtip.joint import MODEL_MARGIN, _chi2_excess
 from softtip.noise import SensorNoise
 
 __all__ = [
-    "N_SUMS", "Window", "evidence_products", "tangent_noise_kernel", "window_kernel", "window_constants",
-    "window_direction_floats", "noise_constants",
+    "N_SUMS", "Window", "evidence_products", "tangent_noise_kernel", "window_kernel", "window_floats",
+    "window_constants", "window_eigen_floats", "window_direction_floats", "noise_constants",
 ]  # fmt: skip
 
 #: Number of window sums: ``Σ h1, Σ h2, Σ h1², Σ h1 h2, Σ h2²`` and the same for ``f_t``.
@@ -175,6 +175,22 @@ def window_kernel(sums, count, h11, h12, h22, f11, f12, f22, corr: float, xp) ->
     return Window(big, small, h_noise, xp.maximum(f_big, 0.0), xp.maximum(f_small, 0.0), tail * f_n, a, angle_std)
 
 
+def window_floats(sums, count: float, noise_terms, tail: float, keep: float, nu: float, corr: float):
+    """:func:`window_kernel` for one window of Python floats, unrolled for the stream (the
+    same operations, so the same results to rounding; no function call per operation).
+
+    ``tail``, ``keep`` and ``nu`` are :func:`window_constants` of ``count``. Returns the
+    fields of :class:`Window` as a plain tuple.
+    """
+    h11, h12, h22, f11, f12, f22 = noise_terms
+    s_big, s2, f_n = noise_constants(noise_terms)
+    e = window_eigen_floats(sums, count, noise_terms, keep)
+    big, small = e[0], e[1]
+    f_big, f_small = e[8], e[9]
+    angle, angle_std = window_direction_floats(e, s2, nu, corr)
+    return big, small, tail * s_big, f_big, f_small, tail * f_n, angle, angle_std
+
+
 def noise_constants(noise_terms):
     """``(largest noise variance of h, mean noise variance of h, largest of f_t)``."""
     h11, h12, h22, f11, f12, f22 = noise_terms
@@ -187,14 +203,35 @@ def noise_constants(noise_terms):
     return s_big, 0.5 * (s_big + s_small), f_n
 
 
-def window_direction_floats(e, s2: float, nu: float, corr: float):
-    """``(angle, angle_std)`` of a window of Python floats, as :func:`window_kernel` gives them.
+def window_eigen_floats(sums, count: float, noise_terms, keep: float):
+    """The eigenvalues of a window's covariances (floats), with what the direction needs:
+    ``(big, small, c11, c12, c22, root, g11, g12, f_big, f_small, g22)`` less the last."""
+    h11, h12, h22, f11, f12, f22 = noise_terms
+    s1, s2_, s11, s12, s22, t1, t2, t11, t12, t22 = sums
+    m1, m2 = s1 / count, s2_ / count
+    c11 = s11 / count - m1 * m1 - keep * h11
+    c12 = s12 / count - m1 * m2 - keep * h12
+    c22 = s22 / count - m2 * m2 - keep * h22
+    half = 0.5 * (c11 - c22)
+    mean = 0.5 * (c11 + c22)
+    root = math.sqrt(half * half + c12 * c12)
+    big, small = mean + root, mean - root
+    n1, n2 = t1 / count, t2 / count
+    g11 = t11 / count - n1 * n1 - keep * f11
+    g12 = t12 / count - n1 * n2 - keep * f12
+    g22 = t22 / count - n2 * n2 - keep * f22
+    gh = 0.5 * (g11 - g22)
+    gm = 0.5 * (g11 + g22)
+    gr = math.sqrt(gh * gh + g12 * g12)
+    f_big, f_small = gm + gr, gm - gr
+    return (
+        big if big > 0.0 else 0.0, small if small > 0.0 else 0.0, c11, c12, c22, root, g11, g12,
+        f_big if f_big > 0.0 else 0.0, f_small if f_small > 0.0 else 0.0, g22, half,
+    )  # fmt: skip
 
-    ``e`` is ``(big, small, c11, c12, c22, root, g11, g12, f_big, f_small, g22, half)``: the
-    clamped eigenvalues and the covariances of ``h`` and ``f_t`` (noise removed), the root
-    and half difference of ``h``'s eigen-decomposition (as :class:`EvidenceTracker
-    <softtip.estimator.evidence.EvidenceTracker>` computes them); ``s2`` the mean noise
-    variance of ``h`` (:func:`noise_constants`), ``nu`` of :func:`window_constants`."""
+
+def window_direction_floats(e, s2: float, nu: float, corr: float):
+    """``(angle, angle_std)`` of a window from :func:`window_eigen_floats`."""
     big, small, c11, c12, c22, root, g11, g12, _, _, g22, half = e
     a = 0.5 * math.atan2(2.0 * c12, 2.0 * half) + _HALF_PI
     if a > _HALF_PI:

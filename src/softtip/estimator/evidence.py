@@ -236,7 +236,7 @@ class EvidenceTracker:
 
     Running sums of the products since the segment's start and, for each sample of the last
     ``evidence_window`` seconds, its time and the sums before it: window sums are
-    differences, as in the batch. Plain float arithmetic (:func:`softtip.evidence.window_kernel`
+    differences, as in the batch. Plain float arithmetic (:func:`softtip.evidence.window_floats`
     written out: the same operations, so the same results to rounding), O(1) per sample.
     """
 
