@@ -33,6 +33,10 @@ method | error with softtip's extension``. Sections:
   without (the papers' grasp, t > 6 s), over three object angles and three noise seeds:
   share of samples line / area / point, confirmed share of the line samples, median
   direction error and RMS of error / reported standard deviation.
+* **rates** (issue 10's note, not in the default run): the line evidence at 1 and 7 kHz, without
+  and with a 20 Hz low-pass, on a 1 mm and a 15 mm plate (rocking and the papers' grasp): the
+  simulator's 50 Hz true wrench resampled linearly, Nano17-class noise drawn per sample.
+  ``--sections rates`` (about a minute).
 * **cost**: streaming time per sample of each mode.
 * **friction** (issue 11): a friction load during the hold (:func:`softtip.sim.friction_scenario`:
   a push ramped in over 6 → 6.5 s, a slow drag over 5.5 → 9.5 s, or a slip of 1.5 mm along
@@ -352,6 +356,54 @@ def evidence_section(angles=(-35.0, 25.0, 70.0), noise_seeds=(101, 102, 103)) ->
         _row(label, *cells)
 
 
+def rates_section(angle: float = 25.0, seed: int = 101) -> None:
+    """Line evidence at high sample rates (issue 10's note): the simulator's 50 Hz grasps,
+    their true wrench resampled (linearly) to 1 and 7 kHz and Nano17-class noise drawn per
+    sample, without and with a 20 Hz low-pass (default settings otherwise)."""
+    print(
+        "\n### line evidence at 1 and 7 kHz (true wrench of a 50 Hz simulation resampled, noise per sample): "
+        "share of samples line / area / point, state changes per second, median direction error, RMS error / "
+        "reported std\n"
+    )
+    print(f"object angle {angle:+.0f}°, noise seed {seed}; rocking: after both axes were excited; papers' grasp: t > {HELD:g} s")
+    print("| object, grasp | rate | low-pass | line / area / point | state changes / s | direction error, err/std |")
+    print("| --- | --- | --- | --- | --- | --- |")
+    sensor = SensorModel()
+    for label, make in (("plate 1 mm", lambda: Plate(0.001)), ("plate 15 mm", lambda: Plate(0.015))):
+        for rock in (True, False):
+            scn = rock_scenario(math.radians(angle)) if rock else paper_scenario(math.radians(angle))
+            log = simulate_grasp(TIP, make(), scn, sensor, rng=seed)
+            if rock:
+                a2 = next(d for d in scn.disturbances if d.label == "rock-a2")
+                start = a2.start + a2.period
+            else:
+                start = HELD
+            for rate in (50.0, 1000.0, 7000.0):
+                t = np.arange(int(log.t[-1] * rate) + 1) / rate
+                wt = np.stack([np.interp(t, log.t, log.wrench_true[:, i]) for i in range(6)], axis=-1)
+                w = sensor.measure(wt, np.random.default_rng(seed))
+                truth = log.truth.angle[np.minimum(np.searchsorted(log.t, t), len(log.t) - 1)]
+                sel = t >= start
+                for cutoff in (None, 20.0):
+                    if cutoff is not None and rate < 1000.0:
+                        continue
+                    cfg = EstimatorConfig() if cutoff is None else EstimatorConfig(lowpass_hz=cutoff, sample_rate=rate)
+                    est = estimate(t, w, TIP, cfg)
+                    st = est.state[sel]
+                    changes = np.count_nonzero(st[1:] != st[:-1]) / (t[sel][-1] - t[sel][0])
+                    share = "/".join(f"{np.mean(st == c):.0%}" for c in (2, 3, 1))
+                    line = sel & (est.state == 2)
+                    err = np.abs(axial_difference(est.angle[line], truth[line]))
+                    known = np.isfinite(err)
+                    cell = "—"
+                    if known.any():
+                        ratio = np.sqrt(np.mean((err[known] / est.angle_std[line][known]) ** 2))
+                        cell = f"{np.degrees(np.median(err[known])):.2f}°, {ratio:.2f}"
+                    grasp = "rocking" if rock else "papers' grasp"
+                    _row(f"{label}, {grasp}", f"{rate:.0f} Hz", "none" if cutoff is None else f"{cutoff:g} Hz", share,
+                         f"{changes:.1f}", cell)  # fmt: skip
+
+
 def fit_depth() -> DepthLaw:
     """Refit :data:`MURAKAMI2006_DEPTH` from simulated calibration presses."""
     model = ContactModel(discretise_skin(TIP, 10000), ContactParams(shear_modulus=2e6)).prepare()
@@ -488,7 +540,7 @@ def main() -> None:
     for name in args.sections:
         {"depth": depth_section, "slide": slide_section, "papers": papers_section, "start": start_section,
          "noise": noise_section, "evidence": evidence_section, "cost": stream_cost, "friction": friction_section,
-         "fusion": fusion_section}[name]()  # fmt: skip
+         "fusion": fusion_section, "rates": rates_section}[name]()  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -13,7 +13,7 @@ command itself (a new process: Python start-up and imports included), in rows/s;
 hand-written Python CSV reader and writer that softtip used before, on the same files.
 Rates are rows per second of CPU time (the process's own, or the command's): on a shared
 machine that is the steady figure; the wall-clock time is printed beside it. Targets (manual §6) end to end: CSV >= 2 M rows/s, Parquet >= 10 M rows/s.
-Only this part: --only end-to-end.
+Only this part: --only end-to-end; only the streaming rows: --only stream.
 
 Mesh rows: the shipped mesh fingertip (the papers' capsule with a nail, 21.6k triangles),
 contact location per sample (streaming kernel, median and p99; target median <= 50 us) and in
@@ -73,7 +73,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--samples", type=int, default=1_000_000)
     ap.add_argument("--stream-samples", type=int, default=20_000)
-    ap.add_argument("--only", choices=["end-to-end"], help="Run only this part.")
+    ap.add_argument("--only", choices=["end-to-end", "stream"], help="Run only this part.")
     ap.add_argument("--mesh-only", action="store_true", help="only the mesh fingertip rows")
     args = ap.parse_args()
     rng = np.random.default_rng(6)
@@ -85,6 +85,9 @@ def main() -> None:
     print(f"softtip core benchmark | python {platform.python_version()} | numpy {np.__version__} | {platform.machine()}")
     if args.only == "end-to-end":
         end_to_end(n)
+        return
+    if args.only == "stream":
+        stream_rows(args, synthetic_grasp("murakami2006", angle_deg=45.0, duration=10.0, rate=1000.0, seed=1))
         return
     print(f"batch contact location, {n:,} samples (best of 3; general solver: 1 run)")
 
@@ -117,7 +120,15 @@ def main() -> None:
     dt = best_of(lambda: estimate(t_rep, w_rep, "murakami2006"), 3)
     print(f"  {'whole batch pipeline (capsule)':30s} {len(t_rep) / dt / 1e6:8.2f} M samples/s   ({dt:.3f} s)")
 
-    print(f"streaming pipeline, one sample at a time ({args.stream_samples:,} samples of a 1 kHz grasp)")
+    stream_rows(args, g)
+    end_to_end(n)
+    mesh_rows(args, rng)
+
+
+def stream_rows(args, g) -> None:
+    """Median and p99 time of one sample of the 1 kHz grasp ``g`` through :class:`Estimator`
+    (each configuration three times; the pass with the lowest median in contact)."""
+    print(f"streaming pipeline, one sample at a time ({args.stream_samples:,} samples of a 1 kHz grasp, best of 3)")
     for label, cfg in (
         ("latch, no filter (online depth)", EstimatorConfig()),
         ("latch, the papers' method", EstimatorConfig(depth_mode="off")),
@@ -125,22 +136,25 @@ def main() -> None:
         ("latch, 4th-order low-pass", EstimatorConfig(lowpass_hz=30.0, sample_rate=1000.0, lowpass_order=4)),
         ("track", EstimatorConfig(contact_point="track")),
     ):
-        est = Estimator("murakami2006", cfg)
         ts = g.t[: args.stream_samples]
         ws = g.wrench[: args.stream_samples].tolist()
-        per = np.empty(len(ts))
-        clock = time.perf_counter
-        for i, (t, w) in enumerate(zip(ts.tolist(), ws)):
-            t0 = clock()
-            est.update(t, w)
-            per[i] = clock() - t0
-        contact = g.t[: len(per)] > 2.2
+        contact = ts > 2.2
+        best = None
+        for _ in range(3):  # the pass with the lowest median in contact (a shared machine)
+            est = Estimator("murakami2006", cfg)
+            per = np.empty(len(ts))
+            clock = time.perf_counter
+            for i, (t, w) in enumerate(zip(ts.tolist(), ws)):
+                t0 = clock()
+                est.update(t, w)
+                per[i] = clock() - t0
+            if best is None or np.median(per[contact]) < np.median(best[contact]):
+                best = per
+        per = best
         print(
             f"  {label:30s} median {np.median(per) * 1e6:6.1f} us   p99 {np.percentile(per, 99) * 1e6:6.1f} us"
             f"   (in contact: median {np.median(per[contact]) * 1e6:6.1f} us)"
         )
-    end_to_end(n)
-    mesh_rows(args, rng)
 
 
 def timed(fn, repeats=2):

@@ -71,6 +71,38 @@ def test_noise_only_window_is_neither_varied_nor_spread():
         assert w.h_major < w.h_noise and w.f_major < w.f_noise
 
 
+def test_noise_margin_grows_as_the_degrees_of_freedom_fall():
+    # the χ² excess per degree of freedom of a window: positive and growing as the window
+    # holds fewer independent noise samples; within 5 % of the true χ²'s from ν = 0.3 on,
+    # and not far below it down to ν = 0.001 (the Wilson–Hilferty form turns over below
+    # ν = 0.1 and went negative under 0.025)
+    from scipy.stats import chi2, norm
+
+    from softtip.core.joint import EXCITATION_Z, _chi2_excess
+
+    nu = np.logspace(-5, 3, 400)
+    tail = _chi2_excess(nu, NP) / nu
+    assert np.all(tail > 0.0) and np.all(np.diff(tail) < 0.0)
+    true = chi2.ppf(norm.cdf(EXCITATION_Z), nu) / nu - 1.0
+    big, small = nu >= 0.3, (nu >= 1e-3) & (nu < 0.3)
+    assert_allclose(tail[big], true[big], rtol=0.05)
+    assert np.all(tail[small] >= 0.65 * true[small])
+    assert [_chi2_excess(float(v), PY) for v in nu[::40]] == list(_chi2_excess(nu[::40], NP))
+
+
+def test_a_low_pass_at_7_khz_does_not_make_a_new_contact_an_area():
+    # 7 kHz with a 20 Hz low-pass: a window of the first samples of a contact holds a small
+    # fraction of one independent noise sample; its noise margin must not vanish there (it
+    # did: every contact was an area two samples after its onset, and stayed one)
+    t, w, _ = rocking_log("line", 30.0, rate=7000.0, seed=2, excite="one", duration=3.5)
+    cfg = EstimatorConfig(depth_mode="off", lowpass_hz=20.0, sample_rate=7000.0)
+    est = estimate(t, w, "murakami2006", cfg)
+    assert not np.any(est.state == 3)
+    assert np.mean(est.state[t > 2.6] == 2) == 1.0
+    stream = Estimator("murakami2006", cfg).process(t, w)
+    assert [s.state for s in stream] == list(est.state_names)
+
+
 def test_window_direction_is_n_cross_the_principal_axis():
     # h varying along e = n × d (d at 30°) gives d back, with a small standard deviation
     a = math.radians(30.0)

@@ -298,6 +298,30 @@ def test_stream_accepts_repeated_time_and_rejects_time_going_back():
         est.update(-0.001, np.zeros(6))
 
 
+@pytest.mark.parametrize(
+    "t, wrench",
+    [
+        (0.0, [0.0] * 5),  # five components
+        (0.0, [0.0] * 7),
+        (0.0, np.zeros((1, 6))),  # one row of a log, not a sample
+        (0.0, [0.0, 0.0, math.nan, 0.0, 0.0, 0.0]),
+        (0.0, [math.inf, -math.inf, 0.0, 0.0, 0.0, 0.0]),  # the sum is NaN, each one infinite
+        (math.inf, [0.0] * 6),
+        (0.0, ["1", "x", 0, 0, 0, 0]),
+        (0.0, None),
+    ],
+)
+def test_stream_rejects_a_bad_sample_and_keeps_going(t, wrench):
+    est = Estimator("murakami2006", EstimatorConfig(tare_duration=0.0))
+    with pytest.raises(ValueError, match="expected a finite time and 6 finite wrench components"):
+        est.update(t, wrench)
+    # the finite components of a sample may be as large as a float allows (their sum overflows)
+    big = [1e308, 1e308, 1e308, 0.0, 0.0, 0.0]
+    assert est.update(0.0, big).state == "none"  # accepted (a contact pending)
+    out = [est.update(0.001 * k, np.array([0.0, 0.0, -2.0, 0.0, 0.0, 0.0])) for k in range(1, 10)]
+    assert out[-1].contact_id == 1 and est.repeated_stamps == 0
+
+
 def test_repeated_stamps_batch_equals_stream():
     g = synthetic_grasp(angle_deg=30.0, seed=3)
     t = g.t.copy()

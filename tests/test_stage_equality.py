@@ -18,6 +18,7 @@ from softtip.core.contact import contact_arrays
 from softtip.estimator.contact import ContactTracker, track_contacts
 from softtip.estimator.depth import DepthTracker, depth_points, resolve_depth
 from softtip.estimator.evidence import EvidenceTracker, evidence_states
+from softtip.estimator.floats import NoiseSquares, PointGeometry
 from softtip.estimator.latch import latch_points
 from softtip.estimator.measure import effective_noise, measure, noise_correlation
 from softtip.estimator.tare import StreamTare, tare_log
@@ -142,15 +143,19 @@ def test_evidence_stage(staged):
         t, s["located"], s["begin"], s["point"], s["normal"], h, force, ms, s["noise"], s["corr"], cfg
     )
     tracker = EvidenceTracker(cfg, s["noise"], s["corr"])
+    sq = NoiseSquares(s["noise"])
     names = {1: "point", 2: "line", 3: "area"}
-    fields = ms._fields
+    eff = s["point"] - s["depth"][0][:, None] * s["normal"]  # h is taken about the point under the depth
+    geo = None
     for i in np.flatnonzero(s["located"]):
         if s["begin"][i]:
             tracker.start_segment()
-        one = type(ms)(*(float(getattr(ms, f)[i]) if np.ndim(getattr(ms, f)) else getattr(ms, f) for f in fields))
+        point, normal = tuple(s["point"][i].tolist()), tuple(s["normal"][i].tolist())
+        if geo is None or geo.point != point or geo.normal != normal:  # one geometry per held point
+            geo = PointGeometry(point, normal, sq)
         st, ev, di, an, an_std, hr, fr = tracker.step(
-            float(t[i]), tuple(s["point"][i].tolist()), tuple(s["normal"][i].tolist()), tuple(h[i].tolist()),
-            tuple(force[i].tolist()), one,
+            float(t[i]), geo, *eff[i].tolist(), *h[i].tolist(), *force[i].tolist(), float(ms.h_norm[i]),
+            float(ms.h_std[i]),
         )  # fmt: skip
         assert st == names[int(state[i])], i
         assert ev == {0: "", 1: "unconfirmed", 2: "confirmed"}[int(evidence[i])], i

@@ -72,27 +72,53 @@ def sosfilt_batch(sos: NDArray[np.float64], x: NDArray[np.float64]) -> NDArray[n
 
 
 class SosStream:
-    """The same filter as :func:`sosfilt_batch`, one sample of ``C`` channels at a time."""
+    """The same filter as :func:`sosfilt_batch`, one sample of ``C`` channels at a time.
+
+    Transposed direct-form II per section, the recurrence scipy's ``sosfilt`` uses, written
+    out for one and two sections (the 2nd- and 4th-order low-pass) and looped for more.
+    """
 
     __slots__ = ("_coef", "_zi0", "_state")
 
     def __init__(self, sos: NDArray[np.float64]):
-        self._coef = [tuple(float(v) for v in row) for row in np.asarray(sos)]
+        # b0, b1, b2, a1, a2 of each section (a0 = 1)
+        self._coef = [(float(r[0]), float(r[1]), float(r[2]), float(r[4]), float(r[5])) for r in np.asarray(sos)]
         self._zi0 = [tuple(float(v) for v in row) for row in _signal().sosfilt_zi(sos)]
-        self._state: list[list[list[float]]] | None = None
+        self._state: list[list[float]] | None = None
 
     def reset(self) -> None:
         """Forget the state; the next sample starts the filter again in steady state."""
         self._state = None
 
     def __call__(self, x: list[float]) -> list[float]:
-        """Filter one sample (a list of ``C`` floats); returns the filtered sample."""
-        if self._state is None:
-            self._state = [[[z0 * xc, z1 * xc] for (z0, z1) in self._zi0] for xc in x]
+        """Filter one sample (a sequence of ``C`` floats); returns the filtered sample."""
+        state = self._state
+        if state is None:  # the state of each channel's sections, channel after channel
+            state = self._state = [[z0 * xc, z1 * xc] for xc in x for (z0, z1) in self._zi0]
+        coef = self._coef
         out = []
-        for xc, channel in zip(x, self._state):
-            # transposed direct-form II, the recurrence scipy's sosfilt uses
-            for (b0, b1, b2, _a0, a1, a2), z in zip(self._coef, channel):
+        if len(coef) == 1:
+            b0, b1, b2, a1, a2 = coef[0]
+            for xc, z in zip(x, state):
+                y = b0 * xc + z[0]
+                z[0] = b1 * xc - a1 * y + z[1]
+                z[1] = b2 * xc - a2 * y
+                out.append(y)
+            return out
+        it = iter(state)
+        if len(coef) == 2:
+            (b0, b1, b2, a1, a2), (c0, c1, c2, d1, d2) = coef
+            for xc, z, w in zip(x, it, it):
+                y = b0 * xc + z[0]
+                z[0] = b1 * xc - a1 * y + z[1]
+                z[1] = b2 * xc - a2 * y
+                u = c0 * y + w[0]
+                w[0] = c1 * y - d1 * u + w[1]
+                w[1] = c2 * y - d2 * u
+                out.append(u)
+            return out
+        for xc in x:
+            for (b0, b1, b2, a1, a2), z in zip(coef, it):  # this channel's sections
                 y = b0 * xc + z[0]
                 z[0] = b1 * xc - a1 * y + z[1]
                 z[1] = b2 * xc - a2 * y

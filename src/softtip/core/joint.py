@@ -138,12 +138,23 @@ def _without_noise(sums, count, ax, ay, az, noise: SensorNoise):
 EXCITATION_Z = 3.0
 
 
+#: Fewest degrees of freedom the Wilson–Hilferty form is used at: below ≈ 0.1 it turns
+#: over (its excess per degree of freedom, largest there at 33, falls to 4 at ν = 0.03 and
+#: below zero under 0.025, where χ²'s own grows on: 49 at 0.1, 175 at 0.01).
+CHI2_MIN_DOF = 0.1
+
+
 def _chi2_excess(nu, xp):
     """Upper :data:`EXCITATION_Z` quantile of a χ² with ``nu`` degrees of freedom less its
     mean (Wilson–Hilferty), ``≈ z √(2ν)`` for large ``nu``: the right-skewed tail matters
     when a low-pass leaves a window few independent samples. A closed form rather than
-    ``scipy.stats.chi2.ppf``: the stream calls it per sample, in both back ends alike."""
-    nu = xp.maximum(nu, 1e-9)
+    ``scipy.stats.chi2.ppf``: the stream calls it per sample, in both back ends alike.
+
+    Below :data:`CHI2_MIN_DOF` (a window shorter than a tenth of the filter's memory, e.g.
+    the first samples of a contact at 7 kHz with a 20 Hz low-pass) the excess is held at its
+    value there, so that the excess per degree of freedom keeps growing as ``ν`` falls
+    (as χ²'s does; the form itself would turn negative and count the noise as signal)."""
+    nu = xp.maximum(nu, CHI2_MIN_DOF)
     c = 2.0 / (9.0 * nu)
     b = 1.0 - c + EXCITATION_Z * xp.sqrt(c)
     return nu * (b * b * b - 1.0)

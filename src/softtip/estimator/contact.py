@@ -32,6 +32,7 @@ run of samples between the thresholds, and per block of ~4000 untouched samples)
 from __future__ import annotations
 
 import math
+from math import sqrt
 from typing import NamedTuple
 
 import numpy as np
@@ -259,7 +260,7 @@ class ContactTracker:
         self._pending: float | None = None
         self.drift_alarm = False
 
-    def step(self, t: float, dt: float, x: list[float]) -> tuple[list[float], int]:
+    def step(self, t: float, dt: float, x: list[float]) -> tuple[tuple[float, ...] | list[float], int]:
         """Sample ``x`` (tared, filtered) at ``t``, ``dt`` s after the previous sample.
 
         Returns the wrench with the drift subtracted (when tracked) and ``0`` (no contact),
@@ -270,13 +271,14 @@ class ContactTracker:
         if not self.drift_alarm and b[0] * b[0] + b[1] * b[1] + b[2] * b[2] > self.on * self.on:
             self.drift_alarm = True
         fx, fy, fz = x[0] - b[0], x[1] - b[1], x[2] - b[2]
-        dev = math.sqrt(fx * fx + fy * fy + fz * fz)
-        if cfg.track_drift:
-            y = [fx, fy, fz, x[3] - b[3], x[4] - b[4], x[5] - b[5]]
+        dev = sqrt(fx * fx + fy * fy + fz * fz)
+        track = cfg.track_drift
+        if track:
+            y = (fx, fy, fz, x[3] - b[3], x[4] - b[4], x[5] - b[5])
             f = dev
         else:
             y = x
-            f = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
+            f = sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
         code = 0
         if self.in_contact:
             if f >= self.off:
@@ -293,9 +295,9 @@ class ContactTracker:
             self._pending = t
             if dt >= cfg.contact_min_duration:  # (t − t) + dt, as in the batch
                 code = self._start()
-        if (not code and self._pending is None) if cfg.track_drift else dev < self.on:  # untouched
+        if (not code and self._pending is None) if track else dev < self.on:  # untouched
             self._follow(min(dt / cfg.drift_time_constant, _MAX_ALPHA), x)
-        else:
+        elif self._block:
             self._block = 0
         return y, code
 

@@ -37,10 +37,11 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from math import cos, sin, sqrt
 
 import numpy as np
 
-from softtip.core._xp import NP, PY
+from softtip.core._xp import NP
 from softtip.core.evidence import (
     N_SUMS,
     _div,
@@ -49,12 +50,12 @@ from softtip.core.evidence import (
     tangent_noise_kernel,
     window_constants,
     window_direction_floats,
-    window_eigen_floats,
     window_kernel,
 )  # fmt: skip
 from softtip.core.noise import SensorNoise
 from softtip.core.spin import tangent_frame_kernel
 from softtip.estimator.config import EstimatorConfig
+from softtip.estimator.floats import NoiseSquares, PointGeometry, sample_direction
 
 __all__ = ["evidence_states", "EvidenceTracker"]
 
@@ -241,22 +242,25 @@ class EvidenceTracker:
 
     Running sums of the products since the segment's start and, for each sample of the last
     ``evidence_window`` seconds, its time and the sums before it: window sums are
-    differences, as in the batch. Plain float arithmetic (:func:`softtip.core.evidence.window_floats`),
-    O(1) per sample.
+    differences, as in the batch. Plain float arithmetic (:func:`softtip.core.evidence.window_floats`
+    written out: the same operations, so the same results to rounding), O(1) per sample.
     """
 
     def __init__(self, config: EstimatorConfig, noise: SensorNoise, corr: float):
         self.config = config
         self.noise = noise
         self.corr = corr
-        self._at: tuple | None = None
-        self._point: tuple | None = None
-        self._frame: tuple = ()
-        self._noise_terms: tuple = ()
+        self._sq = NoiseSquares(noise)
+        self._geo: PointGeometry | None = None
         self._constants: dict[float, tuple[float, float, float]] = {}
         enter, leave = config.area_ratio
         self._enter, self._leave = enter, leave
+        self._on = config.line_evidence
+        self._window = config.evidence_window
+        self._h_sigmas, self._h_min = config.h_sigmas, config.h_min
         self._fmin2 = config.excitation_min * config.excitation_min
+        self._f_ratio = config.excitation_ratio
+        self._max_std = config.evidence_max_angle_std
         self._reset2 = config.evidence_reset_distance * config.evidence_reset_distance
         self.start_segment()
 
@@ -269,78 +273,107 @@ class EvidenceTracker:
         self._sig = False
         self._anchor: tuple | None = None
 
-    def step(self, t, point, normal, h, force, ms):
+    def step(self, t, geo: PointGeometry, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, h_std):
         """``(state, evidence, direction, angle, angle_std, h_ratio, f_ratio)`` of a located
-        sample; ``ms`` is its :class:`~softtip.estimator.measure.Measurement`."""
-        cfg = self.config
-        if not cfg.line_evidence:
-            if ms.line:
-                return "line", "unconfirmed", (ms.dx, ms.dy, ms.dz), ms.angle, ms.angle_std, math.nan, math.nan
+        sample at the contact point of ``geo``, with ``h`` (N·m) taken about ``e`` (m; the
+        point, or the effective point under the depth), the force ``f`` (N), ``hn = |h|``
+        and ``h_std`` ``h``'s noise level (N·m) of the measurement stage."""
+        if not self._on:
+            thr = self._h_sigmas * h_std
+            if hn > (self._h_min if self._h_min > thr else thr):  # the measurement's line test
+                dx, dy, dz, angle, a = sample_direction(hx, hy, hz, hn, ex, ey, ez, geo, self._sq)
+                return "line", "unconfirmed", (dx, dy, dz), angle, a, math.nan, math.nan
             return "point", "", _NAN3, math.nan, math.nan, math.nan, math.nan
+        point = geo.point
         anchor = self._anchor
         if anchor is None:
             self._anchor = point
-        else:
+        elif point is not anchor:
             dx, dy, dz = point[0] - anchor[0], point[1] - anchor[1], point[2] - anchor[2]
             if dx * dx + dy * dy + dz * dz > self._reset2:  # the contact moved: a new segment
                 self.start_segment()
                 self._anchor = point
-        if normal != self._at or point != self._point:  # the point is held: once per latch
-            self._at, self._point = normal, point
-            self._frame = tangent_frame_kernel(*normal, PY)
-            self._noise_terms = tangent_noise_kernel(*point, *self._frame, self.noise)
+        if geo is not self._geo:  # per point: once per latch
+            self._geo = geo
+            self._noise_terms = tangent_noise_kernel(*point, *geo.frame, self.noise)
             self._noise_k = noise_constants(self._noise_terms)
-        e1x, e1y, e1z, e2x, e2y, e2z = self._frame
-        hx, hy, hz = h
-        fx, fy, fz = force
+        e1x, e1y, e1z, e2x, e2y, e2z = geo.frame
         h1 = hx * e1x + hy * e1y + hz * e1z
         h2 = hx * e2x + hy * e2y + hz * e2z
         f1 = fx * e1x + fy * e1y + fz * e1z
         f2 = fx * e2x + fy * e2y + fz * e2z
         hist = self._hist
-        cum = self._cum
+        c0, c1, c2, c3, c4, c5, c6, c7, c8, c9 = cum = self._cum
         hist.append((t, cum))
-        c = self._cum = (
-            cum[0] + h1, cum[1] + h2, cum[2] + h1 * h1, cum[3] + h1 * h2, cum[4] + h2 * h2,
-            cum[5] + f1, cum[6] + f2, cum[7] + f1 * f1, cum[8] + f1 * f2, cum[9] + f2 * f2,
-        )  # fmt: skip
-        start = t - cfg.evidence_window
+        c0, c1, c2, c3, c4 = c0 + h1, c1 + h2, c2 + h1 * h1, c3 + h1 * h2, c4 + h2 * h2
+        c5, c6, c7, c8, c9 = c5 + f1, c6 + f2, c7 + f1 * f1, c8 + f1 * f2, c9 + f2 * f2
+        self._cum = (c0, c1, c2, c3, c4, c5, c6, c7, c8, c9)
+        start = t - self._window
         while hist and hist[0][0] <= start:
             hist.popleft()
-        if hist:
-            o = hist[0][1]
-            sums = (
-                c[0] - o[0], c[1] - o[1], c[2] - o[2], c[3] - o[3], c[4] - o[4],
-                c[5] - o[5], c[6] - o[6], c[7] - o[7], c[8] - o[8], c[9] - o[9],
-            )  # fmt: skip
-        else:  # an empty window (t − T rounds to t) has zero sums, as in the batch
-            sums = (0.0,) * N_SUMS
         count = float(len(hist))
         k = self._constants.get(count)
         if k is None:
             k = self._constants[count] = window_constants(count, self.corr)
         tail, keep, nu = k
         s_big, s2, f_n = self._noise_k
-        e = window_eigen_floats(sums, count, self._noise_terms, keep)
-        major, minor, f_major, f_minor = e[0], e[1], e[8], e[9]
+        h11, h12, h22, f11, f12, f22 = self._noise_terms
+        # the covariances and eigenvalues of window_kernel; window sums are differences
+        if hist:
+            o = hist[0][1]
+            s1, s2_, s11, s12, s22 = c0 - o[0], c1 - o[1], c2 - o[2], c3 - o[3], c4 - o[4]
+            t1, t2, t11, t12, t22 = c5 - o[5], c6 - o[6], c7 - o[7], c8 - o[8], c9 - o[9]
+            m1, m2 = s1 / count, s2_ / count
+            c11 = s11 / count - m1 * m1 - keep * h11
+            c12 = s12 / count - m1 * m2 - keep * h12
+            c22 = s22 / count - m2 * m2 - keep * h22
+            n1, n2 = t1 / count, t2 / count
+            g11 = t11 / count - n1 * n1 - keep * f11
+            g12 = t12 / count - n1 * n2 - keep * f12
+            g22 = t22 / count - n2 * n2 - keep * f22
+        else:  # an empty window (t − T rounds to t): no covariance, as the batch's 0 / 0
+            c11 = c12 = c22 = g11 = g12 = g22 = math.nan
+        half = 0.5 * (c11 - c22)
+        mean = 0.5 * (c11 + c22)
+        root = sqrt(half * half + c12 * c12)
+        major, minor = mean + root, mean - root
+        gh = 0.5 * (g11 - g22)
+        gm = 0.5 * (g11 + g22)
+        gr = sqrt(gh * gh + g12 * g12)
+        f_major, f_minor = gm + gr, gm - gr
+        # clamped at zero (NaN too)
+        if not major > 0.0:
+            major = 0.0
+        if not minor > 0.0:
+            minor = 0.0
+        if not f_major > 0.0:
+            f_major = 0.0
+        if not f_minor > 0.0:
+            f_minor = 0.0
         h_noise, f_noise = tail * s_big, tail * f_n
         # _decide, unrolled (NaN comparisons are False, as in the batch)
         varied = major > h_noise
-        h_ratio = _div(minor, major) if varied else math.nan
-        f_ratio = _div(f_minor, f_major) if f_major > f_noise else math.nan
+        if varied:
+            h_ratio = minor / major if major != 0.0 else _div(minor, major)
+        else:
+            h_ratio = math.nan
+        if f_major > f_noise:
+            f_ratio = f_minor / f_major if f_major != 0.0 else _div(f_minor, f_major)
+        else:
+            f_ratio = math.nan
         if minor > h_noise and h_ratio >= self._enter:
             self._verdict = _AREA
         elif (
             varied and h_ratio < self._leave and f_minor > f_noise
-            and f_minor >= cfg.excitation_ratio * f_major and f_minor >= self._fmin2
+            and f_minor >= self._f_ratio * f_major and f_minor >= self._fmin2
         ):  # fmt: skip
             self._verdict = _LINE
+            e = (major, minor, c11, c12, c22, root, g11, g12, f_major, f_minor, g22, half)
             w_angle, w_std = window_direction_floats(e, s2, nu, self.corr)
-            if w_std <= cfg.evidence_max_angle_std:
+            if w_std <= self._max_std:
                 self._held = (w_angle, w_std)
-        hn = ms.h_norm
-        thr = cfg.h_sigmas * ms.h_std
-        thr = thr if thr > cfg.h_min else cfg.h_min
+        thr = self._h_sigmas * h_std
+        thr = thr if thr > self._h_min else self._h_min
         if hn > thr:
             self._sig = True
         elif hn <= SIG_LEAVE * thr:
@@ -350,15 +383,16 @@ class EvidenceTracker:
             return "area", "", _NAN3, math.nan, math.nan, h_ratio, f_ratio
         if verdict == _LINE and self._held is not None:
             angle, angle_std = self._held
-            ca, sa = math.cos(angle), math.sin(angle)
+            ca, sa = cos(angle), sin(angle)
             d = (ca * e1x + sa * e2x, ca * e1y + sa * e2y, ca * e1z + sa * e2z)
             return "line", "confirmed", d, angle, angle_std, h_ratio, f_ratio
         if not self._sig:
             return "point", "", _NAN3, math.nan, math.nan, h_ratio, f_ratio
-        a = ms.angle_std
-        v = a * a + _div(minor, hn * hn)
-        std = math.sqrt(v) if v >= 0.0 else math.nan
+        # the sample's own direction, the window's across-axis spread counted as model error
+        dx, dy, dz, angle, a = sample_direction(hx, hy, hz, hn, ex, ey, ez, geo, self._sq)
+        v = hn * hn
+        v = a * a + (minor / v if v != 0.0 else _div(minor, v))
         return (
-            "line", "confirmed" if verdict == _LINE else "unconfirmed", (ms.dx, ms.dy, ms.dz), ms.angle, std, h_ratio,
-            f_ratio,
+            "line", "confirmed" if verdict == _LINE else "unconfirmed", (dx, dy, dz), angle,
+            sqrt(v) if v >= 0.0 else math.nan, h_ratio, f_ratio,
         )  # fmt: skip

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from math import isfinite, sqrt
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -27,17 +28,18 @@ from softtip.estimator.contact import (
 )
 from softtip.estimator.depth import DepthTracker, resolve_depth
 from softtip.estimator.evidence import EvidenceTracker
+from softtip.estimator.floats import NoiseSquares, PointGeometry
 from softtip.estimator.joint import JointTracker
 from softtip.estimator.latch import LatchTracker
-from softtip.estimator.measure import effective_noise, measure, noise_correlation
+from softtip.estimator.measure import effective_noise, noise_correlation
 from softtip.estimator.results import EstimatorWarning, SampleEstimate
 from softtip.estimator.tare import StreamTare, TareReport
 
 __all__ = ["Estimator"]
 
 _NAN3 = (math.nan, math.nan, math.nan)
-_NAN4 = (math.nan,) * 4
 _NAN6 = (math.nan,) * 6
+_new_estimate = tuple.__new__  # SampleEstimate with every field given, without its __new__'s frame
 
 
 class Estimator:
@@ -81,6 +83,7 @@ class Estimator:
             self._sos = lowpass_sos(cfg.lowpass_hz, cfg.sample_rate, cfg.lowpass_order)
         self._noise = effective_noise(cfg.noise, self._sos)
         self._track = cfg.contact_point == "track"
+        self._relatch = cfg.relatch_distance is not None
         self._tare = StreamTare(cfg)
         self._latch = LatchTracker(self.tip, cfg)
         self._evidence = EvidenceTracker(cfg, self._noise, noise_correlation(self._sos))
@@ -88,6 +91,8 @@ class Estimator:
         if cfg.contact_point == "joint":
             self._joint = JointTracker(self.tip, cfg, self._noise, noise_correlation(self._sos))
         self._contacts = ContactTracker(cfg, self._noise)
+        self._sq = NoiseSquares(self._noise)
+        self._geo = PointGeometry((math.nan,) * 3, (0.0, 0.0, 1.0), self._sq)  # none yet
         self._depth = None if cfg.depth is None else DepthTracker(cfg, self._noise, noise_correlation(self._sos))
         self.reset()
 
@@ -170,32 +175,38 @@ class Estimator:
         """
         t = float(t)
         try:
-            w = [float(v) for v in (wrench.tolist() if isinstance(wrench, np.ndarray) else wrench)]
+            w0, w1, w2, w3, w4, w5 = wrench.tolist() if type(wrench) is np.ndarray else wrench
+            w = [float(w0), float(w1), float(w2), float(w3), float(w4), float(w5)]
         except (TypeError, ValueError):
             w = []
-        if len(w) != 6 or not all(math.isfinite(v) for v in w) or not math.isfinite(t):
+        # one test for the common case: a sum of finite numbers is finite unless it
+        # overflows, which the per-component test then tells apart
+        if not (len(w) == 6 and isfinite(w[0] + w[1] + w[2] + w[3] + w[4] + w[5] + t)) and not (
+            len(w) == 6 and all(isfinite(v) for v in w) and isfinite(t)
+        ):
             raise ValueError(f"expected a finite time and 6 finite wrench components, got t={t!r}, wrench={wrench!r}")
         dt = 0.0
-        if self._t_prev is not None:
-            if t < self._t_prev:
-                raise ValueError(f"time must not go back: {t!r} s after {self._t_prev!r} s")
-            if t == self._t_prev:
+        t_prev = self._t_prev
+        if t_prev is not None:
+            if t < t_prev:
+                raise ValueError(f"time must not go back: {t!r} s after {t_prev!r} s")
+            if t == t_prev:
                 self.repeated_stamps += 1
-            dt = t - self._t_prev
+            dt = t - t_prev
         self._t_prev = t
 
         tare = self._tare
-        was_taring = tare.bias is None
-        bias = tare.update(t, w)
+        bias = tare.bias
         if bias is None:
-            return self._none(t, (math.nan,) * 6, taring=True)
-        if was_taring:
+            bias = tare.update(t, w)
+            if bias is None:
+                return self._none(t, (math.nan,) * 6, taring=True)
             for msg in tare.report.warnings:
                 self._warn(msg)
             if self._filter is not None:  # the tare samples prime the filter, as in the batch
                 for b in tare.release():
                     self._filter([v - bb for v, bb in zip(b, bias)])
-        x = [v - b for v, b in zip(w, bias)]
+        x = [w[0] - bias[0], w[1] - bias[1], w[2] - bias[2], w[3] - bias[3], w[4] - bias[4], w[5] - bias[5]]
         if self._filter is not None:
             x = self._filter(x)
         return self._step(t, dt, x)
@@ -246,18 +257,19 @@ class Estimator:
             self._first_contact = contacts.contact_id
             self._lead = self._tare.report.source == "tare"
         fx, fy, fz, mx, my, mz = x
-        fn = math.sqrt(fx * fx + fy * fy + fz * fz)
+        fn = sqrt(fx * fx + fy * fy + fz * fz)
         depth = self._depth
         if depth is not None and code == 2:
             depth.start_contact()
 
         tip = self.tip
         latched = fallback = relatched = joint_fb = False
-        stats = _NAN4
+        j0 = j1 = j2 = j3 = math.nan
         if self._track:
             if code == 2:
                 self._evidence.start_segment()
             rx, ry, rz, nx, ny, nz, _, valid = contact_kernel(tip, *x, xp=PY)
+            point, normal = (rx, ry, rz), (nx, ny, nz)
             if not valid:
                 if depth is not None:
                     depth.gap()
@@ -269,16 +281,20 @@ class Estimator:
                 self._start_segment(fn, t)
                 if self._joint is not None:
                     self._joint.start_contact()
-            else:
+            elif self._relatch:
                 moved, sc = self._latch.drifted(fn, x, sc)
                 if moved:
                     relatched = True
                     self._start_segment(fn, t)
-            point, latched, fallback, sc = self._latch.step(t, fn, x, sc)
+            latch = self._latch
+            if latch.point is not None and sc is None:  # held (LatchTracker.step returns it as is)
+                point, latched, fallback = latch.point, True, latch.is_fallback
+            else:
+                point, latched, fallback, sc = latch.step(t, fn, x, sc)
             if latched:
                 self._had_latch = True
             if self._joint is not None:
-                point, stats, moved = self._joint.step(t, x, point, sc)
+                point, (j0, j1, j2, j3), moved = self._joint.step(t, x, point, sc)
                 if moved:
                     latched = fallback = False
                 joint_fb = not moved
@@ -286,29 +302,51 @@ class Estimator:
                 if depth is not None:
                     depth.gap()
                 return self._none(t, x, pulling=True, relatched=relatched)
+            if type(point) is not tuple:
+                point = tuple(point)
             rx, ry, rz = point
-            nx, ny, nz = tip._normal_kernel(rx, ry, rz, PY)
 
+        geo = self._geo
+        if point is not geo.point:  # a new point (while a latch holds: once per contact)
+            if self._track:
+                geo = self._geo = PointGeometry(point, normal, self._sq)
+            else:
+                geo = self._geo = PointGeometry.on_tip(tip, point, self._sq)
+        nx, ny, nz = geo.nx, geo.ny, geo.nz
         if depth is None:
             delta, delta_std, from_data = 0.0, 0.0, False
             ex, ey, ez = rx, ry, rz
         else:  # friction acts at r − δ n, inside the skin
-            delta, delta_std, from_data = depth.step(t, x, (rx, ry, rz), (nx, ny, nz))
+            delta, delta_std, from_data = depth.step(t, x, point, geo.normal)
             ex, ey, ez = rx - delta * nx, ry - delta * ny, rz - delta * nz
-        ms = measure(fx, fy, fz, mx, my, mz, ex, ey, ez, nx, ny, nz, self._noise, cfg.h_sigmas, cfg.h_min, None, PY)
-        if not ms.pushing:
+        if not fx * nx + fy * ny + fz * nz < 0.0:  # not pushing
             return self._none(t, x, pulling=True, relatched=relatched)
-        h = (ms.hx, ms.hy, ms.hz)
+        # the measurement stage (softtip.estimator.measure.measure), written out: q = m − r × f
+        # about the effective point, σ = q · n, h = q − σ n, and h's noise level
+        qx = mx - (ey * fz - ez * fy)
+        qy = my - (ez * fx - ex * fz)
+        qz = mz - (ex * fy - ey * fx)
+        sigma = qx * nx + qy * ny + qz * nz
+        hx, hy, hz = qx - sigma * nx, qy - sigma * ny, qz - sigma * nz
+        hn = sqrt(hx * hx + hy * hy + hz * hz)
+        sq = self._sq
+        e1x, e1y, e1z, e2x, e2y, e2z = geo.frame
+        cx, cy, cz = e1y * ez - e1z * ey, e1z * ex - e1x * ez, e1x * ey - e1y * ex
+        v = geo.m1 + sq.fx * cx * cx + sq.fy * cy * cy + sq.fz * cz * cz
+        cx, cy, cz = e2y * ez - e2z * ey, e2z * ex - e2x * ez, e2x * ey - e2y * ex
+        v = v + (geo.m2 + sq.fx * cx * cx + sq.fy * cy * cy + sq.fz * cz * cz)
+        h_std = sqrt(v) if v >= 0.0 else math.nan
+        h = (hx, hy, hz)
         state, evidence, d, angle, angle_std, h_ratio, f_ratio = self._evidence.step(
-            t, (rx, ry, rz), (nx, ny, nz), h, (fx, fy, fz), ms
+            t, geo, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, h_std
         )
         if self._lead:
             self._lead = False
-        return SampleEstimate(
-            t, state, tuple(x), (rx, ry, rz), (nx, ny, nz), ms.sigma, h, ms.h_norm, ms.h_std, d,
-            angle, angle_std, latched, fallback, False, False, relatched, delta, *stats, joint_fb,
+        return _new_estimate(SampleEstimate, (
+            t, state, tuple(x), point, geo.normal, sigma, h, hn, h_std, d,
+            angle, angle_std, latched, fallback, False, False, relatched, delta, j0, j1, j2, j3, joint_fb,
             contacts.contact_id, contacts.drift_before, delta_std, from_data, evidence, h_ratio, f_ratio,
-        )  # fmt: skip
+        ))  # fmt: skip
 
     def process(self, t: ArrayLike, wrench: ArrayLike) -> list[SampleEstimate]:
         """Feed a sequence of samples through :meth:`update`; returns one estimate each."""

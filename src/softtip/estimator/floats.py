@@ -1,0 +1,96 @@
+"""The stream's per-sample arithmetic on Python floats, written out.
+
+:class:`~softtip.estimator.stream.Estimator` handles one sample in a few microseconds, so the
+kernels of the batch (:func:`softtip.estimator.measure.measure` with the back end
+:data:`softtip.core._xp.PY`) are written out here for it: the same IEEE-754 operations in the same
+order, so the results are the same bits, without a function call per operation. What depends
+only on the contact point (its normal, the tangent frame, the moment-noise part of ``h``'s
+noise level) is computed once per point in :class:`PointGeometry`: while a latch holds, once
+per contact.
+"""
+
+from __future__ import annotations
+
+import math
+from math import atan2, sqrt
+
+from softtip.core._xp import PY
+from softtip.core.fingertip import Fingertip
+from softtip.core.noise import SensorNoise
+from softtip.core.spin import tangent_frame_kernel
+
+__all__ = ["NoiseSquares", "PointGeometry", "sample_direction"]
+
+_PI = math.pi
+_HALF_PI = 0.5 * math.pi
+
+
+class NoiseSquares:
+    """The variances of a :class:`~softtip.core.noise.SensorNoise` (N², N²·m²), as the noise
+    kernels of :mod:`softtip.core.noise` form them (``s * s``)."""
+
+    __slots__ = ("fx", "fy", "fz", "mx", "my", "mz")
+
+    def __init__(self, noise: SensorNoise):
+        (self.fx, self.fy, self.fz), (self.mx, self.my, self.mz) = (
+            tuple(s * s for s in noise.force_std),
+            tuple(s * s for s in noise.moment_std),
+        )
+
+    def quad(self, vx: float, vy: float, vz: float, rx: float, ry: float, rz: float) -> float:
+        """``vᵀ Σ_h v`` at the contact point ``r`` (:func:`softtip.core.noise._quad_kernel`)."""
+        cx = vy * rz - vz * ry
+        cy = vz * rx - vx * rz
+        cz = vx * ry - vy * rx
+        return (
+            self.mx * vx * vx + self.my * vy * vy + self.mz * vz * vz
+            + self.fx * cx * cx + self.fy * cy * cy + self.fz * cz * cz
+        )  # fmt: skip
+
+
+class PointGeometry:
+    """What the stages need of a contact point ``point`` (m) with outward normal ``normal``:
+    the tangent frame ``e1, e2`` (manual §3.4) and the moment-noise parts ``m1``, ``m2`` of
+    ``vᵀ Σ_h v`` for ``v = e1, e2`` (the first three terms of
+    :func:`softtip.core.noise._quad_kernel`, which do not depend on the point).
+
+    Stages that keep their own per-point terms recompute them when handed a geometry that
+    ``is not`` the last one.
+    """
+
+    __slots__ = ("point", "normal", "nx", "ny", "nz", "frame", "e1x", "e1y", "e1z", "e2x", "e2y", "e2z", "m1", "m2")
+
+    def __init__(self, point: tuple[float, float, float], normal: tuple[float, float, float], sq: NoiseSquares):
+        self.point = point
+        self.normal = normal
+        nx, ny, nz = self.nx, self.ny, self.nz = normal
+        self.frame = tangent_frame_kernel(nx, ny, nz, PY)
+        e1x, e1y, e1z, e2x, e2y, e2z = self.e1x, self.e1y, self.e1z, self.e2x, self.e2y, self.e2z = self.frame
+        self.m1 = sq.mx * e1x * e1x + sq.my * e1y * e1y + sq.mz * e1z * e1z
+        self.m2 = sq.mx * e2x * e2x + sq.my * e2y * e2y + sq.mz * e2z * e2z
+
+    @classmethod
+    def on_tip(cls, tip: Fingertip, point: tuple[float, float, float], sq: NoiseSquares) -> PointGeometry:
+        """The geometry of a point on the skin of ``tip`` (its normal from the tip)."""
+        return cls(point, tip._normal_kernel(point[0], point[1], point[2], PY), sq)
+
+
+def sample_direction(hx, hy, hz, hn, rx, ry, rz, geo: PointGeometry, sq: NoiseSquares):
+    """A sample's own direction ``d = n × h / |n × h|``, its angle in the tangent frame and
+    the angle's first-order standard deviation from the sensor noise (rad), with ``h``
+    taken about ``r`` (m) and ``hn = |h|``: ``(dx, dy, dz, angle, angle_std)`` as
+    :func:`softtip.estimator.measure.measure` gives them."""
+    nx, ny, nz = geo.nx, geo.ny, geo.nz
+    cx = ny * hz - nz * hy
+    cy = nz * hx - nx * hz
+    cz = nx * hy - ny * hx
+    cn = sqrt(cx * cx + cy * cy + cz * cz)
+    if cn != 0.0:
+        dx, dy, dz = cx / cn, cy / cn, cz / cn
+    else:
+        dx, dy, dz = PY.div(cx, cn), PY.div(cy, cn), PY.div(cz, cn)
+    a = atan2(dx * geo.e2x + dy * geo.e2y + dz * geo.e2z, dx * geo.e1x + dy * geo.e1y + dz * geo.e1z)
+    angle = a - _PI * (a > _HALF_PI) + _PI * (a <= -_HALF_PI)
+    q = sq.quad(dx, dy, dz, rx, ry, rz)
+    s = sqrt(q) if q >= 0.0 else math.nan
+    return dx, dy, dz, angle, (s / hn if hn != 0.0 else PY.div(s, hn))
