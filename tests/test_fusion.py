@@ -301,6 +301,31 @@ def test_fused_std_counts_the_error_both_fingers_share():
     assert z_naive > 2.0
 
 
+def test_fused_std_propagation():
+    """The fused direction's variance from the fingers' angle stds: independent (ρ = 0),
+    fully shared (ρ = 1: no better than the better finger), plus the unconfirmed term."""
+    gr, pr = _finger("right", R_RIGHT, 30.0, seed=1)
+    gl, pl = _finger("left", R_LEFT, -30.0, seed=2)
+    logs = [("right", gr.t, gr.wrench, pr), ("left", gl.t, gl.wrench, pl)]
+    runs = {rho: fuse_logs(logs, "murakami2006", finger_correlation=rho, unconfirmed_std=0.0) for rho in (0.0, 1.0)}
+    fused, fingers = runs[0.0]
+    late = (fused.t > 7.0) & (fused.grasp_names == "parallel_lines")
+    assert late.sum() > 50
+    ib = np.searchsorted(fingers[1].estimates.t, fused.t[late], side="right") - 1
+    sa, sb = fingers[0].estimates.angle_std[late], fingers[1].estimates.angle_std[ib]
+    assert_allclose(fused.direction_std[late], 1.0 / np.sqrt(sa**-2 + sb**-2), rtol=1e-12)
+    assert_allclose(runs[1.0][0].direction_std[late], (1 / sa + 1 / sb) / (sa**-2 + sb**-2), rtol=1e-12)
+    assert np.all(runs[1.0][0].direction_std[late] >= np.minimum(sa, sb) * (1 - 1e-12))
+    # both lines unconfirmed here: the whole model-error term adds in quadrature
+    assert (fused.evidence[late] == "unconfirmed").all()
+    su = math.radians(5.0)
+    withu, _ = fuse_logs(logs, "murakami2006", finger_correlation=1.0, unconfirmed_std=su)
+    assert_allclose(withu.direction_std[late] ** 2, runs[1.0][0].direction_std[late] ** 2 + su**2, rtol=1e-12)
+    with pytest.raises(ValueError, match="finger_correlation"):
+        fuse(fingers, finger_correlation=1.5)
+
+
+@pytest.mark.slow
 def test_fused_std_of_a_rocked_edge_is_calibrated():
     """A cube's edge rocked about two axes (confirmed lines): error / std near 1, neither
     overconfident nor several times too cautious."""
