@@ -32,11 +32,19 @@ import math
 import numpy as np
 
 import softtip
-from softtip.fusion import Finger, PoseSeries, fuse
 from softtip.axial import axial_difference
 from softtip.estimator import EstimatorConfig
+from softtip.fusion import Finger, PoseSeries, fuse
 from softtip.noise import NANO17, SensorNoise
-from softtip.sim import ContactModel, ContactParams, Cylinder, Plate, Wedge, discretise_skin, stick
+from softtip.sim import (
+    ContactModel,
+    ContactParams,
+    Cylinder,
+    Plate,
+    Wedge,
+    discretise_skin,
+    stick,
+)
 from softtip.sim.hand import simulate_two_finger
 from softtip.sim.sensor import SensorModel
 
