@@ -407,3 +407,34 @@ def test_fuse_rerun_errors_leave_no_output(simulated, tmp_path):
     r = _run(*args, "--rerun-save", tmp_path / "v.rrd", "--truth", bad)
     assert r.returncode == 2 and "truth.json: not a softtip two-finger truth file" in r.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["truth.json"]
+
+
+@pytest.mark.parametrize(("left_angle", "left_kw", "grasp", "strips"), [(45.0, None, "crossing_lines", 2), (0.0, {"h_peak": 0.0}, "line_and_face", 1)])
+def test_rerun_view_of_crossing_lines_and_of_a_line_and_a_face(tmp_path, left_angle, left_kw, grasp, strips):
+    pytest.importorskip("rerun")
+    from softtip.fusion.viz import log_fused
+
+    right_angle = 45.0 if grasp == "crossing_lines" else 0.0
+    gr, pr = _finger("right", R_RIGHT, right_angle, seed=1)
+    gl, pl = _finger("left", R_LEFT, left_angle, seed=2, **(left_kw or {}))
+    fused, fingers = fuse_logs([("right", gr.t, gr.wrench, pr), ("left", gl.t, gl.wrench, pl)], "murakami2006")
+    k = int(np.flatnonzero(fused.grasp_names == grasp)[-1])
+    log_fused(fused, fingers, softtip.murakami2006(), save=tmp_path / "v.rrd", max_frames=len(fused))
+    lines = _strips(tmp_path / "v.rrd", "/hand/fused/line")
+    from rerun.chunk import RrdReader
+
+    drawn = None
+    for chunk in RrdReader(tmp_path / "v.rrd").store().stream():
+        if chunk.entity_path == "/hand/fused/line":
+            batch = chunk.to_record_batch()
+            if "LineStrips3D:strips" in batch.schema.names:
+                for t, s in zip(batch.column("t").to_pylist(), batch.column("LineStrips3D:strips").to_pylist()):
+                    if t.total_seconds() == pytest.approx(fused.t[k], abs=1e-9):
+                        drawn = [np.asarray(x) for x in s]
+    assert drawn is not None and len(drawn) == strips and fused.t[k] in lines
+    # each line drawn passes through a contact and runs along a fused direction
+    dirs = [fused.direction[k]] + ([fused.direction_b[k]] if strips == 2 else [])
+    for strip, d, r in zip(drawn, dirs, (fused.point_a[k], fused.point_b[k])):
+        assert_allclose(strip.mean(axis=0), r, atol=1e-6)
+        u = (strip[-1] - strip[0]) / np.linalg.norm(strip[-1] - strip[0])
+        assert abs(u @ d) == pytest.approx(1.0, abs=1e-6)
