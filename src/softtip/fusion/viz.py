@@ -29,14 +29,20 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from softtip.fingertip import Fingertip
+from softtip import Fingertip
 from softtip.fusion.fuse import Finger, FusedGrasp
-from softtip.viz import _edge_line, import_rerun, surface_mesh
+from softtip.viz import import_rerun, surface_mesh
 
 __all__ = ["log_fused", "read_truth"]
 
 _LINE_COLOUR = [40, 220, 90]
 _TRUTH_COLOUR = [255, 255, 255]
+
+
+def _edge_line(tip: Fingertip, r: NDArray, d: NDArray, half_length: float) -> NDArray:
+    """(21, 3) the line ``r + s d``, ``|s| ≤ half_length``, projected on the skin (sensor frame)."""
+    s = np.linspace(-half_length, half_length, 21)[:, None]
+    return tip.project(np.asarray(r) + s * np.asarray(d))
 
 
 def _plane_patch(centre: NDArray, d: NDArray, n: NDArray, half: float) -> NDArray:
