@@ -12,7 +12,7 @@ method | error with softtip's extension``. Sections:
 * **depth** (issue 5 items 3 and 4, deep penetration): a tangential friction load across
   the line (0.25 and 0.5 of the normal force) applied after the grasp, on top of the
   papers' joint disturbance; ``latch`` (the papers') vs ``latch`` +
-  :data:`~softtip.depth.MURAKAMI2006_DEPTH`, ``track``, ``joint`` and ``joint`` + depth.
+  :data:`~softtip.core.depth.MURAKAMI2006_DEPTH`, ``track``, ``joint`` and ``joint`` + depth.
   Skin with the shear layer stiffened to G = 2 MPa (side walls; with the default E/3
   layer the simulator cannot hold a load across a thin plate, see
   :mod:`softtip.sim.scenario`).
@@ -62,10 +62,10 @@ import time
 import numpy as np
 
 from softtip import EstimatorConfig, axial_difference, estimate, murakami2006
-from softtip.depth import MURAKAMI2006_DEPTH, DepthLaw, lever_depth
-from softtip.noise import NANO17, SensorNoise
-from softtip.spin import direction_angle
-from softtip.sim import NANO17 as SIM_SENSOR
+from softtip.core.depth import MURAKAMI2006_DEPTH, DepthLaw, lever_depth
+from softtip.core.noise import NANO17, SensorNoise
+from softtip.core.spin import direction_angle
+from softtip.sim import NANO17_SENSOR as SIM_SENSOR
 from softtip.sim import (
     ContactModel,
     CylinderRim,
@@ -83,7 +83,7 @@ from softtip.sim import (
     rock_scenario,
     simulate_grasp,
 )
-from softtip.units import KGF
+from softtip.core.units import KGF
 
 from bench_fusion import fusion_section  # noqa: E402  (benchmarks/ is the script's folder)
 
@@ -245,7 +245,7 @@ def start_section(seed: int = 1) -> None:
 
 def noise_section() -> None:
     """Joint mode against the noise model, on synthetic grasps (no simulator) at kHz rates."""
-    from softtip.synthetic import synthetic_grasp
+    from softtip.sim.synthetic import synthetic_grasp
 
     tip = TIP
     centre = np.array([0.0, 0.0, tip.length])
@@ -376,7 +376,7 @@ def fit_depth() -> DepthLaw:
 def stream_cost() -> None:
     print("\n### streaming cost per sample in contact (median, µs)\n")
     from softtip import Estimator
-    from softtip.synthetic import synthetic_grasp
+    from softtip.sim.synthetic import synthetic_grasp
 
     g = synthetic_grasp(angle_deg=30.0, seed=1)
     for label, cfg in (

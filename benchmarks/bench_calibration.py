@@ -29,13 +29,13 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from softtip import estimate, murakami2006
-from softtip.axial import axial_difference
-from softtip.calibration import calibrate_fingertip, simulate_probing
-from softtip.synthetic import sliding_presses
+from softtip.core.axial import axial_difference
+from softtip.calibration.probing import calibrate_fingertip, simulate_probing
+from softtip.sim.synthetic import sliding_presses
 from softtip.errors import InputError
-from softtip.fingertip import Capsule, Sphere
-from softtip.noise import SensorNoise
-from softtip.payload import Payload, calibrate_payload, compensate_payload, payload_wrench
+from softtip.core.fingertip import Capsule, Sphere
+from softtip.core.noise import SensorNoise
+from softtip.calibration.payload import Payload, calibrate_payload, compensate_payload, payload_wrench
 from softtip.sim import HandFrame, SensorModel, Wedge, paper_scenario, simulate_grasp
 
 MM = 1e3

@@ -7,8 +7,8 @@ thread) and the median and 99th-percentile time of one sample through the stream
 estimator. Targets (manual §6): capsule batch >= 5 M samples/s; streaming median <= 20 us.
 
 Then `softtip estimate` end to end on a --samples-row log (the 1 kHz example grasp
-repeated), CSV and Parquet side by side: read (softtip.io.read_log), the pipeline
-(softtip.estimate), write (softtip.io.write_table), their total, and the `softtip estimate`
+repeated), CSV and Parquet side by side: read (softtip.io.tables.read_log), the pipeline
+(softtip.estimate), write (softtip.io.tables.write_table), their total, and the `softtip estimate`
 command itself (a new process: Python start-up and imports included), in rows/s; also the
 hand-written Python CSV reader and writer that softtip used before, on the same files.
 Rates are rows per second of CPU time (the process's own, or the command's): on a shared
@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from softtip import Capsule, Ellipsoid, EstimatorConfig, Estimator, ImplicitSurface, Sphere, contact_from_wrench, estimate
-from softtip.synthetic import synthetic_grasp
+from softtip.sim.synthetic import synthetic_grasp
 
 
 def pushing_wrenches(tip, n, rng):
@@ -148,8 +148,8 @@ def timed(fn, repeats=2):
 def end_to_end(n: int) -> None:
     import pyarrow
 
-    import softtip.io as sio
-    from softtip.io import read_log, write_table
+    import softtip.io.tables as sio
+    from softtip.io.tables import read_log, write_table
 
     g = synthetic_grasp("murakami2006", angle_deg=45.0, duration=10.0, rate=1000.0, seed=1)
     reps = max(1, n // len(g.t))
@@ -224,10 +224,10 @@ def plausible_wrenches(tip, n, rng):
 
 
 def mesh_rows(args, rng) -> None:
-    from softtip.contact import contact_kernel
-    from softtip._xp import PY
-    from softtip.examples import EXAMPLE_PATH
-    from softtip.fingertip import load_fingertip
+    from softtip.core.contact import contact_kernel
+    from softtip.core._xp import PY
+    from softtip.io.examples import EXAMPLE_PATH
+    from softtip.core.fingertip import load_fingertip
 
     t0 = time.perf_counter()
     tip = load_fingertip(EXAMPLE_PATH.with_name("murakami2006_nail.toml"))

@@ -32,10 +32,10 @@ import math
 import numpy as np
 
 import softtip
-from softtip.axial import axial_difference
+from softtip.core.axial import axial_difference
+from softtip.core.noise import NANO17, SensorNoise
 from softtip.estimator import EstimatorConfig
 from softtip.fusion import Finger, PoseSeries, fuse
-from softtip.noise import NANO17, SensorNoise
 from softtip.sim import (
     ContactModel,
     ContactParams,

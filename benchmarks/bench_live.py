@@ -2,7 +2,7 @@
 
     python benchmarks/bench_live.py [--rates 1000 7000] [--seconds 5] [--no-faults]
 
-For each rate a fake device (``python -m softtip.netft_fake``, its own process so it does
+For each rate a fake device (``python -m softtip.testing.netft_fake``, its own process so it does
 not share softtip's interpreter) streams RDT records over loopback UDP; softtip receives
 them in its receive thread, runs the streaming estimator on every sample, records every row
 to a CSV file and redraws the terminal view (to /dev/null) five times a second: the full
@@ -31,8 +31,8 @@ import time
 
 import numpy as np
 
-from softtip.live import LiveStats, Recorder, TerminalView, run_live
-from softtip.netft import NetFTSource
+from softtip.io.live import LiveStats, Recorder, TerminalView, run_live
+from softtip.io.netft import NetFTSource
 from softtip.pipeline import Estimator
 
 
@@ -46,7 +46,7 @@ def bench(rate: float, seconds: float, record: bool = True, view: bool = True, f
         [
             sys.executable,
             "-m",
-            "softtip.netft_fake",
+            "softtip.testing.netft_fake",
             "--rate",
             str(rate),
             "--duration",

@@ -12,7 +12,7 @@ import argparse
 import math
 import time
 
-from softtip.fingertip import murakami2006
+from softtip.core.fingertip import murakami2006
 from softtip.sim import ContactModel, ContactParams, Cylinder, Plate, Wedge, discretise_skin, paper_scenario, simulate_grasp
 
 

@@ -24,8 +24,8 @@ import numpy as np
 
 from softtip import EstimatorConfig, axial_difference, estimate
 from softtip.estimator.results import EstimatorWarning
-from softtip.noise import NANO17
-from softtip.synthetic import synthetic_grasp
+from softtip.core.noise import NANO17
+from softtip.sim.synthetic import synthetic_grasp
 
 PLAIN = EstimatorConfig(tare_method="mean", contact_hysteresis=0.0, contact_min_duration=0.0, track_drift=False)
 DEFAULT = EstimatorConfig()

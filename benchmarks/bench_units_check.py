@@ -1,4 +1,4 @@
-"""The units check (softtip.lever) over simulated grasps: false alarms and detections.
+"""The units check (softtip.core.lever) over simulated grasps: false alarms and detections.
 
     python benchmarks/bench_units_check.py      # 72 grasps (~5 min on a shared 2-core machine)
 
@@ -12,10 +12,10 @@ import itertools
 
 import numpy as np
 
-from softtip.fingertip import Sphere, load_fingertip
-from softtip.lever import force_lever
+from softtip.core.fingertip import Sphere, load_fingertip
+from softtip.core.lever import force_lever
 from softtip.sim.simulate import run_simulation
-from softtip.units import KGF, KGF_MM
+from softtip.core.units import KGF, KGF_MM
 
 tips = {"murakami2006": load_fingertip("murakami2006"), "sphere10": Sphere(0.010, (0.0, 0.0, 0.012))}
 rows = []

@@ -18,10 +18,10 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from softtip.calibration import simulate_probing
-from softtip.fingertip import Sphere
-from softtip.io import write_table
-from softtip.payload import Payload, payload_wrench
+from softtip.calibration.probing import simulate_probing
+from softtip.core.fingertip import Sphere
+from softtip.io.tables import write_table
+from softtip.calibration.payload import Payload, payload_wrench
 from softtip.sim import SensorModel
 
 DATA = Path(__file__).resolve().parents[1] / "src" / "softtip" / "data"

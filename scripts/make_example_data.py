@@ -5,8 +5,8 @@
 
 from pathlib import Path
 
-from softtip.io import write_table
-from softtip.synthetic import synthetic_grasp
+from softtip.io.tables import write_table
+from softtip.sim.synthetic import synthetic_grasp
 
 OUT = Path(__file__).resolve().parents[1] / "src" / "softtip" / "data" / "example_grasp.csv"
 

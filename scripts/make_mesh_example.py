@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from softtip.mesh import capsule_mesh, load_mesh_fingertip
+from softtip.core.mesh import capsule_mesh, load_mesh_fingertip
 
 DATA = Path(__file__).resolve().parents[1] / "src" / "softtip" / "data"
 RADIUS, LENGTH = 0.016, 0.020

@@ -5,11 +5,11 @@ import math
 
 import numpy as np
 
-from softtip.fingertip import load_fingertip
-from softtip.noise import NANO17
-from softtip.spin import tangent_frame_kernel
-from softtip.synthetic import smoothstep
-from softtip._xp import NP
+from softtip.core.fingertip import load_fingertip
+from softtip.core.noise import NANO17
+from softtip.core.spin import tangent_frame_kernel
+from softtip.sim.synthetic import smoothstep
+from softtip.core._xp import NP
 
 #: Moment per tilt, N·m/rad (≈ 1.3 N·mm per degree: a thin strip at 0.5 kgf).
 STIFFNESS = 0.0745

@@ -15,9 +15,9 @@ from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 
 from softtip import load_example
-from softtip.bag import TOPICS, read_bag
+from softtip.io.bag import TOPICS, read_bag
 from softtip.errors import InputError
-from softtip.io import write_table
+from softtip.io.tables import write_table
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 WRENCH = "geometry_msgs/msg/WrenchStamped"
@@ -175,8 +175,9 @@ def test_to_bag_round_trip(tmp_path, example, csv_twin):
     rows = list(csv.DictReader(csv_twin.splitlines()))
     states = [r["state"] for r in rows]
     msgs = {}
-    with AnyReader([out_bag]) as reader:
+    with AnyReader([out_bag], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
         assert {n: i.msgtype for n, i in reader.topics.items()} == {
+            "/softtip/markers": "visualization_msgs/msg/MarkerArray",
             "/ft_sensor/wrench": WRENCH,
             TOPICS["wrench"]: WRENCH,
             TOPICS["state"]: "std_msgs/msg/String",
@@ -185,7 +186,7 @@ def test_to_bag_round_trip(tmp_path, example, csv_twin):
             TOPICS["edge_direction"]: "geometry_msgs/msg/Vector3Stamped",
             TOPICS["line_evidence"]: "std_msgs/msg/String",
         }
-        assert "mcap" in {p.suffix.lstrip(".") for p in out_bag.iterdir()}
+        assert "db3" in {p.suffix.lstrip(".") for p in out_bag.iterdir()}  # Humble's default: sqlite3
         for conn, ts, raw in reader.messages():
             msgs.setdefault(conn.topic, []).append(
                 (ts, reader.deserialize(raw, conn.msgtype))
@@ -238,8 +239,11 @@ def test_csv_input_to_bag(tmp_path):
     out = run("estimate", "--example", "--to-bag", tmp_path / "ex")
     assert out.returncode == 0, out.stderr
     assert out.stdout == ""  # the bag is the output
-    with AnyReader([tmp_path / "ex"]) as reader:
+    with AnyReader([tmp_path / "ex"], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
         assert reader.topics["/softtip/wrench_raw"].msgcount == 500
+        frames = {reader.deserialize(raw, c.msgtype).header.frame_id for c, _, raw in reader.messages() if c.topic != TOPICS["state"]
+                  and c.msgtype != "std_msgs/msg/String" and c.msgtype != "visualization_msgs/msg/MarkerArray"}
+    assert frames == {"ft_sensor"}  # a CSV has no frame: RViz needs one
 
 
 # --- damaged bags, repeated stamps (issue 13, items 11 and 13) ----------------------------

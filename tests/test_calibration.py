@@ -1,4 +1,4 @@
-"""Fingertip calibration from simulated plane presses (softtip.calibration, `softtip calibrate`)."""
+"""Fingertip calibration from simulated plane presses (softtip.calibration.probing, `softtip calibrate`)."""
 
 import math
 import subprocess
@@ -10,14 +10,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from softtip.calibration import PROBING_GUIDE, calibrate_fingertip, find_presses, simulate_probing
+from softtip.calibration.probing import PROBING_GUIDE, calibrate_fingertip, find_presses, simulate_probing
 from softtip.errors import InputError
-from softtip.examples import EXAMPLE_PROBING_PATH
-from softtip.fingertip import Capsule, Sphere, load_fingertip
-from softtip.io import write_table
-from softtip.noise import SensorNoise
+from softtip.io.examples import EXAMPLE_PROBING_PATH
+from softtip.core.fingertip import Capsule, Sphere, load_fingertip
+from softtip.io.tables import write_table
+from softtip.core.noise import SensorNoise
 from softtip.sim import SensorModel
-from softtip.synthetic import sliding_presses
+from softtip.sim.synthetic import sliding_presses
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 MM = 1e-3
@@ -266,7 +266,7 @@ def test_cli_calibrates_a_stream_recording(tmp_path):
 
 
 def _example():
-    from softtip.io import read_log
+    from softtip.io.tables import read_log
 
     log = read_log(EXAMPLE_PROBING_PATH)
     return log.t, log.wrench

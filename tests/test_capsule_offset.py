@@ -7,11 +7,11 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from softtip import Capsule, InputError, contact_from_wrench, load_fingertip
-from softtip._xp import PY
-from softtip.contact import contact_kernel
-from softtip.fingertip import fingertip_from_mapping
+from softtip.core._xp import PY
+from softtip.core.contact import contact_kernel
+from softtip.core.fingertip import fingertip_from_mapping
 from softtip.sim import discretise_skin
-from softtip.viz import surface_mesh
+from softtip.viz.rerun import surface_mesh
 
 offsets = st.tuples(st.floats(-3e-3, 3e-3), st.floats(-3e-3, 3e-3))
 

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from softtip import EXAMPLE_PATH, EstimatorConfig, estimate, load_example
-from softtip.io import read_log, write_table
-from softtip.units import KGF, KGF_MM
+from softtip.io.tables import read_log, write_table
+from softtip.core.units import KGF, KGF_MM
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 SPEC_COLUMNS = (

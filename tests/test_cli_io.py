@@ -13,8 +13,8 @@ import numpy as np
 import pyarrow.parquet as pq
 
 from softtip import estimate, load_example
-from softtip.io import PARQUET_FINGERTIP_KEY, PARQUET_UNITS_KEY, write_table
-from softtip.units import KGF
+from softtip.io.tables import PARQUET_FINGERTIP_KEY, PARQUET_UNITS_KEY, write_table
+from softtip.core.units import KGF
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 WRENCH = ("fx", "fy", "fz", "mx", "my", "mz")

@@ -5,8 +5,8 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from softtip import Capsule, Ellipsoid, ImplicitSurface, Sphere, contact_from_wrench
-from softtip._xp import PY
-from softtip.contact import contact_kernel
+from softtip.core._xp import PY
+from softtip.core.contact import contact_kernel
 
 from strategies import TIPS, soft_contacts
 

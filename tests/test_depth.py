@@ -5,9 +5,9 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from softtip import EstimatorConfig, axial_difference, estimate
-from softtip.depth import MURAKAMI2006_DEPTH, DepthLaw, depth_kernel, lever_depth
-from softtip._xp import NP, PY
-from softtip.synthetic import smoothstep, synthetic_grasp
+from softtip.core.depth import MURAKAMI2006_DEPTH, DepthLaw, depth_kernel, lever_depth
+from softtip.core._xp import NP, PY
+from softtip.sim.synthetic import smoothstep, synthetic_grasp
 
 
 def grasp_with_friction_at_depth(law, ratio=0.4, angle=30.0):

@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from softtip import Capsule, EstimatorConfig, Sphere, axial_difference, estimate, murakami2006
-from softtip.depth import (
+from softtip.core.depth import (
     MURAKAMI2006_DEPTH,
     depth_frame_kernel,
     depth_kernel,
@@ -21,12 +21,12 @@ from softtip.depth import (
     depth_solve_kernel,
     skin_depth_law,
 )
-from softtip._xp import NP
+from softtip.core._xp import NP
 from softtip.errors import InputError
 from softtip.estimator.depth import DEPTH_ITERATIONS, resolve_depth, tip_depth_law
-from softtip.fingertip import load_fingertip
-from softtip.noise import NANO17, SensorNoise
-from softtip.spin import direction_angle
+from softtip.core.fingertip import load_fingertip
+from softtip.core.noise import NANO17, SensorNoise
+from softtip.core.spin import direction_angle
 from softtip.sim import ContactModel, ContactParams, Plate, Wedge, discretise_skin, friction_scenario, simulate_grasp
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))

@@ -11,8 +11,8 @@ from numpy.testing import assert_allclose
 from rocking import rocking_log
 
 from softtip import Estimator, EstimatorConfig, estimate, murakami2006
-from softtip._xp import NP, PY
-from softtip.evidence import (
+from softtip.core._xp import NP, PY
+from softtip.core.evidence import (
     evidence_products,
     noise_constants,
     tangent_noise_kernel,
@@ -20,7 +20,7 @@ from softtip.evidence import (
     window_floats,
     window_kernel,
 )
-from softtip.noise import NANO17
+from softtip.core.noise import NANO17
 from softtip.sim import make_object, rock_scenario, simulate_grasp
 from softtip.sim.scenario import Disturbance
 

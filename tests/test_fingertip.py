@@ -5,7 +5,7 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from softtip import Capsule, Ellipsoid, InputError, Sphere, load_fingertip, murakami2006
-from softtip.fingertip import fingertip_from_mapping
+from softtip.core.fingertip import fingertip_from_mapping
 
 from strategies import TIPS, surface_points
 

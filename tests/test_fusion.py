@@ -14,7 +14,7 @@ import softtip
 from softtip import InputError
 from softtip.fusion import Finger, PoseSeries, fuse, fuse_logs, poses_from_columns, read_hand_file
 from softtip.fusion.tf import TfTree
-from softtip.synthetic import synthetic_grasp
+from softtip.sim.synthetic import synthetic_grasp
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 HAND_X = np.array([1.0, 0.0, 0.0])
@@ -217,7 +217,7 @@ def test_fuse_command_errors(simulated, tmp_path):
 
 
 def test_gravity_compensation_with_orientation_from_tf_and_from_a_callback():
-    from softtip.payload import CompensatedSource, Payload, compensate_payload
+    from softtip.calibration.payload import CompensatedSource, Payload, compensate_payload
 
     payload = Payload(mass=0.02, com=(0.0, 0.0, 0.02))
     tree = TfTree("robot")

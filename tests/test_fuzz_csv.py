@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 from softtip import EXAMPLE_PATH
 from softtip.cli import main
 from softtip.errors import InputError
-from softtip.io import read_log
+from softtip.io.tables import read_log
 
 # the example grasp, shortened: untouched, then the start of the contact (fast to estimate)
 BASE = EXAMPLE_PATH.read_bytes().splitlines(keepends=True)[:180]

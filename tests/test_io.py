@@ -1,4 +1,4 @@
-"""Tests for softtip.io: reading logs (and every bad-input message) and writing tables."""
+"""Tests for softtip.io.tables: reading logs (and every bad-input message) and writing tables."""
 
 from __future__ import annotations
 
@@ -11,9 +11,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-import softtip.io as sio
+import softtip.io.tables as sio
 from softtip.errors import InputError
-from softtip.io import Log, read_log, write_table
+from softtip.io.tables import Log, read_log, write_table
 
 HEADER = "t,fx,fy,fz,mx,my,mz"
 WRENCH = ("fx", "fy", "fz", "mx", "my", "mz")

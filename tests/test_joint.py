@@ -8,11 +8,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from softtip import Capsule, EstimatorConfig, Sphere, axial_difference, estimate, murakami2006
-from softtip._xp import PY
-from softtip.joint import joint_products, joint_solve_kernel
-from softtip.noise import NANO17, SensorNoise
+from softtip.core._xp import PY
+from softtip.core.joint import joint_products, joint_solve_kernel
+from softtip.core.noise import NANO17, SensorNoise
 from softtip.pipeline import _joint_accept
-from softtip.synthetic import smoothstep
+from softtip.sim.synthetic import smoothstep
 
 from strategies import unit_vectors
 from test_pipeline import assert_stream_equals_batch
@@ -183,7 +183,7 @@ def test_simulated_slide_across_the_line_then_the_papers_disturbance():
     # the bench_accuracy "slide" case: 1 mm plate at 0°, 0.5 kgf, 4 mm slide across the
     # line at 4.5–6 s, then the papers' joint disturbance at 6.5–7.5 s
     from softtip.sim import Disturbance, Plate, push_scenario, simulate_grasp
-    from softtip.units import KGF
+    from softtip.core.units import KGF
 
     tip = murakami2006()
     dist = (
@@ -227,7 +227,7 @@ def test_simulated_papers_grasp_at_45_degrees_keeps_the_latch():
 def test_noise_at_a_high_sample_rate_is_not_excitation():
     # at 1 kHz a 1 s window holds 1000 samples: noise alone would look like excitation
     # (review finding: the point moved 1.4 mm before the noise was subtracted)
-    from softtip.synthetic import synthetic_grasp
+    from softtip.sim.synthetic import synthetic_grasp
 
     g = synthetic_grasp(angle_deg=45.0, rate=1000.0, seed=1)
     est = estimate(g.t, g.wrench, "murakami2006", EstimatorConfig(contact_point="joint"))
@@ -241,8 +241,8 @@ def test_noise_off_the_axis_with_depth_compensation_is_not_excitation():
     # 45° down the cap at 7 kHz with a depth law: the noise of the normal force and of the
     # moment about the anchor are correlated there, and a noisy normal in the depth term
     # adds more (review finding: the point moved 1.1 mm before all 21 sums were corrected)
-    from softtip.depth import MURAKAMI2006_DEPTH
-    from softtip.synthetic import synthetic_grasp
+    from softtip.core.depth import MURAKAMI2006_DEPTH
+    from softtip.sim.synthetic import synthetic_grasp
 
     tip = murakami2006()
     point = _cap_point(tip, 45.0)
@@ -262,8 +262,8 @@ def test_standard_deviations_hold_for_low_pass_filtered_noise():
     # through windows without excitation)
     from scipy import signal
 
-    from softtip._xp import NP
-    from softtip.filtering import lowpass_sos, noise_gain
+    from softtip.core._xp import NP
+    from softtip.core.filtering import lowpass_sos, noise_gain
 
     rng = np.random.default_rng(6)
     tip = murakami2006()
@@ -298,8 +298,8 @@ def test_low_pass_noise_in_a_proportional_dip_is_not_excitation():
     # after the point is identified, the whole wrench dips by 80 % and back (τ ∝ f_n: no
     # excitation); with a 2 Hz low-pass at 7 kHz a window holds ~4 independent samples,
     # whose noise once passed the limits and moved the point ~1 mm (review finding)
-    from softtip.depth import MURAKAMI2006_DEPTH
-    from softtip.synthetic import synthetic_grasp
+    from softtip.core.depth import MURAKAMI2006_DEPTH
+    from softtip.sim.synthetic import synthetic_grasp
 
     tip = murakami2006()
     point = _cap_point(tip, 45.0)

@@ -9,10 +9,10 @@ import pytest
 
 from softtip import load_example, murakami2006
 from softtip.errors import InputError
-from softtip.fingertip import Capsule, Ellipsoid, Sphere
-from softtip.io import write_table
-from softtip.lever import LEVER_MARGIN, check_force_lever, force_lever
-from softtip.units import KGF, KGF_MM
+from softtip.core.fingertip import Capsule, Ellipsoid, Sphere
+from softtip.io.tables import write_table
+from softtip.core.lever import LEVER_MARGIN, check_force_lever, force_lever
+from softtip.core.units import KGF, KGF_MM
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 AXES = ("fx", "fy", "fz", "mx", "my", "mz")

@@ -12,10 +12,10 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from softtip import Capsule, EstimatorConfig, InputError, contact_from_wrench, load_fingertip
-from softtip.contact import contact_kernel
-from softtip._xp import PY
-from softtip.mesh import MeshFingertip, capsule_mesh, load_mesh_fingertip, rotation_from_rpy
-from softtip.synthetic import synthetic_grasp
+from softtip.core.contact import contact_kernel
+from softtip.core._xp import PY
+from softtip.core.mesh import MeshFingertip, capsule_mesh, load_mesh_fingertip, rotation_from_rpy
+from softtip.sim.synthetic import synthetic_grasp
 
 from test_pipeline import assert_stream_equals_batch
 
@@ -385,7 +385,7 @@ def test_cli_stream_with_a_mesh_tip_matches_estimate(tmp_path):
 
 
 def test_cli_stream_from_a_fake_netft_with_a_mesh_tip(tmp_path):
-    from softtip.netft_fake import FakeNetFT
+    from softtip.testing.netft_fake import FakeNetFT
 
     with FakeNetFT(rate_hz=500) as dev:
         out = subprocess.run(

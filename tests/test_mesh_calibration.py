@@ -1,4 +1,4 @@
-"""Calibration of a mesh fingertip's placement from plane presses (softtip.calibration_mesh)."""
+"""Calibration of a mesh fingertip's placement from plane presses (softtip.calibration.mesh)."""
 
 import subprocess
 import sys
@@ -9,10 +9,10 @@ import pytest
 from numpy.testing import assert_allclose
 
 from softtip import InputError, load_fingertip
-from softtip.calibration_mesh import calibrate_mesh, mesh_probing_log
-from softtip.io import write_table
-from softtip.mesh import MeshFingertip, capsule_mesh
-from softtip.noise import NANO17
+from softtip.calibration.mesh import calibrate_mesh, mesh_probing_log
+from softtip.io.tables import write_table
+from softtip.core.mesh import MeshFingertip, capsule_mesh
+from softtip.core.noise import NANO17
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 V, F = capsule_mesh(0.016, 0.020, segments=64)
@@ -91,7 +91,7 @@ def test_fitted_shift_is_composed_with_the_files_transform(tmp_path):
     import trimesh
     from scipy.spatial.transform import Rotation
 
-    from softtip.calibration_mesh import calibrate_mesh_file
+    from softtip.calibration.mesh import calibrate_mesh_file
 
     rot = Rotation.from_euler("xyz", [10.0, -5.0, 30.0], degrees=True)
     offset = np.array([0.001, -0.002, 0.003])

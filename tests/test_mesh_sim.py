@@ -7,7 +7,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from softtip import Capsule, contact_from_wrench
-from softtip.mesh import MeshFingertip, capsule_mesh
+from softtip.core.mesh import MeshFingertip, capsule_mesh
 from softtip.sim import ContactModel, Plate, SensorModel, discretise_skin, push_scenario, simulate_grasp
 
 TIP = Capsule(0.016, 0.020)

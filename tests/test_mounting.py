@@ -9,8 +9,8 @@ from scipy.spatial.transform import Rotation
 
 import softtip
 from softtip import Capsule, Ellipsoid, EstimatorConfig, InputError, Mounted, SensorNoise, Sphere, contact_from_wrench
-from softtip.fingertip import load_fingertip
-from softtip.synthetic import synthetic_grasp
+from softtip.core.fingertip import load_fingertip
+from softtip.sim.synthetic import synthetic_grasp
 
 angles = st.floats(-180.0, 180.0, allow_nan=False)
 offsets = st.floats(-0.01, 0.01, allow_nan=False)

@@ -16,10 +16,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from softtip.live import RECORD_COLUMNS
-from softtip.netft import NetFTSource
-from softtip.netft_fake import FakeNetFT
-from softtip.sources import SourceError
+from softtip.io.live import RECORD_COLUMNS
+from softtip.io.netft import NetFTSource
+from softtip.testing.netft_fake import FakeNetFT
+from softtip.io.sources import SourceError
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 
@@ -271,7 +271,7 @@ def test_queue_overflow_is_counted_as_dropped_not_lost():
 def test_the_view_shows_every_counter_the_status_and_the_latest_warning():
     import io
 
-    from softtip.live import LiveStats, TerminalView
+    from softtip.io.live import LiveStats, TerminalView
 
     counters = {"lost": 4, "dropped": 7, "duplicates": 2, "late": 3, "malformed": 5, "restarts": 1, "stalls": 6,
                 "status_records": 9}  # fmt: skip

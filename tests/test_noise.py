@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from softtip import SensorNoise, direction_angle_std, tangential_spin_torque_std
-from softtip.spin import direction_angle, edge_direction, spin_torque, tangential_spin_torque
+from softtip.core.spin import direction_angle, edge_direction, spin_torque, tangential_spin_torque
 
 
 @pytest.mark.parametrize("normal", [(0.0, 0.0, 1.0), (0.6, 0.0, 0.8), (0.0, -1.0, 0.0)])

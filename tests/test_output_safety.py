@@ -22,10 +22,10 @@ import pytest
 from click.testing import CliRunner
 
 from softtip import EXAMPLE_PATH
-from softtip.atomic import AtomicFile, atomic_write_text, check_distinct
+from softtip.io.atomic import AtomicFile, atomic_write_text, check_distinct
 from softtip.cli import main
 from softtip.errors import InputError
-from softtip.io import write_table
+from softtip.io.tables import write_table
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 posix_only = pytest.mark.skipif(os.name != "posix", reason="FIFOs, rlimits and signals are POSIX")
@@ -56,7 +56,7 @@ def payload_log(path, n=200):
     """A contact-free log with varied orientations: input of ``calibrate-payload``."""
     from scipy.spatial.transform import Rotation
 
-    from softtip.payload import Payload, payload_wrench
+    from softtip.calibration.payload import Payload, payload_wrench
 
     rng = np.random.default_rng(5)
     q = Rotation.from_rotvec(rng.normal(size=(n, 3)) * 0.8).as_quat(scalar_first=True)

@@ -10,8 +10,8 @@ import pyarrow.parquet as pq
 import pytest
 
 from softtip.errors import InputError
-from softtip.io import PARQUET_UNITS_KEY, read_log, write_table
-from softtip.units import KGF, KGF_MM
+from softtip.io.tables import PARQUET_UNITS_KEY, read_log, write_table
+from softtip.core.units import KGF, KGF_MM
 
 WRENCH = ("fx", "fy", "fz", "mx", "my", "mz")
 
@@ -76,7 +76,7 @@ def test_units_from_metadata_and_conflicts(tmp_path: Path) -> None:
     plain = _write_pq(tmp_path / "s.parquet", cols)
     assert read_log(plain).units == "si" and read_log(plain, units="kgf-mm").units == "kgf-mm"
     odd = _write_pq(tmp_path / "o.parquet", cols, {PARQUET_UNITS_KEY: "furlongs"})
-    assert _error(odd) == f"{odd}: metadata softtip.units = 'furlongs'; expected one of: si, kgf-mm"
+    assert _error(odd) == f"{odd}: metadata softtip.core.units = 'furlongs'; expected one of: si, kgf-mm"
 
 
 def test_missing_and_misspelled_columns(tmp_path: Path) -> None:
@@ -164,7 +164,7 @@ def test_write_is_atomic_and_keeps_an_existing_file_on_failure(tmp_path: Path) -
 
 
 def test_write_zero_rows_and_progress(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    import softtip.io as sio
+    import softtip.io.tables as sio
 
     path = tmp_path / "z.parquet"
     write_table({"t": np.empty(0), "state": np.array([], dtype=str)}, path)
@@ -180,7 +180,7 @@ def test_write_zero_rows_and_progress(tmp_path: Path, monkeypatch: pytest.Monkey
 
 def test_orientation_columns_of_a_parquet_log(tmp_path: Path) -> None:
     """Gravity compensation reads numeric extra columns; its errors name the row."""
-    from softtip.payload import compensate_log
+    from softtip.calibration.payload import compensate_log
 
     n = 50
     cols = {**_table(n), "qw": np.ones(n), "qx": np.zeros(n), "qy": np.zeros(n), "qz": np.zeros(n)}

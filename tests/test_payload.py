@@ -1,4 +1,4 @@
-"""Gravity compensation of the fingertip's weight (softtip.payload, `calibrate-payload`, `--payload`)."""
+"""Gravity compensation of the fingertip's weight (softtip.calibration.payload, `calibrate-payload`, `--payload`)."""
 
 import csv
 import math
@@ -13,11 +13,11 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 from softtip import estimate, murakami2006
-from softtip.axial import axial_difference
+from softtip.core.axial import axial_difference
 from softtip.errors import InputError
 from softtip.estimator import EstimatorWarning
-from softtip.io import write_table
-from softtip.payload import (
+from softtip.io.tables import write_table
+from softtip.calibration.payload import (
     Payload,
     PayloadCompensator,
     calibrate_payload,
@@ -27,7 +27,7 @@ from softtip.payload import (
     payload_wrench,
 )
 from softtip.sim import HandFrame, SensorModel, Wedge, paper_scenario, simulate_grasp
-from softtip.units import STANDARD_GRAVITY
+from softtip.core.units import STANDARD_GRAVITY
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 AXES = ("fx", "fy", "fz", "mx", "my", "mz")

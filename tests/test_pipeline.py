@@ -7,10 +7,10 @@ from numpy.testing import assert_allclose
 from rocking import rocking_log
 
 from softtip import Capsule, Estimator, EstimatorConfig, Sphere, axial_difference, estimate
-from softtip.depth import MURAKAMI2006_DEPTH
+from softtip.core.depth import MURAKAMI2006_DEPTH
 from softtip.estimator.results import EstimatorWarning
-from softtip.synthetic import synthetic_grasp
-from softtip.units import KGF, KGF_MM
+from softtip.sim.synthetic import synthetic_grasp
+from softtip.core.units import KGF, KGF_MM
 
 FIELDS_3 = ("wrench", "point", "normal", "h", "direction")
 FIELDS_1 = ("sigma", "h_norm", "h_std", "angle", "angle_std", "depth", "depth_std", "joint_conditioning", "joint_angle_std",
@@ -259,7 +259,8 @@ def test_filter_lowers_the_noise_level():
 
 def test_kgf_mm_config_values_are_si():
     cfg = EstimatorConfig()
-    assert cfg.latch_window == pytest.approx((0.2 * KGF, 0.5 * KGF))
+    assert cfg.latch_force_range == pytest.approx((0.2 * KGF, 0.5 * KGF))
+    assert cfg.latch_window == cfg.latch_force_range  # the former name still reads
     assert 0.5 * KGF_MM == pytest.approx(4.903325e-3)
 
 
@@ -278,7 +279,9 @@ def test_config_rejects_nonsense():
         EstimatorConfig(relatch_distance=-1.0)
     with pytest.raises(ValueError, match="depth"):
         EstimatorConfig(depth=2.0)
-    with pytest.raises(ValueError, match="latch_window"):
+    with pytest.raises(ValueError, match="latch_force_range"):
+        EstimatorConfig(latch_force_range=(5.0, 1.0))
+    with pytest.raises(ValueError, match="latch_force_range"):  # the former name is the same setting
         EstimatorConfig(latch_window=(5.0, 1.0))
     with pytest.raises(ValueError, match="Nyquist"):
         EstimatorConfig(lowpass_hz=30.0, sample_rate=50.0)

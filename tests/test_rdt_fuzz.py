@@ -1,4 +1,4 @@
-"""RDT packet handling (softtip.netft.RDTTracker) under what networks and sensors do.
+"""RDT packet handling (softtip.io.netft.RDTTracker) under what networks and sensors do.
 
 Hypothesis builds a device stream (any start sequence, so the 32-bit wrap is crossed),
 then a network that loses, duplicates, delays and reorders records, inserts zero-length and
@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from softtip.netft import FAULTS, RDT_RECORD, RDTTracker, StreamFault
+from softtip.io.netft import FAULTS, RDT_RECORD, RDTTracker, StreamFault
 
 RATE = 1000.0
 MS = 1_000_000  # ns

@@ -1,7 +1,7 @@
 import numpy as np
 
 from softtip import EstimatorConfig, contact_from_wrench, estimate
-from softtip.synthetic import synthetic_grasp
+from softtip.sim.synthetic import synthetic_grasp
 
 
 def sliding_grasp(slide=0.004):

@@ -1,4 +1,4 @@
-"""softtip.sources and `softtip stream --replay`: the live path without hardware."""
+"""softtip.io.sources and `softtip stream --replay`: the live path without hardware."""
 
 import csv
 import subprocess
@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from softtip import EXAMPLE_PATH, Estimator, load_example
-from softtip.io import write_table
-from softtip.live import RECORD_COLUMNS, LiveStats, Recorder, run_live
-from softtip.sources import LogSource, Reading, run
+from softtip.io.tables import write_table
+from softtip.io.live import RECORD_COLUMNS, LiveStats, Recorder, run_live
+from softtip.io.sources import LogSource, Reading, run
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 

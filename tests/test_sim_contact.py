@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from softtip.fingertip import Sphere, murakami2006
+from softtip.core.fingertip import Sphere, murakami2006
 from softtip.sim import (
     ContactModel,
     ContactParams,

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from softtip.fingertip import murakami2006
+from softtip.core.fingertip import murakami2006
 from softtip.sim import (
     ContactModel,
     HandFrame,

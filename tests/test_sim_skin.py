@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from softtip.fingertip import Ellipsoid, Sphere, murakami2006
+from softtip.core.fingertip import Ellipsoid, Sphere, murakami2006
 from softtip.sim import SensorModel, discretise_skin
 
 

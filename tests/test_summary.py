@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import softtip
-from softtip.summary import format_summary, summarise_contacts
-from softtip.synthetic import synthetic_grasp
+from softtip.estimator.summary import format_summary, summarise_contacts
+from softtip.sim.synthetic import synthetic_grasp
 
 
 def test_two_grasps_are_two_contacts_with_their_own_directions():

@@ -17,9 +17,9 @@ from softtip import Estimator, EstimatorConfig, InputError, axial_difference, es
 from softtip.estimator.contact import contact_thresholds
 from softtip.estimator.results import EstimatorWarning
 from softtip.estimator.tare import bias_to_toml, load_bias
-from softtip.live import KeyReader, run_live
-from softtip.noise import NANO17
-from softtip.synthetic import synthetic_grasp
+from softtip.io.live import KeyReader, run_live
+from softtip.core.noise import NANO17
+from softtip.sim.synthetic import synthetic_grasp
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 NOISE = np.r_[NANO17.force_std, NANO17.moment_std]

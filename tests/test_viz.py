@@ -35,7 +35,7 @@ def entity_rows(path):
 )
 def test_surface_mesh_lies_on_the_skin(tip):
     pytest.importorskip("rerun")
-    from softtip.viz import surface_mesh
+    from softtip.viz.rerun import surface_mesh
 
     v, tri, n = surface_mesh(tip)
     assert np.abs(tip.surface(v)).max() < 1e-12

@@ -6,11 +6,11 @@ or a strip (line), and the direction of the edge, stick, thin plate, thin cylind
 being touched (Murakami & Hasegawa 2004, 2006; Bicchi 1990). SI units, sensor frame.
 """
 
-from softtip.axial import axial_difference, axial_mean, axial_median
-from softtip.contact import Contact, contact_from_wrench
+from softtip.core.axial import axial_difference, axial_mean, axial_median
+from softtip.core.contact import Contact, contact_from_wrench
 from softtip.errors import InputError
-from softtip.examples import EXAMPLE_PATH, load_example
-from softtip.fingertip import (
+from softtip.io.examples import EXAMPLE_PATH, load_example
+from softtip.core.fingertip import (
     PRESETS,
     Capsule,
     Ellipsoid,
@@ -20,13 +20,13 @@ from softtip.fingertip import (
     load_fingertip,
     murakami2006,
 )
-from softtip.mesh import MeshFingertip
-from softtip.mounting import Mounted
-from softtip.noise import NANO17, SensorNoise, direction_angle_std, tangential_spin_torque_std
+from softtip.core.mesh import MeshFingertip
+from softtip.core.mounting import Mounted
+from softtip.core.noise import NANO17, SensorNoise, direction_angle_std, tangential_spin_torque_std
 from softtip.estimator import STATES, Estimates, Estimator, EstimatorConfig, EstimatorWarning, SampleEstimate, estimate
-from softtip.sources import run
-from softtip.spin import direction_angle, edge_direction, spin_torque, tangent_frame, tangential_spin_torque
-from softtip.units import KGF, KGF_MM, wrench_from_si, wrench_to_si
+from softtip.io.sources import run
+from softtip.core.spin import direction_angle, edge_direction, spin_torque, tangent_frame, tangential_spin_torque
+from softtip.core.units import KGF, KGF_MM, wrench_from_si, wrench_to_si
 
 __version__ = "0.1.0"
 

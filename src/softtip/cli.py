@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 import os
-import shutil
 import sys
 import warnings
 from pathlib import Path
@@ -16,14 +15,15 @@ from softtip import __version__
 from softtip.cli_types import PORT, Number, check_lowpass, check_pair_increasing
 from softtip.errors import InputError
 from softtip.estimator.depth import tip_depth_law
-from softtip.fingertip import PRESETS, Fingertip, load_fingertip
-from softtip.depth import MURAKAMI2006_DEPTH, DepthLaw
+from softtip.core.fingertip import PRESETS, Fingertip, load_fingertip
+from softtip.core.depth import MURAKAMI2006_DEPTH, DepthLaw
 from softtip.estimator.results import DRIFT_COLUMNS, EstimatorWarning
 from softtip.estimator.tare import bias_to_toml, load_bias
-from softtip.noise import NANO17, SensorNoise
-from softtip.pipeline import STATES, EstimatorConfig
-from softtip.pipeline import estimate as run_estimate
-from softtip.units import KGF, KGF_MM, UNIT_SYSTEMS, wrench_to_si
+from softtip.core.noise import NANO17, SensorNoise
+from softtip.estimator import STATES, EstimatorConfig
+from softtip.estimator import estimate as run_estimate
+from softtip.ros.options import bag_output_options, output_frame_id
+from softtip.core.units import KGF, KGF_MM, UNIT_SYSTEMS, wrench_to_si
 
 FRAMES_HELP = """\
 Frames and units: every vector is in the sensor frame (origin at the F/T sensor's
@@ -51,8 +51,8 @@ _MOMENT_COLUMNS = ("mx", "my", "mz", "sigma", "hx", "hy", "hz", "h_norm", "h_std
 
 class _Group(click.Group):
     def invoke(self, ctx):
-        from softtip.atomic import cannot_write, silence_stdout
-        from softtip.interrupt import Interrupted, exit_code, terminate_like_ctrl_c
+        from softtip.io.atomic import cannot_write, silence_stdout
+        from softtip.io.interrupt import Interrupted, exit_code, terminate_like_ctrl_c
 
         try:
             with terminate_like_ctrl_c():
@@ -296,7 +296,7 @@ from a force/torque log.
 INPUT is a CSV file with a header row and columns t, fx, fy, fz, mx, my, mz (t in s,
 non-decreasing: repeated stamps are counted and reported; extra columns are kept and copied
 to the output), or a Parquet file with those columns (name ending in .parquet; its
-softtip.units metadata gives the units). '-' reads CSV from standard input. With
+softtip.core.units metadata gives the units). '-' reads CSV from standard input. With
 --example, softtip's shipped example grasp is used instead.
 
 The output CSV (standard output unless -o; Parquet when -o ends in .parquet, with the
@@ -325,9 +325,12 @@ INPUT may also be a ROS bag (rosbag2 directory with sqlite3 or MCAP storage, a .
 .db3 file, or a ROS 1 .bag; needs the rosbags package): the samples are the
 geometry_msgs/msg/WrenchStamped messages of --topic, timed by header.stamp (t counts
 from the first message; the stamps are copied to a stamp_ns column). --to-bag
-writes the estimates as a rosbag2 (MCAP) with standard messages on /softtip/state,
-/softtip/contact_point, /softtip/normal, /softtip/edge_direction and /softtip/wrench, plus
-the raw wrench; with --to-bag and no -o no CSV is written.
+writes the estimates as a bag --ros-distro plays (default humble: rosbag2 metadata version
+5, sqlite3; a name ending in .bag: ROS 1) with standard messages on /softtip/state,
+/softtip/contact_point, /softtip/normal, /softtip/edge_direction, /softtip/wrench and RViz
+markers on /softtip/markers, plus the raw wrench, all with --frame-id; with --to-bag and
+no -o no CSV is written. With --payload, --gravity-frame takes the sensor's orientation
+from the bag's /tf.
 
 """
     + FRAMES_HELP
@@ -352,7 +355,8 @@ the raw wrench; with --to-bag and no -o no CSV is written.
 @click.option("--plot-units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the plot's force and moment axes.")
 @click.option("--topic", metavar="TOPIC", help="Bag input: the geometry_msgs/msg/WrenchStamped topic (default: the bag's only one).")
 @click.option("--allow-partial", is_flag=True, help="Bag input: use a damaged bag's readable messages (with a warning) instead of stopping.")
-@click.option("--to-bag", "to_bag", type=click.Path(file_okay=False), metavar="DIR", help="Also write the estimates as a rosbag2 directory (MCAP storage); DIR must not exist.")
+@bag_output_options()
+@click.option("--gravity-frame", metavar="FRAME", help="With --payload and a bag INPUT: the sensor's orientation from the bag's /tf and /tf_static, FRAME (z up, e.g. world) to the wrench's frame_id, at each stamp (instead of qw, qx, qy, qz columns).")
 @click.option("--rerun", "rerun_spawn", is_flag=True, help="Show the fingertip, force, contact point, normal and edge in a Rerun viewer (needs the rerun-sdk package).")
 @click.option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save the Rerun 3-D view and time series to FILE.rrd (open with `rerun FILE.rrd`).")
 @click.option("--payload", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Remove the fingertip's weight ([payload] mass kg, com m; see calibrate-payload) before taring, using INPUT's qw, qx, qy, qz columns (sensor frame in a z-up world frame).")
@@ -376,10 +380,13 @@ def estimate(
     save_bias=None,
     quiet=False,
     allow_partial=False,
+    ros_distro=None,
+    frame_id=None,
+    gravity_frame=None,
     **estimator_opts,
 ):
-    from softtip.examples import EXAMPLE_PATH
-    from softtip.io import Log, read_log
+    from softtip.io.examples import EXAMPLE_PATH
+    from softtip.io.tables import Log, read_log
 
     if example == (input_path is not None):
         raise click.UsageError("give either INPUT or --example")
@@ -401,7 +408,7 @@ def estimate(
     elif input_path == "-":
         log = read_log(sys.stdin, units=units)
     elif _is_bag(input_path):
-        bag = _optional("softtip.bag", "ros")
+        bag = _optional("softtip.io.bag", "ros")
         bag_log = bag.read_bag(input_path, topic, allow_partial=allow_partial)
         _bag_warnings(input_path, bag_log)
         # t counts from the first message; the absolute stamps go along as an extra column
@@ -428,10 +435,26 @@ def estimate(
         raise click.UsageError("--topic applies to bag input only")
     if allow_partial and bag_log is None:
         raise click.UsageError("--allow-partial applies to bag input only")
-    if payload is not None:  # gravity compensation first: the tare then removes only the sensor bias
-        from softtip.payload import compensate_log
+    if to_bag is None and (ros_distro is not None or frame_id is not None):
+        raise click.UsageError("--ros-distro and --frame-id apply to --to-bag")
+    if to_bag is not None:
+        from softtip.ros.bagout import bag_format
 
-        log = compensate_log(log, payload)
+        bag_format(to_bag, ros_distro)  # a name that does not fit the distribution: stop before the work
+    if gravity_frame is not None and (payload is None or bag_log is None):
+        raise click.UsageError("--gravity-frame needs --payload and a bag INPUT (with /tf)")
+    if payload is not None:  # gravity compensation first: the tare then removes only the sensor bias
+        from softtip.calibration.payload import compensate_log, compensate_payload, load_payload
+
+        if gravity_frame is None:
+            log = compensate_log(log, payload)
+        else:  # the orientation from the bag's /tf
+            from dataclasses import replace
+
+            from softtip.fusion.tf import gravity_orientations
+
+            q = gravity_orientations(input_path, gravity_frame, bag_log.frame_ids, bag_log.stamps_ns, frame_id)
+            log = replace(log, wrench=compensate_payload(log.wrench, q, load_payload(payload)))
     check_lowpass(estimator_opts["lowpass"], log.t)
     try:
         with warnings.catch_warnings():
@@ -454,7 +477,7 @@ def estimate(
     _write_estimate_outputs(
         est, columns, log, bag_log, config, fingertip,
         output=output, plot_path=plot_path, plot_units=plot_units, title=f"softtip: {source}",
-        to_bag=to_bag, rerun_spawn=rerun_spawn, rerun_save=rerun_save,
+        to_bag=to_bag, rerun_spawn=rerun_spawn, rerun_save=rerun_save, ros_distro=ros_distro, frame_id=frame_id,
         metadata=_parquet_metadata(fingertip, tip, output_units, log),
     )  # fmt: skip
 
@@ -465,7 +488,7 @@ def estimate(
             raise InputError(f"--save-bias {save_bias}: is also an input or output of this run")
         if not np.all(np.isfinite(est.bias)):
             raise InputError(f"--save-bias {save_bias}: no bias: the whole log lies within the tare")
-        from softtip.calibration import atomic_write_text
+        from softtip.calibration.probing import atomic_write_text
 
         atomic_write_text(save_bias, bias_to_toml(est.bias, f"softtip sensor bias ({est.tare.summary()})"))
         click.echo(f"softtip: bias -> {save_bias}", err=True)
@@ -479,7 +502,7 @@ def estimate(
         return
     # the summary goes to standard error whatever the output: per contact, since samples
     # pooled over several contacts (a -45° grasp, then a +45° one) have no common direction
-    from softtip.summary import format_summary, summarise_contacts
+    from softtip.estimator.summary import format_summary, summarise_contacts
 
     targets = [p for p in (output, to_bag, rerun_save) if p is not None] or ["standard output"]
     confirmed = int(np.count_nonzero(est.line_evidence == 2))
@@ -494,7 +517,7 @@ def estimate(
 
 def _check_units(est, fingertip, config: EstimatorConfig, units: str, source: str) -> None:
     """Exit 2 when the moment-to-force ratio puts the force far outside the fingertip (wrong --units or --tip)."""
-    from softtip.lever import check_force_lever
+    from softtip.core.lever import check_force_lever
 
     check_force_lever(
         est.wrench[~est.taring], fingertip, units=units, source=source, min_force=max(0.1, config.contact_threshold)
@@ -512,28 +535,28 @@ def _bag_warnings(path: str, bag_log) -> None:
 
 
 def _check_outputs(inputs, outputs) -> None:
-    """Exit 2 when an output is an input or another output of the run (:func:`softtip.atomic.check_distinct`)."""
-    from softtip.atomic import check_distinct
+    """Exit 2 when an output is an input or another output of the run (:func:`softtip.io.atomic.check_distinct`)."""
+    from softtip.io.atomic import check_distinct
 
     check_distinct(inputs, outputs)
 
 
 def _write_estimate_outputs(
     est, columns, log, bag_log, config, fingertip, *, output, plot_path, plot_units, title, to_bag, rerun_spawn, rerun_save,
-    metadata,
+    metadata, ros_distro=None, frame_id=None,
 ) -> None:
     """Write every output of ``estimate``; all appear together, or none (and no temporary file stays)."""
     import io as _io
 
-    from softtip.atomic import AtomicFile, cannot_write, commit_all, write_stdout
-    from softtip.io import write_table
+    from softtip.io.atomic import AtomicFile, cannot_write, commit_all, write_stdout
+    from softtip.io.tables import write_table
 
-    viz = _optional("softtip.viz", "viz") if (rerun_spawn or rerun_save) else None
+    viz = _optional("softtip.viz.rerun", "viz") if (rerun_spawn or rerun_save) else None
     pending: list[AtomicFile] = []
     bag_written = False
     try:
         if plot_path is not None:
-            from softtip.plot import plot_estimates
+            from softtip.viz.plot import plot_estimates
 
             # drawn in memory first: a full disk then gives the OS's reason, not the image writer's
             image = _io.BytesIO()
@@ -556,13 +579,14 @@ def _write_estimate_outputs(
             logger.log_estimates(est)
             logger.close()
         if to_bag is not None:
-            bag = _optional("softtip.bag", "ros")
+            bag = _optional("softtip.io.bag", "ros")
+            frame = output_frame_id(frame_id, bag_log.frame_id if bag_log is not None else "")
             if bag_log is not None:
-                bag.write_estimates_bag(to_bag, est, bag_log.wrench, bag_log.stamps_ns, bag_log.frame_id, bag_log.topic)
+                bag.write_estimates_bag(to_bag, est, bag_log.wrench, bag_log.stamps_ns, frame, bag_log.topic, distro=ros_distro)
             else:
-                bag.write_estimates_bag(to_bag, est, log.wrench)
+                bag.write_estimates_bag(to_bag, est, log.wrench, frame_id=frame, distro=ros_distro)
             bag_written = True
-        # the table last, atomically (softtip.atomic, through write_table); then the others are put in place
+        # the table last, atomically (softtip.io.atomic, through write_table); then the others are put in place
         if output is not None:
             with _progress_bar(len(est), "writing") as bar:
                 write_table(columns, output, metadata=metadata, progress=bar.update)
@@ -575,7 +599,9 @@ def _write_estimate_outputs(
         for f in pending:
             f.discard()
         if bag_written:
-            shutil.rmtree(to_bag, ignore_errors=True)
+            from softtip.ros.bagout import remove_bag
+
+            remove_bag(to_bag)
 
 
 class _NoProgress:
@@ -620,7 +646,7 @@ def _progress_bar(total: int, what: str, *, unit: str = " rows", file=None, dela
 
 def _parquet_metadata(fingertip, tip: str, output_units: str, log) -> dict[str, str]:
     """Key-value metadata of a Parquet output: units, fingertip, input, softtip's version."""
-    from softtip.io import PARQUET_FINGERTIP_KEY, PARQUET_UNITS_KEY
+    from softtip.io.tables import PARQUET_FINGERTIP_KEY, PARQUET_UNITS_KEY
 
     meta = {PARQUET_UNITS_KEY: output_units, "softtip.tip": str(tip), "softtip.input": log.source, "softtip.version": __version__}
     try:
@@ -632,7 +658,7 @@ def _parquet_metadata(fingertip, tip: str, output_units: str, log) -> dict[str, 
 
 def _check_figure_path(path: str) -> None:
     """A figure path needs an existing folder and a format matplotlib writes (exit 2 otherwise)."""
-    from softtip.plot import figure_formats
+    from softtip.viz.plot import figure_formats
 
     p = Path(path)
     formats = figure_formats()
@@ -672,7 +698,7 @@ def _make_config(opts: dict, sample_rate: float | None = None, tip: Fingertip | 
         return EstimatorConfig(
             contact_point=opts["contact_point"],
             contact_threshold=opts["contact_threshold"],
-            latch_window=opts["latch_window"],
+            latch_force_range=opts["latch_window"],
             noise=SensorNoise((opts["force_noise"],) * 3, (opts["moment_noise"] * 1e-3,) * 3),
             h_min=opts["h_min"] * 1e-3,
             lowpass_hz=opts["lowpass"],
@@ -704,7 +730,7 @@ def _make_config(opts: dict, sample_rate: float | None = None, tip: Fingertip | 
 
 
 def _is_bag(path: str) -> bool:
-    from softtip.bag import is_bag  # rosbags itself is imported only to read one
+    from softtip.io.bag import is_bag  # rosbags itself is imported only to read one
 
     return is_bag(path)
 
@@ -799,10 +825,10 @@ def stream(
     import signal
     import threading
 
-    from softtip.live import KeyReader, LiveStats, Recorder, TerminalView, run_live
-    from softtip.netft import FAULTS
-    from softtip.pipeline import Estimator
-    from softtip.sources import Interrupted, LogSource, SourceError
+    from softtip.io.live import KeyReader, LiveStats, Recorder, TerminalView, run_live
+    from softtip.io.netft import FAULTS
+    from softtip.estimator import Estimator
+    from softtip.io.sources import Interrupted, LogSource, SourceError
 
     if (host is None) == (replay is None):
         raise click.UsageError("give either --netft HOST or --replay LOG.csv")
@@ -827,7 +853,7 @@ def stream(
     )
     fingertip = load_fingertip(tip)
     recorder = Recorder(record) if record is not None else None
-    viz = _optional("softtip.viz", "viz") if (rerun_spawn or rerun_save) else None
+    viz = _optional("softtip.viz.rerun", "viz") if (rerun_spawn or rerun_save) else None
 
     stop = threading.Event()
     # Ctrl-C, SIGTERM and SIGHUP end the loop between two samples (or a wait for one): the
@@ -841,12 +867,12 @@ def stream(
                 if payload is None:
                     source = LogSource.from_csv(replay, units=units, speed=speed, stop=stop)
                 else:
-                    from softtip.payload import replay_source
+                    from softtip.calibration.payload import replay_source
 
                     source = replay_source(replay, units, speed, payload)
                 info = f"(replay x{speed:g})" if speed else "(replay, as fast as possible)"
             else:
-                from softtip.netft import NetFTSource
+                from softtip.io.netft import NetFTSource
 
                 try:
                     source = NetFTSource(host, rdt_port=rdt_port, http_port=http_port, timeout=timeout, device_bias=device_bias, strict=faults, stop=stop)
@@ -965,7 +991,7 @@ tangent plane as a trace, and the state over time).
 def reproduce(out_dir, only, seed, jobs):
     from tqdm import tqdm
 
-    from softtip.reproduce import run_reproduction
+    from softtip.sim.reproduce import run_reproduction
 
     experiments = [e.strip() for e in only.split(",") if e.strip()] if only else None
     try:

@@ -6,18 +6,18 @@ import sys
 
 import click
 
-from softtip.atomic import write_stdout
+from softtip.io.atomic import write_stdout
 from softtip.cli_types import Number
 from softtip.errors import InputError
-from softtip.examples import EXAMPLE_PROBING_PATH, EXAMPLE_STILL_PATH
-from softtip.noise import NANO17
-from softtip.units import UNIT_SYSTEMS
+from softtip.io.examples import EXAMPLE_PROBING_PATH, EXAMPLE_STILL_PATH
+from softtip.core.noise import NANO17
+from softtip.core.units import UNIT_SYSTEMS
 
 __all__ = ["calibrate", "calibrate_payload"]
 
 
 def _read(input_path: str, units: str):
-    from softtip.io import read_log
+    from softtip.io.tables import read_log
 
     return read_log(sys.stdin if input_path == "-" else input_path, units=units)
 
@@ -34,7 +34,7 @@ def _read_probing(input_path: str, units: str):
     import csv
     import io
 
-    from softtip.io import read_log
+    from softtip.io.tables import read_log
 
     if input_path == "-":
         return _read(input_path, units)
@@ -67,7 +67,7 @@ def _example_or_log(input_path, example: bool, units: str, path, what: str) -> s
 
 
 def _check_output(input_path: str, output: str | None) -> None:
-    from softtip.atomic import check_distinct
+    from softtip.io.atomic import check_distinct
 
     check_distinct([("LOG", input_path)], [("-o", output)])
 
@@ -124,19 +124,19 @@ def calibrate(
     ctx, input_path, shape, output, units, tare_duration, contact_threshold, min_force, rigid, force_noise, moment_noise,
     example, guide, mesh_path, mesh_units, rotation,
 ):
-    from softtip.calibration import PROBING_GUIDE, calibrate_fingertip, write_fingertip_toml
-    from softtip.noise import SensorNoise
+    from softtip.calibration.probing import PROBING_GUIDE, calibrate_fingertip, write_fingertip_toml
+    from softtip.core.noise import SensorNoise
 
     if guide:
         click.echo(PROBING_GUIDE)
         return
     if shape is None:
         raise click.UsageError("Missing option '--shape' (sphere, capsule or mesh).")
-    if shape == "mesh" or mesh_path is not None:  # mesh fingertips: softtip.calibration_mesh
+    if shape == "mesh" or mesh_path is not None:  # mesh fingertips: softtip.calibration.mesh
         if example or input_path is None:
             raise click.UsageError("--shape mesh needs a probing LOG of the mesh fingertip (the example is a sphere's)")
-        from softtip.calibration import atomic_write_text
-        from softtip.calibration_mesh import calibrate_mesh_file
+        from softtip.calibration.probing import atomic_write_text
+        from softtip.calibration.mesh import calibrate_mesh_file
 
         try:
             if shape != "mesh" or mesh_path is None or rigid:
@@ -210,10 +210,10 @@ together with --payload (no tare needed).
 @click.option("--example", is_flag=True, help="Use the shipped example still log (simulated: a 20 g fingertip, centre of mass 1, -0.5, 20 mm, in 12 orientations) as LOG.")
 @click.pass_context
 def calibrate_payload(ctx, input_path, output, units, example):
-    from softtip.calibration import atomic_write_text
+    from softtip.calibration.probing import atomic_write_text
     from softtip.estimator.tare import bias_to_toml
-    from softtip.payload import calibrate_payload as fit_payload
-    from softtip.payload import read_orientation
+    from softtip.calibration.payload import calibrate_payload as fit_payload
+    from softtip.calibration.payload import read_orientation
 
     input_path = _example_or_log(input_path, example, units, EXAMPLE_STILL_PATH, "still log")
     try:

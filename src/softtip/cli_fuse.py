@@ -9,7 +9,8 @@ import click
 import numpy as np
 
 from softtip.errors import InputError
-from softtip.units import UNIT_SYSTEMS, wrench_to_si
+from softtip.ros.options import bag_output_options, output_frame_id
+from softtip.core.units import UNIT_SYSTEMS, wrench_to_si
 
 __all__ = ["fuse"]
 
@@ -61,7 +62,10 @@ common direction and the plane through both lines), crossing_lines (two edges: b
 angle and closest approach), line_and_face, faces, single or none; with the evidence of the
 lines (confirmed once the object was rocked about two axes) and flags (unbalanced forces,
 an area contact). Writes CSV (standard output without -o) or Parquet (-o ending in .parquet);
-a summary on standard error.
+a summary on standard error. --to-bag also writes the fused line and plane as
+geometry_msgs/msg/PoseStamped (x axis along the line, z axis the plane's normal), the contacts as
+PointStamped and RViz markers, in the common frame, in the format --ros-distro plays; with
+--to-bag and no -o no CSV is written.
 """,
     )
     @click.argument("inputs", nargs=-1, required=True, type=click.Path(exists=False))
@@ -77,11 +81,13 @@ a summary on standard error.
     @click.option("--rerun", "rerun_spawn", is_flag=True, help="Show both fingertips, their contacts and the fused line or plane in the hand frame in a Rerun viewer (needs rerun-sdk).")
     @click.option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save that 3-D view and the fused series to FILE.rrd.")
     @click.option("--truth", "truth_file", type=click.Path(dir_okay=False), metavar="FILE.json", help="The simulator's truth.json: the object's true line and plane drawn in the Rerun view.")
+    @bag_output_options(frame_default="the common frame: --frame, the hand file's, else hand")
     @estimator_options
-    def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, point_std, plot_path, rerun_spawn, rerun_save, truth_file, tip, **estimator_opts):
-        from softtip.fingertip import load_fingertip
+    def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, point_std, plot_path, rerun_spawn, rerun_save,
+             truth_file, tip, to_bag=None, ros_distro=None, frame_id=None, **estimator_opts):  # fmt: skip
+        from softtip.core.fingertip import load_fingertip
         from softtip.fusion import fuse_logs, poses_from_columns, read_hand_file
-        from softtip.io import read_log, write_table
+        from softtip.io.tables import read_log, write_table
 
         if object_mass is not None and not (np.isfinite(object_mass) and object_mass >= 0):
             raise click.BadParameter(f"{object_mass!r}: expected a mass in kg, 0 or more", param_hint="--object-mass")
@@ -95,12 +101,18 @@ a summary on standard error.
             raise click.UsageError("--truth draws into the Rerun view: give --rerun or --rerun-save")
         if rerun_spawn or rerun_save:
             optional("softtip.viz", "viz")
-        from softtip.atomic import check_distinct
+        from softtip.io.atomic import check_distinct
 
         check_distinct(
             [("INPUT", p) for p in inputs] + [("--hand", hand_file), ("--bias", estimator_opts.get("bias_file")), ("--truth", truth_file)],
-            [("-o", output), ("--plot", plot_path), ("--rerun-save", rerun_save)],
+            [("-o", output), ("--plot", plot_path), ("--to-bag", to_bag), ("--rerun-save", rerun_save)],
         )
+        if to_bag is None and (ros_distro is not None or frame_id is not None):
+            raise click.UsageError("--ros-distro and --frame-id apply to --to-bag")
+        if to_bag is not None:
+            from softtip.ros.bagout import bag_format
+
+            bag_format(to_bag, ros_distro)
         fingertip = load_fingertip(tip)
         config = make_config(estimator_opts)
         if len(inputs) == 1:
@@ -108,13 +120,14 @@ a summary on standard error.
                 raise click.UsageError("a bag input needs --topics TOPIC TOPIC and --frame FRAME")
             if hand_file is not None:
                 raise click.UsageError("--hand applies to CSV inputs; a bag's poses come from its /tf")
-            bag = optional("softtip.bag", "ros")
+            bag = optional("softtip.io.bag", "ros")
             from softtip.fusion.tf import read_tf
 
             path = inputs[0]
             blogs = [bag.read_bag(path, tp) for tp in topics]
             tree = read_tf(path)
             origin = min(int(b.stamps_ns[0]) for b in blogs)
+            common, stamps = frame, blogs[0].stamps_ns
             logs = []
             for b in blogs:
                 if not b.frame_id:
@@ -125,14 +138,17 @@ a summary on standard error.
             if topics is not None or frame is not None:
                 raise click.UsageError("--topics and --frame apply to a bag input")
             read = [read_log(p, units=units) for p in inputs]
+            common = "hand"  # pose columns name no frame
             if hand_file is not None:
                 hand = read_hand_file(hand_file)
                 if len(hand.fingers) != 2:
                     raise InputError(f"{hand_file}: {len(hand.fingers)} [finger.NAME] tables; expected two, in the order of the logs")
                 poses = list(hand.fingers.items())
+                common = hand.frame
             else:
                 poses = [(os.path.basename(p), poses_from_columns(log.t, log.extra, os.path.basename(p), p)) for p, log in zip(inputs, read)]
             logs = [(name, log.t, log.wrench, pose) for (name, pose), log in zip(poses, read)]
+            stamps = np.rint(read[0].t * 1e9).astype(np.int64)
         else:
             raise click.UsageError(f"expected two CSV logs or one bag, got {len(inputs)} inputs")
         try:
@@ -141,22 +157,37 @@ a summary on standard error.
             )
         except ValueError as exc:
             raise click.UsageError(str(exc)) from None
-        if rerun_spawn or rerun_save:  # the view first; put in place with the table
-            from softtip.atomic import AtomicFile
+        rrd = None
+        if rerun_spawn or rerun_save:  # the view first, put in place with the table
             from softtip.fusion.viz import log_fused, read_truth
+            from softtip.io.atomic import AtomicFile
 
             truth = read_truth(truth_file, fused.t) if truth_file else None
             rrd = AtomicFile(rerun_save) if rerun_save else None
             try:
                 log_fused(fused, fingers, fingertip, save=None if rrd is None else rrd.tmp, spawn=rerun_spawn, truth=truth)
-                write_table(fused.columns(), output)
-                if rrd is not None:
-                    rrd.commit()
-            finally:
+            except BaseException:
                 if rrd is not None:
                     rrd.discard()
-        else:
-            write_table(fused.columns(), output)
+                raise
+        try:
+            if to_bag is not None:  # the fused grasp as standard messages (softtip.ros.fused)
+                from softtip.ros.bagout import remove_bag
+                from softtip.ros.fused import write_fused_bag
+
+                write_fused_bag(to_bag, fused, fingers, stamps, output_frame_id(frame_id, common), distro=ros_distro)
+            try:
+                if output is not None or to_bag is None:
+                    write_table(fused.columns(), output)
+                if rrd is not None:
+                    rrd.commit()
+            except BaseException:
+                if to_bag is not None:
+                    remove_bag(to_bag)
+                raise
+        finally:
+            if rrd is not None:
+                rrd.discard()
         if plot_path is not None:
             from softtip.fusion.plot import plot_fused
 

@@ -4,7 +4,7 @@
 runs it one sample at a time for live use (:mod:`.stream`). Each stage has its batch and its
 stream form side by side in one module: :mod:`.tare`, :mod:`.latch`, :mod:`.joint`,
 :mod:`.depth`, :mod:`.measure`; settings are in :mod:`.config`, results in :mod:`.results`. Both forms call
-the same kernels (:mod:`softtip.contact`, :mod:`softtip.spin`, :mod:`softtip.noise`) and
+the same kernels (:mod:`softtip.core.contact`, :mod:`softtip.core.spin`, :mod:`softtip.core.noise`) and
 agree to rounding.
 
 Per sample (manual §3):
@@ -52,10 +52,10 @@ softtip's extensions (issue 5), each an :class:`EstimatorConfig` field:
   window) whose soft-finger solution lies farther than this from the latched point starts
   a new latch (a new first rise, from that sample); ``relatched`` flags that sample, and
   the first sample of every contact that follows a latched one (contact lost and regained).
-- ``depth``, ``depth_mode``: see step 5 (:mod:`softtip.depth`, :mod:`.depth`).
+- ``depth``, ``depth_mode``: see step 5 (:mod:`softtip.core.depth`, :mod:`.depth`).
 - ``contact_point="joint"``: the latch of ``latch`` mode, then the contact point moved
   across the line to where a window of the last ``joint_window`` seconds fits the line
-  contact model (:mod:`softtip.joint`). A window is accepted when its standard deviations
+  contact model (:mod:`softtip.core.joint`). A window is accepted when its standard deviations
   of line angle and offset are below ``joint_max_angle_std`` and ``joint_max_offset_std``
   and its fit residual below ``joint_max_residual`` noise standard deviations. The point
   held is the accepted window since contact onset (or the last re-latch) with the

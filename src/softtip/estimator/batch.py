@@ -8,8 +8,8 @@ import warnings
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from softtip._xp import NP
-from softtip.contact import contact_arrays
+from softtip.core._xp import NP
+from softtip.core.contact import contact_arrays
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.contact import drift_message, first_contact_pulls, started_in_contact_message, track_contacts
 from softtip.estimator.depth import depth_points, resolve_depth
@@ -19,8 +19,8 @@ from softtip.estimator.latch import latch_points
 from softtip.estimator.measure import effective_noise, measure, noise_correlation
 from softtip.estimator.results import LINE, NONE, Estimates, EstimatorWarning
 from softtip.estimator.tare import tare_log
-from softtip.filtering import lowpass_sos, sosfilt_batch
-from softtip.fingertip import Fingertip, load_fingertip
+from softtip.core.filtering import lowpass_sos, sosfilt_batch
+from softtip.core.fingertip import Fingertip, load_fingertip
 
 __all__ = ["estimate"]
 

@@ -2,16 +2,17 @@
 
 from __future__ import annotations
 
+import inspect
 import math
 from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
 
-from softtip.depth import DepthLaw
-from softtip.filtering import lowpass_sos
-from softtip.noise import NANO17, SensorNoise
-from softtip.units import KGF
+from softtip.core.depth import DepthLaw
+from softtip.core.filtering import lowpass_sos
+from softtip.core.noise import NANO17, SensorNoise
+from softtip.core.units import KGF
 
 __all__ = ["CONTACT_POINT_MODES", "DEPTH_MODES", "TARE_METHODS", "EstimatorConfig"]
 
@@ -33,8 +34,10 @@ class EstimatorConfig:
         How the contact point is obtained (module docstring).
     contact_threshold : float
         N; in contact while ``|f|`` (tared, filtered) is at least this.
-    latch_window : (float, float)
-        N; light-force window of the latch (default 0.2–0.5 kgf).
+    latch_force_range : (float, float)
+        N; the light-force range ``|f|`` must lie in for a sample to be latched (default
+        0.2–0.5 kgf; the papers' "window" of force). ``latch_window=`` is accepted as its
+        former name.
     stall_time : float
         s; the first rise ends when ``|f|`` has set no new maximum for this long.
     fallback_samples : int
@@ -56,12 +59,12 @@ class EstimatorConfig:
         s of samples averaged for the bias when ``bias`` is ``None``; 0 disables taring
         (the input is already tared).
     relatch_distance : float or None
-        m; re-latch when, with the latch held and ``|f|`` inside ``latch_window``, the
+        m; re-latch when, with the latch held and ``|f|`` inside ``latch_force_range``, the
         soft-finger solution lies farther than this from the latched point. ``None``
         (default, the papers'): only on contact loss. A few mm (e.g. 3 mm) is beyond the
         soft-finger bias of the papers' line contacts at light force (≈ |h| / |f| ≤ 1 mm).
     depth : DepthLaw or None
-        Skin law of the depth compensation (:mod:`softtip.depth`): the fixed law of
+        Skin law of the depth compensation (:mod:`softtip.core.depth`): the fixed law of
         ``depth_mode="law"``, the prior of ``"online"``. ``None`` (default): the
         fingertip's own (:func:`softtip.estimator.depth.tip_depth_law`: the murakami2006
         preset and any fingertip file with a ``skin_thickness``).
@@ -149,7 +152,7 @@ class EstimatorConfig:
 
     contact_point: Literal["latch", "track", "joint"] = "latch"
     contact_threshold: float = 0.05
-    latch_window: tuple[float, float] = (0.2 * KGF, 0.5 * KGF)
+    latch_force_range: tuple[float, float] = (0.2 * KGF, 0.5 * KGF)
     stall_time: float = 0.1
     fallback_samples: int = 5
     noise: SensorNoise = field(default=NANO17)
@@ -201,11 +204,13 @@ class EstimatorConfig:
                 raise ValueError(f"relatch_distance must be a positive distance in m or None, got {self.relatch_distance!r}")
             object.__setattr__(self, "relatch_distance", v)
         if self.depth is not None and not isinstance(self.depth, DepthLaw):
-            raise ValueError(f"depth must be a softtip.depth.DepthLaw or None, got {self.depth!r}")
-        lo, hi = (float(v) for v in self.latch_window)
+            raise ValueError(f"depth must be a softtip.core.depth.DepthLaw or None, got {self.depth!r}")
+        lo, hi = (float(v) for v in self.latch_force_range)
         if not (0.0 <= lo < hi):
-            raise ValueError(f"latch_window must be (low, high) with 0 <= low < high, in N; got {self.latch_window!r}")
-        object.__setattr__(self, "latch_window", (lo, hi))
+            raise ValueError(
+                f"latch_force_range must be (low, high) with 0 <= low < high, in N; got {self.latch_force_range!r}"
+            )
+        object.__setattr__(self, "latch_force_range", (lo, hi))
         for name in ("joint_window", "joint_max_angle_std", "joint_max_offset_std", "joint_max_residual", "joint_drift"):
             v = float(getattr(self, name))
             if not (math.isfinite(v) and v > 0.0):
@@ -253,3 +258,22 @@ class EstimatorConfig:
             lowpass_sos(self.lowpass_hz, self.sample_rate, self.lowpass_order)  # validates
 
 
+
+
+_dataclass_init = EstimatorConfig.__init__
+
+
+def _init(self, *args, latch_window=None, **kwargs):
+    # ``latch_window`` is the former name of ``latch_force_range`` (a force range, not a time
+    # window like ``joint_window``); given, it wins (dataclasses.replace passes both)
+    if latch_window is not None:
+        kwargs["latch_force_range"] = latch_window
+    _dataclass_init(self, *args, **kwargs)
+
+
+_init.__doc__ = _dataclass_init.__doc__
+_init.__signature__ = inspect.signature(_dataclass_init)
+EstimatorConfig.__init__ = _init
+EstimatorConfig.latch_window = property(
+    lambda self: self.latch_force_range, doc="Former name of :attr:`latch_force_range`, N."
+)

@@ -38,7 +38,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from softtip.estimator.config import EstimatorConfig
-from softtip.noise import SensorNoise
+from softtip.core.noise import SensorNoise
 
 __all__ = ["RELEASE_FLOOR", "contact_thresholds", "ContactTrack", "track_contacts", "ContactTracker", "START_PULL_TIME"]
 

@@ -5,9 +5,9 @@ Friction acts inside the skin, at a depth ``δ`` below the contact point ``r`` o
 undeformed surface, so the moment is taken about the effective point ``r − δ n``. With
 ``depth_mode="online"`` the depth of each contact is ``δ = κ δ₀(F_n)``: ``δ₀`` the skin
 law's depth at the normal force (the prior), ``κ`` a factor learnt from the contact's own
-data under the line-contact model (the maths is in :mod:`softtip.depth`).
+data under the line-contact model (the maths is in :mod:`softtip.core.depth`).
 
-Window sums of the per-sample products (:func:`softtip.depth.depth_products`) are kept
+Window sums of the per-sample products (:func:`softtip.core.depth.depth_products`) are kept
 over the last ``depth_window`` seconds of a *segment*: the run of samples in contact with
 one and the same contact point (a new segment at contact onset and whenever the point
 changes: during the latch's first rise, at a re-latch, at a move of ``joint`` mode). The
@@ -31,8 +31,8 @@ from collections import deque
 
 import numpy as np
 
-from softtip._xp import NP, PY
-from softtip.depth import (
+from softtip.core._xp import NP, PY
+from softtip.core.depth import (
     MIN_DEPTH_SAMPLES,
     N_DEPTH_SUMS,
     DepthLaw,
@@ -44,8 +44,8 @@ from softtip.depth import (
     skin_depth_law,
 )
 from softtip.estimator.config import EstimatorConfig
-from softtip.fingertip import Fingertip
-from softtip.noise import SensorNoise
+from softtip.core.fingertip import Fingertip
+from softtip.core.noise import SensorNoise
 
 __all__ = ["tip_depth_law", "resolve_depth", "depth_points", "DepthTracker", "SOLVES_PER_WINDOW"]
 
@@ -57,7 +57,7 @@ DEPTH_ITERATIONS = 4
 
 def tip_depth_law(tip: Fingertip) -> DepthLaw | None:
     """The fingertip's skin law: from its ``skin_thickness`` (the murakami2006 preset has
-    5 mm, giving :data:`softtip.depth.MURAKAMI2006_DEPTH`), ``None`` without one."""
+    5 mm, giving :data:`softtip.core.depth.MURAKAMI2006_DEPTH`), ``None`` without one."""
     h = getattr(tip, "skin_thickness", None)
     return None if h is None else skin_depth_law(h)
 
@@ -228,7 +228,7 @@ class DepthTracker:
         ``point`` and its normal ``normal``.
 
         The hot path is written out (the same operations, in the same order, as
-        :func:`softtip.depth.depth_kernel` and :func:`softtip.depth.depth_products`):
+        :func:`softtip.core.depth.depth_kernel` and :func:`softtip.core.depth.depth_products`):
         plain float arithmetic is several times cheaper than calls and ``map``."""
         law = self.law
         fx, fy, fz, mx, my, mz = x

@@ -1,5 +1,5 @@
 """The line-evidence stage: ``line`` or ``area``, and the direction from the window; batch and
-stream side by side (the window maths is in :mod:`softtip.evidence`).
+stream side by side (the window maths is in :mod:`softtip.core.evidence`).
 
 Over a sliding window of ``evidence_window`` seconds (restarted at contact onset, at every
 re-latch and when the contact point has moved farther than ``evidence_reset_distance`` from
@@ -40,14 +40,14 @@ from collections import deque
 
 import numpy as np
 
-from softtip._xp import NP, PY
+from softtip.core._xp import NP, PY
 from softtip.estimator.config import EstimatorConfig
-from softtip.evidence import (
+from softtip.core.evidence import (
     N_SUMS, _div, evidence_products, noise_constants, tangent_noise_kernel, window_constants, window_direction_floats,
     window_eigen_floats, window_kernel,
 )  # fmt: skip
-from softtip.noise import SensorNoise
-from softtip.spin import tangent_frame_kernel
+from softtip.core.noise import SensorNoise
+from softtip.core.spin import tangent_frame_kernel
 
 __all__ = ["evidence_states", "EvidenceTracker"]
 
@@ -234,7 +234,7 @@ class EvidenceTracker:
 
     Running sums of the products since the segment's start and, for each sample of the last
     ``evidence_window`` seconds, its time and the sums before it: window sums are
-    differences, as in the batch. Plain float arithmetic (:func:`softtip.evidence.window_floats`),
+    differences, as in the batch. Plain float arithmetic (:func:`softtip.core.evidence.window_floats`),
     O(1) per sample.
     """
 

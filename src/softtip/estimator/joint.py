@@ -2,7 +2,7 @@
 
 The latch, then the contact point moved across the line to where a window of the last
 ``joint_window`` seconds fits the line-contact model (the maths is in
-:mod:`softtip.joint`). A window is accepted when its standard deviations of line angle and
+:mod:`softtip.core.joint`). A window is accepted when its standard deviations of line angle and
 offset are below ``joint_max_angle_std`` and ``joint_max_offset_std`` and its fit residual
 below ``joint_max_residual`` noise standard deviations. The point held is the accepted
 window since contact onset (or the last re-latch) with the smallest standard deviation aged
@@ -19,14 +19,14 @@ from collections import deque
 
 import numpy as np
 
-from softtip._xp import NP, PY
-from softtip.contact import contact_kernel
-from softtip.depth import depth_kernel
+from softtip.core._xp import NP, PY
+from softtip.core.contact import contact_kernel
+from softtip.core.depth import depth_kernel
 from softtip.estimator.config import EstimatorConfig
-from softtip.fingertip import Fingertip
-from softtip.joint import N_SUMS, joint_products, joint_solve_kernel
-from softtip.noise import SensorNoise
-from softtip.spin import spin_torque_kernel
+from softtip.core.fingertip import Fingertip
+from softtip.core.joint import N_SUMS, joint_products, joint_solve_kernel
+from softtip.core.noise import SensorNoise
+from softtip.core.spin import spin_torque_kernel
 
 __all__ = ["joint_points", "JointTracker", "joint_accept", "joint_moment"]
 

@@ -18,10 +18,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from softtip._xp import PY
-from softtip.contact import contact_kernel
+from softtip.core._xp import PY
+from softtip.core.contact import contact_kernel
 from softtip.estimator.config import EstimatorConfig
-from softtip.fingertip import Fingertip
+from softtip.core.fingertip import Fingertip
 
 __all__ = ["latch_points", "LatchTracker"]
 
@@ -34,7 +34,7 @@ def _latch_segment(t, fn, valid, r_sc, tip: Fingertip, config: EstimatorConfig):
     start with the latch already fixed (where a drift re-latch may happen).
     """
     k = len(t)
-    lo, hi = config.latch_window
+    lo, hi = config.latch_force_range
     idx = np.arange(k)
     prev_peak = np.concatenate(([-np.inf], np.maximum.accumulate(fn)[:-1]))
     t_peak = t[np.maximum.accumulate(np.where(fn > prev_peak, idx, 0))]
@@ -82,7 +82,7 @@ def latch_points(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig):
     relatched = np.zeros(n, dtype=bool)
     valid = np.asarray(sc[7], dtype=bool)
     r_sc = np.where(valid[:, None], np.stack(sc[:3], axis=-1), np.nan)
-    lo, hi = config.latch_window
+    lo, hi = config.latch_force_range
     dist = config.relatch_distance
     edges = np.diff(np.concatenate(([False], contact, [False])).astype(np.int8))
     starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
@@ -115,7 +115,7 @@ class LatchTracker:
 
     Call :meth:`start` at contact onset (and at a re-latch), then :meth:`step` for every
     sample in contact. Soft-finger solutions (``sc``, the 8-tuple of
-    :func:`softtip.contact.contact_kernel`) are computed only when needed and handed back
+    :func:`softtip.core.contact.contact_kernel`) are computed only when needed and handed back
     for reuse.
     """
 
@@ -141,7 +141,7 @@ class LatchTracker:
         """Re-latch test of a held latch: ``(moved, sc)``; ``moved`` when, at light force,
         this sample's soft-finger solution lies farther than ``relatch_distance`` from it."""
         dist = self.config.relatch_distance
-        lo, hi = self.config.latch_window
+        lo, hi = self.config.latch_force_range
         if self.point is None or dist is None or not lo <= fn <= hi:
             return False, sc
         sc = contact_kernel(self.tip, *x, xp=PY)
@@ -168,7 +168,7 @@ class LatchTracker:
         if valid and self._n_fb < cfg.fallback_samples:
             self._n_fb += 1
             self._sum_fb = [s + v for s, v in zip(self._sum_fb, sc[:3])]
-        lo, hi = cfg.latch_window
+        lo, hi = cfg.latch_force_range
         if self.rising and (fn > hi or t - self._t_peak > cfg.stall_time):
             self.rising = False
             if self._n_win > 0:

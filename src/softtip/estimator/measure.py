@@ -2,7 +2,7 @@
 the spin torque, ``h``, its noise level, the line test, the direction and its angle.
 
 :func:`measure` is component-wise: the batch calls it on numpy arrays (back end
-:data:`softtip._xp.NP`), the stream on Python floats (:data:`softtip._xp.PY`), so both agree
+:data:`softtip.core._xp.NP`), the stream on Python floats (:data:`softtip.core._xp.PY`), so both agree
 to rounding.
 """
 
@@ -10,10 +10,10 @@ from __future__ import annotations
 
 from typing import Any, NamedTuple
 
-from softtip.depth import DepthLaw, depth_kernel
-from softtip.filtering import noise_gain
-from softtip.noise import SensorNoise, angle_std_kernel, h_std_kernel
-from softtip.spin import angle_kernel, direction_kernel, spin_torque_kernel, tangent_frame_kernel, tangential_kernel
+from softtip.core.depth import DepthLaw, depth_kernel
+from softtip.core.filtering import noise_gain
+from softtip.core.noise import SensorNoise, angle_std_kernel, h_std_kernel
+from softtip.core.spin import angle_kernel, direction_kernel, spin_torque_kernel, tangent_frame_kernel, tangential_kernel
 
 __all__ = ["Measurement", "measure", "effective_noise", "noise_correlation"]
 

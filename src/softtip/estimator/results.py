@@ -60,7 +60,7 @@ class Estimates:
     depth_from_data : (N,) online depth: the contact's own data, not the skin law (the
         prior), determined it (the data's information on it exceeds the prior's)
     joint_conditioning, joint_angle_std, joint_offset_std, joint_residual : (N,) the
-        ``joint`` window ending at this sample (:mod:`softtip.joint`): reciprocal condition
+        ``joint`` window ending at this sample (:mod:`softtip.core.joint`): reciprocal condition
         number in [0, 1], standard deviations of its line angle (rad) and of its offset
         across the line (m), and the fit's RMS residual in units of the noise; NaN where no
         window was solved (other modes, ``none``, or no soft-finger solution)

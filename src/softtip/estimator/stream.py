@@ -14,8 +14,8 @@ import warnings
 import numpy as np
 from numpy.typing import ArrayLike
 
-from softtip._xp import PY
-from softtip.contact import contact_kernel
+from softtip.core._xp import PY
+from softtip.core.contact import contact_kernel
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.contact import (
     START_PULL_TIME,
@@ -30,8 +30,8 @@ from softtip.estimator.latch import LatchTracker
 from softtip.estimator.measure import effective_noise, measure, noise_correlation
 from softtip.estimator.results import EstimatorWarning, SampleEstimate
 from softtip.estimator.tare import StreamTare, TareReport
-from softtip.filtering import SosStream, lowpass_sos
-from softtip.fingertip import Fingertip, load_fingertip
+from softtip.core.filtering import SosStream, lowpass_sos
+from softtip.core.fingertip import Fingertip, load_fingertip
 
 __all__ = ["Estimator"]
 

@@ -32,9 +32,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from softtip.errors import InputError
-from softtip.tomlfile import read_toml
+from softtip.io.tomlfile import read_toml
 from softtip.estimator.config import EstimatorConfig
-from softtip.joint import MODEL_MARGIN
+from softtip.core.joint import MODEL_MARGIN
 
 __all__ = [
     "SPIKE_SIGMAS",

@@ -14,7 +14,7 @@ from collections.abc import Sequence
 from numpy.typing import ArrayLike
 
 from softtip.estimator import EstimatorConfig, estimate
-from softtip.fingertip import Fingertip, load_fingertip
+from softtip.core.fingertip import Fingertip, load_fingertip
 from softtip.fusion.fuse import GRASPS, Finger, FusedGrasp, fuse
 from softtip.fusion.poses import POSE_COLUMNS, HandFile, PoseSeries, poses_from_columns, read_hand_file
 

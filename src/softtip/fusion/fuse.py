@@ -75,7 +75,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from softtip.estimator import Estimates
 from softtip.fusion.poses import PoseSeries
-from softtip.noise import NANO17, SensorNoise
+from softtip.core.noise import NANO17, SensorNoise
 
 __all__ = ["GRASPS", "Finger", "FusedGrasp", "fuse"]
 

@@ -65,7 +65,7 @@ def plot_fused(
     -------
     matplotlib.figure.Figure
     """
-    from softtip.plot import _figure_module, _save
+    from softtip.viz.plot import _figure_module, _save
 
     plt = _figure_module()
     fig, ((ax_f, ax_d), (ax_g, ax_n)) = plt.subplots(2, 2, figsize=(10, 6.5), sharex=True, constrained_layout=True)

@@ -22,8 +22,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation, Slerp
 
 from softtip.errors import InputError
-from softtip.mounting import pose_from_table
-from softtip.tomlfile import read_toml
+from softtip.core.mounting import pose_from_table
+from softtip.io.tomlfile import read_toml
 
 __all__ = ["POSE_COLUMNS", "PoseSeries", "poses_from_columns", "read_hand_file", "HandFile"]
 

@@ -10,6 +10,7 @@ within ``max_gap`` of a stamp, is an error naming the frames.
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -20,7 +21,7 @@ from scipy.spatial.transform import Rotation, Slerp
 from softtip.errors import InputError
 from softtip.fusion.poses import PoseSeries
 
-__all__ = ["TF_TOPICS", "TfTree", "read_tf"]
+__all__ = ["TF_TOPICS", "TfTree", "gravity_orientations", "read_tf"]
 
 TF_TYPE = "tf2_msgs/msg/TFMessage"
 #: Topics read, and whether their transforms are static.
@@ -154,9 +155,10 @@ class TfTree:
         return PoseSeries((stamps[keep] - origin) * 1e-9, rot, tr, max_gap=0.0, name=frame)
 
 
-def read_tf(path: str | os.PathLike[str]) -> TfTree:
-    """Every transform of a bag's ``/tf`` and ``/tf_static``."""
-    from softtip.bag import _typestore, import_rosbags
+def read_tf(path: str | os.PathLike[str], purpose: str = "give the fingertips' poses another way") -> TfTree:
+    """Every transform of a bag's ``/tf`` and ``/tf_static`` (``purpose``: what the error of a
+    bag without them suggests)."""
+    from softtip.io.bag import _typestore, import_rosbags
 
     import_rosbags()
     from rosbags.highlevel import AnyReader
@@ -171,7 +173,7 @@ def read_tf(path: str | os.PathLike[str]) -> TfTree:
     try:
         conns = [c for c in reader.connections if c.topic in TF_TOPICS and c.msgtype == TF_TYPE]
         if not conns:
-            raise InputError(f"{source}: no /tf or /tf_static ({TF_TYPE}) topic; give the fingertips' poses another way")
+            raise InputError(f"{source}: no /tf or /tf_static ({TF_TYPE}) topic; {purpose}")
         for conn, _, raw in reader.messages(connections=conns):
             msg = reader.deserialize(raw, conn.msgtype)
             for ts in msg.transforms:
@@ -184,3 +186,54 @@ def read_tf(path: str | os.PathLike[str]) -> TfTree:
     finally:
         reader.close()
     return tree
+
+
+def gravity_orientations(
+    path: str | os.PathLike[str],
+    world: str,
+    frame_ids: Sequence[str],
+    stamps_ns: ArrayLike,
+    frame_id: str | None = None,
+    max_gap: float = 0.1,
+) -> NDArray[np.float64]:
+    """The sensor's orientation in a gravity-aligned frame at each wrench stamp, from a bag's /tf.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The bag.
+    world : str
+        The gravity frame (``z`` up, e.g. ``world``, ``odom``, ``base_link`` of a fixed base).
+    frame_ids : sequence of str
+        The distinct ``header.frame_id`` values of the wrench messages (one expected).
+    stamps_ns : array-like of int, shape (N,)
+        The wrench stamps, ns.
+    frame_id : str, optional
+        The sensor frame when the messages have none (an empty ``frame_id``).
+    max_gap : float
+        s; a moving transform farther than this from a stamp is an error.
+
+    Returns
+    -------
+    (N, 4) ``qw, qx, qy, qz``: the sensor frame in ``world``, as :mod:`softtip.calibration.payload` takes it.
+
+    Raises
+    ------
+    InputError
+        No /tf in the bag, several or no sensor frames, a frame not connected to ``world``, a
+        missing or stale transform (naming both frames).
+    """
+    names = [f for f in frame_ids if f]
+    if len(names) > 1:
+        raise InputError(
+            f"{os.fspath(path)}: the wrench messages have several frame_ids ({', '.join(map(repr, names))}); "
+            "expected one sensor frame for --gravity-frame"
+        )
+    sensor = names[0] if names else frame_id
+    if not sensor:
+        raise InputError(
+            f"{os.fspath(path)}: the wrench messages have an empty header.frame_id; give the sensor frame with --frame-id "
+            "to look up its orientation in /tf"
+        )
+    tree = read_tf(path, purpose=f"--gravity-frame needs the transform {world!r} → {sensor!r}")
+    return tree.orientations(world, sensor, stamps_ns, max_gap)

@@ -3,7 +3,7 @@ publishes for one sample (topics, payloads, RViz markers) as plain Python data.
 
 The ROS 2 node (:mod:`softtip.ros.node`, run with ``python -m softtip.ros`` in a sourced ROS 2
 environment) is a thin shell over these functions, and the bag writer
-(:mod:`softtip.bag`) fills the same payloads into ``rosbags`` messages, so what a bag holds and
+(:mod:`softtip.io.bag`) fills the same payloads into ``rosbags`` messages, so what a bag holds and
 what the node publishes are the same. Everything here is tested without ROS.
 """
 
@@ -25,8 +25,10 @@ __all__ = [
     "payloads",
     "Marker",
     "markers",
+    "contact_markers",
     "MARKER_ARROW",
     "MARKER_SPHERE",
+    "MARKER_CUBE",
     "MARKER_LINE_LIST",
     "MARKER_ADD",
     "MARKER_DELETE",
@@ -47,7 +49,7 @@ MARKER_TOPIC = "/softtip/markers"
 DEFAULT_FRAME_ID = "ft_sensor"
 
 # visualization_msgs/msg/Marker constants
-MARKER_ARROW, MARKER_SPHERE, MARKER_LINE_LIST = 0, 2, 5
+MARKER_ARROW, MARKER_CUBE, MARKER_SPHERE, MARKER_LINE_LIST = 0, 1, 2, 5
 MARKER_ADD, MARKER_DELETE = 0, 2
 
 
@@ -110,12 +112,13 @@ class Marker(NamedTuple):
 
     ns: str
     id: int
-    type: int  #: :data:`MARKER_ARROW`, :data:`MARKER_SPHERE` or :data:`MARKER_LINE_LIST`
+    type: int  #: :data:`MARKER_ARROW`, :data:`MARKER_SPHERE`, :data:`MARKER_LINE_LIST` or :data:`MARKER_CUBE`
     action: int  #: :data:`MARKER_ADD` or :data:`MARKER_DELETE`
     points: tuple[tuple[float, float, float], ...]  #: arrow: tail, head; line list: pairs
-    position: tuple[float, float, float]  #: sphere centre (origin otherwise)
-    scale: tuple[float, float, float]  #: arrow: shaft Ø, head Ø, head length; sphere: Ø; line: width
+    position: tuple[float, float, float]  #: sphere or cube centre (origin otherwise)
+    scale: tuple[float, float, float]  #: arrow: shaft Ø, head Ø, head length; sphere: Ø; line: width; cube: sides
     color: tuple[float, float, float, float]  #: RGBA in [0, 1]
+    orientation: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)  #: x, y, z, w of the pose (a cube's)
 
 
 _ORIGIN = (0.0, 0.0, 0.0)
@@ -134,24 +137,37 @@ def markers(est: SampleEstimate, *, normal_length: float = 0.015, edge_length: f
     never lingers in RViz when the state changes.
     """
     p = payloads(est)
+    return contact_markers(p.contact_point, p.normal, p.edge_direction, normal_length=normal_length, edge_length=edge_length)
 
+
+def contact_markers(
+    contact_point: tuple[float, float, float] | None,
+    normal: tuple[float, float, float] | None,
+    edge_direction: tuple[float, float, float] | None,
+    *,
+    normal_length: float = 0.015,
+    edge_length: float = 0.03,
+) -> list[Marker]:
+    """The three markers of :func:`markers` from plain values (m; unit vectors; ``None`` where
+    undefined): the sphere and the arrow are deleted without a contact point and normal, the
+    edge line without an edge direction."""
     def gone(ns: str, i: int, kind: int) -> Marker:
         return Marker(ns, i, kind, MARKER_DELETE, (), _ORIGIN, (1.0, 1.0, 1.0), (0.0, 0.0, 0.0, 0.0))
 
     out = []
-    if p.contact_point is None:
+    if contact_point is None or normal is None:
         out.append(gone("contact_point", 0, MARKER_SPHERE))
         out.append(gone("normal", 1, MARKER_ARROW))
     else:
-        r = p.contact_point
+        r = contact_point
         out.append(Marker("contact_point", 0, MARKER_SPHERE, MARKER_ADD, (), r, (0.002, 0.002, 0.002), _COLORS["contact_point"]))
-        n = p.normal
+        n = normal
         tip = (r[0] + normal_length * n[0], r[1] + normal_length * n[1], r[2] + normal_length * n[2])
         out.append(Marker("normal", 1, MARKER_ARROW, MARKER_ADD, (r, tip), _ORIGIN, (0.001, 0.002, 0.003), _COLORS["normal"]))
-    if p.edge_direction is None:
+    if edge_direction is None or contact_point is None:
         out.append(gone("edge_direction", 2, MARKER_LINE_LIST))
     else:
-        r, d, h = p.contact_point, p.edge_direction, 0.5 * edge_length
+        r, d, h = contact_point, edge_direction, 0.5 * edge_length
         a = (r[0] - h * d[0], r[1] - h * d[1], r[2] - h * d[2])
         b = (r[0] + h * d[0], r[1] + h * d[1], r[2] + h * d[2])
         out.append(Marker("edge_direction", 2, MARKER_LINE_LIST, MARKER_ADD, (a, b), _ORIGIN, (0.001, 0.0, 0.0), _COLORS["edge_direction"]))

@@ -18,7 +18,7 @@ from __future__ import annotations
 from typing import Any
 
 from softtip.estimator import EstimatorConfig
-from softtip.noise import NANO17, SensorNoise
+from softtip.core.noise import NANO17, SensorNoise
 
 __all__ = ["PARAMETERS", "config_from_parameters", "main"]
 
@@ -113,7 +113,7 @@ def main(args: list[str] | None = None) -> None:  # pragma: no cover - needs a R
             }
             self.compensate = self.orientation = None
             if params["payload"]:
-                from softtip.payload import PayloadCompensator, load_payload
+                from softtip.calibration.payload import PayloadCompensator, load_payload
 
                 self.compensate = PayloadCompensator(load_payload(params["payload"]))
                 self.create_subscription(QuaternionStamped, params["orientation_topic"], self.on_orientation, 10)
@@ -169,7 +169,8 @@ def main(args: list[str] | None = None) -> None:  # pragma: no cover - needs a R
                 for m in sr.markers(est):
                     mk = MarkerMsg(header=header, ns=m.ns, id=m.id, type=m.type, action=m.action)
                     mk.pose.position.x, mk.pose.position.y, mk.pose.position.z = m.position
-                    mk.pose.orientation.w = 1.0
+                    (mk.pose.orientation.x, mk.pose.orientation.y, mk.pose.orientation.z,
+                     mk.pose.orientation.w) = m.orientation  # fmt: skip
                     mk.scale.x, mk.scale.y, mk.scale.z = m.scale
                     mk.color.r, mk.color.g, mk.color.b, mk.color.a = m.color
                     for x, y, z in m.points:

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import click
 
-from softtip.atomic import AtomicFile, cannot_write, check_distinct, commit_all, write_stdout
+from softtip.io.atomic import AtomicFile, cannot_write, check_distinct, commit_all, write_stdout
 from softtip.cli_types import Number
 from softtip.errors import InputError
 from softtip.sim.objects import OBJECT_KINDS
@@ -27,7 +27,7 @@ from softtip.sim.scenario import (
 )
 from softtip.sim.simulate import log_csv_text, run_simulation, truth_json_text
 from softtip.sim.skin import DEFAULT_ELEMENTS
-from softtip.units import KGF, UNIT_SYSTEMS
+from softtip.core.units import KGF, UNIT_SYSTEMS
 
 __all__ = ["simulate", "parse_length", "parse_force"]
 
@@ -110,7 +110,7 @@ def _check_sizes(options: dict) -> None:
         raise click.BadParameter(f"{options['force']:g} N; expected a positive force (N or kgf)", param_hint="'--force'")
     thickness = options["thickness"]
     try:
-        from softtip.fingertip import load_fingertip
+        from softtip.core.fingertip import load_fingertip
 
         _, reach = load_fingertip(options["tip"]).bounding_sphere
     except (InputError, ValueError, OSError):
@@ -260,7 +260,7 @@ def simulate(
 
 def _simulate_hand(output, truth, units, left_object, width, to_bag, options) -> None:
     """``softtip simulate --hand two-finger``: both fingertips, files for ``softtip fuse``."""
-    from softtip.fingertip import load_fingertip
+    from softtip.core.fingertip import load_fingertip
     from softtip.sim.hand import simulate_two_finger, write_two_finger, write_two_finger_bag
     from softtip.sim.objects import make_object
 

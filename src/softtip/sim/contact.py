@@ -50,7 +50,7 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from softtip._vec import cross as _cross
+from softtip.core._vec import cross as _cross
 from softtip.sim.objects import RigidObject
 from softtip.sim.pose import Pose
 from softtip.sim.skin import SkinMesh

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from softtip.fingertip import Fingertip
+from softtip.core.fingertip import Fingertip
 from softtip.sim.objects import RigidObject
 from softtip.sim.pose import Pose
 from softtip.sim.scenario import HandFrame, paper_scenario, rock_scenario
@@ -240,7 +240,7 @@ def write_two_finger_bag(grasp: TwoFingerGrasp, dest, tf_rate: float = 25.0) -> 
     edge, as a robot's joint states would give). ``dest`` must not exist."""
     from pathlib import Path
 
-    from softtip.bag import _typestore, import_rosbags
+    from softtip.io.bag import _typestore, import_rosbags
 
     import_rosbags()
     from rosbags.rosbag2 import StoragePlugin, Writer

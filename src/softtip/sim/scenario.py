@@ -85,11 +85,11 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from softtip.fingertip import Fingertip
+from softtip.core.fingertip import Fingertip
 from softtip.sim.pose import Pose, unit
 from softtip.sim.truth import tangent_frame
-from softtip.synthetic import smoothstep
-from softtip.units import KGF, STANDARD_GRAVITY
+from softtip.sim.synthetic import smoothstep
+from softtip.core.units import KGF, STANDARD_GRAVITY
 
 __all__ = [
     "DISTURBANCE_RAMP",

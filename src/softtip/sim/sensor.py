@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["SensorModel", "NANO17"]
+__all__ = ["SensorModel", "NANO17_SENSOR", "NANO17"]
 
 _FORCE_RES = 1.0 / 160.0  # N
 _TORQUE_RES = 1.0 / 32.0 * 1e-3  # N·m (1/32 N·mm)
@@ -88,5 +88,8 @@ class SensorModel:
         }
 
 
-#: The default sensor (ATI Nano17 class, 50 Hz).
-NANO17 = SensorModel()
+#: The default simulated sensor (ATI Nano17 class, 50 Hz): a :class:`SensorModel` (noise, bias,
+#: resolution, rate), not the estimator's noise model :data:`softtip.NANO17`.
+NANO17_SENSOR = SensorModel()
+#: Former name of :data:`NANO17_SENSOR`, kept so that old scripts run.
+NANO17 = NANO17_SENSOR

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from softtip.fingertip import Fingertip, load_fingertip
+from softtip.core.fingertip import Fingertip, load_fingertip
 from softtip.sim.contact import ContactModel, ContactParams, ContactResult, FrictionState
 from softtip.sim.objects import RigidObject, make_object
 from softtip.sim.pose import Pose
@@ -41,7 +41,7 @@ from softtip.sim.scenario import (
 from softtip.sim.sensor import SensorModel
 from softtip.sim.skin import DEFAULT_ELEMENTS, discretise_skin
 from softtip.sim.truth import GroundTruth, line_angle, tangent_frame
-from softtip.units import wrench_from_si
+from softtip.core.units import wrench_from_si
 
 __all__ = ["SimLog", "simulate_grasp", "write_log_csv", "write_truth_json", "run_simulation"]
 
@@ -384,8 +384,8 @@ def simulate_grasp(
 
 
 def _atomic_write(path: str | os.PathLike, text: str) -> None:
-    # one writer for every output (softtip.atomic): a failure never leaves a partial file
-    from softtip.atomic import atomic_write_text
+    # one writer for every output (softtip.io.atomic): a failure never leaves a partial file
+    from softtip.io.atomic import atomic_write_text
 
     atomic_write_text(path, text)
 

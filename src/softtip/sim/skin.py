@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from softtip.fingertip import Capsule, Fingertip, Sphere
+from softtip.core.fingertip import Capsule, Fingertip, Sphere
 
 __all__ = ["SkinMesh", "discretise_skin", "discretise_mesh_skin", "DEFAULT_ELEMENTS"]
 
@@ -141,7 +141,7 @@ def discretise_skin(tip: Fingertip, n_elements: int = DEFAULT_ELEMENTS, z_min: f
 
 
 def discretise_mesh_skin(tip, n_elements: int = DEFAULT_ELEMENTS, z_min: float | None = None) -> SkinMesh:
-    """Skin elements of a triangle-mesh fingertip (:class:`softtip.mesh.MeshFingertip`).
+    """Skin elements of a triangle-mesh fingertip (:class:`softtip.core.mesh.MeshFingertip`).
 
     Every triangle above ``z_min`` becomes one element or, when it is larger than the target
     element area (the covered area over ``n_elements``), ``k²`` equal sub-triangles on a

@@ -8,14 +8,14 @@ from dataclasses import dataclass, fields
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from softtip.spin import direction_angle, tangent_frame
+from softtip.core.spin import direction_angle, tangent_frame
 
 __all__ = ["GroundTruth", "tangent_frame", "line_angle"]
 
 
 def line_angle(direction: ArrayLike, normal: ArrayLike) -> NDArray[np.float64]:
     """Angle (rad) of the axis ``direction`` (..., 3) in the tangent frame of the manual (§3.4) at
-    ``normal`` (..., 3): the estimator's own convention (:func:`softtip.spin.direction_angle`)."""
+    ``normal`` (..., 3): the estimator's own convention (:func:`softtip.core.spin.direction_angle`)."""
     return direction_angle(direction, normal)
 
 

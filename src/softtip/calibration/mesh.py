@@ -1,0 +1,349 @@
+"""Calibration of a mesh fingertip's placement on the sensor from plane presses.
+
+The shape is known (the CAD mesh); its pose relative to the sensor is not exactly: a printed
+tip sits a little off where the drawing puts it. The probing log is the one of
+``softtip calibrate`` for spheres and capsules: presses of the fingertip against a flat,
+rigid surface, spread over the skin, with the friction force turning a little during each
+press (the surface slides or the finger rocks).
+
+Method
+------
+1. **Press points.** Per press ``k`` the contact normal ``n_k`` is constant (the table does
+   not turn) and ``m_i = (r_k − κ √F_i n_k) × f_i + σ_i n_k``. With ``n_k`` the normal of the
+   skin as last fitted (first: against the mean force) the tangential part of that equation
+   (two numbers per sample; ``σ_i`` free) is linear in ``r_k``: least squares, with the
+   covariance of ``r_k`` from the residual scatter. (Fitting ``n_k`` from the moments too
+   turns it toward the noise: the component along ``n_k`` is the one left free.)
+2. **Registration.** The press points must lie on the posed mesh, indented by the skin's
+   compression ``κ √F_k`` along the normal (``F_k`` the press's mean normal force; for a
+   Winkler skin pressed by a plane the depth grows as √F). Gauss–Newton on the
+   point-to-surface distances ``(r_k − q_k) · ν_k + κ √F_k`` (``q_k`` the closest point of
+   the posed mesh, ``ν_k`` its normal), weighted by each point's variance along ``ν_k``,
+   for the translation ``t`` (and with ``rotation=True`` a small rotation ``ω``) and ``κ``.
+   Steps 1 and 2 alternate four times (the points depend on ``κ`` and the normals).
+3. **Honesty.** Standard deviations are ``(JᵀWJ)⁻¹`` scaled by the reduced χ² when it
+   exceeds 1; directions the presses do not constrain (a capsule's roll about its own axis,
+   one spot) are refused by the conditioning of ``JᵀWJ``.
+
+The result moves the mesh: ``p_sensor = R(ω) p + t`` applied after the file's transform.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.spatial.transform import Rotation
+
+from softtip.calibration.probing import _force_spread, _tangent_basis, find_presses, probing_presses
+from softtip.errors import InputError
+from softtip.core.mesh import MeshFingertip
+
+__all__ = ["MeshCalibration", "calibrate_mesh", "calibrate_mesh_file", "mesh_probing_log", "press_points"]
+
+_MIN_SPREAD = math.sin(math.radians(4.0))  # the friction force must turn this much in a press
+
+
+@dataclass(frozen=True)
+class MeshCalibration:
+    """The fitted placement of a mesh fingertip.
+
+    Attributes
+    ----------
+    translation, translation_std : array, shape (3,)
+        Shift of the mesh in the sensor frame and its standard deviation, m.
+    rotation, rotation_std : array, shape (3,)
+        Small rotation (rotation vector, rad) about the mesh's bounding-sphere centre, and its
+        standard deviation; zeros when only the translation was fitted.
+    compliance, compliance_std : float
+        Skin indentation ``κ`` in ``δ = κ √F``, m/√N.
+    n_presses, n_skipped : int
+        Presses used, and presses left out (too short or without a turning force).
+    rms_residual : float
+        RMS distance of the press points from the fitted skin (indentation included), m.
+    tip : MeshFingertip
+        The fingertip moved to the fitted pose.
+    """
+
+    translation: NDArray[np.float64]
+    translation_std: NDArray[np.float64]
+    rotation: NDArray[np.float64]
+    rotation_std: NDArray[np.float64]
+    compliance: float
+    compliance_std: float
+    n_presses: int
+    n_skipped: int
+    rms_residual: float
+    tip: MeshFingertip
+
+    def summary(self) -> str:
+        t = ", ".join(f"{v * 1e3:+.3f}" for v in self.translation)
+        ts = ", ".join(f"{v * 1e3:.3f}" for v in self.translation_std)
+        lines = [
+            f"mesh shift ({t}) mm ± ({ts}) mm",
+            f"skin compliance {self.compliance * 1e3:.3f} ± {self.compliance_std * 1e3:.3f} mm/√N",
+            f"{self.n_presses} presses used ({self.n_skipped} skipped), rms residual {self.rms_residual * 1e3:.3f} mm",
+        ]
+        if np.any(self.rotation_std > 0):
+            r = ", ".join(f"{math.degrees(v):+.3f}" for v in self.rotation)
+            rs = ", ".join(f"{math.degrees(v):.3f}" for v in self.rotation_std)
+            lines.insert(1, f"mesh rotation ({r})° ± ({rs})°")
+        return "\n".join(lines)
+
+
+def press_points(
+    f: NDArray, m: NDArray, normal: ArrayLike | None = None, compliance: float = 0.0
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], float]:
+    """Contact point of one plane press (see the module docstring, step 1).
+
+    Parameters
+    ----------
+    f, m : array, shape (N, 3)
+        Force (N) and moment (N·m) samples of the press, tared.
+    normal : array-like (3,), optional
+        The contact normal (outward from the skin); default: against the mean force. It is
+        not fitted from the moments: the spin leaves the moment's component along ``n``
+        free, and a fitted ``n`` would turn toward the noise.
+    compliance : float
+        Skin indentation ``κ`` (m/√N): the contact point of sample ``i`` is
+        ``r − κ √F_i n``, and ``r`` (returned) is the point of the undeformed skin.
+
+    Returns
+    -------
+    point : array (3,)
+        m.
+    normal : array (3,)
+        The normal used.
+    cov : array (3, 3)
+        Covariance of ``point``, m² (from the residual scatter).
+    force : float
+        Mean normal force ``−f · n``, N.
+    """
+    n = -np.mean(f, axis=0) if normal is None else np.asarray(normal, dtype=float)
+    n = n / np.linalg.norm(n)
+    t1, t2 = _tangent_basis(n)
+    fn = np.maximum(-(f @ n), 0.0)
+    # tangential part of m − (r − δ n) × f = 0, linear in r: (r × f)·t = r · (f × t)
+    q = m + compliance * np.sqrt(fn)[:, None] * np.cross(n, f)
+    a = np.concatenate((np.cross(f, t1), np.cross(f, t2)))
+    b = np.concatenate((q @ t1, q @ t2))
+    r, *_ = np.linalg.lstsq(a, b, rcond=None)
+    res = b - a @ r
+    s2 = float(res @ res) / max(len(b) - 3, 1)
+    cov = s2 * np.linalg.pinv(a.T @ a)
+    return r, n, cov, float(np.mean(fn))
+
+
+def calibrate_mesh(
+    t: ArrayLike,
+    wrench: ArrayLike,
+    tip: MeshFingertip,
+    *,
+    rotation: bool = False,
+    tare_duration: float = 0.2,
+    contact_threshold: float = 0.05,
+    min_force: float = 0.5,
+    iterations: int = 20,
+) -> MeshCalibration:
+    """Fit the placement of ``tip`` on the sensor from a log of plane presses.
+
+    Parameters
+    ----------
+    t : array-like, shape (N,)
+        Time, s.
+    wrench : array-like, shape (N, 6)
+        Raw wrench, N and N·m (the first ``tare_duration`` seconds untouched: the bias).
+    tip : MeshFingertip
+        The fingertip at its nominal placement.
+    rotation : bool
+        Also fit a small rotation (6 DOF); default: the translation only.
+    tare_duration : float
+        s; 0 when the log is already tared.
+    contact_threshold, min_force : float
+        A press lasts while ``|f|`` is at least ``contact_threshold``; only its samples with
+        ``|f| ≥ min_force`` are used, N.
+
+    Raises
+    ------
+    InputError
+        Too few usable presses, or presses that leave a direction of the pose undetermined.
+    """
+    t = np.asarray(t, dtype=float)
+    w = np.asarray(wrench, dtype=float)
+    if tare_duration > 0:
+        still = t - t[0] < tare_duration
+        w = w - w[still].mean(axis=0)
+    fn = np.linalg.norm(w[:, :3], axis=1)
+    presses, skipped = [], 0
+    for idx in find_presses(fn, contact_threshold):
+        idx = idx[fn[idx] >= min_force]
+        if len(idx) < 8 or _force_spread(w[idx, :3]) < _MIN_SPREAD:
+            skipped += 1
+        else:
+            presses.append(idx)
+    n_par = 7 if rotation else 4
+    if len(presses) < n_par + 2:
+        raise InputError(
+            f"{len(presses)} usable presses ({skipped} skipped: too short or without a turning friction force); "
+            f"the mesh placement needs at least {n_par + 2}, spread over the skin"
+        )
+    centre = tip.bounding_sphere[0]
+    x = np.zeros(n_par)
+    # press points with the indentation of the current κ, then the registration; twice more
+    # with the fitted κ (the points move by the indentation's spread within each press)
+    nrm = None  # press normals: against the mean force first, then the fitted skin's
+    for _ in range(4):
+        x, a, wgt, pts, cov, sqf, kappa0, nrm = _register(tip, w, presses, x, rotation, centre, iterations, nrm)
+
+    def posed(x):
+        rot = Rotation.from_rotvec(x[3:6]) if rotation else Rotation.identity()
+        return rot, x[:3]
+
+    # final residuals and covariance
+    rot, shift = posed(x)
+    local = rot.inv().apply(pts - centre - shift) + centre
+    face, b1, b2, _ = tip.closest(local)
+    q, nu = tip._interp(face, b1, b2)
+    res = np.sum((local - q) * nu, axis=1) + (x[-1] - kappa0) * sqf
+    chi2 = float(np.sum(res * res * wgt)) / max(len(pts) - n_par, 1)
+    scale = np.sqrt(np.diag(a))
+    cond = np.linalg.cond(a / np.outer(scale, scale))
+    if not np.isfinite(cond) or cond > 1e8:
+        raise InputError(
+            "the presses leave part of the mesh placement undetermined (a direction the skin's shape does not "
+            "fix, such as a round tip's roll about its own axis, or presses at one spot): fit the translation "
+            "only, or press at more points spread over the skin"
+        )
+    cov_x = np.linalg.inv(a) * max(chi2, 1.0)
+    std = np.sqrt(np.diag(cov_x))
+    # the file's transform composed with the fitted move: p = R_c (R_f p_mesh + t_f − c) + c + t_c
+    r_file = Rotation.from_euler("xyz", tip.rpy)
+    moved = MeshFingertip(
+        rot.apply(tip.vertices - centre) + centre + shift,
+        tip.faces,
+        crease_angle_deg=tip.crease_angle_deg,
+        skin_thickness=tip.skin_thickness,
+        source=tip.source,
+        mesh_units=tip.mesh_units,
+        translation=tuple(float(v) for v in rot.apply(np.asarray(tip.translation) - centre) + centre + shift),
+        rpy=tuple(float(v) for v in (rot * r_file).as_euler("xyz")),
+    )
+    return MeshCalibration(
+        translation=x[:3].copy(),
+        translation_std=std[:3],
+        rotation=x[3:6].copy() if rotation else np.zeros(3),
+        rotation_std=std[3:6] if rotation else np.zeros(3),
+        compliance=float(x[-1]),
+        compliance_std=float(std[-1]),
+        n_presses=len(pts),
+        n_skipped=skipped,
+        rms_residual=float(np.sqrt(np.mean(res * res))),
+        tip=moved,
+    )
+
+
+def _register(tip, w, presses, x, rotation, centre, iterations, nrm):
+    """Press points at the current κ, then Gauss–Newton of the placement and κ (module docstring)."""
+    kappa0 = max(float(x[-1]), 0.0)  # the points are of the undeformed skin at this κ
+    fits = [press_points(w[idx, :3], w[idx, 3:], None if nrm is None else nrm[k], kappa0) for k, idx in enumerate(presses)]
+    pts = np.array([p[0] for p in fits])
+    cov = np.array([p[2] for p in fits])
+    sqf = np.sqrt(np.array([p[3] for p in fits]))
+    n_par = len(x)
+
+    def posed(x):
+        rot = Rotation.from_rotvec(x[3:6]) if rotation else Rotation.identity()
+        return rot, x[:3]
+
+    for _ in range(iterations):
+        rot, shift = posed(x)
+        # press points in the mesh's nominal frame: p = R⁻¹ (r − c − t) + c
+        local = rot.inv().apply(pts - centre - shift) + centre
+        face, b1, b2, _ = tip.closest(local)
+        q, nu = tip._interp(face, b1, b2)
+        res = np.sum((local - q) * nu, axis=1) + (x[-1] - kappa0) * sqf
+        nu_s = rot.apply(nu)  # normals in the sensor frame
+        var = np.einsum("ki,kij,kj->k", nu_s, cov, nu_s)
+        wgt = 1.0 / np.maximum(var, 1e-18)
+        jac = np.zeros((len(pts), n_par))
+        jac[:, :3] = -nu_s  # ∂res/∂t
+        if rotation:
+            arm = rot.apply(q - centre)
+            jac[:, 3:6] = -np.cross(arm, nu_s)  # ∂res/∂ω (small rotation of the mesh)
+        jac[:, -1] = sqf
+        jtw = jac.T * wgt
+        a = jtw @ jac
+        step = np.linalg.lstsq(a, -jtw @ res, rcond=None)[0]  # minimum norm where undetermined
+        x = x + step
+        if np.max(np.abs(step[:-1])) < 1e-10:
+            break
+    return x, a, wgt, pts, cov, sqf, kappa0, nu_s
+
+
+def calibrate_mesh_file(
+    t: ArrayLike, wrench: ArrayLike, mesh: str, mesh_units: str | None = None, **kwargs
+) -> MeshCalibration:
+    """:func:`calibrate_mesh` for a mesh given as a file: a mesh fingertip ``.toml`` or a bare
+    ``.stl`` / ``.obj`` / ``.ply`` with ``mesh_units`` (placed as drawn)."""
+    from pathlib import Path
+
+    from softtip.core.fingertip import load_fingertip
+    from softtip.core.mesh import mesh_fingertip_from_table
+
+    path = Path(mesh)
+    if path.suffix.lower() == ".toml":
+        if mesh_units is not None:
+            raise InputError("--mesh-units is for a bare mesh file; a fingertip .toml gives mesh_units itself")
+        tip = load_fingertip(path)
+        if not isinstance(tip, MeshFingertip):
+            raise InputError(f"{path}: not a mesh fingertip (shape = {tip.kind!r})")
+    else:
+        if mesh_units is None:
+            raise InputError(f"{path}: give --mesh-units (mesh files carry no units)")
+        tip = mesh_fingertip_from_table({"mesh": str(path.resolve()), "mesh_units": mesh_units}, source=str(path))
+    return calibrate_mesh(t, wrench, tip, **kwargs)
+
+
+def mesh_probing_log(
+    tip: MeshFingertip,
+    n_presses: int,
+    rng: np.random.Generator,
+    *,
+    compliance: float = 2e-4,
+    noise=None,
+    rate: float = 200.0,
+    friction: float = 0.25,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """A synthetic probing log of plane presses on ``tip`` (soft-finger model), for tests.
+
+    Press ``k`` touches the skin where its normal points along a planned direction (the mesh
+    vertex farthest that way), with the skin's interpolated normal there as the table's
+    normal; the normal force rises and falls, the friction force (``friction`` × normal)
+    turns through 90°, the skin indents by ``compliance √F``, and a small random spin is
+    added. 0.3 s untouched first (the tare). ``noise``: a :class:`~softtip.core.noise.SensorNoise`.
+
+    Returns
+    -------
+    t : array (N,)
+    wrench : array (N, 6)
+    """
+    rows = [np.zeros((int(0.3 * rate), 6))]
+    for plan in probing_presses(n_presses, rng):
+        r0 = tip.vertices[np.argmax(tip.vertices @ plan["normal"])]
+        r0 = tip.project(r0)
+        n = tip.normal(r0)
+        t1, t2 = _tangent_basis(n)
+        k = 40
+        force = plan["force"] * (0.5 + 0.5 * np.sin(np.linspace(0.2, math.pi - 0.2, k)))
+        turn = np.linspace(0.0, math.radians(90.0), k) + rng.uniform(0.0, 2.0 * math.pi)
+        f = -force[:, None] * n + friction * force[:, None] * (np.cos(turn)[:, None] * t1 + np.sin(turn)[:, None] * t2)
+        r = r0 - compliance * np.sqrt(force)[:, None] * n
+        m = np.cross(r, f) + rng.normal(scale=1e-4, size=k)[:, None] * n
+        rows += [np.concatenate((f, m), axis=1), np.zeros((5, 6))]
+    w = np.concatenate(rows)
+    if noise is not None:
+        w = w + rng.normal(size=w.shape) * np.concatenate((noise.force_std, noise.moment_std))
+    return np.arange(len(w)) / rate, w
+

@@ -1,0 +1,274 @@
+"""Line or area: what a window of samples says about the contact's type (the maths, no state).
+
+A strip contact (a thin plate's edge, a wedge, a thin cylinder) transmits tangential moment
+about one tangent axis only, ``e = n × d``: the object rolls about its own edge. A plane or a
+thick object pressed into the skin transmits it about both. From one axis of excitation the
+two cannot be told apart (a tilted plane and a tilted thin plate give the same wrench); once
+the contact has been excited about two axes, the 2×2 covariance of ``h`` in the tangent
+plane over a window separates them: its eigenvalues stay far apart for a line and close for
+an area.
+
+Per sample, in the tangent frame ``(e1, e2)`` at the contact point (the angle convention of
+the manual: ``e1`` the sensor x axis projected on the tangent plane):
+``h`` and the tangential load ``f_t`` (the force projected on the tangent plane; the push
+that tilts the object turns with the tilt axis) give :data:`N_SUMS` products
+(:func:`evidence_products`); the batch cumulates them, the stream keeps running sums, and
+window sums are differences of the two. :func:`window_kernel` turns window sums into
+
+* the covariance of ``h`` and of ``f_t`` over the window with the noise's expected share
+  removed (``(1 − L / N) Σ``, ``Σ`` the 2×2 noise covariance from the sensor noise model at
+  the contact point, ``L`` samples per independent noise sample: 1 unfiltered, ``1 / g²``
+  after a low-pass of white-noise gain ``g``, ``N`` samples in the window), as eigenvalues
+  ``major ≥ minor`` (clamped at zero);
+* a noise level for each: what the noise alone may still leave in an eigenvalue, the upper
+  3 σ tail of a χ² with ``ν = (N − 1) / L`` degrees of freedom (Wilson–Hilferty, as in
+  :mod:`softtip.core.joint`) plus a 25 % model margin, times the largest noise variance;
+* the window's line direction ``d = n × v`` with ``v`` the principal axis of ``h``'s
+  variation, as an angle in the tangent frame, and its first-order standard deviation: the
+  principal axis of a 2×2 covariance turns by ``C₁₂ / (λ₁ − λ₂)`` for an off-diagonal error
+  ``C₁₂``, whose variance over ``ν`` independent samples is ``(λ₁ + s²)(λ₂ + s²) / ν``
+  (``s²`` the noise variance), plus the model error: an across-axis spread ``λ₂`` (a line
+  that is not quite one; at least the share of the noise that the correction may hide,
+  25 % of ``s²``) turns the axis by as much of ``√(λ₂ / λ₁)`` as the excitation about the
+  two axes is correlated over the window, which the tangential load tells (``ρ²/(1 − ρ²)``
+  of its correlation across the axis; ½ when the load did not vary).
+
+The decisions (thresholds, hysteresis, held verdicts) are the estimator's
+(:mod:`softtip.estimator.evidence`). All kernels are component-wise for both back ends of
+:mod:`softtip.core._xp`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, NamedTuple
+
+from softtip.core.joint import MODEL_MARGIN, _chi2_excess
+from softtip.core.noise import SensorNoise
+
+__all__ = [
+    "N_SUMS", "Window", "evidence_products", "tangent_noise_kernel", "window_kernel", "window_floats",
+    "window_constants", "window_eigen_floats", "window_direction_floats", "noise_constants",
+]  # fmt: skip
+
+#: Number of window sums: ``Σ h1, Σ h2, Σ h1², Σ h1 h2, Σ h2²`` and the same for ``f_t``.
+N_SUMS = 10
+
+
+def evidence_products(h1, h2, f1, f2):
+    """The :data:`N_SUMS` per-sample products whose window sums :func:`window_kernel` needs.
+
+    Parameters
+    ----------
+    h1, h2 : float or array
+        ``h`` in the tangent frame, N·m.
+    f1, f2 : float or array
+        Tangential load in the tangent frame, N.
+    """
+    return (h1, h2, h1 * h1, h1 * h2, h2 * h2, f1, f2, f1 * f1, f1 * f2, f2 * f2)
+
+
+def tangent_noise_kernel(rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, noise: SensorNoise):
+    """Noise covariance of ``h`` (N²·m²) and of ``f_t`` (N²) in the tangent frame at ``r``.
+
+    Returns ``(h11, h12, h22, f11, f12, f22)``: ``Σ_h = P Σ_m P + P [r]× Σ_f [r]×ᵀ P`` and
+    ``Σ_f`` projected on ``(e1, e2)`` (:mod:`softtip.core.noise`).
+    """
+    sfx, sfy, sfz = (s * s for s in noise.force_std)
+    smx, smy, smz = (s * s for s in noise.moment_std)
+    # u × r for u = e1, e2
+    ax, ay, az = e1y * rz - e1z * ry, e1z * rx - e1x * rz, e1x * ry - e1y * rx
+    bx, by, bz = e2y * rz - e2z * ry, e2z * rx - e2x * rz, e2x * ry - e2y * rx
+    h11 = smx * e1x * e1x + smy * e1y * e1y + smz * e1z * e1z + sfx * ax * ax + sfy * ay * ay + sfz * az * az
+    h12 = smx * e1x * e2x + smy * e1y * e2y + smz * e1z * e2z + sfx * ax * bx + sfy * ay * by + sfz * az * bz
+    h22 = smx * e2x * e2x + smy * e2y * e2y + smz * e2z * e2z + sfx * bx * bx + sfy * by * by + sfz * bz * bz
+    f11 = sfx * e1x * e1x + sfy * e1y * e1y + sfz * e1z * e1z
+    f12 = sfx * e1x * e2x + sfy * e1y * e2y + sfz * e1z * e2z
+    f22 = sfx * e2x * e2x + sfy * e2y * e2y + sfz * e2z * e2z
+    return h11, h12, h22, f11, f12, f22
+
+
+class Window(NamedTuple):
+    """What one window says, component-wise (floats or arrays of one shape)."""
+
+    h_major: Any  #: larger eigenvalue of h's covariance, noise removed, N²·m²
+    h_minor: Any  #: smaller one (≥ 0), N²·m²
+    h_noise: Any  #: what noise alone may leave in an eigenvalue of h's covariance, N²·m²
+    f_major: Any  #: the same for the tangential load, N²
+    f_minor: Any
+    f_noise: Any
+    angle: Any  #: window line direction ``n × (principal axis of h)``, rad in (−π/2, π/2]
+    angle_std: Any  #: its standard deviation, rad (inf when h did not vary)
+
+
+def _eig2(c11, c12, c22, xp):
+    half = 0.5 * (c11 - c22)
+    mean = 0.5 * (c11 + c22)
+    root = xp.sqrt(half * half + c12 * c12)
+    return mean + root, mean - root, half, root
+
+
+def _covariance(s1, s2, s11, s12, s22, count, n11, n12, n22, keep, xp):
+    """Window covariance less ``keep`` times the noise covariance: (c11, c12, c22)."""
+    m1, m2 = xp.div(s1, count), xp.div(s2, count)
+    c11 = xp.div(s11, count) - m1 * m1 - keep * n11
+    c12 = xp.div(s12, count) - m1 * m2 - keep * n12
+    c22 = xp.div(s22, count) - m2 * m2 - keep * n22
+    return c11, c12, c22
+
+
+_HALF_PI = 0.5 * math.pi
+
+
+def window_kernel(sums, count, h11, h12, h22, f11, f12, f22, corr: float, xp) -> Window:
+    """What a window says, from its sums (:func:`evidence_products`) and the noise.
+
+    Parameters
+    ----------
+    sums : sequence of 10 floats or arrays
+        Window sums.
+    count : float or array
+        Samples in the window (positive).
+    h11, h12, h22, f11, f12, f22 : float or array
+        Per-sample noise covariances (:func:`tangent_noise_kernel`).
+    corr : float
+        Samples per independent noise sample (1 unfiltered).
+    xp : namespace
+        :data:`softtip.core._xp.NP` or :data:`softtip.core._xp.PY`.
+
+    Returns
+    -------
+    Window
+    """
+    keep = xp.maximum(1.0 - xp.div(corr, count), 0.0)
+    nu = xp.maximum(count - 1.0, 0.0) / corr
+    tail = xp.div(_chi2_excess(nu, xp), nu) + MODEL_MARGIN
+    c11, c12, c22 = _covariance(*sums[0:5], count, h11, h12, h22, keep, xp)
+    big, small, half, root = _eig2(c11, c12, c22, xp)
+    s_big, s_small, _, _ = _eig2(h11, h12, h22, xp)
+    h_noise = tail * s_big
+    g11, g12, g22 = _covariance(*sums[5:10], count, f11, f12, f22, keep, xp)
+    f_big, f_small, _, _ = _eig2(g11, g12, g22, xp)
+    f_n, _, _, _ = _eig2(f11, f12, f22, xp)
+    # principal axis v of h's variation at angle phi; d = n × v is at phi + 90°
+    phi = 0.5 * xp.atan2(2.0 * c12, 2.0 * half)
+    a = phi + _HALF_PI
+    a = a - math.pi * (a > _HALF_PI)
+    small = xp.maximum(small, 0.0)
+    big = xp.maximum(big, 0.0)
+    s2 = 0.5 * (s_big + s_small)
+    gap = big - small
+    # noise (over ν independent samples) and model error: an across-axis spread of h (the
+    # line resisting a roll about its own edge a little) turns the axis by as much of
+    # √(minor / major) as the window's excitation about the two axes is correlated, which
+    # the tangential load tells: its correlation ρ between the axis and across it
+    cp, sp = xp.div(c11 - c22, 2.0 * root), xp.div(c12, root)  # cos 2φ, sin 2φ
+    fm, fd = 0.5 * (g11 + g22), 0.5 * (g11 - g22)
+    f_vv, f_ww, f_vw = fm + fd * cp + g12 * sp, fm - fd * cp - g12 * sp, g12 * cp - fd * sp
+    den = xp.maximum(f_vv, 0.0) * xp.maximum(f_ww, 0.0)
+    rho2 = xp.div(f_vw * f_vw, den)
+    # without load variation about both axes the correlation is unknown: count it as ρ² = ½
+    # the spread the noise correction may hide (its model margin) counts as well
+    hidden = xp.maximum(small, MODEL_MARGIN * s2)
+    model = xp.div(hidden, big) * xp.where(den > 0.0, xp.div(rho2, xp.maximum(1.0 - rho2, 0.0)), 1.0)
+    angle_std = xp.sqrt(xp.div(corr * (big + s2) * (small + s2), nu * gap * gap) + model)
+    return Window(big, small, h_noise, xp.maximum(f_big, 0.0), xp.maximum(f_small, 0.0), tail * f_n, a, angle_std)
+
+
+def window_floats(sums, count: float, noise_terms, tail: float, keep: float, nu: float, corr: float):
+    """:func:`window_kernel` for one window of Python floats, unrolled for the stream (the
+    same operations, so the same results to rounding; no function call per operation).
+
+    ``tail``, ``keep`` and ``nu`` are :func:`window_constants` of ``count``. Returns the
+    fields of :class:`Window` as a plain tuple.
+    """
+    h11, h12, h22, f11, f12, f22 = noise_terms
+    s_big, s2, f_n = noise_constants(noise_terms)
+    e = window_eigen_floats(sums, count, noise_terms, keep)
+    big, small = e[0], e[1]
+    f_big, f_small = e[8], e[9]
+    angle, angle_std = window_direction_floats(e, s2, nu, corr)
+    return big, small, tail * s_big, f_big, f_small, tail * f_n, angle, angle_std
+
+
+def noise_constants(noise_terms):
+    """``(largest noise variance of h, mean noise variance of h, largest of f_t)``."""
+    h11, h12, h22, f11, f12, f22 = noise_terms
+    nh = 0.5 * (h11 - h22)
+    nm = 0.5 * (h11 + h22)
+    nr = math.sqrt(nh * nh + h12 * h12)
+    s_big, s_small = nm + nr, nm - nr
+    fh = 0.5 * (f11 - f22)
+    f_n = 0.5 * (f11 + f22) + math.sqrt(fh * fh + f12 * f12)
+    return s_big, 0.5 * (s_big + s_small), f_n
+
+
+def window_eigen_floats(sums, count: float, noise_terms, keep: float):
+    """The eigenvalues of a window's covariances (floats), with what the direction needs:
+    ``(big, small, c11, c12, c22, root, g11, g12, f_big, f_small, g22)`` less the last."""
+    h11, h12, h22, f11, f12, f22 = noise_terms
+    s1, s2_, s11, s12, s22, t1, t2, t11, t12, t22 = sums
+    m1, m2 = s1 / count, s2_ / count
+    c11 = s11 / count - m1 * m1 - keep * h11
+    c12 = s12 / count - m1 * m2 - keep * h12
+    c22 = s22 / count - m2 * m2 - keep * h22
+    half = 0.5 * (c11 - c22)
+    mean = 0.5 * (c11 + c22)
+    root = math.sqrt(half * half + c12 * c12)
+    big, small = mean + root, mean - root
+    n1, n2 = t1 / count, t2 / count
+    g11 = t11 / count - n1 * n1 - keep * f11
+    g12 = t12 / count - n1 * n2 - keep * f12
+    g22 = t22 / count - n2 * n2 - keep * f22
+    gh = 0.5 * (g11 - g22)
+    gm = 0.5 * (g11 + g22)
+    gr = math.sqrt(gh * gh + g12 * g12)
+    f_big, f_small = gm + gr, gm - gr
+    return (
+        big if big > 0.0 else 0.0, small if small > 0.0 else 0.0, c11, c12, c22, root, g11, g12,
+        f_big if f_big > 0.0 else 0.0, f_small if f_small > 0.0 else 0.0, g22, half,
+    )  # fmt: skip
+
+
+def window_direction_floats(e, s2: float, nu: float, corr: float):
+    """``(angle, angle_std)`` of a window from :func:`window_eigen_floats`."""
+    big, small, c11, c12, c22, root, g11, g12, _, _, g22, half = e
+    a = 0.5 * math.atan2(2.0 * c12, 2.0 * half) + _HALF_PI
+    if a > _HALF_PI:
+        a -= math.pi
+    gap = big - small
+    hidden = small if small > MODEL_MARGIN * s2 else MODEL_MARGIN * s2
+    if root != 0.0:
+        cp, sp = (c11 - c22) / (2.0 * root), c12 / root
+        fd = 0.5 * (g11 - g22)
+        fm = 0.5 * (g11 + g22)
+        f_vv, f_ww, f_vw = fm + fd * cp + g12 * sp, fm - fd * cp - g12 * sp, g12 * cp - fd * sp
+        den = (f_vv if f_vv > 0.0 else 0.0) * (f_ww if f_ww > 0.0 else 0.0)
+        if den > 0.0:
+            rho2 = f_vw * f_vw / den
+            one = 1.0 - rho2
+            model = _div(hidden, big) * _div(rho2, one if one > 0.0 else 0.0)
+        else:
+            model = _div(hidden, big) * 1.0
+    else:  # no principal axis: the load's correlation is undefined, as in the kernel
+        model = _div(hidden, big) * 1.0
+    v = _div(corr * (big + s2) * (small + s2), nu * gap * gap) + model
+    return a, (math.sqrt(v) if v >= 0.0 else math.nan)
+
+
+def window_constants(count: float, corr: float, xp=None):
+    """``(tail, keep, nu)`` of a window of ``count`` samples (floats; see :func:`window_kernel`)."""
+    from softtip.core._xp import PY
+
+    keep = max(1.0 - _div(corr, count), 0.0)
+    nu = max(count - 1.0, 0.0) / corr
+    tail = _div(_chi2_excess(nu, PY), nu) + MODEL_MARGIN
+    return tail, keep, nu
+
+
+def _div(a: float, b: float) -> float:
+    if b != 0.0:
+        return a / b
+    if a != a or a == 0.0:
+        return math.nan
+    return math.copysign(math.inf, a) * math.copysign(1.0, b)

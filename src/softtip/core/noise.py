@@ -1,0 +1,135 @@
+"""Sensor noise model and its propagation to the tangential spin torque and the angle.
+
+The F/T sensor's noise is modelled as independent zero-mean Gaussians per axis with
+standard deviations ``force_std`` (N) and ``moment_std`` (N·m). With the contact point
+``r`` and normal ``n`` held fixed (the latched point), ``h = P (m − [r]× f)`` with
+``P = I − n nᵀ`` is linear in the wrench, so its covariance is
+
+``Σ_h = P Σ_m P + P [r]× Σ_f [r]×ᵀ P``.
+
+For a unit tangent vector ``v``, ``vᵀ Σ_h v = Σ_i σ_m,i² v_i² + Σ_i σ_f,i² (v × r)_i²``.
+softtip reports
+
+- ``h_std = sqrt(trace Σ_h)``: the root-mean-square magnitude of the noise in ``h``, i.e.
+  what ``|h|`` looks like when the true ``h`` is zero; ``|h|`` is significant above
+  ``max(k · h_std, h_min)`` (manual §3.5, ``k = 3``);
+- ``angle_std = sqrt(tᵀ Σ_h t) / |h|`` with ``t = d``: the first-order standard deviation of
+  the direction angle, radians.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from softtip.core._xp import NP
+from softtip.core.spin import tangent_frame_kernel
+
+__all__ = ["SensorNoise", "NANO17", "tangential_spin_torque_std", "direction_angle_std"]
+
+
+@dataclass(frozen=True)
+class SensorNoise:
+    """Per-axis standard deviations of the F/T sensor's noise, sensor frame.
+
+    Parameters
+    ----------
+    force_std : tuple of 3 floats
+        N, for ``fx, fy, fz``.
+    moment_std : tuple of 3 floats
+        N·m, for ``mx, my, mz``.
+    """
+
+    force_std: tuple[float, float, float]
+    moment_std: tuple[float, float, float]
+
+    def __post_init__(self) -> None:
+        for name in ("force_std", "moment_std"):
+            v = np.asarray(getattr(self, name), dtype=float)
+            if v.shape == ():
+                v = np.full(3, float(v))
+            if v.shape != (3,) or not np.all(np.isfinite(v)) or np.any(v < 0):
+                raise ValueError(f"{name} must be 3 non-negative finite numbers, got {getattr(self, name)!r}")
+            object.__setattr__(self, name, tuple(float(x) for x in v))
+
+    def scaled(self, factor: float) -> "SensorNoise":
+        """The same model with every standard deviation multiplied by ``factor``."""
+        return SensorNoise(
+            tuple(factor * s for s in self.force_std), tuple(factor * s for s in self.moment_std)
+        )
+
+
+#: ATI Nano17-class defaults (SI-25-0.25 calibration: resolution 1/160 N and 1/32 N·mm):
+#: about one resolution count of noise per axis, unfiltered.
+NANO17 = SensorNoise(force_std=(0.006, 0.006, 0.006), moment_std=(3.0e-5, 3.0e-5, 3.0e-5))
+
+
+def _quad_kernel(vx, vy, vz, rx, ry, rz, noise: SensorNoise):
+    """``vᵀ Σ_h v`` for a tangent vector ``v`` at the contact point ``r``."""
+    sfx, sfy, sfz = noise.force_std
+    smx, smy, smz = noise.moment_std
+    cx = vy * rz - vz * ry
+    cy = vz * rx - vx * rz
+    cz = vx * ry - vy * rx
+    return (
+        smx * smx * vx * vx
+        + smy * smy * vy * vy
+        + smz * smz * vz * vz
+        + sfx * sfx * cx * cx
+        + sfy * sfy * cy * cy
+        + sfz * sfz * cz * cz
+    )
+
+
+def h_std_kernel(rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, noise: SensorNoise, xp):
+    """``sqrt(trace Σ_h)`` component-wise, from any orthonormal tangent frame ``(e1, e2)``."""
+    return xp.sqrt(_quad_kernel(e1x, e1y, e1z, rx, ry, rz, noise) + _quad_kernel(e2x, e2y, e2z, rx, ry, rz, noise))
+
+
+def angle_std_kernel(dx, dy, dz, h_norm, rx, ry, rz, noise: SensorNoise, xp):
+    """First-order standard deviation of the direction angle, radians."""
+    return xp.div(xp.sqrt(_quad_kernel(dx, dy, dz, rx, ry, rz, noise)), h_norm)
+
+
+def _split3(a: ArrayLike, name: str) -> list[NDArray]:
+    a = np.asarray(a, dtype=float)
+    if a.shape[-1:] != (3,):
+        raise ValueError(f"{name} must have shape (..., 3), got {a.shape}")
+    return [a[..., i] for i in range(3)]
+
+
+def tangential_spin_torque_std(point: ArrayLike, normal: ArrayLike, noise: SensorNoise = NANO17) -> NDArray[np.float64]:
+    """Noise level of ``h``: ``sqrt(trace Σ_h)``, N·m, shape ``(...,)``.
+
+    Parameters
+    ----------
+    point : array-like, shape (..., 3)
+        Contact point, m.
+    normal : array-like, shape (..., 3)
+        Unit normal.
+    noise : SensorNoise
+    """
+    frame = tangent_frame_kernel(*_split3(normal, "normal"), NP)
+    return np.asarray(h_std_kernel(*_split3(point, "point"), *frame, noise, NP))
+
+
+def direction_angle_std(
+    direction: ArrayLike, h_norm: ArrayLike, point: ArrayLike, noise: SensorNoise = NANO17
+) -> NDArray[np.float64]:
+    """First-order standard deviation of the direction angle, radians, shape ``(...,)``.
+
+    Parameters
+    ----------
+    direction : array-like, shape (..., 3)
+        Unit direction ``d``.
+    h_norm : array-like, shape (...,)
+        ``|h|``, N·m.
+    point : array-like, shape (..., 3)
+        Contact point, m.
+    noise : SensorNoise
+    """
+    return np.asarray(
+        angle_std_kernel(*_split3(direction, "direction"), np.asarray(h_norm, float), *_split3(point, "point"), noise, NP)
+    )

@@ -1,0 +1,538 @@
+"""The live path: a source through the streaming estimator to a terminal view and a recording.
+
+:func:`run_live` is what ``softtip stream`` runs, for a live sensor and for a replayed log
+alike. Its consumer loop takes each :class:`~softtip.io.sources.Reading` from the source, runs
+:meth:`Estimator.update <softtip.estimator.Estimator.update>` on it and hands the result
+on without waiting for anything slow:
+
+* the :class:`Recorder` queues rows; its own thread formats and writes them in batches and
+  flushes the file every ``flush_interval`` (0.05 s), always on a whole line, and the loop
+  never waits on the disk; a stop (Ctrl-C, SIGTERM, SIGHUP, ``duration``) writes every row
+  taken so far before the file is closed;
+* the :class:`TerminalView` thread redraws one screen a few times a second from the latest
+  estimate and the counters in :class:`LiveStats`;
+* an optional ``on_estimate`` callback (the rerun logger) is called in the loop and must
+  be cheap (it decimates).
+
+Receiving itself happens before the loop: for a Net F/T in softtip's receive thread and
+queue (:mod:`softtip.io.netft`), so even a stalled loop does not lose packets until the queue
+is full, and those it then drops are counted apart from the network's losses.
+"""
+
+from __future__ import annotations
+
+import collections
+import itertools
+import math
+import os
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+from typing import TextIO
+
+from softtip.errors import InputError
+from softtip.estimator import Estimator, SampleEstimate
+from softtip.io.sources import Reading, readings
+
+__all__ = [
+    "RECORD_COLUMNS",
+    "KeyReader",
+    "LiveStats",
+    "Recorder",
+    "TerminalView",
+    "estimate_row",
+    "run_live",
+]
+
+#: Columns of a live recording. First the samples as a log (``t`` and the raw, untared
+#: wrench ``fx … mz``: a recording is a log that ``softtip estimate`` and ``--replay`` read
+#: as it is, and that reproduces the recorded estimates), then the estimates with the
+#: columns of ``softtip estimate`` (its tared wrench as ``fx_tared … mz_tared``), then the
+#: stream's bookkeeping (see :class:`~softtip.io.sources.Reading`): the source's sequence
+#: number; records missing just before this one (``lost``: network, or late) and dropped by
+#: softtip's queue (``dropped``); late packets, duplicates and malformed datagrams
+#: discarded since the previous row; the device's status word; the host receive time (s
+#: since the Unix epoch). Column sums give the totals (network loss: ``lost − late``).
+RECORD_COLUMNS: tuple[str, ...] = (
+    "t", "fx", "fy", "fz", "mx", "my", "mz",
+    "state", "fx_tared", "fy_tared", "fz_tared", "mx_tared", "my_tared", "mz_tared",
+    "rx", "ry", "rz", "nx", "ny", "nz", "sigma",
+    "hx", "hy", "hz", "h_norm", "dx", "dy", "dz", "angle_deg", "h_std", "angle_std_deg", "latched",
+    "latch_fallback", "relatched", "depth", "joint_conditioning", "joint_angle_std_deg", "joint_offset_std",
+    "joint_residual", "joint_fallback", "depth_std", "depth_from_data", "line_evidence", "h_ratio",
+    "excitation_ratio", "contact_id", "drift_fx", "drift_fy", "drift_fz", "drift_mx",
+    "drift_my", "drift_mz", "seq", "lost", "dropped", "late", "duplicates", "malformed",
+    "status", "host_time",
+)  # fmt: skip
+_INT_COLUMNS = ("latched", "latch_fallback", "relatched", "joint_fallback", "depth_from_data", "contact_id", "seq", "lost", "dropped", "late",
+                "duplicates", "malformed", "status")  # fmt: skip
+# Time and raw wrench exactly (shortest repr: re-reading the file gives the same doubles),
+# the host time to the microsecond, the rest as softtip.io.tables.write_table formats numbers.
+_FORMATS = {"t": "%r", "fx": "%r", "fy": "%r", "fz": "%r", "mx": "%r", "my": "%r", "mz": "%r",
+            "state": "%s", "line_evidence": "%s", "host_time": "%.6f"}  # fmt: skip
+_ROW_FORMAT = ",".join(_FORMATS.get(c, "%d" if c in _INT_COLUMNS else "%.10g") for c in RECORD_COLUMNS) + "\n"
+_DEG = 180.0 / math.pi
+_BLOCK = 32  # rows formatted per call by the recorder
+
+
+def estimate_row(e: SampleEstimate, r: Reading) -> tuple:
+    """One recording row (:data:`RECORD_COLUMNS`) from an estimate and its raw reading."""
+    w = r.wrench
+    return (
+        float(r.t), float(w[0]), float(w[1]), float(w[2]), float(w[3]), float(w[4]), float(w[5]),
+        e.state, *e.wrench, *e.point, *e.normal, e.sigma, *e.h, e.h_norm, *e.direction,
+        e.angle * _DEG, e.h_std, e.angle_std * _DEG, e.latched, e.latch_fallback, e.relatched, e.depth,
+        e.joint_conditioning, e.joint_angle_std * _DEG, e.joint_offset_std, e.joint_residual, e.joint_fallback,
+        e.depth_std, e.depth_from_data, e.line_evidence, e.h_ratio, e.excitation_ratio, e.contact_id, *e.drift,
+        r.seq, r.lost, r.dropped, r.late, r.duplicates, r.malformed, r.status, r.host_time,
+    )  # fmt: skip
+
+
+@dataclass
+class LiveStats:
+    """Counters of a live run, updated by the consumer loop, read by the view.
+
+    Attributes
+    ----------
+    received : int
+        Samples taken from the source.
+    lost : int
+        Sum of the samples' ``lost`` (records missing before each; used when the source
+        has no ``counters``).
+    dropped : Callable or None
+        Returns samples dropped before softtip read them (receive queue overflow).
+    counters : Callable or None
+        Returns the source's counters by name (a Net F/T: ``lost``, ``dropped``,
+        ``duplicates``, ``late``, ``malformed``, ``restarts``, ``stalls``,
+        ``status_records``).
+    warnings : Callable or None
+        Returns the source's warnings so far (list of str).
+    status : int
+        Status word of the newest sample.
+    last_nonzero_status : int
+        The newest nonzero status word (0: none yet).
+    started : float
+        ``time.monotonic()`` at the first sample.
+    latest : SampleEstimate or None
+    """
+
+    received: int = 0
+    lost: int = 0
+    dropped: Callable[[], int] | None = None
+    started: float | None = None
+    latest: SampleEstimate | None = None
+    source_name: str = ""
+    info: str = ""
+    counters: Callable[[], dict[str, int]] | None = None
+    warnings: Callable[[], list[str]] | None = None
+    status: int = 0
+    last_nonzero_status: int = 0
+    rate_window: collections.deque = field(
+        default_factory=lambda: collections.deque(maxlen=8)
+    )
+
+    def rate(self) -> float:
+        """Samples per second over the last couple of seconds (needs calls a few times a second)."""
+        now = time.monotonic()
+        self.rate_window.append((now, self.received))
+        (t0, n0), (t1, n1) = self.rate_window[0], self.rate_window[-1]
+        return (n1 - n0) / (t1 - t0) if t1 > t0 else 0.0
+
+    def totals(self) -> dict[str, int]:
+        """Every counter by name: the source's own where it has them, else ``lost``/``dropped``."""
+        c = dict(self.counters()) if self.counters else {}
+        c.setdefault("lost", self.lost)
+        c.setdefault("dropped", self.dropped() if self.dropped else 0)
+        c["received"] = self.received
+        return c
+
+
+class Recorder:
+    """Writes recording rows to a CSV file as they come, from a thread, in batches.
+
+    The file is created when the first row is written (a run that fails before any sample
+    leaves no file), and flushed to the OS every ``flush_interval`` seconds.
+
+    Parameters
+    ----------
+    path : str or path-like
+        CSV file; an existing file is replaced.
+    flush_interval : float
+        s between flushes (at most this much is lost if the process is killed).
+    """
+
+    def __init__(
+        self, path: str | os.PathLike[str], flush_interval: float = 0.05
+    ) -> None:
+        self.path = os.fspath(path)
+        if os.path.isdir(self.path):
+            raise InputError(
+                f"{self.path}: is a directory; expected a file name for the recording"
+            )
+        directory = os.path.dirname(os.path.abspath(self.path))
+        if not os.path.isdir(directory) or not os.access(directory, os.W_OK):
+            raise InputError(
+                f"{self.path}: cannot write there; expected an existing, writable directory"
+            )
+        self.flush_interval = flush_interval
+        self.rows = 0
+        self._pending: collections.deque = collections.deque()
+        self._fh: TextIO | None = None
+        self._stop = threading.Event()
+        self._error: BaseException | None = None
+        self._thread = threading.Thread(
+            target=self._loop, daemon=True, name="softtip-recorder"
+        )
+        self._thread.start()
+
+    def add(self, row: tuple) -> None:
+        """Queue one row (from the consumer loop; never blocks)."""
+        if self._error is not None:
+            raise self._error
+        self._pending.append(row)
+
+    def _write_pending(self) -> None:
+        pending = self._pending
+        n = len(pending)
+        if not n:
+            return
+        if self._fh is None:
+            self._fh = open(self.path, "w", encoding="utf-8", newline="")
+            self._fh.write(",".join(RECORD_COLUMNS) + "\n")
+        rows = [pending.popleft() for _ in range(n)]
+        # one C-level format per block of rows (as softtip.io.tables.write_table does); small blocks,
+        # because a format call holds the GIL and the consumer loop must not wait long for it
+        for i in range(0, n, _BLOCK):
+            block = rows[i : i + _BLOCK]
+            self._fh.write(
+                (_ROW_FORMAT * len(block)) % tuple(itertools.chain.from_iterable(block))
+            )
+        self._fh.flush()
+        self.rows += n
+
+    def _loop(self) -> None:
+        try:
+            while not self._stop.wait(self.flush_interval):
+                self._write_pending()
+        except BaseException as exc:  # noqa: BLE001 - reported to the consumer on its next add()/close()
+            self._error = exc
+
+    def close(self) -> None:
+        """Write what is queued, flush, sync and close (idempotent)."""
+        if self._stop.is_set():
+            return
+        self._stop.set()
+        self._thread.join()
+        try:
+            if self._error is None:
+                self._write_pending()
+        finally:
+            if self._fh is not None:
+                self._fh.flush()
+                os.fsync(self._fh.fileno())
+                self._fh.close()
+        if self._error is not None:
+            raise InputError(f"{self.path}: cannot write the recording ({self._error})")
+
+
+def _fmt_vec(v, scale: float = 1.0, fmt: str = "{:+7.2f}") -> str:
+    if any(math.isnan(x) for x in v):
+        return "—"
+    return "(" + ", ".join(fmt.format(x * scale) for x in v) + ")"
+
+
+class TerminalView:
+    """A one-screen live view, redrawn in place with ANSI escapes a few times a second.
+
+    Parameters
+    ----------
+    stats : LiveStats
+    out : text stream
+        Where to draw (standard error by default, so standard output stays clean).
+    interval : float
+        s between redraws.
+    h_threshold : float
+        ``h_min`` of the configuration, N·m, shown next to ``|h|``.
+    recorder : Recorder, optional
+        Its row count is shown.
+    estimator : Estimator, optional
+        Its tare, drift, contact count and warnings are shown.
+    tare_key : bool
+        Say that the ``t`` key tares again (:class:`KeyReader` is listening).
+    """
+
+    def __init__(
+        self,
+        stats: LiveStats,
+        out: TextIO | None = None,
+        interval: float = 0.2,
+        h_threshold: float = 5e-4,
+        recorder: Recorder | None = None,
+        estimator: Estimator | None = None,
+        tare_key: bool = False,
+    ) -> None:
+        self.stats, self.out, self.interval = stats, out or sys.stderr, interval
+        self.h_threshold, self.recorder, self.estimator, self.tare_key = h_threshold, recorder, estimator, tare_key
+        self._lines = 0
+        self._stop = threading.Event()
+        self._thread = threading.Thread(
+            target=self._loop, daemon=True, name="softtip-view"
+        )
+
+    def start(self) -> TerminalView:
+        self._thread.start()
+        return self
+
+    def stop(self) -> None:
+        """Stop redrawing; the last screen stays."""
+        self._stop.set()
+        if self._thread.is_alive():
+            self._thread.join()
+        self.draw()
+
+    def _loop(self) -> None:
+        while not self._stop.wait(self.interval):
+            self.draw()
+
+    def render(self) -> list[str]:
+        """The screen as lines of text."""
+        s, e = self.stats, self.stats.latest
+        rate = s.rate()
+        lines = [f"softtip stream  {s.source_name}  {s.info}".rstrip()]
+        if e is None:
+            lines.append("waiting for data ...")
+        else:
+            fn = (
+                math.sqrt(sum(x * x for x in e.wrench[:3]))
+                if not math.isnan(e.wrench[0])
+                else math.nan
+            )
+            flags = " ".join(
+                n
+                for n, on in (("latched", e.latched), ("fallback", e.latch_fallback))
+                if on
+            )
+            state = (
+                "taring (keep the fingertip untouched)" if e.taring
+                else e.state.upper() + (f" ({e.line_evidence})" if e.line_evidence else "")
+            )
+            lines += [
+                f"t        {e.t:10.3f} s",
+                f"state    {state:<8} {flags}",
+                f"|f|      {fn:8.3f} N      f = {_fmt_vec(e.wrench[:3])} N",
+                f"contact  r = {_fmt_vec(e.point, 1e3)} mm",
+                f"normal   n = {_fmt_vec(e.normal, 1.0, '{:+6.3f}')}",
+                f"|h|      {e.h_norm * 1e3:8.3f} N·mm   (significant above {max(3 * e.h_std, self.h_threshold) * 1e3:.3f} N·mm)"
+                if not math.isnan(e.h_norm) else "|h|             —",
+                f"edge     {e.angle * _DEG:+7.1f}° ± {e.angle_std * _DEG:.1f}°" if e.state == "line" else "edge            —",
+            ]  # fmt: skip
+        c = s.totals()
+        lost = c["lost"]
+        pct = 100.0 * lost / (s.received + lost) if s.received + lost > 0 else 0.0
+        if s.counters is None:  # a log or a user's source: only what its readings say
+            lines.append(
+                f"rate     {rate:8.1f} Hz     samples {s.received}   lost {lost} ({pct:.2f} %)   dropped {c['dropped']}"
+            )
+        else:  # a sensor: what the network and the device did
+            lines += [
+                f"rate     {rate:8.1f} Hz     samples {s.received}",
+                f"network  lost {lost} ({pct:.2f} %)   late {c.get('late', 0)}   duplicates {c.get('duplicates', 0)}"
+                f"   malformed {c.get('malformed', 0)}   dropped by softtip {c['dropped']}",
+                f"device   status 0x{s.status:08x}   nonzero in {c.get('status_records', 0)} samples"
+                + (f" (last 0x{s.last_nonzero_status:08x})" if s.last_nonzero_status else "")
+                + f"   restarts {c.get('restarts', 0)}   stalled {c.get('stalls', 0)}",
+            ]
+        warnings = s.warnings() if s.warnings else []
+        if warnings:
+            lines.append(f"warning  {warnings[-1]}" + (f"  (+{len(warnings) - 1} more)" if len(warnings) > 1 else ""))
+        if self.recorder is not None:
+            lines.append(f"record   {self.recorder.path}  {self.recorder.rows} rows")
+        est = self.estimator
+        if est is not None:
+            rep = est.tare_report
+            if rep is not None:
+                d = est.drift
+                lines.append(
+                    f"tare     {rep.source if rep.source != 'tare' else rep.method} {rep.n_samples} samples, "
+                    f"{rep.spikes} spike(s)   drift {math.sqrt(d[0] ** 2 + d[1] ** 2 + d[2] ** 2) * 1e3:.1f} mN   "
+                    f"contacts {est.contacts}"
+                )
+            lines += [f"warning  {w[:150]}" for w in list(dict.fromkeys(est.warnings))[-3:]]
+        lines.append("t: tare again (untouched)   Ctrl-C to stop" if self.tare_key else "Ctrl-C to stop")
+        return lines
+
+    def draw(self) -> None:
+        lines = self.render()
+        # back to the top of the previous screen, then rewrite each line and clear the rest
+        up = f"\x1b[{self._lines}F" if self._lines else ""
+        text = up + "".join(f"\x1b[2K{line}\n" for line in lines) + "\x1b[J"
+        self._lines = len(lines)
+        try:
+            self.out.write(text)
+            self.out.flush()
+        except (OSError, ValueError):  # terminal gone
+            pass
+
+
+class KeyReader:
+    """Calls ``actions[key]`` for each key pressed on a terminal, from a thread.
+
+    The terminal is put in cbreak mode (keys arrive unbuffered, Ctrl-C still interrupts)
+    until :meth:`close`. Does nothing when ``stream`` is not a terminal.
+    """
+
+    def __init__(self, actions: dict[str, Callable[[], None]], stream: TextIO | None = None) -> None:
+        self.actions, self.stream = actions, stream or sys.stdin
+        self._stop = threading.Event()
+        self._saved = None
+        self._thread = None
+        try:
+            import termios
+            import tty
+
+            fd = self.stream.fileno()
+            if not os.isatty(fd):
+                return
+            self._saved = termios.tcgetattr(fd)
+            tty.setcbreak(fd)
+        except (ImportError, OSError, ValueError, AttributeError):  # no terminal (or no termios)
+            self._saved = None
+            return
+        self._thread = threading.Thread(target=self._loop, args=(fd,), daemon=True, name="softtip-keys")
+        self._thread.start()
+
+    def _loop(self, fd: int) -> None:
+        import select
+
+        while not self._stop.is_set():
+            ready, _, _ = select.select([fd], [], [], 0.1)
+            if ready:
+                key = os.read(fd, 1).decode(errors="ignore").lower()
+                action = self.actions.get(key)
+                if action is not None:
+                    action()
+
+    def close(self) -> None:
+        """Stop reading keys and give the terminal back as it was."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
+        if self._saved is not None:
+            import termios
+
+            termios.tcsetattr(self.stream.fileno(), termios.TCSADRAIN, self._saved)
+            self._saved = None
+
+
+@dataclass
+class LiveSummary:
+    """How a live run ended. ``reason``: ``end`` (source exhausted), ``duration``, ``interrupt``.
+
+    ``counters`` has every counter of :meth:`LiveStats.totals`; ``warnings`` the source's.
+    """
+
+    samples: int
+    lost: int
+    dropped: int
+    seconds: float
+    reason: str
+    last: SampleEstimate | None
+    counters: dict[str, int] = field(default_factory=dict)
+    warnings: list[str] = field(default_factory=list)
+
+
+def run_live(
+    source: Iterable,
+    estimator: Estimator,
+    *,
+    recorder: Recorder | None = None,
+    view: TerminalView | None = None,
+    stats: LiveStats | None = None,
+    duration: float | None = None,
+    stop: threading.Event | None = None,
+    on_estimate: Callable[[SampleEstimate, Reading], None] | None = None,
+    tare_request: threading.Event | None = None,
+) -> LiveSummary:
+    """Run ``source`` through ``estimator`` until it ends, ``duration`` passes or ``stop`` is set.
+
+    Parameters
+    ----------
+    source : iterable of Reading or (t, wrench)
+    estimator : Estimator
+    recorder : Recorder, optional
+        Gets one row per sample; closed (flushed) at the end, also on errors.
+    view : TerminalView, optional
+        Started here, stopped at the end.
+    stats : LiveStats, optional
+        Counters to update (the view's); a new one otherwise.
+    duration : float, optional
+        s of wall-clock time after the first sample.
+    stop : threading.Event, optional
+        Set it (e.g. from a SIGINT handler) to end the run cleanly.
+    on_estimate : callable, optional
+        Called with each estimate and its reading, in the loop.
+    tare_request : threading.Event, optional
+        Set it (e.g. from a key) to re-tare (:meth:`Estimator.tare`) from the next sample.
+
+    Returns
+    -------
+    LiveSummary
+    """
+    stats = stats or LiveStats()
+    stop = stop or threading.Event()
+    update = estimator.update
+    add = recorder.add if recorder is not None else None
+    reason = "end"
+    if view is not None:
+        view.start()
+    deadline = math.inf
+    try:
+        for r in readings(source):
+            if stats.started is None:
+                stats.started = time.monotonic()
+                if duration is not None:
+                    deadline = stats.started + duration
+            if tare_request is not None and tare_request.is_set():
+                tare_request.clear()
+                estimator.tare()
+            e = update(r.t, r.wrench)
+            stats.received += 1
+            stats.lost += r.lost
+            if r.status:
+                stats.last_nonzero_status = r.status
+            stats.status = r.status
+            stats.latest = e
+            if add is not None:
+                add(estimate_row(e, r))
+            if on_estimate is not None:
+                on_estimate(e, r)
+            if stop.is_set():
+                reason = "interrupt"
+                break
+            if time.monotonic() >= deadline:
+                reason = "duration"
+                break
+        else:
+            if stop.is_set():  # the source ended because it was asked to stop
+                reason = "interrupt"
+    finally:
+        try:
+            if recorder is not None:
+                recorder.close()
+        finally:
+            if view is not None:
+                view.stop()  # after the recorder, so the last screen shows every row
+    seconds = time.monotonic() - stats.started if stats.started is not None else 0.0
+    totals = stats.totals()
+    return LiveSummary(
+        stats.received,
+        totals["lost"],
+        totals["dropped"],
+        seconds,
+        reason,
+        stats.latest,
+        totals,
+        list(stats.warnings()) if stats.warnings else [],
+    )

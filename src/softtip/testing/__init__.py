@@ -1,0 +1,1 @@
+"""Tools for tests: a fake Net F/T sensor."""

@@ -1,0 +1,322 @@
+"""Figures laid out like the papers': force, moment, ``|h|`` and the measured direction vs time."""
+
+from __future__ import annotations
+
+import os
+from typing import Sequence
+
+import numpy as np
+
+from softtip.estimator import LINE, Estimates
+from softtip.core.units import KGF, KGF_MM
+
+__all__ = ["plot_estimates", "plot_direction_chart", "plot_position_error", "figure_formats"]
+
+_UNITS = {
+    "si": (1.0, 1e3, "N", "N·mm"),
+    "kgf-mm": (1.0 / KGF, 1.0 / KGF_MM, "kgf", "kgf·mm"),
+}
+
+
+def _figure_module():
+    import matplotlib
+
+    if os.environ.get("MPLBACKEND") is None:
+        matplotlib.use("Agg")  # files only; no display needed
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def plot_estimates(
+    estimates: Estimates | Sequence[Estimates],
+    path: str | os.PathLike | None = None,
+    *,
+    labels: Sequence[str] | None = None,
+    units: str = "si",
+    title: str | None = None,
+    h_threshold: float | np.ndarray | None = None,
+    reference_angles: Sequence[float] | None = None,
+    fmt: str | None = None,
+    detail: int = 0,
+):
+    """Draw the four panels of the papers' figures (e.g. 2006 Figs. 8–11).
+
+    Upper left force, lower left moment (of log ``detail``, per axis; named in the panels'
+    titles when there are several logs), upper right ``|h|``,
+    lower right the measured direction in degrees (``line`` samples only, with its ±1σ
+    band). Several logs (e.g. one per plate angle) share the right-hand panels, one trace
+    each.
+
+    Parameters
+    ----------
+    estimates : Estimates or sequence of Estimates
+    path : str or PathLike, optional
+        Where to save (PNG, PDF, SVG by extension); the figure is returned either way.
+    labels : sequence of str, optional
+        One per log, for the legend.
+    units : {"si", "kgf-mm"}
+        Plot force in N and moment in N·mm, or kgf and kgf·mm as in the papers.
+    title : str, optional
+    fmt : str, optional
+        File format (e.g. ``"png"``); default from the extension of ``path``.
+    detail : int
+        Index of the log whose force and moment are drawn (default the first).
+    reference_angles : sequence of float, optional
+        True directions (degrees), one per log, drawn as dashed lines in its colour.
+    h_threshold : float or array of shape (N,), optional
+        The ``|h|`` significance level (N·m) of the first log, drawn dashed: a constant or
+        per sample (``max(h_sigmas · h_std, h_min)``).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    plt = _figure_module()
+    runs = [estimates] if isinstance(estimates, Estimates) else list(estimates)
+    if not runs:
+        raise ValueError("nothing to plot")
+    if units not in _UNITS:
+        raise ValueError(f"units must be one of {', '.join(_UNITS)}, got {units!r}")
+    fscale, mscale, funit, munit = _UNITS[units]
+    fig = plt.figure(figsize=(10, 7.0), constrained_layout=True)
+    grid = fig.add_gridspec(3, 2, height_ratios=[1.0, 1.0, 0.12 + 0.08 * len(runs)])
+    ax_f = fig.add_subplot(grid[0, 0])
+    ax_m = fig.add_subplot(grid[1:, 0], sharex=ax_f)
+    ax_h = fig.add_subplot(grid[0, 1], sharex=ax_f)
+    ax_d = fig.add_subplot(grid[1, 1], sharex=ax_f)
+    ax_s = fig.add_subplot(grid[2, 1], sharex=ax_f)
+    axes = np.array([ax_f, ax_h, ax_m, ax_d])
+
+    first = runs[detail]
+    for i, (name, color) in enumerate(zip("xyz", ("tab:red", "tab:green", "tab:blue"))):
+        ax_f.plot(first.t, first.wrench[:, i] * fscale, color=color, lw=1, label=f"force {name}")
+        ax_m.plot(first.t, first.wrench[:, 3 + i] * mscale, color=color, lw=1, label=f"moment {name}")
+    ax_f.set_ylabel(f"force [{funit}]")
+    ax_m.set_ylabel(f"moment [{munit}]")
+    if len(runs) > 1 and labels is not None:  # say whose force and moment these are
+        ax_f.set_title(f"force and moment of the {labels[detail]} grasp", fontsize=9)
+    ax_f.legend(loc="upper left", fontsize=8)
+    ax_m.legend(loc="upper left", fontsize=8)
+
+    for k, est in enumerate(runs):
+        label = labels[k] if labels is not None else None
+        (line,) = ax_h.plot(est.t, est.h_norm * mscale, lw=1, label=label)
+        angle = np.where(est.state == LINE, np.degrees(est.angle), np.nan)
+        std = np.degrees(est.angle_std)
+        ax_d.plot(est.t, angle, ".", ms=2.5, color=line.get_color(), label=label)
+        ax_d.fill_between(est.t, angle - std, angle + std, color=line.get_color(), alpha=0.2, lw=0)
+        if reference_angles is not None:
+            ax_d.axhline(reference_angles[k], ls="--", lw=0.8, color=line.get_color())
+    if h_threshold is not None:
+        level = np.broadcast_to(np.asarray(h_threshold, dtype=float), first.t.shape)
+        ax_h.plot(first.t, level * mscale, ls="--", color="0.4", lw=1, label="significance")
+    ax_h.set_ylabel(f"|h| tangential spin torque [{munit}]")
+    ax_d.set_ylabel("measured direction [deg]")
+    ax_d.set_ylim(-95, 95)  # a true direction at ±90° stays off the frame
+    ax_d.set_yticks([-90, -45, 0, 45, 90])
+    if labels is not None or h_threshold is not None:
+        ax_h.legend(loc="upper left", fontsize=8)
+    state_band(ax_s, runs, labels)
+    for ax in (ax_m, ax_s):
+        ax.set_xlabel("time [s]")
+    ax_d.tick_params(labelbottom=False)
+    for ax in axes.flat:
+        ax.grid(True, alpha=0.3)
+    if title:
+        fig.suptitle(title)
+    _save(fig, plt, path)
+    return fig
+
+
+#: Colours of the state band: none, point, line (unconfirmed), line (confirmed), area.
+STATE_COLORS = ("white", "0.8", "#a6dba0", "#1b7837", "#e08214")
+STATE_BAND_LABELS = ("none", "point", "line unconfirmed", "line confirmed", "area")
+
+
+def state_band(ax, runs: Sequence[Estimates], labels: Sequence[str] | None = None) -> None:
+    """The contact state over time as a colour band, one row per log (line split into
+    unconfirmed and confirmed evidence; :data:`STATE_COLORS`)."""
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+    from matplotlib.patches import Patch
+
+    cmap = ListedColormap(STATE_COLORS)
+    norm = BoundaryNorm(np.arange(-0.5, len(STATE_COLORS)), cmap.N)
+    for k, est in enumerate(runs):
+        code = np.where(est.state == 3, 4, np.where((est.state == 2) & (est.line_evidence == 2), 3, est.state))
+        t = est.t
+        if len(t) < 2:
+            continue
+        mid = 0.5 * (t[1:] + t[:-1])
+        edges = np.concatenate(([t[0]], mid, [t[-1]]))
+        ax.pcolormesh(edges, [k, k + 1], code[None, :].astype(float), cmap=cmap, norm=norm, shading="flat")
+    ax.set_ylim(len(runs), 0)
+    ax.set_yticks(np.arange(len(runs)) + 0.5)
+    ax.set_yticklabels(list(labels) if labels is not None else [""] * len(runs), fontsize=7)
+    ax.set_ylabel("state", fontsize=8)
+    handles = [Patch(facecolor=c, edgecolor="0.5", label=n) for c, n in zip(STATE_COLORS, STATE_BAND_LABELS)]
+    ax.legend(handles=handles, loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=5, fontsize=7, frameon=False, borderaxespad=0.1)
+
+
+def plot_line_or_area(rows: Sequence[tuple[str, Estimates]], path=None, *, title: str | None = None, t_from: float = 4.0):
+    """Line or area, one row per log: ``h`` in the tangent plane as a trace (left; N·mm,
+    tangent frame at the contact point: a line for a strip, a blob for an area contact) and
+    its components and the state over time (right, with the state band below).
+
+    Parameters
+    ----------
+    rows : sequence of (label, Estimates)
+    path : str or PathLike, optional
+    title : str, optional
+    t_from : float
+        s; the trace starts here (after the grasp force rise).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from softtip.core.spin import tangent_frame_kernel
+    from softtip.core._xp import NP
+
+    plt = _figure_module()
+    if not rows:
+        raise ValueError("nothing to plot")
+    fig = plt.figure(figsize=(10, 2.3 * len(rows) + 0.8), constrained_layout=True)
+    grid = fig.add_gridspec(2 * len(rows), 2, width_ratios=[1.0, 2.6], height_ratios=[1.0, 0.22] * len(rows))
+    ax_last = None
+    for k, (label, est) in enumerate(rows):
+        ax_tr = fig.add_subplot(grid[2 * k : 2 * k + 2, 0])
+        ax_ts = fig.add_subplot(grid[2 * k, 1], sharex=ax_last)
+        ax_st = fig.add_subplot(grid[2 * k + 1, 1], sharex=ax_ts)
+        ax_last = ax_ts
+        sel = (est.t >= t_from) & (est.state > 0)
+        with np.errstate(invalid="ignore"):
+            e1x, e1y, e1z, e2x, e2y, e2z = tangent_frame_kernel(*est.normal.T, NP)
+            h1 = (est.h[:, 0] * e1x + est.h[:, 1] * e1y + est.h[:, 2] * e1z) * 1e3
+            h2 = (est.h[:, 0] * e2x + est.h[:, 1] * e2y + est.h[:, 2] * e2z) * 1e3
+        ax_tr.plot(h1[sel], h2[sel], lw=0.6, color="tab:purple")
+        ax_tr.plot([0], [0], "+", color="0.3")
+        lim = max(1.0, float(np.nanmax(np.abs(np.concatenate((h1[sel], h2[sel]))))) if sel.any() else 1.0) * 1.1
+        ax_tr.set_xlim(-lim, lim)
+        ax_tr.set_ylim(-lim, lim)
+        ax_tr.set_aspect("equal")
+        ax_tr.set_xlabel("h·e1 [N·mm]", fontsize=8)
+        ax_tr.set_ylabel("h·e2 [N·mm]", fontsize=8)
+        ax_tr.set_title(label, fontsize=9)
+        ax_ts.plot(est.t, h1, lw=0.8, label="h·e1")
+        ax_ts.plot(est.t, h2, lw=0.8, label="h·e2")
+        ax_ts.set_ylabel("h [N·mm]", fontsize=8)
+        ax_ts.tick_params(labelbottom=False)
+        ax_ts.grid(True, alpha=0.3)
+        if k == 0:
+            ax_ts.legend(loc="upper left", fontsize=7)
+        state_band(ax_st, [est])
+        ax_st.set_yticks([])
+        if k != len(rows) - 1:
+            ax_st.get_legend().remove()
+            ax_st.tick_params(labelbottom=False)
+        else:
+            ax_st.set_xlabel("time [s]")
+    if title:
+        fig.suptitle(title)
+    _save(fig, plt, path)
+    return fig
+
+
+def figure_formats() -> set[str]:
+    """File name extensions (without the dot) that the figures can be saved as."""
+    plt = _figure_module()
+    fig = plt.figure()
+    try:
+        return set(fig.canvas.get_supported_filetypes())
+    finally:
+        plt.close(fig)
+
+
+def _save(fig, plt, path, fmt: str | None = None) -> None:
+    if path is not None:
+        fig.savefig(path, dpi=110, format=fmt)
+        plt.close(fig)
+
+
+def plot_direction_chart(
+    rows: Sequence[tuple[str, Sequence[Estimates], Sequence[str], Sequence[float]]],
+    path: str | os.PathLike | None = None,
+    *,
+    title: str | None = None,
+):
+    """The papers' per-object charts (2006 Figs. 14–17, 19–22): one row per object, ``|h|``
+    (N·mm) on the left and the measured direction (degrees) on the right, a trace per angle
+    with its true direction dashed.
+
+    Parameters
+    ----------
+    rows : sequence of (name, estimates, labels, true angles in degrees)
+    path : str or PathLike, optional
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    plt = _figure_module()
+    fig, axes = plt.subplots(len(rows), 2, figsize=(10, 2.1 * len(rows) + 0.6), sharex=True, squeeze=False, constrained_layout=True)
+    for (name, runs, labels, truths), (ax_h, ax_d) in zip(rows, axes):
+        for est, label, truth in zip(runs, labels, truths):
+            (ln,) = ax_h.plot(est.t, est.h_norm * 1e3, lw=1, label=label)
+            angle = np.where(est.state == LINE, np.degrees(est.angle), np.nan)
+            ax_d.plot(est.t, angle, ".", ms=2, color=ln.get_color())
+            ax_d.axhline(truth, ls="--", lw=0.8, color=ln.get_color())
+        ax_h.set_ylabel("|h| [N·mm]")
+        ax_h.set_title(name, fontsize=9, loc="left")
+        ax_d.set_ylim(-95, 95)  # a true direction at ±90° stays off the frame
+        ax_d.set_yticks([-90, -45, 0, 45, 90])
+        ax_d.set_ylabel("direction [deg]")
+        ax_h.legend(loc="upper left", fontsize=7, ncol=len(labels))
+        for ax in (ax_h, ax_d):
+            ax.grid(True, alpha=0.3)
+    axes[-1, 0].set_xlabel("time [s]")
+    axes[-1, 1].set_xlabel("time [s]")
+    if title:
+        fig.suptitle(title)
+    _save(fig, plt, path)
+    return fig
+
+
+def plot_position_error(
+    runs: Sequence[tuple[str, np.ndarray, np.ndarray]],
+    path: str | os.PathLike | None = None,
+    *,
+    bound: float | None = None,
+    title: str | None = None,
+):
+    """Contact-position error against pushing force (2006 Fig. 7).
+
+    Parameters
+    ----------
+    runs : sequence of (label, |f| in N (N,), position error in m (N,))
+    path : str or PathLike, optional
+    bound : float, optional
+        An error bound to draw, m.
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    plt = _figure_module()
+    fig, ax = plt.subplots(figsize=(7, 4.2), constrained_layout=True)
+    for label, fn, err in runs:
+        ok = np.isfinite(err) & (fn > 0)
+        ax.plot(fn[ok] / KGF, err[ok] * 1e3, ".", ms=3, label=label)
+    if bound is not None:
+        ax.axhline(bound * 1e3, ls="--", color="0.4", lw=1, label=f"{bound * 1e3:g} mm")
+    ax.axvline(0.2, ls=":", color="0.4", lw=1)
+    ax.set_xlabel("pushing force [kgf]")
+    ax.set_ylabel("contact position error [mm]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    if title:
+        ax.set_title(title, fontsize=10)
+    _save(fig, plt, path)
+    return fig

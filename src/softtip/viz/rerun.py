@@ -1,0 +1,268 @@
+"""3-D view of the estimates with Rerun: live (``softtip stream --rerun``) or offline.
+
+Needs the ``rerun-sdk`` package (``pip install rerun-sdk``; the ``viz`` extra). What
+is logged, sensor frame, metres, on the timeline ``t`` (s of the log):
+
+* ``tip/skin`` (static): the fingertip's skin, a triangle mesh from its geometry;
+* ``tip/contact``: the contact point; ``tip/normal``: the outward normal there (arrow,
+  1 cm); ``tip/force``: the force the object exerts, drawn *ending* at the contact point
+  (``force_scale`` m per N); ``tip/edge``: the edge direction as a line on the skin
+  through the contact point (``line`` contacts only); ``tip/h_trace``: the trace of the
+  tangential spin torque ``h`` over the last ``trace_samples`` logged samples, drawn from
+  the contact point (``h_scale`` m per N·m): a line for a strip, a blob for an area
+  contact; all cleared when there is no contact;
+* ``series/...``: time series of force, moment, ``|h|`` with its significance level, the
+  edge angle (degrees) and the state code (0 none, 1 point, 2 line, 3 area).
+
+``rerun FILE.rrd`` opens a saved recording.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections import deque
+
+import numpy as np
+from numpy.typing import NDArray
+
+from softtip.core.fingertip import Capsule, Ellipsoid, Fingertip, Sphere
+from softtip.estimator import STATES, Estimates, SampleEstimate
+
+__all__ = ["RerunLogger", "import_rerun", "surface_mesh"]
+
+
+def import_rerun():
+    """Import ``rerun`` or raise an :class:`ImportError` that names the extra to install."""
+    try:
+        import rerun
+    except ImportError as exc:
+        raise ImportError(
+            "the 3-D view needs the 'rerun-sdk' package: pip install 'rerun-sdk>=0.23' "
+            "(or, from a softtip checkout, pip install -e '.[viz]')"
+        ) from exc
+    return rerun
+
+
+def surface_mesh(
+    tip: Fingertip, n_around: int = 48, n_along: int = 32
+) -> tuple[NDArray, NDArray, NDArray]:
+    """A triangle mesh of the skin.
+
+    Parameters
+    ----------
+    tip : Fingertip
+    n_around, n_along : int
+        Vertices around the z axis and along the profile.
+
+    Returns
+    -------
+    vertices : (V, 3) m
+    triangles : (T, 3) int32 vertex indices
+    normals : (V, 3) outward unit normals
+    """
+    phi = np.linspace(0.0, 2.0 * np.pi, n_around, endpoint=False)
+    if isinstance(tip, Capsule):
+        # profile: the cylinder from the sensor (z = 0) up, then the hemisphere to the tip
+        n_cyl = max(2, n_along // 3) if tip.length > 0 else 0
+        z_cyl = np.linspace(0.0, tip.length, n_cyl, endpoint=False)
+        a = np.linspace(0.5 * np.pi, 0.0, n_along - n_cyl)
+        rho = np.concatenate((np.full(n_cyl, tip.radius), tip.radius * np.sin(a)))
+        z = np.concatenate((z_cyl, tip.length + tip.radius * np.cos(a)))
+        pts = np.stack(
+            [
+                tip.axis_offset[0] + rho[:, None] * np.cos(phi),
+                tip.axis_offset[1] + rho[:, None] * np.sin(phi),
+                np.broadcast_to(z[:, None], (len(z), n_around)),
+            ],
+            axis=-1,
+        )
+    else:
+        # a UV sphere, scaled (sphere, ellipsoid) or projected onto the skin (anything else)
+        a = np.linspace(np.pi, 0.0, n_along)
+        unit = np.stack(
+            [
+                np.sin(a)[:, None] * np.cos(phi),
+                np.sin(a)[:, None] * np.sin(phi),
+                np.broadcast_to(np.cos(a)[:, None], (n_along, n_around)),
+            ],
+            axis=-1,
+        )
+        if isinstance(tip, Sphere):
+            pts = np.asarray(tip.center) + tip.radius * unit
+        elif isinstance(tip, Ellipsoid):
+            pts = np.asarray(tip.center) + np.asarray(tip.semi_axes) * unit
+        else:
+            center, radius = tip.bounding_sphere
+            pts = tip.project(center + radius * unit)
+    rows, cols = pts.shape[:2]
+    vertices = pts.reshape(-1, 3)
+    i, j = np.meshgrid(np.arange(rows - 1), np.arange(cols), indexing="ij")
+    a0 = i * cols + j
+    a1 = i * cols + (j + 1) % cols
+    b0, b1 = a0 + cols, a1 + cols
+    triangles = np.concatenate(
+        [
+            np.stack([a0, a1, b1], -1).reshape(-1, 3),
+            np.stack([a0, b1, b0], -1).reshape(-1, 3),
+        ]
+    )
+    with np.errstate(invalid="ignore", divide="ignore"):
+        normals = tip.normal(vertices)
+    normals = np.where(np.isfinite(normals), normals, np.array([0.0, 0.0, 1.0]))
+    return vertices, triangles.astype(np.int32), normals
+
+
+def _edge_line(tip: Fingertip, r, d, half_length: float) -> NDArray:
+    """Points of the edge direction drawn on the skin: ``r + s d`` projected, ``|s| ≤ half_length``."""
+    s = np.linspace(-half_length, half_length, 21)[:, None]
+    return tip.project(np.asarray(r) + s * np.asarray(d))
+
+
+class RerunLogger:
+    """Logs a fingertip and its estimates to Rerun.
+
+    Parameters
+    ----------
+    tip : Fingertip
+    save : str or path-like, optional
+        Write a ``.rrd`` file.
+    spawn : bool
+        Open (or connect to) a Rerun viewer.
+    force_scale : float
+        Length of the force arrow, m per N.
+    max_rate_hz : float
+        Live: at most this many samples per second are logged in 3-D (the rest is skipped,
+        the consumer loop must not slow down).
+    """
+
+    def __init__(
+        self,
+        tip: Fingertip,
+        save: str | os.PathLike[str] | None = None,
+        spawn: bool = False,
+        force_scale: float = 0.005,
+        max_rate_hz: float = 50.0,
+        application_id: str = "softtip",
+        h_scale: float = 1.0,
+        trace_samples: int = 100,
+    ) -> None:
+        rr = import_rerun()
+        self.rr, self.tip = rr, tip
+        self.h_scale = h_scale
+        self._trace: deque[NDArray[np.float64]] = deque(maxlen=trace_samples)
+        self.force_scale, self.min_dt = force_scale, 1.0 / max_rate_hz
+        self.rec = rr.RecordingStream(application_id)
+        sinks = [rr.FileSink(os.fspath(save))] if save is not None else []
+        if spawn:
+            self.rec.spawn(connect=False)  # starts a viewer (or finds a running one)
+            sinks.append(rr.GrpcSink())
+        if sinks:
+            self.rec.set_sinks(*sinks)
+        _, radius = tip.bounding_sphere
+        self.edge_half = 0.5 * radius
+        v, tri, n = surface_mesh(tip)
+        self.rec.log("tip", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+        self.rec.log(
+            "tip/skin",
+            rr.Mesh3D(
+                vertex_positions=v,
+                triangle_indices=tri,
+                vertex_normals=n,
+                albedo_factor=[200, 200, 210, 110],
+            ),
+            static=True,
+        )
+        self._last_t = -math.inf
+
+    # -- per sample (live) --------------------------------------------------------------------
+
+    def log_sample(self, e: SampleEstimate) -> None:
+        """Log one estimate, unless one was logged less than ``1 / max_rate_hz`` s before."""
+        if e.t - self._last_t < self.min_dt:
+            return
+        self._last_t = e.t
+        rr, rec = self.rr, self.rec
+        rec.set_time("t", duration=e.t)
+        self._log_geometry(e.state, e.point, e.normal, e.wrench[:3], e.direction, e.h)
+        f, m = e.wrench[:3], e.wrench[3:]
+        for name, value in zip(("fx", "fy", "fz"), f):
+            rec.log(f"series/force/{name}", rr.Scalars(value))
+        for name, value in zip(("mx", "my", "mz"), m):
+            rec.log(f"series/moment/{name}", rr.Scalars(value))
+        rec.log("series/h_norm", rr.Scalars(e.h_norm))
+        rec.log("series/angle_deg", rr.Scalars(math.degrees(e.angle)))
+        rec.log("series/state", rr.Scalars(STATES.index(e.state)))
+
+    def _log_geometry(self, state: str, r, n, f, d, h=None) -> None:
+        rr, rec = self.rr, self.rec
+        if state == "none" or any(math.isnan(x) for x in r):
+            for path in ("tip/contact", "tip/normal", "tip/force", "tip/edge", "tip/h_trace"):
+                rec.log(path, rr.Clear(recursive=False))
+            self._trace.clear()
+            return
+        if h is not None and not any(math.isnan(x) for x in h):
+            self._trace.append(np.asarray(r) + self.h_scale * np.asarray(h))
+            if len(self._trace) > 1:
+                rec.log("tip/h_trace", rr.LineStrips3D([np.array(self._trace)], radii=0.0002, colors=[[200, 80, 220]]))
+        r, n, f = np.asarray(r), np.asarray(n), np.asarray(f)
+        vf = f * self.force_scale
+        rec.log("tip/contact", rr.Points3D([r], radii=0.0008, colors=[[255, 200, 0]]))
+        rec.log(
+            "tip/normal",
+            rr.Arrows3D(origins=[r], vectors=[0.01 * n], colors=[[80, 160, 255]]),
+        )
+        rec.log(
+            "tip/force",
+            rr.Arrows3D(origins=[r - vf], vectors=[vf], colors=[[255, 60, 60]]),
+        )
+        if state == "line":
+            rec.log(
+                "tip/edge",
+                rr.LineStrips3D(
+                    [_edge_line(self.tip, r, d, self.edge_half)],
+                    radii=0.0004,
+                    colors=[[40, 220, 90]],
+                ),
+            )
+        else:
+            rec.log("tip/edge", rr.Clear(recursive=False))
+
+    # -- whole log (offline) ----------------------------------------------------------------
+
+    def log_estimates(self, est: Estimates, max_frames: int = 5000) -> None:
+        """Log a whole :class:`~softtip.estimator.Estimates`.
+
+        Time series go in as columns (every sample); the 3-D view gets at most
+        ``max_frames`` evenly spaced samples.
+        """
+        rr, rec = self.rr, self.rec
+        times = [rr.TimeColumn("t", duration=est.t)]
+        series = {
+            "series/force/fx": est.wrench[:, 0], "series/force/fy": est.wrench[:, 1], "series/force/fz": est.wrench[:, 2],
+            "series/moment/mx": est.wrench[:, 3], "series/moment/my": est.wrench[:, 4], "series/moment/mz": est.wrench[:, 5],
+            "series/h_norm": est.h_norm, "series/angle_deg": np.degrees(est.angle), "series/state": est.state.astype(float),
+        }  # fmt: skip
+        for path, values in series.items():
+            rec.send_columns(
+                path,
+                indexes=times,
+                columns=rr.Scalars.columns(scalars=np.asarray(values, dtype=float)),
+            )
+        names = est.state_names
+        step = max(1, math.ceil(len(est) / max_frames))
+        for k in range(0, len(est), step):
+            rec.set_time("t", duration=float(est.t[k]))
+            self._log_geometry(
+                str(names[k]),
+                est.point[k],
+                est.normal[k],
+                est.wrench[k, :3],
+                est.direction[k],
+                est.h[k],
+            )
+
+    def close(self) -> None:
+        """Flush and close the recording (the ``.rrd`` file is complete afterwards)."""
+        self.rec.flush()
+        self.rec.disconnect()
