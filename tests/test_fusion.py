@@ -259,3 +259,182 @@ def test_a_plane_against_an_edge_is_flagged_once_rocked_and_unconfirmed_before(t
     assert np.mean(np.char.find(f["flag"][after].astype(str), "area") >= 0) > 0.9
     assert np.mean(f["grasp"][after] == "line_and_face") > 0.9
     assert "flagged area" in r.stderr
+
+
+# -- the fused standard deviations and the 3-D view ----------------------------------------------
+
+
+def _fused_z(grasp, tip, start, **options):
+    """rms(error / reported std) of the fused direction and plane normal over the held grasp."""
+    fingers = []
+    for side in ("right", "left"):
+        log, p = grasp.logs[side], grasp.sensor_poses[side]
+        fingers.append(Finger(side, softtip.estimate(log.t, log.wrench, tip), PoseSeries.fixed(p.rotation, p.translation, side)))
+    fz = fuse(fingers, object_mass=grasp.object_mass, **options)
+    held = (fz.t > start) & (fz.grasp_names == "parallel_lines")
+    assert held.sum() > 0.8 * np.count_nonzero(fz.t > start)
+
+    def axial(a, b):
+        return np.arccos(np.clip(np.abs(np.sum(a * b, axis=-1)), 0.0, 1.0))
+
+    e = axial(fz.direction[held], grasp.truth_line()[held])
+    en = axial(fz.plane_normal[held], grasp.truth_plane_normal()[held])
+    z = np.sqrt(np.mean((e / fz.direction_std[held]) ** 2))
+    zn = np.sqrt(np.mean((en / fz.plane_normal_std[held]) ** 2))
+    return z, zn, fz.evidence[held]
+
+
+def test_fused_std_counts_the_error_both_fingers_share():
+    """A stick at −45° without rocking: both fingers' lines are turned the same way by the
+    rolling the single-axis load cannot show (about 7°, each finger reporting under 4°). The
+    fused standard deviation must cover it (the shared error and the unconfirmed line's
+    model error); treating the fingers as independent and the line as certain does not."""
+    from softtip.sim import stick
+    from softtip.sim.hand import simulate_two_finger
+
+    tip = softtip.murakami2006()
+    g = simulate_two_finger(tip, stick(0.004), math.radians(-45), rng=7, n_elements=6000, duration=8.0)
+    z, zn, evidence = _fused_z(g, tip, 6.0)
+    assert np.all(evidence == "unconfirmed")
+    assert 0.5 < z < 1.5 and 0.5 < zn < 1.5
+    z_naive, _, _ = _fused_z(g, tip, 6.0, finger_correlation=0.0, unconfirmed_std=0.0)
+    assert z_naive > 2.0
+
+
+def test_fused_std_propagation():
+    """The fused direction's variance from the fingers' angle stds: independent (ρ = 0),
+    fully shared (ρ = 1: no better than the better finger), plus the unconfirmed term."""
+    gr, pr = _finger("right", R_RIGHT, 30.0, seed=1)
+    gl, pl = _finger("left", R_LEFT, -30.0, seed=2)
+    logs = [("right", gr.t, gr.wrench, pr), ("left", gl.t, gl.wrench, pl)]
+    runs = {rho: fuse_logs(logs, "murakami2006", finger_correlation=rho, unconfirmed_std=0.0) for rho in (0.0, 1.0)}
+    fused, fingers = runs[0.0]
+    late = (fused.t > 7.0) & (fused.grasp_names == "parallel_lines")
+    assert late.sum() > 50
+    ib = np.searchsorted(fingers[1].estimates.t, fused.t[late], side="right") - 1
+    sa, sb = fingers[0].estimates.angle_std[late], fingers[1].estimates.angle_std[ib]
+    assert_allclose(fused.direction_std[late], 1.0 / np.sqrt(sa**-2 + sb**-2), rtol=1e-12)
+    assert_allclose(runs[1.0][0].direction_std[late], (1 / sa + 1 / sb) / (sa**-2 + sb**-2), rtol=1e-12)
+    assert np.all(runs[1.0][0].direction_std[late] >= np.minimum(sa, sb) * (1 - 1e-12))
+    # both lines unconfirmed here: the whole model-error term adds in quadrature
+    assert (fused.evidence[late] == "unconfirmed").all()
+    su = math.radians(5.0)
+    withu, _ = fuse_logs(logs, "murakami2006", finger_correlation=1.0, unconfirmed_std=su)
+    assert_allclose(withu.direction_std[late] ** 2, runs[1.0][0].direction_std[late] ** 2 + su**2, rtol=1e-12)
+    with pytest.raises(ValueError, match="finger_correlation"):
+        fuse(fingers, finger_correlation=1.5)
+
+
+@pytest.mark.slow
+def test_fused_std_of_a_rocked_edge_is_calibrated():
+    """A cube's edge rocked about two axes (confirmed lines): error / std near 1, neither
+    overconfident nor several times too cautious."""
+    from softtip.sim import Wedge
+    from softtip.sim.hand import simulate_two_finger
+
+    tip = softtip.murakami2006()
+    g = simulate_two_finger(tip, Wedge(0.5 * math.pi), math.radians(-40), rng=7, n_elements=6000, rock=True)
+    z, zn, evidence = _fused_z(g, tip, 8.0)
+    assert np.mean(evidence == "confirmed") > 0.8
+    assert 0.6 < z < 1.5 and 0.6 < zn < 1.5
+
+
+def _strips(path, entity):
+    """{t (s): first line strip (K, 3)} logged to ``entity`` in a saved recording."""
+    from rerun.chunk import RrdReader
+
+    out = {}
+    for chunk in RrdReader(path).store().stream():
+        if chunk.entity_path != entity:
+            continue
+        batch = chunk.to_record_batch()
+        if "LineStrips3D:strips" not in batch.schema.names:
+            continue  # a Clear
+        ts = batch.column("t").to_pylist()
+        strips = batch.column("LineStrips3D:strips").to_pylist()
+        for t, s in zip(ts, strips):
+            if s:  # a Clear logs no strips
+                out[t.total_seconds()] = np.asarray(s[0], dtype=float)
+    return out
+
+
+def test_fuse_rerun_view_shows_both_fingers_the_fused_line_and_the_truth(simulated, tmp_path):
+    pytest.importorskip("rerun")
+    g, out = simulated
+    grasp = out / "grasp"
+    r = _run(
+        "fuse", grasp / "right.csv", grasp / "left.csv", "--hand", grasp / "hand.toml", "-o", tmp_path / "f.csv",
+        "--rerun-save", tmp_path / "v.rrd", "--truth", grasp / "truth.json",
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f.csv", "v.rrd"]
+    from test_viz import entity_rows
+
+    rows = entity_rows(tmp_path / "v.rrd")
+    for side in ("right", "left"):
+        assert rows[f"/hand/{side}/skin"] == 1
+        for part in ("", "/contact", "/normal", "/edge"):
+            assert rows[f"/hand/{side}{part}"] == len(g.t)
+    for entity in ("/hand/fused/line", "/hand/fused/plane", "/hand/truth/line", "/series/fused/direction_std_deg"):
+        assert rows[entity] == len(g.t)
+    # the line drawn is the fused line, and it lies along the object's true line
+    fused, truth = _strips(tmp_path / "v.rrd", "/hand/fused/line"), _strips(tmp_path / "v.rrd", "/hand/truth/line")
+    late = [t for t in fused if t > 6.0 and t in truth]
+    assert len(late) > 20
+
+    def axis(strip):
+        d = strip[-1] - strip[0]
+        return d / np.linalg.norm(d)
+
+    err = [np.degrees(np.arccos(min(1.0, abs(axis(fused[t]) @ axis(truth[t]))))) for t in late]
+    assert np.median(err) < 4.0
+    # drawn through the midpoint of the contacts written to the table
+    table = np.genfromtxt(tmp_path / "f.csv", delimiter=",", names=True, dtype=None, encoding=None)
+    k = int(np.argmin(np.abs(table["t"] - late[-1])))
+    mid = 0.5 * np.array([table[f"rright_{a}"][k] + table[f"rleft_{a}"][k] for a in "xyz"])
+    assert_allclose(fused[late[-1]].mean(axis=0), mid, atol=1e-6)
+
+
+def test_fuse_rerun_errors_leave_no_output(simulated, tmp_path):
+    pytest.importorskip("rerun")
+    _, out = simulated
+    grasp = out / "grasp"
+    args = ("fuse", grasp / "right.csv", grasp / "left.csv", "--hand", grasp / "hand.toml", "-o", tmp_path / "f.csv")
+    r = _run(*args, "--truth", grasp / "truth.json")
+    assert r.returncode == 2 and "--truth" in r.stderr and "--rerun" in r.stderr
+    bad = tmp_path / "truth.json"
+    bad.write_text('{"format": "something else"}\n')
+    r = _run(*args, "--rerun-save", tmp_path / "v.rrd", "--truth", bad)
+    assert r.returncode == 2 and "truth.json: not a softtip two-finger truth file" in r.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["truth.json"]
+
+
+@pytest.mark.parametrize(("left_angle", "left_kw", "grasp", "strips"), [(45.0, None, "crossing_lines", 2), (0.0, {"h_peak": 0.0}, "line_and_face", 1)])
+def test_rerun_view_of_crossing_lines_and_of_a_line_and_a_face(tmp_path, left_angle, left_kw, grasp, strips):
+    pytest.importorskip("rerun")
+    from softtip.fusion.viz import log_fused
+
+    right_angle = 45.0 if grasp == "crossing_lines" else 0.0
+    gr, pr = _finger("right", R_RIGHT, right_angle, seed=1)
+    gl, pl = _finger("left", R_LEFT, left_angle, seed=2, **(left_kw or {}))
+    fused, fingers = fuse_logs([("right", gr.t, gr.wrench, pr), ("left", gl.t, gl.wrench, pl)], "murakami2006")
+    k = int(np.flatnonzero(fused.grasp_names == grasp)[-1])
+    log_fused(fused, fingers, softtip.murakami2006(), save=tmp_path / "v.rrd", max_frames=len(fused))
+    lines = _strips(tmp_path / "v.rrd", "/hand/fused/line")
+    from rerun.chunk import RrdReader
+
+    drawn = None
+    for chunk in RrdReader(tmp_path / "v.rrd").store().stream():
+        if chunk.entity_path == "/hand/fused/line":
+            batch = chunk.to_record_batch()
+            if "LineStrips3D:strips" in batch.schema.names:
+                for t, s in zip(batch.column("t").to_pylist(), batch.column("LineStrips3D:strips").to_pylist()):
+                    if t.total_seconds() == pytest.approx(fused.t[k], abs=1e-9):
+                        drawn = [np.asarray(x) for x in s]
+    assert drawn is not None and len(drawn) == strips and fused.t[k] in lines
+    # each line drawn passes through a contact and runs along a fused direction
+    dirs = [fused.direction[k]] + ([fused.direction_b[k]] if strips == 2 else [])
+    for strip, d, r in zip(drawn, dirs, (fused.point_a[k], fused.point_b[k])):
+        assert_allclose(strip.mean(axis=0), r, atol=1e-6)
+        u = (strip[-1] - strip[0]) / np.linalg.norm(strip[-1] - strip[0])
+        assert abs(u @ d) == pytest.approx(1.0, abs=1e-6)

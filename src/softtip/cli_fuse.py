@@ -76,12 +76,15 @@ PointStamped and RViz markers, in the common frame, in the format --ros-distro p
     @click.option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the CSV logs' wrench.")
     @click.option("--object-mass", type=float, metavar="KG", help="The object's mass for the force balance (default: unknown; any weight along gravity allowed).")
     @click.option("--gravity", nargs=3, type=float, default=(0.0, 0.0, -9.80665), show_default=True, metavar="X Y Z", help="Gravity in the common frame, m/s².")
-    @click.option("--point-std", type=float, default=0.2, show_default=True, metavar="MM", help="Standard deviation of a contact point per axis, mm (for the plane normal).")
+    @click.option("--point-std", type=float, default=0.05, show_default=True, metavar="MM", help="Standard deviation of each contact point across its line, mm, independent between the fingers (for the plane normal).")
     @click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Also draw both forces, the grasp reading and the fused angles across the grasp to this PNG/PDF/SVG.")
+    @click.option("--rerun", "rerun_spawn", is_flag=True, help="Show both fingertips, their contacts and the fused line or plane in the hand frame in a Rerun viewer (needs rerun-sdk).")
+    @click.option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save that 3-D view and the fused series to FILE.rrd.")
+    @click.option("--truth", "truth_file", type=click.Path(dir_okay=False), metavar="FILE.json", help="The simulator's truth.json: the object's true line and plane drawn in the Rerun view.")
     @bag_output_options(frame_default="the common frame: --frame, the hand file's, else hand")
     @estimator_options
-    def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, point_std, plot_path, tip,
-             to_bag=None, ros_distro=None, frame_id=None, **estimator_opts):  # fmt: skip
+    def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, point_std, plot_path, rerun_spawn, rerun_save,
+             truth_file, tip, to_bag=None, ros_distro=None, frame_id=None, **estimator_opts):  # fmt: skip
         from softtip.core.fingertip import load_fingertip
         from softtip.fusion import fuse_logs, poses_from_columns, read_hand_file
         from softtip.io.tables import read_log, write_table
@@ -94,11 +97,15 @@ PointStamped and RViz markers, in the common frame, in the format --ros-distro p
             raise click.BadParameter("expected three finite numbers, m/s²", param_hint="--gravity")
         if plot_path is not None:
             check_figure_path(plot_path)
+        if truth_file is not None and not (rerun_spawn or rerun_save):
+            raise click.UsageError("--truth draws into the Rerun view: give --rerun or --rerun-save")
+        if rerun_spawn or rerun_save:
+            optional("softtip.viz", "viz")
         from softtip.io.atomic import check_distinct
 
         check_distinct(
-            [("INPUT", p) for p in inputs] + [("--hand", hand_file), ("--bias", estimator_opts.get("bias_file"))],
-            [("-o", output), ("--plot", plot_path), ("--to-bag", to_bag)],
+            [("INPUT", p) for p in inputs] + [("--hand", hand_file), ("--bias", estimator_opts.get("bias_file")), ("--truth", truth_file)],
+            [("-o", output), ("--plot", plot_path), ("--to-bag", to_bag), ("--rerun-save", rerun_save)],
         )
         if to_bag is None and (ros_distro is not None or frame_id is not None):
             raise click.UsageError("--ros-distro and --frame-id apply to --to-bag")
@@ -150,18 +157,37 @@ PointStamped and RViz markers, in the common frame, in the format --ros-distro p
             )
         except ValueError as exc:
             raise click.UsageError(str(exc)) from None
-        if to_bag is not None:  # the fused grasp as standard messages (softtip.ros.fused)
-            from softtip.ros.bagout import remove_bag
-            from softtip.ros.fused import write_fused_bag
+        rrd = None
+        if rerun_spawn or rerun_save:  # the view first, put in place with the table
+            from softtip.fusion.viz import log_fused, read_truth
+            from softtip.io.atomic import AtomicFile
 
-            write_fused_bag(to_bag, fused, fingers, stamps, output_frame_id(frame_id, common), distro=ros_distro)
+            truth = read_truth(truth_file, fused.t) if truth_file else None
+            rrd = AtomicFile(rerun_save) if rerun_save else None
+            try:
+                log_fused(fused, fingers, fingertip, save=None if rrd is None else rrd.tmp, spawn=rerun_spawn, truth=truth)
+            except BaseException:
+                if rrd is not None:
+                    rrd.discard()
+                raise
         try:
-            if output is not None or to_bag is None:
-                write_table(fused.columns(), output)
-        except BaseException:
-            if to_bag is not None:
-                remove_bag(to_bag)
-            raise
+            if to_bag is not None:  # the fused grasp as standard messages (softtip.ros.fused)
+                from softtip.ros.bagout import remove_bag
+                from softtip.ros.fused import write_fused_bag
+
+                write_fused_bag(to_bag, fused, fingers, stamps, output_frame_id(frame_id, common), distro=ros_distro)
+            try:
+                if output is not None or to_bag is None:
+                    write_table(fused.columns(), output)
+                if rrd is not None:
+                    rrd.commit()
+            except BaseException:
+                if to_bag is not None:
+                    remove_bag(to_bag)
+                raise
+        finally:
+            if rrd is not None:
+                rrd.discard()
         if plot_path is not None:
             from softtip.fusion.plot import plot_fused
 

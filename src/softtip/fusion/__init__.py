@@ -2,7 +2,8 @@
 
 :mod:`~softtip.fusion.poses` (a sensor frame's pose over time; hand files; pose columns),
 :mod:`~softtip.fusion.tf` (poses from a bag's ``/tf``), :mod:`~softtip.fusion.fuse` (two
-contacts read as the object's local geometry). :func:`fuse_logs` runs the estimator on each
+contacts read as the object's local geometry), :mod:`~softtip.fusion.viz` (the Rerun view of
+a fused grasp, ``rerun-sdk`` needed). :func:`fuse_logs` runs the estimator on each
 fingertip's log and fuses the results.
 """
 
