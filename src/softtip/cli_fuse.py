@@ -100,7 +100,7 @@ PointStamped and RViz markers, in the common frame, in the format --ros-distro p
         if truth_file is not None and not (rerun_spawn or rerun_save):
             raise click.UsageError("--truth draws into the Rerun view: give --rerun or --rerun-save")
         if rerun_spawn or rerun_save:
-            optional("softtip.viz", "viz")
+            optional("softtip.viz.rerun", "viz")
         from softtip.io.atomic import check_distinct
 
         check_distinct(

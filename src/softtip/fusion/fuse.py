@@ -66,6 +66,7 @@ independent) over the distance between the contacts.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 

@@ -31,7 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from softtip import Fingertip
 from softtip.fusion.fuse import Finger, FusedGrasp
-from softtip.viz import import_rerun, surface_mesh
+from softtip.viz.rerun import import_rerun, surface_mesh
 
 __all__ = ["log_fused", "read_truth"]
 
