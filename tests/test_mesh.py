@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from hypothesis import assume, given
 from hypothesis import strategies as st
-from numpy.testing import assert_allclose
+from numpy.testing import assert_allclose, assert_array_equal
 
 from softtip import Capsule, EstimatorConfig, InputError, contact_from_wrench, load_fingertip
 from softtip.contact import contact_kernel
@@ -238,6 +238,39 @@ def test_round_trip_on_the_mesh_surface(nail, data):
     assert s[7]
     assert_allclose(s[:3], c.point, rtol=1e-12, atol=1e-15)
     assert_allclose(s[6], c.sigma, rtol=1e-10, atol=1e-15 * np.linalg.norm(w[:3]) * 0.03)
+
+
+def test_streaming_cast_warm_start_equals_the_full_cast(nail, rng):
+    # a contact sliding over the cap, across the nail and down its flank, with sensor-like noise:
+    # the streaming cast (a walk from the previous sample's face) finds the very face and
+    # numbers of the full cast, and walks for most samples
+    n_samples = 1500
+    s = np.linspace(0.0, 1.0, n_samples)
+    path = np.column_stack((-0.02 * s, 0.004 * np.sin(6 * s), 0.036 - 0.03 * s * s))
+    r = nail.project(path + np.array([-0.01, 0.0, 0.01]) * s[:, None])
+    n = nail.normal(r)
+    w = np.array([
+        soft_finger_wrench(r[i], n[i], rng.normal(size=3), 0.3, 3.0, 1e-3) for i in range(n_samples)
+    ]) + rng.normal(scale=[0.01, 0.01, 0.01, 2e-4, 2e-4, 2e-4], size=(n_samples, 6))
+    full = nail._cast(w[:, :3], w[:, 3:])
+    calls = []
+    first_hit = nail._first_hit
+
+    def counting(*args):
+        calls.append(1)
+        return first_hit(*args)
+
+    object.__setattr__(nail, "_first_hit", counting)
+    try:
+        nail._d["hint"] = -1
+        stream = np.array([nail._cast_one(*wi) for wi in w.tolist()])
+    finally:
+        object.__delattr__(nail, "_first_hit")
+    assert (stream[:, 0] >= 0).all()
+    assert_array_equal(stream[:, 0].astype(int), full[0])
+    assert_array_equal(stream[:, 1], full[1])
+    assert_array_equal(stream[:, 2], full[2])
+    assert len(calls) < 0.2 * n_samples  # the full cast is the exception
 
 
 def test_finely_tessellated_capsule_matches_the_closed_form(fine_capsule, rng):

@@ -57,6 +57,7 @@ _MAX_CROSS = 16  # triangles one Newton step may cross (the next step goes on)
 _STEP_TOL = 1e-7  # converged when a step moves the point less than this × the tip's size (the step is taken: the error left is of its square)
 _RES_TOL = 1e-6  # and a solution is kept when |F| (before the last step) ≤ this × |f| × size
 _CAST_BLOCK = 256
+_WALK = 8  # faces the streaming cast walks from the previous sample's face
 _NEAR_K = 32  # nearest triangle centroids tried first by the closest-point query
 _SIDE_TOL = 1e-13  # Plücker side products within this × |f| × size² of zero count as on the edge
 
@@ -174,6 +175,43 @@ def _near_classes(centroids: NDArray, corners: NDArray) -> list:
         k = _NEAR_K if sel is small else _NEAR_K // 4
         out.append((cKDTree(centroids[members]), members, float(reach[members].max()), min(k, members.size)))
     return out
+
+
+def _exposure(vertices: NDArray, faces: NDArray, fn: NDArray, v0: NDArray, centroids: NDArray,
+              extent: float) -> list[tuple[float, float]]:
+    """Per face ``(h, e)``: how far the mesh rises in front of the face's plane (m; 0 for a
+    face on the convex hull, within ``1e-6 × extent``, above the rounding of a mesh stored in
+    single precision, as STL is), and a lower bound on the distance from any point of the
+    face to any point of the mesh in front of its plane (m).
+
+    A line entering the skin through the face along ``f`` meets nothing before it when
+    ``h < e c`` with ``c = −n·f/|f|``: a point of the mesh on the line before the face would
+    be within ``h / c`` of it.
+    """
+    from scipy.spatial import ConvexHull  # imported here: `import softtip` stays light
+
+    tol = 1e-6 * extent
+    hull = np.ascontiguousarray(vertices[ConvexHull(vertices).vertices].T)
+    offset = np.sum(fn * v0, axis=1)
+    rise = np.empty(len(fn))
+    for start in range(0, len(fn), 512):
+        rise[start : start + 512] = (fn[start : start + 512] @ hull).max(axis=1)
+    rise = rise - offset
+    tri = vertices[faces]
+    edge = max(float(np.max(np.linalg.norm(tri[:, k] - tri[:, (k + 1) % 3], axis=1))) for k in range(3))
+    circum = np.max(np.linalg.norm(tri - centroids[:, None, :], axis=2), axis=1)
+    clear = np.full(len(fn), np.inf)
+    inner = np.flatnonzero(rise > tol)
+    vv = np.sum(vertices * vertices, axis=1)
+    for start in range(0, len(inner), 256):
+        blk = inner[start : start + 256]
+        height = fn[blk] @ vertices.T - offset[blk][:, None]
+        c = centroids[blk]
+        dist2 = vv[None, :] - 2.0 * (c @ vertices.T) + np.sum(c * c, axis=1)[:, None]
+        near2 = np.min(np.where(height > tol, dist2, np.inf), axis=1)
+        clear[blk] = np.sqrt(np.maximum(near2, 0.0)) - edge - circum[blk]
+    rise = np.where(rise > tol, rise, 0.0)
+    return [(h, e) for h, e in zip(rise.tolist(), np.maximum(clear, 0.0).tolist())]
 
 
 def _closest_on_triangles(p: NDArray, v0: NDArray, v1: NDArray, v2: NDArray) -> tuple[NDArray, NDArray, NDArray]:
@@ -415,6 +453,15 @@ class MeshFingertip(Fingertip):
             tri9=np.concatenate((v0, v1, v2), axis=1),
             last_normal=(None, None),
             last_project=(None, None),
+        )
+        # the streaming cast's warm start: a walk from the previous sample's face
+        d.update(
+            exposure=_exposure(v, f, fn, v0, centroids, extent),
+            plucker_py=[tuple(tuple(e) for e in row) for row in plucker[:-1].tolist()],
+            fn_py=[tuple(r) for r in fn.tolist()],
+            centroids_py=[tuple(r) for r in centroids.tolist()],
+            walk_reach2=(0.5 * _WALK * float(np.max(np.linalg.norm(np.concatenate((e1, e2)), axis=1)))) ** 2,
+            hint=-1,
         )
 
     # -- geometry queries ---------------------------------------------------------------------
@@ -712,7 +759,14 @@ class MeshFingertip(Fingertip):
         return face, b1, b2
 
     def _cast_one(self, fx: float, fy: float, fz: float, mx: float, my: float, mz: float) -> tuple[int, float, float]:
-        """:meth:`_cast` for one wrench given as floats (the streaming path: fewest numpy calls)."""
+        """:meth:`_cast` for one wrench given as floats (the streaming path: fewest numpy calls).
+
+        Contacts move continuously, so the cast first walks over the faces from the previous
+        sample's hit toward the axis; where it arrives is kept when it is certainly the first
+        entering hit of the whole mesh (see :meth:`_unoccluded`): the same face and numbers as
+        the full cast. Otherwise (a walk of more than a few faces, an axis through an edge or
+        a vertex, a face that something may hide) the full cast runs.
+        """
         d = self._d
         f2 = fx * fx + fy * fy + fz * fz
         if not (f2 > 0.0 and math.isfinite(f2 + mx + my + mz)):
@@ -722,16 +776,60 @@ class MeshFingertip(Fingertip):
         mu = (fx * mx + fy * my + fz * mz) / f2
         line = np.array((fx, fy, fz, mx - mu * fx, my - mu * fy, mz - mu * fz))
         bx, by, bz = (fy * mz - fz * my) / f2, (fz * mx - fx * mz) / f2, (fx * my - fy * mx) / f2
+        tol = (_SIDE_TOL * d["radius"] ** 2) * math.sqrt(f2)
+        axis = (line, bx, by, bz, hx, hy, hz, tol)
+        face = d["hint"]
+        if face >= 0:
+            cx, cy, cz = d["centroids_py"][face]
+            qx, qy, qz = cx - bx, cy - by, cz - bz
+            along = qx * hx + qy * hy + qz * hz
+            if qx * qx + qy * qy + qz * qz - along * along > d["walk_reach2"]:
+                face = -1  # the axis has jumped: no walk
+        if face >= 0:
+            # walk from the previous sample's face toward the axis, across the edge the axis
+            # passes beyond; a face the axis enters clear of its edges, with nothing before it,
+            # is the first entering hit of the whole mesh (no other face is hit there, none before)
+            lf = (fx, fy, fz, mx - mu * fx, my - mu * fy, mz - mu * fz)
+            plucker, nb = d["plucker_py"], d["nb_py"]
+            for _ in range(_WALK):
+                s0, s1, s2 = _sides(plucker[face], lf)
+                if s0 < -tol and s1 < -tol and s2 < -tol:
+                    if self._unoccluded(face, hx, hy, hz):
+                        total = s0 + s1 + s2
+                        d["hint"] = face
+                        return face, s1 / total, s2 / total
+                    break
+                k = 0 if s0 >= s1 and s0 >= s2 else 1 if s1 >= s2 else 2
+                if (s0, s1, s2)[k] <= 0.0:
+                    break  # on an edge or a vertex: the full cast decides
+                face = nb[face][k]
         bf = bx * hx + by * hy + bz * hz
         y = d["cl_centre"] @ np.array(((hx, bx), (hy, by), (hz, bz)))
         along = y[:, 0] - bf
         dist2 = d["cl_centre2"] - 2.0 * y[:, 1] + (bx * bx + by * by + bz * bz) - along * along
         tris = d["members"][np.flatnonzero(dist2 <= d["cl_radius2"])].ravel()
+        face, w1, w2, _ = self._first_hit(tris, *axis)
+        d["hint"] = face
+        return face, w1, w2
+
+    def _unoccluded(self, face: int, hx: float, hy: float, hz: float) -> bool:
+        """True when a line along the unit vector ``h`` entering through ``face`` certainly
+        meets no other part of the mesh before it (see :func:`_exposure`)."""
+        rise, clear = self._d["exposure"][face]
+        if rise == 0.0:
+            return True
+        g = self._d["fn_py"][face]
+        return rise < clear * -(g[0] * hx + g[1] * hy + g[2] * hz)
+
+    def _first_hit(self, tris: NDArray, line: NDArray, bx: float, by: float, bz: float,
+                   hx: float, hy: float, hz: float, tol: float) -> tuple[int, float, float, int]:
+        """The first entering hit of the axis among faces ``tris``: face (−1 for none), its
+        barycentric coordinates, and its position in ``tris``."""
+        d = self._d
         s = (d["plucker18"][tris].reshape(-1, 6) @ line).reshape(-1, 3)
         s0, s1, s2 = s[:, 0], s[:, 1], s[:, 2]
-        tol = (_SIDE_TOL * d["radius"] ** 2) * math.sqrt(f2)
         hit = np.flatnonzero((np.maximum(np.maximum(s0, s1), s2) <= tol) & (s0 + s1 + s2 < 0.0))
-        best = (math.inf, -1, 0.0, 0.0)
+        best = (math.inf, -1, 0.0, 0.0, -1)
         lf = line.tolist()
         for j in hit.tolist():  # one hit on a convex patch, a few where the axis crosses the skin again
             face = int(tris[j])
@@ -745,8 +843,8 @@ class MeshFingertip(Fingertip):
                 + (g[2] + w1 * g[5] + w2 * g[8] - bz) * hz
             )
             if (t, face) < best[:2]:
-                best = (t, face, w1, w2)
-        return best[1], best[2], best[3]
+                best = (t, face, w1, w2, j)
+        return best[1], best[2], best[3], best[4]
 
     def _contact_kernel(self, fx, fy, fz, mx, my, mz, xp=NP):
         """Soft-finger contact on the mesh, component-wise (see :func:`softtip.contact.contact_kernel`).
