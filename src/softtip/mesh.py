@@ -54,9 +54,10 @@ _LEAF = 32  # at most this many triangles per cluster of the cast's pre-filter
 _BRANCH = 16  # at most this many clusters per super-cluster
 _MAX_ITER = 30  # Newton steps
 _MAX_CROSS = 16  # triangles one Newton step may cross (the next step goes on)
-_STEP_TOL = 1e-7  # converged when a step moves the point less than this × the tip's size (the step is taken: the error left is of its square)
-_RES_TOL = 1e-6  # and a solution is kept when |F| (before the last step) ≤ this × |f| × size
+_STEP_TOL = 1e-5  # converged when a step moves the point less than this × the tip's size (the step is taken: the error left is of its square)
+_RES_TOL = 1e-4  # and a solution is kept when |F| (before the last step) ≤ this × |f| × size
 _CAST_BLOCK = 256
+_ALL_FOUR = np.frombuffer(b"\x01\x01\x01\x01", dtype=np.uint32)[0]  # four True bytes as one word
 _WALK = 8  # faces the streaming cast walks from the previous sample's face
 _NEAR_K = 32  # nearest triangle centroids tried first by the closest-point query
 _SIDE_TOL = 1e-13  # Plücker side products within this × |f| × size² of zero count as on the edge
@@ -460,6 +461,14 @@ class MeshFingertip(Fingertip):
             plucker_py=[tuple(tuple(e) for e in row) for row in plucker[:-1].tolist()],
             fn_py=[tuple(r) for r in fn.tolist()],
             centroids_py=[tuple(r) for r in centroids.tolist()],
+            # per cluster: the monomials of its centre for the axis test, its faces' Plücker rows
+            cl_quad=np.column_stack((
+                cl_centre ** 2, cl_centre[:, 0] * cl_centre[:, 1], cl_centre[:, 0] * cl_centre[:, 2],
+                cl_centre[:, 1] * cl_centre[:, 2], cl_centre, np.ones(n_cl), -d["cl_radius2"],
+            )),  # fmt: skip
+            cl_plucker=np.ascontiguousarray(
+                np.concatenate((plucker, plucker.sum(axis=1, keepdims=True)), axis=1)[members].reshape(n_cl, -1)
+            ),
             walk_reach2=(0.5 * _WALK * float(np.max(np.linalg.norm(np.concatenate((e1, e2)), axis=1)))) ** 2,
             hint=-1,
         )
@@ -803,12 +812,19 @@ class MeshFingertip(Fingertip):
                 if (s0, s1, s2)[k] <= 0.0:
                     break  # on an edge or a vertex: the full cast decides
                 face = nb[face][k]
-        bf = bx * hx + by * hy + bz * hz
-        y = d["cl_centre"] @ np.array(((hx, bx), (hy, by), (hz, bz)))
-        along = y[:, 0] - bf
-        dist2 = d["cl_centre2"] - 2.0 * y[:, 1] + (bx * bx + by * by + bz * bz) - along * along
-        tris = d["members"][np.flatnonzero(dist2 <= d["cl_radius2"])].ravel()
-        face, w1, w2, _ = self._first_hit(tris, *axis)
+        # the clusters whose bounding sphere the axis meets: |c − b|² − ((c − b)·h)² ≤ ρ², a
+        # quadratic form in the centre c (b ⟂ h), one product with its monomials
+        quad = np.array((
+            1.0 - hx * hx, 1.0 - hy * hy, 1.0 - hz * hz, -2.0 * hx * hy, -2.0 * hx * hz, -2.0 * hy * hz,
+            -2.0 * bx, -2.0 * by, -2.0 * bz, bx * bx + by * by + bz * bz, 1.0,
+        ))  # fmt: skip
+        cl = np.flatnonzero(d["cl_quad"] @ quad <= 0.0)
+        tris = d["members"][cl].ravel()
+        # per face: the three side products and their sum; a hit (entering) has the three
+        # ≤ 0 (within the rounding margin) and the sum < 0, tested as one 4-byte word per face
+        s = (d["cl_plucker"][cl].reshape(-1, 6) @ line).reshape(-1, 4)
+        hit = np.flatnonzero((s < np.array((tol, tol, tol, 0.0))).view(np.uint32).ravel() == _ALL_FOUR)
+        face, w1, w2, _ = self._first_hit(tris, hit, *axis)
         d["hint"] = face
         return face, w1, w2
 
@@ -821,14 +837,11 @@ class MeshFingertip(Fingertip):
         g = self._d["fn_py"][face]
         return rise < clear * -(g[0] * hx + g[1] * hy + g[2] * hz)
 
-    def _first_hit(self, tris: NDArray, line: NDArray, bx: float, by: float, bz: float,
+    def _first_hit(self, tris: NDArray, hit: NDArray, line: NDArray, bx: float, by: float, bz: float,
                    hx: float, hy: float, hz: float, tol: float) -> tuple[int, float, float, int]:
-        """The first entering hit of the axis among faces ``tris``: face (−1 for none), its
-        barycentric coordinates, and its position in ``tris``."""
+        """The first entering hit of the axis among the faces ``tris[hit]`` (the faces it
+        enters): face (−1 for none), its barycentric coordinates, and its position in ``tris``."""
         d = self._d
-        s = (d["plucker18"][tris].reshape(-1, 6) @ line).reshape(-1, 3)
-        s0, s1, s2 = s[:, 0], s[:, 1], s[:, 2]
-        hit = np.flatnonzero((np.maximum(np.maximum(s0, s1), s2) <= tol) & (s0 + s1 + s2 < 0.0))
         best = (math.inf, -1, 0.0, 0.0, -1)
         lf = line.tolist()
         for j in hit.tolist():  # one hit on a convex patch, a few where the axis crosses the skin again
