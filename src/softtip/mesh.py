@@ -54,10 +54,18 @@ _LEAF = 32  # at most this many triangles per cluster of the cast's pre-filter
 _BRANCH = 16  # at most this many clusters per super-cluster
 _MAX_ITER = 30  # Newton steps
 _MAX_CROSS = 16  # triangles one Newton step may cross (the next step goes on)
-_STEP_TOL = 1e-5  # converged when a step moves the point less than this × the tip's size (the step is taken: the error left is of its square)
-_RES_TOL = 1e-4  # and a solution is kept when |F| (before the last step) ≤ this × |f| × size
+_STEP_TOL = 1e-7  # converged when a step moves the point less than this × the tip's size (the step is taken: the error left is of its square)
+_RES_TOL = 1e-6  # and a solution is kept when |F| (before the last step) ≤ this × |f| × size
 _CAST_BLOCK = 256
 _ALL_FOUR = np.frombuffer(b"\x01\x01\x01\x01", dtype=np.uint32)[0]  # four True bytes as one word
+_CREASE_TAN = 6.0  # a crease contact's normal is within atan(6) = 80.5° of −f
+_CREASE_COS = 1.0 / math.sqrt(1.0 + _CREASE_TAN**2)
+_CREASE_EDGE_TOL = 1e-9  # the crease edge's ends are searched this far (in t) beyond the edge
+_CREASE_WEDGE_TOL = 1e-6  # a normal this close (rad) outside a crease's wedge or cone counts as in it (a root
+# where the moment only touches the normals' plane is found to the square root of the rounding)
+_CREASE_RES_TOL = 1e-9  # a crease edge's moment may leave the normals' plane by this × |f| × size
+_CREASE_SPLIT = 16  # intervals bracketing a crease edge's roots
+_CREASE_BISECT = 60  # interval halvings: to the last bit of t
 _WALK = 8  # faces the streaming cast walks from the previous sample's face
 _NEAR_K = 32  # nearest triangle centroids tried first by the closest-point query
 _SIDE_TOL = 1e-13  # Plücker side products within this × |f| × size² of zero count as on the edge
@@ -213,6 +221,70 @@ def _exposure(vertices: NDArray, faces: NDArray, fn: NDArray, v0: NDArray, centr
         clear[blk] = np.sqrt(np.maximum(near2, 0.0)) - edge - circum[blk]
     rise = np.where(rise > tol, rise, 0.0)
     return [(h, e) for h, e in zip(rise.tolist(), np.maximum(clear, 0.0).tolist())]
+
+
+def _creases(vertices, faces, fn, cn, nb_face, li, lj, extent) -> tuple[dict, dict]:
+    """The sharp features for :meth:`MeshFingertip._crease_contact`: convex crease edges (the
+    corner normals of the two faces differ along them) and convex corners (three or more
+    distinct corner normals), as columns of float arrays."""
+    nf = len(faces)
+    rows = []
+    for k in range(3):
+        i, j = (k + 1) % 3, (k + 2) % 3
+        u, ui, uj = nb_face[:, k], li[:, k], lj[:, k]
+        na_a, na_b = cn[:, i], cn[:, j]
+        nb_a, nb_b = cn[u, ui], cn[u, uj]
+        differ = (np.sum(na_a * nb_a, axis=1) < 1.0 - 1e-12) | (np.sum(na_b * nb_b, axis=1) < 1.0 - 1e-12)
+        a, b = vertices[faces[:, i]], vertices[faces[:, j]]
+        far = vertices[faces[u, 3 - ui - uj]]
+        convex = np.sum(fn * (far - a), axis=1) < -1e-9 * extent
+        t = np.flatnonzero(differ & (np.arange(nf) < u))
+        rows.append((t, a[t], b[t], na_a[t], na_b[t], nb_a[t], nb_b[t], convex[t], faces[t, i], faces[t, j]))
+    t, a, b, na_a, na_b, nb_a, nb_b, convex, va, vb = (np.concatenate(x) for x in zip(*rows))
+    keep = convex
+    mid = 0.5 * (a + b)
+    edges = {"ax": a[:, 0], "ay": a[:, 1], "az": a[:, 2]}
+    u = b - a
+    edges.update(ux=u[:, 0], uy=u[:, 1], uz=u[:, 2], mx=mid[:, 0], my=mid[:, 1], mz=mid[:, 2])
+    edges["half"] = 0.5 * np.linalg.norm(u, axis=1)
+    for name, p0, p1 in (("A", na_a, na_b), ("B", nb_a, nb_b)):
+        for c, axis in enumerate("xyz"):
+            edges[f"{name}0{axis}"] = p0[:, c]
+            edges[f"{name}1{axis}"] = p1[:, c] - p0[:, c]
+    edges = {key: np.ascontiguousarray(val[keep]) for key, val in edges.items()}
+    # corners: the ends of crease edges with three or more distinct normals, all edges convex
+    concave_ends = set(va[~convex].tolist()) | set(vb[~convex].tolist())
+    ends = sorted((set(va.tolist()) | set(vb.tolist())) - concave_ends)
+    corner_vertex = faces.ravel()
+    order = np.argsort(corner_vertex, kind="stable")
+    starts = np.searchsorted(corner_vertex[order], ends)
+    stops = np.searchsorted(corner_vertex[order], ends, side="right")
+    flat_cn = cn.reshape(-1, 3)
+    cones = []
+    for vtx, lo, hi in zip(ends, starts, stops):  # a few corners per mesh
+        normals: list[NDArray] = []
+        for c in flat_cn[order[lo:hi]]:
+            if all(float(c @ e) < 1.0 - 1e-9 for e in normals):
+                normals.append(c)
+        if not 3 <= len(normals) <= 8:
+            continue
+        for x in range(len(normals)):
+            for y in range(x + 1, len(normals)):
+                for z in range(y + 1, len(normals)):
+                    c0, c1, c2 = normals[x], normals[y], normals[z]
+                    det = float(c0 @ np.cross(c1, c2))
+                    if abs(det) < 1e-9:
+                        continue
+                    sgn = 1.0 if det > 0 else -1.0
+                    planes = [sgn * np.cross(p, q) for p, q in ((c1, c2), (c2, c0), (c0, c1))]
+                    cones.append((vertices[vtx], *(p / np.linalg.norm(p) for p in planes)))
+    corners: dict = {}
+    arr = [np.array([cone[i] for cone in cones]).reshape(-1, 3) for i in range(4)]
+    for c, axis in enumerate("xyz"):
+        corners[f"v{axis}"] = np.ascontiguousarray(arr[0][:, c])
+        for k in range(3):
+            corners[f"p{k}{axis}"] = np.ascontiguousarray(arr[k + 1][:, c])
+    return edges, corners
 
 
 def _closest_on_triangles(p: NDArray, v0: NDArray, v1: NDArray, v2: NDArray) -> tuple[NDArray, NDArray, NDArray]:
@@ -455,6 +527,8 @@ class MeshFingertip(Fingertip):
             last_normal=(None, None),
             last_project=(None, None),
         )
+        edges, corners = _creases(v, f, fn, cn, nb_face, li, lj, extent)
+        d.update(crease_edges=edges, crease_corners=corners, crease_any=bool(len(edges["ax"]) or len(corners["vx"])))
         # the streaming cast's warm start: a walk from the previous sample's face
         d.update(
             exposure=_exposure(v, f, fn, v0, centroids, extent),
@@ -748,6 +822,11 @@ class MeshFingertip(Fingertip):
                 who, tris = ray[pi], tris[pi, qi]
                 s0, s1, s2 = _sides(d["plucker"][tris], line[sl][who].T)
                 total = s0 + s1 + s2
+                enters = total < 0.0  # not grazing the face (in its plane), as in _first_hit
+                if not enters.all():
+                    who, tris, s0, s1, s2, total = (x[enters] for x in (who, tris, s0, s1, s2, total))
+                    if who.size == 0:
+                        continue
                 w1, w2 = s1 / total, s2 / total
                 g = d["geom"][tris].T
                 bw, hw = base[sl][who].T, fh[sl][who].T
@@ -848,6 +927,8 @@ class MeshFingertip(Fingertip):
             face = int(tris[j])
             s0, s1, s2 = _sides(d["plucker"][face].tolist(), lf)
             total = s0 + s1 + s2
+            if not total < 0.0:  # the axis grazes the face (in its plane): no entry
+                continue
             w1, w2 = s1 / total, s2 / total
             g = d["geom_py"][face]
             t = (
@@ -866,7 +947,13 @@ class MeshFingertip(Fingertip):
         """
         if xp is PY:
             face, b1, b2 = self._cast_one(fx, fy, fz, mx, my, mz)
-            return self._refine(face, b1, b2, fx, fy, fz, mx, my, mz, PY)
+            res = self._refine(face, b1, b2, fx, fy, fz, mx, my, mz, PY)
+            if res[7] or face < 0 or not self._d["crease_any"]:
+                return res
+            # no smooth root: the contact sits on a sharp edge or corner (the same numpy code
+            # as the batch path, on one sample)
+            one = self._crease_contact(*(np.array([c]) for c in (fx, fy, fz, mx, my, mz)))
+            return tuple(float(c[0]) for c in one[:7]) + (bool(one[7][0]),)
         comps = np.broadcast_arrays(*(np.asarray(c, dtype=float) for c in (fx, fy, fz, mx, my, mz)))
         shape = comps[0].shape
         w = np.stack([c.ravel() for c in comps], axis=-1)
@@ -877,7 +964,190 @@ class MeshFingertip(Fingertip):
             res = self._refine(face[has], b1[has], b2[has], *(w[has, i] for i in range(6)), NP)
             for dst, src in zip(out, res):
                 dst[has] = src
+        again = np.flatnonzero((face >= 0) & ~out[7])
+        if again.size and self._d["crease_any"]:
+            res = self._crease_contact(*(np.ascontiguousarray(w[again, i]) for i in range(6)))
+            for dst, src in zip(out, res):
+                dst[again] = src
         return tuple(o.reshape(shape) for o in out)
+
+    def _crease_contact(self, fx, fy, fz, mx, my, mz):
+        """Soft-finger contact on the sharp features: crease edges and corners (arrays (n,)).
+
+        Where the skin has a crease (faces meeting at more than ``crease_angle_deg``) the
+        normal is not continuous: every normal between the two faces' (on an edge), or in the
+        cone of the corner normals (at a corner), is a normal of the surface there. Newton on
+        the smooth patches cannot reach these contacts; they are solved here directly. On a
+        crease edge ``r(t)`` the moment ``q = m − r × f = σ n`` must lie in the plane of the
+        two faces' normals (``g(t) = q · (n_A × n_B) = 0``, a cubic): its sign changes on 16
+        intervals are bisected, and its smallest values where it touches zero without
+        crossing are refined (on a straight edge ``q`` stays in that plane all along: the
+        point along the edge is then barely determined by the wrench); at a corner ``v``,
+        ``n = ±(m − v × f) / |m − v × f|`` must lie in the corner's normal cone. Of the
+        solutions within 80° of the force (``f · n < 0``), the one with the least ``|σ|`` is
+        kept. Elementwise operations only: one sample or many give the same numbers.
+
+        Returns ``(rx, ry, rz, nx, ny, nz, sigma, valid)``, arrays (n,).
+        """
+        d = self._d
+        n = len(fx)
+        f2 = fx * fx + fy * fy + fz * fz
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            mf = fx * mx + fy * my + fz * mz
+            mu = mf / f2
+            inv = 1.0 / np.sqrt(f2)
+            hx, hy, hz = fx * inv, fy * inv, fz * inv
+            bx, by, bz = (fy * mz - fz * my) / f2, (fz * mx - fx * mz) / f2, (fx * my - fy * mx) / f2
+            reach = np.abs(mu) * _CREASE_TAN + 1e-9 * d["radius"]  # r lies this close to the axis
+            cands = []  # (sample, |σ|, point, normal, σ)
+
+            def near(px, py, pz, extra):
+                """(sample, feature) pairs whose point passes within reach (+ extra) of the axis."""
+                qx, qy, qz = px[None] - bx[:, None], py[None] - by[:, None], pz[None] - bz[:, None]
+                along = qx * hx[:, None] + qy * hy[:, None] + qz * hz[:, None]
+                dist2 = qx * qx + qy * qy + qz * qz - along * along
+                lim = reach[:, None] + extra[None]
+                return np.nonzero(dist2 <= lim * lim)
+
+            e = d["crease_edges"]
+            if len(e["ax"]):
+                si, ei = near(e["mx"], e["my"], e["mz"], e["half"])
+                if si.size:
+                    cands.append(self._crease_edge_roots(si, ei, fx, fy, fz, mx, my, mz))
+            c = d["crease_corners"]
+            if len(c["vx"]):
+                si, ci = near(c["vx"], c["vy"], c["vz"], np.zeros(len(c["vx"])))
+                if si.size:
+                    cands.append(self._crease_corner_roots(si, ci, fx, fy, fz, mx, my, mz, mf))
+        out = [np.full(n, np.nan) for _ in range(7)] + [np.zeros(n, dtype=bool)]
+        if not cands:
+            return tuple(out)
+        # each candidate: sample, |σ|, rx, ry, rz, nx, ny, nz, σ
+        cols = [np.concatenate([cd[k] for cd in cands]) for k in range(9)]
+        who = cols[0].astype(np.int64)
+        if who.size == 0:
+            return tuple(out)
+        order = np.lexsort((np.arange(len(who)), cols[1], who))
+        first = order[np.r_[True, who[order][1:] != who[order][:-1]]]
+        rows = who[first]
+        for k in range(7):
+            out[k][rows] = cols[k + 2][first]
+        out[7][rows] = True
+        return tuple(out)
+
+    def _crease_edge_roots(self, si, ei, fx, fy, fz, mx, my, mz):
+        """Contacts on crease edges for (sample, edge) pairs: see :meth:`_crease_contact`."""
+        e = self._d["crease_edges"]
+        Fx, Fy, Fz, Mx, My, Mz = fx[si], fy[si], fz[si], mx[si], my[si], mz[si]
+        ax, ay, az, ux, uy, uz = (e[k][ei] for k in ("ax", "ay", "az", "ux", "uy", "uz"))
+        # q(t) = m − (a + t u) × f = q0 + t q1; the faces' normals nA(t), nB(t), linear in t
+        c = [
+            Mx - (ay * Fz - az * Fy), My - (az * Fx - ax * Fz), Mz - (ax * Fy - ay * Fx),
+            -(uy * Fz - uz * Fy), -(uz * Fx - ux * Fz), -(ux * Fy - uy * Fx),
+        ] + [e[k][ei] for k in ("A0x", "A0y", "A0z", "A1x", "A1y", "A1z", "B0x", "B0y", "B0z", "B1x", "B1y", "B1z")]  # fmt: skip
+
+        def parts(t, c):
+            return [c[i] + t * c[i + 3] for i in (0, 1, 2, 6, 7, 8, 12, 13, 14)]
+
+        def g(t, c):  # q · (nA × nB): zero where q lies in the plane of the two normals
+            qx, qy, qz, nax, nay, naz, nbx, nby, nbz = parts(t, c)
+            return qx * (nay * nbz - naz * nby) + qy * (naz * nbx - nax * nbz) + qz * (nax * nby - nay * nbx)
+
+        k = _CREASE_SPLIT
+        # the ends reach a little past the edge: a root at a vertex is not lost to rounding
+        knots = [-_CREASE_EDGE_TOL] + [j / k for j in range(1, k)] + [1.0 + _CREASE_EDGE_TOL]
+        grid = [g(x, c) for x in knots]
+        pair, lo, hi, kind = [], [], [], []
+        for j in range(k):
+            # a sign change: a root to bisect
+            sel = np.flatnonzero((grid[j] <= 0.0) != (grid[j + 1] <= 0.0))
+            pair.append(sel)
+            lo.append(np.full(len(sel), knots[j]))
+            hi.append(np.full(len(sel), knots[j + 1]))
+            kind.append(np.zeros(len(sel), dtype=bool))
+            # a smallest |g| of the grid: where g touches zero without crossing (on a straight
+            # edge, q stays in the normals' plane along it), to minimise
+            if 0 < j:
+                sel = np.flatnonzero((np.abs(grid[j]) <= np.abs(grid[j - 1])) & (np.abs(grid[j]) <= np.abs(grid[j + 1])))
+                pair.append(sel)
+                lo.append(np.full(len(sel), knots[j - 1]))
+                hi.append(np.full(len(sel), knots[j + 1]))
+                kind.append(np.ones(len(sel), dtype=bool))
+        pair = np.concatenate(pair)
+        lo, hi, touch = np.concatenate(lo), np.concatenate(hi), np.concatenate(kind)
+        c = [x[pair] for x in c]
+        glo = g(lo, c)
+        for _ in range(_CREASE_BISECT):
+            # bisection on g for crossings; for touches, the same interval halving on the sign
+            # of the slope (a golden-free ternary step: compare g at two inner points)
+            mid = 0.5 * (lo + hi)
+            gm = g(mid, c)
+            quarter = 0.25 * (hi - lo)
+            slope_up = np.abs(g(mid + 0.5 * quarter, c)) >= np.abs(g(mid - 0.5 * quarter, c))
+            left = np.where(touch, ~slope_up, (gm <= 0.0) == (glo <= 0.0))
+            lo = np.where(left, np.where(touch, mid - quarter, mid), lo)
+            hi = np.where(left, hi, np.where(touch, mid + quarter, mid))
+            glo = g(lo, c)
+        t = np.clip(0.5 * (lo + hi), 0.0, 1.0)
+        qx, qy, qz, nax, nay, naz, nbx, nby, nbz = parts(t, c)
+        # q = α nA + β nB with α, β of one sign: q is σ n for a normal between the two faces'
+        g11 = nax * nax + nay * nay + naz * naz
+        g12 = nax * nbx + nay * nby + naz * nbz
+        g22 = nbx * nbx + nby * nby + nbz * nbz
+        r1 = qx * nax + qy * nay + qz * naz
+        r2 = qx * nbx + qy * nby + qz * nbz
+        alpha = g22 * r1 - g12 * r2  # × det > 0
+        beta = g11 * r2 - g12 * r1
+        sign = np.where(alpha + beta > 0.0, 1.0, -1.0)
+        qn = np.sqrt(qx * qx + qy * qy + qz * qz)
+        s_, e_ = si[pair], ei[pair]
+        Fx, Fy, Fz = fx[s_], fy[s_], fz[s_]
+        fn_ = np.sqrt(Fx * Fx + Fy * Fy + Fz * Fz)
+        tiny = _CREASE_RES_TOL * fn_ * self._d["radius"]
+        # no spin (q = 0): the force alone passes through the edge; the normal is then the
+        # wedge's normal nearest −f
+        pa, pb = -(Fx * nax + Fy * nay + Fz * naz), -(Fx * nbx + Fy * nby + Fz * nbz)
+        wa = np.maximum(g22 * pa - g12 * pb, 0.0)
+        wb = np.maximum(g11 * pb - g12 * pa, 0.0)
+        wa = np.where(wa + wb > 0.0, wa, 1.0)
+        px, py, pz = wa * nax + wb * nbx, wa * nay + wb * nby, wa * naz + wb * nbz
+        pn = np.sqrt(px * px + py * py + pz * pz)
+        still = qn <= tiny
+        nx = np.where(still, px / pn, sign * qx / qn)
+        ny = np.where(still, py / pn, sign * qy / qn)
+        nz = np.where(still, pz / pn, sign * qz / qn)
+        fdotn = Fx * nx + Fy * ny + Fz * nz
+        both = np.abs(alpha) + np.abs(beta)
+        same_side = (alpha * sign >= -_CREASE_WEDGE_TOL * both) & (beta * sign >= -_CREASE_WEDGE_TOL * both)
+        cx, cy, cz = nay * nbz - naz * nby, naz * nbx - nax * nbz, nax * nby - nay * nbx
+        cn_ = np.sqrt(cx * cx + cy * cy + cz * cz)
+        off_plane = np.abs(qx * cx + qy * cy + qz * cz) / np.where(cn_ > 0.0, cn_, 1.0)
+        same_side &= cn_ > _CREASE_EDGE_TOL * np.sqrt(g11 * g22)  # a wedge, not one normal
+        ok = (same_side | still) & (fdotn < -_CREASE_COS * fn_) & (off_plane <= tiny)
+        rx = e["ax"][e_] + t * e["ux"][e_]
+        ry = e["ay"][e_] + t * e["uy"][e_]
+        rz = e["az"][e_] + t * e["uz"][e_]
+        sigma = np.where(still, qx * nx + qy * ny + qz * nz, sign * qn)
+        return tuple(x[ok] for x in (s_.astype(float), qn, rx, ry, rz, nx, ny, nz, sigma))
+
+    def _crease_corner_roots(self, si, ci, fx, fy, fz, mx, my, mz, mf):
+        """Contacts at corners for (sample, corner cone) pairs: see :meth:`_crease_contact`."""
+        c = self._d["crease_corners"]
+        Fx, Fy, Fz, Mx, My, Mz = fx[si], fy[si], fz[si], mx[si], my[si], mz[si]
+        vx, vy, vz = c["vx"][ci], c["vy"][ci], c["vz"][ci]
+        qx, qy, qz = Mx - (vy * Fz - vz * Fy), My - (vz * Fx - vx * Fz), Mz - (vx * Fy - vy * Fx)
+        qn = np.sqrt(qx * qx + qy * qy + qz * qz)
+        sign = np.where(mf[si] > 0.0, -1.0, 1.0)  # f · n < 0: n · f = σ⁻¹ m · f
+        nx, ny, nz = sign * qx / qn, sign * qy / qn, sign * qz / qn
+        # n in the cone of three of the corner's normals: non-negative weights
+        inside = np.ones(len(si), dtype=bool)
+        for k in range(3):
+            px, py, pz = (c[f"p{k}{j}"][ci] for j in "xyz")  # the cone's face normals, inward
+            inside &= nx * px + ny * py + nz * pz >= -_CREASE_WEDGE_TOL  # on the cone's boundary too
+        fn_ = np.sqrt(Fx * Fx + Fy * Fy + Fz * Fz)
+        ok = inside & (qn > 0.0) & (mf[si] != 0.0) & (Fx * nx + Fy * ny + Fz * nz < -_CREASE_COS * fn_)
+        sigma = sign * qn
+        return tuple(x[ok] for x in (si.astype(float), qn, vx, vy, vz, nx, ny, nz, sigma))
 
     def _walk_one(self, face: int, b1: float, b2: float, db1: float, db2: float) -> tuple[int, float, float]:
         """Follow a barycentric step from ``(face, b1, b2)`` across edges into the neighbours
@@ -1040,13 +1310,14 @@ class MeshFingertip(Fingertip):
                     uz = n0z + eb1 * d1z + eb2 * d2z
                     inv_len = 1.0 / xp.sqrt(ux * ux + uy * uy + uz * uz)
                     nx, ny, nz = ux * inv_len, uy * inv_len, uz * inv_len
+                    sf = s + tt * dsig
                     rnorm = math.sqrt(Rx * Rx + Ry * Ry + Rz * Rz)
                     fn_dot = Fx * nx + Fy * ny + Fz * nz
                     valid = rnorm <= _RES_TOL * fnorm * size and fn_dot < 0.0 and it < _MAX_ITER
                     if not valid:
                         nan = math.nan
                         return nan, nan, nan, nan, nan, nan, nan, False
-                    return rx, ry, rz, nx, ny, nz, s + tt * dsig, True
+                    return rx, ry, rz, nx, ny, nz, sf, True
             else:
                 done = done | ~np.isfinite(step)
                 if done.any():
@@ -1060,13 +1331,14 @@ class MeshFingertip(Fingertip):
                     uz = n0z[q] + fb1 * d1z[q] + fb2 * d2z[q]
                     inv_len = 1.0 / np.sqrt(ux * ux + uy * uy + uz * uz)
                     fnx, fny, fnz = ux * inv_len, uy * inv_len, uz * inv_len
+                    fq = [c[q] for c in af]
+                    sf = (s + tt * dsig)[q]
                     rnorm = np.sqrt(Rx[q] * Rx[q] + Ry[q] * Ry[q] + Rz[q] * Rz[q])
-                    fq = [c[q] for c in af[:3]]
                     fn_dot = fq[0] * fnx + fq[1] * fny + fq[2] * fnz
                     fn_a = np.sqrt(fq[0] * fq[0] + fq[1] * fq[1] + fq[2] * fq[2])
                     valid = (rnorm <= _RES_TOL * fn_a * size) & (fn_dot < 0.0) & (it < _MAX_ITER)
                     rows = idx[q]
-                    for dst, src in zip(out, (frx, fry, frz, fnx, fny, fnz, (s + tt * dsig)[q], valid)):
+                    for dst, src in zip(out, (frx, fry, frz, fnx, fny, fnz, sf, valid)):
                         dst[rows] = src
                     keep = ~done
                     if not keep.any():
