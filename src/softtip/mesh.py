@@ -197,28 +197,52 @@ def _exposure(vertices: NDArray, faces: NDArray, fn: NDArray, v0: NDArray, centr
     ``h < e c`` with ``c = −n·f/|f|``: a point of the mesh on the line before the face would
     be within ``h / c`` of it.
     """
-    from scipy.spatial import ConvexHull  # imported here: `import softtip` stays light
+    from scipy import sparse
+    from scipy.spatial import ConvexHull, cKDTree  # imported here: `import softtip` stays light
 
     tol = 1e-6 * extent
-    hull = np.ascontiguousarray(vertices[ConvexHull(vertices).vertices].T)
+    nf, nv = len(fn), len(vertices)
+    hull = ConvexHull(vertices)
     offset = np.sum(fn * v0, axis=1)
-    rise = np.empty(len(fn))
-    for start in range(0, len(fn), 512):
-        rise[start : start + 512] = (fn[start : start + 512] @ hull).max(axis=1)
-    rise = rise - offset
+    # a face whose plane passes through a hull vertex that no hull neighbour rises above is
+    # on the hull (a linear function's local maximum over a convex polytope is its maximum)
+    s = hull.simplices
+    e = np.concatenate((s[:, [0, 1]], s[:, [1, 2]], s[:, [2, 0]]))
+    adj = sparse.csr_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(nv, nv))
+    adj = (adj + adj.T).tocsr()
+    on_hull = np.zeros(nv, dtype=bool)
+    on_hull[hull.vertices] = True
+    rise = np.full(nf, np.inf)
+    for k in range(3):
+        vk = faces[:, k]
+        cand = np.flatnonzero(on_hull[vk] & ~(rise <= tol))
+        count = np.diff(adj.indptr)[vk[cand]]
+        rows = np.repeat(np.arange(len(cand)), count)
+        pos = np.repeat(adj.indptr[vk[cand]] - np.cumsum(count) + count, count) + np.arange(count.sum())
+        h = np.einsum("ij,ij->i", vertices[adj.indices[pos]] - vertices[vk[cand[rows]]], fn[cand[rows]])
+        worst = np.full(len(cand), -np.inf)
+        np.maximum.at(worst, rows, h)
+        rise[cand[worst <= tol]] = 0.0
+    # the others: the support function over the hull's vertices
+    rest = np.flatnonzero(rise > tol)
+    hv = np.ascontiguousarray(vertices[hull.vertices].T)
+    for start in range(0, len(rest), 512):
+        blk = rest[start : start + 512]
+        rise[blk] = (fn[blk] @ hv).max(axis=1) - offset[blk]
     tri = vertices[faces]
     edge = max(float(np.max(np.linalg.norm(tri[:, k] - tri[:, (k + 1) % 3], axis=1))) for k in range(3))
     circum = np.max(np.linalg.norm(tri - centroids[:, None, :], axis=2), axis=1)
-    clear = np.full(len(fn), np.inf)
+    # clearance: the nearest vertex in front of the plane among the 64 nearest of the centroid
+    # (none: farther than the 64th, a lower bound)
+    clear = np.full(nf, np.inf)
     inner = np.flatnonzero(rise > tol)
-    vv = np.sum(vertices * vertices, axis=1)
-    for start in range(0, len(inner), 256):
-        blk = inner[start : start + 256]
-        height = fn[blk] @ vertices.T - offset[blk][:, None]
-        c = centroids[blk]
-        dist2 = vv[None, :] - 2.0 * (c @ vertices.T) + np.sum(c * c, axis=1)[:, None]
-        near2 = np.min(np.where(height > tol, dist2, np.inf), axis=1)
-        clear[blk] = np.sqrt(np.maximum(near2, 0.0)) - edge - circum[blk]
+    if inner.size:
+        k = min(64, nv)
+        dist, near = cKDTree(vertices).query(centroids[inner], k=k)
+        dist, near = dist.reshape(len(inner), k), near.reshape(len(inner), k)
+        height = np.einsum("ikj,ij->ik", vertices[near], fn[inner]) - offset[inner][:, None]
+        first = np.where(height > tol, dist, np.inf).min(axis=1)
+        clear[inner] = np.minimum(first, dist[:, -1]) - edge - circum[inner]
     rise = np.where(rise > tol, rise, 0.0)
     return [(h, e) for h, e in zip(rise.tolist(), np.maximum(clear, 0.0).tolist())]
 
