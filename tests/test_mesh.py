@@ -7,9 +7,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import assume, given
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
-from numpy.testing import assert_allclose
+from numpy.testing import assert_allclose, assert_array_equal
 
 from softtip import Capsule, EstimatorConfig, InputError, contact_from_wrench, load_fingertip
 from softtip.core._xp import PY
@@ -237,6 +237,105 @@ def test_round_trip_on_the_mesh_surface(nail, data):
     assert s[7]
     assert_allclose(s[:3], c.point, rtol=1e-12, atol=1e-15)
     assert_allclose(s[6], c.sigma, rtol=1e-10, atol=1e-15 * np.linalg.norm(w[:3]) * 0.03)
+
+
+def test_streaming_cast_warm_start_equals_the_full_cast(nail, rng):
+    # a contact sliding over the cap, across the nail and down its flank, with sensor-like noise:
+    # the streaming cast (a walk from the previous sample's face) finds the very face and
+    # numbers of the full cast, and walks for most samples
+    n_samples = 1500
+    s = np.linspace(0.0, 1.0, n_samples)
+    path = np.column_stack((-0.02 * s, 0.004 * np.sin(6 * s), 0.036 - 0.03 * s * s))
+    r = nail.project(path + np.array([-0.01, 0.0, 0.01]) * s[:, None])
+    n = nail.normal(r)
+    w = np.array([
+        soft_finger_wrench(r[i], n[i], rng.normal(size=3), 0.3, 3.0, 1e-3) for i in range(n_samples)
+    ]) + rng.normal(scale=[0.01, 0.01, 0.01, 2e-4, 2e-4, 2e-4], size=(n_samples, 6))
+    full = nail._cast(w[:, :3], w[:, 3:])
+    calls = []
+    first_hit = nail._first_hit
+
+    def counting(*args):
+        calls.append(1)
+        return first_hit(*args)
+
+    object.__setattr__(nail, "_first_hit", counting)
+    try:
+        nail._d["hint"] = -1
+        stream = np.array([nail._cast_one(*wi) for wi in w.tolist()])
+    finally:
+        object.__delattr__(nail, "_first_hit")
+    assert (stream[:, 0] >= 0).all()
+    assert_array_equal(stream[:, 0].astype(int), full[0])
+    assert_array_equal(stream[:, 1], full[1])
+    assert_array_equal(stream[:, 2], full[2])
+    assert len(calls) < 0.2 * n_samples  # the full cast is the exception
+
+
+@st.composite
+def corner_contacts(draw, tip):
+    """A contact at a corner of the mesh (where three or more smooth patches meet at more than
+    the crease angle: the nail's corners) with a normal anywhere inside the corner's normal
+    cone, pushed within 30° of that normal."""
+    c = tip._d["crease_corners"]
+    i = draw(st.integers(0, len(c["vx"]) - 1))
+    r = np.array([c["vx"][i], c["vy"][i], c["vz"][i]])
+    vtx = int(np.argmin(np.linalg.norm(tip.vertices - r, axis=1)))
+    face, corner = np.nonzero(tip.faces == vtx)
+    normals = tip.corner_normals[face, corner]
+    n = np.array([draw(st.floats(0.01, 1.0)) for _ in normals]) @ normals
+    n = n / np.linalg.norm(n)
+    tilt_dir = np.array([draw(st.floats(-1, 1)) for _ in range(3)])
+    tilt = draw(st.floats(0.0, math.radians(30.0)))
+    fmag = draw(st.floats(0.3, 20.0))
+    sigma = draw(st.floats(-1.0, 1.0)) * 0.5e-3 * fmag
+    return r, n, soft_finger_wrench(r, n, tilt_dir, tilt, fmag, sigma)
+
+
+def assert_soft_finger_solution(tip, w, c):
+    """``c`` solves the soft-finger equations for ``w`` on the skin of ``tip``."""
+    f = w[:3]
+    assert c.valid
+    assert np.linalg.norm(np.cross(c.point, f) + c.sigma * c.normal - w[3:]) <= 1e-9 * np.linalg.norm(f)
+    assert abs(np.linalg.norm(c.normal) - 1.0) < 1e-12 and c.normal @ f < 0.0
+    assert abs(tip.surface(c.point)) < 1e-9
+
+
+@settings(max_examples=50)
+@given(data=st.data())
+def test_pushes_on_the_nail_corners_get_a_contact(nail, data):
+    # at a corner the normal is any in the cone of the patches' normals: the smooth solver
+    # cannot reach these contacts, the crease solver must
+    assert len(nail._d["crease_corners"]["vx"]) > 0
+    r, n, w = data.draw(corner_contacts(nail))
+    assume(nail._cast(w[None, :3], w[None, 3:])[0][0] >= 0)  # the axis meets the skin
+    c = contact_from_wrench(w, nail)
+    assert_soft_finger_solution(nail, w, c)
+    s = contact_kernel(nail, *w.tolist(), xp=PY)
+    assert s[7]
+    assert_allclose(s[:7], [*c.point, *c.normal, c.sigma], rtol=1e-12, atol=1e-15)
+
+
+def test_pushes_all_over_the_nail_tip_get_a_contact(nail):
+    # pushes within friction anywhere above the base (the benchmark's; 2 % failed at the nail's
+    # corners before the crease solver)
+    rng = np.random.default_rng(8)
+    n = 4000
+    centre, radius = nail.bounding_sphere
+    u = rng.normal(size=(n, 3))
+    u[:, 2] = np.abs(u[:, 2])
+    r = nail.project(centre + 3 * radius * u / np.linalg.norm(u, axis=1, keepdims=True))
+    nrm = nail.normal(r)
+    fn = rng.uniform(0.2, 10.0, (n, 1))
+    t = rng.normal(size=(n, 3))
+    t -= np.sum(t * nrm, axis=1, keepdims=True) * nrm
+    t /= np.linalg.norm(t, axis=1, keepdims=True)
+    f = -fn * nrm + rng.uniform(0.0, 0.5, (n, 1)) * fn * t
+    w = np.concatenate((f, np.cross(r, f) + rng.uniform(-1e-3, 1e-3, (n, 1)) * fn * nrm), axis=1)
+    c = contact_from_wrench(w, nail)
+    assert c.valid.mean() >= 0.999
+    for i in np.flatnonzero(c.valid)[::50]:
+        assert_soft_finger_solution(nail, w[i], contact_from_wrench(w[i], nail))
 
 
 def test_finely_tessellated_capsule_matches_the_closed_form(fine_capsule, rng):

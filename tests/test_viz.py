@@ -43,6 +43,33 @@ def test_surface_mesh_lies_on_the_skin(tip):
     assert tri.min() == 0 and tri.max() == len(v) - 1
 
 
+def test_surface_mesh_of_a_mesh_tip_and_of_a_mounted_tip():
+    pytest.importorskip("rerun")
+    from scipy.spatial.transform import Rotation
+
+    from softtip.core.mesh import MeshFingertip, capsule_mesh
+    from softtip.core.mounting import Mounted
+    from softtip.viz.rerun import surface_mesh
+
+    # a mesh fingertip is drawn with its own triangles, not a sphere
+    mesh = MeshFingertip(*capsule_mesh(0.016, 0.020, segments=24, nail_height=0.001))
+    v, tri, n = surface_mesh(mesh)
+    assert np.array_equal(v, mesh.vertices) and np.array_equal(tri, mesh.faces)
+    assert np.all(np.sum(n * mesh.normal(v), axis=1) > 0.5)
+    # a mounted fingertip: its shape's mesh where the mount puts it, in the sensor frame
+    rot = Rotation.from_euler("xyz", [10.0, 30.0, -20.0], degrees=True)
+    shift = np.array([0.002, -0.003, 0.004])
+    for shape in (Capsule(0.016, 0.02), mesh):
+        mounted = Mounted(shape, rot, shift)
+        v0, tri0, n0 = surface_mesh(shape)
+        v, tri, n = surface_mesh(mounted)
+        assert np.array_equal(tri, tri0)
+        assert np.allclose(v, rot.apply(v0) + shift, atol=1e-15)
+        assert np.allclose(n, rot.apply(n0), atol=1e-15)
+        assert np.abs(mounted.surface(v)).max() < 1e-9
+        assert np.all(np.sum(n * mounted.normal(v), axis=1) > 0.5)
+
+
 def test_estimate_rerun_save(tmp_path):
     pytest.importorskip("rerun")
     rrd = tmp_path / "view.rrd"
@@ -127,3 +154,36 @@ def test_missing_extra_names_the_package_to_install(tmp_path, module, args, pack
     assert f"pip install '{package}" in out.stderr and "softtip[" not in out.stderr
     assert "Traceback" not in out.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+def test_rerun_draws_a_mounted_tip_where_its_mount_puts_it(tmp_path):
+    pytest.importorskip("rerun")
+    from rerun.chunk import RrdReader
+
+    from softtip import load_fingertip
+    from softtip.viz.rerun import surface_mesh
+
+    tip_file = tmp_path / "tip.toml"
+    tip_file.write_text(
+        '[fingertip]\nshape = "capsule"\nradius = 0.016\nlength = 0.020\n\n'
+        "[fingertip.mount]\ntranslation = [0.0, 0.003, 0.002]\nrpy_deg = [0.0, 20.0, 0.0]\n",
+        encoding="utf-8",
+    )
+    rrd = tmp_path / "view.rrd"
+    out = subprocess.run(
+        [SOFTTIP, "estimate", EXAMPLE_PATH, "--tip", tip_file, "-o", tmp_path / "e.csv", "--rerun-save", rrd, "-q"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert out.returncode == 0, out.stderr
+    skin = [ch for ch in RrdReader(rrd).store().stream() if ch.entity_path == "/tip/skin"]
+    assert len(skin) == 1
+    drawn = np.array(skin[0].to_record_batch().column("Mesh3D:vertex_positions").to_pylist()[0])
+    tip = load_fingertip(tip_file)
+    v, _, _ = surface_mesh(tip)
+    assert np.allclose(drawn, v, atol=1e-8)  # stored as float32
+    assert np.abs(tip.surface(v)).max() < 1e-12
+    # the mount tilts the shape's apex 20° about y, away from the sensor's z axis
+    apex = v[np.argmax(v @ np.array([np.sin(np.radians(20.0)), 0.0, np.cos(np.radians(20.0))]))]
+    assert np.allclose(apex, [0.036 * np.sin(np.radians(20.0)), 0.003, 0.002 + 0.036 * np.cos(np.radians(20.0))], atol=1e-3)

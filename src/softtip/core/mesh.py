@@ -57,6 +57,16 @@ _MAX_CROSS = 16  # triangles one Newton step may cross (the next step goes on)
 _STEP_TOL = 1e-7  # converged when a step moves the point less than this × the tip's size (the step is taken: the error left is of its square)
 _RES_TOL = 1e-6  # and a solution is kept when |F| (before the last step) ≤ this × |f| × size
 _CAST_BLOCK = 256
+_ALL_FOUR = np.frombuffer(b"\x01\x01\x01\x01", dtype=np.uint32)[0]  # four True bytes as one word
+_CREASE_TAN = 6.0  # a crease contact's normal is within atan(6) = 80.5° of −f
+_CREASE_COS = 1.0 / math.sqrt(1.0 + _CREASE_TAN**2)
+_CREASE_EDGE_TOL = 1e-9  # the crease edge's ends are searched this far (in t) beyond the edge
+_CREASE_WEDGE_TOL = 1e-6  # a normal this close (rad) outside a crease's wedge or cone counts as in it (a root
+# where the moment only touches the normals' plane is found to the square root of the rounding)
+_CREASE_RES_TOL = 1e-9  # a crease edge's moment may leave the normals' plane by this × |f| × size
+_CREASE_SPLIT = 16  # intervals bracketing a crease edge's roots
+_CREASE_BISECT = 60  # interval halvings: to the last bit of t
+_WALK = 8  # faces the streaming cast walks from the previous sample's face
 _NEAR_K = 32  # nearest triangle centroids tried first by the closest-point query
 _SIDE_TOL = 1e-13  # Plücker side products within this × |f| × size² of zero count as on the edge
 
@@ -174,6 +184,131 @@ def _near_classes(centroids: NDArray, corners: NDArray) -> list:
         k = _NEAR_K if sel is small else _NEAR_K // 4
         out.append((cKDTree(centroids[members]), members, float(reach[members].max()), min(k, members.size)))
     return out
+
+
+def _exposure(vertices: NDArray, faces: NDArray, fn: NDArray, v0: NDArray, centroids: NDArray,
+              extent: float) -> list[tuple[float, float]]:
+    """Per face ``(h, e)``: how far the mesh rises in front of the face's plane (m; 0 for a
+    face on the convex hull, within ``1e-6 × extent``, above the rounding of a mesh stored in
+    single precision, as STL is), and a lower bound on the distance from any point of the
+    face to any point of the mesh in front of its plane (m).
+
+    A line entering the skin through the face along ``f`` meets nothing before it when
+    ``h < e c`` with ``c = −n·f/|f|``: a point of the mesh on the line before the face would
+    be within ``h / c`` of it.
+    """
+    from scipy import sparse
+    from scipy.spatial import ConvexHull, cKDTree  # imported here: `import softtip` stays light
+
+    tol = 1e-6 * extent
+    nf, nv = len(fn), len(vertices)
+    hull = ConvexHull(vertices)
+    offset = np.sum(fn * v0, axis=1)
+    # a face whose plane passes through a hull vertex that no hull neighbour rises above is
+    # on the hull (a linear function's local maximum over a convex polytope is its maximum)
+    s = hull.simplices
+    e = np.concatenate((s[:, [0, 1]], s[:, [1, 2]], s[:, [2, 0]]))
+    adj = sparse.csr_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(nv, nv))
+    adj = (adj + adj.T).tocsr()
+    on_hull = np.zeros(nv, dtype=bool)
+    on_hull[hull.vertices] = True
+    rise = np.full(nf, np.inf)
+    for k in range(3):
+        vk = faces[:, k]
+        cand = np.flatnonzero(on_hull[vk] & ~(rise <= tol))
+        count = np.diff(adj.indptr)[vk[cand]]
+        rows = np.repeat(np.arange(len(cand)), count)
+        pos = np.repeat(adj.indptr[vk[cand]] - np.cumsum(count) + count, count) + np.arange(count.sum())
+        h = np.einsum("ij,ij->i", vertices[adj.indices[pos]] - vertices[vk[cand[rows]]], fn[cand[rows]])
+        worst = np.full(len(cand), -np.inf)
+        np.maximum.at(worst, rows, h)
+        rise[cand[worst <= tol]] = 0.0
+    # the others: the support function over the hull's vertices
+    rest = np.flatnonzero(rise > tol)
+    hv = np.ascontiguousarray(vertices[hull.vertices].T)
+    for start in range(0, len(rest), 512):
+        blk = rest[start : start + 512]
+        rise[blk] = (fn[blk] @ hv).max(axis=1) - offset[blk]
+    tri = vertices[faces]
+    edge = max(float(np.max(np.linalg.norm(tri[:, k] - tri[:, (k + 1) % 3], axis=1))) for k in range(3))
+    circum = np.max(np.linalg.norm(tri - centroids[:, None, :], axis=2), axis=1)
+    # clearance: the nearest vertex in front of the plane among the 64 nearest of the centroid
+    # (none: farther than the 64th, a lower bound)
+    clear = np.full(nf, np.inf)
+    inner = np.flatnonzero(rise > tol)
+    if inner.size:
+        k = min(64, nv)
+        dist, near = cKDTree(vertices).query(centroids[inner], k=k)
+        dist, near = dist.reshape(len(inner), k), near.reshape(len(inner), k)
+        height = np.einsum("ikj,ij->ik", vertices[near], fn[inner]) - offset[inner][:, None]
+        first = np.where(height > tol, dist, np.inf).min(axis=1)
+        clear[inner] = np.minimum(first, dist[:, -1]) - edge - circum[inner]
+    rise = np.where(rise > tol, rise, 0.0)
+    return [(h, e) for h, e in zip(rise.tolist(), np.maximum(clear, 0.0).tolist())]
+
+
+def _creases(vertices, faces, fn, cn, nb_face, li, lj, extent) -> tuple[dict, dict]:
+    """The sharp features for :meth:`MeshFingertip._crease_contact`: convex crease edges (the
+    corner normals of the two faces differ along them) and convex corners (three or more
+    distinct corner normals), as columns of float arrays."""
+    nf = len(faces)
+    rows = []
+    for k in range(3):
+        i, j = (k + 1) % 3, (k + 2) % 3
+        u, ui, uj = nb_face[:, k], li[:, k], lj[:, k]
+        na_a, na_b = cn[:, i], cn[:, j]
+        nb_a, nb_b = cn[u, ui], cn[u, uj]
+        differ = (np.sum(na_a * nb_a, axis=1) < 1.0 - 1e-12) | (np.sum(na_b * nb_b, axis=1) < 1.0 - 1e-12)
+        a, b = vertices[faces[:, i]], vertices[faces[:, j]]
+        far = vertices[faces[u, 3 - ui - uj]]
+        convex = np.sum(fn * (far - a), axis=1) < -1e-9 * extent
+        t = np.flatnonzero(differ & (np.arange(nf) < u))
+        rows.append((t, a[t], b[t], na_a[t], na_b[t], nb_a[t], nb_b[t], convex[t], faces[t, i], faces[t, j]))
+    t, a, b, na_a, na_b, nb_a, nb_b, convex, va, vb = (np.concatenate(x) for x in zip(*rows))
+    keep = convex
+    mid = 0.5 * (a + b)
+    edges = {"ax": a[:, 0], "ay": a[:, 1], "az": a[:, 2]}
+    u = b - a
+    edges.update(ux=u[:, 0], uy=u[:, 1], uz=u[:, 2], mx=mid[:, 0], my=mid[:, 1], mz=mid[:, 2])
+    edges["half"] = 0.5 * np.linalg.norm(u, axis=1)
+    for name, p0, p1 in (("A", na_a, na_b), ("B", nb_a, nb_b)):
+        for c, axis in enumerate("xyz"):
+            edges[f"{name}0{axis}"] = p0[:, c]
+            edges[f"{name}1{axis}"] = p1[:, c] - p0[:, c]
+    edges = {key: np.ascontiguousarray(val[keep]) for key, val in edges.items()}
+    # corners: the ends of crease edges with three or more distinct normals, all edges convex
+    concave_ends = set(va[~convex].tolist()) | set(vb[~convex].tolist())
+    ends = sorted((set(va.tolist()) | set(vb.tolist())) - concave_ends)
+    corner_vertex = faces.ravel()
+    order = np.argsort(corner_vertex, kind="stable")
+    starts = np.searchsorted(corner_vertex[order], ends)
+    stops = np.searchsorted(corner_vertex[order], ends, side="right")
+    flat_cn = cn.reshape(-1, 3)
+    cones = []
+    for vtx, lo, hi in zip(ends, starts, stops):  # a few corners per mesh
+        normals: list[NDArray] = []
+        for c in flat_cn[order[lo:hi]]:
+            if all(float(c @ e) < 1.0 - 1e-9 for e in normals):
+                normals.append(c)
+        if not 3 <= len(normals) <= 8:
+            continue
+        for x in range(len(normals)):
+            for y in range(x + 1, len(normals)):
+                for z in range(y + 1, len(normals)):
+                    c0, c1, c2 = normals[x], normals[y], normals[z]
+                    det = float(c0 @ np.cross(c1, c2))
+                    if abs(det) < 1e-9:
+                        continue
+                    sgn = 1.0 if det > 0 else -1.0
+                    planes = [sgn * np.cross(p, q) for p, q in ((c1, c2), (c2, c0), (c0, c1))]
+                    cones.append((vertices[vtx], *(p / np.linalg.norm(p) for p in planes)))
+    corners: dict = {}
+    arr = [np.array([cone[i] for cone in cones]).reshape(-1, 3) for i in range(4)]
+    for c, axis in enumerate("xyz"):
+        corners[f"v{axis}"] = np.ascontiguousarray(arr[0][:, c])
+        for k in range(3):
+            corners[f"p{k}{axis}"] = np.ascontiguousarray(arr[k + 1][:, c])
+    return edges, corners
 
 
 def _closest_on_triangles(p: NDArray, v0: NDArray, v1: NDArray, v2: NDArray) -> tuple[NDArray, NDArray, NDArray]:
@@ -415,6 +550,25 @@ class MeshFingertip(Fingertip):
             tri9=np.concatenate((v0, v1, v2), axis=1),
             last_normal=(None, None),
             last_project=(None, None),
+        )
+        edges, corners = _creases(v, f, fn, cn, nb_face, li, lj, extent)
+        d.update(crease_edges=edges, crease_corners=corners, crease_any=bool(len(edges["ax"]) or len(corners["vx"])))
+        # the streaming cast's warm start: a walk from the previous sample's face
+        d.update(
+            exposure=_exposure(v, f, fn, v0, centroids, extent),
+            plucker_py=[tuple(tuple(e) for e in row) for row in plucker[:-1].tolist()],
+            fn_py=[tuple(r) for r in fn.tolist()],
+            centroids_py=[tuple(r) for r in centroids.tolist()],
+            # per cluster: the monomials of its centre for the axis test, its faces' Plücker rows
+            cl_quad=np.column_stack((
+                cl_centre ** 2, cl_centre[:, 0] * cl_centre[:, 1], cl_centre[:, 0] * cl_centre[:, 2],
+                cl_centre[:, 1] * cl_centre[:, 2], cl_centre, np.ones(n_cl), -d["cl_radius2"],
+            )),  # fmt: skip
+            cl_plucker=np.ascontiguousarray(
+                np.concatenate((plucker, plucker.sum(axis=1, keepdims=True)), axis=1)[members].reshape(n_cl, -1)
+            ),
+            walk_reach2=(0.5 * _WALK * float(np.max(np.linalg.norm(np.concatenate((e1, e2)), axis=1)))) ** 2,
+            hint=-1,
         )
 
     # -- geometry queries ---------------------------------------------------------------------
@@ -692,6 +846,11 @@ class MeshFingertip(Fingertip):
                 who, tris = ray[pi], tris[pi, qi]
                 s0, s1, s2 = _sides(d["plucker"][tris], line[sl][who].T)
                 total = s0 + s1 + s2
+                enters = total < 0.0  # not grazing the face (in its plane), as in _first_hit
+                if not enters.all():
+                    who, tris, s0, s1, s2, total = (x[enters] for x in (who, tris, s0, s1, s2, total))
+                    if who.size == 0:
+                        continue
                 w1, w2 = s1 / total, s2 / total
                 g = d["geom"][tris].T
                 bw, hw = base[sl][who].T, fh[sl][who].T
@@ -712,7 +871,14 @@ class MeshFingertip(Fingertip):
         return face, b1, b2
 
     def _cast_one(self, fx: float, fy: float, fz: float, mx: float, my: float, mz: float) -> tuple[int, float, float]:
-        """:meth:`_cast` for one wrench given as floats (the streaming path: fewest numpy calls)."""
+        """:meth:`_cast` for one wrench given as floats (the streaming path: fewest numpy calls).
+
+        Contacts move continuously, so the cast first walks over the faces from the previous
+        sample's hit toward the axis; where it arrives is kept when it is certainly the first
+        entering hit of the whole mesh (see :meth:`_unoccluded`): the same face and numbers as
+        the full cast. Otherwise (a walk of more than a few faces, an axis through an edge or
+        a vertex, a face that something may hide) the full cast runs.
+        """
         d = self._d
         f2 = fx * fx + fy * fy + fz * fz
         if not (f2 > 0.0 and math.isfinite(f2 + mx + my + mz)):
@@ -722,21 +888,71 @@ class MeshFingertip(Fingertip):
         mu = (fx * mx + fy * my + fz * mz) / f2
         line = np.array((fx, fy, fz, mx - mu * fx, my - mu * fy, mz - mu * fz))
         bx, by, bz = (fy * mz - fz * my) / f2, (fz * mx - fx * mz) / f2, (fx * my - fy * mx) / f2
-        bf = bx * hx + by * hy + bz * hz
-        y = d["cl_centre"] @ np.array(((hx, bx), (hy, by), (hz, bz)))
-        along = y[:, 0] - bf
-        dist2 = d["cl_centre2"] - 2.0 * y[:, 1] + (bx * bx + by * by + bz * bz) - along * along
-        tris = d["members"][np.flatnonzero(dist2 <= d["cl_radius2"])].ravel()
-        s = (d["plucker18"][tris].reshape(-1, 6) @ line).reshape(-1, 3)
-        s0, s1, s2 = s[:, 0], s[:, 1], s[:, 2]
         tol = (_SIDE_TOL * d["radius"] ** 2) * math.sqrt(f2)
-        hit = np.flatnonzero((np.maximum(np.maximum(s0, s1), s2) <= tol) & (s0 + s1 + s2 < 0.0))
-        best = (math.inf, -1, 0.0, 0.0)
+        axis = (line, bx, by, bz, hx, hy, hz, tol)
+        face = d["hint"]
+        if face >= 0:
+            cx, cy, cz = d["centroids_py"][face]
+            qx, qy, qz = cx - bx, cy - by, cz - bz
+            along = qx * hx + qy * hy + qz * hz
+            if qx * qx + qy * qy + qz * qz - along * along > d["walk_reach2"]:
+                face = -1  # the axis has jumped: no walk
+        if face >= 0:
+            # walk from the previous sample's face toward the axis, across the edge the axis
+            # passes beyond; a face the axis enters clear of its edges, with nothing before it,
+            # is the first entering hit of the whole mesh (no other face is hit there, none before)
+            lf = (fx, fy, fz, mx - mu * fx, my - mu * fy, mz - mu * fz)
+            plucker, nb = d["plucker_py"], d["nb_py"]
+            for _ in range(_WALK):
+                s0, s1, s2 = _sides(plucker[face], lf)
+                if s0 < -tol and s1 < -tol and s2 < -tol:
+                    if self._unoccluded(face, hx, hy, hz):
+                        total = s0 + s1 + s2
+                        d["hint"] = face
+                        return face, s1 / total, s2 / total
+                    break
+                k = 0 if s0 >= s1 and s0 >= s2 else 1 if s1 >= s2 else 2
+                if (s0, s1, s2)[k] <= 0.0:
+                    break  # on an edge or a vertex: the full cast decides
+                face = nb[face][k]
+        # the clusters whose bounding sphere the axis meets: |c − b|² − ((c − b)·h)² ≤ ρ², a
+        # quadratic form in the centre c (b ⟂ h), one product with its monomials
+        quad = np.array((
+            1.0 - hx * hx, 1.0 - hy * hy, 1.0 - hz * hz, -2.0 * hx * hy, -2.0 * hx * hz, -2.0 * hy * hz,
+            -2.0 * bx, -2.0 * by, -2.0 * bz, bx * bx + by * by + bz * bz, 1.0,
+        ))  # fmt: skip
+        cl = np.flatnonzero(d["cl_quad"] @ quad <= 0.0)
+        tris = d["members"][cl].ravel()
+        # per face: the three side products and their sum; a hit (entering) has the three
+        # ≤ 0 (within the rounding margin) and the sum < 0, tested as one 4-byte word per face
+        s = (d["cl_plucker"][cl].reshape(-1, 6) @ line).reshape(-1, 4)
+        hit = np.flatnonzero((s < np.array((tol, tol, tol, 0.0))).view(np.uint32).ravel() == _ALL_FOUR)
+        face, w1, w2, _ = self._first_hit(tris, hit, *axis)
+        d["hint"] = face
+        return face, w1, w2
+
+    def _unoccluded(self, face: int, hx: float, hy: float, hz: float) -> bool:
+        """True when a line along the unit vector ``h`` entering through ``face`` certainly
+        meets no other part of the mesh before it (see :func:`_exposure`)."""
+        rise, clear = self._d["exposure"][face]
+        if rise == 0.0:
+            return True
+        g = self._d["fn_py"][face]
+        return rise < clear * -(g[0] * hx + g[1] * hy + g[2] * hz)
+
+    def _first_hit(self, tris: NDArray, hit: NDArray, line: NDArray, bx: float, by: float, bz: float,
+                   hx: float, hy: float, hz: float, tol: float) -> tuple[int, float, float, int]:
+        """The first entering hit of the axis among the faces ``tris[hit]`` (the faces it
+        enters): face (−1 for none), its barycentric coordinates, and its position in ``tris``."""
+        d = self._d
+        best = (math.inf, -1, 0.0, 0.0, -1)
         lf = line.tolist()
         for j in hit.tolist():  # one hit on a convex patch, a few where the axis crosses the skin again
             face = int(tris[j])
             s0, s1, s2 = _sides(d["plucker"][face].tolist(), lf)
             total = s0 + s1 + s2
+            if not total < 0.0:  # the axis grazes the face (in its plane): no entry
+                continue
             w1, w2 = s1 / total, s2 / total
             g = d["geom_py"][face]
             t = (
@@ -745,8 +961,8 @@ class MeshFingertip(Fingertip):
                 + (g[2] + w1 * g[5] + w2 * g[8] - bz) * hz
             )
             if (t, face) < best[:2]:
-                best = (t, face, w1, w2)
-        return best[1], best[2], best[3]
+                best = (t, face, w1, w2, j)
+        return best[1], best[2], best[3], best[4]
 
     def _contact_kernel(self, fx, fy, fz, mx, my, mz, xp=NP):
         """Soft-finger contact on the mesh, component-wise (see :func:`softtip.core.contact.contact_kernel`).
@@ -755,7 +971,13 @@ class MeshFingertip(Fingertip):
         """
         if xp is PY:
             face, b1, b2 = self._cast_one(fx, fy, fz, mx, my, mz)
-            return self._refine(face, b1, b2, fx, fy, fz, mx, my, mz, PY)
+            res = self._refine(face, b1, b2, fx, fy, fz, mx, my, mz, PY)
+            if res[7] or face < 0 or not self._d["crease_any"]:
+                return res
+            # no smooth root: the contact sits on a sharp edge or corner (the same numpy code
+            # as the batch path, on one sample)
+            one = self._crease_contact(*(np.array([c]) for c in (fx, fy, fz, mx, my, mz)))
+            return tuple(float(c[0]) for c in one[:7]) + (bool(one[7][0]),)
         comps = np.broadcast_arrays(*(np.asarray(c, dtype=float) for c in (fx, fy, fz, mx, my, mz)))
         shape = comps[0].shape
         w = np.stack([c.ravel() for c in comps], axis=-1)
@@ -766,7 +988,190 @@ class MeshFingertip(Fingertip):
             res = self._refine(face[has], b1[has], b2[has], *(w[has, i] for i in range(6)), NP)
             for dst, src in zip(out, res):
                 dst[has] = src
+        again = np.flatnonzero((face >= 0) & ~out[7])
+        if again.size and self._d["crease_any"]:
+            res = self._crease_contact(*(np.ascontiguousarray(w[again, i]) for i in range(6)))
+            for dst, src in zip(out, res):
+                dst[again] = src
         return tuple(o.reshape(shape) for o in out)
+
+    def _crease_contact(self, fx, fy, fz, mx, my, mz):
+        """Soft-finger contact on the sharp features: crease edges and corners (arrays (n,)).
+
+        Where the skin has a crease (faces meeting at more than ``crease_angle_deg``) the
+        normal is not continuous: every normal between the two faces' (on an edge), or in the
+        cone of the corner normals (at a corner), is a normal of the surface there. Newton on
+        the smooth patches cannot reach these contacts; they are solved here directly. On a
+        crease edge ``r(t)`` the moment ``q = m − r × f = σ n`` must lie in the plane of the
+        two faces' normals (``g(t) = q · (n_A × n_B) = 0``, a cubic): its sign changes on 16
+        intervals are bisected, and its smallest values where it touches zero without
+        crossing are refined (on a straight edge ``q`` stays in that plane all along: the
+        point along the edge is then barely determined by the wrench); at a corner ``v``,
+        ``n = ±(m − v × f) / |m − v × f|`` must lie in the corner's normal cone. Of the
+        solutions within 80° of the force (``f · n < 0``), the one with the least ``|σ|`` is
+        kept. Elementwise operations only: one sample or many give the same numbers.
+
+        Returns ``(rx, ry, rz, nx, ny, nz, sigma, valid)``, arrays (n,).
+        """
+        d = self._d
+        n = len(fx)
+        f2 = fx * fx + fy * fy + fz * fz
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            mf = fx * mx + fy * my + fz * mz
+            mu = mf / f2
+            inv = 1.0 / np.sqrt(f2)
+            hx, hy, hz = fx * inv, fy * inv, fz * inv
+            bx, by, bz = (fy * mz - fz * my) / f2, (fz * mx - fx * mz) / f2, (fx * my - fy * mx) / f2
+            reach = np.abs(mu) * _CREASE_TAN + 1e-9 * d["radius"]  # r lies this close to the axis
+            cands = []  # (sample, |σ|, point, normal, σ)
+
+            def near(px, py, pz, extra):
+                """(sample, feature) pairs whose point passes within reach (+ extra) of the axis."""
+                qx, qy, qz = px[None] - bx[:, None], py[None] - by[:, None], pz[None] - bz[:, None]
+                along = qx * hx[:, None] + qy * hy[:, None] + qz * hz[:, None]
+                dist2 = qx * qx + qy * qy + qz * qz - along * along
+                lim = reach[:, None] + extra[None]
+                return np.nonzero(dist2 <= lim * lim)
+
+            e = d["crease_edges"]
+            if len(e["ax"]):
+                si, ei = near(e["mx"], e["my"], e["mz"], e["half"])
+                if si.size:
+                    cands.append(self._crease_edge_roots(si, ei, fx, fy, fz, mx, my, mz))
+            c = d["crease_corners"]
+            if len(c["vx"]):
+                si, ci = near(c["vx"], c["vy"], c["vz"], np.zeros(len(c["vx"])))
+                if si.size:
+                    cands.append(self._crease_corner_roots(si, ci, fx, fy, fz, mx, my, mz, mf))
+        out = [np.full(n, np.nan) for _ in range(7)] + [np.zeros(n, dtype=bool)]
+        if not cands:
+            return tuple(out)
+        # each candidate: sample, |σ|, rx, ry, rz, nx, ny, nz, σ
+        cols = [np.concatenate([cd[k] for cd in cands]) for k in range(9)]
+        who = cols[0].astype(np.int64)
+        if who.size == 0:
+            return tuple(out)
+        order = np.lexsort((np.arange(len(who)), cols[1], who))
+        first = order[np.r_[True, who[order][1:] != who[order][:-1]]]
+        rows = who[first]
+        for k in range(7):
+            out[k][rows] = cols[k + 2][first]
+        out[7][rows] = True
+        return tuple(out)
+
+    def _crease_edge_roots(self, si, ei, fx, fy, fz, mx, my, mz):
+        """Contacts on crease edges for (sample, edge) pairs: see :meth:`_crease_contact`."""
+        e = self._d["crease_edges"]
+        Fx, Fy, Fz, Mx, My, Mz = fx[si], fy[si], fz[si], mx[si], my[si], mz[si]
+        ax, ay, az, ux, uy, uz = (e[k][ei] for k in ("ax", "ay", "az", "ux", "uy", "uz"))
+        # q(t) = m − (a + t u) × f = q0 + t q1; the faces' normals nA(t), nB(t), linear in t
+        c = [
+            Mx - (ay * Fz - az * Fy), My - (az * Fx - ax * Fz), Mz - (ax * Fy - ay * Fx),
+            -(uy * Fz - uz * Fy), -(uz * Fx - ux * Fz), -(ux * Fy - uy * Fx),
+        ] + [e[k][ei] for k in ("A0x", "A0y", "A0z", "A1x", "A1y", "A1z", "B0x", "B0y", "B0z", "B1x", "B1y", "B1z")]  # fmt: skip
+
+        def parts(t, c):
+            return [c[i] + t * c[i + 3] for i in (0, 1, 2, 6, 7, 8, 12, 13, 14)]
+
+        def g(t, c):  # q · (nA × nB): zero where q lies in the plane of the two normals
+            qx, qy, qz, nax, nay, naz, nbx, nby, nbz = parts(t, c)
+            return qx * (nay * nbz - naz * nby) + qy * (naz * nbx - nax * nbz) + qz * (nax * nby - nay * nbx)
+
+        k = _CREASE_SPLIT
+        # the ends reach a little past the edge: a root at a vertex is not lost to rounding
+        knots = [-_CREASE_EDGE_TOL] + [j / k for j in range(1, k)] + [1.0 + _CREASE_EDGE_TOL]
+        grid = [g(x, c) for x in knots]
+        pair, lo, hi, kind = [], [], [], []
+        for j in range(k):
+            # a sign change: a root to bisect
+            sel = np.flatnonzero((grid[j] <= 0.0) != (grid[j + 1] <= 0.0))
+            pair.append(sel)
+            lo.append(np.full(len(sel), knots[j]))
+            hi.append(np.full(len(sel), knots[j + 1]))
+            kind.append(np.zeros(len(sel), dtype=bool))
+            # a smallest |g| of the grid: where g touches zero without crossing (on a straight
+            # edge, q stays in the normals' plane along it), to minimise
+            if 0 < j:
+                sel = np.flatnonzero((np.abs(grid[j]) <= np.abs(grid[j - 1])) & (np.abs(grid[j]) <= np.abs(grid[j + 1])))
+                pair.append(sel)
+                lo.append(np.full(len(sel), knots[j - 1]))
+                hi.append(np.full(len(sel), knots[j + 1]))
+                kind.append(np.ones(len(sel), dtype=bool))
+        pair = np.concatenate(pair)
+        lo, hi, touch = np.concatenate(lo), np.concatenate(hi), np.concatenate(kind)
+        c = [x[pair] for x in c]
+        glo = g(lo, c)
+        for _ in range(_CREASE_BISECT):
+            # bisection on g for crossings; for touches, the same interval halving on the sign
+            # of the slope (a golden-free ternary step: compare g at two inner points)
+            mid = 0.5 * (lo + hi)
+            gm = g(mid, c)
+            quarter = 0.25 * (hi - lo)
+            slope_up = np.abs(g(mid + 0.5 * quarter, c)) >= np.abs(g(mid - 0.5 * quarter, c))
+            left = np.where(touch, ~slope_up, (gm <= 0.0) == (glo <= 0.0))
+            lo = np.where(left, np.where(touch, mid - quarter, mid), lo)
+            hi = np.where(left, hi, np.where(touch, mid + quarter, mid))
+            glo = g(lo, c)
+        t = np.clip(0.5 * (lo + hi), 0.0, 1.0)
+        qx, qy, qz, nax, nay, naz, nbx, nby, nbz = parts(t, c)
+        # q = α nA + β nB with α, β of one sign: q is σ n for a normal between the two faces'
+        g11 = nax * nax + nay * nay + naz * naz
+        g12 = nax * nbx + nay * nby + naz * nbz
+        g22 = nbx * nbx + nby * nby + nbz * nbz
+        r1 = qx * nax + qy * nay + qz * naz
+        r2 = qx * nbx + qy * nby + qz * nbz
+        alpha = g22 * r1 - g12 * r2  # × det > 0
+        beta = g11 * r2 - g12 * r1
+        sign = np.where(alpha + beta > 0.0, 1.0, -1.0)
+        qn = np.sqrt(qx * qx + qy * qy + qz * qz)
+        s_, e_ = si[pair], ei[pair]
+        Fx, Fy, Fz = fx[s_], fy[s_], fz[s_]
+        fn_ = np.sqrt(Fx * Fx + Fy * Fy + Fz * Fz)
+        tiny = _CREASE_RES_TOL * fn_ * self._d["radius"]
+        # no spin (q = 0): the force alone passes through the edge; the normal is then the
+        # wedge's normal nearest −f
+        pa, pb = -(Fx * nax + Fy * nay + Fz * naz), -(Fx * nbx + Fy * nby + Fz * nbz)
+        wa = np.maximum(g22 * pa - g12 * pb, 0.0)
+        wb = np.maximum(g11 * pb - g12 * pa, 0.0)
+        wa = np.where(wa + wb > 0.0, wa, 1.0)
+        px, py, pz = wa * nax + wb * nbx, wa * nay + wb * nby, wa * naz + wb * nbz
+        pn = np.sqrt(px * px + py * py + pz * pz)
+        still = qn <= tiny
+        nx = np.where(still, px / pn, sign * qx / qn)
+        ny = np.where(still, py / pn, sign * qy / qn)
+        nz = np.where(still, pz / pn, sign * qz / qn)
+        fdotn = Fx * nx + Fy * ny + Fz * nz
+        both = np.abs(alpha) + np.abs(beta)
+        same_side = (alpha * sign >= -_CREASE_WEDGE_TOL * both) & (beta * sign >= -_CREASE_WEDGE_TOL * both)
+        cx, cy, cz = nay * nbz - naz * nby, naz * nbx - nax * nbz, nax * nby - nay * nbx
+        cn_ = np.sqrt(cx * cx + cy * cy + cz * cz)
+        off_plane = np.abs(qx * cx + qy * cy + qz * cz) / np.where(cn_ > 0.0, cn_, 1.0)
+        same_side &= cn_ > _CREASE_EDGE_TOL * np.sqrt(g11 * g22)  # a wedge, not one normal
+        ok = (same_side | still) & (fdotn < -_CREASE_COS * fn_) & (off_plane <= tiny)
+        rx = e["ax"][e_] + t * e["ux"][e_]
+        ry = e["ay"][e_] + t * e["uy"][e_]
+        rz = e["az"][e_] + t * e["uz"][e_]
+        sigma = np.where(still, qx * nx + qy * ny + qz * nz, sign * qn)
+        return tuple(x[ok] for x in (s_.astype(float), qn, rx, ry, rz, nx, ny, nz, sigma))
+
+    def _crease_corner_roots(self, si, ci, fx, fy, fz, mx, my, mz, mf):
+        """Contacts at corners for (sample, corner cone) pairs: see :meth:`_crease_contact`."""
+        c = self._d["crease_corners"]
+        Fx, Fy, Fz, Mx, My, Mz = fx[si], fy[si], fz[si], mx[si], my[si], mz[si]
+        vx, vy, vz = c["vx"][ci], c["vy"][ci], c["vz"][ci]
+        qx, qy, qz = Mx - (vy * Fz - vz * Fy), My - (vz * Fx - vx * Fz), Mz - (vx * Fy - vy * Fx)
+        qn = np.sqrt(qx * qx + qy * qy + qz * qz)
+        sign = np.where(mf[si] > 0.0, -1.0, 1.0)  # f · n < 0: n · f = σ⁻¹ m · f
+        nx, ny, nz = sign * qx / qn, sign * qy / qn, sign * qz / qn
+        # n in the cone of three of the corner's normals: non-negative weights
+        inside = np.ones(len(si), dtype=bool)
+        for k in range(3):
+            px, py, pz = (c[f"p{k}{j}"][ci] for j in "xyz")  # the cone's face normals, inward
+            inside &= nx * px + ny * py + nz * pz >= -_CREASE_WEDGE_TOL  # on the cone's boundary too
+        fn_ = np.sqrt(Fx * Fx + Fy * Fy + Fz * Fz)
+        ok = inside & (qn > 0.0) & (mf[si] != 0.0) & (Fx * nx + Fy * ny + Fz * nz < -_CREASE_COS * fn_)
+        sigma = sign * qn
+        return tuple(x[ok] for x in (si.astype(float), qn, vx, vy, vz, nx, ny, nz, sigma))
 
     def _walk_one(self, face: int, b1: float, b2: float, db1: float, db2: float) -> tuple[int, float, float]:
         """Follow a barycentric step from ``(face, b1, b2)`` across edges into the neighbours
@@ -846,9 +1251,9 @@ class MeshFingertip(Fingertip):
             if face < 0:
                 nan = math.nan
                 return nan, nan, nan, nan, nan, nan, nan, False
-            geom, nb, conv = d["geom_py"], d["nb_py"], d["conv_py"]
+            geom = d["geom_py"]
         else:
-            geom, nb, conv = d["geom"], d["nb"], d["conv"]
+            geom = d["geom"]
         fnorm = xp.sqrt(fx * fx + fy * fy + fz * fz)
         step_tol = _STEP_TOL * size
         sig = None
@@ -929,13 +1334,14 @@ class MeshFingertip(Fingertip):
                     uz = n0z + eb1 * d1z + eb2 * d2z
                     inv_len = 1.0 / xp.sqrt(ux * ux + uy * uy + uz * uz)
                     nx, ny, nz = ux * inv_len, uy * inv_len, uz * inv_len
+                    sf = s + tt * dsig
                     rnorm = math.sqrt(Rx * Rx + Ry * Ry + Rz * Rz)
                     fn_dot = Fx * nx + Fy * ny + Fz * nz
                     valid = rnorm <= _RES_TOL * fnorm * size and fn_dot < 0.0 and it < _MAX_ITER
                     if not valid:
                         nan = math.nan
                         return nan, nan, nan, nan, nan, nan, nan, False
-                    return rx, ry, rz, nx, ny, nz, s + tt * dsig, True
+                    return rx, ry, rz, nx, ny, nz, sf, True
             else:
                 done = done | ~np.isfinite(step)
                 if done.any():
@@ -949,13 +1355,14 @@ class MeshFingertip(Fingertip):
                     uz = n0z[q] + fb1 * d1z[q] + fb2 * d2z[q]
                     inv_len = 1.0 / np.sqrt(ux * ux + uy * uy + uz * uz)
                     fnx, fny, fnz = ux * inv_len, uy * inv_len, uz * inv_len
+                    fq = [c[q] for c in af]
+                    sf = (s + tt * dsig)[q]
                     rnorm = np.sqrt(Rx[q] * Rx[q] + Ry[q] * Ry[q] + Rz[q] * Rz[q])
-                    fq = [c[q] for c in af[:3]]
                     fn_dot = fq[0] * fnx + fq[1] * fny + fq[2] * fnz
                     fn_a = np.sqrt(fq[0] * fq[0] + fq[1] * fq[1] + fq[2] * fq[2])
                     valid = (rnorm <= _RES_TOL * fn_a * size) & (fn_dot < 0.0) & (it < _MAX_ITER)
                     rows = idx[q]
-                    for dst, src in zip(out, (frx, fry, frz, fnx, fny, fnz, (s + tt * dsig)[q], valid)):
+                    for dst, src in zip(out, (frx, fry, frz, fnx, fny, fnz, sf, valid)):
                         dst[rows] = src
                     keep = ~done
                     if not keep.any():

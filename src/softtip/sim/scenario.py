@@ -86,6 +86,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from softtip.core.fingertip import Fingertip
+from softtip.core.mounting import Mounted
 from softtip.core.units import KGF, STANDARD_GRAVITY
 from softtip.sim.pose import Pose, unit
 from softtip.sim.synthetic import smoothstep
@@ -303,7 +304,8 @@ class GraspScenario:
     approach_speed : float
         Speed of the object toward the fingertip before contact, m/s.
     contact_point : 3 floats, optional
-        Nominal contact point, m (projected onto the skin); None: the fingertip's apex.
+        Nominal contact point, m (projected onto the skin); None: the fingertip's apex (of a
+        mounted fingertip: the apex of the shape in its own frame, where the mount puts it).
     push_direction : 3 floats, optional
         Push axis, into the fingertip; None: minus the skin normal at the contact point.
     disturbances : tuple of Disturbance
@@ -367,8 +369,12 @@ class GraspScenario:
     def nominal_contact(self, tip: Fingertip) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """``(r_c, n_c, u)``: nominal contact point (m), skin normal there, push axis."""
         if self.contact_point is None:
-            centre, radius = tip.bounding_sphere
+            # the apex: the top of the shape in its own frame (a mounted shape's own z axis)
+            shape = tip.tip if isinstance(tip, Mounted) else tip
+            centre, radius = shape.bounding_sphere
             guess = centre + np.array([0.0, 0.0, 4.0 * radius])
+            if isinstance(tip, Mounted):
+                guess = np.array(tip.rotation) @ guess + np.array(tip.translation)
         else:
             guess = np.asarray(self.contact_point)
         r_c = tip.project(guess)

@@ -250,7 +250,8 @@ def simulate_grasp(
     Parameters
     ----------
     tip : Fingertip
-        Capsule or sphere.
+        Capsule, sphere or mesh, or one of them mounted at an angle or an offset
+        (:class:`~softtip.core.mounting.Mounted`: its skin is the shape's, placed by the mount).
     obj : RigidObject
         The touched object; its ``pose`` is an offset in its contact frame (identity:
         placed exactly as the scenario says).

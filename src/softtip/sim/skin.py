@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from softtip.core.fingertip import Capsule, Fingertip, Sphere
+from softtip.core.mounting import Mounted
 
 __all__ = ["SkinMesh", "discretise_skin", "discretise_mesh_skin", "DEFAULT_ELEMENTS"]
 
@@ -81,13 +82,16 @@ def discretise_skin(tip: Fingertip, n_elements: int = DEFAULT_ELEMENTS, z_min: f
 
     Parameters
     ----------
-    tip : Capsule, Sphere or MeshFingertip
-        The fingertip (sensor frame); a mesh goes to :func:`discretise_mesh_skin`.
+    tip : Capsule, Sphere, MeshFingertip or Mounted
+        The fingertip (sensor frame); a mesh goes to :func:`discretise_mesh_skin`; a
+        :class:`~softtip.core.mounting.Mounted` shape is discretised in its own frame and its
+        elements placed by the mount (the same skin, moved and rotated).
     n_elements : int
         Target element count (the result is within a few elements of it).
     z_min : float, optional
         Lowest covered height, m. Capsule: default 0 (the whole side from the sensor
-        flange up). Sphere: default ``center_z - radius/2`` (120° from the top).
+        flange up). Sphere: default ``center_z - radius/2`` (120° from the top). For a
+        mounted shape, in the shape's own frame.
 
     Returns
     -------
@@ -133,6 +137,11 @@ def discretise_skin(tip: Fingertip, n_elements: int = DEFAULT_ELEMENTS, z_min: f
         c, n, a = cen + r * u, u, w * r * r
     elif getattr(tip, "kind", "") == "mesh":
         return discretise_mesh_skin(tip, n_elements, z_min)
+    elif isinstance(tip, Mounted):
+        # the shape's own skin (z_min in its own frame: its flange), placed by the mount
+        own = discretise_skin(tip.tip, n_elements, z_min)
+        rot, shift = np.array(tip.rotation), np.array(tip.translation)
+        return SkinMesh(own.centres @ rot.T + shift, own.normals @ rot.T, own.areas, own.spacing, tip)
     else:
         raise TypeError(
             f"the simulator discretises capsule, sphere and mesh fingertips; got {type(tip).__name__}"

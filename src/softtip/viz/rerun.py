@@ -3,7 +3,8 @@
 Needs the ``rerun-sdk`` package (``pip install rerun-sdk``; the ``viz`` extra). What
 is logged, sensor frame, metres, on the timeline ``t`` (s of the log):
 
-* ``tip/skin`` (static): the fingertip's skin, a triangle mesh from its geometry;
+* ``tip/skin`` (static): the fingertip's skin, a triangle mesh from its geometry (a mesh
+  fingertip's own triangles; a mounted fingertip where its mount puts it);
 * ``tip/contact``: the contact point; ``tip/normal``: the outward normal there (arrow,
   1 cm); ``tip/force``: the force the object exerts, drawn *ending* at the contact point
   (``force_scale`` m per N); ``tip/edge``: the edge direction as a line on the skin
@@ -47,13 +48,17 @@ def import_rerun():
 def surface_mesh(
     tip: Fingertip, n_around: int = 48, n_along: int = 32
 ) -> tuple[NDArray, NDArray, NDArray]:
-    """A triangle mesh of the skin.
+    """A triangle mesh of the skin, in the sensor frame.
+
+    A mesh fingertip gives its own triangles; a capsule, sphere or ellipsoid is tessellated;
+    a mounted fingertip (:class:`~softtip.core.mounting.Mounted`) is its shape's mesh placed by
+    the mount; any other shape, a sphere grid projected onto its skin.
 
     Parameters
     ----------
     tip : Fingertip
     n_around, n_along : int
-        Vertices around the z axis and along the profile.
+        Vertices around the shape's z axis and along the profile (tessellated shapes).
 
     Returns
     -------
@@ -61,6 +66,19 @@ def surface_mesh(
     triangles : (T, 3) int32 vertex indices
     normals : (V, 3) outward unit normals
     """
+    from softtip.core.mesh import MeshFingertip
+    from softtip.core.mounting import Mounted
+
+    if isinstance(tip, Mounted):
+        v, tri, n = surface_mesh(tip.tip, n_around, n_along)
+        rot = np.array(tip.rotation)
+        return v @ rot.T + np.array(tip.translation), tri, n @ rot.T
+    if isinstance(tip, MeshFingertip):
+        # vertex normals for shading: the corner normals around each vertex, averaged
+        acc = np.zeros((len(tip.vertices), 3))
+        np.add.at(acc, tip.faces.ravel(), tip.corner_normals.reshape(-1, 3))
+        normals = acc / np.linalg.norm(acc, axis=1, keepdims=True)
+        return tip.vertices.copy(), tip.faces.astype(np.int32), normals
     phi = np.linspace(0.0, 2.0 * np.pi, n_around, endpoint=False)
     if isinstance(tip, Capsule):
         # profile: the cylinder from the sensor (z = 0) up, then the hemisphere to the tip
