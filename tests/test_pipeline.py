@@ -250,6 +250,21 @@ def test_taring_and_bias():
     assert (est.state[est.taring] == 0).all()
 
 
+@pytest.mark.parametrize("order", [1, 2, 3, 4, 6])
+def test_stream_filter_equals_the_batch_filter(order, rng):
+    # one, two and more second-order sections (the stream writes out one and two)
+    from softtip.core.filtering import SosStream, lowpass_sos, sosfilt_batch
+
+    sos = lowpass_sos(30.0, 1000.0, order)
+    x = rng.normal(size=(400, 6)) * np.r_[[0.5] * 3, [1e-3] * 3] + np.r_[1.0, -2.0, 5.0, 1e-3, 0.0, -2e-3]
+    stream = SosStream(sos)
+    got = np.array([stream(row) for row in x.tolist()])
+    assert_allclose(got, sosfilt_batch(sos, x), rtol=1e-12, atol=1e-15)
+    stream.reset()  # starts again in steady state at the next sample
+    again = np.array([stream(row) for row in x[200:].tolist()])
+    assert_allclose(again, sosfilt_batch(sos, x[200:]), rtol=1e-12, atol=1e-15)
+
+
 def test_filter_lowers_the_noise_level():
     g = synthetic_grasp(angle_deg=0.0, seed=2)
     raw = estimate(g.t, g.wrench, "murakami2006")

@@ -32,10 +32,8 @@ class NoiseSquares:
     __slots__ = ("fx", "fy", "fz", "mx", "my", "mz")
 
     def __init__(self, noise: SensorNoise):
-        (self.fx, self.fy, self.fz), (self.mx, self.my, self.mz) = (
-            tuple(s * s for s in noise.force_std),
-            tuple(s * s for s in noise.moment_std),
-        )
+        self.fx, self.fy, self.fz = (s * s for s in noise.force_std)
+        self.mx, self.my, self.mz = (s * s for s in noise.moment_std)
 
     def quad(self, vx: float, vy: float, vz: float, rx: float, ry: float, rz: float) -> float:
         """``vᵀ Σ_h v`` at the contact point ``r`` (:func:`softtip.core.noise._quad_kernel`)."""

@@ -3,7 +3,9 @@
 Each stage is the stream form of the batch stage beside it (:mod:`~softtip.estimator.tare`,
 :mod:`~softtip.estimator.latch`, :mod:`~softtip.estimator.joint`,
 :mod:`~softtip.estimator.measure`), so :class:`Estimator` and
-:func:`~softtip.estimator.batch.estimate` agree to rounding.
+:func:`~softtip.estimator.batch.estimate` agree to rounding. The per-sample arithmetic is
+written out on Python floats (:mod:`~softtip.estimator.floats`): a few microseconds per
+sample in CPython.
 """
 
 from __future__ import annotations
