@@ -40,8 +40,10 @@ from collections import deque
 
 import numpy as np
 
+from softtip._jit import jit_enabled
 from softtip._xp import NP, PY
 from softtip.estimator.config import EstimatorConfig
+from softtip.estimator.sequential import point_moves_kernel, window_sums_kernel
 from softtip.evidence import (
     N_SUMS, _div, evidence_products, noise_constants, tangent_noise_kernel, window_constants, window_direction_floats,
     window_eigen_floats, window_kernel,
@@ -96,6 +98,9 @@ def _sample_std(angle_std, h_norm, minor, xp):
 def _point_moves(begin, located, point, distance: float):
     """``begin`` with a new segment wherever the contact point has moved farther than
     ``distance`` from the first located point of its segment (one pass per move)."""
+    if jit_enabled(len(begin)):
+        px, py, pz = (np.ascontiguousarray(point[:, i]) for i in range(3))
+        return point_moves_kernel(begin, located, px, py, pz, float(distance) * float(distance), np.empty_like(begin))
     begin = begin.copy()
     idx = np.flatnonzero(begin | located)
     seg = np.cumsum(begin)[idx]
@@ -115,6 +120,34 @@ def _point_moves(begin, located, point, distance: float):
             begin[v[first]] = True
             v = v[first:]
     return begin
+
+
+def _window_sums(t, located, begin, prods, window: float):
+    """``(sums (N_SUMS, N), count (N,))``: the products summed over the window of each
+    located sample (NaN elsewhere): the located samples ``i`` of its segment with
+    ``t_i > t_k − window``, as differences of running sums from the segment's start."""
+    n = len(t)
+    sums = np.full((N_SUMS, n), np.nan)
+    count = np.full(n, np.nan)
+    if jit_enabled(n):
+        p = np.empty((N_SUMS, n))
+        for j, pj in enumerate(prods):
+            p[j] = pj
+        window_sums_kernel(t, located, begin, p, float(window), sums, count)
+        return sums, count
+    seg_id = np.cumsum(begin)
+    v_all = np.flatnonzero(located)
+    cuts = np.flatnonzero(np.diff(seg_id[v_all])) + 1
+    for v in np.split(v_all, cuts):
+        tv = t[v]
+        # window of sample k: the located samples i of its segment with t_i > t_k − T
+        first = np.searchsorted(tv, tv - window, side="right")
+        last = np.arange(1, len(v) + 1)
+        for j, p in enumerate(prods):
+            cz = np.concatenate(([0.0], np.cumsum(p[v])))  # sequential, as the stream's running sums
+            sums[j, v] = cz[last] - cz[first]
+        count[v] = last - first
+    return sums, count
 
 
 def evidence_states(t, located, begin, point, normal, h, force, ms, noise: SensorNoise, corr: float,
@@ -162,25 +195,11 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
     with np.errstate(invalid="ignore"):
         terms, nz, frame = _frame_terms(*point.T, *normal.T, *h.T, *force.T, noise, NP)
     prods = evidence_products(*terms)
-    sums = np.full((N_SUMS, n), np.nan)
-    count = np.full(n, np.nan)
-    seg_id = np.cumsum(begin)
-    v_all = np.flatnonzero(located)
     verdict = np.zeros(n, dtype=np.int8)
     held = np.full(n, -1)
     win = None
-    if len(v_all):
-        ids = seg_id[v_all]
-        cuts = np.flatnonzero(np.diff(ids)) + 1
-        for v in np.split(v_all, cuts):
-            tv = t[v]
-            # window of sample k: the located samples i of its segment with t_i > t_k − T
-            first = np.searchsorted(tv, tv - config.evidence_window, side="right")
-            last = np.arange(1, len(v) + 1)
-            for j, p in enumerate(prods):
-                cz = np.concatenate(([0.0], np.cumsum(p[v])))  # sequential, as the stream's running sums
-                sums[j, v] = cz[last] - cz[first]
-            count[v] = last - first
+    if np.any(located):
+        sums, count = _window_sums(t, located, begin, prods, config.evidence_window)
         with np.errstate(invalid="ignore", divide="ignore"):
             win = window_kernel(sums, count, *nz, corr, NP)
             area_now, line_now, resolved, h_ratio, f_ratio = _decide(win, config, NP)

@@ -1,0 +1,97 @@
+"""The sequential parts of the batch stages as single-pass loops, compiled with numba.
+
+Each kernel does, over a whole log in one pass, what the stage's numpy path does segment
+by segment, with the same floating-point operations in the same order as the streaming
+class (running sums restarted at segment starts, window sums as differences of running
+sums), so the results are the same to the last bit. Compiled on first use
+(:mod:`softtip._jit`); callers fall back to their numpy paths when it is disabled.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from softtip._jit import lazy_jit
+
+__all__ = ["point_moves_kernel", "window_sums_kernel"]
+
+
+@lazy_jit
+def point_moves_kernel(begin, located, px, py, pz, distance2, out):  # pragma: no cover - compiled
+    """``out``: ``begin`` with a new segment wherever the located contact point ``p`` has
+    moved farther than ``sqrt(distance2)`` (m) from the first located point of its segment.
+
+    ``begin``, ``located`` (N,) bool; ``px, py, pz`` (N,) m; ``out`` (N,) bool, written.
+    """
+    have = False
+    ax = ay = az = 0.0
+    for i in range(begin.shape[0]):
+        b = begin[i]
+        out[i] = b
+        if b:
+            have = False
+        if located[i]:
+            if not have:
+                ax, ay, az = px[i], py[i], pz[i]
+                have = True
+            else:
+                dx, dy, dz = px[i] - ax, py[i] - ay, pz[i] - az
+                if dx * dx + dy * dy + dz * dz > distance2:
+                    out[i] = True
+                    ax, ay, az = px[i], py[i], pz[i]
+    return out
+
+
+@lazy_jit
+def window_sums_kernel(t, located, begin, prods, window, sums, count):  # pragma: no cover - compiled
+    """Sums of ``prods`` over a sliding window of the located samples of each segment.
+
+    The window of located sample ``k`` is the located samples ``i`` of its segment (a new
+    one at every ``begin``) with ``t_i > t_k − window``. Its sums are ``C_k − C_j``, ``C``
+    the running sums from the segment's start (the stream's order of additions) and ``j``
+    the window's first sample.
+
+    Parameters
+    ----------
+    t : (N,) s, non-decreasing
+    located, begin : (N,) bool
+    prods : (M, N) float, C-contiguous
+    window : float, s
+    sums : (M, N) float
+        Written at located samples (other columns are left as they are).
+    count : (N,) float
+        Samples in the window, written at located samples.
+    """
+    m = prods.shape[0]
+    n = t.shape[0]
+    cum = np.zeros(m)
+    cum_first = np.zeros(m)
+    j = 0  # the window's first located sample (or a sample before it)
+    n_in = 0  # located samples of the segment so far
+    n_out = 0  # located samples of the segment before j
+    for k in range(n):
+        if begin[k]:
+            for q in range(m):
+                cum[q] = 0.0
+                cum_first[q] = 0.0
+            j = k
+            n_in = 0
+            n_out = 0
+        if not located[k]:
+            continue
+        for q in range(m):
+            cum[q] += prods[q, k]
+        n_in += 1
+        start = t[k] - window
+        while j <= k:
+            if located[j]:
+                if t[j] > start:
+                    break
+                for q in range(m):
+                    cum_first[q] += prods[q, j]
+                n_out += 1
+            j += 1
+        for q in range(m):
+            sums[q, k] = cum[q] - cum_first[q]
+        count[k] = n_in - n_out
+    return count
