@@ -15,6 +15,12 @@ Rates are rows per second of CPU time (the process's own, or the command's): on 
 machine that is the steady figure; the wall-clock time is printed beside it. Targets (manual §6) end to end: CSV >= 2 M rows/s, Parquet >= 10 M rows/s.
 Only this part: --only end-to-end.
 
+Scaling (--only scaling, --sizes 1e5,1e6,1e7): at each log length, in a process of its own,
+the contact kernel, the whole pipeline and end to end (read + estimate + write, Parquet and
+CSV) side by side in rows per CPU second, the kernel/pipeline ratio, and the peak memory of
+the pipeline per row (peak resident memory beyond its inputs). Target (manual §6): pipeline
+>= 20 M rows/s at 1e7 on one core, <= 400 B/row.
+
 Mesh rows: the shipped mesh fingertip (the papers' capsule with a nail, 21.6k triangles),
 contact location per sample (streaming kernel, median and p99; target median <= 50 us) and in
 batch, on pushes within friction (see plausible_wrenches), and the whole pipeline with the
@@ -64,7 +70,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--samples", type=int, default=1_000_000)
     ap.add_argument("--stream-samples", type=int, default=20_000)
-    ap.add_argument("--only", choices=["end-to-end"], help="Run only this part.")
+    ap.add_argument("--only", choices=["end-to-end", "scaling"], help="Run only this part.")
+    ap.add_argument("--sizes", default="1e5,1e6,1e7", help="log lengths of the scaling table (comma-separated)")
+    ap.add_argument("--scaling-worker", type=float, help=argparse.SUPPRESS)
     ap.add_argument("--mesh-only", action="store_true", help="only the mesh fingertip rows")
     args = ap.parse_args()
     rng = np.random.default_rng(6)
@@ -72,10 +80,16 @@ def main() -> None:
         print(f"softtip core benchmark | python {platform.python_version()} | numpy {np.__version__} | {platform.machine()}")
         mesh_rows(args, rng)
         return
+    if args.scaling_worker:
+        scaling_worker(int(args.scaling_worker))
+        return
     n = args.samples
     print(f"softtip core benchmark | python {platform.python_version()} | numpy {np.__version__} | {platform.machine()}")
     if args.only == "end-to-end":
         end_to_end(n)
+        return
+    if args.only == "scaling":
+        scaling([int(float(x)) for x in args.sizes.split(",")])
         return
     print(f"batch contact location, {n:,} samples (best of 3; general solver: 1 run)")
 
@@ -131,7 +145,100 @@ def main() -> None:
             f"   (in contact: median {np.median(per[contact]) * 1e6:6.1f} us)"
         )
     end_to_end(n)
+    scaling([int(float(x)) for x in args.sizes.split(",")])
     mesh_rows(args, rng)
+
+
+def _cpu() -> float:
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+
+
+def _peak_rss() -> int:
+    """Peak resident memory of this process, bytes (Linux reports KiB)."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+
+
+def scaling_worker(n: int) -> None:
+    """One row of :func:`scaling` in a process of its own: prints ``key=value`` pairs."""
+    import json
+    import warnings
+
+    import softtip.io as sio
+    from softtip import load_fingertip
+    from softtip._jit import jit_enabled, set_jit
+    from softtip.contact import contact_arrays
+
+    warnings.simplefilter("ignore")
+    g = synthetic_grasp("murakami2006", angle_deg=45.0, duration=10.0, rate=1000.0, seed=1)
+    reps = -(-n // len(g.t))
+    t = np.arange(n) * 1e-3
+    w = np.tile(g.wrench, (reps, 1))[:n]
+    tip = load_fingertip("murakami2006")
+    repeats = 1 if n >= 5_000_000 else 3
+    # warm up: imports, the compiled kernels' cache (not what a row of the table measures)
+    for flag in (True, False):
+        set_jit(flag)
+        estimate(t[:5000], w[:5000], tip)
+    set_jit(None)
+    cols = [np.ascontiguousarray(w[:, i]) for i in range(6)]
+    res: dict[str, float | bool] = {"n": n, "compiled": jit_enabled(n)}
+    best = min(_timed_cpu(lambda: contact_arrays(tip, *cols)) for _ in range(repeats))
+    res["kernel"] = best
+    del cols
+    base = _peak_rss()
+    cpu = []
+    for _ in range(repeats):
+        cpu.append(_timed_cpu(lambda: estimate(t, w, tip)))
+        if len(cpu) == 1:
+            res["peak_bytes"] = _peak_rss() - base
+    res["pipeline"] = min(cpu)
+    with tempfile.TemporaryDirectory() as tmp:
+        for fmt in ("parquet", "csv"):
+            src, dest = Path(tmp, f"in.{fmt}"), Path(tmp, f"out.{fmt}")
+            sio.write_table({"t": t, **{k: w[:, i] for i, k in enumerate(("fx", "fy", "fz", "mx", "my", "mz"))}}, src)
+
+            def run():
+                log = sio.read_log(src)
+                sio.write_table(estimate(log.t, log.wrench, tip).columns(), dest)
+
+            res[fmt] = min(_timed_cpu(run) for _ in range(1 if fmt == "csv" else repeats))
+            src.unlink()
+            dest.unlink()
+    print(json.dumps(res))
+
+
+def _timed_cpu(fn) -> float:
+    c0 = _cpu()
+    fn()
+    return _cpu() - c0
+
+
+def scaling(sizes: list[int]) -> None:
+    """Kernel, pipeline and end to end side by side at each log length, one process per
+    length (its peak memory measured alone); rows per CPU second (user + system)."""
+    import json
+
+    print(
+        "scaling: contact kernel (capsule closed form), the whole pipeline (softtip.estimate) and end to end"
+        " (read + estimate + write, Parquet and CSV), rows per CPU second; best of 3 (1 at 5e6 rows and"
+        " more; CSV: 1); peak memory of softtip.estimate beyond its inputs (peak RSS)"
+    )
+    head = f"  {'rows':>11s} {'kernel':>10s} {'pipeline':>10s} {'ratio':>6s} {'Parquet e2e':>12s} {'CSV e2e':>10s} {'peak B/row':>11s}"
+    print(head)
+    for n in sizes:
+        done = subprocess.run(
+            [sys.executable, __file__, "--scaling-worker", str(n)], capture_output=True, text=True
+        )
+        if done.returncode != 0:
+            raise SystemExit(done.stderr)
+        r = json.loads(done.stdout.strip().splitlines()[-1])
+        rate = {k: n / r[k] / 1e6 for k in ("kernel", "pipeline", "parquet", "csv")}
+        print(
+            f"  {n:11,d} {rate['kernel']:6.2f} M/s {rate['pipeline']:6.2f} M/s {rate['kernel'] / rate['pipeline']:5.0f}×"
+            f" {rate['parquet']:8.2f} M/s {rate['csv']:6.2f} M/s {r['peak_bytes'] / n:11.0f}"
+            f"{'' if r['compiled'] else '   (numpy paths: shorter than softtip._jit.JIT_MIN_SAMPLES)'}"
+        )
 
 
 def timed(fn, repeats=2):

@@ -8,6 +8,7 @@ import warnings
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from softtip._blocks import blockwise
 from softtip._xp import NP
 from softtip.contact import contact_arrays
 from softtip.estimator.config import EstimatorConfig
@@ -16,7 +17,7 @@ from softtip.estimator.depth import depth_points, resolve_depth
 from softtip.estimator.evidence import evidence_states
 from softtip.estimator.joint import joint_points
 from softtip.estimator.latch import latch_points
-from softtip.estimator.measure import effective_noise, measure, noise_correlation
+from softtip.estimator.measure import Measurement, effective_noise, measure, noise_correlation
 from softtip.estimator.results import LINE, NONE, Estimates, EstimatorWarning
 from softtip.estimator.tare import tare_log
 from softtip.filtering import lowpass_sos, sosfilt_batch
@@ -121,8 +122,13 @@ def estimate(
             has = np.all(np.isfinite(point), axis=-1)
         # depth: friction acts at r − δ n, inside the skin
         delta, delta_std, from_data = depth_points(t, c, contact, point, normal, config, noise, noise_correlation(sos))
-        eff = point - delta[:, None] * normal
-        ms = measure(*c, *eff.T, *normal.T, noise, config.h_sigmas, config.h_min, None, NP)
+        ms = Measurement(*blockwise(
+            lambda fx, fy, fz, mx, my, mz, px, py, pz, nx, ny, nz, d: measure(
+                fx, fy, fz, mx, my, mz, px - d * nx, py - d * ny, pz - d * nz, nx, ny, nz,
+                noise, config.h_sigmas, config.h_min, None, NP,
+            ),
+            (*c, *point.T, *normal.T, delta),
+        ))  # fmt: skip
 
     located = contact & has & ms.pushing
     pulling = contact & ~located

@@ -37,9 +37,11 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from typing import NamedTuple
 
 import numpy as np
 
+from softtip._blocks import blockwise
 from softtip._jit import jit_enabled
 from softtip._xp import NP, PY
 from softtip.estimator.config import EstimatorConfig
@@ -122,19 +124,26 @@ def _point_moves(begin, located, point, distance: float):
     return begin
 
 
+class _Held(NamedTuple):
+    """What the evidence stage keeps of the windows, per sample."""
+
+    h_minor: np.ndarray
+    angle: np.ndarray
+    angle_std: np.ndarray
+
+
 def _window_sums(t, located, begin, prods, window: float):
     """``(sums (N_SUMS, N), count (N,))``: the products summed over the window of each
     located sample (NaN elsewhere): the located samples ``i`` of its segment with
-    ``t_i > t_k − window``, as differences of running sums from the segment's start."""
+    ``t_i > t_k − window``, as differences of running sums from the segment's start;
+    ``prods`` (N_SUMS, N) or a sequence of N_SUMS arrays (N,)."""
     n = len(t)
+    if jit_enabled(n):
+        sums, count = np.empty((N_SUMS, n)), np.empty(n)
+        window_sums_kernel(t, located, begin, np.asarray(prods), float(window), sums, count)
+        return sums, count
     sums = np.full((N_SUMS, n), np.nan)
     count = np.full(n, np.nan)
-    if jit_enabled(n):
-        p = np.empty((N_SUMS, n))
-        for j, pj in enumerate(prods):
-            p[j] = pj
-        window_sums_kernel(t, located, begin, p, float(window), sums, count)
-        return sums, count
     seg_id = np.cumsum(begin)
     v_all = np.flatnonzero(located)
     cuts = np.flatnonzero(np.diff(seg_id[v_all])) + 1
@@ -192,17 +201,28 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
         d = np.stack((ms.dx, ms.dy, ms.dz), axis=-1)
         nan = np.full(n, np.nan)
         return np.where(sig, 2, 1).astype(np.int8), np.where(sig, 1, 0).astype(np.int8), d, ms.angle, ms.angle_std, nan, nan
+
+    def per_sample(*a):
+        terms, nz, frame = _frame_terms(*a, noise, NP)
+        return (*evidence_products(*terms), *nz, *frame)
+
     with np.errstate(invalid="ignore"):
-        terms, nz, frame = _frame_terms(*point.T, *normal.T, *h.T, *force.T, noise, NP)
-    prods = evidence_products(*terms)
+        out = blockwise(per_sample, (*point.T, *normal.T, *h.T, *force.T), stacked=True)
+    prods, nz, frame = out[:N_SUMS], out[N_SUMS : N_SUMS + 6], out[N_SUMS + 6 :]
     verdict = np.zeros(n, dtype=np.int8)
     held = np.full(n, -1)
     win = None
     if np.any(located):
         sums, count = _window_sums(t, located, begin, prods, config.evidence_window)
+
+        def per_window(*a):
+            w = window_kernel(a[:N_SUMS], a[N_SUMS], *a[N_SUMS + 1 :], corr, NP)
+            return (*_decide(w, config, NP), w.h_minor, w.angle, w.angle_std)
+
         with np.errstate(invalid="ignore", divide="ignore"):
-            win = window_kernel(sums, count, *nz, corr, NP)
-            area_now, line_now, resolved, h_ratio, f_ratio = _decide(win, config, NP)
+            area_now, line_now, resolved, h_ratio, f_ratio, *rest = blockwise(per_window, (*sums, count, *nz))
+        del sums, count
+        win = _Held(*rest)
         event = np.where(area_now, _AREA, np.where(line_now, _LINE, _UNKNOWN))
         # the verdict is the latest event of the segment, and the held window the latest
         # resolved one (forward fill within each segment)

@@ -58,9 +58,9 @@ def window_sums_kernel(t, located, begin, prods, window, sums, count):  # pragma
     prods : (M, N) float, C-contiguous
     window : float, s
     sums : (M, N) float
-        Written at located samples (other columns are left as they are).
+        Written (NaN at samples not located).
     count : (N,) float
-        Samples in the window, written at located samples.
+        Samples in the window, written (NaN at samples not located).
     """
     m = prods.shape[0]
     n = t.shape[0]
@@ -78,6 +78,9 @@ def window_sums_kernel(t, located, begin, prods, window, sums, count):  # pragma
             n_in = 0
             n_out = 0
         if not located[k]:
+            for q in range(m):
+                sums[q, k] = np.nan
+            count[k] = np.nan
             continue
         for q in range(m):
             cum[q] += prods[q, k]
