@@ -48,11 +48,18 @@ def _log(name):
         return g.t, g.wrench
     if name == "drifting":
         return drifting_grasp()
+    if name == "taps":  # many short touches, some too quick for the latch window
+        g = synthetic_grasp(angle_deg=30.0, duration=0.5, rate=1000.0, contact_time=0.1, settle_time=0.15,
+                            h_start=0.2, h_rise=0.1, seed=1)  # fmt: skip
+        lead = synthetic_grasp(duration=2.0, rate=1000.0, contact_time=5.0, seed=1)
+        w = np.concatenate([lead.wrench] + [g.wrench] * 12)
+        w[2600:2700] *= np.linspace(1.0, 3.0, 100)[:, None]  # a hard press: the rise ends early
+        return np.arange(len(w)) / 1000.0, w
     return {"two-contacts": grasp_with_two_contacts, "impact": impact_grasp, "sliding": sliding_grasp}[name]()
 
 
 @pytest.mark.parametrize("case", sorted(CASES))
-@pytest.mark.parametrize("log", ["single", "two-contacts", "impact", "sliding", "drifting"])
+@pytest.mark.parametrize("log", ["single", "two-contacts", "impact", "sliding", "drifting", "taps"])
 def test_compiled_pipeline_equals_numpy(case, log, both_paths, recwarn):
     t, w = _log(log)
     a, b = both_paths(estimate, t, w, "murakami2006", CASES[case])
