@@ -8,6 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from test_pipeline import CASES, drifting_grasp, grasp_with_two_contacts, impact_grasp, sliding_grasp
 
+import softtip._blocks
 from softtip import estimate
 from softtip._jit import JIT_MIN_SAMPLES, jit_enabled, set_jit
 from softtip.estimator.evidence import _point_moves, _window_sums
@@ -66,6 +67,18 @@ def test_compiled_pipeline_equals_numpy(case, log, both_paths, recwarn):
     assert_same_estimates(a, b)
 
 
+@pytest.mark.parametrize("case", ["latch", "evidence-joint-depth-relatch", "online-short-window-lowpass-relatch"])
+@pytest.mark.parametrize("log", ["two-contacts", "taps"])
+def test_small_blocks_equal_one_block(case, log, both_paths, monkeypatch, recwarn):
+    # blocks of 37 samples: the running sums carried across many block boundaries
+    t, w = _log(log)
+    a, b = both_paths(estimate, t, w, "murakami2006", CASES[case])
+    monkeypatch.setattr(softtip._blocks, "BLOCK", 37)
+    c, d = both_paths(estimate, t, w, "murakami2006", CASES[case])
+    for x in (b, c, d):
+        assert_same_estimates(a, x)
+
+
 def _segments(draw_bits, n, rng):
     """Random segment starts, located samples and non-decreasing times (repeats included)."""
     begin = rng.random(n) < draw_bits[0]
@@ -75,7 +88,7 @@ def _segments(draw_bits, n, rng):
     return t, begin, located
 
 
-@settings(max_examples=60)
+@settings(max_examples=40)
 @given(
     n=st.integers(0, 400),
     p_begin=st.floats(0.0, 0.2),
@@ -102,7 +115,7 @@ def test_window_sums_equal_numpy(n, p_begin, p_located, window, seed):
     assert np.all(np.isnan(fast[1][~located])) and np.all(fast[1][located] >= 0)
 
 
-@settings(max_examples=60)
+@settings(max_examples=40)
 @given(
     n=st.integers(0, 400),
     p_begin=st.floats(0.0, 0.2),
@@ -141,7 +154,7 @@ def test_short_logs_take_the_numpy_path(monkeypatch):
         set_jit(old)
 
 
-@settings(max_examples=60)
+@settings(max_examples=40)
 @given(
     n=st.integers(1, 300),
     p_onset=st.floats(0.0, 0.1),
@@ -174,7 +187,7 @@ def test_depth_window_sums_equal_numpy(n, p_onset, p_has, seed):
     assert np.array_equal(fast, slow)
 
 
-@settings(max_examples=60)
+@settings(max_examples=40)
 @given(n=st.integers(0, 300), seed=st.integers(0, 2**32 - 1))
 def test_running_best_equals_numpy(n, seed):
     from softtip.estimator.depth import _running_best

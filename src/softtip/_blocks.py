@@ -22,7 +22,7 @@ BLOCK = 8192
 
 
 def blockwise(
-    kernel: Callable[..., Sequence], arrays: Sequence[NDArray], *, block: int = BLOCK, stacked: bool = False
+    kernel: Callable[..., Sequence], arrays: Sequence[NDArray], *, block: int | None = None, stacked: bool = False
 ) -> tuple[NDArray, ...] | NDArray:
     """``kernel(*arrays)`` evaluated block by block.
 
@@ -33,8 +33,8 @@ def blockwise(
         that length (or scalars, broadcast).
     arrays : sequence of array, each shape (N,)
         Its arguments (copied block by block to contiguous arrays).
-    block : int
-        Samples per block.
+    block : int, optional
+        Samples per block (default :data:`BLOCK`).
     stacked : bool
         Return the outputs as the rows of one float array.
 
@@ -44,6 +44,7 @@ def blockwise(
         The kernel's ``k`` outputs, with the dtype of its first block's (float when
         ``stacked``).
     """
+    block = block or BLOCK
     arrays = [np.asarray(a) for a in arrays]
     n = len(arrays[0])
     out: list[NDArray] | NDArray = []

@@ -130,12 +130,14 @@ def estimate(
             (*c, *point.T, *normal.T, delta),
         ))  # fmt: skip
 
+    del c, sc, fn  # not needed from here on (bounds the peak memory)
     located = contact & has & ms.pushing
     pulling = contact & ~located
     # line or area (evidence window): segments start at contact onset and at every re-latch
     begin = contact & ~np.concatenate(([False], contact[:-1])) | (relatched & contact)
+    h = np.stack((ms.hx, ms.hy, ms.hz), axis=-1)
     ev_state, evidence, direction, angle, angle_std, h_ratio, f_ratio = evidence_states(
-        t, located, begin, point, normal, np.stack((ms.hx, ms.hy, ms.hz), axis=-1), x[:, :3], ms, noise,
+        t, located, begin, point, normal, h, x[:, :3], ms, noise,
         noise_correlation(sos), config,
     )
     state = np.where(located, ev_state, NONE).astype(np.int8)
@@ -150,8 +152,10 @@ def estimate(
         warnings.warn(msg, EstimatorWarning, stacklevel=2)
 
     def keep(a, mask):
+        # every array kept is this function's own temporary: masked in place, no copy
         a = np.asarray(a, dtype=float)
-        return np.where(mask.reshape(mask.shape + (1,) * (a.ndim - 1)), a, np.nan)
+        np.copyto(a, np.nan, where=~mask.reshape(mask.shape + (1,) * (a.ndim - 1)))
+        return a
 
     return Estimates(
         t=t,
@@ -161,7 +165,7 @@ def estimate(
         point=keep(point, located),
         normal=keep(normal, located),
         sigma=keep(ms.sigma, located),
-        h=keep(np.stack((ms.hx, ms.hy, ms.hz), axis=-1), located),
+        h=keep(h, located),
         h_norm=keep(ms.h_norm, located),
         h_std=keep(ms.h_std, located),
         direction=keep(direction, is_line),

@@ -41,6 +41,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+import softtip._blocks
 from softtip._blocks import blockwise
 from softtip._jit import jit_enabled
 from softtip._xp import NP, PY
@@ -132,6 +133,20 @@ class _Held(NamedTuple):
     angle_std: np.ndarray
 
 
+def _window_sum_blocks(t, located, begin, prods, window: float, block: int, sums=None, count=None):
+    """Yield ``(slice, sums (N_SUMS, k), count (k,))`` of :func:`_window_sums` block by
+    block (compiled; the running sums carried across blocks); into ``sums`` and ``count``
+    (N_SUMS, N) and (N,) when given."""
+    n = len(t)
+    cum, cum_first, state = np.zeros(N_SUMS), np.zeros(N_SUMS), np.zeros(3, dtype=np.int64)
+    for s in range(0, n, block):
+        e = min(n, s + block)
+        sb = np.empty((N_SUMS, e - s)) if sums is None else sums[:, s:e]
+        cb = np.empty(e - s) if count is None else count[s:e]
+        window_sums_kernel(t, located, begin, prods, float(window), s, e, cum, cum_first, state, sb, cb)
+        yield slice(s, e), sb, cb
+
+
 def _window_sums(t, located, begin, prods, window: float):
     """``(sums (N_SUMS, N), count (N,))``: the products summed over the window of each
     located sample (NaN elsewhere): the located samples ``i`` of its segment with
@@ -140,7 +155,8 @@ def _window_sums(t, located, begin, prods, window: float):
     n = len(t)
     if jit_enabled(n):
         sums, count = np.empty((N_SUMS, n)), np.empty(n)
-        window_sums_kernel(t, located, begin, np.asarray(prods), float(window), sums, count)
+        for block in _window_sum_blocks(t, located, begin, np.asarray(prods), window, max(n, 1), sums, count):
+            pass
         return sums, count
     sums = np.full((N_SUMS, n), np.nan)
     count = np.full(n, np.nan)
@@ -203,25 +219,36 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
         return np.where(sig, 2, 1).astype(np.int8), np.where(sig, 1, 0).astype(np.int8), d, ms.angle, ms.angle_std, nan, nan
 
     def per_sample(*a):
-        terms, nz, frame = _frame_terms(*a, noise, NP)
-        return (*evidence_products(*terms), *nz, *frame)
+        terms, nz, _ = _frame_terms(*a, noise, NP)
+        return (*evidence_products(*terms), *nz)
 
     with np.errstate(invalid="ignore"):
         out = blockwise(per_sample, (*point.T, *normal.T, *h.T, *force.T), stacked=True)
-    prods, nz, frame = out[:N_SUMS], out[N_SUMS : N_SUMS + 6], out[N_SUMS + 6 :]
+    prods, nz = out[:N_SUMS], out[N_SUMS:]
     verdict = np.zeros(n, dtype=np.int8)
     held = np.full(n, -1)
     win = None
     if np.any(located):
-        sums, count = _window_sums(t, located, begin, prods, config.evidence_window)
 
         def per_window(*a):
             w = window_kernel(a[:N_SUMS], a[N_SUMS], *a[N_SUMS + 1 :], corr, NP)
             return (*_decide(w, config, NP), w.h_minor, w.angle, w.angle_std)
 
         with np.errstate(invalid="ignore", divide="ignore"):
-            area_now, line_now, resolved, h_ratio, f_ratio, *rest = blockwise(per_window, (*sums, count, *nz))
-        del sums, count
+            if jit_enabled(n):  # window sums block by block, never the whole log's
+                res = None
+                for b, sb, cb in _window_sum_blocks(t, located, begin, prods, config.evidence_window, softtip._blocks.BLOCK):
+                    r = per_window(*sb, cb, *(z[b] for z in nz))
+                    if res is None:
+                        res = [np.empty(n, dtype=np.asarray(x).dtype) for x in r]
+                    for dst, x in zip(res, r):
+                        dst[b] = x
+            else:
+                sums, count = _window_sums(t, located, begin, prods, config.evidence_window)
+                res = blockwise(per_window, (*sums, count, *nz))
+                del sums, count
+        del out, prods
+        area_now, line_now, resolved, h_ratio, f_ratio, *rest = res
         win = _Held(*rest)
         event = np.where(area_now, _AREA, np.where(line_now, _LINE, _UNKNOWN))
         # the verdict is the latest event of the segment, and the held window the latest
@@ -261,10 +288,12 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
     evidence = np.where(line, np.where(confirmed, 2, 1), 0).astype(np.int8)
     angle = np.where(use_win, win.angle[hi] if win is not None else np.nan, ms.angle)
     angle_std = np.where(use_win, win.angle_std[hi] if win is not None else np.nan, own_std)
-    e1x, e1y, e1z, e2x, e2y, e2z = frame
-    ca, sa = np.cos(angle), np.sin(angle)
-    wd = np.stack((ca * e1x + sa * e2x, ca * e1y + sa * e2y, ca * e1z + sa * e2z), axis=-1)
-    d = np.where(use_win[:, None], wd, np.stack((ms.dx, ms.dy, ms.dz), axis=-1))
+    # the held window's direction, in the tangent frame of the sample
+    d = np.stack((ms.dx, ms.dy, ms.dz), axis=-1)
+    u = np.flatnonzero(use_win)
+    e1x, e1y, e1z, e2x, e2y, e2z = tangent_frame_kernel(*normal[u].T, NP)
+    ca, sa = np.cos(angle[u]), np.sin(angle[u])
+    d[u] = np.stack((ca * e1x + sa * e2x, ca * e1y + sa * e2y, ca * e1z + sa * e2z), axis=-1)
     return state, evidence, d, angle, angle_std, h_ratio, f_ratio
 
 

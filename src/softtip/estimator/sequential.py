@@ -43,8 +43,9 @@ def point_moves_kernel(begin, located, px, py, pz, distance2, out):  # pragma: n
 
 
 @lazy_jit
-def window_sums_kernel(t, located, begin, prods, window, sums, count):  # pragma: no cover - compiled
-    """Sums of ``prods`` over a sliding window of the located samples of each segment.
+def window_sums_kernel(t, located, begin, prods, window, lo, hi, cum, cum_first, state, sums, count):  # pragma: no cover
+    """Sums of ``prods`` over a sliding window of the located samples of each segment, for
+    the samples ``lo .. hi − 1`` (blocks in order, the state carried from one to the next).
 
     The window of located sample ``k`` is the located samples ``i`` of its segment (a new
     one at every ``begin``) with ``t_i > t_k − window``. Its sums are ``C_k − C_j``, ``C``
@@ -55,21 +56,24 @@ def window_sums_kernel(t, located, begin, prods, window, sums, count):  # pragma
     ----------
     t : (N,) s, non-decreasing
     located, begin : (N,) bool
-    prods : (M, N) float, C-contiguous
+    prods : (M, N) float
     window : float, s
-    sums : (M, N) float
+    lo, hi : int
+        The block.
+    cum, cum_first : (M,) float
+        Running sums to the current sample and to the window's first (zeros at ``lo = 0``).
+    state : (3,) int
+        The window's first sample, and the located samples of the segment so far and before
+        the window's first (zeros at ``lo = 0``).
+    sums : (M, hi − lo) float
         Written (NaN at samples not located).
-    count : (N,) float
+    count : (hi − lo,) float
         Samples in the window, written (NaN at samples not located).
     """
     m = prods.shape[0]
-    n = t.shape[0]
-    cum = np.zeros(m)
-    cum_first = np.zeros(m)
-    j = 0  # the window's first located sample (or a sample before it)
-    n_in = 0  # located samples of the segment so far
-    n_out = 0  # located samples of the segment before j
-    for k in range(n):
+    j, n_in, n_out = state[0], state[1], state[2]
+    for k in range(lo, hi):
+        b = k - lo
         if begin[k]:
             for q in range(m):
                 cum[q] = 0.0
@@ -79,8 +83,8 @@ def window_sums_kernel(t, located, begin, prods, window, sums, count):  # pragma
             n_out = 0
         if not located[k]:
             for q in range(m):
-                sums[q, k] = np.nan
-            count[k] = np.nan
+                sums[q, b] = np.nan
+            count[b] = np.nan
             continue
         for q in range(m):
             cum[q] += prods[q, k]
@@ -95,8 +99,9 @@ def window_sums_kernel(t, located, begin, prods, window, sums, count):  # pragma
                 n_out += 1
             j += 1
         for q in range(m):
-            sums[q, k] = cum[q] - cum_first[q]
-        count[k] = n_in - n_out
+            sums[q, b] = cum[q] - cum_first[q]
+        count[b] = n_in - n_out
+    state[0], state[1], state[2] = j, n_in, n_out
     return count
 
 
