@@ -15,6 +15,10 @@ Rates are rows per second of CPU time (the process's own, or the command's): on 
 machine that is the steady figure; the wall-clock time is printed beside it. Targets (manual §6) end to end: CSV >= 2 M rows/s, Parquet >= 10 M rows/s.
 Only this part: --only end-to-end.
 
+Compiled (--only compiled): the pipeline at 1e5 and 1e6 rows with the sequential stages
+compiled by numba and with their numpy paths, and the start-up cost of the compiled kernels
+(importing numba; the first call, compiling them or loading them from the cache).
+
 Scaling (--only scaling, --sizes 1e5,1e6,1e7): at each log length, in a process of its own,
 the contact kernel, the whole pipeline and end to end (read + estimate + write, Parquet and
 CSV) side by side in rows per CPU second, the kernel/pipeline ratio, and the peak memory of
@@ -70,7 +74,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--samples", type=int, default=1_000_000)
     ap.add_argument("--stream-samples", type=int, default=20_000)
-    ap.add_argument("--only", choices=["end-to-end", "scaling"], help="Run only this part.")
+    ap.add_argument("--only", choices=["end-to-end", "scaling", "compiled"], help="Run only this part.")
     ap.add_argument("--sizes", default="1e5,1e6,1e7", help="log lengths of the scaling table (comma-separated)")
     ap.add_argument("--scaling-worker", type=float, help=argparse.SUPPRESS)
     ap.add_argument("--mesh-only", action="store_true", help="only the mesh fingertip rows")
@@ -90,6 +94,9 @@ def main() -> None:
         return
     if args.only == "scaling":
         scaling([int(float(x)) for x in args.sizes.split(",")])
+        return
+    if args.only == "compiled":
+        compiled_rows()
         return
     print(f"batch contact location, {n:,} samples (best of 3; general solver: 1 run)")
 
@@ -145,6 +152,7 @@ def main() -> None:
             f"   (in contact: median {np.median(per[contact]) * 1e6:6.1f} us)"
         )
     end_to_end(n)
+    compiled_rows()
     scaling([int(float(x)) for x in args.sizes.split(",")])
     mesh_rows(args, rng)
 
@@ -212,6 +220,59 @@ def _timed_cpu(fn) -> float:
     c0 = _cpu()
     fn()
     return _cpu() - c0
+
+
+_COMPILE_PROBE = """
+import resource, time
+def cpu():
+    r = resource.getrusage(resource.RUSAGE_SELF); return r.ru_utime + r.ru_stime
+c0 = cpu()
+import numba
+c1 = cpu()
+import warnings
+warnings.simplefilter("ignore")
+from softtip import EstimatorConfig, estimate
+from softtip._jit import set_jit
+from softtip.synthetic import synthetic_grasp
+g = synthetic_grasp("murakami2006", duration=10.0, rate=1000.0, seed=1)
+set_jit(True)
+c2 = cpu(); estimate(g.t, g.wrench, "murakami2006", EstimatorConfig(relatch_distance=3e-3)); c3 = cpu()
+print(c1 - c0, c3 - c2)
+"""
+
+
+def compiled_rows() -> None:
+    """The numbers behind numba: the pipeline with the sequential stages compiled and with
+    their numpy paths, and what the compiled kernels cost at start-up."""
+    import warnings
+
+    from softtip._jit import set_jit
+
+    print("sequential stages (latch, depth, evidence) compiled by numba vs their numpy paths; CPU s, best of 2")
+    g = synthetic_grasp("murakami2006", angle_deg=45.0, duration=10.0, rate=1000.0, seed=1)
+    warnings.simplefilter("ignore")
+    for n in (100_000, 1_000_000):
+        reps = -(-n // len(g.t))
+        t = np.arange(n) * 1e-3
+        w = np.tile(g.wrench, (reps, 1))[:n]
+        cpu = {}
+        for flag in (False, True):
+            set_jit(flag)
+            estimate(t[:5000], w[:5000], "murakami2006")
+            cpu[flag] = min(_timed_cpu(lambda: estimate(t, w, "murakami2006")) for _ in range(2))
+        set_jit(None)
+        print(
+            f"  {n:9,d} rows: numpy paths {cpu[False]:6.2f} s ({n / cpu[False] / 1e6:5.2f} M/s), compiled"
+            f" {cpu[True]:6.2f} s ({n / cpu[True] / 1e6:5.2f} M/s): {cpu[False] / cpu[True]:4.1f}×"
+        )
+    with tempfile.TemporaryDirectory() as cache:
+        env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+        for label in ("cold cache (first run after install)", "warm cache"):
+            out = subprocess.run([sys.executable, "-c", _COMPILE_PROBE], capture_output=True, text=True, env=env)
+            if out.returncode != 0:
+                raise SystemExit(out.stderr)
+            imp, first = (float(x) for x in out.stdout.split())
+            print(f"  start-up, {label}: import numba {imp:.2f} s CPU, first compiled call (10k rows) {first:.2f} s CPU")
 
 
 def scaling(sizes: list[int]) -> None:
