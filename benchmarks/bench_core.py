@@ -15,6 +15,16 @@ Rates are rows per second of CPU time (the process's own, or the command's): on 
 machine that is the steady figure; the wall-clock time is printed beside it. Targets (manual §6) end to end: CSV >= 2 M rows/s, Parquet >= 10 M rows/s.
 Only this part: --only end-to-end; only the streaming rows: --only stream.
 
+Compiled (--only compiled): the pipeline at 1e5 and 1e6 rows with the sequential stages
+compiled by numba and with their numpy paths, and the start-up cost of the compiled kernels
+(importing numba; the first call, compiling them or loading them from the cache).
+
+Scaling (--only scaling, --sizes 1e5,1e6,1e7): at each log length, in a process of its own,
+the contact kernel, the whole pipeline and end to end (read + estimate + write, Parquet and
+CSV) side by side in rows per CPU second, the kernel/pipeline ratio, and the peak memory of
+the pipeline per row (peak resident memory beyond its inputs). Target (manual §6): pipeline
+>= 20 M rows/s at 1e7 on one core, <= 400 B/row.
+
 Mesh rows: the shipped mesh fingertip (the papers' capsule with a nail, 21.6k triangles),
 contact location per sample (streaming kernel, median and p99 of CPU time; target median <=
 50 us) on the example grasp's samples in contact (a contact moving continuously, noise
@@ -74,13 +84,18 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--samples", type=int, default=1_000_000)
     ap.add_argument("--stream-samples", type=int, default=20_000)
-    ap.add_argument("--only", choices=["end-to-end", "stream"], help="Run only this part.")
+    ap.add_argument("--only", choices=["end-to-end", "stream", "scaling", "compiled"], help="Run only this part.")
+    ap.add_argument("--sizes", default="1e5,1e6,1e7", help="log lengths of the scaling table (comma-separated)")
+    ap.add_argument("--scaling-worker", type=float, help=argparse.SUPPRESS)
     ap.add_argument("--mesh-only", action="store_true", help="only the mesh fingertip rows")
     args = ap.parse_args()
     rng = np.random.default_rng(6)
     if args.mesh_only:
         print(f"softtip core benchmark | python {platform.python_version()} | numpy {np.__version__} | {platform.machine()}")
         mesh_rows(args, rng)
+        return
+    if args.scaling_worker:
+        scaling_worker(int(args.scaling_worker))
         return
     n = args.samples
     print(f"softtip core benchmark | python {platform.python_version()} | numpy {np.__version__} | {platform.machine()}")
@@ -89,6 +104,12 @@ def main() -> None:
         return
     if args.only == "stream":
         stream_rows(args, synthetic_grasp("murakami2006", angle_deg=45.0, duration=10.0, rate=1000.0, seed=1))
+        return
+    if args.only == "scaling":
+        scaling([int(float(x)) for x in args.sizes.split(",")])
+        return
+    if args.only == "compiled":
+        compiled_rows()
         return
     print(f"batch contact location, {n:,} samples (best of 3; general solver: 1 run)")
 
@@ -123,6 +144,8 @@ def main() -> None:
 
     stream_rows(args, g)
     end_to_end(n)
+    compiled_rows()
+    scaling([int(float(x)) for x in args.sizes.split(",")])
     mesh_rows(args, rng)
 
 
@@ -155,6 +178,151 @@ def stream_rows(args, g) -> None:
         print(
             f"  {label:30s} median {np.median(per) * 1e6:6.1f} us   p99 {np.percentile(per, 99) * 1e6:6.1f} us"
             f"   (in contact: median {np.median(per[contact]) * 1e6:6.1f} us)"
+        )
+
+
+def _cpu() -> float:
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+
+
+def _peak_rss() -> int:
+    """Peak resident memory of this process, bytes (Linux reports KiB)."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+
+
+def scaling_worker(n: int) -> None:
+    """One row of :func:`scaling` in a process of its own: prints ``key=value`` pairs."""
+    import json
+    import warnings
+
+    import softtip.io.tables as sio
+    from softtip import load_fingertip
+    from softtip.core._jit import jit_enabled, set_jit
+    from softtip.core.contact import contact_arrays
+
+    warnings.simplefilter("ignore")
+    g = synthetic_grasp("murakami2006", angle_deg=45.0, duration=10.0, rate=1000.0, seed=1)
+    reps = -(-n // len(g.t))
+    t = np.arange(n) * 1e-3
+    w = np.tile(g.wrench, (reps, 1))[:n]
+    tip = load_fingertip("murakami2006")
+    repeats = 1 if n >= 5_000_000 else 3
+    # warm up: imports, the compiled kernels' cache (not what a row of the table measures)
+    for flag in (True, False):
+        set_jit(flag)
+        estimate(t[:5000], w[:5000], tip)
+    set_jit(None)
+    cols = [np.ascontiguousarray(w[:, i]) for i in range(6)]
+    res: dict[str, float | bool] = {"n": n, "compiled": jit_enabled(n)}
+    best = min(_timed_cpu(lambda: contact_arrays(tip, *cols)) for _ in range(repeats))
+    res["kernel"] = best
+    cols = None  # freed before the pipeline's peak is measured
+    base = _peak_rss()
+    cpu = []
+    for _ in range(repeats):
+        cpu.append(_timed_cpu(lambda: estimate(t, w, tip)))
+        if len(cpu) == 1:
+            res["peak_bytes"] = _peak_rss() - base
+    res["pipeline"] = min(cpu)
+    with tempfile.TemporaryDirectory() as tmp:
+        for fmt in ("parquet", "csv"):
+            src, dest = Path(tmp, f"in.{fmt}"), Path(tmp, f"out.{fmt}")
+            sio.write_table({"t": t, **{k: w[:, i] for i, k in enumerate(("fx", "fy", "fz", "mx", "my", "mz"))}}, src)
+
+            def run():
+                log = sio.read_log(src)
+                sio.write_table(estimate(log.t, log.wrench, tip).columns(), dest)
+
+            res[fmt] = min(_timed_cpu(run) for _ in range(1 if fmt == "csv" else repeats))
+            src.unlink()
+            dest.unlink()
+    print(json.dumps(res))
+
+
+def _timed_cpu(fn) -> float:
+    c0 = _cpu()
+    fn()
+    return _cpu() - c0
+
+
+_COMPILE_PROBE = """
+import resource, time
+def cpu():
+    r = resource.getrusage(resource.RUSAGE_SELF); return r.ru_utime + r.ru_stime
+c0 = cpu()
+import numba
+c1 = cpu()
+import warnings
+warnings.simplefilter("ignore")
+from softtip import EstimatorConfig, estimate
+from softtip.core._jit import set_jit
+from softtip.sim.synthetic import synthetic_grasp
+g = synthetic_grasp("murakami2006", duration=10.0, rate=1000.0, seed=1)
+set_jit(True)
+c2 = cpu(); estimate(g.t, g.wrench, "murakami2006", EstimatorConfig(relatch_distance=3e-3)); c3 = cpu()
+print(c1 - c0, c3 - c2)
+"""
+
+
+def compiled_rows() -> None:
+    """The numbers behind numba: the pipeline with the sequential stages compiled and with
+    their numpy paths, and what the compiled kernels cost at start-up."""
+    import warnings
+
+    from softtip.core._jit import set_jit
+
+    print("sequential stages (latch, depth, evidence) compiled by numba vs their numpy paths; CPU s, best of 2")
+    g = synthetic_grasp("murakami2006", angle_deg=45.0, duration=10.0, rate=1000.0, seed=1)
+    warnings.simplefilter("ignore")
+    for n in (100_000, 1_000_000):
+        reps = -(-n // len(g.t))
+        t = np.arange(n) * 1e-3
+        w = np.tile(g.wrench, (reps, 1))[:n]
+        cpu = {}
+        for flag in (False, True):
+            set_jit(flag)
+            estimate(t[:5000], w[:5000], "murakami2006")
+            cpu[flag] = min(_timed_cpu(lambda: estimate(t, w, "murakami2006")) for _ in range(2))
+        set_jit(None)
+        print(
+            f"  {n:9,d} rows: numpy paths {cpu[False]:6.2f} s ({n / cpu[False] / 1e6:5.2f} M/s), compiled"
+            f" {cpu[True]:6.2f} s ({n / cpu[True] / 1e6:5.2f} M/s): {cpu[False] / cpu[True]:4.1f}×"
+        )
+    with tempfile.TemporaryDirectory() as cache:
+        env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+        for label in ("cold cache (first run after install)", "warm cache"):
+            out = subprocess.run([sys.executable, "-c", _COMPILE_PROBE], capture_output=True, text=True, env=env)
+            if out.returncode != 0:
+                raise SystemExit(out.stderr)
+            imp, first = (float(x) for x in out.stdout.split())
+            print(f"  start-up, {label}: import numba {imp:.2f} s CPU, first compiled call (10k rows) {first:.2f} s CPU")
+
+
+def scaling(sizes: list[int]) -> None:
+    """Kernel, pipeline and end to end side by side at each log length, one process per
+    length (its peak memory measured alone); rows per CPU second (user + system)."""
+    import json
+
+    print(
+        "scaling: contact kernel (capsule closed form), the whole pipeline (softtip.estimate) and end to end"
+        " (read + estimate + write, Parquet and CSV), rows per CPU second; best of 3 (1 at 5e6 rows and"
+        " more; CSV: 1); peak memory of softtip.estimate beyond its inputs (peak RSS)"
+    )
+    head = f"  {'rows':>11s} {'kernel':>10s} {'pipeline':>10s} {'ratio':>6s} {'Parquet e2e':>12s} {'CSV e2e':>10s} {'peak B/row':>11s}"
+    print(head)
+    for n in sizes:
+        done = subprocess.run(
+            [sys.executable, __file__, "--scaling-worker", str(n)], capture_output=True, text=True
+        )
+        if done.returncode != 0:
+            raise SystemExit(done.stderr)
+        r = json.loads(done.stdout.strip().splitlines()[-1])
+        rate = {k: n / r[k] / 1e6 for k in ("kernel", "pipeline", "parquet", "csv")}
+        print(
+            f"  {n:11,d} {rate['kernel']:6.2f} M/s {rate['pipeline']:6.2f} M/s {rate['kernel'] / rate['pipeline']:5.0f}×"
+            f" {rate['parquet']:8.2f} M/s {rate['csv']:6.2f} M/s {r['peak_bytes'] / n:11.0f}"
+            f"{'' if r['compiled'] else '   (numpy paths: shorter than softtip.core._jit.JIT_MIN_SAMPLES)'}"
         )
 
 

@@ -8,6 +8,7 @@ import warnings
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from softtip.core._blocks import blockwise
 from softtip.core._xp import NP
 from softtip.core.contact import contact_arrays
 from softtip.core.filtering import lowpass_sos, sosfilt_batch
@@ -18,7 +19,7 @@ from softtip.estimator.depth import depth_points, resolve_depth
 from softtip.estimator.evidence import evidence_states
 from softtip.estimator.joint import joint_points
 from softtip.estimator.latch import latch_points
-from softtip.estimator.measure import effective_noise, measure, noise_correlation
+from softtip.estimator.measure import Measurement, effective_noise, measure, noise_correlation
 from softtip.estimator.results import LINE, NONE, Estimates, EstimatorWarning
 from softtip.estimator.tare import tare_log
 
@@ -121,15 +122,22 @@ def estimate(
             has = np.all(np.isfinite(point), axis=-1)
         # depth: friction acts at r − δ n, inside the skin
         delta, delta_std, from_data = depth_points(t, c, contact, point, normal, config, noise, noise_correlation(sos))
-        eff = point - delta[:, None] * normal
-        ms = measure(*c, *eff.T, *normal.T, noise, config.h_sigmas, config.h_min, None, NP)
+        ms = Measurement(*blockwise(
+            lambda fx, fy, fz, mx, my, mz, px, py, pz, nx, ny, nz, d: measure(
+                fx, fy, fz, mx, my, mz, px - d * nx, py - d * ny, pz - d * nz, nx, ny, nz,
+                noise, config.h_sigmas, config.h_min, None, NP,
+            ),
+            (*c, *point.T, *normal.T, delta),
+        ))  # fmt: skip
 
+    del c, sc, fn  # not needed from here on (bounds the peak memory)
     located = contact & has & ms.pushing
     pulling = contact & ~located
     # line or area (evidence window): segments start at contact onset and at every re-latch
     begin = contact & ~np.concatenate(([False], contact[:-1])) | (relatched & contact)
+    h = np.stack((ms.hx, ms.hy, ms.hz), axis=-1)
     ev_state, evidence, direction, angle, angle_std, h_ratio, f_ratio = evidence_states(
-        t, located, begin, point, normal, np.stack((ms.hx, ms.hy, ms.hz), axis=-1), x[:, :3], ms, noise,
+        t, located, begin, point, normal, h, x[:, :3], ms, noise,
         noise_correlation(sos), config,
     )
     state = np.where(located, ev_state, NONE).astype(np.int8)
@@ -144,8 +152,10 @@ def estimate(
         warnings.warn(msg, EstimatorWarning, stacklevel=2)
 
     def keep(a, mask):
+        # every array kept is this function's own temporary: masked in place, no copy
         a = np.asarray(a, dtype=float)
-        return np.where(mask.reshape(mask.shape + (1,) * (a.ndim - 1)), a, np.nan)
+        np.copyto(a, np.nan, where=~mask.reshape(mask.shape + (1,) * (a.ndim - 1)))
+        return a
 
     return Estimates(
         t=t,
@@ -155,7 +165,7 @@ def estimate(
         point=keep(point, located),
         normal=keep(normal, located),
         sigma=keep(ms.sigma, located),
-        h=keep(np.stack((ms.hx, ms.hy, ms.hz), axis=-1), located),
+        h=keep(h, located),
         h_norm=keep(ms.h_norm, located),
         h_std=keep(ms.h_std, located),
         direction=keep(direction, is_line),

@@ -31,6 +31,8 @@ from collections import deque
 
 import numpy as np
 
+from softtip.core._blocks import blockwise
+from softtip.core._jit import jit_enabled
 from softtip.core._xp import NP, PY
 from softtip.core.depth import (
     MIN_DEPTH_SAMPLES,
@@ -46,6 +48,7 @@ from softtip.core.depth import (
 from softtip.core.fingertip import Fingertip
 from softtip.core.noise import SensorNoise
 from softtip.estimator.config import EstimatorConfig
+from softtip.estimator.sequential import contact_window_sums_kernel, running_best_kernel
 
 __all__ = ["tip_depth_law", "resolve_depth", "depth_points", "DepthTracker", "SOLVES_PER_WINDOW"]
 
@@ -112,14 +115,19 @@ def depth_points(t, c, contact, point, normal, config: EstimatorConfig, noise: S
     zero = np.zeros(n)
     if law is None:
         return zero, zero.copy(), np.zeros(n, dtype=bool)
-    fx, fy, fz = c[0], c[1], c[2]
-    nx, ny, nz = normal[:, 0], normal[:, 1], normal[:, 2]
-    d0 = depth_kernel(-(fx * nx + fy * ny + fz * nz), law, NP)
     has = contact & np.all(np.isfinite(point), axis=-1)
-    d0 = np.where(has, d0, 0.0)
     if config.depth_mode == "law":
-        return d0, zero.copy(), np.zeros(n, dtype=bool)
+        fx, fy, fz = c[0], c[1], c[2]
+        d0 = depth_kernel(-(fx * normal[:, 0] + fy * normal[:, 1] + fz * normal[:, 2]), law, NP)
+        return np.where(has, d0, 0.0), zero.copy(), np.zeros(n, dtype=bool)
 
+    def per_sample(fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, ok):
+        d0 = np.where(ok, depth_kernel(-(fx * nx + fy * ny + fz * nz), law, NP), 0.0)
+        return (d0, *depth_products(fx, fy, fz, mx, my, mz, depth_frame_kernel(rx, ry, rz, nx, ny, nz, NP), d0))
+
+    with np.errstate(invalid="ignore"):
+        out = blockwise(per_sample, (*c, *point.T, *normal.T, has), stacked=True)
+    d0, prods = out[0], out[1:]
     kappa = np.ones(n)
     rel = np.full(n, config.depth_prior_std)
     from_data = np.zeros(n, dtype=bool)
@@ -128,70 +136,88 @@ def depth_points(t, c, contact, point, normal, config: EstimatorConfig, noise: S
     seg_start = has & ~same
     # the sums run from contact onset (as the stream's), windows start no earlier than
     # their segment
-    onset = np.flatnonzero(np.diff(np.concatenate(([False], contact, [False])).astype(np.int8)) == 1)
-    stop = np.flatnonzero(np.diff(np.concatenate(([False], contact, [False])).astype(np.int8)) == -1)
-    frame = depth_frame_kernel(*point.T, nx, ny, nz, NP)
-    prods = depth_products(*c, frame, d0)
+    idx = np.arange(n)
+    onset = contact & ~np.concatenate(([False], contact[:-1]))
+    onset_of = np.maximum.accumulate(np.where(onset, idx, 0))
+    seg_of = np.maximum.accumulate(np.where(seg_start, idx, -1))
+    seg_of = np.where(seg_of >= onset_of, seg_of, -1)  # a segment of this contact, or none yet
+    t_seg = np.where(seg_of >= 0, t[np.maximum(seg_of, 0)], np.nan)
+    # solve on the grid of the segment: at its first sample and when a new cell starts
     step = config.depth_window / SOLVES_PER_WINDOW
-    for s, e in zip(onset, stop):
-        idx = np.arange(s, e)
-        ok = has[s:e]
-        if not ok.any():
-            continue
-        cums = [np.concatenate(([0.0], np.cumsum(np.where(ok, p[s:e], 0.0)))) for p in prods]
-        starts = np.flatnonzero(seg_start[s:e])
-        seg_of = np.maximum.accumulate(np.where(seg_start[s:e], np.arange(e - s), -1))
-        tt = t[s:e]
-        t_seg = np.where(seg_of >= 0, tt[np.maximum(seg_of, 0)], np.nan)
-        first = np.maximum(np.searchsorted(tt, tt - config.depth_window, side="right"), seg_of)
-        last = np.arange(1, e - s + 1)
-        # solve on the grid of the segment: at its first sample and when a new cell starts
-        cell = np.floor((tt - t_seg) / step)
-        prev = np.concatenate(([np.nan], cell[:-1]))
-        solve = ok & (seg_start[s:e] | (cell != prev))
-        k = np.flatnonzero(solve)
-        if not len(k):
-            continue
-        count = (last[k] - first[k]).astype(float)
-        # windows too short to inform the depth are not solved (as in the stream)
-        big = count >= MIN_DEPTH_SAMPLES
-        kb = k[big]
-        kw = np.full(len(k), np.nan)
-        var = np.full(len(k), np.inf)
-        if len(kb):
-            sums = [cz[last[kb]] - cz[first[kb]] for cz in cums]
-            cov = depth_noise_kernel(tuple(f[s:e][kb] for f in frame), noise)
-            kw[big], var[big] = depth_solve_kernel(sums, count[big], cov, corr, DEPTH_ITERATIONS, NP)
-        # held: the solved window of the segment with the smallest aged variance; it
-        # replaces the one held when var − drift² (t − t_segment) sets a new minimum
-        key = np.full(e - s, np.inf)
-        with np.errstate(invalid="ignore"):
-            key[k] = np.where(var < np.inf, var - config.depth_drift**2 * (tt[k] - t_seg[k]), np.inf)
-        kap = np.full(e - s, np.nan)
-        kap[k] = kw
-        held = np.full(e - s, -1)
-        ends = np.append(starts[1:], e - s)
-        seg_id = np.cumsum(seg_start[s:e]) - 1
-        for sid in np.unique(seg_id[np.isfinite(key)]):
-            a, b = starts[sid], ends[sid]
-            kk = key[a:b]
-            best = np.concatenate(([np.inf], np.minimum.accumulate(kk)[:-1]))
-            use = kk < best
-            held[a:b] = np.maximum.accumulate(np.where(use, np.arange(a, b), -1))
-        # the combination at each solve holds until the next one (of the same segment)
-        got = held[k] >= 0
-        hi = held[k][got]
-        kh = np.full(len(k), np.nan)
-        vh = np.full(len(k), np.inf)
-        kh[got] = kap[hi]
-        vh[got] = key[hi] + config.depth_drift**2 * (tt[k][got] - t_seg[k][got])
-        kc, rc, fc = _combine(kh, vh, config.depth_prior_std, NP)
-        last_solve = np.maximum.accumulate(np.where(solve, np.arange(e - s), -1))
-        pos = np.searchsorted(k, last_solve[ok])
-        kappa[idx[ok]], rel[idx[ok]], from_data[idx[ok]] = kc[pos], rc[pos], fc[pos]
+    cell = np.floor((t - t_seg) / step)
+    prev = np.concatenate(([np.nan], cell[:-1]))
+    prev[onset] = np.nan
+    solve = has & (seg_start | (cell != prev))
+    del cell, prev
+    k = np.flatnonzero(solve)
+    first = np.maximum(np.searchsorted(t, t[k] - config.depth_window, side="right"), seg_of[k])
+    count = (k + 1 - first).astype(float)
+    # windows too short to inform the depth are not solved (as in the stream)
+    big = count >= MIN_DEPTH_SAMPLES
+    kb = k[big]
+    kw = np.full(len(k), np.nan)
+    var = np.full(len(k), np.inf)
+    if len(kb):
+        sums = _window_sums(onset, has, prods, kb, first[big])
+        frame = depth_frame_kernel(*point[kb].T, *normal[kb].T, NP)
+        cov = depth_noise_kernel(frame, noise)
+        kw[big], var[big] = depth_solve_kernel(sums, count[big], cov, corr, DEPTH_ITERATIONS, NP)
+    del prods, out
+    # held: the solved window of the segment with the smallest aged variance; it
+    # replaces the one held when var − drift² (t − t_segment) sets a new minimum
+    tk, tsk = t[k], t_seg[k]
+    with np.errstate(invalid="ignore"):
+        key = np.where(var < np.inf, var - config.depth_drift**2 * (tk - tsk), np.inf)
+    held = _running_best(seg_of[k], key, n)
+    # the combination at each solve holds until the next one (of the same segment)
+    got = held >= 0
+    hi = held[got]
+    kh = np.full(len(k), np.nan)
+    vh = np.full(len(k), np.inf)
+    kh[got] = kw[hi]
+    vh[got] = key[hi] + config.depth_drift**2 * (tk[got] - tsk[got])
+    kc, rc, fc = _combine(kh, vh, config.depth_prior_std, NP)
+    last_solve = np.maximum.accumulate(np.where(solve, idx, -1))
+    pos = np.searchsorted(k, last_solve[has])
+    kappa[has], rel[has], from_data[has] = kc[pos], rc[pos], fc[pos]
     delta = kappa * d0
     delta = np.where(delta > law.max_depth, law.max_depth, delta)
     return np.where(has, delta, 0.0), np.where(has, rel * d0, 0.0), from_data & has
+
+
+def _window_sums(onset, has, prods, k, first):
+    """Sums of ``prods`` (M, N) over samples ``first .. k`` (each within one contact) as
+    differences of masked running sums from the contact's onset: ``(M, len(k))``."""
+    if jit_enabled(onset.shape[0]):
+        return contact_window_sums_kernel(onset, has, prods, k, first, np.empty((len(prods), len(k))))
+    sums = np.empty((len(prods), len(k)))
+    starts = np.flatnonzero(onset)
+    which = np.searchsorted(starts, k, side="right") - 1  # the contact of each window
+    for w in np.unique(which):
+        s = starts[w]
+        q = np.flatnonzero(which == w)
+        e = k[q[-1]] + 1
+        ok = has[s:e]
+        for r, p in enumerate(prods):
+            cz = np.concatenate(([0.0], np.cumsum(np.where(ok, p[s:e], 0.0))))
+            sums[r, q] = cz[k[q] + 1 - s] - cz[first[q] - s]
+    return sums
+
+
+def _running_best(group, key, n: int):
+    """Index of the smallest ``key`` so far within each run of equal ``group`` (replaced
+    only by a strictly smaller one; -1 before any finite one); ``n`` the log's length."""
+    held = np.full(len(key), -1)
+    if jit_enabled(n):
+        return running_best_kernel(group, key, held)
+    cuts = np.flatnonzero(np.diff(group)) + 1
+    for a, b in zip(np.r_[0, cuts], np.r_[cuts, len(key)]):
+        kk = key[a:b]
+        if not np.isfinite(kk).any():
+            continue
+        best = np.concatenate(([np.inf], np.minimum.accumulate(kk)[:-1]))
+        held[a:b] = np.maximum.accumulate(np.where(kk < best, np.arange(a, b), -1))
+    return held
 
 
 class DepthTracker:

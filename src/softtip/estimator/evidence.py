@@ -38,9 +38,13 @@ from __future__ import annotations
 import math
 from collections import deque
 from math import cos, sin, sqrt
+from typing import NamedTuple
 
 import numpy as np
 
+import softtip.core._blocks
+from softtip.core._blocks import blockwise
+from softtip.core._jit import jit_enabled
 from softtip.core._xp import NP
 from softtip.core.evidence import (
     N_SUMS,
@@ -56,6 +60,7 @@ from softtip.core.noise import SensorNoise
 from softtip.core.spin import tangent_frame_kernel
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.floats import NoiseSquares, PointGeometry, sample_direction
+from softtip.estimator.sequential import point_moves_kernel, window_sums_kernel
 
 __all__ = ["evidence_states", "EvidenceTracker"]
 
@@ -104,6 +109,9 @@ def _sample_std(angle_std, h_norm, minor, xp):
 def _point_moves(begin, located, point, distance: float):
     """``begin`` with a new segment wherever the contact point has moved farther than
     ``distance`` from the first located point of its segment (one pass per move)."""
+    if jit_enabled(len(begin)):
+        px, py, pz = (np.ascontiguousarray(point[:, i]) for i in range(3))
+        return point_moves_kernel(begin, located, px, py, pz, float(distance) * float(distance), np.empty_like(begin))
     begin = begin.copy()
     idx = np.flatnonzero(begin | located)
     seg = np.cumsum(begin)[idx]
@@ -123,6 +131,56 @@ def _point_moves(begin, located, point, distance: float):
             begin[v[first]] = True
             v = v[first:]
     return begin
+
+
+class _Held(NamedTuple):
+    """What the evidence stage keeps of the windows, per sample."""
+
+    h_minor: np.ndarray
+    angle: np.ndarray
+    angle_std: np.ndarray
+
+
+def _window_sum_blocks(t, located, begin, prods, window: float, block: int, sums=None, count=None):
+    """Yield ``(slice, sums (N_SUMS, k), count (k,))`` of :func:`_window_sums` block by
+    block (compiled; the running sums carried across blocks); into ``sums`` and ``count``
+    (N_SUMS, N) and (N,) when given."""
+    n = len(t)
+    cum, cum_first, state = np.zeros(N_SUMS), np.zeros(N_SUMS), np.zeros(3, dtype=np.int64)
+    for s in range(0, n, block):
+        e = min(n, s + block)
+        sb = np.empty((N_SUMS, e - s)) if sums is None else sums[:, s:e]
+        cb = np.empty(e - s) if count is None else count[s:e]
+        window_sums_kernel(t, located, begin, prods, float(window), s, e, cum, cum_first, state, sb, cb)
+        yield slice(s, e), sb, cb
+
+
+def _window_sums(t, located, begin, prods, window: float):
+    """``(sums (N_SUMS, N), count (N,))``: the products summed over the window of each
+    located sample (NaN elsewhere): the located samples ``i`` of its segment with
+    ``t_i > t_k − window``, as differences of running sums from the segment's start;
+    ``prods`` (N_SUMS, N) or a sequence of N_SUMS arrays (N,)."""
+    n = len(t)
+    if jit_enabled(n):
+        sums, count = np.empty((N_SUMS, n)), np.empty(n)
+        for _ in _window_sum_blocks(t, located, begin, np.asarray(prods), window, max(n, 1), sums, count):
+            pass
+        return sums, count
+    sums = np.full((N_SUMS, n), np.nan)
+    count = np.full(n, np.nan)
+    seg_id = np.cumsum(begin)
+    v_all = np.flatnonzero(located)
+    cuts = np.flatnonzero(np.diff(seg_id[v_all])) + 1
+    for v in np.split(v_all, cuts):
+        tv = t[v]
+        # window of sample k: the located samples i of its segment with t_i > t_k − T
+        first = np.searchsorted(tv, tv - window, side="right")
+        last = np.arange(1, len(v) + 1)
+        for j, p in enumerate(prods):
+            cz = np.concatenate(([0.0], np.cumsum(p[v])))  # sequential, as the stream's running sums
+            sums[j, v] = cz[last] - cz[first]
+        count[v] = last - first
+    return sums, count
 
 
 def evidence_states(t, located, begin, point, normal, h, force, ms, noise: SensorNoise, corr: float,
@@ -167,31 +225,39 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
         d = np.stack((ms.dx, ms.dy, ms.dz), axis=-1)
         nan = np.full(n, np.nan)
         return np.where(sig, 2, 1).astype(np.int8), np.where(sig, 1, 0).astype(np.int8), d, ms.angle, ms.angle_std, nan, nan
+
+    def per_sample(*a):
+        terms, nz, _ = _frame_terms(*a, noise, NP)
+        return (*evidence_products(*terms), *nz)
+
     with np.errstate(invalid="ignore"):
-        terms, nz, frame = _frame_terms(*point.T, *normal.T, *h.T, *force.T, noise, NP)
-    prods = evidence_products(*terms)
-    sums = np.full((N_SUMS, n), np.nan)
-    count = np.full(n, np.nan)
-    seg_id = np.cumsum(begin)
-    v_all = np.flatnonzero(located)
+        out = blockwise(per_sample, (*point.T, *normal.T, *h.T, *force.T), stacked=True)
+    prods, nz = out[:N_SUMS], out[N_SUMS:]
     verdict = np.zeros(n, dtype=np.int8)
     held = np.full(n, -1)
     win = None
-    if len(v_all):
-        ids = seg_id[v_all]
-        cuts = np.flatnonzero(np.diff(ids)) + 1
-        for v in np.split(v_all, cuts):
-            tv = t[v]
-            # window of sample k: the located samples i of its segment with t_i > t_k − T
-            first = np.searchsorted(tv, tv - config.evidence_window, side="right")
-            last = np.arange(1, len(v) + 1)
-            for j, p in enumerate(prods):
-                cz = np.concatenate(([0.0], np.cumsum(p[v])))  # sequential, as the stream's running sums
-                sums[j, v] = cz[last] - cz[first]
-            count[v] = last - first
+    if np.any(located):
+
+        def per_window(*a):
+            w = window_kernel(a[:N_SUMS], a[N_SUMS], *a[N_SUMS + 1 :], corr, NP)
+            return (*_decide(w, config, NP), w.h_minor, w.angle, w.angle_std)
+
         with np.errstate(invalid="ignore", divide="ignore"):
-            win = window_kernel(sums, count, *nz, corr, NP)
-            area_now, line_now, resolved, h_ratio, f_ratio = _decide(win, config, NP)
+            if jit_enabled(n):  # window sums block by block, never the whole log's
+                res = None
+                for b, sb, cb in _window_sum_blocks(t, located, begin, prods, config.evidence_window, softtip.core._blocks.BLOCK):
+                    r = per_window(*sb, cb, *(z[b] for z in nz))
+                    if res is None:
+                        res = [np.empty(n, dtype=np.asarray(x).dtype) for x in r]
+                    for dst, x in zip(res, r):
+                        dst[b] = x
+            else:
+                sums, count = _window_sums(t, located, begin, prods, config.evidence_window)
+                res = blockwise(per_window, (*sums, count, *nz))
+                del sums, count
+        del out, prods
+        area_now, line_now, resolved, h_ratio, f_ratio, *rest = res
+        win = _Held(*rest)
         event = np.where(area_now, _AREA, np.where(line_now, _LINE, _UNKNOWN))
         # the verdict is the latest event of the segment, and the held window the latest
         # resolved one (forward fill within each segment)
@@ -230,10 +296,12 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
     evidence = np.where(line, np.where(confirmed, 2, 1), 0).astype(np.int8)
     angle = np.where(use_win, win.angle[hi] if win is not None else np.nan, ms.angle)
     angle_std = np.where(use_win, win.angle_std[hi] if win is not None else np.nan, own_std)
-    e1x, e1y, e1z, e2x, e2y, e2z = frame
-    ca, sa = np.cos(angle), np.sin(angle)
-    wd = np.stack((ca * e1x + sa * e2x, ca * e1y + sa * e2y, ca * e1z + sa * e2z), axis=-1)
-    d = np.where(use_win[:, None], wd, np.stack((ms.dx, ms.dy, ms.dz), axis=-1))
+    # the held window's direction, in the tangent frame of the sample
+    d = np.stack((ms.dx, ms.dy, ms.dz), axis=-1)
+    u = np.flatnonzero(use_win)
+    e1x, e1y, e1z, e2x, e2y, e2z = tangent_frame_kernel(*normal[u].T, NP)
+    ca, sa = np.cos(angle[u]), np.sin(angle[u])
+    d[u] = np.stack((ca * e1x + sa * e2x, ca * e1y + sa * e2y, ca * e1z + sa * e2z), axis=-1)
     return state, evidence, d, angle, angle_std, h_ratio, f_ratio
 
 

@@ -18,10 +18,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from softtip.core._xp import PY
+from softtip.core._jit import jit_enabled
+from softtip.core._xp import NP, PY
 from softtip.core.contact import contact_kernel
 from softtip.core.fingertip import Fingertip
 from softtip.estimator.config import EstimatorConfig
+from softtip.estimator.sequential import latch_scan_kernel
 
 __all__ = ["latch_points", "LatchTracker"]
 
@@ -72,10 +74,13 @@ def _latch_segment(t, fn, valid, r_sc, tip: Fingertip, config: EstimatorConfig):
 def latch_points(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig):
     """Contact point per sample in ``latch`` mode, with re-latching.
 
-    Returns ``(point (N, 3), latched, fallback, relatched)``. One iteration per contact and
-    per re-latch (a handful per log), vectorised within each.
+    Returns ``(point (N, 3), latched, fallback, relatched)``. Long logs: one compiled pass
+    over all contacts (:func:`_latch_compiled`); short ones: one iteration per contact and
+    per re-latch, vectorised within each.
     """
     n = len(t)
+    if jit_enabled(n):
+        return _latch_compiled(t, fn, contact, sc, tip, config)
     point = np.full((n, 3), np.nan)
     latched = np.zeros(n, dtype=bool)
     fallback = np.zeros(n, dtype=bool)
@@ -108,6 +113,82 @@ def latch_points(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig):
         had_latch = had_latch or bool(latched[s:e].any())
     return point, latched, fallback, relatched
 
+
+
+def _projected_means(tip: Fingertip, sums, counts, use):
+    """``sums / counts`` put back on the skin at the samples ``use`` (NaN elsewhere), (N, 3)."""
+    out = np.full((len(counts), 3), np.nan)
+    k = np.flatnonzero(use)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out[k] = np.stack(tip._project_kernel(*(sums[:, k] / counts[k]), NP), axis=-1)
+    return out
+
+
+def _latch_compiled(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig):
+    """:func:`latch_points` over all contacts at once: the running sums of every segment in
+    one compiled pass, the projections and the choices vectorised; with re-latching, one
+    more pass for each re-latch that follows another in the same contact."""
+    n = len(t)
+    valid = np.asarray(sc[7], dtype=bool)
+    rx, ry, rz = (np.where(valid, np.asarray(c, dtype=float), np.nan) for c in sc[:3])
+    lo, hi = config.latch_window
+    dist = config.relatch_distance
+    onset = contact & ~np.concatenate(([False], contact[:-1]))
+    begin = onset.copy()
+    idx = np.arange(n)
+    if not onset.any():
+        return np.full((n, 3), np.nan), np.zeros(n, dtype=bool), np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)
+    while True:
+        n_win = np.zeros(n, dtype=np.int64)
+        n_fb = np.zeros(n, dtype=np.int64)
+        sum_win = np.zeros((3, n))
+        sum_fb = np.zeros((3, n))
+        rising = np.zeros(n, dtype=bool)
+        n_seg = int(np.count_nonzero(begin))
+        seg_end, seg_fixed, seg_total, seg_stop = (np.zeros(n_seg, dtype=np.int64) for _ in range(4))
+        latch_scan_kernel(
+            begin, contact, t, fn, valid, rx, ry, rz, float(lo), float(hi), float(config.stall_time),
+            int(config.fallback_samples), n_win, sum_win, n_fb, sum_fb, rising, seg_end, seg_fixed, seg_total, seg_stop,
+        )  # fmt: skip
+        # the latch of each segment: the rise's window mean, else the fallback mean once fixed
+        by_window = seg_total > 0
+        fb_fixed = ~by_window & (seg_fixed < seg_stop)
+        sid = np.where(contact, np.cumsum(begin) - 1, 0)  # segment of each sample in contact
+        win_seg = by_window[sid]
+        after = contact & ~rising
+        # the means, projected on the skin, where they are used
+        use_win = contact & rising & (n_win > 0)
+        use_win[seg_end[by_window] - 1] = True
+        use_fb = after & ~win_seg & (n_fb > 0)
+        use_fb[seg_fixed[fb_fixed]] = True
+        mean_win = _projected_means(tip, sum_win, n_win, use_win)
+        mean_fb = _projected_means(tip, sum_fb, n_fb, use_fb)
+        latch = np.full((n_seg, 3), np.nan)
+        latch[by_window] = mean_win[seg_end[by_window] - 1]
+        latch[fb_fixed] = mean_fb[seg_fixed[fb_fixed]]
+        point = np.where((rising & (n_win > 0))[:, None], mean_win, np.stack((rx, ry, rz), axis=-1))
+        point = np.where((after & win_seg)[:, None], latch[sid], point)
+        point = np.where((after & ~win_seg)[:, None], np.where((n_fb > 0)[:, None], mean_fb, np.nan), point)
+        latched = np.where(win_seg, rising & (n_win > 0) | after, after & (n_fb > 0)) & contact
+        fallback = latched & ~win_seg
+        if dist is None:
+            break
+        held = contact & (idx > seg_fixed[sid])
+        with np.errstate(invalid="ignore"):
+            dx, dy, dz = rx - latch[sid, 0], ry - latch[sid, 1], rz - latch[sid, 2]
+            drift = held & valid & (fn >= lo) & (fn <= hi) & (dx * dx + dy * dy + dz * dz > dist * dist)
+        # the first drift of each segment starts a new one (a re-latch)
+        d = np.flatnonzero(drift)
+        new = d[np.r_[True, sid[d][1:] != sid[d][:-1]]] if len(d) else d
+        if not len(new):
+            break
+        begin[new] = True
+    point = np.where(contact[:, None], point, np.nan)
+    relatched = begin & ~onset
+    # contact regained after a latched one
+    had = np.concatenate(([0], np.cumsum(latched)))[np.flatnonzero(onset)] > 0
+    relatched[np.flatnonzero(onset)] = had
+    return point, latched, fallback, relatched
 
 
 class LatchTracker:

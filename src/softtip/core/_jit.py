@@ -1,0 +1,88 @@
+"""Compiled sequential kernels (numba), imported and compiled only when first needed.
+
+Some batch stages are sequential by nature: running sums restarted at segment starts, a
+sliding window over the samples of a segment, a test that depends on the previous
+decision. numpy can only do them segment by segment (a Python loop per segment, thousands
+per log); a compiled loop does them in one pass. Each kernel here is plain Python over
+arrays (the same additions in the same order as the streaming classes), compiled by
+numba with ``cache=True`` the first time it runs; every caller keeps a pure-numpy path
+(segment by segment), tested equal.
+
+Importing numba and loading the cached kernels costs about 0.4 s of CPU once per process
+(a first compile ~0.4 s more), so logs shorter than :data:`JIT_MIN_SAMPLES` take the numpy
+paths, which are faster than that for them. ``SOFTTIP_NUMBA=0`` in the environment (or no
+numba installed) selects the numpy paths always, ``SOFTTIP_NUMBA=1`` the compiled ones always.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from typing import Any
+
+__all__ = ["JIT_MIN_SAMPLES", "jit_enabled", "lazy_jit", "set_jit"]
+
+#: Logs of at least this many samples use the compiled kernels (when allowed).
+JIT_MIN_SAMPLES = 100_000
+
+_state: dict[str, Any] = {"enabled": None}
+
+
+def _numba_importable() -> bool:
+    try:
+        import numba  # noqa: F401
+    except ImportError:  # numba is the optional extra softtip[fast]
+        return False
+    return True
+
+
+def _from_environment() -> bool | None:
+    value = os.environ.get("SOFTTIP_NUMBA", "").strip()
+    if value == "0":
+        return False
+    if value == "1":
+        return _numba_importable()
+    return None
+
+
+def jit_enabled(n: int) -> bool:
+    """Whether a batch stage over ``n`` samples uses the compiled kernels: always or never
+    when :func:`set_jit` or ``SOFTTIP_NUMBA`` says so, else from :data:`JIT_MIN_SAMPLES`
+    samples on (when numba is installed)."""
+    forced = _state["enabled"]
+    if forced is None:
+        forced = _from_environment()
+    if forced is not None:
+        return bool(forced)
+    return n >= JIT_MIN_SAMPLES and _numba_importable()
+
+
+def set_jit(enabled: bool | None) -> bool | None:
+    """Use the compiled kernels always (``True``), never (``False``), or by the log's length
+    and the environment (``None``, the default); returns the previous setting. For tests
+    and benchmarks."""
+    old = _state["enabled"]
+    _state["enabled"] = None if enabled is None else bool(enabled) and _numba_importable()
+    return old
+
+
+class _Lazy:
+    """A function compiled by ``numba.njit(cache=True)`` on its first call."""
+
+    def __init__(self, fn: Callable):
+        self.py_func = fn
+        self._compiled: Callable | None = None
+        self.__doc__ = fn.__doc__
+        self.__name__ = fn.__name__
+
+    def __call__(self, *args):
+        if self._compiled is None:
+            import numba
+
+            self._compiled = numba.njit(cache=True, nogil=True)(self.py_func)
+        return self._compiled(*args)
+
+
+def lazy_jit(fn: Callable) -> _Lazy:
+    """Decorator: compile ``fn`` with numba (cached on disk) the first time it is called."""
+    return _Lazy(fn)

@@ -1,0 +1,251 @@
+"""The sequential parts of the batch stages as single-pass loops, compiled with numba.
+
+Each kernel does, over a whole log in one pass, what the stage's numpy path does segment
+by segment, with the same floating-point operations in the same order as the streaming
+class (running sums restarted at segment starts, window sums as differences of running
+sums), so the results are the same to the last bit. Compiled on first use
+(:mod:`softtip.core._jit`); callers fall back to their numpy paths when it is disabled.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from softtip.core._jit import lazy_jit
+
+__all__ = ["contact_window_sums_kernel", "point_moves_kernel", "running_best_kernel", "window_sums_kernel"]
+
+
+@lazy_jit
+def point_moves_kernel(begin, located, px, py, pz, distance2, out):  # pragma: no cover - compiled
+    """``out``: ``begin`` with a new segment wherever the located contact point ``p`` has
+    moved farther than ``sqrt(distance2)`` (m) from the first located point of its segment.
+
+    ``begin``, ``located`` (N,) bool; ``px, py, pz`` (N,) m; ``out`` (N,) bool, written.
+    """
+    have = False
+    ax = ay = az = 0.0
+    for i in range(begin.shape[0]):
+        b = begin[i]
+        out[i] = b
+        if b:
+            have = False
+        if located[i]:
+            if not have:
+                ax, ay, az = px[i], py[i], pz[i]
+                have = True
+            else:
+                dx, dy, dz = px[i] - ax, py[i] - ay, pz[i] - az
+                if dx * dx + dy * dy + dz * dz > distance2:
+                    out[i] = True
+                    ax, ay, az = px[i], py[i], pz[i]
+    return out
+
+
+@lazy_jit
+def window_sums_kernel(t, located, begin, prods, window, lo, hi, cum, cum_first, state, sums, count):  # pragma: no cover
+    """Sums of ``prods`` over a sliding window of the located samples of each segment, for
+    the samples ``lo .. hi − 1`` (blocks in order, the state carried from one to the next).
+
+    The window of located sample ``k`` is the located samples ``i`` of its segment (a new
+    one at every ``begin``) with ``t_i > t_k − window``. Its sums are ``C_k − C_j``, ``C``
+    the running sums from the segment's start (the stream's order of additions) and ``j``
+    the window's first sample.
+
+    Parameters
+    ----------
+    t : (N,) s, non-decreasing
+    located, begin : (N,) bool
+    prods : (M, N) float
+    window : float, s
+    lo, hi : int
+        The block.
+    cum, cum_first : (M,) float
+        Running sums to the current sample and to the window's first (zeros at ``lo = 0``).
+    state : (3,) int
+        The window's first sample, and the located samples of the segment so far and before
+        the window's first (zeros at ``lo = 0``).
+    sums : (M, hi − lo) float
+        Written (NaN at samples not located).
+    count : (hi − lo,) float
+        Samples in the window, written (NaN at samples not located).
+    """
+    m = prods.shape[0]
+    j, n_in, n_out = state[0], state[1], state[2]
+    for k in range(lo, hi):
+        b = k - lo
+        if begin[k]:
+            for q in range(m):
+                cum[q] = 0.0
+                cum_first[q] = 0.0
+            j = k
+            n_in = 0
+            n_out = 0
+        if not located[k]:
+            for q in range(m):
+                sums[q, b] = np.nan
+            count[b] = np.nan
+            continue
+        for q in range(m):
+            cum[q] += prods[q, k]
+        n_in += 1
+        start = t[k] - window
+        while j <= k:
+            if located[j]:
+                if t[j] > start:
+                    break
+                for q in range(m):
+                    cum_first[q] += prods[q, j]
+                n_out += 1
+            j += 1
+        for q in range(m):
+            sums[q, b] = cum[q] - cum_first[q]
+        count[b] = n_in - n_out
+    state[0], state[1], state[2] = j, n_in, n_out
+    return count
+
+
+@lazy_jit
+def contact_window_sums_kernel(onset, has, prods, k, first, sums):  # pragma: no cover - compiled
+    """Sums of ``prods`` over the samples ``first[q] .. k[q]`` (inclusive) of one contact,
+    as differences of running sums from the contact's onset (adding 0 at samples without
+    ``has``, as the numpy path's masked cumulative sums).
+
+    ``onset``, ``has`` (N,) bool; ``prods`` (M, N) float; ``k``, ``first`` (Q,) int,
+    non-decreasing, each pair within one contact; ``sums`` (M, Q) float, written.
+    """
+    m = prods.shape[0]
+    cum = np.zeros(m)
+    cum_first = np.zeros(m)
+    i = 0  # next sample to add to cum
+    j = 0  # next sample to add to cum_first
+    for q in range(k.shape[0]):
+        while i <= k[q]:
+            if onset[i]:
+                for r in range(m):
+                    cum[r] = 0.0
+                    cum_first[r] = 0.0
+                j = i
+            h = has[i]
+            for r in range(m):
+                cum[r] += prods[r, i] if h else 0.0
+            i += 1
+        while j < first[q]:
+            h = has[j]
+            for r in range(m):
+                cum_first[r] += prods[r, j] if h else 0.0
+            j += 1
+        for r in range(m):
+            sums[r, q] = cum[r] - cum_first[r]
+    return sums
+
+
+@lazy_jit
+def running_best_kernel(group, key, held):  # pragma: no cover - compiled
+    """``held[q]``: the index of the smallest ``key`` so far within ``group[q]``'s run (a new
+    one replaces it only when strictly smaller; -1 before any finite one).
+
+    ``group`` (Q,) int, ``key`` (Q,) float, ``held`` (Q,) int, written.
+    """
+    best = np.inf
+    cur = -1
+    for q in range(key.shape[0]):
+        if q == 0 or group[q] != group[q - 1]:
+            best = np.inf
+            cur = -1
+        if key[q] < best:
+            best = key[q]
+            cur = q
+        held[q] = cur
+    return held
+
+
+@lazy_jit
+def latch_scan_kernel(begin, contact, t, fn, valid, rx, ry, rz, lo, hi, stall, n_fallback,
+                      n_win, sum_win, n_fb, sum_fb, rising, seg_end, seg_fixed, seg_total, seg_stop):  # pragma: no cover
+    """The running quantities of the latch (:func:`softtip.estimator.latch.latch_points`)
+    for every segment (a new one at every ``begin`` within ``contact``) in one pass.
+
+    Per sample in contact: ``rising`` (before the first rise ends: ``|f| > hi`` or no new
+    maximum for ``stall`` s), the count and running sums of the soft-finger solutions inside
+    the light-force window while rising (``n_win``, ``sum_win`` (3, N)) and of the first
+    ``n_fallback`` valid ones (``n_fb``, ``sum_fb``). Per segment: ``seg_end`` the sample
+    ending the rise (or the segment's stop), ``seg_total`` the window samples of the rise and
+    ``seg_fixed`` the sample from which the latch is fixed (after it, the latch is held;
+    ``seg_stop`` when never), ``seg_stop`` one past its last sample.
+    """
+    n = t.shape[0]
+    s = -1
+    start = 0
+    open_ = False
+    over = False
+    peak = -np.inf
+    t_pk = 0.0
+    nw = 0
+    nv = 0
+    nf = 0
+    wx = wy = wz = 0.0
+    fx = fy = fz = 0.0
+    fixed_fb = -1
+    for i in range(n + 1):
+        stop = i == n or not contact[i] or begin[i]
+        if open_ and stop:  # close segment s at i
+            end = seg_end[s] if over else i
+            seg_end[s] = end
+            total = n_win[end - 1] if end > start else 0
+            seg_total[s] = total
+            seg_stop[s] = i
+            if total > 0:
+                seg_fixed[s] = end
+            else:
+                seg_fixed[s] = fixed_fb if fixed_fb >= 0 else i
+            open_ = False
+        if i == n or not contact[i]:
+            continue
+        if begin[i]:
+            s += 1
+            start = i
+            open_ = True
+            over = False
+            peak = -np.inf
+            t_pk = t[i]
+            nw = 0
+            nv = 0
+            nf = 0
+            wx = wy = wz = 0.0
+            fx = fy = fz = 0.0
+            fixed_fb = -1
+        f = fn[i]
+        if f > peak:
+            peak = f
+            t_pk = t[i]
+        if not over and (f > hi or t[i] - t_pk > stall):
+            over = True
+            seg_end[s] = i
+        rising[i] = not over
+        ok = valid[i]
+        win = (not over) and lo <= f and f <= hi and ok
+        if win:
+            nw += 1
+        wx += rx[i] if win else 0.0
+        wy += ry[i] if win else 0.0
+        wz += rz[i] if win else 0.0
+        n_win[i] = nw
+        sum_win[0, i] = wx
+        sum_win[1, i] = wy
+        sum_win[2, i] = wz
+        if ok:
+            nv += 1
+        fb = ok and nv <= n_fallback
+        if fb:
+            nf += 1
+        fx += rx[i] if fb else 0.0
+        fy += ry[i] if fb else 0.0
+        fz += rz[i] if fb else 0.0
+        n_fb[i] = nf
+        sum_fb[0, i] = fx
+        sum_fb[1, i] = fy
+        sum_fb[2, i] = fz
+        if over and fixed_fb < 0 and nf >= n_fallback:
+            fixed_fb = i
+    return s + 1

@@ -1,0 +1,212 @@
+"""The compiled sequential kernels (numba) against the numpy paths they replace."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import softtip.core._blocks
+from softtip import estimate
+from softtip.core._jit import JIT_MIN_SAMPLES, jit_enabled, set_jit
+from softtip.estimator.evidence import _point_moves, _window_sums
+from softtip.sim.synthetic import synthetic_grasp
+from test_pipeline import CASES, drifting_grasp, grasp_with_two_contacts, impact_grasp, sliding_grasp
+
+pytest.importorskip("numba")
+
+
+@pytest.fixture
+def both_paths():
+    """Run a function with the compiled kernels and with the numpy paths."""
+    old = set_jit(None)
+
+    def run(fn, *args):
+        out = []
+        for flag in (True, False):
+            set_jit(flag)
+            out.append(fn(*args))
+        return out
+
+    yield run
+    set_jit(old)
+
+
+def assert_same_estimates(a, b):
+    for f in dataclasses.fields(a):
+        x, y = getattr(a, f.name), getattr(b, f.name)
+        if isinstance(x, np.ndarray):
+            # the same operations in the same order: equal to the last bit
+            assert np.array_equal(x, y, equal_nan=x.dtype.kind == "f"), f.name
+        else:
+            assert repr(x) == repr(y), f.name
+
+
+def _log(name):
+    if name == "single":
+        g = synthetic_grasp(angle_deg=45.0, seed=1)
+        return g.t, g.wrench
+    if name == "drifting":
+        return drifting_grasp()
+    if name == "taps":  # many short touches, some too quick for the latch window
+        g = synthetic_grasp(angle_deg=30.0, duration=0.5, rate=1000.0, contact_time=0.1, settle_time=0.15,
+                            h_start=0.2, h_rise=0.1, seed=1)  # fmt: skip
+        lead = synthetic_grasp(duration=2.0, rate=1000.0, contact_time=5.0, seed=1)
+        w = np.concatenate([lead.wrench] + [g.wrench] * 12)
+        w[2600:2700] *= np.linspace(1.0, 3.0, 100)[:, None]  # a hard press: the rise ends early
+        return np.arange(len(w)) / 1000.0, w
+    return {"two-contacts": grasp_with_two_contacts, "impact": impact_grasp, "sliding": sliding_grasp}[name]()
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+@pytest.mark.parametrize("log", ["single", "two-contacts", "impact", "sliding", "drifting", "taps"])
+def test_compiled_pipeline_equals_numpy(case, log, both_paths, recwarn):
+    t, w = _log(log)
+    a, b = both_paths(estimate, t, w, "murakami2006", CASES[case])
+    assert_same_estimates(a, b)
+
+
+@pytest.mark.parametrize("case", ["latch", "evidence-joint-depth-relatch", "online-short-window-lowpass-relatch"])
+@pytest.mark.parametrize("log", ["two-contacts", "taps"])
+def test_small_blocks_equal_one_block(case, log, both_paths, monkeypatch, recwarn):
+    # blocks of 37 samples: the running sums carried across many block boundaries
+    t, w = _log(log)
+    a, b = both_paths(estimate, t, w, "murakami2006", CASES[case])
+    monkeypatch.setattr(softtip.core._blocks, "BLOCK", 37)
+    c, d = both_paths(estimate, t, w, "murakami2006", CASES[case])
+    for x in (b, c, d):
+        assert_same_estimates(a, x)
+
+
+def _segments(draw_bits, n, rng):
+    """Random segment starts, located samples and non-decreasing times (repeats included)."""
+    begin = rng.random(n) < draw_bits[0]
+    located = rng.random(n) < draw_bits[1]
+    steps = rng.choice([0.0, 1e-3, 2.5e-3, 0.05], size=n, p=[0.1, 0.6, 0.2, 0.1])
+    t = 100.0 + np.cumsum(steps)
+    return t, begin, located
+
+
+@settings(max_examples=40)
+@given(
+    n=st.integers(0, 400),
+    p_begin=st.floats(0.0, 0.2),
+    p_located=st.floats(0.0, 1.0),
+    window=st.floats(0.0, 0.5),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_window_sums_equal_numpy(n, p_begin, p_located, window, seed):
+    rng = np.random.default_rng(seed)
+    t, begin, located = _segments((p_begin, p_located), n, rng)
+    prods = tuple(rng.normal(size=n) * 10.0 ** rng.integers(-6, 3) for _ in range(10))
+    old = set_jit(True)
+    try:
+        fast = _window_sums(t, located, begin, prods, window)
+        set_jit(False)
+        slow = _window_sums(t, located, begin, prods, window)
+    finally:
+        set_jit(old)
+    # the numpy path counts a window left empty by rounding (t − window == t, repeated
+    # stamps after it) as negative; both are empty windows
+    ok = slow[1] >= 0
+    assert np.array_equal(fast[0][:, ok], slow[0][:, ok], equal_nan=True)
+    assert np.array_equal(fast[1][ok], slow[1][ok], equal_nan=True)
+    assert np.all(np.isnan(fast[1][~located])) and np.all(fast[1][located] >= 0)
+
+
+@settings(max_examples=40)
+@given(
+    n=st.integers(0, 400),
+    p_begin=st.floats(0.0, 0.2),
+    p_located=st.floats(0.0, 1.0),
+    step=st.floats(1e-5, 2e-3),
+    distance=st.floats(1e-4, 5e-3),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_point_moves_equal_numpy(n, p_begin, p_located, step, distance, seed):
+    rng = np.random.default_rng(seed)
+    _, begin, located = _segments((p_begin, p_located), n, rng)
+    point = np.cumsum(rng.normal(scale=step, size=(n, 3)), axis=0)  # a wandering contact point
+    given_begin = begin.copy()
+    old = set_jit(True)
+    try:
+        fast = _point_moves(begin, located, point, distance)
+        set_jit(False)
+        slow = _point_moves(begin, located, point, distance)
+    finally:
+        set_jit(old)
+    assert np.array_equal(fast, slow)
+    assert np.all(fast[begin]) and np.array_equal(begin, given_begin)  # the input is not changed
+
+
+def test_short_logs_take_the_numpy_path(monkeypatch):
+    monkeypatch.delenv("SOFTTIP_NUMBA", raising=False)
+    old = set_jit(None)
+    try:
+        assert not jit_enabled(JIT_MIN_SAMPLES - 1)
+        assert jit_enabled(JIT_MIN_SAMPLES)
+        monkeypatch.setenv("SOFTTIP_NUMBA", "0")
+        assert not jit_enabled(10 * JIT_MIN_SAMPLES)
+        monkeypatch.setenv("SOFTTIP_NUMBA", "1")
+        assert jit_enabled(1)
+    finally:
+        set_jit(old)
+
+
+@settings(max_examples=40)
+@given(
+    n=st.integers(1, 300),
+    p_onset=st.floats(0.0, 0.1),
+    p_has=st.floats(0.0, 1.0),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_depth_window_sums_equal_numpy(n, p_onset, p_has, seed):
+    from softtip.estimator.depth import _window_sums as depth_window_sums
+
+    rng = np.random.default_rng(seed)
+    onset = rng.random(n) < p_onset
+    onset[0] = True
+    has = rng.random(n) < p_has
+    prods = rng.normal(size=(12, n)) * 10.0 ** rng.integers(-6, 3, size=(12, 1))
+    prods[:, ~has] = np.nan  # never read
+    # windows: within each contact, non-decreasing first and last samples
+    contact_of = np.cumsum(onset) - 1
+    starts = np.flatnonzero(onset)
+    k = np.sort(rng.choice(n, size=rng.integers(0, n + 1)))
+    first = np.maximum.accumulate(np.maximum(k - rng.integers(0, 40, size=len(k)), starts[contact_of[k]]))
+    first = np.minimum(first, k)
+    first = np.where(starts[contact_of[k]] > first, starts[contact_of[k]], first)
+    old = set_jit(True)
+    try:
+        fast = depth_window_sums(onset, has, prods, k, first)
+        set_jit(False)
+        slow = depth_window_sums(onset, has, prods, k, first)
+    finally:
+        set_jit(old)
+    assert np.array_equal(fast, slow)
+
+
+@settings(max_examples=40)
+@given(n=st.integers(0, 300), seed=st.integers(0, 2**32 - 1))
+def test_running_best_equals_numpy(n, seed):
+    from softtip.estimator.depth import _running_best
+
+    rng = np.random.default_rng(seed)
+    group = np.cumsum(rng.random(n) < 0.1)
+    key = np.where(rng.random(n) < 0.3, np.inf, rng.choice([0.5, 1.0, 2.0, -1.0], size=n) + rng.normal(size=n) * 0.1)
+    old = set_jit(True)
+    try:
+        fast = _running_best(group, key, n)
+        set_jit(False)
+        slow = _running_best(group, key, n)
+    finally:
+        set_jit(old)
+    assert np.array_equal(fast, slow)
+    for q in range(n):  # the definition, sample by sample
+        same = np.flatnonzero(group[: q + 1] == group[q])  # its run (groups are runs here)
+        finite = same[np.isfinite(key[same])]
+        if len(finite):
+            assert fast[q] == finite[np.argmin(key[finite])]  # argmin: the first of equal minima
+        else:
+            assert fast[q] == -1
