@@ -58,7 +58,7 @@ from numpy.typing import NDArray
 from softtip.errors import InputError
 from softtip.units import UNIT_SYSTEMS, wrench_to_si
 
-__all__ = ["Log", "read_log", "write_table", "REQUIRED_COLUMNS"]
+__all__ = ["Log", "read_log", "write_table", "REQUIRED_COLUMNS", "iter_log", "LogBlocks", "NotStreamable", "TableWriter"]
 
 #: Columns every input log must have, in wrench order after ``t``.
 REQUIRED_COLUMNS: tuple[str, ...] = ("t", "fx", "fy", "fz", "mx", "my", "mz")
@@ -1032,7 +1032,7 @@ def _object_cells(a: np.ndarray) -> list[str]:
     return [_quote(c) for c in cells]
 
 
-def _write_rows(out: TextIO | BinaryIO, plan: _Plan) -> None:
+def _write_rows(out: TextIO | BinaryIO, plan: _Plan, *, header: bool = True) -> None:
     """Write the table to a text stream (Parquet: to its binary buffer), in blocks.
 
     A binary stream (an atomic writer's temporary file, say) is written to as UTF-8.
@@ -1040,7 +1040,7 @@ def _write_rows(out: TextIO | BinaryIO, plan: _Plan) -> None:
     if not hasattr(out, "encoding"):
         text = io.TextIOWrapper(out, encoding="utf-8", newline="", write_through=True)  # type: ignore[arg-type]
         try:
-            _write_rows(text, plan)
+            _write_rows(text, plan, header=header)
         finally:
             text.flush()
             text.detach()
@@ -1048,7 +1048,8 @@ def _write_rows(out: TextIO | BinaryIO, plan: _Plan) -> None:
     if plan.parquet:
         _write_parquet(out, plan)
         return
-    out.write(plan.header)
+    if header:
+        out.write(plan.header)
     if plan.digits is None:
         _write_rows_printf(out, plan)
         return
@@ -1191,3 +1192,297 @@ def _write_atomic(path: str, plan: _Plan) -> None:
 
     with atomic_write(path) as fh:
         _write_rows(fh, plan)
+
+
+# --------------------------------------------------------------------------------------
+# piece by piece: logs larger than memory
+
+
+class NotStreamable(Exception):
+    """:func:`iter_log` met something its block reader does not take (a trailing blank
+    line, a cell only Python's parser reads, or an error): read the log at once with
+    :func:`read_log`, which takes it or words the error."""
+
+
+class LogBlocks:
+    """A CSV or Parquet log read block by block (:func:`iter_log`).
+
+    Iterate for ``(t, wrench, extra)`` blocks in SI (``extra``: the other columns' values,
+    numpy arrays: text from CSV); after the last block :meth:`warnings` says what
+    :attr:`Log.warnings` would (repeated stamps; the time scale, judged on the first block;
+    a cut last line). Raises :class:`NotStreamable` while iterating for anything else.
+    """
+
+    def __init__(self, path: str | os.PathLike[str], units: str | None, rows: int, progress: Callable[[int], object] | None):
+        self.source = _source_name(path)
+        self.path = os.fspath(path)
+        if units is not None and units not in UNIT_SYSTEMS:
+            raise InputError(f"{self.source}: unknown units {units!r}; expected one of: {', '.join(UNIT_SYSTEMS)}")
+        self.parquet = _is_parquet(self.path)
+        self.rows, self.progress = rows, progress
+        self.units = units
+        self.n = 0
+        self.repeated = 0
+        self._first_repeat = -1
+        self._repeat_t = math.nan
+        self._first_t: NDArray[np.float64] | None = None
+        self._last_t = -math.inf
+        self._first_line: int | None = None
+        self._quoted = False
+
+    def __iter__(self) -> Any:
+        blocks = self._parquet_blocks() if self.parquet else self._csv_blocks()
+        for t, wrench, extra in blocks:
+            if not (np.isfinite(t).all() and np.isfinite(wrench).all()) or (np.diff(t) < 0).any() or t[0] < self._last_t:
+                raise NotStreamable("a value to word")
+            same = np.flatnonzero(np.diff(np.concatenate(([self._last_t], t))) == 0)
+            if len(same) and self._first_repeat < 0:
+                self._first_repeat = self.n + int(same[0])
+                self._repeat_t = float(t[same[0]])
+            self.repeated += len(same)
+            if self._first_t is None:
+                self._first_t = t
+            self._last_t = float(t[-1])
+            self.n += len(t)
+            yield t, wrench_to_si(wrench, self.units or "si"), extra
+
+    def warnings(self) -> tuple[str, ...]:
+        """What :attr:`Log.warnings` holds for the whole log (after the last block)."""
+        first_line = None if self._quoted else self._first_line
+        notes = []
+        if self.repeated:
+            where = f"line {first_line + self._first_repeat}" if first_line is not None else f"data row {self._first_repeat + 1}"
+            what = "line" if first_line is not None else "row"
+            notes.append(
+                f"{self.source}: {self.repeated} repeated time stamp{'s' if self.repeated > 1 else ''} (the first on "
+                f"{where}: t = {self._repeat_t:.10g} s as on the {what} before); kept in file order"
+            )
+        if self._first_t is not None:
+            notes += [n for n in _time_notes(self._first_t, self.source, first_line)[1] if "median step" in n]
+        if not self.parquet and first_line is not None:
+            cut = self._cut_tail(first_line)
+            if cut:
+                notes.append(cut)
+        return tuple(notes)
+
+    def _csv_blocks(self) -> Any:
+        import pyarrow as pa
+        from pyarrow import csv as pacsv
+
+        try:
+            with open(self.path, "rb") as fh:
+                prefix = fh.read(_HEADER_PREFIX + 3)
+                size = os.fstat(fh.fileno()).st_size
+        except OSError:
+            raise NotStreamable("unreadable") from None
+        skip = 3 if prefix.startswith(b"\xef\xbb\xbf") else 0
+        prefix = prefix[skip:]
+        whole = skip + len(prefix) >= size
+        if not whole:
+            prefix = prefix[: prefix.rfind(b"\n") + 1]
+        try:
+            text = prefix.decode("utf-8")
+            header = _read_header(text, self.source)
+            index = _column_index(header, self.source)
+        except (UnicodeDecodeError, InputError):
+            raise NotStreamable("header") from None
+        pos = header.lines.tell()
+        if not whole and pos >= len(text):
+            raise NotStreamable("long header")
+        start = skip + len(text[:pos].encode("utf-8"))
+        self._first_line = header.data_base + 1
+        names = header.names
+        types = {name: pa.float64() if j in index.values() else pa.string() for j, name in enumerate(names)}
+        extra_idx = [j for j in range(len(names)) if j not in index.values()]
+        self._size, self._start = size, start
+        stream = pa.OSFile(self.path)
+        try:
+            stream.seek(start)
+            reader = pacsv.open_csv(
+                stream,
+                read_options=pacsv.ReadOptions(column_names=names, use_threads=False, block_size=1 << 22),
+                parse_options=pacsv.ParseOptions(newlines_in_values=True, ignore_empty_lines=False),
+                convert_options=pacsv.ConvertOptions(
+                    column_types=types, check_utf8=True, strings_can_be_null=False, quoted_strings_can_be_null=False
+                ),
+            )
+            while True:
+                try:
+                    batch = reader.read_next_batch()
+                except StopIteration:
+                    break
+                if batch.num_rows == 0:
+                    continue
+                cols = [batch.column(index[name]) for name in REQUIRED_COLUMNS]
+                if any(c.null_count for c in cols):
+                    raise NotStreamable("empty cell")
+                t = np.array(cols[0].to_numpy(), dtype=np.float64)
+                wrench = np.empty((batch.num_rows, 6))
+                for i, col in enumerate(cols[1:]):
+                    wrench[:, i] = col.to_numpy()
+                extra = {names[j]: np.asarray(batch.column(j).to_pylist(), dtype=str) for j in extra_idx}
+                if self.progress is not None:
+                    self.progress(batch.num_rows)
+                yield t, wrench, extra
+        except (pa.ArrowException, ValueError, OSError):
+            raise NotStreamable("parser") from None
+        finally:
+            stream.close()
+        self._quoted = self._has_quote()
+
+    def _has_quote(self) -> bool:
+        with open(self.path, "rb") as fh:
+            fh.seek(self._start)
+            while chunk := fh.read(1 << 24):
+                if b'"' in chunk:
+                    return True
+        return False
+
+    def _cut_tail(self, first_line: int) -> str | None:
+        with open(self.path, "rb") as fh:
+            fh.seek(max(self._start, self._size - (1 << 16)))
+            tail = fh.read()
+        note = _cut_last_line(tail, self.source, self.n if self.n >= 4 else 0)
+        if note is None:
+            return None
+        # the tail's line count is not the file's: every data row is one line here
+        line = first_line + self.n - 1
+        return re.sub(rf"^{re.escape(self.source)}:\d+:", f"{self.source}:{line}:", note)
+
+    def _parquet_blocks(self) -> Any:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        try:
+            pf = pq.ParquetFile(self.path)
+        except (pa.ArrowException, OSError):
+            raise NotStreamable("unreadable") from None
+        with pf:
+            meta = {k.decode("utf-8", "replace"): v.decode("utf-8", "replace") for k, v in (pf.schema_arrow.metadata or {}).items()}
+            file_units = meta.get(PARQUET_UNITS_KEY)
+            if (file_units is not None and file_units not in UNIT_SYSTEMS) or (
+                self.units is not None and file_units is not None and self.units != file_units
+            ):
+                raise NotStreamable("units")
+            self.units = self.units or file_units or "si"
+            names = list(pf.schema_arrow.names)
+            header = _Header(names=[n.strip() for n in names], line=0, data_base=0, lines=io.StringIO(), comments=[])
+            try:
+                index = _column_index(header, self.source)
+            except InputError:
+                raise NotStreamable("columns") from None
+            for name in REQUIRED_COLUMNS:
+                typ = pf.schema_arrow.field(index[name]).type
+                if not (pa.types.is_floating(typ) or pa.types.is_integer(typ)):
+                    raise NotStreamable("types")
+            if pf.metadata.num_rows == 0:
+                raise NotStreamable("no rows")
+            extra_idx = [j for j in range(len(names)) if j not in index.values()]
+            try:
+                for batch in pf.iter_batches(batch_size=self.rows):
+                    cols = [batch.column(index[name]) for name in REQUIRED_COLUMNS]
+                    if any(c.null_count for c in cols):
+                        raise NotStreamable("null")
+                    t = np.array(cols[0].to_numpy(), dtype=np.float64)
+                    wrench = np.empty((batch.num_rows, 6))
+                    for i, col in enumerate(cols[1:]):
+                        wrench[:, i] = col.to_numpy()
+                    extra = {names[j]: batch.column(j).to_numpy(zero_copy_only=False) for j in extra_idx}
+                    if self.progress is not None:
+                        self.progress(batch.num_rows)
+                    yield t, wrench, extra
+            except (pa.ArrowException, OSError):
+                raise NotStreamable("reader") from None
+
+
+def iter_log(
+    path: str | os.PathLike[str],
+    units: str | None = None,
+    *,
+    rows: int = 1 << 16,
+    progress: Callable[[int], object] | None = None,
+) -> LogBlocks:
+    """A CSV or Parquet log file, block by block, for logs larger than memory.
+
+    Parameters
+    ----------
+    path : str or path-like
+        As :func:`read_log` (a file; ``.parquet`` by extension).
+    units : {"si", "kgf-mm"} or None
+        As :func:`read_log`.
+    rows : int
+        Parquet: rows per block (CSV blocks are pyarrow's, ~4 MB of text).
+    progress : callable, optional
+        Called with the number of rows of each block.
+
+    Returns
+    -------
+    LogBlocks
+        Iterate it for ``(t, wrench, extra)`` blocks; the values are those
+        :func:`read_log` gives, in pieces. Anything :func:`read_log` would report (or that
+        only its Python parser reads) raises :class:`NotStreamable` during the iteration:
+        read the file with :func:`read_log` then, for the located message.
+    """
+    return LogBlocks(path, units, rows, progress)
+
+
+class TableWriter:
+    """:func:`write_table`, piece by piece, to an open stream (an atomic writer's file).
+
+    Parameters
+    ----------
+    out : text or binary stream
+        Left open.
+    parquet : bool
+        Parquet (one row group per block) instead of CSV.
+    float_format, metadata
+        As :func:`write_table`.
+
+    Each :meth:`write` appends rows with the same columns; the CSV header comes with the
+    first. CSV text cells are quoted, when one needs it, piece by piece (each piece as
+    :func:`write_table` would quote it). Call :meth:`close` at the end.
+    """
+
+    def __init__(self, out: TextIO | BinaryIO, *, parquet: bool, float_format: str = "%.10g", metadata: Mapping[str, str] | None = None):
+        self.out, self.parquet, self.float_format = out, parquet, float_format
+        self.metadata = dict(metadata or {})
+        self.names: list[str] | None = None
+        self._writer: Any = None
+        if not hasattr(out, "encoding"):
+            self._text = io.TextIOWrapper(out, encoding="utf-8", newline="", write_through=True)  # type: ignore[arg-type]
+        else:
+            self._text = None
+
+    def write(self, columns: Mapping[str, Sequence[Any] | np.ndarray], progress: Callable[[int], object] | None = None) -> None:
+        """Append the rows of ``columns`` (the same names, in the same order, every time)."""
+        plan = _plan_table(columns, self.float_format)
+        if self.names is not None and plan.names != self.names:
+            raise ValueError(f"columns {plan.names} differ from the first piece's {self.names}")
+        plan.progress = progress
+        out = self._text or self.out
+        if self.parquet:
+            binary = getattr(out, "buffer", out)
+            out.flush()
+            for start in range(0, plan.n, _PARQUET_ROWS):
+                stop = min(start + _PARQUET_ROWS, plan.n)
+                plan.parquet = True
+                table = _arrow_block(plan, start, stop, rounded=False)
+                if self._writer is None:
+                    self._writer = _parquet_writer(binary, table, self.metadata)
+                self._writer.write_table(table)
+                if progress is not None:
+                    progress(stop - start)
+        else:
+            _write_rows(out, plan, header=self.names is None)  # type: ignore[arg-type]
+        self.names = plan.names
+
+    def close(self) -> None:
+        """Finish the file (Parquet: its footer); the stream stays open."""
+        if self._writer is not None:
+            self._writer.close()
+            self._writer = None
+        out = self._text or self.out
+        out.flush()
+        if self._text is not None:
+            self._text.detach()
+            self._text = None

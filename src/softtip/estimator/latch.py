@@ -69,11 +69,12 @@ def _latch_segment(t, fn, valid, r_sc, tip: Fingertip, config: EstimatorConfig):
     return pe, lat, fbk, idx > fixed, latch
 
 
-def latch_points(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig):
+def latch_points(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig, had_latch: bool = False):
     """Contact point per sample in ``latch`` mode, with re-latching.
 
     Returns ``(point (N, 3), latched, fallback, relatched)``. One iteration per contact and
-    per re-latch (a handful per log), vectorised within each.
+    per re-latch (a handful per log), vectorised within each. ``had_latch``: a contact
+    before these samples (an earlier piece of the log) had a latch.
     """
     n = len(t)
     point = np.full((n, 3), np.nan)
@@ -86,7 +87,6 @@ def latch_points(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig):
     dist = config.relatch_distance
     edges = np.diff(np.concatenate(([False], contact, [False])).astype(np.int8))
     starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
-    had_latch = False
     for s, e in zip(starts, stops):
         relatched[s] = had_latch  # contact regained after a latched one
         a = s
