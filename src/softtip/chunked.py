@@ -124,9 +124,10 @@ def _piece(t: NDArray, w: NDArray, tip: Fingertip, config: EstimatorConfig, carr
 
 
 def _cut(t: NDArray, w: NDArray, tip: Fingertip, config: EstimatorConfig, carry: Carry, rows: int) -> int | None:
-    """Where the held samples may be cut: the last sample at or after ``rows`` (or, failing
-    that, any after the tare) at which the estimator, run from ``carry``, is out of contact
-    with nothing pending and the drift following. ``None``: no such sample yet."""
+    """Where the held samples may be cut (the first sample of the next piece): the first
+    sample at or after ``rows``, and after the tare, at which the estimator, run from
+    ``carry``, is out of contact with nothing pending and the drift following. ``None``: no
+    such sample yet (a contact goes on past the samples held)."""
     later = carry.tare is not None
     if later:
         bias, start = carry.tare.bias, 0
@@ -142,8 +143,6 @@ def _cut(t: NDArray, w: NDArray, tip: Fingertip, config: EstimatorConfig, carry:
         x, _ = sosfilt_state(sos, x, carry.zi if later else None)
     ct = track_contacts(t, x, start, config, effective_noise(config.noise, sos), carry.track if later else None)
     free = ~ct.busy
-    free[: max(start, 1)] = False
+    free[: max(start + 1, rows)] = False
     idx = np.flatnonzero(free)
-    if not len(idx):
-        return None
-    return int(idx[-1])
+    return int(idx[0]) if len(idx) else None
