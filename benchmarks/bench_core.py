@@ -9,7 +9,8 @@ estimator. Targets (manual §6): capsule batch >= 5 M samples/s; streaming media
 Then `softtip estimate` end to end on a --samples-row log (the 1 kHz example grasp
 repeated), CSV and Parquet side by side: read (softtip.io.read_log), the pipeline
 (softtip.estimate), write (softtip.io.write_table), their total, and the `softtip estimate`
-command itself (a new process: Python start-up and imports included), in rows/s; also the
+command itself (a new process: Python start-up and imports included), in rows/s, with its
+peak memory, one-shot and in pieces (--chunk-rows 100000); also the
 hand-written Python CSV reader and writer that softtip used before, on the same files.
 Rates are rows per second of CPU time (the process's own, or the command's): on a shared
 machine that is the steady figure; the wall-clock time is printed beside it. Targets (manual §6) end to end: CSV >= 2 M rows/s, Parquet >= 10 M rows/s.
@@ -26,7 +27,6 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import resource
 import subprocess
 import sys
 import tempfile
@@ -145,6 +145,20 @@ def timed(fn, repeats=2):
     return min(wall), min(cpu), out
 
 
+def command(cmd: list[str]) -> tuple[float, float, float]:
+    """Wall time, CPU time (user + system) and peak resident memory (bytes) of a command."""
+    with tempfile.TemporaryFile() as err:
+        w0 = time.perf_counter()
+        proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=err)
+        _, status, usage = os.wait4(proc.pid, 0)  # this child's own usage, peak memory included
+        wall = time.perf_counter() - w0
+        proc.returncode = os.waitstatus_to_exitcode(status)
+        if proc.returncode != 0:
+            err.seek(0)
+            raise SystemExit(err.read().decode())
+    return wall, usage.ru_utime + usage.ru_stime, usage.ru_maxrss * 1024.0
+
+
 def end_to_end(n: int) -> None:
     import pyarrow
 
@@ -181,12 +195,10 @@ def end_to_end(n: int) -> None:
             rows.setdefault("total of the three", []).append(cell(*totals[fmt]))
             rows.setdefault("I/O alone (read + write)", []).append(cell(wr + ww, cr + cw))
             cmd = [str(Path(sys.executable).with_name("softtip")), "estimate", str(src), "-o", str(dest)]
-            w0, c0 = time.perf_counter(), resource.getrusage(resource.RUSAGE_CHILDREN)
-            done = subprocess.run(cmd, capture_output=True, text=True)
-            wall, c1 = time.perf_counter() - w0, resource.getrusage(resource.RUSAGE_CHILDREN)
-            if done.returncode != 0:
-                raise SystemExit(done.stderr)
-            rows.setdefault("`softtip estimate` command", []).append(cell(wall, c1.ru_utime + c1.ru_stime - c0.ru_utime - c0.ru_stime))
+            for label, extra in (("", []), (" --chunk-rows 100000", ["--chunk-rows", "100000"])):
+                wall, cpu, peak = command(cmd + extra)
+                rows.setdefault(f"`softtip estimate`{label}", []).append(cell(wall, cpu))
+                rows.setdefault(f"  its peak memory (max RSS){label}", []).append(f"{peak / 1e6:8.2f} GB".ljust(36))
             rows.setdefault("output file size", []).append(f"{size:8.1f} MB".ljust(36))
         for label, cells in rows.items():
             print(f"  {label:34s} {cells[0]:>36s} {cells[1]:>36s}")

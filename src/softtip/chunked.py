@@ -39,8 +39,8 @@ from softtip.fingertip import Fingertip, load_fingertip
 
 __all__ = ["estimate_pieces", "DEFAULT_PIECE_ROWS"]
 
-#: Samples per piece unless a contact makes it longer (≈ 0.5–1 GB of the pipeline's arrays).
-DEFAULT_PIECE_ROWS = 1 << 20
+#: Samples per piece unless a contact makes it longer (a peak of ~0.4 GB for the default pipeline).
+DEFAULT_PIECE_ROWS = 1 << 18
 
 Block = tuple[NDArray[np.float64], NDArray[np.float64], dict[str, Any]]
 

@@ -361,8 +361,8 @@ the raw wrench; with --to-bag and no -o no CSV is written.
 @click.option(
     "--chunk-rows", type=click.IntRange(min=1), metavar="N",
     help="Process INPUT in pieces of at least N rows, in bounded memory, with the result of the one-shot run (a piece ends "
-    "only out of contact: a contact longer than N rows makes its piece as long). [default: pieces of 1048576 rows for a CSV "
-    "file over 400 MB or a Parquet file over 4 M rows; only for a CSV or Parquet file without --plot, --to-bag, --rerun, "
+    "only out of contact: a contact longer than N rows makes its piece as long). [default: pieces of 262144 rows for a CSV "
+    "file over 200 MB or a Parquet file over 2 M rows; only for a CSV or Parquet file without --plot, --to-bag, --rerun, "
     "--rerun-save, --payload]",
 )  # fmt: skip
 @_estimator_options
@@ -520,6 +520,8 @@ class _RunTotals:
 
 def _report_run(totals: _RunTotals, *, input_path, output, plot_path, to_bag, rerun_save, save_bias, quiet) -> None:
     """The end of ``softtip estimate``: tare and warnings, ``--save-bias``, the summary."""
+    # in the one-shot run's order: a drift alarm (of any piece) after the contact warnings
+    totals.warnings.sort(key=lambda w: w.startswith("the sensor bias drifted"))
     _tare_warnings(totals)
     if save_bias is not None:
         if any(p is not None and Path(p).resolve() == Path(save_bias).resolve() for p in (input_path, output, plot_path)):
@@ -555,8 +557,8 @@ def _report_run(totals: _RunTotals, *, input_path, output, plot_path, to_bag, re
 
 
 #: ``softtip estimate`` processes a log in pieces by itself from these sizes on.
-AUTO_CHUNK_CSV_BYTES = 400_000_000
-AUTO_CHUNK_PARQUET_ROWS = 4_000_000
+AUTO_CHUNK_CSV_BYTES = 200_000_000
+AUTO_CHUNK_PARQUET_ROWS = 2_000_000
 
 
 def _auto_chunk_rows(path: str) -> int | None:
@@ -589,8 +591,14 @@ def _estimate_in_pieces(
 
     parquet = output is not None and output.lower().endswith(".parquet")
     totals = _RunTotals()
-    with _progress_bar(None, "estimating") as bar:
-        blocks = iter_log(input_path, units, rows=min(rows, 1 << 16), progress=bar.update)
+    total = None
+    if input_path.lower().endswith(".parquet"):
+        import pyarrow.parquet as pq
+
+        with pq.ParquetFile(input_path) as pf:
+            total = pf.metadata.num_rows
+    with _progress_bar(total, "estimating") as bar:  # rows estimated and written
+        blocks = iter_log(input_path, units, rows=min(rows, 1 << 16))
 
         def checked():
             first = True
@@ -607,6 +615,7 @@ def _estimate_in_pieces(
                     _check_units(est, fingertip, config, blocks.units or "si", blocks.source)
                     columns = _output_columns(est, extra, output_units)
                     writer.write(columns)
+                    bar.update(len(est))
                     totals.add(est, summarise_contacts(est) if not quiet else [])
             finally:
                 writer.close()
