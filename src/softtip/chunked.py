@@ -39,8 +39,8 @@ from softtip.fingertip import Fingertip, load_fingertip
 
 __all__ = ["estimate_pieces", "DEFAULT_PIECE_ROWS"]
 
-#: Samples per piece unless a contact makes it longer (a peak of ~0.4 GB for the default pipeline).
-DEFAULT_PIECE_ROWS = 1 << 18
+#: Samples per piece unless a contact makes it longer (a peak of ~0.4 GB with the default pipeline).
+DEFAULT_PIECE_ROWS = 1 << 17
 
 Block = tuple[NDArray[np.float64], NDArray[np.float64], dict[str, Any]]
 

@@ -361,8 +361,8 @@ the raw wrench; with --to-bag and no -o no CSV is written.
 @click.option(
     "--chunk-rows", type=click.IntRange(min=1), metavar="N",
     help="Process INPUT in pieces of at least N rows, in bounded memory, with the result of the one-shot run (a piece ends "
-    "only out of contact: a contact longer than N rows makes its piece as long). [default: pieces of 262144 rows for a CSV "
-    "file over 200 MB or a Parquet file over 2 M rows; only for a CSV or Parquet file without --plot, --to-bag, --rerun, "
+    "only out of contact: a contact longer than N rows makes its piece as long). [default: pieces of 131072 rows for a CSV "
+    "file over 24 MB or a Parquet file over 262144 rows; only for a CSV or Parquet file without --plot, --to-bag, --rerun, "
     "--rerun-save, --payload]",
 )  # fmt: skip
 @_estimator_options
@@ -556,9 +556,11 @@ def _report_run(totals: _RunTotals, *, input_path, output, plot_path, to_bag, re
         click.echo(f"softtip: {line}", err=True)
 
 
-#: ``softtip estimate`` processes a log in pieces by itself from these sizes on.
-AUTO_CHUNK_CSV_BYTES = 200_000_000
-AUTO_CHUNK_PARQUET_ROWS = 2_000_000
+#: ``softtip estimate`` processes a log in pieces by itself from these sizes on (~262144 rows):
+#: the same output, in less memory and, measured on a 1e6-row log, 2.3 s less system CPU
+#: time (the one-shot run's page faults on 1.3 GB of fresh arrays).
+AUTO_CHUNK_CSV_BYTES = 24_000_000
+AUTO_CHUNK_PARQUET_ROWS = 262_144
 
 
 def _auto_chunk_rows(path: str) -> int | None:
