@@ -188,3 +188,34 @@ def test_cli_chunk_rows_needs_a_table_output_only(tmp_path: Path, extra: list[st
     assert done.returncode == 2
     assert "--chunk-rows" in done.stderr and done.stdout == ""
     assert sorted(os.listdir(tmp_path)) == ["in.csv"]
+
+
+@pytest.mark.parametrize("case", ["repeated", "cut", "milliseconds", "quoted", "parquet"])
+def test_block_reader_gives_read_log_values_and_warnings(tmp_path: Path, case: str, monkeypatch) -> None:
+    import softtip.io as sio
+    from softtip.io import iter_log, read_log
+
+    monkeypatch.setattr(sio, "_CSV_BLOCK_BYTES", 20_000)
+
+    n = 3000
+    t = np.arange(n) * (1.0 if case == "milliseconds" else 1e-3)
+    if case == "repeated":
+        t[1500] = t[1499]
+        t[2900] = t[2899]
+    w = np.round(np.random.default_rng(1).normal(0.0, 1.0, (n, 6)), 7) + 0.5
+    note = np.where(np.arange(n) % 2, "a", "b, c" if case == "quoted" else "d")
+    columns = {"t": t, **{k: w[:, i] for i, k in enumerate(WRENCH)}, **({} if case == "cut" else {"note": note})}
+    src = tmp_path / ("in.parquet" if case == "parquet" else "in.csv")
+    write_table(columns, src)
+    if case == "cut":  # the file ends inside its last line, whose last number lost digits
+        src.write_bytes(src.read_bytes() + b"%.3f,0.5,0.5,0.5,0.5,0.5,0.5" % (t[-1] + 1e-3))
+    one = read_log(src)
+    blocks = iter_log(src, rows=700)
+    got = list(blocks)
+    assert len(got) > 1
+    assert np.array_equal(np.concatenate([b[0] for b in got]), one.t)
+    assert np.array_equal(np.concatenate([b[1] for b in got]), one.wrench)
+    if case != "cut":
+        assert np.array_equal(np.concatenate([b[2]["note"] for b in got]), np.asarray(one.extra["note"]))
+    assert blocks.warnings() == one.warnings
+    assert len(one.warnings) == (case in ("repeated", "cut", "milliseconds")), one.warnings

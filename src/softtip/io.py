@@ -1198,6 +1198,10 @@ def _write_atomic(path: str, plan: _Plan) -> None:
 # piece by piece: logs larger than memory
 
 
+#: Bytes of CSV text per block of :func:`iter_log`.
+_CSV_BLOCK_BYTES = 1 << 22
+
+
 class NotStreamable(Exception):
     """:func:`iter_log` met something its block reader does not take (a trailing blank
     line, a cell only Python's parser reads, or an error): read the log at once with
@@ -1228,7 +1232,7 @@ class LogBlocks:
         self._first_t: NDArray[np.float64] | None = None
         self._last_t = -math.inf
         self._first_line: int | None = None
-        self._quoted = False
+        self._quoted: bool | None = None  # whether the data holds a quote (then rows may span lines); None: not looked
 
     def __iter__(self) -> Any:
         blocks = self._parquet_blocks() if self.parquet else self._csv_blocks()
@@ -1248,7 +1252,10 @@ class LogBlocks:
 
     def warnings(self) -> tuple[str, ...]:
         """What :attr:`Log.warnings` holds for the whole log (after the last block)."""
-        first_line = None if self._quoted else self._first_line
+        first_line = self._first_line
+        if first_line is not None and (self.repeated or not self._ends_with_break()):
+            if self._quoted is None:  # one more pass over the file, only when a line number is to be given
+                    first_line = None if self._quoted else first_line
         notes = []
         if self.repeated:
             where = f"line {first_line + self._first_repeat}" if first_line is not None else f"data row {self._first_repeat + 1}"
@@ -1300,7 +1307,7 @@ class LogBlocks:
             stream.seek(start)
             reader = pacsv.open_csv(
                 stream,
-                read_options=pacsv.ReadOptions(column_names=names, use_threads=False, block_size=1 << 22),
+                read_options=pacsv.ReadOptions(column_names=names, use_threads=False, block_size=_CSV_BLOCK_BYTES),
                 parse_options=pacsv.ParseOptions(newlines_in_values=True, ignore_empty_lines=False),
                 convert_options=pacsv.ConvertOptions(
                     column_types=types, check_utf8=True, strings_can_be_null=False, quoted_strings_can_be_null=False
@@ -1328,7 +1335,12 @@ class LogBlocks:
             raise NotStreamable("parser") from None
         finally:
             stream.close()
-        self._quoted = self._has_quote()
+
+    def _ends_with_break(self) -> bool:
+        """Whether the file ends with a line break (else its last line may have been cut)."""
+        with open(self.path, "rb") as fh:
+            fh.seek(max(0, self._size - 1))
+            return fh.read(1) in (b"\n", b"\r")
 
     def _has_quote(self) -> bool:
         with open(self.path, "rb") as fh:
