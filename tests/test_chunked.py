@@ -219,3 +219,35 @@ def test_block_reader_gives_read_log_values_and_warnings(tmp_path: Path, case: s
         assert np.array_equal(np.concatenate([b[2]["note"] for b in got]), np.asarray(one.extra["note"]))
     assert blocks.warnings() == one.warnings
     assert len(one.warnings) == (case in ("repeated", "cut", "milliseconds")), one.warnings
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    values=st.lists(st.sampled_from([0.5, 1.0, 1.5, 2.0, 2.5, 3.0]) | st.floats(0.0, 4.0), max_size=40),
+    cuts=st.lists(st.integers(0, 40), max_size=4),
+    limit=st.sampled_from([1.0, 1.5, 1.75, 2.0, 2.25]),
+)
+def test_lever_vote_decides_as_the_median_of_all(values: list[float], cuts: list[int], limit: float) -> None:
+    from softtip.lever import LeverVote
+
+    d = np.array(values)
+    vote = LeverVote(limit)
+    edges = sorted({0, len(d), *[min(c, len(d)) for c in cuts]})
+    for a, b in zip(edges[:-1], edges[1:]):
+        vote.add(d[a:b])
+    assert vote.n == len(d)
+    assert vote.median_above() == (len(d) > 0 and bool(np.median(d) > limit))
+
+
+def test_cli_in_pieces_units_check_as_one_shot(tmp_path: Path) -> None:
+    """A log in kgf and kgf·mm read as SI: the one-shot run's message, exit 2, nothing written."""
+    t, w = _log(seed=8, presses=3)
+    src = tmp_path / "kgf.csv"
+    write_table({"t": t, **{k: (w[:, i] / 9.80665) * (1e3 if i >= 3 else 1.0) for i, k in enumerate(WRENCH)}}, src)
+    dest = tmp_path / "out.csv"
+    one, pieces = run("estimate", src, "-o", dest), run("estimate", src, "-o", dest, "--chunk-rows", 50)
+    assert one.returncode == pieces.returncode == 2
+    assert "--units kgf-mm" in pieces.stderr and pieces.stderr == one.stderr
+    assert not dest.exists()
+    good = run("estimate", src, "--units", "kgf-mm", "-o", dest, "--chunk-rows", 50)
+    assert good.returncode == 0, good.stderr

@@ -591,8 +591,11 @@ def _estimate_in_pieces(
     from softtip.io import NotStreamable, TableWriter, iter_log
     from softtip.summary import summarise_contacts
 
+    from softtip.lever import LEVER_MARGIN, LeverVote, fingertip_reach, lever_distances
+
     parquet = output is not None and output.lower().endswith(".parquet")
     totals = _RunTotals()
+    vote = LeverVote(LEVER_MARGIN * fingertip_reach(fingertip))  # the units check, over the whole log
     total = None
     if input_path.lower().endswith(".parquet"):
         import pyarrow.parquet as pq
@@ -614,18 +617,20 @@ def _estimate_in_pieces(
             writer = TableWriter(out, parquet=parquet, metadata=_parquet_metadata(fingertip, tip, output_units, blocks))
             try:
                 for est, extra in estimate_pieces(checked(), fingertip, config, rows):
-                    _check_units(est, fingertip, config, blocks.units or "si", blocks.source)
+                    vote.add(lever_distances(est.wrench[~est.taring], max(0.1, config.contact_threshold)))
                     columns = _output_columns(est, extra, output_units)
                     writer.write(columns)
                     bar.update(len(est))
                     totals.add(est, summarise_contacts(est) if not quiet else [])
             finally:
                 writer.close()
+            if vote.n >= 5 and vote.median_above():
+                raise NotStreamable("wrong units: the one-shot run says so")  # as _check_units decides
 
         try:
             with atomic_write(output) as fh:
                 run(fh)
-        except NotStreamable:  # nothing written: the one-shot reader takes it, or says what is wrong
+        except NotStreamable:  # nothing written: the one-shot run takes it, or says what is wrong
             return False
         except ValueError as exc:  # e.g. a low-pass cutoff above Nyquist for this log's rate
             if isinstance(exc, InputError):
