@@ -843,7 +843,9 @@ def write_table(
         ``os.replace``): on any failure the temporary file is removed and an existing file
         at ``dest`` is left untouched. A path ending in ``.parquet`` is written as Parquet
         (pyarrow; values exactly, booleans as booleans, text as strings, ``metadata`` in
-        the schema's key-value metadata).
+        the schema's key-value metadata; :data:`PARQUET_COMPRESSION`, dictionary encoding
+        for the columns that are not floating point). :class:`TableWriter` writes a table
+        piece by piece.
     float_format : str
         CSV only: a printf-style format for one float. ``"%.<d>g"`` with ``d`` ≤ 17 (the
         default ``"%.10g"``; ``"%.17g"`` round-trips float64 exactly) writes each value
