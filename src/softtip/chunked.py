@@ -37,7 +37,7 @@ from softtip.estimator.tare import tare_log
 from softtip.filtering import lowpass_sos, sosfilt_state
 from softtip.fingertip import Fingertip, load_fingertip
 
-__all__ = ["estimate_pieces", "DEFAULT_PIECE_ROWS"]
+__all__ = ["DEFAULT_PIECE_ROWS", "estimate_pieces"]
 
 #: Samples per piece unless a contact makes it longer (a peak of ~0.4 GB with the default pipeline).
 DEFAULT_PIECE_ROWS = 1 << 17

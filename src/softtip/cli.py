@@ -496,7 +496,7 @@ class _RunTotals:
         self.tare = None
 
     @classmethod
-    def of(cls, est, contacts: list) -> "_RunTotals":
+    def of(cls, est, contacts: list) -> _RunTotals:
         totals = cls()
         totals.add(est, contacts)
         return totals
@@ -575,7 +575,7 @@ def _auto_chunk_rows(path: str) -> int | None:
                 large = pf.metadata.num_rows > AUTO_CHUNK_PARQUET_ROWS
         else:
             large = os.path.getsize(path) > AUTO_CHUNK_CSV_BYTES
-    except Exception:  # unreadable: the one-shot reader words it
+    except Exception:  # noqa: BLE001 - unreadable in any way: the one-shot reader words it
         return None
     return DEFAULT_PIECE_ROWS if large else None
 
@@ -589,9 +589,8 @@ def _estimate_in_pieces(
     from softtip.atomic import atomic_write
     from softtip.chunked import estimate_pieces
     from softtip.io import NotStreamable, TableWriter, iter_log
-    from softtip.summary import summarise_contacts
-
     from softtip.lever import LEVER_MARGIN, LeverVote, fingertip_reach, lever_distances
+    from softtip.summary import summarise_contacts
 
     parquet = output is not None and output.lower().endswith(".parquet")
     totals = _RunTotals()

@@ -59,7 +59,7 @@ from numpy.typing import NDArray
 from softtip.errors import InputError
 from softtip.units import UNIT_SYSTEMS, wrench_to_si
 
-__all__ = ["Log", "read_log", "write_table", "REQUIRED_COLUMNS", "iter_log", "LogBlocks", "NotStreamable", "TableWriter"]
+__all__ = ["REQUIRED_COLUMNS", "Log", "LogBlocks", "NotStreamable", "TableWriter", "iter_log", "read_log", "write_table"]
 
 #: Columns every input log must have, in wrench order after ``t``.
 REQUIRED_COLUMNS: tuple[str, ...] = ("t", "fx", "fy", "fz", "mx", "my", "mz")
@@ -1258,7 +1258,8 @@ class LogBlocks:
         first_line = self._first_line
         if first_line is not None and (self.repeated or not self._ends_with_break()):
             if self._quoted is None:  # one more pass over the file, only when a line number is to be given
-                    first_line = None if self._quoted else first_line
+                self._quoted = self._has_quote()
+            first_line = None if self._quoted else first_line
         notes = []
         if self.repeated:
             where = f"line {first_line + self._first_repeat}" if first_line is not None else f"data row {self._first_repeat + 1}"

@@ -29,7 +29,7 @@ from softtip.estimator.tare import TareReport, tare_log
 from softtip.filtering import lowpass_sos, sosfilt_state
 from softtip.fingertip import Fingertip, load_fingertip
 
-__all__ = ["estimate", "Carry"]
+__all__ = ["Carry", "estimate"]
 
 
 @dataclass
