@@ -57,9 +57,7 @@ class Mounted(Fingertip):
     Examples
     --------
     >>> import numpy as np
-    >>> 
-if TYPE_CHECKING:  # scipy.spatial costs ~0.3 s to import: only where a rotation is made
-    from scipy.spatial.transform import Rotation
+    >>> from scipy.spatial.transform import Rotation
     >>> from softtip import Sphere, contact_from_wrench
     >>> from softtip.mounting import Mounted
     >>> tip = Mounted(Sphere(0.01, (0, 0, 0.02)), Rotation.from_euler("y", 90, degrees=True), (0, 0, 0.005))
