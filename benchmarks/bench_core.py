@@ -9,7 +9,8 @@ estimator. Targets (manual §6): capsule batch >= 5 M samples/s; streaming media
 Then `softtip estimate` end to end on a --samples-row log (the 1 kHz example grasp
 repeated), CSV and Parquet side by side: read (softtip.io.tables.read_log), the pipeline
 (softtip.estimate), write (softtip.io.tables.write_table), their total, and the `softtip estimate`
-command itself (a new process: Python start-up and imports included), in rows/s; also the
+command itself (a new process: Python start-up and imports included), in rows/s, with its
+peak memory, by default (pieces of 131072 rows for a log this large) and in one piece; also the
 hand-written Python CSV reader and writer that softtip used before, on the same files.
 Rates are rows per second of CPU time (the process's own, or the command's): on a shared
 machine that is the steady figure; the wall-clock time is printed beside it. Targets (manual §6) end to end: CSV >= 2 M rows/s, Parquet >= 10 M rows/s.
@@ -337,6 +338,29 @@ def timed(fn, repeats=2):
     return min(wall), min(cpu), out
 
 
+_MEASURE = """import resource, subprocess, sys
+done = subprocess.run(sys.argv[1:], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+u = resource.getrusage(resource.RUSAGE_CHILDREN)
+print(done.returncode, u.ru_utime + u.ru_stime, u.ru_maxrss * 1024)
+sys.stderr.write(done.stderr.decode())
+"""
+
+
+def command(cmd: list[str]) -> tuple[float, float, float]:
+    """Wall time, CPU time (user + system) and peak resident memory (bytes) of a command.
+
+    Run through a small Python process: a child's peak memory on Linux starts from the size
+    of the process that forked it, so the benchmark (GBs by now) must not be that one.
+    """
+    w0 = time.perf_counter()
+    done = subprocess.run([sys.executable, "-c", _MEASURE, *cmd], capture_output=True, text=True)
+    wall = time.perf_counter() - w0
+    code, cpu, peak = done.stdout.split()
+    if done.returncode != 0 or code != "0":
+        raise SystemExit(done.stderr)
+    return wall, float(cpu), float(peak)
+
+
 def end_to_end(n: int) -> None:
     import pyarrow
 
@@ -373,12 +397,10 @@ def end_to_end(n: int) -> None:
             rows.setdefault("total of the three", []).append(cell(*totals[fmt]))
             rows.setdefault("I/O alone (read + write)", []).append(cell(wr + ww, cr + cw))
             cmd = [str(Path(sys.executable).with_name("softtip")), "estimate", str(src), "-o", str(dest)]
-            w0, c0 = time.perf_counter(), resource.getrusage(resource.RUSAGE_CHILDREN)
-            done = subprocess.run(cmd, capture_output=True, text=True)
-            wall, c1 = time.perf_counter() - w0, resource.getrusage(resource.RUSAGE_CHILDREN)
-            if done.returncode != 0:
-                raise SystemExit(done.stderr)
-            rows.setdefault("`softtip estimate` command", []).append(cell(wall, c1.ru_utime + c1.ru_stime - c0.ru_utime - c0.ru_stime))
+            for label, extra in ((" (pieces of 131072)", []), (" in one piece", ["--chunk-rows", str(10 * n)])):
+                wall, cpu, peak = command(cmd + extra)
+                rows.setdefault(f"`softtip estimate`{label}", []).append(cell(wall, cpu))
+                rows.setdefault(f"  peak memory{label}", []).append(f"{peak / 1e9:8.2f} GB".ljust(36))
             rows.setdefault("output file size", []).append(f"{size:8.1f} MB".ljust(36))
         for label, cells in rows.items():
             print(f"  {label:34s} {cells[0]:>36s} {cells[1]:>36s}")

@@ -362,6 +362,13 @@ from the bag's /tf.
 @click.option("--payload", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Remove the fingertip's weight ([payload] mass kg, com m; see calibrate-payload) before taring, using INPUT's qw, qx, qy, qz columns (sensor frame in a z-up world frame).")
 @click.option("-q", "--quiet", is_flag=True, help="No summary on standard error (warnings and errors still are).")
 @click.option("--save-bias", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Write the bias used (the tare's) to FILE.toml, for --bias of a later run.")
+@click.option(
+    "--chunk-rows", type=click.IntRange(min=1), metavar="N",
+    help="Process INPUT in pieces of at least N rows, in bounded memory, with the result of the one-shot run (a piece ends "
+    "only out of contact: a contact longer than N rows makes its piece as long). [default: pieces of 131072 rows for a CSV "
+    "file over 24 MB or a Parquet file over 262144 rows; only for a CSV or Parquet file without --plot, --to-bag, --rerun, "
+    "--rerun-save, --payload]",
+)  # fmt: skip
 @_estimator_options
 def estimate(
     input_path,
@@ -383,6 +390,7 @@ def estimate(
     ros_distro=None,
     frame_id=None,
     gravity_frame=None,
+    chunk_rows=None,
     **estimator_opts,
 ):
     from softtip.io.examples import EXAMPLE_PATH
@@ -426,6 +434,19 @@ def estimate(
     else:
         if os.path.isdir(input_path):
             raise InputError(f"{input_path}: is a directory but not a ROS bag (no metadata.yaml); expected a CSV log or a bag")
+        others = {"--plot": plot_path, "--to-bag": to_bag, "--rerun": rerun_spawn, "--rerun-save": rerun_save, "--payload": payload}
+        if chunk_rows is not None and any(others.values()):
+            given = ", ".join(k for k, v in others.items() if v)
+            raise click.UsageError(f"--chunk-rows: not with {given}; expected a run that writes only the table")
+        if chunk_rows is not None and output is None:
+            raise click.UsageError("--chunk-rows: needs -o FILE (a piece written to standard output cannot be taken back)")
+        if output is not None and topic is None and not allow_partial and not any(others.values()):
+            rows = chunk_rows or _auto_chunk_rows(input_path)
+            if rows and _estimate_in_pieces(
+                input_path, units, rows, fingertip, config, estimator_opts, output=output, output_units=output_units,
+                tip=tip, quiet=quiet, save_bias=save_bias,
+            ):  # fmt: skip
+                return
         size = os.path.getsize(input_path) if os.path.isfile(input_path) else 0
         with _progress_bar(size, "reading", unit="B") as bar:
             log = read_log(input_path, units=units, progress=bar.update)
@@ -464,14 +485,7 @@ def estimate(
         raise click.UsageError(str(exc)) from None
     _check_units(est, fingertip, config, log.units, log.source)
 
-    columns = est.columns()
-    if output_units == "kgf-mm":
-        for name in _FORCE_COLUMNS:
-            columns[name] = columns[name] / KGF
-        for name in _MOMENT_COLUMNS:
-            columns[name] = columns[name] / KGF_MM
-    for name, values in log.extra.items():
-        columns[name if name not in columns else f"input_{name}"] = np.asarray(values)
+    columns = _output_columns(est, log.extra, output_units)
 
     source = "example grasp" if example else Path(log.source).name
     _write_estimate_outputs(
@@ -481,20 +495,69 @@ def estimate(
         metadata=_parquet_metadata(fingertip, tip, output_units, log),
     )  # fmt: skip
 
-    counts = {name: int(np.count_nonzero(est.state == code)) for code, name in enumerate(STATES)}
-    _tare_warnings(est)
+    from softtip.estimator.summary import summarise_contacts
+
+    _report_run(
+        _RunTotals.of(est, summarise_contacts(est) if not quiet else []),
+        input_path=input_path, output=output, plot_path=plot_path, to_bag=to_bag, rerun_save=rerun_save,
+        save_bias=save_bias, quiet=quiet,
+    )  # fmt: skip
+
+
+class _RunTotals:
+    """What ``softtip estimate`` says at the end of a run, summed over the pieces of a log."""
+
+    def __init__(self) -> None:
+        self.n = 0
+        self.counts = dict.fromkeys(STATES, 0)
+        self.confirmed = 0
+        self.n_pulling = 0
+        self.n_contacts = 0
+        self.contacts: list = []
+        self.warnings: list[str] = []
+        self.bias = np.full(6, np.nan)
+        self.tare = None
+
+    @classmethod
+    def of(cls, est, contacts: list) -> _RunTotals:
+        totals = cls()
+        totals.add(est, contacts)
+        return totals
+
+    def add(self, est, contacts: list) -> None:
+        """Add a piece (its contacts' summaries numbered within the piece)."""
+        import dataclasses
+
+        if self.tare is None:
+            self.tare, self.bias = est.tare, est.bias
+        self.n += len(est)
+        for code, name in enumerate(STATES):
+            self.counts[name] += int(np.count_nonzero(est.state == code))
+        self.confirmed += int(np.count_nonzero(est.line_evidence == 2))
+        self.n_pulling += est.n_pulling
+        first = self.n_contacts
+        self.contacts += [dataclasses.replace(c, index=first + c.index) for c in contacts]
+        self.n_contacts = max(self.n_contacts, est.n_contacts)
+        self.warnings += [w for w in est.warnings if w not in self.warnings]
+
+
+def _report_run(totals: _RunTotals, *, input_path, output, plot_path, to_bag, rerun_save, save_bias, quiet) -> None:
+    """The end of ``softtip estimate``: tare and warnings, ``--save-bias``, the summary."""
+    # in the one-shot run's order: a drift alarm (of any piece) after the contact warnings
+    totals.warnings.sort(key=lambda w: w.startswith("the sensor bias drifted"))
+    _tare_warnings(totals)
     if save_bias is not None:
         if any(p is not None and Path(p).resolve() == Path(save_bias).resolve() for p in (input_path, output, plot_path)):
             raise InputError(f"--save-bias {save_bias}: is also an input or output of this run")
-        if not np.all(np.isfinite(est.bias)):
+        if not np.all(np.isfinite(totals.bias)):
             raise InputError(f"--save-bias {save_bias}: no bias: the whole log lies within the tare")
         from softtip.calibration.probing import atomic_write_text
 
-        atomic_write_text(save_bias, bias_to_toml(est.bias, f"softtip sensor bias ({est.tare.summary()})"))
+        atomic_write_text(save_bias, bias_to_toml(totals.bias, f"softtip sensor bias ({totals.tare.summary()})"))
         click.echo(f"softtip: bias -> {save_bias}", err=True)
-    if est.n_pulling:
+    if totals.n_pulling:
         click.echo(
-            f"softtip: warning: {est.n_pulling} sample(s) in contact by force had no contact point where the force "
+            f"softtip: warning: {totals.n_pulling} sample(s) in contact by force had no contact point where the force "
             "pushes into the fingertip; reported as none",
             err=True,
         )
@@ -502,17 +565,119 @@ def estimate(
         return
     # the summary goes to standard error whatever the output: per contact, since samples
     # pooled over several contacts (a -45° grasp, then a +45° one) have no common direction
-    from softtip.estimator.summary import format_summary, summarise_contacts
+    from softtip.estimator.summary import format_summary
 
     targets = [p for p in (output, to_bag, rerun_save) if p is not None] or ["standard output"]
-    confirmed = int(np.count_nonzero(est.line_evidence == 2))
-    summary = ", ".join(f"{v} {k}" + (f" ({confirmed} confirmed)" if k == "line" else "") for k, v in counts.items())
+    summary = ", ".join(
+        f"{v} {k}" + (f" ({totals.confirmed} confirmed)" if k == "line" else "") for k, v in totals.counts.items()
+    )
     click.echo(
-        f"softtip: {len(est)} samples ({summary}; {est.n_contacts} contact(s)) -> {', '.join(map(str, targets))}",
+        f"softtip: {totals.n} samples ({summary}; {totals.n_contacts} contact(s)) -> {', '.join(map(str, targets))}",
         err=True,
     )
-    for line in format_summary(summarise_contacts(est)):
+    for line in format_summary(totals.contacts):
         click.echo(f"softtip: {line}", err=True)
+
+
+#: ``softtip estimate`` processes a log in pieces by itself from these sizes on (~262144 rows):
+#: the same output, in less memory and, measured on a 1e6-row log, 2.3 s less system CPU
+#: time (the one-shot run's page faults on 1.3 GB of fresh arrays).
+AUTO_CHUNK_CSV_BYTES = 24_000_000
+AUTO_CHUNK_PARQUET_ROWS = 262_144
+
+
+def _auto_chunk_rows(path: str) -> int | None:
+    """Rows per piece for a log this large (:data:`AUTO_CHUNK_CSV_BYTES`, :data:`AUTO_CHUNK_PARQUET_ROWS`), else None."""
+    from softtip.io.chunked import DEFAULT_PIECE_ROWS
+
+    try:
+        if path.lower().endswith(".parquet"):
+            import pyarrow.parquet as pq
+
+            with pq.ParquetFile(path) as pf:
+                large = pf.metadata.num_rows > AUTO_CHUNK_PARQUET_ROWS
+        else:
+            large = os.path.getsize(path) > AUTO_CHUNK_CSV_BYTES
+    except Exception:  # noqa: BLE001 - unreadable in any way: the one-shot reader words it
+        return None
+    return DEFAULT_PIECE_ROWS if large else None
+
+
+def _estimate_in_pieces(
+    input_path, units, rows, fingertip, config, estimator_opts, *, output, output_units, tip, quiet, save_bias
+) -> bool:
+    """``softtip estimate`` piece by piece (:mod:`softtip.io.chunked`) into ``output`` (a path);
+    ``False`` when the log holds something only the one-shot reader takes or words (nothing
+    written then)."""
+    from softtip.core.lever import LEVER_MARGIN, LeverVote, fingertip_reach, lever_distances
+    from softtip.estimator.summary import summarise_contacts
+    from softtip.io.atomic import atomic_write
+    from softtip.io.chunked import estimate_pieces
+    from softtip.io.tables import NotStreamable, TableWriter, iter_log
+
+    parquet = output is not None and output.lower().endswith(".parquet")
+    totals = _RunTotals()
+    vote = LeverVote(LEVER_MARGIN * fingertip_reach(fingertip))  # the units check, over the whole log
+    total = None
+    if input_path.lower().endswith(".parquet"):
+        import pyarrow.parquet as pq
+
+        with pq.ParquetFile(input_path) as pf:
+            total = pf.metadata.num_rows
+    with _progress_bar(total, "estimating") as bar:  # rows estimated and written
+        blocks = iter_log(input_path, units, rows=min(rows, 1 << 16))
+
+        def checked():
+            first = True
+            for block in blocks:
+                if first:
+                    check_lowpass(estimator_opts["lowpass"], block[0])
+                    first = False
+                yield block
+
+        def run(out) -> None:
+            writer = TableWriter(out, parquet=parquet, metadata=_parquet_metadata(fingertip, tip, output_units, blocks))
+            try:
+                for est, extra in estimate_pieces(checked(), fingertip, config, rows):
+                    vote.add(lever_distances(est.wrench[~est.taring], max(0.1, config.contact_threshold)))
+                    columns = _output_columns(est, extra, output_units)
+                    writer.write(columns)
+                    bar.update(len(est))
+                    totals.add(est, summarise_contacts(est) if not quiet else [])
+            finally:
+                writer.close()
+            if vote.n >= 5 and vote.median_above():
+                raise NotStreamable("wrong units: the one-shot run says so")  # as _check_units decides
+
+        try:
+            with atomic_write(output) as fh:
+                run(fh)
+        except NotStreamable:  # nothing written: the one-shot run takes it, or says what is wrong
+            return False
+        except ValueError as exc:  # e.g. a low-pass cutoff above Nyquist for this log's rate
+            if isinstance(exc, InputError):
+                raise
+            raise click.UsageError(str(exc)) from None
+    for note in blocks.warnings():
+        click.echo(f"softtip: warning: {note}", err=True)
+    _report_run(
+        totals, input_path=input_path, output=output, plot_path=None, to_bag=None, rerun_save=None,
+        save_bias=save_bias, quiet=quiet,
+    )  # fmt: skip
+    return True
+
+
+def _output_columns(est, extra, output_units: str) -> dict:
+    """The output table: the estimates' columns in ``output_units``, then the input's extra columns."""
+    columns = est.columns()
+    if output_units == "kgf-mm":
+        for name in _FORCE_COLUMNS:
+            columns[name] = columns[name] / KGF
+        for name in _MOMENT_COLUMNS:
+            columns[name] = columns[name] / KGF_MM
+    for name, values in extra.items():
+        columns[name if name not in columns else f"input_{name}"] = np.asarray(values)
+    return columns
 
 
 def _check_units(est, fingertip, config: EstimatorConfig, units: str, source: str) -> None:

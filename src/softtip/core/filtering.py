@@ -63,12 +63,21 @@ def noise_gain(sos: NDArray[np.float64]) -> float:
 
 def sosfilt_batch(sos: NDArray[np.float64], x: NDArray[np.float64]) -> NDArray[np.float64]:
     """Filter ``x`` (shape ``(N, C)``) along axis 0, starting in steady state for ``x[0]``."""
+    return sosfilt_state(sos, x)[0]
+
+
+def sosfilt_state(
+    sos: NDArray[np.float64], x: NDArray[np.float64], zi: NDArray[np.float64] | None = None
+) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:
+    """:func:`sosfilt_batch` from the filter state ``zi`` (``None``: steady state for
+    ``x[0]``); returns the filtered ``x`` and the state after it (``(sections, 2, C)``; ``zi``
+    for an empty ``x``), to filter a log piece by piece with the bits of the whole."""
     if len(x) == 0:
-        return x.copy()
+        return x.copy(), zi
     signal = _signal()
-    zi = signal.sosfilt_zi(sos)[:, :, None] * x[0][None, None, :]
-    y, _ = signal.sosfilt(sos, x, axis=0, zi=zi)
-    return y
+    if zi is None:
+        zi = signal.sosfilt_zi(sos)[:, :, None] * x[0][None, None, :]
+    return signal.sosfilt(sos, x, axis=0, zi=zi)
 
 
 class SosStream:

@@ -24,7 +24,7 @@ from numpy.typing import ArrayLike
 from softtip.core.fingertip import Fingertip
 from softtip.errors import InputError
 
-__all__ = ["LEVER_MARGIN", "ForceLever", "force_lever", "check_force_lever"]
+__all__ = ["LEVER_MARGIN", "ForceLever", "force_lever", "check_force_lever", "lever_distances", "LeverVote", "fingertip_reach"]
 
 #: How far beyond the fingertip's reach the median line of action may lie before the
 #: log is refused (a factor on the reach; covers noise, spin torque and a fingertip a
@@ -71,15 +71,57 @@ def force_lever(wrench: ArrayLike, fingertip: Fingertip, *, min_force: float = 0
     -------
     ForceLever
     """
+    distance = lever_distances(wrench, min_force)
+    median = float(np.median(distance)) if len(distance) else float("nan")
+    return ForceLever(median, len(distance), fingertip_reach(fingertip))
+
+
+def fingertip_reach(fingertip: Fingertip) -> float:
+    """Farthest skin point from the sensor origin, m (of the bounding sphere)."""
+    centre, radius = fingertip.bounding_sphere
+    return float(np.linalg.norm(centre) + radius)
+
+
+def lever_distances(wrench: ArrayLike, min_force: float = 0.1) -> np.ndarray:
+    """Distance of the force's line of action from the sensor origin, m, for each sample of
+    ``wrench`` (N, 6) with ``|f|`` at least ``min_force`` (N) (the ones :func:`force_lever`
+    takes the median of)."""
     w = np.asarray(wrench, dtype=float).reshape(-1, 6)
     f, m = w[:, :3], w[:, 3:]
     f2 = np.einsum("ij,ij->i", f, f)
     use = np.isfinite(f2) & (f2 >= min_force**2) & np.all(np.isfinite(m), axis=1)
-    distance = np.linalg.norm(np.cross(f[use], m[use]), axis=1) / f2[use]
-    centre, radius = fingertip.bounding_sphere
-    reach = float(np.linalg.norm(centre) + radius)
-    median = float(np.median(distance)) if len(distance) else float("nan")
-    return ForceLever(median, int(use.sum()), reach)
+    return np.linalg.norm(np.cross(f[use], m[use]), axis=1) / f2[use]
+
+
+class LeverVote:
+    """Whether the median of :func:`lever_distances` over a log given in pieces exceeds a
+    limit, decided exactly as ``np.median(all) > limit`` without keeping the distances:
+    counts above the limit, and the nearest distance on each side of it."""
+
+    def __init__(self, limit: float) -> None:
+        self.limit, self.n, self.above = limit, 0, 0
+        self.below_max, self.above_min = -np.inf, np.inf
+
+    def add(self, distance: np.ndarray) -> None:
+        """Count a piece's distances."""
+        up = distance > self.limit
+        self.n += len(distance)
+        self.above += int(np.count_nonzero(up))
+        if up.any():
+            self.above_min = min(self.above_min, float(distance[up].min()))
+        if not up.all():
+            self.below_max = max(self.below_max, float(distance[~up].max()))
+
+    def median_above(self) -> bool:
+        """``np.median(all distances) > limit`` (False without any)."""
+        n, k = self.n, self.above
+        if n == 0:
+            return False
+        if n % 2:
+            return k >= (n + 1) // 2
+        if k != n // 2:
+            return k > n // 2
+        return (self.below_max + self.above_min) / 2 > self.limit  # the two middle values straddle the limit
 
 
 def check_force_lever(

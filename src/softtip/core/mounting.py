@@ -26,11 +26,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial.transform import Rotation
+
+if TYPE_CHECKING:  # scipy.spatial costs ~0.3 s to import: only where a rotation is made
+    from scipy.spatial.transform import Rotation
 
 from softtip.core.fingertip import Fingertip
 from softtip.errors import InputError
@@ -72,7 +74,7 @@ class Mounted(Fingertip):
         if not isinstance(self.tip, Fingertip) or isinstance(self.tip, Mounted):
             raise ValueError(f"tip must be an unmounted Fingertip, got {self.tip!r}")
         rot = self.rotation
-        m = rot.as_matrix() if isinstance(rot, Rotation) else np.asarray(rot, dtype=float)
+        m = rot.as_matrix() if hasattr(rot, "as_matrix") else np.asarray(rot, dtype=float)  # a scipy Rotation
         if m.shape != (3, 3) or not np.all(np.isfinite(m)):
             raise ValueError(f"rotation must be a 3×3 rotation matrix, got {self.rotation!r}")
         if not (np.allclose(m @ m.T, np.eye(3), atol=1e-9) and np.linalg.det(m) > 0):
@@ -129,6 +131,8 @@ class Mounted(Fingertip):
         return np.array(self._from_tip(*np.asarray(c, dtype=float))), r
 
     def to_toml(self) -> str:
+        from scipy.spatial.transform import Rotation
+
         q = Rotation.from_matrix(np.array(self.rotation)).as_quat()  # x, y, z, w
         t = ", ".join(repr(v) for v in self.translation)
         quat = ", ".join(repr(float(v)) for v in (q[3], q[0], q[1], q[2]))
@@ -156,6 +160,8 @@ def pose_from_table(table: dict, where: str) -> tuple[Rotation, tuple[float, flo
         raise InputError(f"{where} unknown key(s) {', '.join(unknown)}; expected translation and rpy_deg or quaternion")
     if "rpy_deg" in table and "quaternion" in table:
         raise InputError(f"{where} give rpy_deg or quaternion, not both")
+    from scipy.spatial.transform import Rotation
+
     translation = _numbers(table.get("translation", [0.0, 0.0, 0.0]), 3, "translation", where)
     if max(abs(v) for v in translation) > 1.0:
         raise InputError(f"{where} translation = {translation!r} m is over 1 m; expected metres")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -11,19 +12,38 @@ from numpy.typing import ArrayLike, NDArray
 from softtip.core._blocks import blockwise
 from softtip.core._xp import NP
 from softtip.core.contact import contact_arrays
-from softtip.core.filtering import lowpass_sos, sosfilt_batch
+from softtip.core.filtering import lowpass_sos, sosfilt_state
 from softtip.core.fingertip import Fingertip, load_fingertip
 from softtip.estimator.config import EstimatorConfig
-from softtip.estimator.contact import drift_message, first_contact_pulls, started_in_contact_message, track_contacts
+from softtip.estimator.contact import (
+    TrackState,
+    drift_message,
+    first_contact_pulls,
+    started_in_contact_message,
+    track_contacts,
+)
 from softtip.estimator.depth import depth_points, resolve_depth
 from softtip.estimator.evidence import evidence_states
 from softtip.estimator.joint import joint_points
 from softtip.estimator.latch import latch_points
 from softtip.estimator.measure import Measurement, effective_noise, measure, noise_correlation
 from softtip.estimator.results import LINE, NONE, Estimates, EstimatorWarning
-from softtip.estimator.tare import tare_log
+from softtip.estimator.tare import TareReport, tare_log
 
-__all__ = ["estimate"]
+__all__ = ["Carry", "estimate"]
+
+
+@dataclass
+class Carry:
+    """The pipeline's state between pieces of one log (see :func:`estimate`, ``carry``).
+
+    Empty before the first piece; :func:`estimate` fills it in at the end of each piece.
+    """
+
+    tare: TareReport | None = None  #: the tare of the first piece (its bias is used from then on)
+    zi: NDArray | None = None  #: the low-pass filter's state after the last piece
+    track: TrackState | None = None  #: the contact tracker's state after the last piece
+    had_latch: bool = False  #: a contact so far had a latched point (the next one starts re-latched)
 
 
 def validate_log(t: ArrayLike, wrench: ArrayLike) -> tuple[NDArray, NDArray]:
@@ -42,12 +62,14 @@ def validate_log(t: ArrayLike, wrench: ArrayLike) -> tuple[NDArray, NDArray]:
 
 
 def infer_rate(t: NDArray) -> float:
-    """Sample rate, Hz, from the median of the positive time steps (repeated stamps ignored)."""
+    """Sample rate, Hz, from the median of the positive time steps (repeated stamps ignored),
+    to 9 significant digits: stamps at a constant rate then give the same rate from any
+    stretch of the log (a log processed in pieces designs the filter from its first block)."""
     dt = np.diff(t)
     dt = dt[dt > 0]
     if not len(dt):
         raise ValueError("a low-pass filter needs at least two distinct sample times to infer the sample rate")
-    return 1.0 / float(np.median(dt))
+    return float(f"{1.0 / float(np.median(dt)):.9g}")
 
 
 def estimate(
@@ -55,8 +77,10 @@ def estimate(
     wrench: ArrayLike,
     tip: Fingertip | str = "murakami2006",
     config: EstimatorConfig | None = None,
+    *,
+    carry: Carry | None = None,
 ) -> Estimates:
-    """Run the estimator over a whole log.
+    """Run the estimator over a whole log (or a piece of one: ``carry``).
 
     Parameters
     ----------
@@ -68,6 +92,14 @@ def estimate(
     tip : Fingertip or str
         Fingertip, preset name or TOML path.
     config : EstimatorConfig, optional
+    carry : Carry, optional
+        For a log processed piece by piece (``softtip estimate`` on a log larger than
+        memory): the state the previous piece left (an empty :class:`Carry` for the first),
+        updated in place. A piece must start at a sample where the previous piece's
+        estimator was out of contact, no contact pending, the drift following (see
+        :func:`softtip.io.chunked.estimate_pieces`), and give ``config.sample_rate`` when it
+        low-pass filters; then every piece gives the bits of the whole log's run over its
+        samples. Warnings of the first piece's tare are given with the first piece only.
 
     Returns
     -------
@@ -86,16 +118,25 @@ def estimate(
     t, w = validate_log(t, wrench)
     n = len(t)
 
-    bias, taring, tare_report = tare_log(t, w, config)
+    later = carry is not None and carry.tare is not None
+    if later:  # a later piece: the first piece's bias, no tare
+        tare_report = carry.tare
+        bias, taring = tare_report.bias, np.zeros(n, dtype=bool)
+    else:
+        bias, taring, tare_report = tare_log(t, w, config)
     x = w - bias
 
     sos = None
+    zf = None
     if config.lowpass_hz is not None:
         rate = config.sample_rate or infer_rate(t)
         sos = lowpass_sos(config.lowpass_hz, rate, config.lowpass_order)
-        x = sosfilt_batch(sos, x) if np.all(np.isfinite(bias)) else x
+        if np.all(np.isfinite(bias)):
+            x, zf = sosfilt_state(sos, x, carry.zi if later else None)
     noise = effective_noise(config.noise, sos)
-    ct = track_contacts(t, x, int(np.count_nonzero(taring)), config, noise)
+    ct = track_contacts(t, x, int(np.count_nonzero(taring)), config, noise, carry.track if later else None)
+    if carry is not None:
+        carry.tare, carry.zi, carry.track = tare_report, zf, ct.state
     x = ct.wrench
 
     c = [np.ascontiguousarray(x[:, i]) for i in range(6)]
@@ -112,7 +153,10 @@ def estimate(
             has = np.asarray(sc[7], dtype=bool)
             latched = fallback = np.zeros(n, dtype=bool)
         else:
-            point, latched, fallback, relatched = latch_points(t, fn, contact, sc, tip, config)
+            had_latch = carry is not None and carry.had_latch
+            point, latched, fallback, relatched = latch_points(t, fn, contact, sc, tip, config, had_latch)
+            if carry is not None:
+                carry.had_latch = had_latch or bool(latched.any())
             if config.contact_point == "joint":
                 point, joint_stats, _, moved = joint_points(
                     t, c, contact, sc, point, relatched, tip, config, noise, noise_correlation(sos)
@@ -143,7 +187,7 @@ def estimate(
     state = np.where(located, ev_state, NONE).astype(np.int8)
     is_line = state == LINE
     started_in_contact = tare_report.source == "tare" and first_contact_pulls(t, pulling, ct.contact_id)
-    warn = list(tare_report.warnings)
+    warn = [] if later else list(tare_report.warnings)
     if started_in_contact:
         warn.append(started_in_contact_message(config))
     if ct.drift_alarm >= 0:

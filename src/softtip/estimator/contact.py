@@ -32,6 +32,7 @@ run of samples between the thresholds, and per block of ~4000 untouched samples)
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, field
 from math import sqrt
 from typing import NamedTuple
 
@@ -41,7 +42,10 @@ from numpy.typing import NDArray
 from softtip.core.noise import SensorNoise
 from softtip.estimator.config import EstimatorConfig
 
-__all__ = ["RELEASE_FLOOR", "contact_thresholds", "ContactTrack", "track_contacts", "ContactTracker", "START_PULL_TIME"]
+__all__ = [
+    "RELEASE_FLOOR", "contact_thresholds", "ContactTrack", "TrackState", "track_contacts", "ContactTracker",
+    "START_PULL_TIME",
+]  # fmt: skip
 
 #: The release threshold is at least this many ``σ_f``: an untouched sensor's ``|f|`` (noise
 #: only, a χ distribution with 3 degrees of freedom) is below it 90 % of the time.
@@ -67,11 +71,34 @@ def contact_thresholds(config: EstimatorConfig, noise: SensorNoise) -> tuple[flo
     return on, max(on - config.contact_hysteresis * sigma, min(on, RELEASE_FLOOR * sigma))
 
 
-def drift_weights(t: NDArray, config: EstimatorConfig) -> NDArray:
-    """``α`` per sample (the first sample has none)."""
+def drift_weights(t: NDArray, config: EstimatorConfig, t_before: float | None = None) -> NDArray:
+    """``α`` per sample (the first sample has none, unless ``t_before``, the time of the
+    sample before it, is given)."""
     a = np.zeros(len(t))
     a[1:] = np.minimum(np.diff(t) / config.drift_time_constant, _MAX_ALPHA)
+    if t_before is not None and len(t):
+        a[0] = min((t[0] - t_before) / config.drift_time_constant, _MAX_ALPHA)
     return a
+
+
+@dataclass
+class TrackState:
+    """What :func:`track_contacts` carries from one piece of a log to the next.
+
+    A log may be tracked piece by piece, cut only at samples that are untouched (no contact
+    pending or held, the drift following: ``~ContactTrack.busy``); with this state the
+    pieces give the same bits as the whole log. SI units.
+    """
+
+    t_last: float | None = None  #: s, time of the last sample tracked (None: none yet)
+    drift: NDArray[np.float64] = field(default_factory=lambda: np.zeros(6))  #: N, N·m, after the last sample
+    open: bool = False  #: a block of the drift average is open (its closed form goes on)
+    b0: NDArray[np.float64] = field(default_factory=lambda: np.zeros(6))  #: the open block's start
+    p0: float = 1.0  #: the open block's product of (1 − α)
+    acc0: NDArray[np.float64] = field(default_factory=lambda: np.zeros(6))  #: the open block's sums
+    block: int = 0  #: samples in the open block
+    count: int = 0  #: contacts so far
+    alarmed: bool = False  #: the drift alarm went off in an earlier piece
 
 
 class ContactTrack(NamedTuple):
@@ -81,7 +108,9 @@ class ContactTrack(NamedTuple):
     drift: NDArray[np.float64]  #: (N, 6) drift tracked before each sample, N and N·m
     contact: NDArray[np.bool_]  #: (N,) in contact (onset confirmed, not released)
     contact_id: NDArray[np.int64]  #: (N,) 1, 2, … per contact; 0 out of contact
-    drift_alarm: int  #: first sample whose drift force exceeds the contact threshold; -1 if none
+    drift_alarm: int  #: first sample whose drift force exceeds the contact threshold; -1 if none (or in an earlier piece)
+    busy: NDArray[np.bool_] | None = None  #: (N,) a contact pending or held, the drift not following
+    state: TrackState | None = None  #: the state after the last sample, for the next piece
 
 
 class _DriftAverage:
@@ -93,11 +122,21 @@ class _DriftAverage:
     small after such an event and double, so the work is proportional to the samples.
     """
 
-    def __init__(self, x: NDArray, alpha: NDArray):
+    def __init__(self, x: NDArray, alpha: NDArray, state: TrackState | None = None):
         self.x, self.alpha = x, alpha
         self.b = np.zeros(6)
         self.open = False
         self.size = 32
+        if state is not None:
+            self.b, self.open = np.array(state.drift, dtype=float), state.open
+            if state.open:
+                self.b0, self.p0, self.acc0, self.count = state.b0, state.p0, np.array(state.acc0), state.block
+
+    def save(self, state: TrackState) -> None:
+        """Store the average's state into ``state`` (the end of a piece)."""
+        state.drift, state.open = self.b.copy(), self.open
+        if self.open:
+            state.b0, state.p0, state.acc0, state.block = self.b0, self.p0, self.acc0.copy(), self.count
 
     def follow(self, i: int, n: int) -> tuple[int, NDArray]:
         """``(e, before)``: the drift before each sample of ``[i, e)`` if all are untouched."""
@@ -146,12 +185,14 @@ def _norm3(v: NDArray) -> NDArray:
     return np.sqrt(v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1] + v[:, 2] * v[:, 2])
 
 
-def _follow_drift(t: NDArray, x: NDArray, start: int, alpha: NDArray, on: float) -> NDArray:
+def _follow_drift(
+    t: NDArray, x: NDArray, start: int, alpha: NDArray, on: float, busy: NDArray, state: TrackState | None
+) -> NDArray:
     """The drift alone (``track_drift`` off): it follows every sample whose force is within
-    ``on`` of it."""
+    ``on`` of it; the others are marked in ``busy``."""
     n = len(t)
     drift = np.zeros((n, 6))
-    avg = _DriftAverage(x, alpha)
+    avg = _DriftAverage(x, alpha, state)
     i = start
     while i < n:
         e, before = avg.follow(i, n)
@@ -166,6 +207,9 @@ def _follow_drift(t: NDArray, x: NDArray, start: int, alpha: NDArray, on: float)
         b = avg.b
         i = _first(lambda lo, hi, b=b: _norm3(x[lo:hi, :3] - b[:3]) < on, j + 1, n)
         drift[j:i] = b
+        busy[j:i] = True
+    if state is not None:
+        avg.save(state)
     return drift
 
 
@@ -175,9 +219,13 @@ def _held(t: NDArray, dt: NDArray, j: int, m: int, min_dur: float) -> NDArray:
     return (t[j:m] - t[j]) + dt[j:m] >= min_dur
 
 
-def _hysteresis(t: NDArray, dt: NDArray, f: NDArray, start: int, on: float, off: float, min_dur: float, cid: NDArray) -> None:
-    """Contacts of a given ``|f|`` (N,), from ``start`` on, numbered into ``cid``."""
-    n, count, i = len(t), 0, start
+def _hysteresis(
+    t: NDArray, dt: NDArray, f: NDArray, start: int, on: float, off: float, min_dur: float, cid: NDArray,
+    busy: NDArray, count: int = 0,
+) -> int:
+    """Contacts of a given ``|f|`` (N,), from ``start`` on, numbered into ``cid`` after
+    ``count`` earlier ones; pending or held samples marked in ``busy``. Returns the count."""
+    n, i = len(t), start
     while i < n:
         j = _first(lambda lo, hi: f[lo:hi] >= on, i, n)
         if j >= n:
@@ -187,29 +235,42 @@ def _hysteresis(t: NDArray, dt: NDArray, f: NDArray, start: int, on: float, off:
         if ok.any():
             count += 1
             cid[j + int(np.argmax(ok)) : m] = count
+        busy[j:m] = True
         i = m
+    return count
 
 
-def track_contacts(t: NDArray, x: NDArray, start: int, config: EstimatorConfig, noise: SensorNoise) -> ContactTrack:
+def track_contacts(
+    t: NDArray, x: NDArray, start: int, config: EstimatorConfig, noise: SensorNoise, state: TrackState | None = None
+) -> ContactTrack:
     """Contacts and drift of the tared (filtered) wrench ``x`` (N, 6) at ``t`` (N,), from
-    sample ``start`` on (the samples before it are the tare's: no contact, no drift)."""
+    sample ``start`` on (the samples before it are the tare's: no contact, no drift).
+
+    ``state``: a piece of a longer log that goes on from an earlier piece, cut where that
+    one's samples were untouched; ``state`` (from that piece's :attr:`ContactTrack.state`)
+    is where it left off. Pieces tracked so give the bits of the whole log tracked at once.
+    """
     n = len(t)
     on, off = contact_thresholds(config, noise)
     min_dur = config.contact_min_duration
-    alpha = drift_weights(t, config)
+    state = TrackState() if state is None else TrackState(**vars(state))
+    alpha = drift_weights(t, config, state.t_last)
     dt = np.zeros(n)
     dt[1:] = np.diff(t)
+    if state.t_last is not None and n:
+        dt[0] = t[0] - state.t_last
     cid = np.zeros(n, dtype=np.int64)
+    busy = np.zeros(n, dtype=bool)
     if not config.track_drift:
-        drift = _follow_drift(t, x, start, alpha, on)
-        _hysteresis(t, dt, _norm3(x[:, :3]), start, on, off, min_dur, cid)
+        drift = _follow_drift(t, x, start, alpha, on, busy, state)
+        state.count = _hysteresis(t, dt, _norm3(x[:, :3]), start, on, off, min_dur, cid, busy, state.count)
         y = x
     else:
         # the contact decisions see the drift subtracted, and the drift follows only while
         # untouched: one loop, an iteration per contact and per chunk of untouched samples
         drift = np.zeros((n, 6))
-        avg = _DriftAverage(x, alpha)
-        count = 0
+        avg = _DriftAverage(x, alpha, state)
+        count = state.count
 
         def fn(lo, hi):  # |f| with the drift held at avg.b
             return _norm3(x[lo:hi, :3] - avg.b[:3])
@@ -228,15 +289,21 @@ def track_contacts(t: NDArray, x: NDArray, start: int, config: EstimatorConfig, 
             # onset at j; the drift is held while the contact is pending or held
             m = _first(lambda lo, hi: fn(lo, hi) < off, j + 1, n)
             drift[j:m] = avg.b
+            busy[j:m] = True
             ok = _held(t, dt, j, m, min_dur)
             if ok.any():
                 count += 1
                 cid[j + int(np.argmax(ok)) : m] = count
             i = m
         y = x - drift
+        avg.save(state)
+        state.count = count
     over = _norm3(drift[:, :3]) > on
-    alarm = int(np.argmax(over)) if over.any() else -1
-    return ContactTrack(y, drift, cid > 0, cid, alarm)
+    alarm = int(np.argmax(over)) if over.any() and not state.alarmed else -1
+    state.alarmed = state.alarmed or alarm >= 0
+    if n:
+        state.t_last = float(t[-1])
+    return ContactTrack(y, drift, cid > 0, cid, alarm, busy, state)
 
 
 class ContactTracker:

@@ -71,16 +71,17 @@ def _latch_segment(t, fn, valid, r_sc, tip: Fingertip, config: EstimatorConfig):
     return pe, lat, fbk, idx > fixed, latch
 
 
-def latch_points(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig):
+def latch_points(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig, had_latch: bool = False):
     """Contact point per sample in ``latch`` mode, with re-latching.
 
     Returns ``(point (N, 3), latched, fallback, relatched)``. Long logs: one compiled pass
     over all contacts (:func:`_latch_compiled`); short ones: one iteration per contact and
-    per re-latch, vectorised within each.
+    per re-latch, vectorised within each. ``had_latch``: a contact before these samples (an
+    earlier piece of the log) had a latch.
     """
     n = len(t)
     if jit_enabled(n):
-        return _latch_compiled(t, fn, contact, sc, tip, config)
+        return _latch_compiled(t, fn, contact, sc, tip, config, had_latch)
     point = np.full((n, 3), np.nan)
     latched = np.zeros(n, dtype=bool)
     fallback = np.zeros(n, dtype=bool)
@@ -91,7 +92,6 @@ def latch_points(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig):
     dist = config.relatch_distance
     edges = np.diff(np.concatenate(([False], contact, [False])).astype(np.int8))
     starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
-    had_latch = False
     for s, e in zip(starts, stops):
         relatched[s] = had_latch  # contact regained after a latched one
         a = s
@@ -124,14 +124,14 @@ def _projected_means(tip: Fingertip, sums, counts, use):
     return out
 
 
-def _latch_compiled(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig):
+def _latch_compiled(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig, had_latch: bool = False):
     """:func:`latch_points` over all contacts at once: the running sums of every segment in
     one compiled pass, the projections and the choices vectorised; with re-latching, one
     more pass for each re-latch that follows another in the same contact."""
     n = len(t)
     valid = np.asarray(sc[7], dtype=bool)
     rx, ry, rz = (np.where(valid, np.asarray(c, dtype=float), np.nan) for c in sc[:3])
-    lo, hi = config.latch_window
+    lo, hi = config.latch_force_range
     dist = config.relatch_distance
     onset = contact & ~np.concatenate(([False], contact[:-1]))
     begin = onset.copy()
@@ -186,7 +186,7 @@ def _latch_compiled(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig)
     point = np.where(contact[:, None], point, np.nan)
     relatched = begin & ~onset
     # contact regained after a latched one
-    had = np.concatenate(([0], np.cumsum(latched)))[np.flatnonzero(onset)] > 0
+    had = (np.concatenate(([0], np.cumsum(latched)))[np.flatnonzero(onset)] > 0) | had_latch
     relatched[np.flatnonzero(onset)] = had
     return point, latched, fallback, relatched
 

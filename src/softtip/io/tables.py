@@ -29,9 +29,10 @@ Python reader 3.8–4.3 s. pyarrow is needed for Parquet anyway and pandas is no
 used, so CSV goes through pyarrow; the Python parser stays only to word an error (and for
 the odd cell pyarrow does not take but Python's ``float`` does, such as ``1_000``). In one
 run of ``python benchmarks/bench_core.py --only end-to-end`` (same machine, busy) reading
-that log took 0.60 s of CPU against 2.67 s for the former reader, and writing the 34
-columns of ``softtip estimate`` for it 3.49 s against 8.19 s for the former writer
-(Parquet: 0.18 s and 0.67 s).
+that log took 0.51 s of CPU against 3.44 s for the former reader, and writing the 46
+columns of ``softtip estimate`` for it 4.3 s (pyarrow's CSV writer formatting 46 M numbers,
+~90 ns each) against 16 s for the former writer; Parquet: read 0.19 s, write 0.60 s (2.40 s
+with pyarrow's default dictionary encoding of every column).
 
 Output tables are written atomically when going to a path: a failure never leaves a
 partial file behind and never touches an existing file at the destination.
@@ -58,7 +59,7 @@ from numpy.typing import NDArray
 from softtip.core.units import UNIT_SYSTEMS, wrench_to_si
 from softtip.errors import InputError
 
-__all__ = ["Log", "read_log", "write_table", "REQUIRED_COLUMNS"]
+__all__ = ["REQUIRED_COLUMNS", "Log", "LogBlocks", "NotStreamable", "TableWriter", "iter_log", "read_log", "write_table"]
 
 #: Columns every input log must have, in wrench order after ``t``.
 REQUIRED_COLUMNS: tuple[str, ...] = ("t", "fx", "fy", "fz", "mx", "my", "mz")
@@ -511,7 +512,9 @@ def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None) 
 
     what = "Parquet log file"
     try:
-        table = pq.read_table(path)
+        # ParquetFile, not read_table: the latter imports pyarrow.dataset (~0.2 s) for nothing here
+        with pq.ParquetFile(path) as pf:
+            table = pf.read()
     except FileNotFoundError:
         raise InputError(f"{source}: file not found; expected an existing {what}") from None
     except IsADirectoryError:
@@ -841,7 +844,9 @@ def write_table(
         ``os.replace``): on any failure the temporary file is removed and an existing file
         at ``dest`` is left untouched. A path ending in ``.parquet`` is written as Parquet
         (pyarrow; values exactly, booleans as booleans, text as strings, ``metadata`` in
-        the schema's key-value metadata).
+        the schema's key-value metadata; :data:`PARQUET_COMPRESSION`, dictionary encoding
+        for the columns that are not floating point). :class:`TableWriter` writes a table
+        piece by piece.
     float_format : str
         CSV only: a printf-style format for one float. ``"%.<d>g"`` with ``d`` ≤ 17 (the
         default ``"%.10g"``; ``"%.17g"`` round-trips float64 exactly) writes each value
@@ -960,6 +965,10 @@ def _needs_quotes(arr: np.ndarray) -> bool:
     return bool(np.isin(codes, [ord(ch) for ch in _CSV_SPECIAL]).any())
 
 
+# Exact powers of ten, 10**0 .. 10**22 (every one is a float64 exactly).
+_POW10 = 10.0 ** np.arange(23)
+
+
 def _round_significant(x: np.ndarray, digits: int) -> np.ndarray:
     """``x`` rounded to ``digits`` significant decimal digits, as the nearest float64.
 
@@ -968,17 +977,35 @@ def _round_significant(x: np.ndarray, digits: int) -> np.ndarray:
     that range (below 1e-13 or from 1e32 on, for 10 digits) go through Python's printf one
     by one. Zeros, NaN and infinities are left as they are. Where ``x * 10**k`` lands within
     its rounding error of a tie the last digit may differ from printf's by one.
+
+    Vectorised with one table look-up for ``10**k`` and the common case (``0 ≤ k ≤ 22``:
+    ``|x|`` below ``10**digits``) done for all values at once; the other cases are fixed
+    on the (usually empty) subsets they concern.
     """
     if digits >= 17:
         return x
     with np.errstate(all="ignore"):
-        k = (digits - 1) - np.floor(np.log10(np.abs(x)))
-        up = (k >= 0) & (k <= 22)
-        down = (k < 0) & (k >= -22)
-        scale = 10.0 ** np.where(up, k, np.where(down, -k, 0.0))
-        out = np.where(up, np.round(x * scale) / scale, x)
-        out = np.where(down, np.round(x / scale) * scale, out)
-        far = np.isfinite(k) & ~up & ~down
+        k = np.log10(np.abs(x))
+        np.floor(k, out=k)
+        np.subtract(digits - 1, k, out=k)  # NaN for NaN, +inf for 0, -inf for ±inf
+        finite = np.isfinite(k)
+        up = finite & (k >= 0) & (k <= 22)
+        if up.all():
+            scale = _POW10[k.astype(np.intp)]
+            out = x * scale
+            np.rint(out, out=out)
+            np.divide(out, scale, out=out)
+            return out
+        out = x.copy()
+        ku = np.where(up, k, 0.0).astype(np.intp)
+        scale = _POW10[ku]
+        rounded = np.rint(x * scale) / scale
+        out[up] = rounded[up]
+        down = finite & (k < 0) & (k >= -22)
+        if down.any():
+            q = _POW10[(-k[down]).astype(np.intp)]
+            out[down] = np.rint(x[down] / q) * q
+        far = finite & ~up & ~down
     if far.any():
         out[far] = [float(f"%.{digits}g" % v) for v in x[far].tolist()]
     return out
@@ -1008,7 +1035,7 @@ def _object_cells(a: np.ndarray) -> list[str]:
     return [_quote(c) for c in cells]
 
 
-def _write_rows(out: TextIO | BinaryIO, plan: _Plan) -> None:
+def _write_rows(out: TextIO | BinaryIO, plan: _Plan, *, header: bool = True) -> None:
     """Write the table to a text stream (Parquet: to its binary buffer), in blocks.
 
     A binary stream (an atomic writer's temporary file, say) is written to as UTF-8.
@@ -1016,7 +1043,7 @@ def _write_rows(out: TextIO | BinaryIO, plan: _Plan) -> None:
     if not hasattr(out, "encoding"):
         text = io.TextIOWrapper(out, encoding="utf-8", newline="", write_through=True)  # type: ignore[arg-type]
         try:
-            _write_rows(text, plan)
+            _write_rows(text, plan, header=header)
         finally:
             text.flush()
             text.detach()
@@ -1024,7 +1051,8 @@ def _write_rows(out: TextIO | BinaryIO, plan: _Plan) -> None:
     if plan.parquet:
         _write_parquet(out, plan)
         return
-    out.write(plan.header)
+    if header:
+        out.write(plan.header)
     if plan.digits is None:
         _write_rows_printf(out, plan)
         return
@@ -1060,13 +1088,49 @@ def _arrow_block(plan: _Plan, start: int, stop: int, *, rounded: bool) -> Any:
         if kind == "f":
             cols.append(pa.array(_round_significant(a, plan.digits) if rounded and plan.digits else a))
         elif kind == "b":
-            cols.append(pa.array(a if plan.parquet else a.astype(np.int8)))
-        elif kind in "iuU":
+            cols.append(pa.array(a if plan.parquet else a.view(np.int8)))
+        elif kind in "iu":
             cols.append(pa.array(a))
+        elif kind == "U":
+            cols.append(_arrow_strings(a, plain=plan.parquet))
         else:  # their text, unquoted: pyarrow quotes
             cells = [x.decode("utf-8", "replace") if isinstance(x, bytes) else str(x) for x in a.tolist()]
             cols.append(pa.array(cells, type=pa.string()))
     return pa.Table.from_arrays(cols, names=plan.names)
+
+
+# A text column with at most this many distinct cells is dictionary-encoded on its way to pyarrow.
+_MAX_LEVELS = 16
+
+
+def _arrow_strings(a: np.ndarray, *, plain: bool) -> Any:
+    """A numpy unicode column as a pyarrow array of its text.
+
+    A column of a few distinct values (softtip's ``state`` and ``line_evidence``) is found
+    by a few whole-column comparisons and handed over dictionary-encoded (pyarrow's CSV
+    writer takes that as it is), ~4× faster than pyarrow's conversion cell by cell;
+    ``plain``: decoded to a plain string array (so a Parquet file's column type stays
+    ``string``). Other columns go through pyarrow's conversion.
+    """
+    import pyarrow as pa
+
+    n = len(a)
+    codes = np.zeros(n, dtype=np.int8)
+    levels: list[str] = []
+    left = np.ones(n, dtype=bool)
+    i = 0
+    while n:
+        same = a == a[i]
+        codes[same] = len(levels)
+        levels.append(str(a[i]))
+        left &= ~same
+        if not left.any():
+            break
+        if len(levels) >= _MAX_LEVELS:
+            return pa.array(a, type=pa.string())
+        i = int(np.argmax(left))
+    out = pa.DictionaryArray.from_arrays(pa.array(codes), pa.array(levels, type=pa.string()))
+    return out.dictionary_decode() if plain else out
 
 
 def _write_rows_printf(out: TextIO, plan: _Plan) -> None:
@@ -1087,10 +1151,16 @@ def _write_rows_printf(out: TextIO, plan: _Plan) -> None:
 # Rows per Parquet row group (and per progress step).
 _PARQUET_ROWS = 1 << 18
 
+#: Parquet compression, chosen by measurement: the 46 columns of ``softtip estimate`` for a
+#: 1e6-row log (2-core machine shared with other work, CPU s, file MB) with pyarrow's
+#: default dictionary encoding of every column 1.32 s, 158 MB; dictionary encoding only for
+#: the columns that are not floats (a float column of measurements has no repeats to find)
+#: with snappy 0.40 s, 154 MB; lz4 0.56 s, 146 MB; zstd level 1 0.82 s, 120 MB; none 0.54 s
+#: (more bytes to write), 305 MB. Snappy: the fastest, and what every Parquet reader reads.
+PARQUET_COMPRESSION = "snappy"
+
 
 def _write_parquet(out: TextIO, plan: _Plan) -> None:
-    import pyarrow.parquet as pq
-
     binary = getattr(out, "buffer", out)
     out.flush()
     writer = None
@@ -1099,9 +1169,8 @@ def _write_parquet(out: TextIO, plan: _Plan) -> None:
             stop = min(start + _PARQUET_ROWS, plan.n)
             table = _arrow_block(plan, start, stop, rounded=False)
             if writer is None:
-                schema = table.schema.with_metadata(plan.metadata or {})
-                writer = pq.ParquetWriter(binary, schema)
-            writer.write_table(table.cast(schema))
+                writer = _parquet_writer(binary, table, plan.metadata)
+            writer.write_table(table)
             if plan.progress is not None and stop > start:
                 plan.progress(stop - start)
     finally:
@@ -1110,8 +1179,326 @@ def _write_parquet(out: TextIO, plan: _Plan) -> None:
     binary.flush()
 
 
+def _parquet_writer(binary: BinaryIO, first: Any, metadata: Mapping[str, str] | None) -> Any:
+    """A ``ParquetWriter`` for tables like ``first``: :data:`PARQUET_COMPRESSION`, dictionary
+    encoding for the columns that are not floating point, ``metadata`` in the schema."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    schema = first.schema.with_metadata(dict(metadata or {}))
+    coded = [field.name for field in schema if not pa.types.is_floating(field.type)]
+    return pq.ParquetWriter(binary, schema, compression=PARQUET_COMPRESSION, use_dictionary=coded)
+
+
 def _write_atomic(path: str, plan: _Plan) -> None:
     from softtip.io.atomic import atomic_write
 
     with atomic_write(path) as fh:
         _write_rows(fh, plan)
+
+
+# --------------------------------------------------------------------------------------
+# piece by piece: logs larger than memory
+
+
+#: Bytes of CSV text per block of :func:`iter_log`.
+_CSV_BLOCK_BYTES = 1 << 22
+
+
+class NotStreamable(Exception):
+    """:func:`iter_log` met something its block reader does not take (a trailing blank
+    line, a cell only Python's parser reads, or an error): read the log at once with
+    :func:`read_log`, which takes it or words the error."""
+
+
+class LogBlocks:
+    """A CSV or Parquet log read block by block (:func:`iter_log`).
+
+    Iterate for ``(t, wrench, extra)`` blocks in SI (``extra``: the other columns' values,
+    numpy arrays: text from CSV); after the last block :meth:`warnings` says what
+    :attr:`Log.warnings` would (repeated stamps; the time scale, judged on the first block;
+    a cut last line). Raises :class:`NotStreamable` while iterating for anything else.
+    """
+
+    def __init__(self, path: str | os.PathLike[str], units: str | None, rows: int, progress: Callable[[int], object] | None):
+        self.source = _source_name(path)
+        self.path = os.fspath(path)
+        if units is not None and units not in UNIT_SYSTEMS:
+            raise InputError(f"{self.source}: unknown units {units!r}; expected one of: {', '.join(UNIT_SYSTEMS)}")
+        self.parquet = _is_parquet(self.path)
+        self.rows, self.progress = rows, progress
+        self.units = units
+        self.n = 0
+        self.repeated = 0
+        self._first_repeat = -1
+        self._repeat_t = math.nan
+        self._first_t: NDArray[np.float64] | None = None
+        self._last_t = -math.inf
+        self._first_line: int | None = None
+        self._quoted: bool | None = None  # whether the data holds a quote (then rows may span lines); None: not looked
+
+    def __iter__(self) -> Any:
+        blocks = self._parquet_blocks() if self.parquet else self._csv_blocks()
+        for t, wrench, extra in blocks:
+            if not (np.isfinite(t).all() and np.isfinite(wrench).all()) or (np.diff(t) < 0).any() or t[0] < self._last_t:
+                raise NotStreamable("a value to word")
+            same = np.flatnonzero(np.diff(np.concatenate(([self._last_t], t))) == 0)
+            if len(same) and self._first_repeat < 0:
+                self._first_repeat = self.n + int(same[0])
+                self._repeat_t = float(t[same[0]])
+            self.repeated += len(same)
+            if self._first_t is None:
+                self._first_t = t
+            self._last_t = float(t[-1])
+            self.n += len(t)
+            yield t, wrench_to_si(wrench, self.units or "si"), extra
+
+    def warnings(self) -> tuple[str, ...]:
+        """What :attr:`Log.warnings` holds for the whole log (after the last block)."""
+        first_line = self._first_line
+        if first_line is not None and (self.repeated or not self._ends_with_break()):
+            if self._quoted is None:  # one more pass over the file, only when a line number is to be given
+                self._quoted = self._has_quote()
+            first_line = None if self._quoted else first_line
+        notes = []
+        if self.repeated:
+            where = f"line {first_line + self._first_repeat}" if first_line is not None else f"data row {self._first_repeat + 1}"
+            what = "line" if first_line is not None else "row"
+            notes.append(
+                f"{self.source}: {self.repeated} repeated time stamp{'s' if self.repeated > 1 else ''} (the first on "
+                f"{where}: t = {self._repeat_t:.10g} s as on the {what} before); kept in file order"
+            )
+        if self._first_t is not None:
+            notes += [n for n in _time_notes(self._first_t, self.source, first_line)[1] if "median step" in n]
+        if not self.parquet and first_line is not None:
+            cut = self._cut_tail(first_line)
+            if cut:
+                notes.append(cut)
+        return tuple(notes)
+
+    def _csv_blocks(self) -> Any:
+        import pyarrow as pa
+        from pyarrow import csv as pacsv
+
+        try:
+            with open(self.path, "rb") as fh:
+                prefix = fh.read(_HEADER_PREFIX + 3)
+                size = os.fstat(fh.fileno()).st_size
+        except OSError:
+            raise NotStreamable("unreadable") from None
+        skip = 3 if prefix.startswith(b"\xef\xbb\xbf") else 0
+        prefix = prefix[skip:]
+        whole = skip + len(prefix) >= size
+        if not whole:
+            prefix = prefix[: prefix.rfind(b"\n") + 1]
+        try:
+            text = prefix.decode("utf-8")
+            header = _read_header(text, self.source)
+            index = _column_index(header, self.source)
+        except (UnicodeDecodeError, InputError):
+            raise NotStreamable("header") from None
+        pos = header.lines.tell()
+        if not whole and pos >= len(text):
+            raise NotStreamable("long header")
+        start = skip + len(text[:pos].encode("utf-8"))
+        self._first_line = header.data_base + 1
+        names = header.names
+        types = {name: pa.float64() if j in index.values() else pa.string() for j, name in enumerate(names)}
+        extra_idx = [j for j in range(len(names)) if j not in index.values()]
+        self._size, self._start = size, start
+        stream = pa.OSFile(self.path)
+        try:
+            stream.seek(start)
+            reader = pacsv.open_csv(
+                stream,
+                read_options=pacsv.ReadOptions(column_names=names, use_threads=False, block_size=_CSV_BLOCK_BYTES),
+                parse_options=pacsv.ParseOptions(newlines_in_values=True, ignore_empty_lines=False),
+                convert_options=pacsv.ConvertOptions(
+                    column_types=types, check_utf8=True, strings_can_be_null=False, quoted_strings_can_be_null=False
+                ),
+            )
+            while True:
+                try:
+                    batch = reader.read_next_batch()
+                except StopIteration:
+                    break
+                if batch.num_rows == 0:
+                    continue
+                cols = [batch.column(index[name]) for name in REQUIRED_COLUMNS]
+                if any(c.null_count for c in cols):
+                    raise NotStreamable("empty cell")
+                t = np.array(cols[0].to_numpy(), dtype=np.float64)
+                wrench = np.empty((batch.num_rows, 6))
+                for i, col in enumerate(cols[1:]):
+                    wrench[:, i] = col.to_numpy()
+                extra = {names[j]: np.asarray(batch.column(j).to_pylist(), dtype=str) for j in extra_idx}
+                if self.progress is not None:
+                    self.progress(batch.num_rows)
+                yield t, wrench, extra
+        except (pa.ArrowException, ValueError, OSError):
+            raise NotStreamable("parser") from None
+        finally:
+            stream.close()
+
+    def _ends_with_break(self) -> bool:
+        """Whether the file ends with a line break (else its last line may have been cut)."""
+        with open(self.path, "rb") as fh:
+            fh.seek(max(0, self._size - 1))
+            return fh.read(1) in (b"\n", b"\r")
+
+    def _has_quote(self) -> bool:
+        with open(self.path, "rb") as fh:
+            fh.seek(self._start)
+            while chunk := fh.read(1 << 24):
+                if b'"' in chunk:
+                    return True
+        return False
+
+    def _cut_tail(self, first_line: int) -> str | None:
+        with open(self.path, "rb") as fh:
+            fh.seek(max(self._start, self._size - (1 << 16)))
+            tail = fh.read()
+        note = _cut_last_line(tail, self.source, self.n if self.n >= 4 else 0)
+        if note is None:
+            return None
+        # the tail's line count is not the file's: every data row is one line here
+        line = first_line + self.n - 1
+        return re.sub(rf"^{re.escape(self.source)}:\d+:", f"{self.source}:{line}:", note)
+
+    def _parquet_blocks(self) -> Any:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        try:
+            pf = pq.ParquetFile(self.path)
+        except (pa.ArrowException, OSError):
+            raise NotStreamable("unreadable") from None
+        with pf:
+            meta = {k.decode("utf-8", "replace"): v.decode("utf-8", "replace") for k, v in (pf.schema_arrow.metadata or {}).items()}
+            file_units = meta.get(PARQUET_UNITS_KEY)
+            if (file_units is not None and file_units not in UNIT_SYSTEMS) or (
+                self.units is not None and file_units is not None and self.units != file_units
+            ):
+                raise NotStreamable("units")
+            self.units = self.units or file_units or "si"
+            names = list(pf.schema_arrow.names)
+            header = _Header(names=[n.strip() for n in names], line=0, data_base=0, lines=io.StringIO(), comments=[])
+            try:
+                index = _column_index(header, self.source)
+            except InputError:
+                raise NotStreamable("columns") from None
+            for name in REQUIRED_COLUMNS:
+                typ = pf.schema_arrow.field(index[name]).type
+                if not (pa.types.is_floating(typ) or pa.types.is_integer(typ)):
+                    raise NotStreamable("types")
+            if pf.metadata.num_rows == 0:
+                raise NotStreamable("no rows")
+            extra_idx = [j for j in range(len(names)) if j not in index.values()]
+            try:
+                for batch in pf.iter_batches(batch_size=self.rows):
+                    cols = [batch.column(index[name]) for name in REQUIRED_COLUMNS]
+                    if any(c.null_count for c in cols):
+                        raise NotStreamable("null")
+                    t = np.array(cols[0].to_numpy(), dtype=np.float64)
+                    wrench = np.empty((batch.num_rows, 6))
+                    for i, col in enumerate(cols[1:]):
+                        wrench[:, i] = col.to_numpy()
+                    extra = {names[j]: batch.column(j).to_numpy(zero_copy_only=False) for j in extra_idx}
+                    if self.progress is not None:
+                        self.progress(batch.num_rows)
+                    yield t, wrench, extra
+            except (pa.ArrowException, OSError):
+                raise NotStreamable("reader") from None
+
+
+def iter_log(
+    path: str | os.PathLike[str],
+    units: str | None = None,
+    *,
+    rows: int = 1 << 16,
+    progress: Callable[[int], object] | None = None,
+) -> LogBlocks:
+    """A CSV or Parquet log file, block by block, for logs larger than memory.
+
+    Parameters
+    ----------
+    path : str or path-like
+        As :func:`read_log` (a file; ``.parquet`` by extension).
+    units : {"si", "kgf-mm"} or None
+        As :func:`read_log`.
+    rows : int
+        Parquet: rows per block (CSV blocks are pyarrow's, ~4 MB of text).
+    progress : callable, optional
+        Called with the number of rows of each block.
+
+    Returns
+    -------
+    LogBlocks
+        Iterate it for ``(t, wrench, extra)`` blocks; the values are those
+        :func:`read_log` gives, in pieces. Anything :func:`read_log` would report (or that
+        only its Python parser reads) raises :class:`NotStreamable` during the iteration:
+        read the file with :func:`read_log` then, for the located message.
+    """
+    return LogBlocks(path, units, rows, progress)
+
+
+class TableWriter:
+    """:func:`write_table`, piece by piece, to an open stream (an atomic writer's file).
+
+    Parameters
+    ----------
+    out : text or binary stream
+        Left open.
+    parquet : bool
+        Parquet (one row group per block) instead of CSV.
+    float_format, metadata
+        As :func:`write_table`.
+
+    Each :meth:`write` appends rows with the same columns; the CSV header comes with the
+    first. CSV text cells are quoted, when one needs it, piece by piece (each piece as
+    :func:`write_table` would quote it). Call :meth:`close` at the end.
+    """
+
+    def __init__(self, out: TextIO | BinaryIO, *, parquet: bool, float_format: str = "%.10g", metadata: Mapping[str, str] | None = None):
+        self.out, self.parquet, self.float_format = out, parquet, float_format
+        self.metadata = dict(metadata or {})
+        self.names: list[str] | None = None
+        self._writer: Any = None
+        if not hasattr(out, "encoding"):
+            self._text = io.TextIOWrapper(out, encoding="utf-8", newline="", write_through=True)  # type: ignore[arg-type]
+        else:
+            self._text = None
+
+    def write(self, columns: Mapping[str, Sequence[Any] | np.ndarray], progress: Callable[[int], object] | None = None) -> None:
+        """Append the rows of ``columns`` (the same names, in the same order, every time)."""
+        plan = _plan_table(columns, self.float_format)
+        if self.names is not None and plan.names != self.names:
+            raise ValueError(f"columns {plan.names} differ from the first piece's {self.names}")
+        plan.progress = progress
+        out = self._text or self.out
+        if self.parquet:
+            binary = getattr(out, "buffer", out)
+            out.flush()
+            for start in range(0, plan.n, _PARQUET_ROWS):
+                stop = min(start + _PARQUET_ROWS, plan.n)
+                plan.parquet = True
+                table = _arrow_block(plan, start, stop, rounded=False)
+                if self._writer is None:
+                    self._writer = _parquet_writer(binary, table, self.metadata)
+                self._writer.write_table(table)
+                if progress is not None:
+                    progress(stop - start)
+        else:
+            _write_rows(out, plan, header=self.names is None)  # type: ignore[arg-type]
+        self.names = plan.names
+
+    def close(self) -> None:
+        """Finish the file (Parquet: its footer); the stream stays open."""
+        if self._writer is not None:
+            self._writer.close()
+            self._writer = None
+        out = self._text or self.out
+        out.flush()
+        if self._text is not None:
+            self._text.detach()
+            self._text = None
