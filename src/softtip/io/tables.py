@@ -36,6 +36,10 @@ with pyarrow's default dictionary encoding of every column).
 
 Output tables are written atomically when going to a path: a failure never leaves a
 partial file behind and never touches an existing file at the destination.
+
+Logs larger than memory: :func:`iter_log` reads a CSV or Parquet file block by block with
+the values and warnings of :func:`read_log`, and :class:`TableWriter` writes a table piece
+by piece (``softtip estimate`` uses both through :mod:`softtip.chunked`).
 """
 
 from __future__ import annotations
