@@ -13,6 +13,7 @@ for any :class:`~softtip.core.fingertip.ImplicitSurface`.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -23,7 +24,7 @@ from softtip.core._xp import NP
 from softtip.core.fingertip import Capsule, Ellipsoid, Fingertip, ImplicitSurface, Sphere, load_fingertip
 from softtip.core.mounting import Mounted
 
-__all__ = ["Contact", "contact_from_wrench"]
+__all__ = ["Contact", "SoftFinger", "contact_from_wrench"]
 
 
 @dataclass(frozen=True)
@@ -152,6 +153,29 @@ def _ellipsoid_kernel(fx, fy, fz, mx, my, mz, a, b, c, cx, cy, cz, xp):
         kappa * gnorm,
         valid,
     )
+
+
+class SoftFinger(NamedTuple):
+    """The soft-finger solution, component-wise (floats or arrays of one shape), sensor frame."""
+
+    rx: Any  #: contact point, m
+    ry: Any
+    rz: Any
+    nx: Any  #: outward unit normal there
+    ny: Any
+    nz: Any
+    sigma: Any  #: spin torque about the normal, N·m
+    valid: Any  #: a pushing solution was found
+
+    @property
+    def point(self) -> tuple:
+        """``(rx, ry, rz)``."""
+        return self[0], self[1], self[2]
+
+    @property
+    def normal(self) -> tuple:
+        """``(nx, ny, nz)``."""
+        return self[3], self[4], self[5]
 
 
 def contact_kernel(tip: Fingertip, fx, fy, fz, mx, my, mz, xp=NP):
@@ -368,8 +392,7 @@ def _blocks(tip: Fingertip, comps: list[NDArray]):
 def contact_arrays(tip: Fingertip, fx, fy, fz, mx, my, mz) -> tuple[NDArray, ...]:
     """:func:`contact_kernel` over 1-D component arrays of any length, in cache-sized blocks.
 
-    Returns the 8 arrays ``(rx, ry, rz, nx, ny, nz, sigma, valid)``; invalid samples are not
-    masked.
+    Returns the 8 arrays as a :class:`SoftFinger`; invalid samples are not masked.
     """
     comps = [np.asarray(c, dtype=float) for c in (fx, fy, fz, mx, my, mz)]
     n = len(comps[0])
@@ -377,4 +400,4 @@ def contact_arrays(tip: Fingertip, fx, fy, fz, mx, my, mz) -> tuple[NDArray, ...
     for block, res in _blocks(tip, comps):
         for dst, src in zip(out, res):
             dst[block] = src
-    return tuple(out)
+    return SoftFinger(*out)

@@ -148,9 +148,9 @@ def estimate(
     with np.errstate(invalid="ignore", divide="ignore"):
         sc = contact_arrays(tip, *c)
         if config.contact_point == "track":
-            point = np.stack(sc[:3], axis=-1)
-            normal = np.stack(sc[3:6], axis=-1)
-            has = np.asarray(sc[7], dtype=bool)
+            point = np.stack(sc.point, axis=-1)
+            normal = np.stack(sc.normal, axis=-1)
+            has = np.asarray(sc.valid, dtype=bool)
             latched = fallback = np.zeros(n, dtype=bool)
         else:
             had_latch = carry is not None and carry.had_latch

@@ -20,7 +20,7 @@ from collections import deque
 import numpy as np
 
 from softtip.core._xp import NP, PY
-from softtip.core.contact import contact_kernel
+from softtip.core.contact import SoftFinger, contact_kernel
 from softtip.core.depth import depth_kernel
 from softtip.core.fingertip import Fingertip
 from softtip.core.joint import N_SUMS, joint_products, joint_solve_kernel
@@ -69,7 +69,7 @@ def joint_points(t, c, contact, sc, base, relatched, tip: Fingertip, config: Est
     (the latched one elsewhere).
     """
     n = len(t)
-    valid = contact & np.asarray(sc[7], dtype=bool)
+    valid = contact & np.asarray(sc.valid, dtype=bool)
     stats = np.full((4, n), np.nan)
     jp = np.full((n, 3), np.nan)
     edges = np.diff(np.concatenate(([False], contact, [False])).astype(np.int8))
@@ -77,8 +77,8 @@ def joint_points(t, c, contact, sc, base, relatched, tip: Fingertip, config: Est
         v = np.flatnonzero(valid[s:e]) + s
         if not len(v):
             continue
-        anchor = [float(sc[i][v[0]]) for i in range(3)]  # first soft-finger point of the contact
-        normal = np.stack([sc[i][v] for i in (3, 4, 5)], axis=-1)
+        anchor = [float(c[v[0]]) for c in sc.point]  # first soft-finger point of the contact
+        normal = np.stack([c[v] for c in sc.normal], axis=-1)
         if config.depth is not None:
             has = np.all(np.isfinite(base[v]), axis=-1)
             normal[has] = tip.normal(base[v][has])
@@ -151,12 +151,12 @@ class JointTracker:
         cfg = self.config
         stats = _NAN4
         if sc is None:
-            sc = contact_kernel(self.tip, *x, xp=PY)
-        if sc[7]:
+            sc = SoftFinger(*contact_kernel(self.tip, *x, xp=PY))
+        if sc.valid:
             if self._anchor is None:
-                self._anchor = (sc[0], sc[1], sc[2])
+                self._anchor = sc.point
             ax, ay, az = self._anchor
-            nx, ny, nz = sc[3], sc[4], sc[5]
+            nx, ny, nz = sc.normal
             if cfg.depth is not None and point is not None:
                 nx, ny, nz = self.tip._normal_kernel(*point, PY)
             qa = joint_moment(*x, nx, ny, nz, ax, ay, az, cfg.depth, PY)

@@ -20,7 +20,7 @@ import numpy as np
 
 from softtip.core._jit import jit_enabled
 from softtip.core._xp import NP, PY
-from softtip.core.contact import contact_kernel
+from softtip.core.contact import SoftFinger, contact_kernel
 from softtip.core.fingertip import Fingertip
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.sequential import latch_scan_kernel
@@ -86,8 +86,8 @@ def latch_points(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig, ha
     latched = np.zeros(n, dtype=bool)
     fallback = np.zeros(n, dtype=bool)
     relatched = np.zeros(n, dtype=bool)
-    valid = np.asarray(sc[7], dtype=bool)
-    r_sc = np.where(valid[:, None], np.stack(sc[:3], axis=-1), np.nan)
+    valid = np.asarray(sc.valid, dtype=bool)
+    r_sc = np.where(valid[:, None], np.stack(sc.point, axis=-1), np.nan)
     lo, hi = config.latch_force_range
     dist = config.relatch_distance
     edges = np.diff(np.concatenate(([False], contact, [False])).astype(np.int8))
@@ -129,8 +129,8 @@ def _latch_compiled(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig,
     one compiled pass, the projections and the choices vectorised; with re-latching, one
     more pass for each re-latch that follows another in the same contact."""
     n = len(t)
-    valid = np.asarray(sc[7], dtype=bool)
-    rx, ry, rz = (np.where(valid, np.asarray(c, dtype=float), np.nan) for c in sc[:3])
+    valid = np.asarray(sc.valid, dtype=bool)
+    rx, ry, rz = (np.where(valid, np.asarray(c, dtype=float), np.nan) for c in sc.point)
     lo, hi = config.latch_force_range
     dist = config.relatch_distance
     onset = contact & ~np.concatenate(([False], contact[:-1]))
@@ -225,11 +225,11 @@ class LatchTracker:
         lo, hi = self.config.latch_force_range
         if self.point is None or dist is None or not lo <= fn <= hi:
             return False, sc
-        sc = contact_kernel(self.tip, *x, xp=PY)
-        if not sc[7]:
+        sc = SoftFinger(*contact_kernel(self.tip, *x, xp=PY))
+        if not sc.valid:
             return False, sc
         lx, ly, lz = self.point
-        dx, dy, dz = sc[0] - lx, sc[1] - ly, sc[2] - lz
+        dx, dy, dz = sc.rx - lx, sc.ry - ly, sc.rz - lz
         return dx * dx + dy * dy + dz * dz > dist * dist, sc
 
     def step(self, t: float, fn: float, x: list[float], sc):
@@ -243,12 +243,12 @@ class LatchTracker:
         if point is not None:
             return point, True, self.is_fallback, sc
         if sc is None:
-            sc = contact_kernel(self.tip, *x, xp=PY)
+            sc = SoftFinger(*contact_kernel(self.tip, *x, xp=PY))
         fallback = False
-        valid = sc[7]
+        valid = sc.valid
         if valid and self._n_fb < cfg.fallback_samples:
             self._n_fb += 1
-            self._sum_fb = [s + v for s, v in zip(self._sum_fb, sc[:3])]
+            self._sum_fb = [s + v for s, v in zip(self._sum_fb, sc.point)]
         lo, hi = cfg.latch_force_range
         if self.rising and (fn > hi or t - self._t_peak > cfg.stall_time):
             self.rising = False
@@ -257,11 +257,11 @@ class LatchTracker:
         if self.rising:
             if valid and lo <= fn <= hi:
                 self._n_win += 1
-                self._sum_win = [s + v for s, v in zip(self._sum_win, sc[:3])]
+                self._sum_win = [s + v for s, v in zip(self._sum_win, sc.point)]
             if self._n_win > 0:
                 point = self._mean(self._sum_win, self._n_win)
             elif valid:
-                point = (sc[0], sc[1], sc[2])
+                point = sc.point
         elif point is None and self._n_fb > 0:
             point = self._mean(self._sum_fb, self._n_fb)
             fallback = True
