@@ -66,6 +66,7 @@ _CREASE_WEDGE_TOL = 1e-6  # a normal this close (rad) outside a crease's wedge o
 _CREASE_RES_TOL = 1e-9  # a crease edge's moment may leave the normals' plane by this × |f| × size
 _CREASE_SPLIT = 16  # intervals bracketing a crease edge's roots
 _CREASE_BISECT = 60  # interval halvings: to the last bit of t
+_CUBIC_FROM_VALUES = np.linalg.inv(np.vander([0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0], 4, increasing=True)).tolist()
 _WALK = 8  # faces the streaming cast walks from the previous sample's face
 _NEAR_K = 32  # nearest triangle centroids tried first by the closest-point query
 _SIDE_TOL = 1e-13  # Plücker side products within this × |f| × size² of zero count as on the edge
@@ -1077,6 +1078,16 @@ class MeshFingertip(Fingertip):
             qx, qy, qz, nax, nay, naz, nbx, nby, nbz = parts(t, c)
             return qx * (nay * nbz - naz * nby) + qy * (naz * nbx - nax * nbz) + qz * (nax * nby - nay * nbx)
 
+        # g is a cubic in t: its coefficients from four values, then Horner's rule (cheap in
+        # the search below)
+        y = [g(x, c) for x in (0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0)]
+        cubic = [y[0] * v0 + y[1] * v1 + y[2] * v2 + y[3] * v3 for v0, v1, v2, v3 in _CUBIC_FROM_VALUES]
+
+        def g(t, cb):  # noqa: F811 - the same function, from its coefficients
+            return ((cb[3] * t + cb[2]) * t + cb[1]) * t + cb[0]
+
+        c_full = c
+        c = cubic
         k = _CREASE_SPLIT
         # the ends reach a little past the edge: a root at a vertex is not lost to rounding
         knots = [-_CREASE_EDGE_TOL] + [j / k for j in range(1, k)] + [1.0 + _CREASE_EDGE_TOL]
@@ -1113,7 +1124,7 @@ class MeshFingertip(Fingertip):
             hi = np.where(left, hi, np.where(touch, mid + quarter, mid))
             glo = g(lo, c)
         t = np.clip(0.5 * (lo + hi), 0.0, 1.0)
-        qx, qy, qz, nax, nay, naz, nbx, nby, nbz = parts(t, c)
+        qx, qy, qz, nax, nay, naz, nbx, nby, nbz = parts(t, [x[pair] for x in c_full])
         # q = α nA + β nB with α, β of one sign: q is σ n for a normal between the two faces'
         g11 = nax * nax + nay * nay + naz * naz
         g12 = nax * nbx + nay * nby + naz * nbz
