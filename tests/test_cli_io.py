@@ -92,7 +92,7 @@ def test_repeated_stamps_are_estimated_and_warned_about(tmp_path: Path) -> None:
 
 
 def test_progress_bar_only_on_a_terminal() -> None:
-    from softtip.cli import _progress_bar
+    from softtip.cli.options import _progress_bar
 
     plain = io.StringIO()
     with _progress_bar(100, "writing", file=plain, delay=0.0) as bar:

@@ -22,7 +22,8 @@ from softtip.sim import (
     write_log_csv,
     write_truth_json,
 )
-from softtip.sim.commands import parse_force, parse_length, simulate
+from softtip.cli.simulate import simulate
+from softtip.units import parse_force, parse_length
 
 TIP = murakami2006()
 

@@ -1,4 +1,4 @@
-"""The ``softtip simulate`` command (click); register it in the main CLI group.
+"""``softtip simulate``: a grasp on the simulator, written as an F/T log and its ground truth.
 
 Lengths accept a unit suffix (``2mm``, ``0.5 mm``, ``40e-3``, ``1cm``; a bare number is in
 metres); forces accept ``N`` or ``kgf`` (``0.5kgf``; bare: newtons); angles are degrees.
@@ -8,13 +8,12 @@ from __future__ import annotations
 
 import math
 import os
-import re
 from pathlib import Path
 
 import click
 
 from softtip.atomic import AtomicFile, cannot_write, check_distinct, commit_all, write_stdout
-from softtip.cli_types import Number
+from softtip.cli.types import Force, Length, Number
 from softtip.errors import InputError
 from softtip.sim.objects import OBJECT_KINDS
 from softtip.sim.scenario import (
@@ -27,9 +26,9 @@ from softtip.sim.scenario import (
 )
 from softtip.sim.simulate import log_csv_text, run_simulation, truth_json_text
 from softtip.sim.skin import DEFAULT_ELEMENTS
-from softtip.units import KGF, UNIT_SYSTEMS
+from softtip.units import UNIT_SYSTEMS
 
-__all__ = ["simulate", "parse_length", "parse_force"]
+__all__ = ["simulate"]
 
 #: Ranges of the simulation's size options (a larger run would not fit in memory)
 MAX_RATE = 100_000.0  # Hz
@@ -37,61 +36,8 @@ MAX_SAMPLES = 10_000_000
 MAX_ELEMENTS = 200_000
 MAX_FRICTION = 10.0
 
-_LENGTH_UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6, "µm": 1e-6}
-_FORCE_UNITS = {"n": 1.0, "kgf": KGF}
-_NUMBER = r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([a-zA-Zµ]*)\s*"
-
-
-def _parse(text: str, units: dict[str, float], what: str) -> float:
-    m = re.fullmatch(_NUMBER, str(text))
-    unit = m.group(2).lower() if m else ""
-    if not m or (unit and unit not in units):
-        raise ValueError(f"{text!r} is not a {what} (a number with an optional unit: {', '.join(units)})")
-    value = float(m.group(1)) * (units[unit] if unit else 1.0)
-    if not math.isfinite(value):
-        raise ValueError(f"{text!r} is not a finite {what}")
-    return value
-
-
-def parse_length(text: str) -> float:
-    """``"2mm"`` → 0.002 (m). A bare number is in metres."""
-    return _parse(text, _LENGTH_UNITS, "length")
-
-
-def parse_force(text: str) -> float:
-    """``"0.5kgf"`` → 4.903325 (N). A bare number is in newtons."""
-    return _parse(text, _FORCE_UNITS, "force")
-
-
-class _Length(click.ParamType):
-    name = "LENGTH"
-
-    def convert(self, value, param, ctx):
-        if isinstance(value, float):
-            return value
-        try:
-            length = parse_length(value)
-        except ValueError as exc:
-            self.fail(str(exc), param, ctx)
-        # a bare number is in metres: "--size 2" would be a 2 m object, surely meant in mm
-        if abs(length) >= 0.1 and not re.search(r"[a-zA-Zµ]", str(value)):
-            self.fail(f"{value!r} is {length:g} m; give a unit, e.g. '{value}mm'", param, ctx)
-        return length
-
-
-class _Force(click.ParamType):
-    name = "FORCE"
-
-    def convert(self, value, param, ctx):
-        if isinstance(value, float):
-            return value
-        try:
-            return parse_force(value)
-        except ValueError as exc:
-            self.fail(str(exc), param, ctx)
-
-
-LENGTH, FORCE = _Length(), _Force()
+#: simulate's lengths: a bare number is in metres, and one of 0.1 m or more needs a unit
+LENGTH, FORCE = Length("m", bare_max=0.1), Force()
 
 
 def _check_sizes(options: dict) -> None:
