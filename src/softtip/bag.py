@@ -30,13 +30,13 @@ from __future__ import annotations
 
 import os
 import shutil
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from softtip.atomic import partial_dir
 from softtip.errors import InputError
 from softtip.ros import TOPICS as ROS_TOPICS
 from softtip.pipeline import Estimates
@@ -326,11 +326,8 @@ def write_estimates_bag(
         raise InputError(
             f"{dest}: exists already; expected a new directory name for the output bag"
         )
-    parent = dest.parent if str(dest.parent) else Path(".")
     try:
-        tmp = Path(
-            tempfile.mkdtemp(prefix=f".{dest.name}.", suffix=".partial", dir=parent)
-        )
+        tmp = partial_dir(dest)  # mode from the umask, like mkdir
     except OSError as exc:
         raise InputError(
             f"{dest}: cannot create the bag there ({exc.strerror or exc}); expected a writable directory"

@@ -7,7 +7,7 @@ import sys
 import click
 
 from softtip.atomic import write_stdout
-from softtip.cli.types import Number
+from softtip.cli.types import Number, option
 from softtip.errors import InputError
 from softtip.examples import EXAMPLE_PROBING_PATH
 from softtip.noise import NANO17
@@ -105,20 +105,20 @@ capsule's offset of its axis from the sensor's z axis is its axis_offset.
 """,
 )
 @click.argument("input_path", metavar="LOG", required=False, type=click.Path(allow_dash=True, dir_okay=False))
-@click.option("--shape", type=click.Choice(["sphere", "capsule", "mesh"]), help="Fingertip shape to fit (required unless --guide; mesh: the placement of --mesh on the sensor).")
-@click.option("--example", is_flag=True, help="Use the shipped example probing log (simulated: 30 presses on a 16 mm sphere centred at 0.3, -0.2, 20.0 mm) as LOG.")
-@click.option("--guide", is_flag=True, help="Print how to record a probing log (where, how hard and how to press) and exit.")
-@click.option("-o", "--output", type=click.Path(dir_okay=False), help="Fingertip TOML file to write (default: standard output).")
-@click.option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the log's wrench.")
-@click.option("--tare-duration", type=Number("s", 0.0), default=0.2, show_default=True, metavar="S", help="Average the first S seconds (untouched) as the sensor bias; 0 if LOG is tared.")
-@click.option("--contact-threshold", type=Number("N", 0.0, min_open=True), default=0.05, show_default=True, metavar="N", help="A press lasts while |f| is at least this (at least 4 times the force noise's magnitude), N.")
-@click.option("--min-force", type=Number("N", 0.0), default=0.5, show_default=True, metavar="N", help="Only samples with |f| at least this enter the fit, N.")
-@click.option("--rigid", is_flag=True, help="Do not fit the skin's indentation (radius then comes out short by about the indentation).")
-@click.option("--mesh", "mesh_path", type=click.Path(dir_okay=False), help="--shape mesh: the fingertip mesh (a mesh fingertip .toml, or .stl/.obj/.ply with --mesh-units); its shift on the sensor is fitted.")
-@click.option("--mesh-units", type=click.Choice(["m", "cm", "mm", "um", "in"]), help="Length unit of a bare --mesh file.")
-@click.option("--rotation", is_flag=True, help="--shape mesh: fit a small rotation as well as the shift (6 DOF).")
-@click.option("--force-noise", type=click.FloatRange(min=0.0, min_open=True), default=NANO17.force_std[0], show_default=True, metavar="N", help="Per-axis standard deviation of the sensor's force noise, N (Nano17-class default).")
-@click.option("--moment-noise", type=click.FloatRange(min=0.0, min_open=True), default=NANO17.moment_std[0] * 1e3, show_default=True, metavar="N·mm", help="Per-axis standard deviation of the sensor's moment noise, N·mm.")
+@option("--shape", type=click.Choice(["sphere", "capsule", "mesh"]), help="Fingertip shape to fit (required unless --guide; mesh: the placement of --mesh on the sensor).")
+@option("--example", is_flag=True, help="Use the shipped example probing log (simulated: 30 presses on a 16 mm sphere centred at 0.3, -0.2, 20.0 mm) as LOG.")
+@option("--guide", is_flag=True, help="Print how to record a probing log (where, how hard and how to press) and exit.")
+@option("-o", "--output", type=click.Path(dir_okay=False), help="Fingertip TOML file to write (default: standard output).")
+@option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the log's wrench.")
+@option("--tare-duration", type=Number("s", 0.0), default=0.2, show_default=True, metavar="S", help="Average the first S seconds (untouched) as the sensor bias; 0 if LOG is tared.")
+@option("--contact-threshold", type=Number("N", 0.0, min_open=True), default=0.05, show_default=True, metavar="N", help="A press lasts while |f| is at least this (at least 4 times the force noise's magnitude), N.")
+@option("--min-force", type=Number("N", 0.0), default=0.5, show_default=True, metavar="N", help="Only samples with |f| at least this enter the fit, N.")
+@option("--rigid", is_flag=True, help="Do not fit the skin's indentation (radius then comes out short by about the indentation).")
+@option("--mesh", "mesh_path", type=click.Path(dir_okay=False), help="--shape mesh: the fingertip mesh (a mesh fingertip .toml, or .stl/.obj/.ply with --mesh-units); its shift on the sensor is fitted.")
+@option("--mesh-units", type=click.Choice(["m", "cm", "mm", "um", "in"]), help="Length unit of a bare --mesh file.")
+@option("--rotation", is_flag=True, help="--shape mesh: fit a small rotation as well as the shift (6 DOF).")
+@option("--force-noise", type=click.FloatRange(min=0.0, min_open=True), default=NANO17.force_std[0], show_default=True, metavar="N", help="Per-axis standard deviation of the sensor's force noise, N (Nano17-class default).")
+@option("--moment-noise", type=click.FloatRange(min=0.0, min_open=True), default=NANO17.moment_std[0] * 1e3, show_default=True, metavar="N·mm", help="Per-axis standard deviation of the sensor's moment noise, N·mm.")
 @click.pass_context
 def calibrate(
     ctx, input_path, shape, output, units, tare_duration, contact_threshold, min_force, rigid, force_noise, moment_noise,

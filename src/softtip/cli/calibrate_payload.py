@@ -6,6 +6,7 @@ import click
 
 from softtip.atomic import write_stdout
 from softtip.cli.calibrate import _check_output, _example_or_log, _fail, _read
+from softtip.cli.types import option
 from softtip.errors import InputError
 from softtip.examples import EXAMPLE_STILL_PATH
 from softtip.units import UNIT_SYSTEMS
@@ -31,9 +32,9 @@ together with --payload (no tare needed).
 """,
 )
 @click.argument("input_path", metavar="LOG", required=False, type=click.Path(allow_dash=True, dir_okay=False))
-@click.option("-o", "--output", type=click.Path(dir_okay=False), help="Payload TOML file to write (default: standard output).")
-@click.option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the log's wrench.")
-@click.option("--example", is_flag=True, help="Use the shipped example still log (simulated: a 20 g fingertip, centre of mass 1, -0.5, 20 mm, in 12 orientations) as LOG.")
+@option("-o", "--output", type=click.Path(dir_okay=False), help="Payload TOML file to write (default: standard output).")
+@option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the log's wrench.")
+@option("--example", is_flag=True, help="Use the shipped example still log (simulated: a 20 g fingertip, centre of mass 1, -0.5, 20 mm, in 12 orientations) as LOG.")
 @click.pass_context
 def calibrate_payload(ctx, input_path, output, units, example):
     from softtip.calibration import atomic_write_text

@@ -15,19 +15,17 @@ from softtip.cli.options import (
     FRAMES_HELP, _bag_warnings, _check_figure_path, _check_outputs, _check_units, _is_bag, _make_config, _optional,
     _parquet_metadata, _progress_bar, _tare_warnings, estimator_options,
 )  # fmt: skip
-from softtip.cli.types import check_lowpass
+from softtip.cli.types import check_lowpass, option
 from softtip.errors import InputError
-from softtip.estimator.results import DRIFT_COLUMNS, EstimatorWarning
+from softtip.estimator.results import EstimatorWarning
 from softtip.estimator.tare import bias_to_toml
 from softtip.fingertip import load_fingertip
 from softtip.pipeline import STATES
 from softtip.pipeline import estimate as run_estimate
-from softtip.units import KGF, KGF_MM, UNIT_SYSTEMS, wrench_to_si
+from softtip.units import UNIT_SYSTEMS, wrench_to_si
 
 __all__ = ["estimate"]
 
-_FORCE_COLUMNS = ("fx", "fy", "fz") + DRIFT_COLUMNS[:3]
-_MOMENT_COLUMNS = ("mx", "my", "mz", "sigma", "hx", "hy", "hz", "h_norm", "h_std") + DRIFT_COLUMNS[3:]
 @click.command(
     "estimate",
     help="""Estimate contact point, normal, spin torque, contact state and edge direction
@@ -73,31 +71,31 @@ the raw wrench; with --to-bag and no -o no CSV is written.
     + FRAMES_HELP
 )
 @click.argument("input_path", metavar="INPUT", required=False, type=click.Path(allow_dash=True))
-@click.option("--example", is_flag=True, help="Use the shipped example grasp (a 45° line contact, murakami2006 tip) as INPUT.")
-@click.option("-o", "--output", type=click.Path(dir_okay=False, writable=True), help="Output CSV, or Parquet for a name ending in .parquet (default: CSV on standard output).")
-@click.option(
+@option("--example", is_flag=True, help="Use the shipped example grasp (a 45° line contact, murakami2006 tip) as INPUT.")
+@option("-o", "--output", type=click.Path(dir_okay=False, writable=True), help="Output CSV, or Parquet for a name ending in .parquet (default: CSV on standard output).")
+@option(
     "--units",
     type=click.Choice(UNIT_SYSTEMS),
     default=None,
     help="Units of the input wrench: si (N, N·m) or kgf-mm (kgf, kgf·mm, the papers').  [default: si, or a Parquet INPUT's own]",
 )
-@click.option(
+@option(
     "--output-units",
     type=click.Choice(UNIT_SYSTEMS),
     default="si",
     show_default=True,
     help="Units of force and moment columns in the output; lengths stay in m, angles in degrees.",
 )
-@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Also draw the papers' four panels (force, moment, |h|, direction) to this PNG/PDF/SVG.")
-@click.option("--plot-units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the plot's force and moment axes.")
-@click.option("--topic", metavar="TOPIC", help="Bag input: the geometry_msgs/msg/WrenchStamped topic (default: the bag's only one).")
-@click.option("--allow-partial", is_flag=True, help="Bag input: use a damaged bag's readable messages (with a warning) instead of stopping.")
-@click.option("--to-bag", "to_bag", type=click.Path(file_okay=False), metavar="DIR", help="Also write the estimates as a rosbag2 directory (MCAP storage); DIR must not exist.")
-@click.option("--rerun", "rerun_spawn", is_flag=True, help="Show the fingertip, force, contact point, normal and edge in a Rerun viewer (needs the rerun-sdk package).")
-@click.option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save the Rerun 3-D view and time series to FILE.rrd (open with `rerun FILE.rrd`).")
-@click.option("--payload", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Remove the fingertip's weight ([payload] mass kg, com m; see calibrate-payload) before taring, using INPUT's qw, qx, qy, qz columns (sensor frame in a z-up world frame).")
-@click.option("-q", "--quiet", is_flag=True, help="No summary on standard error (warnings and errors still are).")
-@click.option("--save-bias", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Write the bias used (the tare's) to FILE.toml, for --bias of a later run.")
+@option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Also draw the papers' four panels (force, moment, |h|, direction) to this PNG/PDF/SVG.")
+@option("--plot-units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the plot's force and moment axes.")
+@option("--topic", metavar="TOPIC", help="Bag input: the geometry_msgs/msg/WrenchStamped topic (default: the bag's only one).")
+@option("--allow-partial", is_flag=True, help="Bag input: use a damaged bag's readable messages (with a warning) instead of stopping.")
+@option("--to-bag", "to_bag", type=click.Path(file_okay=False), metavar="DIR", help="Also write the estimates as a rosbag2 directory (MCAP storage); DIR must not exist.")
+@option("--rerun", "rerun_spawn", is_flag=True, help="Show the fingertip, force, contact point, normal and edge in a Rerun viewer (needs the rerun-sdk package).")
+@option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save the Rerun 3-D view and time series to FILE.rrd (open with `rerun FILE.rrd`).")
+@option("--payload", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Remove the fingertip's weight ([payload] mass kg, com m; see calibrate-payload) before taring, using INPUT's qw, qx, qy, qz columns (sensor frame in a z-up world frame).")
+@option("-q", "--quiet", is_flag=True, help="No summary on standard error (warnings and errors still are).")
+@option("--save-bias", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Write the bias used (the tare's) to FILE.toml, for --bias of a later run.")
 @estimator_options
 def estimate(
     input_path,
@@ -132,6 +130,10 @@ def estimate(
          ("--bias", estimator_opts.get("bias_file"))],
         [("-o", output), ("--plot", plot_path), ("--to-bag", to_bag), ("--rerun-save", rerun_save), ("--save-bias", save_bias)],
     )
+    if rerun_spawn:  # at once: without a display the viewer would fail only after the whole run
+        from softtip.viz import check_viewer  # rerun itself is imported later
+
+        check_viewer()
     fingertip = load_fingertip(tip)
     config = _make_config(estimator_opts, tip=fingertip)
 
@@ -181,12 +183,7 @@ def estimate(
         raise click.UsageError(str(exc)) from None
     _check_units(est, fingertip, config, log.units, log.source)
 
-    columns = est.columns()
-    if output_units == "kgf-mm":
-        for name in _FORCE_COLUMNS:
-            columns[name] = columns[name] / KGF
-        for name in _MOMENT_COLUMNS:
-            columns[name] = columns[name] / KGF_MM
+    columns = est.columns(units=output_units)
     for name, values in log.extra.items():
         columns[name if name not in columns else f"input_{name}"] = np.asarray(values)
 
@@ -251,7 +248,7 @@ def _write_estimate_outputs(
 
             # drawn in memory first: a full disk then gives the OS's reason, not the image writer's
             image = _io.BytesIO()
-            threshold = np.maximum(config.h_sigmas * est.h_std, config.h_min)
+            threshold = config.line_threshold(est.h_std)
             plot_estimates(
                 est, image, units=plot_units, title=title, h_threshold=threshold,
                 fmt=Path(plot_path).suffix.lower().lstrip("."),

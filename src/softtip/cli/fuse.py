@@ -11,6 +11,7 @@ from softtip.cli.options import _check_figure_path as check_figure_path
 from softtip.cli.options import _make_config as make_config
 from softtip.cli.options import _optional as optional
 from softtip.cli.options import estimator_options
+from softtip.cli.types import Length, Number, option
 from softtip.errors import InputError
 from softtip.units import UNIT_SYSTEMS, wrench_to_si
 
@@ -67,27 +68,21 @@ a summary on standard error.
 """,
 )
 @click.argument("inputs", nargs=-1, required=True, type=click.Path(exists=False))
-@click.option("-o", "--output", type=click.Path(dir_okay=False, writable=True), help="Output CSV, or Parquet for a name ending in .parquet (default: CSV on standard output).")
-@click.option("--hand", "hand_file", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Fingertip poses in the common frame ([hand] frame, [finger.NAME] translation m, rpy_deg or quaternion).")
-@click.option("--topics", nargs=2, metavar="TOPIC TOPIC", help="Bag input: the two fingertips' wrench topics.")
-@click.option("--frame", metavar="FRAME", help="Bag input: the common frame (e.g. hand, base_link).")
-@click.option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the CSV logs' wrench.")
-@click.option("--object-mass", type=float, metavar="KG", help="The object's mass for the force balance (default: unknown; any weight along gravity allowed).")
-@click.option("--gravity", nargs=3, type=float, default=(0.0, 0.0, -9.80665), show_default=True, metavar="X Y Z", help="Gravity in the common frame, m/s².")
-@click.option("--point-std", type=float, default=0.2, show_default=True, metavar="MM", help="Standard deviation of a contact point per axis, mm (for the plane normal).")
-@click.option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Also draw both forces, the grasp reading and the fused angles across the grasp to this PNG/PDF/SVG.")
+@option("-o", "--output", type=click.Path(dir_okay=False, writable=True), help="Output CSV, or Parquet for a name ending in .parquet (default: CSV on standard output).")
+@option("--hand", "hand_file", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Fingertip poses in the common frame ([hand] frame, [finger.NAME] translation m, rpy_deg or quaternion).")
+@option("--topics", nargs=2, metavar="TOPIC TOPIC", help="Bag input: the two fingertips' wrench topics.")
+@option("--frame", metavar="FRAME", help="Bag input: the common frame (e.g. hand, base_link).")
+@option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the CSV logs' wrench.")
+@option("--object-mass", type=Number("kg", 0.0), metavar="KG", help="The object's mass for the force balance (default: unknown; any weight along gravity allowed).")
+@option("--gravity", type=(Number("m/s²"), Number("m/s²"), Number("m/s²")), default=(0.0, 0.0, -9.80665), show_default=True, metavar="X Y Z", help="Gravity in the common frame, m/s².")
+@option("--point-std", type=Length("mm", 0.0, min_open=True), default="0.2mm", show_default=True, metavar="LENGTH", help="Standard deviation of a contact point per axis, for the plane normal (a bare number is in mm).")
+@option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Also draw both forces, the grasp reading and the fused angles across the grasp to this PNG/PDF/SVG.")
 @estimator_options
 def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, point_std, plot_path, tip, **estimator_opts):
     from softtip.fingertip import load_fingertip
     from softtip.fusion import fuse_logs, poses_from_columns, read_hand_file
     from softtip.io import read_log, write_table
 
-    if object_mass is not None and not (np.isfinite(object_mass) and object_mass >= 0):
-        raise click.BadParameter(f"{object_mass!r}: expected a mass in kg, 0 or more", param_hint="--object-mass")
-    if not (np.isfinite(point_std) and point_std > 0):
-        raise click.BadParameter(f"{point_std!r}: expected a positive length in mm", param_hint="--point-std")
-    if not np.all(np.isfinite(gravity)):
-        raise click.BadParameter("expected three finite numbers, m/s²", param_hint="--gravity")
     if plot_path is not None:
         check_figure_path(plot_path)
     from softtip.atomic import check_distinct
@@ -132,7 +127,7 @@ def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, 
         raise click.UsageError(f"expected two CSV logs or one bag, got {len(inputs)} inputs")
     try:
         fused, fingers = fuse_logs(
-            logs, fingertip, config, object_mass=object_mass, gravity=gravity, point_std=point_std * 1e-3
+            logs, fingertip, config, object_mass=object_mass, gravity=gravity, point_std=point_std
         )
     except ValueError as exc:
         raise click.UsageError(str(exc)) from None

@@ -12,7 +12,7 @@ import click
 import numpy as np
 
 from softtip import __version__
-from softtip.cli.types import Number, check_pair_increasing
+from softtip.cli.types import Force, Length, Number, check_pair_increasing, option
 from softtip.depth import MURAKAMI2006_DEPTH, DepthLaw
 from softtip.errors import InputError
 from softtip.estimator.depth import tip_depth_law
@@ -20,7 +20,6 @@ from softtip.estimator.tare import load_bias
 from softtip.fingertip import PRESETS, Fingertip
 from softtip.noise import NANO17, SensorNoise
 from softtip.pipeline import EstimatorConfig
-from softtip.units import KGF
 
 FRAMES_HELP = """\
 Frames and units: every vector is in the sensor frame (origin at the F/T sensor's
@@ -38,15 +37,19 @@ def POSITIVE(unit: str) -> Number:  # noqa: N802
     return Number(unit, 0.0, min_open=True)
 
 
+#: A positive length option of the estimator: a unit may be given (3mm, 0.3cm); a bare number is in mm
+MM_POSITIVE = Length("mm", 0.0, min_open=True)
+
+
 _ESTIMATOR_OPTIONS = [
-    click.option(
+    option(
         "--tip",
         default="murakami2006",
         show_default=True,
         metavar="PRESET_OR_TOML",
         help=f"Fingertip: a preset ({', '.join(sorted(PRESETS))}) or a TOML file ([fingertip] shape = sphere|capsule|ellipsoid, lengths in m).",
     ),
-    click.option(
+    option(
         "--contact-point",
         type=click.Choice(["latch", "track", "joint"]),
         default="latch",
@@ -56,7 +59,7 @@ _ESTIMATOR_OPTIONS = [
         "joint: latch, then move the point across the line to where a sliding window (--joint-window) fits the "
         "line-contact model, wherever the window determines it (flagged joint_fallback until one does).",
     ),
-    click.option(
+    option(
         "--joint-window",
         type=POSITIVE("s"),
         default=1.0,
@@ -64,16 +67,16 @@ _ESTIMATOR_OPTIONS = [
         metavar="S",
         help="Sliding window of --contact-point joint, s.",
     ),
-    click.option(
+    option(
         "--joint-max-std",
-        type=(POSITIVE("deg"), POSITIVE("mm")),
-        default=(2.0, 0.2),
+        type=(POSITIVE("deg"), MM_POSITIVE),
+        default=(2.0, "0.2mm"),
         show_default=True,
         metavar="DEG MM",
         help="--contact-point joint accepts a window when the standard deviations of its line angle and of its "
-        "offset across the line are at most these (degrees, mm).",
+        "offset across the line are at most these (degrees, a length: mm unless a unit is given).",
     ),
-    click.option(
+    option(
         "--joint-max-residual",
         type=POSITIVE("noise standard deviations"),
         default=3.0,
@@ -81,16 +84,16 @@ _ESTIMATOR_OPTIONS = [
         metavar="SIGMAS",
         help="... and the RMS residual of its fit is at most this many noise standard deviations.",
     ),
-    click.option("--lowpass", type=POSITIVE("Hz"), metavar="HZ", help="Causal Butterworth low-pass cutoff in Hz (default: no filter)."),
-    click.option(
+    option("--lowpass", type=POSITIVE("Hz"), metavar="HZ", help="Causal Butterworth low-pass cutoff in Hz (default: no filter)."),
+    option(
         "--tare-duration",
         type=NON_NEGATIVE("s"),
         default=0.2,
         show_default=True,
         metavar="S",
-        help="Take the first S seconds (fingertip untouched) as the sensor bias; 0 if INPUT is already tared.",
+        help="Take the first S seconds (fingertip untouched) as the sensor bias; 0 if the wrench is already tared.",
     ),
-    click.option(
+    option(
         "--tare-method",
         type=click.Choice(["robust", "median", "mean"]),
         default="robust",
@@ -98,7 +101,7 @@ _ESTIMATOR_OPTIONS = [
         help="How the tare samples make the bias: robust (the mean of the samples that are not spikes), median, "
         "or mean (of all: a spike moves it).",
     ),
-    click.option(
+    option(
         "--bias",
         "bias_file",
         type=click.Path(dir_okay=False),
@@ -106,7 +109,7 @@ _ESTIMATOR_OPTIONS = [
         help="Subtract this sensor bias instead of taring ([bias] force = [N, N, N], moment = [N·m, N·m, N·m]; "
         "written by --save-bias or calibrate-payload).",
     ),
-    click.option(
+    option(
         "--hysteresis",
         type=NON_NEGATIVE("noise standard deviations"),
         default=3.0,
@@ -115,7 +118,7 @@ _ESTIMATOR_OPTIONS = [
         help="Contact ends below --contact-threshold minus this many standard deviations of the noise of |f| "
         "(from --force-noise, after --lowpass; at least half the threshold); 0: one threshold.",
     ),
-    click.option(
+    option(
         "--min-contact-duration",
         type=NON_NEGATIVE("s"),
         default=0.005,
@@ -124,7 +127,7 @@ _ESTIMATOR_OPTIONS = [
         help="A contact is reported once |f| has stayed above the release threshold this long, each sample counting "
         "for its sampling interval (a shorter spike is no contact).",
     ),
-    click.option(
+    option(
         "--drift-time-constant",
         type=POSITIVE("s"),
         default=10.0,
@@ -132,23 +135,23 @@ _ESTIMATOR_OPTIONS = [
         metavar="S",
         help="While untouched, follow the sensor's bias drift with a moving average of this time constant.",
     ),
-    click.option(
+    option(
         "--drift-tracking/--no-drift-tracking",
         default=True,
         show_default=True,
         help="Subtract the drift followed while untouched (--no-drift-tracking: report it only, the papers').",
     ),
-    click.option("--contact-threshold", type=NON_NEGATIVE("N"), default=0.05, show_default=True, metavar="N", help="In contact while |f| is at least this, N."),
-    click.option(
+    option("--contact-threshold", type=Force(0.0), default=0.05, show_default=True, metavar="FORCE", help="In contact while |f| is at least this (N unless kgf is given)."),
+    option(
         "--latch-window",
-        type=(NON_NEGATIVE("N"), NON_NEGATIVE("N")),
-        default=(0.2 * KGF, 0.5 * KGF),
+        type=(Force(0.0), Force(0.0)),
+        default=("0.2kgf", "0.5kgf"),
         show_default=True,
         metavar="LOW HIGH",
-        help="Light-force window for latching the contact point, N (default 0.2–0.5 kgf).",
+        help="Light-force window for latching the contact point (forces: N unless kgf is given).",
     ),
-    click.option("--h-min", type=NON_NEGATIVE("N·mm"), default=0.5, show_default=True, metavar="N·mm", help="Smallest |h| reported as a line contact, N·mm."),
-    click.option(
+    option("--h-min", type=NON_NEGATIVE("N·mm"), default=0.5, show_default=True, metavar="N·mm", help="Smallest |h| reported as a line contact, N·mm."),
+    option(
         "--force-noise",
         type=NON_NEGATIVE("N"),
         default=NANO17.force_std[0],
@@ -156,22 +159,22 @@ _ESTIMATOR_OPTIONS = [
         metavar="N",
         help="Per-axis standard deviation of the sensor's force noise, N (Nano17-class default).",
     ),
-    click.option(
+    option(
         "--moment-noise",
         type=NON_NEGATIVE("N·mm"),
-        default=NANO17.moment_std[0] * 1e3,
+        default=round(NANO17.moment_std[0] * 1e3, 12),
         show_default=True,
         metavar="N·mm",
         help="Per-axis standard deviation of the sensor's moment noise, N·mm.",
     ),
-    click.option(
+    option(
         "--relatch-distance",
-        type=POSITIVE("mm"),
-        metavar="MM",
+        type=MM_POSITIVE,
+        metavar="LENGTH",
         help="Latch again when, at light force, the soft-finger contact point moves farther than this from the "
-        "latched one, mm (default: only when contact is lost and regained, the papers').",
+        "latched one (3mm, 0.3cm; a bare number is in mm). Default: only when contact is lost and regained, the papers'.",
     ),
-    click.option(
+    option(
         "--depth-compensation/--no-depth-compensation",
         default=None,
         help="Take the moment about the point inside the skin where friction acts, removing the spurious "
@@ -180,21 +183,21 @@ _ESTIMATOR_OPTIONS = [
         "the fingertip gives a skin (the murakami2006 preset, a file with skin_thickness), in latch mode. "
         "--no-depth-compensation: the papers' method.",
     ),
-    click.option(
+    option(
         "--fixed-depth",
         is_flag=True,
         help="Depth compensation at the skin law's depth as it is, not learnt from the data.",
     ),
-    click.option(
+    option(
         "--skin-law",
-        type=(POSITIVE("N/m^P"), POSITIVE(""), POSITIVE("mm")),
+        type=(POSITIVE("N/m^P"), POSITIVE(""), MM_POSITIVE),
         default=None,
-        metavar="K P MAX_MM",
-        help="Skin law of the depth compensation: normal force = K·depth^P (N, m), depth at most MAX_MM mm "
+        metavar="K P MAX_DEPTH",
+        help="Skin law of the depth compensation: normal force = K·depth^P (N, m), depth at most MAX_DEPTH (a length, mm unless a unit is given) "
         "(default: the fingertip's skin; else the murakami2006 skin, "
-        f"{MURAKAMI2006_DEPTH.stiffness:g} {MURAKAMI2006_DEPTH.exponent:g} {MURAKAMI2006_DEPTH.max_depth * 1e3:g}).",
+        f"{MURAKAMI2006_DEPTH.stiffness:g} {MURAKAMI2006_DEPTH.exponent:g} {MURAKAMI2006_DEPTH.max_depth * 1e3:g}mm).",
     ),
-    click.option(
+    option(
         "--line-evidence",
         type=click.Choice(["on", "off"]),
         default="on",
@@ -203,8 +206,8 @@ _ESTIMATOR_OPTIONS = [
         "contact was excited about two tangent axes and h stayed on one, else unconfirmed; under confirmed "
         "evidence the direction comes from the window); off: the papers' per-sample line/point.",
     ),
-    click.option("--evidence-window", type=POSITIVE("s"), default=2.0, show_default=True, metavar="S", help="Sliding window of the line evidence, s."),
-    click.option(
+    option("--evidence-window", type=POSITIVE("s"), default=2.0, show_default=True, metavar="S", help="Sliding window of the line evidence, s."),
+    option(
         "--area-ratio",
         type=(POSITIVE("(eigenvalue ratio)"), POSITIVE("(eigenvalue ratio)")),
         default=(0.2, 0.1),
@@ -213,7 +216,7 @@ _ESTIMATOR_OPTIONS = [
         help="area when the smaller/larger eigenvalue ratio of h's window covariance (noise removed) reaches ENTER; "
         "a confirmed line again only below LEAVE.",
     ),
-    click.option(
+    option(
         "--excitation",
         type=(POSITIVE("(eigenvalue ratio)"), POSITIVE("N")),
         default=(0.5, 0.01),
@@ -222,15 +225,15 @@ _ESTIMATOR_OPTIONS = [
         help="Excited about two tangent axes when the tangential load's window covariance has its smaller eigenvalue "
         "beyond the noise, at least RATIO times the larger and at least MIN_N² (N).",
     ),
-    click.option(
+    option(
         "--evidence-reset-distance",
-        type=POSITIVE("mm"),
-        default=1.0,
+        type=MM_POSITIVE,
+        default="1mm",
         show_default=True,
-        metavar="MM",
-        help="The line evidence starts afresh when the contact point moves farther than this, mm.",
+        metavar="LENGTH",
+        help="The line evidence starts afresh when the contact point moves farther than this (a bare number is in mm).",
     ),
-    click.option(
+    option(
         "--evidence-max-std",
         type=POSITIVE("deg"),
         default=10.0,
@@ -243,8 +246,8 @@ _ESTIMATOR_OPTIONS = [
 
 def estimator_options(f):
     """The pipeline settings shared by ``estimate`` and ``stream``."""
-    for option in reversed(_ESTIMATOR_OPTIONS):
-        f = option(f)
+    for decorator in reversed(_ESTIMATOR_OPTIONS):
+        f = decorator(f)
     return f
 
 
@@ -356,8 +359,8 @@ def _make_config(opts: dict, sample_rate: float | None = None, tip: Fingertip | 
             raise click.UsageError("--fixed-depth and --no-depth-compensation contradict each other")
         depth = None
         if opts["skin_law"] is not None:
-            k, p, max_mm = opts["skin_law"]
-            depth = DepthLaw(k, p, max_mm * 1e-3)
+            k, p, max_depth = opts["skin_law"]
+            depth = DepthLaw(k, p, max_depth)
         depth_mode = "auto"
         if comp is False:
             depth_mode = "off"
@@ -381,12 +384,12 @@ def _make_config(opts: dict, sample_rate: float | None = None, tip: Fingertip | 
             contact_min_duration=opts["min_contact_duration"],
             drift_time_constant=opts["drift_time_constant"],
             track_drift=opts["drift_tracking"],
-            relatch_distance=None if relatch is None else relatch * 1e-3,
+            relatch_distance=relatch,
             depth=depth,
             depth_mode=depth_mode,
             joint_window=opts["joint_window"],
             joint_max_angle_std=math.radians(opts["joint_max_std"][0]),
-            joint_max_offset_std=opts["joint_max_std"][1] * 1e-3,
+            joint_max_offset_std=opts["joint_max_std"][1],
             joint_max_residual=opts["joint_max_residual"],
             line_evidence=opts["line_evidence"] == "on",
             evidence_window=opts["evidence_window"],
@@ -394,7 +397,7 @@ def _make_config(opts: dict, sample_rate: float | None = None, tip: Fingertip | 
             excitation_ratio=opts["excitation"][0],
             excitation_min=opts["excitation"][1],
             evidence_max_angle_std=math.radians(opts["evidence_max_std"]),
-            evidence_reset_distance=opts["evidence_reset_distance"] * 1e-3,
+            evidence_reset_distance=opts["evidence_reset_distance"],
         )
     except ValueError as exc:
         raise click.UsageError(str(exc)) from None

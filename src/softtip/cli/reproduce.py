@@ -9,6 +9,7 @@ from pathlib import Path
 import click
 
 from softtip.cli.options import FRAMES_HELP
+from softtip.cli.types import option
 
 __all__ = ["reproduce"]
 
@@ -20,7 +21,7 @@ __all__ = ["reproduce"]
 Every condition (edges of different sharpness, the 1 mm plate at −45°, 0°, 45°, 90°, plates
 1–15 mm, cylinders Ø 4–14 mm, the fringe of a Ø 40 mm cylinder bottom, contact position)
 is simulated with the papers' grasp and measured by the same pipeline as `softtip
-estimate` (default options, --no-drift-tracking as in the papers). Writes to --out one figure per experiment laid out like the
+estimate` (default options, --no-drift-tracking as in the papers). Writes to -o DIR one figure per experiment laid out like the
 papers' (e1_edges.png … e6_contact_position.png) and the summary table summary.md /
 summary.csv: per condition the median axial direction error (degrees), the share of
 samples with a reported direction, the contact-position error (mm), the line evidence, the
@@ -31,14 +32,14 @@ tangent plane as a trace, and the state over time).
 """
     + FRAMES_HELP
 )
-@click.option("--out", "out_dir", type=click.Path(file_okay=False), default="reproduction", show_default=True, help="Output directory (created).")
-@click.option(
+@option("-o", "--output", "--out", "out_dir", type=click.Path(file_okay=False), default="reproduction", show_default=True, metavar="DIR", help="Output directory (created; --out is the same option).")
+@option(
     "--only",
     metavar="E1,E2,...",
     help="Run only these experiments (comma-separated ids E1–E6, X1).",
 )
-@click.option("--seed", type=click.IntRange(min=0), default=2006, show_default=True, help="Seed of the simulated sensor noise.")
-@click.option(
+@option("--seed", type=click.IntRange(min=0), default=2006, show_default=True, help="Seed of the simulated sensor noise.")
+@option(
     "--jobs",
     type=click.IntRange(1, 64),
     default=min(4, os.cpu_count() or 1),

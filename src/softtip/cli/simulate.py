@@ -13,7 +13,7 @@ from pathlib import Path
 import click
 
 from softtip.atomic import AtomicFile, cannot_write, check_distinct, commit_all, write_stdout
-from softtip.cli.types import Force, Length, Number
+from softtip.cli.types import Force, Length, Number, option
 from softtip.errors import InputError
 from softtip.sim.objects import OBJECT_KINDS
 from softtip.sim.scenario import (
@@ -69,84 +69,84 @@ def _check_sizes(options: dict) -> None:
 
 
 @click.command("simulate")
-@click.option("--object", "object_kind", type=click.Choice(OBJECT_KINDS), default="plate", show_default=True,
+@option("--object", "object_kind", type=click.Choice(OBJECT_KINDS), default="plate", show_default=True,
               help="What the fingertip touches.")
-@click.option("--size", type=LENGTH, default=None,
+@option("--size", type=LENGTH, default=None,
               help="Plate thickness, or cylinder/stick/fringe diameter (e.g. 2mm). Defaults: plate 1mm, "
                    "cylinder 6mm, stick 4mm, fringe 40mm.")
-@click.option("--angle", "angle_deg", type=Number("deg"), default=0.0, show_default=True,
+@option("--angle", "angle_deg", type=Number("deg"), default=0.0, show_default=True,
               help="Direction of the edge/axis/fringe at the contact, degrees from the sensor x axis "
                    "(manual §3.4 tangent frame; 90 = along the hand's joint axes).")
-@click.option("--scenario", type=click.Choice(["paper", "push", "friction"]), default="paper", show_default=True,
+@option("--scenario", type=click.Choice(["paper", "push", "friction"]), default="paper", show_default=True,
               help="paper: the papers' two-fingered grasp with joint and gravity disturbances; "
                    "push: a plain push; friction: the papers' grasp (weightless object) with a friction load "
                    "during the hold (--load, --load-direction, --load-profile).")
-@click.option("--load", "load_ratio", type=Number("(fraction of the grasp force)", 0.0), default=0.25, show_default=True,
+@option("--load", "load_ratio", type=Number("(fraction of the grasp force)", 0.0), default=0.25, show_default=True,
               help="friction scenario: tangential load, a fraction of the grasp force.")
-@click.option("--load-direction", type=click.Choice(["across", "along"]), default="across", show_default=True,
+@option("--load-direction", type=click.Choice(["across", "along"]), default="across", show_default=True,
               help="friction scenario: load across the line or along it.")
-@click.option("--load-profile", type=click.Choice(FRICTION_PROFILES), default="push", show_default=True,
+@option("--load-profile", type=click.Choice(FRICTION_PROFILES), default="push", show_default=True,
               help="friction scenario: push (ramped in at 6-6.5 s, held), drag (slowly, 5.5-9.5 s) or slip "
                    "(the object slides 1.5 mm at 6-7 s, friction at the Coulomb limit).")
-@click.option("--tip", default="murakami2006", show_default=True, help="Fingertip preset or TOML file.")
-@click.option("--edge-radius", type=LENGTH, default=0.0, show_default=True,
+@option("--tip", default="murakami2006", show_default=True, help="Fingertip preset or TOML file.")
+@option("--edge-radius", type=LENGTH, default="0mm", show_default=True,
               help="Plate corner radius or wedge tip radius (length).")
-@click.option("--apex-angle", "apex_angle_deg", type=Number("deg", 0.0, 180.0, min_open=True, max_open=True), default=90.0, show_default=True,
+@option("--apex-angle", "apex_angle_deg", type=Number("deg", 0.0, 180.0, min_open=True, max_open=True), default=90.0, show_default=True,
               help="Wedge apex angle, degrees.")
-@click.option("--tilt", "tilt_deg", type=Number("deg", 0.0, 90.0), default=45.0, show_default=True,
+@option("--tilt", "tilt_deg", type=Number("deg", 0.0, 90.0), default=45.0, show_default=True,
               help="Fringe: contact normal's angle from the cylinder side toward its bottom face, degrees.")
-@click.option("--force", type=FORCE, default="0.5kgf", show_default=True, help="Held grasp force (N or kgf).")
-@click.option("--duration", type=Number("s", 0.0, min_open=True), default=None, help="Recorded time, s [default: 10, or the end of --rock].")
-@click.option("--t-contact", type=Number("s", 0.0), default=2.0, show_default=True, help="Time of first touch, s.")
-@click.option("--t-stable", type=Number("s", 0.0, min_open=True), default=4.0, show_default=True, help="End of the force ramp, s.")
-@click.option("--rate", type=Number("Hz", 0.0, MAX_RATE, min_open=True), default=50.0, show_default=True, help="Sample rate, Hz.")
-@click.option("--joint-rotation", "joint_rotation_deg", type=Number("deg", -90.0, 90.0), default=JOINT_ROTATION_DEG, show_default=True,
+@option("--force", type=FORCE, default="0.5kgf", show_default=True, help="Held grasp force (N or kgf).")
+@option("--duration", type=Number("s", 0.0, min_open=True), default=None, help="Recorded time, s [default: 10, or the end of --rock].")
+@option("--t-contact", type=Number("s", 0.0), default=2.0, show_default=True, help="Time of first touch, s.")
+@option("--t-stable", type=Number("s", 0.0, min_open=True), default=4.0, show_default=True, help="End of the force ramp, s.")
+@option("--rate", type=Number("Hz", 0.0, MAX_RATE, min_open=True), default=50.0, show_default=True, help="Sample rate, Hz.")
+@option("--joint-rotation", "joint_rotation_deg", type=Number("deg", -90.0, 90.0), default=JOINT_ROTATION_DEG, show_default=True,
               help="paper: object rotation about the joint axis once the grasp holds it, degrees.")
-@click.option("--gravity-spin", "gravity_spin_deg", type=Number("deg", -90.0, 90.0), default=1.0, show_default=True,
+@option("--gravity-spin", "gravity_spin_deg", type=Number("deg", -90.0, 90.0), default=1.0, show_default=True,
               help="paper: object rotation about the grasp axis from its weight, degrees.")
-@click.option("--mass", "object_mass", type=Number("kg", 0.0), default=OBJECT_MASS, show_default=True,
+@option("--mass", "object_mass", type=Number("kg", 0.0), default=OBJECT_MASS, show_default=True,
               help="paper: object mass, kg (half its weight loads each finger tangentially).")
-@click.option("--disturbance-timing", type=click.Choice(DISTURBANCE_TIMINGS), default="after_grasp",
+@option("--disturbance-timing", type=click.Choice(DISTURBANCE_TIMINGS), default="after_grasp",
               show_default=True,
               help="paper: after_grasp (the papers' procedure: disturbances ramp in after the grasp force "
                    "is established) or during_rise (together with the force rise; harder for the latch).")
-@click.option("--misalignment", "misalignment_deg", type=Number("deg", -90.0, 90.0), default=0.0, show_default=True,
+@option("--misalignment", "misalignment_deg", type=Number("deg", -90.0, 90.0), default=0.0, show_default=True,
               help="paper: fixed alignment error about the hand z axis, degrees.")
-@click.option("--rock", is_flag=True,
+@option("--rock", is_flag=True,
               help="paper: after the grasp, rock the object about two tangent axes and then in a figure-eight "
                    "(each segment averaging to zero tilt), the excitation that tells a line from an area; "
                    "--duration defaults to the end of the rocking.")
-@click.option("--rock-amplitude", "rock_amplitude_deg", type=Number("deg", 0.0, 90.0, min_open=True), default=ROCK_AMPLITUDE_DEG, show_default=True,
+@option("--rock-amplitude", "rock_amplitude_deg", type=Number("deg", 0.0, 90.0, min_open=True), default=ROCK_AMPLITUDE_DEG, show_default=True,
               help="--rock: tilt amplitude, degrees.")
-@click.option("--rock-period", type=Number("s", 0.0, min_open=True), default=1.0, show_default=True, help="--rock: period of the rocking, s.")
-@click.option("--rock-load", type=FORCE, default=str(ROCK_LOAD), show_default=True,
+@option("--rock-period", type=Number("s", 0.0, min_open=True), default=1.0, show_default=True, help="--rock: period of the rocking, s.")
+@option("--rock-load", type=FORCE, default=str(ROCK_LOAD), show_default=True,
               help="--rock: tangential load that comes with the tilt (N or kgf), turning with the tilt axis.")
-@click.option("--elements", "n_elements", type=click.IntRange(50, MAX_ELEMENTS), default=DEFAULT_ELEMENTS, show_default=True,
+@option("--elements", "n_elements", type=click.IntRange(50, MAX_ELEMENTS), default=DEFAULT_ELEMENTS, show_default=True,
               help="Skin surface elements.")
-@click.option("--modulus", type=Number("Pa", 0.0, min_open=True), default=0.6e6, show_default=True, help="Skin Winkler modulus, Pa.")
-@click.option("--shear-modulus", type=Number("Pa", 0.0, min_open=True), default=None, help="Skin shear modulus, Pa [default: modulus/3].")
-@click.option("--friction", type=Number("", 0.0, MAX_FRICTION, min_open=True), default=1.0, show_default=True, help="Coulomb friction coefficient.")
-@click.option("--thickness", type=LENGTH, default="5mm", show_default=True, help="Skin thickness (length).")
-@click.option("--noise/--no-noise", default=True, show_default=True,
+@option("--modulus", type=Number("Pa", 0.0, min_open=True), default=0.6e6, show_default=True, help="Skin Winkler modulus, Pa.")
+@option("--shear-modulus", type=Number("Pa", 0.0, min_open=True), default=None, help="Skin shear modulus, Pa [default: modulus/3].")
+@option("--friction", type=Number("", 0.0, MAX_FRICTION, min_open=True), default=1.0, show_default=True, help="Coulomb friction coefficient.")
+@option("--thickness", type=LENGTH, default="5mm", show_default=True, help="Skin thickness (length).")
+@option("--noise/--no-noise", default=True, show_default=True,
               help="Apply the sensor model (ATI Nano17 class noise and quantisation) or write the true wrench.")
-@click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Seed of the noise generator.")
-@click.option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True,
+@option("--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Seed of the noise generator.")
+@option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True,
               help="Units of the written log: si (N, N·m) or kgf-mm.")
-@click.option("--hand", type=click.Choice(["one-finger", "two-finger"]), default="one-finger", show_default=True,
+@option("--hand", type=click.Choice(["one-finger", "two-finger"]), default="one-finger", show_default=True,
               help="two-finger: both fingertips of the papers' hand on one object (the paper scenario, --rock "
                    "optional): -o is then a new directory for right.csv, left.csv, hand.toml (their poses in the "
                    "hand frame) and truth.json (the object's line and plate normal in the hand frame), for "
                    "`softtip fuse`.")
-@click.option("--left-object", type=click.Choice(OBJECT_KINDS), default=None,
+@option("--left-object", type=click.Choice(OBJECT_KINDS), default=None,
               help="--hand two-finger: what the left fingertip touches [default: --object, its other side].")
-@click.option("--width", type=LENGTH, default="30mm", show_default=True,
+@option("--width", type=LENGTH, default="30mm", show_default=True,
               help="--hand two-finger: the object's width between the two contacts.")
-@click.option("--to-bag", type=click.Path(file_okay=False, path_type=Path), default=None,
+@option("--to-bag", type=click.Path(file_okay=False, path_type=Path), default=None,
               help="--hand two-finger: also a rosbag2 (MCAP) with /right/wrench, /left/wrench and the fingertips' "
                    "poses on /tf_static and /tf (DIR must not exist).")
-@click.option("-o", "--output", type=click.Path(path_type=Path), default=None,
+@option("-o", "--output", type=click.Path(path_type=Path), default=None,
               help="Log CSV (t,fx,fy,fz,mx,my,mz) [default: stdout]; --hand two-finger: a new directory.")
-@click.option("--truth", type=click.Path(dir_okay=False, path_type=Path), default=None,
+@option("--truth", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Ground truth JSON [default: OUTPUT with suffix .truth.json; none when writing to stdout].")
 def simulate(
     output: Path | None, truth: Path | None, units: str, hand: str, left_object: str | None, width: float,
@@ -202,6 +202,8 @@ def simulate(
     finally:
         for f in files.values():
             f.discard()
+    written = [str(p) for p in (output, truth) if p is not None] or ["standard output"]
+    click.echo(f"softtip: simulated {len(log.t)} samples ({options['scenario']}, {options['object_kind']}) -> {', '.join(written)}", err=True)
 
 
 def _simulate_hand(output, truth, units, left_object, width, to_bag, options) -> None:

@@ -9,7 +9,7 @@ import warnings
 import click
 
 from softtip.cli.options import POSITIVE, FRAMES_HELP, _check_outputs, _make_config, _optional, estimator_options
-from softtip.cli.types import PORT, Number, check_lowpass
+from softtip.cli.types import PORT, Number, check_lowpass, option
 from softtip.estimator.results import EstimatorWarning
 from softtip.fingertip import load_fingertip
 from softtip.units import UNIT_SYSTEMS
@@ -46,7 +46,7 @@ restarts and F/T-sequence stalls, and the latest warning; the device's rate (com
 is checked against the host clock (a difference over 2 % is warned about). None of these
 ends the stream unless named in --strict (then exit 1).
 
---record FILE.csv writes every sample as it comes (flushed every 0.05 s, always whole
+-o FILE.csv (or --record FILE.csv) writes every sample as it comes (flushed every 0.05 s, always whole
 lines): t and the raw wrench fx..mz first (the file is a log that `softtip estimate` and
 --replay read as it is), then the columns of `softtip estimate` with its tared wrench as
 fx_tared..mz_tared, then seq (RDT sequence or row), lost and dropped (records missing just
@@ -60,21 +60,21 @@ an error (exit 1).
 """
     + FRAMES_HELP
 )
-@click.option("--netft", "host", metavar="HOST", help="Address of the Net F/T / Axia.")
-@click.option("--replay", "replay", type=click.Path(dir_okay=False), metavar="LOG.csv", help="Replay a recorded CSV log (columns t, fx, fy, fz, mx, my, mz) instead.")
-@click.option("--speed", type=Number("× real time", 0.0, MAX_SPEED), default=1.0, show_default=True, help="Replay speed: 1 real time, 2 twice as fast, 0 as fast as possible.")
-@click.option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the replayed log's wrench.")
-@click.option("--rdt-port", type=PORT, default=49152, show_default=True, help="UDP port of the sensor's RDT server.")
-@click.option("--http-port", type=PORT, default=80, show_default=True, help="HTTP port of the sensor's web server (calibration).")
-@click.option("--timeout", type=Number("s", 0.0, MAX_TIMEOUT, min_open=True), default=2.0, show_default=True, metavar="S", help="Give up after S seconds without data from the sensor.")
-@click.option("--device-bias", is_flag=True, help="Send the sensor's own bias (zero) command at start, before softtip's tare.")
-@click.option("--strict", metavar="FAULTS", default="", help="Comma-separated faults that end the stream (exit 1): status, restart, stall, lost, duplicate, late, malformed, dropped, or all. Default: none (counted, warned).")
-@click.option("--duration", type=POSITIVE("s"), metavar="S", help="Stop after S seconds (default: until Ctrl-C or the end of the replayed log).")
-@click.option("--record", type=click.Path(dir_okay=False), metavar="FILE.csv", help="Record raw samples and estimates to FILE.csv as they come.")
-@click.option("--view/--no-view", default=None, help="Live terminal view (default: when standard error is a terminal).")
-@click.option("--rerun", "rerun_spawn", is_flag=True, help="Show the 3-D view live in a Rerun viewer (needs the rerun-sdk package; at most 50 samples/s are drawn).")
-@click.option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save the 3-D view and time series to FILE.rrd.")
-@click.option("--payload", type=click.Path(dir_okay=False), metavar="FILE.toml", help="With --replay: remove the fingertip's weight per sample, using the log's qw, qx, qy, qz columns (recorded raw_* columns are then compensated).")
+@option("--netft", "host", metavar="HOST", help="Address of the Net F/T / Axia.")
+@option("--replay", "replay", type=click.Path(dir_okay=False), metavar="LOG.csv", help="Replay a recorded CSV log (columns t, fx, fy, fz, mx, my, mz) instead.")
+@option("--speed", type=Number("× real time", 0.0, MAX_SPEED), default=1.0, show_default=True, help="Replay speed: 1 real time, 2 twice as fast, 0 as fast as possible.")
+@option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the replayed log's wrench.")
+@option("--rdt-port", type=PORT, default=49152, show_default=True, help="UDP port of the sensor's RDT server.")
+@option("--http-port", type=PORT, default=80, show_default=True, help="HTTP port of the sensor's web server (calibration).")
+@option("--timeout", type=Number("s", 0.0, MAX_TIMEOUT, min_open=True), default=2.0, show_default=True, metavar="S", help="Give up after S seconds without data from the sensor.")
+@option("--device-bias", is_flag=True, help="Send the sensor's own bias (zero) command at start, before softtip's tare.")
+@option("--strict", metavar="FAULTS", default="", help="Comma-separated faults that end the stream (exit 1): status, restart, stall, lost, duplicate, late, malformed, dropped, or all. Default: none (counted, warned).")
+@option("--duration", type=POSITIVE("s"), metavar="S", help="Stop after S seconds (default: until Ctrl-C or the end of the replayed log).")
+@option("-o", "--output", "--record", "record", type=click.Path(dir_okay=False), metavar="FILE.csv", help="Record raw samples and estimates to FILE.csv as they come (--record is the same option).")
+@option("--view/--no-view", default=None, help="Live terminal view (default: when standard error is a terminal).")
+@option("--rerun", "rerun_spawn", is_flag=True, help="Show the 3-D view live in a Rerun viewer (needs the rerun-sdk package; at most 50 samples/s are drawn).")
+@option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save the 3-D view and time series to FILE.rrd.")
+@option("--payload", type=click.Path(dir_okay=False), metavar="FILE.toml", help="With --replay: remove the fingertip's weight per sample, using the log's qw, qx, qy, qz columns (recorded raw_* columns are then compensated).")
 @estimator_options
 @click.pass_context
 def stream(
@@ -124,10 +124,14 @@ def stream(
     _check_outputs(
         [("--replay", replay), ("--payload", payload), ("--tip", tip if os.path.isfile(tip) else None),
          ("--bias", estimator_opts.get("bias_file"))],
-        [("--record", record), ("--rerun-save", rerun_save)],
+        [("-o", record), ("--rerun-save", rerun_save)],
     )
     fingertip = load_fingertip(tip)
     recorder = Recorder(record) if record is not None else None
+    if rerun_spawn:  # before the sensor is opened: without a display the viewer fails late
+        from softtip.viz import check_viewer
+
+        check_viewer()
     viz = _optional("softtip.viz", "viz") if (rerun_spawn or rerun_save) else None
 
     stop = threading.Event()

@@ -15,7 +15,7 @@ import numpy as np
 
 from softtip.units import FORCE_UNITS, LENGTH_UNITS, parse_quantity
 
-__all__ = ["Number", "Length", "Force", "PORT", "check_lowpass", "check_pair_increasing"]
+__all__ = ["Number", "Length", "Force", "Option", "option", "as_written", "PORT", "check_lowpass", "check_pair_increasing"]
 
 #: Lowest low-pass cutoff as a fraction of the Nyquist frequency: below it the Butterworth
 #: sections lose their precision (the filter's initial state and its noise gain go wrong,
@@ -144,6 +144,37 @@ class Force(_Quantity):
     def __init__(self, min: float | None = None, max: float | None = None, *, min_open: bool = False,
                  max_open: bool = False) -> None:  # fmt: skip
         super().__init__("n", min, max, min_open=min_open, max_open=max_open)
+
+
+def as_written(value) -> str:
+    """A default as a user types it: ``0.03`` (not ``0.030000000000000002``), ``1`` for 1.0, pairs space-separated."""
+    if isinstance(value, (list, tuple)):
+        return " ".join(as_written(v) for v in value)
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    return str(value)
+
+
+class Option(click.Option):
+    """A :class:`click.Option` whose help shows the default as a user would type it.
+
+    Numbers print in the shortest form (:func:`as_written`), pairs space-separated as on the
+    command line, and a ``show_default`` text without parentheses.
+    """
+
+    def get_help_extra(self, ctx: click.Context):
+        extra = super().get_help_extra(ctx)
+        if "default" in extra:
+            if isinstance(self.show_default, str):
+                extra["default"] = self.show_default
+            elif not self.is_flag and not callable(self.default):
+                extra["default"] = as_written(self.default)  # as declared: "0.2kgf", not its value in N
+        return extra
+
+
+def option(*param_decls: str, **attrs):
+    """:func:`click.option` with :class:`Option`: every ``softtip`` option is declared through this."""
+    return click.option(*param_decls, cls=Option, **attrs)
 
 
 #: A TCP/UDP port.
