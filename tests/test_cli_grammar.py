@@ -199,3 +199,11 @@ def test_plot_shows_h_as_missing_while_latching(tmp_path: Path) -> None:
     assert any(isinstance(c, PolyCollection) and c.get_label().startswith("latching") for c in ax_h.collections)
     assert any(ax.get_ylabel() == "state" for ax in fig.axes)  # the state band
     assert (tmp_path / "p.png").stat().st_size > 10_000
+
+
+def test_calibration_noise_warning_comes_from_the_library(tmp_path: Path) -> None:
+    r = run("calibrate", "--example", "--shape", "sphere", "--force-noise", "0.2", "--moment-noise", "2", "-o", tmp_path / "t.toml")
+    assert r.returncode == 0, r.stderr
+    assert "softtip: warning: the residual is" in r.stderr and "(--force-noise 0.2 N, --moment-noise 2 N·mm)" in r.stderr
+    ratio = float(re.search(r"the residual is ([0-9.]+) times", r.stderr).group(1))
+    assert ratio < 0.5  # a noise model 30 times too large: the residual is a small fraction of it

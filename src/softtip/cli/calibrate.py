@@ -178,10 +178,8 @@ def calibrate(
         return
     if cal.warning:
         click.echo(f"softtip: warning: {cal.warning}", err=True)
-    if not 0.5 <= cal.noise_ratio <= 2.0:
+    if cal.noise_warning:
         click.echo(
-            f"softtip: warning: the residual is {cal.noise_ratio:.2f} times the noise model's (--force-noise {force_noise:g} N, "
-            f"--moment-noise {moment_noise:g} N·mm); the standard deviations allow for it, but the weights are best with this "
-            "sensor's noise (the standard deviation of each axis in the untouched part of the log)",
+            f"softtip: warning: {cal.noise_warning} (--force-noise {force_noise:g} N, --moment-noise {moment_noise:g} N·mm)",
             err=True,
         )
