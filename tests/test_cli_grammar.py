@@ -171,11 +171,11 @@ def test_columns_in_the_papers_units_and_the_line_threshold() -> None:
     si, kgf = est.columns(), est.columns(units="kgf-mm")
     assert list(si) == list(kgf)
     for name in si:
-        scale = 1 / KGF if name in FORCE_COLUMNS else 1 / KGF_MM if name in MOMENT_COLUMNS else None
-        if scale is None:
+        unit = KGF if name in FORCE_COLUMNS else KGF_MM if name in MOMENT_COLUMNS else None
+        if unit is None:
             assert np.array_equal(np.asarray(si[name]), np.asarray(kgf[name]), equal_nan=si[name].dtype.kind == "f"), name
-        else:
-            np.testing.assert_allclose(kgf[name], si[name] * scale, rtol=1e-12, equal_nan=True, err_msg=name)
+        else:  # exactly the division the CLI did before
+            np.testing.assert_array_equal(kgf[name], si[name] / unit, err_msg=name)
     config = EstimatorConfig(h_sigmas=2.0, h_min=1e-3)
     np.testing.assert_array_equal(config.line_threshold([1e-4, 1e-3]), [1e-3, 2e-3])
     assert est.state[est.h_norm > EstimatorConfig().line_threshold(est.h_std)].min() >= 2  # above it: line or area

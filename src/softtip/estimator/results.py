@@ -10,7 +10,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from softtip.units import wrench_from_si
+from softtip.units import wrench_to_si
 
 __all__ = ["STATES", "NONE", "POINT", "LINE", "AREA", "EVIDENCE", "EstimatorWarning", "Estimates", "SampleEstimate"]
 
@@ -195,11 +195,11 @@ class Estimates:
             "excitation_ratio": self.excitation_ratio,
         }  # fmt: skip
         if units != "si":
-            force, moment = wrench_from_si(np.eye(6), units).diagonal()[[0, 3]]
+            force, moment = wrench_to_si(np.ones(6), units)[[0, 3]]  # one kgf in N, one kgf·mm in N·m
             for name in FORCE_COLUMNS:
-                columns[name] = columns[name] * force
+                columns[name] = columns[name] / force
             for name in MOMENT_COLUMNS:
-                columns[name] = columns[name] * moment
+                columns[name] = columns[name] / moment
         return columns
 
 
