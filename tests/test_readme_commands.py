@@ -38,7 +38,7 @@ SLOW = ("softtip reproduce", "--hand two-finger")
 
 def readme_blocks() -> list[list[str]]:
     """The softtip command lines of each shell code block of the README, comments removed."""
-    blocks = re.findall(r"```(?:sh|bash|shell|console)\n(.*?)```", README.read_text(encoding="utf-8"), re.S)
+    blocks = re.findall(r"```(?:sh|bash|shell|console)\n(.*?)```", README.read_text(encoding="utf-8"), re.DOTALL)
     out = []
     for block in blocks:
         text = block.replace("\\\n", " ")
@@ -81,16 +81,17 @@ def _seed(name: str, line: str, block: list[str], work: Path) -> None:
     elif name == "run1/":
         if any("--topics" in other for other in block):  # two fingertips' wrenches and their /tf
             run = subprocess.run(
-                [SOFTTIP, "simulate", "--hand", "two-finger", "--duration", "3", "-o", work / "_hand", "--to-bag", dest],
+                [SOFTTIP, "simulate", "--hand", "two-finger", "--duration", "3", "--elements", "2000", "-o", work / "_hand",
+                 "--to-bag", dest],
                 capture_output=True, text=True,
             )  # fmt: skip
             assert run.returncode == 0, run.stderr
             shutil.rmtree(work / "_hand")
         else:  # one sensor's wrench on the topic the README names
             from softtip.bag import write_estimates_bag
+            from softtip.estimator.results import EstimatorWarning
             from softtip.fingertip import load_fingertip
             from softtip.io import read_log
-            from softtip.estimator.results import EstimatorWarning
             from softtip.pipeline import estimate
 
             log = read_log(EXAMPLE_PATH, units="si")

@@ -124,7 +124,11 @@ def calibrate(
     ctx, input_path, shape, output, units, tare_duration, contact_threshold, min_force, rigid, force_noise, moment_noise,
     example, guide, mesh_path, mesh_units, rotation,
 ):
-    from softtip.calibration import PROBING_GUIDE, calibrate_fingertip, write_fingertip_toml
+    from softtip.calibration import (
+        PROBING_GUIDE,
+        calibrate_fingertip,
+        write_fingertip_toml,
+    )
     from softtip.noise import SensorNoise
 
     if guide:

@@ -12,8 +12,18 @@ import click
 import numpy as np
 
 from softtip.cli.options import (
-    FRAMES_HELP, _bag_warnings, _check_figure_path, _check_outputs, _check_units, _is_bag, _make_config, _optional,
-    _parquet_metadata, _progress_bar, _tare_warnings, estimator_options,
+    FRAMES_HELP,
+    bag_warnings,
+    check_figure_path,
+    check_outputs,
+    check_units,
+    estimator_options,
+    is_bag,
+    make_config,
+    optional_extra,
+    parquet_metadata,
+    progress_bar,
+    tare_warnings,
 )  # fmt: skip
 from softtip.cli.types import check_lowpass, option
 from softtip.errors import InputError
@@ -124,8 +134,8 @@ def estimate(
     if example and units not in (None, "si"):
         raise click.UsageError("--units applies to INPUT; the example grasp is in SI")
     if plot_path is not None:
-        _check_figure_path(plot_path)
-    _check_outputs(
+        check_figure_path(plot_path)
+    check_outputs(
         [("INPUT", None if example else input_path), ("--payload", payload), ("--tip", tip if os.path.isfile(tip) else None),
          ("--bias", estimator_opts.get("bias_file"))],
         [("-o", output), ("--plot", plot_path), ("--to-bag", to_bag), ("--rerun-save", rerun_save), ("--save-bias", save_bias)],
@@ -135,17 +145,17 @@ def estimate(
 
         check_viewer()
     fingertip = load_fingertip(tip)
-    config = _make_config(estimator_opts, tip=fingertip)
+    config = make_config(estimator_opts, tip=fingertip)
 
     bag_log = None
     if example:
         log = read_log(EXAMPLE_PATH, units="si")
     elif input_path == "-":
         log = read_log(sys.stdin, units=units)
-    elif _is_bag(input_path):
-        bag = _optional("softtip.bag", "ros")
+    elif is_bag(input_path):
+        bag = optional_extra("softtip.bag", "ros")
         bag_log = bag.read_bag(input_path, topic, allow_partial=allow_partial)
-        _bag_warnings(input_path, bag_log)
+        bag_warnings(input_path, bag_log)
         # t counts from the first message; the absolute stamps go along as an extra column
         extra = {"stamp_ns": [str(v) for v in bag_log.stamps_ns.tolist()]}
         units = units or "si"
@@ -162,7 +172,7 @@ def estimate(
         if os.path.isdir(input_path):
             raise InputError(f"{input_path}: is a directory but not a ROS bag (no metadata.yaml); expected a CSV log or a bag")
         size = os.path.getsize(input_path) if os.path.isfile(input_path) else 0
-        with _progress_bar(size, "reading", unit="B") as bar:
+        with progress_bar(size, "reading", unit="B") as bar:
             log = read_log(input_path, units=units, progress=bar.update)
     for note in log.warnings:  # repeated stamps, an implausible time scale, a cut last line
         click.echo(f"softtip: warning: {note}", err=True)
@@ -181,7 +191,7 @@ def estimate(
             est = run_estimate(log.t, log.wrench, fingertip, config)
     except ValueError as exc:  # e.g. a low-pass cutoff above Nyquist for this log's rate
         raise click.UsageError(str(exc)) from None
-    _check_units(est, fingertip, config, log.units, log.source)
+    check_units(est, fingertip, config, log.units, log.source)
 
     columns = est.columns(units=output_units)
     for name, values in log.extra.items():
@@ -192,11 +202,11 @@ def estimate(
         est, columns, log, bag_log, config, fingertip,
         output=output, plot_path=plot_path, plot_units=plot_units, title=f"softtip: {source}",
         to_bag=to_bag, rerun_spawn=rerun_spawn, rerun_save=rerun_save,
-        metadata=_parquet_metadata(fingertip, tip, output_units, log),
+        metadata=parquet_metadata(fingertip, tip, output_units, log),
     )  # fmt: skip
 
     counts = {name: int(np.count_nonzero(est.state == code)) for code, name in enumerate(STATES)}
-    _tare_warnings(est)
+    tare_warnings(est)
     if save_bias is not None:
         if any(p is not None and Path(p).resolve() == Path(save_bias).resolve() for p in (input_path, output, plot_path)):
             raise InputError(f"--save-bias {save_bias}: is also an input or output of this run")
@@ -239,7 +249,7 @@ def _write_estimate_outputs(
     from softtip.atomic import AtomicFile, cannot_write, commit_all, write_stdout
     from softtip.io import write_table
 
-    viz = _optional("softtip.viz", "viz") if (rerun_spawn or rerun_save) else None
+    viz = optional_extra("softtip.viz", "viz") if (rerun_spawn or rerun_save) else None
     pending: list[AtomicFile] = []
     bag_written = False
     try:
@@ -267,7 +277,7 @@ def _write_estimate_outputs(
             logger.log_estimates(est)
             logger.close()
         if to_bag is not None:
-            bag = _optional("softtip.bag", "ros")
+            bag = optional_extra("softtip.bag", "ros")
             if bag_log is not None:
                 bag.write_estimates_bag(to_bag, est, bag_log.wrench, bag_log.stamps_ns, bag_log.frame_id, bag_log.topic)
             else:
@@ -275,10 +285,10 @@ def _write_estimate_outputs(
             bag_written = True
         # the table last, atomically (softtip.atomic, through write_table); then the others are put in place
         if output is not None:
-            with _progress_bar(len(est), "writing") as bar:
+            with progress_bar(len(est), "writing") as bar:
                 write_table(columns, output, metadata=metadata, progress=bar.update)
         elif to_bag is None:
-            with _progress_bar(len(est), "writing") as bar:
+            with progress_bar(len(est), "writing") as bar:
                 write_stdout(lambda out: write_table(columns, out, progress=bar.update))
         commit_all(pending)
         bag_written = False  # every output is in place: keep the bag

@@ -7,10 +7,12 @@ import os
 import click
 import numpy as np
 
-from softtip.cli.options import _check_figure_path as check_figure_path
-from softtip.cli.options import _make_config as make_config
-from softtip.cli.options import _optional as optional
-from softtip.cli.options import estimator_options
+from softtip.cli.options import (
+    check_figure_path,
+    estimator_options,
+    make_config,
+    optional_extra,
+)
 from softtip.cli.types import Length, Number, option
 from softtip.errors import InputError
 from softtip.units import UNIT_SYSTEMS, wrench_to_si
@@ -98,7 +100,7 @@ def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, 
             raise click.UsageError("a bag input needs --topics TOPIC TOPIC and --frame FRAME")
         if hand_file is not None:
             raise click.UsageError("--hand applies to CSV inputs; a bag's poses come from its /tf")
-        bag = optional("softtip.bag", "ros")
+        bag = optional_extra("softtip.bag", "ros")
         from softtip.fusion.tf import read_tf
 
         path = inputs[0]

@@ -251,7 +251,7 @@ def estimator_options(f):
     return f
 
 
-def _check_units(est, fingertip, config: EstimatorConfig, units: str, source: str) -> None:
+def check_units(est, fingertip, config: EstimatorConfig, units: str, source: str) -> None:
     """Exit 2 when the moment-to-force ratio puts the force far outside the fingertip (wrong --units or --tip)."""
     from softtip.lever import check_force_lever
 
@@ -260,7 +260,7 @@ def _check_units(est, fingertip, config: EstimatorConfig, units: str, source: st
     )
 
 
-def _bag_warnings(path: str, bag_log) -> None:
+def bag_warnings(path: str, bag_log) -> None:
     """Say what was odd about a bag that was read anyway (damaged with --allow-partial; repeated stamps)."""
     if bag_log.damage:
         click.echo(f"softtip: warning: {path}: damaged bag, {len(bag_log.t)} samples used: {bag_log.damage}", err=True)
@@ -270,7 +270,7 @@ def _bag_warnings(path: str, bag_log) -> None:
         )
 
 
-def _check_outputs(inputs, outputs) -> None:
+def check_outputs(inputs, outputs) -> None:
     """Exit 2 when an output is an input or another output of the run (:func:`softtip.atomic.check_distinct`)."""
     from softtip.atomic import check_distinct
 
@@ -279,7 +279,7 @@ def _check_outputs(inputs, outputs) -> None:
 
 
 class _NoProgress:
-    """What :func:`_progress_bar` gives when standard error is not a terminal."""
+    """What :func:`progress_bar` gives when standard error is not a terminal."""
 
     def update(self, n: int = 1) -> None:
         pass
@@ -294,7 +294,7 @@ class _NoProgress:
         pass
 
 
-def _progress_bar(total: int, what: str, *, unit: str = " rows", file=None, delay: float = 2.0):
+def progress_bar(total: int, what: str, *, unit: str = " rows", file=None, delay: float = 2.0):
     """A tqdm bar on standard error, shown only on a terminal and only after ``delay`` s."""
     from tqdm import tqdm
 
@@ -318,7 +318,7 @@ def _progress_bar(total: int, what: str, *, unit: str = " rows", file=None, dela
     )  # fmt: skip
 
 
-def _parquet_metadata(fingertip, tip: str, output_units: str, log) -> dict[str, str]:
+def parquet_metadata(fingertip, tip: str, output_units: str, log) -> dict[str, str]:
     """Key-value metadata of a Parquet output: units, fingertip, input, softtip's version."""
     from softtip.io import PARQUET_FINGERTIP_KEY, PARQUET_UNITS_KEY
 
@@ -330,7 +330,7 @@ def _parquet_metadata(fingertip, tip: str, output_units: str, log) -> dict[str, 
     return meta
 
 
-def _check_figure_path(path: str) -> None:
+def check_figure_path(path: str) -> None:
     """A figure path needs an existing folder and a format matplotlib writes (exit 2 otherwise)."""
     from softtip.plot import figure_formats
 
@@ -342,7 +342,7 @@ def _check_figure_path(path: str) -> None:
         raise InputError(f"{path}: folder {str(p.parent)!r} does not exist")
 
 
-def _tare_warnings(est) -> None:
+def tare_warnings(est) -> None:
     """Say what the tare did, and every warning of the estimator (all from the library)."""
     if est.tare is not None and est.tare.source != "none" and np.all(np.isfinite(est.bias)):
         click.echo(f"softtip: {est.tare.summary()}", err=True)
@@ -350,7 +350,7 @@ def _tare_warnings(est) -> None:
         click.echo(f"softtip: warning: {msg}", err=True)
 
 
-def _make_config(opts: dict, sample_rate: float | None = None, tip: Fingertip | None = None) -> EstimatorConfig:
+def make_config(opts: dict, sample_rate: float | None = None, tip: Fingertip | None = None) -> EstimatorConfig:
     """The :class:`EstimatorConfig` of the shared estimator options (CLI units → SI)."""
     check_pair_increasing("--latch-window", opts["latch_window"], "N")
     try:
@@ -403,13 +403,13 @@ def _make_config(opts: dict, sample_rate: float | None = None, tip: Fingertip | 
         raise click.UsageError(str(exc)) from None
 
 
-def _is_bag(path: str) -> bool:
+def is_bag(path: str) -> bool:
     from softtip.bag import is_bag  # rosbags itself is imported only to read one
 
     return is_bag(path)
 
 
-def _optional(module: str, extra: str):
+def optional_extra(module: str, extra: str):
     """Import one of softtip's modules that needs an optional extra; exit 2 naming the extra."""
     import importlib
 

@@ -12,7 +12,13 @@ from pathlib import Path
 
 import click
 
-from softtip.atomic import AtomicFile, cannot_write, check_distinct, commit_all, write_stdout
+from softtip.atomic import (
+    AtomicFile,
+    cannot_write,
+    check_distinct,
+    commit_all,
+    write_stdout,
+)
 from softtip.cli.types import Force, Length, Number, option
 from softtip.errors import InputError
 from softtip.sim.objects import OBJECT_KINDS
@@ -209,7 +215,11 @@ def simulate(
 def _simulate_hand(output, truth, units, left_object, width, to_bag, options) -> None:
     """``softtip simulate --hand two-finger``: both fingertips, files for ``softtip fuse``."""
     from softtip.fingertip import load_fingertip
-    from softtip.sim.hand import simulate_two_finger, write_two_finger, write_two_finger_bag
+    from softtip.sim.hand import (
+        simulate_two_finger,
+        write_two_finger,
+        write_two_finger_bag,
+    )
     from softtip.sim.objects import make_object
 
     if output is None:

@@ -8,7 +8,14 @@ import warnings
 
 import click
 
-from softtip.cli.options import POSITIVE, FRAMES_HELP, _check_outputs, _make_config, _optional, estimator_options
+from softtip.cli.options import (
+    FRAMES_HELP,
+    POSITIVE,
+    check_outputs,
+    estimator_options,
+    make_config,
+    optional_extra,
+)
 from softtip.cli.types import PORT, Number, check_lowpass, option
 from softtip.estimator.results import EstimatorWarning
 from softtip.fingertip import load_fingertip
@@ -121,7 +128,7 @@ def stream(
         raise click.UsageError(f"--strict: unknown fault(s) {', '.join(sorted(faults - set(FAULTS)))}; expected some of {', '.join(FAULTS)} or all")
     if faults and host is None:
         raise click.UsageError("--strict applies to a live sensor (--netft HOST)")
-    _check_outputs(
+    check_outputs(
         [("--replay", replay), ("--payload", payload), ("--tip", tip if os.path.isfile(tip) else None),
          ("--bias", estimator_opts.get("bias_file"))],
         [("-o", record), ("--rerun-save", rerun_save)],
@@ -132,7 +139,7 @@ def stream(
         from softtip.viz import check_viewer
 
         check_viewer()
-    viz = _optional("softtip.viz", "viz") if (rerun_spawn or rerun_save) else None
+    viz = optional_extra("softtip.viz", "viz") if (rerun_spawn or rerun_save) else None
 
     stop = threading.Event()
     # Ctrl-C, SIGTERM and SIGHUP end the loop between two samples (or a wait for one): the
@@ -164,7 +171,7 @@ def stream(
             lowpass = estimator_opts["lowpass"]
             if lowpass is not None and source.rate_hz is not None:
                 check_lowpass(lowpass, source.rate_hz)
-            config = _make_config(
+            config = make_config(
                 estimator_opts, sample_rate=source.rate_hz if lowpass is not None else None, tip=fingertip
             )
             if lowpass is not None and source.rate_hz is None:
