@@ -92,17 +92,17 @@ def test_repeated_stamps_are_estimated_and_warned_about(tmp_path: Path) -> None:
 
 
 def test_progress_bar_only_on_a_terminal() -> None:
-    from softtip.cli import _progress_bar
+    from softtip.cli.options import progress_bar
 
     plain = io.StringIO()
-    with _progress_bar(100, "writing", file=plain, delay=0.0) as bar:
+    with progress_bar(100, "writing", file=plain, delay=0.0) as bar:
         bar.update(100)
     assert plain.getvalue() == ""
 
     master, slave = os.openpty()
     shown = ""
     try:
-        with open(slave, "w", closefd=False) as tty, _progress_bar(100, "writing", file=tty, delay=0.0) as bar:
+        with open(slave, "w", closefd=False) as tty, progress_bar(100, "writing", file=tty, delay=0.0) as bar:
             bar.update(40)
             bar.refresh()
             tty.flush()

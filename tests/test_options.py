@@ -14,7 +14,7 @@ from click.testing import CliRunner
 
 from softtip import EXAMPLE_PATH
 from softtip.cli import main
-from softtip.cli_types import Number, check_lowpass
+from softtip.cli.types import Number, check_lowpass
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 LOG = str(EXAMPLE_PATH)

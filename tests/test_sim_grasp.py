@@ -8,7 +8,9 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
+from softtip.cli.simulate import simulate
 from softtip.core.fingertip import murakami2006
+from softtip.core.units import parse_force, parse_length
 from softtip.sim import (
     ContactModel,
     HandFrame,
@@ -22,7 +24,6 @@ from softtip.sim import (
     write_log_csv,
     write_truth_json,
 )
-from softtip.sim.commands import parse_force, parse_length, simulate
 
 TIP = murakami2006()
 

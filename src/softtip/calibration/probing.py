@@ -230,6 +230,17 @@ class Calibration:
             "deviations; press harder (2-6 N) and slide the surface while holding each press (softtip calibrate --guide)"
         )
 
+    @property
+    def noise_warning(self) -> str:
+        """``""``, or why the noise model does not fit: the residual is outside 0.5–2 times the model's."""
+        if 0.5 <= self.noise_ratio <= 2.0:
+            return ""
+        return (
+            f"the residual is {self.noise_ratio:.2f} times the noise model's; the standard deviations allow for it, but "
+            "the weights are best with this sensor's noise (the standard deviation of each axis in the untouched part "
+            "of the log)"
+        )
+
     def summary(self) -> str:
         """Human-readable report, mm."""
         mm = 1e3

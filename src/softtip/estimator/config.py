@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from softtip.core.depth import DepthLaw
 from softtip.core.filtering import lowpass_sos
@@ -187,6 +188,20 @@ class EstimatorConfig:
     excitation_min: float = 0.01
     evidence_max_angle_std: float = math.radians(10.0)
     evidence_reset_distance: float = 1e-3
+
+    def line_threshold(self, h_std: ArrayLike) -> NDArray[np.float64]:
+        """The ``|h|`` above which a contact is a line: ``max(h_sigmas · h_std, h_min)``.
+
+        Parameters
+        ----------
+        h_std : array of shape (...,), N·m
+            The noise level of ``h`` (:attr:`Estimates.h_std`).
+
+        Returns
+        -------
+        array of shape (...,), N·m
+        """
+        return np.maximum(self.h_sigmas * np.asarray(h_std, dtype=float), self.h_min)
 
     def __post_init__(self) -> None:
         if self.depth_mode not in DEPTH_MODES:

@@ -276,7 +276,7 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
 
     # significance with hysteresis: a line stays significant down to SIG_LEAVE × threshold
     with np.errstate(invalid="ignore"):
-        thr = np.maximum(config.h_sigmas * np.asarray(ms.h_std, dtype=float), config.h_min)
+        thr = config.line_threshold(ms.h_std)
         hn = np.asarray(ms.h_norm, dtype=float)
         sig_ev = np.where(hn > thr, 1, np.where(hn <= SIG_LEAVE * thr, 0, -1))
     idx = np.arange(n)

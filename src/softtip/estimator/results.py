@@ -10,6 +10,8 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from softtip.core.units import wrench_to_si
+
 __all__ = ["STATES", "NONE", "POINT", "LINE", "AREA", "EVIDENCE", "EstimatorWarning", "Estimates", "SampleEstimate"]
 
 #: Contact states, indexed by the integer codes in :attr:`Estimates.state`.
@@ -19,6 +21,9 @@ NONE, POINT, LINE, AREA = 0, 1, 2, 3
 EVIDENCE = ("", "unconfirmed", "confirmed")
 #: Names of the drift columns (:meth:`Estimates.columns`).
 DRIFT_COLUMNS = ("drift_fx", "drift_fy", "drift_fz", "drift_mx", "drift_my", "drift_mz")
+#: The force columns (N, or kgf in ``columns(units="kgf-mm")``) and the moment columns (N·m or kgf·mm).
+FORCE_COLUMNS = ("fx", "fy", "fz") + DRIFT_COLUMNS[:3]
+MOMENT_COLUMNS = ("mx", "my", "mz", "sigma", "hx", "hy", "hz", "h_norm", "h_std") + DRIFT_COLUMNS[3:]
 
 
 class EstimatorWarning(UserWarning):
@@ -147,10 +152,18 @@ class Estimates:
         """Samples in contact by force whose force pulls at every root (reported ``none``)."""
         return int(np.count_nonzero(self.pulling))
 
-    def columns(self) -> dict[str, NDArray]:
-        """The output columns (manual §4) (SI, angles in degrees), in order, then softtip's extras."""
+    def columns(self, units: str = "si") -> dict[str, NDArray]:
+        """The output columns (manual §4), in order, then softtip's extras.
+
+        Parameters
+        ----------
+        units : {"si", "kgf-mm"}
+            Units of the force (N or kgf) and moment (N·m or kgf·mm) columns: the wrench,
+            ``sigma``, ``h``, ``h_norm``, ``h_std`` and the drift. Lengths are always in m,
+            angles in degrees.
+        """
         w, p, n, h, d = self.wrench, self.point, self.normal, self.h, self.direction
-        return {
+        columns = {
             "t": self.t,
             "state": self.state_names,
             "fx": w[:, 0], "fy": w[:, 1], "fz": w[:, 2],
@@ -181,6 +194,13 @@ class Estimates:
             "h_ratio": self.h_ratio,
             "excitation_ratio": self.excitation_ratio,
         }  # fmt: skip
+        if units != "si":
+            force, moment = wrench_to_si(np.ones(6), units)[[0, 3]]  # one kgf in N, one kgf·mm in N·m
+            for name in FORCE_COLUMNS:
+                columns[name] = columns[name] / force
+            for name in MOMENT_COLUMNS:
+                columns[name] = columns[name] / moment
+        return columns
 
 
 class SampleEstimate(NamedTuple):

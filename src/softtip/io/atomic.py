@@ -208,6 +208,28 @@ class AtomicFile:
                 raise cannot_write(self.path, exc) from None
 
 
+def partial_dir(dest: PathLike) -> Path:
+    """A new hidden directory beside ``dest`` to write an output directory in, then rename into place.
+
+    Unlike :func:`tempfile.mkdtemp` (mode 0700) its mode follows the umask, as ``mkdir``'s
+    would, so the renamed directory has the permissions the user expects.
+
+    Raises
+    ------
+    OSError
+        The parent directory does not exist or is not writable.
+    """
+    dest = Path(dest)
+    parent = dest.parent if str(dest.parent) else Path(".")
+    while True:
+        tmp = parent / f".{dest.name}.{secrets.token_hex(4)}.partial"
+        try:
+            os.mkdir(tmp, 0o777)
+            return tmp
+        except FileExistsError:
+            continue
+
+
 def commit_all(files: Iterable[AtomicFile]) -> None:
     """Put several outputs in place: devices and pipes first (they can block or fail), then the renames.
 

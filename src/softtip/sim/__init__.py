@@ -10,7 +10,7 @@ Modules: :mod:`~softtip.sim.skin` (surface elements), :mod:`~softtip.sim.objects
 objects), :mod:`~softtip.sim.contact` (Winkler + friction), :mod:`~softtip.sim.scenario`
 (grasp time series, the papers' hand), :mod:`~softtip.sim.sensor` (noise),
 :mod:`~softtip.sim.truth` (ground truth), :mod:`~softtip.sim.simulate` (the loop and the
-writers), :mod:`~softtip.sim.commands` (the ``simulate`` command).
+writers); the ``simulate`` command is :mod:`softtip.cli.simulate`.
 
 Example
 -------

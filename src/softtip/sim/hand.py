@@ -209,16 +209,16 @@ def write_two_finger(grasp: TwoFingerGrasp, out_dir) -> list:
     import json
     import os
     import shutil
-    import tempfile
     from pathlib import Path
 
+    from softtip.io.atomic import partial_dir
     from softtip.sim.simulate import write_log_csv
 
     out = Path(out_dir)
     if out.exists():
         raise FileExistsError(f"{out}: exists; expected a new directory")
     # written in a hidden folder beside it and renamed into place: all files or none
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".partial", dir=out.parent if str(out.parent) else "."))
+    tmp = partial_dir(out)  # mode from the umask, like mkdir
     try:
         for side in SIDES:
             write_log_csv(grasp.logs[side], tmp / f"{side}.csv")

@@ -43,7 +43,8 @@ def plot_estimates(
     """Draw the four panels of the papers' figures (e.g. 2006 Figs. 8–11).
 
     Upper left force, lower left moment (of log ``detail``, per axis; named in the panels'
-    titles when there are several logs), upper right ``|h|``,
+    titles when there are several logs), upper right ``|h|`` (missing while the contact
+    point is being latched, where it is zero by construction; that interval is shaded),
     lower right the measured direction in degrees (``line`` samples only, with its ±1σ
     band). Several logs (e.g. one per plate angle) share the right-hand panels, one trace
     each.
@@ -101,13 +102,22 @@ def plot_estimates(
 
     for k, est in enumerate(runs):
         label = labels[k] if labels is not None else None
-        (line,) = ax_h.plot(est.t, est.h_norm * mscale, lw=1, label=label)
+        # while the point is being latched it is the sample's own soft-finger solution, where
+        # h is zero by construction: no measurement, so drawn as missing (and shaded below)
+        h_norm = np.where(latching(est), np.nan, est.h_norm)
+        (line,) = ax_h.plot(est.t, h_norm * mscale, lw=1, label=label)
         angle = np.where(est.state == LINE, np.degrees(est.angle), np.nan)
         std = np.degrees(est.angle_std)
         ax_d.plot(est.t, angle, ".", ms=2.5, color=line.get_color(), label=label)
         ax_d.fill_between(est.t, angle - std, angle + std, color=line.get_color(), alpha=0.2, lw=0)
         if reference_angles is not None:
             ax_d.axhline(reference_angles[k], ls="--", lw=0.8, color=line.get_color())
+    shade = latching(first)
+    if shade.any():
+        ax_h.fill_between(
+            first.t, 0.0, 1.0, where=shade, transform=ax_h.get_xaxis_transform(), color="0.85", lw=0,
+            label="latching: |h| not measured",
+        )  # fmt: skip
     if h_threshold is not None:
         level = np.broadcast_to(np.asarray(h_threshold, dtype=float), first.t.shape)
         ax_h.plot(first.t, level * mscale, ls="--", color="0.4", lw=1, label="significance")
@@ -115,7 +125,7 @@ def plot_estimates(
     ax_d.set_ylabel("measured direction [deg]")
     ax_d.set_ylim(-95, 95)  # a true direction at ±90° stays off the frame
     ax_d.set_yticks([-90, -45, 0, 45, 90])
-    if labels is not None or h_threshold is not None:
+    if labels is not None or h_threshold is not None or shade.any():
         ax_h.legend(loc="upper left", fontsize=8)
     state_band(ax_s, runs, labels)
     for ax in (ax_m, ax_s):
@@ -127,6 +137,15 @@ def plot_estimates(
         fig.suptitle(title)
     _save(fig, plt, path)
     return fig
+
+
+def latching(est: Estimates) -> np.ndarray:
+    """Samples in contact whose point is not (yet) a latched one, shape (N,) bool.
+
+    There the contact point is the sample's own soft-finger solution, so ``h`` is zero by
+    construction: not a measurement (plots show it as missing).
+    """
+    return (est.state > 0) & ~np.asarray(est.latched, dtype=bool)
 
 
 #: Colours of the state band: none, point, line (unconfirmed), line (confirmed), area.

@@ -22,15 +22,17 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 from collections import deque
 
 import numpy as np
 from numpy.typing import NDArray
 
 from softtip.core.fingertip import Capsule, Ellipsoid, Fingertip, Sphere
+from softtip.errors import InputError
 from softtip.estimator import STATES, Estimates, SampleEstimate
 
-__all__ = ["RerunLogger", "import_rerun", "surface_mesh"]
+__all__ = ["RerunLogger", "check_viewer", "import_rerun", "surface_mesh"]
 
 
 def import_rerun():
@@ -137,6 +139,20 @@ def _edge_line(tip: Fingertip, r, d, half_length: float) -> NDArray:
     return tip.project(np.asarray(r) + s * np.asarray(d))
 
 
+def check_viewer() -> None:
+    """Raise :class:`~softtip.errors.InputError` at once when no Rerun viewer can be shown here.
+
+    On Linux a viewer needs a display: ``DISPLAY`` (X11) or ``WAYLAND_DISPLAY``. Without one
+    the viewer process fails only after many seconds; saving a recording works anywhere.
+    """
+    if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        raise InputError(
+            "--rerun: no display to open the Rerun viewer on (DISPLAY and WAYLAND_DISPLAY are unset, e.g. over ssh); "
+            "save the view instead with --rerun-save FILE.rrd (in Python: RerunLogger(tip, save='FILE.rrd')) and open "
+            "it with `rerun FILE.rrd` on a machine with a display"
+        )
+
+
 class RerunLogger:
     """Logs a fingertip and its estimates to Rerun.
 
@@ -173,7 +189,14 @@ class RerunLogger:
         self.rec = rr.RecordingStream(application_id)
         sinks = [rr.FileSink(os.fspath(save))] if save is not None else []
         if spawn:
-            self.rec.spawn(connect=False)  # starts a viewer (or finds a running one)
+            check_viewer()
+            try:
+                self.rec.spawn(connect=False)  # starts a viewer (or finds a running one)
+            except Exception as exc:  # noqa: BLE001 - whatever rerun raises, the user gets one message
+                raise InputError(
+                    f"--rerun: could not start the Rerun viewer ({exc}); save the view instead with "
+                    "--rerun-save FILE.rrd and open it with `rerun FILE.rrd`"
+                ) from None
             sinks.append(rr.GrpcSink())
         if sinks:
             self.rec.set_sinks(*sinks)
@@ -282,5 +305,11 @@ class RerunLogger:
 
     def close(self) -> None:
         """Flush and close the recording (the ``.rrd`` file is complete afterwards)."""
-        self.rec.flush()
+        try:
+            self.rec.flush()
+        except RuntimeError as exc:  # the spawned viewer died (no display, no GPU, closed early)
+            raise InputError(
+                f"--rerun: the Rerun viewer could not be reached ({exc}); save the view instead with "
+                "--rerun-save FILE.rrd and open it with `rerun FILE.rrd`"
+            ) from None
         self.rec.disconnect()

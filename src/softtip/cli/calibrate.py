@@ -1,4 +1,4 @@
-"""``softtip calibrate`` and ``softtip calibrate-payload``: click commands (registered in :mod:`softtip.cli`)."""
+"""``softtip calibrate``: the fingertip geometry from a probing log (and the helpers ``calibrate-payload`` shares)."""
 
 from __future__ import annotations
 
@@ -6,14 +6,14 @@ import sys
 
 import click
 
-from softtip.cli_types import Number
+from softtip.cli.types import Number, option
 from softtip.core.noise import NANO17
 from softtip.core.units import UNIT_SYSTEMS
 from softtip.errors import InputError
 from softtip.io.atomic import write_stdout
-from softtip.io.examples import EXAMPLE_PROBING_PATH, EXAMPLE_STILL_PATH
+from softtip.io.examples import EXAMPLE_PROBING_PATH
 
-__all__ = ["calibrate", "calibrate_payload"]
+__all__ = ["calibrate"]
 
 
 def _read(input_path: str, units: str):
@@ -105,26 +105,30 @@ capsule's offset of its axis from the sensor's z axis is its axis_offset.
 """,
 )
 @click.argument("input_path", metavar="LOG", required=False, type=click.Path(allow_dash=True, dir_okay=False))
-@click.option("--shape", type=click.Choice(["sphere", "capsule", "mesh"]), help="Fingertip shape to fit (required unless --guide; mesh: the placement of --mesh on the sensor).")
-@click.option("--example", is_flag=True, help="Use the shipped example probing log (simulated: 30 presses on a 16 mm sphere centred at 0.3, -0.2, 20.0 mm) as LOG.")
-@click.option("--guide", is_flag=True, help="Print how to record a probing log (where, how hard and how to press) and exit.")
-@click.option("-o", "--output", type=click.Path(dir_okay=False), help="Fingertip TOML file to write (default: standard output).")
-@click.option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the log's wrench.")
-@click.option("--tare-duration", type=Number("s", 0.0), default=0.2, show_default=True, metavar="S", help="Average the first S seconds (untouched) as the sensor bias; 0 if LOG is tared.")
-@click.option("--contact-threshold", type=Number("N", 0.0, min_open=True), default=0.05, show_default=True, metavar="N", help="A press lasts while |f| is at least this (at least 4 times the force noise's magnitude), N.")
-@click.option("--min-force", type=Number("N", 0.0), default=0.5, show_default=True, metavar="N", help="Only samples with |f| at least this enter the fit, N.")
-@click.option("--rigid", is_flag=True, help="Do not fit the skin's indentation (radius then comes out short by about the indentation).")
-@click.option("--mesh", "mesh_path", type=click.Path(dir_okay=False), help="--shape mesh: the fingertip mesh (a mesh fingertip .toml, or .stl/.obj/.ply with --mesh-units); its shift on the sensor is fitted.")
-@click.option("--mesh-units", type=click.Choice(["m", "cm", "mm", "um", "in"]), help="Length unit of a bare --mesh file.")
-@click.option("--rotation", is_flag=True, help="--shape mesh: fit a small rotation as well as the shift (6 DOF).")
-@click.option("--force-noise", type=click.FloatRange(min=0.0, min_open=True), default=NANO17.force_std[0], show_default=True, metavar="N", help="Per-axis standard deviation of the sensor's force noise, N (Nano17-class default).")
-@click.option("--moment-noise", type=click.FloatRange(min=0.0, min_open=True), default=NANO17.moment_std[0] * 1e3, show_default=True, metavar="N·mm", help="Per-axis standard deviation of the sensor's moment noise, N·mm.")
+@option("--shape", type=click.Choice(["sphere", "capsule", "mesh"]), help="Fingertip shape to fit (required unless --guide; mesh: the placement of --mesh on the sensor).")
+@option("--example", is_flag=True, help="Use the shipped example probing log (simulated: 30 presses on a 16 mm sphere centred at 0.3, -0.2, 20.0 mm) as LOG.")
+@option("--guide", is_flag=True, help="Print how to record a probing log (where, how hard and how to press) and exit.")
+@option("-o", "--output", type=click.Path(dir_okay=False), help="Fingertip TOML file to write (default: standard output).")
+@option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the log's wrench.")
+@option("--tare-duration", type=Number("s", 0.0), default=0.2, show_default=True, metavar="S", help="Average the first S seconds (untouched) as the sensor bias; 0 if LOG is tared.")
+@option("--contact-threshold", type=Number("N", 0.0, min_open=True), default=0.05, show_default=True, metavar="N", help="A press lasts while |f| is at least this (at least 4 times the force noise's magnitude), N.")
+@option("--min-force", type=Number("N", 0.0), default=0.5, show_default=True, metavar="N", help="Only samples with |f| at least this enter the fit, N.")
+@option("--rigid", is_flag=True, help="Do not fit the skin's indentation (radius then comes out short by about the indentation).")
+@option("--mesh", "mesh_path", type=click.Path(dir_okay=False), help="--shape mesh: the fingertip mesh (a mesh fingertip .toml, or .stl/.obj/.ply with --mesh-units); its shift on the sensor is fitted.")
+@option("--mesh-units", type=click.Choice(["m", "cm", "mm", "um", "in"]), help="Length unit of a bare --mesh file.")
+@option("--rotation", is_flag=True, help="--shape mesh: fit a small rotation as well as the shift (6 DOF).")
+@option("--force-noise", type=click.FloatRange(min=0.0, min_open=True), default=NANO17.force_std[0], show_default=True, metavar="N", help="Per-axis standard deviation of the sensor's force noise, N (Nano17-class default).")
+@option("--moment-noise", type=click.FloatRange(min=0.0, min_open=True), default=NANO17.moment_std[0] * 1e3, show_default=True, metavar="N·mm", help="Per-axis standard deviation of the sensor's moment noise, N·mm.")
 @click.pass_context
 def calibrate(
     ctx, input_path, shape, output, units, tare_duration, contact_threshold, min_force, rigid, force_noise, moment_noise,
     example, guide, mesh_path, mesh_units, rotation,
 ):
-    from softtip.calibration.probing import PROBING_GUIDE, calibrate_fingertip, write_fingertip_toml
+    from softtip.calibration.probing import (
+        PROBING_GUIDE,
+        calibrate_fingertip,
+        write_fingertip_toml,
+    )
     from softtip.core.noise import SensorNoise
 
     if guide:
@@ -178,64 +182,8 @@ def calibrate(
         return
     if cal.warning:
         click.echo(f"softtip: warning: {cal.warning}", err=True)
-    if not 0.5 <= cal.noise_ratio <= 2.0:
+    if cal.noise_warning:
         click.echo(
-            f"softtip: warning: the residual is {cal.noise_ratio:.2f} times the noise model's (--force-noise {force_noise:g} N, "
-            f"--moment-noise {moment_noise:g} N·mm); the standard deviations allow for it, but the weights are best with this "
-            "sensor's noise (the standard deviation of each axis in the untouched part of the log)",
+            f"softtip: warning: {cal.noise_warning} (--force-noise {force_noise:g} N, --moment-noise {moment_noise:g} N·mm)",
             err=True,
         )
-
-
-@click.command(
-    "calibrate-payload",
-    help="""Estimate the fingertip's mass, centre of mass and the sensor bias.
-
-LOG is a CSV log (t, fx, fy, fz, mx, my, mz, qw, qx, qy, qz; '-' reads standard input)
-recorded with nothing touching the fingertip while the finger takes varied orientations
-(±45° or more about at least two axes). qw, qx, qy, qz is the unit quaternion of the
-sensor frame in a gravity-aligned world frame (world z up). Linear least squares on
-wrench = bias + (m g_s, c × m g_s), g_s = Rᵀ (0, 0, −9.80665); prints the estimates with
-standard deviations and refuses (exit 2) when the orientations do not vary enough.
-
-Writes a payload TOML file ([payload] mass = kg, com = [x, y, z] m; -o, atomically;
-standard output otherwise) for `softtip estimate --payload` and `softtip stream --payload`;
-its [bias] table is the sensor bias without the fingertip's weight, for --bias FILE
-together with --payload (no tare needed).
-""",
-)
-@click.argument("input_path", metavar="LOG", required=False, type=click.Path(allow_dash=True, dir_okay=False))
-@click.option("-o", "--output", type=click.Path(dir_okay=False), help="Payload TOML file to write (default: standard output).")
-@click.option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the log's wrench.")
-@click.option("--example", is_flag=True, help="Use the shipped example still log (simulated: a 20 g fingertip, centre of mass 1, -0.5, 20 mm, in 12 orientations) as LOG.")
-@click.pass_context
-def calibrate_payload(ctx, input_path, output, units, example):
-    from softtip.calibration.payload import calibrate_payload as fit_payload
-    from softtip.calibration.payload import read_orientation
-    from softtip.calibration.probing import atomic_write_text
-    from softtip.estimator.tare import bias_to_toml
-
-    input_path = _example_or_log(input_path, example, units, EXAMPLE_STILL_PATH, "still log")
-    try:
-        _check_output(input_path, output)
-        log = _read(input_path, units)
-        fit = fit_payload(log.wrench, read_orientation(log), source=log.source)
-        b = fit.bias
-        text = (
-            f"# softtip calibrate-payload {log.source}: {fit.n_samples} samples; mass std {fit.mass_std * 1e3:.3f} g, "
-            "com std " + ", ".join(f"{v * 1e3:.3f}" for v in fit.com_std) + " mm\n"
-            "# sensor bias (removed by the tare, not used): force "
-            + ", ".join(f"{v:.5g}" for v in b[:3]) + " N, moment " + ", ".join(f"{v:.5g}" for v in b[3:]) + " N·m\n"
-            + fit.payload.to_toml()
-            + "# the sensor bias without the fingertip's weight: for --bias together with --payload\n"
-            + bias_to_toml(b)
-        )
-        if output is not None:
-            atomic_write_text(output, text)
-            click.echo(fit.summary())
-            click.echo(f"softtip: payload -> {output}", err=True)
-        else:
-            click.echo(fit.summary(), err=True)
-            write_stdout(text)
-    except InputError as exc:
-        _fail(ctx, exc)

@@ -1,4 +1,4 @@
-"""The ``softtip simulate`` command (click); register it in the main CLI group.
+"""``softtip simulate``: a grasp on the simulator, written as an F/T log and its ground truth.
 
 Lengths accept a unit suffix (``2mm``, ``0.5 mm``, ``40e-3``, ``1cm``; a bare number is in
 metres); forces accept ``N`` or ``kgf`` (``0.5kgf``; bare: newtons); angles are degrees.
@@ -8,15 +8,20 @@ from __future__ import annotations
 
 import math
 import os
-import re
 from pathlib import Path
 
 import click
 
-from softtip.cli_types import Number
-from softtip.core.units import KGF, UNIT_SYSTEMS
+from softtip.cli.types import Force, Length, Number, option
+from softtip.core.units import UNIT_SYSTEMS
 from softtip.errors import InputError
-from softtip.io.atomic import AtomicFile, cannot_write, check_distinct, commit_all, write_stdout
+from softtip.io.atomic import (
+    AtomicFile,
+    cannot_write,
+    check_distinct,
+    commit_all,
+    write_stdout,
+)
 from softtip.sim.objects import OBJECT_KINDS
 from softtip.sim.scenario import (
     DISTURBANCE_TIMINGS,
@@ -29,7 +34,7 @@ from softtip.sim.scenario import (
 from softtip.sim.simulate import log_csv_text, run_simulation, truth_json_text
 from softtip.sim.skin import DEFAULT_ELEMENTS
 
-__all__ = ["simulate", "parse_length", "parse_force"]
+__all__ = ["simulate"]
 
 #: Ranges of the simulation's size options (a larger run would not fit in memory)
 MAX_RATE = 100_000.0  # Hz
@@ -37,61 +42,8 @@ MAX_SAMPLES = 10_000_000
 MAX_ELEMENTS = 200_000
 MAX_FRICTION = 10.0
 
-_LENGTH_UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6, "µm": 1e-6}
-_FORCE_UNITS = {"n": 1.0, "kgf": KGF}
-_NUMBER = r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([a-zA-Zµ]*)\s*"
-
-
-def _parse(text: str, units: dict[str, float], what: str) -> float:
-    m = re.fullmatch(_NUMBER, str(text))
-    unit = m.group(2).lower() if m else ""
-    if not m or (unit and unit not in units):
-        raise ValueError(f"{text!r} is not a {what} (a number with an optional unit: {', '.join(units)})")
-    value = float(m.group(1)) * (units[unit] if unit else 1.0)
-    if not math.isfinite(value):
-        raise ValueError(f"{text!r} is not a finite {what}")
-    return value
-
-
-def parse_length(text: str) -> float:
-    """``"2mm"`` → 0.002 (m). A bare number is in metres."""
-    return _parse(text, _LENGTH_UNITS, "length")
-
-
-def parse_force(text: str) -> float:
-    """``"0.5kgf"`` → 4.903325 (N). A bare number is in newtons."""
-    return _parse(text, _FORCE_UNITS, "force")
-
-
-class _Length(click.ParamType):
-    name = "LENGTH"
-
-    def convert(self, value, param, ctx):
-        if isinstance(value, float):
-            return value
-        try:
-            length = parse_length(value)
-        except ValueError as exc:
-            self.fail(str(exc), param, ctx)
-        # a bare number is in metres: "--size 2" would be a 2 m object, surely meant in mm
-        if abs(length) >= 0.1 and not re.search(r"[a-zA-Zµ]", str(value)):
-            self.fail(f"{value!r} is {length:g} m; give a unit, e.g. '{value}mm'", param, ctx)
-        return length
-
-
-class _Force(click.ParamType):
-    name = "FORCE"
-
-    def convert(self, value, param, ctx):
-        if isinstance(value, float):
-            return value
-        try:
-            return parse_force(value)
-        except ValueError as exc:
-            self.fail(str(exc), param, ctx)
-
-
-LENGTH, FORCE = _Length(), _Force()
+#: simulate's lengths: a bare number is in metres, and one of 0.1 m or more needs a unit
+LENGTH, FORCE = Length("m", bare_max=0.1), Force()
 
 
 def _check_sizes(options: dict) -> None:
@@ -123,84 +75,84 @@ def _check_sizes(options: dict) -> None:
 
 
 @click.command("simulate")
-@click.option("--object", "object_kind", type=click.Choice(OBJECT_KINDS), default="plate", show_default=True,
+@option("--object", "object_kind", type=click.Choice(OBJECT_KINDS), default="plate", show_default=True,
               help="What the fingertip touches.")
-@click.option("--size", type=LENGTH, default=None,
+@option("--size", type=LENGTH, default=None,
               help="Plate thickness, or cylinder/stick/fringe diameter (e.g. 2mm). Defaults: plate 1mm, "
                    "cylinder 6mm, stick 4mm, fringe 40mm.")
-@click.option("--angle", "angle_deg", type=Number("deg"), default=0.0, show_default=True,
+@option("--angle", "angle_deg", type=Number("deg"), default=0.0, show_default=True,
               help="Direction of the edge/axis/fringe at the contact, degrees from the sensor x axis "
                    "(manual §3.4 tangent frame; 90 = along the hand's joint axes).")
-@click.option("--scenario", type=click.Choice(["paper", "push", "friction"]), default="paper", show_default=True,
+@option("--scenario", type=click.Choice(["paper", "push", "friction"]), default="paper", show_default=True,
               help="paper: the papers' two-fingered grasp with joint and gravity disturbances; "
                    "push: a plain push; friction: the papers' grasp (weightless object) with a friction load "
                    "during the hold (--load, --load-direction, --load-profile).")
-@click.option("--load", "load_ratio", type=Number("(fraction of the grasp force)", 0.0), default=0.25, show_default=True,
+@option("--load", "load_ratio", type=Number("(fraction of the grasp force)", 0.0), default=0.25, show_default=True,
               help="friction scenario: tangential load, a fraction of the grasp force.")
-@click.option("--load-direction", type=click.Choice(["across", "along"]), default="across", show_default=True,
+@option("--load-direction", type=click.Choice(["across", "along"]), default="across", show_default=True,
               help="friction scenario: load across the line or along it.")
-@click.option("--load-profile", type=click.Choice(FRICTION_PROFILES), default="push", show_default=True,
+@option("--load-profile", type=click.Choice(FRICTION_PROFILES), default="push", show_default=True,
               help="friction scenario: push (ramped in at 6-6.5 s, held), drag (slowly, 5.5-9.5 s) or slip "
                    "(the object slides 1.5 mm at 6-7 s, friction at the Coulomb limit).")
-@click.option("--tip", default="murakami2006", show_default=True, help="Fingertip preset or TOML file.")
-@click.option("--edge-radius", type=LENGTH, default=0.0, show_default=True,
+@option("--tip", default="murakami2006", show_default=True, help="Fingertip preset or TOML file.")
+@option("--edge-radius", type=LENGTH, default="0mm", show_default=True,
               help="Plate corner radius or wedge tip radius (length).")
-@click.option("--apex-angle", "apex_angle_deg", type=Number("deg", 0.0, 180.0, min_open=True, max_open=True), default=90.0, show_default=True,
+@option("--apex-angle", "apex_angle_deg", type=Number("deg", 0.0, 180.0, min_open=True, max_open=True), default=90.0, show_default=True,
               help="Wedge apex angle, degrees.")
-@click.option("--tilt", "tilt_deg", type=Number("deg", 0.0, 90.0), default=45.0, show_default=True,
+@option("--tilt", "tilt_deg", type=Number("deg", 0.0, 90.0), default=45.0, show_default=True,
               help="Fringe: contact normal's angle from the cylinder side toward its bottom face, degrees.")
-@click.option("--force", type=FORCE, default="0.5kgf", show_default=True, help="Held grasp force (N or kgf).")
-@click.option("--duration", type=Number("s", 0.0, min_open=True), default=None, help="Recorded time, s [default: 10, or the end of --rock].")
-@click.option("--t-contact", type=Number("s", 0.0), default=2.0, show_default=True, help="Time of first touch, s.")
-@click.option("--t-stable", type=Number("s", 0.0, min_open=True), default=4.0, show_default=True, help="End of the force ramp, s.")
-@click.option("--rate", type=Number("Hz", 0.0, MAX_RATE, min_open=True), default=50.0, show_default=True, help="Sample rate, Hz.")
-@click.option("--joint-rotation", "joint_rotation_deg", type=Number("deg", -90.0, 90.0), default=JOINT_ROTATION_DEG, show_default=True,
+@option("--force", type=FORCE, default="0.5kgf", show_default=True, help="Held grasp force (N or kgf).")
+@option("--duration", type=Number("s", 0.0, min_open=True), default=None, help="Recorded time, s [default: 10, or the end of --rock].")
+@option("--t-contact", type=Number("s", 0.0), default=2.0, show_default=True, help="Time of first touch, s.")
+@option("--t-stable", type=Number("s", 0.0, min_open=True), default=4.0, show_default=True, help="End of the force ramp, s.")
+@option("--rate", type=Number("Hz", 0.0, MAX_RATE, min_open=True), default=50.0, show_default=True, help="Sample rate, Hz.")
+@option("--joint-rotation", "joint_rotation_deg", type=Number("deg", -90.0, 90.0), default=JOINT_ROTATION_DEG, show_default=True,
               help="paper: object rotation about the joint axis once the grasp holds it, degrees.")
-@click.option("--gravity-spin", "gravity_spin_deg", type=Number("deg", -90.0, 90.0), default=1.0, show_default=True,
+@option("--gravity-spin", "gravity_spin_deg", type=Number("deg", -90.0, 90.0), default=1.0, show_default=True,
               help="paper: object rotation about the grasp axis from its weight, degrees.")
-@click.option("--mass", "object_mass", type=Number("kg", 0.0), default=OBJECT_MASS, show_default=True,
+@option("--mass", "object_mass", type=Number("kg", 0.0), default=OBJECT_MASS, show_default=True,
               help="paper: object mass, kg (half its weight loads each finger tangentially).")
-@click.option("--disturbance-timing", type=click.Choice(DISTURBANCE_TIMINGS), default="after_grasp",
+@option("--disturbance-timing", type=click.Choice(DISTURBANCE_TIMINGS), default="after_grasp",
               show_default=True,
               help="paper: after_grasp (the papers' procedure: disturbances ramp in after the grasp force "
                    "is established) or during_rise (together with the force rise; harder for the latch).")
-@click.option("--misalignment", "misalignment_deg", type=Number("deg", -90.0, 90.0), default=0.0, show_default=True,
+@option("--misalignment", "misalignment_deg", type=Number("deg", -90.0, 90.0), default=0.0, show_default=True,
               help="paper: fixed alignment error about the hand z axis, degrees.")
-@click.option("--rock", is_flag=True,
+@option("--rock", is_flag=True,
               help="paper: after the grasp, rock the object about two tangent axes and then in a figure-eight "
                    "(each segment averaging to zero tilt), the excitation that tells a line from an area; "
                    "--duration defaults to the end of the rocking.")
-@click.option("--rock-amplitude", "rock_amplitude_deg", type=Number("deg", 0.0, 90.0, min_open=True), default=ROCK_AMPLITUDE_DEG, show_default=True,
+@option("--rock-amplitude", "rock_amplitude_deg", type=Number("deg", 0.0, 90.0, min_open=True), default=ROCK_AMPLITUDE_DEG, show_default=True,
               help="--rock: tilt amplitude, degrees.")
-@click.option("--rock-period", type=Number("s", 0.0, min_open=True), default=1.0, show_default=True, help="--rock: period of the rocking, s.")
-@click.option("--rock-load", type=FORCE, default=str(ROCK_LOAD), show_default=True,
+@option("--rock-period", type=Number("s", 0.0, min_open=True), default=1.0, show_default=True, help="--rock: period of the rocking, s.")
+@option("--rock-load", type=FORCE, default=str(ROCK_LOAD), show_default=True,
               help="--rock: tangential load that comes with the tilt (N or kgf), turning with the tilt axis.")
-@click.option("--elements", "n_elements", type=click.IntRange(50, MAX_ELEMENTS), default=DEFAULT_ELEMENTS, show_default=True,
+@option("--elements", "n_elements", type=click.IntRange(50, MAX_ELEMENTS), default=DEFAULT_ELEMENTS, show_default=True,
               help="Skin surface elements.")
-@click.option("--modulus", type=Number("Pa", 0.0, min_open=True), default=0.6e6, show_default=True, help="Skin Winkler modulus, Pa.")
-@click.option("--shear-modulus", type=Number("Pa", 0.0, min_open=True), default=None, help="Skin shear modulus, Pa [default: modulus/3].")
-@click.option("--friction", type=Number("", 0.0, MAX_FRICTION, min_open=True), default=1.0, show_default=True, help="Coulomb friction coefficient.")
-@click.option("--thickness", type=LENGTH, default="5mm", show_default=True, help="Skin thickness (length).")
-@click.option("--noise/--no-noise", default=True, show_default=True,
+@option("--modulus", type=Number("Pa", 0.0, min_open=True), default=0.6e6, show_default=True, help="Skin Winkler modulus, Pa.")
+@option("--shear-modulus", type=Number("Pa", 0.0, min_open=True), default=None, help="Skin shear modulus, Pa [default: modulus/3].")
+@option("--friction", type=Number("", 0.0, MAX_FRICTION, min_open=True), default=1.0, show_default=True, help="Coulomb friction coefficient.")
+@option("--thickness", type=LENGTH, default="5mm", show_default=True, help="Skin thickness (length).")
+@option("--noise/--no-noise", default=True, show_default=True,
               help="Apply the sensor model (ATI Nano17 class noise and quantisation) or write the true wrench.")
-@click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Seed of the noise generator.")
-@click.option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True,
+@option("--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Seed of the noise generator.")
+@option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True,
               help="Units of the written log: si (N, N·m) or kgf-mm.")
-@click.option("--hand", type=click.Choice(["one-finger", "two-finger"]), default="one-finger", show_default=True,
+@option("--hand", type=click.Choice(["one-finger", "two-finger"]), default="one-finger", show_default=True,
               help="two-finger: both fingertips of the papers' hand on one object (the paper scenario, --rock "
                    "optional): -o is then a new directory for right.csv, left.csv, hand.toml (their poses in the "
                    "hand frame) and truth.json (the object's line and plate normal in the hand frame), for "
                    "`softtip fuse`.")
-@click.option("--left-object", type=click.Choice(OBJECT_KINDS), default=None,
+@option("--left-object", type=click.Choice(OBJECT_KINDS), default=None,
               help="--hand two-finger: what the left fingertip touches [default: --object, its other side].")
-@click.option("--width", type=LENGTH, default="30mm", show_default=True,
+@option("--width", type=LENGTH, default="30mm", show_default=True,
               help="--hand two-finger: the object's width between the two contacts.")
-@click.option("--to-bag", type=click.Path(file_okay=False, path_type=Path), default=None,
+@option("--to-bag", type=click.Path(file_okay=False, path_type=Path), default=None,
               help="--hand two-finger: also a rosbag2 (MCAP) with /right/wrench, /left/wrench and the fingertips' "
                    "poses on /tf_static and /tf (DIR must not exist).")
-@click.option("-o", "--output", type=click.Path(path_type=Path), default=None,
+@option("-o", "--output", type=click.Path(path_type=Path), default=None,
               help="Log CSV (t,fx,fy,fz,mx,my,mz) [default: stdout]; --hand two-finger: a new directory.")
-@click.option("--truth", type=click.Path(dir_okay=False, path_type=Path), default=None,
+@option("--truth", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Ground truth JSON [default: OUTPUT with suffix .truth.json; none when writing to stdout].")
 def simulate(
     output: Path | None, truth: Path | None, units: str, hand: str, left_object: str | None, width: float,
@@ -256,12 +208,18 @@ def simulate(
     finally:
         for f in files.values():
             f.discard()
+    written = [str(p) for p in (output, truth) if p is not None] or ["standard output"]
+    click.echo(f"softtip: simulated {len(log.t)} samples ({options['scenario']}, {options['object_kind']}) -> {', '.join(written)}", err=True)
 
 
 def _simulate_hand(output, truth, units, left_object, width, to_bag, options) -> None:
     """``softtip simulate --hand two-finger``: both fingertips, files for ``softtip fuse``."""
     from softtip.core.fingertip import load_fingertip
-    from softtip.sim.hand import simulate_two_finger, write_two_finger, write_two_finger_bag
+    from softtip.sim.hand import (
+        simulate_two_finger,
+        write_two_finger,
+        write_two_finger_bag,
+    )
     from softtip.sim.objects import make_object
 
     if output is None:

@@ -2,7 +2,8 @@
 
 A bad value exits 2 with click's ``Invalid value for '--OPTION'`` followed by what was
 expected, unit included (``expected a number > 0 s``); NaN and infinity are refused
-everywhere unless an option says otherwise.
+everywhere unless an option says otherwise. Every length option takes a unit (``3mm``,
+``0.5cm``, ``2e-3m``; :class:`Length`), every force option ``N`` or ``kgf`` (:class:`Force`).
 """
 
 from __future__ import annotations
@@ -12,7 +13,9 @@ import math
 import click
 import numpy as np
 
-__all__ = ["Number", "PORT", "check_lowpass", "check_pair_increasing"]
+from softtip.core.units import FORCE_UNITS, LENGTH_UNITS, parse_quantity
+
+__all__ = ["Number", "Length", "Force", "Option", "option", "as_written", "PORT", "check_lowpass", "check_pair_increasing"]
 
 #: Lowest low-pass cutoff as a fraction of the Nyquist frequency: below it the Butterworth
 #: sections lose their precision (the filter's initial state and its noise gain go wrong,
@@ -74,6 +77,104 @@ class Number(click.ParamType):
 
     def __repr__(self) -> str:
         return f"Number({self.expected()!r})"
+
+
+class _Quantity(Number):
+    """A number with an optional unit suffix, converted to SI; range-checked in SI."""
+
+    units: dict[str, float] = {}
+    what = ""
+
+    def __init__(self, bare: str, min: float | None = None, max: float | None = None, *, min_open: bool = False,
+                 max_open: bool = False, bare_max: float | None = None) -> None:  # fmt: skip
+        super().__init__("", min, max, min_open=min_open, max_open=max_open)
+        self.bare, self.bare_max = bare, bare_max
+
+    def expected(self) -> str:
+        scale = self.units[self.bare]
+        unit = "N" if self.bare == "n" else self.bare
+        lo = None if self.min is None else self.min / scale
+        hi = None if self.max is None else self.max / scale
+        bound = Number(unit, lo, hi, min_open=self.min_open, max_open=self.max_open).expected()
+        return bound.replace("a number", f"a {self.what}").replace("a finite number", f"a {self.what}") + (
+            f" (a unit may follow: {', '.join(self.units)}; a bare number is in {unit})"
+        )
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, float) and math.isfinite(value) and self._inside(value):
+            return value  # already converted (a default given as a number, in SI)
+        try:
+            v, with_unit = parse_quantity(value, self.units, self.what, self.bare)
+        except ValueError as exc:
+            self.fail(f"{exc}; expected {self.expected()}", param, ctx)
+        if self.bare_max is not None and not with_unit and abs(v) >= self.bare_max:
+            # "--size 2" would be a 2 m object, surely meant in mm
+            self.fail(f"{value!r} is {v:g} {self.bare}; give a unit, e.g. '{value}mm'", param, ctx)
+        if not self._inside(v):
+            self.fail(f"{value!r}; expected {self.expected()}", param, ctx)
+        return v
+
+
+class Length(_Quantity):
+    """A length option: ``3mm``, ``0.5 cm``, ``2e-3m``; converted to metres.
+
+    Parameters
+    ----------
+    bare : str
+        Unit of a number given without one (``"mm"`` for the estimator's options, ``"m"`` for
+        ``simulate``'s), as the option's help says.
+    min, max : float, optional
+        Bounds in metres.
+    bare_max : float, optional
+        A bare number this large or larger (metres) is refused as ambiguous: give a unit.
+    """
+
+    name = "LENGTH"
+    units = LENGTH_UNITS
+    what = "length"
+
+
+class Force(_Quantity):
+    """A force option: ``0.5kgf``, ``2N``, ``2``; converted to newtons (bounds in N)."""
+
+    name = "FORCE"
+    units = FORCE_UNITS
+    what = "force"
+
+    def __init__(self, min: float | None = None, max: float | None = None, *, min_open: bool = False,
+                 max_open: bool = False) -> None:  # fmt: skip
+        super().__init__("n", min, max, min_open=min_open, max_open=max_open)
+
+
+def as_written(value) -> str:
+    """A default as a user types it: ``0.03`` (not ``0.030000000000000002``), ``1`` for 1.0, pairs space-separated."""
+    if isinstance(value, (list, tuple)):
+        return " ".join(as_written(v) for v in value)
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    return str(value)
+
+
+class Option(click.Option):
+    """A :class:`click.Option` whose help shows the default as a user would type it.
+
+    Numbers print in the shortest form (:func:`as_written`), pairs space-separated as on the
+    command line, and a ``show_default`` text without parentheses.
+    """
+
+    def get_help_extra(self, ctx: click.Context):
+        extra = super().get_help_extra(ctx)
+        if "default" in extra:
+            if isinstance(self.show_default, str):
+                extra["default"] = self.show_default
+            elif not self.is_flag and not callable(self.default):
+                extra["default"] = as_written(self.default)  # as declared: "0.2kgf", not its value in N
+        return extra
+
+
+def option(*param_decls: str, **attrs):
+    """:func:`click.option` with :class:`Option`: every ``softtip`` option is declared through this."""
+    return click.option(*param_decls, cls=Option, **attrs)
 
 
 #: A TCP/UDP port.

@@ -1,0 +1,55 @@
+"""The ``softtip`` command group: error handling common to every command, and the commands."""
+
+from __future__ import annotations
+
+import sys
+
+import click
+
+from softtip import __version__
+from softtip.cli.calibrate import calibrate
+from softtip.cli.calibrate_payload import calibrate_payload
+from softtip.cli.estimate import estimate
+from softtip.cli.fuse import fuse
+from softtip.cli.options import FRAMES_HELP
+from softtip.cli.reproduce import reproduce
+from softtip.cli.simulate import simulate
+from softtip.cli.stream import stream
+from softtip.errors import InputError
+
+__all__ = ["main"]
+
+
+class _Group(click.Group):
+    def invoke(self, ctx):
+        from softtip.io.atomic import cannot_write, silence_stdout
+        from softtip.io.interrupt import Interrupted, exit_code, terminate_like_ctrl_c
+
+        try:
+            with terminate_like_ctrl_c():
+                result = super().invoke(ctx)
+                try:
+                    sys.stdout.flush()  # a full device or a closed pipe shows here at the latest
+                except OSError as exc:
+                    silence_stdout()
+                    raise cannot_write("standard output", exc) from None
+                return result
+        except InputError as exc:
+            click.echo(f"softtip: error: {exc}", err=True)
+            ctx.exit(2)
+        except KeyboardInterrupt as exc:
+            # Ctrl-C, SIGTERM, SIGHUP: every temporary file is gone by now (unwound like an error)
+            name = exc.signal_name if isinstance(exc, Interrupted) else "SIGINT"
+            click.echo(f"softtip: interrupted ({name})", err=True)
+            ctx.exit(exit_code(exc))
+
+
+@click.group(cls=_Group, help="softtip: intrinsic tactile sensing with a soft fingertip on a six-axis F/T sensor.\n\n" + FRAMES_HELP)
+@click.version_option(__version__, prog_name="softtip")
+def main() -> None:
+    pass
+
+
+
+for _command in (estimate, stream, simulate, reproduce, calibrate, calibrate_payload, fuse):
+    main.add_command(_command)

@@ -1,0 +1,68 @@
+"""``softtip calibrate-payload``: the fingertip's mass, centre of mass and the sensor bias from a still log."""
+
+from __future__ import annotations
+
+import click
+
+from softtip.cli.calibrate import _check_output, _example_or_log, _fail, _read
+from softtip.cli.types import option
+from softtip.core.units import UNIT_SYSTEMS
+from softtip.errors import InputError
+from softtip.io.atomic import write_stdout
+from softtip.io.examples import EXAMPLE_STILL_PATH
+
+__all__ = ["calibrate_payload"]
+
+
+@click.command(
+    "calibrate-payload",
+    help="""Estimate the fingertip's mass, centre of mass and the sensor bias.
+
+LOG is a CSV log (t, fx, fy, fz, mx, my, mz, qw, qx, qy, qz; '-' reads standard input)
+recorded with nothing touching the fingertip while the finger takes varied orientations
+(±45° or more about at least two axes). qw, qx, qy, qz is the unit quaternion of the
+sensor frame in a gravity-aligned world frame (world z up). Linear least squares on
+wrench = bias + (m g_s, c × m g_s), g_s = Rᵀ (0, 0, −9.80665); prints the estimates with
+standard deviations and refuses (exit 2) when the orientations do not vary enough.
+
+Writes a payload TOML file ([payload] mass = kg, com = [x, y, z] m; -o, atomically;
+standard output otherwise) for `softtip estimate --payload` and `softtip stream --payload`;
+its [bias] table is the sensor bias without the fingertip's weight, for --bias FILE
+together with --payload (no tare needed).
+""",
+)
+@click.argument("input_path", metavar="LOG", required=False, type=click.Path(allow_dash=True, dir_okay=False))
+@option("-o", "--output", type=click.Path(dir_okay=False), help="Payload TOML file to write (default: standard output).")
+@option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the log's wrench.")
+@option("--example", is_flag=True, help="Use the shipped example still log (simulated: a 20 g fingertip, centre of mass 1, -0.5, 20 mm, in 12 orientations) as LOG.")
+@click.pass_context
+def calibrate_payload(ctx, input_path, output, units, example):
+    from softtip.calibration.payload import calibrate_payload as fit_payload
+    from softtip.calibration.payload import read_orientation
+    from softtip.calibration.probing import atomic_write_text
+    from softtip.estimator.tare import bias_to_toml
+
+    input_path = _example_or_log(input_path, example, units, EXAMPLE_STILL_PATH, "still log")
+    try:
+        _check_output(input_path, output)
+        log = _read(input_path, units)
+        fit = fit_payload(log.wrench, read_orientation(log), source=log.source)
+        b = fit.bias
+        text = (
+            f"# softtip calibrate-payload {log.source}: {fit.n_samples} samples; mass std {fit.mass_std * 1e3:.3f} g, "
+            "com std " + ", ".join(f"{v * 1e3:.3f}" for v in fit.com_std) + " mm\n"
+            "# sensor bias (removed by the tare, not used): force "
+            + ", ".join(f"{v:.5g}" for v in b[:3]) + " N, moment " + ", ".join(f"{v:.5g}" for v in b[3:]) + " N·m\n"
+            + fit.payload.to_toml()
+            + "# the sensor bias without the fingertip's weight: for --bias together with --payload\n"
+            + bias_to_toml(b)
+        )
+        if output is not None:
+            atomic_write_text(output, text)
+            click.echo(fit.summary())
+            click.echo(f"softtip: payload -> {output}", err=True)
+        else:
+            click.echo(fit.summary(), err=True)
+            write_stdout(text)
+    except InputError as exc:
+        _fail(ctx, exc)

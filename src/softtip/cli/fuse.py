@@ -1,0 +1,201 @@
+"""``softtip fuse``: two fingertips' logs fused into the grasped object's local geometry."""
+
+from __future__ import annotations
+
+import os
+
+import click
+import numpy as np
+
+from softtip.cli.options import (
+    check_figure_path,
+    estimator_options,
+    make_config,
+    optional_extra,
+)
+from softtip.cli.types import Length, Number, option
+from softtip.core.units import UNIT_SYSTEMS, wrench_to_si
+from softtip.errors import InputError
+from softtip.ros.options import bag_output_options, output_frame_id
+
+__all__ = ["fuse"]
+
+
+def _summary(fused) -> list[str]:
+    names = fused.grasp_names
+    lines = []
+    shares = ", ".join(f"{k} {100 * np.mean(names == k):.0f} %" for k in dict.fromkeys(names.tolist()))
+    lines.append(f"{len(fused)} time steps: {shares}")
+    par = names == "parallel_lines"
+    if par.any():
+        d = fused.direction[par]
+        d = d * np.where(d @ d[-1] < 0, -1.0, 1.0)[:, None]
+        u = np.median(d, axis=0)
+        u /= np.linalg.norm(u)
+        nrm = fused.plane_normal[par]
+        nrm = nrm * np.where(nrm @ nrm[-1] < 0, -1.0, 1.0)[:, None]
+        v = np.median(nrm, axis=0)
+        v /= np.linalg.norm(v)
+        lines.append(
+            f"parallel lines: median direction ({u[0]:+.3f}, {u[1]:+.3f}, {u[2]:+.3f}) "
+            f"± {np.degrees(np.median(fused.direction_std[par])):.1f} deg, plane normal "
+            f"({v[0]:+.3f}, {v[1]:+.3f}, {v[2]:+.3f}) ± {np.degrees(np.median(fused.plane_normal_std[par])):.1f} deg"
+        )
+    ev = fused.evidence[fused.evidence != ""]
+    if len(ev):
+        lines.append(f"line evidence: {100 * np.mean(ev == 'confirmed'):.0f} % of the fused time steps confirmed")
+    for flag in ("unbalanced", "area"):
+        k = int(np.count_nonzero(np.char.find(fused.flag.astype(str), flag) >= 0))
+        if k:
+            lines.append(f"warning: {k} time step(s) flagged {flag}")
+    return lines
+
+
+@click.command(
+    "fuse",
+    help="""Fuse two fingertips into the grasped object's local geometry, in a common frame.
+
+INPUTS are either two CSV logs (one per fingertip, on one clock) with the fingertips' poses
+from --hand FILE.toml (a [finger.NAME] table per fingertip, in the order of the logs) or from
+pose columns px, py, pz (m) and qw, qx, qy, qz in each log; or one ROS bag with --topics
+(two geometry_msgs/msg/WrenchStamped topics) and --frame (the common frame), the poses
+composed from the bag's /tf and /tf_static to each topic's frame_id.
+
+Each log is estimated as by `softtip estimate` (the same options), then the pair is read
+per time step of the first log: parallel_lines (a plate or a stick pinched across: the
+common direction and the plane through both lines), crossing_lines (two edges: both, their
+angle and closest approach), line_and_face, faces, single or none; with the evidence of the
+lines (confirmed once the object was rocked about two axes) and flags (unbalanced forces,
+an area contact). Writes CSV (standard output without -o) or Parquet (-o ending in .parquet);
+a summary on standard error. --to-bag also writes the fused line and plane as
+geometry_msgs/msg/PoseStamped (x axis along the line, z axis the plane's normal), the contacts as
+PointStamped and RViz markers, in the common frame, in the format --ros-distro plays; with
+--to-bag and no -o no CSV is written.
+""",
+)
+@click.argument("inputs", nargs=-1, required=True, type=click.Path(exists=False))
+@option("-o", "--output", type=click.Path(dir_okay=False, writable=True), help="Output CSV, or Parquet for a name ending in .parquet (default: CSV on standard output).")
+@option("--hand", "hand_file", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Fingertip poses in the common frame ([hand] frame, [finger.NAME] translation m, rpy_deg or quaternion).")
+@option("--topics", nargs=2, metavar="TOPIC TOPIC", help="Bag input: the two fingertips' wrench topics.")
+@option("--frame", metavar="FRAME", help="Bag input: the common frame (e.g. hand, base_link).")
+@option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the CSV logs' wrench.")
+@option("--object-mass", type=Number("kg", 0.0), metavar="KG", help="The object's mass for the force balance (default: unknown; any weight along gravity allowed).")
+@option("--gravity", type=(Number("m/s²"), Number("m/s²"), Number("m/s²")), default=(0.0, 0.0, -9.80665), show_default=True, metavar="X Y Z", help="Gravity in the common frame, m/s².")
+@option("--point-std", type=Length("mm", 0.0, min_open=True), default="0.05mm", show_default=True, metavar="LENGTH", help="Standard deviation of each contact point across its line, independent between the fingers, for the plane normal (a bare number is in mm).")
+@option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Also draw both forces, the grasp reading and the fused angles across the grasp to this PNG/PDF/SVG.")
+@option("--rerun", "rerun_spawn", is_flag=True, help="Show both fingertips, their contacts and the fused line or plane in the hand frame in a Rerun viewer (needs rerun-sdk).")
+@option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save that 3-D view and the fused series to FILE.rrd.")
+@option("--truth", "truth_file", type=click.Path(dir_okay=False), metavar="FILE.json", help="The simulator's truth.json: the object's true line and plane drawn in the Rerun view.")
+@bag_output_options(frame_default="the common frame: --frame, the hand file's, else hand")
+@estimator_options
+def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, point_std, plot_path, rerun_spawn, rerun_save,
+         truth_file, tip, to_bag=None, ros_distro=None, frame_id=None, **estimator_opts):  # fmt: skip
+    from softtip.core.fingertip import load_fingertip
+    from softtip.fusion import fuse_logs, poses_from_columns, read_hand_file
+    from softtip.io.tables import read_log, write_table
+
+    if plot_path is not None:
+        check_figure_path(plot_path)
+    if truth_file is not None and not (rerun_spawn or rerun_save):
+        raise click.UsageError("--truth draws into the Rerun view: give --rerun or --rerun-save")
+    if rerun_spawn or rerun_save:
+        optional_extra("softtip.viz.rerun", "viz")
+    if rerun_spawn:  # at once: without a display the viewer would fail only after the fusion
+        from softtip.viz.rerun import check_viewer
+
+        check_viewer()
+    from softtip.io.atomic import check_distinct
+
+    check_distinct(
+        [("INPUT", p) for p in inputs] + [("--hand", hand_file), ("--bias", estimator_opts.get("bias_file")), ("--truth", truth_file)],
+        [("-o", output), ("--plot", plot_path), ("--to-bag", to_bag), ("--rerun-save", rerun_save)],
+    )
+    if to_bag is None and (ros_distro is not None or frame_id is not None):
+        raise click.UsageError("--ros-distro and --frame-id apply to --to-bag")
+    if to_bag is not None:
+        from softtip.ros.bagout import bag_format
+
+        bag_format(to_bag, ros_distro)
+    fingertip = load_fingertip(tip)
+    config = make_config(estimator_opts)
+    if len(inputs) == 1:
+        if topics is None or frame is None:
+            raise click.UsageError("a bag input needs --topics TOPIC TOPIC and --frame FRAME")
+        if hand_file is not None:
+            raise click.UsageError("--hand applies to CSV inputs; a bag's poses come from its /tf")
+        bag = optional_extra("softtip.io.bag", "ros")
+        from softtip.fusion.tf import read_tf
+
+        path = inputs[0]
+        blogs = [bag.read_bag(path, tp) for tp in topics]
+        tree = read_tf(path)
+        origin = min(int(b.stamps_ns[0]) for b in blogs)
+        common, stamps = frame, blogs[0].stamps_ns
+        logs = []
+        for b in blogs:
+            if not b.frame_id:
+                raise InputError(f"{path}: topic {b.topic!r} has an empty header.frame_id; cannot place it with /tf")
+            pose = tree.poses(frame, b.frame_id, b.stamps_ns, origin_ns=origin)
+            logs.append((b.topic, (b.stamps_ns - origin) * 1e-9, wrench_to_si(b.wrench, units), pose))
+    elif len(inputs) == 2:
+        if topics is not None or frame is not None:
+            raise click.UsageError("--topics and --frame apply to a bag input")
+        read = [read_log(p, units=units) for p in inputs]
+        common = "hand"  # pose columns name no frame
+        if hand_file is not None:
+            hand = read_hand_file(hand_file)
+            if len(hand.fingers) != 2:
+                raise InputError(f"{hand_file}: {len(hand.fingers)} [finger.NAME] tables; expected two, in the order of the logs")
+            poses = list(hand.fingers.items())
+            common = hand.frame
+        else:
+            poses = [(os.path.basename(p), poses_from_columns(log.t, log.extra, os.path.basename(p), p)) for p, log in zip(inputs, read)]
+        logs = [(name, log.t, log.wrench, pose) for (name, pose), log in zip(poses, read)]
+        stamps = np.rint(read[0].t * 1e9).astype(np.int64)
+    else:
+        raise click.UsageError(f"expected two CSV logs or one bag, got {len(inputs)} inputs")
+    try:
+        fused, fingers = fuse_logs(
+            logs, fingertip, config, object_mass=object_mass, gravity=gravity, point_std=point_std
+        )
+    except ValueError as exc:
+        raise click.UsageError(str(exc)) from None
+    rrd = None
+    if rerun_spawn or rerun_save:  # the view first, put in place with the table
+        from softtip.fusion.viz import log_fused, read_truth
+        from softtip.io.atomic import AtomicFile
+
+        truth = read_truth(truth_file, fused.t) if truth_file else None
+        rrd = AtomicFile(rerun_save) if rerun_save else None
+        try:
+            log_fused(fused, fingers, fingertip, save=None if rrd is None else rrd.tmp, spawn=rerun_spawn, truth=truth)
+        except BaseException:
+            if rrd is not None:
+                rrd.discard()
+            raise
+    try:
+        if to_bag is not None:  # the fused grasp as standard messages (softtip.ros.fused)
+            from softtip.ros.bagout import remove_bag
+            from softtip.ros.fused import write_fused_bag
+
+            write_fused_bag(to_bag, fused, fingers, stamps, output_frame_id(frame_id, common), distro=ros_distro)
+        try:
+            if output is not None or to_bag is None:
+                write_table(fused.columns(), output)
+            if rrd is not None:
+                rrd.commit()
+        except BaseException:
+            if to_bag is not None:
+                remove_bag(to_bag)
+            raise
+    finally:
+        if rrd is not None:
+            rrd.discard()
+    if plot_path is not None:
+        from softtip.fusion.plot import plot_fused
+
+        up = -np.asarray(gravity) if np.linalg.norm(gravity) > 0 else (0.0, 0.0, 1.0)
+        plot_fused(fused, fingers, plot_path, up=up)
+    for line in _summary(fused):
+        click.echo(f"softtip: {line}", err=True)
+

@@ -1,0 +1,209 @@
+"""One grammar across the commands: -o/--output (old names kept), lengths with units, defaults
+as typed, simulate's report and file modes, --rerun without a display, the --plot |h| panel."""
+
+from __future__ import annotations
+
+import csv
+import os
+import re
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from softtip.cli.types import Force, Length, as_written
+from softtip.core.units import KGF, KGF_MM
+
+SOFTTIP = Path(sys.executable).with_name("softtip")
+COMMANDS = ("estimate", "stream", "simulate", "reproduce", "calibrate", "calibrate-payload", "fuse")
+
+
+def run(*args, env=None, umask=None, cwd=None):
+    pre = (lambda: os.umask(umask)) if umask is not None else None
+    return subprocess.run(
+        [SOFTTIP, *map(str, args)], capture_output=True, text=True, env=env, preexec_fn=pre, cwd=cwd, timeout=300
+    )
+
+
+def _example_estimates():
+    from softtip.core.fingertip import load_fingertip
+    from softtip.estimator.results import EstimatorWarning
+    from softtip.io.examples import load_example
+    from softtip.pipeline import estimate
+
+    log = load_example()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", EstimatorWarning)
+        return estimate(log.t, log.wrench, load_fingertip("murakami2006"))
+
+
+# -- option types ------------------------------------------------------------------------------
+
+
+@given(st.floats(1e-3, 1e3))
+def test_a_length_is_the_same_in_every_unit(mm: float) -> None:
+    length = Length("mm", 0.0, min_open=True)
+    bare = length.convert(repr(mm), None, None)
+    assert bare == pytest.approx(mm * 1e-3, rel=1e-12)
+    for text in (f"{mm!r}mm", f"{mm!r} mm", f"{mm / 10!r}cm", f"{mm * 1e-3!r}m", f"{mm * 1e3!r}um"):
+        assert length.convert(text, None, None) == pytest.approx(bare, rel=1e-12), text
+
+
+@given(st.floats(1e-3, 1e3))
+def test_a_force_in_kgf_or_newtons(n: float) -> None:
+    force = Force(0.0)
+    assert force.convert(repr(n), None, None) == pytest.approx(n, rel=1e-12)
+    assert force.convert(f"{n / KGF!r}kgf", None, None) == pytest.approx(n, rel=1e-12)
+    assert force.convert(f"{n!r}N", None, None) == pytest.approx(n, rel=1e-12)
+
+
+def test_defaults_print_as_typed() -> None:
+    assert as_written(0.030000000000000002) == "0.03"
+    assert as_written((2.0, "0.2mm")) == "2 0.2mm"
+    assert as_written(600000.0) == "600000"
+
+
+# -- --help of every command -------------------------------------------------------------------
+
+
+def test_help_shows_defaults_as_people_write_them() -> None:
+    env = {**os.environ, "COLUMNS": "250"}
+    helps = {}
+    for command in COMMANDS:
+        out = run(command, "--help", env=env)
+        assert out.returncode == 0, out.stderr
+        helps[command] = out.stdout
+        assert not re.search(r"\d\.\d{7,}|\d{6,}\.\d", out.stdout), (command, re.findall(r"\S*\d\.\d{7,}\S*", out.stdout))
+        assert "-o, --output" in out.stdout, command
+    assert "INPUT" not in helps["stream"]  # stream reads --netft or --replay, no INPUT argument
+    assert "-o, --output, --record FILE.csv" in helps["stream"]
+    assert "-o, --output, --out DIR" in helps["reproduce"]
+    assert "[default: 0.2kgf 0.5kgf]" in helps["estimate"]
+
+
+# -- lengths with units through the command ----------------------------------------------------
+
+
+def test_length_options_take_units(tmp_path: Path) -> None:
+    outs = {}
+    for value in ("3", "3mm", "0.3cm"):
+        out = tmp_path / f"{value}.csv"
+        r = run("estimate", "--example", "--relatch-distance", value, "--evidence-reset-distance", "1mm",
+                "--joint-max-std", "2", "0.2mm", "-o", out, "-q")  # fmt: skip
+        assert r.returncode == 0, r.stderr
+        outs[value] = out.read_bytes()
+    assert outs["3"] == outs["3mm"] == outs["0.3cm"]
+    bad = run("estimate", "--example", "--relatch-distance", "3parsecs", "-o", tmp_path / "bad.csv")
+    assert bad.returncode == 2 and "'--relatch-distance'" in bad.stderr and "length" in bad.stderr
+    assert not (tmp_path / "bad.csv").exists()
+
+
+def test_output_aliases_of_stream(tmp_path: Path) -> None:
+    from softtip.io.examples import EXAMPLE_PATH
+
+    tables = []
+    for flag in ("-o", "--output", "--record"):
+        out = tmp_path / f"rec{flag.strip('-')}.csv"
+        r = run("stream", "--replay", EXAMPLE_PATH, "--speed", "0", flag, out, "--no-view")
+        assert r.returncode == 0, r.stderr
+        with open(out, newline="") as fh:
+            rows = list(csv.DictReader(line for line in fh if not line.startswith("#")))
+        tables.append([{k: v for k, v in row.items() if k != "host_time"} for row in rows])
+    assert len(tables[0]) > 100 and tables[0] == tables[1] == tables[2]
+
+
+# -- simulate: what it wrote, and with which mode ----------------------------------------------
+
+
+def test_simulate_says_what_it_wrote_and_honours_the_umask(tmp_path: Path) -> None:
+    args = ("simulate", "--duration", "3", "--elements", "2000", "-o", "log.csv")
+    r = run(*args, umask=0o027, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert "-> log.csv, log.truth.json" in r.stderr
+    for name in ("log.csv", "log.truth.json"):
+        assert (tmp_path / name).stat().st_mode & 0o777 == 0o640, name
+    os.chmod(tmp_path / "log.csv", 0o604)  # a replaced file keeps its mode
+    r = run(*args, umask=0o077, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert (tmp_path / "log.csv").stat().st_mode & 0o777 == 0o604
+
+
+def test_output_directories_follow_the_umask(tmp_path: Path) -> None:
+    from softtip.io.atomic import partial_dir
+
+    old = os.umask(0o022)
+    try:
+        d = partial_dir(tmp_path / "bag")
+    finally:
+        os.umask(old)
+    assert d.parent == tmp_path and d.name.startswith(".bag.") and d.stat().st_mode & 0o777 == 0o755
+
+
+# -- --rerun on a machine without a display ----------------------------------------------------
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the display check is Linux's")
+def test_rerun_without_a_display_stops_at_once(tmp_path: Path) -> None:
+    pytest.importorskip("rerun")
+    from softtip.io.examples import EXAMPLE_PATH
+
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    for args in (("estimate", "--example", "-o", tmp_path / "e.csv"), ("stream", "--replay", EXAMPLE_PATH, "-o", tmp_path / "s.csv")):
+        r = run(*args, "--rerun", env=env)
+        assert r.returncode == 2, r.stderr
+        assert "no display" in r.stderr and "--rerun-save FILE.rrd" in r.stderr and "Traceback" not in r.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+# -- library: what the CLI used to compute itself ----------------------------------------------
+
+
+def test_columns_in_the_papers_units_and_the_line_threshold() -> None:
+    from softtip.estimator.results import FORCE_COLUMNS, MOMENT_COLUMNS
+    from softtip.pipeline import EstimatorConfig
+
+    est = _example_estimates()
+    si, kgf = est.columns(), est.columns(units="kgf-mm")
+    assert list(si) == list(kgf)
+    for name in si:
+        unit = KGF if name in FORCE_COLUMNS else KGF_MM if name in MOMENT_COLUMNS else None
+        if unit is None:
+            assert np.array_equal(np.asarray(si[name]), np.asarray(kgf[name]), equal_nan=si[name].dtype.kind == "f"), name
+        else:  # exactly the division the CLI did before
+            np.testing.assert_array_equal(kgf[name], si[name] / unit, err_msg=name)
+    config = EstimatorConfig(h_sigmas=2.0, h_min=1e-3)
+    np.testing.assert_array_equal(config.line_threshold([1e-4, 1e-3]), [1e-3, 2e-3])
+    assert est.state[est.h_norm > EstimatorConfig().line_threshold(est.h_std)].min() >= 2  # above it: line or area
+
+
+def test_plot_shows_h_as_missing_while_latching(tmp_path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.collections import PolyCollection
+
+    from softtip.viz.plot import latching, plot_estimates
+
+    est = _example_estimates()
+    shade = latching(est)
+    assert shade.sum() >= 5 and np.all(est.state[shade] > 0)
+    fig = plot_estimates(est, tmp_path / "p.png", h_threshold=1e-3)
+    ax_h = next(ax for ax in fig.axes if ax.get_ylabel().startswith("|h|"))
+    y = ax_h.lines[0].get_ydata()
+    assert np.all(np.isnan(y[shade])) and np.all(np.isfinite(y[(est.state > 0) & ~shade]))
+    assert any(isinstance(c, PolyCollection) and c.get_label().startswith("latching") for c in ax_h.collections)
+    assert any(ax.get_ylabel() == "state" for ax in fig.axes)  # the state band
+    assert (tmp_path / "p.png").stat().st_size > 10_000
+
+
+def test_calibration_noise_warning_comes_from_the_library(tmp_path: Path) -> None:
+    r = run("calibrate", "--example", "--shape", "sphere", "--force-noise", "0.2", "--moment-noise", "2", "-o", tmp_path / "t.toml")
+    assert r.returncode == 0, r.stderr
+    assert "softtip: warning: the residual is" in r.stderr and "(--force-noise 0.2 N, --moment-noise 2 N·mm)" in r.stderr
+    ratio = float(re.search(r"the residual is ([0-9.]+) times", r.stderr).group(1))
+    assert ratio < 0.5  # a noise model 30 times too large: the residual is a small fraction of it

@@ -1,0 +1,177 @@
+"""Every ``softtip ...`` line of the README's shell blocks runs as written, so they cannot rot.
+
+Each block runs in its own temporary directory, its lines in order (a line may use what an
+earlier one wrote), through the installed ``softtip`` command. Files a line reads that the
+README assumes the reader has (their own grasp log, probing log, still log, a bag) and no
+earlier line of the block wrote are put there first, made from softtip's shipped examples.
+Skipped, and said so: lines that need a sensor (``stream --netft``), a display (``--rerun``)
+or ROS 2 (``python -m softtip.ros``), and lines that are not softtip's (``make``, ``pip``).
+The fast test leaves out the slow lines (``reproduce``, a rocked two-finger simulation) and
+the lines that read what they write; the ``slow`` test runs those too.
+"""
+
+from __future__ import annotations
+
+import re
+import shlex
+import shutil
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+SOFTTIP = Path(sys.executable).with_name("softtip")
+README = Path(__file__).resolve().parents[1] / "README.md"
+
+#: Lines not run, and why (the first pattern found in a line decides)
+SKIP = {
+    "--netft": "needs a Net F/T sensor on the network",
+    "--rerun ": "needs a display for the Rerun viewer",
+    "python -m softtip.ros": "needs a sourced ROS 2 installation",
+}
+#: Lines run only by the slow test: their outputs, and every later line that reads them, too
+SLOW = ("softtip reproduce", "--hand two-finger")
+
+
+def readme_blocks() -> list[list[str]]:
+    """The softtip command lines of each shell code block of the README, comments removed."""
+    blocks = re.findall(r"```(?:sh|bash|shell|console)\n(.*?)```", README.read_text(encoding="utf-8"), re.DOTALL)
+    out = []
+    for block in blocks:
+        text = block.replace("\\\n", " ")
+        lines = []
+        for raw in text.splitlines():
+            line = raw.strip().removeprefix("$ ")
+            line = " ".join(shlex.split(line, comments=True))
+            if line.startswith("softtip ") or line.startswith("python -m softtip"):
+                lines.append(line)
+        if lines:
+            out.append(lines)
+    return out
+
+
+def _write_csv(path: Path, t, wrench, names=("t", "fx", "fy", "fz", "mx", "my", "mz")) -> None:
+    np.savetxt(path, np.column_stack([t, wrench]), delimiter=",", header=",".join(names), comments="", fmt="%.9g")
+
+
+def _seed(name: str, line: str, block: list[str], work: Path) -> None:
+    """Put the input the README assumes the reader has under ``name`` (made from shipped examples)."""
+    from softtip.io.examples import EXAMPLE_PATH, EXAMPLE_PROBING_PATH, EXAMPLE_STILL_PATH
+
+    dest = work / name.rstrip("/")
+    if name == "grasp.csv":
+        if "--units kgf-mm" in line:  # the reader's own log in the papers' units
+            from softtip.core.units import wrench_from_si
+            from softtip.io.tables import read_log
+
+            log = read_log(EXAMPLE_PATH, units="si")
+            _write_csv(dest, log.t, wrench_from_si(log.wrench, "kgf-mm"))
+        else:
+            shutil.copy(EXAMPLE_PATH, dest)
+    elif name in ("probing.csv", "probe.csv"):
+        shutil.copy(EXAMPLE_PROBING_PATH, dest)
+    elif name == "still.csv":
+        shutil.copy(EXAMPLE_STILL_PATH, dest)
+    elif name == "my_tip.toml":
+        run = subprocess.run([SOFTTIP, "calibrate", "--example", "--shape", "sphere", "-o", dest], capture_output=True, text=True)
+        assert run.returncode == 0, run.stderr
+    elif name == "run1/":
+        if any("--topics" in other for other in block):  # two fingertips' wrenches and their /tf
+            run = subprocess.run(
+                [SOFTTIP, "simulate", "--hand", "two-finger", "--duration", "3", "--elements", "2000", "-o", work / "_hand",
+                 "--to-bag", dest],
+                capture_output=True, text=True,
+            )  # fmt: skip
+            assert run.returncode == 0, run.stderr
+            shutil.rmtree(work / "_hand")
+        else:  # one sensor's wrench on the topic the README names
+            from softtip.core.fingertip import load_fingertip
+            from softtip.estimator.results import EstimatorWarning
+            from softtip.io.bag import write_estimates_bag
+            from softtip.io.tables import read_log
+            from softtip.pipeline import estimate
+
+            log = read_log(EXAMPLE_PATH, units="si")
+            with warnings.catch_warnings():  # what the tare says is the README line's business
+                warnings.simplefilter("ignore", EstimatorWarning)
+                est = estimate(log.t, log.wrench, load_fingertip("murakami2006"))
+            write_estimates_bag(dest, est, log.wrench, frame_id="ft_sensor", raw_topic="/ft_sensor/wrench")
+    else:
+        raise AssertionError(f"the README's line {line!r} reads {name}, which this test does not know how to provide")
+
+
+#: What a README line may read that the reader is assumed to have
+INPUTS = ("grasp.csv", "probing.csv", "probe.csv", "still.csv", "my_tip.toml", "run1/")
+
+
+def _reads(line: str) -> list[str]:
+    """The assumed inputs a line names (not counting what it writes with -o / --to-bag)."""
+    words = line.split()
+    outputs = {words[i + 1] for i, w in enumerate(words[:-1]) if w in ("-o", "--output", "--out", "--to-bag", "--record")}
+    return [w for w in words if w in INPUTS and w not in outputs]
+
+
+def _written(line: str) -> set[str]:
+    words = line.split()
+    return {words[i + 1] for i, w in enumerate(words[:-1]) if w in ("-o", "--output", "--out", "--to-bag", "--record")}
+
+
+def _run_block(block: list[str], work: Path, slow: bool) -> list[str]:
+    """Run a README block's lines in ``work``; returns what was skipped and why."""
+    skipped, made, slow_outputs = [], set(), set()
+    for line in block:
+        reason = next((why for pattern, why in SKIP.items() if pattern in line + " "), None)
+        if reason is None and not slow:
+            if any(p in line for p in SLOW):
+                reason, slow_outputs = "slow (run by the slow test)", slow_outputs | _written(line)
+            elif any(out in line for out in slow_outputs):
+                reason = "reads the output of a slow line (run by the slow test)"
+        if reason is not None:
+            skipped.append(f"{line}: {reason}")
+            continue
+        for name in _reads(line):
+            if name not in made:
+                _seed(name, line, block, work)
+                if name != "grasp.csv":  # grasp.csv: in the units of each line that reads it
+                    made.add(name)
+        argv = shlex.split(line)
+        argv[0] = str(SOFTTIP)
+        run = subprocess.run(argv, cwd=work, capture_output=True, text=True, timeout=900)
+        assert run.returncode == 0, f"README line failed (exit {run.returncode}): {line}\n{run.stderr[-3000:]}"
+        assert "Traceback" not in run.stderr, f"{line}\n{run.stderr[-3000:]}"
+        made |= _written(line) | {n.rstrip("/") + "/" for n in _written(line)}
+    return skipped
+
+
+BLOCKS = readme_blocks()
+
+
+def test_the_readme_has_softtip_commands() -> None:
+    assert len(BLOCKS) >= 3 and sum(len(b) for b in BLOCKS) >= 15, BLOCKS
+
+
+@pytest.mark.parametrize("k", range(len(BLOCKS)), ids=[b[0][:40] for b in BLOCKS])
+def test_readme_block_runs_as_written(k: int, tmp_path: Path) -> None:
+    skipped = _run_block(BLOCKS[k], tmp_path, slow=False)
+    for why in skipped:  # in the report with -rA; every skip reason is one of SKIP's or SLOW's
+        print("skipped:", why)
+    assert len(skipped) < len(BLOCKS[k]) or all("--netft" in line or "softtip.ros" in line for line in BLOCKS[k])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("k", range(len(BLOCKS)), ids=[b[0][:40] for b in BLOCKS])
+def test_readme_block_runs_as_written_with_the_slow_lines(k: int, tmp_path: Path) -> None:
+    if not any(any(p in line for p in SLOW) for line in BLOCKS[k]):
+        pytest.skip("no slow line in this block (the fast test ran it)")
+    _run_block(BLOCKS[k], tmp_path, slow=True)
+
+
+def test_the_walk_fails_on_a_broken_line(tmp_path: Path) -> None:
+    """The walk is not vacuous: a line that exits non-zero fails it, and an unknown input is named."""
+    with pytest.raises(AssertionError, match="README line failed"):
+        _run_block(["softtip estimate grasp.csv --relatch-distance 3parsecs"], tmp_path, slow=False)
+    with pytest.raises(AssertionError, match="does not know how to provide"):
+        _seed("other.csv", "softtip estimate other.csv", [], tmp_path)
