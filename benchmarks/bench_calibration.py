@@ -34,7 +34,7 @@ from softtip.calibration import calibrate_fingertip, simulate_probing
 from softtip.synthetic import sliding_presses
 from softtip.errors import InputError
 from softtip.fingertip import Capsule, Sphere
-from softtip.noise import SensorNoise
+from softtip.noise import MINI40, NANO25, SensorNoise
 from softtip.payload import Payload, calibrate_payload, compensate_payload, payload_wrench
 from softtip.sim import HandFrame, SensorModel, Wedge, paper_scenario, simulate_grasp
 
@@ -115,14 +115,13 @@ def gravity_rows(seed: int) -> list[tuple[str, str, str]]:
 
 
 # Per-axis noise (fx, fy, fz in N; mx, my, mz in N·m) of three ATI sensor classes: about
-# one count of their catalogue resolution (Nano17 SI-25-0.25: 1/160 N, 1/32 N·mm, rounded
-# to the issue's 5 mN and 0.05 N·mm; Nano25 SI-125-3: 1/48 N, fz 1/16 N, 1/1320 N·m;
-# Mini40 SI-40-2: 1/100 N, fz 1/50 N, 1/4000 N·m). The simulated sensor adds this Gaussian
-# noise and quantises to the same step; the fit is given the noise figures.
+# one count of their published resolution (softtip.noise's presets, where the sources are
+# cited; the Nano17's rounded to the issue's 5 mN and 0.05 N·mm). The simulated sensor adds
+# this Gaussian noise and quantises to the same step; the fit is given the noise figures.
 SENSORS = {
     "Nano17": ((0.005,) * 3, (0.05e-3,) * 3),
-    "Nano25": ((1 / 48, 1 / 48, 1 / 16), (1 / 1320,) * 3),
-    "Mini40": ((1 / 100, 1 / 100, 1 / 50), (1 / 4000,) * 3),
+    "Nano25": (NANO25.force_std, NANO25.moment_std),
+    "Mini40": (MINI40.force_std, MINI40.moment_std),
 }
 HONEST_TIP = Sphere(0.016, (0.0003, -0.0002, 0.020))
 
@@ -141,16 +140,17 @@ def _honesty_row(label, truth, fits) -> str:
 
     refused = f" ({len(fits) - len(ok)} refused)" if len(ok) < len(fits) else ""
     warned = sum(bool(c.warning) for c in ok)
-    refused += f" ({warned} of {len(ok)} with a warning)" if warned else ""
+    jk = sum(c.std_method == "jackknife" for c in ok)
+    refused += f" ({warned} of {len(ok)} with a warning" + (", jackknife standard deviations" if jk else "") + ")" if warned else ""
     return (
         f"| {label}{refused} | {cells(err.mean(0), '+.3f')} | {cells(np.sqrt((err**2).mean(0)), '.3f')} | "
         f"{cells(np.abs(err).max(0), '.3f')} | {cells(np.median(std, 0), '.3f')} | {cells(z.mean(0), '+.2f')} | {cells(z.std(0), '.2f')} |"
     )
 
 
-def _fit(t, w, noise):
+def _fit(t, w, noise, **kw):
     try:
-        return calibrate_fingertip(t, w, "sphere", noise=noise)
+        return calibrate_fingertip(t, w, "sphere", noise=noise, **kw)
     except InputError:
         return None
 
@@ -170,7 +170,7 @@ def honesty_rows(seeds: int, seed0: int) -> list[str]:
         sd = np.r_[fs, ms]
         noisy = [(t, w + np.random.default_rng(seed0 + 2000 + k).standard_normal(w.shape) * sd) for k, (t, w) in enumerate(issue)]
         if name == "Nano17":
-            rows.append(_honesty_row(f"issue's presses, {name}, plain least squares (before)", truth, [_fit(t, w, plain_noise) for t, w in noisy]))
+            rows.append(_honesty_row(f"issue's presses, {name}, plain least squares (before)", truth, [_fit(t, w, plain_noise, jackknife=False) for t, w in noisy]))
         rows.append(_honesty_row(f"issue's presses, {name}", truth, [_fit(t, w, SensorNoise(fs, ms)) for t, w in noisy]))
     return rows
 

@@ -178,6 +178,8 @@ def calibrate(
         return
     if cal.warning:
         click.echo(f"softtip: warning: {cal.warning}", err=True)
+    elif cal.precision_warning():
+        click.echo(f"softtip: warning: {cal.precision_warning()}", err=True)
     if not 0.5 <= cal.noise_ratio <= 2.0:
         click.echo(
             f"softtip: warning: the residual is {cal.noise_ratio:.2f} times the noise model's (--force-noise {force_noise:g} N, "
