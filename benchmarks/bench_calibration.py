@@ -17,7 +17,7 @@
    without softtip's simulator: the friction turns only while the force ramps), with plain
    least squares for comparison.
 
-    python benchmarks/bench_calibration.py [--seed N] [--seeds 20] [--honesty-only]
+    python benchmarks/bench_calibration.py [--seed N] [--seeds 20] [--honesty-only] [--force-range 1 8] [--sim-only]
 """
 
 from __future__ import annotations
@@ -155,24 +155,29 @@ def _fit(t, w, noise, **kw):
         return None
 
 
-def honesty_rows(seeds: int, seed0: int) -> list[str]:
-    rows = []
+def honesty_rows(seeds: int, seed0: int, force_range=(1.5, 4.0), sim_only: bool = False, issue_only: bool = False) -> None:
+    """Print the honesty section's rows, one at a time as they are measured."""
     truth = np.r_[HONEST_TIP.center, HONEST_TIP.radius]
-    logs = [simulate_probing(HONEST_TIP, 45.0, sensor=SensorModel.ideal(100.0), rng=seed0 + k, n_elements=6000) for k in range(seeds)]
-    for name, (fs, ms) in SENSORS.items():
+    logs = [
+        simulate_probing(HONEST_TIP, 45.0, force_range=force_range, sensor=SensorModel.ideal(100.0), rng=seed0 + k, n_elements=6000)
+        for k in range(0 if issue_only else seeds)
+    ]
+    for name, (fs, ms) in SENSORS.items() if logs else ():
         model = SensorModel(rate=100.0, noise_std=(*fs, *ms), resolution=(*fs, *ms))
         noise = SensorNoise(fs, ms)
         fits = [_fit(t, model.measure(w, np.random.default_rng(seed0 + 1000 + k)), noise) for k, (t, w) in enumerate(logs)]
-        rows.append(_honesty_row(f"softtip.sim, {name}", truth, fits))
+        print(_honesty_row(f"softtip.sim {force_range[0]:g}–{force_range[1]:g} N, {name}", truth, fits), flush=True)
+    if sim_only:
+        return
     plain_noise = SensorNoise((1e-12,) * 3, (1e-4,) * 3)  # moment noise only: unweighted least squares
     issue = [sliding_presses(np.random.default_rng(seed0 + k)) for k in range(seeds)]
-    for name, (fs, ms) in SENSORS.items():
+    for name in ("Nano25", "Mini40", "Nano17"):  # the hardest first
+        fs, ms = SENSORS[name]
         sd = np.r_[fs, ms]
         noisy = [(t, w + np.random.default_rng(seed0 + 2000 + k).standard_normal(w.shape) * sd) for k, (t, w) in enumerate(issue)]
+        print(_honesty_row(f"issue's presses, {name}", truth, [_fit(t, w, SensorNoise(fs, ms)) for t, w in noisy]), flush=True)
         if name == "Nano17":
-            rows.append(_honesty_row(f"issue's presses, {name}, plain least squares (before)", truth, [_fit(t, w, plain_noise, jackknife=False) for t, w in noisy]))
-        rows.append(_honesty_row(f"issue's presses, {name}", truth, [_fit(t, w, SensorNoise(fs, ms)) for t, w in noisy]))
-    return rows
+            print(_honesty_row(f"issue's presses, {name}, plain least squares (before)", truth, [_fit(t, w, plain_noise, jackknife=False) for t, w in noisy]), flush=True)
 
 
 def main() -> None:
@@ -180,6 +185,10 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=3)
     ap.add_argument("--seeds", type=int, default=20, help="probing logs per noise level in the honesty section (0: skip it)")
     ap.add_argument("--honesty-only", action="store_true", help="print only the calibration-under-noise section")
+    ap.add_argument("--force-range", type=float, nargs=2, default=(1.5, 4.0), metavar=("LO", "HI"),
+                    help="held force of the simulated presses, N (default 1.5 4)")
+    ap.add_argument("--sim-only", action="store_true", help="honesty section: only the simulated (held, sliding) presses")
+    ap.add_argument("--issue-only", action="store_true", help="honesty section: only the issue's presses")
     args = ap.parse_args()
     if not args.honesty_only:
         rows = calibration_rows(args.seed) + gravity_rows(args.seed)
@@ -195,8 +204,7 @@ def main() -> None:
     print()
     print("| log, sensor | bias | RMS error | largest error | median reported std | error/std mean | error/std spread |")
     print("| --- | --- | --- | --- | --- | --- | --- |")
-    for r in honesty_rows(args.seeds, args.seed):
-        print(r)
+    honesty_rows(args.seeds, args.seed, tuple(args.force_range), args.sim_only, args.issue_only)  # prints its rows as they come
 
 
 if __name__ == "__main__":

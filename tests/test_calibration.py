@@ -227,6 +227,7 @@ def test_weak_fit_reports_jackknife_standard_deviations_that_cover_its_error():
     plain = calibrate_fingertip(t, w, "sphere", noise=noise, jackknife=False)
     cal = calibrate_fingertip(t, w, "sphere", noise=noise)
     assert plain.warning and cal.std_method == "jackknife" and "leaving out one press" in cal.warning
+    assert "jackknife" in cal.summary() and "jackknife" not in plain.summary()
     assert np.allclose(cal.center, plain.center) and cal.radius == plain.radius  # only the standard deviations change
     err = np.abs(np.r_[cal.center, cal.radius] - truth)
     curvature, jk = np.r_[plain.center_std, plain.radius_std], np.r_[cal.center_std, cal.radius_std]

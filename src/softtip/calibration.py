@@ -290,6 +290,8 @@ class Calibration:
         ]
         if self.shape == "capsule":
             lines.append(f"  length     {c[2]:.3f} ± {cs[2]:.3f} mm (cap centre height); axis offset x, y = cap centre x, y")
+        if self.std_method == "jackknife":
+            lines.append("  ± are the larger of the fit's curvature and a delete-one-press jackknife (see the warning)")
         return "\n".join(lines)
 
 
