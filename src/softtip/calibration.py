@@ -63,9 +63,9 @@ Limits: the weighting removes the first-order bias; where the presses excite lit
 compared with the noise (friction turning only while the force ramps, 0.1–0.3 of the
 normal force, a Nano25's noise) the objective is far from quadratic over the scatter and
 the curvature's standard deviations understate it several times over. Such fits end far
-from the start sphere; :attr:`Calibration.warning` says so and their standard deviations
-come from a delete-one-press jackknife (:func:`_jackknife_std`; the larger of the two per
-parameter). On held, sliding presses (the procedure of :data:`PROBING_GUIDE`) the
+from the start sphere; :attr:`Calibration.warning` says so, and the standard deviations of
+fits ending more than :data:`JACKKNIFE_SHIFT` from it come from a delete-one-press
+jackknife too (:func:`_jackknife_std`; the larger of the two per parameter). On held, sliding presses (the procedure of :data:`PROBING_GUIDE`) the
 curvature's are honest; the radius is then the least precise parameter because it trades
 off against the indentation ``κ`` unless the presses span a wide range of forces.
 ``benchmarks/bench_calibration.py`` prints both kinds of log. The sensor's noise is taken
@@ -91,6 +91,7 @@ from softtip.fingertip import Capsule, Fingertip, Sphere
 from softtip.noise import NANO17, SensorNoise
 
 __all__ = [
+    "JACKKNIFE_SHIFT",
     "MAX_START_SHIFT",
     "PROBING_GUIDE",
     "TARGET_STD",
@@ -153,6 +154,10 @@ _CAP_MIN_NZ = math.sin(math.radians(20.0))
 _MAX_CONDITION = 1e4
 #: Largest :attr:`Calibration.start_shift` without a warning (healthy simulated logs: ≤ 2).
 MAX_START_SHIFT = 3.0
+#: :attr:`Calibration.start_shift` above which the standard deviations also come from a
+#: delete-one-press jackknife: below the warning's threshold, since fits that end 2-3 from
+#: the start sphere can already be far off (held, sliding presses on the simulator: ≤ 2.5).
+JACKKNIFE_SHIFT = 2.0
 #: Standard deviation (m) above which :meth:`Calibration.precision_warning` says how many
 #: presses would reach it: 0.1 mm keeps centre and radius within 0.2 mm at 2 std.
 TARGET_STD = 0.1e-3
@@ -206,7 +211,8 @@ class Calibration:
     std_method : str
         ``"curvature"``: the standard deviations are ``s² (JᵀJ)⁻¹`` at the solution;
         ``"jackknife"``: per parameter the larger of those and a delete-one-press
-        jackknife's (fits with a :attr:`warning`, or when asked).
+        jackknife's (fits with a :attr:`start_shift` above :data:`JACKKNIFE_SHIFT`, which
+        includes every fit with a :attr:`warning`, or when asked).
     """
 
     tip: Fingertip
@@ -291,7 +297,7 @@ class Calibration:
         if self.shape == "capsule":
             lines.append(f"  length     {c[2]:.3f} ± {cs[2]:.3f} mm (cap centre height); axis offset x, y = cap centre x, y")
         if self.std_method == "jackknife":
-            lines.append("  ± are the larger of the fit's curvature and a delete-one-press jackknife (see the warning)")
+            lines.append("  ± are the larger of the fit's curvature and a delete-one-press jackknife")
         return "\n".join(lines)
 
 
@@ -435,8 +441,8 @@ def calibrate_fingertip(
     jackknife : bool or None
         Standard deviations also from refits leaving out one press at a time (the larger
         of those and the curvature's per parameter; one refit per press). None (default):
-        only when the fit ends more than :data:`MAX_START_SHIFT` from the start sphere,
-        where the curvature's understate the scatter.
+        only when the fit ends more than :data:`JACKKNIFE_SHIFT` from the start sphere,
+        where the curvature's can understate the scatter.
     source : str
         Name used in error messages.
 
@@ -524,7 +530,7 @@ def calibrate_fingertip(
     start_shift = float(np.linalg.norm(sol["center"] - c0) / r0_std) if r0_std > 0 else 0.0
     x = sol.pop("x")
     std_method = "curvature"
-    if jackknife or (jackknife is None and start_shift > MAX_START_SHIFT):
+    if jackknife or (jackknife is None and start_shift > JACKKNIFE_SHIFT):
         jk = _jackknife_std(f_all, m_all, presses, normals0, x, compliance, noise)
         # neither estimate is allowed to shrink the other: the larger of the two per parameter
         sol["center_std"] = np.maximum(sol["center_std"], jk[:3] * 1e-3)
