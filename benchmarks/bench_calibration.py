@@ -17,7 +17,7 @@
    without softtip's simulator: the friction turns only while the force ramps), with plain
    least squares for comparison.
 
-    python benchmarks/bench_calibration.py [--seed N] [--seeds 20] [--honesty-only]
+    python benchmarks/bench_calibration.py [--seed N] [--seeds 20] [--honesty-only] [--force-range 1 8] [--sim-only]
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ from softtip.calibration.payload import Payload, calibrate_payload, compensate_p
 from softtip.calibration.probing import calibrate_fingertip, simulate_probing
 from softtip.core.axial import axial_difference
 from softtip.core.fingertip import Capsule, Sphere
-from softtip.core.noise import SensorNoise
+from softtip.core.noise import MINI40, NANO25, SensorNoise
 from softtip.errors import InputError
 from softtip.sim import HandFrame, SensorModel, Wedge, paper_scenario, simulate_grasp
 from softtip.sim.synthetic import sliding_presses
@@ -115,14 +115,13 @@ def gravity_rows(seed: int) -> list[tuple[str, str, str]]:
 
 
 # Per-axis noise (fx, fy, fz in N; mx, my, mz in N·m) of three ATI sensor classes: about
-# one count of their catalogue resolution (Nano17 SI-25-0.25: 1/160 N, 1/32 N·mm, rounded
-# to the issue's 5 mN and 0.05 N·mm; Nano25 SI-125-3: 1/48 N, fz 1/16 N, 1/1320 N·m;
-# Mini40 SI-40-2: 1/100 N, fz 1/50 N, 1/4000 N·m). The simulated sensor adds this Gaussian
-# noise and quantises to the same step; the fit is given the noise figures.
+# one count of their published resolution (softtip.core.noise's presets, where the sources are
+# cited; the Nano17's rounded to the issue's 5 mN and 0.05 N·mm). The simulated sensor adds
+# this Gaussian noise and quantises to the same step; the fit is given the noise figures.
 SENSORS = {
     "Nano17": ((0.005,) * 3, (0.05e-3,) * 3),
-    "Nano25": ((1 / 48, 1 / 48, 1 / 16), (1 / 1320,) * 3),
-    "Mini40": ((1 / 100, 1 / 100, 1 / 50), (1 / 4000,) * 3),
+    "Nano25": (NANO25.force_std, NANO25.moment_std),
+    "Mini40": (MINI40.force_std, MINI40.moment_std),
 }
 HONEST_TIP = Sphere(0.016, (0.0003, -0.0002, 0.020))
 
@@ -141,38 +140,44 @@ def _honesty_row(label, truth, fits) -> str:
 
     refused = f" ({len(fits) - len(ok)} refused)" if len(ok) < len(fits) else ""
     warned = sum(bool(c.warning) for c in ok)
-    refused += f" ({warned} of {len(ok)} with a warning)" if warned else ""
+    jk = sum(c.std_method == "jackknife" for c in ok)
+    refused += f" ({warned} of {len(ok)} with a warning" + (", jackknife standard deviations" if jk else "") + ")" if warned else ""
     return (
         f"| {label}{refused} | {cells(err.mean(0), '+.3f')} | {cells(np.sqrt((err**2).mean(0)), '.3f')} | "
         f"{cells(np.abs(err).max(0), '.3f')} | {cells(np.median(std, 0), '.3f')} | {cells(z.mean(0), '+.2f')} | {cells(z.std(0), '.2f')} |"
     )
 
 
-def _fit(t, w, noise):
+def _fit(t, w, noise, **kw):
     try:
-        return calibrate_fingertip(t, w, "sphere", noise=noise)
+        return calibrate_fingertip(t, w, "sphere", noise=noise, **kw)
     except InputError:
         return None
 
 
-def honesty_rows(seeds: int, seed0: int) -> list[str]:
-    rows = []
+def honesty_rows(seeds: int, seed0: int, force_range=(1.5, 4.0), sim_only: bool = False, issue_only: bool = False) -> None:
+    """Print the honesty section's rows, one at a time as they are measured."""
     truth = np.r_[HONEST_TIP.center, HONEST_TIP.radius]
-    logs = [simulate_probing(HONEST_TIP, 45.0, sensor=SensorModel.ideal(100.0), rng=seed0 + k, n_elements=6000) for k in range(seeds)]
-    for name, (fs, ms) in SENSORS.items():
+    logs = [
+        simulate_probing(HONEST_TIP, 45.0, force_range=force_range, sensor=SensorModel.ideal(100.0), rng=seed0 + k, n_elements=6000)
+        for k in range(0 if issue_only else seeds)
+    ]
+    for name, (fs, ms) in SENSORS.items() if logs else ():
         model = SensorModel(rate=100.0, noise_std=(*fs, *ms), resolution=(*fs, *ms))
         noise = SensorNoise(fs, ms)
         fits = [_fit(t, model.measure(w, np.random.default_rng(seed0 + 1000 + k)), noise) for k, (t, w) in enumerate(logs)]
-        rows.append(_honesty_row(f"softtip.sim, {name}", truth, fits))
+        print(_honesty_row(f"softtip.sim {force_range[0]:g}–{force_range[1]:g} N, {name}", truth, fits), flush=True)
+    if sim_only:
+        return
     plain_noise = SensorNoise((1e-12,) * 3, (1e-4,) * 3)  # moment noise only: unweighted least squares
     issue = [sliding_presses(np.random.default_rng(seed0 + k)) for k in range(seeds)]
-    for name, (fs, ms) in SENSORS.items():
+    for name in ("Nano25", "Mini40", "Nano17"):  # the hardest first
+        fs, ms = SENSORS[name]
         sd = np.r_[fs, ms]
         noisy = [(t, w + np.random.default_rng(seed0 + 2000 + k).standard_normal(w.shape) * sd) for k, (t, w) in enumerate(issue)]
+        print(_honesty_row(f"issue's presses, {name}", truth, [_fit(t, w, SensorNoise(fs, ms)) for t, w in noisy]), flush=True)
         if name == "Nano17":
-            rows.append(_honesty_row(f"issue's presses, {name}, plain least squares (before)", truth, [_fit(t, w, plain_noise) for t, w in noisy]))
-        rows.append(_honesty_row(f"issue's presses, {name}", truth, [_fit(t, w, SensorNoise(fs, ms)) for t, w in noisy]))
-    return rows
+            print(_honesty_row(f"issue's presses, {name}, plain least squares (before)", truth, [_fit(t, w, plain_noise, jackknife=False) for t, w in noisy]), flush=True)
 
 
 def main() -> None:
@@ -180,6 +185,10 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=3)
     ap.add_argument("--seeds", type=int, default=20, help="probing logs per noise level in the honesty section (0: skip it)")
     ap.add_argument("--honesty-only", action="store_true", help="print only the calibration-under-noise section")
+    ap.add_argument("--force-range", type=float, nargs=2, default=(1.5, 4.0), metavar=("LO", "HI"),
+                    help="held force of the simulated presses, N (default 1.5 4)")
+    ap.add_argument("--sim-only", action="store_true", help="honesty section: only the simulated (held, sliding) presses")
+    ap.add_argument("--issue-only", action="store_true", help="honesty section: only the issue's presses")
     args = ap.parse_args()
     if not args.honesty_only:
         rows = calibration_rows(args.seed) + gravity_rows(args.seed)
@@ -195,8 +204,7 @@ def main() -> None:
     print()
     print("| log, sensor | bias | RMS error | largest error | median reported std | error/std mean | error/std spread |")
     print("| --- | --- | --- | --- | --- | --- | --- |")
-    for r in honesty_rows(args.seeds, args.seed):
-        print(r)
+    honesty_rows(args.seeds, args.seed, tuple(args.force_range), args.sim_only, args.issue_only)  # prints its rows as they come
 
 
 if __name__ == "__main__":

@@ -32,6 +32,8 @@ TRUE_CAPSULE = Capsule(0.0150, 0.0225, CAPSULE_OFFSET)
 MINI40 = SensorNoise((0.01, 0.01, 0.02), (2.5e-4, 2.5e-4, 2.5e-4))
 # noise in the moment only: the weights of plain (unweighted) least squares
 UNWEIGHTED = SensorNoise((1e-12,) * 3, (1e-4,) * 3)
+# a weak-press log (press_log) whose fit lands far off its curvature standard deviations
+JK_SEED = 5
 
 
 @pytest.fixture(scope="module")
@@ -174,7 +176,8 @@ def press_log(seed, n_presses=30, center=(0.3e-3, -0.2e-3, 20e-3), radius=16e-3,
     """
     rng = np.random.default_rng(seed)
     t, w = sliding_presses(rng, n_presses, center, radius)
-    w = w + rng.standard_normal(w.shape) * np.repeat(noise, 3)
+    sd = np.concatenate([np.broadcast_to(np.asarray(v, dtype=float), (3,)) for v in noise])
+    w = w + rng.standard_normal(w.shape) * sd
     return t, w
 
 
@@ -205,13 +208,52 @@ def test_warns_when_presses_excite_too_little_for_the_noise():
     # deviations off and far from the start sphere through the presses' contact points
     noise = SensorNoise((1 / 32,) * 3, (0.76e-3,) * 3)
     t, w = press_log(5, noise=(1 / 32, 0.76e-3))
-    cal = calibrate_fingertip(t, w, "sphere", noise=noise)
-    assert cal.start_shift > 3.0 and "excite too little" in cal.warning
+    cal = calibrate_fingertip(t, w, "sphere", noise=noise, jackknife=False)
+    assert cal.start_shift > 3.0 and "excite too little" in cal.warning and cal.std_method == "curvature"
     # the noise (|noise| ≈ 0.06 N untouched) does not make presses of its own
     assert cal.n_presses == 30 and cal.n_skipped == 0
     # ... the same presses with a Nano17-class noise give none
     t, w = press_log(5)
     assert calibrate_fingertip(t, w, "sphere", noise=SensorNoise((0.005,) * 3, (0.05e-3,) * 3)).warning == ""
+
+
+def test_weak_fit_reports_jackknife_standard_deviations_that_cover_its_error():
+    # weak presses (the issue's kind, 16 of them) with a Nano25-class noise: the fit's
+    # curvature understates the scatter several times over; a flagged fit's standard
+    # deviations come from refits leaving out one press at a time, and cover the error
+    truth = np.r_[0.3e-3, -0.2e-3, 20e-3, 16e-3]
+    noise = SensorNoise((1 / 48, 1 / 48, 1 / 16), (1 / 1320,) * 3)
+    t, w = press_log(JK_SEED, n_presses=16, noise=(np.r_[noise.force_std], np.r_[noise.moment_std]))
+    plain = calibrate_fingertip(t, w, "sphere", noise=noise, jackknife=False)
+    cal = calibrate_fingertip(t, w, "sphere", noise=noise)
+    assert plain.warning and cal.std_method == "jackknife" and "leaving out one press" in cal.warning
+    assert "jackknife" in cal.summary() and "jackknife" not in plain.summary()
+    assert np.allclose(cal.center, plain.center) and cal.radius == plain.radius  # only the standard deviations change
+    err = np.abs(np.r_[cal.center, cal.radius] - truth)
+    curvature, jk = np.r_[plain.center_std, plain.radius_std], np.r_[cal.center_std, cal.radius_std]
+    assert np.all(jk >= curvature) and np.max(err / curvature) > 3.0, err / curvature
+    assert np.all(err < 2.5 * jk), err / jk
+
+
+def test_precision_warning_says_how_many_presses_reach_the_target(sphere_log):
+    cal = calibrate_fingertip(*sphere_log, "sphere")
+    worst = max(cal.radius_std, *cal.center_std)
+    assert cal.precision_warning(2.0 * worst) == ""
+    msg = cal.precision_warning(worst / 3.0)
+    # the standard deviations fall as 1/√presses: 9 times the presses for a third of the std
+    assert f"about {math.ceil(cal.n_presses * 9.0 - 1e-9)} presses like these" in msg
+    assert f"±{worst / MM:.2f} mm" in msg
+
+
+def test_cli_warns_when_the_noise_leaves_the_geometry_imprecise(tmp_path):
+    # the shipped example with 15 mN and 0.4 N·mm more noise per axis: the radius std is above 0.1 mm
+    t, w = _example()
+    log = tmp_path / "noisy.csv"
+    write_log(log, t, w + np.random.default_rng(0).standard_normal(w.shape) * np.repeat([0.015, 0.4e-3], 3))
+    res = run("calibrate", log, "--shape", "sphere", "--force-noise", "0.015", "--moment-noise", "0.4", "-o", tmp_path / "tip.toml")
+    assert res.returncode == 0, res.stderr
+    assert "presses like these would bring every standard deviation to 0.1 mm" in res.stderr
+    assert "# warning: " in (tmp_path / "tip.toml").read_text()
 
 
 def test_capsule_cli_writes_the_axis_offset(tmp_path, capsule_log):

@@ -59,14 +59,17 @@ Standard deviations come from the Jacobian of the whitened residuals at the solu
 model is right; reported as :attr:`Calibration.noise_ratio`), so a noise model off by a
 constant factor still gives honest standard deviations.
 
-Limits: the weighting removes the first-order bias; a second-order one remains where the
-presses excite little compared with the noise (friction turning only while the force
-ramps, 0.1–0.3 of the normal force, a Nano25's noise): there the fit can be off by several
-reported standard deviations. Such fits end far from the start sphere, and
-:attr:`Calibration.warning` says so. Presses held at 2–6 N while the surface slides (the
-procedure of :data:`PROBING_GUIDE`) are well inside the honest regime;
-``benchmarks/bench_calibration.py`` prints both. The sensor's noise is taken as white and
-the tare (the mean of the first ``tare_duration`` s) as exact.
+Limits: the weighting removes the first-order bias; where the presses excite little
+compared with the noise (friction turning only while the force ramps, 0.1–0.3 of the
+normal force, a Nano25's noise) the objective is far from quadratic over the scatter and
+the curvature's standard deviations understate it several times over. Such fits end far
+from the start sphere; :attr:`Calibration.warning` says so, and the standard deviations of
+fits ending more than :data:`JACKKNIFE_SHIFT` from it come from a delete-one-press
+jackknife too (:func:`_jackknife_std`; the larger of the two per parameter). On held, sliding presses (the procedure of :data:`PROBING_GUIDE`) the
+curvature's are honest; the radius is then the least precise parameter because it trades
+off against the indentation ``κ`` unless the presses span a wide range of forces.
+``benchmarks/bench_calibration.py`` prints both kinds of log. The sensor's noise is taken
+as white and the tare (the mean of the first ``tare_duration`` s) as exact.
 """
 
 from __future__ import annotations
@@ -88,8 +91,10 @@ from softtip.core.noise import NANO17, SensorNoise
 from softtip.errors import InputError
 
 __all__ = [
+    "JACKKNIFE_SHIFT",
     "MAX_START_SHIFT",
     "PROBING_GUIDE",
+    "TARGET_STD",
     "SHAPES",
     "Calibration",
     "calibrate_fingertip",
@@ -113,7 +118,10 @@ steel or glass plate; not foam, rubber or cloth) that you can press it against.
    - where: spread the spots evenly over the part that touches things, from the very tip
      out to 60° from it, all the way round (a capsule: only the rounded cap, not lower
      than 20° above where the cap meets the cylinder);
-   - how hard: push to 2-6 N (200-600 g on a kitchen scale) and hold for 1-2 s;
+   - how hard: vary it, about half the presses light (1-2 N, 100-200 g on a kitchen
+     scale) and half firm (5-8 N), each held for 1-2 s: the spread of forces separates
+     the radius from the skin's indentation (presses all at 2-4 N leave the two
+     entangled, which is most of the radius' uncertainty);
    - how to move while holding: slide the surface (or the finger) sideways by about half
      a millimetre one way, then across, or in a small circle, so that the friction force
      turns by 40° or more. Do not tilt the surface relative to the finger and do not roll
@@ -124,10 +132,12 @@ steel or glass plate; not foam, rubber or cloth) that you can press it against.
      softtip calibrate probe.csv --shape sphere -o my_tip.toml
    with --force-noise and --moment-noise set to your sensor's noise (the standard
    deviation of each axis while untouched; defaults: a Nano17).
-4. Check the report: the standard deviations (a Nano17 and 30 presses: a few hundredths
-   of a mm; noisier sensors need more or harder presses), and a residual near 1 times
-   the noise model's (a warning below 0.5 or above 2 means the noise options do not fit
-   the sensor). A log without presses, presses at one spot, or a force that never turns
+4. Check the report: the standard deviations (30 presses held at 1.5-4 N at 100 Hz:
+   a Nano17 about 0.01-0.05 mm, a Nano25 0.07 mm for the centre's x, y but 0.2-0.3 mm
+   for its height and the radius; they fall as 1/sqrt(presses), and a warning above
+   0.1 mm says how many presses would reach it), and a residual near 1 times the noise
+   model's (a warning below 0.5 or above 2 means the noise options do not fit the
+   sensor). A log without presses, presses at one spot, or a force that never turns
    within a press are refused with a message saying which.
 
 Try it without hardware: softtip calibrate --example --shape sphere
@@ -144,6 +154,13 @@ _CAP_MIN_NZ = math.sin(math.radians(20.0))
 _MAX_CONDITION = 1e4
 #: Largest :attr:`Calibration.start_shift` without a warning (healthy simulated logs: ≤ 2).
 MAX_START_SHIFT = 3.0
+#: :attr:`Calibration.start_shift` above which the standard deviations also come from a
+#: delete-one-press jackknife: below the warning's threshold, since fits that end 2-3 from
+#: the start sphere can already be far off (held, sliding presses on the simulator: ≤ 2.5).
+JACKKNIFE_SHIFT = 2.0
+#: Standard deviation (m) above which :meth:`Calibration.precision_warning` says how many
+#: presses would reach it: 0.1 mm keeps centre and radius within 0.2 mm at 2 std.
+TARGET_STD = 0.1e-3
 # ... and when the start-value sphere through the presses' contact points has a radius
 # deviation above this fraction of the radius (the points do not span a cap).
 _MAX_START_SPREAD = 0.1
@@ -191,6 +208,11 @@ class Calibration:
         (:attr:`warning` says so).
     normals : ndarray, shape (K, 3)
         Fitted contact normal of each press used.
+    std_method : str
+        ``"curvature"``: the standard deviations are ``s² (JᵀJ)⁻¹`` at the solution;
+        ``"jackknife"``: per parameter the larger of those and a delete-one-press
+        jackknife's (fits with a :attr:`start_shift` above :data:`JACKKNIFE_SHIFT`, which
+        includes every fit with a :attr:`warning`, or when asked).
     """
 
     tip: Fingertip
@@ -208,6 +230,7 @@ class Calibration:
     condition: float
     start_shift: float
     normals: NDArray[np.float64] = field(repr=False)
+    std_method: str = "curvature"
 
     @property
     def shape(self) -> str:
@@ -224,10 +247,36 @@ class Calibration:
         """Why the result may be off by more than its standard deviations, or ``""``."""
         if self.start_shift <= MAX_START_SHIFT:
             return ""
+        how = (
+            "the standard deviations are from refits leaving out one press at a time (the fit's curvature understates "
+            "them here), which cover the error in most but not all such cases"
+            if self.std_method == "jackknife"
+            else "the result may be off by several standard deviations"
+        )
         return (
             f"the fit ended {self.start_shift:.1f} standard deviations from the sphere through the presses' own contact "
-            "points: the presses excite too little for the sensor's noise, and the result may be off by several standard "
-            "deviations; press harder (2-6 N) and slide the surface while holding each press (softtip calibrate --guide)"
+            f"points: the presses excite too little for the sensor's noise, and {how}; press harder (1-8 N) and slide "
+            "the surface while holding each press (softtip calibrate --guide)"
+        )
+
+    def precision_warning(self, target: float = TARGET_STD) -> str:
+        """What it would take to bring every standard deviation to ``target`` (m), or ``""``.
+
+        The standard deviations fall as ``1/√presses``, so about
+        ``n_presses (std / target)²`` presses like these are needed. With the default
+        0.1 mm the centre and radius stay within 0.2 mm in 95 % of calibrations.
+        """
+        stds = {"radius": self.radius_std, "centre x": self.center_std[0], "centre y": self.center_std[1], "centre z": self.center_std[2]}
+        name = max(stds, key=lambda k: stds[k])
+        worst = stds[name]
+        if not worst > target:
+            return ""
+        need = math.ceil(self.n_presses * (worst / target) ** 2)
+        return (
+            f"the {name} is known to ±{worst * 1e3:.2f} mm (1 std) only: about {need} presses like these would bring "
+            f"every standard deviation to {target * 1e3:.2g} mm (they fall as 1/√presses); presses over a wider range of "
+            "forces (half of them at 1-2 N, half at 5-8 N) separate the radius from the skin's indentation and help most "
+            "(softtip calibrate --guide)"
         )
 
     @property
@@ -258,6 +307,8 @@ class Calibration:
         ]
         if self.shape == "capsule":
             lines.append(f"  length     {c[2]:.3f} ± {cs[2]:.3f} mm (cap centre height); axis offset x, y = cap centre x, y")
+        if self.std_method == "jackknife":
+            lines.append("  ± are the larger of the fit's curvature and a delete-one-press jackknife")
         return "\n".join(lines)
 
 
@@ -366,6 +417,7 @@ def calibrate_fingertip(
     min_spread: float = math.sin(math.radians(3.0)),
     compliance: bool = True,
     noise: SensorNoise = NANO17,
+    jackknife: bool | None = None,
     source: str = "<log>",
 ) -> Calibration:
     """Fit the fingertip's centre and radius to a probing log of plane presses.
@@ -397,6 +449,11 @@ def calibrate_fingertip(
         The sensor's per-axis noise (default Nano17 class). Each sample is weighted by the
         noise of its residual propagated from it; what matters for the weights is the
         ratio of force to moment noise (the overall scale is taken from the residual).
+    jackknife : bool or None
+        Standard deviations also from refits leaving out one press at a time (the larger
+        of those and the curvature's per parameter; one refit per press). None (default):
+        only when the fit ends more than :data:`JACKKNIFE_SHIFT` from the start sphere,
+        where the curvature's can understate the scatter.
     source : str
         Name used in error messages.
 
@@ -482,7 +539,17 @@ def calibrate_fingertip(
     else:
         tip = Sphere(radius=sol["radius"], center=tuple(sol["center"]))
     start_shift = float(np.linalg.norm(sol["center"] - c0) / r0_std) if r0_std > 0 else 0.0
-    return Calibration(tip=tip, n_skipped=n_skipped, start_shift=start_shift, **sol)
+    x = sol.pop("x")
+    std_method = "curvature"
+    if jackknife or (jackknife is None and start_shift > JACKKNIFE_SHIFT):
+        jk = _jackknife_std(f_all, m_all, presses, normals0, x, compliance, noise)
+        # neither estimate is allowed to shrink the other: the larger of the two per parameter
+        sol["center_std"] = np.maximum(sol["center_std"], jk[:3] * 1e-3)
+        sol["radius_std"] = max(sol["radius_std"], float(jk[3]) * 1e-3)
+        if compliance:
+            sol["compliance_std"] = max(sol["compliance_std"], float(jk[4]) * 1e-3)
+        std_method = "jackknife"
+    return Calibration(tip=tip, n_skipped=n_skipped, start_shift=start_shift, std_method=std_method, **sol)
 
 
 def _press_normal(f: NDArray, m: NDArray, c: NDArray, radius: float) -> NDArray:
@@ -512,13 +579,11 @@ def _whiten(e: NDArray, u1: NDArray, u2: NDArray, r: NDArray, force_var: NDArray
     return np.concatenate((e1 / sa, (e2 - b / a * e1) / np.sqrt(c - b * b / a)))
 
 
-def _fit(f_all, m_all, presses, normals0, c0, r0, compliance: bool, noise: SensorNoise) -> dict:
-    """Noise-weighted nonlinear least squares; lengths in mm and moments in N·mm inside (scaled).
+def _objective(f_all, m_all, presses, normals0, compliance: bool, noise: SensorNoise):
+    """Whitened residual, its Jacobian and the parameter unpacking for the presses given.
 
-    Each sample's tangential residual is whitened by its noise covariance at the current
-    parameters (the force noise enters through the lever arm ``r``), so the objective's
-    expected noise share is the same (two per sample) for every trial geometry: the
-    estimate is consistent, unlike plain least squares, which prefers a shorter lever arm.
+    Parameters ``x``: centre (3, mm), radius (mm), indentation coefficient (mm/√N, with
+    ``compliance``) and two tangential coordinates of each press's normal about ``normals0``.
     """
     k = len(presses)
     idx = np.concatenate(presses)
@@ -575,6 +640,43 @@ def _fit(f_all, m_all, presses, normals0, c0, r0, compliance: bool, noise: Senso
                 jac[rows, n_geo + 2 * col_of_row + (j - n_geo)] = d
         return jac
 
+    return residual, jacobian, unpack, n_geo, len(idx)
+
+
+def _jackknife_std(f_all, m_all, presses, normals0, x, compliance: bool, noise: SensorNoise) -> NDArray:
+    """Delete-one-press jackknife standard deviations of the geometry parameters (mm, mm/√N).
+
+    Each press in turn is left out and the fit repeated from the full solution; the spread
+    of the ``K`` refits, ``sqrt((K − 1)/K Σ (θ₋ₖ − θ̄)²)``, estimates the estimator's
+    scatter without the local linearisation behind ``(JᵀJ)⁻¹``, which understates it where
+    the presses excite little compared with the noise (the objective is far from
+    quadratic over the range of the scatter).
+    """
+    k = len(presses)
+    n_geo = 5 if compliance else 4
+    geo = []
+    for j in range(k):
+        keep = np.arange(k) != j
+        sub = [p for p, ok in zip(presses, keep) if ok]
+        residual, jacobian, _, _, _ = _objective(f_all, m_all, sub, normals0[keep], compliance, noise)
+        x0 = np.concatenate((x[:n_geo], x[n_geo:].reshape(k, 2)[keep].ravel()))
+        res = least_squares(residual, x0, method="lm", x_scale="jac", jac=jacobian, xtol=1e-8, ftol=1e-8, gtol=1e-8)
+        geo.append(res.x[:n_geo])
+    geo = np.array(geo)
+    return np.sqrt((k - 1) / k * np.sum(np.square(geo - geo.mean(axis=0)), axis=0))
+
+
+def _fit(f_all, m_all, presses, normals0, c0, r0, compliance: bool, noise: SensorNoise) -> dict:
+    """Noise-weighted nonlinear least squares; lengths in mm and moments in N·mm inside (scaled).
+
+    Each sample's tangential residual is whitened by its noise covariance at the current
+    parameters (the force noise enters through the lever arm ``r``), so the objective's
+    expected noise share is the same (two per sample) for every trial geometry: the
+    estimate is consistent, unlike plain least squares, which prefers a shorter lever arm.
+    """
+    k = len(presses)
+    residual, jacobian, unpack, n_geo, n_samples = _objective(f_all, m_all, presses, normals0, compliance, noise)
+    n_par = n_geo + 2 * k
     x0 = np.concatenate((c0 * 1e3, [r0 * 1e3], [0.1] if compliance else [], np.zeros(2 * k)))
     res = least_squares(residual, x0, method="lm", x_scale="jac", jac=jacobian, xtol=1e-12, ftol=1e-12, gtol=1e-12)
     jac = res.jac
@@ -609,9 +711,10 @@ def _fit(f_all, m_all, presses, normals0, c0, r0, compliance: bool, noise: Senso
         "residual_rms": math.sqrt(float(np.mean(np.square(residual(res.x, whiten=False))))) * 1e-3,
         "noise_ratio": math.sqrt(s2),
         "n_presses": k,
-        "n_samples": len(idx),
+        "n_samples": n_samples,
         "condition": condition,
         "normals": n,
+        "x": res.x,
     }
 
 
@@ -637,8 +740,8 @@ def write_fingertip_toml(cal: Calibration, path: str | os.PathLike[str], source:
         + ", ".join(f"{v * mm:.4f}" for v in cal.center_std)
         + f" mm; residual {cal.residual_rms * mm:.4f} N·mm RMS",
     ]
-    if cal.warning:
-        header.append(f"# warning: {cal.warning}")
+    if cal.warning or cal.precision_warning():
+        header.append(f"# warning: {cal.warning or cal.precision_warning()}")
     text = "\n".join(header) + "\n" + cal.tip.to_toml()
     atomic_write_text(path, text)
 
@@ -655,7 +758,10 @@ def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
 
 
 def probing_presses(
-    n_presses: int, rng: np.random.Generator, max_tilt: float = math.radians(60.0)
+    n_presses: int,
+    rng: np.random.Generator,
+    max_tilt: float = math.radians(60.0),
+    force_range: tuple[float, float] = (1.5, 4.0),
 ) -> list[dict]:
     """Random press plans: contact normal, force and two tangential slides per press.
 
@@ -665,6 +771,8 @@ def probing_presses(
     rng : numpy Generator
     max_tilt : float
         Largest angle of the contact normal from the fingertip axis (+z), rad.
+    force_range : (float, float)
+        Each press's held force is drawn uniformly from this range, N.
 
     Returns
     -------
@@ -684,7 +792,7 @@ def probing_presses(
         d1 = math.cos(a) * t1 + math.sin(a) * t2
         d2 = _cross(n, d1)
         slides = np.stack((rng.uniform(0.3e-3, 0.7e-3) * d1, rng.choice([-1.0, 1.0]) * rng.uniform(0.3e-3, 0.7e-3) * d2))
-        plans.append({"normal": n, "force": float(rng.uniform(1.5, 4.0)), "slides": slides})
+        plans.append({"normal": n, "force": float(rng.uniform(*force_range)), "slides": slides})
     return plans
 
 
@@ -695,6 +803,7 @@ def simulate_probing(
     press_duration: float = 1.5,
     slide: bool = True,
     max_tilt: float = math.radians(60.0),
+    force_range: tuple[float, float] = (1.5, 4.0),
     sensor=None,
     rng: np.random.Generator | int | None = 0,
     n_elements: int = 12_000,
@@ -702,7 +811,7 @@ def simulate_probing(
     """A simulated probing log: plane presses at many points, with friction and sensor noise.
 
     Each press (``press_duration`` s): 0.3 s untouched, the surface pushes along the skin
-    normal to 1.5–4 N over 0.3 s, then (``slide``) slides 0.3–0.7 mm along one tangent
+    normal to a force in ``force_range`` (default 1.5–4 N) over 0.3 s, then (``slide``) slides 0.3–0.7 mm along one tangent
     direction and then along the other, which turns the friction force. Uses
     :func:`softtip.sim.simulate_grasp` with a :class:`~softtip.sim.HalfSpace`.
 
@@ -717,6 +826,8 @@ def simulate_probing(
     max_tilt : float
         Presses cover contact normals up to this angle from +z, rad (a few degrees: all at
         one spot, another degenerate log).
+    force_range : (float, float)
+        Each press holds a force drawn uniformly from this range, N.
     sensor : softtip.sim.SensorModel, optional
         Default Nano17 class at 50 Hz.
     rng : Generator or int
@@ -745,7 +856,7 @@ def simulate_probing(
     centre = np.array(tip.center) if isinstance(tip, Sphere) else np.array([*tip.axis_offset, tip.length])
     n_presses = max(1, int(round(duration / press_duration)))
     ts, ws = [], []
-    for k, plan in enumerate(probing_presses(n_presses, rng, max_tilt)):
+    for k, plan in enumerate(probing_presses(n_presses, rng, max_tilt, force_range)):
         p = centre + tip.radius * plan["normal"]
         dist = ()
         if slide:

@@ -182,6 +182,8 @@ def calibrate(
         return
     if cal.warning:
         click.echo(f"softtip: warning: {cal.warning}", err=True)
+    elif cal.precision_warning():
+        click.echo(f"softtip: warning: {cal.precision_warning()}", err=True)
     if cal.noise_warning:
         click.echo(
             f"softtip: warning: {cal.noise_warning} (--force-noise {force_noise:g} N, --moment-noise {moment_noise:g} N·mm)",

@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 from softtip.core._xp import NP
 from softtip.core.spin import tangent_frame_kernel
 
-__all__ = ["SensorNoise", "NANO17", "tangential_spin_torque_std", "direction_angle_std"]
+__all__ = ["SensorNoise", "NANO17", "NANO25", "MINI40", "SENSOR_CLASSES", "tangential_spin_torque_std", "direction_angle_std"]
 
 
 @dataclass(frozen=True)
@@ -61,9 +61,26 @@ class SensorNoise:
         )
 
 
+# Noise presets: about one count of ATI's published resolution per axis (SI calibrations,
+# unfiltered). ATI states a resolution, not a noise standard deviation; measure your own
+# sensor (the standard deviation of each axis while untouched) when it matters. Sources:
+# ATI's product pages (https://www.ati-ia.com/products/ft/ft_models.aspx?id=Nano17, ...id=Nano25,
+# ...id=Mini40), whose calibration tables we could read only as quoted in public projects:
+# Nano17 SI-12-0.12 1/320 N and 1/64 N·mm, SI-25-0.25 1/160 N (its torque step, 1/32 N·mm,
+# follows from the doubled range); Nano25 SI-125-3 1/48 N (fx, fy) and 1/16 N (fz) (≈ 0.021
+# and 0.063 N); Mini40 SI-20-1 1/200 N, fz 1/100 N, 1/8000 N·m, so SI-40-2 (twice the
+# ranges) 1/100 N, fz 1/50 N, 1/4000 N·m by the same scaling. Not checked against ATI's
+# page itself: the Nano25's torque step (1/1320 N·m) and the Mini40 SI-40-2 row.
+
 #: ATI Nano17-class defaults (SI-25-0.25 calibration: resolution 1/160 N and 1/32 N·mm):
 #: about one resolution count of noise per axis, unfiltered.
 NANO17 = SensorNoise(force_std=(0.006, 0.006, 0.006), moment_std=(3.0e-5, 3.0e-5, 3.0e-5))
+#: ATI Nano25 class (SI-125-3: 1/48 N, fz 1/16 N, 1/1320 N·m), one count per axis.
+NANO25 = SensorNoise(force_std=(1 / 48, 1 / 48, 1 / 16), moment_std=(1 / 1320, 1 / 1320, 1 / 1320))
+#: ATI Mini40 class (SI-40-2: 1/100 N, fz 1/50 N, 1/4000 N·m), one count per axis.
+MINI40 = SensorNoise(force_std=(1 / 100, 1 / 100, 1 / 50), moment_std=(1 / 4000, 1 / 4000, 1 / 4000))
+#: The presets by name.
+SENSOR_CLASSES = {"Nano17": NANO17, "Nano25": NANO25, "Mini40": MINI40}
 
 
 def _quad_kernel(vx, vy, vz, rx, ry, rz, noise: SensorNoise):
