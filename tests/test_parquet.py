@@ -63,7 +63,8 @@ def test_integer_columns_and_any_order(tmp_path: Path) -> None:
 
 def test_units_from_metadata_and_conflicts(tmp_path: Path) -> None:
     cols = _table()
-    path = _write_pq(tmp_path / "k.parquet", cols, {PARQUET_UNITS_KEY: "kgf-mm"})
+    # the key is part of the file format (files written by any softtip version): spelled out here
+    path = _write_pq(tmp_path / "k.parquet", cols, {"softtip.units": "kgf-mm"})
     log = read_log(path)
     assert log.units == "kgf-mm"
     np.testing.assert_allclose(log.wrench[:, 0], cols["fx"] * KGF)
@@ -76,7 +77,7 @@ def test_units_from_metadata_and_conflicts(tmp_path: Path) -> None:
     plain = _write_pq(tmp_path / "s.parquet", cols)
     assert read_log(plain).units == "si" and read_log(plain, units="kgf-mm").units == "kgf-mm"
     odd = _write_pq(tmp_path / "o.parquet", cols, {PARQUET_UNITS_KEY: "furlongs"})
-    assert _error(odd) == f"{odd}: metadata softtip.core.units = 'furlongs'; expected one of: si, kgf-mm"
+    assert _error(odd) == f"{odd}: metadata softtip.units = 'furlongs'; expected one of: si, kgf-mm"
 
 
 def test_missing_and_misspelled_columns(tmp_path: Path) -> None:

@@ -44,7 +44,7 @@ from a force/torque log.
 INPUT is a CSV file with a header row and columns t, fx, fy, fz, mx, my, mz (t in s,
 non-decreasing: repeated stamps are counted and reported; extra columns are kept and copied
 to the output), or a Parquet file with those columns (name ending in .parquet; its
-softtip.core.units metadata gives the units). '-' reads CSV from standard input. With
+softtip.units metadata gives the units). '-' reads CSV from standard input. With
 --example, softtip's shipped example grasp is used instead.
 
 The output CSV (standard output unless -o; Parquet when -o ends in .parquet, with the

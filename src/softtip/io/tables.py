@@ -5,7 +5,7 @@ the columns ``t, fx, fy, fz, mx, my, mz`` in any order, or Parquet files (by the
 ``.parquet`` extension) with those columns; other columns are kept and otherwise ignored.
 ``t`` is in seconds and non-decreasing: a repeated stamp is accepted and counted, a stamp
 that goes back is an error. The wrench is in SI or, on request (or, for Parquet, by the
-file's ``softtip.core.units`` metadata), in the papers' kgf and kgf·mm, and is converted to SI
+file's ``softtip.units`` metadata), in the papers' kgf and kgf·mm, and is converted to SI
 on reading.
 
 Accepted CSV layout, beyond plain CSV:
@@ -140,7 +140,7 @@ def read_log(
     units : {"si", "kgf-mm"} or None
         Units of the wrench columns in the file: ``"si"`` (N, N·m) or ``"kgf-mm"`` (kgf,
         kgf·mm; 1 kgf = 9.80665 N). ``t`` is always in seconds. ``None`` (default): SI, or
-        for Parquet the units its metadata names (``softtip.core.units``); a Parquet file whose
+        for Parquet the units its metadata names (``softtip.units``); a Parquet file whose
         metadata names other units than ``units`` is an error.
     progress : callable, optional
         Called with the number of bytes parsed after each block of a CSV file (e.g.
@@ -505,8 +505,8 @@ def _cut_last_line(data: bytes, source: str, n_rows: int) -> str | None:
 # Parquet
 
 #: Key-value metadata softtip reads and writes in a Parquet file's schema.
-PARQUET_UNITS_KEY = "softtip.core.units"
-PARQUET_FINGERTIP_KEY = "softtip.core.fingertip"
+PARQUET_UNITS_KEY = "softtip.units"
+PARQUET_FINGERTIP_KEY = "softtip.fingertip"
 
 
 def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None) -> Log:
