@@ -205,6 +205,15 @@ def _source_name(path: str | os.PathLike[str] | TextIO) -> str:
     return os.fspath(path) if not isinstance(path, bytes) else os.fsdecode(path)
 
 
+def _opening_error(exc: OSError, source: str, what: str) -> InputError:
+    """The located message for a file that cannot be opened (missing, a directory, denied)."""
+    if isinstance(exc, FileNotFoundError):
+        return InputError(f"{source}: file not found; expected an existing {what}")
+    if isinstance(exc, IsADirectoryError):
+        return InputError(f"{source}: is a directory; expected a {what}")
+    return InputError(f"{source}: permission denied; expected a readable {what}")
+
+
 def _read_data(path: str | os.PathLike[str] | TextIO, source: str, what: str = "CSV log file") -> bytes | str:
     """The whole input: bytes from a file, or what a stream gives (bytes or text).
 
@@ -217,12 +226,8 @@ def _read_data(path: str | os.PathLike[str] | TextIO, source: str, what: str = "
         else:
             with open(path, "rb") as fh:
                 data = fh.read()
-    except FileNotFoundError:
-        raise InputError(f"{source}: file not found; expected an existing {what}") from None
-    except IsADirectoryError:
-        raise InputError(f"{source}: is a directory; expected a {what}") from None
-    except PermissionError:
-        raise InputError(f"{source}: permission denied; expected a readable {what}") from None
+    except (FileNotFoundError, IsADirectoryError, PermissionError) as exc:
+        raise _opening_error(exc, source, what) from None
     except UnicodeDecodeError as exc:
         # A text stream (e.g. stdin) decoding on the fly: no byte offset into the file.
         raise InputError(f"{source}: not valid UTF-8 ({exc.reason}); expected UTF-8 text") from None
@@ -519,12 +524,8 @@ def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None) 
         # ParquetFile, not read_table: the latter imports pyarrow.dataset (~0.2 s) for nothing here
         with pq.ParquetFile(path) as pf:
             table = pf.read()
-    except FileNotFoundError:
-        raise InputError(f"{source}: file not found; expected an existing {what}") from None
-    except IsADirectoryError:
-        raise InputError(f"{source}: is a directory; expected a {what}") from None
-    except PermissionError:
-        raise InputError(f"{source}: permission denied; expected a readable {what}") from None
+    except (FileNotFoundError, IsADirectoryError, PermissionError) as exc:
+        raise _opening_error(exc, source, what) from None
     except (pa.ArrowException, OSError) as exc:
         raise InputError(f"{source}: not a readable Parquet file ({exc}); expected a {what}") from None
     meta = {k.decode("utf-8", "replace"): v.decode("utf-8", "replace") for k, v in (table.schema.metadata or {}).items()}
