@@ -38,7 +38,7 @@ from scipy.spatial.transform import Rotation
 
 from softtip.core.units import STANDARD_GRAVITY
 from softtip.errors import InputError
-from softtip.io.tomlfile import read_toml
+from softtip.io.tomlfile import read_toml_table
 
 __all__ = [
     "QUATERNION_COLUMNS",
@@ -101,13 +101,7 @@ def load_payload(path: str | os.PathLike[str] | Payload) -> Payload:
     if isinstance(path, Payload):
         return path
     name = os.fspath(path)
-    data = read_toml(name, "payload")
-    table = data.get("payload")
-    if not isinstance(table, dict):
-        raise InputError(f"{name}: expected a [payload] table with mass (kg) and com (m)")
-    unknown = sorted(set(table) - {"mass", "com"})
-    if unknown:
-        raise InputError(f"{name}: [payload] unknown key(s) {', '.join(unknown)}; expected mass, com")
+    table = read_toml_table(name, "payload", ("mass", "com"), "mass (kg) and com (m)")
     if "mass" not in table:
         raise InputError(f"{name}: [payload] missing key mass (kg)")
     mass = table["mass"]

@@ -34,7 +34,7 @@ from numpy.typing import NDArray
 from softtip.core.joint import MODEL_MARGIN
 from softtip.errors import InputError
 from softtip.estimator.config import EstimatorConfig
-from softtip.io.tomlfile import read_toml
+from softtip.io.tomlfile import read_toml_table
 
 __all__ = [
     "SPIKE_SIGMAS",
@@ -275,13 +275,7 @@ def load_bias(path: str | os.PathLike[str]) -> tuple[float, ...]:
         names the file and the key.
     """
     name = os.fspath(path)
-    data = read_toml(name, "bias")
-    table = data.get("bias")
-    if not isinstance(table, dict):
-        raise InputError(f"{name}: expected a [bias] table with force = [fx, fy, fz] (N) and moment = [mx, my, mz] (N·m)")
-    unknown = sorted(set(table) - {"force", "moment"})
-    if unknown:
-        raise InputError(f"{name}: [bias] unknown key(s) {', '.join(unknown)}; expected force, moment")
+    table = read_toml_table(name, "bias", ("force", "moment"), "force = [fx, fy, fz] (N) and moment = [mx, my, mz] (N·m)")
     out: list[float] = []
     for key, unit in (("force", "N"), ("moment", "N·m")):
         v = table.get(key)
