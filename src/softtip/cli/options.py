@@ -325,7 +325,7 @@ def parquet_metadata(fingertip, tip: str, output_units: str, log) -> dict[str, s
     meta = {PARQUET_UNITS_KEY: output_units, "softtip.tip": str(tip), "softtip.input": log.source, "softtip.version": __version__}
     try:
         meta[PARQUET_FINGERTIP_KEY] = fingertip.to_toml()
-    except (NotImplementedError, AttributeError, TypeError, ValueError):  # e.g. a callable surface
+    except ValueError:  # a tip with no TOML form (callables, a mesh built from arrays): the file names none
         pass
     return meta
 
