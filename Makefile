@@ -1,7 +1,7 @@
 # Quick start: `make demo` reproduces the papers' experiments on the simulator and runs
 # softtip on the shipped example grasp; `make test` runs the tests.
 # Both create ./.venv on first use: `demo` installs softtip alone, `test` adds the test tools
-# and every optional extra (ROS bags, Net F/T, the Rerun viewer: about 1 GB).
+# and every optional extra (numba, ROS bags, Net F/T, the Rerun viewer: about 1.3 GB).
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
@@ -21,7 +21,7 @@ $(VENV)/.demo-installed: pyproject.toml | $(BIN)/python
 	touch $@
 
 $(VENV)/.test-installed: pyproject.toml | $(BIN)/python
-	@echo "installing softtip with pytest, hypothesis and every extra into $(VENV) (about 1 GB, a few minutes on first use)"
+	@echo "installing softtip with pytest, hypothesis and every extra into $(VENV) (about 1.3 GB, a few minutes on first use)"
 	$(BIN)/pip install --quiet -e '.[test]'
 	touch $@ $(VENV)/.demo-installed
 
