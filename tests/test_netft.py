@@ -98,6 +98,10 @@ def test_units_from_the_device_are_converted_to_si():
 
 
 def test_silent_device_times_out(tmp_path):
+    # the command's own start-up (imports), measured now: under load it alone can take seconds
+    t0 = time.monotonic()
+    subprocess.run([SOFTTIP, "stream", "--help"], capture_output=True, check=True, timeout=60)
+    startup = time.monotonic() - t0
     with FakeNetFT(rate_hz=1000, silent=True) as dev:
         t0 = time.monotonic()
         out = subprocess.run(
@@ -112,7 +116,7 @@ def test_silent_device_times_out(tmp_path):
         "no data for 0.5 s" in out.stderr
         and f"RDT UDP port {dev.rdt_port}" in out.stderr
     )
-    assert elapsed < 10
+    assert elapsed - startup < 8  # gave up after about the 0.5 s time-out, not a hang
     assert not (tmp_path / "rec.csv").exists()  # nothing recorded: no file
 
 
