@@ -55,3 +55,4 @@ def test_the_command_prints_a_summary_per_contact_on_standard_error_unless_quiet
     assert "-> standard output" in r.stderr
     q = subprocess.run([softtip_cmd, "estimate", tmp_path / "log.csv", "-q"], capture_output=True, text=True, timeout=120)
     assert q.returncode == 0 and "contact 1:" not in q.stderr and q.stdout == r.stdout
+    assert "bias from the first" in r.stderr and q.stderr == ""  # quiet: not the tare's line either

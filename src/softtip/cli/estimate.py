@@ -108,7 +108,7 @@ from the bag's /tf.
 @option("--rerun", "rerun_spawn", is_flag=True, help="Show the fingertip, force, contact point, normal and edge in a Rerun viewer (needs the rerun-sdk package).")
 @option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save the Rerun 3-D view and time series to FILE.rrd (open with `rerun FILE.rrd`).")
 @option("--payload", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Remove the fingertip's weight ([payload] mass kg, com m; see calibrate-payload) before taring, using INPUT's qw, qx, qy, qz columns (sensor frame in a z-up world frame).")
-@option("-q", "--quiet", is_flag=True, help="No summary on standard error (warnings and errors still are).")
+@option("-q", "--quiet", is_flag=True, help="Nothing but warnings and errors on standard error (no tare line, no summary).")
 @option("--save-bias", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Write the bias used (the tare's) to FILE.toml, for --bias of a later run.")
 @option(
     "--chunk-rows", type=click.IntRange(min=1), metavar="N",
@@ -297,7 +297,7 @@ def _report_run(totals: _RunTotals, *, input_path, output, plot_path, to_bag, re
     """The end of ``softtip estimate``: tare and warnings, ``--save-bias``, the summary."""
     # in the one-shot run's order: a drift alarm (of any piece) after the contact warnings
     totals.warnings.sort(key=lambda w: w.startswith("the sensor bias drifted"))
-    tare_warnings(totals)
+    tare_warnings(totals, quiet)
     if save_bias is not None:
         if any(p is not None and Path(p).resolve() == Path(save_bias).resolve() for p in (input_path, output, plot_path)):
             raise InputError(f"--save-bias {save_bias}: is also an input or output of this run")

@@ -342,9 +342,9 @@ def check_figure_path(path: str) -> None:
         raise InputError(f"{path}: folder {str(p.parent)!r} does not exist")
 
 
-def tare_warnings(est) -> None:
-    """Say what the tare did, and every warning of the estimator (all from the library)."""
-    if est.tare is not None and est.tare.source != "none" and np.all(np.isfinite(est.bias)):
+def tare_warnings(est, quiet: bool = False) -> None:
+    """Say what the tare did (not when ``quiet``), and every warning of the estimator (all from the library)."""
+    if not quiet and est.tare is not None and est.tare.source != "none" and np.all(np.isfinite(est.bias)):
         click.echo(f"softtip: {est.tare.summary()}", err=True)
     for msg in est.warnings:
         click.echo(f"softtip: warning: {msg}", err=True)
