@@ -12,19 +12,19 @@ method | error with softtip's extension``. Sections:
 * **depth** (issue 5 items 3 and 4, deep penetration): a tangential friction load across
   the line (0.25 and 0.5 of the normal force) applied after the grasp, on top of the
   papers' joint disturbance; ``latch`` (the papers') vs ``latch`` +
-  :data:`~softtip.core.depth.MURAKAMI2006_DEPTH`, ``track``, ``joint`` and ``joint`` + depth.
+  :data:`~softtip.core.depth.MURAKAMI2006_DEPTH`, ``track``, ``line-fit`` and ``line-fit`` + depth.
   Skin with the shear layer stiffened to G = 2 MPa (side walls; with the default E/3
   layer the simulator cannot hold a load across a thin plate, see
   :mod:`softtip.sim.scenario`).
 * **slide** (items 4 and 5): after the grasp the object slides 4 mm across the line along
   the skin (kinematic translation, no tangential load), then the papers' joint
   disturbance moves it: ``latch`` without re-latch (the papers') vs re-latch at 3 mm,
-  ``track`` and ``joint``; point and direction errors after both (t > 8 s).
+  ``track`` and ``line-fit``; point and direction errors after both (t > 8 s).
 * **papers** (item 4): the papers' grasps (1 mm plate, 90° edge, Ø 4 mm cylinder), where
-  the latch is right: what ``joint`` changes there.
+  the latch is right: what ``line-fit`` changes there.
 * **start** (item 4): the log starts in the held grasp (from 4.5 s, the disturbances applied
   during the rise, the sensor bias given): no light-force phase to latch in.
-* **noise** (item 4, synthetic grasps at up to 7 kHz): ``joint`` with a sensor noisier
+* **noise** (item 4, synthetic grasps at up to 7 kHz): ``line-fit`` with a sensor noisier
   than its noise model, and whether its reported standard deviations hold with and
   without a low-pass.
 * **evidence** (issue 10, line or area): per object (lines: plates ≤ 3 mm, wedges,
@@ -157,8 +157,8 @@ DEPTH_CONFIGS = (
     per_sample(depth_mode="off"),
     per_sample(depth_mode="law"),
     per_sample(depth_mode="off", contact_point="track"),
-    per_sample(depth_mode="off", contact_point="joint"),
-    per_sample(contact_point="joint", depth_mode="law"),
+    per_sample(depth_mode="off", contact_point="line-fit"),
+    per_sample(contact_point="line-fit", depth_mode="law"),
 )
 
 
@@ -176,9 +176,9 @@ def slide_section(seed: int = 1) -> None:
         per_sample(depth_mode="off"),
         per_sample(depth_mode="off", relatch_distance=3e-3),
         per_sample(depth_mode="off", contact_point="track"),
-        per_sample(depth_mode="off", contact_point="joint"),
-        per_sample(depth_mode="off", contact_point="joint", joint_max_angle_std=math.radians(3.0)),
-        per_sample(depth_mode="off", contact_point="joint", noise=SensorNoise(tuple(std[:3]), tuple(std[3:]))),
+        per_sample(depth_mode="off", contact_point="line-fit"),
+        per_sample(depth_mode="off", contact_point="line-fit", joint_max_angle_std=math.radians(3.0)),
+        per_sample(depth_mode="off", contact_point="line-fit", noise=SensorNoise(tuple(std[:3]), tuple(std[3:]))),
     )
     for name, obj, ang in (("plate 1 mm", Plate(0.001), 0.0), ("plate 1 mm", Plate(0.001), 45.0),
                            ("plate 1 mm", Plate(0.001), -45.0), ("plate 2 mm", Plate(0.002), 0.0)):  # fmt: skip
@@ -202,7 +202,7 @@ def slide_section(seed: int = 1) -> None:
             for cfg in configs:
                 est = estimate(log.t, log.wrench, TIP, cfg)
                 extra = f", {int(est.relatched.sum())} re-latch" if cfg.relatch_distance else ""
-                if cfg.contact_point == "joint":
+                if cfg.contact_point == "line-fit":
                     after = (log.t > 7.0) & (log.t < 8.5)  # windows past the slide
                     extra = (f"; std ≥ {np.degrees(np.nanmin(est.joint_angle_std[after])):.2f}°, "
                              f"residual {np.nanmedian(est.joint_residual[sel]):.2f} σ")  # fmt: skip
@@ -219,10 +219,10 @@ def papers_section(seed: int = 2006) -> None:
             log = simulate_grasp(TIP, obj, paper_scenario(math.radians(ang)), rng=seed)
             sel = log.t > HELD
             cells = []
-            for cfg in (per_sample(depth_mode="off"), per_sample(depth_mode="off", contact_point="joint")):
+            for cfg in (per_sample(depth_mode="off"), per_sample(depth_mode="off", contact_point="line-fit")):
                 est = estimate(log.t, log.wrench, TIP, cfg)
                 m = sel & (est.state > 0)
-                extra = f"; {est.joint_fallback[m].mean():.0%} on the latch" if cfg.contact_point == "joint" else ""
+                extra = f"; {est.joint_fallback[m].mean():.0%} on the latch" if cfg.contact_point == "line-fit" else ""
                 cells.append(_cell(est, log.truth.angle, log.truth.contact_point, sel) + extra)
             _row(f"{name} {ang:+.0f}°", *cells)
 
@@ -240,14 +240,14 @@ def start_section(seed: int = 1) -> None:
             cut = log.t >= 4.5
             t, angle, point = log.t[cut], log.truth.angle[cut], log.truth.contact_point[cut]
             sel = t > HELD
-            for mode in ("latch", "track", "joint"):
+            for mode in ("latch", "track", "line-fit"):
                 est = estimate(t, log.wrench[cut], TIP, per_sample(depth_mode="off", contact_point=mode, bias=log.sensor.bias))
                 cells.append(_cell(est, angle, point, sel))
             _row(f"{name} {ang:+.0f}°", *cells)
 
 
 def noise_section() -> None:
-    """Joint mode against the noise model, on synthetic grasps (no simulator) at kHz rates."""
+    """Line-fit mode against the noise model, on synthetic grasps (no simulator) at kHz rates."""
     from softtip.sim.synthetic import synthetic_grasp
 
     tip = TIP
@@ -257,7 +257,7 @@ def noise_section() -> None:
         a = math.radians(polar_deg)
         return centre + tip.radius * np.array([math.sin(a), 0.0, math.cos(a)])
 
-    print("\n### joint mode and the noise model (item 4): synthetic 45° grasp at 7 kHz, 3 seeds\n")
+    print("\n### line-fit mode and the noise model (item 4): synthetic 45° grasp at 7 kHz, 3 seeds\n")
     print("share of squeeze samples (2.5–4.4 s, no excitation) taken as identified; largest point error after 6.5 s\n")
     print("| contact | sensor noise / model | identified in the squeeze | largest point error |")
     print("| --- | --- | --- | --- |")
@@ -267,14 +267,14 @@ def noise_section() -> None:
             shares, errors = [], []
             for seed in range(3):
                 g = synthetic_grasp(tip, point=cap(polar), rate=7000.0, duration=8.0, noise=real, seed=seed)
-                est = estimate(g.t, g.wrench, tip, per_sample(depth_mode="off", contact_point="joint"))
+                est = estimate(g.t, g.wrench, tip, per_sample(depth_mode="off", contact_point="line-fit"))
                 squeeze = (g.t > 2.5) & (g.t < 4.4) & (est.state > 0)
                 shares.append(1.0 - est.joint_fallback[squeeze].mean())
                 errors.append(np.max(np.linalg.norm(est.point[g.t > 6.5] - g.point, axis=1)) * 1e3)
             _row(f"{polar:.0f}° off the axis", f"{scale:.1f}", f"{min(shares):.0%}–{max(shares):.0%}",
                  f"{min(errors):.3f}–{max(errors):.3f} mm")  # fmt: skip
 
-    print("\n### joint mode under a low-pass (item 4): are the reported standard deviations right?\n")
+    print("\n### line-fit mode under a low-pass (item 4): are the reported standard deviations right?\n")
     print("synthetic 45° grasp 30° off the axis; across-line error of the final point over seeds, against the")
     print("offset std of the window it came from (1 = calibrated, < 1 conservative)\n")
     print("| rate | low-pass | seeds | error spread | median reported std | spread / reported |")
@@ -285,7 +285,7 @@ def noise_section() -> None:
         for seed in range(seeds):
             g = synthetic_grasp(tip, point=cap(30.0), rate=rate, seed=seed)
             kw = {} if cutoff is None else {"lowpass_hz": cutoff, "sample_rate": rate}
-            est = estimate(g.t, g.wrench, tip, per_sample(depth_mode="off", contact_point="joint", **kw))
+            est = estimate(g.t, g.wrench, tip, per_sample(depth_mode="off", contact_point="line-fit", **kw))
             # the held window is the sample where the final point was taken up
             same = np.all(est.point == est.point[-1], axis=1)
             k = len(same) - int(np.argmin(same[::-1])) if not same.all() else 0
@@ -436,7 +436,7 @@ def stream_cost() -> None:
         ("latch, re-latch at 3 mm", EstimatorConfig(depth_mode="off", relatch_distance=3e-3)),
         ("latch + fixed depth law", EstimatorConfig(depth_mode="law")),
         ("track", EstimatorConfig(depth_mode="off", contact_point="track")),
-        ("joint", EstimatorConfig(depth_mode="off", contact_point="joint")),
+        ("line-fit", EstimatorConfig(depth_mode="off", contact_point="line-fit")),
     ):
         times = []
         for _ in range(3):

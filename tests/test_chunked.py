@@ -41,7 +41,7 @@ CONFIGS = {
     "default": EstimatorConfig(),
     "lowpass": EstimatorConfig(lowpass_hz=20.0),
     "no-drift-tracking": EstimatorConfig(track_drift=False, lowpass_hz=15.0),
-    "joint": EstimatorConfig(contact_point="joint"),
+    "joint": EstimatorConfig(contact_point="line-fit"),
 }
 
 

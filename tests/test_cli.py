@@ -159,9 +159,9 @@ def test_failure_leaves_an_existing_output_untouched(tmp_path):
         (["--units", "furlongs"], ["furlongs", "si", "kgf-mm"]),
         (["--tip", "nonexistent_preset"], ["nonexistent_preset", "murakami2006"]),
         (["--tip", "missing.toml"], ["missing.toml", "not found"]),
-        (["--contact-point", "windowed"], ["windowed", "latch", "track", "joint"]),
-        (["--contact-point", "joint", "--joint-max-std", "0", "0.2"], ["--joint-max-std", "0"]),
-        (["--contact-point", "joint", "--joint-window", "-1"], ["--joint-window", "-1"]),
+        (["--contact-point", "windowed"], ["windowed", "latch", "track", "line-fit"]),
+        (["--contact-point", "line-fit", "--joint-max-std", "0", "0.2"], ["--joint-max-std", "0"]),
+        (["--contact-point", "line-fit", "--joint-window", "-1"], ["--joint-window", "-1"]),
     ],
 )
 def test_bad_options_exit_2(tmp_path, args, needles):
@@ -251,12 +251,12 @@ def test_tare_that_cannot_be_right_is_reported(tmp_path):
 
 
 def test_joint_mode_columns(tmp_path):
-    out = run("estimate", "--example", "--contact-point", "joint", "--joint-window", "0.8", "--joint-max-std", "3", "0.3",
+    out = run("estimate", "--example", "--contact-point", "line-fit", "--joint-window", "0.8", "--joint-max-std", "3", "0.3",
               "-o", tmp_path / "j.csv")  # fmt: skip
     assert out.returncode == 0, out.stderr
     rows = read_csv(tmp_path / "j.csv")
     log = load_example()
-    cfg = EstimatorConfig(contact_point="joint", joint_window=0.8, joint_max_angle_std=np.radians(3.0),
+    cfg = EstimatorConfig(contact_point="line-fit", joint_window=0.8, joint_max_angle_std=np.radians(3.0),
                           joint_max_offset_std=0.3e-3)  # fmt: skip
     est = estimate(log.t, log.wrench, "murakami2006", cfg)
     assert [r["joint_fallback"] for r in rows] == [str(int(v)) for v in est.joint_fallback]
@@ -265,8 +265,20 @@ def test_joint_mode_columns(tmp_path):
         np.testing.assert_allclose([float(r[key]) for r in rows], ref, rtol=1e-9, equal_nan=True)
     assert np.isfinite(est.joint_conditioning).any()
     assert "exceeds the noise model" not in out.stderr
-    # a noise model well below the sensor's: joint mode would take the rest for excitation
-    low = run("estimate", "--example", "--contact-point", "joint", "--force-noise", "0.003", "-o", tmp_path / "k.csv")
+    # a noise model well below the sensor's: line-fit mode would take the rest for excitation
+    low = run("estimate", "--example", "--contact-point", "line-fit", "--force-noise", "0.003", "-o", tmp_path / "k.csv")
     assert low.returncode == 0 and "exceeds the noise model (0.003 N)" in low.stderr
     latch = run("estimate", "--example", "--force-noise", "0.003", "-o", tmp_path / "l.csv")
     assert "exceeds the noise model" not in latch.stderr
+
+
+def test_joint_is_the_former_name_of_line_fit(tmp_path):
+    """``--contact-point joint`` (the former name) runs ``line-fit``, to the bit."""
+    a = run("estimate", "--example", "--contact-point", "line-fit", "-o", tmp_path / "a.csv", "-q")
+    b = run("estimate", "--example", "--contact-point", "joint", "-o", tmp_path / "b.csv", "-q")
+    assert a.returncode == 0 and b.returncode == 0, b.stderr
+    assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()
+    assert EstimatorConfig(contact_point="joint") == EstimatorConfig(contact_point="line-fit")
+    assert EstimatorConfig(contact_point="joint").contact_point == "line-fit"
+    helptext = " ".join(run("estimate", "--help").stdout.split())
+    assert "line-fit: latch, then" in helptext and "joint: its former name" in helptext

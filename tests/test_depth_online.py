@@ -145,10 +145,10 @@ def test_default_is_online_for_a_skin_and_off_without_one():
     assert resolve_depth(EstimatorConfig(), TIP).depth == MURAKAMI2006_DEPTH
     assert resolve_depth(EstimatorConfig(), Capsule(0.016, 0.02)).depth_mode == "off"
     assert resolve_depth(EstimatorConfig(contact_point="track"), TIP).depth_mode == "off"
-    assert resolve_depth(EstimatorConfig(contact_point="joint"), TIP).depth_mode == "off"
-    given = EstimatorConfig(contact_point="joint", depth=MURAKAMI2006_DEPTH)
-    assert resolve_depth(given, TIP).depth_mode == "law"  # a law given in joint mode: as before, fixed
-    assert resolve_depth(EstimatorConfig(contact_point="joint", depth_mode="online"), TIP).depth_mode == "online"
+    assert resolve_depth(EstimatorConfig(contact_point="line-fit"), TIP).depth_mode == "off"
+    given = EstimatorConfig(contact_point="line-fit", depth=MURAKAMI2006_DEPTH)
+    assert resolve_depth(given, TIP).depth_mode == "law"  # a law given in line-fit mode: as before, fixed
+    assert resolve_depth(EstimatorConfig(contact_point="line-fit", depth_mode="online"), TIP).depth_mode == "online"
     assert resolve_depth(EstimatorConfig(depth_mode="off"), TIP).depth is None
     assert resolve_depth(EstimatorConfig(depth_mode="law"), TIP).depth_mode == "law"
     with pytest.raises(ValueError, match="skin law"):

@@ -195,9 +195,9 @@ def test_a_moved_contact_point_starts_the_evidence_afresh():
     late = t > 8.5
     latch = estimate(t, w, "murakami2006", EstimatorConfig(tare_duration=0.0))
     assert np.all(latch.state[late] != 2)
-    joint = estimate(t, w, "murakami2006", EstimatorConfig(contact_point="joint", tare_duration=0.0))
+    joint = estimate(t, w, "murakami2006", EstimatorConfig(contact_point="line-fit", tare_duration=0.0))
     assert np.mean(joint.state[late] == 2) > 0.7 and not np.any(joint.state[late] == 3)
-    stream = Estimator("murakami2006", EstimatorConfig(contact_point="joint", tare_duration=0.0)).process(t, w)
+    stream = Estimator("murakami2006", EstimatorConfig(contact_point="line-fit", tare_duration=0.0)).process(t, w)
     assert [s.state for s in stream] == list(joint.state_names)
 
 

@@ -1,4 +1,4 @@
-"""``joint`` mode: the windowed joint estimate of contact point and line direction."""
+"""``line-fit`` mode: the windowed joint estimate of contact point and line direction."""
 
 import math
 
@@ -150,7 +150,7 @@ def test_joint_follows_a_contact_that_slides_across_the_line_after_the_latch():
     tip = murakami2006()
     late = t > 8.5
     errors = {}
-    for mode in ("latch", "joint"):
+    for mode in ("latch", "line-fit"):
         # the papers' per-sample line/point (with the line evidence on, the latch 4 mm off
         # makes h span both axes: area, no direction; test_evidence covers that)
         est = estimate(t, w, tip, EstimatorConfig(contact_point=mode, tare_duration=0.0, line_evidence=False))
@@ -160,17 +160,17 @@ def test_joint_follows_a_contact_that_slides_across_the_line_after_the_latch():
         truth_angle = np.arctan2(d[1], d[0])
         direction = np.median(np.degrees(np.abs(axial_difference(est.angle[line], truth_angle))))
         errors[mode] = point, direction
-        if mode == "joint":
+        if mode == "line-fit":
             assert not est.joint_fallback[late].any()
             assert est.joint_fallback[(t > 2.5) & (t < 4.0)].all()  # a squeeze identifies nothing
     assert errors["latch"][0] > 2.5e-3 and errors["latch"][1] > 20.0
-    assert errors["joint"][0] < 0.15e-3 and errors["joint"][1] < 2.0
+    assert errors["line-fit"][0] < 0.15e-3 and errors["line-fit"][1] < 2.0
 
 
 def test_joint_keeps_the_latch_without_excitation():
     # the tangential spin torque follows the normal force: nothing to identify
     t, w, r, d = slide_across_log(slide=0.0, tau_follows_force=True)
-    est = estimate(t, w, "murakami2006", EstimatorConfig(contact_point="joint", tare_duration=0.0))
+    est = estimate(t, w, "murakami2006", EstimatorConfig(contact_point="line-fit", tare_duration=0.0))
     latch = estimate(t, w, "murakami2006", EstimatorConfig(tare_duration=0.0))
     inside = est.state > 0
     assert est.joint_fallback[inside].all()
@@ -195,7 +195,7 @@ def test_simulated_slide_across_the_line_then_the_papers_disturbance():
     truth = tip.project(np.array([scn.disturbance_pose(float(t), r_c).apply(r_c[None])[0] for t in log.t]))
     late = log.t > 8.0
     errors = {}
-    for mode in ("latch", "joint"):
+    for mode in ("latch", "line-fit"):
         # the papers' per-sample line/point (the line evidence calls the stale latch an area)
         est = estimate(log.t, log.wrench, tip, EstimatorConfig(contact_point=mode, line_evidence=False))
         line = late & (est.state == 2)
@@ -205,7 +205,7 @@ def test_simulated_slide_across_the_line_then_the_papers_disturbance():
         errors[mode] = point, direction
     # measured: latch 3.9 mm and 77°, joint 0.3 mm and 0.8° (10k-element skin)
     assert errors["latch"][0] > 3e-3 and errors["latch"][1] > 45.0
-    assert errors["joint"][0] < 0.6e-3 and errors["joint"][1] < 3.0
+    assert errors["line-fit"][0] < 0.6e-3 and errors["line-fit"][1] < 3.0
 
 
 def test_simulated_papers_grasp_at_45_degrees_keeps_the_latch():
@@ -214,8 +214,8 @@ def test_simulated_papers_grasp_at_45_degrees_keeps_the_latch():
     from softtip.sim import Plate, paper_scenario, simulate_grasp
 
     log = simulate_grasp(murakami2006(), Plate(0.001), paper_scenario(math.radians(45.0)), rng=2006)
-    joint = estimate(log.t, log.wrench, "murakami2006", EstimatorConfig(contact_point="joint"))
-    # the papers' latch: joint mode takes no depth compensation unless asked
+    joint = estimate(log.t, log.wrench, "murakami2006", EstimatorConfig(contact_point="line-fit"))
+    # the papers' latch: line-fit mode takes no depth compensation unless asked
     latch = estimate(log.t, log.wrench, "murakami2006", EstimatorConfig(depth_mode="off"))
     inside = joint.state > 0
     assert joint.joint_fallback[inside].all()
@@ -229,7 +229,7 @@ def test_noise_at_a_high_sample_rate_is_not_excitation():
     from softtip.sim.synthetic import synthetic_grasp
 
     g = synthetic_grasp(angle_deg=45.0, rate=1000.0, seed=1)
-    est = estimate(g.t, g.wrench, "murakami2006", EstimatorConfig(contact_point="joint"))
+    est = estimate(g.t, g.wrench, "murakami2006", EstimatorConfig(contact_point="line-fit"))
     rising = (g.t > 2.5) & (g.t < 4.4)  # squeeze, no tangential spin torque yet
     assert est.joint_fallback[rising & (est.state > 0)].all()
     late = g.t > 7.0
@@ -246,7 +246,7 @@ def test_noise_off_the_axis_with_depth_compensation_is_not_excitation():
     tip = murakami2006()
     point = _cap_point(tip, 45.0)
     g = synthetic_grasp(tip, angle_deg=45.0, point=point, rate=7000.0, duration=8.0, seed=0)
-    est = estimate(g.t, g.wrench, tip, EstimatorConfig(contact_point="joint", depth=MURAKAMI2006_DEPTH))
+    est = estimate(g.t, g.wrench, tip, EstimatorConfig(contact_point="line-fit", depth=MURAKAMI2006_DEPTH))
     rising = (g.t > 2.5) & (g.t < 4.4)
     assert est.joint_fallback[rising & (est.state > 0)].all()
     # measured 0.024 mm (the synthetic grasp's friction acts at the surface: a depth law
@@ -311,7 +311,7 @@ def test_low_pass_noise_in_a_proportional_dip_is_not_excitation():
         w[:, 3:] -= MURAKAMI2006_DEPTH.depth(fn)[:, None] * np.cross(g.normal, w[:, :3])
         rng = np.random.default_rng(seed + 77)
         w += g.bias + rng.normal(size=w.shape) * np.concatenate((NANO17.force_std, NANO17.moment_std))
-        cfg = EstimatorConfig(contact_point="joint", depth=MURAKAMI2006_DEPTH, lowpass_hz=2.0, sample_rate=rate)
+        cfg = EstimatorConfig(contact_point="line-fit", depth=MURAKAMI2006_DEPTH, lowpass_hz=2.0, sample_rate=rate)
         est = estimate(g.t, w, tip, cfg)
         before = np.argmin(np.abs(g.t - 10.95))
         moved = np.linalg.norm(est.point[g.t > 11.0] - est.point[before], axis=1)
@@ -321,6 +321,6 @@ def test_low_pass_noise_in_a_proportional_dip_is_not_excitation():
 def test_stream_survives_an_empty_window():
     # t − joint_window rounds to t at Unix-epoch times: the window is empty, in both paths
     t, w, _, _ = slide_across_log()
-    cfg = EstimatorConfig(contact_point="joint", joint_window=1e-7, tare_duration=0.0)
+    cfg = EstimatorConfig(contact_point="line-fit", joint_window=1e-7, tare_duration=0.0)
     est = assert_stream_equals_batch(t + 1.7e9, w, "murakami2006", cfg)
     assert est.joint_fallback[est.state > 0].all()

@@ -405,7 +405,7 @@ def test_contact_on_the_nail_and_beside_it(nail):
 
 @pytest.mark.parametrize(
     ("config", "where"),
-    [("latch", "tip"), ("latch", "nail"), ("latch", "side"), ("track", "nail"), ("track", "side"), ("joint", "nail")],
+    [("latch", "tip"), ("latch", "nail"), ("latch", "side"), ("track", "nail"), ("track", "side"), ("line-fit", "nail")],
 )
 def test_stream_agrees_with_batch_on_a_mesh(nail, config, where):
     point = {"tip": None, "nail": [-0.0175, 0.003, 0.016], "side": [0.012, 0.011, 0.010]}[where]

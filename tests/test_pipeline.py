@@ -72,7 +72,7 @@ CASES = {
         depth_window=0.3, depth_prior_std=0.5, depth_drift=0.5, relatch_distance=3e-3, lowpass_hz=8.0, sample_rate=50.0
     ),
     "online-given-law": EstimatorConfig(depth=MURAKAMI2006_DEPTH, depth_mode="online", depth_window=2.0),
-    "joint-online-relatch": EstimatorConfig(contact_point="joint", depth_mode="online", relatch_distance=3e-3),
+    "joint-online-relatch": EstimatorConfig(contact_point="line-fit", depth_mode="online", relatch_distance=3e-3),
     "latch-relatch": EstimatorConfig(relatch_distance=3e-3),
     "latch-relatch-tight": EstimatorConfig(relatch_distance=0.3e-3),
     "latch-depth": EstimatorConfig(depth=MURAKAMI2006_DEPTH),
@@ -84,12 +84,12 @@ CASES = {
     "track": EstimatorConfig(contact_point="track"),
     "given-bias": EstimatorConfig(bias=(0.12, -0.05, 0.3, 2e-3, -1e-3, 5e-4), lowpass_hz=5.0, sample_rate=50.0),
     "no-tare": EstimatorConfig(tare_duration=0.0),
-    "joint": EstimatorConfig(contact_point="joint"),
+    "joint": EstimatorConfig(contact_point="line-fit"),
     "joint-short-window-loose": EstimatorConfig(
-        contact_point="joint", joint_window=0.2, joint_max_angle_std=0.5, joint_max_offset_std=1e-3
+        contact_point="line-fit", joint_window=0.2, joint_max_angle_std=0.5, joint_max_offset_std=1e-3
     ),
     "joint-depth-relatch-lowpass": EstimatorConfig(
-        contact_point="joint", depth=MURAKAMI2006_DEPTH, relatch_distance=3e-3, lowpass_hz=8.0, sample_rate=50.0
+        contact_point="line-fit", depth=MURAKAMI2006_DEPTH, relatch_distance=3e-3, lowpass_hz=8.0, sample_rate=50.0
     ),
     # tare, drift and hysteresis (issue 13 items 9, 10, 14)
     "mean-tare": EstimatorConfig(tare_method="mean"),
@@ -102,7 +102,7 @@ CASES = {
         evidence_window=0.3, area_ratio=(0.05, 0.02), excitation_ratio=0.05, excitation_min=1e-4
     ),
     "evidence-joint-depth-relatch": EstimatorConfig(
-        contact_point="joint", depth=MURAKAMI2006_DEPTH, relatch_distance=3e-3, evidence_window=1.0
+        contact_point="line-fit", depth=MURAKAMI2006_DEPTH, relatch_distance=3e-3, evidence_window=1.0
     ),
 }
 

@@ -57,7 +57,7 @@ the touched edge / strip, an axis), angle_deg (its angle in the tangent frame, d
 angle_std_deg, latched, latch_fallback, relatched (a new latch starts here), depth
 (m, the depth compensation used; 0 without it), joint_conditioning, joint_angle_std_deg,
 joint_offset_std (m), joint_residual and joint_fallback (the sliding window of
---contact-point joint: reciprocal condition number, standard deviations of its line angle
+--contact-point line-fit: reciprocal condition number, standard deviations of its line angle
 and offset, RMS fit residual in noise standard deviations, and whether the latched point
 is used because no window has been accepted yet), depth_std (m, the depth's standard
 deviation), depth_from_data (the contact's own data, not the skin law, determined it),

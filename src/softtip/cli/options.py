@@ -51,13 +51,14 @@ _ESTIMATOR_OPTIONS = [
     ),
     option(
         "--contact-point",
-        type=click.Choice(["latch", "track", "joint"]),
+        type=click.Choice(["latch", "track", "line-fit", "joint"]),
         default="latch",
         show_default=True,
         help="latch: measure the contact point in the light-force window at the start of the grasp and hold it (the papers'); "
         "track: soft-finger solution every sample (h is then zero by construction: no directions); "
-        "joint: latch, then move the point across the line to where a sliding window (--joint-window) fits the "
-        "line-contact model, wherever the window determines it (flagged joint_fallback until one does).",
+        "line-fit: latch, then move the point across the line to where a sliding window (--joint-window) fits the "
+        "line-contact model, wherever the window determines it (flagged joint_fallback until one does); "
+        "joint: its former name.",
     ),
     option(
         "--joint-window",
@@ -65,7 +66,7 @@ _ESTIMATOR_OPTIONS = [
         default=1.0,
         show_default=True,
         metavar="S",
-        help="Sliding window of --contact-point joint, s.",
+        help="Sliding window of --contact-point line-fit, s.",
     ),
     option(
         "--joint-max-std",
@@ -73,7 +74,7 @@ _ESTIMATOR_OPTIONS = [
         default=(2.0, "0.2mm"),
         show_default=True,
         metavar="DEG MM",
-        help="--contact-point joint accepts a window when the standard deviations of its line angle and of its "
+        help="--contact-point line-fit accepts a window when the standard deviations of its line angle and of its "
         "offset across the line are at most these (degrees, a length: mm unless a unit is given).",
     ),
     option(

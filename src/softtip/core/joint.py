@@ -1,4 +1,4 @@
-"""Contact point and line direction estimated jointly over a sliding window (``joint`` mode).
+"""Contact point and line direction estimated jointly over a sliding window (``line-fit`` mode).
 
 Line-contact model (paper III-A): over a short window the contact point ``r`` and the line
 direction ``d`` are fixed and each sample transmits a spin about ``n`` and a moment about

@@ -53,7 +53,7 @@ softtip's extensions (issue 5), each an :class:`EstimatorConfig` field:
   a new latch (a new first rise, from that sample); ``relatched`` flags that sample, and
   the first sample of every contact that follows a latched one (contact lost and regained).
 - ``depth``, ``depth_mode``: see step 5 (:mod:`softtip.core.depth`, :mod:`.depth`).
-- ``contact_point="joint"``: the latch of ``latch`` mode, then the contact point moved
+- ``contact_point="line-fit"``: the latch of ``latch`` mode, then the contact point moved
   across the line to where a window of the last ``joint_window`` seconds fits the line
   contact model (:mod:`softtip.core.joint`). A window is accepted when its standard deviations
   of line angle and offset are below ``joint_max_angle_std`` and ``joint_max_offset_std``

@@ -157,7 +157,7 @@ def estimate(
             point, latched, fallback, relatched = latch_points(t, fn, contact, sc, tip, config, had_latch)
             if carry is not None:
                 carry.had_latch = had_latch or bool(latched.any())
-            if config.contact_point == "joint":
+            if config.contact_point == "line-fit":
                 point, joint_stats, _, moved = joint_points(
                     t, c, contact, sc, point, relatched, tip, config, noise, noise_correlation(sos)
                 )

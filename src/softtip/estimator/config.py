@@ -18,7 +18,9 @@ from softtip.core.units import KGF
 __all__ = ["CONTACT_POINT_MODES", "DEPTH_MODES", "TARE_METHODS", "EstimatorConfig"]
 
 #: Values of :attr:`EstimatorConfig.contact_point`.
-CONTACT_POINT_MODES = ("latch", "track", "joint")
+CONTACT_POINT_MODES = ("latch", "track", "line-fit")
+#: Former names of :attr:`EstimatorConfig.contact_point` values, still accepted.
+CONTACT_POINT_ALIASES = {"joint": "line-fit"}
 #: Values of :attr:`EstimatorConfig.tare_method`.
 TARE_METHODS = ("robust", "median", "mean")
 #: Values of :attr:`EstimatorConfig.depth_mode`.
@@ -31,8 +33,10 @@ class EstimatorConfig:
 
     Parameters
     ----------
-    contact_point : {"latch", "track", "joint"}
-        How the contact point is obtained (module docstring).
+    contact_point : {"latch", "track", "line-fit"}
+        How the contact point is obtained (module docstring). ``"joint"`` is accepted as the
+        former name of ``"line-fit"`` (the joint estimate of the line's angle and offset over a
+        window; its settings and output columns keep the ``joint_`` prefix).
     contact_threshold : float
         N; in contact while ``|f|`` (tared, filtered) is at least this.
     latch_force_range : (float, float)
@@ -74,7 +78,7 @@ class EstimatorConfig:
         (:mod:`softtip.estimator.depth`); ``law``: the law's depth at the normal force
         (fixed); ``off``: the papers' undeformed contact point. ``auto`` (default):
         ``online`` in ``latch`` mode when there is a law (``depth`` or the fingertip's),
-        else ``off``; in ``track`` and ``joint`` mode ``law`` when ``depth`` is given, else
+        else ``off``; in ``track`` and ``line-fit`` mode ``law`` when ``depth`` is given, else
         ``off``.
     depth_window : float
         s; sliding window of the online depth (default 1 s).
@@ -85,10 +89,10 @@ class EstimatorConfig:
         1/√s; how fast the held factor of a contact ages (default 0.02/√s): the factor held
         is the window with the smallest ``variance + depth_drift² · age``.
     joint_window : float
-        s; length of the sliding window of ``joint`` mode (default 1 s: 50 samples at the
+        s; length of the sliding window of ``line-fit`` mode (default 1 s: 50 samples at the
         papers' 50 Hz).
     joint_max_angle_std, joint_max_offset_std : float
-        ``joint`` mode accepts a window when the standard deviations of its line angle (rad,
+        ``line-fit`` mode accepts a window when the standard deviations of its line angle (rad,
         default 2°) and of its offset across the line (m, default 0.2 mm) are at most these.
     joint_max_residual : float
         ... and the RMS residual of its fit is at most this many noise standard deviations.
@@ -151,7 +155,7 @@ class EstimatorConfig:
         said about another point does not hold for the new one.
     """
 
-    contact_point: Literal["latch", "track", "joint"] = "latch"
+    contact_point: Literal["latch", "track", "line-fit", "joint"] = "latch"
     contact_threshold: float = 0.05
     latch_force_range: tuple[float, float] = (0.2 * KGF, 0.5 * KGF)
     stall_time: float = 0.1
@@ -211,6 +215,7 @@ class EstimatorConfig:
             if not (math.isfinite(v) and v > 0.0):
                 raise ValueError(f"{name} must be a positive number, got {getattr(self, name)!r}")
             object.__setattr__(self, name, v)
+        object.__setattr__(self, "contact_point", CONTACT_POINT_ALIASES.get(self.contact_point, self.contact_point))
         if self.contact_point not in CONTACT_POINT_MODES:
             raise ValueError(f"contact_point must be one of {', '.join(CONTACT_POINT_MODES)}, got {self.contact_point!r}")
         if self.relatch_distance is not None:
@@ -233,8 +238,8 @@ class EstimatorConfig:
             object.__setattr__(self, name, v)
         if self.joint_drift > 1.0:
             raise ValueError(f"joint_drift must be at most 1 m/√s, got {self.joint_drift!r}")
-        if self.contact_point == "joint" and not any(self.noise.force_std + self.noise.moment_std):
-            raise ValueError("contact_point='joint' needs a sensor noise model (noise is all zero)")
+        if self.contact_point == "line-fit" and not any(self.noise.force_std + self.noise.moment_std):
+            raise ValueError("contact_point='line-fit' needs a sensor noise model (noise is all zero)")
         if int(self.joint_iterations) < 1:
             raise ValueError(f"joint_iterations must be at least 1, got {self.joint_iterations!r}")
         object.__setattr__(self, "joint_iterations", int(self.joint_iterations))

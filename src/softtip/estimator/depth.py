@@ -10,7 +10,7 @@ data under the line-contact model (the maths is in :mod:`softtip.core.depth`).
 Window sums of the per-sample products (:func:`softtip.core.depth.depth_products`) are kept
 over the last ``depth_window`` seconds of a *segment*: the run of samples in contact with
 one and the same contact point (a new segment at contact onset and whenever the point
-changes: during the latch's first rise, at a re-latch, at a move of ``joint`` mode). The
+changes: during the latch's first rise, at a re-latch, at a move of ``line-fit`` mode). The
 window is solved on a grid of ``depth_window / 10`` from the segment's start (and at its
 first sample); the factor held is the solved window of the segment with the smallest
 variance aged by ``depth_drift``, combined with the prior ``1 ± depth_prior_std`` (at each
@@ -68,7 +68,7 @@ def tip_depth_law(tip: Fingertip) -> DepthLaw | None:
 def resolve_depth(config: EstimatorConfig, tip: Fingertip) -> EstimatorConfig:
     """``config`` with ``depth_mode`` decided (``online``, ``law`` or ``off``) and ``depth``
     the law it uses (``None`` when off). ``auto`` is ``online`` with a law in ``latch``
-    mode; in ``track`` and ``joint`` mode it is ``law`` when ``config.depth`` is given,
+    mode; in ``track`` and ``line-fit`` mode it is ``law`` when ``config.depth`` is given,
     else ``off``.
 
     Raises
@@ -79,7 +79,7 @@ def resolve_depth(config: EstimatorConfig, tip: Fingertip) -> EstimatorConfig:
     """
     mode = config.depth_mode
     if mode == "auto" and config.contact_point != "latch":
-        # track mode has no tangential spin torque; joint mode moves the point under a
+        # track mode has no tangential spin torque; line-fit mode moves the point under a
         # tangential load (a slide), where the depth prior alone turned a measured slide
         # case by 26°: both keep the papers' point unless asked (a law given is used as is)
         mode = "off" if config.depth is None else "law"

@@ -3,7 +3,7 @@ stream side by side (the window maths is in :mod:`softtip.core.evidence`).
 
 Over a sliding window of ``evidence_window`` seconds (restarted at contact onset, at every
 re-latch and when the contact point has moved farther than ``evidence_reset_distance`` from
-where the window started, e.g. a ``joint`` point found) of the located samples, with ``major ≥ minor`` the eigenvalues of ``h``'s
+where the window started, e.g. a ``line-fit`` point found) of the located samples, with ``major ≥ minor`` the eigenvalues of ``h``'s
 covariance (noise removed) and ``ratio = minor / major``:
 
 * the window **spans both axes** when ``minor`` is beyond the noise and

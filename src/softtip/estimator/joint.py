@@ -1,4 +1,4 @@
-"""The ``joint`` contact-point stage, batch and stream side by side.
+"""The ``line-fit`` contact-point stage, batch and stream side by side.
 
 The latch, then the contact point moved across the line to where a window of the last
 ``joint_window`` seconds fits the line-contact model (the maths is in
@@ -60,7 +60,7 @@ def joint_accept(cond, angle_std, offset_std, residual, config: EstimatorConfig)
 
 
 def joint_points(t, c, contact, sc, base, relatched, tip: Fingertip, config: EstimatorConfig, noise: SensorNoise, corr):
-    """``joint`` mode over a whole log, vectorised within each contact.
+    """``line-fit`` mode over a whole log, vectorised within each contact.
 
     ``c`` are the six wrench components, ``sc`` the soft-finger solutions, ``base`` the
     latched points (N, 3) (start of each solve; their coordinate along the line is kept).
@@ -119,7 +119,7 @@ def joint_points(t, c, contact, sc, base, relatched, tip: Fingertip, config: Est
 
 
 class JointTracker:
-    """The ``joint`` stage of :func:`joint_points`, one sample at a time.
+    """The ``line-fit`` stage of :func:`joint_points`, one sample at a time.
 
     Running sums of the joint products since contact onset and, for each valid sample of the
     last ``joint_window`` seconds, its time and the sums before it: window sums are

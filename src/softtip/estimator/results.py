@@ -65,11 +65,11 @@ class Estimates:
     depth_from_data : (N,) online depth: the contact's own data, not the skin law (the
         prior), determined it (the data's information on it exceeds the prior's)
     joint_conditioning, joint_angle_std, joint_offset_std, joint_residual : (N,) the
-        ``joint`` window ending at this sample (:mod:`softtip.core.joint`): reciprocal condition
+        ``line-fit`` window ending at this sample (:mod:`softtip.core.joint`): reciprocal condition
         number in [0, 1], standard deviations of its line angle (rad) and of its offset
         across the line (m), and the fit's RMS residual in units of the noise; NaN where no
         window was solved (other modes, ``none``, or no soft-finger solution)
-    joint_fallback : (N,) ``joint`` mode: no window of this contact accepted yet, so the
+    joint_fallback : (N,) ``line-fit`` mode: no window of this contact accepted yet, so the
         point is the latched one
     repeated_stamps : int
         samples whose time equals the previous sample's (accepted; time must not go back)

@@ -90,7 +90,7 @@ class Estimator:
         self._latch = LatchTracker(self.tip, cfg)
         self._evidence = EvidenceTracker(cfg, self._noise, noise_correlation(self._sos))
         self._joint = None
-        if cfg.contact_point == "joint":
+        if cfg.contact_point == "line-fit":
             self._joint = JointTracker(self.tip, cfg, self._noise, noise_correlation(self._sos))
         self._contacts = ContactTracker(cfg, self._noise)
         self._sq = NoiseSquares(self._noise)

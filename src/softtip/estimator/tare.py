@@ -15,7 +15,7 @@ Unless a bias is given, the samples in the first ``tare_duration`` seconds make 
   moves a mean bias by 2 N);
 - **touched while taring**: the standard deviation of the other samples above
   :data:`TOUCHED_RATIO` times the noise model, in force or in moment;
-- in ``joint`` mode, force noise above the noise model by more than the margin joint mode
+- in ``line-fit`` mode, force noise above the noise model by more than the margin line-fit mode
   allows for (it would take the excess for excitation).
 
 :meth:`softtip.Estimator.tare` re-tares on demand from the next samples;
@@ -174,7 +174,7 @@ def tare_from_samples(samples: NDArray, config: EstimatorConfig, duration: float
     fstd = float(np.nanmax(std[:3])) if k > 1 else math.nan
     fmodel = float(np.max(model[:3]))
     if (
-        config.contact_point == "joint"
+        config.contact_point == "line-fit"
         and k > 2
         and fmodel > 0
         and fstd <= TOUCHED_RATIO * fmodel
@@ -183,7 +183,7 @@ def tare_from_samples(samples: NDArray, config: EstimatorConfig, duration: float
         # two standard errors of the tare's own estimate of the noise on top of the margin
         warn.append(
             f"the force noise while taring ({fstd:.3g} N standard deviation) exceeds the noise model "
-            f"({fmodel:g} N); contact_point='joint' would take the excess noise for excitation at high sample "
+            f"({fmodel:g} N); contact_point='line-fit' would take the excess noise for excitation at high sample "
             "rates: give this sensor's noise model (--force-noise, --moment-noise)"
         )
     return TareReport(
