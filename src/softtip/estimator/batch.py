@@ -180,11 +180,8 @@ def estimate(
     # line or area (evidence window): segments start at contact onset and at every re-latch
     begin = contact & ~np.concatenate(([False], contact[:-1])) | (relatched & contact)
     h = np.stack((ms.hx, ms.hy, ms.hz), axis=-1)
-    ev_state, evidence, direction, angle, angle_std, h_ratio, f_ratio = evidence_states(
-        t, located, begin, point, normal, h, x[:, :3], ms, noise,
-        noise_correlation(sos), config,
-    )
-    state = np.where(located, ev_state, NONE).astype(np.int8)
+    ev = evidence_states(t, located, begin, point, normal, h, x[:, :3], ms, noise, noise_correlation(sos), config)
+    state = np.where(located, ev.state, NONE).astype(np.int8)
     is_line = state == LINE
     started_in_contact = tare_report.source == "tare" and first_contact_pulls(t, pulling, ct.contact_id)
     warn = [] if later else list(tare_report.warnings)
@@ -212,9 +209,9 @@ def estimate(
         h=keep(h, located),
         h_norm=keep(ms.h_norm, located),
         h_std=keep(ms.h_std, located),
-        direction=keep(direction, is_line),
-        angle=keep(angle, is_line),
-        angle_std=keep(angle_std, is_line),
+        direction=keep(ev.direction, is_line),
+        angle=keep(ev.angle, is_line),
+        angle_std=keep(ev.angle_std, is_line),
         latched=latched & located,
         latch_fallback=fallback & located,
         pulling=pulling,
@@ -228,9 +225,9 @@ def estimate(
         joint_offset_std=keep(joint_stats[2], located),
         joint_residual=keep(joint_stats[3], located),
         joint_fallback=joint_fb & located,
-        line_evidence=np.where(is_line, evidence, 0).astype(np.int8),
-        h_ratio=keep(h_ratio, located),
-        excitation_ratio=keep(f_ratio, located),
+        line_evidence=np.where(is_line, ev.evidence, 0).astype(np.int8),
+        h_ratio=keep(ev.h_ratio, located),
+        excitation_ratio=keep(ev.excitation_ratio, located),
         repeated_stamps=int(np.count_nonzero(np.diff(t) == 0)),
         contact_id=ct.contact_id,
         drift=keep(ct.drift, ~taring),

@@ -28,8 +28,10 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections import deque
+from typing import NamedTuple
 
 import numpy as np
+from numpy.typing import NDArray
 
 from softtip.core._blocks import blockwise
 from softtip.core._jit import jit_enabled
@@ -50,7 +52,15 @@ from softtip.core.noise import SensorNoise
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.sequential import contact_window_sums_kernel, running_best_kernel
 
-__all__ = ["tip_depth_law", "resolve_depth", "depth_points", "DepthTracker", "SOLVES_PER_WINDOW"]
+__all__ = ["tip_depth_law", "resolve_depth", "depth_points", "DepthPoints", "DepthTracker", "SOLVES_PER_WINDOW"]
+
+
+class DepthPoints(NamedTuple):
+    """What :func:`depth_points` gives for a whole log (N samples)."""
+
+    depth: NDArray  #: (N,) m, friction acts at ``r − depth · n`` (0 with the papers' method or no point)
+    depth_std: NDArray  #: (N,) m, its standard deviation (0 where the depth is not estimated)
+    from_data: NDArray  #: (N,) bool, the data outweighed the skin law's prior
 
 #: Solves per window length (the grid of the window solves).
 SOLVES_PER_WINDOW = 10
@@ -103,23 +113,22 @@ def _combine(kappa_h, var_h, prior_std, xp):
     return xp.maximum(kappa, 0.0), xp.sqrt(xp.div(1.0, wh + w0)), wh > w0
 
 
-def depth_points(t, c, contact, point, normal, config: EstimatorConfig, noise: SensorNoise, corr):
+def depth_points(t, c, contact, point, normal, config: EstimatorConfig, noise: SensorNoise, corr) -> DepthPoints:
     """The depth of every sample (resolved ``config``, see :func:`resolve_depth`).
 
     ``c`` are the six wrench components, ``point`` and ``normal`` (N, 3) the contact points
-    of the contact-point stage (NaN where none). Returns ``(depth (N,), depth_std (N,),
-    from_data (N,))``; the depth is 0 with the papers' method and where there is no point.
+    of the contact-point stage (NaN where none). Returns :class:`DepthPoints`; the depth is 0 with the papers' method and where there is no point.
     """
     n = len(t)
     law = config.depth
     zero = np.zeros(n)
     if law is None:
-        return zero, zero.copy(), np.zeros(n, dtype=bool)
+        return DepthPoints(zero, zero.copy(), np.zeros(n, dtype=bool))
     has = contact & np.all(np.isfinite(point), axis=-1)
     if config.depth_mode == "law":
         fx, fy, fz = c[0], c[1], c[2]
         d0 = depth_kernel(-(fx * normal[:, 0] + fy * normal[:, 1] + fz * normal[:, 2]), law, NP)
-        return np.where(has, d0, 0.0), zero.copy(), np.zeros(n, dtype=bool)
+        return DepthPoints(np.where(has, d0, 0.0), zero.copy(), np.zeros(n, dtype=bool))
 
     def per_sample(fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, ok):
         d0 = np.where(ok, depth_kernel(-(fx * nx + fy * ny + fz * nz), law, NP), 0.0)
@@ -182,7 +191,7 @@ def depth_points(t, c, contact, point, normal, config: EstimatorConfig, noise: S
     kappa[has], rel[has], from_data[has] = kc[pos], rc[pos], fc[pos]
     delta = kappa * d0
     delta = np.where(delta > law.max_depth, law.max_depth, delta)
-    return np.where(has, delta, 0.0), np.where(has, rel * d0, 0.0), from_data & has
+    return DepthPoints(np.where(has, delta, 0.0), np.where(has, rel * d0, 0.0), from_data & has)
 
 
 def _window_sums(onset, has, prods, k, first):

@@ -41,6 +41,7 @@ from math import cos, sin, sqrt
 from typing import NamedTuple
 
 import numpy as np
+from numpy.typing import NDArray
 
 import softtip.core._blocks
 from softtip.core._blocks import blockwise
@@ -62,7 +63,19 @@ from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.floats import NoiseSquares, PointGeometry, sample_direction
 from softtip.estimator.sequential import point_moves_kernel, window_sums_kernel
 
-__all__ = ["evidence_states", "EvidenceTracker"]
+__all__ = ["evidence_states", "EvidenceStates", "EvidenceTracker"]
+
+
+class EvidenceStates(NamedTuple):
+    """What :func:`evidence_states` gives for a whole log (N samples)."""
+
+    state: NDArray  #: (N,) int8, POINT, LINE or AREA (where located)
+    evidence: NDArray  #: (N,) int8, 1 unconfirmed, 2 confirmed (lines)
+    direction: NDArray  #: (N, 3) unit line direction, the window's under confirmed excitation
+    angle: NDArray  #: (N,) rad, the direction's angle in the tangent frame
+    angle_std: NDArray  #: (N,) rad, its standard deviation
+    h_ratio: NDArray  #: (N,) minor / major eigenvalue of h's covariance in the window
+    excitation_ratio: NDArray  #: (N,) the same for the tangential force (how far it turned)
 
 #: A significant ``|h|`` stays significant down to this share of the threshold (hysteresis).
 SIG_LEAVE = 2.0 / 3.0
@@ -224,7 +237,8 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
     if not config.line_evidence:
         d = np.stack((ms.dx, ms.dy, ms.dz), axis=-1)
         nan = np.full(n, np.nan)
-        return np.where(sig, 2, 1).astype(np.int8), np.where(sig, 1, 0).astype(np.int8), d, ms.angle, ms.angle_std, nan, nan
+        return EvidenceStates(np.where(sig, 2, 1).astype(np.int8), np.where(sig, 1, 0).astype(np.int8), d, ms.angle,
+                              ms.angle_std, nan, nan)  # fmt: skip
 
     def per_sample(*a):
         terms, nz, _ = _frame_terms(*a, noise, NP)
@@ -302,7 +316,7 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
     e1x, e1y, e1z, e2x, e2y, e2z = tangent_frame_kernel(*normal[u].T, NP)
     ca, sa = np.cos(angle[u]), np.sin(angle[u])
     d[u] = np.stack((ca * e1x + sa * e2x, ca * e1y + sa * e2y, ca * e1z + sa * e2z), axis=-1)
-    return state, evidence, d, angle, angle_std, h_ratio, f_ratio
+    return EvidenceStates(state, evidence, d, angle, angle_std, h_ratio, f_ratio)
 
 
 class EvidenceTracker:

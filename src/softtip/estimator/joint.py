@@ -16,8 +16,10 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from typing import NamedTuple
 
 import numpy as np
+from numpy.typing import NDArray
 
 from softtip.core._xp import NP, PY
 from softtip.core.contact import SoftFinger, contact_kernel
@@ -28,9 +30,18 @@ from softtip.core.noise import SensorNoise
 from softtip.core.spin import spin_torque_kernel
 from softtip.estimator.config import EstimatorConfig
 
-__all__ = ["joint_points", "JointTracker", "joint_accept", "joint_moment"]
+__all__ = ["joint_points", "LineFitPoints", "JointTracker", "joint_accept", "joint_moment"]
 
 _NAN4 = (math.nan,) * 4
+
+
+class LineFitPoints(NamedTuple):
+    """What :func:`joint_points` gives for a whole log (N samples)."""
+
+    point: NDArray  #: (N, 3) m, the contact point: the accepted window's, else the latch's
+    stats: NDArray  #: (4, N) the window ending at each sample: conditioning, angle std (rad), offset std (m), residual (σ)
+    use: NDArray  #: (N,) bool, the window ending here became the one held
+    moved: NDArray  #: (N,) bool, the point is a window's, not the latch's
 
 
 def joint_moment(fx, fy, fz, mx, my, mz, nx, ny, nz, ax, ay, az, law, xp):
@@ -59,7 +70,7 @@ def joint_accept(cond, angle_std, offset_std, residual, config: EstimatorConfig)
 
 
 
-def joint_points(t, c, contact, sc, base, relatched, tip: Fingertip, config: EstimatorConfig, noise: SensorNoise, corr):
+def joint_points(t, c, contact, sc, base, relatched, tip: Fingertip, config: EstimatorConfig, noise: SensorNoise, corr) -> LineFitPoints:
     """``line-fit`` mode over a whole log, vectorised within each contact.
 
     ``c`` are the six wrench components, ``sc`` the soft-finger solutions, ``base`` the
@@ -115,7 +126,7 @@ def joint_points(t, c, contact, sc, base, relatched, tip: Fingertip, config: Est
     moved = contact & (held_at >= 0)
     point = base.copy()
     point[moved] = jp[held_at[moved]]
-    return point, stats, use, moved
+    return LineFitPoints(point, stats, use, moved)
 
 
 class JointTracker:

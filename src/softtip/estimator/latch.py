@@ -16,7 +16,10 @@ soft-finger solution lies farther than this from the latched point starts a new 
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
+from numpy.typing import NDArray
 
 from softtip.core._jit import jit_enabled
 from softtip.core._xp import NP, PY
@@ -25,7 +28,16 @@ from softtip.core.fingertip import Fingertip
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.sequential import latch_scan_kernel
 
-__all__ = ["latch_points", "LatchTracker"]
+__all__ = ["latch_points", "LatchedPoints", "LatchTracker"]
+
+
+class LatchedPoints(NamedTuple):
+    """What :func:`latch_points` gives for a whole log (N samples)."""
+
+    point: NDArray  #: (N, 3) m, the contact point held (NaN where there is none)
+    latched: NDArray  #: (N,) bool, the samples the latch averaged
+    fallback: NDArray  #: (N,) bool, latched on the first samples: no light-force phase
+    relatched: NDArray  #: (N,) bool, a new latch starts here (re-latch, or a contact after a latched one)
 
 
 def _latch_segment(t, fn, valid, r_sc, tip: Fingertip, config: EstimatorConfig):
@@ -71,10 +83,10 @@ def _latch_segment(t, fn, valid, r_sc, tip: Fingertip, config: EstimatorConfig):
     return pe, lat, fbk, idx > fixed, latch
 
 
-def latch_points(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig, had_latch: bool = False):
+def latch_points(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig, had_latch: bool = False) -> LatchedPoints:
     """Contact point per sample in ``latch`` mode, with re-latching.
 
-    Returns ``(point (N, 3), latched, fallback, relatched)``. Long logs: one compiled pass
+    Returns :class:`LatchedPoints`. Long logs: one compiled pass
     over all contacts (:func:`_latch_compiled`); short ones: one iteration per contact and
     per re-latch, vectorised within each. ``had_latch``: a contact before these samples (an
     earlier piece of the log) had a latch.
@@ -111,7 +123,7 @@ def latch_points(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig, ha
             a += stop
             relatched[a] = True
         had_latch = had_latch or bool(latched[s:e].any())
-    return point, latched, fallback, relatched
+    return LatchedPoints(point, latched, fallback, relatched)
 
 
 
@@ -137,7 +149,7 @@ def _latch_compiled(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig,
     begin = onset.copy()
     idx = np.arange(n)
     if not onset.any():
-        return np.full((n, 3), np.nan), np.zeros(n, dtype=bool), np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)
+        return LatchedPoints(np.full((n, 3), np.nan), np.zeros(n, dtype=bool), np.zeros(n, dtype=bool), np.zeros(n, dtype=bool))
     while True:
         n_win = np.zeros(n, dtype=np.int64)
         n_fb = np.zeros(n, dtype=np.int64)
@@ -188,7 +200,7 @@ def _latch_compiled(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig,
     # contact regained after a latched one
     had = (np.concatenate(([0], np.cumsum(latched)))[np.flatnonzero(onset)] > 0) | had_latch
     relatched[np.flatnonzero(onset)] = had
-    return point, latched, fallback, relatched
+    return LatchedPoints(point, latched, fallback, relatched)
 
 
 class LatchTracker:

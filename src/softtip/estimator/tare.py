@@ -27,6 +27,7 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -42,6 +43,7 @@ __all__ = [
     "TareReport",
     "tare_from_samples",
     "tare_log",
+    "LogTare",
     "StreamTare",
     "load_bias",
     "bias_to_toml",
@@ -191,17 +193,17 @@ def tare_from_samples(samples: NDArray, config: EstimatorConfig, duration: float
     )
 
 
-def tare_log(t: NDArray, w: NDArray, config: EstimatorConfig) -> tuple[NDArray, NDArray, TareReport]:
+def tare_log(t: NDArray, w: NDArray, config: EstimatorConfig) -> LogTare:
     """The bias of a whole log ``w`` (N, 6) sampled at ``t`` (N,).
 
-    Returns ``(bias (6,), taring (N,) bool, report)``; the bias is NaN when the log never
+    Returns :class:`LogTare`; the bias is NaN when the log never
     leaves the tare period (as in the stream).
     """
     n = len(t)
     taring = np.zeros(n, dtype=bool)
     if config.bias is not None or config.tare_duration <= 0 or not n:
         rep = _given(config)
-        return rep.bias, taring, rep
+        return LogTare(rep.bias, taring, rep)
     n_tare = int(np.count_nonzero(t - t[0] < config.tare_duration))
     taring[:n_tare] = True
     rep = tare_from_samples(w[:n_tare], config)
@@ -211,7 +213,15 @@ def tare_log(t: NDArray, w: NDArray, config: EstimatorConfig) -> tuple[NDArray, 
             "estimated (tare_duration 0, --tare-duration 0, for a log that is already tared)"
         )
         rep = TareReport(np.full(6, np.nan), **{**_fields(rep), "warnings": rep.warnings + (msg,)})
-    return rep.bias, taring, rep
+    return LogTare(rep.bias, taring, rep)
+
+
+class LogTare(NamedTuple):
+    """What :func:`tare_log` gives for a whole log (N samples)."""
+
+    bias: NDArray  #: (6,) N and N·m, the sensor bias (NaN when the log never leaves the tare period)
+    taring: NDArray  #: (N,) bool, the samples the tare used
+    report: TareReport  #: how the bias was found, and its warnings
 
 
 def _fields(rep: TareReport) -> dict:
