@@ -30,12 +30,13 @@ from scipy.spatial.transform import Rotation
 
 from softtip import estimate, murakami2006
 from softtip.calibration.payload import Payload, calibrate_payload, compensate_payload, payload_wrench
-from softtip.calibration.probing import calibrate_fingertip, simulate_probing
+from softtip.calibration.probing import calibrate_fingertip
 from softtip.core.axial import axial_difference
 from softtip.core.fingertip import Capsule, Sphere
 from softtip.core.noise import MINI40, NANO25, SensorNoise
 from softtip.errors import InputError
 from softtip.sim import HandFrame, SensorModel, Wedge, paper_scenario, simulate_grasp
+from softtip.sim.probing import simulate_probing
 from softtip.sim.synthetic import sliding_presses
 
 MM = 1e3

@@ -4,7 +4,7 @@
 
 Each trial shifts a tessellated capsule (the papers' fingertip, 64 segments) by a random
 offset (0.5 mm per axis), synthesises a probing log of plane presses on it
-(softtip.calibration.mesh.mesh_probing_log: soft-finger model, skin indentation 0.2 mm/√N,
+(softtip.sim.probing.mesh_probing_log: soft-finger model, skin indentation 0.2 mm/√N,
 friction 0.25 turning through 90° per press, Nano17 noise at 200 Hz) and fits the shift
 with the capsule at its nominal place. Prints the RMS error per axis and the error / reported
 standard deviation (mean: bias in standard deviations; spread: should be 0.7-1.5).
@@ -17,9 +17,10 @@ import time
 
 import numpy as np
 
-from softtip.calibration.mesh import calibrate_mesh, mesh_probing_log
+from softtip.calibration.mesh import calibrate_mesh
 from softtip.core.mesh import MeshFingertip, capsule_mesh
 from softtip.core.noise import NANO17
+from softtip.sim.probing import mesh_probing_log
 
 
 def main() -> None:

@@ -19,10 +19,10 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from softtip.calibration.payload import Payload, payload_wrench
-from softtip.calibration.probing import simulate_probing
 from softtip.core.fingertip import Sphere
 from softtip.io.tables import write_table
 from softtip.sim import SensorModel
+from softtip.sim.probing import simulate_probing
 
 DATA = Path(__file__).resolve().parents[1] / "src" / "softtip" / "data"
 AXES = ("fx", "fy", "fz", "mx", "my", "mz")

@@ -9,10 +9,11 @@ import pytest
 from numpy.testing import assert_allclose
 
 from softtip import InputError, load_fingertip
-from softtip.calibration.mesh import calibrate_mesh, mesh_probing_log
+from softtip.calibration.mesh import calibrate_mesh
 from softtip.core.mesh import MeshFingertip, capsule_mesh
 from softtip.core.noise import NANO17
 from softtip.io.tables import write_table
+from softtip.sim.probing import mesh_probing_log
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 V, F = capsule_mesh(0.016, 0.020, segments=64)

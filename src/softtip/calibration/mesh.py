@@ -37,11 +37,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from softtip.calibration.probing import _force_spread, _tangent_basis, find_presses, probing_presses
+from softtip.calibration.probing import _force_spread, find_presses
+from softtip.core._vec import tangent_basis as _tangent_basis
 from softtip.core.mesh import MeshFingertip
 from softtip.errors import InputError
 
-__all__ = ["MeshCalibration", "calibrate_mesh", "calibrate_mesh_file", "mesh_probing_log", "press_points"]
+__all__ = ["MeshCalibration", "calibrate_mesh", "calibrate_mesh_file", "press_points"]
 
 _MIN_SPREAD = math.sin(math.radians(4.0))  # the friction force must turn this much in a press
 
@@ -306,44 +307,10 @@ def calibrate_mesh_file(
     return calibrate_mesh(t, wrench, tip, **kwargs)
 
 
-def mesh_probing_log(
-    tip: MeshFingertip,
-    n_presses: int,
-    rng: np.random.Generator,
-    *,
-    compliance: float = 2e-4,
-    noise=None,
-    rate: float = 200.0,
-    friction: float = 0.25,
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """A synthetic probing log of plane presses on ``tip`` (soft-finger model), for tests.
+def __getattr__(name: str):
+    # moved to softtip.sim.probing; the former name still resolves, on first use
+    if name == "mesh_probing_log":
+        from softtip.sim import probing
 
-    Press ``k`` touches the skin where its normal points along a planned direction (the mesh
-    vertex farthest that way), with the skin's interpolated normal there as the table's
-    normal; the normal force rises and falls, the friction force (``friction`` × normal)
-    turns through 90°, the skin indents by ``compliance √F``, and a small random spin is
-    added. 0.3 s untouched first (the tare). ``noise``: a :class:`~softtip.core.noise.SensorNoise`.
-
-    Returns
-    -------
-    t : array (N,)
-    wrench : array (N, 6)
-    """
-    rows = [np.zeros((int(0.3 * rate), 6))]
-    for plan in probing_presses(n_presses, rng):
-        r0 = tip.vertices[np.argmax(tip.vertices @ plan["normal"])]
-        r0 = tip.project(r0)
-        n = tip.normal(r0)
-        t1, t2 = _tangent_basis(n)
-        k = 40
-        force = plan["force"] * (0.5 + 0.5 * np.sin(np.linspace(0.2, math.pi - 0.2, k)))
-        turn = np.linspace(0.0, math.radians(90.0), k) + rng.uniform(0.0, 2.0 * math.pi)
-        f = -force[:, None] * n + friction * force[:, None] * (np.cos(turn)[:, None] * t1 + np.sin(turn)[:, None] * t2)
-        r = r0 - compliance * np.sqrt(force)[:, None] * n
-        m = np.cross(r, f) + rng.normal(scale=1e-4, size=k)[:, None] * n
-        rows += [np.concatenate((f, m), axis=1), np.zeros((5, 6))]
-    w = np.concatenate(rows)
-    if noise is not None:
-        w = w + rng.normal(size=w.shape) * np.concatenate((noise.force_std, noise.moment_std))
-    return np.arange(len(w)) / rate, w
-
+        return probing.mesh_probing_log
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -84,6 +84,7 @@ from scipy.optimize import least_squares
 
 from softtip.core._vec import cross as _cross
 from softtip.core._vec import skew as _skew
+from softtip.core._vec import tangent_basis as _tangent_basis
 from softtip.core._xp import NP
 from softtip.core.contact import _sphere_kernel
 from softtip.core.fingertip import Capsule, Fingertip, Sphere
@@ -100,8 +101,6 @@ __all__ = [
     "calibrate_fingertip",
     "find_presses",
     "write_fingertip_toml",
-    "probing_presses",
-    "simulate_probing",
 ]
 
 #: How to record a probing log (``softtip calibrate --guide`` prints it).
@@ -384,13 +383,6 @@ def _sphere_fit(points: NDArray) -> tuple[NDArray, float, float]:
     radius = math.sqrt(r2)
     grad = np.concatenate((c, [0.5])) / radius  # dR = (c·dc + dd/2) / R
     return c, radius, math.sqrt(max(float(grad @ cov @ grad), 0.0))
-
-
-def _tangent_basis(n: NDArray) -> tuple[NDArray, NDArray]:
-    ref = np.where(np.abs(n[..., 2:3]) < 0.9, [0.0, 0.0, 1.0], [1.0, 0.0, 0.0])
-    t1 = _cross(ref, n)
-    t1 /= np.linalg.norm(t1, axis=-1, keepdims=True)
-    return t1, _cross(n, t1)
 
 
 # --------------------------------------------------------------------------------------
@@ -753,123 +745,11 @@ def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
     write(path, text)
 
 
-# --------------------------------------------------------------------------------------
-# simulated probing logs (tests, benchmarks, documentation)
+def __getattr__(name: str):
+    # the probing simulator moved to softtip.sim.probing (calibration does not depend on the
+    # simulator); its former names still resolve, on first use
+    if name in ("probing_presses", "simulate_probing"):
+        from softtip.sim import probing
 
-
-def probing_presses(
-    n_presses: int,
-    rng: np.random.Generator,
-    max_tilt: float = math.radians(60.0),
-    force_range: tuple[float, float] = (1.5, 4.0),
-) -> list[dict]:
-    """Random press plans: contact normal, force and two tangential slides per press.
-
-    Parameters
-    ----------
-    n_presses : int
-    rng : numpy Generator
-    max_tilt : float
-        Largest angle of the contact normal from the fingertip axis (+z), rad.
-    force_range : (float, float)
-        Each press's held force is drawn uniformly from this range, N.
-
-    Returns
-    -------
-    list of dict
-        ``normal`` (3,), ``force`` (N), ``slides`` ((2, 3), m, tangential).
-    """
-    plans = []
-    golden = math.pi * (3.0 - math.sqrt(5.0))
-    for i in range(n_presses):
-        # an equal-area spiral over the cap, jittered: presses spread over the skin
-        cz = 1.0 - (i + rng.uniform(0.2, 0.8)) / n_presses * (1.0 - math.cos(max_tilt))
-        sz = math.sqrt(max(1.0 - cz * cz, 0.0))
-        phi = golden * i + rng.uniform(-0.3, 0.3)
-        n = np.array([sz * math.cos(phi), sz * math.sin(phi), cz])
-        t1, t2 = _tangent_basis(n)
-        a = rng.uniform(0.0, 2.0 * math.pi)
-        d1 = math.cos(a) * t1 + math.sin(a) * t2
-        d2 = _cross(n, d1)
-        slides = np.stack((rng.uniform(0.3e-3, 0.7e-3) * d1, rng.choice([-1.0, 1.0]) * rng.uniform(0.3e-3, 0.7e-3) * d2))
-        plans.append({"normal": n, "force": float(rng.uniform(*force_range)), "slides": slides})
-    return plans
-
-
-def simulate_probing(
-    tip: Sphere | Capsule,
-    duration: float = 30.0,
-    *,
-    press_duration: float = 1.5,
-    slide: bool = True,
-    max_tilt: float = math.radians(60.0),
-    force_range: tuple[float, float] = (1.5, 4.0),
-    sensor=None,
-    rng: np.random.Generator | int | None = 0,
-    n_elements: int = 12_000,
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """A simulated probing log: plane presses at many points, with friction and sensor noise.
-
-    Each press (``press_duration`` s): 0.3 s untouched, the surface pushes along the skin
-    normal to a force in ``force_range`` (default 1.5–4 N) over 0.3 s, then (``slide``) slides 0.3–0.7 mm along one tangent
-    direction and then along the other, which turns the friction force. Uses
-    :func:`softtip.sim.simulate_grasp` with a :class:`~softtip.sim.HalfSpace`.
-
-    Parameters
-    ----------
-    tip : Sphere or Capsule
-        The true fingertip (capsule: presses on the cap only; its ``axis_offset`` is simulated).
-    duration : float
-        s; ``duration / press_duration`` presses.
-    slide : bool
-        False: pure normal presses (a degenerate log: the radius is unobservable).
-    max_tilt : float
-        Presses cover contact normals up to this angle from +z, rad (a few degrees: all at
-        one spot, another degenerate log).
-    force_range : (float, float)
-        Each press holds a force drawn uniformly from this range, N.
-    sensor : softtip.sim.SensorModel, optional
-        Default Nano17 class at 50 Hz.
-    rng : Generator or int
-
-    Returns
-    -------
-    t : ndarray, shape (N,)
-        s.
-    wrench : ndarray, shape (N, 6)
-        Measured wrench, N and N·m.
-    """
-    from softtip.sim import (
-        ContactModel,
-        ContactParams,
-        Disturbance,
-        HalfSpace,
-        SensorModel,
-        discretise_skin,
-        push_scenario,
-        simulate_grasp,
-    )
-
-    rng = np.random.default_rng(rng)
-    sensor = SensorModel() if sensor is None else sensor
-    model = ContactModel(discretise_skin(tip, n_elements), ContactParams(), 2).prepare()
-    centre = np.array(tip.center) if isinstance(tip, Sphere) else np.array([*tip.axis_offset, tip.length])
-    n_presses = max(1, int(round(duration / press_duration)))
-    ts, ws = [], []
-    for k, plan in enumerate(probing_presses(n_presses, rng, max_tilt, force_range)):
-        p = centre + tip.radius * plan["normal"]
-        dist = ()
-        if slide:
-            s1, s2 = plan["slides"]
-            dist = (
-                Disturbance(translation=tuple(s1), start=0.7, end=1.0, label="slide 1"),
-                Disturbance(translation=tuple(s2), start=1.0, end=1.35, label="slide 2"),
-            )
-        sc = push_scenario(
-            0.0, contact_point=tuple(p), force=plan["force"], duration=press_duration,
-            t_contact=0.3, t_stable=0.6, disturbances=dist, name=f"press {k}",
-        )  # fmt: skip
-        log = simulate_grasp(tip, HalfSpace(), sc, SensorModel.ideal(sensor.rate), model=model)
-        ts.append(log.t + k * press_duration)
-        ws.append(sensor.measure(log.wrench_true, rng))
-    return np.concatenate(ts), np.concatenate(ws)
+        return getattr(probing, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -217,7 +217,8 @@ def estimate(
     if gravity_frame is not None and (payload is None or bag_log is None):
         raise click.UsageError("--gravity-frame needs --payload and a bag INPUT (with /tf)")
     if payload is not None:  # gravity compensation first: the tare then removes only the sensor bias
-        from softtip.calibration.payload import compensate_log, compensate_payload, load_payload
+        from softtip.core.gravity import compensate_payload, load_payload
+        from softtip.io.payload import compensate_log
 
         if gravity_frame is None:
             log = compensate_log(log, payload)

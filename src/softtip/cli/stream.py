@@ -153,7 +153,7 @@ def stream(
                 if payload is None:
                     source = LogSource.from_csv(replay, units=units, speed=speed, stop=stop)
                 else:
-                    from softtip.calibration.payload import replay_source
+                    from softtip.io.payload import replay_source
 
                     source = replay_source(replay, units, speed, payload)
                 info = f"(replay x{speed:g})" if speed else "(replay, as fast as possible)"

@@ -29,3 +29,14 @@ def skew(v: NDArray) -> NDArray:
         ),
         axis=-2,
     )
+
+
+def tangent_basis(n: NDArray) -> tuple[NDArray, NDArray]:
+    """Two unit tangents ``t1, t2`` (..., 3) with ``(t1, t2, n)`` right-handed, for unit ``n`` (..., 3).
+
+    ``t1`` is perpendicular to ``n`` and to +z (to +x where ``n`` is within 26° of ±z).
+    """
+    ref = np.where(np.abs(n[..., 2:3]) < 0.9, [0.0, 0.0, 1.0], [1.0, 0.0, 0.0])
+    t1 = cross(ref, n)
+    t1 /= np.linalg.norm(t1, axis=-1, keepdims=True)
+    return t1, cross(n, t1)

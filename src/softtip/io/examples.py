@@ -15,7 +15,7 @@ EXAMPLE_PATH = Path(str(resources.files("softtip") / "data" / "example_grasp.csv
 
 #: A 45 s, 100 Hz probing log for ``softtip calibrate``: 30 plane presses with slides on a
 #: sphere fingertip of radius 16 mm centred at (0.3, −0.2, 20.0) mm, Nano17-class noise.
-#: Made by ``scripts/make_calibration_examples.py`` with :func:`softtip.calibration.probing.simulate_probing`.
+#: Made by ``scripts/make_calibration_examples.py`` with :func:`softtip.sim.probing.simulate_probing`.
 EXAMPLE_PROBING_PATH = Path(str(resources.files("softtip") / "data" / "example_probing.csv"))
 
 #: A 12 s, 100 Hz contact-free log for ``softtip calibrate-payload``: a 20 g fingertip

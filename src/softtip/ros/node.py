@@ -113,7 +113,7 @@ def main(args: list[str] | None = None) -> None:  # pragma: no cover - needs a R
             }
             self.compensate = self.orientation = None
             if params["payload"]:
-                from softtip.calibration.payload import PayloadCompensator, load_payload
+                from softtip.core.gravity import PayloadCompensator, load_payload
 
                 self.compensate = PayloadCompensator(load_payload(params["payload"]))
                 self.create_subscription(QuaternionStamped, params["orientation_topic"], self.on_orientation, 10)

@@ -10,7 +10,7 @@ Modules: :mod:`~softtip.sim.skin` (surface elements), :mod:`~softtip.sim.objects
 objects), :mod:`~softtip.sim.contact` (Winkler + friction), :mod:`~softtip.sim.scenario`
 (grasp time series, the papers' hand), :mod:`~softtip.sim.sensor` (noise),
 :mod:`~softtip.sim.truth` (ground truth), :mod:`~softtip.sim.simulate` (the loop and the
-writers); the ``simulate`` command is :mod:`softtip.cli.simulate`.
+writers), :mod:`~softtip.sim.probing` (probing logs for calibration); the ``simulate`` command is :mod:`softtip.cli.simulate`.
 
 Example
 -------
@@ -35,6 +35,7 @@ from softtip.sim.objects import (
     stick,
 )
 from softtip.sim.pose import Pose, rotation_matrix
+from softtip.sim.probing import mesh_probing_log, probing_presses, simulate_probing
 from softtip.sim.scenario import (
     DISTURBANCE_RAMP,
     DISTURBANCE_TIMINGS,
@@ -57,6 +58,9 @@ from softtip.sim.truth import GroundTruth, line_angle, tangent_frame
 
 __all__ = [
     "ContactModel",
+    "simulate_probing",
+    "probing_presses",
+    "mesh_probing_log",
     "ContactParams",
     "ContactResult",
     "FrictionState",
