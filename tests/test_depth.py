@@ -16,9 +16,9 @@ def grasp_with_friction_at_depth(law, ratio=0.4, angle=30.0):
     g = synthetic_grasp(angle_deg=angle, noise=None, seed=None, tangential_ratio=0.0)
     n, d = g.normal, g.direction
     across = np.cross(n, d)
-    fn = -g.wrench_true[:, :3] @ n
-    ft = ratio * fn[:, None] * smoothstep((g.t - 5.0) / 1.0)[:, None] * across
-    delta = depth_kernel(fn, law, NP)
+    f_normal = -g.wrench_true[:, :3] @ n
+    ft = ratio * f_normal[:, None] * smoothstep((g.t - 5.0) / 1.0)[:, None] * across
+    delta = depth_kernel(f_normal, law, NP)
     w = g.wrench.copy()
     w[:, :3] += ft
     w[:, 3:] += np.cross(g.point - delta[:, None] * n, ft)
@@ -35,8 +35,8 @@ def test_depth_law_values():
 
 
 @given(st.floats(0.0, 50.0))
-def test_float_and_array_kernels_agree(fn):
-    assert depth_kernel(fn, MURAKAMI2006_DEPTH, PY) == pytest.approx(float(depth_kernel(np.array([fn]), MURAKAMI2006_DEPTH, NP)[0]), rel=1e-12, abs=0)
+def test_float_and_array_kernels_agree(f_normal):
+    assert depth_kernel(f_normal, MURAKAMI2006_DEPTH, PY) == pytest.approx(float(depth_kernel(np.array([f_normal]), MURAKAMI2006_DEPTH, NP)[0]), rel=1e-12, abs=0)
 
 
 def test_depth_compensation_removes_the_friction_lever():
@@ -60,13 +60,13 @@ def test_lever_depth_recovers_the_depth():
     g, w = grasp_with_friction_at_depth(law, angle=-20.0)
     late = g.t > 6.5
     lever = lever_depth(w[late] - g.bias, g.point, g.normal, g.direction)
-    fn = -(w[late, :3] - g.bias[:3]) @ g.normal
-    assert_allclose(lever, depth_kernel(fn, law, NP), rtol=1e-6)
+    f_normal = -(w[late, :3] - g.bias[:3]) @ g.normal
+    assert_allclose(lever, depth_kernel(f_normal, law, NP), rtol=1e-6)
 
 
 def test_fit_recovers_the_law():
     law = DepthLaw(2.5e6, 1.8, 0.005)
-    fn = np.linspace(1.0, 6.0, 40)
-    fitted = DepthLaw.fit(fn, depth_kernel(fn, law, NP))
+    f_normal = np.linspace(1.0, 6.0, 40)
+    fitted = DepthLaw.fit(f_normal, depth_kernel(f_normal, law, NP))
     assert fitted.stiffness == pytest.approx(law.stiffness, rel=1e-6)
     assert fitted.exponent == pytest.approx(law.exponent, rel=1e-6)

@@ -307,8 +307,8 @@ def test_low_pass_noise_in_a_proportional_dip_is_not_excitation():
         g = synthetic_grasp(tip, point=point, rate=rate, duration=13.0, noise=None, seed=seed)
         dip = 1.0 - 0.8 * (smoothstep(g.t - 10.0) - smoothstep(g.t - 11.0))
         w = g.wrench_true * dip[:, None]
-        fn = -(w[:, :3] @ g.normal)  # friction at the depth the law gives (the law is right)
-        w[:, 3:] -= MURAKAMI2006_DEPTH.depth(fn)[:, None] * np.cross(g.normal, w[:, :3])
+        f_normal = -(w[:, :3] @ g.normal)  # friction at the depth the law gives (the law is right)
+        w[:, 3:] -= MURAKAMI2006_DEPTH.depth(f_normal)[:, None] * np.cross(g.normal, w[:, :3])
         rng = np.random.default_rng(seed + 77)
         w += g.bias + rng.normal(size=w.shape) * np.concatenate((NANO17.force_std, NANO17.moment_std))
         cfg = EstimatorConfig(contact_point="line-fit", depth=MURAKAMI2006_DEPTH, lowpass_hz=2.0, sample_rate=rate)

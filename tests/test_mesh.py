@@ -327,12 +327,12 @@ def test_pushes_all_over_the_nail_tip_get_a_contact(nail):
     u[:, 2] = np.abs(u[:, 2])
     r = nail.project(centre + 3 * radius * u / np.linalg.norm(u, axis=1, keepdims=True))
     nrm = nail.normal(r)
-    fn = rng.uniform(0.2, 10.0, (n, 1))
+    f_normal = rng.uniform(0.2, 10.0, (n, 1))
     t = rng.normal(size=(n, 3))
     t -= np.sum(t * nrm, axis=1, keepdims=True) * nrm
     t /= np.linalg.norm(t, axis=1, keepdims=True)
-    f = -fn * nrm + rng.uniform(0.0, 0.5, (n, 1)) * fn * t
-    w = np.concatenate((f, np.cross(r, f) + rng.uniform(-1e-3, 1e-3, (n, 1)) * fn * nrm), axis=1)
+    f = -f_normal * nrm + rng.uniform(0.0, 0.5, (n, 1)) * f_normal * t
+    w = np.concatenate((f, np.cross(r, f) + rng.uniform(-1e-3, 1e-3, (n, 1)) * f_normal * nrm), axis=1)
     c = contact_from_wrench(w, nail)
     assert c.valid.mean() >= 0.999
     for i in np.flatnonzero(c.valid)[::50]:

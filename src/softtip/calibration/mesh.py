@@ -125,16 +125,16 @@ def press_points(
     n = -np.mean(f, axis=0) if normal is None else np.asarray(normal, dtype=float)
     n = n / np.linalg.norm(n)
     t1, t2 = _tangent_basis(n)
-    fn = np.maximum(-(f @ n), 0.0)
+    f_normal = np.maximum(-(f @ n), 0.0)
     # tangential part of m − (r − δ n) × f = 0, linear in r: (r × f)·t = r · (f × t)
-    q = m + compliance * np.sqrt(fn)[:, None] * np.cross(n, f)
+    q = m + compliance * np.sqrt(f_normal)[:, None] * np.cross(n, f)
     a = np.concatenate((np.cross(f, t1), np.cross(f, t2)))
     b = np.concatenate((q @ t1, q @ t2))
     r, *_ = np.linalg.lstsq(a, b, rcond=None)
     res = b - a @ r
     s2 = float(res @ res) / max(len(b) - 3, 1)
     cov = s2 * np.linalg.pinv(a.T @ a)
-    return r, n, cov, float(np.mean(fn))
+    return r, n, cov, float(np.mean(f_normal))
 
 
 def calibrate_mesh(
@@ -176,10 +176,10 @@ def calibrate_mesh(
     if tare_duration > 0:
         still = t - t[0] < tare_duration
         w = w - w[still].mean(axis=0)
-    fn = np.linalg.norm(w[:, :3], axis=1)
+    f_norm = np.linalg.norm(w[:, :3], axis=1)
     presses, skipped = [], 0
-    for idx in find_presses(fn, contact_threshold):
-        idx = idx[fn[idx] >= min_force]
+    for idx in find_presses(f_norm, contact_threshold):
+        idx = idx[f_norm[idx] >= min_force]
         if len(idx) < 8 or _force_spread(w[idx, :3]) < _MIN_SPREAD:
             skipped += 1
         else:

@@ -598,8 +598,8 @@ def _objective(f_all, m_all, presses, normals0, compliance: bool, noise: SensorN
     def residual(x, whiten=True):
         c, radius, kappa, n = unpack(x)
         ns = n[press_of]
-        fn = np.maximum(-np.sum(f * ns, axis=1), 0.0)
-        rho = radius - kappa * np.sqrt(fn)
+        f_normal = np.maximum(-np.sum(f * ns, axis=1), 0.0)
+        rho = radius - kappa * np.sqrt(f_normal)
         r = c + rho[:, None] * ns
         e = m - _cross(r, f)
         # tangent basis at the current normal: the spin (along n) is free

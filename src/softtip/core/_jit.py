@@ -69,11 +69,11 @@ def set_jit(enabled: bool | None) -> bool | None:
 class _Lazy:
     """A function compiled by ``numba.njit(cache=True)`` on its first call."""
 
-    def __init__(self, fn: Callable):
-        self.py_func = fn
+    def __init__(self, func: Callable):
+        self.py_func = func
         self._compiled: Callable | None = None
-        self.__doc__ = fn.__doc__
-        self.__name__ = fn.__name__
+        self.__doc__ = func.__doc__
+        self.__name__ = func.__name__
 
     def __call__(self, *args):
         if self._compiled is None:
@@ -83,6 +83,6 @@ class _Lazy:
         return self._compiled(*args)
 
 
-def lazy_jit(fn: Callable) -> _Lazy:
-    """Decorator: compile ``fn`` with numba (cached on disk) the first time it is called."""
-    return _Lazy(fn)
+def lazy_jit(func: Callable) -> _Lazy:
+    """Decorator: compile ``func`` with numba (cached on disk) the first time it is called."""
+    return _Lazy(func)

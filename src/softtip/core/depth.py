@@ -157,9 +157,9 @@ def skin_depth_law(thickness: float) -> DepthLaw:
 
 def depth_kernel(normal_force, law: DepthLaw, xp):
     """``δ = min((max(F_n, 0) / k)^(1/p), δ_max)`` component-wise (numpy or float)."""
-    fn = xp.where(normal_force > 0.0, normal_force, 0.0 * normal_force)
+    f_normal = xp.where(normal_force > 0.0, normal_force, 0.0 * normal_force)
     # a square root where p = 2 (correctly rounded in both back ends, and cheaper)
-    d = xp.sqrt(fn / law.stiffness) if law.exponent == 2.0 else xp.pow(fn / law.stiffness, 1.0 / law.exponent)
+    d = xp.sqrt(f_normal / law.stiffness) if law.exponent == 2.0 else xp.pow(f_normal / law.stiffness, 1.0 / law.exponent)
     return xp.where(d > law.max_depth, law.max_depth + 0.0 * d, d)
 
 

@@ -187,7 +187,7 @@ def _near_classes(centroids: NDArray, corners: NDArray) -> list:
     return out
 
 
-def _exposure(vertices: NDArray, faces: NDArray, fn: NDArray, v0: NDArray, centroids: NDArray,
+def _exposure(vertices: NDArray, faces: NDArray, face_n: NDArray, v0: NDArray, centroids: NDArray,
               extent: float) -> list[tuple[float, float]]:
     """Per face ``(h, e)``: how far the mesh rises in front of the face's plane (m; 0 for a
     face on the convex hull, within ``1e-6 × extent``, above the rounding of a mesh stored in
@@ -202,9 +202,9 @@ def _exposure(vertices: NDArray, faces: NDArray, fn: NDArray, v0: NDArray, centr
     from scipy.spatial import ConvexHull, cKDTree  # imported here: `import softtip` stays light
 
     tol = 1e-6 * extent
-    nf, nv = len(fn), len(vertices)
+    nf, nv = len(face_n), len(vertices)
     hull = ConvexHull(vertices)
-    offset = np.sum(fn * v0, axis=1)
+    offset = np.sum(face_n * v0, axis=1)
     # a face whose plane passes through a hull vertex that no hull neighbour rises above is
     # on the hull (a linear function's local maximum over a convex polytope is its maximum)
     s = hull.simplices
@@ -220,7 +220,7 @@ def _exposure(vertices: NDArray, faces: NDArray, fn: NDArray, v0: NDArray, centr
         count = np.diff(adj.indptr)[vk[cand]]
         rows = np.repeat(np.arange(len(cand)), count)
         pos = np.repeat(adj.indptr[vk[cand]] - np.cumsum(count) + count, count) + np.arange(count.sum())
-        h = np.einsum("ij,ij->i", vertices[adj.indices[pos]] - vertices[vk[cand[rows]]], fn[cand[rows]])
+        h = np.einsum("ij,ij->i", vertices[adj.indices[pos]] - vertices[vk[cand[rows]]], face_n[cand[rows]])
         worst = np.full(len(cand), -np.inf)
         np.maximum.at(worst, rows, h)
         rise[cand[worst <= tol]] = 0.0
@@ -229,7 +229,7 @@ def _exposure(vertices: NDArray, faces: NDArray, fn: NDArray, v0: NDArray, centr
     hv = np.ascontiguousarray(vertices[hull.vertices].T)
     for start in range(0, len(rest), 512):
         blk = rest[start : start + 512]
-        rise[blk] = (fn[blk] @ hv).max(axis=1) - offset[blk]
+        rise[blk] = (face_n[blk] @ hv).max(axis=1) - offset[blk]
     tri = vertices[faces]
     edge = max(float(np.max(np.linalg.norm(tri[:, k] - tri[:, (k + 1) % 3], axis=1))) for k in range(3))
     circum = np.max(np.linalg.norm(tri - centroids[:, None, :], axis=2), axis=1)
@@ -241,14 +241,14 @@ def _exposure(vertices: NDArray, faces: NDArray, fn: NDArray, v0: NDArray, centr
         k = min(64, nv)
         dist, near = cKDTree(vertices).query(centroids[inner], k=k)
         dist, near = dist.reshape(len(inner), k), near.reshape(len(inner), k)
-        height = np.einsum("ikj,ij->ik", vertices[near], fn[inner]) - offset[inner][:, None]
+        height = np.einsum("ikj,ij->ik", vertices[near], face_n[inner]) - offset[inner][:, None]
         first = np.where(height > tol, dist, np.inf).min(axis=1)
         clear[inner] = np.minimum(first, dist[:, -1]) - edge - circum[inner]
     rise = np.where(rise > tol, rise, 0.0)
     return [(h, e) for h, e in zip(rise.tolist(), np.maximum(clear, 0.0).tolist())]
 
 
-def _creases(vertices, faces, fn, cn, nb_face, li, lj, extent) -> tuple[dict, dict]:
+def _creases(vertices, faces, face_n, cn, nb_face, li, lj, extent) -> tuple[dict, dict]:
     """The sharp features for :meth:`MeshFingertip._crease_contact`: convex crease edges (the
     corner normals of the two faces differ along them) and convex corners (three or more
     distinct corner normals), as columns of float arrays."""
@@ -262,7 +262,7 @@ def _creases(vertices, faces, fn, cn, nb_face, li, lj, extent) -> tuple[dict, di
         differ = (np.sum(na_a * nb_a, axis=1) < 1.0 - 1e-12) | (np.sum(na_b * nb_b, axis=1) < 1.0 - 1e-12)
         a, b = vertices[faces[:, i]], vertices[faces[:, j]]
         far = vertices[faces[u, 3 - ui - uj]]
-        convex = np.sum(fn * (far - a), axis=1) < -1e-9 * extent
+        convex = np.sum(face_n * (far - a), axis=1) < -1e-9 * extent
         t = np.flatnonzero(differ & (np.arange(nf) < u))
         rows.append((t, a[t], b[t], na_a[t], na_b[t], nb_a[t], nb_b[t], convex[t], faces[t, i], faces[t, j]))
     t, a, b, na_a, na_b, nb_a, nb_b, convex, va, vb = (np.concatenate(x) for x in zip(*rows))
@@ -448,7 +448,7 @@ class MeshFingertip(Fingertip):
         bad = dbl_area <= 1e-12 * extent * extent
         if bad.any():
             raise ValueError(f"{int(bad.sum())} degenerate (zero-area) triangles, e.g. face {int(np.argmax(bad))}")
-        fn = cross / dbl_area[:, None]
+        face_n = cross / dbl_area[:, None]
         nb_face, li, lj = _edge_neighbours(f)
         volume = float(np.sum(v0 * np.cross(v1, v2)) / 6.0)
         if volume <= 0.0:
@@ -456,7 +456,7 @@ class MeshFingertip(Fingertip):
                 f"the mesh's signed volume is {volume:.3g} m³: its faces are wound inward (inverted normals); "
                 "flip them (e.g. trimesh's mesh.invert())"
             )
-        cn = _corner_normals(v, f, fn, math.cos(math.radians(self.crease_angle_deg)))
+        cn = _corner_normals(v, f, face_n, math.cos(math.radians(self.crease_angle_deg)))
         centroids = (v0 + v1 + v2) / 3.0
         groups = _clusters(centroids, _LEAF)
         n_cl = len(groups)
@@ -517,7 +517,7 @@ class MeshFingertip(Fingertip):
         d = self._d
         d.update(
             extent=extent,
-            fn=fn,
+            face_n=face_n,
             cn=cn,
             v0=v0,
             v1=v1,
@@ -552,13 +552,13 @@ class MeshFingertip(Fingertip):
             last_normal=(None, None),
             last_project=(None, None),
         )
-        edges, corners = _creases(v, f, fn, cn, nb_face, li, lj, extent)
+        edges, corners = _creases(v, f, face_n, cn, nb_face, li, lj, extent)
         d.update(crease_edges=edges, crease_corners=corners, crease_any=bool(len(edges["ax"]) or len(corners["vx"])))
         # the streaming cast's warm start: a walk from the previous sample's face
         d.update(
-            exposure=_exposure(v, f, fn, v0, centroids, extent),
+            exposure=_exposure(v, f, face_n, v0, centroids, extent),
             plucker_py=[tuple(tuple(e) for e in row) for row in plucker[:-1].tolist()],
-            fn_py=[tuple(r) for r in fn.tolist()],
+            face_n_py=[tuple(r) for r in face_n.tolist()],
             centroids_py=[tuple(r) for r in centroids.tolist()],
             # per cluster: the monomials of its centre for the axis test, its faces' Plücker rows
             cl_quad=np.column_stack((
@@ -767,7 +767,7 @@ class MeshFingertip(Fingertip):
     @property
     def face_normals(self) -> NDArray[np.float64]:
         """Geometric unit normals of the triangles, shape (F, 3)."""
-        return self._d["fn"]
+        return self._d["face_n"]
 
     @property
     def corner_normals(self) -> NDArray[np.float64]:
@@ -938,7 +938,7 @@ class MeshFingertip(Fingertip):
         rise, clear = self._d["exposure"][face]
         if rise == 0.0:
             return True
-        g = self._d["fn_py"][face]
+        g = self._d["face_n_py"][face]
         return rise < clear * -(g[0] * hx + g[1] * hy + g[2] * hz)
 
     def _first_hit(self, tris: NDArray, hit: NDArray, line: NDArray, bx: float, by: float, bz: float,

@@ -140,7 +140,7 @@ def estimate(
     x = ct.wrench
 
     c = [np.ascontiguousarray(x[:, i]) for i in range(6)]
-    fn = np.sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2])
+    f_norm = np.sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2])
     contact = ct.contact
     relatched = np.zeros(n, dtype=bool)
     joint_stats = np.full((4, n), np.nan)
@@ -154,7 +154,7 @@ def estimate(
             latched = fallback = np.zeros(n, dtype=bool)
         else:
             had_latch = carry is not None and carry.had_latch
-            point, latched, fallback, relatched = latch_points(t, fn, contact, sc, tip, config, had_latch)
+            point, latched, fallback, relatched = latch_points(t, f_norm, contact, sc, tip, config, had_latch)
             if carry is not None:
                 carry.had_latch = had_latch or bool(latched.any())
             if config.contact_point == "line-fit":
@@ -174,7 +174,7 @@ def estimate(
             (*c, *point.T, *normal.T, delta),
         ))  # fmt: skip
 
-    del c, sc, fn  # not needed from here on (bounds the peak memory)
+    del c, sc, f_norm  # not needed from here on (bounds the peak memory)
     located = contact & has & ms.pushing
     pulling = contact & ~located
     # line or area (evidence window): segments start at contact onset and at every re-latch

@@ -272,7 +272,7 @@ def track_contacts(
         avg = _DriftAverage(x, alpha, state)
         count = state.count
 
-        def fn(lo, hi):  # |f| with the drift held at avg.b
+        def force_norm(lo, hi):  # |f| with the drift held at avg.b
             return _norm3(x[lo:hi, :3] - avg.b[:3])
 
         i = start
@@ -287,7 +287,7 @@ def track_contacts(
                 continue
             j = i + k
             # onset at j; the drift is held while the contact is pending or held
-            m = _first(lambda lo, hi: fn(lo, hi) < off, j + 1, n)
+            m = _first(lambda lo, hi: force_norm(lo, hi) < off, j + 1, n)
             drift[j:m] = avg.b
             busy[j:m] = True
             ok = _held(t, dt, j, m, min_dur)

@@ -269,8 +269,8 @@ class DepthTracker:
         fx, fy, fz, mx, my, mz = x
         nx, ny, nz = normal
         if self._sqrt_law:
-            fn = -(fx * nx + fy * ny + fz * nz)
-            d0 = math.sqrt(fn / law.stiffness) if fn > 0.0 else 0.0
+            f_normal = -(fx * nx + fy * ny + fz * nz)
+            d0 = math.sqrt(f_normal / law.stiffness) if f_normal > 0.0 else 0.0
             if d0 > law.max_depth:
                 d0 = law.max_depth
         else:

@@ -40,7 +40,7 @@ class LatchedPoints(NamedTuple):
     relatched: NDArray  #: (N,) bool, a new latch starts here (re-latch, or a contact after a latched one)
 
 
-def _latch_segment(t, fn, valid, r_sc, tip: Fingertip, config: EstimatorConfig):
+def _latch_segment(t, f_norm, valid, r_sc, tip: Fingertip, config: EstimatorConfig):
     """The latch of one segment (a contact, or its rest after a re-latch), vectorised.
 
     The segment's first sample starts a first rise. Returns ``(point (k, 3), latched (k,),
@@ -50,11 +50,11 @@ def _latch_segment(t, fn, valid, r_sc, tip: Fingertip, config: EstimatorConfig):
     k = len(t)
     lo, hi = config.latch_force_range
     idx = np.arange(k)
-    prev_peak = np.concatenate(([-np.inf], np.maximum.accumulate(fn)[:-1]))
-    t_peak = t[np.maximum.accumulate(np.where(fn > prev_peak, idx, 0))]
-    rise_over = (fn > hi) | (t - t_peak > config.stall_time)
+    prev_peak = np.concatenate(([-np.inf], np.maximum.accumulate(f_norm)[:-1]))
+    t_peak = t[np.maximum.accumulate(np.where(f_norm > prev_peak, idx, 0))]
+    rise_over = (f_norm > hi) | (t - t_peak > config.stall_time)
     end = int(np.argmax(rise_over)) if rise_over.any() else k
-    win = (idx < end) & (fn >= lo) & (fn <= hi) & valid
+    win = (idx < end) & (f_norm >= lo) & (f_norm <= hi) & valid
     n_win = np.cumsum(win)
     sum_win = np.cumsum(np.where(win[:, None], r_sc, 0.0), axis=0)
     fb = valid & (np.cumsum(valid) <= config.fallback_samples)
@@ -83,7 +83,7 @@ def _latch_segment(t, fn, valid, r_sc, tip: Fingertip, config: EstimatorConfig):
     return pe, lat, fbk, idx > fixed, latch
 
 
-def latch_points(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig, had_latch: bool = False) -> LatchedPoints:
+def latch_points(t, f_norm, contact, sc, tip: Fingertip, config: EstimatorConfig, had_latch: bool = False) -> LatchedPoints:
     """Contact point per sample in ``latch`` mode, with re-latching.
 
     Returns :class:`LatchedPoints`. Long logs: one compiled pass
@@ -93,7 +93,7 @@ def latch_points(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig, ha
     """
     n = len(t)
     if jit_enabled(n):
-        return _latch_compiled(t, fn, contact, sc, tip, config, had_latch)
+        return _latch_compiled(t, f_norm, contact, sc, tip, config, had_latch)
     point = np.full((n, 3), np.nan)
     latched = np.zeros(n, dtype=bool)
     fallback = np.zeros(n, dtype=bool)
@@ -108,10 +108,10 @@ def latch_points(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig, ha
         relatched[s] = had_latch  # contact regained after a latched one
         a = s
         while True:
-            pe, lat, fbk, held, latch = _latch_segment(t[a:e], fn[a:e], valid[a:e], r_sc[a:e], tip, config)
+            pe, lat, fbk, held, latch = _latch_segment(t[a:e], f_norm[a:e], valid[a:e], r_sc[a:e], tip, config)
             stop = e - a
             if dist is not None and held.any():
-                fe = fn[a:e]
+                fe = f_norm[a:e]
                 dx, dy, dz = (r_sc[a:e, i] - latch[i] for i in range(3))
                 with np.errstate(invalid="ignore"):
                     drift = held & valid[a:e] & (fe >= lo) & (fe <= hi) & (dx * dx + dy * dy + dz * dz > dist * dist)
@@ -136,7 +136,7 @@ def _projected_means(tip: Fingertip, sums, counts, use):
     return out
 
 
-def _latch_compiled(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig, had_latch: bool = False):
+def _latch_compiled(t, f_norm, contact, sc, tip: Fingertip, config: EstimatorConfig, had_latch: bool = False):
     """:func:`latch_points` over all contacts at once: the running sums of every segment in
     one compiled pass, the projections and the choices vectorised; with re-latching, one
     more pass for each re-latch that follows another in the same contact."""
@@ -159,7 +159,7 @@ def _latch_compiled(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig,
         n_seg = int(np.count_nonzero(begin))
         seg_end, seg_fixed, seg_total, seg_stop = (np.zeros(n_seg, dtype=np.int64) for _ in range(4))
         latch_scan_kernel(
-            begin, contact, t, fn, valid, rx, ry, rz, float(lo), float(hi), float(config.stall_time),
+            begin, contact, t, f_norm, valid, rx, ry, rz, float(lo), float(hi), float(config.stall_time),
             int(config.fallback_samples), n_win, sum_win, n_fb, sum_fb, rising, seg_end, seg_fixed, seg_total, seg_stop,
         )  # fmt: skip
         # the latch of each segment: the rise's window mean, else the fallback mean once fixed
@@ -188,7 +188,7 @@ def _latch_compiled(t, fn, contact, sc, tip: Fingertip, config: EstimatorConfig,
         held = contact & (idx > seg_fixed[sid])
         with np.errstate(invalid="ignore"):
             dx, dy, dz = rx - latch[sid, 0], ry - latch[sid, 1], rz - latch[sid, 2]
-            drift = held & valid & (fn >= lo) & (fn <= hi) & (dx * dx + dy * dy + dz * dz > dist * dist)
+            drift = held & valid & (f_norm >= lo) & (f_norm <= hi) & (dx * dx + dy * dy + dz * dz > dist * dist)
         # the first drift of each segment starts a new one (a re-latch)
         d = np.flatnonzero(drift)
         new = d[np.r_[True, sid[d][1:] != sid[d][:-1]]] if len(d) else d
@@ -218,10 +218,10 @@ class LatchTracker:
         self.point: tuple[float, float, float] | None = None
         self.is_fallback = False
 
-    def start(self, fn: float, t: float) -> None:
-        """A new first rise at force ``fn`` (N) and time ``t`` (s)."""
+    def start(self, f_norm: float, t: float) -> None:
+        """A new first rise at force ``f_norm`` (N) and time ``t`` (s)."""
         self.rising = True
-        self._peak = fn
+        self._peak = f_norm
         self._t_peak = t
         self._n_win = 0
         self._sum_win = [0.0, 0.0, 0.0]
@@ -230,12 +230,12 @@ class LatchTracker:
         self.point = None  # the latched point once fixed
         self.is_fallback = False
 
-    def drifted(self, fn: float, x: list[float], sc):
+    def drifted(self, f_norm: float, x: list[float], sc):
         """Re-latch test of a held latch: ``(moved, sc)``; ``moved`` when, at light force,
         this sample's soft-finger solution lies farther than ``relatch_distance`` from it."""
         dist = self.config.relatch_distance
         lo, hi = self.config.latch_force_range
-        if self.point is None or dist is None or not lo <= fn <= hi:
+        if self.point is None or dist is None or not lo <= f_norm <= hi:
             return False, sc
         sc = SoftFinger(*contact_kernel(self.tip, *x, xp=PY))
         if not sc.valid:
@@ -244,13 +244,13 @@ class LatchTracker:
         dx, dy, dz = sc.rx - lx, sc.ry - ly, sc.rz - lz
         return dx * dx + dy * dy + dz * dz > dist * dist, sc
 
-    def step(self, t: float, fn: float, x: list[float], sc):
+    def step(self, t: float, f_norm: float, x: list[float], sc):
         """The contact point of a sample in contact: ``(point, latched, fallback, sc)``.
 
         ``point`` is ``None`` when there is none yet (no valid soft-finger solution)."""
         cfg = self.config
-        if self.rising and fn > self._peak:
-            self._peak, self._t_peak = fn, t
+        if self.rising and f_norm > self._peak:
+            self._peak, self._t_peak = f_norm, t
         point = self.point
         if point is not None:
             return point, True, self.is_fallback, sc
@@ -262,12 +262,12 @@ class LatchTracker:
             self._n_fb += 1
             self._sum_fb = [s + v for s, v in zip(self._sum_fb, sc.point)]
         lo, hi = cfg.latch_force_range
-        if self.rising and (fn > hi or t - self._t_peak > cfg.stall_time):
+        if self.rising and (f_norm > hi or t - self._t_peak > cfg.stall_time):
             self.rising = False
             if self._n_win > 0:
                 self.point = point = self._mean(self._sum_win, self._n_win)
         if self.rising:
-            if valid and lo <= fn <= hi:
+            if valid and lo <= f_norm <= hi:
                 self._n_win += 1
                 self._sum_win = [s + v for s, v in zip(self._sum_win, sc.point)]
             if self._n_win > 0:

@@ -161,7 +161,7 @@ def running_best_kernel(group, key, held):  # pragma: no cover - compiled
 
 
 @lazy_jit
-def latch_scan_kernel(begin, contact, t, fn, valid, rx, ry, rz, lo, hi, stall, n_fallback,
+def latch_scan_kernel(begin, contact, t, f_norm, valid, rx, ry, rz, lo, hi, stall, n_fallback,
                       n_win, sum_win, n_fb, sum_fb, rising, seg_end, seg_fixed, seg_total, seg_stop):  # pragma: no cover
     """The running quantities of the latch (:func:`softtip.estimator.latch.latch_points`)
     for every segment (a new one at every ``begin`` within ``contact``) in one pass.
@@ -215,7 +215,7 @@ def latch_scan_kernel(begin, contact, t, fn, valid, rx, ry, rz, lo, hi, stall, n
             wx = wy = wz = 0.0
             fx = fy = fz = 0.0
             fixed_fb = -1
-        f = fn[i]
+        f = f_norm[i]
         if f > peak:
             peak = f
             t_pk = t[i]

@@ -239,9 +239,9 @@ class Estimator:
             self.started_in_contact = True
             self._warn(started_in_contact_message(self.config))
 
-    def _start_segment(self, fn: float, t: float) -> None:
+    def _start_segment(self, f_norm: float, t: float) -> None:
         """A new first rise: at contact onset, and at a re-latch."""
-        self._latch.start(fn, t)
+        self._latch.start(f_norm, t)
         self._evidence.start_segment()
         if self._joint is not None:
             self._joint.start_segment(t)
@@ -259,7 +259,7 @@ class Estimator:
             self._first_contact = contacts.contact_id
             self._lead = self._tare.report.source == "tare"
         fx, fy, fz, mx, my, mz = x
-        fn = sqrt(fx * fx + fy * fy + fz * fz)
+        f_norm = sqrt(fx * fx + fy * fy + fz * fz)
         depth = self._depth
         if depth is not None and code == 2:
             depth.start_contact()
@@ -280,19 +280,19 @@ class Estimator:
             sc = None
             if code == 2:
                 relatched = self._had_latch  # contact regained after a latched one
-                self._start_segment(fn, t)
+                self._start_segment(f_norm, t)
                 if self._joint is not None:
                     self._joint.start_contact()
             elif self._relatch:
-                moved, sc = self._latch.drifted(fn, x, sc)
+                moved, sc = self._latch.drifted(f_norm, x, sc)
                 if moved:
                     relatched = True
-                    self._start_segment(fn, t)
+                    self._start_segment(f_norm, t)
             latch = self._latch
             if latch.point is not None and sc is None:  # held (LatchTracker.step returns it as is)
                 point, latched, fallback = latch.point, True, latch.is_fallback
             else:
-                point, latched, fallback, sc = latch.step(t, fn, x, sc)
+                point, latched, fallback, sc = latch.step(t, f_norm, x, sc)
             if latched:
                 self._had_latch = True
             if self._joint is not None:

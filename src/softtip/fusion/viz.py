@@ -191,10 +191,10 @@ def _log_geometry(rr, rec, fused: FusedGrasp, k: int, grasp: str, half: float, a
             lines.append([r - half * d, r + half * d])
     elif grasp == "line_and_face":
         d = fused.direction[k]
-        fn = fused.face_normal[k]
+        face_n = fused.face_normal[k]
         r_line, r_face = (ra, rb) if a_is_line else (rb, ra)
         lines.append([r_line - half * d, r_line + half * d])
-        face = (r_face, fn)
+        face = (r_face, face_n)
     if lines:
         rec.log("hand/fused/line", rr.LineStrips3D(np.asarray(lines), radii=0.0005, colors=[_LINE_COLOUR]))
     else:

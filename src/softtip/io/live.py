@@ -304,7 +304,7 @@ class TerminalView:
         if e is None:
             lines.append("waiting for data ...")
         else:
-            fn = (
+            f_norm = (
                 math.sqrt(sum(x * x for x in e.wrench[:3]))
                 if not math.isnan(e.wrench[0])
                 else math.nan
@@ -321,7 +321,7 @@ class TerminalView:
             lines += [
                 f"t        {e.t:10.3f} s",
                 f"state    {state:<8} {flags}",
-                f"|f|      {fn:8.3f} N      f = {_fmt_vec(e.wrench[:3])} N",
+                f"|f|      {f_norm:8.3f} N      f = {_fmt_vec(e.wrench[:3])} N",
                 f"contact  r = {_fmt_vec(e.point, 1e3)} mm",
                 f"normal   n = {_fmt_vec(e.normal, 1.0, '{:+6.3f}')}",
                 f"|h|      {e.h_norm * 1e3:8.3f} N·mm   (significant above {max(3 * e.h_std, self.h_threshold) * 1e3:.3f} N·mm)"

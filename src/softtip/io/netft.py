@@ -573,13 +573,13 @@ class RDTTracker:
             )
 
 
-def _interruptible(fn: Callable[[], object], deadline: float, stop: threading.Event | None, what: str):
-    """Run ``fn`` in a thread; wait until it returns, ``deadline`` passes or ``stop`` is set."""
+def _interruptible(func: Callable[[], object], deadline: float, stop: threading.Event | None, what: str):
+    """Run ``func`` in a thread; wait until it returns, ``deadline`` passes or ``stop`` is set."""
     box: dict[str, object] = {}
 
     def target() -> None:
         try:
-            box["value"] = fn()
+            box["value"] = func()
         except BaseException as exc:  # noqa: BLE001 - handed to the caller
             box["error"] = exc
 

@@ -59,12 +59,12 @@ def config_from_parameters(params: dict[str, Any]) -> EstimatorConfig:
         raise ValueError("lowpass_hz and sample_rate must be non-negative (0: off / unknown)")
     if lowpass > 0 and rate <= 0:
         raise ValueError("lowpass_hz needs sample_rate (Hz) for the streaming filter")
-    fn, mn = float(p["force_noise"]), float(p["moment_noise"])
-    if fn < 0 or mn < 0:
+    force_noise, moment_noise = float(p["force_noise"]), float(p["moment_noise"])
+    if force_noise < 0 or moment_noise < 0:
         raise ValueError("force_noise and moment_noise must be non-negative (0: the Nano17-class default)")
     noise = SensorNoise(
-        force_std=(fn,) * 3 if fn > 0 else NANO17.force_std,
-        moment_std=(mn,) * 3 if mn > 0 else NANO17.moment_std,
+        force_std=(force_noise,) * 3 if force_noise > 0 else NANO17.force_std,
+        moment_std=(moment_noise,) * 3 if moment_noise > 0 else NANO17.moment_std,
     )
     return EstimatorConfig(
         contact_point=str(p["contact_point"]),

@@ -282,8 +282,8 @@ class ContactResult:
         ft = self.area[:, None] * self.traction
         total = ft.sum(axis=0)
         tt = float(total @ total)
-        fn = float(np.sum(self.area * self.pressure))
-        if not len(self.depth) or tt <= (0.01 * fn) ** 2:
+        f_normal = float(np.sum(self.area * self.pressure))
+        if not len(self.depth) or tt <= (0.01 * f_normal) ** 2:
             return math.nan
         return float(total @ (self.depth @ ft)) / tt
 

@@ -228,14 +228,14 @@ def run_condition(condition: Condition, *, seed: int = 2006, config: EstimatorCo
     if condition.experiment == "E6":
         # the papers' Fig. 7: soft-finger position error against the pushing force
         est = estimate(log.t, log.wrench, tip, EstimatorConfig(contact_point="track", track_drift=False))
-        fn = np.linalg.norm(log.wrench_true[:, :3], axis=1)
+        f_norm = np.linalg.norm(log.wrench_true[:, :3], axis=1)
         err = np.linalg.norm(est.point - truth.contact_point, axis=1)
-        above = (fn >= 0.2 * KGF) & np.isfinite(err)
+        above = (f_norm >= 0.2 * KGF) & np.isfinite(err)
         worst = float(np.max(err[above])) if above.any() else math.nan
         ok = bool(worst < POSITION_BOUND)
         return ConditionResult(
             condition, math.nan, math.nan, worst, math.nan, "within 0.5 mm" if ok else "beyond 0.5 mm", ok, est,
-            force_norm=fn, position_error=err,
+            force_norm=f_norm, position_error=err,
         )  # fmt: skip
 
     est = estimate(log.t, log.wrench, tip, PAPERS_CONFIG if config is None else config)

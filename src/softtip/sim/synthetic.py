@@ -159,11 +159,11 @@ def sliding_presses(
         force, mu = rng.uniform(2.0, 6.0), rng.uniform(0.1, 0.3)
         turn = math.radians(rng.uniform(40.0, 120.0)) * rng.choice([-1.0, 1.0])
         s = np.arange(0.0, 1.0, dt)
-        fn = force * np.clip(np.minimum(s, 1.0 - s) / 0.5, 0.0, 1.0)
+        f_normal = force * np.clip(np.minimum(s, 1.0 - s) / 0.5, 0.0, 1.0)
         ang = rng.uniform(0.0, 2.0 * math.pi) + turn * s
-        f = -fn[:, None] * n + mu * fn[:, None] * (np.cos(ang)[:, None] * a + np.sin(ang)[:, None] * b)
-        r = c + (radius - kappa * np.sqrt(fn))[:, None] * n
-        m = np.cross(r, f) + (rng.normal(0.0, 0.2e-3) * fn)[:, None] * n
+        f = -f_normal[:, None] * n + mu * f_normal[:, None] * (np.cos(ang)[:, None] * a + np.sin(ang)[:, None] * b)
+        r = c + (radius - kappa * np.sqrt(f_normal))[:, None] * n
+        m = np.cross(r, f) + (rng.normal(0.0, 0.2e-3) * f_normal)[:, None] * n
         t += [t0 + s, t0 + 1.0 + np.arange(0.0, 0.3, dt)]
         w += [np.column_stack((f, m)), np.zeros((30, 6))]
         t0 += 1.3

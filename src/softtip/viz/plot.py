@@ -325,9 +325,9 @@ def plot_position_error(
     """
     plt = _figure_module()
     fig, ax = plt.subplots(figsize=(7, 4.2), constrained_layout=True)
-    for label, fn, err in runs:
-        ok = np.isfinite(err) & (fn > 0)
-        ax.plot(fn[ok] / KGF, err[ok] * 1e3, ".", ms=3, label=label)
+    for label, f_norm, err in runs:
+        ok = np.isfinite(err) & (f_norm > 0)
+        ax.plot(f_norm[ok] / KGF, err[ok] * 1e3, ".", ms=3, label=label)
     if bound is not None:
         ax.axhline(bound * 1e3, ls="--", color="0.4", lw=1, label=f"{bound * 1e3:g} mm")
     ax.axvline(0.2, ls=":", color="0.4", lw=1)
