@@ -273,3 +273,48 @@ def test_simulated_rocking_tells_a_thin_plate_from_a_plane(rocked):
     assert np.mean(plane.state_names[after] == "line") <= 0.05
     assert np.mean(plane.state_names[after] == "area") >= 0.9
     assert state_changes(plane.state_names[plane.t >= 4.0]) <= 4
+
+
+# --- significance at high sample rates: the vote of the last significance_window seconds ---
+
+
+def _changes_per_s(est, t, after):
+    sel = t >= after
+    st = est.state[sel]
+    return np.count_nonzero(st[1:] != st[:-1]) / (t[sel][-1] - t[sel][0])
+
+
+def test_a_line_near_its_threshold_does_not_flicker_at_7_khz():
+    from softtip.core.units import KGF_MM
+    from softtip.sim.synthetic import synthetic_grasp
+    from test_pipeline import assert_stream_equals_batch
+
+    # |h| held near the line threshold (Nano17-class noise per sample): each sample alone flips
+    g = synthetic_grasp(rate=7000.0, h_peak=0.12 * KGF_MM, seed=0, duration=8.0)
+    alone = estimate(g.t, g.wrench, "murakami2006", EstimatorConfig(significance_window=0.0))
+    assert _changes_per_s(alone, g.t, 6.5) > 50.0
+    voted = assert_stream_equals_batch(g.t, g.wrench, "murakami2006", EstimatorConfig())
+    assert _changes_per_s(voted, g.t, 6.5) < 2.0
+    # the vote keeps the share of line samples (it removes the flicker, not the line)
+    sel = g.t >= 6.5
+    assert abs(np.mean(voted.state[sel] == 2) - np.mean(alone.state[sel] == 2)) < 0.15
+
+
+def test_the_vote_changes_nothing_at_50_hz_and_delays_a_clear_line_by_at_most_its_window():
+    from softtip.sim.synthetic import synthetic_grasp
+
+    g = synthetic_grasp(rate=50.0, seed=2)
+    a = estimate(g.t, g.wrench, "murakami2006", EstimatorConfig(significance_window=0.0))
+    b = estimate(g.t, g.wrench, "murakami2006", EstimatorConfig())
+    assert (a.state == b.state).all() and np.array_equal(a.angle, b.angle, equal_nan=True)
+    g = synthetic_grasp(rate=7000.0, seed=2, duration=7.0)
+    a = estimate(g.t, g.wrench, "murakami2006", EstimatorConfig(significance_window=0.0))
+    b = estimate(g.t, g.wrench, "murakami2006", EstimatorConfig(significance_window=0.015))
+    # the last turn to line before the held grasp: the vote is there within its window
+    onset = []
+    for e in (a, b):
+        held = g.t < 6.5
+        turn = np.flatnonzero((e.state[1:] == 2) & (e.state[:-1] != 2) & held[1:]) + 1
+        onset.append(g.t[turn[-1]])
+    assert onset[1] <= onset[0] + 0.015
+    assert (b.state[g.t >= onset[1]] == 2).all()

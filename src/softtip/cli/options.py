@@ -209,6 +209,15 @@ _ESTIMATOR_OPTIONS = [
     ),
     option("--evidence-window", type=POSITIVE("s"), default=2.0, show_default=True, metavar="S", help="Sliding window of the line evidence, s."),
     option(
+        "--significance-window",
+        type=NON_NEGATIVE("s"),
+        default=0.015,
+        show_default=True,
+        metavar="S",
+        help="|h| turns significant (line) when most samples of the last S seconds are above the line threshold, "
+        "and not when most are below 2/3 of it (0, or a sample period longer than S: each sample alone, the papers').",
+    ),
+    option(
         "--area-ratio",
         type=(POSITIVE("(eigenvalue ratio)"), POSITIVE("(eigenvalue ratio)")),
         default=(0.2, 0.1),
@@ -399,6 +408,7 @@ def make_config(opts: dict, sample_rate: float | None = None, tip: Fingertip | N
             excitation_min=opts["excitation"][1],
             evidence_max_angle_std=math.radians(opts["evidence_max_std"]),
             evidence_reset_distance=opts["evidence_reset_distance"],
+            significance_window=opts["significance_window"],
         )
     except ValueError as exc:
         raise click.UsageError(str(exc)) from None

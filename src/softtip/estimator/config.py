@@ -153,6 +153,14 @@ class EstimatorConfig:
         m; the evidence starts afresh (window, verdict, held direction) when the contact
         point moves farther than this from where it started (default 1 mm): what a window
         said about another point does not hold for the new one.
+    significance_window : float
+        s; ``|h|`` turns significant (a line) when most of the segment's samples of the last
+        this many seconds are above the line threshold, and not significant when most are
+        below its leaving share (:data:`~softtip.estimator.evidence.SIG_LEAVE`); otherwise it
+        stays as it was. Default 15 ms: shorter than a sample period at 50 Hz, so there each
+        sample decides alone (the papers' test); at 1–7 kHz a vote of 15–105 samples, so
+        sensor noise near the threshold does not make a line flicker to ``point``. 0: each
+        sample alone at every rate.
     """
 
     contact_point: Literal["latch", "track", "line-fit", "joint"] = "latch"
@@ -192,6 +200,7 @@ class EstimatorConfig:
     excitation_min: float = 0.01
     evidence_max_angle_std: float = math.radians(10.0)
     evidence_reset_distance: float = 1e-3
+    significance_window: float = 0.015
 
     def line_threshold(self, h_std: ArrayLike) -> NDArray[np.float64]:
         """The ``|h|`` above which a contact is a line: ``max(h_sigmas · h_std, h_min)``.
@@ -251,7 +260,7 @@ class EstimatorConfig:
         object.__setattr__(self, "drift_time_constant", v)
         object.__setattr__(self, "track_drift", bool(self.track_drift))
         for name in ("contact_threshold", "stall_time", "h_sigmas", "h_min", "tare_duration", "contact_hysteresis",
-                     "contact_min_duration"):  # fmt: skip
+                     "contact_min_duration", "significance_window"):  # fmt: skip
             v = float(getattr(self, name))
             if not (math.isfinite(v) and v >= 0.0):
                 raise ValueError(f"{name} must be a non-negative number, got {getattr(self, name)!r}")

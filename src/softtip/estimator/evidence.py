@@ -20,7 +20,10 @@ changes; otherwise a sample with significant ``|h|`` is ``line`` ``confirmed`` o
 ``unconfirmed``, and one below significance ``point``, except inside a confirmed line with a
 window direction held: ``h`` passing through zero while the object rocks does not make a
 line or an area a point. Significance has hysteresis too: once above the measurement's
-threshold, ``|h|`` stays significant down to :data:`SIG_LEAVE` of it. In a confirmed line
+threshold, ``|h|`` stays significant down to :data:`SIG_LEAVE` of it; and at high sample rates
+the samples of the segment's last ``significance_window`` seconds vote (most above the
+threshold: significant; most below its leaving share: not; else unchanged), so noise near
+the threshold does not flicker (at 50 Hz the window holds one sample: each decides alone). In a confirmed line
 the direction is the latest window's of this segment that confirmed the line (two-axis
 excitation, ``h`` on one axis) with an angle standard deviation at most
 ``evidence_max_angle_std`` (``d = n × principal axis``); before there is one, the sample's
@@ -117,6 +120,29 @@ def _frame_terms(px, py, pz, nx, ny, nz, hx, hy, hz, fx, fy, fz, noise, xp):
 def _sample_std(angle_std, h_norm, minor, xp):
     """The sample's angle standard deviation with the window's across-axis spread added."""
     return xp.sqrt(angle_std * angle_std + xp.div(minor, h_norm * h_norm))
+
+
+def _vote(t, located, begin, side, window: float):
+    """``side`` (1 above the threshold, 0 below its leaving share, −1 between) of each located
+    sample replaced by the vote of the located samples of its segment in the last ``window``
+    s (``t_j > t − window``, itself included): 1 or 0 when more than half are on that side, else −1."""
+    if window <= 0.0:
+        return side
+    loc = np.flatnonzero(located)
+    tl = t[loc]
+    pos = np.arange(len(loc))
+    # first located sample of each sample's segment (positions in loc)
+    first = np.maximum.accumulate(np.where(begin[loc], pos, 0))
+    lo = np.maximum(np.searchsorted(tl, tl - window, side="right"), first)
+    m = pos + 1 - lo
+    out = np.full_like(side, -1)
+    c = side[loc]
+    vote = np.full(len(loc), -1, dtype=side.dtype)
+    for v in (0, 1):
+        cum = np.concatenate(([0], np.cumsum(c == v)))
+        vote[2 * (cum[pos + 1] - cum[lo]) > m] = v
+    out[loc] = vote
+    return out
 
 
 def _point_moves(begin, located, point, distance: float):
@@ -288,13 +314,15 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
     h_ratio = np.where(located, h_ratio, np.nan)
     f_ratio = np.where(located, f_ratio, np.nan)
 
-    # significance with hysteresis: a line stays significant down to SIG_LEAVE × threshold
+    # significance with hysteresis: a line stays significant down to SIG_LEAVE × threshold,
+    # decided by the vote of the last significance_window s
     with np.errstate(invalid="ignore"):
         thr = config.line_threshold(ms.h_std)
         hn = np.asarray(ms.h_norm, dtype=float)
         sig_ev = np.where(hn > thr, 1, np.where(hn <= SIG_LEAVE * thr, 0, -1))
     idx = np.arange(n)
     seg_start = np.maximum.accumulate(np.where(begin, idx, 0))
+    sig_ev = _vote(t, located, begin, sig_ev, config.significance_window)
     sig_at = np.maximum.accumulate(np.where(located & (sig_ev >= 0), idx, -1))
     sig = located & (sig_at >= seg_start) & (sig_ev[np.maximum(sig_at, 0)] == 1)
     has_held = held >= 0
@@ -344,6 +372,7 @@ class EvidenceTracker:
         self._f_ratio = config.excitation_ratio
         self._max_std = config.evidence_max_angle_std
         self._reset2 = config.evidence_reset_distance * config.evidence_reset_distance
+        self._vote_window = config.significance_window
         self.start_segment()
 
     def start_segment(self) -> None:
@@ -354,6 +383,10 @@ class EvidenceTracker:
         self._held: tuple[float, float] | None = None
         self._sig = False
         self._anchor: tuple | None = None
+        # the segment's samples of the last significance_window s: (t, side), and how many
+        # are above the threshold and below its leaving share
+        self._votes: deque[tuple[float, int]] = deque()
+        self._n_above = self._n_below = 0
 
     def step(self, t, geo: PointGeometry, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, h_std):
         """``(state, evidence, direction, angle, angle_std, h_ratio, f_ratio)`` of a located
@@ -456,10 +489,21 @@ class EvidenceTracker:
                 self._held = (w_angle, w_std)
         thr = self._h_sigmas * h_std
         thr = thr if thr > self._h_min else self._h_min
-        if hn > thr:
-            self._sig = True
-        elif hn <= SIG_LEAVE * thr:
-            self._sig = False
+        side = 1 if hn > thr else (0 if hn <= SIG_LEAVE * thr else -1)
+        if self._vote_window > 0.0:
+            votes = self._votes
+            votes.append((t, side))
+            self._n_above += side == 1
+            self._n_below += side == 0
+            start = t - self._vote_window
+            while votes[0][0] <= start:
+                old = votes.popleft()[1]
+                self._n_above -= old == 1
+                self._n_below -= old == 0
+            m = len(votes)
+            side = 1 if 2 * self._n_above > m else (0 if 2 * self._n_below > m else -1)
+        if side >= 0:
+            self._sig = side == 1
         verdict = self._verdict
         if verdict == _AREA:
             return "area", "", _NAN3, math.nan, math.nan, h_ratio, f_ratio
