@@ -35,8 +35,10 @@ method | error with softtip's extension``. Sections:
   direction error and RMS of error / reported standard deviation.
 * **rates** (issue 10's note, not in the default run): the line evidence at 1 and 7 kHz, without
   and with a 20 Hz low-pass, on a 1 mm and a 15 mm plate (rocking and the papers' grasp): the
-  simulator's 50 Hz true wrench resampled linearly, Nano17-class noise drawn per sample.
-  ``--sections rates`` (about a minute).
+  simulator's 50 Hz true wrench resampled linearly, Nano17-class noise drawn per sample;
+  then significance near the threshold, each sample alone vs the vote of the last
+  ``significance_window`` s, on synthetic grasps at 50 Hz, 1 and 7 kHz.
+  ``--sections rates`` (about two minutes).
 * **cost**: streaming time per sample of each mode.
 * **friction** (issue 11): a friction load during the hold (:func:`softtip.sim.friction_scenario`:
   a push ramped in over 6 → 6.5 s, a slow drag over 5.5 → 9.5 s, or a slip of 1.5 mm along
@@ -402,6 +404,34 @@ def rates_section(angle: float = 25.0, seed: int = 101) -> None:
                     grasp = "rocking" if rock else "papers' grasp"
                     _row(f"{label}, {grasp}", f"{rate:.0f} Hz", "none" if cutoff is None else f"{cutoff:g} Hz", share,
                          f"{changes:.1f}", cell)  # fmt: skip
+    flicker_rows()
+
+
+def flicker_rows(seeds: int = 3) -> None:
+    """Significance near the threshold: synthetic grasps (:func:`softtip.sim.synthetic.synthetic_grasp`)
+    with ``|h|`` held at 0.08–0.2 kgf·mm, each sample deciding alone vs the default vote of the
+    last ``significance_window`` s; after 6.5 s, mean over seeds."""
+    from softtip.core.units import KGF_MM
+    from softtip.sim.synthetic import synthetic_grasp
+
+    print("\n### significance near the threshold: each sample alone vs the vote (synthetic grasps, "
+          f"{seeds} seeds, t ≥ 6.5 s)\n")  # fmt: skip
+    print("| rate | h held, kgf·mm | state changes / s, alone → vote | line share, alone → vote |")
+    print("| --- | --- | --- | --- |")
+    for rate in (50.0, 1000.0, 7000.0):
+        for h_peak in (0.08, 0.12, 0.2):
+            ch, share = {}, {}
+            for window in (0.0, EstimatorConfig().significance_window):
+                c, sh = [], []
+                for seed in range(seeds):
+                    g = synthetic_grasp(rate=rate, h_peak=h_peak * KGF_MM, seed=seed, duration=10.0)
+                    st = estimate(g.t, g.wrench, TIP, EstimatorConfig(significance_window=window)).state[g.t >= 6.5]
+                    c.append(np.count_nonzero(st[1:] != st[:-1]) / (10.0 - 6.5))
+                    sh.append(np.mean(st == 2))
+                ch[window], share[window] = np.mean(c), np.mean(sh)
+            a, b = ch.values()
+            sa, sb = share.values()
+            _row(f"{rate:.0f} Hz", f"{h_peak:g}", f"{a:.1f} → {b:.1f}", f"{sa:.0%} → {sb:.0%}")
 
 
 def fit_depth() -> DepthLaw:
