@@ -318,3 +318,29 @@ def test_the_vote_changes_nothing_at_50_hz_and_delays_a_clear_line_by_at_most_it
         onset.append(g.t[turn[-1]])
     assert onset[1] <= onset[0] + 0.015
     assert (b.state[g.t >= onset[1]] == 2).all()
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.lists(st.tuples(st.floats(0.0, 0.02), st.booleans(), st.booleans(), st.sampled_from([-1, 0, 1])), min_size=1, max_size=60),
+    st.floats(0.0, 0.1),
+)
+def test_the_vote_counts_only_located_samples_of_the_segment_in_the_window(rows, window):
+    from softtip.estimator.evidence import _vote
+
+    t = np.cumsum([r[0] for r in rows])
+    located = np.array([r[1] for r in rows])
+    begin = np.array([r[2] for r in rows])
+    begin[0] = True
+    side = np.array([r[3] for r in rows], dtype=np.int64)
+    seg_start = np.maximum.accumulate(np.where(begin, np.arange(len(t)), 0))
+    got = _vote(t, located, seg_start, side, window)
+    for i in np.flatnonzero(located):  # brute force, as the stream counts
+        if window <= 0.0:
+            assert got[i] == side[i]
+            continue
+        mine = [j for j in range(seg_start[i], i + 1) if located[j] and t[j] > t[i] - window]
+        n1 = sum(side[j] == 1 for j in mine)
+        n0 = sum(side[j] == 0 for j in mine)
+        want = 1 if 2 * n1 > len(mine) else (0 if 2 * n0 > len(mine) else -1)
+        assert got[i] == want, (i, mine)

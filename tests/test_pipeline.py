@@ -65,6 +65,8 @@ def sliding_grasp():
 
 
 CASES = {
+    # at 50 Hz: a vote of 15 samples on significance, segments restarted by re-latches
+    "vote": EstimatorConfig(significance_window=0.3, relatch_distance=3e-3),
     "latch": EstimatorConfig(),  # the online depth (murakami2006 has a skin thickness)
     "latch-papers": PAPERS,
     "latch-law": EstimatorConfig(depth_mode="law"),
@@ -172,6 +174,8 @@ def test_stream_agrees_with_batch_on_a_sphere_with_pulling_samples(rng):
     w[300:310, :3] *= -1.0  # the force pulls for 0.2 s
     batch = assert_stream_equals_batch(g.t, w, Sphere(0.02, center=(0, 0, 0.01)), EstimatorConfig())
     assert batch.n_pulling >= 10
+    voted = assert_stream_equals_batch(g.t, w, Sphere(0.02, center=(0, 0, 0.01)), EstimatorConfig(significance_window=0.5))
+    assert not np.array_equal(voted.state, batch.state)  # the vote did decide something
 
 
 @pytest.mark.parametrize("angle", [-45.0, 0.0, 30.0, 45.0, 89.0])

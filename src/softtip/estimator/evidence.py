@@ -122,7 +122,7 @@ def _sample_std(angle_std, h_norm, minor, xp):
     return xp.sqrt(angle_std * angle_std + xp.div(minor, h_norm * h_norm))
 
 
-def _vote(t, located, begin, side, window: float):
+def _vote(t, located, seg_start, side, window: float):
     """``side`` (1 above the threshold, 0 below its leaving share, −1 between) of each located
     sample replaced by the vote of the located samples of its segment in the last ``window``
     s (``t_j > t − window``, itself included): 1 or 0 when more than half are on that side, else −1."""
@@ -131,8 +131,9 @@ def _vote(t, located, begin, side, window: float):
     loc = np.flatnonzero(located)
     tl = t[loc]
     pos = np.arange(len(loc))
-    # first located sample of each sample's segment (positions in loc)
-    first = np.maximum.accumulate(np.where(begin[loc], pos, 0))
+    # first located sample of each sample's segment (positions in loc; a segment may begin
+    # at a sample that is not located)
+    first = np.searchsorted(loc, seg_start[loc])
     lo = np.maximum(np.searchsorted(tl, tl - window, side="right"), first)
     m = pos + 1 - lo
     out = np.full_like(side, -1)
@@ -322,7 +323,7 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
         sig_ev = np.where(hn > thr, 1, np.where(hn <= SIG_LEAVE * thr, 0, -1))
     idx = np.arange(n)
     seg_start = np.maximum.accumulate(np.where(begin, idx, 0))
-    sig_ev = _vote(t, located, begin, sig_ev, config.significance_window)
+    sig_ev = _vote(t, located, seg_start, sig_ev, config.significance_window)
     sig_at = np.maximum.accumulate(np.where(located & (sig_ev >= 0), idx, -1))
     sig = located & (sig_at >= seg_start) & (sig_ev[np.maximum(sig_at, 0)] == 1)
     has_held = held >= 0
