@@ -339,8 +339,18 @@ def test_the_vote_counts_only_located_samples_of_the_segment_in_the_window(rows,
         if window <= 0.0:
             assert got[i] == side[i]
             continue
-        mine = [j for j in range(seg_start[i], i + 1) if located[j] and t[j] > t[i] - window]
+        mine = [j for j in range(seg_start[i], i) if located[j] and t[j] > t[i] - window] + [i]
         n1 = sum(side[j] == 1 for j in mine)
         n0 = sum(side[j] == 0 for j in mine)
         want = 1 if 2 * n1 > len(mine) else (0 if 2 * n0 > len(mine) else -1)
         assert got[i] == want, (i, mine)
+
+
+def test_a_vote_window_below_the_stamps_rounding_is_each_sample_alone_in_batch_and_stream():
+    from softtip.sim.synthetic import synthetic_grasp
+    from test_pipeline import assert_stream_equals_batch
+
+    g = synthetic_grasp(rate=1000.0, seed=5, duration=6.0)
+    tiny = assert_stream_equals_batch(g.t, g.wrench, "murakami2006", EstimatorConfig(significance_window=1e-300))
+    alone = estimate(g.t, g.wrench, "murakami2006", EstimatorConfig(significance_window=0.0))
+    assert (tiny.state == alone.state).all()

@@ -125,7 +125,7 @@ def _sample_std(angle_std, h_norm, minor, xp):
 def _vote(t, located, seg_start, side, window: float):
     """``side`` (1 above the threshold, 0 below its leaving share, −1 between) of each located
     sample replaced by the vote of the located samples of its segment in the last ``window``
-    s (``t_j > t − window``, itself included): 1 or 0 when more than half are on that side, else −1."""
+    s (``t_j > t − window``, and itself): 1 or 0 when more than half are on that side, else −1."""
     if window <= 0.0:
         return side
     loc = np.flatnonzero(located)
@@ -134,7 +134,8 @@ def _vote(t, located, seg_start, side, window: float):
     # first located sample of each sample's segment (positions in loc; a segment may begin
     # at a sample that is not located)
     first = np.searchsorted(loc, seg_start[loc])
-    lo = np.maximum(np.searchsorted(tl, tl - window, side="right"), first)
+    # the sample itself always votes (a window below the stamps' rounding keeps just it)
+    lo = np.maximum(np.minimum(np.searchsorted(tl, tl - window, side="right"), pos), first)
     m = pos + 1 - lo
     out = np.full_like(side, -1)
     c = side[loc]
@@ -299,7 +300,11 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
         del out, prods
         area_now, line_now, resolved, h_ratio, f_ratio, *rest = res
         win = _Held(*rest)
-        event = np.where(area_now, _AREA, np.where(line_now, _LINE, _UNKNOWN))
+        # an area only where |h| itself is significant: sub-threshold h wanders about both axes
+        # with the model's error (a grasp force settling) once a low-pass has removed the noise
+        with np.errstate(invalid="ignore"):
+            above = np.asarray(ms.h_norm, dtype=float) > config.line_threshold(ms.h_std)
+        event = np.where(area_now & above, _AREA, np.where(line_now, _LINE, _UNKNOWN))
         # the verdict is the latest event of the segment, and the held window the latest
         # resolved one (forward fill within each segment)
         idx = np.arange(n)
@@ -477,7 +482,9 @@ class EvidenceTracker:
             f_ratio = f_minor / f_major if f_major != 0.0 else _div(f_minor, f_major)
         else:
             f_ratio = math.nan
-        if minor > h_noise and h_ratio >= self._enter:
+        thr = self._h_sigmas * h_std
+        thr = thr if thr > self._h_min else self._h_min
+        if minor > h_noise and h_ratio >= self._enter and hn > thr:
             self._verdict = _AREA
         elif (
             varied and h_ratio < self._leave and f_minor > f_noise
@@ -488,8 +495,6 @@ class EvidenceTracker:
             w_angle, w_std = window_direction_floats(e, s2, nu, self.corr)
             if w_std <= self._max_std:
                 self._held = (w_angle, w_std)
-        thr = self._h_sigmas * h_std
-        thr = thr if thr > self._h_min else self._h_min
         side = 1 if hn > thr else (0 if hn <= SIG_LEAVE * thr else -1)
         if self._vote_window > 0.0:
             votes = self._votes
@@ -497,7 +502,7 @@ class EvidenceTracker:
             self._n_above += side == 1
             self._n_below += side == 0
             start = t - self._vote_window
-            while votes[0][0] <= start:
+            while len(votes) > 1 and votes[0][0] <= start:
                 old = votes.popleft()[1]
                 self._n_above -= old == 1
                 self._n_below -= old == 0
