@@ -94,7 +94,11 @@ def _decide(win, config: EstimatorConfig, xp):
     f_ratio = xp.where(win.f_major > win.f_noise, xp.div(win.f_minor, win.f_major), xp.nan)
     # comparisons written so that NaN is False in both back ends
     varied = win.h_major > win.h_noise
-    area_now = (win.h_minor > win.h_noise) & (h_ratio >= enter)
+    # a two-axis h counts when the load turned about its weaker axis too, or when h's spread
+    # about that axis exceeds the model's error floor h_min (a point gone stale, whatever the
+    # load); below it, without a turning load, it is the model's error (a grasp force settling)
+    turned = (win.f_minor > win.f_noise) & (win.f_minor >= config.excitation_min * config.excitation_min)
+    area_now = (win.h_minor > win.h_noise) & (h_ratio >= enter) & (turned | (win.h_minor >= config.h_min * config.h_min))
     one_axis = varied & (h_ratio < leave)
     excited = (
         (win.f_minor > win.f_noise)
@@ -375,6 +379,7 @@ class EvidenceTracker:
         self._window = config.evidence_window
         self._h_sigmas, self._h_min = config.h_sigmas, config.h_min
         self._fmin2 = config.excitation_min * config.excitation_min
+        self._hmin2 = config.h_min * config.h_min
         self._f_ratio = config.excitation_ratio
         self._max_std = config.evidence_max_angle_std
         self._reset2 = config.evidence_reset_distance * config.evidence_reset_distance
@@ -484,7 +489,10 @@ class EvidenceTracker:
             f_ratio = math.nan
         thr = self._h_sigmas * h_std
         thr = thr if thr > self._h_min else self._h_min
-        if minor > h_noise and h_ratio >= self._enter and hn > thr:
+        if (
+            minor > h_noise and h_ratio >= self._enter and hn > thr
+            and ((f_minor > f_noise and f_minor >= self._fmin2) or minor >= self._hmin2)
+        ):  # fmt: skip
             self._verdict = _AREA
         elif (
             varied and h_ratio < self._leave and f_minor > f_noise
