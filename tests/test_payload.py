@@ -187,6 +187,9 @@ def test_cli_payload_errors_name_file_and_column(tmp_path):
     bad.write_text("\n".join(text) + "\n")
     res = run("estimate", bad, "--payload", ptoml, "-o", out)
     assert res.returncode == 2 and "bad.csv:4" in res.stderr and "'qz'" in res.stderr
+    bad.write_text("# recorded by a robot\n\n" + "\n".join(text) + "\n")  # the reader's lines count these
+    res = run("estimate", bad, "--payload", ptoml, "-o", out)
+    assert res.returncode == 2 and "bad.csv:6" in res.stderr and "'qz'" in res.stderr
     assert not out.exists()
 
 

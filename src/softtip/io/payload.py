@@ -26,19 +26,6 @@ UNIT_TOLERANCE = 1e-3
 
 
 
-def _header_line(source: str) -> int | None:
-    """1-based line of a CSV file's header (the first line not blank and not a comment)."""
-    try:
-        with open(source, encoding="utf-8-sig", newline="") as fh:
-            for k, line in enumerate(fh, start=1):
-                s = line.strip()
-                if s and not s.startswith("#"):
-                    return k
-    except (OSError, UnicodeDecodeError):
-        return None
-    return None
-
-
 def _to_float(cell: str) -> float:
     try:
         return float(cell)
@@ -70,11 +57,9 @@ def read_orientation(log, tolerance: float = UNIT_TOLERANCE) -> NDArray[np.float
             f"{log.source}: missing orientation column(s) {', '.join(missing)}; gravity compensation needs "
             f"qw, qx, qy, qz (unit quaternion of the sensor frame in a z-up world frame); extra columns present: {have}"
         )
-    csv_file = os.path.isfile(log.source) and not log.source.lower().endswith(".parquet")
-    header = _header_line(log.source) if csv_file else None  # Parquet: rows by number
-
     def where(i: int, col: str) -> str:
-        line = f"{log.source}:{header + 1 + i}" if header is not None else f"{log.source}: data row {i + 1}"
+        first = getattr(log, "first_line", None)  # the reader's: no second look at the file
+        line = f"{log.source}:{first + i}" if first is not None else f"{log.source}: data row {i + 1}"
         return f"{line}: column {col!r}"
 
     n = len(log.t)

@@ -108,6 +108,10 @@ class Log:
         one applies): repeated stamps, an implausible time scale (``t`` in ms, µs or ns
         instead of s), a last line cut while the file was written. A command line tool
         prints them; a library user may check them.
+    first_line : int or None
+        The CSV line (1-based) of the first data row when every row is one line (row ``i`` is
+        then on line ``first_line + i``), for messages about a row; ``None`` where rows are
+        named by number (Parquet, a quoted cell spanning lines, a bag).
     """
 
     t: NDArray[np.float64]
@@ -117,6 +121,7 @@ class Log:
     units: str
     repeated_t: int = 0
     warnings: tuple[str, ...] = ()
+    first_line: int | None = None
 
 
 # --------------------------------------------------------------------------------------
@@ -190,6 +195,7 @@ def read_log(
         units=units,
         repeated_t=repeated,
         warnings=tuple(notes) + ((cut,) if cut else ()),
+        first_line=None if quoted else first_line,
     )
 
 
