@@ -90,6 +90,7 @@ from softtip.core.contact import _sphere_kernel
 from softtip.core.fingertip import Capsule, Fingertip, Sphere
 from softtip.core.noise import NANO17, SensorNoise
 from softtip.errors import InputError
+from softtip.io.atomic import atomic_write_text
 
 __all__ = [
     "JACKKNIFE_SHIFT",
@@ -736,13 +737,6 @@ def write_fingertip_toml(cal: Calibration, path: str | os.PathLike[str], source:
         header.append(f"# warning: {cal.warning or cal.precision_warning()}")
     text = "\n".join(header) + "\n" + cal.tip.to_toml()
     atomic_write_text(path, text)
-
-
-def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
-    """Write ``text`` to ``path`` atomically (:func:`softtip.io.atomic.atomic_write_text`); nothing partial is left."""
-    from softtip.io.atomic import atomic_write_text as write
-
-    write(path, text)
 
 
 def __getattr__(name: str):

@@ -140,7 +140,7 @@ def calibrate(
         if example or input_path is None:
             raise click.UsageError("--shape mesh needs a probing LOG of the mesh fingertip (the example is a sphere's)")
         from softtip.calibration.mesh import calibrate_mesh_file
-        from softtip.calibration.probing import atomic_write_text
+        from softtip.io.atomic import atomic_write_text
 
         try:
             if shape != "mesh" or mesh_path is None or rigid:

@@ -38,8 +38,8 @@ together with --payload (no tare needed).
 @click.pass_context
 def calibrate_payload(ctx, input_path, output, units, example):
     from softtip.calibration.payload import calibrate_payload as fit_payload
-    from softtip.calibration.probing import atomic_write_text
     from softtip.estimator.tare import bias_to_toml
+    from softtip.io.atomic import atomic_write_text
     from softtip.io.payload import read_orientation
 
     input_path = _example_or_log(input_path, example, units, EXAMPLE_STILL_PATH, "still log")

@@ -304,7 +304,7 @@ def _report_run(totals: _RunTotals, *, input_path, output, plot_path, to_bag, re
             raise InputError(f"--save-bias {save_bias}: is also an input or output of this run")
         if not np.all(np.isfinite(totals.bias)):
             raise InputError(f"--save-bias {save_bias}: no bias: the whole log lies within the tare")
-        from softtip.calibration.probing import atomic_write_text
+        from softtip.io.atomic import atomic_write_text
 
         atomic_write_text(save_bias, bias_to_toml(totals.bias, f"softtip sensor bias ({totals.tare.summary()})"))
         click.echo(f"softtip: bias -> {save_bias}", err=True)

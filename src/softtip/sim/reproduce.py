@@ -43,6 +43,7 @@ from softtip.core.axial import axial_difference
 from softtip.core.fingertip import Fingertip, murakami2006
 from softtip.core.units import KGF
 from softtip.estimator import AREA, LINE, Estimates, EstimatorConfig, estimate
+from softtip.io.atomic import atomic_write_text
 
 __all__ = [
     "TOLERANCE_DEG",
@@ -431,9 +432,7 @@ def write_summary(results: Sequence[ConditionResult], out: Path) -> None:
         lines.append("| " + " | ".join(row.values()) + " |")
     judged = [r for r in results if r.agrees is not None]
     lines += ["", f"Agreement with the published outcomes: {sum(r.agrees for r in judged)} of {len(judged)} conditions."]
-    tmp = out / ".summary.md.partial"
-    tmp.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    os.replace(tmp, out / "summary.md")
+    atomic_write_text(out / "summary.md", "\n".join(lines) + "\n")
 
 
 def write_figures(results: Sequence[ConditionResult], out: Path) -> None:
