@@ -7,7 +7,9 @@ where the window started, e.g. a ``line-fit`` point found) of the located sample
 covariance (noise removed) and ``ratio = minor / major``:
 
 * the window **spans both axes** when ``minor`` is beyond the noise and
-  ``ratio ≥ area_ratio[0]``: the contact becomes ``area``;
+  ``ratio ≥ area_ratio[0]``: the contact becomes ``area`` at a sample whose ``|h|`` is
+  significant, provided the load turned about its weaker axis too (its ``minor`` beyond the
+  noise and at least ``excitation_min²``) or ``minor ≥ h_min²`` (a point gone stale);
 * it **confirms a line** when the tangential load was excited about two axes (its own
   ``minor`` beyond the noise, at least ``excitation_ratio`` times its ``major`` and at least
   ``excitation_min²``), ``h``
