@@ -335,6 +335,11 @@ def test_the_vote_counts_only_located_samples_of_the_segment_in_the_window(rows,
     side = np.array([r[3] for r in rows], dtype=np.int64)
     seg_start = np.maximum.accumulate(np.where(begin, np.arange(len(t)), 0))
     got = _vote(t, located, seg_start, side, window)
+    if window > 0.0:  # the compiled loop (its Python form without numba) gives the same
+        from softtip.estimator.sequential import vote_kernel
+
+        loop = vote_kernel.py_func(t, located, seg_start, side, window, np.empty(len(t), dtype=np.int64))
+        assert np.array_equal(loop[located], got[located])
     for i in np.flatnonzero(located):  # brute force, as the stream counts
         if window <= 0.0:
             assert got[i] == side[i]

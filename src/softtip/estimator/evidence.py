@@ -66,7 +66,7 @@ from softtip.core.noise import SensorNoise
 from softtip.core.spin import tangent_frame_kernel
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.floats import NoiseSquares, PointGeometry, sample_direction
-from softtip.estimator.sequential import point_moves_kernel, window_sums_kernel
+from softtip.estimator.sequential import point_moves_kernel, vote_kernel, window_sums_kernel
 
 __all__ = ["evidence_states", "EvidenceStates", "EvidenceTracker"]
 
@@ -134,6 +134,9 @@ def _vote(t, located, seg_start, side, window: float):
     s (``t_j > t − window``, and itself): 1 or 0 when more than half are on that side, else −1."""
     if window <= 0.0:
         return side
+    if jit_enabled(len(t)):
+        seg = np.ascontiguousarray(seg_start, dtype=np.int64)
+        return vote_kernel(t, located, seg, np.ascontiguousarray(side, dtype=np.int64), float(window), np.empty(len(t), dtype=np.int64))
     loc = np.flatnonzero(located)
     tl = t[loc]
     pos = np.arange(len(loc))

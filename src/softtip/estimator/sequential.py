@@ -13,7 +13,7 @@ import numpy as np
 
 from softtip.core._jit import lazy_jit
 
-__all__ = ["contact_window_sums_kernel", "point_moves_kernel", "running_best_kernel", "window_sums_kernel"]
+__all__ = ["contact_window_sums_kernel", "point_moves_kernel", "running_best_kernel", "vote_kernel", "window_sums_kernel"]
 
 
 @lazy_jit
@@ -249,3 +249,46 @@ def latch_scan_kernel(begin, contact, t, f_norm, valid, rx, ry, rz, lo, hi, stal
         if over and fixed_fb < 0 and nf >= n_fallback:
             fixed_fb = i
     return s + 1
+
+
+@lazy_jit
+def vote_kernel(t, located, seg_start, side, window, out):  # pragma: no cover - compiled
+    """``out``: the vote on significance of each located sample (see
+    :func:`softtip.estimator.evidence._vote`): 1 or 0 when more than half of the located
+    samples of its segment with ``t_j > t − window`` (and itself) are on that side, else −1.
+
+    ``t`` (N,) s non-decreasing; ``located`` (N,) bool; ``seg_start`` (N,) int, the index of
+    each sample's segment start; ``side`` (N,) int (1, 0, −1); ``out`` (N,) int, written
+    (−1 where not located). One pass, a window of located samples between two pointers.
+    """
+    n = t.shape[0]
+    left = 0  # the window's first located sample
+    above = below = m = 0
+    seg = -1
+    for i in range(n):
+        out[i] = -1
+        if not located[i]:
+            continue
+        if seg_start[i] != seg:  # a new segment: an empty window
+            seg = seg_start[i]
+            left = i
+            above = below = m = 0
+        m += 1
+        if side[i] == 1:
+            above += 1
+        elif side[i] == 0:
+            below += 1
+        start = t[i] - window
+        while left < i and (not located[left] or t[left] <= start):
+            if located[left]:
+                m -= 1
+                if side[left] == 1:
+                    above -= 1
+                elif side[left] == 0:
+                    below -= 1
+            left += 1
+        if 2 * above > m:
+            out[i] = 1
+        elif 2 * below > m:
+            out[i] = 0
+    return out
