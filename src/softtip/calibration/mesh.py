@@ -37,7 +37,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from softtip.calibration.probing import _force_spread, find_presses
+from softtip.calibration.probing import find_presses, force_spread
 from softtip.core._vec import tangent_basis as _tangent_basis
 from softtip.core.mesh import MeshFingertip
 from softtip.errors import InputError
@@ -180,7 +180,7 @@ def calibrate_mesh(
     presses, skipped = [], 0
     for idx in find_presses(f_norm, contact_threshold):
         idx = idx[f_norm[idx] >= min_force]
-        if len(idx) < 8 or _force_spread(w[idx, :3]) < _MIN_SPREAD:
+        if len(idx) < 8 or force_spread(w[idx, :3]) < _MIN_SPREAD:
             skipped += 1
         else:
             presses.append(idx)

@@ -86,7 +86,7 @@ from softtip.core._vec import cross as _cross
 from softtip.core._vec import skew as _skew
 from softtip.core._vec import tangent_basis as _tangent_basis
 from softtip.core._xp import NP
-from softtip.core.contact import _sphere_kernel
+from softtip.core.contact import sphere_kernel
 from softtip.core.fingertip import Capsule, Fingertip, Sphere
 from softtip.core.noise import NANO17, SensorNoise
 from softtip.errors import InputError
@@ -340,7 +340,7 @@ def find_presses(
     return [np.arange(a, b) for a, b in zip(edges[::2], edges[1::2]) if b - a >= min_samples]
 
 
-def _force_spread(f: NDArray) -> float:
+def force_spread(f: NDArray) -> float:
     """Sine of the typical angle the force direction turns through within a press."""
     u = f / np.linalg.norm(f, axis=1, keepdims=True)
     lam = np.linalg.eigvalsh(u.T @ u / len(u))  # ascending
@@ -495,7 +495,7 @@ def calibrate_fingertip(
         )
 
     # start values: per press the point m = r × f pins (if the force turns), a sphere through them
-    spread = np.array([_force_spread(f_all[k]) for k in presses])
+    spread = np.array([force_spread(f_all[k]) for k in presses])
     located = np.flatnonzero(spread >= min_spread)
     if len(located) < 4:
         raise _not_excited(
@@ -547,7 +547,7 @@ def calibrate_fingertip(
 
 def _press_normal(f: NDArray, m: NDArray, c: NDArray, radius: float) -> NDArray:
     """Mean soft-finger contact normal of a press on the trial sphere ``(c, radius)``."""
-    out = _sphere_kernel(*f.T, *m.T, radius, *c, NP)
+    out = sphere_kernel(*f.T, *m.T, radius, *c, NP)
     n = np.column_stack(out[3:6])[out[7]]
     if len(n) == 0:  # no pushing root on the trial sphere: the force direction is a fair guess
         n = -f / np.linalg.norm(f, axis=1, keepdims=True)

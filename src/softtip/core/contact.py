@@ -54,7 +54,8 @@ class Contact:
 # (rx, ry, rz, nx, ny, nz, sigma, valid).
 
 
-def _sphere_kernel(fx, fy, fz, mx, my, mz, radius, cx, cy, cz, xp):
+def sphere_kernel(fx, fy, fz, mx, my, mz, radius, cx, cy, cz, xp):
+    """The soft-finger contact on a sphere of ``radius`` (m) centred at ``c`` (m), component-wise: point, normal, ``σ`` and validity."""
     # moment about the centre: m_c = m - c × f
     mx = mx - (cy * fz - cz * fy)
     my = my - (cz * fx - cx * fz)
@@ -97,7 +98,7 @@ def _capsule_kernel(fx, fy, fz, mx, my, mz, radius, length, ox, oy, xp):
 
 def _centred_capsule_kernel(fx, fy, fz, mx, my, mz, radius, length, xp):
     # hemisphere first (manual §3.2)
-    sx, sy, sz, snx, sny, snz, ssig, sval = _sphere_kernel(fx, fy, fz, mx, my, mz, radius, 0.0, 0.0, length, xp)
+    sx, sy, sz, snx, sny, snz, ssig, sval = sphere_kernel(fx, fy, fz, mx, my, mz, radius, 0.0, 0.0, length, xp)
     on_cap = xp.logical_and(sval, sz >= length)
 
     # cylinder side x² + y² = R²: m_z fixes the azimuth φ, m_x and m_y give z and σ linearly.
@@ -137,7 +138,7 @@ def _ellipsoid_kernel(fx, fy, fz, mx, my, mz, a, b, c, cx, cy, cz, xp):
     mx = mx - (cy * fz - cz * fy)
     my = my - (cz * fx - cx * fz)
     mz = mz - (cx * fy - cy * fx)
-    sx, sy, sz, _, _, _, kappa, valid = _sphere_kernel(
+    sx, sy, sz, _, _, _, kappa, valid = sphere_kernel(
         b * c * fx, a * c * fy, a * b * fz, a * mx, b * my, c * mz, 1.0, 0.0, 0.0, 0.0, xp
     )
     gx, gy, gz = sx / a, sy / b, sz / c  # ∝ gradient of S at p
@@ -193,7 +194,7 @@ def contact_kernel(tip: Fingertip, fx, fy, fz, mx, my, mz, xp=NP):
     if isinstance(tip, Capsule):
         return _capsule_kernel(fx, fy, fz, mx, my, mz, tip.radius, tip.length, *tip.axis_offset, xp)
     if isinstance(tip, Sphere):
-        return _sphere_kernel(fx, fy, fz, mx, my, mz, tip.radius, *tip.center, xp)
+        return sphere_kernel(fx, fy, fz, mx, my, mz, tip.radius, *tip.center, xp)
     if isinstance(tip, Ellipsoid):
         return _ellipsoid_kernel(fx, fy, fz, mx, my, mz, *tip.semi_axes, *tip.center, xp)
     if isinstance(tip, ImplicitSurface):
@@ -307,7 +308,7 @@ def _implicit_contact(w: NDArray, tip: ImplicitSurface, max_iter: int = 60, tol:
     if retry.size:
         (cx, cy, cz), radius = tip.bounding_sphere
         fr, mr = f[retry], m[retry]
-        sx, sy, sz = _sphere_kernel(*fr.T, *mr.T, radius, cx, cy, cz, NP)[:3]
+        sx, sy, sz = sphere_kernel(*fr.T, *mr.T, radius, cx, cy, cz, NP)[:3]
         r1 = tip.project(np.stack((sx, sy, sz), axis=-1))
         r1, k1, g1, gn1, conv1 = _levenberg_marquardt(fr, mr, r1, _kappa_at(tip, r1, fr, mr), tip, max_iter, tol)
         better = conv1 & (np.sum(fr * g1, axis=-1) < 0.0)

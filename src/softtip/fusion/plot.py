@@ -65,9 +65,9 @@ def plot_fused(
     -------
     matplotlib.figure.Figure
     """
-    from softtip.viz.plot import _figure_module, _save
+    from softtip.viz.plot import figure_module, save_figure
 
-    plt = _figure_module()
+    plt = figure_module()
     fig, ((ax_f, ax_d), (ax_g, ax_n)) = plt.subplots(2, 2, figsize=(10, 6.5), sharex=True, constrained_layout=True)
     t = fused.t
     a, b = fused.names
@@ -121,5 +121,5 @@ def plot_fused(
     for ax in (ax_f, ax_d, ax_n):
         ax.grid(True, alpha=0.3)
     fig.suptitle(title or f"fused grasp ({a}, {b}): angles across the grasp, from up toward ({a} → {b}) × up")
-    _save(fig, plt, path)
+    save_figure(fig, plt, path)
     return fig

@@ -158,7 +158,7 @@ class TfTree:
 def read_tf(path: str | os.PathLike[str], purpose: str = "give the fingertips' poses another way") -> TfTree:
     """Every transform of a bag's ``/tf`` and ``/tf_static`` (``purpose``: what the error of a
     bag without them suggests)."""
-    from softtip.io.bag import _typestore, import_rosbags
+    from softtip.io.bag import default_typestore, import_rosbags
 
     import_rosbags()
     from rosbags.highlevel import AnyReader
@@ -166,7 +166,7 @@ def read_tf(path: str | os.PathLike[str], purpose: str = "give the fingertips' p
     source = os.fspath(path)
     tree = TfTree(source)
     try:
-        reader = AnyReader([Path(path)], default_typestore=_typestore())
+        reader = AnyReader([Path(path)], default_typestore=default_typestore())
         reader.open()
     except Exception as exc:  # rosbags raises several unrelated types for a bad file
         raise InputError(f"{source}: cannot read as a ROS bag ({exc})") from None

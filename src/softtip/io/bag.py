@@ -127,7 +127,8 @@ class BagLog:
         return self.frame_ids[0] if self.frame_ids else ""
 
 
-def _typestore():
+def default_typestore():
+    """The rosbags type store messages are read with (ROS 2 Humble's definitions of the standard messages)."""
     from rosbags.typesys import Stores, get_typestore
 
     return get_typestore(Stores.ROS2_HUMBLE)
@@ -185,7 +186,7 @@ def read_bag(path: str | os.PathLike[str], topic: str | None = None, *, allow_pa
             f"{source}: no such file or directory; expected a ROS bag (rosbag2 directory, .mcap, .db3 or ROS 1 .bag)"
         )
     try:
-        reader = AnyReader([p], default_typestore=_typestore())
+        reader = AnyReader([p], default_typestore=default_typestore())
         reader.open()
     except Exception as exc:  # rosbags raises several unrelated types for a bad file
         raise InputError(

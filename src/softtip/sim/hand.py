@@ -239,12 +239,12 @@ def write_two_finger_bag(grasp: TwoFingerGrasp, dest, tf_rate: float = 25.0) -> 
     edge, as a robot's joint states would give). ``dest`` must not exist."""
     from pathlib import Path
 
-    from softtip.io.bag import _typestore, import_rosbags
+    from softtip.io.bag import default_typestore, import_rosbags
 
     import_rosbags()
     from rosbags.rosbag2 import StoragePlugin, Writer
 
-    ts = _typestore()
+    ts = default_typestore()
     T = ts.types
     Header, Time = T["std_msgs/msg/Header"], T["builtin_interfaces/msg/Time"]
     V3, Q = T["geometry_msgs/msg/Vector3"], T["geometry_msgs/msg/Quaternion"]

@@ -18,7 +18,8 @@ _UNITS = {
 }
 
 
-def _figure_module():
+def figure_module():
+    """``matplotlib.pyplot`` on a backend that needs no display unless one is asked for (``MPLBACKEND``)."""
     import matplotlib
 
     if os.environ.get("MPLBACKEND") is None:
@@ -73,7 +74,7 @@ def plot_estimates(
     -------
     matplotlib.figure.Figure
     """
-    plt = _figure_module()
+    plt = figure_module()
     runs = [estimates] if isinstance(estimates, Estimates) else list(estimates)
     if not runs:
         raise ValueError("nothing to plot")
@@ -135,7 +136,7 @@ def plot_estimates(
         ax.grid(True, alpha=0.3)
     if title:
         fig.suptitle(title)
-    _save(fig, plt, path)
+    save_figure(fig, plt, path)
     return fig
 
 
@@ -197,7 +198,7 @@ def plot_line_or_area(rows: Sequence[tuple[str, Estimates]], path=None, *, title
     from softtip.core._xp import NP
     from softtip.core.spin import tangent_frame_kernel
 
-    plt = _figure_module()
+    plt = figure_module()
     if not rows:
         raise ValueError("nothing to plot")
     fig = plt.figure(figsize=(10, 2.3 * len(rows) + 0.8), constrained_layout=True)
@@ -238,13 +239,13 @@ def plot_line_or_area(rows: Sequence[tuple[str, Estimates]], path=None, *, title
             ax_st.set_xlabel("time [s]")
     if title:
         fig.suptitle(title)
-    _save(fig, plt, path)
+    save_figure(fig, plt, path)
     return fig
 
 
 def figure_formats() -> set[str]:
     """File name extensions (without the dot) that the figures can be saved as."""
-    plt = _figure_module()
+    plt = figure_module()
     fig = plt.figure()
     try:
         return set(fig.canvas.get_supported_filetypes())
@@ -252,7 +253,8 @@ def figure_formats() -> set[str]:
         plt.close(fig)
 
 
-def _save(fig, plt, path, fmt: str | None = None) -> None:
+def save_figure(fig, plt, path, fmt: str | None = None) -> None:
+    """Save ``fig`` to ``path`` (format from its name, or ``fmt``) and close it; ``path`` None: leave it open."""
     if path is not None:
         fig.savefig(path, dpi=110, format=fmt)
         plt.close(fig)
@@ -278,7 +280,7 @@ def plot_direction_chart(
     -------
     matplotlib.figure.Figure
     """
-    plt = _figure_module()
+    plt = figure_module()
     fig, axes = plt.subplots(len(rows), 2, figsize=(10, 2.1 * len(rows) + 0.6), sharex=True, squeeze=False, constrained_layout=True)
     for (name, runs, labels, truths), (ax_h, ax_d) in zip(rows, axes):
         for est, label, truth in zip(runs, labels, truths):
@@ -298,7 +300,7 @@ def plot_direction_chart(
     axes[-1, 1].set_xlabel("time [s]")
     if title:
         fig.suptitle(title)
-    _save(fig, plt, path)
+    save_figure(fig, plt, path)
     return fig
 
 
@@ -323,7 +325,7 @@ def plot_position_error(
     -------
     matplotlib.figure.Figure
     """
-    plt = _figure_module()
+    plt = figure_module()
     fig, ax = plt.subplots(figsize=(7, 4.2), constrained_layout=True)
     for label, f_norm, err in runs:
         ok = np.isfinite(err) & (f_norm > 0)
@@ -337,5 +339,5 @@ def plot_position_error(
     ax.legend(fontsize=8)
     if title:
         ax.set_title(title, fontsize=10)
-    _save(fig, plt, path)
+    save_figure(fig, plt, path)
     return fig
