@@ -27,7 +27,7 @@ PARAMETERS: dict[str, Any] = {
     "tip": "murakami2006",  # preset name or fingertip TOML path
     "wrench_topic": "/ft_sensor/wrench",
     "frame_id": "",  # "" → the input's frame_id, or "ft_sensor" when that is empty
-    "contact_point": "latch",  # latch | track | joint
+    "contact_point": "latch",  # latch | track | line-fit (joint: its former name)
     "lowpass_hz": 0.0,  # 0 → no filter
     "sample_rate": 0.0,  # Hz; needed with lowpass_hz
     "tare_duration": 0.2,  # s
