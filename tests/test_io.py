@@ -801,3 +801,17 @@ def test_read_reports_progress_in_bytes(tmp_path: Path) -> None:
     assert len(log.t) == 300
     # every byte between the header line and the last line break
     assert sum(steps) == len(text.encode()) - len(HEADER) - 2
+
+
+def test_csv_blocks_formatted_on_threads_are_written_in_order(tmp_path, monkeypatch):
+    import softtip.io.tables as tables
+
+    n = 3 * tables._CHUNK_ROWS + 17
+    rng = np.random.default_rng(4)
+    cols = {"t": np.arange(n) * 1e-3, "x": rng.normal(size=n), "flag": rng.random(n) > 0.5}
+    seen = []
+    tables.write_table(cols, tmp_path / "threads.csv", progress=seen.append)
+    monkeypatch.setattr(tables, "_WRITE_THREADS", 1)
+    tables.write_table(cols, tmp_path / "one.csv")
+    assert (tmp_path / "threads.csv").read_bytes() == (tmp_path / "one.csv").read_bytes()
+    assert sum(seen) == n and len(seen) == 4

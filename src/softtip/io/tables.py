@@ -53,7 +53,9 @@ import math
 import os
 import re
 import sys
+from collections import deque
 from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any, BinaryIO, TextIO
 
@@ -72,6 +74,8 @@ _EXPECTED_HEADER = ", ".join(REQUIRED_COLUMNS)
 # Rows parsed (read) or formatted (write) per block: bounds the number of live Python
 # string objects, which dominate memory and time for 1e6-row files.
 _CHUNK_ROWS = 65536
+#: Threads that format CSV blocks at once (at most the machine's cores).
+_WRITE_THREADS = 4
 
 # Header names people use for time; difflib alone does not connect them to "t".
 _TIME_ALIASES = frozenset({"time", "times", "timestamp", "ts", "sec", "secs", "seconds"})
@@ -870,6 +874,9 @@ def write_table(
     progress : callable, optional
         Called with the number of rows written after each block (e.g. ``tqdm.update``).
 
+    CSV blocks are formatted on up to :data:`_WRITE_THREADS` threads at once (pyarrow formats
+    without holding the GIL) and written in order; at most twice that many wait in memory.
+
     CSV cells: NaN as ``nan``, infinities as ``inf``/``-inf``; booleans as ``0``/``1``;
     integers, strings and anything else with ``str``. When any text cell contains a comma,
     quote or line break, text cells are quoted as CSV requires (with the pyarrow writer:
@@ -1073,19 +1080,36 @@ def _write_rows(out: TextIO | BinaryIO, plan: _Plan, *, header: bool = True) -> 
     binary = getattr(out, "buffer", None)
     if binary is not None:
         out.flush()  # the header first
-    for start in range(0, plan.n, _CHUNK_ROWS):
-        stop = min(start + _CHUNK_ROWS, plan.n)
-        table = _arrow_block(plan, start, stop, rounded=True)
-        if binary is not None:
-            pacsv.write_csv(table, binary, options)
-        else:
-            sink = io.BytesIO()
-            pacsv.write_csv(table, sink, options)
-            out.write(sink.getvalue().decode("utf-8"))
-        if plan.progress is not None:
-            plan.progress(stop - start)
+
+    def text_of(start: int) -> bytes:
+        # formatting floats is the cost; pyarrow does it without the GIL, so blocks are
+        # formatted on the free cores while the file gets the ones before them, in order
+        sink = io.BytesIO()
+        pacsv.write_csv(_arrow_block(plan, start, min(start + _CHUNK_ROWS, plan.n), rounded=True), sink, options)
+        return sink.getvalue()
+
+    starts = range(0, plan.n, _CHUNK_ROWS)
+    workers = min(_WRITE_THREADS, os.cpu_count() or 1, len(starts))
+    with ThreadPoolExecutor(max_workers=max(workers, 1)) as pool:
+        pending: deque = deque()
+        for start in starts:
+            pending.append((start, pool.submit(text_of, start)))
+            if len(pending) > 2 * workers:  # a bounded number of blocks in memory
+                _put_block(out, binary, plan, *pending.popleft())
+        while pending:
+            _put_block(out, binary, plan, *pending.popleft())
     if binary is not None:
         binary.flush()
+
+
+def _put_block(out, binary, plan: _Plan, start: int, done) -> None:
+    data = done.result()
+    if binary is not None:
+        binary.write(data)
+    else:
+        out.write(data.decode("utf-8"))
+    if plan.progress is not None:
+        plan.progress(min(start + _CHUNK_ROWS, plan.n) - start)
 
 
 def _arrow_block(plan: _Plan, start: int, stop: int, *, rounded: bool) -> Any:
