@@ -54,6 +54,7 @@ def test_rocked_plane_is_an_area_and_off_gives_the_papers_lines(rocked_plane, tm
         (["--evidence-window", "0"], "--evidence-window"),
         (["--excitation", "0.5"], "--excitation"),
         (["--evidence-reset-distance", "-1"], "--evidence-reset-distance"),
+        (["--evidence-model-std", "-0.5"], "--evidence-model-std"),
     ],
 )
 def test_bad_evidence_options_exit_2_naming_them(args, word, tmp_path):
@@ -61,6 +62,24 @@ def test_bad_evidence_options_exit_2_naming_them(args, word, tmp_path):
     assert out.returncode == 2
     assert word in out.stderr
     assert not (tmp_path / "x.csv").exists()
+
+
+def test_the_window_direction_std_carries_the_model_error_option(tmp_path):
+    log = tmp_path / "plate.csv"
+    out = run("simulate", "--object", "plate", "--rock", "--rock-period", "0.5", "--angle", "30", "--elements", "1200",
+              "--seed", "5", "-o", log)  # fmt: skip
+    assert out.returncode == 0, out.stderr
+    stds = {}
+    for model in ("0", "2"):
+        out = run("estimate", log, "-o", tmp_path / f"m{model}.csv", "--evidence-model-std", model)
+        assert out.returncode == 0, out.stderr
+        stds[model] = [float(r["angle_std_deg"]) for r in read_csv(tmp_path / f"m{model}.csv")
+                       if r["line_evidence"] == "confirmed"]  # fmt: skip
+    assert len(stds["0"]) > 50 and len(stds["0"]) == len(stds["2"])
+    # added in quadrature, so never below the model error and the window's own term unchanged
+    assert min(stds["2"]) >= 2.0 - 1e-9
+    for a, b in zip(stds["0"], stds["2"]):
+        assert abs(b * b - a * a - 4.0) < 1e-6 * max(1.0, b * b)
 
 
 def test_rock_needs_the_paper_scenario(tmp_path):

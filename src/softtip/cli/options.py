@@ -251,6 +251,14 @@ _ESTIMATOR_OPTIONS = [
         metavar="DEG",
         help="A window's line direction is used only when its standard deviation is at most this, degrees.",
     ),
+    option(
+        "--evidence-model-std",
+        type=NON_NEGATIVE("deg"),
+        default=0.4,
+        show_default=True,
+        metavar="DEG",
+        help="Model error of the window's line direction, added in quadrature to its standard deviation, degrees.",
+    ),
 ]
 
 
@@ -407,6 +415,7 @@ def make_config(opts: dict, sample_rate: float | None = None, tip: Fingertip | N
             excitation_ratio=opts["excitation"][0],
             excitation_min=opts["excitation"][1],
             evidence_max_angle_std=math.radians(opts["evidence_max_std"]),
+            evidence_model_std=math.radians(opts["evidence_model_std"]),
             evidence_reset_distance=opts["evidence_reset_distance"],
             significance_window=opts["significance_window"],
         )

@@ -147,8 +147,15 @@ class EstimatorConfig:
         deviation about its weaker axis; default 0.01 N): a load turning by less is not
         taken for the trace of a tilt (a low-pass's slow transients are not excitation).
     evidence_max_angle_std : float
-        rad; a window's line direction is used (and held) only when its standard deviation
-        is at most this (default 10°).
+        rad; a window's line direction is used (and held) only when its own standard
+        deviation (without ``evidence_model_std``) is at most this (default 10°).
+    evidence_model_std : float
+        rad; the window direction's model error that no window shows, added in quadrature to
+        its standard deviation (default 0.4°). The axis of ``h``'s variation turns a little
+        with the pattern of excitation (the contact's small nonlinearity: on the simulator's
+        rocked lines, 0.2–1.5° between rocking about two axes in turn and in a figure-eight),
+        while the window's own standard deviation shrinks with the number of samples; without
+        this term a window at 1–7 kHz claims a precision the physics does not give.
     evidence_reset_distance : float
         m; the evidence starts afresh (window, verdict, held direction) when the contact
         point moves farther than this from where it started (default 1 mm): what a window
@@ -199,6 +206,7 @@ class EstimatorConfig:
     excitation_ratio: float = 0.5
     excitation_min: float = 0.01
     evidence_max_angle_std: float = math.radians(10.0)
+    evidence_model_std: float = math.radians(0.4)
     evidence_reset_distance: float = 1e-3
     significance_window: float = 0.015
 
@@ -260,7 +268,7 @@ class EstimatorConfig:
         object.__setattr__(self, "drift_time_constant", v)
         object.__setattr__(self, "track_drift", bool(self.track_drift))
         for name in ("contact_threshold", "stall_time", "h_sigmas", "h_min", "tare_duration", "contact_hysteresis",
-                     "contact_min_duration", "significance_window"):  # fmt: skip
+                     "contact_min_duration", "significance_window", "evidence_model_std"):  # fmt: skip
             v = float(getattr(self, name))
             if not (math.isfinite(v) and v >= 0.0):
                 raise ValueError(f"{name} must be a non-negative number, got {getattr(self, name)!r}")

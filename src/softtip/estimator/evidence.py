@@ -28,7 +28,8 @@ threshold: significant; most below its leaving share: not; else unchanged), so n
 the threshold does not flicker (at 50 Hz the window holds one sample: each decides alone). In a confirmed line
 the direction is the latest window's of this segment that confirmed the line (two-axis
 excitation, ``h`` on one axis) with an angle standard deviation at most
-``evidence_max_angle_std`` (``d = n × principal axis``); before there is one, the sample's
+``evidence_max_angle_std`` (``d = n × principal axis``; its standard deviation with the
+model error ``evidence_model_std`` added in quadrature); before there is one, the sample's
 own. A window excited about one axis only would bias the axis: a line's small resistance to
 rolling about its own edge follows the same excitation. A sample's own angle standard
 deviation counts the window's across-axis spread beyond the noise as model error:
@@ -352,7 +353,9 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
     state = np.where(area, 3, np.where(line, 2, 1)).astype(np.int8)
     evidence = np.where(line, np.where(confirmed, 2, 1), 0).astype(np.int8)
     angle = np.where(use_win, win.angle[hi] if win is not None else np.nan, ms.angle)
-    angle_std = np.where(use_win, win.angle_std[hi] if win is not None else np.nan, own_std)
+    mv = config.evidence_model_std * config.evidence_model_std
+    angle_std = np.where(use_win, np.sqrt(win.angle_std[hi] * win.angle_std[hi] + mv) if win is not None else np.nan,
+                         own_std)  # fmt: skip
     # the held window's direction, in the tangent frame of the sample
     d = np.stack((ms.dx, ms.dy, ms.dz), axis=-1)
     u = np.flatnonzero(use_win)
@@ -387,6 +390,7 @@ class EvidenceTracker:
         self._hmin2 = config.h_min * config.h_min
         self._f_ratio = config.excitation_ratio
         self._max_std = config.evidence_max_angle_std
+        self._model_var = config.evidence_model_std * config.evidence_model_std
         self._reset2 = config.evidence_reset_distance * config.evidence_reset_distance
         self._vote_window = config.significance_window
         self.start_segment()
@@ -507,7 +511,7 @@ class EvidenceTracker:
             e = (major, minor, c11, c12, c22, root, g11, g12, f_major, f_minor, g22, half)
             w_angle, w_std = window_direction_floats(e, s2, nu, self.corr)
             if w_std <= self._max_std:
-                self._held = (w_angle, w_std)
+                self._held = (w_angle, math.sqrt(w_std * w_std + self._model_var))
         side = 1 if hn > thr else (0 if hn <= SIG_LEAVE * thr else -1)
         if self._vote_window > 0.0:
             votes = self._votes
