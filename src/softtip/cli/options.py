@@ -259,6 +259,15 @@ _ESTIMATOR_OPTIONS = [
         metavar="DEG",
         help="Model error of the window's line direction, added in quadrature to its standard deviation, degrees.",
     ),
+    option(
+        "--unconfirmed-model-std",
+        type=NON_NEGATIVE("deg"),
+        default=5.0,
+        show_default=True,
+        metavar="DEG",
+        help="Model error of an unconfirmed line's direction (from one axis of excitation: its rolling bias), added in "
+        "quadrature to its standard deviation, degrees (0: the sensor noise only).",
+    ),
 ]
 
 
@@ -416,6 +425,7 @@ def make_config(opts: dict, sample_rate: float | None = None, tip: Fingertip | N
             excitation_min=opts["excitation"][1],
             evidence_max_angle_std=math.radians(opts["evidence_max_std"]),
             evidence_model_std=math.radians(opts["evidence_model_std"]),
+            unconfirmed_model_std=math.radians(opts["unconfirmed_model_std"]),
             evidence_reset_distance=opts["evidence_reset_distance"],
             significance_window=opts["significance_window"],
         )
