@@ -41,6 +41,12 @@ def POSITIVE(unit: str) -> Number:  # noqa: N802
 MM_POSITIVE = Length("mm", 0.0, min_open=True)
 
 
+def _model_std_option(name: str, default: float, what: str):
+    """A model-error standard deviation in degrees, added in quadrature to a reported one."""
+    return option(name, type=NON_NEGATIVE("deg"), default=default, show_default=True, metavar="DEG",
+                  help=f"Model error of {what}, added in quadrature to its standard deviation, degrees (0: none).")  # fmt: skip
+
+
 _ESTIMATOR_OPTIONS = [
     option(
         "--tip",
@@ -251,23 +257,9 @@ _ESTIMATOR_OPTIONS = [
         metavar="DEG",
         help="A window's line direction is used only when its standard deviation is at most this, degrees.",
     ),
-    option(
-        "--evidence-model-std",
-        type=NON_NEGATIVE("deg"),
-        default=0.4,
-        show_default=True,
-        metavar="DEG",
-        help="Model error of the window's line direction, added in quadrature to its standard deviation, degrees.",
-    ),
-    option(
-        "--unconfirmed-model-std",
-        type=NON_NEGATIVE("deg"),
-        default=5.0,
-        show_default=True,
-        metavar="DEG",
-        help="Model error of an unconfirmed line's direction (from one axis of excitation: its rolling bias), added in "
-        "quadrature to its standard deviation, degrees (0: the sensor noise only).",
-    ),
+    _model_std_option("--evidence-model-std", 0.4, "a window's line direction (what no window shows)"),
+    _model_std_option("--unconfirmed-model-std", 5.0,
+                      "an unconfirmed line's direction (from one axis of excitation: its rolling bias)"),  # fmt: skip
 ]
 
 
