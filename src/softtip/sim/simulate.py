@@ -2,7 +2,8 @@
 
 Per sample the object's travel along the push axis (and, with a tangential load, its
 offset across it) is solved — Newton steps with the Winkler tangent stiffness, warm-started
-by extrapolating the previous samples, with a bracketing fallback — so that the true force
+by extrapolating the previous samples, with a bracketing fallback for the push and a coupled
+Newton solve (difference Jacobian) when those steps stall — so that the true force
 follows the scenario's grasp profile; the friction state is committed once per sample, so
 the tangential tractions follow the motion history.
 
