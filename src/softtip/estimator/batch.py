@@ -143,7 +143,7 @@ def estimate(
     f_norm = np.sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2])
     contact = ct.contact
     relatched = np.zeros(n, dtype=bool)
-    joint_stats = np.full((4, n), np.nan)
+    joint_stats = None  # (4, N), allocated at the end unless the line fit gives them
     joint_fb = np.zeros(n, dtype=bool)
     with np.errstate(invalid="ignore", divide="ignore"):
         sc = contact_arrays(tip, *c)
@@ -164,22 +164,26 @@ def estimate(
                 latched, fallback, joint_fb = latched & ~moved, fallback & ~moved, contact & ~moved
             normal = tip.normal(point)
             has = np.all(np.isfinite(point), axis=-1)
+        del sc, f_norm  # not needed from here on (bounds the peak memory)
         # depth: friction acts at r − δ n, inside the skin
         delta, delta_std, from_data = depth_points(t, c, contact, point, normal, config, noise, noise_correlation(sos))
+        # h is written straight into its (N, 3) output; no depth column (the moment is
+        # taken about the point moved by the depth here, not by a law in measure)
+        h = np.empty((n, 3))
         ms = Measurement(*blockwise(
             lambda fx, fy, fz, mx, my, mz, px, py, pz, nx, ny, nz, d: measure(
                 fx, fy, fz, mx, my, mz, px - d * nx, py - d * ny, pz - d * nz, nx, ny, nz,
                 noise, config.h_sigmas, config.h_min, None, NP,
-            ),
+            )[:-1],
             (*c, *point.T, *normal.T, delta),
-        ))  # fmt: skip
+            out=(None, *h.T) + (None,) * 9,
+        ), None)  # fmt: skip
 
-    del c, sc, f_norm  # not needed from here on (bounds the peak memory)
+    del c
     located = contact & has & ms.pushing
     pulling = contact & ~located
     # line or area (evidence window): segments start at contact onset and at every re-latch
     begin = contact & ~np.concatenate(([False], contact[:-1])) | (relatched & contact)
-    h = np.stack((ms.hx, ms.hy, ms.hz), axis=-1)
     ev = evidence_states(t, located, begin, point, normal, h, x[:, :3], ms, noise, noise_correlation(sos), config)
     state = np.where(located, ev.state, NONE).astype(np.int8)
     is_line = state == LINE
@@ -191,6 +195,8 @@ def estimate(
         warn.append(drift_message(config, float(t[ct.drift_alarm])))
     for msg in warn:
         warnings.warn(msg, EstimatorWarning, stacklevel=2)
+    if joint_stats is None:
+        joint_stats = np.full((4, n), np.nan)
 
     def keep(a, mask):
         # every array kept is this function's own temporary: masked in place, no copy

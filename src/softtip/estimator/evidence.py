@@ -288,6 +288,8 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
     verdict = np.zeros(n, dtype=np.int8)
     held = np.full(n, -1)
     win = None
+    idx = np.arange(n)
+    seg_start = np.maximum.accumulate(np.where(begin, idx, 0))  # segment start of each sample
     if np.any(located):
 
         def per_window(*a):
@@ -307,9 +309,10 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
                 sums, count = _window_sums(t, located, begin, prods, config.evidence_window)
                 res = blockwise(per_window, (*sums, count, *nz))
                 del sums, count
-        del out, prods
+        del out, prods, nz  # nz, a view of out, would keep it
         area_now, line_now, resolved, h_ratio, f_ratio, *rest = res
         win = _Held(*rest)
+        del res, rest  # temporaries are dropped as soon as done with: they set the peak memory
         # an area only where |h| itself is significant: sub-threshold h wanders about both axes
         # with the model's error (a grasp force settling) once a low-pass has removed the noise
         with np.errstate(invalid="ignore"):
@@ -317,18 +320,22 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
         event = np.where(area_now & above, _AREA, np.where(line_now, _LINE, _UNKNOWN))
         # the verdict is the latest event of the segment, and the held window the latest
         # resolved one (forward fill within each segment)
-        idx = np.arange(n)
-        start = np.maximum.accumulate(np.where(begin, idx, 0))  # segment start of each sample
+        del area_now, line_now, above
         ev_at = np.maximum.accumulate(np.where(located & (event > 0), idx, -1))
-        ok = ev_at >= start
+        ok = ev_at >= seg_start
         verdict[ok] = event[ev_at[ok]]
+        del ev_at, ok, event
         hd_at = np.maximum.accumulate(np.where(located & resolved, idx, -1))
-        held = np.where(hd_at >= start, hd_at, -1)
+        held = np.where(hd_at >= seg_start, hd_at, -1)
+        del hd_at, resolved
     else:
-        h_ratio = f_ratio = np.full(n, np.nan)
-    verdict = np.where(located, verdict, 0)
-    h_ratio = np.where(located, h_ratio, np.nan)
-    f_ratio = np.where(located, f_ratio, np.nan)
+        h_ratio, f_ratio = np.full(n, np.nan), np.full(n, np.nan)
+    # in place: h_ratio and f_ratio are this function's own arrays
+    out_of = ~located
+    verdict[out_of] = 0
+    np.copyto(h_ratio, np.nan, where=out_of)
+    np.copyto(f_ratio, np.nan, where=out_of)
+    del out_of
 
     # significance with hysteresis: a line stays significant down to SIG_LEAVE × threshold,
     # decided by the vote of the last significance_window s
@@ -336,16 +343,17 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
         thr = config.line_threshold(ms.h_std)
         hn = np.asarray(ms.h_norm, dtype=float)
         sig_ev = np.where(hn > thr, 1, np.where(hn <= SIG_LEAVE * thr, 0, -1))
-    idx = np.arange(n)
-    seg_start = np.maximum.accumulate(np.where(begin, idx, 0))
     sig_ev = _vote(t, located, seg_start, sig_ev, config.significance_window)
     sig_at = np.maximum.accumulate(np.where(located & (sig_ev >= 0), idx, -1))
     sig = located & (sig_at >= seg_start) & (sig_ev[np.maximum(sig_at, 0)] == 1)
+    del sig_ev, sig_at, seg_start, idx
     has_held = held >= 0
     hi = np.where(has_held, held, 0)
+    del held
     minor = np.zeros(n) if win is None else np.where(located, win.h_minor, 0.0)
     with np.errstate(invalid="ignore", divide="ignore"):
         own_std = _sample_std(ms.angle_std, ms.h_norm, minor, NP)
+    del minor
     confirmed = located & (verdict == _LINE)
     use_win = confirmed & has_held
     line = (sig & (verdict != _AREA)) | use_win
@@ -356,6 +364,7 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
     mv = config.evidence_model_std * config.evidence_model_std
     angle_std = np.where(use_win, np.sqrt(win.angle_std[hi] * win.angle_std[hi] + mv) if win is not None else np.nan,
                          own_std)  # fmt: skip
+    del win, hi, own_std
     # the held window's direction, in the tangent frame of the sample
     d = np.stack((ms.dx, ms.dy, ms.dz), axis=-1)
     u = np.flatnonzero(use_win)
