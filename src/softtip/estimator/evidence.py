@@ -115,13 +115,20 @@ def _decide(win, config: EstimatorConfig, xp):
     return area_now, line_now, resolved, h_ratio, f_ratio
 
 
-def _frame_terms(px, py, pz, nx, ny, nz, hx, hy, hz, fx, fy, fz, noise, xp):
+def _frame_terms(nx, ny, nz, hx, hy, hz, fx, fy, fz, xp):
+    """``h`` and the tangential load in the tangent frame: ``(h1, h2, f1, f2)``."""
     e1x, e1y, e1z, e2x, e2y, e2z = tangent_frame_kernel(nx, ny, nz, xp)
     h1 = hx * e1x + hy * e1y + hz * e1z
     h2 = hx * e2x + hy * e2y + hz * e2z
     f1 = fx * e1x + fy * e1y + fz * e1z
     f2 = fx * e2x + fy * e2y + fz * e2z
-    return (h1, h2, f1, f2), tangent_noise_kernel(px, py, pz, e1x, e1y, e1z, e2x, e2y, e2z, noise), (e1x, e1y, e1z, e2x, e2y, e2z)
+    return h1, h2, f1, f2
+
+
+def _frame_noise(px, py, pz, nx, ny, nz, noise, xp):
+    """The noise covariances of ``h`` and of the load in the tangent frame at ``p``
+    (:func:`~softtip.core.evidence.tangent_noise_kernel`)."""
+    return tangent_noise_kernel(px, py, pz, *tangent_frame_kernel(nx, ny, nz, xp), noise)
 
 
 def _sample_std(angle_std, h_norm, minor, xp):
@@ -278,38 +285,33 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
         return EvidenceStates(np.where(sig, 2, 1).astype(np.int8), np.where(sig, 1, 0).astype(np.int8), d, ms.angle,
                               ms.angle_std, nan, nan)  # fmt: skip
 
-    def per_sample(*a):
-        terms, nz, _ = _frame_terms(*a, noise, NP)
-        return (*evidence_products(*terms), *nz)
-
     with np.errstate(invalid="ignore"):
-        out = blockwise(per_sample, (*point.T, *normal.T, *h.T, *force.T), stacked=True)
-    prods, nz = out[:N_SUMS], out[N_SUMS:]
+        prods = blockwise(lambda *a: evidence_products(*_frame_terms(*a, NP)), (*normal.T, *h.T, *force.T), stacked=True)
     verdict = np.zeros(n, dtype=np.int8)
     held = np.full(n, -1)
     win = None
-    idx = np.arange(n)
-    seg_start = np.maximum.accumulate(np.where(begin, idx, 0))  # segment start of each sample
     if np.any(located):
 
         def per_window(*a):
-            w = window_kernel(a[:N_SUMS], a[N_SUMS], *a[N_SUMS + 1 :], corr, NP)
+            # the sample's noise is computed here, block by block, not kept for the whole log
+            nz = _frame_noise(*a[N_SUMS + 1 :], noise, NP)
+            w = window_kernel(a[:N_SUMS], a[N_SUMS], *nz, corr, NP)
             return (*_decide(w, config, NP), w.h_minor, w.angle, w.angle_std)
 
         with np.errstate(invalid="ignore", divide="ignore"):
             if jit_enabled(n):  # window sums block by block, never the whole log's
                 res = None
                 for b, sb, cb in _window_sum_blocks(t, located, begin, prods, config.evidence_window, softtip.core._blocks.BLOCK):
-                    r = per_window(*sb, cb, *(z[b] for z in nz))
+                    r = per_window(*sb, cb, *(np.ascontiguousarray(z[b]) for z in (*point.T, *normal.T)))
                     if res is None:
                         res = [np.empty(n, dtype=np.asarray(x).dtype) for x in r]
                     for dst, x in zip(res, r):
                         dst[b] = x
             else:
                 sums, count = _window_sums(t, located, begin, prods, config.evidence_window)
-                res = blockwise(per_window, (*sums, count, *nz))
+                res = blockwise(per_window, (*sums, count, *point.T, *normal.T))
                 del sums, count
-        del out, prods, nz  # nz, a view of out, would keep it
+        del prods
         area_now, line_now, resolved, h_ratio, f_ratio, *rest = res
         win = _Held(*rest)
         del res, rest  # temporaries are dropped as soon as done with: they set the peak memory
@@ -318,6 +320,8 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
         with np.errstate(invalid="ignore"):
             above = np.asarray(ms.h_norm, dtype=float) > config.line_threshold(ms.h_std)
         event = np.where(area_now & above, _AREA, np.where(line_now, _LINE, _UNKNOWN))
+        idx = np.arange(n)
+        seg_start = np.maximum.accumulate(np.where(begin, idx, 0))  # segment start of each sample
         # the verdict is the latest event of the segment, and the held window the latest
         # resolved one (forward fill within each segment)
         del area_now, line_now, above
@@ -329,7 +333,10 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
         held = np.where(hd_at >= seg_start, hd_at, -1)
         del hd_at, resolved
     else:
+        del prods
         h_ratio, f_ratio = np.full(n, np.nan), np.full(n, np.nan)
+        idx = np.arange(n)
+        seg_start = np.maximum.accumulate(np.where(begin, idx, 0))
     # in place: h_ratio and f_ratio are this function's own arrays
     out_of = ~located
     verdict[out_of] = 0

@@ -175,12 +175,19 @@ def _latch_compiled(t, f_norm, contact, sc, tip: Fingertip, config: EstimatorCon
         use_fb[seg_fixed[fb_fixed]] = True
         mean_win = _projected_means(tip, sum_win, n_win, use_win)
         mean_fb = _projected_means(tip, sum_fb, n_fb, use_fb)
+        del sum_win, sum_fb, use_win, use_fb  # (N, 3) temporaries set the peak memory
         latch = np.full((n_seg, 3), np.nan)
         latch[by_window] = mean_win[seg_end[by_window] - 1]
         latch[fb_fixed] = mean_fb[seg_fixed[fb_fixed]]
-        point = np.where((rising & (n_win > 0))[:, None], mean_win, np.stack((rx, ry, rz), axis=-1))
-        point = np.where((after & win_seg)[:, None], latch[sid], point)
-        point = np.where((after & ~win_seg)[:, None], np.where((n_fb > 0)[:, None], mean_fb, np.nan), point)
+        # the point assembled in place, each choice over the one before (as nested np.where)
+        point = None  # the last pass's, dropped first
+        point = np.stack((rx, ry, rz), axis=-1)
+        np.copyto(point, mean_win, where=(rising & (n_win > 0))[:, None])
+        m = after & win_seg
+        point[m] = latch[sid[m]]
+        m = after & ~win_seg
+        point[m] = np.where((n_fb > 0)[m, None], mean_fb[m], np.nan)
+        del mean_win, mean_fb, m
         latched = np.where(win_seg, rising & (n_win > 0) | after, after & (n_fb > 0)) & contact
         fallback = latched & ~win_seg
         if dist is None:
@@ -195,7 +202,7 @@ def _latch_compiled(t, f_norm, contact, sc, tip: Fingertip, config: EstimatorCon
         if not len(new):
             break
         begin[new] = True
-    point = np.where(contact[:, None], point, np.nan)
+    point[~contact] = np.nan
     relatched = begin & ~onset
     # contact regained after a latched one
     had = (np.concatenate(([0], np.cumsum(latched)))[np.flatnonzero(onset)] > 0) | had_latch
