@@ -288,7 +288,6 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
     with np.errstate(invalid="ignore"):
         prods = blockwise(lambda *a: evidence_products(*_frame_terms(*a, NP)), (*normal.T, *h.T, *force.T), stacked=True)
     verdict = np.zeros(n, dtype=np.int8)
-    held = np.full(n, -1)
     win = None
     if np.any(located):
 
@@ -334,6 +333,7 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
         del hd_at, resolved
     else:
         del prods
+        held = np.full(n, -1)
         h_ratio, f_ratio = np.full(n, np.nan), np.full(n, np.nan)
         idx = np.arange(n)
         seg_start = np.maximum.accumulate(np.where(begin, idx, 0))
