@@ -24,9 +24,11 @@ tared (filtered) wrench minus ``b`` (minus nothing when ``track_drift`` is off):
   subtracted. A drift of the force beyond the contact threshold since the last tare is
   flagged (:attr:`ContactTrack.drift_alarm`).
 
-:func:`track_contacts` does it for a whole log, vectorised (one iteration per contact, per
-run of samples between the thresholds, and per block of ~4000 untouched samples);
-:class:`ContactTracker` one sample at a time with O(1) float work.
+:func:`track_contacts` does it for a whole log: with ``track_drift``, long logs in one
+compiled pass (:func:`softtip.estimator.sequential.track_kernel`), otherwise vectorised
+(one iteration per contact, per run of samples between the thresholds, and per block of
+~4000 untouched samples), both the same bits; :class:`ContactTracker` one sample at a time
+with O(1) float work.
 """
 
 from __future__ import annotations
