@@ -55,6 +55,7 @@ def test_rocked_plane_is_an_area_and_off_gives_the_papers_lines(rocked_plane, tm
         (["--excitation", "0.5"], "--excitation"),
         (["--evidence-reset-distance", "-1"], "--evidence-reset-distance"),
         (["--evidence-model-std", "-0.5"], "--evidence-model-std"),
+        (["--unconfirmed-model-std", "nan"], "--unconfirmed-model-std"),
     ],
 )
 def test_bad_evidence_options_exit_2_naming_them(args, word, tmp_path):

@@ -161,6 +161,31 @@ def test_one_axis_excitation_cannot_tell_and_says_unconfirmed(kind):
     assert np.all(est.line_evidence[~line] == 0)
 
 
+def test_an_unconfirmed_line_carries_its_rolling_bias_in_its_std():
+    """One axis of excitation: every line is unconfirmed, and its angle standard deviation is
+    the noise's with ``unconfirmed_model_std`` added in quadrature; confirmed lines (rocked
+    about two axes) and ``--line-evidence off`` (the papers') do not carry it."""
+    t, w, _ = rocking_log("line", 30.0, excite="one", seed=3)
+    u = EstimatorConfig().unconfirmed_model_std
+    assert u == pytest.approx(math.radians(5.0))
+    with_bias = estimate(t, w, "murakami2006")
+    noise_only = estimate(t, w, "murakami2006", EstimatorConfig(unconfirmed_model_std=0.0))
+    line = with_bias.state == 2
+    assert line.sum() > 100 and np.all(with_bias.line_evidence[line] == 1)
+    assert np.array_equal(with_bias.angle[line], noise_only.angle[line])
+    assert_allclose(with_bias.angle_std[line] ** 2, noise_only.angle_std[line] ** 2 + u * u, rtol=1e-12)
+    assert np.all(with_bias.angle_std[line] >= u)
+    t, w, _ = rocking_log("line", 30.0, seed=3)  # rocked about two axes
+    rocked = estimate(t, w, "murakami2006")
+    rocked0 = estimate(t, w, "murakami2006", EstimatorConfig(unconfirmed_model_std=0.0))
+    confirmed = rocked.line_evidence == 2
+    assert confirmed.sum() > 100
+    assert np.array_equal(rocked.angle_std[confirmed], rocked0.angle_std[confirmed])
+    off = estimate(t, w, "murakami2006", EstimatorConfig(line_evidence=False))
+    off0 = estimate(t, w, "murakami2006", EstimatorConfig(line_evidence=False, unconfirmed_model_std=0.0))
+    assert np.array_equal(off.angle_std, off0.angle_std, equal_nan=True)
+
+
 def test_line_evidence_off_is_the_papers_per_sample_behaviour():
     t, w, _ = rocking_log("area", 30.0, seed=5)
     on = estimate(t, w, "murakami2006")
@@ -227,6 +252,7 @@ def test_stream_equals_batch_on_rocking_grasps():
         dict(evidence_max_angle_std=0.0),
         dict(evidence_model_std=-0.01),
         dict(evidence_model_std=math.inf),
+        dict(unconfirmed_model_std=-1.0),
         dict(evidence_reset_distance=-1e-3),
     ],
 )

@@ -264,12 +264,13 @@ def test_a_plane_against_an_edge_is_flagged_once_rocked_and_unconfirmed_before(t
 # -- the fused standard deviations and the 3-D view ----------------------------------------------
 
 
-def _fused_z(grasp, tip, start, **options):
+def _fused_z(grasp, tip, start, config=None, **options):
     """rms(error / reported std) of the fused direction and plane normal over the held grasp."""
     fingers = []
     for side in ("right", "left"):
         log, p = grasp.logs[side], grasp.sensor_poses[side]
-        fingers.append(Finger(side, softtip.estimate(log.t, log.wrench, tip), PoseSeries.fixed(p.rotation, p.translation, side)))
+        est = softtip.estimate(log.t, log.wrench, tip, config)
+        fingers.append(Finger(side, est, PoseSeries.fixed(p.rotation, p.translation, side)))
     fz = fuse(fingers, object_mass=grasp.object_mass, **options)
     held = (fz.t > start) & (fz.grasp_names == "parallel_lines")
     assert held.sum() > 0.8 * np.count_nonzero(fz.t > start)
@@ -297,8 +298,13 @@ def test_fused_std_counts_the_error_both_fingers_share():
     z, zn, evidence = _fused_z(g, tip, 6.0)
     assert np.all(evidence == "unconfirmed")
     assert 0.5 < z < 1.5 and 0.5 < zn < 1.5
-    z_naive, _, _ = _fused_z(g, tip, 6.0, finger_correlation=0.0, unconfirmed_std=0.0)
+    # the fingers as independent and their unconfirmed lines as certain (noise only)
+    noise_only = softtip.EstimatorConfig(unconfirmed_model_std=0.0)
+    z_naive, _, _ = _fused_z(g, tip, 6.0, noise_only, finger_correlation=0.0)
     assert z_naive > 2.0
+    # the model error given to fuse instead of to the estimator: the same reading
+    z_fuse, _, _ = _fused_z(g, tip, 6.0, noise_only, unconfirmed_std=math.radians(5.0))
+    assert abs(z_fuse - z) < 0.1 * z
 
 
 def test_fused_std_propagation():

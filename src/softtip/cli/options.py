@@ -41,6 +41,12 @@ def POSITIVE(unit: str) -> Number:  # noqa: N802
 MM_POSITIVE = Length("mm", 0.0, min_open=True)
 
 
+def _model_std_option(name: str, default: float, what: str):
+    """A model-error standard deviation in degrees, added in quadrature to a reported one."""
+    return option(name, type=NON_NEGATIVE("deg"), default=default, show_default=True, metavar="DEG",
+                  help=f"Model error of {what}, added in quadrature to its standard deviation, degrees (0: none).")  # fmt: skip
+
+
 _ESTIMATOR_OPTIONS = [
     option(
         "--tip",
@@ -251,14 +257,9 @@ _ESTIMATOR_OPTIONS = [
         metavar="DEG",
         help="A window's line direction is used only when its standard deviation is at most this, degrees.",
     ),
-    option(
-        "--evidence-model-std",
-        type=NON_NEGATIVE("deg"),
-        default=0.4,
-        show_default=True,
-        metavar="DEG",
-        help="Model error of the window's line direction, added in quadrature to its standard deviation, degrees.",
-    ),
+    _model_std_option("--evidence-model-std", 0.4, "a window's line direction (what no window shows)"),
+    _model_std_option("--unconfirmed-model-std", 5.0,
+                      "an unconfirmed line's direction (from one axis of excitation: its rolling bias)"),  # fmt: skip
 ]
 
 
@@ -416,6 +417,7 @@ def make_config(opts: dict, sample_rate: float | None = None, tip: Fingertip | N
             excitation_min=opts["excitation"][1],
             evidence_max_angle_std=math.radians(opts["evidence_max_std"]),
             evidence_model_std=math.radians(opts["evidence_model_std"]),
+            unconfirmed_model_std=math.radians(opts["unconfirmed_model_std"]),
             evidence_reset_distance=opts["evidence_reset_distance"],
             significance_window=opts["significance_window"],
         )

@@ -26,8 +26,10 @@ window sums are differences of the two. :func:`window_kernel` turns window sums 
 * the window's line direction ``d = n × v`` with ``v`` the principal axis of ``h``'s
   variation, as an angle in the tangent frame, and its first-order standard deviation: the
   principal axis of a 2×2 covariance turns by ``C₁₂ / (λ₁ − λ₂)`` for an off-diagonal error
-  ``C₁₂``, whose variance over ``ν`` independent samples is ``(λ₁ + s²)(λ₂ + s²) / ν``
-  (``s²`` the noise variance), plus the model error: an across-axis spread ``λ₂`` (a line
+  ``C₁₂``, whose noise share over ``ν`` independent noise samples is
+  ``s² (λ₁ + λ₂ + s²) / ν`` (``s²`` the noise variance; the product ``λ₁ λ₂`` of the
+  excitation with the across-axis spread is no noise: it varies with the excitation, not
+  from sample to sample, and is the model error's), plus the model error: an across-axis spread ``λ₂`` (a line
   that is not quite one; at least the share of the noise that the correction may hide,
   25 % of ``s²``) turns the axis by as much of ``√(λ₂ / λ₁)`` as the excitation about the
   two axes is correlated over the window, which the tangential load tells (``ρ²/(1 − ρ²)``
@@ -158,10 +160,11 @@ def window_kernel(sums, count, h11, h12, h22, f11, f12, f22, corr: float, xp) ->
     big = xp.maximum(big, 0.0)
     s2 = 0.5 * (s_big + s_small)
     gap = big - small
-    # noise (over ν independent samples) and model error: an across-axis spread of h (the
-    # line resisting a roll about its own edge a little) turns the axis by as much of
-    # √(minor / major) as the window's excitation about the two axes is correlated, which
-    # the tangential load tells: its correlation ρ between the axis and across it
+    # noise (over ν independent noise samples: the products with the noise only) and model
+    # error: an across-axis spread of h (the line resisting a roll about its own edge a
+    # little) turns the axis by as much of √(minor / major) as the window's excitation about
+    # the two axes is correlated, which the tangential load tells: its correlation ρ between
+    # the axis and across it
     cp, sp = xp.div(c11 - c22, 2.0 * root), xp.div(c12, root)  # cos 2φ, sin 2φ
     fm, fd = 0.5 * (g11 + g22), 0.5 * (g11 - g22)
     f_vv, f_ww, f_vw = fm + fd * cp + g12 * sp, fm - fd * cp - g12 * sp, g12 * cp - fd * sp
@@ -171,7 +174,7 @@ def window_kernel(sums, count, h11, h12, h22, f11, f12, f22, corr: float, xp) ->
     # the spread the noise correction may hide (its model margin) counts as well
     hidden = xp.maximum(small, MODEL_MARGIN * s2)
     model = xp.div(hidden, big) * xp.where(den > 0.0, xp.div(rho2, xp.maximum(1.0 - rho2, 0.0)), 1.0)
-    angle_std = xp.sqrt(xp.div(corr * (big + s2) * (small + s2), nu * gap * gap) + model)
+    angle_std = xp.sqrt(xp.div(corr * s2 * (big + small + s2), nu * gap * gap) + model)
     return Window(big, small, h_noise, xp.maximum(f_big, 0.0), xp.maximum(f_small, 0.0), tail * f_n, a, angle_std)
 
 
@@ -252,7 +255,7 @@ def window_direction_floats(e, s2: float, nu: float, corr: float):
             model = _div(hidden, big) * 1.0
     else:  # no principal axis: the load's correlation is undefined, as in the kernel
         model = _div(hidden, big) * 1.0
-    v = _div(corr * (big + s2) * (small + s2), nu * gap * gap) + model
+    v = _div(corr * s2 * (big + small + s2), nu * gap * gap) + model
     return a, (math.sqrt(v) if v >= 0.0 else math.nan)
 
 

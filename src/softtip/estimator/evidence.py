@@ -32,8 +32,9 @@ excitation, ``h`` on one axis) with an angle standard deviation at most
 model error ``evidence_model_std`` added in quadrature); before there is one, the sample's
 own. A window excited about one axis only would bias the axis: a line's small resistance to
 rolling about its own edge follows the same excitation. A sample's own angle standard
-deviation counts the window's across-axis spread beyond the noise as model error:
-``sqrt(σ_d² + minor) / |h|``.
+deviation counts the window's across-axis spread beyond the noise as model error,
+``sqrt(σ_d² + minor / |h|²)``, and while the line is ``unconfirmed`` the rolling bias that
+one axis of excitation hides (``unconfirmed_model_std``, added in quadrature).
 
 :func:`evidence_states` does it for a whole log, :class:`EvidenceTracker` one sample at a
 time (running sums, O(1) per sample, as :mod:`softtip.estimator.joint`).
@@ -131,9 +132,10 @@ def _frame_noise(px, py, pz, nx, ny, nz, noise, xp):
     return tangent_noise_kernel(px, py, pz, *tangent_frame_kernel(nx, ny, nz, xp), noise)
 
 
-def _sample_std(angle_std, h_norm, minor, xp):
-    """The sample's angle standard deviation with the window's across-axis spread added."""
-    return xp.sqrt(angle_std * angle_std + xp.div(minor, h_norm * h_norm))
+def _sample_std(angle_std, h_norm, minor, model_var, xp):
+    """The sample's angle standard deviation with the window's across-axis spread and a model
+    error variance (rad², the unconfirmed line's; 0 otherwise) added."""
+    return xp.sqrt(angle_std * angle_std + xp.div(minor, h_norm * h_norm) + model_var)
 
 
 def _vote(t, located, seg_start, side, window: float):
@@ -358,10 +360,11 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
     hi = np.where(has_held, held, 0)
     del held
     minor = np.zeros(n) if win is None else np.where(located, win.h_minor, 0.0)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        own_std = _sample_std(ms.angle_std, ms.h_norm, minor, NP)
-    del minor
     confirmed = located & (verdict == _LINE)
+    uv = config.unconfirmed_model_std * config.unconfirmed_model_std
+    with np.errstate(invalid="ignore", divide="ignore"):
+        own_std = _sample_std(ms.angle_std, ms.h_norm, minor, np.where(confirmed, 0.0, uv), NP)
+    del minor
     use_win = confirmed & has_held
     line = (sig & (verdict != _AREA)) | use_win
     area = located & (verdict == _AREA)
@@ -407,6 +410,7 @@ class EvidenceTracker:
         self._f_ratio = config.excitation_ratio
         self._max_std = config.evidence_max_angle_std
         self._model_var = config.evidence_model_std * config.evidence_model_std
+        self._unconfirmed_var = config.unconfirmed_model_std * config.unconfirmed_model_std
         self._reset2 = config.evidence_reset_distance * config.evidence_reset_distance
         self._vote_window = config.significance_window
         self.start_segment()
@@ -556,7 +560,7 @@ class EvidenceTracker:
         # the sample's own direction, the window's across-axis spread counted as model error
         dx, dy, dz, angle, a = sample_direction(hx, hy, hz, hn, ex, ey, ez, geo, self._sq)
         v = hn * hn
-        v = a * a + (minor / v if v != 0.0 else _div(minor, v))
+        v = a * a + (minor / v if v != 0.0 else _div(minor, v)) + (0.0 if verdict == _LINE else self._unconfirmed_var)
         return (
             "line", "confirmed" if verdict == _LINE else "unconfirmed", (dx, dy, dz), angle,
             sqrt(v) if v >= 0.0 else math.nan, h_ratio, f_ratio,

@@ -54,9 +54,11 @@ deviation cannot show:
   comes from load varied about one axis, and its rolling resistance follows the same load:
   the axis is biased by an amount no single-axis window shows (on the simulator's stick and
   cube edge at 45° to the joint axis, 7–9° on both fingers alike while each reported about
-  3.7°). A line fused while ``unconfirmed`` therefore carries a model-error term
-  ``unconfirmed_std`` (shared by both fingers, added in quadrature), and stays marked
-  ``unconfirmed``.
+  3.7° from the noise alone). Each fingertip's estimator therefore reports a line that is
+  ``unconfirmed`` with a model-error term in its standard deviation
+  (``EstimatorConfig.unconfirmed_model_std``, 5°), which the fully correlated fingers carry
+  into the fused one undiminished (``unconfirmed_std`` adds a further shared term, for
+  estimates made without it); the fused reading stays marked ``unconfirmed``.
 
 The plane normal's standard deviation is the direction's tilt across the plane (the part of
 each finger's error about the line between the contacts, which tilts the plane one for one)
@@ -213,7 +215,7 @@ def fuse(
     gravity: ArrayLike = (0.0, 0.0, -STANDARD_GRAVITY),
     point_std: float = 5e-5,
     finger_correlation: float = 1.0,
-    unconfirmed_std: float = math.radians(5.0),
+    unconfirmed_std: float = 0.0,
     agree_sigmas: float = 3.0,
     balance_tolerance: float = 0.05,
     balance_chi2: float = 16.27,
@@ -241,7 +243,10 @@ def fuse(
         (the object's motion and the contact model's errors are shared). 0: independent.
     unconfirmed_std : float
         rad, model-error standard deviation of a line direction that is not yet confirmed by
-        excitation about two axes (its rolling bias), shared by both fingers.
+        excitation about two axes (its rolling bias), shared by both fingers, added here
+        (default 0: the estimator already carries it in each finger's ``angle_std``,
+        ``EstimatorConfig.unconfirmed_model_std``, 5°, which ``finger_correlation = 1``
+        treats as shared; give it here for estimates made without it).
     agree_sigmas : float
         Two lines agree when their axial angle is at most this many standard deviations
         (of the fingers' independent errors: the difference of the two is tested).
