@@ -210,3 +210,65 @@ def test_running_best_equals_numpy(n, seed):
             assert fast[q] == finite[np.argmin(key[finite])]  # argmin: the first of equal minima
         else:
             assert fast[q] == -1
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    n=st.integers(1, 600),
+    p_touch=st.floats(0.0, 0.2),
+    cut=st.floats(0.0, 1.0),
+    start=st.integers(0, 20),
+    tau=st.sampled_from([0.01, 0.5, 5.0]),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_track_contacts_equals_numpy(n, p_touch, cut, start, tau, seed):
+    # touches of random lengths and forces (near the thresholds too) on a drifting bias,
+    # tracked at once and in two pieces cut at an untouched sample (the state carried)
+    from softtip.core.noise import SensorNoise
+    from softtip.estimator import EstimatorConfig
+    from softtip.estimator.contact import track_contacts
+
+    rng = np.random.default_rng(seed)
+    steps = rng.choice([0.0, 1e-3, 2.5e-3, 0.05], size=n, p=[0.1, 0.6, 0.2, 0.1])
+    t = 10.0 + np.cumsum(steps)
+    x = rng.normal(scale=0.02, size=(n, 6)) + np.linspace(0.0, 0.3, n)[:, None]
+    touch = np.repeat(rng.random(n // 4 + 1) < p_touch, 4)[:n]
+    x[touch, :3] += rng.choice([0.1, 0.2, 1.0], size=(np.count_nonzero(touch), 1))
+    config = EstimatorConfig(drift_time_constant=tau, contact_threshold=0.2)
+    noise = SensorNoise(force_std=(0.02,) * 3, moment_std=(2e-4,) * 3)
+    start = min(start, n)
+    out = []
+    for flag in (True, False):
+        set_jit(flag)
+        try:
+            whole = track_contacts(t, x, start, config, noise)
+            free = np.flatnonzero(~whole.busy[start:]) + start
+            k = int(free[int(cut * (len(free) - 1))]) if len(free) else n
+            first = track_contacts(t[:k], x[:k], start, config, noise)
+            second = track_contacts(t[k:], x[k:], 0, config, noise, first.state)
+        finally:
+            set_jit(None)
+        out.append((whole, first, second))
+    for a, b in zip(out[0], out[1]):
+        for name in ("wrench", "drift", "contact", "contact_id", "busy"):
+            assert np.array_equal(getattr(a, name), getattr(b, name)), name
+        assert a.drift_alarm == b.drift_alarm
+        assert repr(vars(a.state)) == repr(vars(b.state))
+    (whole, first, second), _ = out
+    assert np.array_equal(whole.drift, np.concatenate((first.drift, second.drift)))
+    assert np.array_equal(whole.contact_id, np.concatenate((first.contact_id, second.contact_id)))
+
+
+@pytest.mark.parametrize("block", [1, 7, 1000])
+def test_blockwise_writes_into_given_outputs(block):
+    # outputs given as columns of an (N, 2) array are written there, the others allocated;
+    # every block's values land where the whole-array expression puts them
+    from softtip.core._blocks import blockwise
+
+    rng = np.random.default_rng(3)
+    a, b = rng.normal(size=50), rng.normal(size=50)
+    pair = np.full((50, 2), np.nan)
+    s, d, q = blockwise(lambda x, y: (x + y, x - y, x * y), (a, b), block=block, out=(*pair.T, None))
+    assert s.base is pair and d.base is pair
+    assert np.array_equal(pair, np.stack((a + b, a - b), axis=-1))
+    assert np.array_equal(q, a * b)

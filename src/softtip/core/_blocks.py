@@ -22,7 +22,12 @@ BLOCK = 8192
 
 
 def blockwise(
-    kernel: Callable[..., Sequence], arrays: Sequence[NDArray], *, block: int | None = None, stacked: bool = False
+    kernel: Callable[..., Sequence],
+    arrays: Sequence[NDArray],
+    *,
+    block: int | None = None,
+    stacked: bool = False,
+    out: Sequence[NDArray | None] | None = None,
 ) -> tuple[NDArray, ...] | NDArray:
     """``kernel(*arrays)`` evaluated block by block.
 
@@ -37,6 +42,9 @@ def blockwise(
         Samples per block (default :data:`BLOCK`).
     stacked : bool
         Return the outputs as the rows of one float array.
+    out : sequence of (array, shape (N,), or None), optional
+        Where to write each output (a column of a larger array, say: no copy afterwards);
+        None entries are allocated. Not with ``stacked``.
 
     Returns
     -------
@@ -47,14 +55,15 @@ def blockwise(
     block = block or BLOCK
     arrays = [np.asarray(a) for a in arrays]
     n = len(arrays[0])
-    out: list[NDArray] | NDArray = []
+    dst_all: list[NDArray] | NDArray = []
     for s in range(0, max(n, 1), block):
         res = kernel(*(np.ascontiguousarray(a[s : s + block]) for a in arrays))
-        if not len(out):
+        if not len(dst_all):
             if stacked:
-                out = np.empty((len(res), n))
+                dst_all = np.empty((len(res), n))
             else:
-                out = [np.empty(n, dtype=np.asarray(r).dtype) for r in res]
-        for dst, r in zip(out, res):
+                given = out or (None,) * len(res)
+                dst_all = [np.empty(n, dtype=np.asarray(r).dtype) if g is None else g for r, g in zip(res, given)]
+        for dst, r in zip(dst_all, res):
             dst[s : s + block] = r
-    return out if stacked else tuple(out)
+    return dst_all if stacked else tuple(dst_all)

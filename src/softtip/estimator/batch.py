@@ -143,7 +143,7 @@ def estimate(
     f_norm = np.sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2])
     contact = ct.contact
     relatched = np.zeros(n, dtype=bool)
-    joint_stats = np.full((4, n), np.nan)
+    joint_stats = None  # (4, N), allocated at the end unless the line fit gives them
     joint_fb = np.zeros(n, dtype=bool)
     with np.errstate(invalid="ignore", divide="ignore"):
         sc = contact_arrays(tip, *c)
@@ -164,22 +164,26 @@ def estimate(
                 latched, fallback, joint_fb = latched & ~moved, fallback & ~moved, contact & ~moved
             normal = tip.normal(point)
             has = np.all(np.isfinite(point), axis=-1)
+        del sc, f_norm  # not needed from here on (bounds the peak memory)
         # depth: friction acts at r − δ n, inside the skin
         delta, delta_std, from_data = depth_points(t, c, contact, point, normal, config, noise, noise_correlation(sos))
+        # h is written straight into its (N, 3) output; no depth column (the moment is
+        # taken about the point moved by the depth here, not by a law in measure)
+        h = np.empty((n, 3))
         ms = Measurement(*blockwise(
             lambda fx, fy, fz, mx, my, mz, px, py, pz, nx, ny, nz, d: measure(
                 fx, fy, fz, mx, my, mz, px - d * nx, py - d * ny, pz - d * nz, nx, ny, nz,
                 noise, config.h_sigmas, config.h_min, None, NP,
-            ),
+            )[:-1],
             (*c, *point.T, *normal.T, delta),
-        ))  # fmt: skip
+            out=(None, *h.T) + (None,) * 9,
+        ), None)  # fmt: skip
 
-    del c, sc, f_norm  # not needed from here on (bounds the peak memory)
+    del c
     located = contact & has & ms.pushing
     pulling = contact & ~located
     # line or area (evidence window): segments start at contact onset and at every re-latch
     begin = contact & ~np.concatenate(([False], contact[:-1])) | (relatched & contact)
-    h = np.stack((ms.hx, ms.hy, ms.hz), axis=-1)
     ev = evidence_states(t, located, begin, point, normal, h, x[:, :3], ms, noise, noise_correlation(sos), config)
     state = np.where(located, ev.state, NONE).astype(np.int8)
     is_line = state == LINE
@@ -191,27 +195,31 @@ def estimate(
         warn.append(drift_message(config, float(t[ct.drift_alarm])))
     for msg in warn:
         warnings.warn(msg, EstimatorWarning, stacklevel=2)
+    if joint_stats is None:
+        joint_stats = np.full((4, n), np.nan)
 
-    def keep(a, mask):
-        # every array kept is this function's own temporary: masked in place, no copy
+    not_located, not_line = ~located, ~is_line  # inverted once, not per column
+
+    def blank(a, off):
+        # every array here is this function's own temporary: NaN written in place where off
         a = np.asarray(a, dtype=float)
-        np.copyto(a, np.nan, where=~mask.reshape(mask.shape + (1,) * (a.ndim - 1)))
+        np.copyto(a, np.nan, where=off.reshape(off.shape + (1,) * (a.ndim - 1)))
         return a
 
     return Estimates(
         t=t,
         state=state,
         # the bias is not known while taring, so neither is the tared wrench (as in the stream)
-        wrench=keep(x, ~taring),
-        point=keep(point, located),
-        normal=keep(normal, located),
-        sigma=keep(ms.sigma, located),
-        h=keep(h, located),
-        h_norm=keep(ms.h_norm, located),
-        h_std=keep(ms.h_std, located),
-        direction=keep(ev.direction, is_line),
-        angle=keep(ev.angle, is_line),
-        angle_std=keep(ev.angle_std, is_line),
+        wrench=blank(x, taring),
+        point=blank(point, not_located),
+        normal=blank(normal, not_located),
+        sigma=blank(ms.sigma, not_located),
+        h=blank(h, not_located),
+        h_norm=blank(ms.h_norm, not_located),
+        h_std=blank(ms.h_std, not_located),
+        direction=blank(ev.direction, not_line),
+        angle=blank(ev.angle, not_line),
+        angle_std=blank(ev.angle_std, not_line),
         latched=latched & located,
         latch_fallback=fallback & located,
         pulling=pulling,
@@ -219,22 +227,22 @@ def estimate(
         bias=bias,
         tare_force_std=float(np.nanmax(tare_report.force_std)) if np.any(np.isfinite(tare_report.force_std)) else math.nan,
         relatched=relatched,
-        depth=keep(delta, located),
-        joint_conditioning=keep(joint_stats[0], located),
-        joint_angle_std=keep(joint_stats[1], located),
-        joint_offset_std=keep(joint_stats[2], located),
-        joint_residual=keep(joint_stats[3], located),
+        depth=blank(delta, not_located),
+        joint_conditioning=blank(joint_stats[0], not_located),
+        joint_angle_std=blank(joint_stats[1], not_located),
+        joint_offset_std=blank(joint_stats[2], not_located),
+        joint_residual=blank(joint_stats[3], not_located),
         joint_fallback=joint_fb & located,
         line_evidence=np.where(is_line, ev.evidence, 0).astype(np.int8),
-        h_ratio=keep(ev.h_ratio, located),
-        excitation_ratio=keep(ev.excitation_ratio, located),
+        h_ratio=blank(ev.h_ratio, not_located),
+        excitation_ratio=blank(ev.excitation_ratio, not_located),
         repeated_stamps=int(np.count_nonzero(np.diff(t) == 0)),
         contact_id=ct.contact_id,
-        drift=keep(ct.drift, ~taring),
+        drift=blank(ct.drift, taring),
         tare=tare_report,
         started_in_contact=started_in_contact,
         drift_alarm=ct.drift_alarm >= 0,
         warnings=tuple(warn),
-        depth_std=keep(delta_std, located),
+        depth_std=blank(delta_std, not_located),
         depth_from_data=from_data & located,
     )

@@ -24,9 +24,11 @@ tared (filtered) wrench minus ``b`` (minus nothing when ``track_drift`` is off):
   subtracted. A drift of the force beyond the contact threshold since the last tare is
   flagged (:attr:`ContactTrack.drift_alarm`).
 
-:func:`track_contacts` does it for a whole log, vectorised (one iteration per contact, per
-run of samples between the thresholds, and per block of ~4000 untouched samples);
-:class:`ContactTracker` one sample at a time with O(1) float work.
+:func:`track_contacts` does it for a whole log: with ``track_drift``, long logs in one
+compiled pass (:func:`softtip.estimator.sequential.track_kernel`), otherwise vectorised
+(one iteration per contact, per run of samples between the thresholds, and per block of
+~4000 untouched samples), both the same bits; :class:`ContactTracker` one sample at a time
+with O(1) float work.
 """
 
 from __future__ import annotations
@@ -39,8 +41,10 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from softtip.core._jit import jit_enabled
 from softtip.core.noise import SensorNoise
 from softtip.estimator.config import EstimatorConfig
+from softtip.estimator.sequential import track_kernel
 
 __all__ = [
     "RELEASE_FLOOR", "contact_thresholds", "ContactTrack", "TrackState", "track_contacts", "ContactTracker",
@@ -131,6 +135,23 @@ class _DriftAverage:
             self.b, self.open = np.array(state.drift, dtype=float), state.open
             if state.open:
                 self.b0, self.p0, self.acc0, self.count = state.b0, state.p0, np.array(state.acc0), state.block
+
+    @staticmethod
+    def pack(state: TrackState) -> NDArray:
+        """``state``'s drift average as the compiled kernel's float state (see
+        :func:`softtip.estimator.sequential.track_kernel`)."""
+        avg = np.zeros(19)
+        avg[0:6], avg[18] = state.drift, 1.0
+        if state.open:
+            avg[6:12], avg[12:18], avg[18] = state.b0, state.acc0, state.p0
+        return avg
+
+    @staticmethod
+    def unpack(state: TrackState, avg: NDArray, iavg: NDArray) -> None:
+        """Store the compiled kernel's state into ``state`` (as :meth:`save` does)."""
+        state.drift, state.open, state.count = avg[0:6].copy(), bool(iavg[0]), int(iavg[2])
+        if state.open:
+            state.b0, state.acc0, state.p0, state.block = avg[6:12].copy(), avg[12:18].copy(), float(avg[18]), int(iavg[1])
 
     def save(self, state: TrackState) -> None:
         """Store the average's state into ``state`` (the end of a piece)."""
@@ -265,6 +286,12 @@ def track_contacts(
         drift = _follow_drift(t, x, start, alpha, on, busy, state)
         state.count = _hysteresis(t, dt, _norm3(x[:, :3]), start, on, off, min_dur, cid, busy, state.count)
         y = x
+    elif jit_enabled(n):  # the same loop compiled: one pass, no Python iteration per contact
+        drift, y = np.zeros((n, 6)), np.empty((n, 6))
+        y[:start] = x[:start]
+        avg, iavg = _DriftAverage.pack(state), np.array([state.open, state.block, state.count], dtype=np.int64)
+        track_kernel(t, dt, x, alpha, start, on, off, min_dur, _BLOCK, _TINY, avg, iavg, cid, busy, drift, y)
+        _DriftAverage.unpack(state, avg, iavg)
     else:
         # the contact decisions see the drift subtracted, and the drift follows only while
         # untouched: one loop, an iteration per contact and per chunk of untouched samples

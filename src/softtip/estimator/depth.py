@@ -171,13 +171,16 @@ def depth_points(t, c, contact, point, normal, config: EstimatorConfig, noise: S
         frame = depth_frame_kernel(*point[kb].T, *normal[kb].T, NP)
         cov = depth_noise_kernel(frame, noise)
         kw[big], var[big] = depth_solve_kernel(sums, count[big], cov, corr, DEPTH_ITERATIONS, NP)
-    del prods, out
+    d0 = d0.copy()  # a view of out would keep all of it (the products) to the end
+    del prods, out, first, count, big, kb
     # held: the solved window of the segment with the smallest aged variance; it
     # replaces the one held when var − drift² (t − t_segment) sets a new minimum
     tk, tsk = t[k], t_seg[k]
+    del t_seg, onset_of
     with np.errstate(invalid="ignore"):
         key = np.where(var < np.inf, var - config.depth_drift**2 * (tk - tsk), np.inf)
     held = _running_best(seg_of[k], key, n)
+    del seg_of
     # the combination at each solve holds until the next one (of the same segment)
     got = held >= 0
     hi = held[got]
@@ -187,7 +190,9 @@ def depth_points(t, c, contact, point, normal, config: EstimatorConfig, noise: S
     vh[got] = key[hi] + config.depth_drift**2 * (tk[got] - tsk[got])
     kc, rc, fc = _combine(kh, vh, config.depth_prior_std, NP)
     last_solve = np.maximum.accumulate(np.where(solve, idx, -1))
+    del idx
     pos = np.searchsorted(k, last_solve[has])
+    del last_solve
     kappa[has], rel[has], from_data[has] = kc[pos], rc[pos], fc[pos]
     delta = kappa * d0
     delta = np.where(delta > law.max_depth, law.max_depth, delta)

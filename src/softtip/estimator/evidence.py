@@ -116,13 +116,20 @@ def _decide(win, config: EstimatorConfig, xp):
     return area_now, line_now, resolved, h_ratio, f_ratio
 
 
-def _frame_terms(px, py, pz, nx, ny, nz, hx, hy, hz, fx, fy, fz, noise, xp):
+def _frame_terms(nx, ny, nz, hx, hy, hz, fx, fy, fz, xp):
+    """``h`` and the tangential load in the tangent frame: ``(h1, h2, f1, f2)``."""
     e1x, e1y, e1z, e2x, e2y, e2z = tangent_frame_kernel(nx, ny, nz, xp)
     h1 = hx * e1x + hy * e1y + hz * e1z
     h2 = hx * e2x + hy * e2y + hz * e2z
     f1 = fx * e1x + fy * e1y + fz * e1z
     f2 = fx * e2x + fy * e2y + fz * e2z
-    return (h1, h2, f1, f2), tangent_noise_kernel(px, py, pz, e1x, e1y, e1z, e2x, e2y, e2z, noise), (e1x, e1y, e1z, e2x, e2y, e2z)
+    return h1, h2, f1, f2
+
+
+def _frame_noise(px, py, pz, nx, ny, nz, noise, xp):
+    """The noise covariances of ``h`` and of the load in the tangent frame at ``p``
+    (:func:`~softtip.core.evidence.tangent_noise_kernel`)."""
+    return tangent_noise_kernel(px, py, pz, *tangent_frame_kernel(nx, ny, nz, xp), noise)
 
 
 def _sample_std(angle_std, h_norm, minor, model_var, xp):
@@ -280,57 +287,64 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
         return EvidenceStates(np.where(sig, 2, 1).astype(np.int8), np.where(sig, 1, 0).astype(np.int8), d, ms.angle,
                               ms.angle_std, nan, nan)  # fmt: skip
 
-    def per_sample(*a):
-        terms, nz, _ = _frame_terms(*a, noise, NP)
-        return (*evidence_products(*terms), *nz)
-
     with np.errstate(invalid="ignore"):
-        out = blockwise(per_sample, (*point.T, *normal.T, *h.T, *force.T), stacked=True)
-    prods, nz = out[:N_SUMS], out[N_SUMS:]
+        prods = blockwise(lambda *a: evidence_products(*_frame_terms(*a, NP)), (*normal.T, *h.T, *force.T), stacked=True)
     verdict = np.zeros(n, dtype=np.int8)
-    held = np.full(n, -1)
     win = None
     if np.any(located):
 
         def per_window(*a):
-            w = window_kernel(a[:N_SUMS], a[N_SUMS], *a[N_SUMS + 1 :], corr, NP)
+            # the sample's noise is computed here, block by block, not kept for the whole log
+            nz = _frame_noise(*a[N_SUMS + 1 :], noise, NP)
+            w = window_kernel(a[:N_SUMS], a[N_SUMS], *nz, corr, NP)
             return (*_decide(w, config, NP), w.h_minor, w.angle, w.angle_std)
 
         with np.errstate(invalid="ignore", divide="ignore"):
             if jit_enabled(n):  # window sums block by block, never the whole log's
                 res = None
                 for b, sb, cb in _window_sum_blocks(t, located, begin, prods, config.evidence_window, softtip.core._blocks.BLOCK):
-                    r = per_window(*sb, cb, *(z[b] for z in nz))
+                    r = per_window(*sb, cb, *(np.ascontiguousarray(z[b]) for z in (*point.T, *normal.T)))
                     if res is None:
                         res = [np.empty(n, dtype=np.asarray(x).dtype) for x in r]
                     for dst, x in zip(res, r):
                         dst[b] = x
             else:
                 sums, count = _window_sums(t, located, begin, prods, config.evidence_window)
-                res = blockwise(per_window, (*sums, count, *nz))
+                res = blockwise(per_window, (*sums, count, *point.T, *normal.T))
                 del sums, count
-        del out, prods
+        del prods
         area_now, line_now, resolved, h_ratio, f_ratio, *rest = res
         win = _Held(*rest)
+        del res, rest  # temporaries are dropped as soon as done with: they set the peak memory
         # an area only where |h| itself is significant: sub-threshold h wanders about both axes
         # with the model's error (a grasp force settling) once a low-pass has removed the noise
         with np.errstate(invalid="ignore"):
             above = np.asarray(ms.h_norm, dtype=float) > config.line_threshold(ms.h_std)
         event = np.where(area_now & above, _AREA, np.where(line_now, _LINE, _UNKNOWN))
+        idx = np.arange(n)
+        seg_start = np.maximum.accumulate(np.where(begin, idx, 0))  # segment start of each sample
         # the verdict is the latest event of the segment, and the held window the latest
         # resolved one (forward fill within each segment)
-        idx = np.arange(n)
-        start = np.maximum.accumulate(np.where(begin, idx, 0))  # segment start of each sample
+        del area_now, line_now, above
         ev_at = np.maximum.accumulate(np.where(located & (event > 0), idx, -1))
-        ok = ev_at >= start
+        ok = ev_at >= seg_start
         verdict[ok] = event[ev_at[ok]]
+        del ev_at, ok, event
         hd_at = np.maximum.accumulate(np.where(located & resolved, idx, -1))
-        held = np.where(hd_at >= start, hd_at, -1)
+        held = np.where(hd_at >= seg_start, hd_at, -1)
+        del hd_at, resolved
     else:
-        h_ratio = f_ratio = np.full(n, np.nan)
-    verdict = np.where(located, verdict, 0)
-    h_ratio = np.where(located, h_ratio, np.nan)
-    f_ratio = np.where(located, f_ratio, np.nan)
+        del prods
+        held = np.full(n, -1)
+        h_ratio, f_ratio = np.full(n, np.nan), np.full(n, np.nan)
+        idx = np.arange(n)
+        seg_start = np.maximum.accumulate(np.where(begin, idx, 0))
+    # in place: h_ratio and f_ratio are this function's own arrays
+    out_of = ~located
+    verdict[out_of] = 0
+    np.copyto(h_ratio, np.nan, where=out_of)
+    np.copyto(f_ratio, np.nan, where=out_of)
+    del out_of
 
     # significance with hysteresis: a line stays significant down to SIG_LEAVE × threshold,
     # decided by the vote of the last significance_window s
@@ -338,18 +352,19 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
         thr = config.line_threshold(ms.h_std)
         hn = np.asarray(ms.h_norm, dtype=float)
         sig_ev = np.where(hn > thr, 1, np.where(hn <= SIG_LEAVE * thr, 0, -1))
-    idx = np.arange(n)
-    seg_start = np.maximum.accumulate(np.where(begin, idx, 0))
     sig_ev = _vote(t, located, seg_start, sig_ev, config.significance_window)
     sig_at = np.maximum.accumulate(np.where(located & (sig_ev >= 0), idx, -1))
     sig = located & (sig_at >= seg_start) & (sig_ev[np.maximum(sig_at, 0)] == 1)
+    del sig_ev, sig_at, seg_start, idx
     has_held = held >= 0
     hi = np.where(has_held, held, 0)
+    del held
     minor = np.zeros(n) if win is None else np.where(located, win.h_minor, 0.0)
     confirmed = located & (verdict == _LINE)
     uv = config.unconfirmed_model_std * config.unconfirmed_model_std
     with np.errstate(invalid="ignore", divide="ignore"):
         own_std = _sample_std(ms.angle_std, ms.h_norm, minor, np.where(confirmed, 0.0, uv), NP)
+    del minor
     use_win = confirmed & has_held
     line = (sig & (verdict != _AREA)) | use_win
     area = located & (verdict == _AREA)
@@ -359,6 +374,7 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
     mv = config.evidence_model_std * config.evidence_model_std
     angle_std = np.where(use_win, np.sqrt(win.angle_std[hi] * win.angle_std[hi] + mv) if win is not None else np.nan,
                          own_std)  # fmt: skip
+    del win, hi, own_std
     # the held window's direction, in the tangent frame of the sample
     d = np.stack((ms.dx, ms.dy, ms.dz), axis=-1)
     u = np.flatnonzero(use_win)

@@ -128,11 +128,21 @@ def latch_points(t, f_norm, contact, sc, tip: Fingertip, config: EstimatorConfig
 
 
 def _projected_means(tip: Fingertip, sums, counts, use):
-    """``sums / counts`` put back on the skin at the samples ``use`` (NaN elsewhere), (N, 3)."""
-    out = np.full((len(counts), 3), np.nan)
+    """``(k, means)``: the samples ``use`` (indices, increasing) and ``sums / counts`` there
+    put back on the skin, (len(k), 3) (only where used: no (N, 3) array)."""
     k = np.flatnonzero(use)
     with np.errstate(invalid="ignore", divide="ignore"):
-        out[k] = np.stack(tip._project_kernel(*(sums[:, k] / counts[k]), NP), axis=-1)
+        return k, np.stack(tip._project_kernel(*(sums[:, k] / counts[k]), NP), axis=-1)
+
+
+def _means_at(k, means, rows):
+    """The means of :func:`_projected_means` at the samples ``rows``, (len(rows), 3) (NaN
+    at samples it did not use)."""
+    out = np.full((len(rows), 3), np.nan)
+    if len(k):
+        pos = np.minimum(np.searchsorted(k, rows), len(k) - 1)
+        hit = k[pos] == rows
+        out[hit] = means[pos[hit]]
     return out
 
 
@@ -175,12 +185,22 @@ def _latch_compiled(t, f_norm, contact, sc, tip: Fingertip, config: EstimatorCon
         use_fb[seg_fixed[fb_fixed]] = True
         mean_win = _projected_means(tip, sum_win, n_win, use_win)
         mean_fb = _projected_means(tip, sum_fb, n_fb, use_fb)
+        del sum_win, sum_fb, use_win, use_fb  # (N, 3) temporaries set the peak memory
         latch = np.full((n_seg, 3), np.nan)
-        latch[by_window] = mean_win[seg_end[by_window] - 1]
-        latch[fb_fixed] = mean_fb[seg_fixed[fb_fixed]]
-        point = np.where((rising & (n_win > 0))[:, None], mean_win, np.stack((rx, ry, rz), axis=-1))
-        point = np.where((after & win_seg)[:, None], latch[sid], point)
-        point = np.where((after & ~win_seg)[:, None], np.where((n_fb > 0)[:, None], mean_fb, np.nan), point)
+        latch[by_window] = _means_at(*mean_win, seg_end[by_window] - 1)
+        latch[fb_fixed] = _means_at(*mean_fb, seg_fixed[fb_fixed])
+        # the point assembled in place, each choice over the one before (as nested np.where)
+        point = None  # the last pass's, dropped first
+        point = np.stack((rx, ry, rz), axis=-1)
+        m = np.flatnonzero(rising & (n_win > 0))
+        point[m] = _means_at(*mean_win, m)
+        m = after & win_seg
+        point[m] = latch[sid[m]]
+        m = np.flatnonzero(after & ~win_seg)
+        v = _means_at(*mean_fb, m)
+        v[n_fb[m] == 0] = np.nan
+        point[m] = v
+        del mean_win, mean_fb, m, v
         latched = np.where(win_seg, rising & (n_win > 0) | after, after & (n_fb > 0)) & contact
         fallback = latched & ~win_seg
         if dist is None:
@@ -195,7 +215,7 @@ def _latch_compiled(t, f_norm, contact, sc, tip: Fingertip, config: EstimatorCon
         if not len(new):
             break
         begin[new] = True
-    point = np.where(contact[:, None], point, np.nan)
+    point[~contact] = np.nan
     relatched = begin & ~onset
     # contact regained after a latched one
     had = (np.concatenate(([0], np.cumsum(latched)))[np.flatnonzero(onset)] > 0) | had_latch
