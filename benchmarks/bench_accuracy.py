@@ -384,10 +384,7 @@ def rates_section(angle: float = 25.0, seed: int = 101) -> None:
             else:
                 start = HELD
             for rate in (50.0, 1000.0, 7000.0):
-                t = np.arange(int(log.t[-1] * rate) + 1) / rate
-                wt = np.stack([np.interp(t, log.t, log.wrench_true[:, i]) for i in range(6)], axis=-1)
-                w = sensor.measure(wt, np.random.default_rng(seed))
-                truth = log.truth.angle[np.minimum(np.searchsorted(log.t, t), len(log.t) - 1)]
+                t, w, truth = _resampled(log, rate, sensor, seed)
                 sel = t >= start
                 for cutoff in (None, 20.0):
                     if cutoff is not None and rate < 1000.0:
@@ -486,10 +483,7 @@ def window_std_over_time(angle: float = -35.0, seed: int = 7) -> None:
     a2 = next(d for d in scn.disturbances if d.label == "rock-a2")
     start = a2.start + a2.period
     for rate in (50.0, 7000.0):
-        t = np.arange(int(log.t[-1] * rate) + 1) / rate
-        wt = np.stack([np.interp(t, log.t, log.wrench_true[:, i]) for i in range(6)], axis=-1)
-        w = sensor.measure(wt, np.random.default_rng(seed))
-        truth = log.truth.angle[np.minimum(np.searchsorted(log.t, t), len(log.t) - 1)]
+        t, w, truth = _resampled(log, rate, sensor, seed)
         est = estimate(t, w, TIP, EstimatorConfig())
         for b in np.arange(start, t[-1], 0.5):
             m = (t >= b) & (t < b + 0.5) & (est.state == 2)
