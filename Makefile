@@ -21,7 +21,7 @@ $(VENV)/.demo-installed: pyproject.toml | $(BIN)/python
 	touch $@
 
 $(VENV)/.test-installed: pyproject.toml | $(BIN)/python
-	@echo "installing softtip with pytest, hypothesis and every extra into $(VENV) (about 1.3 GB, a few minutes on first use)"
+	@echo "installing softtip with pytest, pytest-xdist, hypothesis and every extra into $(VENV) (about 1.3 GB, a few minutes on first use)"
 	$(BIN)/pip install --quiet -e '.[test]'
 	touch $@ $(VENV)/.demo-installed
 
@@ -31,8 +31,10 @@ demo: $(VENV)/.demo-installed
 	$(BIN)/softtip estimate --example -o $(OUT)/estimates.csv --plot $(OUT)/estimates.png
 	@echo "wrote $(OUT)/reproduction/ (figures, summary.md) and $(OUT)/estimates.csv, .png"
 
+# one worker per core (pytest-xdist), each test file on one worker so that its module's
+# simulations run once
 test: $(VENV)/.test-installed
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n auto --dist loadfile
 
 bench: $(VENV)/.test-installed
 	$(BIN)/python benchmarks/bench_core.py

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import assume, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose, assert_array_equal
 
@@ -221,6 +221,9 @@ def first_entry_is(tip, r, w):
     return np.linalg.norm(hit - r) < 1e-9
 
 
+# the nail hides part of the skin from some force directions (filtered out below): on some
+# seeds that is most of the draws, which is the geometry, not a slow strategy
+@settings(suppress_health_check=[HealthCheck.filter_too_much, HealthCheck.too_slow])
 @given(data=st.data())
 def test_round_trip_on_the_mesh_surface(nail, data):
     r, n, w, sigma = data.draw(mesh_contacts(nail))
