@@ -442,6 +442,7 @@ def calibration_over_rates(angles=(-35.0, 25.0, 70.0), noise_seeds=(101, 102), s
 
     print("| object | " + " | ".join(head(*c) for c in cols) + " |")
     print("|" + " --- |" * (len(cols) + 1))
+    pooled = [[] for _ in cols]
     for label, make, kind in EVIDENCE_OBJECTS:
         if kind != "line":
             continue
@@ -464,10 +465,13 @@ def calibration_over_rates(angles=(-35.0, 25.0, 70.0), noise_seeds=(101, 102), s
                     errs[k].append(err)
                     ratios[k].append(err / est.angle_std[c])
         cells = []
-        for e, r in zip(errs, ratios):
+        for k, (e, r) in enumerate(zip(errs, ratios)):
             e, r = np.concatenate(e), np.concatenate(r)
             cells.append(f"{np.degrees(np.median(e)):.2f}°, {np.sqrt(np.mean(r**2)):.2f}" if len(e) else "—")
+            if len(r):  # each object's RMS once: objects weigh alike, whatever their sample counts
+                pooled[k].append(np.mean(r**2))
         _row(label, *cells)
+    _row("all seven, pooled", *(f"{math.sqrt(np.mean(p)):.2f}" if p else "—" for p in pooled))
 
 
 def window_std_over_time(angle: float = -35.0, seed: int = 7) -> None:

@@ -27,7 +27,9 @@ window sums are differences of the two. :func:`window_kernel` turns window sums 
   variation, as an angle in the tangent frame, and its first-order standard deviation: the
   principal axis of a 2×2 covariance turns by ``C₁₂ / (λ₁ − λ₂)`` for an off-diagonal error
   ``C₁₂``, whose noise share over ``ν`` independent noise samples is
-  ``s² (λ₁ + λ₂ + s²) / ν`` (``s²`` the noise variance; the product ``λ₁ λ₂`` of the
+  ``s² (λ₁ + λ₂ + s²) / ν`` (``s²`` the noise variance after any low-pass, so ``s² / ν`` is
+  the unfiltered ``s₀² / (N − 1)``: a low-pass leaves the noise at the excitation's few
+  hertz as it was, and the axis sees no more and no less of it; the product ``λ₁ λ₂`` of the
   excitation with the across-axis spread is no noise: it varies with the excitation, not
   from sample to sample, and is the model error's), plus the model error: an across-axis spread ``λ₂`` (a line
   that is not quite one; at least the share of the noise that the correction may hide,
@@ -160,7 +162,9 @@ def window_kernel(sums, count, h11, h12, h22, f11, f12, f22, corr: float, xp) ->
     big = xp.maximum(big, 0.0)
     s2 = 0.5 * (s_big + s_small)
     gap = big - small
-    # noise (over ν independent noise samples: the products with the noise only) and model
+    # noise (over ν independent noise samples: the products with the noise only; a low-pass
+    # leaves the noise under the excitation's few hertz as it was, so the cross products keep
+    # their unfiltered share s²·L / N = s² / ν) and model
     # error: an across-axis spread of h (the line resisting a roll about its own edge a
     # little) turns the axis by as much of √(minor / major) as the window's excitation about
     # the two axes is correlated, which the tangential load tells: its correlation ρ between
@@ -174,11 +178,11 @@ def window_kernel(sums, count, h11, h12, h22, f11, f12, f22, corr: float, xp) ->
     # the spread the noise correction may hide (its model margin) counts as well
     hidden = xp.maximum(small, MODEL_MARGIN * s2)
     model = xp.div(hidden, big) * xp.where(den > 0.0, xp.div(rho2, xp.maximum(1.0 - rho2, 0.0)), 1.0)
-    angle_std = xp.sqrt(xp.div(corr * s2 * (big + small + s2), nu * gap * gap) + model)
+    angle_std = xp.sqrt(xp.div(s2 * (big + small + s2), nu * gap * gap) + model)
     return Window(big, small, h_noise, xp.maximum(f_big, 0.0), xp.maximum(f_small, 0.0), tail * f_n, a, angle_std)
 
 
-def window_floats(sums, count: float, noise_terms, tail: float, keep: float, nu: float, corr: float):
+def window_floats(sums, count: float, noise_terms, tail: float, keep: float, nu: float):
     """:func:`window_kernel` for one window of Python floats, unrolled for the stream (the
     same operations, so the same results to rounding; no function call per operation).
 
@@ -190,7 +194,7 @@ def window_floats(sums, count: float, noise_terms, tail: float, keep: float, nu:
     e = window_eigen_floats(sums, count, noise_terms, keep)
     big, small = e[0], e[1]
     f_big, f_small = e[8], e[9]
-    angle, angle_std = window_direction_floats(e, s2, nu, corr)
+    angle, angle_std = window_direction_floats(e, s2, nu)
     return big, small, tail * s_big, f_big, f_small, tail * f_n, angle, angle_std
 
 
@@ -233,7 +237,7 @@ def window_eigen_floats(sums, count: float, noise_terms, keep: float):
     )  # fmt: skip
 
 
-def window_direction_floats(e, s2: float, nu: float, corr: float):
+def window_direction_floats(e, s2: float, nu: float):
     """``(angle, angle_std)`` of a window from :func:`window_eigen_floats`."""
     big, small, c11, c12, c22, root, g11, g12, _, _, g22, half = e
     a = 0.5 * math.atan2(2.0 * c12, 2.0 * half) + _HALF_PI
@@ -255,7 +259,7 @@ def window_direction_floats(e, s2: float, nu: float, corr: float):
             model = _div(hidden, big) * 1.0
     else:  # no principal axis: the load's correlation is undefined, as in the kernel
         model = _div(hidden, big) * 1.0
-    v = _div(corr * s2 * (big + small + s2), nu * gap * gap) + model
+    v = _div(s2 * (big + small + s2), nu * gap * gap) + model
     return a, (math.sqrt(v) if v >= 0.0 else math.nan)
 
 

@@ -529,7 +529,7 @@ class EvidenceTracker:
         ):  # fmt: skip
             self._verdict = _LINE
             e = (major, minor, c11, c12, c22, root, g11, g12, f_major, f_minor, g22, half)
-            w_angle, w_std = window_direction_floats(e, s2, nu, self.corr)
+            w_angle, w_std = window_direction_floats(e, s2, nu)
             if w_std <= self._max_std:
                 self._held = (w_angle, math.sqrt(w_std * w_std + self._model_var))
         side = 1 if hn > thr else (0 if hn <= SIG_LEAVE * thr else -1)
