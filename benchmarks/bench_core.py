@@ -16,6 +16,10 @@ Rates are rows per second of CPU time (the process's own, or the command's): on 
 machine that is the steady figure; the wall-clock time is printed beside it. Targets (manual §6) end to end: CSV >= 2 M rows/s, Parquet >= 10 M rows/s.
 Only this part: --only end-to-end; only the streaming rows: --only stream.
 
+Bounds (--only bounds): pyarrow alone reading the log and writing the least output the command
+line contract allows (24 columns), and numpy filling that many columns: what any `softtip
+estimate` must stay below, whatever its pipeline.
+
 Compiled (--only compiled): the pipeline at 1e5 and 1e6 rows with the sequential stages
 compiled by numba and with their numpy paths, and the start-up cost of the compiled kernels
 (importing numba; the first call, compiling them or loading them from the cache).
@@ -85,7 +89,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--samples", type=int, default=1_000_000)
     ap.add_argument("--stream-samples", type=int, default=20_000)
-    ap.add_argument("--only", choices=["end-to-end", "stream", "scaling", "compiled"], help="Run only this part.")
+    ap.add_argument("--only", choices=["end-to-end", "stream", "scaling", "compiled", "bounds"], help="Run only this part.")
     ap.add_argument("--sizes", default="1e5,1e6,1e7", help="log lengths of the scaling table (comma-separated)")
     ap.add_argument("--scaling-worker", type=float, help=argparse.SUPPRESS)
     ap.add_argument("--mesh-only", action="store_true", help="only the mesh fingertip rows")
@@ -111,6 +115,9 @@ def main() -> None:
         return
     if args.only == "compiled":
         compiled_rows()
+        return
+    if args.only == "bounds":
+        bounds(n)
         return
     print(f"batch contact location, {n:,} samples (best of 3; general solver: 1 run)")
 
@@ -145,6 +152,7 @@ def main() -> None:
 
     stream_rows(args, g)
     end_to_end(n)
+    bounds(n)
     compiled_rows()
     scaling([int(float(x)) for x in args.sizes.split(",")])
     mesh_rows(args, rng)
@@ -418,6 +426,68 @@ def end_to_end(n: int) -> None:
         ww, cw, _ = timed(old_write, repeats=1)
         print(f"  {'before: Python CSV reader':34s} {cell(wr, cr):>36s}")
         print(f"  {'before: Python CSV writer':34s} {cell(ww, cw):>36s}")
+
+
+#: The output columns manual §6's end-to-end targets are bound to (the least the command line
+#: contract allows): time, state, wrench, point, normal, spin, h, |h|, direction, angle, evidence.
+SPEC_COLUMNS = (
+    "t", "state", "fx", "fy", "fz", "mx", "my", "mz", "rx", "ry", "rz", "nx", "ny", "nz", "sigma",
+    "hx", "hy", "hz", "h_norm", "dx", "dy", "dz", "angle_deg", "line_evidence",
+)  # fmt: skip
+
+
+def bounds(n: int) -> None:
+    """What the end-to-end targets leave for softtip: pyarrow alone reading the n-row input log
+    and writing the least output the command line contract allows (:data:`SPEC_COLUMNS` of
+    softtip's own estimates), and numpy filling that many float64 columns, per CPU second on
+    one thread and with pyarrow's threads. Any `softtip estimate` is slower than read + write
+    here, whatever its pipeline."""
+    import pyarrow
+    import pyarrow.csv as pcsv
+    import pyarrow.parquet as pq
+
+    g = synthetic_grasp("murakami2006", angle_deg=45.0, duration=10.0, rate=1000.0, seed=1)
+    reps = max(1, n // len(g.t))
+    t = np.arange(reps * len(g.t)) * 1e-3
+    w = np.tile(g.wrench, (reps, 1))
+    n = len(t)
+    cols = estimate(t, w, "murakami2006").columns()
+    out = pyarrow.table({k: pyarrow.array(cols[k]).dictionary_encode() if cols[k].dtype.kind == "U" else cols[k]
+                         for k in SPEC_COLUMNS})  # fmt: skip
+    log = pyarrow.table({"t": t, **{k: w[:, i] for i, k in enumerate(("fx", "fy", "fz", "mx", "my", "mz"))}})
+    print(f"bounds of end to end, {n:,}-row log, the {len(SPEC_COLUMNS)} columns the contract requires, pyarrow "
+          f"{pyarrow.__version__} alone; rows per second, best of 2 (targets, manual §6: CSV >= 2 M, Parquet >= 10 M)")  # fmt: skip
+    with tempfile.TemporaryDirectory() as tmp:
+        src = {"csv": Path(tmp, "in.csv"), "parquet": Path(tmp, "in.parquet")}
+        pcsv.write_csv(log, src["csv"])
+        pq.write_table(log, src["parquet"])
+        dest = Path(tmp, "out")
+        steps = {
+            "CSV": (lambda: pcsv.read_csv(src["csv"]), lambda: pcsv.write_csv(out, dest)),
+            "Parquet": (lambda: pq.read_table(src["parquet"]), lambda: pq.write_table(out, dest)),
+        }
+        cores = pyarrow.cpu_count()
+        for threads in (1, cores):
+            label = "one thread" if threads == 1 else f"{threads} threads (pyarrow's default)"
+            pyarrow.set_cpu_count(threads)
+            for fmt, (read, write) in steps.items():
+                wr, cr, _ = timed(read)
+                ww, cw, _ = timed(write)
+                size = dest.stat().st_size / n
+                print(f"  {fmt:8s} {label:34s} read {n / cr / 1e6:6.2f} M/s, write {n / cw / 1e6:6.2f} M/s "
+                      f"({size:.0f} B/row), read + write {n / (cr + cw) / 1e6:6.2f} M/s per CPU second, "
+                      f"{n / (wr + ww) / 1e6:6.2f} M/s wall")  # fmt: skip
+    k = sum(1 for c in SPEC_COLUMNS if c not in ("state", "line_evidence"))
+    m = 10 * n
+    for label in ("first allocation", "again"):
+        c0 = time.process_time()
+        arrays = [np.empty(m) for _ in range(k)]
+        for a in arrays:
+            a.fill(1.0)
+        c = time.process_time() - c0
+        del arrays
+        print(f"  numpy: allocate and fill {k} float64 columns of {m:,} rows, {label}: {c / m * 1e9:.0f} ns/row "
+              f"(the pipeline target, 20 M rows/s, is 50 ns/row for everything)")  # fmt: skip
 
 
 def plausible_wrenches(tip, n, rng):
