@@ -60,7 +60,9 @@ N_SUMS = 10
 
 #: Across-axis spread of ``h`` that the noise correction may hide, as a share of the noise
 #: variance: the floor of ``λ₂`` in the window direction's model term. Set on the simulator's
-#: rocked lines, seven objects in nine settings (50 Hz told the Nano17 preset, sensor noise ×1
+#: rocked lines with this constant varied (the calibration table of ``benchmarks/
+#: bench_accuracy.py --sections rates``, and the same at 50 Hz with the sensor noise ×2 and ×4):
+#: seven objects in nine settings (50 Hz told the Nano17 preset, sensor noise ×1
 #: and ×2; told the simulated noise, ×1, ×2 and ×4; 1 and 7 kHz with the preset, 7 kHz behind a
 #: 20 Hz low-pass; 7 kHz told the simulated noise): with 0.25 (the noise model's margin) RMS
 #: error / std fell outside 0.7–1.5 in 20 of the 63 cells, 19 of them conservative; with 0.1
