@@ -42,6 +42,9 @@ method | error with softtip's extension``. Sections:
   without a low-pass and at 7 kHz without the window's model error; then the rocked 1 mm
   plate's window direction half second by half second at 50 Hz and 7 kHz.
   ``--sections rates`` (about five minutes).
+* **tips** (not in the default run): the confirmed lines' error / reported std on fingertips
+  the defaults were not set on (a sphere of 12 mm and a capsule of 10 mm), rocked, 50 Hz,
+  with the Nano17 preset and told the simulated noise. ``--sections tips`` (about five minutes).
 * **cost**: streaming time per sample of each mode.
 * **friction** (issue 11): a friction load during the hold (:func:`softtip.sim.friction_scenario`:
   a push ramped in over 6 → 6.5 s, a slow drag over 5.5 → 9.5 s, or a slip of 1.5 mm along
@@ -71,7 +74,7 @@ import time
 import numpy as np
 from bench_fusion import fusion_section  # noqa: E402  (benchmarks/ is the script's folder)
 
-from softtip import EstimatorConfig, axial_difference, estimate, murakami2006
+from softtip import Capsule, EstimatorConfig, Sphere, axial_difference, estimate, murakami2006
 from softtip.core.depth import MURAKAMI2006_DEPTH, DepthLaw, lever_depth
 from softtip.core.noise import NANO17, SensorNoise
 from softtip.core.spin import direction_angle
@@ -474,6 +477,61 @@ def calibration_over_rates(angles=(-35.0, 25.0, 70.0), noise_seeds=(101, 102), s
     _row("all seven, pooled", *(f"{math.sqrt(np.mean(p)):.2f}" if p else "—" for p in pooled))
 
 
+#: Fingertips other than the papers' for :func:`tips_section`: (label, fingertip).
+OTHER_TIPS = (
+    ("sphere R 12 mm", lambda: Sphere(0.012, center=(0.0, 0.0, 0.012))),
+    ("capsule R 10 mm, cylinder 15 mm", lambda: Capsule(0.010, 0.015)),
+)
+
+
+def tips_section(angles=(-35.0, 25.0, 70.0), noise_seeds=(1, 2), sim_seed: int = 5) -> None:
+    """The confirmed lines' error / reported std on fingertips the defaults were not set on
+    (a sphere and a smaller capsule), rocked, 50 Hz, the estimator told the Nano17 preset or
+    the simulated sensor's noise (with its quantisation)."""
+    print("\n### confirmed lines on other fingertips (rocked, 50 Hz, after both axes were excited): median "
+          "direction error, RMS error / reported std with the Nano17 preset and told the simulated noise\n")  # fmt: skip
+    print(f"object angles {', '.join(f'{a:+.0f}°' for a in angles)}, noise seeds {', '.join(map(str, noise_seeds))}")
+    sensor = SensorModel()
+    q = np.hypot(sensor.noise_std, np.asarray(sensor.resolution) / math.sqrt(12.0))
+    configs = (("preset", EstimatorConfig()), ("told", EstimatorConfig(noise=SensorNoise(tuple(q[:3]), tuple(q[3:])))))
+    print("| fingertip | object | median error | err/std, preset | err/std, told the simulated noise |")
+    print("| --- | --- | --- | --- | --- |")
+    for tip_label, make_tip in OTHER_TIPS:
+        tip = make_tip()
+        pooled = {k: [] for k, _ in configs}
+        for label, make, kind in EVIDENCE_OBJECTS:
+            if kind != "line":
+                continue
+            ratios, errs, failed = {k: [] for k, _ in configs}, [], []
+            for ang in angles:
+                scn = rock_scenario(math.radians(ang))
+                try:
+                    log = simulate_grasp(tip, make(), scn, sensor, rng=sim_seed)
+                except RuntimeError:  # the simulator cannot hold this grasp on this tip
+                    failed.append(f"{ang:+.0f}°")
+                    continue
+                a2 = next(d for d in scn.disturbances if d.label == "rock-a2")
+                for seed in noise_seeds:
+                    w = sensor.measure(log.wrench_true, np.random.default_rng(seed))
+                    for k, cfg in configs:
+                        est = estimate(log.t, w, tip, cfg)
+                        c = (log.t >= a2.start + a2.period) & (est.line_evidence == 2)
+                        err = np.abs(axial_difference(est.angle[c], log.truth.angle[c]))
+                        ratios[k].append(err / est.angle_std[c])
+                        if k == "told":
+                            errs.append(err)
+            if not errs:
+                _row(tip_label, label, f"the simulator cannot hold the grasp ({', '.join(failed)})", "—", "—")
+                continue
+            z = {k: math.sqrt(np.mean(np.concatenate(v) ** 2)) for k, v in ratios.items()}
+            for k in z:
+                pooled[k].append(z[k] ** 2)
+            note = f" (not simulated at {', '.join(failed)})" if failed else ""
+            _row(tip_label, label + note, f"{np.degrees(np.median(np.concatenate(errs))):.2f}°", f"{z['preset']:.2f}",
+                 f"{z['told']:.2f}")  # fmt: skip
+        _row(tip_label, "pooled", "", *(f"{math.sqrt(np.mean(v)):.2f}" for v in pooled.values()))
+
+
 def window_std_over_time(angle: float = -35.0, seed: int = 7) -> None:
     """Where the window's std is too small at high rates: the rocked 1 mm plate, median error,
     median reported std and RMS error / std of the confirmed line per half second, at 50 Hz
@@ -663,7 +721,7 @@ def main() -> None:
     for name in args.sections:
         {"depth": depth_section, "slide": slide_section, "papers": papers_section, "start": start_section,
          "noise": noise_section, "evidence": evidence_section, "cost": stream_cost, "friction": friction_section,
-         "fusion": fusion_section, "rates": rates_section}[name]()  # fmt: skip
+         "fusion": fusion_section, "rates": rates_section, "tips": tips_section}[name]()  # fmt: skip
 
 
 if __name__ == "__main__":
