@@ -16,7 +16,7 @@ from softtip import Estimator, EstimatorConfig, InputError, axial_difference, es
 from softtip.core.noise import NANO17
 from softtip.estimator.contact import contact_thresholds
 from softtip.estimator.results import EstimatorWarning
-from softtip.estimator.tare import bias_to_toml, load_bias
+from softtip.estimator.tare import bias_to_toml, load_bias, tare_from_samples
 from softtip.io.live import KeyReader, run_live
 from softtip.sim.synthetic import synthetic_grasp
 
@@ -384,3 +384,21 @@ def test_cli_stream_prints_the_tare_and_takes_a_bias_file(tmp_path):
     r = run_cli("stream", "--replay", "log.csv", "--speed", "0", "--no-view", "--bias", "bias.toml", cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     assert "bias given" in r.stderr and "warning" not in r.stderr
+
+
+@pytest.mark.parametrize(
+    ("scale", "n", "says_conservative"),
+    [(0.3, 200, True), (1.0, 200, False), (0.3, 20, False), (0.8, 200, False)],
+)
+def test_the_tare_summary_compares_its_noise_with_the_noise_model(scale, n, says_conservative):
+    # untouched samples with `scale` times the Nano17 preset's noise: the summary gives their
+    # noise and its ratio to the model, and says the reported stds are conservative only when
+    # the model overstates the noise on every axis over enough samples to know
+    rng = np.random.default_rng(21)
+    model = np.array(NANO17.force_std + NANO17.moment_std)
+    samples = np.array([0.1, -0.05, 0.3, 2e-3, -1e-3, 5e-4]) + rng.normal(size=(n, 6)) * scale * model
+    report = tare_from_samples(samples, EstimatorConfig())
+    line = report.summary()
+    assert "times the noise model" in line
+    assert report.noise_ratio == pytest.approx(scale, rel=0.45)
+    assert ("conservative" in line) is says_conservative

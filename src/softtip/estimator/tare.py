@@ -53,6 +53,11 @@ __all__ = [
 SPIKE_SIGMAS = 8.0
 #: The tare's noise this many times the noise model: the fingertip was touched while taring.
 TOUCHED_RATIO = 5.0
+#: The tare's noise below this share of the noise model on every axis, over at least
+#: :data:`OVERSTATED_MIN_SAMPLES` samples (its standard deviation then known to about 13 %):
+#: the model overstates the sensor's noise, and the summary says so.
+OVERSTATED_RATIO = 0.6
+OVERSTATED_MIN_SAMPLES = 30
 
 
 _LABELS = {"robust": "mean without spikes", "median": "median", "mean": "mean"}
@@ -101,17 +106,29 @@ class TareReport:
     warnings: tuple[str, ...] = ()
 
     def summary(self) -> str:
-        """One line: where the bias came from and its value (N, N·mm)."""
+        """One line: where the bias came from and its value (N, N·mm); for a tare, the noise of
+        its samples against the noise model (and whether the model overstates it)."""
         f, m = self.bias[:3], self.bias[3:] * 1e3
         what = {
             "tare": f"from the first {self.duration:g} s ({self.n_samples} samples, {_LABELS[self.method]})",
             "given": "given",
             "none": "none (input already tared)",
         }[self.source]
-        return (
+        line = (
             f"bias {what}: force ({f[0]:+.4f}, {f[1]:+.4f}, {f[2]:+.4f}) N, "
             f"moment ({m[0]:+.4f}, {m[1]:+.4f}, {m[2]:+.4f}) N·mm"
         )
+        if self.source == "tare" and math.isfinite(self.noise_ratio):
+            line += (
+                f"; their noise up to {np.nanmax(self.force_std) * 1e3:.2g} mN and "
+                f"{np.nanmax(self.moment_std) * 1e3:.2g} N·mm, {self.noise_ratio:.2g} times the noise model"
+            )
+            if self.n_samples >= OVERSTATED_MIN_SAMPLES and self.noise_ratio < OVERSTATED_RATIO:
+                line += (
+                    " (which overstates this sensor's noise: the reported standard deviations are conservative; "
+                    "give its noise model, --force-noise and --moment-noise)"
+                )
+        return line
 
 
 def _given(config: EstimatorConfig) -> TareReport:
