@@ -434,8 +434,7 @@ def calibration_over_rates(angles=(-35.0, 25.0, 70.0), noise_seeds=(101, 102), s
     sensor = SensorModel()
     # the simulated sensor's noise with its quantisation (what the Nano17 preset overstates
     # by 1.7 in force and 1.4 in moment)
-    q = np.hypot(sensor.noise_std, np.asarray(sensor.resolution) / math.sqrt(12.0))
-    true_noise = SensorNoise(tuple(q[:3]), tuple(q[3:]))
+    true_noise = sensor.noise_model()
     cols = ((50.0, None, None), (1000.0, None, None), (7000.0, None, None), (1000.0, 20.0, None), (7000.0, 20.0, None),
             (7000.0, None, 0.0), (50.0, None, true_noise), (7000.0, None, true_noise))  # fmt: skip
 
@@ -492,8 +491,7 @@ def tips_section(angles=(-35.0, 25.0, 70.0), noise_seeds=(1, 2), sim_seed: int =
           "direction error, RMS error / reported std with the Nano17 preset and told the simulated noise\n")  # fmt: skip
     print(f"object angles {', '.join(f'{a:+.0f}°' for a in angles)}, noise seeds {', '.join(map(str, noise_seeds))}")
     sensor = SensorModel()
-    q = np.hypot(sensor.noise_std, np.asarray(sensor.resolution) / math.sqrt(12.0))
-    configs = (("preset", EstimatorConfig()), ("told", EstimatorConfig(noise=SensorNoise(tuple(q[:3]), tuple(q[3:])))))
+    configs = (("preset", EstimatorConfig()), ("told", EstimatorConfig(noise=sensor.noise_model())))
     print("| fingertip | object | median error | err/std, preset | err/std, told the simulated noise |")
     print("| --- | --- | --- | --- | --- |")
     for tip_label, make_tip in OTHER_TIPS:

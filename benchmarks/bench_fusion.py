@@ -74,8 +74,7 @@ def run_case(tip, model, obj, angle_deg, seed, rock=False, noise=1.0, told_true=
     g = simulate_two_finger(tip, obj, math.radians(angle_deg), rng=seed, model=model, rock=rock)
     sensor = SensorModel(noise_std=tuple(noise * np.asarray(SensorModel().noise_std)))
     if told_true:  # the estimator told the simulated sensor's noise with its quantisation, not the Nano17 preset's
-        q = np.hypot(sensor.noise_std, np.asarray(sensor.resolution) / math.sqrt(12.0))
-        config = EstimatorConfig(noise=SensorNoise(tuple(q[:3]), tuple(q[3:])))
+        config = EstimatorConfig(noise=sensor.noise_model())
     elif noise != 1.0:
         config = EstimatorConfig(noise=SensorNoise(tuple(noise * np.asarray(NANO17.force_std)), tuple(noise * np.asarray(NANO17.moment_std))))
     else:

@@ -47,6 +47,8 @@ def test_sensor_noise_bias_and_quantisation():
     # quantisation adds res²/12 to the variance
     expected = np.sqrt(np.array(sensor.noise_std) ** 2 + res**2 / 12)
     assert_allclose(a.std(axis=0), expected, rtol=0.05)
+    told = sensor.noise_model()  # what the estimator is told of this sensor
+    assert_allclose(told.force_std + told.moment_std, expected, rtol=1e-12)
     ideal = SensorModel.ideal().measure(w + 0.123, np.random.default_rng(0))
     assert np.all(ideal == 0.123)
     assert len(SensorModel(rate=50.0).times(10.0)) == 500

@@ -8,6 +8,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from softtip.core.noise import SensorNoise
+
 __all__ = ["SensorModel", "NANO17_SENSOR", "NANO17"]
 
 _FORCE_RES = 1.0 / 160.0  # N
@@ -76,6 +78,13 @@ class SensorModel:
         res = np.asarray(self.resolution)
         step = np.where(res > 0.0, res, 1.0)
         return np.where(res > 0.0, np.round(out / step) * step, out)
+
+    def noise_model(self) -> SensorNoise:
+        """What to tell the estimator about this sensor: per axis the standard deviation of
+        the noise with the quantisation's share, ``sqrt(noise_std² + resolution² / 12)``
+        (N and N·m; the bias is left out, a tare removes it)."""
+        q = np.hypot(self.noise_std, np.asarray(self.resolution) / math.sqrt(12.0))
+        return SensorNoise(tuple(float(v) for v in q[:3]), tuple(float(v) for v in q[3:]))
 
     def as_dict(self) -> dict:
         """JSON-ready, SI."""
