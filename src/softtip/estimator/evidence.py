@@ -138,6 +138,12 @@ def _sample_std(angle_std, h_norm, minor, model_var, xp):
     return xp.sqrt(angle_std * angle_std + xp.div(minor, h_norm * h_norm) + model_var)
 
 
+def _segment_starts(begin):
+    """``(idx, seg_start)``: the sample indices and the start of each sample's segment."""
+    idx = np.arange(len(begin))
+    return idx, np.maximum.accumulate(np.where(begin, idx, 0))
+
+
 def _vote(t, located, seg_start, side, window: float):
     """``side`` (1 above the threshold, 0 below its leaving share, −1 between) of each located
     sample replaced by the vote of the located samples of its segment in the last ``window``
@@ -321,8 +327,7 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
         with np.errstate(invalid="ignore"):
             above = np.asarray(ms.h_norm, dtype=float) > config.line_threshold(ms.h_std)
         event = np.where(area_now & above, _AREA, np.where(line_now, _LINE, _UNKNOWN))
-        idx = np.arange(n)
-        seg_start = np.maximum.accumulate(np.where(begin, idx, 0))  # segment start of each sample
+        idx, seg_start = _segment_starts(begin)
         # the verdict is the latest event of the segment, and the held window the latest
         # resolved one (forward fill within each segment)
         del area_now, line_now, above
@@ -337,8 +342,7 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
         del prods
         held = np.full(n, -1)
         h_ratio, f_ratio = np.full(n, np.nan), np.full(n, np.nan)
-        idx = np.arange(n)
-        seg_start = np.maximum.accumulate(np.where(begin, idx, 0))
+        idx, seg_start = _segment_starts(begin)
     # in place: h_ratio and f_ratio are this function's own arrays
     out_of = ~located
     verdict[out_of] = 0

@@ -317,7 +317,7 @@ def track_kernel(t, dt, x, alpha, start, on, off, min_dur, blk, tiny, avg, iavg,
         Samples per block of the drift average.
     tiny : float
         The block also ends once its product of ``(1 − α)`` falls below this.
-    avg : (20,) float
+    avg : (19,) float
         The drift average's state, read and written: the drift ``b`` (0:6), the open block's
         start ``b0`` (6:12), its sums (12:18) and product (18).
     iavg : (3,) int
