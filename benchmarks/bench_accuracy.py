@@ -45,6 +45,12 @@ method | error with softtip's extension``. Sections:
 * **tips** (not in the default run): the confirmed lines' error / reported std on fingertips
   the defaults were not set on (a sphere of 12 mm and a capsule of 10 mm), rocked, 50 Hz,
   with the Nano17 preset and told the simulated noise. ``--sections tips`` (about five minutes).
+* **rolling** (issue 15's note, not in the default run): an ``unconfirmed`` line's rolling
+  bias in the papers' grasp (one axis of excitation), per object and angle, against the
+  angle between the axes along which ``h`` and the tangential load vary over the held
+  grasp: the bias grows with the line's angle to the joint axis, the two axes stay at right
+  angles whatever it is, so no wrench shows the bias. ``--sections rolling`` (about a
+  minute).
 * **cost**: streaming time per sample of each mode.
 * **friction** (issue 11): a friction load during the hold (:func:`softtip.sim.friction_scenario`:
   a push ramped in over 6 → 6.5 s, a slow drag over 5.5 → 9.5 s, or a slip of 1.5 mm along
@@ -75,9 +81,10 @@ import numpy as np
 from bench_fusion import fusion_section  # noqa: E402  (benchmarks/ is the script's folder)
 
 from softtip import Capsule, EstimatorConfig, Sphere, axial_difference, estimate, murakami2006
+from softtip.core._xp import NP
 from softtip.core.depth import MURAKAMI2006_DEPTH, DepthLaw, lever_depth
 from softtip.core.noise import NANO17, SensorNoise
-from softtip.core.spin import direction_angle
+from softtip.core.spin import direction_angle, tangent_frame_kernel
 from softtip.core.units import KGF
 from softtip.sim import NANO17_SENSOR as SIM_SENSOR
 from softtip.sim import (
@@ -704,6 +711,45 @@ def friction_section(seed: int = 1, angles=(0.0, 30.0, -45.0)) -> None:
           f"of {len(cases)} grasps (slips included)")
 
 
+def _variation_axis(x, y) -> float:
+    """Angle (rad) of the principal axis of the 2-D scatter ``(x, y)``."""
+    x, y = x - x.mean(), y - y.mean()
+    return 0.5 * math.atan2(2.0 * np.mean(x * y), np.mean(x * x) - np.mean(y * y))
+
+
+def rolling_section(angles=(-60.0, -45.0, 0.0, 30.0, 60.0), seed: int = 3) -> None:
+    """Issue 15's note: what one axis of excitation hides (``unconfirmed`` lines)."""
+    print(
+        "\n### rolling bias of unconfirmed lines (the papers' grasp, t > 6 s): median signed error of the line's angle, "
+        "median reported std, and the angle between the axes along which h and the tangential load vary\n"
+    )
+    objects = [o for o in EVIDENCE_OBJECTS if o[2] == "line"]
+    print("| object | " + " | ".join(f"{a:+.0f}°" for a in angles) + " |")
+    print("| --- |" + " --- |" * len(angles))
+    sensor = SensorModel()
+    gaps = []
+    for label, make, _kind in objects:
+        cells = []
+        for ang in angles:
+            log = simulate_grasp(TIP, make(), paper_scenario(math.radians(ang)), sensor, rng=seed)
+            est = estimate(log.t, log.wrench, TIP)
+            sel = (log.t > HELD) & (est.state == 2)
+            if sel.sum() < 20:
+                cells.append("—")
+                continue
+            bias = np.degrees(np.median(axial_difference(est.angle[sel], log.truth.angle[sel])))
+            e1x, e1y, e1z, e2x, e2y, e2z = (np.asarray(v) for v in tangent_frame_kernel(*est.normal[sel].T, NP))
+            h, f = est.h[sel], est.wrench[sel, :3]
+            ah = _variation_axis(h[:, 0] * e1x + h[:, 1] * e1y + h[:, 2] * e1z, h[:, 0] * e2x + h[:, 1] * e2y + h[:, 2] * e2z)
+            af = _variation_axis(f[:, 0] * e1x + f[:, 1] * e1y + f[:, 2] * e1z, f[:, 0] * e2x + f[:, 1] * e2y + f[:, 2] * e2z)
+            gap = abs(np.degrees(axial_difference(ah, af)))
+            gaps.append(gap)
+            std = np.degrees(np.median(est.angle_std[sel]))
+            cells.append(f"{bias:+.1f}° (± {std:.1f}°), axes {gap:.0f}°")
+        _row(label, *cells)
+    print(f"\naxes of h and of the tangential load {min(gaps):.0f}–{max(gaps):.0f}° apart over every case")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--fit-depth", action="store_true", help="refit the default depth law and stop")
@@ -719,7 +765,8 @@ def main() -> None:
     for name in args.sections:
         {"depth": depth_section, "slide": slide_section, "papers": papers_section, "start": start_section,
          "noise": noise_section, "evidence": evidence_section, "cost": stream_cost, "friction": friction_section,
-         "fusion": fusion_section, "rates": rates_section, "tips": tips_section}[name]()  # fmt: skip
+         "fusion": fusion_section, "rates": rates_section, "tips": tips_section,
+         "rolling": rolling_section}[name]()  # fmt: skip
 
 
 if __name__ == "__main__":

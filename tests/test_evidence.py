@@ -221,6 +221,31 @@ def test_an_unconfirmed_line_carries_its_rolling_bias_in_its_std():
     assert np.array_equal(off.angle_std, off0.angle_std, equal_nan=True)
 
 
+def test_the_noise_share_of_the_angle_std():
+    """``angle_noise_std`` is the share of ``angle_std`` that the sensor noise gives: the same
+    whatever model error is configured, never above ``angle_std``, and all of it where the
+    estimator counts no model error (``--line-evidence off``, the papers' noise only)."""
+    t, w, _ = rocking_log("line", 30.0, seed=3)  # rocked: unconfirmed, then confirmed lines
+    est = estimate(t, w, "murakami2006")
+    line = est.state == 2
+    conf, unconf = line & (est.line_evidence == 2), line & (est.line_evidence == 1)
+    assert conf.sum() > 100 and unconf.sum() > 10
+    noise, std = est.angle_noise_std, est.angle_std
+    assert np.all(np.isfinite(noise[line])) and np.all(np.isnan(noise[~line]))
+    assert np.all(noise[line] <= std[line])
+    # the model error: at least the configured terms (more with the window's spread)
+    model = np.sqrt(std**2 - noise**2)
+    cfg = EstimatorConfig()
+    assert np.all(model[unconf] >= cfg.unconfirmed_model_std * (1 - 1e-9))
+    held = conf & (model > 0)
+    assert held.mean() > 0.9 * conf.mean() and np.all(model[held] >= cfg.evidence_model_std * (1 - 1e-9))
+    # the noise's share does not depend on the model-error settings
+    other = estimate(t, w, "murakami2006", EstimatorConfig(unconfirmed_model_std=0.0, evidence_model_std=math.radians(2.0)))
+    assert_allclose(other.angle_noise_std[line], noise[line], rtol=1e-12)
+    off = estimate(t, w, "murakami2006", EstimatorConfig(line_evidence=False))
+    assert np.array_equal(off.angle_noise_std, off.angle_std, equal_nan=True)
+
+
 def test_line_evidence_off_is_the_papers_per_sample_behaviour():
     t, w, _ = rocking_log("area", 30.0, seed=5)
     on = estimate(t, w, "murakami2006")

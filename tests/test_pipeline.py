@@ -13,7 +13,7 @@ from softtip.estimator.results import EstimatorWarning
 from softtip.sim.synthetic import synthetic_grasp
 
 FIELDS_3 = ("wrench", "point", "normal", "h", "direction")
-FIELDS_1 = ("sigma", "h_norm", "h_std", "angle", "angle_std", "depth", "depth_std", "joint_conditioning", "joint_angle_std",
+FIELDS_1 = ("sigma", "h_norm", "h_std", "angle", "angle_std", "angle_noise_std", "depth", "depth_std", "joint_conditioning", "joint_angle_std",
             "joint_offset_std", "joint_residual", "h_ratio", "excitation_ratio")  # fmt: skip
 FLAGS = ("latched", "latch_fallback", "pulling", "taring", "relatched", "joint_fallback", "depth_from_data", "contact_id")
 #: The papers' method (no depth compensation): the synthetic grasps put the tangential force

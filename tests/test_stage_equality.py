@@ -139,7 +139,7 @@ def test_evidence_stage(staged):
     cfg, ms = s["config"], s["ms"]
     h = np.stack((ms.hx, ms.hy, ms.hz), axis=-1)
     force = np.stack(s["c"][:3], axis=-1)
-    state, evidence, d, angle, angle_std, h_ratio, f_ratio = evidence_states(
+    state, evidence, d, angle, angle_std, noise_std, h_ratio, f_ratio = evidence_states(
         t, s["located"], s["begin"], s["point"], s["normal"], h, force, ms, s["noise"], s["corr"], cfg
     )
     tracker = EvidenceTracker(cfg, s["noise"], s["corr"])
@@ -153,7 +153,7 @@ def test_evidence_stage(staged):
         point, normal = tuple(s["point"][i].tolist()), tuple(s["normal"][i].tolist())
         if geo is None or geo.point != point or geo.normal != normal:  # one geometry per held point
             geo = PointGeometry(point, normal, sq)
-        st, ev, di, an, an_std, hr, fr = tracker.step(
+        st, ev, di, an, an_std, an_noise, hr, fr = tracker.step(
             float(t[i]), geo, *eff[i].tolist(), *h[i].tolist(), *force[i].tolist(), float(ms.h_norm[i]),
             float(ms.h_std[i]),
         )  # fmt: skip
@@ -161,7 +161,7 @@ def test_evidence_stage(staged):
         assert ev == {0: "", 1: "unconfirmed", 2: "confirmed"}[int(evidence[i])], i
         if st == "line":
             assert_allclose(di, d[i], **CLOSE)
-            assert_allclose([an, an_std], [angle[i], angle_std[i]], **CLOSE)
+            assert_allclose([an, an_std, an_noise], [angle[i], angle_std[i], noise_std[i]], **CLOSE)
         assert_allclose([hr, fr], [h_ratio[i], f_ratio[i]], **CLOSE)
     seen = set(np.unique(state[s["located"]]).tolist())
     assert len(seen) >= 2, seen  # the log exercises the stage: more than one state

@@ -54,7 +54,8 @@ rx, ry, rz (contact point, m), nx, ny, nz (outward normal), sigma (spin torque a
 normal, N·m), hx, hy, hz, h_norm (tangential spin torque, N·m), dx, dy, dz (direction of
 the touched edge / strip, an axis), angle_deg (its angle in the tangent frame, degrees in
 (-90, 90]; at the tip: from the sensor x axis), h_std (noise level of h, N·m),
-angle_std_deg, latched, latch_fallback, relatched (a new latch starts here), depth
+angle_std_deg, angle_noise_std_deg (the sensor noise's share of it; the rest is model
+error), latched, latch_fallback, relatched (a new latch starts here), depth
 (m, the depth compensation used; 0 without it), joint_conditioning, joint_angle_std_deg,
 joint_offset_std (m), joint_residual and joint_fallback (the sliding window of
 --contact-point line-fit: reciprocal condition number, standard deviations of its line angle

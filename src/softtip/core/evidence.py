@@ -35,7 +35,8 @@ window sums are differences of the two. :func:`window_kernel` turns window sums 
   that is not quite one; at least the share of the noise that the correction may hide,
   :data:`HIDDEN_SPREAD` ``s²``) turns the axis by as much of ``√(λ₂ / λ₁)`` as the excitation about the
   two axes is correlated over the window, which the tangential load tells (``ρ²/(1 − ρ²)``
-  of its correlation across the axis; ½ when the load did not vary).
+  of its correlation across the axis; ½ when the load did not vary). The noise term alone
+  is returned too (``angle_noise_std``).
 
 The decisions (thresholds, hysteresis, held verdicts) are the estimator's
 (:mod:`softtip.estimator.evidence`). All kernels are component-wise for both back ends of
@@ -116,6 +117,7 @@ class Window(NamedTuple):
     f_noise: Any
     angle: Any  #: window line direction ``n × (principal axis of h)``, rad in (−π/2, π/2]
     angle_std: Any  #: its standard deviation, rad (inf when h did not vary)
+    angle_noise_std: Any  #: the noise's share of it alone, rad (the rest is model error)
 
 
 def _eig2(c11, c12, c22, xp):
@@ -191,8 +193,11 @@ def window_kernel(sums, count, h11, h12, h22, f11, f12, f22, corr: float, xp) ->
     # the spread the noise correction may hide counts as well
     hidden = xp.maximum(small, HIDDEN_SPREAD * s2)
     model = xp.div(hidden, big) * xp.where(den > 0.0, xp.div(rho2, xp.maximum(1.0 - rho2, 0.0)), 1.0)
-    angle_std = xp.sqrt(xp.div(s2 * (big + small + s2), nu * gap * gap) + model)
-    return Window(big, small, h_noise, xp.maximum(f_big, 0.0), xp.maximum(f_small, 0.0), tail * f_n, a, angle_std)
+    noise_var = xp.div(s2 * (big + small + s2), nu * gap * gap)
+    angle_std = xp.sqrt(noise_var + model)
+    return Window(
+        big, small, h_noise, xp.maximum(f_big, 0.0), xp.maximum(f_small, 0.0), tail * f_n, a, angle_std, xp.sqrt(noise_var)
+    )
 
 
 def window_floats(sums, count: float, noise_terms, tail: float, keep: float, nu: float):
@@ -207,8 +212,8 @@ def window_floats(sums, count: float, noise_terms, tail: float, keep: float, nu:
     e = window_eigen_floats(sums, count, noise_terms, keep)
     big, small = e[0], e[1]
     f_big, f_small = e[8], e[9]
-    angle, angle_std = window_direction_floats(e, s2, nu)
-    return big, small, tail * s_big, f_big, f_small, tail * f_n, angle, angle_std
+    angle, angle_std, noise_std = window_direction_floats(e, s2, nu)
+    return big, small, tail * s_big, f_big, f_small, tail * f_n, angle, angle_std, noise_std
 
 
 def noise_constants(noise_terms):
@@ -251,7 +256,7 @@ def window_eigen_floats(sums, count: float, noise_terms, keep: float):
 
 
 def window_direction_floats(e, s2: float, nu: float):
-    """``(angle, angle_std)`` of a window from :func:`window_eigen_floats`."""
+    """``(angle, angle_std, angle_noise_std)`` of a window from :func:`window_eigen_floats`."""
     big, small, c11, c12, c22, root, g11, g12, _, _, g22, half = e
     a = 0.5 * math.atan2(2.0 * c12, 2.0 * half) + _HALF_PI
     if a > _HALF_PI:
@@ -272,8 +277,9 @@ def window_direction_floats(e, s2: float, nu: float):
             model = _div(hidden, big) * 1.0
     else:  # no principal axis: the load's correlation is undefined, as in the kernel
         model = _div(hidden, big) * 1.0
-    v = _div(s2 * (big + small + s2), nu * gap * gap) + model
-    return a, (math.sqrt(v) if v >= 0.0 else math.nan)
+    nv = _div(s2 * (big + small + s2), nu * gap * gap)
+    v = nv + model
+    return a, (math.sqrt(v) if v >= 0.0 else math.nan), (math.sqrt(nv) if nv >= 0.0 else math.nan)
 
 
 def window_constants(count: float, corr: float, xp=None):

@@ -220,6 +220,7 @@ def estimate(
         direction=blank(ev.direction, not_line),
         angle=blank(ev.angle, not_line),
         angle_std=blank(ev.angle_std, not_line),
+        angle_noise_std=blank(ev.angle_noise_std, not_line),
         latched=latched & located,
         latch_fallback=fallback & located,
         pulling=pulling,

@@ -34,7 +34,10 @@ own. A window excited about one axis only would bias the axis: a line's small re
 rolling about its own edge follows the same excitation. A sample's own angle standard
 deviation counts the window's across-axis spread beyond the noise as model error,
 ``sqrt(σ_d² + minor / |h|²)``, and while the line is ``unconfirmed`` the rolling bias that
-one axis of excitation hides (``unconfirmed_model_std``, added in quadrature).
+one axis of excitation hides (``unconfirmed_model_std``, added in quadrature). The share of
+the standard deviation that is the sensor noise's alone (``angle_noise_std``: the window's
+noise term, or the sample's ``σ_d``) is kept apart: two sensors share the model error, not
+their noise (:mod:`softtip.fusion`).
 
 :func:`evidence_states` does it for a whole log, :class:`EvidenceTracker` one sample at a
 time (running sums, O(1) per sample, as :mod:`softtip.estimator.joint`).
@@ -81,6 +84,7 @@ class EvidenceStates(NamedTuple):
     direction: NDArray  #: (N, 3) unit line direction, the window's under confirmed excitation
     angle: NDArray  #: (N,) rad, the direction's angle in the tangent frame
     angle_std: NDArray  #: (N,) rad, its standard deviation
+    angle_noise_std: NDArray  #: (N,) rad, the sensor noise's share of it (the rest is model error)
     h_ratio: NDArray  #: (N,) minor / major eigenvalue of h's covariance in the window
     excitation_ratio: NDArray  #: (N,) the same for the tangential force (how far it turned)
 
@@ -205,6 +209,7 @@ class _Held(NamedTuple):
     h_minor: np.ndarray
     angle: np.ndarray
     angle_std: np.ndarray
+    angle_noise_std: np.ndarray
 
 
 def _window_sum_blocks(t, located, begin, prods, window: float, block: int, sums=None, count=None):
@@ -277,11 +282,10 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
     Returns
     -------
     tuple
-        ``(state, evidence, direction (N, 3), angle, angle_std, h_ratio, f_ratio)``: state
-        codes of :data:`~softtip.estimator.results.STATES` (``point`` / ``line`` / ``area``
-        on located samples), evidence codes of
-        :data:`~softtip.estimator.results.EVIDENCE`, the direction and its angle and
-        standard deviation (NaN unless ``line``) and the window ratios.
+        :class:`EvidenceStates`: state codes of :data:`~softtip.estimator.results.STATES`
+        (``point`` / ``line`` / ``area`` on located samples), evidence codes of
+        :data:`~softtip.estimator.results.EVIDENCE`, the direction and its angle, standard
+        deviation and the noise's share of it (NaN unless ``line``) and the window ratios.
     """
     n = len(t)
     sig = located & np.asarray(ms.line, dtype=bool)
@@ -291,7 +295,7 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
         d = np.stack((ms.dx, ms.dy, ms.dz), axis=-1)
         nan = np.full(n, np.nan)
         return EvidenceStates(np.where(sig, 2, 1).astype(np.int8), np.where(sig, 1, 0).astype(np.int8), d, ms.angle,
-                              ms.angle_std, nan, nan)  # fmt: skip
+                              ms.angle_std, ms.angle_std, nan, nan)  # fmt: skip
 
     with np.errstate(invalid="ignore"):
         prods = blockwise(lambda *a: evidence_products(*_frame_terms(*a, NP)), (*normal.T, *h.T, *force.T), stacked=True)
@@ -303,7 +307,7 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
             # the sample's noise is computed here, block by block, not kept for the whole log
             nz = _frame_noise(*a[N_SUMS + 1 :], noise, NP)
             w = window_kernel(a[:N_SUMS], a[N_SUMS], *nz, corr, NP)
-            return (*_decide(w, config, NP), w.h_minor, w.angle, w.angle_std)
+            return (*_decide(w, config, NP), w.h_minor, w.angle, w.angle_std, w.angle_noise_std)
 
         with np.errstate(invalid="ignore", divide="ignore"):
             if jit_enabled(n):  # window sums block by block, never the whole log's
@@ -378,6 +382,8 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
     mv = config.evidence_model_std * config.evidence_model_std
     angle_std = np.where(use_win, np.sqrt(win.angle_std[hi] * win.angle_std[hi] + mv) if win is not None else np.nan,
                          own_std)  # fmt: skip
+    # the sample's own direction: its noise; the held window's: the window's noise term
+    angle_noise_std = np.where(use_win, win.angle_noise_std[hi] if win is not None else np.nan, ms.angle_std)
     del win, hi, own_std
     # the held window's direction, in the tangent frame of the sample
     d = np.stack((ms.dx, ms.dy, ms.dz), axis=-1)
@@ -385,7 +391,7 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
     e1x, e1y, e1z, e2x, e2y, e2z = tangent_frame_kernel(*normal[u].T, NP)
     ca, sa = np.cos(angle[u]), np.sin(angle[u])
     d[u] = np.stack((ca * e1x + sa * e2x, ca * e1y + sa * e2y, ca * e1z + sa * e2z), axis=-1)
-    return EvidenceStates(state, evidence, d, angle, angle_std, h_ratio, f_ratio)
+    return EvidenceStates(state, evidence, d, angle, angle_std, angle_noise_std, h_ratio, f_ratio)
 
 
 class EvidenceTracker:
@@ -424,7 +430,7 @@ class EvidenceTracker:
         self._cum = (0.0,) * N_SUMS
         self._hist: deque[tuple[float, tuple]] = deque()
         self._verdict = _UNKNOWN
-        self._held: tuple[float, float] | None = None
+        self._held: tuple[float, float, float] | None = None  # angle, its std, the noise's share
         self._sig = False
         self._anchor: tuple | None = None
         # the segment's samples of the last significance_window s: (t, side), and how many
@@ -433,7 +439,7 @@ class EvidenceTracker:
         self._n_above = self._n_below = 0
 
     def step(self, t, geo: PointGeometry, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, h_std):
-        """``(state, evidence, direction, angle, angle_std, h_ratio, f_ratio)`` of a located
+        """``(state, evidence, direction, angle, angle_std, angle_noise_std, h_ratio, f_ratio)`` of a located
         sample at the contact point of ``geo``, with ``h`` (N·m) taken about ``e`` (m; the
         point, or the effective point under the depth), the force ``f`` (N), ``hn = |h|``
         and ``h_std`` ``h``'s noise level (N·m) of the measurement stage."""
@@ -441,8 +447,8 @@ class EvidenceTracker:
             thr = self._h_sigmas * h_std
             if hn > (self._h_min if self._h_min > thr else thr):  # the measurement's line test
                 dx, dy, dz, angle, a = sample_direction(hx, hy, hz, hn, ex, ey, ez, geo, self._sq)
-                return "line", "unconfirmed", (dx, dy, dz), angle, a, math.nan, math.nan
-            return "point", "", _NAN3, math.nan, math.nan, math.nan, math.nan
+                return "line", "unconfirmed", (dx, dy, dz), angle, a, a, math.nan, math.nan
+            return "point", "", _NAN3, math.nan, math.nan, math.nan, math.nan, math.nan
         point = geo.point
         anchor = self._anchor
         if anchor is None:
@@ -533,9 +539,9 @@ class EvidenceTracker:
         ):  # fmt: skip
             self._verdict = _LINE
             e = (major, minor, c11, c12, c22, root, g11, g12, f_major, f_minor, g22, half)
-            w_angle, w_std = window_direction_floats(e, s2, nu)
+            w_angle, w_std, w_noise = window_direction_floats(e, s2, nu)
             if w_std <= self._max_std:
-                self._held = (w_angle, math.sqrt(w_std * w_std + self._model_var))
+                self._held = (w_angle, math.sqrt(w_std * w_std + self._model_var), w_noise)
         side = 1 if hn > thr else (0 if hn <= SIG_LEAVE * thr else -1)
         if self._vote_window > 0.0:
             votes = self._votes
@@ -553,19 +559,19 @@ class EvidenceTracker:
             self._sig = side == 1
         verdict = self._verdict
         if verdict == _AREA:
-            return "area", "", _NAN3, math.nan, math.nan, h_ratio, f_ratio
+            return "area", "", _NAN3, math.nan, math.nan, math.nan, h_ratio, f_ratio
         if verdict == _LINE and self._held is not None:
-            angle, angle_std = self._held
+            angle, angle_std, noise_std = self._held
             ca, sa = cos(angle), sin(angle)
             d = (ca * e1x + sa * e2x, ca * e1y + sa * e2y, ca * e1z + sa * e2z)
-            return "line", "confirmed", d, angle, angle_std, h_ratio, f_ratio
+            return "line", "confirmed", d, angle, angle_std, noise_std, h_ratio, f_ratio
         if not self._sig:
-            return "point", "", _NAN3, math.nan, math.nan, h_ratio, f_ratio
+            return "point", "", _NAN3, math.nan, math.nan, math.nan, h_ratio, f_ratio
         # the sample's own direction, the window's across-axis spread counted as model error
         dx, dy, dz, angle, a = sample_direction(hx, hy, hz, hn, ex, ey, ez, geo, self._sq)
         v = hn * hn
         v = a * a + (minor / v if v != 0.0 else _div(minor, v)) + (0.0 if verdict == _LINE else self._unconfirmed_var)
         return (
             "line", "confirmed" if verdict == _LINE else "unconfirmed", (dx, dy, dz), angle,
-            sqrt(v) if v >= 0.0 else math.nan, h_ratio, f_ratio,
+            sqrt(v) if v >= 0.0 else math.nan, a, h_ratio, f_ratio,
         )  # fmt: skip

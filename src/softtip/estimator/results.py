@@ -50,6 +50,11 @@ class Estimates:
     direction : (N, 3) unit direction of the edge / strip; NaN unless ``line``
     angle, angle_std : (N,) its angle in the tangent frame of the manual (§3.4) and the angle's
         standard deviation, rad; NaN unless ``line``
+    angle_noise_std : (N,) the share of ``angle_std`` that is the sensor noise's alone, rad
+        (the window's noise term, or the sample's); ``angle_std² − angle_noise_std²`` is the
+        model error the estimator counts (``evidence_model_std``, ``unconfirmed_model_std``,
+        the window's across-axis spread), which two sensors on one object share and their
+        noise is not (:mod:`softtip.fusion`); NaN unless ``line``
     latched : (N,) the contact point is the latched one (not this sample's own solution)
     latch_fallback : (N,) that latch had no light-force sample (manual §3.6)
     pulling : (N,) in contact by force but no pushing contact point (reported ``none``)
@@ -108,6 +113,7 @@ class Estimates:
     direction: NDArray[np.float64]
     angle: NDArray[np.float64]
     angle_std: NDArray[np.float64]
+    angle_noise_std: NDArray[np.float64]
     latched: NDArray[np.bool_]
     latch_fallback: NDArray[np.bool_]
     pulling: NDArray[np.bool_]
@@ -177,6 +183,7 @@ class Estimates:
             "angle_deg": np.degrees(self.angle),
             "h_std": self.h_std,
             "angle_std_deg": np.degrees(self.angle_std),
+            "angle_noise_std_deg": np.degrees(self.angle_noise_std),
             "latched": self.latched,
             "latch_fallback": self.latch_fallback,
             "relatched": self.relatched,
@@ -239,4 +246,5 @@ class SampleEstimate(NamedTuple):
     line_evidence: str = ""
     h_ratio: float = math.nan
     excitation_ratio: float = math.nan
+    angle_noise_std: float = math.nan
 

@@ -339,7 +339,7 @@ class Estimator:
         v = v + (geo.m2 + sq.fx * cx * cx + sq.fy * cy * cy + sq.fz * cz * cz)
         h_std = sqrt(v) if v >= 0.0 else math.nan
         h = (hx, hy, hz)
-        state, evidence, d, angle, angle_std, h_ratio, f_ratio = self._evidence.step(
+        state, evidence, d, angle, angle_std, noise_std, h_ratio, f_ratio = self._evidence.step(
             t, geo, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, h_std
         )
         if self._lead:
@@ -347,7 +347,7 @@ class Estimator:
         return _new_estimate(SampleEstimate, (
             t, state, tuple(x), point, geo.normal, sigma, h, hn, h_std, d,
             angle, angle_std, latched, fallback, False, False, relatched, delta, j0, j1, j2, j3, joint_fb,
-            contacts.contact_id, contacts.drift_before, delta_std, from_data, evidence, h_ratio, f_ratio,
+            contacts.contact_id, contacts.drift_before, delta_std, from_data, evidence, h_ratio, f_ratio, noise_std,
         ))  # fmt: skip
 
     def process(self, t: ArrayLike, wrench: ArrayLike) -> list[SampleEstimate]:

@@ -44,21 +44,24 @@ deviation cannot show:
 * **Shared error.** Both fingertips hold one object: what moves it (the joints, gravity,
   rocking) loads both contacts alike, and what the single-finger model leaves out (a line's
   small resistance to rolling about its own edge, the skin's shear) turns both measured
-  directions the same way in the common frame. The fused direction is the weighted axial
-  mean, but its variance treats the fingers' errors as correlated (``finger_correlation``,
-  ρ): for equal angle standard deviations σ it is ``σ² (1 + ρ) / 2``, not ``σ² / 2``. The
-  default ρ = 1 never reports the pair as more certain than its better finger: on the
-  simulator's grasps the two fingers' errors had the same sign in the common frame in most
-  runs, and the fused error was their mean, not a √2 smaller one.
+  directions the same way in the common frame. Each finger's ``angle_std`` is split in two:
+  the sensor noise's share (``angle_noise_std``), independent between two sensors, and the
+  rest, the estimator's model error (``EstimatorConfig.evidence_model_std``, the window's
+  across-axis spread, ``unconfirmed_model_std``), taken as shared with correlation
+  ``finger_correlation`` (ρ, default 1). The fused direction is the weighted axial mean,
+  with weights ``w = 1 / angle_std²`` and the variance
+  ``(w_a + w_b + 2 ρ w_a w_b m_a m_b) / (w_a + w_b)²`` (``m`` the model errors): averaging
+  two fingers shrinks their noise, never the error they share. On the simulator's grasps
+  the two fingers' errors had the same sign in the common frame in most runs.
 * **Unconfirmed lines.** Before the object has been rocked about two axes, a line's direction
   comes from load varied about one axis, and its rolling resistance follows the same load:
   the axis is biased by an amount no single-axis window shows (on the simulator's stick and
   cube edge at 45° to the joint axis, 7–9° on both fingers alike while each reported about
   3.7° from the noise alone). Each fingertip's estimator therefore reports a line that is
   ``unconfirmed`` with a model-error term in its standard deviation
-  (``EstimatorConfig.unconfirmed_model_std``, 5°), which the fully correlated fingers carry
-  into the fused one undiminished (``unconfirmed_std`` adds a further shared term, for
-  estimates made without it); the fused reading stays marked ``unconfirmed``.
+  (``EstimatorConfig.unconfirmed_model_std``, 5°), which the correlated fingers carry into
+  the fused one undiminished (``unconfirmed_std`` adds a further shared term, for estimates
+  made without it); the fused reading stays marked ``unconfirmed``.
 
 The plane normal's standard deviation is the direction's tilt across the plane (the part of
 each finger's error about the line between the contacts, which tilts the plane one for one)
@@ -191,13 +194,18 @@ def _in_common(f: Finger, t: NDArray, idx: NDArray, ok: NDArray):
     cov = np.einsum("nij,j,nkj->nik", m, s2, m)
     contact = state != "none"
     nan3 = np.full((n, 3), np.nan)
+    angle_std = np.where(state == "line", est.angle_std[idx], np.nan)
+    noise_std = np.where(state == "line", est.angle_noise_std[idx], np.nan)
+    # what is not the sensor's noise is the estimator's model error: shared by both fingers
+    model = np.sqrt(np.maximum(angle_std * angle_std - noise_std * noise_std, 0.0))
     return {
         "state": state,
         "evidence": evidence,
         "point": np.where(contact[:, None], point, nan3),
         "normal": np.where(contact[:, None], normal, nan3),
         "direction": np.where((state == "line")[:, None], direction, nan3),
-        "angle_std": np.where(state == "line", est.angle_std[idx], np.nan),
+        "angle_std": angle_std,
+        "model_std": model,
         "force": np.where(ok[:, None], force, 0.0),
         "force_cov": cov,
     }
@@ -239,17 +247,19 @@ def fuse(
         depth law's error) shifts the plane without tilting it; on the simulator the
         difference between the two fingers' errors is below 0.02 mm.
     finger_correlation : float
-        ρ in [0, 1], correlation of the two fingers' direction errors in the common frame
-        (the object's motion and the contact model's errors are shared). 0: independent.
+        ρ in [0, 1], correlation of the two fingers' model errors (each ``angle_std`` less its
+        ``angle_noise_std``) in the common frame: the object's motion and the contact model's
+        errors are shared. 0: independent. The sensors' noise is independent whatever ρ.
     unconfirmed_std : float
         rad, model-error standard deviation of a line direction that is not yet confirmed by
         excitation about two axes (its rolling bias), shared by both fingers, added here
         (default 0: the estimator already carries it in each finger's ``angle_std``,
-        ``EstimatorConfig.unconfirmed_model_std``, 5°, which ``finger_correlation = 1``
+        ``EstimatorConfig.unconfirmed_model_std``, 5°, which ``finger_correlation``
         treats as shared; give it here for estimates made without it).
     agree_sigmas : float
-        Two lines agree when their axial angle is at most this many standard deviations
-        (of the fingers' independent errors: the difference of the two is tested).
+        Two lines agree when their axial angle is at most this many standard deviations:
+        the two fingers' ``angle_std`` combined as if independent (a shared error cancels in
+        the difference, so the test is the wider for it; ``line_angle_std`` is the same).
     balance_tolerance : float
         Fraction of the grasp force allowed as unbalanced (dynamics, friction hysteresis).
     balance_chi2 : float
@@ -304,11 +314,13 @@ def fuse(
         w = wa + wb
         u = _unit(wa[:, None] * da + wb[:, None] * dbs)
         rho = float(finger_correlation)
+        # the shared part: the model terms' covariance, ρ m_a m_b, weighted
+        shared = 2.0 * rho * wa * wb * A["model_std"] * B["model_std"]
         su2 = float(unconfirmed_std) ** 2
         # shares of the weight whose line is unconfirmed: their common rolling bias
         ua = np.where(A["evidence"] == "unconfirmed", wa, 0.0) / w
         ub = np.where(B["evidence"] == "unconfirmed", wb, 0.0) / w
-        u_var = (wa + wb + 2.0 * rho * np.sqrt(wa * wb)) / w**2 + su2 * (ua + ub) ** 2
+        u_var = (wa + wb + shared) / w**2 + su2 * (ua + ub) ** 2
         base = B["point"] - A["point"]
         length = np.linalg.norm(base, axis=-1)
         bhat = base / length[:, None]
@@ -321,7 +333,7 @@ def fuse(
         ca = np.sum(A["normal"] * bhat, axis=-1) * np.sum(np.cross(A["normal"], da) * plane_n, axis=-1)
         cb = np.sum(B["normal"] * bhat, axis=-1) * np.sum(np.cross(B["normal"], dbs) * plane_n, axis=-1)
         tilt = (
-            (ca**2 * wa + cb**2 * wb + 2.0 * rho * ca * cb * np.sqrt(wa * wb)) / w**2
+            (ca**2 * wa + cb**2 * wb + ca * cb * shared) / w**2
             + su2 * (ua * ca + ub * cb) ** 2
         )
         # about the direction with the contact points' errors across it
