@@ -239,6 +239,31 @@ def test_gravity_compensation_with_orientation_from_tf_and_from_a_callback():
     assert_allclose(-expected[0, :3], [0.0, 0.0, -0.02 * 9.80665], atol=1e-12)
 
 
+def test_the_simulator_options_reach_both_fingertips(tmp_path):
+    """``--hand two-finger`` simulates what the one-finger options say (rate, duration, noise,
+    skin), not silently the defaults."""
+    r = _run(
+        "simulate", "--hand", "two-finger", "--object", "stick", "--size", "4mm", "--rate", "100", "--duration", "4",
+        "--no-noise", "--friction", "0.8", "--modulus", "0.8e6", "--elements", "2000", "-o", tmp_path / "g",
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    for side in ("right", "left"):
+        log = np.genfromtxt(tmp_path / f"g/{side}.csv", delimiter=",", names=True)
+        assert_allclose(np.diff(log["t"]), 0.01, atol=1e-9)
+        assert log["t"][-1] == pytest.approx(4.0 - 0.01, abs=0.011)
+        # noise-free: untouched before contact at 2 s, exactly
+        before = log["t"] < 1.5
+        assert all(np.all(log[c][before] == 0.0) for c in ("fx", "fy", "fz", "mx", "my", "mz"))
+    # the skin's options too: the default skin (0.6 MPa, friction 1) gives another wrench
+    r = _run(
+        "simulate", "--hand", "two-finger", "--object", "stick", "--size", "4mm", "--rate", "100", "--duration", "4",
+        "--no-noise", "--elements", "2000", "-o", tmp_path / "h",
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    stiff, soft = (np.genfromtxt(tmp_path / f"{d}/right.csv", delimiter=",", names=True) for d in "gh")
+    assert not np.array_equal(stiff["mx"], soft["mx"])
+
+
 def test_a_plane_against_an_edge_is_flagged_once_rocked_and_unconfirmed_before(tmp_path):
     """The edge of a 1 mm plate on the right fingertip, a flat face on the left: before the
     object is rocked no reading can tell this from two edges (every line unconfirmed); once

@@ -142,7 +142,8 @@ def _check_sizes(options: dict) -> None:
               help="two-finger: both fingertips of the papers' hand on one object (the paper scenario, --rock "
                    "optional): -o is then a new directory for right.csv, left.csv, hand.toml (their poses in the "
                    "hand frame) and truth.json (the object's line and plate normal in the hand frame), for "
-                   "`softtip fuse`.")
+                   "`softtip fuse`. The paper scenario's, rocking's, skin's and sensor's options apply to both "
+                   "fingertips.")
 @option("--left-object", type=click.Choice(OBJECT_KINDS), default=None,
               help="--hand two-finger: what the left fingertip touches [default: --object, its other side].")
 @option("--width", type=LENGTH, default="30mm", show_default=True,
@@ -215,12 +216,14 @@ def simulate(
 def _simulate_hand(output, truth, units, left_object, width, to_bag, options) -> None:
     """``softtip simulate --hand two-finger``: both fingertips, files for ``softtip fuse``."""
     from softtip.core.fingertip import load_fingertip
+    from softtip.sim.contact import ContactParams
     from softtip.sim.hand import (
         simulate_two_finger,
         write_two_finger,
         write_two_finger_bag,
     )
     from softtip.sim.objects import make_object
+    from softtip.sim.sensor import SensorModel
 
     if output is None:
         raise click.UsageError("--hand two-finger writes several files: give -o DIR (a new directory)")
@@ -238,13 +241,29 @@ def _simulate_hand(output, truth, units, left_object, width, to_bag, options) ->
                  tilt=math.radians(options["tilt_deg"]))  # fmt: skip
     objs = {"right": make_object(kind, options["size"], **shape),
             "left": make_object(left_object or kind, options["size"] if left_object in (None, kind) else None, **shape)}  # fmt: skip
+    # every option of the one-finger paper scenario reaches both fingers (as run_simulation)
+    scenario = dict(
+        force=options["force"], t_contact=options["t_contact"], t_stable=options["t_stable"],
+        joint_rotation=math.radians(options["joint_rotation_deg"]), gravity_spin=math.radians(options["gravity_spin_deg"]),
+        misalignment=math.radians(options["misalignment_deg"]), disturbance_timing=options["disturbance_timing"],
+    )  # fmt: skip
+    if options["duration"] is not None:
+        scenario["duration"] = options["duration"]
+    elif not options["rock"]:
+        scenario["duration"] = 10.0
+    if options["rock"]:
+        scenario.update(rock_amplitude=math.radians(options["rock_amplitude_deg"]), rock_period=options["rock_period"],
+                        rock_load=options["rock_load"])  # fmt: skip
+    rate = options["rate"]
+    sensor = SensorModel(rate=rate) if options["noise"] else SensorModel.ideal(rate)
+    params = ContactParams(thickness=options["thickness"], modulus=options["modulus"],
+                           shear_modulus=options["shear_modulus"], friction=options["friction"])  # fmt: skip
     try:
         tip = load_fingertip(options["tip"])
         grasp = simulate_two_finger(
             tip, objs, math.radians(options["angle_deg"]), width=width, rng=options["seed"],
             object_mass=options["object_mass"], n_elements=options["n_elements"], rock=options["rock"],
-            force=options["force"], joint_rotation=math.radians(options["joint_rotation_deg"]),
-            gravity_spin=math.radians(options["gravity_spin_deg"]),
+            sensor=sensor, params=params, **scenario,
         )  # fmt: skip
     except InputError as exc:
         raise click.BadParameter(str(exc), param_hint="--tip") from None

@@ -25,7 +25,9 @@ from numpy.typing import NDArray
 from softtip.core.fingertip import Fingertip
 from softtip.sim.objects import RigidObject
 from softtip.sim.pose import Pose
+from softtip.sim.contact import ContactParams
 from softtip.sim.scenario import HandFrame, paper_scenario, rock_scenario
+from softtip.sim.sensor import SensorModel
 from softtip.sim.simulate import SimLog, simulate_grasp
 
 __all__ = ["SIDES", "TwoFingerGrasp", "simulate_two_finger", "sensor_pose_in_hand"]
@@ -104,6 +106,8 @@ def simulate_two_finger(
     n_elements: int | None = None,
     model=None,
     rock: bool = False,
+    sensor: SensorModel | None = None,
+    params: ContactParams | None = None,
     **scenario_kwargs,
 ) -> TwoFingerGrasp:
     """Simulate the papers' grasp with both fingertips.
@@ -132,8 +136,15 @@ def simulate_two_finger(
         After the grasp, rock the object about two axes and in a figure-eight
         (:func:`~softtip.sim.scenario.rock_scenario`: the same rotations in the hand for both
         fingers), which lets each fingertip tell a line from an area.
+    sensor : SensorModel, optional
+        Both sensors' model (rate, noise, bias, resolution; default Nano17 class at 50 Hz);
+        each draws its own noise.
+    params : ContactParams, optional
+        Both skins' material (default :class:`~softtip.sim.contact.ContactParams`; not with
+        ``model``, which has its own).
     **scenario_kwargs
-        Other :func:`~softtip.sim.scenario.paper_scenario` arguments.
+        Other :func:`~softtip.sim.scenario.paper_scenario` (or, rocked,
+        :func:`~softtip.sim.scenario.rock_scenario`) arguments.
     """
     if not (math.isfinite(width) and width > 0):
         raise ValueError(f"width must be a positive length in m, got {width!r}")
@@ -142,13 +153,17 @@ def simulate_two_finger(
         raise ValueError(f"objects must name 'right' and 'left', got {sorted(objs)}")
     kw = {} if n_elements is None else {"n_elements": n_elements}
     if model is not None:
+        if params is not None:
+            raise ValueError("give the skin's params or a prebuilt model, not both")
         kw = {"model": model}
+    elif params is not None:
+        kw["params"] = params
     logs, poses = {}, {}
     for k, side in enumerate(SIDES):
         a = angle if side == "right" else -angle
         make = rock_scenario if rock else paper_scenario
         scenario = make(a, side=side, object_mass=object_mass, **scenario_kwargs)
-        logs[side] = simulate_grasp(tip, objs[side], scenario, rng=rng + k, **kw)
+        logs[side] = simulate_grasp(tip, objs[side], scenario, sensor, rng=rng + k, **kw)
         poses[side] = sensor_pose_in_hand(tip, side, width, scenario_kwargs.get("finger_pitch", 0.0))
     return TwoFingerGrasp(logs, poses, float(width), float(object_mass))
 
