@@ -23,7 +23,11 @@ Nano17 preset × k) and ``--objects`` check scenarios other than the default gri
 ``--told-true-noise`` tells the estimator the simulated sensor's noise (with its quantisation)
 instead of the Nano17 preset, which assumes 1.7 times the simulated force noise and 1.4 times
 its moment noise: with the preset every reported std is conservative, the more so where the
-noise dominates the error.
+noise dominates the error. ``--load R`` (``--load-direction``, ``--load-profile``) puts a
+friction load on the object during the hold instead of rocking it
+(:class:`softtip.sim.hand.FrictionLoad`, the same vector in the hand at both fingertips;
+the stiffer 2 MPa shear layer of ``bench_accuracy.py --sections friction``), errors from the
+load on.
 """
 
 from __future__ import annotations
@@ -47,7 +51,7 @@ from softtip.sim import (
     discretise_skin,
     stick,
 )
-from softtip.sim.hand import simulate_two_finger
+from softtip.sim.hand import FrictionLoad, simulate_two_finger
 from softtip.sim.sensor import SensorModel
 
 HELD = 6.0
@@ -70,8 +74,8 @@ def _axial_deg(a, b):
     return np.degrees(np.arccos(np.clip(np.abs(np.sum(a * b, axis=-1)), 0.0, 1.0)))
 
 
-def run_case(tip, model, obj, angle_deg, seed, rock=False, noise=1.0, told_true=False):
-    g = simulate_two_finger(tip, obj, math.radians(angle_deg), rng=seed, model=model, rock=rock)
+def run_case(tip, model, obj, angle_deg, seed, rock=False, noise=1.0, told_true=False, load=None):
+    g = simulate_two_finger(tip, obj, math.radians(angle_deg), rng=seed, model=model, rock=rock, load=load)
     sensor = SensorModel(noise_std=tuple(noise * np.asarray(SensorModel().noise_std)))
     if told_true:  # the estimator told the simulated sensor's noise with its quantisation, not the Nano17 preset's
         config = EstimatorConfig(noise=sensor.noise_model())
@@ -87,7 +91,8 @@ def run_case(tip, model, obj, angle_deg, seed, rock=False, noise=1.0, told_true=
         est = softtip.estimate(log.t, w, tip, config)
         fingers.append(Finger(side, est, PoseSeries.fixed(p.rotation, p.translation, side), config.noise))
     fz = fuse(fingers, object_mass=g.object_mass)
-    start = 8.0 if rock else HELD  # rocked: once both axes were excited
+    # rocked: once both axes were excited; a friction load: once it is on
+    start = 8.0 if rock else (HELD if load is None else (9.5 if load.profile == "drag" else 7.0))
     held = (fz.t > start) & (fz.grasp_names == "parallel_lines")
     out = {"share": held.sum() / max(np.count_nonzero(fz.t > start), 1)}
     if not held.any():
@@ -116,23 +121,33 @@ def run_case(tip, model, obj, angle_deg, seed, rock=False, noise=1.0, told_true=
     return out
 
 
-def fusion_section(seeds=(1,), angles=(-45.0, 0.0, 30.0), objects=None, noise=1.0, told_true=False) -> None:
+def fusion_section(seeds=(1,), angles=(-45.0, 0.0, 30.0), objects=None, noise=1.0, told_true=False, load=None) -> None:
     objects = objects or OBJECTS
     tip = softtip.murakami2006()
-    model = ContactModel(discretise_skin(tip), ContactParams(), 2)
+    if load is None:
+        model = ContactModel(discretise_skin(tip), ContactParams(), 2)
+    else:  # the stiffer shear layer of bench_accuracy's friction section: the default cannot hold the loads
+        model = ContactModel(discretise_skin(tip, 10000), ContactParams(shear_modulus=2e6), 2)
     print("\n## fusion: two fingertips on one object (median over the held grasp, t > 6 s, or once rocked about")
     print("both axes, t > 8 s; z = rms(error / reported std); each finger's own z against its own line; shared:")
     told = "the simulated sensor's" if told_true else "the Nano17 preset's (1.7 times the simulated force noise, 1.4 times the moment noise)"
-    print(f"both fingers' errors of one sign in the hand frame); sensor noise × {noise:g}; the estimator told {told}\n")
+    print(f"both fingers' errors of one sign in the hand frame); sensor noise × {noise:g}; the estimator told {told}")
+    if load is not None:
+        way = "across" if load.across else "along"
+        print(f"With a friction load, {load.profile} {way} the line at the right fingertip"
+              + (f", {load.ratio:g} of the grasp force" if load.profile != "slip" else "")
+              + f", errors from t > {9.5 if load.profile == 'drag' else 7.0:g} s; shear modulus 2 MPa, 10 000 skin "
+              "elements; no rocking")  # fmt: skip
+    print()
     print("| object | rocked | angle | seed | parallel | right / left alone | finger z | shared | fused | z | plane normal | z |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
-    for rock in (False, True):
+    for rock in (False,) if load is not None else (False, True):
         pooled = {"fused": [], "normal": [], "fused_z": [], "normal_z": [], "finger_z": [], "shared": []}
         for name, make in objects.items():
             for a in angles:
                 for s in seeds:
                     try:
-                        r = run_case(tip, model, make(), a, s, rock, noise, told_true)
+                        r = run_case(tip, model, make(), a, s, rock, noise, told_true, load)
                     except RuntimeError as exc:  # the simulator cannot hold the grasp (friction)
                         print(f"| {name} | {'yes' if rock else 'no'} | {a:+.0f}° | {s} | simulator: {exc} |")
                         continue
@@ -167,6 +182,12 @@ if __name__ == "__main__":
     ap.add_argument("--noise", type=float, default=1.0, help="sensor noise × this (the estimator told the Nano17 preset × this)")
     ap.add_argument("--objects", choices=("default", "more"), default="default", help="the default grid's objects or four others")
     ap.add_argument("--told-true-noise", action="store_true", help="tell the estimator the simulated sensor's noise (default: the Nano17 preset)")
+    ap.add_argument("--load", type=float, help="a friction load on the object, this fraction of the grasp force (no rocking)")
+    ap.add_argument("--load-direction", choices=("across", "along"), default="across", help="at the right fingertip's line")
+    ap.add_argument("--load-profile", choices=("push", "drag", "slip"), default="push")
     args = ap.parse_args()
     objects = OBJECTS if args.objects == "default" else MORE_OBJECTS
-    fusion_section(tuple(args.seeds), tuple(args.angles), objects, args.noise, args.told_true_noise)
+    load = None
+    if args.load is not None or args.load_profile == "slip":
+        load = FrictionLoad(args.load or 0.0, args.load_direction == "across", args.load_profile)
+    fusion_section(tuple(args.seeds), tuple(args.angles), objects, args.noise, args.told_true_noise, load)

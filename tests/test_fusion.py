@@ -264,6 +264,45 @@ def test_the_simulator_options_reach_both_fingertips(tmp_path):
     assert not np.array_equal(stiff["mx"], soft["mx"])
 
 
+def test_a_friction_load_on_the_grasped_object(tmp_path):
+    """A friction load pushes the pinched plate across its line (0.25 of the grasp force at
+    each fingertip, one vector in the hand): both fingertips carry the same tangential load,
+    the fused line stays within the thin-plate target, and while the load is on the contact
+    forces no longer balance the weight alone: flagged ``unbalanced``, not before."""
+    from softtip.sim import ContactModel, ContactParams, Plate, discretise_skin
+    from softtip.sim.hand import FrictionLoad, simulate_two_finger
+
+    tip = softtip.murakami2006()
+    model = ContactModel(discretise_skin(tip, n_elements=6000), ContactParams(shear_modulus=2e6), 2)
+    g = simulate_two_finger(tip, Plate(0.001), math.radians(30), rng=3, model=model, load=FrictionLoad(0.25))
+    f_hand = {s: g.logs[s].wrench_true[:, :3] @ g.sensor_poses[s].rotation.T for s in ("right", "left")}
+    late = g.logs["right"].t > 7.0
+    # across the grasp (hand x) the pinch is opposite; the load (hand y, z) is one vector
+    assert_allclose(f_hand["right"][late, 1:], f_hand["left"][late, 1:], atol=0.05)
+    assert np.all(np.linalg.norm(f_hand["right"][late, 1:], axis=1) > 0.2 * 4.9)
+    fingers = []
+    for side in ("right", "left"):
+        log, p = g.logs[side], g.sensor_poses[side]
+        fingers.append(Finger(side, softtip.estimate(log.t, log.wrench, tip), PoseSeries.fixed(p.rotation, p.translation, side)))
+    fz = fuse(fingers, object_mass=g.object_mass)
+    held = (fz.t > 7.0) & (fz.grasp_names == "parallel_lines")
+    assert held.mean() > 0.9 * np.mean(fz.t > 7.0)
+    err = np.degrees(np.arccos(np.clip(np.abs(np.sum(fz.direction[held] * g.truth_line()[held], axis=-1)), 0, 1)))
+    assert np.median(err) < 3.0
+    assert np.mean(fz.flag[fz.t > 6.6] == "unbalanced") > 0.9
+    assert not np.any(fz.flag[(fz.t > 4.6) & (fz.t < 5.9)] == "unbalanced")
+    # the same from the command line, its load options for both fingertips
+    r = _run(
+        "simulate", "--hand", "two-finger", "--scenario", "friction", "--load", "0.25", "--shear-modulus", "2e6",
+        "--object", "plate", "--size", "1mm", "--angle", "30", "--elements", "3000", "-o", tmp_path / "g",
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    r = _run("fuse", tmp_path / "g/right.csv", tmp_path / "g/left.csv", "--hand", tmp_path / "g/hand.toml", "-o", tmp_path / "f.csv")
+    assert r.returncode == 0 and "flagged unbalanced" in r.stderr, r.stderr
+    r = _run("simulate", "--hand", "two-finger", "--scenario", "friction", "--rock", "-o", tmp_path / "x")
+    assert r.returncode == 2 and "--rock needs the paper scenario" in r.stderr
+
+
 def test_a_plane_against_an_edge_is_flagged_once_rocked_and_unconfirmed_before(tmp_path):
     """The edge of a 1 mm plate on the right fingertip, a flat face on the left: before the
     object is rocked no reading can tell this from two edges (every line unconfirmed); once

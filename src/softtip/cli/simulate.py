@@ -142,8 +142,9 @@ def _check_sizes(options: dict) -> None:
               help="two-finger: both fingertips of the papers' hand on one object (the paper scenario, --rock "
                    "optional): -o is then a new directory for right.csv, left.csv, hand.toml (their poses in the "
                    "hand frame) and truth.json (the object's line and plate normal in the hand frame), for "
-                   "`softtip fuse`. The paper scenario's, rocking's, skin's and sensor's options apply to both "
-                   "fingertips.")
+                   "`softtip fuse`. The paper or friction scenario's, rocking's, skin's and sensor's options apply to "
+                   "both fingertips (a friction load: one vector in the hand, --load-direction as seen at the right "
+                   "fingertip).")
 @option("--left-object", type=click.Choice(OBJECT_KINDS), default=None,
               help="--hand two-finger: what the left fingertip touches [default: --object, its other side].")
 @option("--width", type=LENGTH, default="30mm", show_default=True,
@@ -188,11 +189,7 @@ def simulate(
     except ValueError as exc:
         raise click.UsageError(str(exc)) from None
     except RuntimeError as exc:  # the contact solve found no equilibrium for these options
-        hint = (
-            "a stiffer shear layer (e.g. --shear-modulus 2e6) holds larger loads" if options["scenario"] == "friction"
-            else "a larger --friction or --force, a smaller --mass, or a thinner --thickness helps"
-        )
-        raise click.UsageError(f"the simulated grasp has no equilibrium with these options ({exc}); {hint}") from None
+        raise click.UsageError(f"the simulated grasp has no equilibrium with these options ({exc}); {_no_equilibrium_hint(options)}") from None
     # both files appear together or neither does (and no temporary file stays behind)
     files = {name: AtomicFile(path) for name, path in (("log", output), ("truth", truth)) if path is not None}
     try:
@@ -213,11 +210,18 @@ def simulate(
     click.echo(f"softtip: simulated {len(log.t)} samples ({options['scenario']}, {options['object_kind']}) -> {', '.join(written)}", err=True)
 
 
+def _no_equilibrium_hint(options) -> str:
+    if options["scenario"] == "friction":
+        return "a stiffer shear layer (e.g. --shear-modulus 2e6) holds larger loads"
+    return "a larger --friction or --force, a smaller --mass, or a thinner --thickness helps"
+
+
 def _simulate_hand(output, truth, units, left_object, width, to_bag, options) -> None:
     """``softtip simulate --hand two-finger``: both fingertips, files for ``softtip fuse``."""
     from softtip.core.fingertip import load_fingertip
     from softtip.sim.contact import ContactParams
     from softtip.sim.hand import (
+        FrictionLoad,
         simulate_two_finger,
         write_two_finger,
         write_two_finger_bag,
@@ -227,8 +231,12 @@ def _simulate_hand(output, truth, units, left_object, width, to_bag, options) ->
 
     if output is None:
         raise click.UsageError("--hand two-finger writes several files: give -o DIR (a new directory)")
-    if truth is not None or units != "si" or options["scenario"] != "paper":
-        raise click.UsageError("--hand two-finger writes SI logs of the paper scenario (no --truth, --units, --scenario)")
+    if truth is not None or units != "si" or options["scenario"] == "push":
+        raise click.UsageError(
+            "--hand two-finger writes SI logs of the paper or friction scenario (no --truth, --units, --scenario push)"
+        )
+    if options["scenario"] == "friction" and options["rock"]:
+        raise click.UsageError("--rock needs the paper scenario")
     if output.exists():
         raise click.BadParameter(f"{output} exists; expected a new directory", param_hint="-o")
     if to_bag is not None and to_bag.exists():
@@ -254,6 +262,9 @@ def _simulate_hand(output, truth, units, left_object, width, to_bag, options) ->
     if options["rock"]:
         scenario.update(rock_amplitude=math.radians(options["rock_amplitude_deg"]), rock_period=options["rock_period"],
                         rock_load=options["rock_load"])  # fmt: skip
+    load = None
+    if options["scenario"] == "friction":
+        load = FrictionLoad(options["load_ratio"], options["load_direction"] == "across", options["load_profile"])
     rate = options["rate"]
     sensor = SensorModel(rate=rate) if options["noise"] else SensorModel.ideal(rate)
     params = ContactParams(thickness=options["thickness"], modulus=options["modulus"],
@@ -263,12 +274,14 @@ def _simulate_hand(output, truth, units, left_object, width, to_bag, options) ->
         grasp = simulate_two_finger(
             tip, objs, math.radians(options["angle_deg"]), width=width, rng=options["seed"],
             object_mass=options["object_mass"], n_elements=options["n_elements"], rock=options["rock"],
-            sensor=sensor, params=params, **scenario,
+            sensor=sensor, params=params, load=load, **scenario,
         )  # fmt: skip
     except InputError as exc:
         raise click.BadParameter(str(exc), param_hint="--tip") from None
-    except (ValueError, RuntimeError) as exc:
+    except ValueError as exc:
         raise click.UsageError(str(exc)) from None
+    except RuntimeError as exc:  # a contact solve found no equilibrium for these options
+        raise click.UsageError(f"the simulated grasp has no equilibrium with these options ({exc}); {_no_equilibrium_hint(options)}") from None
     paths = write_two_finger(grasp, output)
     if to_bag is not None:
         write_two_finger_bag(grasp, to_bag)

@@ -27,7 +27,7 @@ Flags (``flag``, several joined by ``+``):
     The contact forces do not balance the object's weight (``object_mass`` along
     ``gravity``; without a mass any weight along gravity is allowed) beyond the sensors'
     noise and ``balance_tolerance`` of the grasp force: one of the estimates (or a pose) is
-    wrong.
+    wrong, or a third force acts on the object (the environment, another finger, a load).
 ``area``
     A contact's evidence says ``area``: it is a face, never fused as a line.
 

@@ -16,6 +16,7 @@ inconsistent reading for a plate-pinch model, see :mod:`softtip.fusion`).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -23,14 +24,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from softtip.core.fingertip import Fingertip
+from softtip.sim.contact import ContactParams
 from softtip.sim.objects import RigidObject
 from softtip.sim.pose import Pose
-from softtip.sim.contact import ContactParams
-from softtip.sim.scenario import HandFrame, paper_scenario, rock_scenario
+from softtip.sim.scenario import HandFrame, friction_scenario, paper_scenario, rock_scenario
 from softtip.sim.sensor import SensorModel
 from softtip.sim.simulate import SimLog, simulate_grasp
 
-__all__ = ["SIDES", "TwoFingerGrasp", "simulate_two_finger", "sensor_pose_in_hand"]
+__all__ = ["SIDES", "FrictionLoad", "TwoFingerGrasp", "simulate_two_finger", "sensor_pose_in_hand"]
 
 SIDES = ("right", "left")
 
@@ -108,6 +109,7 @@ def simulate_two_finger(
     rock: bool = False,
     sensor: SensorModel | None = None,
     params: ContactParams | None = None,
+    load: FrictionLoad | None = None,
     **scenario_kwargs,
 ) -> TwoFingerGrasp:
     """Simulate the papers' grasp with both fingertips.
@@ -142,6 +144,10 @@ def simulate_two_finger(
     params : ContactParams, optional
         Both skins' material (default :class:`~softtip.sim.contact.ContactParams`; not with
         ``model``, which has its own).
+    load : FrictionLoad, optional
+        A friction load during the hold (:func:`~softtip.sim.scenario.friction_scenario`, as
+        seen at the right fingertip: ``across`` its line or along it), the same vector in the
+        hand for both fingertips (the object pushed or slid as one); not with ``rock``.
     **scenario_kwargs
         Other :func:`~softtip.sim.scenario.paper_scenario` (or, rocked,
         :func:`~softtip.sim.scenario.rock_scenario`) arguments.
@@ -158,14 +164,64 @@ def simulate_two_finger(
         kw = {"model": model}
     elif params is not None:
         kw["params"] = params
-    logs, poses = {}, {}
-    for k, side in enumerate(SIDES):
+    if load is not None and rock:
+        raise ValueError("a friction load goes with the papers' grasp, not with rocking")
+    pitch = scenario_kwargs.get("finger_pitch", 0.0)
+    poses = {side: sensor_pose_in_hand(tip, side, width, pitch) for side in SIDES}
+    scenarios = {}
+    for side in SIDES:
         a = angle if side == "right" else -angle
-        make = rock_scenario if rock else paper_scenario
-        scenario = make(a, side=side, object_mass=object_mass, **scenario_kwargs)
-        logs[side] = simulate_grasp(tip, objs[side], scenario, sensor, rng=rng + k, **kw)
-        poses[side] = sensor_pose_in_hand(tip, side, width, scenario_kwargs.get("finger_pitch", 0.0))
+        if load is not None:
+            scenarios[side] = friction_scenario(
+                tip, a, load.ratio, across=load.across, profile=load.profile, slip_distance=load.slip_distance,
+                side=side, object_mass=object_mass, **scenario_kwargs,
+            )  # fmt: skip
+        else:
+            make = rock_scenario if rock else paper_scenario
+            scenarios[side] = make(a, side=side, object_mass=object_mass, **scenario_kwargs)
+    if load is not None:  # the right finger's load and slide, as one vector in the hand, for both
+        scenarios["left"] = _as_seen_by(scenarios["left"], scenarios["right"], poses["right"].rotation, poses["left"].rotation)
+    logs = {
+        side: simulate_grasp(tip, objs[side], scenarios[side], sensor, rng=rng + k, **kw) for k, side in enumerate(SIDES)
+    }
     return TwoFingerGrasp(logs, poses, float(width), float(object_mass))
+
+
+@dataclass(frozen=True)
+class FrictionLoad:
+    """A friction load on the grasped object (:func:`~softtip.sim.scenario.friction_scenario`).
+
+    Parameters
+    ----------
+    ratio : float
+        Tangential load at each fingertip, a fraction of the grasp force (``push``, ``drag``).
+    across : bool
+        Across the line at the right fingertip (``n × d``) or along it.
+    profile : {"push", "drag", "slip"}
+    slip_distance : float
+        m, for ``slip``.
+    """
+
+    ratio: float = 0.25
+    across: bool = True
+    profile: str = "push"
+    slip_distance: float = 1.5e-3
+
+
+def _as_seen_by(left, right, rot_right, rot_left):
+    """``left`` with ``right``'s tangential load and slide (sensor frame vectors) turned into
+    the left sensor's frame through the hand."""
+    turn = np.asarray(rot_left).T @ np.asarray(rot_right)
+    fields = {f: getattr(left, f) for f in left.__dataclass_fields__}
+    if right.tangential_force is not None:
+        fields["tangential_force"] = tuple(turn @ np.asarray(right.tangential_force))
+    slip = next((d for d in right.disturbances if d.label == "slip"), None)
+    if slip is not None:
+        moved = tuple(turn @ np.asarray(slip.translation))
+        fields["disturbances"] = tuple(
+            dataclasses.replace(d, translation=moved) if d.label == "slip" else d for d in left.disturbances
+        )
+    return type(left)(**fields)
 
 
 # -- files ---------------------------------------------------------------------------------------
