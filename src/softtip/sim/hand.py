@@ -11,7 +11,10 @@ pose is common up to the skin's compression (a few tenths of a millimetre along 
 
 What each finger touches is given per finger: the two edges of a plate pinched across its
 width, a stick's two sides, or an edge on one finger and a plane on the other (an
-inconsistent reading for a plate-pinch model, see :mod:`softtip.fusion`).
+inconsistent reading for a plate-pinch model, see :mod:`softtip.fusion`). Instead of the
+papers' disturbances alone, the object can be rocked about two axes (``rock``) or loaded
+through friction during the hold (:class:`FrictionLoad`: the same load vector in the hand at
+both fingertips, each finger's :func:`~softtip.sim.scenario.friction_scenario`).
 """
 
 from __future__ import annotations
@@ -212,16 +215,16 @@ def _as_seen_by(left, right, rot_right, rot_left):
     """``left`` with ``right``'s tangential load and slide (sensor frame vectors) turned into
     the left sensor's frame through the hand."""
     turn = np.asarray(rot_left).T @ np.asarray(rot_right)
-    fields = {f: getattr(left, f) for f in left.__dataclass_fields__}
+    changes = {}
     if right.tangential_force is not None:
-        fields["tangential_force"] = tuple(turn @ np.asarray(right.tangential_force))
+        changes["tangential_force"] = tuple(turn @ np.asarray(right.tangential_force))
     slip = next((d for d in right.disturbances if d.label == "slip"), None)
     if slip is not None:
         moved = tuple(turn @ np.asarray(slip.translation))
-        fields["disturbances"] = tuple(
+        changes["disturbances"] = tuple(
             dataclasses.replace(d, translation=moved) if d.label == "slip" else d for d in left.disturbances
         )
-    return type(left)(**fields)
+    return dataclasses.replace(left, **changes)
 
 
 # -- files ---------------------------------------------------------------------------------------
