@@ -143,6 +143,7 @@ def fusion_section(seeds=(1,), angles=(-45.0, 0.0, 30.0), objects=None, noise=1.
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for rock in (False,) if load is not None else (False, True):
         pooled = {"fused": [], "normal": [], "fused_z": [], "normal_z": [], "finger_z": [], "shared": []}
+        per_object: dict[str, list[float]] = {}
         for name, make in objects.items():
             for a in angles:
                 for s in seeds:
@@ -157,6 +158,7 @@ def fusion_section(seeds=(1,), angles=(-45.0, 0.0, 30.0), objects=None, noise=1.
                     for k in ("fused", "normal", "fused_z", "normal_z", "shared"):
                         pooled[k].append(r[k])
                     pooled["finger_z"] += [r["right_z"], r["left_z"]]
+                    per_object.setdefault(name, []).append(r["fused_z"])
                     print(
                         f"| {name} | {'yes' if rock else 'no'} | {a:+.0f}° | {s} | {100 * r['share']:.0f} % | "
                         f"{r['right']:.1f} / {r['left']:.1f}° | {r['right_z']:.2f} / {r['left_z']:.2f} | "
@@ -171,8 +173,10 @@ def fusion_section(seeds=(1,), angles=(-45.0, 0.0, 30.0), objects=None, noise=1.
                 f"{fz.min():.2f}–{fz.max():.2f} (rms {np.sqrt(np.mean(fz**2)):.2f}), normal "
                 f"{nz.min():.2f}–{nz.max():.2f} (rms {np.sqrt(np.mean(nz**2)):.2f}); single fingers "
                 f"{np.min(pooled['finger_z']):.2f}–{np.max(pooled['finger_z']):.2f}; errors shared in "
-                f"{sum(pooled['shared'])} of {len(pooled['shared'])} runs\n"
+                f"{sum(pooled['shared'])} of {len(pooled['shared'])} runs"
             )
+            each = ", ".join(f"{k} {np.sqrt(np.mean(np.square(v))):.2f}" for k, v in per_object.items())
+            print(f"direction z per object (rms over its runs): {each}\n")
 
 
 if __name__ == "__main__":
