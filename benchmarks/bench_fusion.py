@@ -192,6 +192,8 @@ if __name__ == "__main__":
     args = ap.parse_args()
     objects = OBJECTS if args.objects == "default" else MORE_OBJECTS
     load = None
+    if args.load is None and args.load_profile in ("push", "drag") and (args.load_profile, args.load_direction) != ("push", "across"):
+        ap.error("--load-direction and --load-profile go with --load R (or --load-profile slip)")
     if args.load is not None or args.load_profile == "slip":
         load = FrictionLoad(args.load or 0.0, args.load_direction == "across", args.load_profile)
     fusion_section(tuple(args.seeds), tuple(args.angles), objects, args.noise, args.told_true_noise, load)

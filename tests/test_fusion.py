@@ -265,18 +265,22 @@ def test_the_simulator_options_reach_both_fingertips(tmp_path):
 
 
 def test_a_friction_load_on_the_grasped_object(tmp_path):
-    """A friction load pushes the pinched plate across its line (0.25 of the grasp force at
-    each fingertip, one vector in the hand): both fingertips carry the same tangential load,
-    the fused line stays within the thin-plate target, and while the load is on the contact
-    forces no longer balance the weight alone: flagged ``unbalanced``, not before."""
+    """A friction load pushes the pinched plate (100 g) across its line (0.25 of the grasp
+    force at each fingertip, one vector in the hand): both fingertips carry the same
+    tangential load on top of half the weight, the fused line stays within the friction
+    target for thin objects (4° median), and while the load is on the contact forces no longer balance the weight alone:
+    flagged ``unbalanced``, not before."""
     from softtip.sim import ContactModel, ContactParams, Plate, discretise_skin
     from softtip.sim.hand import FrictionLoad, simulate_two_finger
 
     tip = softtip.murakami2006()
     model = ContactModel(discretise_skin(tip, n_elements=6000), ContactParams(shear_modulus=2e6), 2)
-    g = simulate_two_finger(tip, Plate(0.001), math.radians(30), rng=3, model=model, load=FrictionLoad(0.25))
+    g = simulate_two_finger(tip, Plate(0.001), math.radians(30), rng=3, model=model, object_mass=0.1, load=FrictionLoad(0.25))
     f_hand = {s: g.logs[s].wrench_true[:, :3] @ g.sensor_poses[s].rotation.T for s in ("right", "left")}
-    late = g.logs["right"].t > 7.0
+    t = g.logs["right"].t
+    weight = np.array([0.0, 0.0, -0.1 * 9.80665])
+    held, late = (t > 4.6) & (t < 5.9), t > 7.0
+    assert_allclose((f_hand["right"] + f_hand["left"])[held], np.broadcast_to(weight, (held.sum(), 3)), atol=0.01)
     # across the grasp (hand x) the pinch is opposite; the load (hand y, z) is one vector
     assert_allclose(f_hand["right"][late, 1:], f_hand["left"][late, 1:], atol=0.05)
     assert np.all(np.linalg.norm(f_hand["right"][late, 1:], axis=1) > 0.2 * 4.9)
@@ -285,10 +289,10 @@ def test_a_friction_load_on_the_grasped_object(tmp_path):
         log, p = g.logs[side], g.sensor_poses[side]
         fingers.append(Finger(side, softtip.estimate(log.t, log.wrench, tip), PoseSeries.fixed(p.rotation, p.translation, side)))
     fz = fuse(fingers, object_mass=g.object_mass)
-    held = (fz.t > 7.0) & (fz.grasp_names == "parallel_lines")
-    assert held.mean() > 0.9 * np.mean(fz.t > 7.0)
-    err = np.degrees(np.arccos(np.clip(np.abs(np.sum(fz.direction[held] * g.truth_line()[held], axis=-1)), 0, 1)))
-    assert np.median(err) < 3.0
+    lines = (fz.t > 7.0) & (fz.grasp_names == "parallel_lines")
+    assert lines.mean() > 0.9 * np.mean(fz.t > 7.0)
+    err = np.degrees(np.arccos(np.clip(np.abs(np.sum(fz.direction[lines] * g.truth_line()[lines], axis=-1)), 0, 1)))
+    assert np.median(err) < 4.0
     assert np.mean(fz.flag[fz.t > 6.6] == "unbalanced") > 0.9
     assert not np.any(fz.flag[(fz.t > 4.6) & (fz.t < 5.9)] == "unbalanced")
     # the same from the command line, its load options for both fingertips

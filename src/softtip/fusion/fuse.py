@@ -195,8 +195,10 @@ def _in_common(f: Finger, t: NDArray, idx: NDArray, ok: NDArray):
     contact = state != "none"
     nan3 = np.full((n, 3), np.nan)
     angle_std = np.where(state == "line", est.angle_std[idx], np.nan)
-    noise_std = np.where(state == "line", est.angle_noise_std[idx], np.nan)
     # what is not the sensor's noise is the estimator's model error: shared by both fingers
+    # (estimates without the split: all of it, as if none were noise)
+    noise = getattr(est, "angle_noise_std", None)
+    noise_std = np.where(state == "line", noise[idx], np.nan) if noise is not None else np.zeros(n)
     model = np.sqrt(np.maximum(angle_std * angle_std - noise_std * noise_std, 0.0))
     return {
         "state": state,

@@ -30,7 +30,7 @@ used, so CSV goes through pyarrow; the Python parser stays only to word an error
 the odd cell pyarrow does not take but Python's ``float`` does, such as ``1_000``). In one
 run of ``python benchmarks/bench_core.py --only end-to-end`` (same machine, busy) reading
 that log took 0.51 s of CPU against 3.44 s for the former reader, and writing the 46
-columns of ``softtip estimate`` for it 4.3 s (pyarrow's CSV writer formatting 46 M numbers,
+columns ``softtip estimate`` had then (47 now) for it 4.3 s (pyarrow's CSV writer formatting 46 M numbers,
 ~90 ns each) against 16 s for the former writer; Parquet: read 0.19 s, write 0.60 s (2.40 s
 with pyarrow's default dictionary encoding of every column).
 
@@ -1186,7 +1186,7 @@ def _write_rows_printf(out: TextIO, plan: _Plan) -> None:
 # Rows per Parquet row group (and per progress step).
 _PARQUET_ROWS = 1 << 18
 
-#: Parquet compression, chosen by measurement: the 46 columns of ``softtip estimate`` for a
+#: Parquet compression, chosen by measurement: the 46 columns ``softtip estimate`` had then for a
 #: 1e6-row log (2-core machine shared with other work, CPU s, file MB) with pyarrow's
 #: default dictionary encoding of every column 1.32 s, 158 MB; dictionary encoding only for
 #: the columns that are not floats (a float column of measurements has no repeats to find)

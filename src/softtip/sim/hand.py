@@ -30,7 +30,7 @@ from softtip.core.fingertip import Fingertip
 from softtip.sim.contact import ContactParams
 from softtip.sim.objects import RigidObject
 from softtip.sim.pose import Pose
-from softtip.sim.scenario import HandFrame, friction_scenario, paper_scenario, rock_scenario
+from softtip.sim.scenario import Disturbance, HandFrame, friction_scenario, paper_scenario, rock_scenario
 from softtip.sim.sensor import SensorModel
 from softtip.sim.simulate import SimLog, simulate_grasp
 
@@ -150,7 +150,9 @@ def simulate_two_finger(
     load : FrictionLoad, optional
         A friction load during the hold (:func:`~softtip.sim.scenario.friction_scenario`, as
         seen at the right fingertip: ``across`` its line or along it), the same vector in the
-        hand for both fingertips (the object pushed or slid as one); not with ``rock``.
+        hand for both fingertips (the object pushed or slid as one), on top of the weight
+        (a ``slip`` moves the object kinematically, from the start: what moves it holds its
+        weight, and the grasp's ``object_mass`` is 0); not with ``rock``.
     **scenario_kwargs
         Other :func:`~softtip.sim.scenario.paper_scenario` (or, rocked,
         :func:`~softtip.sim.scenario.rock_scenario`) arguments.
@@ -171,23 +173,20 @@ def simulate_two_finger(
         raise ValueError("a friction load goes with the papers' grasp, not with rocking")
     pitch = scenario_kwargs.get("finger_pitch", 0.0)
     poses = {side: sensor_pose_in_hand(tip, side, width, pitch) for side in SIDES}
-    scenarios = {}
-    for side in SIDES:
-        a = angle if side == "right" else -angle
-        if load is not None:
-            scenarios[side] = friction_scenario(
-                tip, a, load.ratio, across=load.across, profile=load.profile, slip_distance=load.slip_distance,
-                side=side, object_mass=object_mass, **scenario_kwargs,
-            )  # fmt: skip
-        else:
-            make = rock_scenario if rock else paper_scenario
-            scenarios[side] = make(a, side=side, object_mass=object_mass, **scenario_kwargs)
-    if load is not None:  # the right finger's load and slide, as one vector in the hand, for both
-        scenarios["left"] = _as_seen_by(scenarios["left"], scenarios["right"], poses["right"].rotation, poses["left"].rotation)
+    if load is not None:
+        scenarios = _friction_scenarios(tip, angle, load, object_mass, poses, scenario_kwargs)
+    else:
+        make = rock_scenario if rock else paper_scenario
+        scenarios = {
+            side: make(angle if side == "right" else -angle, side=side, object_mass=object_mass, **scenario_kwargs)
+            for side in SIDES
+        }
     logs = {
         side: simulate_grasp(tip, objs[side], scenarios[side], sensor, rng=rng + k, **kw) for k, side in enumerate(SIDES)
     }
-    return TwoFingerGrasp(logs, poses, float(width), float(object_mass))
+    # a slip moves the object kinematically: the fingers carry none of its weight
+    carried = 0.0 if load is not None and load.profile == "slip" else float(object_mass)
+    return TwoFingerGrasp(logs, poses, float(width), carried)
 
 
 @dataclass(frozen=True)
@@ -211,20 +210,31 @@ class FrictionLoad:
     slip_distance: float = 1.5e-3
 
 
-def _as_seen_by(left, right, rot_right, rot_left):
-    """``left`` with ``right``'s tangential load and slide (sensor frame vectors) turned into
-    the left sensor's frame through the hand."""
-    turn = np.asarray(rot_left).T @ np.asarray(rot_right)
-    changes = {}
-    if right.tangential_force is not None:
-        changes["tangential_force"] = tuple(turn @ np.asarray(right.tangential_force))
-    slip = next((d for d in right.disturbances if d.label == "slip"), None)
-    if slip is not None:
-        moved = tuple(turn @ np.asarray(slip.translation))
-        changes["disturbances"] = tuple(
-            dataclasses.replace(d, translation=moved) if d.label == "slip" else d for d in left.disturbances
-        )
-    return dataclasses.replace(left, **changes)
+def _friction_scenarios(tip, angle, load: FrictionLoad, object_mass, poses, scenario_kwargs) -> dict:
+    """Each finger's scenario under ``load``: the right finger's load (or slide), a sensor
+    frame vector of :func:`~softtip.sim.scenario.friction_scenario`, turned into the left
+    sensor's frame through the hand, so that both carry one vector in the hand."""
+    right = friction_scenario(
+        tip, angle, load.ratio, across=load.across, profile=load.profile, slip_distance=load.slip_distance,
+        side="right", **scenario_kwargs,
+    )  # fmt: skip
+    turn = {"right": np.eye(3), "left": poses["left"].rotation.T @ poses["right"].rotation}
+    out = {}
+    for side in SIDES:
+        a = angle if side == "right" else -angle
+        mass = 0.0 if load.profile == "slip" else object_mass
+        base = paper_scenario(a, side=side, object_mass=mass, name=right.name, **scenario_kwargs)
+        if load.profile == "slip":
+            # the slide moves the object kinematically (what moves it holds its weight too)
+            slide = next(d for d in right.disturbances if d.label == "slip")
+            moved = dataclasses.replace(slide, translation=tuple(turn[side] @ np.asarray(slide.translation)))
+            out[side] = dataclasses.replace(base, disturbances=base.disturbances + (moved,), tangential_force=None)
+        else:
+            # the load over its own interval, on top of the weight (which ramps with the grasp)
+            push = Disturbance(load=tuple(turn[side] @ np.asarray(right.tangential_force)), start=right.load_start,
+                               end=right.load_end, label="friction-load")  # fmt: skip
+            out[side] = dataclasses.replace(base, disturbances=base.disturbances + (push,))
+    return out
 
 
 # -- files ---------------------------------------------------------------------------------------
