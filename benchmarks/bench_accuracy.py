@@ -84,8 +84,9 @@ from softtip import Capsule, EstimatorConfig, Sphere, axial_difference, estimate
 from softtip.core._xp import NP
 from softtip.core.depth import MURAKAMI2006_DEPTH, DepthLaw, lever_depth
 from softtip.core.noise import NANO17, SensorNoise
-from softtip.core.spin import direction_angle, tangent_frame_kernel
+from softtip.core.spin import direction_angle
 from softtip.core.units import KGF
+from softtip.estimator.evidence import _frame_terms
 from softtip.sim import NANO17_SENSOR as SIM_SENSOR
 from softtip.sim import (
     ContactModel,
@@ -738,10 +739,9 @@ def rolling_section(angles=(-60.0, -45.0, 0.0, 30.0, 60.0), seed: int = 3) -> No
                 cells.append("—")
                 continue
             bias = np.degrees(np.median(axial_difference(est.angle[sel], log.truth.angle[sel])))
-            e1x, e1y, e1z, e2x, e2y, e2z = (np.asarray(v) for v in tangent_frame_kernel(*est.normal[sel].T, NP))
-            h, f = est.h[sel], est.wrench[sel, :3]
-            ah = _variation_axis(h[:, 0] * e1x + h[:, 1] * e1y + h[:, 2] * e1z, h[:, 0] * e2x + h[:, 1] * e2y + h[:, 2] * e2z)
-            af = _variation_axis(f[:, 0] * e1x + f[:, 1] * e1y + f[:, 2] * e1z, f[:, 0] * e2x + f[:, 1] * e2y + f[:, 2] * e2z)
+            # h and the tangential load in the tangent frame, as the evidence window takes them
+            h1, h2, f1, f2 = _frame_terms(*est.normal[sel].T, *est.h[sel].T, *est.wrench[sel, :3].T, NP)
+            ah, af = _variation_axis(h1, h2), _variation_axis(f1, f2)
             gap = abs(np.degrees(axial_difference(ah, af)))
             gaps.append(gap)
             std = np.degrees(np.median(est.angle_std[sel]))

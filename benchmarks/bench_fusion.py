@@ -39,7 +39,7 @@ import numpy as np
 
 import softtip
 from softtip.core.axial import axial_difference
-from softtip.core.noise import NANO17, SensorNoise
+from softtip.core.noise import NANO17
 from softtip.estimator import EstimatorConfig
 from softtip.fusion import Finger, PoseSeries, fuse
 from softtip.sim import (
@@ -80,7 +80,7 @@ def run_case(tip, model, obj, angle_deg, seed, rock=False, noise=1.0, told_true=
     if told_true:  # the estimator told the simulated sensor's noise with its quantisation, not the Nano17 preset's
         config = EstimatorConfig(noise=sensor.noise_model())
     elif noise != 1.0:
-        config = EstimatorConfig(noise=SensorNoise(tuple(noise * np.asarray(NANO17.force_std)), tuple(noise * np.asarray(NANO17.moment_std))))
+        config = EstimatorConfig(noise=NANO17.scaled(noise))
     else:
         config = EstimatorConfig()
     fingers = []

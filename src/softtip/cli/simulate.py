@@ -219,7 +219,6 @@ def _no_equilibrium_hint(options) -> str:
 def _simulate_hand(output, truth, units, left_object, width, to_bag, options) -> None:
     """``softtip simulate --hand two-finger``: both fingertips, files for ``softtip fuse``."""
     from softtip.core.fingertip import load_fingertip
-    from softtip.sim.contact import ContactParams
     from softtip.sim.hand import (
         FrictionLoad,
         simulate_two_finger,
@@ -227,7 +226,7 @@ def _simulate_hand(output, truth, units, left_object, width, to_bag, options) ->
         write_two_finger_bag,
     )
     from softtip.sim.objects import make_object
-    from softtip.sim.sensor import SensorModel
+    from softtip.sim.simulate import scenario_options, sensor_and_skin
 
     if output is None:
         raise click.UsageError("--hand two-finger writes several files: give -o DIR (a new directory)")
@@ -249,26 +248,12 @@ def _simulate_hand(output, truth, units, left_object, width, to_bag, options) ->
                  tilt=math.radians(options["tilt_deg"]))  # fmt: skip
     objs = {"right": make_object(kind, options["size"], **shape),
             "left": make_object(left_object or kind, options["size"] if left_object in (None, kind) else None, **shape)}  # fmt: skip
-    # every option of the one-finger paper scenario reaches both fingers (as run_simulation)
-    scenario = dict(
-        force=options["force"], t_contact=options["t_contact"], t_stable=options["t_stable"],
-        joint_rotation=math.radians(options["joint_rotation_deg"]), gravity_spin=math.radians(options["gravity_spin_deg"]),
-        misalignment=math.radians(options["misalignment_deg"]), disturbance_timing=options["disturbance_timing"],
-    )  # fmt: skip
-    if options["duration"] is not None:
-        scenario["duration"] = options["duration"]
-    elif not options["rock"]:
-        scenario["duration"] = 10.0
-    if options["rock"]:
-        scenario.update(rock_amplitude=math.radians(options["rock_amplitude_deg"]), rock_period=options["rock_period"],
-                        rock_load=options["rock_load"])  # fmt: skip
+    # every option of the one-finger paper scenario reaches both fingers, as in run_simulation
+    scenario = scenario_options(**options)
+    sensor, params = sensor_and_skin(**options)
     load = None
     if options["scenario"] == "friction":
         load = FrictionLoad(options["load_ratio"], options["load_direction"] == "across", options["load_profile"])
-    rate = options["rate"]
-    sensor = SensorModel(rate=rate) if options["noise"] else SensorModel.ideal(rate)
-    params = ContactParams(thickness=options["thickness"], modulus=options["modulus"],
-                           shear_modulus=options["shear_modulus"], friction=options["friction"])  # fmt: skip
     try:
         tip = load_fingertip(options["tip"])
         grasp = simulate_two_finger(

@@ -503,6 +503,50 @@ def write_truth_json(log: SimLog, path: str | os.PathLike) -> None:
     _atomic_write(path, truth_json_text(log))
 
 
+def scenario_options(
+    *,
+    force: float,
+    t_contact: float,
+    t_stable: float,
+    duration: float | None,
+    joint_rotation_deg: float,
+    gravity_spin_deg: float,
+    misalignment_deg: float,
+    disturbance_timing: str,
+    rock: bool,
+    rock_amplitude_deg: float,
+    rock_period: float,
+    rock_load: float,
+    **_other,
+) -> dict:
+    """Keyword arguments of :func:`~softtip.sim.scenario.paper_scenario` (rocked:
+    :func:`~softtip.sim.scenario.rock_scenario`) from :func:`run_simulation`'s plain options
+    (angles in degrees; ``duration`` None: 10 s, or to the rocking's end). Options of
+    :func:`run_simulation` other than these are ignored (``**_other``), so that its whole
+    option set can be passed (``softtip simulate --hand two-finger``)."""
+    kw = dict(
+        force=force, t_contact=t_contact, t_stable=t_stable, joint_rotation=math.radians(joint_rotation_deg),
+        gravity_spin=math.radians(gravity_spin_deg), misalignment=math.radians(misalignment_deg),
+        disturbance_timing=disturbance_timing,
+    )  # fmt: skip
+    if duration is not None:
+        kw["duration"] = duration
+    elif not rock:
+        kw["duration"] = 10.0
+    if rock:
+        kw.update(rock_amplitude=math.radians(rock_amplitude_deg), rock_period=rock_period, rock_load=rock_load)
+    return kw
+
+
+def sensor_and_skin(
+    *, rate: float, noise: bool, thickness: float, modulus: float, shear_modulus: float | None, friction: float, **_other
+) -> tuple[SensorModel, ContactParams]:
+    """The sensor model and the skin's material from :func:`run_simulation`'s plain options
+    (other options ignored, as in :func:`scenario_options`)."""
+    sensor = SensorModel(rate=rate) if noise else SensorModel.ideal(rate)
+    return sensor, ContactParams(thickness=thickness, modulus=modulus, shear_modulus=shear_modulus, friction=friction)
+
+
 def run_simulation(
     object_kind: str = "plate",
     size: float | None = None,
@@ -555,50 +599,28 @@ def run_simulation(
     tipo = load_fingertip(tip)
     obj = make_object(object_kind, size, edge_radius=edge_radius, apex_angle=math.radians(apex_angle_deg),
                       tilt=math.radians(tilt_deg))
-    timing = dict(force=force, t_contact=t_contact, t_stable=t_stable)
-    if duration is not None:
-        timing["duration"] = duration
-    elif not (rock and scenario == "paper"):
-        timing["duration"] = 10.0
     if rock and scenario != "paper":
         raise ValueError("--rock needs the paper scenario")
+    kw = scenario_options(
+        force=force, t_contact=t_contact, t_stable=t_stable, duration=duration, joint_rotation_deg=joint_rotation_deg,
+        gravity_spin_deg=gravity_spin_deg, misalignment_deg=misalignment_deg, disturbance_timing=disturbance_timing,
+        rock=rock, rock_amplitude_deg=rock_amplitude_deg, rock_period=rock_period, rock_load=rock_load,
+    )  # fmt: skip
+    angle = math.radians(angle_deg)
     if rock:
-        scn = rock_scenario(
-            math.radians(angle_deg),
-            rock_amplitude=math.radians(rock_amplitude_deg),
-            rock_period=rock_period,
-            rock_load=rock_load,
-            joint_rotation=math.radians(joint_rotation_deg),
-            gravity_spin=math.radians(gravity_spin_deg),
-            object_mass=object_mass,
-            misalignment=math.radians(misalignment_deg),
-            disturbance_timing=disturbance_timing,
-            **timing,
-        )
+        scn = rock_scenario(angle, object_mass=object_mass, **kw)
     elif scenario == "paper":
-        scn = paper_scenario(
-            math.radians(angle_deg),
-            joint_rotation=math.radians(joint_rotation_deg),
-            gravity_spin=math.radians(gravity_spin_deg),
-            object_mass=object_mass,
-            misalignment=math.radians(misalignment_deg),
-            disturbance_timing=disturbance_timing,
-            **timing,
-        )
+        scn = paper_scenario(angle, object_mass=object_mass, **kw)
     elif scenario == "push":
-        scn = push_scenario(math.radians(angle_deg), **timing)
+        scn = push_scenario(angle, **{k: kw[k] for k in ("force", "t_contact", "t_stable", "duration")})
     elif scenario == "friction":
         if load_direction not in ("across", "along"):
             raise ValueError(f"load_direction must be across or along, got {load_direction!r}")
-        scn = friction_scenario(
-            tipo, math.radians(angle_deg), load_ratio, across=load_direction == "across", profile=load_profile,
-            joint_rotation=math.radians(joint_rotation_deg), gravity_spin=math.radians(gravity_spin_deg),
-            misalignment=math.radians(misalignment_deg), disturbance_timing=disturbance_timing, **timing,
-        )  # fmt: skip
+        scn = friction_scenario(tipo, angle, load_ratio, across=load_direction == "across", profile=load_profile, **kw)
     else:
         raise ValueError(f"unknown scenario {scenario!r}; expected paper, push or friction")
-    sensor = SensorModel(rate=rate) if noise else SensorModel.ideal(rate)
-    params = ContactParams(thickness=thickness, modulus=modulus, shear_modulus=shear_modulus, friction=friction)
+    sensor, params = sensor_and_skin(rate=rate, noise=noise, thickness=thickness, modulus=modulus,
+                                     shear_modulus=shear_modulus, friction=friction)  # fmt: skip
     log = simulate_grasp(tipo, obj, scn, sensor, seed, params=params, n_elements=n_elements)
     if output is not None:
         write_log_csv(log, output, units)
