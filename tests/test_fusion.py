@@ -284,11 +284,7 @@ def test_a_friction_load_on_the_grasped_object(tmp_path):
     # across the grasp (hand x) the pinch is opposite; the load (hand y, z) is one vector
     assert_allclose(f_hand["right"][late, 1:], f_hand["left"][late, 1:], atol=0.05)
     assert np.all(np.linalg.norm(f_hand["right"][late, 1:], axis=1) > 0.2 * 4.9)
-    fingers = []
-    for side in ("right", "left"):
-        log, p = g.logs[side], g.sensor_poses[side]
-        fingers.append(Finger(side, softtip.estimate(log.t, log.wrench, tip), PoseSeries.fixed(p.rotation, p.translation, side)))
-    fz = fuse(fingers, object_mass=g.object_mass)
+    fz = fuse(_fingers(g, tip), object_mass=g.object_mass)
     lines = (fz.t > 7.0) & (fz.grasp_names == "parallel_lines")
     assert lines.mean() > 0.9 * np.mean(fz.t > 7.0)
     err = np.degrees(np.arccos(np.clip(np.abs(np.sum(fz.direction[lines] * g.truth_line()[lines], axis=-1)), 0, 1)))
@@ -332,15 +328,20 @@ def test_a_plane_against_an_edge_is_flagged_once_rocked_and_unconfirmed_before(t
 # -- the fused standard deviations and the 3-D view ----------------------------------------------
 
 
-def _fused_z(grasp, tip, start, config=None, **options):
-    """rms(error / reported std) of the fused direction and plane normal over the held grasp."""
+def _fingers(grasp, tip, config=None):
+    """Both fingertips of a simulated two-finger grasp, estimated, at their poses in the hand."""
+    config = config or softtip.EstimatorConfig()
     fingers = []
     for side in ("right", "left"):
         log, p = grasp.logs[side], grasp.sensor_poses[side]
-        config = config or softtip.EstimatorConfig()
         est = softtip.estimate(log.t, log.wrench, tip, config)
         fingers.append(Finger(side, est, PoseSeries.fixed(p.rotation, p.translation, side), config.noise))
-    fz = fuse(fingers, object_mass=grasp.object_mass, **options)
+    return fingers
+
+
+def _fused_z(grasp, tip, start, config=None, **options):
+    """rms(error / reported std) of the fused direction and plane normal over the held grasp."""
+    fz = fuse(_fingers(grasp, tip, config), object_mass=grasp.object_mass, **options)
     held = (fz.t > start) & (fz.grasp_names == "parallel_lines")
     assert held.sum() > 0.8 * np.count_nonzero(fz.t > start)
 
