@@ -23,11 +23,15 @@ Nano17 preset × k) and ``--objects`` check scenarios other than the default gri
 ``--told-true-noise`` tells the estimator the simulated sensor's noise (with its quantisation)
 instead of the Nano17 preset, which assumes 1.7 times the simulated force noise and 1.4 times
 its moment noise: with the preset every reported std is conservative, the more so where the
-noise dominates the error. ``--load R`` (``--load-direction``, ``--load-profile``) puts a
+noise dominates the error; ``--noise-from-tare`` lets the estimator measure the noise from a
+1.5 s tare of each log (``EstimatorConfig(noise_from_tare=True)``), as a user would. ``--load R`` (``--load-direction``, ``--load-profile``) puts a
 friction load on the object during the hold instead of rocking it
 (:class:`softtip.sim.hand.FrictionLoad`, the same vector in the hand at both fingertips;
 the stiffer 2 MPa shear layer of ``bench_accuracy.py --sections friction``), errors from the
-load on.
+load on. ``--rock-axes 0 30 60`` rocks each grasp three ways (the tangent axes of
+:func:`softtip.sim.scenario.rock_scenario` turned by those angles): the 0.4° model error of
+a confirmed line stands for how the axis turns with the pattern of excitation, which one
+pattern per run shows as a fixed offset.
 """
 
 from __future__ import annotations
@@ -41,6 +45,7 @@ import softtip
 from softtip.core.axial import axial_difference
 from softtip.core.noise import NANO17
 from softtip.estimator import EstimatorConfig
+from softtip.estimator.tare import noise_in_use
 from softtip.fusion import Finger, PoseSeries, fuse
 from softtip.sim import (
     ContactModel,
@@ -74,11 +79,14 @@ def _axial_deg(a, b):
     return np.degrees(np.arccos(np.clip(np.abs(np.sum(a * b, axis=-1)), 0.0, 1.0)))
 
 
-def run_case(tip, model, obj, angle_deg, seed, rock=False, noise=1.0, told_true=False, load=None):
-    g = simulate_two_finger(tip, obj, math.radians(angle_deg), rng=seed, model=model, rock=rock, load=load)
+def run_case(tip, model, obj, angle_deg, seed, rock=False, noise=1.0, told="preset", load=None, rock_axes=0.0):
+    kw = {"rock_axes": math.radians(rock_axes)} if rock else {}
+    g = simulate_two_finger(tip, obj, math.radians(angle_deg), rng=seed, model=model, rock=rock, load=load, **kw)
     sensor = SensorModel(noise_std=tuple(noise * np.asarray(SensorModel().noise_std)))
-    if told_true:  # the estimator told the simulated sensor's noise with its quantisation, not the Nano17 preset's
+    if told == "true":  # the estimator told the simulated sensor's noise with its quantisation, not the Nano17 preset's
         config = EstimatorConfig(noise=sensor.noise_model())
+    elif told == "tare":  # measured from the samples before contact (at about 2 s)
+        config = EstimatorConfig(noise_from_tare=True, tare_duration=1.5)
     elif noise != 1.0:
         config = EstimatorConfig(noise=NANO17.scaled(noise))
     else:
@@ -89,7 +97,8 @@ def run_case(tip, model, obj, angle_deg, seed, rock=False, noise=1.0, told_true=
         w = log.wrench if noise == 1.0 else sensor.measure(log.wrench_true, np.random.default_rng(1000 * seed + k))
         p = g.sensor_poses[side]
         est = softtip.estimate(log.t, w, tip, config)
-        fingers.append(Finger(side, est, PoseSeries.fixed(p.rotation, p.translation, side), config.noise))
+        pose = PoseSeries.fixed(p.rotation, p.translation, side)
+        fingers.append(Finger(side, est, pose, noise_in_use(config, est.tare)))
     fz = fuse(fingers, object_mass=g.object_mass)
     # rocked: once both axes were excited; a friction load: once it is on
     start = 8.0 if rock else (HELD if load is None else (9.5 if load.profile == "drag" else 7.0))
@@ -121,7 +130,9 @@ def run_case(tip, model, obj, angle_deg, seed, rock=False, noise=1.0, told_true=
     return out
 
 
-def fusion_section(seeds=(1,), angles=(-45.0, 0.0, 30.0), objects=None, noise=1.0, told_true=False, load=None) -> None:
+def fusion_section(
+    seeds=(1,), angles=(-45.0, 0.0, 30.0), objects=None, noise=1.0, told="preset", load=None, rock_axes=(0.0,)
+) -> None:
     objects = objects or OBJECTS
     tip = softtip.murakami2006()
     if load is None:
@@ -130,8 +141,12 @@ def fusion_section(seeds=(1,), angles=(-45.0, 0.0, 30.0), objects=None, noise=1.
         model = ContactModel(discretise_skin(tip, 10000), ContactParams(shear_modulus=2e6), 2)
     print("\n## fusion: two fingertips on one object (median over the held grasp, t > 6 s, or once rocked about")
     print("both axes, t > 8 s; z = rms(error / reported std); each finger's own z against its own line; shared:")
-    told = "the simulated sensor's" if told_true else "the Nano17 preset's (1.7 times the simulated force noise, 1.4 times the moment noise)"
-    print(f"both fingers' errors of one sign in the hand frame); sensor noise × {noise:g}; the estimator told {told}")
+    what = {
+        "true": "told the simulated sensor's",
+        "tare": "measured it from a 1.5 s tare",
+        "preset": "told the Nano17 preset's (1.7 times the simulated force noise, 1.4 times the moment noise)",
+    }[told]
+    print(f"both fingers' errors of one sign in the hand frame); sensor noise × {noise:g}; the estimator {what}")
     if load is not None:
         way = "across" if load.across else "along"
         print(f"With a friction load, {load.profile} {way} the line at the right fingertip"
@@ -144,27 +159,28 @@ def fusion_section(seeds=(1,), angles=(-45.0, 0.0, 30.0), objects=None, noise=1.
     for rock in (False,) if load is not None else (False, True):
         pooled = {"fused": [], "normal": [], "fused_z": [], "normal_z": [], "finger_z": [], "shared": []}
         per_object: dict[str, list[float]] = {}
-        for name, make in objects.items():
-            for a in angles:
-                for s in seeds:
-                    try:
-                        r = run_case(tip, model, make(), a, s, rock, noise, told_true, load)
-                    except RuntimeError as exc:  # the simulator cannot hold the grasp (friction)
-                        print(f"| {name} | {'yes' if rock else 'no'} | {a:+.0f}° | {s} | simulator: {exc} |")
-                        continue
-                    if "fused" not in r:
-                        print(f"| {name} | {'yes' if rock else 'no'} | {a:+.0f}° | {s} | {100 * r['share']:.0f} % | — | — | — | — | — | — | — |")
-                        continue
-                    for k in ("fused", "normal", "fused_z", "normal_z", "shared"):
-                        pooled[k].append(r[k])
-                    pooled["finger_z"] += [r["right_z"], r["left_z"]]
-                    per_object.setdefault(name, []).append(r["fused_z"])
-                    print(
-                        f"| {name} | {'yes' if rock else 'no'} | {a:+.0f}° | {s} | {100 * r['share']:.0f} % | "
-                        f"{r['right']:.1f} / {r['left']:.1f}° | {r['right_z']:.2f} / {r['left_z']:.2f} | "
-                        f"{'yes' if r['shared'] else 'no'} | {r['fused']:.1f}° | {r['fused_z']:.2f} | {r['normal']:.1f}° | "
-                        f"{r['normal_z']:.2f} |"
-                    )
+        cases = [(name, make, a, s, ax) for name, make in objects.items() for a in angles for s in seeds
+                 for ax in (rock_axes if rock else (0.0,))]  # fmt: skip
+        for name, make, a, s, ax in cases:
+            rocked = ("yes" if ax == 0.0 else f"axes {ax:+.0f}°") if rock else "no"
+            try:
+                r = run_case(tip, model, make(), a, s, rock, noise, told, load, ax)
+            except RuntimeError as exc:  # the simulator cannot hold the grasp (friction)
+                print(f"| {name} | {rocked} | {a:+.0f}° | {s} | simulator: {exc} |")
+                continue
+            if "fused" not in r:
+                print(f"| {name} | {rocked} | {a:+.0f}° | {s} | {100 * r['share']:.0f} % | — | — | — | — | — | — | — |")
+                continue
+            for k in ("fused", "normal", "fused_z", "normal_z", "shared"):
+                pooled[k].append(r[k])
+            pooled["finger_z"] += [r["right_z"], r["left_z"]]
+            per_object.setdefault(name, []).append(r["fused_z"])
+            print(
+                f"| {name} | {rocked} | {a:+.0f}° | {s} | {100 * r['share']:.0f} % | "
+                f"{r['right']:.1f} / {r['left']:.1f}° | {r['right_z']:.2f} / {r['left_z']:.2f} | "
+                f"{'yes' if r['shared'] else 'no'} | {r['fused']:.1f}° | {r['fused_z']:.2f} | {r['normal']:.1f}° | "
+                f"{r['normal_z']:.2f} |"
+            )
         if pooled["fused"]:
             fz, nz = np.asarray(pooled["fused_z"]), np.asarray(pooled["normal_z"])
             print(
@@ -185,10 +201,14 @@ if __name__ == "__main__":
     ap.add_argument("--angles", type=float, nargs="*", default=[-45.0, 0.0, 30.0], help="degrees at the right fingertip")
     ap.add_argument("--noise", type=float, default=1.0, help="sensor noise × this (the estimator told the Nano17 preset × this)")
     ap.add_argument("--objects", choices=("default", "more"), default="default", help="the default grid's objects or four others")
-    ap.add_argument("--told-true-noise", action="store_true", help="tell the estimator the simulated sensor's noise (default: the Nano17 preset)")
+    told = ap.add_mutually_exclusive_group()
+    told.add_argument("--told-true-noise", action="store_true", help="tell the estimator the simulated sensor's noise (default: the Nano17 preset)")
+    told.add_argument("--noise-from-tare", action="store_true", help="the estimator measures the noise from a 1.5 s tare (default: the Nano17 preset)")
     ap.add_argument("--load", type=float, help="a friction load on the object, this fraction of the grasp force (no rocking)")
     ap.add_argument("--load-direction", choices=("across", "along"), default="across", help="at the right fingertip's line")
     ap.add_argument("--load-profile", choices=("push", "drag", "slip"), default="push")
+    ap.add_argument("--rock-axes", type=float, nargs="+", default=[0.0], metavar="DEG",
+                    help="rock about tangent axes turned by these angles (one rocked run each; rock_scenario's rock_axes)")
     args = ap.parse_args()
     objects = OBJECTS if args.objects == "default" else MORE_OBJECTS
     load = None
@@ -196,4 +216,5 @@ if __name__ == "__main__":
         ap.error("--load-direction and --load-profile go with --load R (or --load-profile slip)")
     if args.load is not None or args.load_profile == "slip":
         load = FrictionLoad(args.load or 0.0, args.load_direction == "across", args.load_profile)
-    fusion_section(tuple(args.seeds), tuple(args.angles), objects, args.noise, args.told_true_noise, load)
+    told = "true" if args.told_true_noise else "tare" if args.noise_from_tare else "preset"
+    fusion_section(tuple(args.seeds), tuple(args.angles), objects, args.noise, told, load, tuple(args.rock_axes))

@@ -42,6 +42,7 @@ CONFIGS = {
     "lowpass": EstimatorConfig(lowpass_hz=20.0),
     "no-drift-tracking": EstimatorConfig(track_drift=False, lowpass_hz=15.0),
     "joint": EstimatorConfig(contact_point="line-fit"),
+    "noise-from-tare": EstimatorConfig(noise_from_tare=True, tare_duration=0.4),
 }
 
 

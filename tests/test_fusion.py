@@ -11,7 +11,8 @@ from numpy.testing import assert_allclose
 from scipy.spatial.transform import Rotation
 
 import softtip
-from softtip import InputError
+from softtip import EstimatorConfig, InputError
+from softtip.core.noise import NANO17
 from softtip.fusion import Finger, PoseSeries, fuse, fuse_logs, poses_from_columns, read_hand_file
 from softtip.fusion.tf import TfTree
 from softtip.sim.synthetic import synthetic_grasp
@@ -535,3 +536,14 @@ def test_rerun_view_of_crossing_lines_and_of_a_line_and_a_face(tmp_path, left_an
         assert_allclose(strip.mean(axis=0), r, atol=1e-6)
         u = (strip[-1] - strip[0]) / np.linalg.norm(strip[-1] - strip[0])
         assert abs(u @ d) == pytest.approx(1.0, abs=1e-6)
+
+
+def test_fuse_logs_checks_the_force_balance_against_the_noise_each_tare_measured():
+    gr, pr = _finger("right", R_RIGHT, 30.0, seed=1, noise=NANO17.scaled(0.5))
+    gl, pl = _finger("left", R_LEFT, -30.0, seed=2, noise=NANO17.scaled(2.0))
+    logs = [("right", gr.t, gr.wrench, pr), ("left", gl.t, gl.wrench, pl)]
+    config = EstimatorConfig(noise_from_tare=True, tare_duration=1.5)
+    _, fingers = fuse_logs(logs, "murakami2006", config)
+    for finger, scale in zip(fingers, (0.5, 2.0)):
+        assert finger.noise == finger.estimates.tare.noise
+        assert_allclose(finger.noise.force_std, np.full(3, scale * NANO17.force_std[0]), rtol=0.5)

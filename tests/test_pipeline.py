@@ -103,6 +103,11 @@ CASES = {
     "evidence-short-window-loose": EstimatorConfig(
         evidence_window=0.3, area_ratio=(0.05, 0.02), excitation_ratio=0.05, excitation_min=1e-4
     ),
+    # the noise model measured by the tare (or, on logs whose tare is short or touched, kept)
+    "noise-from-tare": EstimatorConfig(noise_from_tare=True, tare_duration=1.0),
+    "noise-from-tare-joint-lowpass": EstimatorConfig(
+        noise_from_tare=True, tare_duration=1.0, contact_point="line-fit", lowpass_hz=8.0, sample_rate=50.0
+    ),
     "evidence-joint-depth-relatch": EstimatorConfig(
         contact_point="line-fit", depth=MURAKAMI2006_DEPTH, relatch_distance=3e-3, evidence_window=1.0
     ),

@@ -86,6 +86,7 @@ def test_node_parameters_default_to_the_estimators_defaults():
     cfg = config_from_parameters({"lowpass_hz": 30.0, "sample_rate": 1000.0, "force_noise": 0.01})
     assert cfg.lowpass_hz == 30.0 and cfg.sample_rate == 1000.0 and cfg.noise.force_std == (0.01,) * 3
     assert set(PARAMETERS) >= {"tip", "wrench_topic", "frame_id", "lowpass_hz", "contact_point"}
+    assert config_from_parameters({"noise_from_tare": True, "tare_duration": 1.0}).noise_from_tare
 
 
 @pytest.mark.parametrize(
@@ -96,6 +97,8 @@ def test_node_parameters_default_to_the_estimators_defaults():
         ({"lowpass_hz": -1.0}, "non-negative"),
         ({"force_noise": -0.1}, "force_noise"),
         ({"contact_point": "latched"}, "contact_point"),
+        ({"noise_from_tare": "false"}, "noise_from_tare must be true or false"),
+        ({"noise_from_tare": True, "tare_duration": 0.0}, "noise_from_tare needs a tare"),
     ],
 )
 def test_node_parameters_are_checked(params, match):

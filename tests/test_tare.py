@@ -402,3 +402,96 @@ def test_the_tare_summary_compares_its_noise_with_the_noise_model(scale, n, says
     assert "times the noise model" in line
     assert report.noise_ratio == pytest.approx(scale, rel=0.45)
     assert ("conservative" in line) is says_conservative
+
+
+# ---------------------------------------------------------------- the noise model measured by the tare
+
+
+def per_sample_z(est, angle):
+    """RMS over the line samples of (axial error / reported std)."""
+    line = est.state == 2
+    err = axial_difference(est.angle[line], angle)
+    return float(np.sqrt(np.mean((err / est.angle_std[line]) ** 2)))
+
+
+@pytest.mark.parametrize("scale", [0.4, 2.5])
+def test_the_noise_measured_by_the_tare_calibrates_a_sensor_the_preset_misjudges(scale):
+    # a sensor 0.4 or 2.5 times as noisy as the Nano17 preset; the papers' per-sample std
+    # (line evidence and depth off) is the noise's alone, so error / std tells whether the
+    # model is right
+    true = NANO17.scaled(scale)
+    papers = {"line_evidence": False, "depth_mode": "off", "tare_duration": 1.5}
+    told, measured = [], []
+    for seed in range(6):
+        g = synthetic_grasp(angle_deg=30.0, seed=seed, noise=true)
+        preset = quiet_estimate(g.t, g.wrench, EstimatorConfig(**papers))
+        est = quiet_estimate(g.t, g.wrench, EstimatorConfig(**papers, noise_from_tare=True))
+        n = est.tare.n_samples
+        assert n == 75 and est.warnings == ()
+        got = np.r_[est.tare.noise.force_std, est.tare.noise.moment_std]
+        want = np.r_[true.force_std, true.moment_std]
+        assert np.all(np.abs(got / want - 1.0) < 4.0 / np.sqrt(2.0 * (n - 1)))  # four standard errors
+        assert "noise model measured from them" in est.tare.summary()
+        told.append(per_sample_z(preset, g.angle))
+        measured.append(per_sample_z(est, g.angle))
+    z_told, z_measured = np.sqrt(np.mean(np.square(told))), np.sqrt(np.mean(np.square(measured)))
+    assert 0.8 < z_measured < 1.25, (z_told, z_measured)
+    assert (z_told < 0.6) if scale < 1.0 else (z_told > 1.8), z_told  # so the test can fail
+
+
+def test_the_measured_noise_is_what_the_estimator_uses():
+    g = synthetic_grasp(angle_deg=-20.0, seed=3, noise=NANO17.scaled(0.5))
+    est = quiet_estimate(g.t, g.wrench, EstimatorConfig(tare_duration=1.0, noise_from_tare=True))
+    told = quiet_estimate(g.t, g.wrench, EstimatorConfig(tare_duration=1.0, noise=est.tare.noise))
+    for name in ("state", "contact_id", "h_std", "angle", "angle_std", "angle_noise_std", "line_evidence"):
+        assert np.array_equal(getattr(est, name), getattr(told, name), equal_nan=True), name
+    preset = quiet_estimate(g.t, g.wrench, EstimatorConfig(tare_duration=1.0))
+    assert not np.array_equal(est.h_std, preset.h_std, equal_nan=True)
+
+
+def test_too_few_tare_samples_keep_the_given_noise_model_and_say_so():
+    g = synthetic_grasp(angle_deg=10.0, seed=1)
+    with pytest.warns(EstimatorWarning, match="10 tare samples .* fewer than the 30 .* configured noise model is used"):
+        est = estimate(g.t, g.wrench, "murakami2006", EstimatorConfig(noise_from_tare=True))
+    assert est.tare.noise is None
+    plain = quiet_estimate(g.t, g.wrench)
+    assert np.array_equal(est.angle_std, plain.angle_std, equal_nan=True)
+    stream = Estimator("murakami2006", EstimatorConfig(noise_from_tare=True))
+    with pytest.warns(EstimatorWarning, match="fewer than the 30"):
+        stream.process(g.t, g.wrench)
+    assert stream.tare_report.noise is None
+
+
+def test_a_touched_tare_or_a_still_axis_keeps_the_given_noise_for_it():
+    g = synthetic_grasp(angle_deg=0.0, seed=4)
+    config = EstimatorConfig(noise_from_tare=True, tare_duration=1.0)
+    w = g.wrench.copy()
+    w[:50, :3] += np.random.default_rng(4).normal(size=(50, 3)) * 8 * NANO17.force_std[0]
+    with pytest.warns(EstimatorWarning) as caught:
+        est = estimate(g.t, w, "murakami2006", config)
+    text = " ".join(str(c.message) for c in caught)
+    assert "touched" in text and "varied as if touched (above); the configured noise model is used" in text
+    assert est.tare.noise is None
+    w = g.wrench.copy()
+    w[:50, 5] = w[0, 5]  # mz quantised to one value while taring
+    with pytest.warns(EstimatorWarning, match="mz did not change over the 50 tare samples"):
+        est = estimate(g.t, w, "murakami2006", config)
+    assert est.tare.noise.moment_std[2] == NANO17.moment_std[2]
+    assert 0.5 * NANO17.force_std[0] < est.tare.noise.force_std[0] < 1.5 * NANO17.force_std[0]
+
+
+def test_noise_from_tare_needs_a_tare():
+    for bad in ({"tare_duration": 0.0}, {"bias": (0.0,) * 6}):
+        with pytest.raises(ValueError, match="noise_from_tare needs a tare"):
+            EstimatorConfig(noise_from_tare=True, **bad)
+
+
+def test_cli_measures_the_noise_with_noise_from_tare(tmp_path):
+    g = synthetic_grasp(angle_deg=30.0, seed=2, noise=NANO17.scaled(0.5))
+    write_log(tmp_path / "log.csv", g.t, g.wrench)
+    r = run_cli("estimate", "log.csv", "-o", "a.csv", "--noise-from-tare", "--tare-duration", "1", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert "noise model measured from them: force (" in r.stderr and "warning" not in r.stderr
+    r = run_cli("estimate", "log.csv", "-o", "b.csv", "--noise-from-tare", "--tare-duration", "0", cwd=tmp_path)
+    assert r.returncode == 2 and "noise_from_tare needs a tare" in r.stderr
+    assert not (tmp_path / "b.csv").exists()

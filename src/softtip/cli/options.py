@@ -175,6 +175,13 @@ _ESTIMATOR_OPTIONS = [
         help="Per-axis standard deviation of the sensor's moment noise, N·mm.",
     ),
     option(
+        "--noise-from-tare",
+        is_flag=True,
+        help="Measure the noise model from the tare's samples (each axis's standard deviation) instead of "
+        "--force-noise/--moment-noise, which stay the fallback; needs at least 30 tare samples "
+        "(--tare-duration 1 at 50 Hz).",
+    ),
+    option(
         "--relatch-distance",
         type=MM_POSITIVE,
         metavar="LENGTH",
@@ -420,6 +427,7 @@ def make_config(opts: dict, sample_rate: float | None = None, tip: Fingertip | N
             unconfirmed_model_std=math.radians(opts["unconfirmed_model_std"]),
             evidence_reset_distance=opts["evidence_reset_distance"],
             significance_window=opts["significance_window"],
+            noise_from_tare=opts["noise_from_tare"],
         )
     except ValueError as exc:
         raise click.UsageError(str(exc)) from None

@@ -28,7 +28,7 @@ from softtip.estimator.joint import joint_points
 from softtip.estimator.latch import latch_points
 from softtip.estimator.measure import Measurement, effective_noise, measure, noise_correlation
 from softtip.estimator.results import LINE, NONE, Estimates, EstimatorWarning
-from softtip.estimator.tare import TareReport, tare_log
+from softtip.estimator.tare import TareReport, noise_in_use, tare_log
 
 __all__ = ["Carry", "estimate"]
 
@@ -133,7 +133,7 @@ def estimate(
         sos = lowpass_sos(config.lowpass_hz, rate, config.lowpass_order)
         if np.all(np.isfinite(bias)):
             x, zf = sosfilt_state(sos, x, carry.zi if later else None)
-    noise = effective_noise(config.noise, sos)
+    noise = effective_noise(noise_in_use(config, tare_report), sos)
     ct = track_contacts(t, x, int(np.count_nonzero(taring)), config, noise, carry.track if later else None)
     if carry is not None:
         carry.tare, carry.zi, carry.track = tare_report, zf, ct.state

@@ -48,7 +48,8 @@ class EstimatorConfig:
     fallback_samples : int
         Samples averaged for a latch when the rise has no sample in the window.
     noise : SensorNoise
-        Standard deviations of the unfiltered sensor noise.
+        Standard deviations of the unfiltered sensor noise (with ``noise_from_tare``: the
+        model the tare's samples are checked against, and the fallback).
     h_sigmas, h_min : float
         ``|h|`` is significant (a ``line`` contact) above ``max(h_sigmas · h_std, h_min)``;
         ``h_min`` in N·m (default 0.5 N·mm).
@@ -170,6 +171,16 @@ class EstimatorConfig:
         m; the evidence starts afresh (window, verdict, held direction) when the contact
         point moves farther than this from where it started (default 1 mm): what a window
         said about another point does not hold for the new one.
+    noise_from_tare : bool
+        Measure the noise model from the tare: the standard deviation of each axis over the
+        tare's samples (spikes left out) replaces ``noise`` for everything after the tare
+        (thresholds, every reported standard deviation), as ATI advises (the presets are
+        about one resolution count, not this sensor's noise). Needs a tare
+        (``tare_duration`` > 0, no ``bias``) of at least
+        :data:`~softtip.estimator.tare.NOISE_MIN_SAMPLES` samples (its standard deviations
+        then known to about 13 %; e.g. 1 s at 50 Hz); with fewer, with a tare that looks
+        touched, or on an axis that did not vary at all, ``noise`` is kept and a warning
+        says so. Default off.
     significance_window : float
         s; ``|h|`` turns significant (a line) when most of the segment's samples of the last
         this many seconds are above the line threshold, and not significant when most are
@@ -220,6 +231,7 @@ class EstimatorConfig:
     unconfirmed_model_std: float = math.radians(5.0)
     evidence_reset_distance: float = 1e-3
     significance_window: float = 0.015
+    noise_from_tare: bool = False
 
     def line_threshold(self, h_std: ArrayLike) -> NDArray[np.float64]:
         """The ``|h|`` above which a contact is a line: ``max(h_sigmas · h_std, h_min)``.
@@ -296,6 +308,11 @@ class EstimatorConfig:
             raise ValueError(f"area_ratio must be (enter, leave) with 0 < leave <= enter <= 1, got {self.area_ratio!r}")
         object.__setattr__(self, "area_ratio", (enter, leave))
         object.__setattr__(self, "line_evidence", bool(self.line_evidence))
+        object.__setattr__(self, "noise_from_tare", bool(self.noise_from_tare))
+        if self.noise_from_tare and (self.bias is not None or self.tare_duration <= 0.0):
+            raise ValueError(
+                "noise_from_tare needs a tare to measure the noise from: tare_duration > 0 and no bias given"
+            )
         if int(self.fallback_samples) < 1:
             raise ValueError(f"fallback_samples must be at least 1, got {self.fallback_samples!r}")
         if self.bias is not None:

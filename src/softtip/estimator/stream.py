@@ -21,10 +21,12 @@ from softtip.core._xp import PY
 from softtip.core.contact import contact_kernel
 from softtip.core.filtering import SosStream, lowpass_sos
 from softtip.core.fingertip import Fingertip, load_fingertip
+from softtip.core.noise import SensorNoise
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.contact import (
     START_PULL_TIME,
     ContactTracker,
+    contact_thresholds,
     drift_message,
     started_in_contact_message,
 )
@@ -35,7 +37,7 @@ from softtip.estimator.joint import JointTracker
 from softtip.estimator.latch import LatchTracker
 from softtip.estimator.measure import effective_noise, noise_correlation
 from softtip.estimator.results import EstimatorWarning, SampleEstimate
-from softtip.estimator.tare import StreamTare, TareReport
+from softtip.estimator.tare import StreamTare, TareReport, noise_in_use
 
 __all__ = ["Estimator"]
 
@@ -83,20 +85,29 @@ class Estimator:
             if cfg.sample_rate is None:
                 raise ValueError("streaming with a low-pass filter needs config.sample_rate (Hz)")
             self._sos = lowpass_sos(cfg.lowpass_hz, cfg.sample_rate, cfg.lowpass_order)
-        self._noise = effective_noise(cfg.noise, self._sos)
         self._track = cfg.contact_point == "track"
         self._relatch = cfg.relatch_distance is not None
         self._tare = StreamTare(cfg)
         self._latch = LatchTracker(self.tip, cfg)
-        self._evidence = EvidenceTracker(cfg, self._noise, noise_correlation(self._sos))
+        self._contacts = ContactTracker(cfg, effective_noise(cfg.noise, self._sos))
+        self._use_noise(cfg.noise)
+        self.reset()
+
+    def _use_noise(self, noise: SensorNoise) -> None:
+        """Build the stages that depend on the (unfiltered) noise model ``noise``: at the
+        start, and after a tare that measured it (``noise_from_tare``), when no contact is
+        under way."""
+        cfg = self.config
+        corr = noise_correlation(self._sos)
+        self._noise = effective_noise(noise, self._sos)
+        self._evidence = EvidenceTracker(cfg, self._noise, corr)
         self._joint = None
         if cfg.contact_point == "line-fit":
-            self._joint = JointTracker(self.tip, cfg, self._noise, noise_correlation(self._sos))
-        self._contacts = ContactTracker(cfg, self._noise)
+            self._joint = JointTracker(self.tip, cfg, self._noise, corr)
+        self._contacts.on, self._contacts.off = contact_thresholds(cfg, self._noise)
         self._sq = NoiseSquares(self._noise)
         self._geo = PointGeometry((math.nan,) * 3, (0.0, 0.0, 1.0), self._sq)  # none yet
-        self._depth = None if cfg.depth is None else DepthTracker(cfg, self._noise, noise_correlation(self._sos))
-        self.reset()
+        self._depth = None if cfg.depth is None else DepthTracker(cfg, self._noise, corr)
 
     @property
     def bias(self) -> tuple[float, ...] | None:
@@ -205,6 +216,8 @@ class Estimator:
                 return self._none(t, (math.nan,) * 6, taring=True)
             for msg in tare.report.warnings:
                 self._warn(msg)
+            if self.config.noise_from_tare:
+                self._use_noise(noise_in_use(self.config, tare.report))
             if self._filter is not None:  # the tare samples prime the filter, as in the batch
                 for b in tare.release():
                     self._filter([v - bb for v, bb in zip(b, bias)])

@@ -18,6 +18,9 @@ Unless a bias is given, the samples in the first ``tare_duration`` seconds make 
 - in ``line-fit`` mode, force noise above the noise model by more than the margin line-fit mode
   allows for (it would take the excess for excitation).
 
+With ``noise_from_tare`` the tare also measures the noise model (:attr:`TareReport.noise`,
+:func:`noise_in_use`): each axis's standard deviation over the samples without spikes.
+
 :meth:`softtip.Estimator.tare` re-tares on demand from the next samples;
 :func:`load_bias` reads a bias file (``--bias FILE``).
 """
@@ -33,6 +36,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from softtip.core.joint import MODEL_MARGIN
+from softtip.core.noise import SensorNoise
 from softtip.errors import InputError
 from softtip.estimator.config import EstimatorConfig
 from softtip.io.tomlfile import read_toml_table
@@ -40,7 +44,9 @@ from softtip.io.tomlfile import read_toml_table
 __all__ = [
     "SPIKE_SIGMAS",
     "TOUCHED_RATIO",
+    "NOISE_MIN_SAMPLES",
     "TareReport",
+    "noise_in_use",
     "tare_from_samples",
     "tare_log",
     "LogTare",
@@ -58,6 +64,10 @@ TOUCHED_RATIO = 5.0
 #: the model overstates the sensor's noise, and the summary says so.
 OVERSTATED_RATIO = 0.6
 OVERSTATED_MIN_SAMPLES = 30
+#: ``noise_from_tare`` measures the noise from at least this many tare samples (spikes left
+#: out): a standard deviation from k samples is known to about ``1 / sqrt(2 (k - 1))``, 13 % here.
+NOISE_MIN_SAMPLES = 30
+_AXES = ("fx", "fy", "fz", "mx", "my", "mz")
 
 
 _LABELS = {"robust": "mean without spikes", "median": "median", "mean": "mean"}
@@ -91,6 +101,10 @@ class TareReport:
         ignore them).
     warnings : tuple of str
         Plain-language warnings (also in :attr:`softtip.Estimates.warnings`).
+    noise : SensorNoise or None
+        The noise model measured from the tare samples (``noise_from_tare``); ``None``
+        when not asked for or not measurable (the configured model is used, and a warning
+        says why).
     """
 
     bias: NDArray[np.float64]
@@ -104,6 +118,7 @@ class TareReport:
     spikes: int = 0
     spike_shift: float = 0.0
     warnings: tuple[str, ...] = ()
+    noise: SensorNoise | None = None
 
     def summary(self) -> str:
         """One line: where the bias came from and its value (N, N·mm); for a tare, the noise of
@@ -123,12 +138,50 @@ class TareReport:
                 f"; their noise up to {np.nanmax(self.force_std) * 1e3:.2g} mN and "
                 f"{np.nanmax(self.moment_std) * 1e3:.2g} N·mm, {self.noise_ratio:.2g} times the noise model"
             )
-            if self.n_samples >= OVERSTATED_MIN_SAMPLES and self.noise_ratio < OVERSTATED_RATIO:
+            if self.noise is not None:
+                fn, mn = np.asarray(self.noise.force_std) * 1e3, np.asarray(self.noise.moment_std) * 1e3
+                line += (
+                    f"; noise model measured from them: force ({fn[0]:.3g}, {fn[1]:.3g}, {fn[2]:.3g}) mN, "
+                    f"moment ({mn[0]:.3g}, {mn[1]:.3g}, {mn[2]:.3g}) N·mm"
+                )
+            elif self.n_samples >= OVERSTATED_MIN_SAMPLES and self.noise_ratio < OVERSTATED_RATIO:
                 line += (
                     " (which overstates this sensor's noise: the reported standard deviations are conservative; "
-                    "give its noise model, --force-noise and --moment-noise)"
+                    "give its noise model, --force-noise and --moment-noise, or measure it, --noise-from-tare)"
                 )
         return line
+
+
+def noise_in_use(config: EstimatorConfig, report: TareReport | None) -> SensorNoise:
+    """The unfiltered noise model the estimates after the tare ``report`` use: the one it
+    measured (``noise_from_tare``), else ``config.noise``."""
+    if report is not None and report.noise is not None:
+        return report.noise
+    return config.noise
+
+
+def _measured_noise(clean: NDArray, std: NDArray, ratio: NDArray, config: EstimatorConfig) -> tuple[SensorNoise | None, str]:
+    """The noise model of ``noise_from_tare`` from the tare's samples without spikes
+    ``clean`` (k, 6) and their per-axis ``std`` (6,), and why it is not (or only partly) used."""
+    keep = "the configured noise model is used"
+    n_clean = len(clean)
+    if n_clean < NOISE_MIN_SAMPLES:
+        return None, (
+            f"noise_from_tare: {n_clean} tare samples (spikes left out), fewer than the {NOISE_MIN_SAMPLES} a "
+            f"measurement of the noise needs; {keep} (tare longer: tare_duration, --tare-duration)"
+        )
+    if np.any(ratio > TOUCHED_RATIO):
+        return None, f"noise_from_tare: the tare's samples varied as if touched (above); {keep}"
+    model = np.array(config.noise.force_std + config.noise.moment_std)
+    still = np.ptp(clean, axis=0) == 0.0  # (its std need not come out exactly 0)
+    std = np.where(still, model, std)
+    if np.any(still):
+        axes = ", ".join(a for a, s in zip(_AXES, still) if s)
+        return SensorNoise(tuple(std[:3]), tuple(std[3:])), (
+            f"noise_from_tare: {axes} did not change over the {n_clean} tare samples (below the sensor's "
+            "resolution?); the configured noise is kept for them"
+        )
+    return SensorNoise(tuple(std[:3]), tuple(std[3:])), ""
 
 
 def _given(config: EstimatorConfig) -> TareReport:
@@ -190,10 +243,16 @@ def tare_from_samples(samples: NDArray, config: EstimatorConfig, duration: float
                 f"touched in the first {duration:g} s? The bias, and every estimate, would then be wrong "
                 "(tare again untouched, give a bias, or tare_duration 0 for an input that is already tared)"
             )
+    measured = None
+    if config.noise_from_tare:
+        measured, why = _measured_noise(clean, std, ratio, config)
+        if why:
+            warn.append(why)
     fstd = float(np.nanmax(std[:3])) if k > 1 else math.nan
     fmodel = float(np.max(model[:3]))
     if (
-        config.contact_point == "line-fit"
+        measured is None
+        and config.contact_point == "line-fit"
         and k > 2
         and fmodel > 0
         and fstd <= TOUCHED_RATIO * fmodel
@@ -206,7 +265,8 @@ def tare_from_samples(samples: NDArray, config: EstimatorConfig, duration: float
             "rates: give this sensor's noise model (--force-noise, --moment-noise)"
         )
     return TareReport(
-        bias, "tare", config.tare_method, k, duration, std[:3], std[3:], noise_ratio, n_spikes, shift, tuple(warn)
+        bias, "tare", config.tare_method, k, duration, std[:3], std[3:], noise_ratio, n_spikes, shift, tuple(warn),
+        measured,
     )
 
 

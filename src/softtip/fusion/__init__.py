@@ -15,6 +15,7 @@ from numpy.typing import ArrayLike
 
 from softtip.core.fingertip import Fingertip, load_fingertip
 from softtip.estimator import EstimatorConfig, estimate
+from softtip.estimator.tare import noise_in_use
 from softtip.fusion.fuse import GRASPS, Finger, FusedGrasp, fuse
 from softtip.fusion.poses import POSE_COLUMNS, HandFile, PoseSeries, poses_from_columns, read_hand_file
 
@@ -57,8 +58,8 @@ def fuse_logs(
     """
     tips = list(tip) if isinstance(tip, (list, tuple)) else [tip] * len(logs)
     config = config or EstimatorConfig()
-    fingers = [
-        Finger(name, estimate(t, w, load_fingertip(tp), config), pose, config.noise)
-        for (name, t, w, pose), tp in zip(logs, tips)
-    ]
+    fingers = []
+    for (name, t, w, pose), tp in zip(logs, tips):
+        est = estimate(t, w, load_fingertip(tp), config)
+        fingers.append(Finger(name, est, pose, noise_in_use(config, est.tare)))  # measured with noise_from_tare
     return fuse(fingers, **fuse_options), fingers

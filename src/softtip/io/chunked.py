@@ -35,7 +35,7 @@ from softtip.estimator.contact import track_contacts
 from softtip.estimator.depth import resolve_depth
 from softtip.estimator.measure import effective_noise
 from softtip.estimator.results import Estimates
-from softtip.estimator.tare import tare_log
+from softtip.estimator.tare import noise_in_use, tare_log
 
 __all__ = ["DEFAULT_PIECE_ROWS", "estimate_pieces"]
 
@@ -130,9 +130,9 @@ def _cut(t: NDArray, w: NDArray, tip: Fingertip, config: EstimatorConfig, carry:
     such sample yet (a contact goes on past the samples held)."""
     later = carry.tare is not None
     if later:
-        bias, start = carry.tare.bias, 0
+        bias, start, report = carry.tare.bias, 0, carry.tare
     else:
-        bias, taring, _ = tare_log(t, w, config)
+        bias, taring, report = tare_log(t, w, config)
         start = int(np.count_nonzero(taring))
         if not np.all(np.isfinite(bias)):
             return None  # still taring
@@ -141,7 +141,7 @@ def _cut(t: NDArray, w: NDArray, tip: Fingertip, config: EstimatorConfig, carry:
     if config.lowpass_hz is not None:
         sos = lowpass_sos(config.lowpass_hz, config.sample_rate, config.lowpass_order)
         x, _ = sosfilt_state(sos, x, carry.zi if later else None)
-    ct = track_contacts(t, x, start, config, effective_noise(config.noise, sos), carry.track if later else None)
+    ct = track_contacts(t, x, start, config, effective_noise(noise_in_use(config, report), sos), carry.track if later else None)
     free = ~ct.busy
     free[: max(start + 1, rows)] = False
     idx = np.flatnonzero(free)

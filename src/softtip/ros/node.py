@@ -33,6 +33,7 @@ PARAMETERS: dict[str, Any] = {
     "tare_duration": 0.2,  # s
     "force_noise": 0.0,  # N per axis; 0 → Nano17-class default
     "moment_noise": 0.0,  # N·m per axis; 0 → Nano17-class default
+    "noise_from_tare": False,  # measure the noise model from the tare (≥ 30 samples)
     "publish_markers": True,
     "payload": "",  # payload TOML (softtip calibrate-payload): remove the fingertip's weight
     "orientation_topic": "",  # geometry_msgs/msg/QuaternionStamped: the sensor frame in a z-up world
@@ -62,6 +63,8 @@ def config_from_parameters(params: dict[str, Any]) -> EstimatorConfig:
     force_noise, moment_noise = float(p["force_noise"]), float(p["moment_noise"])
     if force_noise < 0 or moment_noise < 0:
         raise ValueError("force_noise and moment_noise must be non-negative (0: the Nano17-class default)")
+    if not isinstance(p["noise_from_tare"], bool):
+        raise ValueError(f"noise_from_tare must be true or false, got {p['noise_from_tare']!r}")
     noise = SensorNoise(
         force_std=(force_noise,) * 3 if force_noise > 0 else NANO17.force_std,
         moment_std=(moment_noise,) * 3 if moment_noise > 0 else NANO17.moment_std,
@@ -72,6 +75,7 @@ def config_from_parameters(params: dict[str, Any]) -> EstimatorConfig:
         sample_rate=rate if rate > 0 else None,
         tare_duration=float(p["tare_duration"]),
         noise=noise,
+        noise_from_tare=p["noise_from_tare"],
     )
 
 
