@@ -86,7 +86,7 @@ def run_case(tip, model, obj, angle_deg, seed, rock=False, noise=1.0, told="pres
     if told == "true":  # the estimator told the simulated sensor's noise with its quantisation, not the Nano17 preset's
         config = EstimatorConfig(noise=sensor.noise_model())
     elif told == "tare":  # measured from the samples before contact (at about 2 s)
-        config = EstimatorConfig(noise_from_tare=True, tare_duration=1.5)
+        config = EstimatorConfig(noise=NANO17.scaled(noise), noise_from_tare=True, tare_duration=1.5)
     elif noise != 1.0:
         config = EstimatorConfig(noise=NANO17.scaled(noise))
     else:
@@ -212,6 +212,8 @@ if __name__ == "__main__":
     args = ap.parse_args()
     objects = OBJECTS if args.objects == "default" else MORE_OBJECTS
     load = None
+    if (args.load is not None or args.load_profile == "slip") and args.rock_axes != [0.0]:
+        ap.error("--rock-axes goes with the rocked runs; a friction load is not rocked")
     if args.load is None and args.load_profile in ("push", "drag") and (args.load_profile, args.load_direction) != ("push", "across"):
         ap.error("--load-direction and --load-profile go with --load R (or --load-profile slip)")
     if args.load is not None or args.load_profile == "slip":

@@ -182,6 +182,7 @@ def test_fuse_command_on_csv_and_on_a_bag_agree(simulated):
     assert a.returncode == 0, a.stderr
     assert (out / "a.png").stat().st_size > 10_000
     assert "parallel lines: median direction" in a.stderr
+    assert "softtip: right: bias from the first 0.2 s" in a.stderr and "softtip: left: bias from" in a.stderr
     b = _run("fuse", out / "bag", "--topics", "/right/wrench", "/left/wrench", "--frame", "hand", "-o", out / "b.csv")
     assert b.returncode == 0, b.stderr
     ta = np.genfromtxt(out / "a.csv", delimiter=",", names=True, dtype=None, encoding=None)

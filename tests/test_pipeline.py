@@ -141,7 +141,7 @@ def tare_in_contact():
 
 
 NEW_LOG_CASES = ["latch", "latch-lowpass", "track", "joint", "given-bias", "mean-tare", "single-threshold",
-                 "min-duration-fast-drift", "fast-drift-lowpass", "drift-reported-only"]  # fmt: skip
+                 "min-duration-fast-drift", "fast-drift-lowpass", "drift-reported-only", "noise-from-tare"]  # fmt: skip
 
 
 @pytest.mark.parametrize(

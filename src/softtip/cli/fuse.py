@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import warnings
 
 import click
 import numpy as np
@@ -12,10 +13,12 @@ from softtip.cli.options import (
     estimator_options,
     make_config,
     optional_extra,
+    tare_warnings,
 )
 from softtip.cli.types import Length, Number, option
 from softtip.core.units import UNIT_SYSTEMS, wrench_to_si
 from softtip.errors import InputError
+from softtip.estimator.results import EstimatorWarning
 from softtip.ros.options import bag_output_options, output_frame_id
 
 __all__ = ["fuse"]
@@ -155,11 +158,15 @@ def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, 
     else:
         raise click.UsageError(f"expected two CSV logs or one bag, got {len(inputs)} inputs")
     try:
-        fused, fingers = fuse_logs(
-            logs, fingertip, config, object_mass=object_mass, gravity=gravity, point_std=point_std
-        )
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", EstimatorWarning)  # said below, finger by finger
+            fused, fingers = fuse_logs(
+                logs, fingertip, config, object_mass=object_mass, gravity=gravity, point_std=point_std
+            )
     except ValueError as exc:
         raise click.UsageError(str(exc)) from None
+    for finger in fingers:
+        tare_warnings(finger.estimates, name=finger.name)
     rrd = None
     if rerun_spawn or rerun_save:  # the view first, put in place with the table
         from softtip.fusion.viz import log_fused, read_truth

@@ -368,12 +368,14 @@ def check_figure_path(path: str) -> None:
         raise InputError(f"{path}: folder {str(p.parent)!r} does not exist")
 
 
-def tare_warnings(est, quiet: bool = False) -> None:
-    """Say what the tare did (not when ``quiet``), and every warning of the estimator (all from the library)."""
+def tare_warnings(est, quiet: bool = False, name: str | None = None) -> None:
+    """Say what the tare did (not when ``quiet``), and every warning of the estimator (all from the library);
+    each line after ``name:`` when given (one of several fingertips)."""
+    head = "softtip: " if name is None else f"softtip: {name}: "
     if not quiet and est.tare is not None and est.tare.source != "none" and np.all(np.isfinite(est.bias)):
-        click.echo(f"softtip: {est.tare.summary()}", err=True)
+        click.echo(f"{head}{est.tare.summary()}", err=True)
     for msg in est.warnings:
-        click.echo(f"softtip: warning: {msg}", err=True)
+        click.echo(f"{head}warning: {msg}", err=True)
 
 
 def make_config(opts: dict, sample_rate: float | None = None, tip: Fingertip | None = None) -> EstimatorConfig:

@@ -40,7 +40,7 @@ class Carry:
     Empty before the first piece; :func:`estimate` fills it in at the end of each piece.
     """
 
-    tare: TareReport | None = None  #: the tare of the first piece (its bias is used from then on)
+    tare: TareReport | None = None  #: the tare of the first piece (its bias, and any noise model it measured, used from then on)
     zi: NDArray | None = None  #: the low-pass filter's state after the last piece
     track: TrackState | None = None  #: the contact tracker's state after the last piece
     had_latch: bool = False  #: a contact so far had a latched point (the next one starts re-latched)

@@ -171,16 +171,6 @@ class EstimatorConfig:
         m; the evidence starts afresh (window, verdict, held direction) when the contact
         point moves farther than this from where it started (default 1 mm): what a window
         said about another point does not hold for the new one.
-    noise_from_tare : bool
-        Measure the noise model from the tare: the standard deviation of each axis over the
-        tare's samples (spikes left out) replaces ``noise`` for everything after the tare
-        (thresholds, every reported standard deviation), as ATI advises (the presets are
-        about one resolution count, not this sensor's noise). Needs a tare
-        (``tare_duration`` > 0, no ``bias``) of at least
-        :data:`~softtip.estimator.tare.NOISE_MIN_SAMPLES` samples (its standard deviations
-        then known to about 13 %; e.g. 1 s at 50 Hz); with fewer, with a tare that looks
-        touched, or on an axis that did not vary at all, ``noise`` is kept and a warning
-        says so. Default off.
     significance_window : float
         s; ``|h|`` turns significant (a line) when most of the segment's samples of the last
         this many seconds are above the line threshold, and not significant when most are
@@ -189,6 +179,17 @@ class EstimatorConfig:
         sample decides alone (the papers' test); at 1–7 kHz a vote of 15–105 samples, so
         sensor noise near the threshold does not make a line flicker to ``point``. 0: each
         sample alone at every rate.
+    noise_from_tare : bool
+        Measure the noise model from the tare: the standard deviation of each axis over the
+        tare's samples (spikes left out) replaces ``noise`` for everything after the tare
+        (thresholds, every reported standard deviation): the presets are about one
+        resolution count, not this sensor's noise. Needs a tare
+        (``tare_duration`` > 0, no ``bias``) of at least
+        :data:`~softtip.estimator.tare.NOISE_MIN_SAMPLES` samples (its standard deviations
+        then known to about 13 %; e.g. 1 s at 50 Hz); with fewer, with a tare that looks
+        touched, or on an axis that did not vary at all, ``noise`` is kept and a warning
+        says so; an axis read in steps of ``q`` is taken as at least ``q / √12`` (its
+        rounding). Default off.
     """
 
     contact_point: Literal["latch", "track", "line-fit", "joint"] = "latch"
@@ -311,7 +312,8 @@ class EstimatorConfig:
         object.__setattr__(self, "noise_from_tare", bool(self.noise_from_tare))
         if self.noise_from_tare and (self.bias is not None or self.tare_duration <= 0.0):
             raise ValueError(
-                "noise_from_tare needs a tare to measure the noise from: tare_duration > 0 and no bias given"
+                "noise_from_tare needs a tare to measure the noise from: tare_duration > 0 (--tare-duration) and no "
+                "bias given (--bias)"
             )
         if int(self.fallback_samples) < 1:
             raise ValueError(f"fallback_samples must be at least 1, got {self.fallback_samples!r}")

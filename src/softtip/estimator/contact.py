@@ -341,9 +341,13 @@ class ContactTracker:
 
     def __init__(self, config: EstimatorConfig, noise: SensorNoise):
         self.config = config
-        self.on, self.off = contact_thresholds(config, noise)
+        self.set_noise(noise)
         self.count = 0  #: contacts so far (not reset by a re-tare)
         self.reset()
+
+    def set_noise(self, noise: SensorNoise) -> None:
+        """Thresholds for the (filtered) noise model ``noise`` (a tare that measured it)."""
+        self.on, self.off = contact_thresholds(self.config, noise)
 
     def reset(self) -> None:
         """Forget the drift and the contact (a new tare)."""

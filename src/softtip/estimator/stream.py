@@ -26,7 +26,6 @@ from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.contact import (
     START_PULL_TIME,
     ContactTracker,
-    contact_thresholds,
     drift_message,
     started_in_contact_message,
 )
@@ -104,7 +103,7 @@ class Estimator:
         self._joint = None
         if cfg.contact_point == "line-fit":
             self._joint = JointTracker(self.tip, cfg, self._noise, corr)
-        self._contacts.on, self._contacts.off = contact_thresholds(cfg, self._noise)
+        self._contacts.set_noise(self._noise)
         self._sq = NoiseSquares(self._noise)
         self._geo = PointGeometry((math.nan,) * 3, (0.0, 0.0, 1.0), self._sq)  # none yet
         self._depth = None if cfg.depth is None else DepthTracker(cfg, self._noise, corr)
@@ -150,7 +149,9 @@ class Estimator:
         duration : float, optional
             s of samples to tare from; default ``config.tare_duration`` (0.2 s when that is 0).
             Those samples are reported as ``none`` (``taring``); the filter, the contact and
-            the drift start again, the contact count goes on.
+            the drift start again, the contact count goes on. With ``noise_from_tare`` the
+            noise model is measured again from those samples (the configured one if they
+            cannot give it, as the warning then says).
         """
         d = (self.config.tare_duration or 0.2) if duration is None else float(duration)
         if not (math.isfinite(d) and d > 0.0):

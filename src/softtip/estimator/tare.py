@@ -66,7 +66,7 @@ OVERSTATED_RATIO = 0.6
 OVERSTATED_MIN_SAMPLES = 30
 #: ``noise_from_tare`` measures the noise from at least this many tare samples (spikes left
 #: out): a standard deviation from k samples is known to about ``1 / sqrt(2 (k - 1))``, 13 % here.
-NOISE_MIN_SAMPLES = 30
+NOISE_MIN_SAMPLES = OVERSTATED_MIN_SAMPLES
 _AXES = ("fx", "fy", "fz", "mx", "my", "mz")
 
 
@@ -138,31 +138,48 @@ class TareReport:
                 f"; their noise up to {np.nanmax(self.force_std) * 1e3:.2g} mN and "
                 f"{np.nanmax(self.moment_std) * 1e3:.2g} N·mm, {self.noise_ratio:.2g} times the noise model"
             )
-            if self.noise is not None:
-                fn, mn = np.asarray(self.noise.force_std) * 1e3, np.asarray(self.noise.moment_std) * 1e3
-                line += (
-                    f"; noise model measured from them: force ({fn[0]:.3g}, {fn[1]:.3g}, {fn[2]:.3g}) mN, "
-                    f"moment ({mn[0]:.3g}, {mn[1]:.3g}, {mn[2]:.3g}) N·mm"
-                )
-            elif self.n_samples >= OVERSTATED_MIN_SAMPLES and self.noise_ratio < OVERSTATED_RATIO:
+            if self.noise is None and self.n_samples >= OVERSTATED_MIN_SAMPLES and self.noise_ratio < OVERSTATED_RATIO:
                 line += (
                     " (which overstates this sensor's noise: the reported standard deviations are conservative; "
                     "give its noise model, --force-noise and --moment-noise, or measure it, --noise-from-tare)"
                 )
+        if self.noise is not None:
+            fn, mn = np.asarray(self.noise.force_std) * 1e3, np.asarray(self.noise.moment_std) * 1e3
+            line += (
+                f"; noise model measured from them: force ({fn[0]:.3g}, {fn[1]:.3g}, {fn[2]:.3g}) mN, "
+                f"moment ({mn[0]:.3g}, {mn[1]:.3g}, {mn[2]:.3g}) N·mm"
+            )
         return line
 
 
 def noise_in_use(config: EstimatorConfig, report: TareReport | None) -> SensorNoise:
-    """The unfiltered noise model the estimates after the tare ``report`` use: the one it
-    measured (``noise_from_tare``), else ``config.noise``."""
+    """The unfiltered noise model of the estimates after a tare.
+
+    Parameters
+    ----------
+    config : EstimatorConfig
+    report : TareReport or None
+        The tare's report (``None``: no tare yet).
+
+    Returns
+    -------
+    SensorNoise
+        The model the tare measured (``noise_from_tare``), else ``config.noise``.
+    """
     if report is not None and report.noise is not None:
         return report.noise
     return config.noise
 
 
-def _measured_noise(clean: NDArray, std: NDArray, ratio: NDArray, config: EstimatorConfig) -> tuple[SensorNoise | None, str]:
-    """The noise model of ``noise_from_tare`` from the tare's samples without spikes
-    ``clean`` (k, 6) and their per-axis ``std`` (6,), and why it is not (or only partly) used."""
+def _measured_noise(clean: NDArray, std: NDArray, model: NDArray, touched: bool) -> tuple[SensorNoise | None, str]:
+    """The noise model of ``noise_from_tare`` and why it is not (or only partly) used.
+
+    ``clean`` (k, 6): the tare's samples without spikes; ``std`` (6,) their per-axis standard
+    deviations; ``model`` (6,) the configured model's; ``touched``: the tare looked touched.
+    An axis read on a grid of step ``q`` (a quantised sensor) has at least ``q / √12`` of
+    rounding error whatever the samples' spread, so its measured standard deviation is not
+    taken below that; an axis that never changed keeps the configured value.
+    """
     keep = "the configured noise model is used"
     n_clean = len(clean)
     if n_clean < NOISE_MIN_SAMPLES:
@@ -170,18 +187,26 @@ def _measured_noise(clean: NDArray, std: NDArray, ratio: NDArray, config: Estima
             f"noise_from_tare: {n_clean} tare samples (spikes left out), fewer than the {NOISE_MIN_SAMPLES} a "
             f"measurement of the noise needs; {keep} (tare longer: tare_duration, --tare-duration)"
         )
-    if np.any(ratio > TOUCHED_RATIO):
-        return None, f"noise_from_tare: the tare's samples varied as if touched (above); {keep}"
-    model = np.array(config.noise.force_std + config.noise.moment_std)
+    if touched:
+        return None, (
+            f"noise_from_tare: the tare's samples varied more than {TOUCHED_RATIO:g} times the configured noise "
+            f"model, as if touched; {keep} (if the fingertip was untouched, the sensor is that much noisier: give "
+            "a larger model, --force-noise and --moment-noise)"
+        )
     still = np.ptp(clean, axis=0) == 0.0  # (its std need not come out exactly 0)
-    std = np.where(still, model, std)
+    if np.all(still):
+        return None, f"noise_from_tare: no axis changed over the {n_clean} tare samples; {keep}"
+    steps = np.diff(np.sort(clean, axis=0), axis=0)
+    step = np.min(np.where(steps > 0.0, steps, np.inf), axis=0)  # inf where still
+    std = np.where(still, model, np.maximum(std, np.where(still, 0.0, step) / math.sqrt(12.0)))
+    measured = SensorNoise(tuple(std[:3]), tuple(std[3:]))
     if np.any(still):
         axes = ", ".join(a for a, s in zip(_AXES, still) if s)
-        return SensorNoise(tuple(std[:3]), tuple(std[3:])), (
+        return measured, (
             f"noise_from_tare: {axes} did not change over the {n_clean} tare samples (below the sensor's "
             "resolution?); the configured noise is kept for them"
         )
-    return SensorNoise(tuple(std[:3]), tuple(std[3:])), ""
+    return measured, ""
 
 
 def _given(config: EstimatorConfig) -> TareReport:
@@ -234,9 +259,11 @@ def tare_from_samples(samples: NDArray, config: EstimatorConfig, duration: float
             )
         else:
             warn.append(f"{what}, left out of the {config.tare_method} tare")
+    touched = False
     for name, sl, unit, fmt in (("force", slice(0, 3), "N", 1.0), ("moment", slice(3, 6), "N·mm", 1e3)):
         r = ratio[sl]
         if np.any(r > TOUCHED_RATIO):
+            touched = True
             warn.append(
                 f"the {name} varied by {np.nanmax(std[sl]) * fmt:.3g} {unit} (standard deviation) while taring, "
                 f"{np.nanmax(r):.3g} times the noise model ({np.max(model[sl]) * fmt:g} {unit}): was the fingertip "
@@ -245,7 +272,7 @@ def tare_from_samples(samples: NDArray, config: EstimatorConfig, duration: float
             )
     measured = None
     if config.noise_from_tare:
-        measured, why = _measured_noise(clean, std, ratio, config)
+        measured, why = _measured_noise(clean, std, model, touched)
         if why:
             warn.append(why)
     fstd = float(np.nanmax(std[:3])) if k > 1 else math.nan
@@ -266,7 +293,7 @@ def tare_from_samples(samples: NDArray, config: EstimatorConfig, duration: float
         )
     return TareReport(
         bias, "tare", config.tare_method, k, duration, std[:3], std[3:], noise_ratio, n_spikes, shift, tuple(warn),
-        measured,
+        noise=measured,
     )
 
 

@@ -102,7 +102,9 @@ class Finger:
     pose : PoseSeries
         The sensor frame's pose in the common frame over the log's time (``estimates.t``).
     noise : SensorNoise
-        The sensor's noise model (for the force balance).
+        The sensor's noise model (for the force balance): the one its estimates used
+        (:func:`softtip.estimator.tare.noise_in_use`, which :func:`softtip.fusion.fuse_logs`
+        passes; measured with ``noise_from_tare``).
     """
 
     name: str

@@ -141,7 +141,8 @@ def _cut(t: NDArray, w: NDArray, tip: Fingertip, config: EstimatorConfig, carry:
     if config.lowpass_hz is not None:
         sos = lowpass_sos(config.lowpass_hz, config.sample_rate, config.lowpass_order)
         x, _ = sosfilt_state(sos, x, carry.zi if later else None)
-    ct = track_contacts(t, x, start, config, effective_noise(noise_in_use(config, report), sos), carry.track if later else None)
+    noise = effective_noise(noise_in_use(config, report), sos)
+    ct = track_contacts(t, x, start, config, noise, carry.track if later else None)
     free = ~ct.busy
     free[: max(start + 1, rows)] = False
     idx = np.flatnonzero(free)
