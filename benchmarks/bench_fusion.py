@@ -31,7 +31,8 @@ the stiffer 2 MPa shear layer of ``bench_accuracy.py --sections friction``), err
 load on. ``--rock-axes 0 30 60`` rocks each grasp three ways (the tangent axes of
 :func:`softtip.sim.scenario.rock_scenario` turned by those angles): the 0.4° model error of
 a confirmed line stands for how the axis turns with the pattern of excitation, which one
-pattern per run shows as a fixed offset.
+pattern per run shows as a fixed offset. ``--tip sphere`` puts a 12 mm sphere on both
+fingers, a fingertip the defaults were not set on.
 """
 
 from __future__ import annotations
@@ -43,6 +44,7 @@ import numpy as np
 
 import softtip
 from softtip.core.axial import axial_difference
+from softtip.core.fingertip import Sphere
 from softtip.core.noise import NANO17
 from softtip.estimator import EstimatorConfig
 from softtip.estimator.tare import noise_in_use
@@ -65,6 +67,11 @@ OBJECTS = {
     "plate 2 mm": lambda: Plate(0.002),
     "stick Ø 4 mm": lambda: stick(0.004),
     "cube edge (90°)": lambda: Wedge(0.5 * math.pi),
+}
+#: Fingertips (``--tip``): the papers' and one the defaults were not set on.
+TIPS = {
+    "murakami2006": softtip.murakami2006,
+    "sphere": lambda: Sphere(0.012, center=(0.0, 0.0, 0.012)),
 }
 #: Further objects for checks beyond the default grid (``--objects``).
 MORE_OBJECTS = {
@@ -131,10 +138,11 @@ def run_case(tip, model, obj, angle_deg, seed, rock=False, noise=1.0, told="pres
 
 
 def fusion_section(
-    seeds=(1,), angles=(-45.0, 0.0, 30.0), objects=None, noise=1.0, told="preset", load=None, rock_axes=(0.0,)
+    seeds=(1,), angles=(-45.0, 0.0, 30.0), objects=None, noise=1.0, told="preset", load=None, rock_axes=(0.0,),
+    tip_name="murakami2006",
 ) -> None:
     objects = objects or OBJECTS
-    tip = softtip.murakami2006()
+    tip = TIPS[tip_name]()
     if load is None:
         model = ContactModel(discretise_skin(tip), ContactParams(), 2)
     else:  # the stiffer shear layer of bench_accuracy's friction section: the default cannot hold the loads
@@ -146,7 +154,8 @@ def fusion_section(
         "tare": "measured it from a 1.5 s tare",
         "preset": "told the Nano17 preset's (1.7 times the simulated force noise, 1.4 times the moment noise)",
     }[told]
-    print(f"both fingers' errors of one sign in the hand frame); sensor noise × {noise:g}; the estimator {what}")
+    print(f"both fingers' errors of one sign in the hand frame); sensor noise × {noise:g}; the estimator {what}; "
+          f"fingertips: {tip_name}")
     if load is not None:
         way = "across" if load.across else "along"
         print(f"With a friction load, {load.profile} {way} the line at the right fingertip"
@@ -207,6 +216,7 @@ if __name__ == "__main__":
     ap.add_argument("--load", type=float, help="a friction load on the object, this fraction of the grasp force (no rocking)")
     ap.add_argument("--load-direction", choices=("across", "along"), default="across", help="at the right fingertip's line")
     ap.add_argument("--load-profile", choices=("push", "drag", "slip"), default="push")
+    ap.add_argument("--tip", choices=sorted(TIPS), default="murakami2006", help="both fingertips' shape (sphere: R 12 mm)")
     ap.add_argument("--rock-axes", type=float, nargs="+", default=[0.0], metavar="DEG",
                     help="rock about tangent axes turned by these angles (one rocked run each; rock_scenario's rock_axes)")
     args = ap.parse_args()
@@ -219,4 +229,4 @@ if __name__ == "__main__":
     if args.load is not None or args.load_profile == "slip":
         load = FrictionLoad(args.load or 0.0, args.load_direction == "across", args.load_profile)
     told = "true" if args.told_true_noise else "tare" if args.noise_from_tare else "preset"
-    fusion_section(tuple(args.seeds), tuple(args.angles), objects, args.noise, told, load, tuple(args.rock_axes))
+    fusion_section(tuple(args.seeds), tuple(args.angles), objects, args.noise, told, load, tuple(args.rock_axes), args.tip)
