@@ -407,6 +407,10 @@ def test_the_tare_summary_compares_its_noise_with_the_noise_model(scale, n, says
 # ---------------------------------------------------------------- the noise model measured by the tare
 
 
+#: The papers' per-sample std (line evidence and depth off): the noise's alone; a 1.5 s tare
+NOISE_ONLY = {"line_evidence": False, "depth_mode": "off", "tare_duration": 1.5}
+
+
 def per_sample_z(est, angle):
     """RMS over the line samples of (axial error / reported std)."""
     line = est.state == 2
@@ -420,12 +424,11 @@ def test_the_noise_measured_by_the_tare_calibrates_a_sensor_the_preset_misjudges
     # (line evidence and depth off) is the noise's alone, so error / std tells whether the
     # model is right
     true = NANO17.scaled(scale)
-    papers = {"line_evidence": False, "depth_mode": "off", "tare_duration": 1.5}
     told, measured = [], []
     for seed in range(6):
         g = synthetic_grasp(angle_deg=30.0, seed=seed, noise=true)
-        preset = quiet_estimate(g.t, g.wrench, EstimatorConfig(**papers))
-        est = quiet_estimate(g.t, g.wrench, EstimatorConfig(**papers, noise_from_tare=True))
+        preset = quiet_estimate(g.t, g.wrench, EstimatorConfig(**NOISE_ONLY))
+        est = quiet_estimate(g.t, g.wrench, EstimatorConfig(**NOISE_ONLY, noise_from_tare=True))
         n = est.tare.n_samples
         assert n == 75 and est.warnings == ()
         got = np.r_[est.tare.noise.force_std, est.tare.noise.moment_std]
@@ -502,12 +505,11 @@ def test_a_quantised_sensor_is_not_measured_quieter_than_its_rounding():
     # three values, whose spread alone would understate what the rounding adds in contact
     q = np.r_[[1 / 160] * 3, [1 / 32e3] * 3]
     true = SensorNoise(tuple(0.25 * q[:3]), tuple(0.25 * q[3:]))
-    papers = {"line_evidence": False, "depth_mode": "off", "tare_duration": 1.5}
     z = []
     for seed in range(6):
         g = synthetic_grasp(angle_deg=30.0, seed=seed, noise=true)
         w = np.round(g.wrench / q) * q
-        est = quiet_estimate(g.t, w, EstimatorConfig(**papers, noise_from_tare=True))
+        est = quiet_estimate(g.t, w, EstimatorConfig(**NOISE_ONLY, noise_from_tare=True))
         got = np.r_[est.tare.noise.force_std, est.tare.noise.moment_std]
         assert np.all(got >= q / np.sqrt(12.0) * (1.0 - 1e-9))
         z.append(per_sample_z(est, g.angle))

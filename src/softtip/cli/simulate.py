@@ -189,7 +189,7 @@ def simulate(
     except ValueError as exc:
         raise click.UsageError(str(exc)) from None
     except RuntimeError as exc:  # the contact solve found no equilibrium for these options
-        raise click.UsageError(f"the simulated grasp has no equilibrium with these options ({exc}); {_no_equilibrium_hint(options)}") from None
+        raise _no_equilibrium(exc, options) from None
     # both files appear together or neither does (and no temporary file stays behind)
     files = {name: AtomicFile(path) for name, path in (("log", output), ("truth", truth)) if path is not None}
     try:
@@ -210,10 +210,13 @@ def simulate(
     click.echo(f"softtip: simulated {len(log.t)} samples ({options['scenario']}, {options['object_kind']}) -> {', '.join(written)}", err=True)
 
 
-def _no_equilibrium_hint(options) -> str:
+def _no_equilibrium(exc: RuntimeError, options) -> click.UsageError:
+    """The error for a contact solve that found no equilibrium, with what may help."""
     if options["scenario"] == "friction":
-        return "a stiffer shear layer (e.g. --shear-modulus 2e6) holds larger loads"
-    return "a larger --friction or --force, a smaller --mass, or a thinner --thickness helps"
+        hint = "a stiffer shear layer (e.g. --shear-modulus 2e6) holds larger loads"
+    else:
+        hint = "a larger --friction or --force, a smaller --mass, or a thinner --thickness helps"
+    return click.UsageError(f"the simulated grasp has no equilibrium with these options ({exc}); {hint}")
 
 
 def _simulate_hand(output, truth, units, left_object, width, to_bag, options) -> None:
@@ -266,7 +269,7 @@ def _simulate_hand(output, truth, units, left_object, width, to_bag, options) ->
     except ValueError as exc:
         raise click.UsageError(str(exc)) from None
     except RuntimeError as exc:  # a contact solve found no equilibrium for these options
-        raise click.UsageError(f"the simulated grasp has no equilibrium with these options ({exc}); {_no_equilibrium_hint(options)}") from None
+        raise _no_equilibrium(exc, options) from None
     paths = write_two_finger(grasp, output)
     if to_bag is not None:
         write_two_finger_bag(grasp, to_bag)

@@ -198,7 +198,7 @@ def _measured_noise(clean: NDArray, std: NDArray, model: NDArray, touched: bool)
         return None, f"noise_from_tare: no axis changed over the {n_clean} tare samples; {keep}"
     steps = np.diff(np.sort(clean, axis=0), axis=0)
     step = np.min(np.where(steps > 0.0, steps, np.inf), axis=0)  # inf where still
-    std = np.where(still, model, np.maximum(std, np.where(still, 0.0, step) / math.sqrt(12.0)))
+    std = np.where(still, model, np.maximum(std, step / math.sqrt(12.0)))
     measured = SensorNoise(tuple(std[:3]), tuple(std[3:]))
     if np.any(still):
         axes = ", ".join(a for a, s in zip(_AXES, still) if s)

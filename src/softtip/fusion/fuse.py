@@ -80,6 +80,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from softtip.core.noise import NANO17, SensorNoise
 from softtip.estimator import Estimates
+from softtip.estimator.results import EVIDENCE
 from softtip.fusion.poses import PoseSeries
 
 __all__ = ["GRASPS", "Finger", "FusedGrasp", "fuse"]
@@ -179,12 +180,7 @@ def _in_common(f: Finger, t: NDArray, idx: NDArray, ok: NDArray):
     est = f.estimates
     n = len(t)
     state = np.where(ok, est.state_names[idx], "none")
-    if hasattr(est, "line_evidence"):
-        from softtip.estimator.results import EVIDENCE
-
-        evidence = np.where(ok, np.asarray(EVIDENCE)[est.line_evidence[idx]], "")
-    else:
-        evidence = np.where(state == "line", "unconfirmed", "")
+    evidence = np.where(ok, np.asarray(EVIDENCE)[est.line_evidence[idx]], "")
     rot, tr = f.pose.at(est.t[idx])
     point = rot.apply(np.nan_to_num(est.point[idx])) + tr
     normal = rot.apply(np.nan_to_num(est.normal[idx]))
@@ -198,9 +194,7 @@ def _in_common(f: Finger, t: NDArray, idx: NDArray, ok: NDArray):
     nan3 = np.full((n, 3), np.nan)
     angle_std = np.where(state == "line", est.angle_std[idx], np.nan)
     # what is not the sensor's noise is the estimator's model error: shared by both fingers
-    # (estimates without the split: all of it, as if none were noise)
-    noise = getattr(est, "angle_noise_std", None)
-    noise_std = np.where(state == "line", noise[idx], np.nan) if noise is not None else np.zeros(n)
+    noise_std = np.where(state == "line", est.angle_noise_std[idx], np.nan)
     model = np.sqrt(np.maximum(angle_std * angle_std - noise_std * noise_std, 0.0))
     return {
         "state": state,

@@ -219,10 +219,10 @@ def _friction_scenarios(tip, angle, load: FrictionLoad, object_mass, poses, scen
         side="right", **scenario_kwargs,
     )  # fmt: skip
     turn = {"right": np.eye(3), "left": poses["left"].rotation.T @ poses["right"].rotation}
+    mass = 0.0 if load.profile == "slip" else object_mass
     out = {}
     for side in SIDES:
         a = angle if side == "right" else -angle
-        mass = 0.0 if load.profile == "slip" else object_mass
         base = paper_scenario(a, side=side, object_mass=mass, name=right.name, **scenario_kwargs)
         if load.profile == "slip":
             # the slide moves the object kinematically (what moves it holds its weight too)
