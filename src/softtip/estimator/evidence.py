@@ -117,13 +117,15 @@ def _decide(win, config: EstimatorConfig, xp, stated=False):
     # excited about two axes: the load shows it, or the user says so (where the load is locked
     # to h, as on a frictionless round skin, it cannot)
     line_now = (excited | stated) & one_axis
-    # h varied along one axis with an eigen-gap beyond the noise: the window's principal axis
-    # is the direction, confirmed or not (one axis of excitation leaves a rolling bias, which
-    # the unconfirmed model error covers)
-    axis_now = one_axis & (win.angle_std <= config.evidence_max_angle_std)
+    # h varied along one axis with an eigen-gap beyond the noise and by at least h_min: the
+    # window's principal axis is the direction, confirmed or not (one axis of excitation
+    # leaves a rolling bias, which the unconfirmed model error covers), and the contact a line
+    # while the window shows it, also where h passes through zero
+    sharp = win.angle_std <= config.evidence_max_angle_std
+    axis_now = one_axis & sharp & (win.h_major >= config.h_min * config.h_min)
     # a confirmed line's direction comes from two-axis windows only (a line's small
     # resistance to rolling about its own edge follows the excitation)
-    resolved = line_now & axis_now
+    resolved = line_now & sharp
     return area_now, line_now, resolved, axis_now, h_ratio, f_ratio
 
 
@@ -391,7 +393,7 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
         own_std = _sample_std(ms.angle_std, ms.h_norm, minor, np.where(confirmed, 0.0, uv), NP)
     del minor
     use_win = confirmed & has_held
-    line = (sig & ~area) | use_win
+    line = ((sig | (axis_now & located)) & ~area) | use_win
     del held, has_held
     state = np.where(area, 3, np.where(line, 2, 1)).astype(np.int8)
     evidence = np.where(line, np.where(confirmed, 2, 1), 0).astype(np.int8)
@@ -590,7 +592,8 @@ class EvidenceTracker:
                 e = (major, minor, c11, c12, c22, root, g11, g12, f_major, f_minor, g22, half)
                 w_angle, w_std, w_noise = window_direction_floats(e, s2, nu)
                 if w_std <= self._max_std:
-                    axis = (w_angle, w_std, w_noise)
+                    if major >= self._hmin2:
+                        axis = (w_angle, w_std, w_noise)
                     if line_now:
                         self._held = (w_angle, math.sqrt(w_std * w_std + self._model_var), w_noise)
         side = 1 if hn > thr else (0 if hn <= SIG_LEAVE * thr else -1)
@@ -616,10 +619,9 @@ class EvidenceTracker:
             ca, sa = cos(angle), sin(angle)
             d = (ca * e1x + sa * e2x, ca * e1y + sa * e2y, ca * e1z + sa * e2z)
             return "line", "confirmed", d, angle, angle_std, noise_std, h_ratio, f_ratio
-        if not self._sig:
+        if not self._sig and axis is None:
             return "point", "", _NAN3, math.nan, math.nan, math.nan, h_ratio, f_ratio
         evidence = "confirmed" if verdict == _LINE else "unconfirmed"
-        dx, dy, dz, angle, a = sample_direction(hx, hy, hz, hn, ex, ey, ez, geo, self._sq)
         if axis is not None:  # the current window resolves the axis
             angle, w_std, noise_std = axis
             ca, sa = cos(angle), sin(angle)
@@ -627,6 +629,7 @@ class EvidenceTracker:
             v = w_std * w_std + (self._model_var if verdict == _LINE else self._unconfirmed_var)
             return "line", evidence, d, angle, sqrt(v), noise_std, h_ratio, f_ratio
         # the sample's own direction, the window's across-axis spread counted as model error
+        dx, dy, dz, angle, a = sample_direction(hx, hy, hz, hn, ex, ey, ez, geo, self._sq)
         v = hn * hn
         v = a * a + (minor / v if v != 0.0 else _div(minor, v)) + (0.0 if verdict == _LINE else self._unconfirmed_var)
         return "line", evidence, (dx, dy, dz), angle, sqrt(v) if v >= 0.0 else math.nan, a, h_ratio, f_ratio
