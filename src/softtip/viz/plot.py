@@ -250,9 +250,9 @@ def plot_line_or_area(rows: Sequence[tuple[str, Estimates]], path=None, *, title
     fig.text(
         0.01, 0.0,
         "h: the tangential spin torque; e1, e2: the tangent frame at the contact point (e1: the sensor's x axis "
-        "projected on the tangent plane, its y axis where x is nearly normal; e2 = n × e1). "
+        "projected on the tangent plane,\nits y axis where x is nearly normal; e2 = n × e1). "
         f"Left: h in that plane from {t_from:g} s on, a line for a strip contact, a blob for an area.",
-        fontsize=8, ha="left", va="bottom", wrap=True,
+        fontsize=8, ha="left", va="bottom",
     )  # fmt: skip
     fig.get_layout_engine().set(rect=(0, 0.035, 1, 0.965))
     if title:
@@ -287,7 +287,9 @@ def plot_direction_chart(
 ):
     """The papers' per-object charts (2006 Figs. 14–17, 19–22): one row per object, ``|h|``
     (N·mm) on the left and the measured direction (degrees) on the right, a trace per angle
-    with its true direction dashed.
+    with its true direction dashed. Each angle has its own colour, line style and marker, and
+    its markers are drawn on every n-th sample (n angles, offset), so that angles measured
+    alike (a thick plate reads every angle as 0°) do not hide one another.
 
     Parameters
     ----------
@@ -311,7 +313,8 @@ def plot_direction_chart(
             (ln,) = ax_h.plot(est.t, est.h_norm * 1e3, ls=LINESTYLES[k % len(LINESTYLES)], lw=1.1)
             angle = np.where(est.state == LINE, np.degrees(est.angle), np.nan)
             marker = MARKERS[k % len(MARKERS)]
-            ax_d.plot(est.t, angle, marker, ms=3.2 - 0.6 * (k % 3), mfc="none", mew=0.7, color=ln.get_color())
+            # each angle's markers on every n-th sample, offset: where angles coincide all show
+            ax_d.plot(est.t, angle, marker, ms=3.5, mfc="none", mew=0.8, color=ln.get_color(), markevery=(k, len(runs)))
             ax_d.axhline(truth, ls="--", lw=0.9, color=ln.get_color(), zorder=3)
             handles.setdefault(lab, Line2D([], [], color=ln.get_color(), ls=LINESTYLES[k % len(LINESTYLES)], marker=marker,
                                            mfc="none", ms=4, label=lab))  # fmt: skip
@@ -321,7 +324,7 @@ def plot_direction_chart(
         ax_d.set_yticks([-90, -45, 0, 45, 90])
         ax_d.set_ylabel(label("direction", "deg"))
     handles["truth"] = Line2D([], [], ls="--", color="0.3", label="truth (dashed, in the angle's colour)")
-    fig.legend(handles=list(handles.values()), loc="outside upper center", ncol=len(handles), frameon=False, title="true angle")
+    fig.legend(handles=list(handles.values()), loc="outside lower center", ncol=len(handles), frameon=False)
     axes[-1, 0].set_xlabel(label("time", "s"))
     axes[-1, 1].set_xlabel(label("time", "s"))
     if title:
@@ -366,6 +369,6 @@ def plot_position_error(
     ax.set_ylabel(label("contact position error", "mm"))
     legend_outside(ax, where="right")
     if title:
-        ax.set_title(title)
+        fig.suptitle(title)
     save_figure(fig, plt, path)
     return fig
