@@ -20,6 +20,6 @@ print(cal.summary())
 f = log.wrench[:, :3]
 fig, ax = plt.subplots(figsize=(6, 3), layout="constrained")
 ax.plot(log.t, (f**2).sum(axis=1) ** 0.5, lw=0.8)
-ax.set_xlabel("time (s)")
-ax.set_ylabel("|f| (N)")
+ax.set_xlabel("time [s]")
+ax.set_ylabel("|f| [N]")
 ax.set_title("Probing log: one bump per press")
