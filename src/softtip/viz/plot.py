@@ -345,7 +345,7 @@ def plot_position_error(
 
     Parameters
     ----------
-    runs : sequence of (label, |f| in N (N,), position error in m (N,))
+    runs : sequence of (label, ``|f|`` in N (N,), position error in m (N,))
     path : str or PathLike, optional
     bound : float, optional
         An error bound to draw, m. The papers judge it above 0.2 kgf (1.96 N), shaded below.
