@@ -142,7 +142,7 @@ def estimate(
     chunk_rows=None,
     **estimator_opts,
 ):
-    from softtip.io.examples import EXAMPLE_PATH
+    from softtip.io.examples import EXAMPLE_ANGLE_DEG, EXAMPLE_PATH
     from softtip.io.tables import Log, read_log
 
     if example == (input_path is not None):
@@ -245,6 +245,7 @@ def estimate(
     _write_estimate_outputs(
         est, columns, log, bag_log, config, fingertip,
         output=output, plot_path=plot_path, plot_units=plot_units, title=f"softtip: {source}",
+        truth_angle=EXAMPLE_ANGLE_DEG if example else None,
         to_bag=to_bag, rerun_spawn=rerun_spawn, rerun_save=rerun_save, ros_distro=ros_distro, frame_id=frame_id,
         metadata=parquet_metadata(fingertip, tip, output_units, log),
     )  # fmt: skip
@@ -431,7 +432,7 @@ def _output_columns(est, extra, output_units: str) -> dict:
 
 def _write_estimate_outputs(
     est, columns, log, bag_log, config, fingertip, *, output, plot_path, plot_units, title, to_bag, rerun_spawn, rerun_save,
-    metadata, ros_distro=None, frame_id=None,
+    metadata, ros_distro=None, frame_id=None, truth_angle=None,
 ) -> None:
     """Write every output of ``estimate``; all appear together, or none (and no temporary file stays)."""
     import io as _io
@@ -451,7 +452,7 @@ def _write_estimate_outputs(
             threshold = config.line_threshold(est.h_std)
             plot_estimates(
                 est, image, units=plot_units, title=title, h_threshold=threshold,
-                fmt=Path(plot_path).suffix.lower().lstrip("."),
+                reference_angles=None if truth_angle is None else [truth_angle], fmt=Path(plot_path).suffix.lower().lstrip("."),
             )  # fmt: skip
             pending.append(AtomicFile(plot_path))
             try:

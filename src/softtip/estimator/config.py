@@ -68,7 +68,7 @@ class EstimatorConfig:
         m; re-latch when, with the latch held and ``|f|`` inside ``latch_force_range``, the
         soft-finger solution lies farther than this from the latched point. ``None``
         (default, the papers'): only on contact loss. A few mm (e.g. 3 mm) is beyond the
-        soft-finger bias of the papers' line contacts at light force (≈ |h| / |f| ≤ 1 mm).
+        soft-finger bias of the papers' line contacts at light force (≈ ``|h| / |f|`` ≤ 1 mm).
     depth : DepthLaw or None
         Skin law of the depth compensation (:mod:`softtip.core.depth`): the fixed law of
         ``depth_mode="law"``, the prior of ``"online"``. ``None`` (default): the
