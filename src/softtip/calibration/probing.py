@@ -122,7 +122,8 @@ steel or glass plate; not foam, rubber or cloth) that you can press it against.
 2. Press 20 to 40 times, each at a different spot of the skin:
    - where: spread the spots evenly over the part that touches things, from the very tip
      out to 60° from it, all the way round (a capsule: only the rounded cap, not lower
-     than 20° above where the cap meets the cylinder);
+     than 20° above where the cap meets the cylinder; an ellipsoid: out to 85°, down to
+     its widest part, which separates its height from its length);
    - how hard: vary it, about half the presses light (1-2 N, 100-200 g on a kitchen
      scale) and half firm (5-8 N), each held for 1-2 s: the spread of forces separates
      the radius from the skin's indentation (presses all at 2-4 N leave the two

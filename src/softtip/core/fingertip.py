@@ -596,7 +596,7 @@ def _looks_like_name(name: str) -> bool:
     return "/" not in name and "\\" not in name
 
 
-def shape_name(table: dict) -> str | None:
+def _shape_name(table: dict) -> str | None:
     """The shape a ``[fingertip]`` table names: its ``shape``, else the shape a key implies
     (``mesh = "…"``: a mesh), else None."""
     shape = table.get("shape")
@@ -615,7 +615,7 @@ def fingertip_from_mapping(data: dict, source: str = "<fingertip>") -> Fingertip
     table = data.get("fingertip")
     if not isinstance(table, dict):
         raise InputError(f"{source}: expected a [fingertip] table")
-    shape = shape_name(table)
+    shape = _shape_name(table)
     cls = SHAPES.get(shape) if isinstance(shape, str) else None
     mount = table.get("mount")
     if mount is not None and not (cls is not None and cls.reads_mount):

@@ -1602,8 +1602,8 @@ def load_mesh_fingertip(path: str | Path) -> MeshFingertip:
     table = read_toml(path, "fingertip").get("fingertip")
     if not isinstance(table, dict):
         raise InputError(f"{path}: expected a [fingertip] table")
-    shape = table.get("shape", "mesh" if "mesh" in table else None)
-    if shape != "mesh":
+    shape = table.get("shape", MeshFingertip.kind if MeshFingertip.implied_by in table else None)
+    if shape != MeshFingertip.kind:
         raise InputError(f"{path}: not a mesh fingertip (shape = {shape!r})")
     return mesh_fingertip_from_table(table, str(path))
 
