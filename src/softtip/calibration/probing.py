@@ -400,11 +400,11 @@ def _sphere_fit(points: NDArray) -> tuple[NDArray, float, float]:
 # the fit
 
 
-def _not_excited(detail: str) -> InputError:
+def _not_excited(detail: str, model: PressModel) -> InputError:
     return InputError(
         f"the presses do not excite enough directions to calibrate the fingertip: {detail}. "
         "Press the fingertip against a flat surface at many points spread over the skin (at least "
-        "4, better 15 or more, covering ±60° around the tip), and during each press let the surface "
+        f"4, better 15 or more, covering {model.coverage}), and during each press let the surface "
         "slide or the finger rock a little so that the friction force turns (by 10° or more)"
     )
 
@@ -503,7 +503,8 @@ def calibrate_fingertip(
         presses.append(keep)
     if len(presses) < 4:
         raise _not_excited(
-            f"{source} has {len(presses)} press(es) with at least 5 samples above {min_force:g} N; expected at least 4"
+            f"{source} has {len(presses)} press(es) with at least 5 samples above {min_force:g} N; expected at least 4",
+            model,
         )
 
     # start values: per press the point m = r × f pins (if the force turns), a sphere through them
@@ -513,7 +514,8 @@ def calibrate_fingertip(
         raise _not_excited(
             f"in {len(located)} of {len(presses)} presses of {source} the force direction turns by more than "
             f"{math.degrees(math.asin(min_spread)):.0f}° (largest turn {math.degrees(math.asin(min(spread.max(), 1.0))):.1f}°); "
-            "expected at least 4"
+            "expected at least 4",
+            model,
         )
     force_var = np.square(noise.force_std)
     points = np.array([_press_point(f_all[presses[k]], m_all[presses[k]], force_var) for k in located])
@@ -522,7 +524,8 @@ def calibrate_fingertip(
         detail = f"±{r0_std * 1e3:.2g} mm on {r0 * 1e3:.3g} mm" if math.isfinite(r0) else "no sphere"
         raise _not_excited(
             f"the contact points of the {len(located)} presses in {source} that locate one lie too close to one spot "
-            f"or one circle to fix a sphere (radius {detail})"
+            f"or one circle to fix a sphere (radius {detail})",
+            model,
         )
 
     normals0 = np.array([_press_normal(f_all[k], m_all[k], c0, r0) for k in presses])
@@ -532,7 +535,7 @@ def calibrate_fingertip(
         presses = [p for p, ok in zip(presses, keep) if ok]
         normals0 = normals0[keep]
         if len(presses) < 4:
-            raise _not_excited(f"{len(presses)} presses of {source} are {model.region}; expected at least 4")
+            raise _not_excited(f"{len(presses)} presses of {source} are {model.region}; expected at least 4", model)
 
     sol = _fit(f_all, m_all, presses, normals0, c0, r0, compliance, noise, model)
     tip = model.tip(sol["parameters"], source)
@@ -704,11 +707,11 @@ def _fit(f_all, m_all, presses, normals0, c0, r0, compliance: bool, noise: Senso
         names = [*model.names, "indentation"][:n_geo]
         vec = np.linalg.eigh(corr)[1][:, 0] if np.all(np.isfinite(corr)) else np.ones(n_geo)
         worst = ", ".join(names[i] for i in np.argsort(-np.abs(vec))[:2])
-        raise _not_excited(f"the fit cannot separate {worst} (condition number {condition:.3g} > {_MAX_CONDITION:.0e})")
+        raise _not_excited(f"the fit cannot separate {worst} (condition number {condition:.3g} > {_MAX_CONDITION:.0e})", model)
     geo, kappa, n = unpack(res.x)
     for name, value in zip(model.names[3:], geo[3:]):
         if not value > 0:
-            raise _not_excited(f"the fitted {name} is {value:.3g} mm")
+            raise _not_excited(f"the fitted {name} is {value:.3g} mm", model)
     parameters, parameters_std = geo * 1e-3, std[:n_shape] * 1e-3
     return {
         "center": parameters[:3],

@@ -383,6 +383,7 @@ class _EllipsoidPress(PressModel):
     is ``c + D² n / |D n| − δ n`` (``D = diag(a, b, c)``)."""
 
     names = ("centre x", "centre y", "centre z", "semi-axis a", "semi-axis b", "semi-axis c")
+    coverage = "±85° around the tip, down to its widest part: within ±60° its centre's height and semi-axis c are nearly one unknown"
 
     def start(self, center: NDArray, radius: float) -> NDArray:
         return np.concatenate((center * 1e3, [radius * 1e3] * 3))

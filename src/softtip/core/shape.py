@@ -138,6 +138,8 @@ class PressModel(abc.ABC):
     names: ClassVar[tuple[str, ...]] = ()
     #: Where presses must be to enter the fit (messages), "" when anywhere on the skin.
     region: ClassVar[str] = ""
+    #: How far around the tip presses must spread to determine the parameters (messages).
+    coverage: ClassVar[str] = "±60° around the tip"
 
     @abc.abstractmethod
     def start(self, center: NDArray, radius: float) -> NDArray:
