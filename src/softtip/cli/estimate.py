@@ -18,9 +18,13 @@ from softtip.cli.options import (
     check_units,
     estimator_options,
     is_bag,
+    log_format_given,
+    log_format_kwargs,
+    log_format_options,
     make_config,
     optional_extra,
     parquet_metadata,
+    print_log_notes,
     progress_bar,
     tare_warnings,
 )  # fmt: skip
@@ -118,6 +122,7 @@ from the bag's /tf.
     "file over 24 MB or a Parquet file over 262144 rows; only for a CSV or Parquet file without --plot, --to-bag, --rerun, "
     "--rerun-save, --payload]",
 )  # fmt: skip
+@log_format_options
 @estimator_options
 def estimate(
     input_path,
@@ -145,6 +150,7 @@ def estimate(
     from softtip.io.examples import EXAMPLE_PATH
     from softtip.io.tables import Log, read_log
 
+    formats = log_format_kwargs(estimator_opts)
     if example == (input_path is not None):
         raise click.UsageError("give either INPUT or --example")
     if example and units not in (None, "si"):
@@ -167,7 +173,7 @@ def estimate(
     if example:
         log = read_log(EXAMPLE_PATH, units="si")
     elif input_path == "-":
-        log = read_log(sys.stdin, units=units)
+        log = read_log(sys.stdin, units=units, **formats)
     elif is_bag(input_path):
         bag = optional_extra("softtip.io.bag", "ros")
         bag_log = bag.read_bag(input_path, topic, allow_partial=allow_partial)
@@ -193,7 +199,7 @@ def estimate(
             raise click.UsageError(f"--chunk-rows: not with {given}; expected a run that writes only the table")
         if chunk_rows is not None and output is None:
             raise click.UsageError("--chunk-rows: needs -o FILE (a piece written to standard output cannot be taken back)")
-        if output is not None and topic is None and not allow_partial and not any(others.values()):
+        if output is not None and topic is None and not allow_partial and not any(others.values()) and not log_format_given(formats):
             rows = chunk_rows or _auto_chunk_rows(input_path)
             if rows and _estimate_in_pieces(
                 input_path, units, rows, fingertip, config, estimator_opts, output=output, output_units=output_units,
@@ -202,9 +208,8 @@ def estimate(
                 return
         size = os.path.getsize(input_path) if os.path.isfile(input_path) else 0
         with progress_bar(size, "reading", unit="B") as bar:
-            log = read_log(input_path, units=units, progress=bar.update)
-    for note in log.warnings:  # repeated stamps, an implausible time scale, a cut last line
-        click.echo(f"softtip: warning: {note}", err=True)
+            log = read_log(input_path, units=units, progress=bar.update, **formats)
+    print_log_notes(log)  # how a foreign file was read; repeated stamps, an implausible time scale, a cut last line
     if topic is not None and bag_log is None:
         raise click.UsageError("--topic applies to bag input only")
     if allow_partial and bag_log is None:
@@ -237,7 +242,7 @@ def estimate(
             est = run_estimate(log.t, log.wrench, fingertip, config)
     except ValueError as exc:  # e.g. a low-pass cutoff above Nyquist for this log's rate
         raise click.UsageError(str(exc)) from None
-    check_units(est, fingertip, config, log.units, log.source)
+    check_units(est, fingertip, config, log)
 
     columns = _output_columns(est, log.extra, output_units)
 

@@ -123,6 +123,9 @@ class Log:
         cells dropped or filled. A command line tool prints them.
     force_unit, moment_unit : str
         The units the wrench columns were in (names of :data:`softtip.core.units.UNITS`).
+    time_suspect : str or None
+        The warning about ``t``'s scale when its unit was not given and another one fits
+        (``t`` in ms read as s): a command line tool stops with it (``--time-units``).
     """
 
     t: NDArray[np.float64]
@@ -136,6 +139,7 @@ class Log:
     notes: tuple[str, ...] = ()
     force_unit: str = "N"
     moment_unit: str = "N*m"
+    time_suspect: str | None = None
 
 
 #: A time stamp from this many seconds on is absolute (after 1973 in Unix time): ``t`` counts from the first.
@@ -207,6 +211,18 @@ def _finish(
         i = int(back[0]) + 1
         raise InputError(f"{source}: {where(i)}: expected the stamps non-decreasing, got {t[i]} ns after {t[i - 1]} ns")
     start = float(t[0]) * tunit.si
+    explicit_time = fmt.time_unit is not None or (cmap is not None and (cmap.from_header["t"] or tunit.name != "s"))
+    if not explicit_time and start >= 1e10 and len(t) > 1:
+        # no date in seconds: the one unit that makes the first stamp a date (Unix time ns, µs or ms)
+        dated = [u for u in ("ms", "us", "ns") if ABSOLUTE_STAMP_S <= float(t[0]) * get_unit(u, "time").si < 1e10]
+        if len(dated) == 1:
+            tunit = get_unit(dated[0], "time")
+            start = float(t[0]) * tunit.si
+            explicit_time = True
+            notes.append(
+                f"{source}: column {names[header.index['t']]!r}: t read in {tunit.label}, the only unit that makes its "
+                f"first stamp a date (give --time-units to say otherwise)"
+            )
     if ABSOLUTE_STAMP_S <= start < 1e10:  # from 1973 to 2286 in Unix time
         if t.dtype.kind in "iu":
             rel = t - t[0]
@@ -227,7 +243,6 @@ def _finish(
     else:
         force_unit, moment_unit = UNIT_SYSTEM_UNITS[units]
         scale = wrench_scale(force_unit, moment_unit)
-    explicit_time = fmt.time_unit is not None or (cmap is not None and (cmap.from_header["t"] or tunit.name != "s"))
     repeated, time_notes = _time_notes(t_s, source, first_line, explicit=explicit_time)
     cut = _cut_last_line(raw, source, len(t_s)) if raw is not None and header.delimiter == "," else None
     return Log(
@@ -242,6 +257,7 @@ def _finish(
         notes=tuple(notes),
         force_unit=force_unit,
         moment_unit=moment_unit,
+        time_suspect=next((n for n in time_notes if "--time-units" in n), None),
     )
 
 
@@ -717,7 +733,10 @@ def _parse_arrow(
     names = header.names
     roles = _roles(index)
     exact = {index[r] for r in ("t", "nanosec") if r in index and (r == "nanosec" or "nanosec" in index)}
-    if header.cmap is not None and header.cmap.units["t"].name == "ns":
+    first_row = bytes(data[start : data.find(b"\n", start) if data.find(b"\n", start) > 0 else end])
+    first_t = _split_line(first_row.decode("utf-8", "replace"), header.delimiter)[index["t"] :][:1]
+    long_int = bool(first_t) and first_t[0].isdigit() and len(first_t[0]) >= 16
+    if (header.cmap is not None and header.cmap.units["t"].name == "ns") or long_int:
         exact.add(index["t"])  # integer ns stamps: int64, exact beyond 2**53
     types = {
         name: (pa.int64() if j in exact else pa.float64()) if j in index.values() else pa.string()
