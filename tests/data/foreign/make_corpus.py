@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from softtip.core.units import KGF, KGF_MM, LBF, INCH
+from softtip.core.units import INCH, KGF, KGF_MM, LBF
 from softtip.io.examples import load_example
 
 HERE = Path(__file__).parent
