@@ -657,13 +657,23 @@ def test_plausible_time_scale_gives_no_warning(tmp_path: Path, rate: float) -> N
     ],
 )
 def test_time_in_ms_us_or_ns_is_reported(tmp_path: Path, scale: float, rate: float, guess: str) -> None:
-    t = np.arange(40) / rate * scale + (1.7e18 if scale == 1e9 else 0.0)  # epoch ns
+    t = np.arange(40) / rate * scale
     path = _write(tmp_path, _log_text(t))
     (note,) = read_log(path).warnings
     assert note.startswith(f"{path}: column 't': median step ")
     assert "implausible for a force/torque log (expected 2 Hz to 100 kHz with t in seconds)" in note
     assert guess in note, note
     assert note.endswith("Give t in seconds: the tare duration and every time window are in seconds")
+
+
+def test_epoch_stamps_in_t_are_read_in_the_unit_that_makes_them_a_date(tmp_path: Path) -> None:
+    """Integer Unix-time ns in a plain ``t`` column: exact int64, t from the first, the stamps kept."""
+    ns = 1_700_000_000_123_456_789 + np.arange(40) * 142_857
+    rows = "".join(f"{v},1,2,3,4,5,6\n" for v in ns.tolist())
+    log = read_log(_write(tmp_path, f"{HEADER}\n{rows}"))
+    np.testing.assert_array_equal(log.t, (ns - ns[0]) / 1e9)
+    assert log.extra["stamp_ns"] == [str(v) for v in ns.tolist()]
+    assert not log.warnings and "t read in ns, the only unit that makes its first stamp a date" in log.notes[0]
 
 
 def test_log_cut_inside_its_last_number_is_reported(tmp_path: Path) -> None:

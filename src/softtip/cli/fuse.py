@@ -16,7 +16,7 @@ from softtip.cli.options import (
     tare_warnings,
 )
 from softtip.cli.types import Length, Number, option
-from softtip.core.units import UNIT_SYSTEMS, wrench_to_si
+from softtip.core.units import UNIT_SYSTEMS, seconds_from_ns, wrench_to_si
 from softtip.errors import InputError
 from softtip.estimator.results import EstimatorWarning
 from softtip.ros.options import bag_output_options, output_frame_id
@@ -139,7 +139,7 @@ def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, 
             if not b.frame_id:
                 raise InputError(f"{path}: topic {b.topic!r} has an empty header.frame_id; cannot place it with /tf")
             pose = tree.poses(frame, b.frame_id, b.stamps_ns, origin_ns=origin)
-            logs.append((b.topic, (b.stamps_ns - origin) * 1e-9, wrench_to_si(b.wrench, units), pose))
+            logs.append((b.topic, seconds_from_ns(b.stamps_ns, origin), wrench_to_si(b.wrench, units), pose))
     elif len(inputs) == 2:
         if topics is not None or frame is not None:
             raise click.UsageError("--topics and --frame apply to a bag input")

@@ -62,7 +62,7 @@ from typing import Any, BinaryIO, TextIO
 import numpy as np
 from numpy.typing import NDArray
 
-from softtip.core.units import UNIT_SYSTEM_UNITS, UNIT_SYSTEMS, get_unit, wrench_scale, wrench_to_si
+from softtip.core.units import UNIT_SYSTEM_UNITS, UNIT_SYSTEMS, get_unit, seconds_from_ns, wrench_scale, wrench_to_si
 from softtip.errors import InputError
 from softtip.io.formats import ROLES, ColumnError, ColumnMap, LogFormat, parse_column_spec, resolve_columns
 
@@ -146,6 +146,24 @@ class Log:
 ABSOLUTE_STAMP_S = 1e8
 
 
+def _to_seconds(t: NDArray[np.float64], si: float) -> NDArray[np.float64]:
+    """``t`` in a unit of ``si`` seconds as seconds: divided by 1000, 1e6 or 1e9 (exact, so correctly
+    rounded: ``3900`` ms gives the float ``3.9``, as the text ``"3.9"`` does), not multiplied by 1e-3."""
+    if si == 1.0:
+        return t
+    per_second = round(1.0 / si)
+    return t / float(per_second) if abs(per_second * si - 1.0) < 1e-12 else t * si
+
+
+def _to_seconds_like(wrench: NDArray[np.float64], scale: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Each column times its ``scale``, dividing by an exact power of ten where the scale is one's
+    inverse (N·mm: ``/ 1000``, correctly rounded), multiplying otherwise."""
+    out = np.empty_like(wrench)
+    for k, si in enumerate(scale):
+        out[:, k] = _to_seconds(wrench[:, k], float(si))
+    return out
+
+
 def _units_label(force: str, moment: str) -> str:
     """``"si"``/``"kgf-mm"`` for the presets, else ``"N, N*mm"``."""
     for name, pair in UNIT_SYSTEM_UNITS.items():
@@ -204,7 +222,7 @@ def _finish(
             raise InputError(f"{source}: a wrench column has no value at all; expected at least one number in each")
     # time: unit and origin
     tunit = cmap.units["t"] if cmap is not None else get_unit("s", "time")
-    if "nanosec" in header.index:
+    if "nanosec" in header.index or header.t_in_ns:
         tunit = get_unit("ns", "time")
     back = np.flatnonzero(np.diff(t) < 0)
     if len(back):  # only a stamp split in seconds and nanoseconds gets here
@@ -225,20 +243,22 @@ def _finish(
             )
     if ABSOLUTE_STAMP_S <= start < 1e10:  # from 1973 to 2286 in Unix time
         if t.dtype.kind in "iu":
-            rel = t - t[0]
-            t_s = rel.astype(np.float64) * tunit.si
-            stamps = (t.astype(object) * round(tunit.si * 1e9) if tunit.si >= 1e-9 else t).tolist()
+            ns = t * round(tunit.si * 1e9)
+            t_s = seconds_from_ns(ns)
+            stamps = ns.tolist()
         else:
-            t_s = (t - t[0]) * tunit.si
+            t_s = _to_seconds(t - t[0], tunit.si)
             stamps = np.round(t * (tunit.si * 1e9)).astype(np.int64).tolist()
         extra = {**extra, "stamp_ns": [str(v) for v in stamps]}
         notes.append(f"{source}: absolute stamps ({tunit.label}): t counts from the first, {stamps[0]} ns; the stamps go along as column stamp_ns")
     else:
-        t_s = t.astype(np.float64) * tunit.si if tunit.si != 1.0 or t.dtype.kind != "f" else t
+        t_s = _to_seconds(t.astype(np.float64), tunit.si)
     t_s = np.ascontiguousarray(t_s, dtype=np.float64)
     # wrench units
     if cmap is not None:
         scale = np.array([cmap.units[r].si for r in ROLES[1:]])
+        wrench = _to_seconds_like(np.asarray(wrench, dtype=np.float64), scale)
+        scale = np.ones(6)
         force_unit, moment_unit = cmap.units["fx"].name, cmap.units["mx"].name
     else:
         force_unit, moment_unit = UNIT_SYSTEM_UNITS[units]
@@ -488,6 +508,7 @@ class _Header:
     cmap: ColumnMap | None = None  # the roles' columns and units; None: not every role found
     preamble: int = 0  # lines skipped before the header that were neither blank nor comments
     headerless: bool = False
+    t_in_ns: bool = False  # set by a parser that read absolute decimal seconds exactly, as int64 ns
 
     @property
     def index(self) -> dict[str, int]:
@@ -661,6 +682,17 @@ def _parse_with_header(
             gc.enable()
 
 
+def _ns_of(cell: str) -> int | None:
+    """A decimal number of seconds as integer ns when that is exact (at most 9 decimals), else None."""
+    from decimal import Decimal, InvalidOperation
+
+    try:
+        ns = Decimal(cell.strip()).scaleb(9)
+    except InvalidOperation:
+        return None
+    return int(ns) if ns.is_finite() and ns == ns.to_integral_value() and 0 <= ns < 2**63 else None
+
+
 def _swallowed(cell: str, delimiter: str, ncol: int) -> int:
     """How many of the lines inside a cell that spans lines look like data rows (a stray quote)."""
     return sum(1 for ln in re.split(r"\r\n|\r|\n", cell)[1:] if ln.count(delimiter) >= ncol - 1 >= 1)
@@ -738,10 +770,15 @@ def _parse_arrow(
     long_int = bool(first_t) and first_t[0].isdigit() and len(first_t[0]) >= 16
     if (header.cmap is not None and header.cmap.units["t"].name == "ns") or long_int:
         exact.add(index["t"])  # integer ns stamps: int64, exact beyond 2**53
+    decimal_t = bool(first_t) and _exact_seconds(first_t[0], header) and "nanosec" not in index
+    if decimal_t:  # absolute seconds with decimals (PlotJuggler, bag converters): exact, as ns
+        exact.discard(index["t"])
     types = {
         name: (pa.int64() if j in exact else pa.float64()) if j in index.values() else pa.string()
         for j, name in enumerate(names)
     }
+    if decimal_t:
+        types[names[index["t"]]] = pa.decimal128(19, 9)
     body = memoryview(data)[start:end]
     try:
         reader = pacsv.open_csv(  # block by block, so that progress can be shown
@@ -782,7 +819,14 @@ def _parse_arrow(
     if quoted and bytes(body).count(b"\n") + (not bytes(body).endswith(b"\n")) != n:
         return None  # a record spans lines: the text parser tells a note from a stray quote
     # filled in place: fresh pages cost more than the copy itself, so no temporaries
-    if index["t"] in exact and "nanosec" not in index:
+    if decimal_t:
+        if wanted[0].null_count:
+            return None
+        # a decimal128's 16 bytes are its unscaled integer, little-endian: here the stamp in ns (< 2**63)
+        t = np.concatenate([np.frombuffer(c.buffers()[1], dtype=np.int64)[2 * c.offset : 2 * (c.offset + len(c)) : 2]
+                            for c in wanted[0].chunks]) if wanted[0].num_chunks else np.zeros(0, dtype=np.int64)
+        header.t_in_ns = True
+    elif index["t"] in exact and "nanosec" not in index:
         t = wanted[0].to_numpy(zero_copy_only=False).astype(np.float64) if wanted[0].null_count else np.array(
             wanted[0].to_numpy(), dtype=np.int64
         )
@@ -1067,6 +1111,20 @@ def _near_misses(missing: list[str], names: list[str]) -> list[str]:
     return hints
 
 
+_DECIMAL_SECONDS = re.compile(r"^\s*\d{9,10}\.\d{1,9}\s*$")
+
+
+def _exact_seconds(cell: str, header: _Header) -> bool:
+    """Whether a first ``t`` cell is an absolute stamp in seconds with decimals (read exactly, as ns)."""
+    cmap = header.cmap
+    return (
+        header.decimal == "."
+        and bool(_DECIMAL_SECONDS.match(cell))
+        and (cmap is None or cmap.units["t"].name == "s")
+        and ABSOLUTE_STAMP_S <= float(cell) < 1e10
+    )
+
+
 def _roles(index: Mapping[str, int]) -> list[str]:
     """The roles of ``index`` in block order: ``t``, ``fx`` … ``mz``, then ``nanosec`` if there."""
     return [r for r in (*ROLES, "nanosec") if r in index]
@@ -1169,6 +1227,13 @@ def _parse_careful(
     base = header.data_base + start[1]
     values: list[list[float]] = []
     big_t: list[int | float] = []  # t cells as Python numbers (ints beyond 2**53 kept exact)
+    exact_ns: list[int | None] | None = None  # absolute decimal seconds as ns, as the pyarrow path reads them
+    if start[1] == 0 and "nanosec" not in index:
+        first = header.lines.readline()
+        header.lines.seek(start[0])
+        cells = _split_line(first, header.delimiter)
+        if len(cells) == ncol and _exact_seconds(cells[index["t"]], header):
+            exact_ns = []
     extra: dict[str, list[str]] = {names[j]: [] for j in extra_idx}
     prev_end = 0
     first_blank: int | None = None
@@ -1236,6 +1301,8 @@ def _parse_careful(
                         pass
             sample[roles.index(name)] = value
         big_t.append(sample[0])
+        if exact_ns is not None:
+            exact_ns.append(_ns_of(row[index["t"]]))
         values.append(sample)
         for j in extra_idx:
             extra[names[j]].append(row[j])
@@ -1248,6 +1315,9 @@ def _parse_careful(
     t = _combine_time(data, roles)
     if any(isinstance(v, int) for v in big_t) and all(isinstance(v, int) for v in big_t):
         t = np.array(big_t, dtype=np.int64)
+    if exact_ns and all(v is not None for v in exact_ns):
+        t = np.array(exact_ns, dtype=np.int64)
+        header.t_in_ns = True
     return t, np.ascontiguousarray(data[:, 1:7]), extra
 
 
@@ -1793,6 +1863,9 @@ class LogBlocks:
                 for i, col in enumerate(cols[1:]):
                     wrench[:, i] = col.to_numpy()
                 extra = {names[j]: np.asarray(batch.column(j).to_pylist(), dtype=str) for j in extra_idx}
+                if any(np.char.find(col, "\n").max(initial=-1) >= 0 or np.char.find(col, "\r").max(initial=-1) >= 0
+                       for col in extra.values()):  # fmt: skip
+                    raise NotStreamable("a cell spans lines: read_log tells a note from a stray quote")
                 if self.progress is not None:
                     self.progress(batch.num_rows)
                 yield t, wrench, extra

@@ -62,7 +62,7 @@ def main() -> None:
         [[str(v // 1_000_000_000) for v in ns.tolist()], [str(v % 1_000_000_000) for v in ns.tolist()], ["ft_sensor"] * n, *f.T, *m.T]
     )
     files["plotjuggler.csv"] = "__time,/ft/wrench/force/x,/ft/wrench/force/y,/ft/wrench/force/z,/ft/wrench/torque/x,/ft/wrench/torque/y,/ft/wrench/torque/z\n" + _rows(
-        [[f"{v / 1e9:.9f}" for v in ns.tolist()], *f.T, *m.T]
+        [[f"{v // 10**9}.{v % 10**9:09d}" for v in ns.tolist()], *f.T, *m.T]
     )
     files["tab_separated.tsv"] = "t\tfx\tfy\tfz\tmx\tmy\tmz\n" + _rows(si_cols, "\t")
     files["semicolon_decimal_comma.csv"] = "t;fx;fy;fz;mx;my;mz\n" + _rows(si_cols, ";", comma=True)
