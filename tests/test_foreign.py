@@ -253,3 +253,96 @@ def test_inf_cell_exits_2_every_time(tmp_path: Path, chunk: list[str]) -> None:
         assert done.returncode == 2, done.stderr
         assert f"{src}:102: column 'fy': expected a finite number, got 'inf'" in done.stderr
         assert "terminate called" not in done.stderr and not (tmp_path / "out.csv").exists()
+
+
+# --------------------------------------------------------------------------------------
+# any mix of dialect, units, delimiter, decimal mark and compression reads back the same
+
+
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+from softtip.core.units import UNITS, find_unit  # noqa: E402
+
+_HEADERS = {
+    "softtip": ("t", "fx", "fy", "fz", "mx", "my", "mz"),
+    "ATI": ("Time", "Fx", "Fy", "Fz", "Tx", "Ty", "Tz"),
+    "upper": ("T", "FX", "FY", "FZ", "MX", "MY", "MZ"),
+    "PlotJuggler": ("__time", *(f"/ft/wrench/{q}/{a}" for q in ("force", "torque") for a in "xyz")),
+    "bagpy": ("Time", *(f"wrench.{q}.{a}" for q in ("force", "torque") for a in "xyz")),
+}
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    n=st.integers(1, 30),
+    seed=st.integers(0, 2**32 - 1),
+    style=st.sampled_from(sorted(_HEADERS)),
+    delimiter=st.sampled_from([",", "\t", ";"]),
+    comma=st.booleans(),
+    force=st.sampled_from([u.name for u in UNITS if u.quantity == "force"]),
+    moment=st.sampled_from([u.name for u in UNITS if u.quantity == "moment"]),
+    in_header=st.booleans(),
+    compression=st.sampled_from(["", "gzip", "bz2", "xz", "zstd"]),
+    preamble=st.integers(0, 3),
+)
+def test_any_dialect_reads_back(tmp_path_factory, n, seed, style, delimiter, comma, force, moment, in_header, compression, preamble):
+    import bz2
+    import gzip
+    import lzma
+
+    import pyarrow as pa
+
+    rng = np.random.default_rng(seed)
+    t = np.cumsum(rng.uniform(1e-3, 2e-2, n))
+    w = rng.normal(size=(n, 6)) * [1, 1, 5, 1e-2, 1e-2, 1e-3]
+    fu, mu = find_unit(force, "force"), find_unit(moment, "moment")
+    in_units = w / np.array([fu.si] * 3 + [mu.si] * 3)
+    names = list(_HEADERS[style])
+    if in_header:
+        names = [names[0]] + [f"{c} ({fu.label})" for c in names[1:4]] + [f"{c} [{mu.name.replace('*', '-')}]" for c in names[4:]]
+    decimal_comma = comma and delimiter != ","
+    lines = ["# exported by something", "Serial: FT0001", "Rate: 1 kHz"][:preamble]
+    lines.append(delimiter.join(names))
+    for ti, row in zip(t, in_units):
+        cells = [repr(float(ti)), *(repr(float(v)) for v in row)]
+        lines.append(delimiter.join(c.replace(".", ",") if decimal_comma else c for c in cells))
+    data = ("\n".join(lines) + "\n").encode()
+    data = {"": lambda d: d, "gzip": gzip.compress, "bz2": bz2.compress, "xz": lzma.compress,
+            "zstd": lambda d: pa.compress(d, codec="zstd", asbytes=True)}[compression](data)  # fmt: skip
+    path = tmp_path_factory.mktemp("dialect") / "log.csv"
+    path.write_bytes(data)
+    kwargs = {} if in_header else {"force_units": force, "moment_units": moment}
+    log = read_log(path, **kwargs)
+    np.testing.assert_array_equal(log.t, t)
+    np.testing.assert_allclose(log.wrench, w, rtol=1e-12, atol=0)
+
+
+def test_the_input_doc_lists_every_registered_source_and_unit() -> None:
+    """docs/input_formats.md (the README's Input section) names what the registries hold."""
+    from softtip.io.formats import ROS2_CSV, SOURCES
+
+    doc = (Path(__file__).parents[1] / "docs" / "input_formats.md").read_text()
+    for source in (*SOURCES, ROS2_CSV):
+        assert source.name in doc, source.name
+    for unit in UNITS:
+        assert f"`{unit.name}`" in doc, unit.name
+
+
+def test_cli_columns_skip_rows_and_headerless(tmp_path: Path, reference_estimate) -> None:
+    lines = REFERENCE.read_text().splitlines()
+    odd = tmp_path / "odd.csv"
+    odd.write_text("\n".join(["exported 2026-11-27", "zeit;a;b;c;d;e;f", *(ln.replace(",", ";") for ln in lines[1:])]) + "\n")
+    out = tmp_path / "e.csv"
+    done = run("estimate", odd, "--skip-rows", "1", "--columns", "t=zeit,fx=a,fy=b,fz=c,mx=d,my=e,mz=f", "-o", out)
+    assert done.returncode == 0, done.stderr
+    assert "read as --columns: t ← 'zeit' (s, not in the header)" in done.stderr
+    _same_estimates(_table(out), reference_estimate)
+    bare = tmp_path / "bare.csv"
+    bare.write_text("\n".join(lines[1:]) + "\n")
+    done = run("estimate", bare, "-o", out)
+    assert done.returncode == 2 and "--columns t=1,fx=2,fy=3,fz=4,mx=5,my=6,mz=7" in done.stderr
+    done = run("estimate", odd, "--columns", "t=nope", "-o", out)
+    assert done.returncode == 2 and "--columns t=nope: no column 'nope' in the header" in done.stderr
+    done = run("estimate", bare, "--moment-units", "furlong", "-o", out)
+    assert done.returncode == 2 and "expected a moment unit: N*m, N*mm, kgf*mm, lbf*in" in done.stderr
