@@ -6,8 +6,8 @@ import sys
 
 import click
 
-from softtip.cli.options import log_format_kwargs, log_format_options
-from softtip.cli.types import Number, option
+from softtip.cli.options import log_format_kwargs, log_format_options, sensor_noise
+from softtip.cli.types import Length, Number, option
 from softtip.core.noise import NANO17
 from softtip.core.units import UNIT_SYSTEMS
 from softtip.errors import InputError
@@ -124,18 +124,23 @@ capsule's offset of its axis from the sensor's z axis is its axis_offset.
 @option("--rotation", is_flag=True, help="--shape mesh: fit a small rotation as well as the shift (6 DOF).")
 @option("--force-noise", type=click.FloatRange(min=0.0, min_open=True), default=NANO17.force_std[0], show_default=True, metavar="N", help="Per-axis standard deviation of the sensor's force noise, N (Nano17-class default).")
 @option("--moment-noise", type=click.FloatRange(min=0.0, min_open=True), default=NANO17.moment_std[0] * 1e3, show_default=True, metavar="N·mm", help="Per-axis standard deviation of the sensor's moment noise, N·mm.")
+@option("--sensor", type=click.Choice(["nano17", "nano25", "mini40"]), help="The sensor's noise preset for --force-noise and --moment-noise where they are not given. [default: nano17]")
+@option(
+    "--skin-thickness", type=Length("mm", 0.0, min_open=True), metavar="LENGTH",
+    help="Thickness of the fingertip's soft skin (5mm; a bare number is in mm), written into the fingertip file: "
+    "estimate's depth compensation needs it and is off for a file without it.",
+)  # fmt: skip
 @log_format_options
 @click.pass_context
 def calibrate(
     ctx, input_path, shape, output, units, tare_duration, contact_threshold, min_force, rigid, force_noise, moment_noise,
-    example, guide, mesh_path, mesh_units, rotation, **log_format,
+    example, guide, mesh_path, mesh_units, rotation, skin_thickness=None, sensor=None, **log_format,
 ):
     from softtip.calibration.probing import (
         PROBING_GUIDE,
         calibrate_fingertip,
         write_fingertip_toml,
     )
-    from softtip.core.noise import SensorNoise
 
     formats = log_format_kwargs(log_format)
     if guide:
@@ -174,8 +179,18 @@ def calibrate(
         cal = calibrate_fingertip(
             log.t, log.wrench, shape, tare_duration=tare_duration, contact_threshold=contact_threshold,
             min_force=min_force, compliance=not rigid, source=log.source,
-            noise=SensorNoise((force_noise,) * 3, (moment_noise * 1e-3,) * 3),
+            noise=sensor_noise(sensor, force_noise, moment_noise),
         )  # fmt: skip
+        if skin_thickness is not None:
+            from dataclasses import replace
+
+            cal = replace(cal, tip=replace(cal.tip, skin_thickness=skin_thickness))
+        else:
+            click.echo(
+                "softtip: the fingertip file has no skin_thickness, so estimate's depth compensation (on for the "
+                "murakami2006 preset) stays off for it; give --skin-thickness (the soft skin's thickness) to turn it on",
+                err=True,
+            )
         report = cal.summary()
         if output is not None:
             write_fingertip_toml(cal, output, source=log.source)

@@ -168,6 +168,13 @@ def estimate(
         check_viewer()
     fingertip = load_fingertip(tip)
     config = make_config(estimator_opts, tip=fingertip)
+    if (os.path.isfile(tip) and getattr(fingertip, "skin_thickness", None) is None and not quiet
+            and estimator_opts.get("depth_compensation") is None and estimator_opts.get("contact_point") == "latch"):  # fmt: skip
+        click.echo(
+            f"softtip: {tip}: no skin_thickness, so the depth compensation is off (add skin_thickness = <m> under "
+            "[fingertip], e.g. from calibrate --skin-thickness, to turn it on)",
+            err=True,
+        )
 
     bag_log = None
     if example:

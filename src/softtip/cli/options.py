@@ -175,6 +175,12 @@ _ESTIMATOR_OPTIONS = [
         help="Per-axis standard deviation of the sensor's moment noise, N·mm.",
     ),
     option(
+        "--sensor",
+        type=click.Choice(["nano17", "nano25", "mini40"]),
+        help="The sensor's noise preset (ATI Nano17, Nano25, Mini40 class; per axis, fz apart) for --force-noise and "
+        "--moment-noise where they are not given. [default: nano17]",
+    ),
+    option(
         "--noise-from-tare",
         is_flag=True,
         help="Measure the noise model from the tare's samples (each axis's standard deviation) instead of "
@@ -334,6 +340,30 @@ def print_log_notes(log) -> None:
         click.echo(f"softtip: warning: {note}", err=True)
 
 
+def sensor_noise(sensor: str | None, force_noise: float, moment_noise_nmm: float) -> SensorNoise:
+    """The noise model of ``--sensor`` and ``--force-noise`` (N) / ``--moment-noise`` (N·mm): an option given on
+    the command line wins for its quantity, the preset (per axis) gives the rest."""
+    from softtip.core.noise import SENSOR_CLASSES
+
+    explicit = {"force_noise": True, "moment_noise": True}
+    ctx = click.get_current_context(silent=True)
+    if ctx is not None:
+        for name in explicit:
+            try:
+                source = ctx.get_parameter_source(name)
+            except KeyError:
+                continue
+            explicit[name] = source is not None and source.name not in ("DEFAULT", "DEFAULT_MAP")
+    given = SensorNoise((force_noise,) * 3, (moment_noise_nmm * 1e-3,) * 3)
+    if sensor is None:
+        return given
+    preset = SENSOR_CLASSES[{"nano17": "Nano17", "nano25": "Nano25", "mini40": "Mini40"}[sensor]]
+    return SensorNoise(
+        given.force_std if explicit["force_noise"] else preset.force_std,
+        given.moment_std if explicit["moment_noise"] else preset.moment_std,
+    )
+
+
 def estimator_options(f):
     """The pipeline settings shared by ``estimate`` and ``stream``."""
     for decorator in reversed(_ESTIMATOR_OPTIONS):
@@ -474,7 +504,7 @@ def make_config(opts: dict, sample_rate: float | None = None, tip: Fingertip | N
             contact_point=opts["contact_point"],
             contact_threshold=opts["contact_threshold"],
             latch_force_range=opts["latch_window"],
-            noise=SensorNoise((opts["force_noise"],) * 3, (opts["moment_noise"] * 1e-3,) * 3),
+            noise=sensor_noise(opts.get("sensor"), opts["force_noise"], opts["moment_noise"]),
             h_min=opts["h_min"] * 1e-3,
             lowpass_hz=opts["lowpass"],
             sample_rate=sample_rate,
