@@ -346,3 +346,17 @@ def test_cli_columns_skip_rows_and_headerless(tmp_path: Path, reference_estimate
     assert done.returncode == 2 and "--columns t=nope: no column 'nope' in the header" in done.stderr
     done = run("estimate", bare, "--moment-units", "furlong", "-o", out)
     assert done.returncode == 2 and "expected a moment unit: N*m, N*mm, kgf*mm, lbf*in" in done.stderr
+
+
+def test_piecewise_runs_refuse_and_count_stamps_as_the_one_shot_run(tmp_path: Path) -> None:
+    """--chunk-rows: wrong units stop by the noise too, ms stamps stop, absolute stamps count from the first."""
+    out = tmp_path / "p.csv"
+    done = run("estimate", REFERENCE, "--units", "kgf-mm", "--chunk-rows", "50", "-o", out)
+    assert done.returncode == 2 and "forces in N with moments in N·m (the default" in done.stderr and not out.exists()
+    done = run("estimate", DATA / "t_in_ms.csv", "--chunk-rows", "50", "-o", out)
+    assert done.returncode == 2 and "(--time-units ms)" in done.stderr and not out.exists()
+    done = run("estimate", DATA / "t_absolute_ns.csv", "--chunk-rows", "50", "-o", out)
+    assert done.returncode == 0, done.stderr
+    one_shot = tmp_path / "o.csv"
+    assert run("estimate", DATA / "t_absolute_ns.csv", "-o", one_shot).returncode == 0
+    assert out.read_bytes() == one_shot.read_bytes()

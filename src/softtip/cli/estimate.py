@@ -393,18 +393,37 @@ def _estimate_in_pieces(
     with progress_bar(total, "estimating") as bar:  # rows estimated and written
         blocks = iter_log(input_path, units, rows=min(rows, 1 << 16))
 
+        first_wrench = []
+
         def checked():
             first = True
             for block in blocks:
                 if first:
                     check_lowpass(estimator_opts["lowpass"], block[0])
+                    first_wrench.append(block[1])
                     first = False
                 yield block
+
+        def noise_fits(est) -> None:
+            """The units check's noise half on the first piece (the lever's is voted over all); a
+            doubt goes to the one-shot run, which words it with both halves."""
+            from softtip.cli.options import quiet_samples
+            from softtip.core.lever import check_wrench_units
+            from softtip.core.units import UNIT_SYSTEM_UNITS
+
+            force_unit, moment_unit = UNIT_SYSTEM_UNITS[blocks.units or "si"]
+            try:
+                check_wrench_units(np.zeros((0, 6)), fingertip, force_unit=force_unit, moment_unit=moment_unit,
+                                   quiet=quiet_samples(est, first_wrench[0]), noise=config.noise)  # fmt: skip
+            except InputError:
+                raise NotStreamable("wrong units: the one-shot run says so") from None
 
         def run(out) -> None:
             writer = TableWriter(out, parquet=parquet, metadata=parquet_metadata(fingertip, tip, output_units, blocks))
             try:
-                for est, extra in estimate_pieces(checked(), fingertip, config, rows):
+                for k, (est, extra) in enumerate(estimate_pieces(checked(), fingertip, config, rows)):
+                    if k == 0:
+                        noise_fits(est)
                     vote.add(lever_distances(est.wrench[~est.taring], max(0.1, config.contact_threshold)))
                     columns = _output_columns(est, extra, output_units)
                     writer.write(columns)

@@ -1776,6 +1776,9 @@ class LogBlocks:
                 self._repeat_t = float(t[same[0]])
             self.repeated += len(same)
             if self._first_t is None:
+                if not self.parquet and (t[0] >= ABSOLUTE_STAMP_S or _time_notes(t, self.source, None)[1] and any(
+                        "--time-units" in note for note in _time_notes(t, self.source, None)[1])):  # fmt: skip
+                    raise NotStreamable("absolute stamps or a time unit to guess: read_log counts or refuses them")
                 self._first_t = t
             self._last_t = float(t[-1])
             self.n += len(t)
