@@ -72,3 +72,21 @@ def test_the_package_is_typed() -> None:
     import softtip
 
     assert (Path(softtip.__file__).parent / "py.typed").exists()
+
+
+def test_estimates_as_arrow_and_pandas() -> None:
+    from softtip.io.frames import to_arrow, to_pandas
+
+    log = load_example()
+    est = estimate(log.t, log.wrench)
+    table = to_arrow(est)
+    assert table.column_names == list(est.columns())
+    assert table.column("state").to_pylist() == list(est.state_names)
+    assert table.num_rows == len(log.t)
+    try:
+        import pandas  # noqa: F401
+    except ImportError:
+        with pytest.raises(ImportError, match="pip install pandas"):
+            to_pandas(est)
+    else:
+        assert list(to_pandas(est)["state"]) == list(est.state_names)
