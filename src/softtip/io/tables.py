@@ -359,6 +359,11 @@ def read_log(
         raise InputError(f"{source}: unknown units {units!r}; expected one of: {', '.join(UNIT_SYSTEMS)}")
     fmt = _log_format(source, units, columns, force_units, moment_units, time_units, missing, skip_rows)
     if not hasattr(path, "read") and _is_parquet(path):
+        if not fmt.plain or (force_units or moment_units):
+            raise InputError(
+                f"{source}: --columns, --force-units, --moment-units, --time-units, --missing and --skip-rows apply to "
+                "CSV logs; expected a Parquet log with softtip's columns (and its softtip.units metadata)"
+            )
         return _read_parquet(path, source, units)  # type: ignore[arg-type]
     data = _read_data(path, source)
     if isinstance(data, bytes):
@@ -564,7 +569,7 @@ def _read_header(text: str, source: str, fmt: LogFormat | None = None) -> _Heade
             continue
         if not stripped:
             continue
-        if stripped.startswith("#") and skip is None:
+        if stripped.startswith("#"):
             comments.append((lineno, stripped))
             continue
         break
