@@ -22,7 +22,7 @@ def _read(input_path: str, units: str, **formats):
     from softtip.cli.options import print_log_notes
     from softtip.io.tables import read_log
 
-    log = read_log(sys.stdin if input_path == "-" else input_path, units=units, **formats)
+    log = read_log(getattr(sys.stdin, "buffer", sys.stdin) if input_path == "-" else input_path, units=units, **formats)
     print_log_notes(log)
     return log
 

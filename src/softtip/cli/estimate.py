@@ -180,7 +180,7 @@ def estimate(
     if example:
         log = read_log(EXAMPLE_PATH, units="si")
     elif input_path == "-":
-        log = read_log(sys.stdin, units=units, **formats)
+        log = read_log(getattr(sys.stdin, "buffer", sys.stdin), units=units, **formats)  # bytes: compressed input too
     elif is_bag(input_path):
         bag = optional_extra("softtip.io.bag", "ros")
         bag_log = bag.read_bag(input_path, topic, allow_partial=allow_partial)
