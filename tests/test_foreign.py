@@ -373,3 +373,42 @@ def test_csv_options_on_a_parquet_log_are_refused(tmp_path: Path) -> None:
     with pytest.raises(InputError, match="apply to CSV logs"):
         read_log(path, missing="drop")
     assert len(read_log(path).t) == len(ref.t)
+
+
+_SMALL = {name: "\n".join((DATA / name).read_text().splitlines()[:14]) + "\n" for name in (
+    "ati_ms_n_nmm.csv", "ros2_topic_echo.csv", "plotjuggler.csv", "semicolon_decimal_comma.csv", "rostopic_echo_p.csv",
+    "upper_case_preamble.csv",
+)}  # fmt: skip
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    name=st.sampled_from(sorted(_SMALL)),
+    edits=st.lists(
+        st.tuples(st.sampled_from(["delete", "insert", "replace"]), st.integers(0, 10_000),
+                  st.sampled_from(list(',;\t"\n\r -.e9x#') + ["nan", "", "(N)", "1e400"])),  # fmt: skip
+        min_size=1, max_size=4,
+    ),
+    missing=st.sampled_from(["fail", "drop", "interpolate"]),
+)
+def test_damaged_foreign_logs_read_or_fail_cleanly(tmp_path_factory, name: str, edits: list, missing: str) -> None:
+    """Whatever the damage: a Log with finite values and t non-decreasing, or an InputError naming the file."""
+    text = _SMALL[name]
+    for op, pos, s in edits:
+        pos %= len(text) + 1
+        if op == "delete":
+            text = text[:pos] + text[pos + 1 :]
+        elif op == "insert":
+            text = text[:pos] + s + text[pos:]
+        else:
+            text = text[:pos] + s + text[pos + len(s) :]
+    path = tmp_path_factory.mktemp("damaged") / name
+    path.write_text(text)
+    try:
+        log = read_log(path, missing=missing)
+    except InputError as exc:
+        assert str(exc).startswith(str(path)), exc
+        return
+    assert len(log.t) >= 1 and np.isfinite(log.t).all() and np.isfinite(log.wrench).all()
+    assert (np.diff(log.t) >= 0).all()
+    assert all(len(v) == len(log.t) for v in log.extra.values())
