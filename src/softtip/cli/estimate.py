@@ -49,7 +49,14 @@ INPUT is a CSV file with a header row and columns t, fx, fy, fz, mx, my, mz (t i
 non-decreasing: repeated stamps are counted and reported; extra columns are kept and copied
 to the output), or a Parquet file with those columns (name ending in .parquet; its
 softtip.units metadata gives the units). '-' reads CSV from standard input. With
---example, softtip's shipped example grasp is used instead.
+--example, softtip's shipped example grasp is used instead. Logs as ATI's software,
+rostopic echo -p, ros2 topic echo --csv, PlotJuggler and bag converters write them are read
+as they are (units from the header; comma, tab or semicolon, a decimal comma; .gz, .bz2, .xz,
+.zst; a preamble), and standard error says which column was taken for what in which unit;
+--columns, --force-units, --moment-units, --time-units, --missing and --skip-rows for the
+rest (docs/input_formats.md). Absolute stamps count from the first (stamp_ns column). A run
+whose units make the fingertip geometry or the sensor's noise impossible stops, naming the
+unit pair that fits.
 
 The output CSV (standard output unless -o; Parquet when -o ends in .parquet, with the
 units and the fingertip in its key-value metadata) has the columns t, state (none|point|line|area),

@@ -1,19 +1,28 @@
 """Reading force/torque logs and writing result tables (CSV and Parquet).
 
-Input logs (see the manual, docs/manual.md) are CSV files with a header row naming at least
-the columns ``t, fx, fy, fz, mx, my, mz`` in any order, or Parquet files (by the name's
-``.parquet`` extension) with those columns; other columns are kept and otherwise ignored.
-``t`` is in seconds and non-decreasing: a repeated stamp is accepted and counted, a stamp
-that goes back is an error. The wrench is in SI or, on request (or, for Parquet, by the
-file's ``softtip.units`` metadata), in the papers' kgf and kgf·mm, and is converted to SI
-on reading.
+Input logs (see the manual, docs/manual.md, and docs/input_formats.md) are CSV files with a
+header row naming at least the columns ``t, fx, fy, fz, mx, my, mz`` in any order, or Parquet
+files (by the name's ``.parquet`` extension) with those columns; other columns are kept and
+otherwise ignored. ``t`` is non-decreasing: a repeated stamp is accepted and counted, a stamp
+that goes back is an error. Everything is converted to SI (s, N, N·m) here, at the edge, and
+nowhere else.
 
 Accepted CSV layout, beyond plain CSV:
 
 * a UTF-8 byte-order mark, CRLF or LF line ends, quoted cells (the stdlib :mod:`csv` dialect);
-* blank lines and lines starting with ``#`` (comments) **before** the header are skipped;
-* blank lines at the end of the file are ignored. A blank line between data rows is an error.
-* header names are compared after stripping surrounding whitespace, with exact case.
+  a quoted cell may span lines, but not take in lines that look like data rows (a stray or
+  unterminated quote is an error naming its line: the rows read equal the file's);
+* comma, tab or semicolon delimiters (sniffed from the header line), a decimal comma with tab
+  or semicolon; gzip, bzip2, xz and zstd compression (by the first bytes);
+* blank lines and lines starting with ``#`` (comments) **before** the header are skipped, and
+  so are preamble lines before the first line that names the columns (or ``skip_rows``);
+* blank lines at the end of the file are ignored. A blank line between data rows is an error;
+* the headers of the sources in :data:`softtip.io.formats.SOURCES` (ATI, ``rostopic echo
+  -p``, ``ros2 topic echo --csv`` without a header, PlotJuggler, bag converters), case-
+  insensitively, with units in the header (``Fx (N)``, ``Tz (N-mm)``); ``columns`` maps
+  anything else. Per-quantity units (:data:`softtip.core.units.UNITS`) for columns whose
+  header gives none; absolute stamps counted from the first (kept as ``stamp_ns``), integer
+  ns divided exactly so that a bag and a CSV of it give the same ``t`` to the last bit.
 
 Every problem with an input log raises :class:`~softtip.errors.InputError` naming the file,
 the line (1-based, as a text editor counts, header included; Parquet: the row), the column
