@@ -412,3 +412,20 @@ def test_damaged_foreign_logs_read_or_fail_cleanly(tmp_path_factory, name: str, 
     assert len(log.t) >= 1 and np.isfinite(log.t).all() and np.isfinite(log.wrench).all()
     assert (np.diff(log.t) >= 0).all()
     assert all(len(v) == len(log.t) for v in log.extra.values())
+
+
+def test_bag_converter_header_stamp_in_secs_and_nsecs(tmp_path: Path) -> None:
+    """bagpy/rosbags exports: the header stamp (secs + nsecs, exact), not the recording Time."""
+    ros2 = (DATA / "ros2_topic_echo.csv").read_text().splitlines()
+    head = "Time,header.seq,header.stamp.secs,header.stamp.nsecs,header.frame_id," + ",".join(
+        f"wrench.{q}.{a}" for q in ("force", "torque") for a in "xyz"
+    )
+    rows = []
+    for k, line in enumerate(ros2):
+        sec, nsec, frame, *w = line.split(",")
+        rows.append(",".join([f"{int(sec) + 0.5:.6f}", str(k), sec, nsec, frame, *w]))
+    path = tmp_path / "bagpy.csv"
+    path.write_text("\n".join([head, *rows]) + "\n")
+    log = read_log(path)
+    np.testing.assert_array_equal(log.t, read_log(REFERENCE).t)
+    assert "t ← 'header.stamp.secs' (s" in log.notes[0] and "nanosec ← 'header.stamp.nsecs' (ns)" in log.notes[0]

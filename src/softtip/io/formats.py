@@ -96,7 +96,9 @@ SOURCES: tuple[Source, ...] = (
     Source(
         "rosbag to CSV converters (bagpy, rosbags, rqt_bag)",
         "Time,header.seq,header.stamp.secs,header.stamp.nsecs,header.frame_id,wrench.force.x,…",
-        {"t": ("time", "timestamp", r"%time"), **_axes(r"(.*[./_])?wrench[./_]force[./_]{a}", r"(.*[./_])?wrench[./_]torque[./_]{a}")},
+        {"t": (r"(.*[./_])?header[./_]stamp[./_]secs?", "time", "timestamp", r"%time"),
+         "nanosec": (r"(.*[./_])?header[./_]stamp[./_]n(ano)?secs?",),
+         **_axes(r"(.*[./_])?wrench[./_]force[./_]{a}", r"(.*[./_])?wrench[./_]torque[./_]{a}")},
     ),
 )
 
@@ -303,6 +305,8 @@ def resolve_columns(names: Sequence[str], fmt: LogFormat, *, headerless: bool = 
                 break
             index[role] = hits[0]
             taken.add(hits[0])
+        if ok and "nanosec" in index and not re.search(r"secs?$", bases[index["t"]]):
+            del index["nanosec"]  # nanoseconds only complete a seconds stamp
         if ok:
             chosen, source = index, (candidate.name if not fmt.columns else f"--columns and {candidate.name}")
             time_default = candidate.time_unit
