@@ -429,3 +429,12 @@ def test_bag_converter_header_stamp_in_secs_and_nsecs(tmp_path: Path) -> None:
     log = read_log(path)
     np.testing.assert_array_equal(log.t, read_log(REFERENCE).t)
     assert "t ← 'header.stamp.secs' (s" in log.notes[0] and "nanosec ← 'header.stamp.nsecs' (ns)" in log.notes[0]
+
+
+def test_softtip_names_win_over_look_alike_extra_columns(tmp_path: Path) -> None:
+    lines = REFERENCE.read_text().splitlines()
+    path = tmp_path / "extra.csv"
+    path.write_text("\n".join([lines[0] + ",Fx,time", *(ln + ",x,y" for ln in lines[1:])]) + "\n")
+    log = read_log(path)
+    np.testing.assert_array_equal(log.wrench, read_log(REFERENCE).wrench)
+    assert list(log.extra) == ["Fx", "time"] and not log.notes

@@ -290,6 +290,9 @@ def resolve_columns(names: Sequence[str], fmt: LogFormat, *, headerless: bool = 
             if role in index:
                 continue
             hits = _match(patterns, bases, taken)
+            exact = [j for j in hits if names[j].strip() == role]
+            if len(hits) > 1 and len(exact) == 1:
+                hits = exact  # softtip's own name wins over a look-alike (an extra "Fx" next to "fx")
             if len(hits) > 1:
                 if len({names[j] for j in hits}) < len(hits):
                     return None  # a duplicate name: the reader says so
