@@ -280,9 +280,8 @@ def resolve_columns(names: Sequence[str], fmt: LogFormat, *, headerless: bool = 
                     raise ColumnError(f"--columns {role}={want}: no column {want!r} in the header ({', '.join(map(repr, names))})")
             chosen[role] = j
         source = "--columns"
-    for candidate in (ROS2_CSV, *SOURCES) if headerless or not fmt.columns or len(fmt.columns) < len(ROLES) else ():
-        if headerless and candidate is not ROS2_CSV:
-            continue
+    candidates = ((ROS2_CSV,) if headerless else SOURCES) if len(fmt.columns) < len(ROLES) else ()
+    for candidate in candidates:
         index = dict(chosen or {})
         taken = set(index.values())
         ok = True
