@@ -319,10 +319,10 @@ def test_any_dialect_reads_back(tmp_path_factory, n, seed, style, delimiter, com
 
 
 def test_the_input_doc_lists_every_registered_source_and_unit() -> None:
-    """docs/input_formats.md (the README's Input section) names what the registries hold."""
+    """docs/guide/input-formats.md (the README's Input section) names what the registries hold."""
     from softtip.io.formats import ROS2_CSV, SOURCES
 
-    doc = (Path(__file__).parents[1] / "docs" / "input_formats.md").read_text()
+    doc = (Path(__file__).parents[1] / "docs" / "guide" / "input-formats.md").read_text()
     for source in (*SOURCES, ROS2_CSV):
         assert source.name in doc, source.name
     for unit in UNITS:

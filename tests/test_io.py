@@ -26,7 +26,7 @@ def _write(tmp_path: Path, text: str | bytes, name: str = "log.csv") -> str:
     return str(path)
 
 
-COLUMNS_HINT = " Other names: map them with --columns t=NAME,fx=NAME,… (docs/input_formats.md lists the headers read as they are)."
+COLUMNS_HINT = " Other names: map them with --columns t=NAME,fx=NAME,… (docs/guide/input-formats.md lists the headers read as they are)."
 MISSING_HINT = "; or give --missing drop (skip the row) or --missing interpolate (fill it)"
 
 

@@ -87,7 +87,7 @@ def test_missing_and_misspelled_columns(tmp_path: Path) -> None:
     assert _error(path) == (
         f"{path}: missing column 'fx'; expected a header with columns t, fx, fy, fz, mx, my, mz (any order, exact "
         "case). Column 7 is 'Fx': did you mean 'fx'? Other names: map them with --columns t=NAME,fx=NAME,… "
-        "(docs/input_formats.md lists the headers read as they are)."
+        "(docs/guide/input-formats.md lists the headers read as they are)."
     )
 
 

@@ -54,7 +54,7 @@ rostopic echo -p, ros2 topic echo --csv, PlotJuggler and bag converters write th
 as they are (units from the header; comma, tab or semicolon, a decimal comma; .gz, .bz2, .xz,
 .zst; a preamble), and standard error says which column was taken for what in which unit;
 --columns, --force-units, --moment-units, --time-units, --missing and --skip-rows for the
-rest (docs/input_formats.md). Absolute stamps count from the first (stamp_ns column). A run
+rest (docs/guide/input-formats.md). Absolute stamps count from the first (stamp_ns column). A run
 whose units make the fingertip geometry or the sensor's noise impossible stops, naming the
 unit pair that fits.
 

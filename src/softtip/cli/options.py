@@ -301,7 +301,7 @@ _LOG_FORMAT_OPTIONS = [
         metavar="ROLE=COLUMN,…",
         help="Which column is t, fx, fy, fz, mx, my, mz, by header name (or 1-based position for a file without a "
         "header row), e.g. t=Time,fx=Fx,…,mz=Tz. Not needed for softtip's, ATI's, rostopic echo -p, ros2 topic echo "
-        "--csv and PlotJuggler headers (docs/input_formats.md).",
+        "--csv and PlotJuggler headers (docs/guide/input-formats.md).",
     ),
     option("--force-units", type=UnitName("force"), help="Units of the force columns whose header gives none. [default: N]"),
     option(

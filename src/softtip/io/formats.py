@@ -1,5 +1,5 @@
 """What a force/torque log from other software looks like: the recognised header dialects,
-the column mapping, and the per-quantity units (docs/input_formats.md has the table).
+the column mapping, and the per-quantity units (docs/guide/input-formats.md has the table).
 
 One registry, :data:`SOURCES`, declares each recognised header dialect once (the names its
 columns have, the unit of its time column when the header does not say); the reader

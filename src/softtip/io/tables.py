@@ -1,6 +1,6 @@
 """Reading force/torque logs and writing result tables (CSV and Parquet).
 
-Input logs (see the manual, docs/manual.md, and docs/input_formats.md) are CSV files with a
+Input logs (see the manual, docs/manual.md, and docs/guide/input-formats.md) are CSV files with a
 header row naming at least the columns ``t, fx, fy, fz, mx, my, mz`` in any order, or Parquet
 files (by the name's ``.parquet`` extension) with those columns; other columns are kept and
 otherwise ignored. ``t`` is non-decreasing: a repeated stamp is accepted and counted, a stamp
@@ -330,7 +330,7 @@ def read_log(
         the sources in :data:`softtip.io.formats.SOURCES` are recognised.
     force_units, moment_units, time_units : str, optional
         Units of the force (N, kgf, lbf), moment (N*m, N*mm, kgf*mm, lbf*in) and time
-        (s, ms, us, ns) columns whose header does not say (docs/input_formats.md).
+        (s, ms, us, ns) columns whose header does not say (docs/guide/input-formats.md).
         Absolute stamps (from 1e8 s on) are counted from the first; the stamps go along
         as an extra column ``stamp_ns``.
     missing : {"fail", "drop", "interpolate"}
@@ -1082,7 +1082,7 @@ def _column_index(header: _Header, source: str) -> dict[str, int]:
                 f"by position, e.g. --columns {positions})."
             )
         hints.append(
-            "Other names: map them with --columns t=NAME,fx=NAME,… (docs/input_formats.md lists the headers read as they are)."
+            "Other names: map them with --columns t=NAME,fx=NAME,… (docs/guide/input-formats.md lists the headers read as they are)."
         )
         raise InputError(" ".join([msg + ".", *hints]))
     return {c: seen[c] for c in REQUIRED_COLUMNS}
