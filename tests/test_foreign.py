@@ -438,3 +438,19 @@ def test_softtip_names_win_over_look_alike_extra_columns(tmp_path: Path) -> None
     log = read_log(path)
     np.testing.assert_array_equal(log.wrench, read_log(REFERENCE).wrench)
     assert list(log.extra) == ["Fx", "time"] and not log.notes
+
+
+def test_the_pandas_example_of_the_input_formats_page_runs() -> None:
+    """The page's pandas block runs as written on the corpus's ATI export and gives the
+    estimates of read_log on the same file."""
+    import re
+
+    page = (Path(__file__).parents[1] / "docs" / "guide" / "input-formats.md").read_text(encoding="utf-8")
+    (code,) = [b for b in re.findall(r"```python\n(.*?)```", page, re.DOTALL) if "pd.read_csv" in b]
+    run = subprocess.run([sys.executable, "-c", code + "\nprint(int((table['state'] == 'line').sum()))"],
+                         capture_output=True, text=True, timeout=300, cwd=Path(__file__).parent / "data" / "foreign")  # fmt: skip
+    assert run.returncode == 0, run.stderr[-3000:]
+    from softtip import estimate
+
+    log = read_log(Path(__file__).parent / "data" / "foreign" / "ati_ms_n_nmm.csv")
+    assert int(run.stdout.split()[-1]) == int(np.sum(estimate(log.t, log.wrench).state_names == "line"))

@@ -75,11 +75,9 @@ def test_the_package_is_typed() -> None:
 
 
 def test_estimates_as_arrow_and_pandas() -> None:
-    from softtip.io.frames import to_arrow, to_pandas
-
     log = load_example()
     est = estimate(log.t, log.wrench)
-    table = to_arrow(est)
+    table = est.to_arrow()
     assert table.column_names == list(est.columns())
     assert table.column("state").to_pylist() == list(est.state_names)
     assert table.num_rows == len(log.t)
@@ -87,6 +85,6 @@ def test_estimates_as_arrow_and_pandas() -> None:
         import pandas  # noqa: F401
     except ImportError:
         with pytest.raises(ImportError, match="pip install pandas"):
-            to_pandas(est)
+            est.to_pandas()
     else:
-        assert list(to_pandas(est)["state"]) == list(est.state_names)
+        assert list(est.to_pandas()["state"]) == list(est.state_names)

@@ -158,6 +158,38 @@ class Estimates:
         """Samples in contact by force whose force pulls at every root (reported ``none``)."""
         return int(np.count_nonzero(self.pulling))
 
+    def to_arrow(self, units: str = "si") -> Any:
+        """The output columns (:meth:`columns`) as a ``pyarrow.Table``, without writing a file.
+
+        Parameters
+        ----------
+        units : {"si", "kgf-mm"}
+            Units of the force and moment columns, as :meth:`columns`.
+
+        Returns
+        -------
+        pyarrow.Table
+            One column per output column, in order; ``state`` and ``line_evidence`` as strings.
+        """
+        import pyarrow as pa
+
+        return pa.table({name: pa.array(v.tolist() if v.dtype.kind == "U" else v)
+                         for name, v in ((k, np.asarray(x)) for k, x in self.columns(units=units).items())})  # fmt: skip
+
+    def to_pandas(self, units: str = "si") -> Any:
+        """The output columns as a ``pandas.DataFrame`` (pandas is not a dependency of softtip).
+
+        Raises
+        ------
+        ImportError
+            pandas is not installed; the message says how to get it.
+        """
+        try:
+            import pandas  # noqa: F401
+        except ImportError:
+            raise ImportError("Estimates.to_pandas needs pandas (pip install pandas); to_arrow gives a pyarrow.Table without it") from None
+        return self.to_arrow(units).to_pandas()
+
     def columns(self, units: str = "si") -> dict[str, NDArray]:
         """The output columns (manual §4), in order, then softtip's extras.
 
