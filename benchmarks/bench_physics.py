@@ -113,13 +113,13 @@ class Physics:
         scale = args.modulus / DRAKE_MODULUS
         self.winkler_modulus = WINKLER_MODULUS * scale
 
-    def simulate(self, tip, obj, scn, *, friction_load: bool = False) -> SimLog:
+    def simulate(self, tip, obj, scn, *, friction_load: bool = False, rocking: bool = False) -> SimLog:
         a = self.args
         sensor = SensorModel(rate=50.0)  # noise drawn later, per seed
         if self.name == "drake":
+            solver = "sap" if friction_load or (rocking and a.rock_solver == "sap") else "quasistatic"
             return simulate_drake(tip, obj, scn, sensor, 0, modulus=a.modulus, mesh_resolution=a.mesh_resolution,
-                                  friction=a.friction, solver="sap" if friction_load else "quasistatic",
-                                  progress=not a.no_progress)  # fmt: skip
+                                  friction=a.friction, solver=solver, progress=not a.no_progress)  # fmt: skip
         params = ContactParams(modulus=self.winkler_modulus, friction=a.friction,
                                shear_modulus=2e6 if friction_load else None)  # fmt: skip
         key = json.dumps({"v": 1, "tip": repr(tip), "obj": obj.describe(), "scn": scn.as_dict(),
@@ -201,7 +201,7 @@ def run_cases(phys: Physics, args, tip, objects, kind: str, angles, results: dic
                 name = f"{label} {ang:+.0f}°" + ("" if ratio is None else f" {ratio:.1f} {'across' if across else 'along'}")
                 t0 = time.perf_counter()
                 try:
-                    log = phys.simulate(tip, make(), scn, friction_load=kind == "friction")
+                    log = phys.simulate(tip, make(), scn, friction_load=kind == "friction", rocking=kind == "rock")
                 except (RuntimeError, NotImplementedError) as exc:
                     print(f"  [{phys.name}] {kind} {name}: not simulated ({exc})", file=sys.stderr)
                     results.setdefault("failed", []).append(f"{kind} {name}")
@@ -314,20 +314,20 @@ def per_grasp_rows(name: str, res: dict) -> None:
 
 
 def plot_rocking(path: str, physics: list[Physics], args, tip) -> None:
-    """h in the tangent plane under rocking, a thin plate and a plane, per physics."""
+    """h in the tangent plane under rocking, a thin plate (along the first rocking axis and at 25°)
+    and a plane, per physics."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    ang = 25.0
-    objs = (("plate 1 mm", Plate(0.001)), ("plane", HalfSpace()))
-    fig, axs = plt.subplots(len(physics), 2, figsize=(10, 4.8 * len(physics)), squeeze=False)
+    objs = (("plate 1 mm", Plate(0.001), 0.0), ("plate 1 mm", Plate(0.001), 25.0), ("plane", HalfSpace(), 25.0))
+    fig, axs = plt.subplots(len(physics), len(objs), figsize=(5 * len(objs), 4.6 * len(physics)), squeeze=False)
     for i, phys in enumerate(physics):
-        for j, (label, obj) in enumerate(objs):
+        for j, (label, obj, ang) in enumerate(objs):
             scn = rock_scenario(math.radians(ang), rock_amplitude=math.radians(args.rock_amplitude),
                                 rock_axes=math.radians(args.rock_axes))  # fmt: skip
-            log = phys.simulate(tip, obj, scn)
+            log = phys.simulate(tip, obj, scn, rocking=True)
             t, w, truth = noisy(log, args, 101)
             est = estimate(t, w, tip)
             a1 = next(d for d in scn.disturbances if d.label == "rock-a1")
@@ -339,7 +339,7 @@ def plot_rocking(path: str, physics: list[Physics], args, tip) -> None:
             sc = ax.scatter(h1, h2, c=t[m], s=6, cmap="viridis")
             lim = max(np.abs(np.r_[h1, h2]).max() * 1.15, 0.5)
             if obj.kind != "plane":
-                th = float(np.median(log.truth.angle[m[: len(log.truth.angle)]] if args.rate == 50 else truth[m]))
+                th = float(np.median(truth[m]))
                 d = np.array([math.cos(th), math.sin(th)])
                 hd = np.array([-d[1], d[0]])  # n × d: the axis h lies on for a line
                 ax.plot([-lim * d[0], lim * d[0]], [-lim * d[1], lim * d[1]], "k--", lw=1.2,
@@ -353,8 +353,9 @@ def plot_rocking(path: str, physics: list[Physics], args, tip) -> None:
             ax.axvline(0, color="0.8", lw=0.5)
             ax.set_xlabel("h · e1 (N·mm)")
             ax.set_ylabel("h · e2 (N·mm)")
-            share = np.mean(est.state[t >= a1.start + 2 * a1.period * 1.0] == 2)
-            ax.set_title(f"{phys.name}: {label} at {ang:+.0f}°, rocked ({share:.0%} line)", fontsize=10)
+            a2 = next(d for d in scn.disturbances if d.label == "rock-a2")
+            share = np.mean(est.state[t >= a2.start + a2.period] == 2)
+            ax.set_title(f"{phys.name}: {label} at {ang:+.0f}°, rocked ({share:.0%} line after both axes)", fontsize=10)
             fig.colorbar(sc, ax=ax, label="t (s)", shrink=0.8)
     fig.suptitle("Tangential spin torque h under rocking (two tangent axes, then a figure-eight), murakami2006 tip, "
                  "default estimator\ne1 = sensor x projected on the tangent plane, e2 = n × e1 (manual §3.4); "
@@ -384,6 +385,9 @@ def main(argv=None) -> int:
     ap.add_argument("--tilt", type=float, default=3.5, help="the papers' joint rotation, deg")
     ap.add_argument("--rock-amplitude", type=float, default=3.0, help="rocking amplitude, deg")
     ap.add_argument("--rock-axes", type=float, default=0.0, help="rocking axes turned about the normal, deg")
+    ap.add_argument("--rock-solver", choices=("quasistatic", "sap"), default="quasistatic",
+                    help="Drake solver of the rocking grasps (default: frictionless quasi-static, as the issue's; "
+                         "sap: with friction μ, where the load is not locked to h)")
     ap.add_argument("--check", action="store_true", help="also fit h = k n0 × f_t on the rocked lines (locking)")
     ap.add_argument("--per-grasp", action="store_true", help="print every grasp's row")
     ap.add_argument("--plot", metavar="PATH", help="write the rocking figure (h in the tangent plane)")
@@ -408,9 +412,10 @@ def main(argv=None) -> int:
           f"tilt {args.tilt:g}°, rocking ±{args.rock_amplitude:g}° about axes at {args.rock_axes:g}°")  # fmt: skip
     for p in physics:
         if p.name == "drake":
+            rocking = "SAP" if args.rock_solver == "sap" else "frictionless quasi-static"
             print(f"drake {drake_version()}: hydroelastic modulus {args.modulus / 1e6:g} MPa, resolution hint "
-                  f"{args.mesh_resolution * 1e3:g} mm; frictionless quasi-static (rocking, tilt), SAP μ = {args.friction:g} "
-                  "(friction loads)")  # fmt: skip
+                  f"{args.mesh_resolution * 1e3:g} mm; rocking: {rocking}; single tilt: frictionless quasi-static; "
+                  f"friction loads: SAP, μ = {args.friction:g}")  # fmt: skip
         else:
             print(f"winkler: softtip's skin, E = {p.winkler_modulus / 1e6:g} MPa over 5 mm, μ = {args.friction:g} "
                   "(shear G = 2 MPa for the friction loads)")  # fmt: skip
