@@ -74,7 +74,7 @@ from softtip.sim import (
 )
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from drake_physics import DRAKE_MISSING, drake_available, drake_version, simulate_drake  # noqa: E402
+from drake_physics import DRAKE_MISSING, drake_available, drake_version, pressure_check, simulate_drake  # noqa: E402
 
 CACHE = Path(__file__).resolve().parent / ".cache"
 HELD = 6.0  # s: the papers' grasp is held (disturbances done) from here
@@ -446,6 +446,11 @@ def main(argv=None) -> int:
     for n, r in all_res.items():
         if r.get("failed"):
             print(f"\n{n}: not simulated: {', '.join(r['failed'])}")
+    if args.check and any(p.name == "drake" for p in physics):
+        pc = pressure_check(tip, modulus=args.modulus, mesh_resolution=args.mesh_resolution)
+        print(f"\ndrake pressure field: plane pressed 1 mm: p_max / (E·d/R) = {pc['p_max_over_E_depth_per_R']:.4f}; "
+              f"force {pc['force_N']:.3f} N (the field integrated exactly: {pc['force_field_N']:.3f} N); "
+              f"area {pc['area_mm2']:.1f} mm²")  # fmt: skip
     if args.check:
         print("\n### locking: h = k n0 × f_t on the rocked thin lines (after both axes), first seed\n")
         print("| grasp | " + " | ".join(f"{p.name}: k, residual" for p in physics) + " |")

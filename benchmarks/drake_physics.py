@@ -22,7 +22,7 @@ What is softtip's and what is Drake's
   ``(0, 0, length)``; the lower hemisphere lies below the sensor plate and is never touched),
   welded to the world, whose frame is the sensor frame. Its pressure field is Drake's for a
   compliant capsule, ``p = E · d / R`` at depth ``d`` below the undeformed surface (measured,
-  not assumed: the bench's ``--check`` prints it): with ``E = 2 MPa`` and ``R = 16 mm`` its
+  not assumed: :func:`pressure_check`, printed by the bench's ``--check``): with ``E = 2 MPa`` and ``R = 16 mm`` its
   surface stiffness, 1.25e8 Pa/m, is that of a 5 mm layer of 0.6 MPa (softtip's default
   Winkler skin, 1.2e8 Pa/m); penetrations stay below 2.5 mm, inside the 5 mm skin, so the
   shell under it is not modelled. ``mesh_resolution`` is Drake's resolution hint of the
@@ -112,7 +112,7 @@ from softtip.sim import (
 )
 from softtip.sim.pose import Pose
 
-__all__ = ["DRAKE_MISSING", "DrakeSimLog", "drake_available", "drake_version", "simulate_drake", "CACHE_DIR"]
+__all__ = ["DRAKE_MISSING", "DrakeSimLog", "drake_available", "drake_version", "pressure_check", "simulate_drake", "CACHE_DIR"]
 
 #: The message printed when Drake is not installed.
 DRAKE_MISSING = (
@@ -364,6 +364,23 @@ def _contact(w: _World, pose: Pose):
     _set_pose(w, pose)
     q = w.scene_graph.get_query_output_port().Eval(w.sg_context)
     return _integrate_surfaces(q.ComputeContactSurfaces(HydroelasticContactRepresentation.kPolygon), w.tip_id)
+
+
+def pressure_check(tip: Fingertip, *, modulus: float = 2e6, mesh_resolution: float = 0.002,
+                   depth: float = 1e-3) -> dict:
+    """Press a plane ``depth`` (m) into the tip's apex: the pressure per depth below the
+    undeformed surface against ``E / R`` (Drake's compliant capsule field), the force, and
+    that of a Winkler layer of the same surface stiffness (``E_w / h = E / R``)."""
+    w, _ = _build(tip, HalfSpace(), modulus=modulus, mesh_resolution=mesh_resolution, friction=0.0)
+    top = w.centre + np.array([0.0, 0.0, w.radius])
+    pose = Pose.from_frame([0.0, 0.0, -1.0], [1.0, 0.0, 0.0], top - np.array([0.0, 0.0, depth]))
+    wr, st = _contact(w, pose)
+    # a plane at depth δ in the field p = E (R − r) / R (r: distance from the cap centre), a = R − δ:
+    # F = 2π E / R ∫_a^R (R − r) r dr = 2π E / R [R (R² − a²) / 2 − (R³ − a³) / 3]
+    r, a = w.radius, w.radius - depth
+    exact = 2.0 * math.pi * modulus / r * (r * (r * r - a * a) / 2.0 - (r**3 - a**3) / 3.0)
+    return {"p_max_over_E_depth_per_R": st["pmax"] / (modulus * depth / w.radius), "force_N": float(-wr[2]),
+            "force_field_N": exact, "area_mm2": st["area"] * 1e6}  # fmt: skip
 
 
 # -- cache --------------------------------------------------------------------------------
