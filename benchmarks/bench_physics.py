@@ -375,6 +375,9 @@ def main(argv=None) -> int:
                     help="line angles, deg (default 0 90 -35 25; --quick: 0 90): 0° lies along the first rocking axis")
     ap.add_argument("--friction-angles", type=float, nargs="*", default=None,
                     help="line angles of the friction loads, deg (default 0 30 -45; --quick: 30)")
+    ap.add_argument("--friction-objects", nargs="*", default=None, metavar="LABEL",
+                    help="thin lines loaded by friction, by label (default: plates 1-3 mm, cylinder Ø 4 mm, wedges 60° "
+                         "and 90°; --quick: plate 1 mm, wedge 90°)")
     ap.add_argument("--modulus", type=float, default=DRAKE_MODULUS, help="Drake hydroelastic modulus, Pa (Winkler scaled alike)")
     ap.add_argument("--tip-radius", type=float, default=0.016, help="capsule radius, m (cylinder 20 mm)")
     ap.add_argument("--mesh-resolution", type=float, default=0.002, help="Drake's resolution hint of the tip mesh, m")
@@ -430,7 +433,8 @@ def main(argv=None) -> int:
             run_cases(p, args, tip, areas, "rock", angles, sub := {})
             res["rock_areas"] = sub.get("rock", [])
         if "friction" in args.sections:
-            fl = [o for o in LINES if o[0] in (QUICK_FRICTION if args.quick else FRICTION_LINES)]
+            chosen = args.friction_objects or (QUICK_FRICTION if args.quick else FRICTION_LINES)
+            fl = [o for o in LINES if o[0] in chosen]
             fa = args.friction_angles if args.friction_angles is not None else ([30.0] if args.quick else [0.0, 30.0, -45.0])
             run_cases(p, args, tip, fl, "friction", fa, res)
         if "tilt" in args.sections:

@@ -474,6 +474,9 @@ def simulate_drake(
     if cache:
         folder = CACHE_DIR if cache is True else Path(cache)
         path = folder / f"{_cache_key(tip, obj, scenario, sensor.rate, settings)}.npz"
+    failed = None if path is None else path.with_suffix(".failed.txt")
+    if failed is not None and failed.exists():
+        raise RuntimeError(failed.read_text().strip() + " (cached)")
     if path is not None and path.exists():
         t, wrench, truth, info = _load(path)
     else:
@@ -481,7 +484,13 @@ def simulate_drake(
             raise ImportError(DRAKE_MISSING)
         t0 = time.perf_counter()
         run = _run_quasistatic if solver == "quasistatic" else _run_sap
-        t, wrench, truth, info = run(tip, obj, scenario, sensor, settings, progress)
+        try:
+            t, wrench, truth, info = run(tip, obj, scenario, sensor, settings, progress)
+        except RuntimeError as exc:  # remembered: a grasp this physics cannot hold stays so
+            if failed is not None:
+                failed.parent.mkdir(parents=True, exist_ok=True)
+                failed.write_text(f"{exc}\n")
+            raise
         info = {**info, "cpu_s": round(time.perf_counter() - t0, 2), "drake": drake_version()}
         if path is not None:
             _save(path, t, wrench, truth, info)
