@@ -260,7 +260,9 @@ def summarise(res: dict) -> dict:
     fr = res.get("friction", [])
     if fr:
         meds = [g.median for g in fr]
-        out["c"] = f"{_med(meds)} median, {_worst(meds)} worst over {len(fr)} grasps (median of each)"
+        share = {c: np.mean([g.share[c] for g in fr]) for c in ("line", "area", "point")}
+        out["c"] = (f"{_med(meds)} median, {_worst(meds)} worst over {len(fr)} grasps (median of each); "
+                    f"{share['line']:.0%} line, {share['area']:.0%} area, {share['point']:.0%} point")  # fmt: skip
         miss = [g.name for g in fr if not np.isfinite(g.median)]
         if miss:
             out["c"] += f"; {len(miss)} with no line sample"
