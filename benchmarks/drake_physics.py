@@ -70,6 +70,31 @@ Which scenario uses which solver, and why
   surface*, which is the rigid object's surface inside the undeformed skin, so at the depth
   of the pressed-in surface).
 
+What the frictionless physics implies (measured with ``bench_physics.py --check``)
+-------------------------------------------------------------------------------
+Drake's compliant capsule field depends only on the distance from the cap centre ``c``,
+so on every flat face of a rigid object the pressure is symmetric about the foot of the
+perpendicular from ``c``, and the face's resultant passes through ``c``: ``m ≈ c × f``.
+Relative to the latched point and normal, ``h = k n₀ × f_t`` with ``k = −15.9 mm ≈ −R``
+(residual 3–8 %, from the truncated faces). The wrench is then a function of the force
+alone: a 1 mm plate, a 120° wedge, a Ø 4 mm cylinder and a 10 mm plate rocked alike give
+wrenches within 0.04 N·mm and 0.2 mN of each other (below the sensor noise); the object
+shows only through which loads it can carry (a line cannot carry one along itself, so
+the tilt of its face along the line turns the force; a plane and a 15 mm plate at this
+depth carry none, so the load stays at the target).
+
+With friction (``sap``) the lever of the friction force about ``r_c`` is not the depth of
+the contact surface: side faces of a thin plate carry friction couples (on a 1 mm plate
+loaded across at 0.2 of the normal force the lever ``−(m_fr − r_c × f_fr) · (n × f_fr) /
+|n × f_fr|²`` is 7.3 mm while the surface lies 2–3 mm deep), and tractions left by the
+tilt before the load add a couple. :attr:`GroundTruth.friction_depth` therefore records
+the pressure-weighted depth of the contact surface below ``r_c`` (the depth where the
+tractions act if they follow the pressure, as on the Winkler skin). A 1 mm plate
+loaded across at 0.5 of the normal force slides off at μ = 1 (it slips at about 0.47; most
+likely the side faces' friction carries part of the push, leaving the top face less normal
+force to hold the load with): such a grasp raises
+RuntimeError ("friction cannot hold the load"), remembered in the cache.
+
 Truth that differs from softtip's simulator: ``pressure_centre`` is on the contact surface
 (the rigid object's surface, deformed skin), not on the undeformed skin; ``slip_fraction``
 is NaN (not available); ``depth`` is the largest pressure over ``E / R``.
