@@ -277,7 +277,7 @@ def summarise(res: dict) -> dict:
             beyond = np.concatenate(r) if r else np.zeros(0)
             if len(beyond):
                 parts.append(f"{grp} {_rms(r):.2f} ({np.mean(beyond > 3):.0%} > 3σ)")
-        cells.append(f"{scen}: " + ", ".join(parts))
+        cells.append(f"{scen}: " + (", ".join(parts) if parts else "no line sample"))
     if cells:
         out["d"] = "; ".join(cells)
     tilt = res.get("tilt", [])
