@@ -40,6 +40,35 @@ true wrench with noise drawn per sample, as ``bench_accuracy.py``'s ``_resampled
 (deg: the rocking axes turned about the normal relative to the sensor x axis).
 
 Simulated logs are cached (``benchmarks/.cache/<physics>/``), noise drawn per seed on loading.
+
+Measured (drake 1.51.1, estimator of main at b2128df, default settings; 4 angles 0°, 90°,
+−35°, 25°; 3 noise seeds; 50 Hz; ``--physics both --sections rock tilt --check``)
+---------------------------------------------------------------------------------------
+=====================================  ===========================  ==============================
+held-out grasps                        winkler                      drake (hydroelastic)
+=====================================  ===========================  ==============================
+(a) thin lines rocked                  100 % line, 0.8° / 3.1°      46 % line (42 % area, 12 %
+                                                                    point), 2.8° / 13.8°
+    (median / worst grasp's median)                                 (lines at 0°: 100 % area; at
+                                                                    90°: 68 % area, 31 % point)
+(b) plates 10–15 mm and plane rocked   0 % line, 0 confirmed        15 % line (the 10 mm plate
+                                                                    at −35°/25° reads as a line),
+                                                                    0 confirmed
+(d) RMS error / std, rocking           0.97–1.01                    0.80 (all groups)
+(d) RMS error / std, single tilt       0.54 / 0.83 / 1.46           0.47 (all groups)
+    (plates / cylinders / wedges)
+(e) single tilt, thin lines            2.3° / 80.5° (line on 77 %;  2.0° / 2.3° (line on 75 %;
+                                       the 80° are Ø 4 mm, 90° and  every 90° line ``point``)
+                                       120° wedges at 90°)
+(f) confirmed samples                  14 700 of 204 grasps         0
+locking fit k (h = k n₀ × f_t)         −4 to −94 mm, residual       −15.9 mm, residual 3–8 %
+                                       28–98 % (not locked)         (locked: k = −R)
+=====================================  ===========================  ==============================
+
+Friction loads at 30° (plates 1 and 2 mm, Ø 4 mm, 90° wedge; 0.2 and 0.5 across and along;
+``--sections friction --friction-angles 30 --friction-objects ...``): see the report of
+issue 27 (every 0.5-across load reads ``area`` on both physics; the 1 mm plate at 0.5
+across slides off on Drake).
 """
 
 from __future__ import annotations
