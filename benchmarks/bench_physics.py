@@ -88,7 +88,7 @@ from pathlib import Path
 
 import numpy as np
 
-from softtip import Capsule, axial_difference, estimate
+from softtip import Capsule, EstimatorConfig, axial_difference, estimate
 from softtip.sim import (
     ContactParams,
     Cylinder,
@@ -248,9 +248,13 @@ def run_cases(phys: Physics, args, tip, objects, kind: str, angles, results: dic
                     start = HELD
                 else:
                     start = 7.0
+                cfg = EstimatorConfig()
+                if kind == "rock" and args.stated_rocking:
+                    # the user says the object was rocked about two axes from the second axis on
+                    cfg = EstimatorConfig(rocked=((a2.start, scn.duration),))
                 for seed in range(101, 101 + args.seeds):
                     t, w, truth = noisy(log, args, seed)
-                    est = estimate(t, w, tip)
+                    est = estimate(t, w, tip, cfg)
                     g = Grasp(est, truth, t >= start)
                     g.name, g.group, g.angle = name, group, ang
                     results.setdefault(kind, []).append(g)
@@ -428,6 +432,9 @@ def main(argv=None) -> int:
                          "walks 4 mm across the skin within 2 s of rocking and is reported as not simulated)")
     ap.add_argument("--check", action="store_true", help="also fit h = k n0 × f_t on the rocked lines (locking)")
     ap.add_argument("--per-grasp", action="store_true", help="print every grasp's row")
+    ap.add_argument("--stated-rocking", action="store_true",
+                    help="the rocked grasps estimated with the rocking stated (EstimatorConfig.rocked, --rocked: from the "
+                         "second rocking axis to the end), as a user who rocked the object would")  # fmt: skip
     ap.add_argument("--plot", metavar="PATH", help="write the rocking figure (h in the tangent plane)")
     ap.add_argument("--no-progress", action="store_true")
     args = ap.parse_args(argv)
@@ -447,7 +454,8 @@ def main(argv=None) -> int:
 
     print(f"capsule R {args.tip_radius * 1e3:g} mm, cylinder 20 mm; noise ×{args.noise_scale:g} (5 mN, 0.05 N·mm); "
           f"{args.rate:g} Hz; object angles {', '.join(f'{a:+.0f}°' for a in angles)}; {args.seeds} noise seed(s); "
-          f"tilt {args.tilt:g}°, rocking ±{args.rock_amplitude:g}° about axes at {args.rock_axes:g}°")  # fmt: skip
+          f"tilt {args.tilt:g}°, rocking ±{args.rock_amplitude:g}° about axes at {args.rock_axes:g}°"
+          + ("; the rocking stated (--rocked)" if args.stated_rocking else "; default settings"))  # fmt: skip
     for p in physics:
         if p.name == "drake":
             rocking = "SAP" if args.rock_solver == "sap" else "frictionless quasi-static"
