@@ -114,6 +114,7 @@ HELD = 6.0  # s: the papers' grasp is held (disturbances done) from here
 BASE_NOISE = (5e-3, 5e-3, 5e-3, 5e-5, 5e-5, 5e-5)
 WINKLER_MODULUS = 0.6e6  # softtip's default Winkler skin (5 mm)
 DRAKE_MODULUS = 2e6  # the hydroelastic capsule, same surface stiffness on R = 16 mm
+SKIN_THICKNESS = 0.005  # m: the papers' silicone skin (murakami2006), the estimator's depth prior
 
 #: thin lines: (label, group, factory)
 LINES = (
@@ -169,6 +170,12 @@ class Physics:
                             **{f"truth_{f.name}": getattr(log.truth, f.name) for f in dataclasses.fields(GroundTruth)})  # fmt: skip
         os.replace(tmp, path)
         return log
+
+
+def estimation_tip(tip: Capsule) -> Capsule:
+    """The fingertip as its user's file states it: with its 5 mm skin, which the default depth
+    compensation needs (a capsule without ``skin_thickness`` is estimated without it)."""
+    return dataclasses.replace(tip, skin_thickness=SKIN_THICKNESS)
 
 
 def noisy(log: SimLog, args, seed: int):
@@ -254,7 +261,7 @@ def run_cases(phys: Physics, args, tip, objects, kind: str, angles, results: dic
                     cfg = EstimatorConfig(rocked=((a2.start, scn.duration),))
                 for seed in range(101, 101 + args.seeds):
                     t, w, truth = noisy(log, args, seed)
-                    est = estimate(t, w, tip, cfg)
+                    est = estimate(t, w, estimation_tip(tip), cfg)
                     g = Grasp(est, truth, t >= start)
                     g.name, g.group, g.angle = name, group, ang
                     results.setdefault(kind, []).append(g)
@@ -367,7 +374,7 @@ def plot_rocking(path: str, physics: list[Physics], args, tip) -> None:
                                 rock_axes=math.radians(args.rock_axes))  # fmt: skip
             log = phys.simulate(tip, obj, scn, rocking=True)
             t, w, truth = noisy(log, args, 101)
-            est = estimate(t, w, tip)
+            est = estimate(t, w, estimation_tip(tip))
             a1 = next(d for d in scn.disturbances if d.label == "rock-a1")
             ax = axs[i, j]
             m = (t >= a1.start) & (est.state > 0)
