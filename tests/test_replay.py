@@ -58,18 +58,18 @@ def test_replay_record_matches_estimate(tmp_path):
     rows = read_rows(rec)
     assert list(rows[0]) == list(RECORD_COLUMNS)
     assert len(rows) == len(expected) == 500
-    # the same numbers as the batch command: its tared wrench as fx_tared..mz_tared, t and
-    # the raw wrench exactly (shortest round-trip repr); `softtip estimate` writes with
-    # pyarrow, the recorder with printf (0.00001 vs 1e-05), so the cells compare as numbers
+    # the same numbers as the batch command, its columns under the same names (fx..mz the
+    # tared wrench in both), t and the raw wrench fx_raw..mz_raw exactly (shortest round-trip
+    # repr); `softtip estimate` writes with pyarrow, the recorder with printf (0.00001 vs
+    # 1e-05), so the cells compare as numbers
     wrench = ("fx", "fy", "fz", "mx", "my", "mz")
     for r, e in zip(rows, expected):
-        same = [k for k in e if k not in wrench and k != "t"]
+        same = [k for k in e if k != "t"]
         assert [_cell(r[k]) for k in same] == [_cell(e[k]) for k in same]
-        assert [_cell(r[k + "_tared"]) for k in wrench] == [_cell(e[k]) for k in wrench]
         assert float(r["t"]) == float(e["t"])
     log = load_example()
     assert [float(r["t"]) for r in rows] == log.t.tolist()
-    assert [[float(r[k]) for k in wrench] for r in rows] == log.wrench.tolist()
+    assert [[float(r[k + "_raw"]) for k in wrench] for r in rows] == log.wrench.tolist()
 
 
 def test_a_recording_is_a_log_estimate_and_replay_read_as_it_is(tmp_path):

@@ -54,9 +54,9 @@ is checked against the host clock (a difference over 2 % is warned about). None 
 ends the stream unless named in --strict (then exit 1).
 
 -o FILE.csv (or --record FILE.csv) writes every sample as it comes (flushed every 0.05 s, always whole
-lines): t and the raw wrench fx..mz first (the file is a log that `softtip estimate` and
---replay read as it is), then the columns of `softtip estimate` with its tared wrench as
-fx_tared..mz_tared, then seq (RDT sequence or row), lost and dropped (records missing just
+lines): t and the raw wrench fx_raw..mz_raw first (the file is a log that `softtip estimate`
+and --replay read as it is), then the columns of `softtip estimate` (fx..mz the tared wrench,
+as there), then seq (RDT sequence or row), lost and dropped (records missing just
 before this one: on the network or still to come late / dropped by this host), late,
 duplicates and malformed (discarded since the previous row), status (the device's status
 word) and host_time (host receive time, s since the Unix epoch). Ctrl-C, SIGTERM and

@@ -77,6 +77,11 @@ class Source:
 #: Header dialects, most specific first (the first that maps every role wins).
 SOURCES: tuple[Source, ...] = (
     Source(
+        "softtip live recording (stream --record)",
+        "t,fx_raw,…,mz_raw,state,fx,…,mz,…",
+        {"t": ("t",), **_axes(r"f{a}_raw", r"m{a}_raw")},
+    ),
+    Source(
         "softtip, ATI (Net F/T, DAQ F/T), generic",
         "Time (ms),Fx (N),Fy (N),Fz (N),Tx (N-mm),Ty (N-mm),Tz (N-mm)",
         {"t": ("t", "time", "times", "timestamp", "time_?stamp", "seconds"),

@@ -47,17 +47,18 @@ __all__ = [
 ]
 
 #: Columns of a live recording. First the samples as a log (``t`` and the raw, untared
-#: wrench ``fx … mz``: a recording is a log that ``softtip estimate`` and ``--replay`` read
-#: as it is, and that reproduces the recorded estimates), then the estimates with the
-#: columns of ``softtip estimate`` (its tared wrench as ``fx_tared … mz_tared``), then the
+#: wrench ``fx_raw … mz_raw``: a recording is a log that ``softtip estimate`` and ``--replay``
+#: read as it is, :data:`softtip.io.formats.SOURCES` knows its header, and it reproduces the
+#: recorded estimates), then the estimates with the columns of ``softtip estimate``, whose
+#: ``fx … mz`` are the tared (and filtered) wrench in both, then the
 #: stream's bookkeeping (see :class:`~softtip.io.sources.Reading`): the source's sequence
 #: number; records missing just before this one (``lost``: network, or late) and dropped by
 #: softtip's queue (``dropped``); late packets, duplicates and malformed datagrams
 #: discarded since the previous row; the device's status word; the host receive time (s
 #: since the Unix epoch). Column sums give the totals (network loss: ``lost − late``).
 RECORD_COLUMNS: tuple[str, ...] = (
-    "t", "fx", "fy", "fz", "mx", "my", "mz",
-    "state", "fx_tared", "fy_tared", "fz_tared", "mx_tared", "my_tared", "mz_tared",
+    "t", "fx_raw", "fy_raw", "fz_raw", "mx_raw", "my_raw", "mz_raw",
+    "state", "fx", "fy", "fz", "mx", "my", "mz",
     "rx", "ry", "rz", "nx", "ny", "nz", "sigma",
     "hx", "hy", "hz", "h_norm", "dx", "dy", "dz", "angle_deg", "h_std", "angle_std_deg", "angle_noise_std_deg",
     "latched", "latch_fallback", "relatched", "depth", "joint_conditioning", "joint_angle_std_deg", "joint_offset_std",
@@ -70,7 +71,7 @@ _INT_COLUMNS = ("latched", "latch_fallback", "relatched", "joint_fallback", "dep
                 "duplicates", "malformed", "status")  # fmt: skip
 # Time and raw wrench exactly (shortest repr: re-reading the file gives the same doubles),
 # the host time to the microsecond, the rest as softtip.io.tables.write_table formats numbers.
-_FORMATS = {"t": "%r", "fx": "%r", "fy": "%r", "fz": "%r", "mx": "%r", "my": "%r", "mz": "%r",
+_FORMATS = {"t": "%r", "fx_raw": "%r", "fy_raw": "%r", "fz_raw": "%r", "mx_raw": "%r", "my_raw": "%r", "mz_raw": "%r",
             "state": "%s", "line_evidence": "%s", "host_time": "%.6f"}  # fmt: skip
 _ROW_FORMAT = ",".join(_FORMATS.get(c, "%d" if c in _INT_COLUMNS else "%.10g") for c in RECORD_COLUMNS) + "\n"
 _DEG = 180.0 / math.pi
