@@ -496,7 +496,7 @@ def test_fuse_rerun_view_shows_both_fingers_the_fused_line_and_the_truth(simulat
     # drawn through the midpoint of the contacts written to the table
     table = np.genfromtxt(tmp_path / "f.csv", delimiter=",", names=True, dtype=None, encoding=None)
     k = int(np.argmin(np.abs(table["t"] - late[-1])))
-    mid = 0.5 * np.array([table[f"rright_{a}"][k] + table[f"rleft_{a}"][k] for a in "xyz"])
+    mid = 0.5 * np.array([table[f"r1_{a}"][k] + table[f"r2_{a}"][k] for a in "xyz"])
     assert_allclose(fused[late[-1]].mean(axis=0), mid, atol=1e-6)
 
 

@@ -32,6 +32,7 @@ def _summary(fused) -> list[str]:
     lines = []
     shares = ", ".join(f"{k} {100 * np.mean(names == k):.0f} %" for k in dict.fromkeys(names.tolist()))
     lines.append(f"{len(fused)} time steps: {shares}")
+    lines.append(f"fingers: 1 = {fused.names[0]}, 2 = {fused.names[1]} (columns r1_*, r2_*)")
     par = names == "parallel_lines"
     if par.any():
         d = fused.direction[par]
@@ -72,8 +73,9 @@ per time step of the first log: parallel_lines (a plate or a stick pinched acros
 common direction and the plane through both lines), crossing_lines (two edges: both, their
 angle and closest approach), line_and_face, faces, single or none; with the evidence of the
 lines (confirmed once the object was rocked about two axes) and flags (unbalanced forces,
-an area contact). Writes CSV (standard output without -o) or Parquet (-o ending in .parquet);
-a summary on standard error. --to-bag also writes the fused line and plane as
+an area contact). Writes CSV (standard output without -o) or Parquet (-o ending in .parquet),
+the contact points as r1_x..r2_z of the first and second finger given (named on standard
+error), whatever the input; a summary on standard error. --to-bag also writes the fused line and plane as
 geometry_msgs/msg/PoseStamped (x axis along the line, z axis the plane's normal), the contacts as
 PointStamped and RViz markers, in the common frame, in the format --ros-distro plays; with
 --to-bag and no -o no CSV is written.

@@ -146,10 +146,11 @@ class FusedGrasp:
         return np.asarray(GRASPS)[self.grasp]
 
     def columns(self) -> dict[str, NDArray]:
-        """Output columns (SI, angles in degrees), in order."""
-        a, b = self.names
+        """Output columns (SI, angles in degrees), in order. The contact points are ``r1_*`` and
+        ``r2_*``, of the first and the second finger given (:attr:`names` says which is which),
+        so the columns are the same whether the fingers came from CSV logs or a bag's topics."""
         out: dict[str, NDArray] = {"t": self.t, "grasp": self.grasp_names, "evidence": self.evidence, "flag": self.flag}
-        for key, arr in ((f"r{a}", self.point_a), (f"r{b}", self.point_b)):
+        for key, arr in (("r1", self.point_a), ("r2", self.point_b)):
             for i, ax in enumerate("xyz"):
                 out[f"{key}_{ax}"] = arr[:, i]
         for key, arr in (("d", self.direction), ("d2", self.direction_b), ("plane_n", self.plane_normal), ("face_n", self.face_normal)):
