@@ -439,6 +439,7 @@ def main(argv=None) -> int:
                          "walks 4 mm across the skin within 2 s of rocking and is reported as not simulated)")
     ap.add_argument("--check", action="store_true", help="also fit h = k n0 × f_t on the rocked lines (locking)")
     ap.add_argument("--per-grasp", action="store_true", help="print every grasp's row")
+    # --markdown PATH (handled around main): also write the printed tables to PATH
     ap.add_argument("--stated-rocking", action="store_true",
                     help="the rocked grasps estimated with the rocking stated (EstimatorConfig.rocked, --rocked: from the "
                          "second rocking axis to the end), as a user who rocked the object would")  # fmt: skip
@@ -523,5 +524,44 @@ def main(argv=None) -> int:
     return 0
 
 
+class _Tee:
+    """Standard output also kept, for ``--markdown``."""
+
+    def __init__(self, out):
+        self.out, self.kept = out, []
+
+    def write(self, text: str) -> int:
+        self.kept.append(text)
+        return self.out.write(text)
+
+    def flush(self) -> None:
+        self.out.flush()
+
+
+def _main_with_markdown(argv=None) -> int:
+    """``main``, and with ``--markdown PATH`` its tables written to PATH too (the documentation's
+    benchmark page includes that file: its figures are this script's, not typed by hand)."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if "--markdown" not in argv:
+        return main(argv)
+    k = argv.index("--markdown")
+    if k + 1 >= len(argv):
+        print("bench_physics: --markdown needs a PATH", file=sys.stderr)
+        return 2
+    path = Path(argv[k + 1])
+    del argv[k : k + 2]
+    tee = _Tee(sys.stdout)
+    sys.stdout = tee
+    try:
+        code = main(argv)
+    finally:
+        sys.stdout = tee.out
+    if code == 0:
+        command = " ".join(["python benchmarks/bench_physics.py", *argv])
+        path.write_text(f"<!-- written by {command} --markdown {path.name}; do not edit -->\n\n"
+                        f"Run: `{command}`\n\n" + "".join(tee.kept).replace("\n### ", "\n#### "), encoding="utf-8")  # fmt: skip
+    return code
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(_main_with_markdown())

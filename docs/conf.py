@@ -38,6 +38,7 @@ root_doc = "index"
 exclude_patterns = [
     "_build",
     "manual.md",  # a pointer to guide/ kept for old links
+    "benchmarks/physics-*.md",  # written by benchmarks/bench_physics.py --markdown, included by two-physics.md
     "examples/README.txt",
     "auto_examples/*.ipynb",
     "auto_examples/*.py",
