@@ -613,21 +613,7 @@ def _run_quasistatic(tip, obj, scenario, sensor, settings, progress):
             bar.update()
     if bar is not None:
         bar.close()
-    truth = GroundTruth(
-        direction=direction,
-        angle=line_angle(direction, np.broadcast_to(n_c, direction.shape)),
-        contact_point=np.broadcast_to(r_c, (n, 3)).copy(),
-        contact_normal=np.broadcast_to(n_c, (n, 3)).copy(),
-        pressure_centre=centre,
-        contact_area=area,
-        depth=depth,
-        push=push,
-        normal_force=wrench[:, :3] @ u,
-        force_target=target,
-        in_contact=in_contact,
-        slip_fraction=np.full(n, np.nan),
-        friction_depth=np.full(n, np.nan),
-    )
+    truth = _truth(direction, r_c, n_c, u, wrench, centre, area, depth, push, target, in_contact, np.full(n, np.nan))
     return t, wrench, truth, {"dropped_load_max_N": dropped, "push_only_samples": fallback}
 
 
@@ -842,7 +828,14 @@ def _run_sap(tip, obj, scenario, sensor, settings, progress):
             bar.update()
     if bar is not None:
         bar.close()
-    truth = GroundTruth(
+    truth = _truth(direction, r_c, n_c, u, wrench, centre, area, depth, push, target, in_contact, fdepth)
+    return t, wrench, truth, {"sap_damping": _SAP_DAMPING, "sap_pd": list(_SAP_PD)}
+
+
+def _truth(direction, r_c, n_c, u, wrench, centre, area, depth, push, target, in_contact, friction_depth) -> GroundTruth:
+    """The per-sample truth of a Drake grasp (``slip_fraction`` is not available: NaN)."""
+    n = len(wrench)
+    return GroundTruth(
         direction=direction,
         angle=line_angle(direction, np.broadcast_to(n_c, direction.shape)),
         contact_point=np.broadcast_to(r_c, (n, 3)).copy(),
@@ -855,9 +848,8 @@ def _run_sap(tip, obj, scenario, sensor, settings, progress):
         force_target=target,
         in_contact=in_contact,
         slip_fraction=np.full(n, np.nan),
-        friction_depth=fdepth,
+        friction_depth=friction_depth,
     )
-    return t, wrench, truth, {"sap_damping": _SAP_DAMPING, "sap_pd": list(_SAP_PD)}
 
 
 def _sap_wrench(w: _World, r_c, n_c):
