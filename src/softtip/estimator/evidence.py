@@ -7,34 +7,40 @@ where the window started, e.g. a ``line-fit`` point found) of the located sample
 covariance (noise removed) and ``ratio = minor / major``:
 
 * the window **spans both axes** when ``minor`` is beyond the noise and
-  ``ratio ≥ area_ratio[0]``: the contact becomes ``area`` at a sample whose ``|h|`` is
-  significant, provided the load turned about its weaker axis too (its ``minor`` beyond the
-  noise and at least ``excitation_min²``) or ``minor ≥ h_min²`` (a point gone stale);
-* it **confirms a line** when the tangential load was excited about two axes (its own
-  ``minor`` beyond the noise, at least ``excitation_ratio`` times its ``major`` and at least
-  ``excitation_min²``), ``h``
-  varied beyond the noise and ``ratio < area_ratio[1]``;
-* otherwise the verdict stays what it was (hysteresis: between the two ratios nothing
-  changes); before any verdict a line is ``unconfirmed``.
+  ``ratio ≥ area_ratio[0]``, at a sample whose ``|h|`` is significant, provided the load
+  turned about its weaker axis too (its ``minor`` beyond the noise and at least
+  ``excitation_min²``) or ``minor ≥ h_min²`` (a point gone stale). The contact **reads
+  ``area``** while more than ``area_share`` of the window's samples span both axes: a reading
+  of the current window, revisited as it slides (a transient spread, as a new rock begins
+  while the window still holds the last one, neither makes nor locks an area);
+* it **confirms a line** when the contact was excited about two axes, as the tangential load
+  shows (its own ``minor`` beyond the noise, at least ``excitation_ratio`` times its
+  ``major`` and at least ``excitation_min²``) or as the user states (the window wholly inside
+  an interval of ``rocked``), ``h`` varied beyond the noise and ``ratio < area_ratio[1]``; a
+  confirmed line stays confirmed until the window reads an area;
+* it **resolves an axis** when ``h`` varied along one axis (``major`` beyond the noise and at
+  least ``h_min²``, ``ratio < area_ratio[1]``) with an angle standard deviation at most
+  ``evidence_max_angle_std``.
 
-Once the verdict is ``area`` every sample is ``area`` (no direction) until the verdict
-changes; otherwise a sample with significant ``|h|`` is ``line`` ``confirmed`` or ``line``
-``unconfirmed``, and one below significance ``point``, except inside a confirmed line with a
-window direction held: ``h`` passing through zero while the object rocks does not make a
-line or an area a point. Significance has hysteresis too: once above the measurement's
-threshold, ``|h|`` stays significant down to :data:`SIG_LEAVE` of it; and at high sample rates
-the samples of the segment's last ``significance_window`` seconds vote (most above the
-threshold: significant; most below its leaving share: not; else unchanged), so noise near
-the threshold does not flicker (at 50 Hz the window holds one sample: each decides alone). In a confirmed line
-the direction is the latest window's of this segment that confirmed the line (two-axis
-excitation, ``h`` on one axis) with an angle standard deviation at most
-``evidence_max_angle_std`` (``d = n × principal axis``; its standard deviation with the
-model error ``evidence_model_std`` added in quadrature); before there is one, the sample's
-own. A window excited about one axis only would bias the axis: a line's small resistance to
-rolling about its own edge follows the same excitation. A sample's own angle standard
-deviation counts the window's across-axis spread beyond the noise as model error,
-``sqrt(σ_d² + minor / |h|²)``, and while the line is ``unconfirmed`` the rolling bias that
-one axis of excitation hides (``unconfirmed_model_std``, added in quadrature). The share of
+Where the window reads ``area`` the sample is ``area`` (no direction). Otherwise it is a
+``line`` where ``|h|`` is significant or the current window resolves an axis (``h`` passing
+through zero while the object rocks does not make a line a point), and ``point`` elsewhere,
+except inside a confirmed line with a window direction held. Significance has hysteresis:
+once above the measurement's threshold, ``|h|`` stays significant down to :data:`SIG_LEAVE`
+of it; and at high sample rates the samples of the segment's last ``significance_window``
+seconds vote (most above the threshold: significant; most below its leaving share: not; else
+unchanged), so noise near the threshold does not flicker (at 50 Hz the window holds one
+sample: each decides alone).
+
+The direction: in a confirmed line, the latest window of this segment that confirmed it
+(two-axis excitation, ``h`` on one axis; ``d = n × principal axis``) with the model error
+``evidence_model_std`` in quadrature (a window excited about one axis only would bias the
+axis: a line's small resistance to rolling about its own edge follows the same excitation);
+otherwise the current window's where it resolves an axis, with ``unconfirmed_model_std`` in
+quadrature while the line is unconfirmed (``evidence_model_std`` when confirmed); the
+sample's own only where the window resolves none. A sample's own angle standard deviation
+counts the window's across-axis spread beyond the noise as model error,
+``sqrt(σ_d² + minor / |h|²)``, plus ``unconfirmed_model_std`` while unconfirmed. The share of
 the standard deviation that is the sensor noise's alone (``angle_noise_std``: the window's
 noise term, or the sample's ``σ_d``) is kept apart: two sensors share the model error, not
 their noise (:mod:`softtip.fusion`).
