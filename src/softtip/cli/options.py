@@ -222,9 +222,10 @@ _ESTIMATOR_OPTIONS = [
         type=click.Choice(["on", "off"]),
         default="on",
         show_default=True,
-        help="on: tell a line from an area over a sliding window (state area; line_evidence confirmed once the "
-        "contact was excited about two tangent axes and h stayed on one, else unconfirmed; under confirmed "
-        "evidence the direction comes from the window); off: the papers' per-sample line/point.",
+        help="on: tell a line from an area over a sliding window (state area while the window shows h spread over "
+        "both tangent axes; line_evidence confirmed once the contact was excited about two tangent axes, by the load "
+        "or --rocked, and h stayed on one, else unconfirmed; the direction from the window wherever h varied along "
+        "one axis); off: the papers' per-sample line/point.",
     ),
     option("--evidence-window", type=POSITIVE("s"), default=2.0, show_default=True, metavar="S", help="Sliding window of the line evidence, s."),
     option(
