@@ -119,7 +119,16 @@ from the bag's /tf.
     "--rerun-save, --payload]",
 )  # fmt: skip
 @estimator_options
-def estimate(
+def estimate(**kwargs) -> None:
+    from softtip.io.atomic import Outputs
+
+    # one transaction for every output of the run: all appear, or none (an error, a signal)
+    with Outputs() as outputs:
+        _estimate(outputs, **kwargs)
+
+
+def _estimate(
+    outputs,
     input_path,
     example,
     output,
@@ -156,6 +165,16 @@ def estimate(
          ("--bias", estimator_opts.get("bias_file"))],
         [("-o", output), ("--plot", plot_path), ("--to-bag", to_bag), ("--rerun-save", rerun_save), ("--save-bias", save_bias)],
     )
+    # every output file staged before any work: a missing folder or no permission stops the run at once
+    for path in (output, plot_path, rerun_save, save_bias):
+        if path is not None:
+            outputs.file(path)
+    staged_bag = None
+    if to_bag is not None:
+        from softtip.ros.bagout import bag_format
+
+        bag_format(to_bag, ros_distro)  # a name that does not fit the distribution: stop before the work
+        staged_bag = outputs.path(to_bag)
     if rerun_spawn:  # at once: without a display the viewer would fail only after the whole run
         from softtip.viz.rerun import check_viewer  # rerun itself is imported later
 
@@ -197,7 +216,7 @@ def estimate(
             rows = chunk_rows or _auto_chunk_rows(input_path)
             if rows and _estimate_in_pieces(
                 input_path, units, rows, fingertip, config, estimator_opts, output=output, output_units=output_units,
-                tip=tip, quiet=quiet, save_bias=save_bias,
+                tip=tip, quiet=quiet, save_bias=save_bias, outputs=outputs,
             ):  # fmt: skip
                 return
         size = os.path.getsize(input_path) if os.path.isfile(input_path) else 0
@@ -211,10 +230,6 @@ def estimate(
         raise click.UsageError("--allow-partial applies to bag input only")
     if to_bag is None and (ros_distro is not None or frame_id is not None):
         raise click.UsageError("--ros-distro and --frame-id apply to --to-bag")
-    if to_bag is not None:
-        from softtip.ros.bagout import bag_format
-
-        bag_format(to_bag, ros_distro)  # a name that does not fit the distribution: stop before the work
     if gravity_frame is not None and (payload is None or bag_log is None):
         raise click.UsageError("--gravity-frame needs --payload and a bag INPUT (with /tf)")
     if payload is not None:  # gravity compensation first: the tare then removes only the sensor bias
@@ -246,7 +261,7 @@ def estimate(
         est, columns, log, bag_log, config, fingertip,
         output=output, plot_path=plot_path, plot_units=plot_units, title=f"softtip: {source}",
         to_bag=to_bag, rerun_spawn=rerun_spawn, rerun_save=rerun_save, ros_distro=ros_distro, frame_id=frame_id,
-        metadata=parquet_metadata(fingertip, tip, output_units, log),
+        metadata=parquet_metadata(fingertip, tip, output_units, log), outputs=outputs, staged_bag=staged_bag,
     )  # fmt: skip
 
     from softtip.estimator.summary import summarise_contacts
@@ -254,7 +269,7 @@ def estimate(
     _report_run(
         _RunTotals.of(est, summarise_contacts(est) if not quiet else []),
         input_path=input_path, output=output, plot_path=plot_path, to_bag=to_bag, rerun_save=rerun_save,
-        save_bias=save_bias, quiet=quiet,
+        save_bias=save_bias, quiet=quiet, outputs=outputs,
     )  # fmt: skip
 
 
@@ -295,19 +310,28 @@ class _RunTotals:
         self.warnings += [w for w in est.warnings if w not in self.warnings]
 
 
-def _report_run(totals: _RunTotals, *, input_path, output, plot_path, to_bag, rerun_save, save_bias, quiet) -> None:
-    """The end of ``softtip estimate``: tare and warnings, ``--save-bias``, the summary."""
-    # in the one-shot run's order: a drift alarm (of any piece) after the contact warnings
-    totals.warnings.sort(key=lambda w: w.startswith("the sensor bias drifted"))
-    tare_warnings(totals, quiet)
+def _report_run(
+    totals: _RunTotals, *, input_path, output, plot_path, to_bag, rerun_save, save_bias, quiet, outputs
+) -> None:
+    """The end of ``softtip estimate``: ``--save-bias``, every output put in place (``outputs``
+    committed), then tare and warnings and the summary."""
     if save_bias is not None:
         if any(p is not None and Path(p).resolve() == Path(save_bias).resolve() for p in (input_path, output, plot_path)):
             raise InputError(f"--save-bias {save_bias}: is also an input or output of this run")
         if not np.all(np.isfinite(totals.bias)):
             raise InputError(f"--save-bias {save_bias}: no bias: the whole log lies within the tare")
-        from softtip.io.atomic import atomic_write_text
+        from softtip.io.atomic import cannot_write
 
-        atomic_write_text(save_bias, bias_to_toml(totals.bias, f"softtip sensor bias ({totals.tare.summary()})"))
+        try:
+            with outputs.get(save_bias).open() as fh:
+                fh.write(bias_to_toml(totals.bias, f"softtip sensor bias ({totals.tare.summary()})"))
+        except OSError as exc:
+            raise cannot_write(save_bias, exc) from None
+    outputs.commit()
+    # in the one-shot run's order: a drift alarm (of any piece) after the contact warnings
+    totals.warnings.sort(key=lambda w: w.startswith("the sensor bias drifted"))
+    tare_warnings(totals, quiet)
+    if save_bias is not None:
         click.echo(f"softtip: bias -> {save_bias}", err=True)
     if totals.n_pulling:
         click.echo(
@@ -358,14 +382,14 @@ def _auto_chunk_rows(path: str) -> int | None:
 
 
 def _estimate_in_pieces(
-    input_path, units, rows, fingertip, config, estimator_opts, *, output, output_units, tip, quiet, save_bias
+    input_path, units, rows, fingertip, config, estimator_opts, *, output, output_units, tip, quiet, save_bias, outputs
 ) -> bool:
     """``softtip estimate`` piece by piece (:mod:`softtip.io.chunked`) into ``output`` (a path);
     ``False`` when the log holds something only the one-shot reader takes or words (nothing
     written then)."""
     from softtip.core.lever import LEVER_MARGIN, LeverVote, fingertip_reach, lever_distances
     from softtip.estimator.summary import summarise_contacts
-    from softtip.io.atomic import atomic_write
+    from softtip.io.atomic import cannot_write
     from softtip.io.chunked import estimate_pieces
     from softtip.io.tables import NotStreamable, TableWriter, iter_log
 
@@ -404,8 +428,11 @@ def _estimate_in_pieces(
                 raise NotStreamable("wrong units: the one-shot run says so")  # as check_units decides
 
         try:
-            with atomic_write(output) as fh:
-                run(fh)
+            try:
+                with outputs.get(output).open() as fh:  # the staged file: put in place with the others
+                    run(fh)
+            except OSError as exc:
+                raise cannot_write(output, exc) from None
         except NotStreamable:  # nothing written: the one-shot run takes it, or says what is wrong
             return False
         except ValueError as exc:  # e.g. a low-pass cutoff above Nyquist for this log's rate
@@ -416,7 +443,7 @@ def _estimate_in_pieces(
         click.echo(f"softtip: warning: {note}", err=True)
     _report_run(
         totals, input_path=input_path, output=output, plot_path=None, to_bag=None, rerun_save=None,
-        save_bias=save_bias, quiet=quiet,
+        save_bias=save_bias, quiet=quiet, outputs=outputs,
     )  # fmt: skip
     return True
 
@@ -431,64 +458,56 @@ def _output_columns(est, extra, output_units: str) -> dict:
 
 def _write_estimate_outputs(
     est, columns, log, bag_log, config, fingertip, *, output, plot_path, plot_units, title, to_bag, rerun_spawn, rerun_save,
-    metadata, ros_distro=None, frame_id=None,
+    metadata, outputs, staged_bag=None, ros_distro=None, frame_id=None,
 ) -> None:
-    """Write every output of ``estimate``; all appear together, or none (and no temporary file stays)."""
+    """Write every output of ``estimate`` into its staged file (``outputs``, committed by the caller)."""
     import io as _io
 
-    from softtip.io.atomic import AtomicFile, cannot_write, commit_all, write_stdout
+    from softtip.io.atomic import cannot_write, write_stdout
     from softtip.io.tables import write_table
 
     viz = optional_extra("softtip.viz.rerun", "viz") if (rerun_spawn or rerun_save) else None
-    pending: list[AtomicFile] = []
-    bag_written = False
-    try:
-        if plot_path is not None:
-            from softtip.viz.plot import plot_estimates
+    if plot_path is not None:
+        from softtip.viz.plot import plot_estimates
 
-            # drawn in memory first: a full disk then gives the OS's reason, not the image writer's
-            image = _io.BytesIO()
-            threshold = config.line_threshold(est.h_std)
-            plot_estimates(
-                est, image, units=plot_units, title=title, h_threshold=threshold,
-                fmt=Path(plot_path).suffix.lower().lstrip("."),
-            )  # fmt: skip
-            pending.append(AtomicFile(plot_path))
-            try:
-                with pending[-1].open("wb") as fh:
-                    fh.write(image.getbuffer())
-            except OSError as exc:
-                raise cannot_write(plot_path, exc) from None
-        if viz is not None:
-            rerun_file = None
-            if rerun_save:
-                pending.append(rerun_file := AtomicFile(rerun_save))
-            logger = viz.RerunLogger(fingertip, save=None if rerun_file is None else rerun_file.tmp, spawn=rerun_spawn)
-            logger.log_estimates(est)
-            logger.close()
-        if to_bag is not None:
-            bag = optional_extra("softtip.io.bag", "ros")
-            frame = output_frame_id(frame_id, bag_log.frame_id if bag_log is not None else "")
+        # drawn in memory first: a full disk then gives the OS's reason, not the image writer's
+        image = _io.BytesIO()
+        threshold = config.line_threshold(est.h_std)
+        plot_estimates(
+            est, image, units=plot_units, title=title, h_threshold=threshold,
+            fmt=Path(plot_path).suffix.lower().lstrip("."),
+        )  # fmt: skip
+        try:
+            with outputs.get(plot_path).open("wb") as fh:
+                fh.write(image.getbuffer())
+        except OSError as exc:
+            raise cannot_write(plot_path, exc) from None
+    if viz is not None:
+        rerun_file = outputs.get(rerun_save)
+        logger = viz.RerunLogger(fingertip, save=None if rerun_file is None else rerun_file.tmp, spawn=rerun_spawn)
+        logger.log_estimates(est)
+        logger.close()
+    if to_bag is not None:
+        bag = optional_extra("softtip.io.bag", "ros")
+        frame = output_frame_id(frame_id, bag_log.frame_id if bag_log is not None else "")
+        try:
             if bag_log is not None:
-                bag.write_estimates_bag(to_bag, est, bag_log.wrench, bag_log.stamps_ns, frame, bag_log.topic, distro=ros_distro)
+                bag.write_estimates_bag(staged_bag, est, bag_log.wrench, bag_log.stamps_ns, frame, bag_log.topic, distro=ros_distro)
             else:
-                bag.write_estimates_bag(to_bag, est, log.wrench, frame_id=frame, distro=ros_distro)
-            bag_written = True
-        # the table last, atomically (softtip.io.atomic, through write_table); then the others are put in place
-        if output is not None:
-            with progress_bar(len(est), "writing") as bar:
-                write_table(columns, output, metadata=metadata, progress=bar.update)
-        elif to_bag is None:
-            with progress_bar(len(est), "writing") as bar:
-                write_stdout(lambda out: write_table(columns, out, progress=bar.update))
-        commit_all(pending)
-        bag_written = False  # every output is in place: keep the bag
-    finally:
-        for f in pending:
-            f.discard()
-        if bag_written:
-            from softtip.ros.bagout import remove_bag
+                bag.write_estimates_bag(staged_bag, est, log.wrench, frame_id=frame, distro=ros_distro)
+        except InputError as exc:  # name the destination, not where it was staged
+            raise InputError(str(exc).replace(str(staged_bag), str(to_bag))) from None
+    if output is not None:
+        from softtip.io.tables import TableWriter
 
-            remove_bag(to_bag)
-
-
+        with progress_bar(len(est), "writing") as bar:
+            try:
+                with outputs.get(output).open() as fh:  # the staged file
+                    writer = TableWriter(fh, parquet=output.lower().endswith(".parquet"), metadata=metadata)
+                    writer.write(columns, progress=bar.update)
+                    writer.close()
+            except OSError as exc:
+                raise cannot_write(output, exc) from None
+    elif to_bag is None:
+        with progress_bar(len(est), "writing") as bar:
+            write_stdout(lambda out: write_table(columns, out, progress=bar.update))
