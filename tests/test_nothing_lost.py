@@ -8,9 +8,11 @@ from __future__ import annotations
 
 import os
 import shutil
+import signal
 import stat
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -159,3 +161,155 @@ def test_output_to_a_fifo_whose_reader_quits(tmp_path, log):
     assert (tmp_path / "b.toml").read_text() == "old"
     assert stat.S_ISFIFO(os.stat(fifo).st_mode)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["b.toml", "grasp.csv", "pipe"]
+
+
+# ---------------------------------------------------------------------------------------
+# 3. signals: every command ends within seconds, cleans up, ends its workers
+
+
+def _children(pid: int) -> list[int]:
+    """Process ids whose parent is ``pid`` (Linux /proc)."""
+    kids = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[1]) == pid:
+                kids.append(int(entry.name))
+    return kids
+
+
+def _alive(pid: int) -> bool:
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except OSError:
+        return False
+    return fields[0] != "Z"
+
+
+def _start(argv, tmp_path, env=None):
+    return subprocess.Popen(
+        [SOFTTIP, *map(str, argv)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=tmp_path, env=env,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )  # fmt: skip
+
+
+needs_proc = pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs Linux /proc")
+
+
+@needs_proc
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    "signals", [(signal.SIGTERM,), (signal.SIGINT,), (signal.SIGHUP,), (signal.SIGTERM, signal.SIGTERM), (signal.SIGINT, signal.SIGTERM)],
+    ids=["TERM", "INT", "HUP", "TERM-TERM", "INT-TERM"],
+)
+def test_reproduce_ends_its_pool_on_a_signal(tmp_path, signals):
+    proc = _start(["reproduce", "--only", "E2", "--jobs", "2", "-o", "rep"], tmp_path)
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and len(_children(proc.pid)) < 2 and proc.poll() is None:
+        time.sleep(0.05)
+    workers = _children(proc.pid)
+    assert proc.poll() is None and len(workers) >= 2
+    time.sleep(0.3)
+    start = time.monotonic()
+    for k, sig in enumerate(signals):
+        if k:
+            time.sleep(0.005)
+        proc.send_signal(sig)
+    try:
+        _, err = proc.communicate(timeout=20)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        for w in workers:
+            with pytest.raises(ProcessLookupError):
+                os.kill(w, signal.SIGKILL)
+        raise
+    assert time.monotonic() - start < 15
+    err = err.decode()
+    assert proc.returncode == 128 + signals[0], err
+    assert "Traceback" not in err
+    deadline = time.monotonic() + 5
+    while time.monotonic() < deadline and any(_alive(w) for w in workers):
+        time.sleep(0.05)
+    assert not any(_alive(w) for w in workers)
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+@posix_only
+@pytest.mark.parametrize(
+    "signals, gap", [((signal.SIGTERM, signal.SIGTERM), 0.05), ((signal.SIGINT, signal.SIGTERM), 0.005), ((signal.SIGHUP, signal.SIGINT), 0.0)],
+    ids=["TERM-TERM-50ms", "INT-TERM-5ms", "HUP-INT-0ms"],
+)
+@pytest.mark.parametrize("chunked", [False, True], ids=["one-shot", "chunked"])
+def test_two_signals_in_quick_succession_leave_nothing(tmp_path, log, signals, gap, chunked):
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    tmpdir = tmp_path / "tmpdir"
+    tmpdir.mkdir()
+    (tmp_path / "b.toml").write_text("old")
+    argv = ["estimate", log.name, "-o", "pipe", "--save-bias", "b.toml"] + (["--chunk-rows", "100"] if chunked else [])
+    proc = _start(argv, tmp_path, env={**os.environ, "TMPDIR": str(tmpdir)})
+    # blocked on the FIFO nobody reads, with its staged files in place
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and proc.poll() is None:
+        hidden = [p for d in (tmp_path, tmpdir) for p in d.iterdir() if p.name.startswith(".")]
+        if len(hidden) >= 2:
+            break
+        time.sleep(0.02)
+    assert proc.poll() is None, proc.stderr.read().decode()
+    time.sleep(0.2)
+    for k, sig in enumerate(signals):
+        if k and gap:
+            time.sleep(gap)
+        proc.send_signal(sig)
+    try:
+        _, err = proc.communicate(timeout=30)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.communicate()
+        raise
+    err = err.decode()
+    assert proc.returncode == 128 + signals[0], err
+    assert "Traceback" not in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["b.toml", "grasp.csv", "pipe", "tmpdir"]
+    assert list(tmpdir.iterdir()) == []
+    assert (tmp_path / "b.toml").read_text() == "old"
+
+
+# ---------------------------------------------------------------------------------------
+# 2. no traceback for any option value: exit 2 naming the option
+
+
+BAD_OPTIONS = {
+    "calibrate-force-noise-nan": (["calibrate", "--example", "--shape", "sphere", "--force-noise", "nan"], "--force-noise"),
+    "calibrate-force-noise-inf": (["calibrate", "--example", "--shape", "sphere", "--force-noise", "inf"], "--force-noise"),
+    "calibrate-force-noise-1e309": (["calibrate", "--example", "--shape", "sphere", "--force-noise", "1e309"], "--force-noise"),
+    "calibrate-moment-noise-nan": (["calibrate", "--example", "--shape", "sphere", "--moment-noise", "nan"], "--moment-noise"),
+    "calibrate-moment-noise-inf": (["calibrate", "--example", "--shape", "sphere", "--moment-noise", "inf"], "--moment-noise"),
+    "calibrate-moment-noise-1e308": (["calibrate", "--example", "--shape", "sphere", "--moment-noise", "1e308"], "--moment-noise"),
+    "estimate-force-noise-1e308": (["estimate", "--example", "--force-noise", "1e308"], "--force-noise"),
+    "estimate-contact-threshold-1e308": (["estimate", "--example", "--contact-threshold", "1e308"], "--contact-threshold"),
+    "estimate-contact-threshold-1e200": (["estimate", "--example", "--contact-threshold", "1e200"], "--contact-threshold"),
+    "estimate-tare-duration-1e300": (["estimate", "--example", "--tare-duration", "1e300"], "--tare-duration"),
+    "estimate-joint-window-1e300": (["estimate", "--example", "--joint-window", "1e300"], "--joint-window"),
+    "estimate-relatch-1e300": (["estimate", "--example", "--relatch-distance", "1e300m"], "--relatch-distance"),
+    "estimate-o-empty": (["estimate", "--example", "-o", ""], "''"),
+    "simulate-o-empty": (["simulate", "-o", ""], "-o"),
+    "simulate-truth-empty": (["simulate", "-o", "x.csv", "--truth", ""], "--truth"),
+    "stream-o-empty": (["stream", "--replay", "{log}", "--speed", "0", "-o", ""], "-o"),
+    "stream-rerun-save-empty": (["stream", "--replay", "{log}", "--speed", "0", "--rerun-save", ""], "--rerun-save"),
+    "stream-duration-1e300": (["stream", "--replay", "{log}", "--speed", "0", "--duration", "1e300"], "--duration"),
+    "reproduce-out-dev-null": (["reproduce", "--out", "/dev/null"], "/dev/null"),
+    "reproduce-out-under-a-file": (["reproduce", "--out", "{log}/x"], "not a directory"),
+}
+
+
+@pytest.mark.parametrize("argv, named", list(BAD_OPTIONS.values()), ids=list(BAD_OPTIONS))
+def test_bad_option_values_exit_2_naming_the_option(tmp_path, log, argv, named):
+    r = run(*[a.replace("{log}", str(log)) for a in argv], cwd=tmp_path, timeout=60)
+    no_traceback(r)
+    assert r.returncode == 2, r.stderr
+    assert named in r.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["grasp.csv"]

@@ -23,7 +23,7 @@ __all__ = ["main"]
 class _Group(click.Group):
     def invoke(self, ctx):
         from softtip.io.atomic import cannot_write, silence_stdout
-        from softtip.io.interrupt import Interrupted, exit_code, terminate_like_ctrl_c
+        from softtip.io.interrupt import Interrupted, exit_code, exit_now, terminate_like_ctrl_c
 
         try:
             with terminate_like_ctrl_c():
@@ -41,6 +41,7 @@ class _Group(click.Group):
             # Ctrl-C, SIGTERM, SIGHUP: every temporary file is gone by now (unwound like an error)
             name = exc.signal_name if isinstance(exc, Interrupted) else "SIGINT"
             click.echo(f"softtip: interrupted ({name})", err=True)
+            exit_now(exit_code(exc))  # by a real signal: now, whatever follows it
             ctx.exit(exit_code(exc))
 
 

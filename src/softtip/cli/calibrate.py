@@ -6,6 +6,7 @@ import sys
 
 import click
 
+from softtip.cli.options import MAX_FORCE_NOISE, MAX_MOMENT_NOISE_NMM
 from softtip.cli.types import Number, option
 from softtip.core.noise import NANO17
 from softtip.core.units import UNIT_SYSTEMS
@@ -117,8 +118,8 @@ capsule's offset of its axis from the sensor's z axis is its axis_offset.
 @option("--mesh", "mesh_path", type=click.Path(dir_okay=False), help="--shape mesh: the fingertip mesh (a mesh fingertip .toml, or .stl/.obj/.ply with --mesh-units); its shift on the sensor is fitted.")
 @option("--mesh-units", type=click.Choice(["m", "cm", "mm", "um", "in"]), help="Length unit of a bare --mesh file.")
 @option("--rotation", is_flag=True, help="--shape mesh: fit a small rotation as well as the shift (6 DOF).")
-@option("--force-noise", type=click.FloatRange(min=0.0, min_open=True), default=NANO17.force_std[0], show_default=True, metavar="N", help="Per-axis standard deviation of the sensor's force noise, N (Nano17-class default).")
-@option("--moment-noise", type=click.FloatRange(min=0.0, min_open=True), default=NANO17.moment_std[0] * 1e3, show_default=True, metavar="N·mm", help="Per-axis standard deviation of the sensor's moment noise, N·mm.")
+@option("--force-noise", type=Number("N", 0.0, MAX_FORCE_NOISE, min_open=True), default=NANO17.force_std[0], show_default=True, metavar="N", help="Per-axis standard deviation of the sensor's force noise, N (Nano17-class default).")
+@option("--moment-noise", type=Number("N·mm", 0.0, MAX_MOMENT_NOISE_NMM, min_open=True), default=NANO17.moment_std[0] * 1e3, show_default=True, metavar="N·mm", help="Per-axis standard deviation of the sensor's moment noise, N·mm.")
 @click.pass_context
 def calibrate(
     ctx, input_path, shape, output, units, tare_duration, contact_threshold, min_force, rigid, force_noise, moment_noise,

@@ -23,12 +23,15 @@ or the same file under another name: a hard link).
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import secrets
+import select
 import shutil
 import stat
 import sys
 import tempfile
+import time
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import IO, Any
@@ -192,9 +195,38 @@ class AtomicFile:
         self._done = True
 
     def _copy_into_device(self) -> None:
-        """Copy the content into a character device or FIFO (waits for a FIFO's reader, as ``cat > FIFO`` does)."""
-        with open(self.tmp, "rb") as src, open(self._target, "wb") as dst:
-            shutil.copyfileobj(src, dst, 1 << 20)
+        """Copy the content into a character device or FIFO.
+
+        A FIFO waits for its reader, as ``cat > FIFO`` does, but in short steps that let
+        Ctrl-C, SIGTERM and SIGHUP through (the kernel may hand a signal to another thread,
+        which would not interrupt a blocking open or write of the main one).
+        """
+        if not stat.S_ISFIFO(os.stat(self._target).st_mode):
+            with open(self.tmp, "rb") as src, open(self._target, "wb") as dst:
+                shutil.copyfileobj(src, dst, 1 << 20)
+            os.unlink(self.tmp)
+            self._done = True
+            return
+        while True:
+            try:
+                fd = os.open(self._target, os.O_WRONLY | os.O_NONBLOCK)
+                break
+            except OSError as exc:
+                if exc.errno != errno.ENXIO:  # ENXIO: no reader yet
+                    raise
+                time.sleep(0.05)
+        try:
+            with open(self.tmp, "rb") as src:
+                while chunk := src.read(1 << 16):
+                    view = memoryview(chunk)
+                    while view:
+                        select.select([], [fd], [], 0.1)
+                        try:
+                            view = view[os.write(fd, view) :]
+                        except BlockingIOError:
+                            continue
+        finally:
+            os.close(fd)
         os.unlink(self.tmp)
         self._done = True
 
