@@ -313,3 +313,125 @@ def test_bad_option_values_exit_2_naming_the_option(tmp_path, log, argv, named):
     assert r.returncode == 2, r.stderr
     assert named in r.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["grasp.csv"]
+
+
+# ---------------------------------------------------------------------------------------
+# 4. live faults against the shipped fake Net F/T: the session always ends
+
+
+def _stream_args(dev, *more):
+    return ["stream", "--netft", "127.0.0.1", "--rdt-port", dev.rdt_port, "--http-port", dev.http_port, "--no-view", *more]
+
+
+def _only_malformed(seq, record):
+    return [b"garbage"]
+
+
+def _only_empty(seq, record):
+    return [b""]
+
+
+class _RepeatFirst:
+    """Send the first record again and again (a device stuck on one record)."""
+
+    def __init__(self):
+        self.first = None
+
+    def __call__(self, seq, record):
+        if self.first is None:
+            self.first = record
+        return [self.first]
+
+
+FAULTY_DEVICES = {"malformed": _only_malformed, "empty": _only_empty, "repeats-one-record": _RepeatFirst}
+
+
+@pytest.mark.parametrize("mangle", list(FAULTY_DEVICES.values()), ids=list(FAULTY_DEVICES))
+def test_a_device_sending_no_new_sample_ends_at_the_duration(tmp_path, mangle):
+    from softtip.testing.netft_fake import FakeNetFT
+
+    m = mangle() if isinstance(mangle, type) else mangle
+    with FakeNetFT(rate_hz=500, mangle=m) as dev:
+        t0 = time.monotonic()
+        r = run(*_stream_args(dev, "--duration", "1.5", "--timeout", "30", "-o", tmp_path / "rec.csv"), timeout=60)
+        elapsed = time.monotonic() - t0
+    no_traceback(r)
+    assert r.returncode == 0, r.stderr
+    assert "duration reached" in r.stderr
+    counted = "malformed" if mangle is not _RepeatFirst else "duplicates"
+    assert f" {counted}" in r.stderr and f" 0 {counted}" not in r.stderr.split("duration reached")[0].split("softtip: ")[-1]
+    assert elapsed < 20
+
+
+@pytest.mark.parametrize("mangle", list(FAULTY_DEVICES.values()), ids=list(FAULTY_DEVICES))
+def test_a_device_sending_no_new_sample_times_out_without_a_duration(tmp_path, mangle):
+    from softtip.testing.netft_fake import FakeNetFT
+
+    m = mangle() if isinstance(mangle, type) else mangle
+    with FakeNetFT(rate_hz=500, mangle=m) as dev:
+        t0 = time.monotonic()
+        r = run(*_stream_args(dev, "--timeout", "1"), timeout=60)
+        elapsed = time.monotonic() - t0
+    no_traceback(r)
+    assert r.returncode == 1, r.stderr
+    assert "no new sample for 1 s (--timeout" in r.stderr
+    assert elapsed < 20
+
+
+@pytest.mark.parametrize(
+    "setting, value, named",
+    [("counts_per_force", 1e-300, "cfgcpf"), ("counts_per_torque", 1e-300, "cfgcpt"), ("counts_per_force", 1e300, "cfgcpf"),
+     ("rate_hz", 1e-300, "comrdtrate"), ("rate_hz", 1e9, "comrdtrate")],
+)  # fmt: skip
+def test_implausible_device_calibration_is_refused(setting, value, named):
+    from softtip.testing.netft_fake import FakeNetFT
+
+    with FakeNetFT(rate_hz=500) as dev:
+        setattr(dev, setting, value)  # what the HTTP side channel reports
+        r = run(*_stream_args(dev, "--duration", "1"), timeout=60)
+    no_traceback(r)
+    assert r.returncode == 1, r.stderr
+    assert named in r.stderr and "outside any Net F/T" in r.stderr
+
+
+@posix_only
+@pytest.mark.parametrize("target", ["/dev/null", "fifo", "fifo-reader-quits", "/dev/full", "/dev/stdout"])
+def test_stream_recording_onto_devices_and_pipes(tmp_path, log, target):
+    if target == "/dev/full" and not Path("/dev/full").is_char_device():
+        pytest.skip("needs /dev/full")
+    reader = None
+    dest = target
+    if target.startswith("fifo"):
+        dest = str(tmp_path / "fifo")
+        os.mkfifo(dest)
+        cmd = ["head", "-c", "10", dest] if target == "fifo-reader-quits" else ["cat", dest]
+        sink = open(tmp_path / "read.txt", "wb")  # noqa: SIM115 - closed below
+        reader = subprocess.Popen(cmd, stdout=sink)
+        sink.close()
+    try:
+        if target == "/dev/stdout":
+            r = subprocess.run(f"{SOFTTIP} stream --replay {log} --speed 0 -o /dev/stdout | cat", shell=True,
+                               capture_output=True, text=True, timeout=60)  # fmt: skip
+        else:
+            r = run("stream", "--replay", log, "--speed", "0", "-o", dest, timeout=60)
+    finally:
+        if reader is not None:
+            reader.wait(timeout=30)
+    out = (tmp_path / "read.txt").read_bytes() if reader is not None else b""
+    no_traceback(r)
+    if target in ("/dev/full", "fifo-reader-quits"):
+        assert r.returncode == 2, r.stderr
+        assert f"{dest}: cannot write the recording" in r.stderr
+    else:
+        assert r.returncode == 0, r.stderr
+    if target == "fifo":
+        assert len(out.splitlines()) == 501
+    if target == "/dev/stdout":
+        assert len(r.stdout.splitlines()) == 501
+
+
+def test_stream_rerun_save_into_a_missing_folder(log):
+    pytest.importorskip("rerun")
+    r = run("stream", "--replay", log, "--speed", "0", "--rerun-save", "/nonexistent/dir/x.rrd", timeout=60)
+    no_traceback(r)
+    assert r.returncode == 2 and "/nonexistent/dir/x.rrd" in r.stderr
