@@ -435,3 +435,100 @@ def test_stream_rerun_save_into_a_missing_folder(log):
     r = run("stream", "--replay", log, "--speed", "0", "--rerun-save", "/nonexistent/dir/x.rrd", timeout=60)
     no_traceback(r)
     assert r.returncode == 2 and "/nonexistent/dir/x.rrd" in r.stderr
+
+
+# ---------------------------------------------------------------------------------------
+# 2b. values near the float range and beyond the sensor's range: refused, never a contact
+
+
+def _with_cell(src: Path, dest: Path, row: int, column: str, value: str) -> Path:
+    lines = src.read_text().splitlines()
+    header = lines[0].split(",")
+    cells = lines[row].split(",")
+    cells[header.index(column)] = value
+    lines[row] = ",".join(cells)
+    dest.write_text("\n".join(lines) + "\n")
+    return dest
+
+
+#: just beyond a Nano17's range (50 N in x and y, 70 N in z, 0.5 N·m)
+_JUST_OVER = {"fx": "50.5", "fz": "70.5", "my": "0.51"}
+
+
+@pytest.mark.parametrize("value", ["1e30", "1e154", "1e200", "1e308", "-1e308", "over", "-over"])
+@pytest.mark.parametrize("column", ["fz", "fx", "my"])
+@pytest.mark.parametrize("chunked", [False, True], ids=["one-shot", "chunked"])
+def test_a_value_beyond_the_full_scale_is_refused(tmp_path, log, value, column, chunked):
+    value = value.replace("over", _JUST_OVER[column])
+    bad = _with_cell(log, tmp_path / "bad.csv", 101, column, value)
+    extra = ["--chunk-rows", "50"] if chunked else []
+    r = run("estimate", bad, "-o", tmp_path / "out.csv", *extra, timeout=60)
+    no_traceback(r)
+    assert r.returncode == 2, r.stderr
+    assert "bad.csv: sample 101" in r.stderr and f"{column} = " in r.stderr and "--full-scale nano17" in r.stderr
+    assert "peak" not in r.stderr
+    assert not (tmp_path / "out.csv").exists()
+
+
+@pytest.mark.parametrize("value", ["1e154", "1e308"])
+def test_full_scale_off_still_refuses_what_no_sensor_gives(tmp_path, log, value):
+    bad = _with_cell(log, tmp_path / "bad.csv", 101, "fz", value)
+    r = run("estimate", bad, "--full-scale", "off", timeout=60)
+    no_traceback(r)
+    assert r.returncode == 2 and "sample 101" in r.stderr
+
+
+def test_full_scale_presets_and_numbers(tmp_path, log):
+    bad = _with_cell(log, tmp_path / "bad.csv", 101, "fz", "200")
+    assert run("estimate", bad, "-o", tmp_path / "a.csv", "--full-scale", "nano25", timeout=60).returncode == 0
+    assert run("estimate", bad, "-o", tmp_path / "b.csv", "--full-scale", "300,1", timeout=60).returncode == 0
+    r = run("estimate", bad, "--full-scale", "mini40", timeout=60)
+    assert r.returncode == 0, r.stderr  # 200 N < 240 N in z
+    r = run("estimate", log, "--full-scale", "nano99", timeout=60)
+    assert r.returncode == 2 and "'--full-scale'" in r.stderr and "nano17" in r.stderr
+
+
+def test_check_full_scale_library():
+    import numpy as np
+
+    from softtip.core.fullscale import SENSOR_RANGES, check_full_scale, parse_full_scale
+    from softtip.errors import InputError
+
+    w = np.zeros((5, 6))
+    check_full_scale(np.arange(5.0), w, SENSOR_RANGES["nano17"], "x")
+    w[3, 2] = 1e30
+    with pytest.raises(InputError, match=r"x: sample 14 \(t = 3 s\): fz = 1e\+30 N"):
+        check_full_scale(np.arange(5.0), w, parse_full_scale("nano17"), "x", first_sample=10)
+    with pytest.raises(ValueError, match="expected a sensor"):
+        parse_full_scale("1,2,3")
+
+
+# ---------------------------------------------------------------------------------------
+# 2c. damaged metadata, OS failures: a message, never a traceback
+
+
+def test_a_bag_whose_message_count_is_not_a_number(tmp_path, log):
+    pytest.importorskip("rosbags")
+    r = run("estimate", log, "--to-bag", tmp_path / "bag", "-q", timeout=60)
+    assert r.returncode == 0, r.stderr
+    meta = tmp_path / "bag" / "metadata.yaml"
+    meta.write_text(meta.read_text().replace("message_count: 500", "message_count: lots"))
+    r = run("estimate", tmp_path / "bag", "--topic", "/softtip/wrench", timeout=60)
+    no_traceback(r)
+    assert r.returncode == 2
+    assert "metadata" in r.stderr and "message_count" in r.stderr
+
+
+def test_an_unreadable_input_is_an_error_not_a_traceback(tmp_path, log, monkeypatch):
+    from click.testing import CliRunner
+
+    import softtip.io.tables as tables
+    from softtip.cli import main
+
+    def denied(*args, **kwargs):
+        raise PermissionError(13, "Permission denied", str(log))
+
+    monkeypatch.setattr(tables, "read_log", denied)
+    result = CliRunner().invoke(main, ["estimate", str(log)])
+    assert result.exit_code == 2
+    assert f"{log}: Permission denied" in result.output

@@ -37,6 +37,10 @@ class _Group(click.Group):
         except InputError as exc:
             click.echo(f"softtip: error: {exc}", err=True)
             ctx.exit(2)
+        except OSError as exc:  # the last line of defence: an OS failure no command worded itself
+            where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
+            click.echo(f"softtip: error: {where}{exc.strerror or exc} (check the path and its permissions)", err=True)
+            ctx.exit(2)
         except KeyboardInterrupt as exc:
             # Ctrl-C, SIGTERM, SIGHUP: every temporary file is gone by now (unwound like an error)
             name = exc.signal_name if isinstance(exc, Interrupted) else "SIGINT"

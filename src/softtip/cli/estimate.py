@@ -26,6 +26,7 @@ from softtip.cli.options import (
 )  # fmt: skip
 from softtip.cli.types import check_lowpass, option
 from softtip.core.fingertip import load_fingertip
+from softtip.core.fullscale import DEFAULT_SENSOR, SENSOR_RANGES, check_full_scale, parse_full_scale
 from softtip.core.units import UNIT_SYSTEMS, wrench_to_si
 from softtip.errors import InputError
 from softtip.estimator import STATES
@@ -118,6 +119,11 @@ from the bag's /tf.
     "file over 24 MB or a Parquet file over 262144 rows; only for a CSV or Parquet file without --plot, --to-bag, --rerun, "
     "--rerun-save, --payload]",
 )  # fmt: skip
+@option(
+    "--full-scale", default=DEFAULT_SENSOR, show_default=True, metavar="SENSOR|FORCE,MOMENT|off",
+    help="The sensor's full-scale range: a sample beyond it (a corrupted row) stops the run naming it. A sensor ("
+    + ", ".join(SENSOR_RANGES) + "; rated range per axis), FORCE,MOMENT in N and N·m for every axis, or off.",
+)  # fmt: skip
 @estimator_options
 def estimate(**kwargs) -> None:
     from softtip.io.atomic import Outputs
@@ -149,9 +155,15 @@ def _estimate(
     frame_id=None,
     gravity_frame=None,
     chunk_rows=None,
+    full_scale=DEFAULT_SENSOR,
     **estimator_opts,
 ):
     from softtip.io.examples import EXAMPLE_PATH
+
+    try:
+        sensor_range = parse_full_scale(full_scale)
+    except ValueError as exc:
+        raise click.BadParameter(str(exc), param_hint="'--full-scale'") from None
     from softtip.io.tables import Log, read_log
 
     if example == (input_path is not None):
@@ -216,12 +228,13 @@ def _estimate(
             rows = chunk_rows or _auto_chunk_rows(input_path)
             if rows and _estimate_in_pieces(
                 input_path, units, rows, fingertip, config, estimator_opts, output=output, output_units=output_units,
-                tip=tip, quiet=quiet, save_bias=save_bias, outputs=outputs,
+                tip=tip, quiet=quiet, save_bias=save_bias, outputs=outputs, sensor_range=sensor_range,
             ):  # fmt: skip
                 return
         size = os.path.getsize(input_path) if os.path.isfile(input_path) else 0
         with progress_bar(size, "reading", unit="B") as bar:
             log = read_log(input_path, units=units, progress=bar.update)
+    check_full_scale(log.t, log.wrench, sensor_range, log.source, units=log.units)
     for note in log.warnings:  # repeated stamps, an implausible time scale, a cut last line
         click.echo(f"softtip: warning: {note}", err=True)
     if topic is not None and bag_log is None:
@@ -382,7 +395,8 @@ def _auto_chunk_rows(path: str) -> int | None:
 
 
 def _estimate_in_pieces(
-    input_path, units, rows, fingertip, config, estimator_opts, *, output, output_units, tip, quiet, save_bias, outputs
+    input_path, units, rows, fingertip, config, estimator_opts, *, output, output_units, tip, quiet, save_bias, outputs,
+    sensor_range=None,
 ) -> bool:
     """``softtip estimate`` piece by piece (:mod:`softtip.io.chunked`) into ``output`` (a path);
     ``False`` when the log holds something only the one-shot reader takes or words (nothing
@@ -407,10 +421,13 @@ def _estimate_in_pieces(
 
         def checked():
             first = True
+            n = 0
             for block in blocks:
                 if first:
                     check_lowpass(estimator_opts["lowpass"], block[0])
                     first = False
+                check_full_scale(block[0], block[1], sensor_range, input_path, first_sample=n, units=units or "si")
+                n += len(block[0])
                 yield block
 
         def run(out) -> None:

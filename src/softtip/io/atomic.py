@@ -429,8 +429,6 @@ class Outputs:
     def __exit__(self, exc_type, exc, tb) -> None:
         if exc_type is not None:
             self.discard()
-            if isinstance(exc, OSError) and not isinstance(exc, InputError):
-                raise InputError(f"cannot write an output ({exc.strerror or exc}); nothing was written") from None
         else:
             self.commit()
 

@@ -194,7 +194,14 @@ def read_bag(path: str | os.PathLike[str], topic: str | None = None, *, allow_pa
             "a .mcap or .db3 file, or a ROS 1 .bag file"
         ) from None
     try:
-        topics = reader.topics
+        try:
+            topics = reader.topics
+            counts = {name: int(info.msgcount) for name, info in topics.items()}
+        except (TypeError, ValueError, AttributeError, KeyError) as exc:  # e.g. message_count: lots
+            raise InputError(
+                f"{source}: the bag's metadata is damaged ({exc}); expected whole message counts "
+                "(metadata.yaml: message_count)"
+            ) from None
         if topic is None:
             wrench_topics = [
                 name for name, info in topics.items() if info.msgtype == WRENCH_TYPE
@@ -214,7 +221,7 @@ def read_bag(path: str | os.PathLike[str], topic: str | None = None, *, allow_pa
             raise InputError(
                 f"{source}: topic {topic!r} has type {info.msgtype}; expected {WRENCH_TYPE}; {_topic_list(topics)}"
             )
-        expected = int(info.msgcount)
+        expected = counts[topic]
         if expected < 0:
             raise InputError(
                 f"{source}: topic {topic!r}: the bag's metadata lists {expected} messages; expected a count of "
