@@ -532,3 +532,61 @@ def test_an_unreadable_input_is_an_error_not_a_traceback(tmp_path, log, monkeypa
     result = CliRunner().invoke(main, ["estimate", str(log)])
     assert result.exit_code == 2
     assert f"{log}: Permission denied" in result.output
+
+
+# ---------------------------------------------------------------------------------------
+# 5. --allow-partial reads the messages before the damage of a cut MCAP or ROS 1 bag
+
+
+@pytest.fixture(scope="module")
+def full_bags(tmp_path_factory):
+    pytest.importorskip("rosbags")
+    d = tmp_path_factory.mktemp("bags")
+    for args in (["--to-bag", d / "mcap", "--ros-distro", "jazzy"], ["--to-bag", d / "ros1.bag"]):
+        r = run("estimate", EXAMPLE_PATH, "-q", *args, timeout=120)
+        assert r.returncode == 0, r.stderr
+    mcap = next((d / "mcap").glob("*.mcap"))
+    return {"mcap": mcap, "mcap-dir": d / "mcap", "ros1": d / "ros1.bag"}
+
+
+def _read(path, *more):
+    from softtip.io.bag import read_bag
+
+    return read_bag(path, "/softtip/wrench", **dict(more))
+
+
+@pytest.mark.parametrize(
+    "kind, fraction",
+    [("mcap", f) for f in (0.1, 0.3, 0.5, 0.7, 0.9, "footer")] + [("mcap-dir", 0.5)] + [("ros1", f) for f in (0.5, 0.75, 0.9, 0.99)],
+)
+def test_allow_partial_reads_a_cut_bag(tmp_path, full_bags, kind, fraction):
+    import numpy as np
+
+    src = full_bags["mcap" if kind == "mcap-dir" else kind]
+    data = src.read_bytes()
+    if fraction == "footer":  # the summary and footer gone, the data section whole
+        end = data.rfind(b"\x0f")  # DataEnd record
+        cut = data[: end if end > 0 else len(data) - 64]
+    else:
+        cut = data[: int(len(data) * fraction)]
+    if kind == "mcap-dir":
+        dest = tmp_path / "bag"
+        shutil.copytree(full_bags["mcap-dir"], dest)
+        next(dest.glob("*.mcap")).write_bytes(cut)
+    else:
+        dest = tmp_path / src.name
+        dest.write_bytes(cut)
+    r = run("estimate", dest, "--topic", "/softtip/wrench", timeout=60)
+    no_traceback(r)
+    assert r.returncode == 2 and "--allow-partial" in r.stderr
+    r = run("estimate", dest, "--topic", "/softtip/wrench", "--allow-partial", "-o", tmp_path / "out.csv", timeout=60)
+    no_traceback(r)
+    assert r.returncode == 0, r.stderr
+    assert "damaged bag" in r.stderr
+    whole, part = _read(src), _read(dest, ("allow_partial", True))
+    k = len(part.t)
+    assert 0 < k <= len(whole.t)
+    if fraction not in ("footer",) and float(fraction) >= 0.3:
+        assert k >= 0.5 * float(fraction) * len(whole.t)
+    np.testing.assert_array_equal(part.wrench, whole.wrench[:k])
+    np.testing.assert_array_equal(part.stamps_ns, whole.stamps_ns[:k])
