@@ -590,3 +590,68 @@ def test_allow_partial_reads_a_cut_bag(tmp_path, full_bags, kind, fraction):
         assert k >= 0.5 * float(fraction) * len(whole.t)
     np.testing.assert_array_equal(part.wrench, whole.wrench[:k])
     np.testing.assert_array_equal(part.stamps_ns, whole.stamps_ns[:k])
+
+
+# ---------------------------------------------------------------------------------------
+# 6. extra columns: carried with their Arrow type, never dropped
+
+
+def _parquet_with_extras(path: Path, late_nulls: bool = False) -> Path:
+    import datetime
+
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from softtip.io.examples import load_example
+
+    log = load_example()
+    n = len(log.t)
+    cols = {"t": pa.array(log.t), **{k: pa.array(log.wrench[:, i]) for i, k in enumerate(("fx", "fy", "fz", "mx", "my", "mz"))}}
+    cols["blob"] = pa.array([bytes([i % 256, 0xFF]) for i in range(n)], pa.binary())
+    cols["lst"] = pa.array([[i, i + 1] for i in range(n)], pa.list_(pa.int64()))
+    cols["st"] = pa.array([{"a": i, "b": "x"} for i in range(n)])
+    cols["ts"] = pa.array([datetime.datetime(2024, 1, 1) + datetime.timedelta(seconds=i) for i in range(n)], pa.timestamp("us"))
+    nulls = (lambda i: i > 400 and i % 7 == 0) if late_nulls else (lambda i: i % 7 == 0)
+    cols["nint"] = pa.array([None if nulls(i) else i for i in range(n)], pa.int64())
+    cols["state"] = pa.array([f"s{i}" for i in range(n)])
+    cols["input_state"] = pa.array([f"i{i}" for i in range(n)])
+    cols["note"] = pa.array([f"n{i}" for i in range(n)])
+    pq.write_table(pa.table(cols), path)
+    return path
+
+
+@pytest.mark.parametrize("late_nulls", [False, True], ids=["nulls", "late-nulls"])
+@pytest.mark.parametrize("chunked", [False, True], ids=["one-shot", "chunked"])
+def test_parquet_extra_columns_keep_their_arrow_type(tmp_path, chunked, late_nulls):
+    import pyarrow.parquet as pq
+
+    src = _parquet_with_extras(tmp_path / "in.parquet", late_nulls)
+    out = tmp_path / "out.parquet"
+    r = run("estimate", src, "-o", out, *(["--chunk-rows", "50"] if chunked else []), timeout=120)
+    no_traceback(r)
+    assert r.returncode == 0, r.stderr
+    assert "input column 'state' is named like an output column; written as 'input_input_state'" not in r.stderr
+    assert "'state' is named like an output column; written as 'input_state'" in r.stderr
+    a, b = pq.read_table(src), pq.read_table(out)
+    for name in ("blob", "lst", "st", "ts", "nint", "note"):
+        assert b.schema.field(name).type == a.schema.field(name).type, name
+        assert b.column(name).to_pylist() == a.column(name).to_pylist(), name
+    assert b.column("input_state").to_pylist() == a.column("state").to_pylist()
+    assert b.column("input_input_state").to_pylist() == a.column("input_state").to_pylist()
+    assert b.column("state").to_pylist()[0] == "none"
+    assert b.schema.metadata[b"softtip.units"] == b"si"
+
+
+def test_csv_extra_column_named_like_an_output_is_renamed_with_a_warning(tmp_path, log):
+    lines = log.read_text().splitlines()
+    lines = [lines[0] + ",state,input_state"] + [f"{line},mine{i},other{i}" for i, line in enumerate(lines[1:])]
+    src = tmp_path / "in.csv"
+    src.write_text("\n".join(lines) + "\n")
+    r = run("estimate", src, "-o", tmp_path / "out.csv", timeout=60)
+    assert r.returncode == 0, r.stderr
+    assert "written as 'input_state'" in r.stderr and "written as 'input_input_state'" in r.stderr
+    import csv
+
+    with open(tmp_path / "out.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert rows[3]["input_state"] == "mine3" and rows[3]["input_input_state"] == "other3"

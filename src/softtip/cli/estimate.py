@@ -267,7 +267,11 @@ def _estimate(
         raise click.UsageError(str(exc)) from None
     check_units(est, fingertip, config, log.units, log.source)
 
-    columns = _output_columns(est, log.extra, output_units)
+    carried = _carried(None if example or bag_log is not None else input_path, output)
+    notes: list[str] = []
+    columns = _output_columns(est, log.extra, output_units, carried, notes)
+    for note in notes:
+        click.echo(f"softtip: warning: {note}", err=True)
 
     source = "example grasp" if example else Path(log.source).name
     _write_estimate_outputs(
@@ -276,6 +280,7 @@ def _estimate(
         to_bag=to_bag, rerun_spawn=rerun_spawn, rerun_save=rerun_save, ros_distro=ros_distro, frame_id=frame_id,
         metadata=parquet_metadata(fingertip, tip, output_units, log), outputs=outputs, staged_bag=staged_bag,
     )  # fmt: skip
+    _carry(input_path, output, outputs, list(est.columns(units=output_units)), list(log.extra), carried)
 
     from softtip.estimator.summary import summarise_contacts
 
@@ -408,6 +413,9 @@ def _estimate_in_pieces(
     from softtip.io.tables import NotStreamable, TableWriter, iter_log
 
     parquet = output is not None and output.lower().endswith(".parquet")
+    carried = _carried(input_path, output)
+    names: dict[str, list[str]] = {}  # the first piece's output and extra column names
+    notes: list[str] = []
     totals = _RunTotals()
     vote = LeverVote(LEVER_MARGIN * fingertip_reach(fingertip))  # the units check, over the whole log
     total = None
@@ -435,7 +443,9 @@ def _estimate_in_pieces(
             try:
                 for est, extra in estimate_pieces(checked(), fingertip, config, rows):
                     vote.add(lever_distances(est.wrench[~est.taring], max(0.1, config.contact_threshold)))
-                    columns = _output_columns(est, extra, output_units)
+                    columns = _output_columns(est, extra, output_units, carried, notes if not names else None)
+                    names.setdefault("est", list(est.columns(units=output_units)))
+                    names.setdefault("extra", list(extra))
                     writer.write(columns)
                     bar.update(len(est))
                     totals.add(est, summarise_contacts(est) if not quiet else [])
@@ -448,6 +458,8 @@ def _estimate_in_pieces(
             try:
                 with outputs.get(output).open() as fh:  # the staged file: put in place with the others
                     run(fh)
+                if names:
+                    _carry(input_path, output, outputs, names["est"], names["extra"], carried)
             except OSError as exc:
                 raise cannot_write(output, exc) from None
         except NotStreamable:  # nothing written: the one-shot run takes it, or says what is wrong
@@ -456,7 +468,7 @@ def _estimate_in_pieces(
             if isinstance(exc, InputError):
                 raise
             raise click.UsageError(str(exc)) from None
-    for note in blocks.warnings():
+    for note in [*notes, *blocks.warnings()]:
         click.echo(f"softtip: warning: {note}", err=True)
     _report_run(
         totals, input_path=input_path, output=output, plot_path=None, to_bag=None, rerun_save=None,
@@ -465,12 +477,41 @@ def _estimate_in_pieces(
     return True
 
 
-def _output_columns(est, extra, output_units: str) -> dict:
-    """The output table: the estimates' columns in ``output_units`` (``Estimates.columns``), then the input's extra columns."""
+def _output_columns(est, extra, output_units: str, carried=(), notes: list[str] | None = None) -> dict:
+    """The output table: the estimates' columns in ``output_units`` (``Estimates.columns``), then the input's
+    extra columns (renamed ``input_NAME`` when named like an output column, said in ``notes``; a ``carried``
+    column as a placeholder for :func:`softtip.io.carry.carry_columns`)."""
+    from softtip.io.carry import extra_names, placeholder
+
     columns = est.columns(units=output_units)
+    names = extra_names(list(columns), list(extra))
     for name, values in extra.items():
-        columns[name if name not in columns else f"input_{name}"] = np.asarray(values)
+        columns[names[name]] = placeholder(len(est)) if name in carried else np.asarray(values)
+        if notes is not None and names[name] != name:
+            notes.append(f"input column {name!r} is named like an output column; written as {names[name]!r}")
     return columns
+
+
+def _carried(input_path, output) -> list[str]:
+    """The input's Parquet extra columns to carry with their Arrow type (Parquet in and out), else none."""
+    if input_path in (None, "-") or output is None or not (
+        input_path.lower().endswith(".parquet") and output.lower().endswith(".parquet")
+    ):
+        return []
+    from softtip.io.carry import typed_extras
+    from softtip.io.tables import REQUIRED_COLUMNS
+
+    return typed_extras(input_path, tuple(REQUIRED_COLUMNS))
+
+
+def _carry(input_path, output, outputs, est_names: list[str], extra_names_in: list[str], carried: list[str]) -> None:
+    """Put the carried columns (:func:`_carried`) into the staged output."""
+    if not carried:
+        return
+    from softtip.io.carry import carry_columns, extra_names
+
+    names = extra_names(est_names, extra_names_in)
+    carry_columns(input_path, outputs.get(output).tmp, {c: names[c] for c in carried})
 
 
 def _write_estimate_outputs(
