@@ -655,3 +655,28 @@ def test_csv_extra_column_named_like_an_output_is_renamed_with_a_warning(tmp_pat
     with open(tmp_path / "out.csv", newline="") as fh:
         rows = list(csv.DictReader(fh))
     assert rows[3]["input_state"] == "mine3" and rows[3]["input_input_state"] == "other3"
+
+
+@has_dev_full
+@pytest.mark.slow
+def test_fuse_outputs_are_one_transaction(tmp_path):
+    pytest.importorskip("rerun")
+    import math
+
+    import softtip
+    from softtip.sim import Plate
+    from softtip.sim.hand import simulate_two_finger, write_two_finger
+
+    g = simulate_two_finger(softtip.murakami2006(), Plate(0.001), math.radians(-45), n_elements=2000, duration=4.0)
+    write_two_finger(g, tmp_path / "grasp")
+    (tmp_path / "out.csv").write_text("old")
+    before = snapshot(tmp_path)
+    grasp = tmp_path / "grasp"
+    args = ["fuse", grasp / "right.csv", grasp / "left.csv", "--hand", grasp / "hand.toml", "-o", tmp_path / "out.csv"]
+    r = run(*args, "--plot", tmp_path / "p.png", "--rerun-save", "/dev/full", timeout=120)
+    no_traceback(r)
+    assert r.returncode == 2 and "/dev/full" in r.stderr
+    assert snapshot(tmp_path) == before
+    r = run(*args, "--plot", tmp_path / "p.png", timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert (tmp_path / "out.csv").read_text().startswith("t,") and (tmp_path / "p.png").stat().st_size > 10_000

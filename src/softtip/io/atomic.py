@@ -444,11 +444,11 @@ def commit_all(files: Iterable[AtomicFile]) -> None:
     """Put several outputs in place: devices and pipes first (they can block or fail), then the renames.
 
     A failure (or an interrupt) while writing into a device leaves every regular file
-    untouched; the renames that follow do not fail in practice.
+    untouched; a failing rename restores the files already replaced (:class:`Outputs`).
     """
-    files = list(files)
-    for f in sorted(files, key=lambda f: not f.is_device):
-        f.commit()
+    transaction = Outputs()
+    transaction._files = list(files)
+    transaction.commit()
 
 
 @contextlib.contextmanager
