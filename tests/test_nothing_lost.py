@@ -680,3 +680,24 @@ def test_fuse_outputs_are_one_transaction(tmp_path):
     r = run(*args, "--plot", tmp_path / "p.png", timeout=120)
     assert r.returncode == 0, r.stderr
     assert (tmp_path / "out.csv").read_text().startswith("t,") and (tmp_path / "p.png").stat().st_size > 10_000
+
+
+def test_tiny_pieces_give_the_one_shot_result_quickly(tmp_path):
+    import numpy as np
+
+    from softtip.io.examples import load_example
+    from softtip.io.tables import write_table
+
+    ex = load_example()
+    k = 40  # 2e4 rows: the example grasp again and again
+    t = np.concatenate([ex.t + i * (ex.t[-1] + ex.t[1]) for i in range(k)])
+    w = np.tile(ex.wrench, (k, 1))
+    src = tmp_path / "long.csv"
+    write_table({"t": t, **{c: w[:, i] for i, c in enumerate(("fx", "fy", "fz", "mx", "my", "mz"))}}, src, float_format="%.17g")
+    assert run("estimate", src, "-o", tmp_path / "one.csv", "-q", timeout=120).returncode == 0
+    for n in ("1", "7"):
+        t0 = time.monotonic()
+        r = run("estimate", src, "-o", tmp_path / f"p{n}.csv", "-q", "--chunk-rows", n, timeout=120)
+        assert r.returncode == 0, r.stderr
+        assert time.monotonic() - t0 < 60  # minutes before (a piece per out-of-contact sample)
+        assert (tmp_path / f"p{n}.csv").read_bytes() == (tmp_path / "one.csv").read_bytes()
