@@ -114,7 +114,7 @@ from the bag's /tf.
 @option("--save-bias", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Write the bias used (the tare's) to FILE.toml, for --bias of a later run.")
 @option(
     "--chunk-rows", type=click.IntRange(min=1), metavar="N",
-    help="Process INPUT in pieces of at least N rows (and at least 4096), in bounded memory, with the result of the one-shot run (a piece ends "
+    help="Process INPUT in pieces of at least N rows (and at least 1/256 of the log, up to 8192), in bounded memory, with the result of the one-shot run (a piece ends "
     "only out of contact: a contact longer than N rows makes its piece as long). [default: pieces of 131072 rows for a CSV "
     "file over 24 MB or a Parquet file over 262144 rows; only for a CSV or Parquet file without --plot, --to-bag, --rerun, "
     "--rerun-save, --payload]",
@@ -379,9 +379,23 @@ def _report_run(
 #: the same output, in less memory and, measured on a 1e6-row log, 2.3 s less system CPU
 #: time (the one-shot run's page faults on 1.3 GB of fresh arrays).
 AUTO_CHUNK_CSV_BYTES = 24_000_000
-#: The smallest piece ``--chunk-rows`` makes (a smaller N is taken as this): the result is the
-#: same whatever the piece size, the time is not.
-MIN_PIECE_ROWS = 4096
+#: ``--chunk-rows`` makes pieces of at least 1/MAX_PIECES of the log (a smaller N is taken as
+#: that): the result is the same whatever the piece size, the time is not (a fixed cost per piece).
+MAX_PIECES = 256
+MAX_FLOOR_ROWS = 8192
+
+
+def _row_estimate(path: str) -> int:
+    """The rows of a log, or an upper estimate (a CSV row takes at least 14 bytes: 7 one-digit cells)."""
+    try:
+        if path.lower().endswith(".parquet"):
+            import pyarrow.parquet as pq
+
+            with pq.ParquetFile(path) as pf:
+                return int(pf.metadata.num_rows)
+        return os.path.getsize(path) // 14
+    except Exception:  # noqa: BLE001 - unreadable: the reader says why
+        return 0
 AUTO_CHUNK_PARQUET_ROWS = 262_144
 
 
@@ -416,8 +430,9 @@ def _estimate_in_pieces(
     from softtip.io.tables import NotStreamable, TableWriter, iter_log
 
     # pieces of a few rows give the same result, but each piece costs a fixed overhead
-    # (--chunk-rows 1 took minutes for 5e4 rows): never fewer than MIN_PIECE_ROWS
-    rows = max(rows, MIN_PIECE_ROWS)
+    # (--chunk-rows 1 took minutes for 5e4 rows): at most about MAX_PIECES pieces
+    # (and memory stays bounded: that floor is at most MAX_FLOOR_ROWS)
+    rows = max(rows, min(-(-_row_estimate(input_path) // MAX_PIECES), MAX_FLOOR_ROWS))
     parquet = output is not None and output.lower().endswith(".parquet")
     carried = _carried(input_path, output)
     names: dict[str, list[str]] = {}  # the first piece's output and extra column names
