@@ -701,3 +701,18 @@ def test_tiny_pieces_give_the_one_shot_result_quickly(tmp_path):
         assert r.returncode == 0, r.stderr
         assert time.monotonic() - t0 < 60  # minutes before (a piece per out-of-contact sample)
         assert (tmp_path / f"p{n}.csv").read_bytes() == (tmp_path / "one.csv").read_bytes()
+
+
+def test_out_of_memory_is_a_message_not_a_traceback(log, monkeypatch):
+    from click.testing import CliRunner
+
+    import softtip.io.tables as tables
+    from softtip.cli import main
+
+    def exhausted(*args, **kwargs):
+        raise MemoryError
+
+    monkeypatch.setattr(tables, "read_log", exhausted)
+    result = CliRunner().invoke(main, ["estimate", str(log)])
+    assert result.exit_code == 1
+    assert "out of memory" in result.output and "--chunk-rows" in result.output

@@ -37,6 +37,13 @@ class _Group(click.Group):
         except InputError as exc:
             click.echo(f"softtip: error: {exc}", err=True)
             ctx.exit(2)
+        except MemoryError:
+            click.echo(
+                "softtip: error: out of memory; for a large log write to a file in pieces (-o FILE --chunk-rows N), "
+                "or free memory (nothing was written)",
+                err=True,
+            )
+            ctx.exit(1)
         except OSError as exc:  # the last line of defence: an OS failure no command worded itself
             where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
             click.echo(f"softtip: error: {where}{exc.strerror or exc} (check the path and its permissions)", err=True)
