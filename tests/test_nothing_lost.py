@@ -83,6 +83,7 @@ def test_a_failing_output_leaves_every_file_as_it_was(tmp_path, log, extra, exis
     assert snapshot(tmp_path) == before
 
 
+@pytest.mark.slow
 def test_all_outputs_appear_together(tmp_path, log):
     pytest.importorskip("rosbags")
     (tmp_path / "out.parquet").write_bytes(b"old")
