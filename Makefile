@@ -1,13 +1,16 @@
-# Quick start: `make demo` reproduces the papers' experiments on the simulator and runs
-# softtip on the shipped example grasp; `make test` runs the tests.
-# Both create ./.venv on first use: `demo` installs softtip alone, `test` adds the test tools
-# and every optional extra (numba, ROS bags, Net F/T, the Rerun viewer: about 1.3 GB).
+# Quick start: `make demo` runs softtip on the shipped example grasp and plots it (seconds);
+# `make test` runs the tests. `make reproduce` is the full reproduction of the papers'
+# experiments on the simulator (52 simulated grasps, about a minute of CPU time);
+# `make docs` builds the documentation site into docs/_build/html, warnings as errors.
+# All create ./.venv on first use: `demo` and `reproduce` install softtip alone, `test` adds
+# the test and docs tools and every optional extra (numba, ROS bags, Net F/T, the Rerun
+# viewer: about 1.3 GB), `docs` the docs tools.
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 OUT ?= demo-output
 
-.PHONY: demo test bench clean
+.PHONY: demo reproduce test docs bench clean
 
 $(BIN)/python:
 	@echo "creating $(VENV) with $(PYTHON)"
@@ -21,15 +24,29 @@ $(VENV)/.demo-installed: pyproject.toml | $(BIN)/python
 	touch $@
 
 $(VENV)/.test-installed: pyproject.toml | $(BIN)/python
-	@echo "installing softtip with pytest, pytest-xdist, hypothesis and every extra into $(VENV) (about 1.3 GB, a few minutes on first use)"
-	$(BIN)/pip install --quiet -e '.[test]'
+	@echo "installing softtip with pytest, pytest-xdist, hypothesis, the docs tools and every extra into $(VENV) (about 1.3 GB, a few minutes on first use)"
+	$(BIN)/pip install --quiet -e '.[test,docs]'
+	touch $@ $(VENV)/.demo-installed $(VENV)/.docs-installed
+
+$(VENV)/.docs-installed: pyproject.toml | $(BIN)/python
+	@echo "installing softtip with Sphinx, numpydoc, sphinx-gallery, myst-parser and furo into $(VENV)"
+	$(BIN)/pip install --quiet -e '.[docs]'
 	touch $@ $(VENV)/.demo-installed
 
 demo: $(VENV)/.demo-installed
 	mkdir -p $(OUT)
-	$(BIN)/softtip reproduce --out $(OUT)/reproduction
 	$(BIN)/softtip estimate --example -o $(OUT)/estimates.csv --plot $(OUT)/estimates.png
-	@echo "wrote $(OUT)/reproduction/ (figures, summary.md) and $(OUT)/estimates.csv, .png"
+	@echo "wrote $(OUT)/estimates.csv and $(OUT)/estimates.png; the papers' experiments: make reproduce"
+
+reproduce: $(VENV)/.demo-installed
+	mkdir -p $(OUT)
+	$(BIN)/softtip reproduce --out $(OUT)/reproduction
+	@echo "wrote $(OUT)/reproduction/ (figures, summary.md)"
+
+# the site, warnings as errors; the gallery's examples run (cached while unchanged)
+docs: $(VENV)/.docs-installed
+	$(BIN)/python -m sphinx -W --keep-going -b html docs docs/_build/html
+	@echo "open docs/_build/html/index.html"
 
 # one worker per core (pytest-xdist), each test file on one worker so that its module's
 # simulations run once
@@ -42,4 +59,4 @@ bench: $(VENV)/.test-installed
 	$(BIN)/python benchmarks/bench_live.py
 
 clean:
-	rm -rf $(VENV) $(OUT) .pytest_cache .hypothesis
+	rm -rf $(VENV) $(OUT) .pytest_cache .hypothesis docs/_build docs/auto_examples dist

@@ -322,8 +322,10 @@ def test_a_plane_against_an_edge_is_flagged_once_rocked_and_unconfirmed_before(t
     assert not np.any(np.char.find(f["flag"][before].astype(str), "area") >= 0)
     assert set(f["evidence"][before]) <= {"unconfirmed", ""}
     after = f["t"] > 8.0  # rocked about both axes
-    assert np.mean(np.char.find(f["flag"][after].astype(str), "area") >= 0) > 0.9
-    assert np.mean(f["grasp"][after] == "line_and_face") > 0.9
+    # area is a reading of the current window: it may lapse briefly where one rocking axis
+    # hands over to the next
+    assert np.mean(np.char.find(f["flag"][after].astype(str), "area") >= 0) > 0.85
+    assert np.mean(f["grasp"][after] == "line_and_face") > 0.85
     assert "flagged area" in r.stderr
 
 

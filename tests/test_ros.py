@@ -58,6 +58,9 @@ def test_payloads_publish_only_what_is_defined(stream):
         assert (p.normal is None) == (est.state == "none")
         assert (p.edge_direction is None) == (est.state != "line")
         assert (p.line_evidence in ("confirmed", "unconfirmed")) == (est.state == "line")
+        assert (p.angle_std is not None) == (est.state == "line" and math.isfinite(est.angle_std))
+        if p.angle_std is not None:
+            assert p.angle_std == est.angle_std > 0
         if p.edge_direction is not None:
             assert math.isclose(np.linalg.norm(p.edge_direction), 1.0, rel_tol=1e-12)
             assert abs(np.dot(p.edge_direction, p.normal)) < 1e-12

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from softtip.core.fingertip import Ellipsoid, Sphere, murakami2006
+from softtip.core.fingertip import ImplicitSurface, Sphere, murakami2006
 from softtip.sim import SensorModel, discretise_skin
 
 
@@ -30,8 +30,10 @@ def test_sphere_mesh():
     assert len(skin) == 5_000
     assert skin.total_area == pytest.approx(2 * math.pi * 0.015**2 * 1.5, rel=1e-12)  # down to 120° from the top
     assert np.abs(tip.surface(skin.centres)).max() < 1e-12
-    with pytest.raises(TypeError):
-        discretise_skin(Ellipsoid((0.01, 0.01, 0.02)))
+    # a surface given as code has no simulator skin (the ellipsoid has one: tests/test_shapes.py)
+    ball = ImplicitSurface(lambda p: np.linalg.norm(p, axis=-1) - 0.01, lambda p: p / np.linalg.norm(p, axis=-1, keepdims=True), (0, 0, 0), 0.01)
+    with pytest.raises(TypeError, match="no skin"):
+        discretise_skin(ball)
 
 
 def test_sensor_noise_bias_and_quantisation():

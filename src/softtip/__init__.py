@@ -28,7 +28,15 @@ from softtip.estimator import STATES, Estimates, Estimator, EstimatorConfig, Est
 from softtip.io.examples import EXAMPLE_PATH, load_example
 from softtip.io.sources import run
 
-__version__ = "0.1.0"
+try:  # written by setuptools-scm from the git tag when softtip is built or installed
+    from softtip._version import __version__
+except ImportError:  # a source tree on sys.path that was never built: the installed metadata, if any
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        __version__ = version("softtip")
+    except PackageNotFoundError:
+        __version__ = "0+unknown"
 
 __all__ = [
     "Capsule",

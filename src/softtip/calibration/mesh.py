@@ -290,16 +290,13 @@ def calibrate_mesh_file(
     ``.stl`` / ``.obj`` / ``.ply`` with ``mesh_units`` (placed as drawn)."""
     from pathlib import Path
 
-    from softtip.core.fingertip import load_fingertip
-    from softtip.core.mesh import mesh_fingertip_from_table
+    from softtip.core.mesh import load_mesh_fingertip, mesh_fingertip_from_table
 
     path = Path(mesh)
     if path.suffix.lower() == ".toml":
         if mesh_units is not None:
             raise InputError("--mesh-units is for a bare mesh file; a fingertip .toml gives mesh_units itself")
-        tip = load_fingertip(path)
-        if not isinstance(tip, MeshFingertip):
-            raise InputError(f"{path}: not a mesh fingertip (shape = {tip.kind!r})")
+        tip = load_mesh_fingertip(path)
     else:
         if mesh_units is None:
             raise InputError(f"{path}: give --mesh-units (mesh files carry no units)")

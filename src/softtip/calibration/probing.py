@@ -1,4 +1,4 @@
-"""Fingertip calibration: the skin geometry's offset and radius from plane presses.
+"""Fingertip calibration: the skin geometry's offset and radius (or semi-axes) from plane presses.
 
 Why the obvious residual does not work
 --------------------------------------
@@ -40,6 +40,10 @@ of the force direction is checked, and after the fit the conditioning of the Jac
 The capsule's cylinder axis is parallel to ``z``; its cap centre ``(x, y, length)`` and
 radius are fitted from presses on the cap (contact normals at least 20° above the equator;
 others are counted and left out), and ``(x, y)`` becomes the capsule's ``axis_offset``.
+The axis-aligned ellipsoid's centre and three semi-axes are fitted the same way: the contact
+point of press ``k`` is the skin point with outward normal ``n_k``, ``c + D² n_k / |D n_k|``
+(``D = diag(a, b, c)``), moved in by the indentation. Each shape says what it fits (its
+:class:`~softtip.core.shape.PressModel`, the shape protocol); :data:`SHAPES` lists them.
 
 Noise: errors in variables
 --------------------------
@@ -86,9 +90,10 @@ from softtip.core._vec import cross as _cross
 from softtip.core._vec import skew as _skew
 from softtip.core._vec import tangent_basis as _tangent_basis
 from softtip.core._xp import NP
-from softtip.core.contact import sphere_kernel
-from softtip.core.fingertip import Capsule, Fingertip, Sphere
+from softtip.core.fingertip import SHAPES as _ALL_SHAPES
+from softtip.core.fingertip import Fingertip
 from softtip.core.noise import NANO17, SensorNoise
+from softtip.core.shape import PressModel, sphere_kernel
 from softtip.errors import InputError
 from softtip.io.atomic import atomic_write_text
 
@@ -117,7 +122,8 @@ steel or glass plate; not foam, rubber or cloth) that you can press it against.
 2. Press 20 to 40 times, each at a different spot of the skin:
    - where: spread the spots evenly over the part that touches things, from the very tip
      out to 60° from it, all the way round (a capsule: only the rounded cap, not lower
-     than 20° above where the cap meets the cylinder);
+     than 20° above where the cap meets the cylinder; an ellipsoid: out to 85°, down to
+     its widest part, which separates its height from its length);
    - how hard: vary it, about half the presses light (1-2 N, 100-200 g on a kitchen
      scale) and half firm (5-8 N), each held for 1-2 s: the spread of forces separates
      the radius from the skin's indentation (presses all at 2-4 N leave the two
@@ -143,12 +149,9 @@ steel or glass plate; not foam, rubber or cloth) that you can press it against.
 Try it without hardware: softtip calibrate --example --shape sphere
 """
 
-#: Shapes :func:`calibrate_fingertip` can fit.
-SHAPES = ("sphere", "capsule")
-
-# Capsule presses whose contact normal is less than this far above the equator may touch
-# the cylinder side (the contact patch reaches ~15° around its centre at a few N).
-_CAP_MIN_NZ = math.sin(math.radians(20.0))
+#: Shapes :func:`calibrate_fingertip` can fit (those of :data:`softtip.core.fingertip.SHAPES`
+#: calibrated from presses).
+SHAPES = tuple(name for name, cls in _ALL_SHAPES.items() if cls.calibrates == "presses")
 # The fit is refused when the correlation matrix of the geometry parameters has a
 # condition number above this (a combination of them is undetermined by the data).
 _MAX_CONDITION = 1e4
@@ -172,18 +175,22 @@ class Calibration:
 
     Attributes
     ----------
-    tip : Sphere or Capsule
+    tip : Sphere, Capsule or Ellipsoid
         The calibrated fingertip.
     center : ndarray, shape (3,)
-        Sphere centre, or the capsule's cap centre ``(x, y, length)``, m, sensor frame.
+        Sphere or ellipsoid centre, or the capsule's cap centre ``(x, y, length)``, m, sensor frame.
     radius : float
-        Skin radius, m.
+        Skin radius, m (NaN for an ellipsoid: see :attr:`parameters`).
     compliance : float
         Indentation coefficient ``κ``, m/√N: the surface is ``κ √F_n`` below the skin.
     center_std : ndarray, shape (3,)
         Standard deviations of ``center``, m.
     radius_std, compliance_std : float
         Standard deviations, m and m/√N.
+    parameters, parameters_std : ndarray, shape (P,)
+        The shape's fitted parameters (the names of its
+        :attr:`~softtip.core.shape.PressModel.names`: the centre, then the radius or the
+        ellipsoid's semi-axes) and their standard deviations, m.
     residual_rms : float
         RMS of the tangential moment residual, N·m.
     noise_ratio : float
@@ -229,13 +236,20 @@ class Calibration:
     n_samples: int
     condition: float
     start_shift: float
+    parameters: NDArray[np.float64] = field(repr=False)
+    parameters_std: NDArray[np.float64] = field(repr=False)
     normals: NDArray[np.float64] = field(repr=False)
     std_method: str = "curvature"
 
     @property
     def shape(self) -> str:
-        """``"sphere"`` or ``"capsule"``."""
+        """The shape's name (:data:`SHAPES`)."""
         return self.tip.kind
+
+    @property
+    def model(self) -> PressModel:
+        """What was fitted: the shape's :class:`~softtip.core.shape.PressModel`."""
+        return self.tip.press_model()
 
     @property
     def axis_offset(self) -> NDArray[np.float64]:
@@ -266,7 +280,7 @@ class Calibration:
         ``n_presses (std / target)²`` presses like these are needed. With the default
         0.1 mm the centre and radius stay within 0.2 mm in 95 % of calibrations.
         """
-        stds = {"radius": self.radius_std, "centre x": self.center_std[0], "centre y": self.center_std[1], "centre z": self.center_std[2]}
+        stds = self.model.stds(self.parameters_std)
         name = max(stds, key=lambda k: stds[k])
         worst = stds[name]
         if not worst > target:
@@ -293,20 +307,16 @@ class Calibration:
     def summary(self) -> str:
         """Human-readable report, mm."""
         mm = 1e3
-        c, cs = self.center * mm, self.center_std * mm
-        name = "cap centre" if self.shape == "capsule" else "centre"
+        head, tail = self.model.report(self.parameters, self.parameters_std)
         lines = [
             f"shape {self.shape}: {self.n_presses} presses ({self.n_skipped} left out), {self.n_samples} samples",
-            f"  {name:10s} x = {c[0]:+.3f} ± {cs[0]:.3f} mm, y = {c[1]:+.3f} ± {cs[1]:.3f} mm, "
-            f"z = {c[2]:+.3f} ± {cs[2]:.3f} mm",
-            f"  radius     {self.radius * mm:.3f} ± {self.radius_std * mm:.3f} mm",
+            *head,
             f"  indentation {self.compliance * mm:.4f} ± {self.compliance_std * mm:.4f} mm/√N "
             f"({self.compliance * mm * 2.0:.3f} mm at 4 N)",
             f"  residual   {self.residual_rms * mm:.4f} N·mm RMS (tangential moment), {self.noise_ratio:.2f} × the sensor "
             f"noise model's, condition {self.condition:.3g}",
         ]
-        if self.shape == "capsule":
-            lines.append(f"  length     {c[2]:.3f} ± {cs[2]:.3f} mm (cap centre height); axis offset x, y = cap centre x, y")
+        lines += tail
         if self.std_method == "jackknife":
             lines.append("  ± are the larger of the fit's curvature and a delete-one-press jackknife")
         return "\n".join(lines)
@@ -390,11 +400,11 @@ def _sphere_fit(points: NDArray) -> tuple[NDArray, float, float]:
 # the fit
 
 
-def _not_excited(detail: str) -> InputError:
+def _not_excited(detail: str, model: PressModel) -> InputError:
     return InputError(
         f"the presses do not excite enough directions to calibrate the fingertip: {detail}. "
         "Press the fingertip against a flat surface at many points spread over the skin (at least "
-        "4, better 15 or more, covering ±60° around the tip), and during each press let the surface "
+        f"4, better 15 or more, covering {model.coverage}), and during each press let the surface "
         "slide or the finger rock a little so that the friction force turns (by 10° or more)"
     )
 
@@ -421,8 +431,9 @@ def calibrate_fingertip(
         Sample times, s, increasing.
     wrench : array-like, shape (N, 6)
         Raw wrench ``fx, fy, fz`` (N), ``mx, my, mz`` (N·m), sensor frame.
-    shape : {"sphere", "capsule"}
-        Capsule: cylinder axis along z, cap centre ``(x, y, length)``.
+    shape : {"sphere", "capsule", "ellipsoid"}
+        One of :data:`SHAPES`. Capsule: cylinder axis along z, cap centre ``(x, y, length)``;
+        ellipsoid: axis-aligned, centre and semi-axes.
     tare_duration : float
         The mean of the first ``tare_duration`` s (fingertip untouched) is the bias; 0 if
         the log is already tared.
@@ -465,6 +476,7 @@ def calibrate_fingertip(
     """
     if shape not in SHAPES:
         raise InputError(f"unknown shape {shape!r}; expected one of {', '.join(SHAPES)}")
+    model = _ALL_SHAPES[shape].press_model()
     if not min(noise.moment_std) > 0.0:
         raise ValueError(f"noise.moment_std must be positive on every axis (it sets the weights), got {noise.moment_std!r}")
     t = np.asarray(t, dtype=float)
@@ -491,7 +503,8 @@ def calibrate_fingertip(
         presses.append(keep)
     if len(presses) < 4:
         raise _not_excited(
-            f"{source} has {len(presses)} press(es) with at least 5 samples above {min_force:g} N; expected at least 4"
+            f"{source} has {len(presses)} press(es) with at least 5 samples above {min_force:g} N; expected at least 4",
+            model,
         )
 
     # start values: per press the point m = r × f pins (if the force turns), a sphere through them
@@ -501,7 +514,8 @@ def calibrate_fingertip(
         raise _not_excited(
             f"in {len(located)} of {len(presses)} presses of {source} the force direction turns by more than "
             f"{math.degrees(math.asin(min_spread)):.0f}° (largest turn {math.degrees(math.asin(min(spread.max(), 1.0))):.1f}°); "
-            "expected at least 4"
+            "expected at least 4",
+            model,
         )
     force_var = np.square(noise.force_std)
     points = np.array([_press_point(f_all[presses[k]], m_all[presses[k]], force_var) for k in located])
@@ -510,39 +524,40 @@ def calibrate_fingertip(
         detail = f"±{r0_std * 1e3:.2g} mm on {r0 * 1e3:.3g} mm" if math.isfinite(r0) else "no sphere"
         raise _not_excited(
             f"the contact points of the {len(located)} presses in {source} that locate one lie too close to one spot "
-            f"or one circle to fix a sphere (radius {detail})"
+            f"or one circle to fix a sphere (radius {detail})",
+            model,
         )
 
     normals0 = np.array([_press_normal(f_all[k], m_all[k], c0, r0) for k in presses])
-    if shape == "capsule":
-        on_cap = normals0[:, 2] >= _CAP_MIN_NZ
-        n_skipped += int(np.count_nonzero(~on_cap))
-        presses = [p for p, ok in zip(presses, on_cap) if ok]
-        normals0 = normals0[on_cap]
+    keep = model.accepts(normals0)
+    if not keep.all():
+        n_skipped += int(np.count_nonzero(~keep))
+        presses = [p for p, ok in zip(presses, keep) if ok]
+        normals0 = normals0[keep]
         if len(presses) < 4:
-            raise _not_excited(
-                f"{len(presses)} presses of {source} are on the capsule's cap (contact normal ≥ 20° above the equator); expected at least 4"
-            )
+            raise _not_excited(f"{len(presses)} presses of {source} are {model.region}; expected at least 4", model)
 
-    sol = _fit(f_all, m_all, presses, normals0, c0, r0, compliance, noise)
-    if shape == "capsule":
-        if not sol["center"][2] >= 0.0:
-            raise InputError(f"{source}: the fitted cap centre is at z = {sol['center'][2] * 1e3:.3f} mm, below the sensor; expected ≥ 0")
-        tip: Fingertip = Capsule(radius=sol["radius"], length=sol["center"][2], axis_offset=tuple(sol["center"][:2]))
-    else:
-        tip = Sphere(radius=sol["radius"], center=tuple(sol["center"]))
+    sol = _fit(f_all, m_all, presses, normals0, c0, r0, compliance, noise, model)
+    tip = model.tip(sol["parameters"], source)
     start_shift = float(np.linalg.norm(sol["center"] - c0) / r0_std) if r0_std > 0 else 0.0
     x = sol.pop("x")
     std_method = "curvature"
     if jackknife or (jackknife is None and start_shift > JACKKNIFE_SHIFT):
-        jk = _jackknife_std(f_all, m_all, presses, normals0, x, compliance, noise)
+        jk = _jackknife_std(f_all, m_all, presses, normals0, x, compliance, noise, model)
         # neither estimate is allowed to shrink the other: the larger of the two per parameter
-        sol["center_std"] = np.maximum(sol["center_std"], jk[:3] * 1e-3)
-        sol["radius_std"] = max(sol["radius_std"], float(jk[3]) * 1e-3)
+        n_shape = len(model.names)
+        sol["parameters_std"] = np.maximum(sol["parameters_std"], jk[:n_shape] * 1e-3)
+        sol["center_std"] = sol["parameters_std"][:3]
+        sol["radius_std"] = _radius(model, sol["parameters_std"])
         if compliance:
-            sol["compliance_std"] = max(sol["compliance_std"], float(jk[4]) * 1e-3)
+            sol["compliance_std"] = max(sol["compliance_std"], float(jk[n_shape]) * 1e-3)
         std_method = "jackknife"
     return Calibration(tip=tip, n_skipped=n_skipped, start_shift=start_shift, std_method=std_method, **sol)
+
+
+def _radius(model: PressModel, values: NDArray) -> float:
+    """The ``radius`` among the fitted parameters (m), NaN when the shape has none."""
+    return float(values[model.names.index("radius")]) if "radius" in model.names else math.nan
 
 
 def _press_normal(f: NDArray, m: NDArray, c: NDArray, radius: float) -> NDArray:
@@ -572,11 +587,12 @@ def _whiten(e: NDArray, u1: NDArray, u2: NDArray, r: NDArray, force_var: NDArray
     return np.concatenate((e1 / sa, (e2 - b / a * e1) / np.sqrt(c - b * b / a)))
 
 
-def _objective(f_all, m_all, presses, normals0, compliance: bool, noise: SensorNoise):
+def _objective(f_all, m_all, presses, normals0, compliance: bool, noise: SensorNoise, model: PressModel):
     """Whitened residual, its Jacobian and the parameter unpacking for the presses given.
 
-    Parameters ``x``: centre (3, mm), radius (mm), indentation coefficient (mm/√N, with
-    ``compliance``) and two tangential coordinates of each press's normal about ``normals0``.
+    Parameters ``x``: the shape's (``model.names``: centre (3, mm), radius or semi-axes, mm),
+    the indentation coefficient (mm/√N, with ``compliance``) and two tangential coordinates
+    of each press's normal about ``normals0``.
     """
     k = len(presses)
     idx = np.concatenate(presses)
@@ -586,22 +602,22 @@ def _objective(f_all, m_all, presses, normals0, compliance: bool, noise: SensorN
     force_var = np.square(noise.force_std)
     moment_var = np.square(np.asarray(noise.moment_std) * 1e3)  # (N·mm)²
     t1, t2 = _tangent_basis(normals0)
-    n_geo = 5 if compliance else 4
+    n_shape = len(model.names)
+    n_geo = n_shape + 1 if compliance else n_shape
 
     def unpack(x):
-        c, radius = x[:3], x[3]
-        kappa = x[4] if compliance else 0.0
+        geo = x[:n_shape]
+        kappa = x[n_shape] if compliance else 0.0
         ab = x[n_geo:].reshape(k, 2)
         n = normals0 + ab[:, :1] * t1 + ab[:, 1:] * t2
         n = n / np.linalg.norm(n, axis=1, keepdims=True)
-        return c, radius, kappa, n
+        return geo, kappa, n
 
     def residual(x, whiten=True):
-        c, radius, kappa, n = unpack(x)
+        geo, kappa, n = unpack(x)
         ns = n[press_of]
         f_normal = np.maximum(-np.sum(f * ns, axis=1), 0.0)
-        rho = radius - kappa * np.sqrt(f_normal)
-        r = c + rho[:, None] * ns
+        r = model.points(geo, ns, kappa * np.sqrt(f_normal))
         e = m - _cross(r, f)
         # tangent basis at the current normal: the spin (along n) is free
         u1 = t1[press_of] - np.sum(t1[press_of] * ns, axis=1, keepdims=True) * ns
@@ -636,7 +652,7 @@ def _objective(f_all, m_all, presses, normals0, compliance: bool, noise: SensorN
     return residual, jacobian, unpack, n_geo, len(idx)
 
 
-def _jackknife_std(f_all, m_all, presses, normals0, x, compliance: bool, noise: SensorNoise) -> NDArray:
+def _jackknife_std(f_all, m_all, presses, normals0, x, compliance: bool, noise: SensorNoise, model: PressModel) -> NDArray:
     """Delete-one-press jackknife standard deviations of the geometry parameters (mm, mm/√N).
 
     Each press in turn is left out and the fit repeated from the full solution; the spread
@@ -646,12 +662,12 @@ def _jackknife_std(f_all, m_all, presses, normals0, x, compliance: bool, noise: 
     quadratic over the range of the scatter).
     """
     k = len(presses)
-    n_geo = 5 if compliance else 4
+    n_geo = len(model.names) + 1 if compliance else len(model.names)
     geo = []
     for j in range(k):
         keep = np.arange(k) != j
         sub = [p for p, ok in zip(presses, keep) if ok]
-        residual, jacobian, _, _, _ = _objective(f_all, m_all, sub, normals0[keep], compliance, noise)
+        residual, jacobian, _, _, _ = _objective(f_all, m_all, sub, normals0[keep], compliance, noise, model)
         x0 = np.concatenate((x[:n_geo], x[n_geo:].reshape(k, 2)[keep].ravel()))
         res = least_squares(residual, x0, method="lm", x_scale="jac", jac=jacobian, xtol=1e-8, ftol=1e-8, gtol=1e-8)
         geo.append(res.x[:n_geo])
@@ -659,7 +675,7 @@ def _jackknife_std(f_all, m_all, presses, normals0, x, compliance: bool, noise: 
     return np.sqrt((k - 1) / k * np.sum(np.square(geo - geo.mean(axis=0)), axis=0))
 
 
-def _fit(f_all, m_all, presses, normals0, c0, r0, compliance: bool, noise: SensorNoise) -> dict:
+def _fit(f_all, m_all, presses, normals0, c0, r0, compliance: bool, noise: SensorNoise, model: PressModel) -> dict:
     """Noise-weighted nonlinear least squares; lengths in mm and moments in N·mm inside (scaled).
 
     Each sample's tangential residual is whitened by its noise covariance at the current
@@ -668,9 +684,10 @@ def _fit(f_all, m_all, presses, normals0, c0, r0, compliance: bool, noise: Senso
     estimate is consistent, unlike plain least squares, which prefers a shorter lever arm.
     """
     k = len(presses)
-    residual, jacobian, unpack, n_geo, n_samples = _objective(f_all, m_all, presses, normals0, compliance, noise)
+    residual, jacobian, unpack, n_geo, n_samples = _objective(f_all, m_all, presses, normals0, compliance, noise, model)
     n_par = n_geo + 2 * k
-    x0 = np.concatenate((c0 * 1e3, [r0 * 1e3], [0.1] if compliance else [], np.zeros(2 * k)))
+    n_shape = len(model.names)
+    x0 = np.concatenate((model.start(c0, r0), [0.1] if compliance else [], np.zeros(2 * k)))
     res = least_squares(residual, x0, method="lm", x_scale="jac", jac=jacobian, xtol=1e-12, ftol=1e-12, gtol=1e-12)
     jac = res.jac
     n_res = jac.shape[0]
@@ -687,20 +704,24 @@ def _fit(f_all, m_all, presses, normals0, c0, r0, compliance: bool, noise: Senso
     ev = np.linalg.eigvalsh(corr) if np.all(np.isfinite(corr)) else np.array([0.0, 1.0])
     condition = float(ev[-1] / ev[0]) if ev[0] > 0 else math.inf
     if not condition <= _MAX_CONDITION:
-        names = ["centre x", "centre y", "centre z", "radius", "indentation"][:n_geo]
+        names = [*model.names, "indentation"][:n_geo]
         vec = np.linalg.eigh(corr)[1][:, 0] if np.all(np.isfinite(corr)) else np.ones(n_geo)
         worst = ", ".join(names[i] for i in np.argsort(-np.abs(vec))[:2])
-        raise _not_excited(f"the fit cannot separate {worst} (condition number {condition:.3g} > {_MAX_CONDITION:.0e})")
-    c, radius, kappa, n = unpack(res.x)
-    if not radius > 0:
-        raise _not_excited(f"the fitted radius is {radius:.3g} mm")
+        raise _not_excited(f"the fit cannot separate {worst} (condition number {condition:.3g} > {_MAX_CONDITION:.0e})", model)
+    geo, kappa, n = unpack(res.x)
+    for name, value in zip(model.names[3:], geo[3:]):
+        if not value > 0:
+            raise _not_excited(f"the fitted {name} is {value:.3g} mm", model)
+    parameters, parameters_std = geo * 1e-3, std[:n_shape] * 1e-3
     return {
-        "center": c * 1e-3,
-        "radius": float(radius) * 1e-3,
+        "center": parameters[:3],
+        "radius": _radius(model, parameters),
         "compliance": float(kappa) * 1e-3,
-        "center_std": std[:3] * 1e-3,
-        "radius_std": float(std[3]) * 1e-3,
-        "compliance_std": float(std[4]) * 1e-3 if compliance else 0.0,
+        "center_std": parameters_std[:3],
+        "radius_std": _radius(model, parameters_std),
+        "compliance_std": float(std[n_shape]) * 1e-3 if compliance else 0.0,
+        "parameters": parameters,
+        "parameters_std": parameters_std,
         "residual_rms": math.sqrt(float(np.mean(np.square(residual(res.x, whiten=False))))) * 1e-3,
         "noise_ratio": math.sqrt(s2),
         "n_presses": k,
@@ -729,9 +750,7 @@ def write_fingertip_toml(cal: Calibration, path: str | os.PathLike[str], source:
     mm = 1e3
     header = [
         f"# softtip calibrate{(' ' + source) if source else ''}: {cal.n_presses} presses, {cal.n_samples} samples",
-        f"# radius std {cal.radius_std * mm:.4f} mm; centre std "
-        + ", ".join(f"{v * mm:.4f}" for v in cal.center_std)
-        + f" mm; residual {cal.residual_rms * mm:.4f} N·mm RMS",
+        f"# {cal.model.std_line(cal.parameters_std)}; residual {cal.residual_rms * mm:.4f} N·mm RMS",
     ]
     if cal.warning or cal.precision_warning():
         header.append(f"# warning: {cal.warning or cal.precision_warning()}")

@@ -8,6 +8,7 @@ import click
 
 from softtip.cli.options import MAX_FORCE_NOISE, MAX_MOMENT_NOISE_NMM
 from softtip.cli.types import Number, option
+from softtip.core.fingertip import SHAPES
 from softtip.core.noise import NANO17
 from softtip.core.units import UNIT_SYSTEMS
 from softtip.errors import InputError
@@ -15,6 +16,9 @@ from softtip.io.atomic import write_stdout
 from softtip.io.examples import EXAMPLE_PROBING_PATH
 
 __all__ = ["calibrate"]
+
+#: ``--shape``'s choices: the fingertip shapes that calibrate (from presses, or a mesh's placement).
+CALIBRATED_SHAPES = [name for name, cls in SHAPES.items() if cls.calibrates is not None]
 
 
 def _read(input_path: str, units: str):
@@ -92,8 +96,9 @@ surface must not tilt relative to the fingertip, and it should slide a little si
 that the friction force turns (40° or more): that is what pins each contact point.
 --guide prints the procedure step by step; --example runs on a shipped simulated log.
 
-softtip fits the centre (sphere) or the cap centre (capsule: axis parallel to z,
-cap centre height = length) and the radius by nonlinear least squares over every sample,
+softtip fits the centre (sphere, ellipsoid) or the cap centre (capsule: axis parallel to
+z, cap centre height = length) and the radius (the ellipsoid's three semi-axes, its axes
+along the sensor's) by nonlinear least squares over every sample,
 with the skin's indentation (∝ √force) as a nuisance parameter, and prints the estimates
 with standard deviations and the residual. Each sample is weighted by its noise, propagated
 from the sensor noise model (--force-noise, --moment-noise) through the lever arm, so the
@@ -106,7 +111,7 @@ capsule's offset of its axis from the sensor's z axis is its axis_offset.
 """,
 )
 @click.argument("input_path", metavar="LOG", required=False, type=click.Path(allow_dash=True, dir_okay=False))
-@option("--shape", type=click.Choice(["sphere", "capsule", "mesh"]), help="Fingertip shape to fit (required unless --guide; mesh: the placement of --mesh on the sensor).")
+@option("--shape", type=click.Choice(CALIBRATED_SHAPES), help="Fingertip shape to fit (required unless --guide; mesh: the placement of --mesh on the sensor).")
 @option("--example", is_flag=True, help="Use the shipped example probing log (simulated: 30 presses on a 16 mm sphere centred at 0.3, -0.2, 20.0 mm) as LOG.")
 @option("--guide", is_flag=True, help="Print how to record a probing log (where, how hard and how to press) and exit.")
 @option("-o", "--output", type=click.Path(dir_okay=False), help="Fingertip TOML file to write (default: standard output).")
@@ -136,15 +141,16 @@ def calibrate(
         click.echo(PROBING_GUIDE)
         return
     if shape is None:
-        raise click.UsageError("Missing option '--shape' (sphere, capsule or mesh).")
-    if shape == "mesh" or mesh_path is not None:  # mesh fingertips: softtip.calibration.mesh
+        raise click.UsageError(f"Missing option '--shape' ({', '.join(CALIBRATED_SHAPES[:-1])} or {CALIBRATED_SHAPES[-1]}).")
+    placement = SHAPES[shape].calibrates == "placement"  # a mesh's pose on the sensor: softtip.calibration.mesh
+    if placement or mesh_path is not None:
         if example or input_path is None:
             raise click.UsageError("--shape mesh needs a probing LOG of the mesh fingertip (the example is a sphere's)")
         from softtip.calibration.mesh import calibrate_mesh_file
         from softtip.io.atomic import atomic_write_text
 
         try:
-            if shape != "mesh" or mesh_path is None or rigid:
+            if not placement or mesh_path is None or rigid:
                 raise InputError("--shape mesh goes with --mesh FILE (and without --rigid)")
             log = _read(input_path, units)
             cal = calibrate_mesh_file(

@@ -158,7 +158,7 @@ def _estimate(
     full_scale=DEFAULT_SENSOR,
     **estimator_opts,
 ):
-    from softtip.io.examples import EXAMPLE_PATH
+    from softtip.io.examples import EXAMPLE_ANGLE_DEG, EXAMPLE_PATH
 
     try:
         sensor_range = parse_full_scale(full_scale)
@@ -277,6 +277,7 @@ def _estimate(
     _write_estimate_outputs(
         est, columns, log, bag_log, config, fingertip,
         output=output, plot_path=plot_path, plot_units=plot_units, title=f"softtip: {source}",
+        truth_angle=EXAMPLE_ANGLE_DEG if example else None,
         to_bag=to_bag, rerun_spawn=rerun_spawn, rerun_save=rerun_save, ros_distro=ros_distro, frame_id=frame_id,
         metadata=parquet_metadata(fingertip, tip, output_units, log), outputs=outputs, staged_bag=staged_bag,
     )  # fmt: skip
@@ -537,7 +538,7 @@ def _carry(input_path, output, outputs, est_names: list[str], extra_names_in: li
 
 def _write_estimate_outputs(
     est, columns, log, bag_log, config, fingertip, *, output, plot_path, plot_units, title, to_bag, rerun_spawn, rerun_save,
-    metadata, outputs, staged_bag=None, ros_distro=None, frame_id=None,
+    metadata, outputs, staged_bag=None, ros_distro=None, frame_id=None, truth_angle=None,
 ) -> None:
     """Write every output of ``estimate`` into its staged file (``outputs``, committed by the caller)."""
     import io as _io
@@ -554,7 +555,7 @@ def _write_estimate_outputs(
         threshold = config.line_threshold(est.h_std)
         plot_estimates(
             est, image, units=plot_units, title=title, h_threshold=threshold,
-            fmt=Path(plot_path).suffix.lower().lstrip("."),
+            reference_angles=None if truth_angle is None else [truth_angle], fmt=Path(plot_path).suffix.lower().lstrip("."),
         )  # fmt: skip
         try:
             with outputs.get(plot_path).open("wb") as fh:

@@ -88,7 +88,7 @@ PointStamped and RViz markers, in the common frame, in the format --ros-distro p
 @option("--plot", "plot_path", type=click.Path(dir_okay=False), help="Also draw both forces, the grasp reading and the fused angles across the grasp to this PNG/PDF/SVG.")
 @option("--rerun", "rerun_spawn", is_flag=True, help="Show both fingertips, their contacts and the fused line or plane in the hand frame in a Rerun viewer (needs rerun-sdk).")
 @option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save that 3-D view and the fused series to FILE.rrd.")
-@option("--truth", "truth_file", type=click.Path(dir_okay=False), metavar="FILE.json", help="The simulator's truth.json: the object's true line and plane drawn in the Rerun view.")
+@option("--truth", "truth_file", type=click.Path(dir_okay=False), metavar="FILE.json", help="The simulator's truth.json: the object's true line and plane drawn in the Rerun view and the --plot figure.")
 @bag_output_options(frame_default="the common frame: --frame, the hand file's, else hand")
 @estimator_options
 def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, point_std, plot_path, rerun_spawn, rerun_save,
@@ -99,8 +99,8 @@ def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, 
 
     if plot_path is not None:
         check_figure_path(plot_path)
-    if truth_file is not None and not (rerun_spawn or rerun_save):
-        raise click.UsageError("--truth draws into the Rerun view: give --rerun or --rerun-save")
+    if truth_file is not None and not (rerun_spawn or rerun_save or plot_path):
+        raise click.UsageError("--truth draws into the Rerun view or the figure: give --rerun, --rerun-save or --plot")
     if rerun_spawn or rerun_save:
         optional_extra("softtip.viz.rerun", "viz")
     if rerun_spawn:  # at once: without a display the viewer would fail only after the fusion
@@ -167,6 +167,11 @@ def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, 
         raise click.UsageError(str(exc)) from None
     for finger in fingers:
         tare_warnings(finger.estimates, name=finger.name)
+    truth = None
+    if truth_file:
+        from softtip.fusion.viz import read_truth
+
+        truth = read_truth(truth_file, fused.t)
     from softtip.io.atomic import Outputs, cannot_write
 
     # one transaction for every output: all appear, or none (an error, a signal)
@@ -174,9 +179,8 @@ def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, 
         staged = {p: outputs.file(p) for p in (output, plot_path, rerun_save) if p is not None}
         staged_bag = outputs.path(to_bag) if to_bag is not None else None
         if rerun_spawn or rerun_save:
-            from softtip.fusion.viz import log_fused, read_truth
+            from softtip.fusion.viz import log_fused
 
-            truth = read_truth(truth_file, fused.t) if truth_file else None
             log_fused(
                 fused, fingers, fingertip, save=staged[rerun_save].tmp if rerun_save else None, spawn=rerun_spawn,
                 truth=truth,
@@ -192,7 +196,8 @@ def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, 
             from softtip.fusion.plot import plot_fused
 
             up = -np.asarray(gravity) if np.linalg.norm(gravity) > 0 else (0.0, 0.0, 1.0)
-            plot_fused(fused, fingers, staged[plot_path].tmp, up=up)
+            plot_fused(fused, fingers, staged[plot_path].tmp, up=up, truth_line=None if truth is None else truth["line"],
+                       truth_normal=None if truth is None else truth["plane_normal"])  # fmt: skip
         if output is not None:
             from softtip.io.tables import TableWriter
 

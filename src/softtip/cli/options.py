@@ -244,6 +244,24 @@ _ESTIMATOR_OPTIONS = [
         "a confirmed line again only below LEAVE.",
     ),
     option(
+        "--area-share",
+        type=Number("(share of the window)", 0.0, 1.0, min_open=True, max_open=True),
+        default=0.35,
+        show_default=True,
+        metavar="SHARE",
+        help="area while more than this share of the evidence window's samples show h spread over both tangent axes "
+        "(a reading of the current window, revisited as it slides).",
+    ),
+    option(
+        "--rocked",
+        type=(Number("s"), Number("s")),
+        multiple=True,
+        metavar="START END",
+        help="The object was rocked about two tangent axes from START to END (s, the log's time; repeat for more): "
+        "a window wholly inside counts as excited about two axes, so h on one axis there confirms a line (for a "
+        "skin on which the load cannot show it, manual §3.5).",
+    ),
+    option(
         "--excitation",
         type=(POSITIVE("(eigenvalue ratio)"), POSITIVE("N")),
         default=(0.5, 0.01),
@@ -439,6 +457,8 @@ def make_config(opts: dict, sample_rate: float | None = None, tip: Fingertip | N
             line_evidence=opts["line_evidence"] == "on",
             evidence_window=opts["evidence_window"],
             area_ratio=opts["area_ratio"],
+            area_share=opts["area_share"],
+            rocked=tuple(opts["rocked"]),
             excitation_ratio=opts["excitation"][0],
             excitation_min=opts["excitation"][1],
             evidence_max_angle_std=math.radians(opts["evidence_max_std"]),

@@ -1,19 +1,22 @@
-"""Fingertip geometry: the outer skin surface ``S(r) = 0`` in the sensor frame.
+"""Fingertip shapes with closed forms, the registry of shapes and the fingertip file.
 
-Shapes (manual §2): :class:`Sphere`, :class:`Capsule` (the papers' fingertip: a cylinder
-along +z from ``z = 0`` capped by a hemisphere centred at ``(0, 0, length)``),
-:class:`Ellipsoid` (axis-aligned, Bicchi's quadric case) and :class:`ImplicitSurface`
-(any callable ``S`` with its gradient). ``S < 0`` inside, ``S > 0`` outside; the outward
-normal is ``∇S / |∇S|`` (paper Eq. 2). Lengths are in metres.
+The skin is the surface ``S(r) = 0`` in the sensor frame (manual §2), ``S < 0`` inside and
+``S > 0`` outside, with outward normal ``∇S / |∇S|`` (paper Eq. 2); lengths in metres.
+Each shape implements the shape protocol (:class:`~softtip.core.shape.Fingertip`) in one
+place: its surface, its contact solution, its simulator skin, its calibration, its view
+and its file form. Here: :class:`Sphere`, :class:`Capsule` (the papers' fingertip: a
+cylinder along +z from ``z = 0`` capped by a hemisphere centred at ``(0, 0, length)``) and
+:class:`Ellipsoid` (axis-aligned, Bicchi's quadric case), each with its closed-form contact
+solution. :class:`~softtip.core.implicit.ImplicitSurface` (any callable ``S``) and
+:class:`~softtip.core.mesh.MeshFingertip` (a triangle mesh) have their own modules;
+:class:`~softtip.core.mounting.Mounted` places any of them on the sensor.
 
-Each shape exposes batch methods on arrays of shape ``(..., 3)`` and, for the streaming
-estimator, component-wise kernels (``_normal_kernel``, ``_project_kernel``) that take
-either numpy arrays or Python floats (see :mod:`softtip.core._xp`).
+:data:`SHAPES` names the shapes a fingertip file can give; :func:`load_fingertip` reads
+a preset or a file.
 """
 
 from __future__ import annotations
 
-import abc
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -23,7 +26,23 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from softtip.core._xp import NP, PY
+from softtip.core.implicit import ImplicitSurface
+from softtip.core.mesh import MeshFingertip
+from softtip.core.mounting import mount_from_mapping
+from softtip.core.shape import (
+    Fingertip,
+    PressModel,
+    check_skin,
+    fibonacci_cap,
+    fields_from_table,
+    fmt,
+    grid_mesh,
+    positive,
+    skin_toml,
+    sphere_kernel,
+    uv_sphere,
+    vec3,
+)
 from softtip.errors import InputError
 
 __all__ = [
@@ -33,95 +52,47 @@ __all__ = [
     "Ellipsoid",
     "ImplicitSurface",
     "PRESETS",
+    "SHAPES",
     "murakami2006",
     "load_fingertip",
+    "fingertip_from_mapping",
 ]
 
 
-def _vec3(value: ArrayLike, name: str) -> tuple[float, float, float]:
-    a = np.asarray(value, dtype=float)
-    if a.shape != (3,) or not np.all(np.isfinite(a)):
-        raise ValueError(f"{name} must be 3 finite numbers (m), got {value!r}")
-    return (float(a[0]), float(a[1]), float(a[2]))
+# -- sphere -------------------------------------------------------------------------------------
 
 
-def _positive(value: float, name: str) -> float:
-    v = float(value)
-    if not (math.isfinite(v) and v > 0.0):
-        raise ValueError(f"{name} must be a positive length in metres, got {value!r}")
-    return v
+class _SphericalPress(PressModel):
+    """A sphere's (or a capsule's cap's) centre and radius: the contact point is ``c + (R − δ) n``."""
 
+    names = ("centre x", "centre y", "centre z", "radius")
+    centre_name = "centre"
 
-def _split(points: ArrayLike) -> tuple[NDArray, NDArray, NDArray]:
-    p = np.asarray(points, dtype=float)
-    if p.shape[-1:] != (3,):
-        raise ValueError(f"points must have shape (..., 3), got {p.shape}")
-    return p[..., 0], p[..., 1], p[..., 2]
+    def start(self, center: NDArray, radius: float) -> NDArray:
+        return np.concatenate((center * 1e3, [radius * 1e3]))
 
+    def points(self, x: NDArray, normals: NDArray, depth: NDArray) -> NDArray:
+        rho = x[3] - depth
+        return x[:3] + rho[:, None] * normals
 
-class Fingertip(abc.ABC):
-    """Base class of the fingertip shapes.
+    def tip(self, x: NDArray, source: str) -> Fingertip:
+        return Sphere(radius=x[3], center=tuple(x[:3]))
 
-    Subclasses define the component-wise kernels; the array methods below wrap them.
-    """
+    def stds(self, std: NDArray) -> dict[str, float]:
+        return {"radius": std[3], "centre x": std[0], "centre y": std[1], "centre z": std[2]}
 
-    kind: ClassVar[str] = ""
+    def report(self, x: NDArray, std: NDArray) -> tuple[list[str], list[str]]:
+        mm = 1e3
+        c, cs = x[:3] * mm, std[:3] * mm
+        return [
+            f"  {self.centre_name:10s} x = {c[0]:+.3f} ± {cs[0]:.3f} mm, y = {c[1]:+.3f} ± {cs[1]:.3f} mm, "
+            f"z = {c[2]:+.3f} ± {cs[2]:.3f} mm",
+            f"  radius     {x[3] * mm:.3f} ± {std[3] * mm:.3f} mm",
+        ], []
 
-    # -- kernels (components in, components out; xp is softtip.core._xp.NP or PY) --------------
-    @abc.abstractmethod
-    def _surface_kernel(self, x, y, z, xp):
-        """``S`` at the point ``(x, y, z)``."""
-
-    @abc.abstractmethod
-    def _normal_kernel(self, x, y, z, xp):
-        """Outward unit normal ``(nx, ny, nz)`` at ``(x, y, z)``."""
-
-    @abc.abstractmethod
-    def _project_kernel(self, x, y, z, xp):
-        """The point of the skin nearest ``(x, y, z)`` (see :meth:`project`)."""
-
-    # -- array API ----------------------------------------------------------------------
-    def surface(self, points: ArrayLike) -> NDArray[np.float64]:
-        """Value of ``S`` at ``points``, shape ``(...,)``; negative inside, 0 on the skin."""
-        return np.asarray(self._surface_kernel(*_split(points), NP), dtype=float)
-
-    def normal(self, points: ArrayLike) -> NDArray[np.float64]:
-        """Outward unit normal ``∇S/|∇S|`` at ``points``, shape ``(..., 3)``."""
-        return np.stack(self._normal_kernel(*_split(points), NP), axis=-1)
-
-    def project(self, points: ArrayLike) -> NDArray[np.float64]:
-        """Map points near the skin onto it, shape ``(..., 3)``.
-
-        Exact closest point for the sphere and the capsule; a radial (ellipsoid) or
-        gradient-Newton (implicit) projection otherwise, which is the closest point to
-        first order for points within a fraction of a millimetre of the surface.
-        """
-        return np.stack(self._project_kernel(*_split(points), NP), axis=-1)
-
-    @property
-    @abc.abstractmethod
-    def bounding_sphere(self) -> tuple[NDArray[np.float64], float]:
-        """Centre (m, shape (3,)) and radius (m) of a sphere containing the whole skin."""
-
-    @abc.abstractmethod
-    def to_toml(self) -> str:
-        """The fingertip as a fingertip TOML file (manual §2)."""
-
-
-def _fmt(v: float) -> str:
-    return repr(float(v))
-
-
-def _skin(tip) -> None:
-    """Validate the optional ``skin_thickness`` (m) of a fingertip dataclass."""
-    h = tip.skin_thickness
-    if h is not None:
-        object.__setattr__(tip, "skin_thickness", _positive(h, "skin_thickness"))
-
-
-def _skin_toml(tip) -> str:
-    h = getattr(tip, "skin_thickness", None)
-    return "" if h is None else f"skin_thickness = {_fmt(h)}\n"
+    def std_line(self, std: NDArray) -> str:
+        mm = 1e3
+        return f"radius std {std[3] * mm:.4f} mm; centre std " + ", ".join(f"{v * mm:.4f}" for v in std[:3]) + " mm"
 
 
 @dataclass(frozen=True)
@@ -132,11 +103,12 @@ class Sphere(Fingertip):
     center: tuple[float, float, float] = (0.0, 0.0, 0.0)
     skin_thickness: float | None = field(default=None, compare=False)
     kind: ClassVar[str] = "sphere"
+    calibrates: ClassVar[str | None] = "presses"
 
     def __post_init__(self) -> None:
-        _skin(self)
-        object.__setattr__(self, "radius", _positive(self.radius, "radius"))
-        object.__setattr__(self, "center", _vec3(self.center, "center"))
+        check_skin(self)
+        object.__setattr__(self, "radius", positive(self.radius, "radius"))
+        object.__setattr__(self, "center", vec3(self.center, "center"))
 
     def _surface_kernel(self, x, y, z, xp):
         cx, cy, cz = self.center
@@ -159,9 +131,118 @@ class Sphere(Fingertip):
     def bounding_sphere(self) -> tuple[NDArray[np.float64], float]:
         return np.array(self.center), self.radius
 
+    def _contact_kernel(self, fx, fy, fz, mx, my, mz, xp):
+        return sphere_kernel(fx, fy, fz, mx, my, mz, self.radius, *self.center, xp)
+
+    def skin_elements(self, n_elements: int, z_min: float | None = None) -> tuple[NDArray, NDArray, NDArray]:
+        """Fibonacci-lattice elements from the top down to ``z_min`` (m; default
+        ``center_z − radius/2``, 120° from the top). See :meth:`Fingertip.skin_elements`."""
+        r = self.radius
+        cen = np.array(self.center)
+        zc = cen[2] - 0.5 * r if z_min is None else float(z_min)
+        cos_min = min(max((zc - cen[2]) / r, -1.0), 1.0)
+        if cos_min >= 1.0:
+            raise ValueError(f"z_min {zc} m leaves no skin on the sphere")
+        u, w = fibonacci_cap(n_elements, cos_min)
+        return cen + r * u, u, w * r * r
+
+    def support_point(self, normal: ArrayLike) -> NDArray[np.float64]:
+        return np.array(self.center) + self.radius * np.asarray(normal, dtype=float)
+
+    @classmethod
+    def press_model(cls) -> PressModel:
+        return _SphericalPress()
+
+    def surface_mesh(self, n_around: int = 48, n_along: int = 32) -> tuple[NDArray, NDArray, NDArray]:
+        return grid_mesh(self, np.asarray(self.center) + self.radius * uv_sphere(n_around, n_along))
+
+    @classmethod
+    def from_table(cls, table: dict, source: str) -> Fingertip:
+        kwargs = fields_from_table(table, source, "sphere", {"radius": True, "center": False, "skin_thickness": False})
+        return _construct(cls, kwargs, source)
+
     def to_toml(self) -> str:
-        c = ", ".join(_fmt(v) for v in self.center)
-        return f'[fingertip]\nshape = "sphere"\nradius = {_fmt(self.radius)}\ncenter = [{c}]\n' + _skin_toml(self)
+        c = ", ".join(fmt(v) for v in self.center)
+        return f'[fingertip]\nshape = "sphere"\nradius = {fmt(self.radius)}\ncenter = [{c}]\n' + skin_toml(self)
+
+
+def _construct(cls, kwargs: dict, source: str) -> Fingertip:
+    try:
+        return cls(**kwargs)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{source}: [fingertip] {exc}") from None
+
+
+# -- capsule ------------------------------------------------------------------------------------
+
+#: Capsule presses whose contact normal is less than this far above the equator may touch
+#: the cylinder side (the contact patch reaches ~15° around its centre at a few N).
+_CAP_MIN_NZ = math.sin(math.radians(20.0))
+
+
+class _CapPress(_SphericalPress):
+    """The capsule's cap: its centre ``(x, y, length)`` and radius, from presses on the cap."""
+
+    centre_name = "cap centre"
+    region = "on the capsule's cap (contact normal ≥ 20° above the equator)"
+
+    def accepts(self, normals: NDArray) -> NDArray[np.bool_]:
+        return normals[:, 2] >= _CAP_MIN_NZ
+
+    def tip(self, x: NDArray, source: str) -> Fingertip:
+        if not x[2] >= 0.0:
+            raise InputError(f"{source}: the fitted cap centre is at z = {x[2] * 1e3:.3f} mm, below the sensor; expected ≥ 0")
+        return Capsule(radius=x[3], length=x[2], axis_offset=tuple(x[:2]))
+
+    def report(self, x: NDArray, std: NDArray) -> tuple[list[str], list[str]]:
+        head, _ = super().report(x, std)
+        mm = 1e3
+        return head, [f"  length     {x[2] * mm:.3f} ± {std[2] * mm:.3f} mm (cap centre height); axis offset x, y = cap centre x, y"]
+
+
+def _capsule_kernel(fx, fy, fz, mx, my, mz, radius, length, ox, oy, xp):
+    # an axis through (ox, oy): solve about that point (m' = m − o × f), then shift back
+    mx = mx - oy * fz  # o × f = (oy fz, −ox fz, ox fy − oy fx)
+    my = my + ox * fz
+    mz = mz - (ox * fy - oy * fx)
+    rx, ry, rz, nx, ny, nz, sig, valid = _centred_capsule_kernel(fx, fy, fz, mx, my, mz, radius, length, xp)
+    return rx + ox, ry + oy, rz, nx, ny, nz, sig, valid
+
+
+def _centred_capsule_kernel(fx, fy, fz, mx, my, mz, radius, length, xp):
+    # hemisphere first (manual §3.2)
+    sx, sy, sz, snx, sny, snz, ssig, sval = sphere_kernel(fx, fy, fz, mx, my, mz, radius, 0.0, 0.0, length, xp)
+    on_cap = xp.logical_and(sval, sz >= length)
+
+    # cylinder side x² + y² = R²: m_z fixes the azimuth φ, m_x and m_y give z and σ linearly.
+    ft = xp.sqrt(fx * fx + fy * fy)
+    s = xp.div(mz, radius * ft)  # sin(α − φ), α the azimuth of the tangential force
+    cpsi = -xp.sqrt(1.0 - s * s)  # cos(α − φ) < 0: the pushing root
+    cphi = xp.div(fx * cpsi + fy * s, ft)
+    sphi = xp.div(fy * cpsi - fx * s, ft)
+    det = -ft * cpsi  # = −f · n > 0 when pushing
+    ax = mx - radius * sphi * fz
+    ay = my + radius * cphi * fz
+    cz = xp.div(ax * sphi - cphi * ay, det)
+    csig = xp.div(-fy * ay - fx * ax, det)
+    cyl_solved = xp.logical_and(det > 0.0, xp.isfinite(cz + csig))
+    # a rounding-size margin keeps contacts exactly on the base rim (z = 0)
+    tol = 1e-12 * (radius + length)
+    on_side = xp.logical_and(cyl_solved, xp.logical_and(cz >= -tol, cz <= length))
+    # Near the seam, noise can put the sphere root just below the equator and the cylinder
+    # root just above it; the surface is C¹ there, so keep the sphere root.
+    seam = xp.logical_and(xp.logical_and(sval, xp.logical_not(on_cap)), xp.logical_and(cyl_solved, cz > length))
+    use_cap = xp.logical_or(on_cap, seam)
+    use_side = xp.logical_and(xp.logical_not(use_cap), on_side)
+    valid = xp.logical_or(use_cap, use_side)
+    rx = xp.where(use_cap, sx, radius * cphi)
+    ry = xp.where(use_cap, sy, radius * sphi)
+    rz = xp.where(use_cap, sz, cz)
+    nx = xp.where(use_cap, snx, cphi)
+    ny = xp.where(use_cap, sny, sphi)
+    nz = xp.where(use_cap, snz, 0.0 * cz)
+    sig = xp.where(use_cap, ssig, csig)
+    return rx, ry, rz, nx, ny, nz, sig, valid
 
 
 @dataclass(frozen=True)
@@ -180,10 +261,11 @@ class Capsule(Fingertip):
     axis_offset: tuple[float, float] = (0.0, 0.0)
     skin_thickness: float | None = field(default=None, compare=False)
     kind: ClassVar[str] = "capsule"
+    calibrates: ClassVar[str | None] = "presses"
 
     def __post_init__(self) -> None:
-        _skin(self)
-        object.__setattr__(self, "radius", _positive(self.radius, "radius"))
+        check_skin(self)
+        object.__setattr__(self, "radius", positive(self.radius, "radius"))
         length = float(self.length)
         if not (math.isfinite(length) and length >= 0.0):
             raise ValueError(f"length must be a non-negative length in metres, got {self.length!r}")
@@ -220,11 +302,141 @@ class Capsule(Fingertip):
         half = 0.5 * (self.length + self.radius)
         return np.array([*self.axis_offset, half]), math.hypot(self.radius, half)
 
+    def _contact_kernel(self, fx, fy, fz, mx, my, mz, xp):
+        return _capsule_kernel(fx, fy, fz, mx, my, mz, self.radius, self.length, *self.axis_offset, xp)
+
+    def skin_elements(self, n_elements: int, z_min: float | None = None) -> tuple[NDArray, NDArray, NDArray]:
+        """The cap as a Fibonacci lattice, the side from ``z_min`` (m, default 0: the sensor
+        flange) up as a staggered (brick) grid. See :meth:`Fingertip.skin_elements`."""
+        r, length = self.radius, self.length
+        z0 = 0.0 if z_min is None else float(z_min)
+        if z0 > length:
+            raise ValueError(f"z_min must not exceed the capsule length {length} m, got {z0}")
+        a_cap = 2.0 * math.pi * r * r
+        a_side = 2.0 * math.pi * r * (length - z0)
+        h = math.sqrt((a_cap + a_side) / n_elements)
+        n_cap = max(1, round(a_cap / (h * h)))
+        u, w = fibonacci_cap(n_cap, 0.0)
+        ox, oy = self.axis_offset
+        centres = [u * r + np.array([ox, oy, length])]
+        normals = [u]
+        areas = [w * r * r]
+        if a_side > 0.0:
+            n_phi = max(3, round(2.0 * math.pi * r / h))
+            n_z = max(1, round((length - z0) / h))
+            dphi, dz = 2.0 * math.pi / n_phi, (length - z0) / n_z
+            j, i = np.meshgrid(np.arange(n_z), np.arange(n_phi), indexing="ij")
+            phi = (i + 0.5 * (j % 2)).ravel() * dphi  # staggered rows: a brick pattern
+            z = z0 + (j.ravel() + 0.5) * dz
+            nrm = np.column_stack((np.cos(phi), np.sin(phi), np.zeros_like(phi)))
+            centres.append(np.column_stack((ox + r * nrm[:, 0], oy + r * nrm[:, 1], z)))
+            normals.append(nrm)
+            areas.append(np.full(len(phi), r * dphi * dz))
+        return np.concatenate(centres), np.concatenate(normals), np.concatenate(areas)
+
+    def support_point(self, normal: ArrayLike) -> NDArray[np.float64]:
+        """The point of the cap whose outward normal is ``normal`` (unit, ``n_z ≥ 0``), m."""
+        n = np.asarray(normal, dtype=float)
+        if np.any(n[..., 2] < 0.0):
+            raise ValueError("a capsule's skin point for a normal is on its cap: normals need n_z >= 0")
+        return np.array([*self.axis_offset, self.length]) + self.radius * n
+
+    @classmethod
+    def press_model(cls) -> PressModel:
+        return _CapPress()
+
+    def surface_mesh(self, n_around: int = 48, n_along: int = 32) -> tuple[NDArray, NDArray, NDArray]:
+        # profile: the cylinder from the sensor (z = 0) up, then the hemisphere to the tip
+        phi = np.linspace(0.0, 2.0 * np.pi, n_around, endpoint=False)
+        n_cyl = max(2, n_along // 3) if self.length > 0 else 0
+        z_cyl = np.linspace(0.0, self.length, n_cyl, endpoint=False)
+        a = np.linspace(0.5 * np.pi, 0.0, n_along - n_cyl)
+        rho = np.concatenate((np.full(n_cyl, self.radius), self.radius * np.sin(a)))
+        z = np.concatenate((z_cyl, self.length + self.radius * np.cos(a)))
+        pts = np.stack(
+            [
+                self.axis_offset[0] + rho[:, None] * np.cos(phi),
+                self.axis_offset[1] + rho[:, None] * np.sin(phi),
+                np.broadcast_to(z[:, None], (len(z), n_around)),
+            ],
+            axis=-1,
+        )
+        return grid_mesh(self, pts)
+
+    @classmethod
+    def from_table(cls, table: dict, source: str) -> Fingertip:
+        fields = {"radius": True, "length": True, "axis_offset": False, "skin_thickness": False}
+        return _construct(cls, fields_from_table(table, source, "capsule", fields, pairs=("axis_offset",)), source)
+
     def to_toml(self) -> str:
-        text = f'[fingertip]\nshape = "capsule"\nradius = {_fmt(self.radius)}\nlength = {_fmt(self.length)}\n'
+        text = f'[fingertip]\nshape = "capsule"\nradius = {fmt(self.radius)}\nlength = {fmt(self.length)}\n'
         if self.axis_offset != (0.0, 0.0):
-            text += f"axis_offset = [{', '.join(_fmt(v) for v in self.axis_offset)}]\n"
-        return text + _skin_toml(self)
+            text += f"axis_offset = [{', '.join(fmt(v) for v in self.axis_offset)}]\n"
+        return text + skin_toml(self)
+
+
+# -- ellipsoid ----------------------------------------------------------------------------------
+
+
+class _EllipsoidPress(PressModel):
+    """An axis-aligned ellipsoid's centre and semi-axes: the contact point for the normal ``n``
+    is ``c + D² n / |D n| − δ n`` (``D = diag(a, b, c)``)."""
+
+    names = ("centre x", "centre y", "centre z", "semi-axis a", "semi-axis b", "semi-axis c")
+    coverage = "±85° around the tip, down to its widest part: within ±60° its centre's height and semi-axis c are nearly one unknown"
+
+    def start(self, center: NDArray, radius: float) -> NDArray:
+        return np.concatenate((center * 1e3, [radius * 1e3] * 3))
+
+    def points(self, x: NDArray, normals: NDArray, depth: NDArray) -> NDArray:
+        d = x[3:6]
+        dn = d * normals
+        return x[:3] + (d * dn) / np.sqrt(np.sum(dn * dn, axis=1))[:, None] - depth[:, None] * normals
+
+    def tip(self, x: NDArray, source: str) -> Fingertip:
+        return Ellipsoid(semi_axes=tuple(x[3:6]), center=tuple(x[:3]))
+
+    def stds(self, std: NDArray) -> dict[str, float]:
+        return dict(zip(self.names[3:] + self.names[:3], np.concatenate((std[3:6], std[:3]))))
+
+    def report(self, x: NDArray, std: NDArray) -> tuple[list[str], list[str]]:
+        mm = 1e3
+        c, cs, a, s = x[:3] * mm, std[:3] * mm, x[3:6] * mm, std[3:6] * mm
+        return [
+            f"  centre     x = {c[0]:+.3f} ± {cs[0]:.3f} mm, y = {c[1]:+.3f} ± {cs[1]:.3f} mm, z = {c[2]:+.3f} ± {cs[2]:.3f} mm",
+            f"  semi-axes  a = {a[0]:.3f} ± {s[0]:.3f} mm, b = {a[1]:.3f} ± {s[1]:.3f} mm, c = {a[2]:.3f} ± {s[2]:.3f} mm",
+        ], []
+
+    def std_line(self, std: NDArray) -> str:
+        mm = 1e3
+        return (
+            "semi-axes std " + ", ".join(f"{v * mm:.4f}" for v in std[3:6])
+            + " mm; centre std " + ", ".join(f"{v * mm:.4f}" for v in std[:3]) + " mm"
+        )
+
+
+def _ellipsoid_kernel(fx, fy, fz, mx, my, mz, a, b, c, cx, cy, cz, xp):
+    # With p = D s (D = diag(a, b, c)), m_c = p × f + κ D⁻² p becomes the unit-sphere problem
+    # D m_c = s × f' + κ s with f' = det(D) D⁻¹ f, since D [f]× D = det(D) [D⁻¹ f]×.
+    mx = mx - (cy * fz - cz * fy)
+    my = my - (cz * fx - cx * fz)
+    mz = mz - (cx * fy - cy * fx)
+    sx, sy, sz, _, _, _, kappa, valid = sphere_kernel(
+        b * c * fx, a * c * fy, a * b * fz, a * mx, b * my, c * mz, 1.0, 0.0, 0.0, 0.0, xp
+    )
+    gx, gy, gz = sx / a, sy / b, sz / c  # ∝ gradient of S at p
+    gnorm = xp.sqrt(gx * gx + gy * gy + gz * gz)
+    # f · n has the sign of f' · s, so the sphere's root choice carries over.
+    return (
+        cx + a * sx,
+        cy + b * sy,
+        cz + c * sz,
+        xp.div(gx, gnorm),
+        xp.div(gy, gnorm),
+        xp.div(gz, gnorm),
+        kappa * gnorm,
+        valid,
+    )
 
 
 @dataclass(frozen=True)
@@ -235,14 +447,15 @@ class Ellipsoid(Fingertip):
     center: tuple[float, float, float] = (0.0, 0.0, 0.0)
     skin_thickness: float | None = field(default=None, compare=False)
     kind: ClassVar[str] = "ellipsoid"
+    calibrates: ClassVar[str | None] = "presses"
 
     def __post_init__(self) -> None:
-        _skin(self)
-        axes = _vec3(self.semi_axes, "semi_axes")
+        check_skin(self)
+        axes = vec3(self.semi_axes, "semi_axes")
         for a in axes:
-            _positive(a, "each of semi_axes")
+            positive(a, "each of semi_axes")
         object.__setattr__(self, "semi_axes", axes)
-        object.__setattr__(self, "center", _vec3(self.center, "center"))
+        object.__setattr__(self, "center", vec3(self.center, "center"))
 
     def _scaled(self, x, y, z):
         a, b, c = self.semi_axes
@@ -272,91 +485,54 @@ class Ellipsoid(Fingertip):
     def bounding_sphere(self) -> tuple[NDArray[np.float64], float]:
         return np.array(self.center), max(self.semi_axes)
 
-    def to_toml(self) -> str:
-        a = ", ".join(_fmt(v) for v in self.semi_axes)
-        c = ", ".join(_fmt(v) for v in self.center)
-        return f'[fingertip]\nshape = "ellipsoid"\nsemi_axes = [{a}]\ncenter = [{c}]\n' + _skin_toml(self)
+    def _contact_kernel(self, fx, fy, fz, mx, my, mz, xp):
+        return _ellipsoid_kernel(fx, fy, fz, mx, my, mz, *self.semi_axes, *self.center, xp)
 
+    def skin_elements(self, n_elements: int, z_min: float | None = None) -> tuple[NDArray, NDArray, NDArray]:
+        """The sphere's Fibonacci lattice mapped onto the ellipsoid (``p = c + D u``), from the
+        top down to ``z_min`` (m; default ``center_z − c/2``, as the sphere's 120°).
 
-@dataclass(frozen=True)
-class ImplicitSurface(Fingertip):
-    """A general skin ``S(r) = 0`` given as callables.
+        An element's area is its area on the unit sphere times ``abc |D⁻¹ u|`` (the area
+        scale of ``D`` on the tangent plane with normal ``u``), so the areas sum to the
+        covered skin's area; elements are smaller where the skin is more curved.
+        See :meth:`Fingertip.skin_elements`.
+        """
+        d = np.array(self.semi_axes)
+        cen = np.array(self.center)
+        zc = cen[2] - 0.5 * d[2] if z_min is None else float(z_min)
+        cos_min = min(max((zc - cen[2]) / d[2], -1.0), 1.0)
+        if cos_min >= 1.0:
+            raise ValueError(f"z_min {zc} m leaves no skin on the ellipsoid")
+        u, w = fibonacci_cap(n_elements, cos_min)
+        g = u / d  # ∝ the outward normal at c + D u
+        gn = np.linalg.norm(g, axis=1)
+        return cen + d * u, g / gn[:, None], w * np.prod(d) * gn
 
-    Parameters
-    ----------
-    function : callable
-        ``S(points) -> values``: points shape ``(..., 3)`` (m) to shape ``(...,)``; negative
-        inside, positive outside.
-    gradient : callable
-        ``∇S(points) -> (..., 3)``.
-    center, radius : array-like (3,), float
-        A sphere (m) that contains the whole skin; it bounds the search for the contact
-        solver's starting point.
-    hessian : callable, optional
-        ``(..., 3) -> (..., 3, 3)``. Central differences of ``gradient`` when absent.
-    """
+    def support_point(self, normal: ArrayLike) -> NDArray[np.float64]:
+        n = np.asarray(normal, dtype=float)
+        d = np.array(self.semi_axes)
+        dn = d * n
+        return np.array(self.center) + d * dn / np.linalg.norm(dn, axis=-1, keepdims=True)
 
-    function: Callable[[NDArray], NDArray]
-    gradient: Callable[[NDArray], NDArray]
-    center: tuple[float, float, float]
-    radius: float
-    hessian: Callable[[NDArray], NDArray] | None = field(default=None)
-    kind: ClassVar[str] = "implicit"
+    @classmethod
+    def press_model(cls) -> PressModel:
+        return _EllipsoidPress()
 
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "center", _vec3(self.center, "center"))
-        object.__setattr__(self, "radius", _positive(self.radius, "radius"))
+    def surface_mesh(self, n_around: int = 48, n_along: int = 32) -> tuple[NDArray, NDArray, NDArray]:
+        return grid_mesh(self, np.asarray(self.center) + np.asarray(self.semi_axes) * uv_sphere(n_around, n_along))
 
-    # The implicit surface works on arrays only; scalar (stream) calls go through arrays.
-    def _surface_kernel(self, x, y, z, xp):
-        v = np.asarray(self.function(np.stack(np.broadcast_arrays(x, y, z), axis=-1)), dtype=float)
-        return float(v) if xp is PY else v
-
-    def grad(self, points: ArrayLike) -> NDArray[np.float64]:
-        """``∇S`` at ``points``, shape ``(..., 3)``."""
-        return np.asarray(self.gradient(np.asarray(points, dtype=float)), dtype=float)
-
-    def hess(self, points: ArrayLike) -> NDArray[np.float64]:
-        """Hessian of ``S`` at ``points``, shape ``(..., 3, 3)`` (central differences by default)."""
-        p = np.asarray(points, dtype=float)
-        if self.hessian is not None:
-            return np.asarray(self.hessian(p), dtype=float)
-        step = 1e-6 * self.radius
-        cols = []
-        for i in range(3):
-            e = np.zeros(3)
-            e[i] = step
-            cols.append((self.grad(p + e) - self.grad(p - e)) / (2.0 * step))
-        h = np.stack(cols, axis=-1)
-        return 0.5 * (h + np.swapaxes(h, -1, -2))
-
-    def _normal_kernel(self, x, y, z, xp):
-        p = np.stack(np.broadcast_arrays(x, y, z), axis=-1)
-        g = self.grad(p)
-        n = g / np.linalg.norm(g, axis=-1, keepdims=True)
-        if xp is PY:
-            return float(n[0]), float(n[1]), float(n[2])
-        return n[..., 0], n[..., 1], n[..., 2]
-
-    def _project_kernel(self, x, y, z, xp):
-        p = np.stack(np.broadcast_arrays(x, y, z), axis=-1).astype(float)
-        for _ in range(20):
-            s = np.asarray(self.function(p), dtype=float)
-            g = self.grad(p)
-            step = (s / np.sum(g * g, axis=-1))[..., None] * g
-            p = p - step
-            if np.all(np.abs(s) < 1e-14 * max(1.0, self.radius)):
-                break
-        if xp is PY:
-            return float(p[0]), float(p[1]), float(p[2])
-        return p[..., 0], p[..., 1], p[..., 2]
-
-    @property
-    def bounding_sphere(self) -> tuple[NDArray[np.float64], float]:
-        return np.array(self.center), self.radius
+    @classmethod
+    def from_table(cls, table: dict, source: str) -> Fingertip:
+        fields = {"semi_axes": True, "center": False, "skin_thickness": False}
+        return _construct(cls, fields_from_table(table, source, "ellipsoid", fields), source)
 
     def to_toml(self) -> str:
-        raise ValueError("an implicit surface given as Python callables has no TOML form")
+        a = ", ".join(fmt(v) for v in self.semi_axes)
+        c = ", ".join(fmt(v) for v in self.center)
+        return f'[fingertip]\nshape = "ellipsoid"\nsemi_axes = [{a}]\ncenter = [{c}]\n' + skin_toml(self)
+
+
+# -- presets, the registry and the fingertip file -----------------------------------------------
 
 
 def murakami2006() -> Capsule:
@@ -371,10 +547,15 @@ def murakami2006() -> Capsule:
 #: Named fingertips accepted wherever a fingertip file is.
 PRESETS: dict[str, Callable[[], Fingertip]] = {"murakami2006": murakami2006}
 
-_FIELDS = {
-    "sphere": {"radius": True, "center": False, "skin_thickness": False},
-    "capsule": {"radius": True, "length": True, "axis_offset": False, "skin_thickness": False},
-    "ellipsoid": {"semi_axes": True, "center": False, "skin_thickness": False},
+#: The shapes a fingertip file's ``shape`` names (manual §2), and ``softtip calibrate
+#: --shape``'s choices (those that calibrate). Adding a shape is its module and a line here
+#: (docs/shapes.md). :class:`ImplicitSurface` is made in Python (its ``S`` is code), so no
+#: file names it.
+SHAPES: dict[str, type[Fingertip]] = {
+    "sphere": Sphere,
+    "capsule": Capsule,
+    "ellipsoid": Ellipsoid,
+    "mesh": MeshFingertip,
 }
 
 
@@ -416,51 +597,32 @@ def _looks_like_name(name: str) -> bool:
     return "/" not in name and "\\" not in name
 
 
+def _shape_name(table: dict) -> str | None:
+    """The shape a ``[fingertip]`` table names: its ``shape``, else the shape a key implies
+    (``mesh = "…"``: a mesh), else None."""
+    shape = table.get("shape")
+    if shape is None:
+        shape = next((name for name, cls in SHAPES.items() if cls.implied_by is not None and cls.implied_by in table), None)
+    return shape
+
+
 def fingertip_from_mapping(data: dict, source: str = "<fingertip>") -> Fingertip:
-    """Build a fingertip from the parsed TOML mapping (``{"fingertip": {...}}``)."""
+    """Build a fingertip from the parsed TOML mapping (``{"fingertip": {...}}``).
+
+    The ``[fingertip]`` table's ``shape`` picks the class in :data:`SHAPES`, which reads the
+    rest (:meth:`~softtip.core.shape.Fingertip.from_table`); a ``[fingertip.mount]`` places
+    it on the sensor (:class:`~softtip.core.mounting.Mounted`) unless the shape reads it itself.
+    """
     table = data.get("fingertip")
     if not isinstance(table, dict):
         raise InputError(f"{source}: expected a [fingertip] table")
+    shape = _shape_name(table)
+    cls = SHAPES.get(shape) if isinstance(shape, str) else None
     mount = table.get("mount")
-    if mount is not None and table.get("shape", "mesh" if "mesh" in table else None) != "mesh":
-        # [fingertip.mount]: the tip's pose in the sensor frame (a mesh applies it to its vertices)
-        from softtip.core.mounting import mount_from_mapping
-
+    if mount is not None and not (cls is not None and cls.reads_mount):
+        # [fingertip.mount]: the tip's pose in the sensor frame
         inner = {k: v for k, v in table.items() if k != "mount"}
         return mount_from_mapping(fingertip_from_mapping({"fingertip": inner}, source), mount, source)
-    shape = table.get("shape")
-    if shape == "mesh" or (shape is None and "mesh" in table):
-        # a triangle mesh file (softtip.core.mesh; trimesh is imported only then)
-        from softtip.core.mesh import mesh_fingertip_from_table
-
-        return mesh_fingertip_from_table(table, source)
-    if shape not in _FIELDS:
-        raise InputError(
-            f"{source}: [fingertip] shape = {shape!r}; expected one of {', '.join((*_FIELDS, 'mesh'))}"
-        )
-    fields = _FIELDS[shape]
-    unknown = sorted(set(table) - set(fields) - {"shape"})
-    if unknown:
-        raise InputError(
-            f"{source}: [fingertip] unknown key(s) {', '.join(unknown)} for shape {shape!r}; "
-            f"expected {', '.join(fields)}"
-        )
-    missing = [k for k, required in fields.items() if required and k not in table]
-    if missing:
-        raise InputError(f"{source}: [fingertip] missing key(s) {', '.join(missing)} for shape {shape!r}")
-    kwargs = {k: table[k] for k in fields if k in table}
-    for key, value in kwargs.items():
-        ok = isinstance(value, (int, float)) and not isinstance(value, bool)
-        size = 2 if key == "axis_offset" else 3
-        if isinstance(value, list):
-            ok = len(value) == size and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
-        elif key == "axis_offset":
-            ok = False
-        if not ok:
-            what = "a list of 2 numbers [x, y]" if key == "axis_offset" else "a number (or a list of 3)"
-            raise InputError(f"{source}: [fingertip] {key} = {value!r} is not {what} in metres")
-    cls = {"sphere": Sphere, "capsule": Capsule, "ellipsoid": Ellipsoid}[shape]
-    try:
-        return cls(**kwargs)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{source}: [fingertip] {exc}") from None
+    if cls is None:
+        raise InputError(f"{source}: [fingertip] shape = {shape!r}; expected one of {', '.join(SHAPES)}")
+    return cls.from_table(table, source)

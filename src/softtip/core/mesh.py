@@ -31,7 +31,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from softtip.core._xp import NP, PY
-from softtip.core.fingertip import Fingertip
+from softtip.core.mounting import pose_from_table
+from softtip.core.shape import Fingertip
 from softtip.errors import InputError
 
 __all__ = [
@@ -406,6 +407,9 @@ class MeshFingertip(Fingertip):
     rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
     _d: dict = field(default_factory=dict, init=False, repr=False)
     kind: ClassVar[str] = "mesh"
+    implied_by: ClassVar[str | None] = "mesh"
+    reads_mount: ClassVar[bool] = True
+    calibrates: ClassVar[str | None] = "placement"
 
     def __post_init__(self) -> None:
         v = np.ascontiguousarray(self.vertices, dtype=float)
@@ -778,6 +782,59 @@ class MeshFingertip(Fingertip):
     def volume(self) -> float:
         """Enclosed volume, m³."""
         return self._d["volume"]
+
+    def skin_elements(self, n_elements: int, z_min: float | None = None) -> tuple[NDArray, NDArray, NDArray]:
+        """Every triangle above ``z_min`` as one element or, when it is larger than the target
+        element area (the covered area over ``n_elements``), ``k²`` equal sub-triangles on a
+        barycentric grid.
+
+        Element centres lie on the mesh; normals are the mesh's interpolated normals there, as
+        the estimator sees them. A mesh finer than ``n_elements`` keeps one element per
+        triangle (more elements than asked). ``z_min``: lowest covered height, m (default 0:
+        the face where the fingertip is mounted on the sensor, and anything below it, is not
+        skin); a triangle is covered when its centroid is above it. See
+        :meth:`Fingertip.skin_elements`.
+        """
+        z0 = 0.0 if z_min is None else float(z_min)
+        v, f = self.vertices, self.faces
+        tri = v[f]
+        centroid_z = tri[:, :, 2].mean(axis=1)
+        keep = np.flatnonzero(centroid_z > z0 + 1e-9 * self.bounding_sphere[1])
+        if keep.size == 0:
+            raise ValueError(f"z_min {z0} m leaves no skin on the mesh")
+        area = 0.5 * np.linalg.norm(np.cross(tri[keep, 1] - tri[keep, 0], tri[keep, 2] - tri[keep, 0]), axis=1)
+        target = area.sum() / n_elements
+        k = np.maximum(1, np.ceil(np.sqrt(area / target) - 1e-9)).astype(int)
+        faces, b1s, b2s, areas = [], [], [], []
+        for kk in np.unique(k):
+            sel = keep[k == kk]
+            # centroids of the k² sub-triangles, barycentric (b1, b2): upward and downward ones
+            i, j = np.meshgrid(np.arange(kk), np.arange(kk), indexing="ij")
+            up = (i + j) <= kk - 1
+            down = (i + j) <= kk - 2
+            sb1 = np.concatenate(((i[up] + 1 / 3) / kk, (i[down] + 2 / 3) / kk))
+            sb2 = np.concatenate(((j[up] + 1 / 3) / kk, (j[down] + 2 / 3) / kk))
+            faces.append(np.repeat(sel, len(sb1)))
+            b1s.append(np.tile(sb1, len(sel)))
+            b2s.append(np.tile(sb2, len(sel)))
+            areas.append(np.repeat(area[np.searchsorted(keep, sel)] / kk**2, len(sb1)))
+        face = np.concatenate(faces)
+        centres, normals = self._interp(face, np.concatenate(b1s), np.concatenate(b2s))
+        return centres, normals, np.concatenate(areas)
+
+    def surface_mesh(self, n_around: int = 48, n_along: int = 32) -> tuple[NDArray, NDArray, NDArray]:
+        """The mesh's own triangles, with vertex normals for shading (the corner normals
+        around each vertex, averaged); ``n_around`` and ``n_along`` are not used.
+        See :meth:`Fingertip.surface_mesh`."""
+        acc = np.zeros((len(self.vertices), 3))
+        np.add.at(acc, self.faces.ravel(), self.corner_normals.reshape(-1, 3))
+        normals = acc / np.linalg.norm(acc, axis=1, keepdims=True)
+        return self.vertices.copy(), self.faces.astype(np.int32), normals
+
+    @classmethod
+    def from_table(cls, table: dict, source: str) -> Fingertip:
+        """See :func:`mesh_fingertip_from_table`."""
+        return mesh_fingertip_from_table(table, source)
 
     def to_toml(self) -> str:
         if self.source is None:
@@ -1510,8 +1567,6 @@ def mesh_fingertip_from_table(table: dict, source: str = "<fingertip>") -> MeshF
     thickness = table.get("skin_thickness")
     thickness = None if thickness is None else number("skin_thickness", thickness)
     # the mesh frame's pose in the sensor frame: the [fingertip.mount] of every shape
-    from softtip.core.mounting import pose_from_table
-
     rotation, translation = pose_from_table(table.get("mount", {}), f"{source}: [fingertip.mount]")
     rpy = tuple(float(a) for a in rotation.as_euler("xyz"))
     base = Path(source).parent if source and not source.startswith("<") else Path(".")
@@ -1542,12 +1597,15 @@ def mesh_fingertip_from_table(table: dict, source: str = "<fingertip>") -> MeshF
 
 def load_mesh_fingertip(path: str | Path) -> MeshFingertip:
     """A mesh fingertip from a TOML fingertip file (see :func:`mesh_fingertip_from_table`)."""
-    from softtip.core.fingertip import load_fingertip
+    from softtip.io.tomlfile import read_toml
 
-    tip = load_fingertip(Path(path))
-    if not isinstance(tip, MeshFingertip):
-        raise InputError(f"{path}: not a mesh fingertip (shape = {tip.kind!r})")
-    return tip
+    table = read_toml(path, "fingertip").get("fingertip")
+    if not isinstance(table, dict):
+        raise InputError(f"{path}: expected a [fingertip] table")
+    shape = table.get("shape", MeshFingertip.kind if MeshFingertip.implied_by in table else None)
+    if shape != MeshFingertip.kind:
+        raise InputError(f"{path}: not a mesh fingertip (shape = {shape!r})")
+    return mesh_fingertip_from_table(table, str(path))
 
 
 def _check_origin(tip: MeshFingertip, where: str) -> None:

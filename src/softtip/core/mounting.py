@@ -29,12 +29,13 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 if TYPE_CHECKING:  # scipy.spatial costs ~0.3 s to import: only where a rotation is made
     from scipy.spatial.transform import Rotation
 
-from softtip.core.fingertip import Fingertip
+from softtip.core._xp import NP
+from softtip.core.shape import Fingertip
 from softtip.errors import InputError
 
 __all__ = ["Mounted", "mount_from_mapping", "pose_from_table"]
@@ -129,6 +130,32 @@ class Mounted(Fingertip):
     def bounding_sphere(self) -> tuple[NDArray[np.float64], float]:
         c, r = self.tip.bounding_sphere
         return np.array(self._from_tip(*np.asarray(c, dtype=float))), r
+
+    def _contact_kernel(self, fx, fy, fz, mx, my, mz, xp=NP):
+        # the shape's own solution for the wrench in its frame, mapped back to the sensor frame
+        rx, ry, rz, nx, ny, nz, sigma, valid = self.tip._contact_kernel(*self.wrench_in_tip_frame(fx, fy, fz, mx, my, mz), xp)
+        return (*self._from_tip(rx, ry, rz), *self._rotate(nx, ny, nz), sigma, valid)
+
+    def skin_elements(self, n_elements: int, z_min: float | None = None) -> tuple[NDArray, NDArray, NDArray]:
+        """The shape's own skin (``z_min`` in its own frame: its flange), placed by the mount.
+        See :meth:`Fingertip.skin_elements`."""
+        centres, normals, areas = self.tip.skin_elements(n_elements, z_min)
+        rot, shift = np.array(self.rotation), np.array(self.translation)
+        return centres @ rot.T + shift, normals @ rot.T, areas
+
+    def support_point(self, normal: ArrayLike) -> NDArray[np.float64]:
+        rot = np.array(self.rotation)
+        return self.tip.support_point(np.asarray(normal, dtype=float) @ rot) @ rot.T + np.array(self.translation)
+
+    def apex_hint(self) -> NDArray[np.float64]:
+        """The shape's own apex hint (on its own +z axis), placed by the mount."""
+        return np.array(self.rotation) @ self.tip.apex_hint() + np.array(self.translation)
+
+    def surface_mesh(self, n_around: int = 48, n_along: int = 32) -> tuple[NDArray, NDArray, NDArray]:
+        """The shape's own mesh placed by the mount. See :meth:`Fingertip.surface_mesh`."""
+        v, tri, n = self.tip.surface_mesh(n_around, n_along)
+        rot = np.array(self.rotation)
+        return v @ rot.T + np.array(self.translation), tri, n @ rot.T
 
     def to_toml(self) -> str:
         from scipy.spatial.transform import Rotation

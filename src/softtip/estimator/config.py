@@ -68,7 +68,7 @@ class EstimatorConfig:
         m; re-latch when, with the latch held and ``|f|`` inside ``latch_force_range``, the
         soft-finger solution lies farther than this from the latched point. ``None``
         (default, the papers'): only on contact loss. A few mm (e.g. 3 mm) is beyond the
-        soft-finger bias of the papers' line contacts at light force (≈ |h| / |f| ≤ 1 mm).
+        soft-finger bias of the papers' line contacts at light force (≈ ``|h| / |f|`` ≤ 1 mm).
     depth : DepthLaw or None
         Skin law of the depth compensation (:mod:`softtip.core.depth`): the fixed law of
         ``depth_mode="law"``, the prior of ``"online"``. ``None`` (default): the
@@ -138,6 +138,22 @@ class EstimatorConfig:
         ``h``'s window covariance is beyond the noise and at least ``enter`` times the
         larger, and a confirmed ``line`` again only when the ratio is below ``leave``
         (hysteresis; default 0.2, 0.1).
+    area_share : float
+        The contact reads ``area`` while more than this share of the evidence window's samples
+        show ``h`` spread over both tangent axes (the ``enter`` test of ``area_ratio``), and
+        stops reading it as soon as the sliding window no longer does (default 0.5: a sustained
+        spread, at the default window a second of it; a transient spread while a new rock
+        begins, when the window holds the end of one excitation and the start of the next,
+        does not make an area). A reading of the current window, not a verdict.
+    rocked : sequence of (float, float)
+        s, in the log's time: intervals during which the user rocked the object about two
+        tangent axes (in turn or at once), stated because the wrench cannot always show it: on
+        a frictionless round skin the tangential load stays locked to ``h`` (manual §3.5), so
+        a line rocked about its own axis leaves no trace in the load. A window wholly inside
+        one of them (its start ``t − evidence_window`` at or after the interval's start, ``t``
+        at or before its end) counts as excited about two axes: ``h`` still on one axis there
+        confirms a line, and a plane shows its spread as an area. State only an interval in
+        which every window of ``evidence_window`` seconds saw both axes. Default none.
     excitation_ratio : float
         The contact counts as excited about two tangent axes when the tangential load's
         window covariance has its smaller eigenvalue beyond the noise and at least this
@@ -225,6 +241,8 @@ class EstimatorConfig:
     line_evidence: bool = True
     evidence_window: float = 2.0
     area_ratio: tuple[float, float] = (0.2, 0.1)
+    area_share: float = 0.35
+    rocked: tuple[tuple[float, float], ...] = ()
     excitation_ratio: float = 0.5
     excitation_min: float = 0.01
     evidence_max_angle_std: float = math.radians(10.0)
@@ -233,6 +251,14 @@ class EstimatorConfig:
     evidence_reset_distance: float = 1e-3
     significance_window: float = 0.015
     noise_from_tare: bool = False
+
+    def stated_excitation(self, t):
+        """Whether the evidence window ending at ``t`` (s, float or array) lies wholly inside a
+        stated two-axis rocking interval (:attr:`rocked`)."""
+        inside = False if np.ndim(t) == 0 else np.zeros(np.shape(t), dtype=bool)
+        for a, b in self.rocked:
+            inside = inside | ((t - self.evidence_window >= a) & (t <= b))
+        return inside
 
     def line_threshold(self, h_std: ArrayLike) -> NDArray[np.float64]:
         """The ``|h|`` above which a contact is a line: ``max(h_sigmas · h_std, h_min)``.
@@ -308,6 +334,18 @@ class EstimatorConfig:
         if not (0.0 < leave <= enter <= 1.0):
             raise ValueError(f"area_ratio must be (enter, leave) with 0 < leave <= enter <= 1, got {self.area_ratio!r}")
         object.__setattr__(self, "area_ratio", (enter, leave))
+        try:
+            rocked = tuple((float(a), float(b)) for a, b in self.rocked)
+        except (TypeError, ValueError):
+            raise ValueError(f"rocked must be (start, end) pairs of times in s, got {self.rocked!r}") from None
+        for a, b in rocked:
+            if not (math.isfinite(a) and math.isfinite(b) and a < b):
+                raise ValueError(f"rocked intervals must be finite with start < end, got ({a!r}, {b!r})")
+        object.__setattr__(self, "rocked", rocked)
+        v = float(self.area_share)
+        if not (0.0 < v < 1.0):
+            raise ValueError(f"area_share must be a share between 0 and 1 (exclusive), got {self.area_share!r}")
+        object.__setattr__(self, "area_share", v)
         object.__setattr__(self, "line_evidence", bool(self.line_evidence))
         object.__setattr__(self, "noise_from_tare", bool(self.noise_from_tare))
         if self.noise_from_tare and (self.bias is not None or self.tare_duration <= 0.0):

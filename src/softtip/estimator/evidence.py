@@ -95,8 +95,9 @@ _UNKNOWN, _LINE, _AREA = 0, 1, 2
 _NAN3 = (math.nan, math.nan, math.nan)
 
 
-def _decide(win, config: EstimatorConfig, xp):
-    """``(area_now, line_now, resolved, h_ratio, f_ratio)`` of a window (component-wise)."""
+def _decide(win, config: EstimatorConfig, xp, stated=False):
+    """``(area_now, line_now, resolved, axis_now, h_ratio, f_ratio)`` of a window (component-wise);
+    ``stated``: the window lies in a stated two-axis rocking (:attr:`EstimatorConfig.rocked`)."""
     enter, leave = config.area_ratio
     h_ratio = xp.where(win.h_major > win.h_noise, xp.div(win.h_minor, win.h_major), xp.nan)
     f_ratio = xp.where(win.f_major > win.f_noise, xp.div(win.f_minor, win.f_major), xp.nan)
@@ -113,11 +114,19 @@ def _decide(win, config: EstimatorConfig, xp):
         & (win.f_minor >= config.excitation_ratio * win.f_major)
         & (win.f_minor >= config.excitation_min * config.excitation_min)
     )
-    line_now = excited & one_axis
-    # single-axis windows bias the axis (a line's small resistance to rolling about its own
-    # edge follows the same excitation): only two-axis windows give the direction
-    resolved = line_now & (win.angle_std <= config.evidence_max_angle_std)
-    return area_now, line_now, resolved, h_ratio, f_ratio
+    # excited about two axes: the load shows it, or the user says so (where the load is locked
+    # to h, as on a frictionless round skin, it cannot)
+    line_now = (excited | stated) & one_axis
+    # h varied along one axis with an eigen-gap beyond the noise and by at least h_min: the
+    # window's principal axis is the direction, confirmed or not (one axis of excitation
+    # leaves a rolling bias, which the unconfirmed model error covers), and the contact a line
+    # while the window shows it, also where h passes through zero
+    sharp = win.angle_std <= config.evidence_max_angle_std
+    axis_now = one_axis & sharp & (win.h_major >= config.h_min * config.h_min)
+    # a confirmed line's direction comes from two-axis windows only (a line's small
+    # resistance to rolling about its own edge follows the excitation)
+    resolved = line_now & sharp
+    return area_now, line_now, resolved, axis_now, h_ratio, f_ratio
 
 
 def _frame_terms(nx, ny, nz, hx, hy, hz, fx, fy, fz, xp):
@@ -148,15 +157,17 @@ def _segment_starts(begin):
     return idx, np.maximum.accumulate(np.where(begin, idx, 0))
 
 
-def _vote(t, located, seg_start, side, window: float):
+def _vote(t, located, seg_start, side, window: float, share: float = 0.5):
     """``side`` (1 above the threshold, 0 below its leaving share, −1 between) of each located
     sample replaced by the vote of the located samples of its segment in the last ``window``
-    s (``t_j > t − window``, and itself): 1 or 0 when more than half are on that side, else −1."""
+    s (``t_j > t − window``, and itself): 1 or 0 when more than ``share`` of them are on that
+    side, else −1."""
     if window <= 0.0:
         return side
     if jit_enabled(len(t)):
         seg = np.ascontiguousarray(seg_start, dtype=np.int64)
-        return vote_kernel(t, located, seg, np.ascontiguousarray(side, dtype=np.int64), float(window), np.empty(len(t), dtype=np.int64))
+        return vote_kernel(t, located, seg, np.ascontiguousarray(side, dtype=np.int64), float(window), float(share),
+                           np.empty(len(t), dtype=np.int64))  # fmt: skip
     loc = np.flatnonzero(located)
     tl = t[loc]
     pos = np.arange(len(loc))
@@ -171,7 +182,7 @@ def _vote(t, located, seg_start, side, window: float):
     vote = np.full(len(loc), -1, dtype=side.dtype)
     for v in (0, 1):
         cum = np.concatenate(([0], np.cumsum(c == v)))
-        vote[2 * (cum[pos + 1] - cum[lo]) > m] = v
+        vote[cum[pos + 1] - cum[lo] > share * m] = v
     out[loc] = vote
     return out
 
@@ -305,46 +316,55 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
 
         def per_window(*a):
             # the sample's noise is computed here, block by block, not kept for the whole log
-            nz = _frame_noise(*a[N_SUMS + 1 :], noise, NP)
+            nz = _frame_noise(*a[N_SUMS + 1 : N_SUMS + 7], noise, NP)
             w = window_kernel(a[:N_SUMS], a[N_SUMS], *nz, corr, NP)
-            return (*_decide(w, config, NP), w.h_minor, w.angle, w.angle_std, w.angle_noise_std)
+            stated = config.stated_excitation(a[N_SUMS + 7]) if config.rocked else False
+            return (*_decide(w, config, NP, stated), w.h_minor, w.angle, w.angle_std, w.angle_noise_std)
 
         with np.errstate(invalid="ignore", divide="ignore"):
             if jit_enabled(n):  # window sums block by block, never the whole log's
                 res = None
                 for b, sb, cb in _window_sum_blocks(t, located, begin, prods, config.evidence_window, softtip.core._blocks.BLOCK):
-                    r = per_window(*sb, cb, *(np.ascontiguousarray(z[b]) for z in (*point.T, *normal.T)))
+                    r = per_window(*sb, cb, *(np.ascontiguousarray(z[b]) for z in (*point.T, *normal.T, t)))
                     if res is None:
                         res = [np.empty(n, dtype=np.asarray(x).dtype) for x in r]
                     for dst, x in zip(res, r):
                         dst[b] = x
             else:
                 sums, count = _window_sums(t, located, begin, prods, config.evidence_window)
-                res = blockwise(per_window, (*sums, count, *point.T, *normal.T))
+                res = blockwise(per_window, (*sums, count, *point.T, *normal.T, t))
                 del sums, count
         del prods
-        area_now, line_now, resolved, h_ratio, f_ratio, *rest = res
+        area_now, line_now, resolved, axis_now, h_ratio, f_ratio, *rest = res
         win = _Held(*rest)
         del res, rest  # temporaries are dropped as soon as done with: they set the peak memory
         # an area only where |h| itself is significant: sub-threshold h wanders about both axes
         # with the model's error (a grasp force settling) once a low-pass has removed the noise
         with np.errstate(invalid="ignore"):
             above = np.asarray(ms.h_norm, dtype=float) > config.line_threshold(ms.h_std)
-        event = np.where(area_now & above, _AREA, np.where(line_now, _LINE, _UNKNOWN))
         idx, seg_start = _segment_starts(begin)
-        # the verdict is the latest event of the segment, and the held window the latest
-        # resolved one (forward fill within each segment)
-        del area_now, line_now, above
+        # area is a reading of the current window: more than half of the window's samples
+        # show h spread over both axes (a transient spread as a new rock begins does not make
+        # one, and the reading ends when the window no longer shows it)
+        area = _vote(t, located, seg_start, (area_now & above).astype(np.int64), config.evidence_window, config.area_share) == 1
+        area &= located
+        del area_now, above
+        event = np.where(area, _AREA, np.where(line_now, _LINE, _UNKNOWN))
+        del line_now
+        # the verdict is the latest event of the segment (a confirmed line stays confirmed until
+        # the window reads an area), the held windows the latest since the last area reading
         ev_at = np.maximum.accumulate(np.where(located & (event > 0), idx, -1))
         ok = ev_at >= seg_start
         verdict[ok] = event[ev_at[ok]]
         del ev_at, ok, event
+        floor = np.maximum(seg_start, np.maximum.accumulate(np.where(area, idx, -1)) + 1)
         hd_at = np.maximum.accumulate(np.where(located & resolved, idx, -1))
-        held = np.where(hd_at >= seg_start, hd_at, -1)
-        del hd_at, resolved
+        held = np.where(hd_at >= floor, hd_at, -1)
+        del hd_at, floor, resolved
     else:
         del prods
         held = np.full(n, -1)
+        area = axis_now = np.zeros(n, dtype=bool)
         h_ratio, f_ratio = np.full(n, np.nan), np.full(n, np.nan)
         idx, seg_start = _segment_starts(begin)
     # in place: h_ratio and f_ratio are this function's own arrays
@@ -366,7 +386,6 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
     del sig_ev, sig_at, seg_start, idx
     has_held = held >= 0
     hi = np.where(has_held, held, 0)
-    del held
     minor = np.zeros(n) if win is None else np.where(located, win.h_minor, 0.0)
     confirmed = located & (verdict == _LINE)
     uv = config.unconfirmed_model_std * config.unconfirmed_model_std
@@ -374,17 +393,28 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
         own_std = _sample_std(ms.angle_std, ms.h_norm, minor, np.where(confirmed, 0.0, uv), NP)
     del minor
     use_win = confirmed & has_held
-    line = (sig & (verdict != _AREA)) | use_win
-    area = located & (verdict == _AREA)
+    line = ((sig | (axis_now & located)) & ~area) | use_win
+    del held, has_held
     state = np.where(area, 3, np.where(line, 2, 1)).astype(np.int8)
     evidence = np.where(line, np.where(confirmed, 2, 1), 0).astype(np.int8)
-    angle = np.where(use_win, win.angle[hi] if win is not None else np.nan, ms.angle)
-    mv = config.evidence_model_std * config.evidence_model_std
-    angle_std = np.where(use_win, np.sqrt(win.angle_std[hi] * win.angle_std[hi] + mv) if win is not None else np.nan,
-                         own_std)  # fmt: skip
-    # the sample's own direction: its noise; the held window's: the window's noise term
-    angle_noise_std = np.where(use_win, win.angle_noise_std[hi] if win is not None else np.nan, ms.angle_std)
-    del win, hi, own_std
+    if win is None:
+        angle, angle_std, angle_noise_std = ms.angle, own_std, ms.angle_std
+    else:
+        # otherwise (an unconfirmed line, or a confirmed one before its two-axis window) the
+        # current window's direction wherever h varied along one axis within it, with the
+        # model error of its kind; the sample's own only where the window resolves none
+        use_axis = line & ~use_win & axis_now
+        w = np.where(use_win, hi, np.arange(n))
+        w_std = win.angle_std[w]
+        use = use_win | use_axis
+        mv = config.evidence_model_std * config.evidence_model_std
+        angle = np.where(use, win.angle[w], ms.angle)
+        angle_std = np.where(use, np.sqrt(w_std * w_std + np.where(confirmed, mv, uv)), own_std)
+        # the sample's own direction: its noise; a window's: the window's noise term
+        angle_noise_std = np.where(use, win.angle_noise_std[w], ms.angle_std)
+        del w, w_std, use_axis
+        use_win = use
+    del win, hi, own_std, axis_now
     # the held window's direction, in the tangent frame of the sample
     d = np.stack((ms.dx, ms.dy, ms.dz), axis=-1)
     u = np.flatnonzero(use_win)
@@ -423,6 +453,8 @@ class EvidenceTracker:
         self._unconfirmed_var = config.unconfirmed_model_std * config.unconfirmed_model_std
         self._reset2 = config.evidence_reset_distance * config.evidence_reset_distance
         self._vote_window = config.significance_window
+        self._area_share = config.area_share
+        self._rocked = config.rocked
         self.start_segment()
 
     def start_segment(self) -> None:
@@ -437,6 +469,10 @@ class EvidenceTracker:
         # are above the threshold and below its leaving share
         self._votes: deque[tuple[float, int]] = deque()
         self._n_above = self._n_below = 0
+        # the segment's samples of the last evidence_window s: (t, h spread over both axes)
+        # and how many are
+        self._areas: deque[tuple[float, bool]] = deque()
+        self._n_area = 0
 
     def step(self, t, geo: PointGeometry, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, h_std):
         """``(state, evidence, direction, angle, angle_std, angle_noise_std, h_ratio, f_ratio)`` of a located
@@ -528,20 +564,38 @@ class EvidenceTracker:
             f_ratio = math.nan
         thr = self._h_sigmas * h_std
         thr = thr if thr > self._h_min else self._h_min
-        if (
+        spread = (
             minor > h_noise and h_ratio >= self._enter and hn > thr
             and ((f_minor > f_noise and f_minor >= self._fmin2) or minor >= self._hmin2)
-        ):  # fmt: skip
+        )  # fmt: skip
+        # area: more than half of the window's samples spread over both axes (the batch's vote)
+        areas = self._areas
+        areas.append((t, spread))
+        self._n_area += spread
+        start = t - self._window
+        while len(areas) > 1 and areas[0][0] <= start:
+            self._n_area -= areas.popleft()[1]
+        area = self._n_area > self._area_share * len(areas)
+        axis = None  # the current window's direction, where h varied along one axis
+        if area:
             self._verdict = _AREA
-        elif (
-            varied and h_ratio < self._leave and f_minor > f_noise
-            and f_minor >= self._f_ratio * f_major and f_minor >= self._fmin2
-        ):  # fmt: skip
-            self._verdict = _LINE
-            e = (major, minor, c11, c12, c22, root, g11, g12, f_major, f_minor, g22, half)
-            w_angle, w_std, w_noise = window_direction_floats(e, s2, nu)
-            if w_std <= self._max_std:
-                self._held = (w_angle, math.sqrt(w_std * w_std + self._model_var), w_noise)
+            self._held = None
+        else:
+            one_axis = varied and h_ratio < self._leave
+            line_now = one_axis and (
+                (f_minor > f_noise and f_minor >= self._f_ratio * f_major and f_minor >= self._fmin2)
+                or (bool(self._rocked) and bool(self.config.stated_excitation(t)))
+            )
+            if line_now:
+                self._verdict = _LINE
+            if one_axis:
+                e = (major, minor, c11, c12, c22, root, g11, g12, f_major, f_minor, g22, half)
+                w_angle, w_std, w_noise = window_direction_floats(e, s2, nu)
+                if w_std <= self._max_std:
+                    if major >= self._hmin2:
+                        axis = (w_angle, w_std, w_noise)
+                    if line_now:
+                        self._held = (w_angle, math.sqrt(w_std * w_std + self._model_var), w_noise)
         side = 1 if hn > thr else (0 if hn <= SIG_LEAVE * thr else -1)
         if self._vote_window > 0.0:
             votes = self._votes
@@ -558,20 +612,24 @@ class EvidenceTracker:
         if side >= 0:
             self._sig = side == 1
         verdict = self._verdict
-        if verdict == _AREA:
+        if area:
             return "area", "", _NAN3, math.nan, math.nan, math.nan, h_ratio, f_ratio
         if verdict == _LINE and self._held is not None:
             angle, angle_std, noise_std = self._held
             ca, sa = cos(angle), sin(angle)
             d = (ca * e1x + sa * e2x, ca * e1y + sa * e2y, ca * e1z + sa * e2z)
             return "line", "confirmed", d, angle, angle_std, noise_std, h_ratio, f_ratio
-        if not self._sig:
+        if not self._sig and axis is None:
             return "point", "", _NAN3, math.nan, math.nan, math.nan, h_ratio, f_ratio
+        evidence = "confirmed" if verdict == _LINE else "unconfirmed"
+        if axis is not None:  # the current window resolves the axis
+            angle, w_std, noise_std = axis
+            ca, sa = cos(angle), sin(angle)
+            d = (ca * e1x + sa * e2x, ca * e1y + sa * e2y, ca * e1z + sa * e2z)
+            v = w_std * w_std + (self._model_var if verdict == _LINE else self._unconfirmed_var)
+            return "line", evidence, d, angle, sqrt(v), noise_std, h_ratio, f_ratio
         # the sample's own direction, the window's across-axis spread counted as model error
         dx, dy, dz, angle, a = sample_direction(hx, hy, hz, hn, ex, ey, ez, geo, self._sq)
         v = hn * hn
         v = a * a + (minor / v if v != 0.0 else _div(minor, v)) + (0.0 if verdict == _LINE else self._unconfirmed_var)
-        return (
-            "line", "confirmed" if verdict == _LINE else "unconfirmed", (dx, dy, dz), angle,
-            sqrt(v) if v >= 0.0 else math.nan, a, h_ratio, f_ratio,
-        )  # fmt: skip
+        return "line", evidence, (dx, dy, dz), angle, sqrt(v) if v >= 0.0 else math.nan, a, h_ratio, f_ratio

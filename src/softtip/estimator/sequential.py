@@ -253,10 +253,10 @@ def latch_scan_kernel(begin, contact, t, f_norm, valid, rx, ry, rz, lo, hi, stal
 
 
 @lazy_jit
-def vote_kernel(t, located, seg_start, side, window, out):  # pragma: no cover - compiled
-    """``out``: the vote on significance of each located sample (see
-    :func:`softtip.estimator.evidence._vote`): 1 or 0 when more than half of the located
-    samples of its segment with ``t_j > t − window`` (and itself) are on that side, else −1.
+def vote_kernel(t, located, seg_start, side, window, share, out):  # pragma: no cover - compiled
+    """``out``: the vote of each located sample (see :func:`softtip.estimator.evidence._vote`):
+    1 or 0 when more than ``share`` of the located samples of its segment with
+    ``t_j > t − window`` (and itself) are on that side, else −1.
 
     ``t`` (N,) s non-decreasing; ``located`` (N,) bool; ``seg_start`` (N,) int, the index of
     each sample's segment start; ``side`` (N,) int (1, 0, −1); ``out`` (N,) int, written
@@ -288,9 +288,9 @@ def vote_kernel(t, located, seg_start, side, window, out):  # pragma: no cover -
                 elif side[left] == 0:
                     below -= 1
             left += 1
-        if 2 * above > m:
+        if above > share * m:
             out[i] = 1
-        elif 2 * below > m:
+        elif below > share * m:
             out[i] = 0
     return out
 

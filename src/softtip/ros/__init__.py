@@ -42,6 +42,7 @@ TOPICS = {
     "normal": "/softtip/normal",
     "edge_direction": "/softtip/edge_direction",
     "line_evidence": "/softtip/line_evidence",
+    "angle_std": "/softtip/angle_std",  # std_msgs/msg/Float64, rad: the direction's standard deviation
 }
 #: Topic of the RViz markers (``visualization_msgs/msg/MarkerArray``).
 MARKER_TOPIC = "/softtip/markers"
@@ -87,6 +88,7 @@ class Payloads(NamedTuple):
     normal: tuple[float, float, float] | None  #: outward unit normal; in contact
     edge_direction: tuple[float, float, float] | None  #: unit axis; ``line`` only
     line_evidence: str | None = None  #: ``confirmed`` or ``unconfirmed``; ``line`` only
+    angle_std: float | None = None  #: rad, standard deviation of the direction's angle; ``line`` only
 
 
 def _finite(v) -> tuple[float, ...] | None:
@@ -104,6 +106,7 @@ def payloads(est: SampleEstimate) -> Payloads:
         normal=_finite(est.normal) if contact else None,
         edge_direction=_finite(est.direction) if est.state == "line" else None,
         line_evidence=(getattr(est, "line_evidence", "") or "unconfirmed") if est.state == "line" else None,
+        angle_std=float(est.angle_std) if est.state == "line" and math.isfinite(est.angle_std) else None,
     )
 
 

@@ -2,7 +2,8 @@
 
 Subscribes to a ``geometry_msgs/msg/WrenchStamped`` topic, runs the streaming estimator on
 every message (about 25 µs each in CPython) and publishes the topics of :data:`softtip.ros.TOPICS` and
-RViz markers on :data:`softtip.ros.MARKER_TOPIC`; the service ``~/tare``
+RViz markers on :data:`softtip.ros.MARKER_TOPIC` (with each line its direction's standard
+deviation, ``angle_std`` in rad, and its ``line_evidence``); the service ``~/tare``
 (``std_srvs/srv/Trigger``) re-tares from the next samples (keep the fingertip untouched).
 
 Parameters (``--ros-args -p name:=value``), see :data:`PARAMETERS`.
@@ -85,7 +86,7 @@ def main(args: list[str] | None = None) -> None:  # pragma: no cover - needs a R
         import rclpy
         from geometry_msgs.msg import PointStamped, QuaternionStamped, Vector3Stamped, WrenchStamped
         from rclpy.node import Node
-        from std_msgs.msg import String
+        from std_msgs.msg import Float64, String
         from std_srvs.srv import Trigger
         from visualization_msgs.msg import Marker as MarkerMsg
         from visualization_msgs.msg import MarkerArray
@@ -113,6 +114,7 @@ def main(args: list[str] | None = None) -> None:  # pragma: no cover - needs a R
                 "normal": self.create_publisher(Vector3Stamped, sr.TOPICS["normal"], 10),
                 "edge_direction": self.create_publisher(Vector3Stamped, sr.TOPICS["edge_direction"], 10),
                 "line_evidence": self.create_publisher(String, sr.TOPICS["line_evidence"], 10),
+                "angle_std": self.create_publisher(Float64, sr.TOPICS["angle_std"], 10),
                 "markers": self.create_publisher(MarkerArray, sr.MARKER_TOPIC, 10),
             }
             self.compensate = self.orientation = None
@@ -168,6 +170,8 @@ def main(args: list[str] | None = None) -> None:  # pragma: no cover - needs a R
                 out.vector.x, out.vector.y, out.vector.z = p.edge_direction
                 self.pub["edge_direction"].publish(out)
                 self.pub["line_evidence"].publish(String(data=p.line_evidence))
+                if p.angle_std is not None:
+                    self.pub["angle_std"].publish(Float64(data=p.angle_std))
             if self.publish_markers:
                 arr = MarkerArray()
                 for m in sr.markers(est):

@@ -1,7 +1,7 @@
 """Simulated probing logs: plane presses on a fingertip, for calibration's tests, benchmarks and examples.
 
 :func:`simulate_probing` runs the skin simulator (:func:`softtip.sim.simulate_grasp` with a
-:class:`~softtip.sim.HalfSpace`) on a sphere or capsule; :func:`mesh_probing_log` writes a
+:class:`~softtip.sim.HalfSpace`) on a sphere, capsule or ellipsoid; :func:`mesh_probing_log` writes a
 soft-finger-model log for a mesh fingertip. :func:`probing_presses` plans the presses of both.
 The fits are in :mod:`softtip.calibration`.
 """
@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 
 from softtip.core._vec import cross as _cross
 from softtip.core._vec import tangent_basis as _tangent_basis
-from softtip.core.fingertip import Capsule, Sphere
+from softtip.core.fingertip import Fingertip
 from softtip.core.mesh import MeshFingertip
 from softtip.sim.contact import ContactModel, ContactParams
 from softtip.sim.objects import HalfSpace
@@ -67,7 +67,7 @@ def probing_presses(
 
 
 def simulate_probing(
-    tip: Sphere | Capsule,
+    tip: Fingertip,
     duration: float = 30.0,
     *,
     press_duration: float = 1.5,
@@ -87,8 +87,10 @@ def simulate_probing(
 
     Parameters
     ----------
-    tip : Sphere or Capsule
-        The true fingertip (capsule: presses on the cap only; its ``axis_offset`` is simulated).
+    tip : Fingertip
+        The true fingertip: a shape with a simulator skin and a skin point for each normal
+        (:meth:`~softtip.core.shape.Fingertip.support_point`: sphere, capsule — presses on
+        the cap only, its ``axis_offset`` simulated — ellipsoid, or one of them mounted).
     duration : float
         s; ``duration / press_duration`` presses.
     slide : bool
@@ -112,11 +114,10 @@ def simulate_probing(
     rng = np.random.default_rng(rng)
     sensor = SensorModel() if sensor is None else sensor
     model = ContactModel(discretise_skin(tip, n_elements), ContactParams(), 2).prepare()
-    centre = np.array(tip.center) if isinstance(tip, Sphere) else np.array([*tip.axis_offset, tip.length])
     n_presses = max(1, int(round(duration / press_duration)))
     ts, ws = [], []
     for k, plan in enumerate(probing_presses(n_presses, rng, max_tilt, force_range)):
-        p = centre + tip.radius * plan["normal"]
+        p = tip.support_point(plan["normal"])
         dist = ()
         if slide:
             s1, s2 = plan["slides"]

@@ -86,7 +86,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from softtip.core.fingertip import Fingertip
-from softtip.core.mounting import Mounted
 from softtip.core.units import KGF, STANDARD_GRAVITY
 from softtip.sim.pose import Pose, unit
 from softtip.sim.synthetic import smoothstep
@@ -370,11 +369,7 @@ class GraspScenario:
         """``(r_c, n_c, u)``: nominal contact point (m), skin normal there, push axis."""
         if self.contact_point is None:
             # the apex: the top of the shape in its own frame (a mounted shape's own z axis)
-            shape = tip.tip if isinstance(tip, Mounted) else tip
-            centre, radius = shape.bounding_sphere
-            guess = centre + np.array([0.0, 0.0, 4.0 * radius])
-            if isinstance(tip, Mounted):
-                guess = np.array(tip.rotation) @ guess + np.array(tip.translation)
+            guess = tip.apex_hint()
         else:
             guess = np.asarray(self.contact_point)
         r_c = tip.project(guess)

@@ -9,6 +9,7 @@ import numpy as np
 
 from softtip.core.units import KGF, KGF_MM
 from softtip.estimator import LINE, Estimates
+from softtip.viz.style import LINESTYLES, MARKERS, NEUTRAL, PALETTE, TRUTH, XYZ, label, legend_outside, styled
 
 __all__ = ["plot_estimates", "plot_direction_chart", "plot_position_error", "figure_formats"]
 
@@ -29,6 +30,7 @@ def figure_module():
     return plt
 
 
+@styled
 def plot_estimates(
     estimates: Estimates | Sequence[Estimates],
     path: str | os.PathLike | None = None,
@@ -88,52 +90,59 @@ def plot_estimates(
     ax_h = fig.add_subplot(grid[0, 1], sharex=ax_f)
     ax_d = fig.add_subplot(grid[1, 1], sharex=ax_f)
     ax_s = fig.add_subplot(grid[2, 1], sharex=ax_f)
-    axes = np.array([ax_f, ax_h, ax_m, ax_d])
 
     first = runs[detail]
-    for i, (name, color) in enumerate(zip("xyz", ("tab:red", "tab:green", "tab:blue"))):
-        ax_f.plot(first.t, first.wrench[:, i] * fscale, color=color, lw=1, label=f"force {name}")
-        ax_m.plot(first.t, first.wrench[:, 3 + i] * mscale, color=color, lw=1, label=f"moment {name}")
-    ax_f.set_ylabel(f"force [{funit}]")
-    ax_m.set_ylabel(f"moment [{munit}]")
-    if len(runs) > 1 and labels is not None:  # say whose force and moment these are
-        ax_f.set_title(f"force and moment of the {labels[detail]} grasp", fontsize=9)
-    ax_f.legend(loc="upper left", fontsize=8)
-    ax_m.legend(loc="upper left", fontsize=8)
+    for i, (name, color) in enumerate(zip("xyz", XYZ)):
+        ax_f.plot(first.t, first.wrench[:, i] * fscale, color=color, ls=LINESTYLES[i], label=f"f{name}")
+        ax_m.plot(first.t, first.wrench[:, 3 + i] * mscale, color=color, ls=LINESTYLES[i], label=f"m{name}")
+    ax_f.set_ylabel(label("force", funit))
+    ax_m.set_ylabel(label("moment", munit))
+    whose = f" of the {labels[detail]} grasp" if len(runs) > 1 and labels is not None else ""
+    legend_outside(ax_f, title=f"force{whose}, sensor frame", alignment="left")
+    legend_outside(ax_m, title=f"moment{whose}, sensor frame", alignment="left")
+
+    from matplotlib.lines import Line2D
 
     for k, est in enumerate(runs):
-        label = labels[k] if labels is not None else None
+        name = labels[k] if labels is not None else None
         # while the point is being latched it is the sample's own soft-finger solution, where
         # h is zero by construction: no measurement, so drawn as missing (and shaded below)
         h_norm = np.where(latching(est), np.nan, est.h_norm)
-        (line,) = ax_h.plot(est.t, h_norm * mscale, lw=1, label=label)
+        (line,) = ax_h.plot(est.t, h_norm * mscale, ls=LINESTYLES[k % len(LINESTYLES)], label=name)
         angle = np.where(est.state == LINE, np.degrees(est.angle), np.nan)
         std = np.degrees(est.angle_std)
-        ax_d.plot(est.t, angle, ".", ms=2.5, color=line.get_color(), label=label)
-        ax_d.fill_between(est.t, angle - std, angle + std, color=line.get_color(), alpha=0.2, lw=0)
-        if reference_angles is not None:
-            ax_d.axhline(reference_angles[k], ls="--", lw=0.8, color=line.get_color())
+        ax_d.plot(est.t, angle, MARKERS[k % len(MARKERS)], ms=2.5, mfc="none" if k else line.get_color(), mew=0.6,
+                  color=line.get_color(), label=name)  # fmt: skip
+        ax_d.fill_between(est.t, angle - std, angle + std, color=line.get_color(), alpha=0.15, lw=0)
+        if reference_angles is not None:  # the truth: black for one log, the log's colour for several
+            ax_d.axhline(reference_angles[k], ls="--", lw=1.0, color=TRUTH if len(runs) == 1 else line.get_color(), zorder=3)
     shade = latching(first)
     if shade.any():
         ax_h.fill_between(
-            first.t, 0.0, 1.0, where=shade, transform=ax_h.get_xaxis_transform(), color="0.85", lw=0,
+            first.t, 0.0, 1.0, where=shade, transform=ax_h.get_xaxis_transform(), color="0.88", lw=0,
             label="latching: |h| not measured",
         )  # fmt: skip
     if h_threshold is not None:
         level = np.broadcast_to(np.asarray(h_threshold, dtype=float), first.t.shape)
-        ax_h.plot(first.t, level * mscale, ls="--", color="0.4", lw=1, label="significance")
-    ax_h.set_ylabel(f"|h| tangential spin torque [{munit}]")
-    ax_d.set_ylabel("measured direction [deg]")
+        ax_h.plot(first.t, level * mscale, ls="--", color=NEUTRAL, lw=1, label="significance level")
+    ax_h.set_ylabel(label("|h| tangential spin torque", munit))
+    ax_d.set_ylabel(label("measured direction", "deg"))
     ax_d.set_ylim(-95, 95)  # a true direction at ±90° stays off the frame
     ax_d.set_yticks([-90, -45, 0, 45, 90])
-    if labels is not None or h_threshold is not None or shade.any():
-        ax_h.legend(loc="upper left", fontsize=8)
+    if labels is None:
+        legend_outside(ax_h, ncol=2)
+        handles = [Line2D([], [], ls="none", marker=MARKERS[0], ms=3, color=ax_h.lines[0].get_color(), label="direction ±1σ")]
+        if reference_angles is not None:
+            handles.append(Line2D([], [], ls="--", color=TRUTH, label=f"truth ({reference_angles[0]:g}°)"))
+        legend_outside(ax_d, handles=handles)
+    else:  # one entry per log above |h|; the direction panel says what its dashes are
+        legend_outside(ax_h, ncol=min(len(runs) + 2, 6))
+        if reference_angles is not None:
+            legend_outside(ax_d, handles=[Line2D([], [], ls="--", color="0.3", label="truth, in each log's colour")])
     state_band(ax_s, runs, labels)
     for ax in (ax_m, ax_s):
-        ax.set_xlabel("time [s]")
+        ax.set_xlabel(label("time", "s"))
     ax_d.tick_params(labelbottom=False)
-    for ax in axes.flat:
-        ax.grid(True, alpha=0.3)
     if title:
         fig.suptitle(title)
     save_figure(fig, plt, path)
@@ -150,7 +159,8 @@ def latching(est: Estimates) -> np.ndarray:
 
 
 #: Colours of the state band: none, point, line (unconfirmed), line (confirmed), area.
-STATE_COLORS = ("white", "0.8", "#a6dba0", "#1b7837", "#e08214")
+#: (white, light grey and three of :data:`softtip.viz.style.PALETTE`'s colour-blind-safe colours)
+STATE_COLORS = ("white", "0.82", "#56B4E9", "#0072B2", "#E69F00")
 STATE_BAND_LABELS = ("none", "point", "line unconfirmed", "line confirmed", "area")
 
 
@@ -178,6 +188,7 @@ def state_band(ax, runs: Sequence[Estimates], labels: Sequence[str] | None = Non
     ax.legend(handles=handles, loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=5, fontsize=7, frameon=False, borderaxespad=0.1)
 
 
+@styled
 def plot_line_or_area(rows: Sequence[tuple[str, Estimates]], path=None, *, title: str | None = None, t_from: float = 4.0):
     """Line or area, one row per log: ``h`` in the tangent plane as a trace (left; N·mm,
     tangent frame at the contact point: a line for a strip, a blob for an area contact) and
@@ -204,7 +215,7 @@ def plot_line_or_area(rows: Sequence[tuple[str, Estimates]], path=None, *, title
     fig = plt.figure(figsize=(10, 2.3 * len(rows) + 0.8), constrained_layout=True)
     grid = fig.add_gridspec(2 * len(rows), 2, width_ratios=[1.0, 2.6], height_ratios=[1.0, 0.22] * len(rows))
     ax_last = None
-    for k, (label, est) in enumerate(rows):
+    for k, (name, est) in enumerate(rows):
         ax_tr = fig.add_subplot(grid[2 * k : 2 * k + 2, 0])
         ax_ts = fig.add_subplot(grid[2 * k, 1], sharex=ax_last)
         ax_st = fig.add_subplot(grid[2 * k + 1, 1], sharex=ax_ts)
@@ -214,29 +225,36 @@ def plot_line_or_area(rows: Sequence[tuple[str, Estimates]], path=None, *, title
             e1x, e1y, e1z, e2x, e2y, e2z = tangent_frame_kernel(*est.normal.T, NP)
             h1 = (est.h[:, 0] * e1x + est.h[:, 1] * e1y + est.h[:, 2] * e1z) * 1e3
             h2 = (est.h[:, 0] * e2x + est.h[:, 1] * e2y + est.h[:, 2] * e2z) * 1e3
-        ax_tr.plot(h1[sel], h2[sel], lw=0.6, color="tab:purple")
-        ax_tr.plot([0], [0], "+", color="0.3")
+        ax_tr.plot(h1[sel], h2[sel], lw=0.6, color=PALETTE[4])
+        ax_tr.plot([0], [0], "+", color=TRUTH)
         lim = max(1.0, float(np.nanmax(np.abs(np.concatenate((h1[sel], h2[sel]))))) if sel.any() else 1.0) * 1.1
         ax_tr.set_xlim(-lim, lim)
         ax_tr.set_ylim(-lim, lim)
         ax_tr.set_aspect("equal")
-        ax_tr.set_xlabel("h·e1 [N·mm]", fontsize=8)
-        ax_tr.set_ylabel("h·e2 [N·mm]", fontsize=8)
-        ax_tr.set_title(label, fontsize=9)
-        ax_ts.plot(est.t, h1, lw=0.8, label="h·e1")
-        ax_ts.plot(est.t, h2, lw=0.8, label="h·e2")
-        ax_ts.set_ylabel("h [N·mm]", fontsize=8)
+        ax_tr.set_xlabel(label("h·e1", "N·mm"))
+        ax_tr.set_ylabel(label("h·e2", "N·mm"))
+        ax_tr.set_title(name, fontsize=9)
+        ax_ts.plot(est.t, h1, color=PALETTE[0], label="h·e1")
+        ax_ts.plot(est.t, h2, color=PALETTE[1], ls="--", label="h·e2")
+        ax_ts.set_ylabel(label("h", "N·mm"))
         ax_ts.tick_params(labelbottom=False)
-        ax_ts.grid(True, alpha=0.3)
         if k == 0:
-            ax_ts.legend(loc="upper left", fontsize=7)
+            legend_outside(ax_ts)
         state_band(ax_st, [est])
         ax_st.set_yticks([])
         if k != len(rows) - 1:
             ax_st.get_legend().remove()
             ax_st.tick_params(labelbottom=False)
         else:
-            ax_st.set_xlabel("time [s]")
+            ax_st.set_xlabel(label("time", "s"))
+    fig.text(
+        0.01, 0.0,
+        "h: the tangential spin torque; e1, e2: the tangent frame at the contact point (e1: the sensor's x axis "
+        "projected on the tangent plane,\nits y axis where x is nearly normal; e2 = n × e1). "
+        f"Left: h in that plane from {t_from:g} s on, a line for a strip contact, a blob for an area.",
+        fontsize=8, ha="left", va="bottom",
+    )  # fmt: skip
+    fig.get_layout_engine().set(rect=(0, 0.035, 1, 0.965))
     if title:
         fig.suptitle(title)
     save_figure(fig, plt, path)
@@ -260,6 +278,7 @@ def save_figure(fig, plt, path, fmt: str | None = None) -> None:
         plt.close(fig)
 
 
+@styled
 def plot_direction_chart(
     rows: Sequence[tuple[str, Sequence[Estimates], Sequence[str], Sequence[float]]],
     path: str | os.PathLike | None = None,
@@ -268,7 +287,9 @@ def plot_direction_chart(
 ):
     """The papers' per-object charts (2006 Figs. 14–17, 19–22): one row per object, ``|h|``
     (N·mm) on the left and the measured direction (degrees) on the right, a trace per angle
-    with its true direction dashed.
+    with its true direction dashed. Each angle has its own colour, line style and marker, and
+    its markers are drawn on every n-th sample (n angles, offset), so that angles measured
+    alike (a thick plate reads every angle as 0°) do not hide one another.
 
     Parameters
     ----------
@@ -280,30 +301,39 @@ def plot_direction_chart(
     -------
     matplotlib.figure.Figure
     """
+    from matplotlib.lines import Line2D
+
     plt = figure_module()
-    fig, axes = plt.subplots(len(rows), 2, figsize=(10, 2.1 * len(rows) + 0.6), sharex=True, squeeze=False, constrained_layout=True)
+    fig, axes = plt.subplots(len(rows), 2, figsize=(10, 2.1 * len(rows) + 0.9), sharex=True, squeeze=False, constrained_layout=True)
+    handles: dict[str, Line2D] = {}
     for (name, runs, labels, truths), (ax_h, ax_d) in zip(rows, axes):
-        for est, label, truth in zip(runs, labels, truths):
-            (ln,) = ax_h.plot(est.t, est.h_norm * 1e3, lw=1, label=label)
+        for k, (est, lab, truth) in enumerate(zip(runs, labels, truths)):
+            # each angle its own line style and (open) marker as well as its colour: where the
+            # traces coincide (a thick plate reads every angle as 0°) none hides another
+            (ln,) = ax_h.plot(est.t, est.h_norm * 1e3, ls=LINESTYLES[k % len(LINESTYLES)], lw=1.1)
             angle = np.where(est.state == LINE, np.degrees(est.angle), np.nan)
-            ax_d.plot(est.t, angle, ".", ms=2, color=ln.get_color())
-            ax_d.axhline(truth, ls="--", lw=0.8, color=ln.get_color())
-        ax_h.set_ylabel("|h| [N·mm]")
+            marker = MARKERS[k % len(MARKERS)]
+            # each angle's markers on every n-th sample, offset: where angles coincide all show
+            ax_d.plot(est.t, angle, marker, ms=3.5, mfc="none", mew=0.8, color=ln.get_color(), markevery=(k, len(runs)))
+            ax_d.axhline(truth, ls="--", lw=0.9, color=ln.get_color(), zorder=3)
+            handles.setdefault(lab, Line2D([], [], color=ln.get_color(), ls=LINESTYLES[k % len(LINESTYLES)], marker=marker,
+                                           mfc="none", ms=4, label=lab))  # fmt: skip
+        ax_h.set_ylabel(label("|h|", "N·mm"))
         ax_h.set_title(name, fontsize=9, loc="left")
         ax_d.set_ylim(-95, 95)  # a true direction at ±90° stays off the frame
         ax_d.set_yticks([-90, -45, 0, 45, 90])
-        ax_d.set_ylabel("direction [deg]")
-        ax_h.legend(loc="upper left", fontsize=7, ncol=len(labels))
-        for ax in (ax_h, ax_d):
-            ax.grid(True, alpha=0.3)
-    axes[-1, 0].set_xlabel("time [s]")
-    axes[-1, 1].set_xlabel("time [s]")
+        ax_d.set_ylabel(label("direction", "deg"))
+    handles["truth"] = Line2D([], [], ls="--", color="0.3", label="truth (dashed, in the angle's colour)")
+    fig.legend(handles=list(handles.values()), loc="outside lower center", ncol=len(handles), frameon=False)
+    axes[-1, 0].set_xlabel(label("time", "s"))
+    axes[-1, 1].set_xlabel(label("time", "s"))
     if title:
         fig.suptitle(title)
     save_figure(fig, plt, path)
     return fig
 
 
+@styled
 def plot_position_error(
     runs: Sequence[tuple[str, np.ndarray, np.ndarray]],
     path: str | os.PathLike | None = None,
@@ -315,10 +345,10 @@ def plot_position_error(
 
     Parameters
     ----------
-    runs : sequence of (label, |f| in N (N,), position error in m (N,))
+    runs : sequence of (label, ``|f|`` in N (N,), position error in m (N,))
     path : str or PathLike, optional
     bound : float, optional
-        An error bound to draw, m.
+        An error bound to draw, m. The papers judge it above 0.2 kgf (1.96 N), shaded below.
     title : str, optional
 
     Returns
@@ -326,18 +356,19 @@ def plot_position_error(
     matplotlib.figure.Figure
     """
     plt = figure_module()
-    fig, ax = plt.subplots(figsize=(7, 4.2), constrained_layout=True)
-    for label, f_norm, err in runs:
+    fig, ax = plt.subplots(figsize=(8, 4.2), constrained_layout=True)
+    for k, (lab, f_norm, err) in enumerate(runs):
         ok = np.isfinite(err) & (f_norm > 0)
-        ax.plot(f_norm[ok] / KGF, err[ok] * 1e3, ".", ms=3, label=label)
+        ax.plot(f_norm[ok], err[ok] * 1e3, MARKERS[k % len(MARKERS)], ms=3, mfc="none", mew=0.7, label=lab)
     if bound is not None:
-        ax.axhline(bound * 1e3, ls="--", color="0.4", lw=1, label=f"{bound * 1e3:g} mm")
-    ax.axvline(0.2, ls=":", color="0.4", lw=1)
-    ax.set_xlabel("pushing force [kgf]")
-    ax.set_ylabel("contact position error [mm]")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
+        ax.axhline(bound * 1e3, ls="--", color=TRUTH, lw=1, label=f"the papers' bound, {bound * 1e3:g} mm")
+    ax.axvspan(0.0, 0.2 * KGF, color="0.9", lw=0, zorder=0, label=f"below 0.2 kgf = {0.2 * KGF:.2f} N: not judged")
+    ax.set_xlim(left=0.0)
+    ax.set_ylim(bottom=0.0)
+    ax.set_xlabel(label("pushing force |f|", "N"))
+    ax.set_ylabel(label("contact position error", "mm"))
+    legend_outside(ax, where="right")
     if title:
-        ax.set_title(title, fontsize=10)
+        fig.suptitle(title)
     save_figure(fig, plt, path)
     return fig

@@ -28,7 +28,7 @@ from collections import deque
 import numpy as np
 from numpy.typing import NDArray
 
-from softtip.core.fingertip import Capsule, Ellipsoid, Fingertip, Sphere
+from softtip.core.fingertip import Fingertip
 from softtip.errors import InputError
 from softtip.estimator import STATES, Estimates, SampleEstimate
 
@@ -50,7 +50,8 @@ def import_rerun():
 def surface_mesh(
     tip: Fingertip, n_around: int = 48, n_along: int = 32
 ) -> tuple[NDArray, NDArray, NDArray]:
-    """A triangle mesh of the skin, in the sensor frame.
+    """A triangle mesh of the skin, in the sensor frame: the shape's own
+    (:meth:`~softtip.core.shape.Fingertip.surface_mesh`).
 
     A mesh fingertip gives its own triangles; a capsule, sphere or ellipsoid is tessellated;
     a mounted fingertip (:class:`~softtip.core.mounting.Mounted`) is its shape's mesh placed by
@@ -68,69 +69,7 @@ def surface_mesh(
     triangles : (T, 3) int32 vertex indices
     normals : (V, 3) outward unit normals
     """
-    from softtip.core.mesh import MeshFingertip
-    from softtip.core.mounting import Mounted
-
-    if isinstance(tip, Mounted):
-        v, tri, n = surface_mesh(tip.tip, n_around, n_along)
-        rot = np.array(tip.rotation)
-        return v @ rot.T + np.array(tip.translation), tri, n @ rot.T
-    if isinstance(tip, MeshFingertip):
-        # vertex normals for shading: the corner normals around each vertex, averaged
-        acc = np.zeros((len(tip.vertices), 3))
-        np.add.at(acc, tip.faces.ravel(), tip.corner_normals.reshape(-1, 3))
-        normals = acc / np.linalg.norm(acc, axis=1, keepdims=True)
-        return tip.vertices.copy(), tip.faces.astype(np.int32), normals
-    phi = np.linspace(0.0, 2.0 * np.pi, n_around, endpoint=False)
-    if isinstance(tip, Capsule):
-        # profile: the cylinder from the sensor (z = 0) up, then the hemisphere to the tip
-        n_cyl = max(2, n_along // 3) if tip.length > 0 else 0
-        z_cyl = np.linspace(0.0, tip.length, n_cyl, endpoint=False)
-        a = np.linspace(0.5 * np.pi, 0.0, n_along - n_cyl)
-        rho = np.concatenate((np.full(n_cyl, tip.radius), tip.radius * np.sin(a)))
-        z = np.concatenate((z_cyl, tip.length + tip.radius * np.cos(a)))
-        pts = np.stack(
-            [
-                tip.axis_offset[0] + rho[:, None] * np.cos(phi),
-                tip.axis_offset[1] + rho[:, None] * np.sin(phi),
-                np.broadcast_to(z[:, None], (len(z), n_around)),
-            ],
-            axis=-1,
-        )
-    else:
-        # a UV sphere, scaled (sphere, ellipsoid) or projected onto the skin (anything else)
-        a = np.linspace(np.pi, 0.0, n_along)
-        unit = np.stack(
-            [
-                np.sin(a)[:, None] * np.cos(phi),
-                np.sin(a)[:, None] * np.sin(phi),
-                np.broadcast_to(np.cos(a)[:, None], (n_along, n_around)),
-            ],
-            axis=-1,
-        )
-        if isinstance(tip, Sphere):
-            pts = np.asarray(tip.center) + tip.radius * unit
-        elif isinstance(tip, Ellipsoid):
-            pts = np.asarray(tip.center) + np.asarray(tip.semi_axes) * unit
-        else:
-            center, radius = tip.bounding_sphere
-            pts = tip.project(center + radius * unit)
-    rows, cols = pts.shape[:2]
-    vertices = pts.reshape(-1, 3)
-    i, j = np.meshgrid(np.arange(rows - 1), np.arange(cols), indexing="ij")
-    a0 = i * cols + j
-    a1 = i * cols + (j + 1) % cols
-    b0, b1 = a0 + cols, a1 + cols
-    triangles = np.concatenate(
-        [
-            np.stack([a0, a1, b1], -1).reshape(-1, 3),
-            np.stack([a0, b1, b0], -1).reshape(-1, 3),
-        ]
-    )
-    with np.errstate(invalid="ignore", divide="ignore"):
-        normals = tip.normal(vertices)
-    normals = np.where(np.isfinite(normals), normals, np.array([0.0, 0.0, 1.0]))
-    return vertices, triangles.astype(np.int32), normals
+    return tip.surface_mesh(n_around, n_along)
 
 
 def _edge_line(tip: Fingertip, r, d, half_length: float) -> NDArray:
