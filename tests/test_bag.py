@@ -93,7 +93,7 @@ def csv_twin(tmp_path_factory, example):
     """The bag's data as a CSV log: relative t from the same stamps, and the stamp column."""
     st = stamps_ns(example.t)
     path = tmp_path_factory.mktemp("csv") / "grasp.csv"
-    cols = {"t": (st - st[0]) * 1e-9}
+    cols = {"t": (st - st[0]) / 1e9}  # as the bag reader makes t (seconds_from_ns)
     cols.update(
         {
             n: example.wrench[:, i]
@@ -348,3 +348,31 @@ def test_bag_with_a_repeated_stamp_is_estimated_whole(tmp_path, example):
     assert "1 message(s) repeat the previous header.stamp" in out.stderr
     with open(tmp_path / "e.csv") as fh:
         assert len(fh.readlines()) == len(t) + 1
+
+
+def test_bag_equals_the_plain_csv_and_its_ros_exports(tmp_path, example):
+    """issue 28: the same samples from a rosbag2, from the CSV of their seconds and from ``ros2 topic echo
+    --csv`` / ``rostopic echo -p`` exports give byte-identical estimates (stamps in ns divided by an exact
+    1e9 are the floats the text of the seconds gives)."""
+    bag = write_bag2(tmp_path / "grasp", example, StoragePlugin.SQLITE3, extra_topic=False)
+    from_bag = run("estimate", bag)
+    assert from_bag.returncode == 0, from_bag.stderr
+    st = stamps_ns(example.t)
+    plain = tmp_path / "plain.csv"
+    write_table({"t": example.t, **{n: example.wrench[:, i] for i, n in enumerate(["fx", "fy", "fz", "mx", "my", "mz"])}},
+                plain, float_format="%.17g")  # fmt: skip
+    from_csv = run("estimate", plain)
+    assert from_csv.returncode == 0, from_csv.stderr
+    ros2 = tmp_path / "echo.csv"
+    ros2.write_text("".join(
+        f"{s // 10**9},{s % 10**9},ft_link,{','.join(repr(v) for v in w)}\n" for s, w in zip(st.tolist(), example.wrench.tolist())
+    ))  # fmt: skip
+    from_echo = run("estimate", ros2)
+    assert from_echo.returncode == 0, from_echo.stderr
+
+    def table(text):  # the estimates' columns, without the input's extra ones
+        rows = list(csv.reader(text.splitlines()))
+        keep = [j for j, name in enumerate(rows[0]) if name not in ("stamp_ns", "header.frame_id")]
+        return [[r[j] for j in keep] for r in rows]
+
+    assert table(from_bag.stdout) == table(from_csv.stdout) == table(from_echo.stdout)

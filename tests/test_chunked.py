@@ -213,6 +213,13 @@ def test_block_reader_gives_read_log_values_and_warnings(tmp_path: Path, case: s
         src.write_bytes(src.read_bytes() + b"%.3f,0.5,0.5,0.5,0.5,0.5,0.5" % (t[-1] + 1e-3))
     one = read_log(src)
     blocks = iter_log(src, rows=700)
+    if case == "milliseconds":  # a time unit to guess: the one-shot run stops naming --time-units (issue 28)
+        from softtip.io.tables import NotStreamable
+
+        with pytest.raises(NotStreamable):
+            list(blocks)
+        assert len(one.warnings) == 1 and one.time_suspect is not None
+        return
     got = list(blocks)
     assert len(got) > 1
     assert np.array_equal(np.concatenate([b[0] for b in got]), one.t)

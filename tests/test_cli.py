@@ -122,7 +122,8 @@ def bad_inputs():
     lines = good_lines()
     header, rows = lines[0], lines[1:]
     yield "missing-column", "t,fx,fy,fz,mx,my\n" + "\n".join(",".join(r.split(",")[:6]) for r in rows), ["mz"]
-    yield "misspelled-column", header.replace("fy", "Fy") + "\n" + "\n".join(rows), ["fy", "Fy"]
+    # (upper case "Fy" is read as fy since issue 28: a real misspelling)
+    yield "misspelled-column", header.replace("fy", "fyy") + "\n" + "\n".join(rows), ["fy", "fyy"]
     yield "non-numeric", "\n".join([header] + rows[:5] + ["0.1,abc,0,0,0,0,0"] + rows[6:]), [":7:", "fx", "abc"]
     yield "nan", "\n".join([header] + rows[:3] + [rows[3].replace(rows[3].split(",")[3], "nan", 1)] + rows[4:]), [":5:", "fz"]
     yield "inf", "\n".join([header] + rows[:3] + ["0.07,inf,0,0,0,0,0"] + rows[4:]), [":5:", "fx"]

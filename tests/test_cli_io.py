@@ -64,13 +64,18 @@ def test_parquet_bad_input_exits_2_without_output(tmp_path: Path) -> None:
     assert [p.name for p in tmp_path.iterdir()] == ["bad.parquet"]
 
 
-def test_time_in_milliseconds_is_warned_about(tmp_path: Path) -> None:
+def test_time_in_milliseconds_stops_naming_the_option(tmp_path: Path) -> None:
+    """Read as seconds, t in ms gives a one-sample tare: the run stops naming --time-units (issue 28)."""
     src = tmp_path / "ms.csv"
     write_table(_example_columns(t_scale=1e3), src)
     out = run("estimate", src, "-o", tmp_path / "out.csv")
+    assert out.returncode == 2, out.stderr
+    assert f"softtip: error: {src}: column 't': median step 20 s" in out.stderr
+    assert "if t is in milliseconds 50 Hz (--time-units ms)" in out.stderr and "Stopped: give --time-units" in out.stderr
+    assert not (tmp_path / "out.csv").exists()
+    out = run("estimate", src, "--time-units", "ms", "-o", tmp_path / "out.csv")
     assert out.returncode == 0, out.stderr
-    assert f"softtip: warning: {src}: column 't': median step 20 s" in out.stderr
-    assert "if t is in milliseconds 50 Hz" in out.stderr
+    assert "warning" not in out.stderr
 
 
 def _repeated_stamp_log(tmp_path: Path) -> Path:

@@ -408,9 +408,13 @@ def test_fused_std_propagation():
     # never below the smaller shared error, never above the whole errors fully correlated
     assert np.all(shared >= np.minimum(ma, mb) * (1 - 1e-12))
     assert np.all(shared <= (1 / sa + 1 / sb) / (wa + wb) * (1 + 1e-12))
-    # the noise of the two sensors averages: below the better finger where both are alike
+    # the noise of the two sensors averages: never above the worse finger where both are
+    # alike, and below the better one where the noise is a real share of each (the window's
+    # direction leaves little noise: then the shared model error is nearly all)
     alike = np.abs(sa / sb - 1) < 0.2
-    assert alike.sum() > 10 and np.all(shared[alike] < np.minimum(sa, sb)[alike])
+    assert alike.sum() > 10 and np.all(shared[alike] < np.maximum(sa, sb)[alike])
+    noisy = alike & (ea.angle_noise_std[late] > 0.3 * sa) & (eb.angle_noise_std[ib] > 0.3 * sb)
+    assert np.all(shared[noisy] < np.minimum(sa, sb)[noisy])
     # fuse's own term adds in quadrature
     su = math.radians(5.0)
     withu, _ = fuse_logs(logs, "murakami2006", finger_correlation=1.0, unconfirmed_std=su)

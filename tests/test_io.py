@@ -26,6 +26,10 @@ def _write(tmp_path: Path, text: str | bytes, name: str = "log.csv") -> str:
     return str(path)
 
 
+COLUMNS_HINT = " Other names: map them with --columns t=NAME,fx=NAME,… (docs/guide/input-formats.md lists the headers read as they are)."
+MISSING_HINT = "; or give --missing drop (skip the row) or --missing interpolate (fill it)"
+
+
 def _error(path: str, **kw: str) -> str:
     with pytest.raises(InputError) as info:
         read_log(path, **kw)
@@ -231,38 +235,50 @@ def test_header_only(tmp_path: Path, tail: str) -> None:
 
 
 def test_missing_columns_with_suggestions(tmp_path: Path) -> None:
-    path = _write(tmp_path, "time,Fx,f_y,fz,mx,my,torque_z\n0,1,2,3,4,5,6\n")
+    path = _write(tmp_path, "time,Fx,f_y,fz,mx,my,torque_zz\n0,1,2,3,4,5,6\n")
     assert _error(path) == (
         f"{path}:1: missing columns 't', 'fx', 'fy', 'mz'; expected a header with columns "
         "t, fx, fy, fz, mx, my, mz (any order, exact case). "
         "Column 1 is 'time': did you mean 't'? Column 2 is 'Fx': did you mean 'fx'? "
-        "Column 3 is 'f_y': did you mean 'fy'?"
+        "Column 3 is 'f_y': did you mean 'fy'?" + COLUMNS_HINT
     )
+
+
+def test_common_names_are_read_and_said(tmp_path: Path) -> None:
+    """time/Fx/f_y/torque_z (the former near misses) are recognised; the note says which column is what."""
+    path = _write(tmp_path, "time,Fx,f_y,fz,mx,my,torque_z\n0,1,2,3,4,5,6\n")
+    log = read_log(path)
+    assert log.wrench.tolist() == [[1, 2, 3, 4, 5, 6]]
+    (note,) = log.notes
+    assert "t ← 'time' (s, not in the header), fx ← 'Fx' (N, not in the header)" in note
 
 
 def test_missing_column_difflib_typo(tmp_path: Path) -> None:
     path = _write(tmp_path, "t,fx,fy,fz,mx,my,mzz\n0,1,2,3,4,5,6\n")
-    assert _error(path).endswith("Column 7 is 'mzz': did you mean 'mz'?")
+    assert _error(path).endswith("Column 7 is 'mzz': did you mean 'mz'?" + COLUMNS_HINT)
 
 
 def test_missing_column_without_near_miss(tmp_path: Path) -> None:
     path = _write(tmp_path, "t,fx,fy,fz,mx,my\n0,1,2,3,4,5\n")
     assert _error(path) == (
         f"{path}:1: missing column 'mz'; expected a header with columns "
-        "t, fx, fy, fz, mx, my, mz (any order, exact case)"
+        "t, fx, fy, fz, mx, my, mz (any order, exact case)." + COLUMNS_HINT
     )
 
 
 def test_missing_header_hints(tmp_path: Path) -> None:
+    # semicolon- and tab-separated files are read now (issue 28)
     semicolons = _write(tmp_path, "t;fx;fy;fz;mx;my;mz\n0;1;2;3;4;5;6\n", "a.csv")
-    assert _error(semicolons).endswith(
-        "(any order, exact case). The header looks semicolon-separated; expected commas between columns."
-    )
+    assert read_log(semicolons).wrench.tolist() == [[1, 2, 3, 4, 5, 6]]
     commented = _write(tmp_path, "# t,fx,fy,fz,mx,my,mz\n0,1,2,3,4,5,6\n", "b.csv")
     assert _error(commented).startswith(f"{commented}:2: missing columns 't', 'fx',")
-    assert _error(commented).endswith("Line 1 looks like the header commented out with '#'; remove the '#'.")
+    assert _error(commented).endswith("Line 1 looks like the header commented out with '#'; remove the '#'." + COLUMNS_HINT)
     no_header = _write(tmp_path, "0,1,2,3,4,5,6\n", "c.csv")
-    assert _error(no_header).endswith("Line 1 looks like data; expected the header row first.")
+    assert _error(no_header).endswith(
+        "Line 1 looks like data; expected the header row first (a file without one: give the columns by position, "
+        "e.g. --columns t=1,fx=2,fy=3,fz=4,mx=5,my=6,mz=7)." + COLUMNS_HINT
+    )
+    assert read_log(no_header, columns="t=1,fx=2,fy=3,fz=4,mx=5,my=6,mz=7").wrench.tolist() == [[1, 2, 3, 4, 5, 6]]
 
 
 def test_duplicate_column(tmp_path: Path) -> None:
@@ -284,18 +300,19 @@ def test_non_numeric_cell(tmp_path: Path) -> None:
 @pytest.mark.parametrize("cell", ["nan", "NaN", "inf", "-Infinity", "1e999"])
 def test_nan_or_inf(tmp_path: Path, cell: str) -> None:
     path = _write(tmp_path, f"{HEADER}\n0,1,2,3,4,5,6\n0.1,1,2,{cell},4,5,6\n")
-    assert _error(path) == f"{path}:3: column 'fz': expected a finite number, got '{cell}'"
+    hint = MISSING_HINT if cell.lower() == "nan" else ""
+    assert _error(path) == f"{path}:3: column 'fz': expected a finite number, got '{cell}'{hint}"
 
 
 def test_nan_in_t(tmp_path: Path) -> None:
     path = _write(tmp_path, f"{HEADER}\nnan,1,2,3,4,5,6\n")
-    assert _error(path) == f"{path}:2: column 't': expected a finite number, got 'nan'"
+    assert _error(path) == f"{path}:2: column 't': expected a finite number, got 'nan'" + MISSING_HINT
 
 
 @pytest.mark.parametrize("cell", ["", "  "])
 def test_empty_cell(tmp_path: Path, cell: str) -> None:
     path = _write(tmp_path, f"{HEADER}\n0,1,2,3,4,5,6\n0.1,1,2,3,{cell},5,6\n")
-    assert _error(path) == f"{path}:3: column 'mx': empty cell; expected a number"
+    assert _error(path) == f"{path}:3: column 'mx': empty cell; expected a number" + MISSING_HINT
 
 
 def test_empty_extra_cell_is_fine(tmp_path: Path) -> None:
@@ -640,13 +657,23 @@ def test_plausible_time_scale_gives_no_warning(tmp_path: Path, rate: float) -> N
     ],
 )
 def test_time_in_ms_us_or_ns_is_reported(tmp_path: Path, scale: float, rate: float, guess: str) -> None:
-    t = np.arange(40) / rate * scale + (1.7e18 if scale == 1e9 else 0.0)  # epoch ns
+    t = np.arange(40) / rate * scale
     path = _write(tmp_path, _log_text(t))
     (note,) = read_log(path).warnings
     assert note.startswith(f"{path}: column 't': median step ")
     assert "implausible for a force/torque log (expected 2 Hz to 100 kHz with t in seconds)" in note
     assert guess in note, note
     assert note.endswith("Give t in seconds: the tare duration and every time window are in seconds")
+
+
+def test_epoch_stamps_in_t_are_read_in_the_unit_that_makes_them_a_date(tmp_path: Path) -> None:
+    """Integer Unix-time ns in a plain ``t`` column: exact int64, t from the first, the stamps kept."""
+    ns = 1_700_000_000_123_456_789 + np.arange(40) * 142_857
+    rows = "".join(f"{v},1,2,3,4,5,6\n" for v in ns.tolist())
+    log = read_log(_write(tmp_path, f"{HEADER}\n{rows}"))
+    np.testing.assert_array_equal(log.t, (ns - ns[0]) / 1e9)
+    assert log.extra["stamp_ns"] == [str(v) for v in ns.tolist()]
+    assert not log.warnings and "t read in ns, the only unit that makes its first stamp a date" in log.notes[0]
 
 
 def test_log_cut_inside_its_last_number_is_reported(tmp_path: Path) -> None:
@@ -719,9 +746,10 @@ def test_fast_and_careful_parsers_agree(tmp_path_factory: pytest.TempPathFactory
         assert fast == careful
     else:
         assert isinstance(fast, Log), fast
-        np.testing.assert_array_equal(fast.t, careful.t)
+        absolute = sio.ABSOLUTE_STAMP_S <= careful.t[0] < 1e10  # counted from the first, stamps kept
+        np.testing.assert_array_equal(fast.t, careful.t - careful.t[0] if absolute else careful.t)
         np.testing.assert_array_equal(fast.wrench, careful.wrench)
-        assert fast.extra == careful.extra
+        assert {k: v for k, v in fast.extra.items() if k != "stamp_ns"} == careful.extra
 
 
 _GOOD = _log_text(np.arange(12) * 1e-3, ',"a, ""b"""')

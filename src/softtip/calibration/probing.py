@@ -754,6 +754,11 @@ def write_fingertip_toml(cal: Calibration, path: str | os.PathLike[str], source:
     ]
     if cal.warning or cal.precision_warning():
         header.append(f"# warning: {cal.warning or cal.precision_warning()}")
+    if getattr(cal.tip, "skin_thickness", None) is None:
+        header.append(
+            "# no skin_thickness: softtip estimate's depth compensation is off for this fingertip; add "
+            "skin_thickness = <the soft skin's thickness, m> under [fingertip] to turn it on"
+        )
     text = "\n".join(header) + "\n" + cal.tip.to_toml()
     atomic_write_text(path, text)
 

@@ -6,8 +6,14 @@ import sys
 
 import click
 
-from softtip.cli.options import MAX_FORCE_NOISE, MAX_MOMENT_NOISE_NMM
-from softtip.cli.types import Number, option
+from softtip.cli.options import (
+    MAX_FORCE_NOISE,
+    MAX_MOMENT_NOISE_NMM,
+    log_format_kwargs,
+    log_format_options,
+    sensor_noise,
+)
+from softtip.cli.types import Length, Number, option
 from softtip.core.fingertip import SHAPES
 from softtip.core.noise import NANO17
 from softtip.core.units import UNIT_SYSTEMS
@@ -21,16 +27,20 @@ __all__ = ["calibrate"]
 CALIBRATED_SHAPES = [name for name, cls in SHAPES.items() if cls.calibrates is not None]
 
 
-def _read(input_path: str, units: str):
+def _read(input_path: str, units: str, **formats):
+    """The log (``formats``: :func:`~softtip.cli.options.log_format_kwargs`), its notes said on stderr."""
+    from softtip.cli.options import print_log_notes
     from softtip.io.tables import read_log
 
-    return read_log(sys.stdin if input_path == "-" else input_path, units=units)
+    log = read_log(getattr(sys.stdin, "buffer", sys.stdin) if input_path == "-" else input_path, units=units, **formats)
+    print_log_notes(log)
+    return log
 
 
 _WRENCH = ("fx", "fy", "fz", "mx", "my", "mz")
 
 
-def _read_probing(input_path: str, units: str):
+def _read_probing(input_path: str, units: str, **formats):
     """A probing log; a `softtip stream --record` file is read through its raw (untared) wrench.
 
     A recording's fx..mz are the stream's tared estimates (NaN during its tare); its
@@ -42,25 +52,25 @@ def _read_probing(input_path: str, units: str):
     from softtip.io.tables import read_log
 
     if input_path == "-":
-        return _read(input_path, units)
+        return _read(input_path, units, **formats)
     try:
         with open(input_path, encoding="utf-8-sig", newline="") as fh:
             text = fh.read()
     except (OSError, UnicodeDecodeError):
-        return _read(input_path, units)  # read_log says what is wrong
+        return _read(input_path, units, **formats)  # read_log says what is wrong (or decompresses it)
     lines = text.splitlines(keepends=True)
     k = next((i for i, line in enumerate(lines) if line.strip() and not line.lstrip().startswith("#")), None)
     if k is None:
-        return _read(input_path, units)
+        return _read(input_path, units, **formats)
     header = next(csv.reader([lines[k]]))
     names = [h.strip() for h in header]
     if not all(f"raw_{c}" in names for c in _WRENCH):
-        return _read(input_path, units)
+        return _read(input_path, units, **formats)
     rename = {c: f"tared_{c}" for c in _WRENCH} | {f"raw_{c}": c for c in _WRENCH}
     lines[k] = ",".join(rename.get(h, h) for h in names) + "\n"
     stream = io.StringIO("".join(lines))
     stream.name = input_path
-    return read_log(stream, units=units)
+    return read_log(stream, units=units, **formats)
 
 
 def _example_or_log(input_path, example: bool, units: str, path, what: str) -> str:
@@ -125,18 +135,25 @@ capsule's offset of its axis from the sensor's z axis is its axis_offset.
 @option("--rotation", is_flag=True, help="--shape mesh: fit a small rotation as well as the shift (6 DOF).")
 @option("--force-noise", type=Number("N", 0.0, MAX_FORCE_NOISE, min_open=True), default=NANO17.force_std[0], show_default=True, metavar="N", help="Per-axis standard deviation of the sensor's force noise, N (Nano17-class default).")
 @option("--moment-noise", type=Number("N·mm", 0.0, MAX_MOMENT_NOISE_NMM, min_open=True), default=NANO17.moment_std[0] * 1e3, show_default=True, metavar="N·mm", help="Per-axis standard deviation of the sensor's moment noise, N·mm.")
+@option("--sensor", type=click.Choice(["nano17", "nano25", "mini40"]), help="The sensor's noise preset for --force-noise and --moment-noise where they are not given. [default: nano17]")
+@option(
+    "--skin-thickness", type=Length("mm", 0.0, min_open=True), metavar="LENGTH",
+    help="Thickness of the fingertip's soft skin (5mm; a bare number is in mm), written into the fingertip file: "
+    "estimate's depth compensation needs it and is off for a file without it.",
+)  # fmt: skip
+@log_format_options
 @click.pass_context
 def calibrate(
     ctx, input_path, shape, output, units, tare_duration, contact_threshold, min_force, rigid, force_noise, moment_noise,
-    example, guide, mesh_path, mesh_units, rotation,
+    example, guide, mesh_path, mesh_units, rotation, skin_thickness=None, sensor=None, **log_format,
 ):
     from softtip.calibration.probing import (
         PROBING_GUIDE,
         calibrate_fingertip,
         write_fingertip_toml,
     )
-    from softtip.core.noise import SensorNoise
 
+    formats = log_format_kwargs(log_format)
     if guide:
         click.echo(PROBING_GUIDE)
         return
@@ -152,7 +169,7 @@ def calibrate(
         try:
             if not placement or mesh_path is None or rigid:
                 raise InputError("--shape mesh goes with --mesh FILE (and without --rigid)")
-            log = _read(input_path, units)
+            log = _read(input_path, units, **formats)
             cal = calibrate_mesh_file(
                 log.t, log.wrench, mesh_path, mesh_units, rotation=rotation, tare_duration=tare_duration,
                 contact_threshold=contact_threshold, min_force=min_force,
@@ -170,12 +187,22 @@ def calibrate(
     input_path = _example_or_log(input_path, example, units, EXAMPLE_PROBING_PATH, "probing log")
     try:
         _check_output(input_path, output)
-        log = _read_probing(input_path, units)
+        log = _read_probing(input_path, units, **formats)
         cal = calibrate_fingertip(
             log.t, log.wrench, shape, tare_duration=tare_duration, contact_threshold=contact_threshold,
             min_force=min_force, compliance=not rigid, source=log.source,
-            noise=SensorNoise((force_noise,) * 3, (moment_noise * 1e-3,) * 3),
+            noise=sensor_noise(sensor, force_noise, moment_noise),
         )  # fmt: skip
+        if skin_thickness is not None:
+            from dataclasses import replace
+
+            cal = replace(cal, tip=replace(cal.tip, skin_thickness=skin_thickness))
+        else:
+            click.echo(
+                "softtip: the fingertip file has no skin_thickness, so estimate's depth compensation (on for the "
+                "murakami2006 preset) stays off for it; give --skin-thickness (the soft skin's thickness) to turn it on",
+                err=True,
+            )
         report = cal.summary()
         if output is not None:
             write_fingertip_toml(cal, output, source=log.source)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from softtip.cli.calibrate import _check_output, _example_or_log, _fail, _read
+from softtip.cli.options import log_format_kwargs, log_format_options
 from softtip.cli.types import option
 from softtip.core.units import UNIT_SYSTEMS
 from softtip.errors import InputError
@@ -35,8 +36,9 @@ together with --payload (no tare needed).
 @option("-o", "--output", type=click.Path(dir_okay=False), help="Payload TOML file to write (default: standard output).")
 @option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the log's wrench.")
 @option("--example", is_flag=True, help="Use the shipped example still log (simulated: a 20 g fingertip, centre of mass 1, -0.5, 20 mm, in 12 orientations) as LOG.")
+@log_format_options
 @click.pass_context
-def calibrate_payload(ctx, input_path, output, units, example):
+def calibrate_payload(ctx, input_path, output, units, example, **log_format):
     from softtip.calibration.payload import calibrate_payload as fit_payload
     from softtip.estimator.tare import bias_to_toml
     from softtip.io.atomic import atomic_write_text
@@ -45,7 +47,7 @@ def calibrate_payload(ctx, input_path, output, units, example):
     input_path = _example_or_log(input_path, example, units, EXAMPLE_STILL_PATH, "still log")
     try:
         _check_output(input_path, output)
-        log = _read(input_path, units)
+        log = _read(input_path, units, **log_format_kwargs(log_format))
         fit = fit_payload(log.wrench, read_orientation(log), source=log.source)
         b = fit.bias
         text = (

@@ -18,9 +18,13 @@ from softtip.cli.options import (
     check_units,
     estimator_options,
     is_bag,
+    log_format_given,
+    log_format_kwargs,
+    log_format_options,
     make_config,
     optional_extra,
     parquet_metadata,
+    print_log_notes,
     progress_bar,
     tare_warnings,
 )  # fmt: skip
@@ -46,7 +50,14 @@ INPUT is a CSV file with a header row and columns t, fx, fy, fz, mx, my, mz (t i
 non-decreasing: repeated stamps are counted and reported; extra columns are kept and copied
 to the output), or a Parquet file with those columns (name ending in .parquet; its
 softtip.units metadata gives the units). '-' reads CSV from standard input. With
---example, softtip's shipped example grasp is used instead.
+--example, softtip's shipped example grasp is used instead. Logs as ATI's software,
+rostopic echo -p, ros2 topic echo --csv, PlotJuggler and bag converters write them are read
+as they are (units from the header; comma, tab or semicolon, a decimal comma; .gz, .bz2, .xz,
+.zst; a preamble), and standard error says which column was taken for what in which unit;
+--columns, --force-units, --moment-units, --time-units, --missing and --skip-rows for the
+rest (docs/guide/input-formats.md). Absolute stamps count from the first (stamp_ns column). A run
+whose units make the fingertip geometry or the sensor's noise impossible stops, naming the
+unit pair that fits.
 
 The output CSV (standard output unless -o; Parquet when -o ends in .parquet, with the
 units and the fingertip in its key-value metadata) has the columns t, state (none|point|line|area),
@@ -120,10 +131,12 @@ from the bag's /tf.
     "--rerun-save, --payload]",
 )  # fmt: skip
 @option(
-    "--full-scale", default=DEFAULT_SENSOR, show_default=True, metavar="SENSOR|FORCE,MOMENT|off",
+    "--full-scale", metavar="SENSOR|FORCE,MOMENT|off",
     help="The sensor's full-scale range: a sample beyond it (a corrupted row) stops the run naming it. A sensor ("
-    + ", ".join(SENSOR_RANGES) + "; rated range per axis), FORCE,MOMENT in N and N·m for every axis, or off.",
+    + ", ".join(SENSOR_RANGES) + "; rated range per axis), FORCE,MOMENT in N and N·m for every axis, or off "
+    "(then only values no sensor gives).  [default: the --sensor's, nano17]",
 )  # fmt: skip
+@log_format_options
 @estimator_options
 def estimate(**kwargs) -> None:
     from softtip.io.atomic import Outputs
@@ -155,17 +168,18 @@ def _estimate(
     frame_id=None,
     gravity_frame=None,
     chunk_rows=None,
-    full_scale=DEFAULT_SENSOR,
+    full_scale=None,
     **estimator_opts,
 ):
     from softtip.io.examples import EXAMPLE_ANGLE_DEG, EXAMPLE_PATH
 
-    try:
-        sensor_range = parse_full_scale(full_scale)
+    try:  # default: the range of --sensor (the noise preset), else a Nano17's
+        sensor_range = parse_full_scale(full_scale or estimator_opts.get("sensor") or DEFAULT_SENSOR)
     except ValueError as exc:
         raise click.BadParameter(str(exc), param_hint="'--full-scale'") from None
     from softtip.io.tables import Log, read_log
 
+    formats = log_format_kwargs(estimator_opts)
     if example == (input_path is not None):
         raise click.UsageError("give either INPUT or --example")
     if example and units not in (None, "si"):
@@ -193,13 +207,23 @@ def _estimate(
         check_viewer()
     fingertip = load_fingertip(tip)
     config = make_config(estimator_opts, tip=fingertip)
+    if (os.path.isfile(tip) and getattr(fingertip, "skin_thickness", None) is None and not quiet
+            and estimator_opts.get("depth_compensation") is None and estimator_opts.get("contact_point") == "latch"):  # fmt: skip
+        click.echo(
+            f"softtip: {tip}: no skin_thickness, so the depth compensation is off (add skin_thickness = <m> under "
+            "[fingertip], e.g. from calibrate --skin-thickness, to turn it on)",
+            err=True,
+        )
 
     bag_log = None
     if example:
         log = read_log(EXAMPLE_PATH, units="si")
     elif input_path == "-":
-        log = read_log(sys.stdin, units=units)
+        log = read_log(getattr(sys.stdin, "buffer", sys.stdin), units=units, **formats)  # bytes: compressed input too
     elif is_bag(input_path):
+        if log_format_given(formats):
+            raise click.UsageError("--columns, --force-units, --moment-units, --time-units, --missing and --skip-rows "
+                                   "apply to CSV input; a bag's WrenchStamped messages are in N, N·m and ns")  # fmt: skip
         bag = optional_extra("softtip.io.bag", "ros")
         bag_log = bag.read_bag(input_path, topic, allow_partial=allow_partial)
         bag_warnings(input_path, bag_log)
@@ -224,7 +248,7 @@ def _estimate(
             raise click.UsageError(f"--chunk-rows: not with {given}; expected a run that writes only the table")
         if chunk_rows is not None and output is None:
             raise click.UsageError("--chunk-rows: needs -o FILE (a piece written to standard output cannot be taken back)")
-        if output is not None and topic is None and not allow_partial and not any(others.values()):
+        if output is not None and topic is None and not allow_partial and not any(others.values()) and not log_format_given(formats):
             rows = chunk_rows or _auto_chunk_rows(input_path)
             if rows and _estimate_in_pieces(
                 input_path, units, rows, fingertip, config, estimator_opts, output=output, output_units=output_units,
@@ -233,10 +257,9 @@ def _estimate(
                 return
         size = os.path.getsize(input_path) if os.path.isfile(input_path) else 0
         with progress_bar(size, "reading", unit="B") as bar:
-            log = read_log(input_path, units=units, progress=bar.update)
+            log = read_log(input_path, units=units, progress=bar.update, **formats)
     check_full_scale(log.t, log.wrench, sensor_range, log.source, units=log.units)
-    for note in log.warnings:  # repeated stamps, an implausible time scale, a cut last line
-        click.echo(f"softtip: warning: {note}", err=True)
+    print_log_notes(log)  # how a foreign file was read; repeated stamps, an implausible time scale, a cut last line
     if topic is not None and bag_log is None:
         raise click.UsageError("--topic applies to bag input only")
     if allow_partial and bag_log is None:
@@ -265,7 +288,7 @@ def _estimate(
             est = run_estimate(log.t, log.wrench, fingertip, config)
     except ValueError as exc:  # e.g. a low-pass cutoff above Nyquist for this log's rate
         raise click.UsageError(str(exc)) from None
-    check_units(est, fingertip, config, log.units, log.source)
+    check_units(est, fingertip, config, log)
 
     carried = _carried(None if example or bag_log is not None else input_path, output)
     notes: list[str] = []
@@ -449,21 +472,40 @@ def _estimate_in_pieces(
     with progress_bar(total, "estimating") as bar:  # rows estimated and written
         blocks = iter_log(input_path, units, rows=min(rows, 1 << 16))
 
+        first_wrench = []
+
         def checked():
             first = True
             n = 0
             for block in blocks:
                 if first:
                     check_lowpass(estimator_opts["lowpass"], block[0])
+                    first_wrench.append(block[1])
                     first = False
                 check_full_scale(block[0], block[1], sensor_range, input_path, first_sample=n, units=units or "si")
                 n += len(block[0])
                 yield block
 
+        def noise_fits(est) -> None:
+            """The units check's noise half on the first piece (the lever's is voted over all); a
+            doubt goes to the one-shot run, which words it with both halves."""
+            from softtip.cli.options import quiet_samples
+            from softtip.core.lever import check_wrench_units
+            from softtip.core.units import UNIT_SYSTEM_UNITS
+
+            force_unit, moment_unit = UNIT_SYSTEM_UNITS[blocks.units or "si"]
+            try:
+                check_wrench_units(np.zeros((0, 6)), fingertip, force_unit=force_unit, moment_unit=moment_unit,
+                                   quiet=quiet_samples(est, first_wrench[0]), noise=config.noise)  # fmt: skip
+            except InputError:
+                raise NotStreamable("wrong units: the one-shot run says so") from None
+
         def run(out) -> None:
             writer = TableWriter(out, parquet=parquet, metadata=parquet_metadata(fingertip, tip, output_units, blocks))
             try:
-                for est, extra in estimate_pieces(checked(), fingertip, config, rows):
+                for k, (est, extra) in enumerate(estimate_pieces(checked(), fingertip, config, rows)):
+                    if k == 0:
+                        noise_fits(est)
                     vote.add(lever_distances(est.wrench[~est.taring], max(0.1, config.contact_threshold)))
                     columns = _output_columns(est, extra, output_units, carried, notes if not names else None)
                     names.setdefault("est", list(est.columns(units=output_units)))

@@ -11,12 +11,15 @@ import numpy as np
 from softtip.cli.options import (
     check_figure_path,
     estimator_options,
+    log_format_kwargs,
+    log_format_options,
     make_config,
     optional_extra,
+    print_log_notes,
     tare_warnings,
 )
 from softtip.cli.types import Length, Number, option
-from softtip.core.units import UNIT_SYSTEMS, wrench_to_si
+from softtip.core.units import UNIT_SYSTEMS, seconds_from_ns, wrench_to_si
 from softtip.errors import InputError
 from softtip.estimator.results import EstimatorWarning
 from softtip.ros.options import bag_output_options, output_frame_id
@@ -90,6 +93,7 @@ PointStamped and RViz markers, in the common frame, in the format --ros-distro p
 @option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save that 3-D view and the fused series to FILE.rrd.")
 @option("--truth", "truth_file", type=click.Path(dir_okay=False), metavar="FILE.json", help="The simulator's truth.json: the object's true line and plane drawn in the Rerun view and the --plot figure.")
 @bag_output_options(frame_default="the common frame: --frame, the hand file's, else hand")
+@log_format_options
 @estimator_options
 def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, point_std, plot_path, rerun_spawn, rerun_save,
          truth_file, tip, to_bag=None, ros_distro=None, frame_id=None, **estimator_opts):  # fmt: skip
@@ -97,6 +101,7 @@ def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, 
     from softtip.fusion import fuse_logs, poses_from_columns, read_hand_file
     from softtip.io.tables import read_log, write_table
 
+    formats = log_format_kwargs(estimator_opts)
     if plot_path is not None:
         check_figure_path(plot_path)
     if truth_file is not None and not (rerun_spawn or rerun_save or plot_path):
@@ -139,11 +144,13 @@ def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, 
             if not b.frame_id:
                 raise InputError(f"{path}: topic {b.topic!r} has an empty header.frame_id; cannot place it with /tf")
             pose = tree.poses(frame, b.frame_id, b.stamps_ns, origin_ns=origin)
-            logs.append((b.topic, (b.stamps_ns - origin) * 1e-9, wrench_to_si(b.wrench, units), pose))
+            logs.append((b.topic, seconds_from_ns(b.stamps_ns, origin), wrench_to_si(b.wrench, units), pose))
     elif len(inputs) == 2:
         if topics is not None or frame is not None:
             raise click.UsageError("--topics and --frame apply to a bag input")
-        read = [read_log(p, units=units) for p in inputs]
+        read = [read_log(p, units=units, **formats) for p in inputs]
+        for log in read:
+            print_log_notes(log)
         common = "hand"  # pose columns name no frame
         if hand_file is not None:
             hand = read_hand_file(hand_file)

@@ -12,7 +12,7 @@ import click
 import numpy as np
 
 from softtip import __version__
-from softtip.cli.types import Force, Length, Number, check_pair_increasing, option
+from softtip.cli.types import ColumnSpec, Force, Length, Number, UnitName, check_pair_increasing, option
 from softtip.core.depth import MURAKAMI2006_DEPTH, DepthLaw
 from softtip.core.fingertip import PRESETS, Fingertip
 from softtip.core.noise import NANO17, SensorNoise
@@ -179,6 +179,12 @@ _ESTIMATOR_OPTIONS = [
         help="Per-axis standard deviation of the sensor's moment noise, N·mm.",
     ),
     option(
+        "--sensor",
+        type=click.Choice(["nano17", "nano25", "mini40"]),
+        help="The sensor's noise preset (ATI Nano17, Nano25, Mini40 class; per axis, fz apart) for --force-noise and "
+        "--moment-noise where they are not given. [default: nano17]",
+    ),
+    option(
         "--noise-from-tare",
         is_flag=True,
         help="Measure the noise model from the tare's samples (each axis's standard deviation) instead of "
@@ -292,6 +298,94 @@ _ESTIMATOR_OPTIONS = [
 ]
 
 
+_LOG_FORMAT_OPTIONS = [
+    option(
+        "--columns",
+        type=ColumnSpec(),
+        metavar="ROLE=COLUMN,…",
+        help="Which column is t, fx, fy, fz, mx, my, mz, by header name (or 1-based position for a file without a "
+        "header row), e.g. t=Time,fx=Fx,…,mz=Tz. Not needed for softtip's, ATI's, rostopic echo -p, ros2 topic echo "
+        "--csv and PlotJuggler headers (docs/guide/input-formats.md).",
+    ),
+    option("--force-units", type=UnitName("force"), help="Units of the force columns whose header gives none. [default: N]"),
+    option(
+        "--moment-units", type=UnitName("moment"),
+        help="Units of the moment columns whose header gives none (N*m, N*mm, kgf*mm, lbf*in; N-mm, Nmm, N·mm "
+        "alike). [default: N*m]",
+    ),  # fmt: skip
+    option(
+        "--time-units", type=UnitName("time"),
+        help="Units of the time column when its header gives none (s, ms, us, ns). Absolute stamps (Unix time) count "
+        "from the first; they go along as a stamp_ns column. [default: s, ns for ROS stamps]",
+    ),  # fmt: skip
+    option(
+        "--missing",
+        type=click.Choice(["fail", "drop", "interpolate"]),
+        default="fail",
+        show_default=True,
+        help="An empty or nan cell in t, fx … mz: stop naming it, drop its row (t keeps the gap), or interpolate "
+        "linearly in t (a row without t is dropped). Dropped or filled rows are counted on standard error.",
+    ),
+    option("--skip-rows", type=click.IntRange(min=0), metavar="N", help="Lines before the header row (a preamble). [default: found]"),
+]
+
+
+def log_format_options(f):
+    """How a CSV log's columns, units and missing cells are read (:func:`softtip.io.tables.read_log`)."""
+    for decorator in reversed(_LOG_FORMAT_OPTIONS):
+        f = decorator(f)
+    return f
+
+
+def log_format_kwargs(opts: dict) -> dict:
+    """Pop the :func:`log_format_options` from a command's keyword arguments, as :func:`read_log`'s keywords."""
+    return {
+        "columns": opts.pop("columns", None), "force_units": opts.pop("force_units", None),
+        "moment_units": opts.pop("moment_units", None), "time_units": opts.pop("time_units", None),
+        "missing": opts.pop("missing", "fail") or "fail", "skip_rows": opts.pop("skip_rows", None),
+    }  # fmt: skip
+
+
+def log_format_given(kwargs: dict) -> bool:
+    """Whether any :func:`log_format_options` differs from its default."""
+    return any(v not in (None, "fail", {}) for v in kwargs.values())
+
+
+def print_log_notes(log) -> None:
+    """How a foreign log was read (columns, units, skipped lines, missing cells), then its warnings."""
+    for note in getattr(log, "notes", ()):
+        click.echo(f"softtip: {note}", err=True)
+    suspect = getattr(log, "time_suspect", None)
+    if suspect is not None:  # t in ms read as s: a one-sample tare and windows of thousands of samples
+        raise InputError(suspect.replace(". Give t in seconds:", ". Stopped: give --time-units (or t in seconds):"))
+    for note in log.warnings:  # repeated stamps, an implausible time scale, a cut last line
+        click.echo(f"softtip: warning: {note}", err=True)
+
+
+def sensor_noise(sensor: str | None, force_noise: float, moment_noise_nmm: float) -> SensorNoise:
+    """The noise model of ``--sensor`` and ``--force-noise`` (N) / ``--moment-noise`` (N·mm): an option given on
+    the command line wins for its quantity, the preset (per axis) gives the rest."""
+    from softtip.core.noise import SENSOR_CLASSES
+
+    explicit = {"force_noise": True, "moment_noise": True}
+    ctx = click.get_current_context(silent=True)
+    if ctx is not None:
+        for name in explicit:
+            try:
+                source = ctx.get_parameter_source(name)
+            except KeyError:
+                continue
+            explicit[name] = source is not None and source.name not in ("DEFAULT", "DEFAULT_MAP")
+    given = SensorNoise((force_noise,) * 3, (moment_noise_nmm * 1e-3,) * 3)
+    if sensor is None:
+        return given
+    preset = SENSOR_CLASSES[{"nano17": "Nano17", "nano25": "Nano25", "mini40": "Mini40"}[sensor]]
+    return SensorNoise(
+        given.force_std if explicit["force_noise"] else preset.force_std,
+        given.moment_std if explicit["moment_noise"] else preset.moment_std,
+    )
+
+
 def estimator_options(f):
     """The pipeline settings shared by ``estimate`` and ``stream``."""
     for decorator in reversed(_ESTIMATOR_OPTIONS):
@@ -299,13 +393,22 @@ def estimator_options(f):
     return f
 
 
-def check_units(est, fingertip, config: EstimatorConfig, units: str, source: str) -> None:
-    """Exit 2 when the moment-to-force ratio puts the force far outside the fingertip (wrong --units or --tip)."""
-    from softtip.core.lever import check_force_lever
+def check_units(est, fingertip, config: EstimatorConfig, log, source: str | None = None) -> None:
+    """Exit 2 when the wrench's units make the fingertip geometry or the sensor's noise impossible
+    (:func:`softtip.core.lever.check_wrench_units`), naming the unit pairs that fit the data."""
+    from softtip.core.lever import check_wrench_units
 
-    check_force_lever(
-        est.wrench[~est.taring], fingertip, units=units, source=source, min_force=max(0.1, config.contact_threshold)
-    )
+    check_wrench_units(
+        est.wrench[~est.taring], fingertip, force_unit=getattr(log, "force_unit", "N"),
+        moment_unit=getattr(log, "moment_unit", "N*m"), quiet=quiet_samples(est, log.wrench), noise=config.noise,
+        source=source or log.source, min_force=max(0.1, config.contact_threshold),
+    )  # fmt: skip
+
+
+def quiet_samples(est, wrench):
+    """The input ``wrench``'s samples in a run's tare window (its first 50 when it did not tare), for the noise check."""
+    taring = np.asarray(est.taring, dtype=bool)[: len(wrench)]
+    return wrench[: len(taring)][taring] if np.count_nonzero(taring) >= 6 else wrench[:50]
 
 
 def bag_warnings(path: str, bag_log) -> None:
@@ -436,7 +539,7 @@ def make_config(opts: dict, sample_rate: float | None = None, tip: Fingertip | N
             contact_point=opts["contact_point"],
             contact_threshold=opts["contact_threshold"],
             latch_force_range=opts["latch_window"],
-            noise=SensorNoise((opts["force_noise"],) * 3, (opts["moment_noise"] * 1e-3,) * 3),
+            noise=sensor_noise(opts.get("sensor"), opts["force_noise"], opts["moment_noise"]),
             h_min=opts["h_min"] * 1e-3,
             lowpass_hz=opts["lowpass"],
             sample_rate=sample_rate,

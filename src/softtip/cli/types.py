@@ -15,7 +15,10 @@ import numpy as np
 
 from softtip.core.units import FORCE_UNITS, LENGTH_UNITS, parse_quantity
 
-__all__ = ["Number", "Length", "Force", "Option", "option", "as_written", "PORT", "check_lowpass", "check_pair_increasing"]
+__all__ = [
+    "Number", "Length", "Force", "UnitName", "ColumnSpec", "Option", "option", "as_written", "PORT", "check_lowpass",
+    "check_pair_increasing",
+]
 
 #: Lowest low-pass cutoff as a fraction of the Nyquist frequency: below it the Butterworth
 #: sections lose their precision (the filter's initial state and its noise gain go wrong,
@@ -179,6 +182,45 @@ class Option(click.Option):
             elif not self.is_flag and not callable(self.default):
                 extra["default"] = as_written(self.default)  # as declared: "0.2kgf", not its value in N
         return extra
+
+
+class UnitName(click.ParamType):
+    """A unit of ``quantity`` (force, moment, time) from :data:`softtip.core.units.UNITS`, any registered
+    spelling (``N*mm``, ``N-mm``, ``Nmm``, ``N·mm``); converted to its canonical name."""
+
+    name = "UNIT"
+
+    def __init__(self, quantity: str) -> None:
+        self.quantity = quantity
+
+    def get_metavar(self, param, ctx=None) -> str:  # noqa: ARG002 - click's signature
+        from softtip.core.units import unit_names
+
+        return "|".join(unit_names(self.quantity))
+
+    def convert(self, value, param, ctx):
+        from softtip.core.units import find_unit, unit_names
+
+        unit = find_unit(str(value), self.quantity)
+        if unit is None:
+            self.fail(f"{value!r}; expected a {self.quantity} unit: {', '.join(unit_names(self.quantity))}", param, ctx)
+        return unit.name
+
+
+class ColumnSpec(click.ParamType):
+    """``ROLE=COLUMN,…``: which header column (or 1-based position) is ``t``, ``fx`` … ``mz``."""
+
+    name = "ROLE=COLUMN,…"
+
+    def convert(self, value, param, ctx):
+        from softtip.io.formats import parse_column_spec
+
+        if isinstance(value, dict):
+            return value
+        try:
+            return parse_column_spec(str(value))
+        except ValueError as exc:
+            self.fail(f"{exc}; expected e.g. t=Time,fx=Fx,fy=Fy,fz=Fz,mx=Tx,my=Ty,mz=Tz", param, ctx)
 
 
 def option(*param_decls: str, **attrs):

@@ -11,7 +11,11 @@ such a run instead of returning confident wrong directions.
 
 The opposite mistake (an SI log read as kgf-mm) puts every force ~100 times closer to the
 origin; a line through the origin is a possible contact (a push along the finger's axis),
-so that mistake cannot be told from the data this way.
+so that mistake cannot be told from the lever. The sensor's noise tells it:
+:func:`check_wrench_units` also compares the noise while taring with the sensor's
+(:class:`~softtip.core.noise.SensorNoise`), and stops a run whose units put that noise 5 or
+more times off when one of the unit pairs F/T software writes (:data:`UNIT_PAIRS`) puts
+both the lever and the noise right. Either message names the pairs that fit the data.
 """
 
 from __future__ import annotations
@@ -22,9 +26,14 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from softtip.core.fingertip import Fingertip
+from softtip.core.noise import SensorNoise
+from softtip.core.units import find_unit
 from softtip.errors import InputError
 
-__all__ = ["LEVER_MARGIN", "ForceLever", "force_lever", "check_force_lever", "lever_distances", "LeverVote", "fingertip_reach"]
+__all__ = [
+    "LEVER_MARGIN", "UNIT_PAIRS", "ForceLever", "force_lever", "check_force_lever", "check_wrench_units", "lever_distances",
+    "LeverVote", "fingertip_reach", "noise_ratio",
+]
 
 #: How far beyond the fingertip's reach the median line of action may lie before the
 #: log is refused (a factor on the reach; covers noise, spin torque and a fingertip a
@@ -157,5 +166,145 @@ def check_force_lever(
             f"ratio over {lever.n_samples} samples with |f| ≥ {min_force:g} N), but the fingertip reaches only "
             f"{lever.reach * 1e3:.3g} mm: {hint}; or is the fingertip (--tip) the wrong one? Expected moments in N·m "
             "about the sensor origin"
+        )
+    return lever
+
+
+#: The (force, moment) unit pairs force/torque software writes: the candidates a units message names.
+UNIT_PAIRS: tuple[tuple[str, str], ...] = (("N", "N*m"), ("N", "N*mm"), ("kgf", "kgf*mm"), ("lbf", "lbf*in"))
+#: The noise read in the given units may be this many times off the sensor's before another unit pair is looked for.
+NOISE_OFF = 5.0
+#: ... and a unit pair fits when it puts the noise within this factor of the sensor's.
+NOISE_FITS = 3.0
+
+
+def noise_ratio(quiet: ArrayLike, noise: SensorNoise) -> tuple[float, float] | None:
+    """Measured over expected noise, force and moment, of untouched samples (the tare window).
+
+    Parameters
+    ----------
+    quiet : array-like, shape (N, 6)
+        Wrench samples while untouched, N and N·m (N ≥ 6).
+    noise : SensorNoise
+        The sensor's noise standard deviations.
+
+    Returns
+    -------
+    tuple of float or None
+        ``(σ_f / σ_f,sensor, σ_m / σ_m,sensor)``, each a median over the three axes of a robust
+        standard deviation (from the median absolute difference of successive samples, so a
+        slow drift does not count); None with fewer than 6 samples or a constant axis group.
+    """
+    w = np.asarray(quiet, dtype=float).reshape(-1, 6)
+    w = w[np.isfinite(w).all(axis=1)]
+    if len(w) < 6:
+        return None
+    step = np.diff(w, axis=0)
+    sigma = np.median(np.abs(step - np.median(step, axis=0)), axis=0) * 1.4826 / np.sqrt(2.0)
+    f, m = float(np.median(sigma[:3])), float(np.median(sigma[3:]))
+    f0, m0 = float(np.median(noise.force_std)), float(np.median(noise.moment_std))
+    if not (f > 0 and m > 0 and f0 > 0 and m0 > 0):
+        return None
+    return f / f0, m / m0
+
+
+def _pair_option(force: str, moment: str, given: tuple[str, str]) -> str:
+    if (force, moment) == ("kgf", "kgf*mm"):
+        return "--units kgf-mm"
+    if (force, moment) == ("N", "N*m"):
+        return "the default: no --units, --force-units or --moment-units"
+    parts = [f"--force-units {force}"] if force != given[0] or force != "N" else []
+    return " ".join([*parts, f"--moment-units {moment}"])
+
+
+def check_wrench_units(
+    wrench: ArrayLike,
+    fingertip: Fingertip,
+    *,
+    force_unit: str = "N",
+    moment_unit: str = "N*m",
+    quiet: ArrayLike | None = None,
+    noise: SensorNoise | None = None,
+    source: str = "",
+    min_force: float = 0.1,
+) -> ForceLever:
+    """Stop a log whose units make the fingertip geometry or the sensor's noise impossible.
+
+    Parameters
+    ----------
+    wrench : array-like, shape (N, 6)
+        Tared wrench as read, converted to N and N·m from ``force_unit`` and ``moment_unit``.
+    fingertip : Fingertip
+    force_unit, moment_unit : str
+        The units the log was read in (names of :data:`softtip.core.units.UNITS`).
+    quiet : array-like, shape (M, 6), optional
+        Untouched samples (the tare window), N and N·m, for the noise check.
+    noise : SensorNoise, optional
+        The sensor's noise; without it (or ``quiet``) only the lever is checked.
+    source : str
+        The log's name, for the message.
+    min_force : float
+        As :func:`force_lever`, N.
+
+    Returns
+    -------
+    ForceLever
+
+    Raises
+    ------
+    InputError
+        The median line of action lies beyond ``LEVER_MARGIN`` times the fingertip's reach,
+        or the noise is :data:`NOISE_OFF` times off the sensor's while another pair of
+        :data:`UNIT_PAIRS` fits both; the message names the pairs that fit and their options.
+    """
+    lever = force_lever(wrench, fingertip, min_force=min_force)
+    ratio = noise_ratio(quiet, noise) if quiet is not None and noise is not None else None
+    f_unit, m_unit = find_unit(force_unit, "force"), find_unit(moment_unit, "moment")
+    if f_unit is None or m_unit is None:
+        raise ValueError(f"unknown units {force_unit!r}, {moment_unit!r}")
+    given = (f_unit.name, m_unit.name)
+    limit = LEVER_MARGIN * lever.reach
+    fits: list[tuple[float, str, str]] = []
+    for force, moment in UNIT_PAIRS:
+        kf = find_unit(force, "force").si / f_unit.si  # type: ignore[union-attr]
+        km = find_unit(moment, "moment").si / m_unit.si  # type: ignore[union-attr]
+        if lever.n_samples >= 5 and not lever.median * km / kf <= limit:
+            continue
+        if ratio is not None:
+            off = max(abs(np.log(ratio[0] * kf)), abs(np.log(ratio[1] * km)))
+            if off > np.log(NOISE_FITS):
+                continue
+        else:
+            off = 0.0
+        fits.append((off, force, moment))
+    fits.sort()
+    named = [(fo, mo) for _, fo, mo in fits if (fo, mo) != given]
+    labels = {u: find_unit(u, q).label for u, q in ((f_unit.name, "force"), (m_unit.name, "moment"))}  # type: ignore[union-attr]
+    read_in = f"{labels[f_unit.name]} and {labels[m_unit.name]}"
+
+    def fit_text() -> str:
+        if not named:
+            return "no unit pair F/T software writes fits the data"
+        pairs = [
+            f"forces in {find_unit(fo, 'force').label} with moments in {find_unit(mo, 'moment').label} "  # type: ignore[union-attr]
+            f"({_pair_option(fo, mo, given)})"
+            for fo, mo in named
+        ]
+        return "the data fit " + ", or ".join(pairs)
+
+    where = f"{source}: " if source else ""
+    if not lever.plausible:
+        raise InputError(
+            f"{where}the forces act {lever.median * 1e3:.4g} mm from the sensor origin (median of the moment-to-force "
+            f"ratio over {lever.n_samples} samples with |f| ≥ {min_force:g} N, read in {read_in}), but the fingertip "
+            f"reaches only {lever.reach * 1e3:.3g} mm: {fit_text()}; or is the fingertip (--tip) the wrong one? "
+            "Expected moments in N·m about the sensor origin"
+        )
+    if ratio is not None and max(abs(np.log(ratio[0])), abs(np.log(ratio[1]))) > np.log(NOISE_OFF) and named:
+        f0, m0 = float(np.median(noise.force_std)), float(np.median(noise.moment_std))  # type: ignore[union-attr]
+        raise InputError(
+            f"{where}read in {read_in}, the noise while taring is {ratio[0] * f0:.3g} N and {ratio[1] * m0 * 1e3:.3g} N·mm, "
+            f"but the sensor's is {f0:.3g} N and {m0 * 1e3:.3g} N·mm (--force-noise, --moment-noise): {fit_text()}. "
+            "If the sensor really is this noisy, give its --force-noise and --moment-noise"
         )
     return lever

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import re
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -101,3 +102,115 @@ def parse_length(text: str, bare: str = "m") -> float:
 def parse_force(text: str, bare: str = "n") -> float:
     """``"0.5kgf"`` → 4.903325 (N). A bare number is in ``bare`` (newtons unless told)."""
     return parse_quantity(text, FORCE_UNITS, "force", bare)[0]
+
+
+# --------------------------------------------------------------------------------------
+# Units of an input log's columns: one registry for force, moment and time.
+
+
+@dataclass(frozen=True)
+class Unit:
+    """A unit an input log's column may be in.
+
+    Attributes
+    ----------
+    name : str
+        The spelling options take and messages print (``"N*mm"``).
+    quantity : {"force", "moment", "time"}
+    si : float
+        Its size in SI: N, N·m or s.
+    label : str
+        How it reads in prose (``"N·mm"``).
+    aliases : tuple of str
+        Other spellings, compared after :func:`_unit_key` (``"N-mm"``, ``"Nmm"``, ``"N.mm"``).
+    """
+
+    name: str
+    quantity: str
+    si: float
+    label: str
+    aliases: tuple[str, ...] = ()
+
+
+#: lbf in N, and one inch in m (exact by definition).
+LBF = 4.4482216152605
+INCH = 0.0254
+
+#: Every unit a log's column may be in, each declared once.
+UNITS: tuple[Unit, ...] = (
+    Unit("N", "force", 1.0, "N", ("newton", "newtons")),
+    Unit("kgf", "force", KGF, "kgf", ("kg-f", "kilogram-force", "kp")),
+    Unit("lbf", "force", LBF, "lbf", ("lb", "lbs", "pound-force")),
+    Unit("N*m", "moment", 1.0, "N·m", ("Nm", "newton-metre", "newton-meter")),
+    Unit("N*mm", "moment", 1e-3, "N·mm", ("Nmm", "mN*m", "mNm")),
+    Unit("kgf*mm", "moment", KGF_MM, "kgf·mm", ("kgfmm",)),
+    Unit("lbf*in", "moment", LBF * INCH, "lbf·in", ("lbfin", "lb*in", "lbin", "in*lb", "in*lbf", "inlb", "inlbf")),
+    Unit("s", "time", 1.0, "s", ("sec", "secs", "second", "seconds")),
+    Unit("ms", "time", 1e-3, "ms", ("msec", "millisecond", "milliseconds")),
+    Unit("us", "time", 1e-6, "µs", ("µs", "μs", "usec", "microsecond", "microseconds")),
+    Unit("ns", "time", 1e-9, "ns", ("nsec", "nanosecond", "nanoseconds")),
+)
+
+#: The ``--units`` presets: force and moment unit of each unit system.
+UNIT_SYSTEM_UNITS = {"si": ("N", "N*m"), "kgf-mm": ("kgf", "kgf*mm")}
+
+
+def _unit_key(text: str) -> str:
+    """A unit's spelling reduced for comparison: lower case, ``·``/``-``/``.``/space as ``*``."""
+    key = text.strip().lower().replace("μ", "µ")
+    key = re.sub(r"\s*[·⋅\-.*×\s]\s*", "*", key)
+    return key
+
+
+def _unit_table() -> dict[tuple[str, str], Unit]:
+    table: dict[tuple[str, str], Unit] = {}
+    for unit in UNITS:
+        for spelling in (unit.name, unit.label, *unit.aliases):
+            table[(unit.quantity, _unit_key(spelling))] = unit
+    return table
+
+
+_UNIT_TABLE = _unit_table()
+
+
+def unit_names(quantity: str) -> list[str]:
+    """The names of the units of ``quantity`` (``"force"``, ``"moment"``, ``"time"``)."""
+    return [u.name for u in UNITS if u.quantity == quantity]
+
+
+def find_unit(text: str, quantity: str) -> Unit | None:
+    """The unit of ``quantity`` spelled ``text`` (any registered spelling, any case,
+    ``·``/``-``/``.``/``*``/space or nothing between its parts), or None."""
+    key = _unit_key(text)
+    unit = _UNIT_TABLE.get((quantity, key))
+    if unit is None:
+        flat = key.replace("*", "")
+        unit = next((u for (q, k), u in _UNIT_TABLE.items() if q == quantity and k.replace("*", "") == flat), None)
+    return unit
+
+
+def get_unit(text: str, quantity: str) -> Unit:
+    """:func:`find_unit`, raising ``ValueError`` naming the accepted spellings."""
+    unit = find_unit(text, quantity)
+    if unit is None:
+        raise ValueError(f"unknown {quantity} unit {text!r}; expected one of: {', '.join(unit_names(quantity))}")
+    return unit
+
+
+def wrench_scale(force_unit: str, moment_unit: str) -> NDArray[np.float64]:
+    """Factors taking ``fx, fy, fz, mx, my, mz`` in these units to N and N·m, shape (6,)."""
+    f, m = get_unit(force_unit, "force").si, get_unit(moment_unit, "moment").si
+    return np.array([f, f, f, m, m, m])
+
+
+def seconds_from_ns(stamps_ns: ArrayLike, origin_ns: int | None = None) -> NDArray[np.float64]:
+    """Integer stamps, ns, as seconds from ``origin_ns`` (default: the first stamp).
+
+    ``(stamps - origin) / 1e9``: the division by an exact 1e9 is correctly rounded, so a stamp
+    3.9 s after the origin gives the float ``3.9`` exactly as the text ``"3.9"`` does; a bag, a
+    ``rostopic echo -p`` CSV of it and a CSV of its seconds give the same ``t`` to the last bit.
+    """
+    ns = np.asarray(stamps_ns, dtype=np.int64)
+    if origin_ns is None:
+        origin_ns = int(ns[0]) if len(ns) else 0
+    return (ns - np.int64(origin_ns)).astype(np.float64) / 1e9

@@ -72,6 +72,30 @@ def infer_rate(t: NDArray) -> float:
     return float(f"{1.0 / float(np.median(dt)):.9g}")
 
 
+#: A configured sample rate this far (relative) from the stamps' is warned about.
+SAMPLE_RATE_TOLERANCE = 0.1
+
+
+def sample_rate_mismatch(t: ArrayLike, sample_rate: float | None) -> str | None:
+    """The warning when ``config.sample_rate`` (Hz) contradicts the stamps ``t`` (s): their rate (the
+    median step's, :func:`infer_rate`) more than :data:`SAMPLE_RATE_TOLERANCE` away; None when they agree,
+    or with fewer than 10 distinct stamps."""
+    if sample_rate is None:
+        return None
+    dt = np.diff(np.asarray(t, dtype=float))
+    dt = dt[dt > 0]
+    if len(dt) < 9:
+        return None
+    rate = 1.0 / float(np.median(dt))
+    if abs(rate / sample_rate - 1.0) <= SAMPLE_RATE_TOLERANCE:
+        return None
+    return (
+        f"config.sample_rate is {sample_rate:g} Hz but the stamps step at {rate:.4g} Hz (median): the low-pass filter "
+        f"and every rate-based setting are designed for {sample_rate:g} Hz; give sample_rate={rate:.4g} (or None to "
+        "take it from the stamps)"
+    )
+
+
 def estimate(
     t: ArrayLike,
     wrench: ArrayLike,
@@ -189,6 +213,9 @@ def estimate(
     is_line = state == LINE
     started_in_contact = tare_report.source == "tare" and first_contact_pulls(t, pulling, ct.contact_id)
     warn = [] if later else list(tare_report.warnings)
+    mismatch = None if later else sample_rate_mismatch(t, config.sample_rate)
+    if mismatch:
+        warn.append(mismatch)
     if started_in_contact:
         warn.append(started_in_contact_message(config))
     if ct.drift_alarm >= 0:

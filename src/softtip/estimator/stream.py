@@ -22,6 +22,7 @@ from softtip.core.contact import contact_kernel
 from softtip.core.filtering import SosStream, lowpass_sos
 from softtip.core.fingertip import Fingertip, load_fingertip
 from softtip.core.noise import SensorNoise
+from softtip.estimator.batch import sample_rate_mismatch
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.contact import (
     START_PULL_TIME,
@@ -137,6 +138,7 @@ class Estimator:
         self._contacts.count = 0
         self._had_latch = False
         self._t_prev: float | None = None
+        self._rate_t: list[float] | None = [] if self.config.sample_rate is not None else None  # the first stamps
         self.repeated_stamps = 0
         self.warnings: list[str] = []
         self._after_tare()
@@ -208,6 +210,13 @@ class Estimator:
                 self.repeated_stamps += 1
             dt = t - t_prev
         self._t_prev = t
+        if self._rate_t is not None:  # once, after 21 samples: does config.sample_rate fit the stamps?
+            self._rate_t.append(t)
+            if len(self._rate_t) > 20:
+                msg = sample_rate_mismatch(self._rate_t, self.config.sample_rate)
+                self._rate_t = None
+                if msg:
+                    self._warn(msg)
 
         tare = self._tare
         bias = tare.bias

@@ -38,6 +38,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from softtip.core.units import seconds_from_ns
 from softtip.errors import InputError
 from softtip.estimator import Estimates
 from softtip.ros import DEFAULT_FRAME_ID
@@ -295,7 +296,7 @@ def read_bag(path: str | os.PathLike[str], topic: str | None = None, *, allow_pa
             f"({stamps[i - 1] * 1e-9:.9f} s); expected non-decreasing header stamps"
         )
     return BagLog(
-        t=(stamps - stamps[0]) * 1e-9,
+        t=seconds_from_ns(stamps),
         wrench=wrench,
         stamps_ns=stamps,
         frame_ids=tuple(frame_ids),

@@ -1,19 +1,28 @@
 """Reading force/torque logs and writing result tables (CSV and Parquet).
 
-Input logs (see the manual, docs/manual.md) are CSV files with a header row naming at least
-the columns ``t, fx, fy, fz, mx, my, mz`` in any order, or Parquet files (by the name's
-``.parquet`` extension) with those columns; other columns are kept and otherwise ignored.
-``t`` is in seconds and non-decreasing: a repeated stamp is accepted and counted, a stamp
-that goes back is an error. The wrench is in SI or, on request (or, for Parquet, by the
-file's ``softtip.units`` metadata), in the papers' kgf and kgf·mm, and is converted to SI
-on reading.
+Input logs (see the manual, docs/manual.md, and docs/guide/input-formats.md) are CSV files with a
+header row naming at least the columns ``t, fx, fy, fz, mx, my, mz`` in any order, or Parquet
+files (by the name's ``.parquet`` extension) with those columns; other columns are kept and
+otherwise ignored. ``t`` is non-decreasing: a repeated stamp is accepted and counted, a stamp
+that goes back is an error. Everything is converted to SI (s, N, N·m) here, at the edge, and
+nowhere else.
 
 Accepted CSV layout, beyond plain CSV:
 
 * a UTF-8 byte-order mark, CRLF or LF line ends, quoted cells (the stdlib :mod:`csv` dialect);
-* blank lines and lines starting with ``#`` (comments) **before** the header are skipped;
-* blank lines at the end of the file are ignored. A blank line between data rows is an error.
-* header names are compared after stripping surrounding whitespace, with exact case.
+  a quoted cell may span lines, but not take in lines that look like data rows (a stray or
+  unterminated quote is an error naming its line: the rows read equal the file's);
+* comma, tab or semicolon delimiters (sniffed from the header line), a decimal comma with tab
+  or semicolon; gzip, bzip2, xz and zstd compression (by the first bytes);
+* blank lines and lines starting with ``#`` (comments) **before** the header are skipped, and
+  so are preamble lines before the first line that names the columns (or ``skip_rows``);
+* blank lines at the end of the file are ignored. A blank line between data rows is an error;
+* the headers of the sources in :data:`softtip.io.formats.SOURCES` (ATI, ``rostopic echo
+  -p``, ``ros2 topic echo --csv`` without a header, PlotJuggler, bag converters), case-
+  insensitively, with units in the header (``Fx (N)``, ``Tz (N-mm)``); ``columns`` maps
+  anything else. Per-quantity units (:data:`softtip.core.units.UNITS`) for columns whose
+  header gives none; absolute stamps counted from the first (kept as ``stamp_ns``), integer
+  ns divided exactly so that a bag and a CSV of it give the same ``t`` to the last bit.
 
 Every problem with an input log raises :class:`~softtip.errors.InputError` naming the file,
 the line (1-based, as a text editor counts, header included; Parquet: the row), the column
@@ -62,8 +71,9 @@ from typing import Any, BinaryIO, TextIO
 import numpy as np
 from numpy.typing import NDArray
 
-from softtip.core.units import UNIT_SYSTEMS, wrench_to_si
+from softtip.core.units import UNIT_SYSTEM_UNITS, UNIT_SYSTEMS, get_unit, seconds_from_ns, wrench_scale, wrench_to_si
 from softtip.errors import InputError
+from softtip.io.formats import ROLES, ColumnError, ColumnMap, LogFormat, parse_column_spec, resolve_columns
 
 __all__ = ["REQUIRED_COLUMNS", "Log", "LogBlocks", "NotStreamable", "TableWriter", "iter_log", "read_log", "write_table"]
 
@@ -116,6 +126,15 @@ class Log:
         The CSV line (1-based) of the first data row when every row is one line (row ``i`` is
         then on line ``first_line + i``), for messages about a row; ``None`` where rows are
         named by number (Parquet, a quoted cell spanning lines, a bag).
+    notes : tuple of str
+        How a file not in softtip's own layout was read: which column was taken for what,
+        in which unit; lines skipped before the header; absolute stamps; rows with missing
+        cells dropped or filled. A command line tool prints them.
+    force_unit, moment_unit : str
+        The units the wrench columns were in (names of :data:`softtip.core.units.UNITS`).
+    time_suspect : str or None
+        The warning about ``t``'s scale when its unit was not given and another one fits
+        (``t`` in ms read as s): a command line tool stops with it (``--time-units``).
     """
 
     t: NDArray[np.float64]
@@ -126,6 +145,149 @@ class Log:
     repeated_t: int = 0
     warnings: tuple[str, ...] = ()
     first_line: int | None = None
+    notes: tuple[str, ...] = ()
+    force_unit: str = "N"
+    moment_unit: str = "N*m"
+    time_suspect: str | None = None
+
+
+#: A time stamp from this many seconds on is absolute (after 1973 in Unix time): ``t`` counts from the first.
+ABSOLUTE_STAMP_S = 1e8
+
+
+def _to_seconds(t: NDArray[np.float64], si: float) -> NDArray[np.float64]:
+    """``t`` in a unit of ``si`` seconds as seconds: divided by 1000, 1e6 or 1e9 (exact, so correctly
+    rounded: ``3900`` ms gives the float ``3.9``, as the text ``"3.9"`` does), not multiplied by 1e-3."""
+    if si == 1.0:
+        return t
+    per_second = round(1.0 / si)
+    return t / float(per_second) if abs(per_second * si - 1.0) < 1e-12 else t * si
+
+
+def _to_seconds_like(wrench: NDArray[np.float64], scale: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Each column times its ``scale``, dividing by an exact power of ten where the scale is one's
+    inverse (N·mm: ``/ 1000``, correctly rounded), multiplying otherwise."""
+    out = np.empty_like(wrench)
+    for k, si in enumerate(scale):
+        out[:, k] = _to_seconds(wrench[:, k], float(si))
+    return out
+
+
+def _units_label(force: str, moment: str) -> str:
+    """``"si"``/``"kgf-mm"`` for the presets, else ``"N, N*mm"``."""
+    for name, pair in UNIT_SYSTEM_UNITS.items():
+        if pair == (force, moment):
+            return name
+    return f"{force}, {moment}"
+
+
+def _finish(
+    t: NDArray[Any], wrench: NDArray[np.float64], extra: dict[str, Any], header: _Header, fmt: LogFormat,
+    source: str, units: str, first_line: int | None, raw: bytes | None,
+) -> Log:
+    """The :class:`Log` of parsed columns: missing cells, time unit and origin, wrench units, notes."""
+    cmap = header.cmap
+    names = header.names
+    notes: list[str] = []
+
+    def where(i: int) -> str:
+        return f"line {first_line + i}" if first_line is not None else f"data row {i + 1}"
+
+    if cmap is not None and not cmap.native(names):
+        notes.append(f"{source}: read as {cmap.source}: {cmap.describe(names)}")
+    if header.preamble:
+        notes.append(
+            f"{source}: the header is on line {header.line}; the {header.preamble} line(s) before it skipped "
+            f"(--skip-rows {header.line - 1} says so)"
+        )
+    # missing cells (only with --missing drop|interpolate; else the parsers raised)
+    bad_t = np.isnan(t) if t.dtype.kind == "f" else np.zeros(len(t), dtype=bool)
+    bad = bad_t | np.isnan(wrench).any(axis=1)
+    if bad.any():
+        first = int(np.argmax(bad))
+        keep = ~bad_t if fmt.missing == "interpolate" else ~bad
+        if fmt.missing == "interpolate":
+            filled = int(np.count_nonzero(bad & ~bad_t))
+            tt = t[keep].astype(np.float64)
+            w = wrench[keep]
+            for k in range(6):
+                hole = np.isnan(w[:, k])
+                if hole.any() and (~hole).any():
+                    w[hole, k] = np.interp(tt[hole], tt[~hole], w[~hole, k])
+            what = f"{filled} row(s) filled by linear interpolation in t"
+            if bad_t.any():
+                what += f", {int(np.count_nonzero(bad_t))} row(s) without t dropped"
+            wrench = w
+        else:
+            what = f"{int(np.count_nonzero(bad))} row(s) dropped (t keeps the gap)"
+            wrench = wrench[keep]
+        t = t[keep]
+        extra = {k: [v for v, ok in zip(col, keep) if ok] if isinstance(col, list) else col[keep] for k, col in extra.items()}
+        notes.append(f"{source}: empty or nan cells in {int(np.count_nonzero(bad))} row(s), the first on {where(first)}: {what} (--missing {fmt.missing})")
+        first_line = None if not keep.all() else first_line
+        if not len(t):
+            raise InputError(f"{source}: every row has an empty or nan cell; expected at least one complete row")
+        if np.isnan(wrench).any():
+            raise InputError(f"{source}: a wrench column has no value at all; expected at least one number in each")
+    # time: unit and origin
+    tunit = cmap.units["t"] if cmap is not None else get_unit("s", "time")
+    if "nanosec" in header.index or header.t_in_ns:
+        tunit = get_unit("ns", "time")
+    back = np.flatnonzero(np.diff(t) < 0)
+    if len(back):  # only a stamp split in seconds and nanoseconds gets here
+        i = int(back[0]) + 1
+        raise InputError(f"{source}: {where(i)}: expected the stamps non-decreasing, got {t[i]} ns after {t[i - 1]} ns")
+    start = float(t[0]) * tunit.si
+    explicit_time = fmt.time_unit is not None or (cmap is not None and (cmap.from_header["t"] or tunit.name != "s"))
+    if not explicit_time and start >= 1e10 and len(t) > 1:
+        # no date in seconds: the one unit that makes the first stamp a date (Unix time ns, µs or ms)
+        dated = [u for u in ("ms", "us", "ns") if ABSOLUTE_STAMP_S <= float(t[0]) * get_unit(u, "time").si < 1e10]
+        if len(dated) == 1:
+            tunit = get_unit(dated[0], "time")
+            start = float(t[0]) * tunit.si
+            explicit_time = True
+            notes.append(
+                f"{source}: column {names[header.index['t']]!r}: t read in {tunit.label}, the only unit that makes its "
+                f"first stamp a date (give --time-units to say otherwise)"
+            )
+    if ABSOLUTE_STAMP_S <= start < 1e10:  # from 1973 to 2286 in Unix time
+        if t.dtype.kind in "iu":
+            ns = t * round(tunit.si * 1e9)
+            t_s = seconds_from_ns(ns)
+            stamps = ns.tolist()
+        else:
+            t_s = _to_seconds(t - t[0], tunit.si)
+            stamps = np.round(t * (tunit.si * 1e9)).astype(np.int64).tolist()
+        extra = {**extra, "stamp_ns": [str(v) for v in stamps]}
+        notes.append(f"{source}: absolute stamps ({tunit.label}): t counts from the first, {stamps[0]} ns; the stamps go along as column stamp_ns")
+    else:
+        t_s = _to_seconds(t.astype(np.float64), tunit.si)
+    t_s = np.ascontiguousarray(t_s, dtype=np.float64)
+    # wrench units
+    if cmap is not None:
+        scale = np.array([cmap.units[r].si for r in ROLES[1:]])
+        wrench = _to_seconds_like(np.asarray(wrench, dtype=np.float64), scale)
+        scale = np.ones(6)
+        force_unit, moment_unit = cmap.units["fx"].name, cmap.units["mx"].name
+    else:
+        force_unit, moment_unit = UNIT_SYSTEM_UNITS[units]
+        scale = wrench_scale(force_unit, moment_unit)
+    repeated, time_notes = _time_notes(t_s, source, first_line, explicit=explicit_time)
+    cut = _cut_last_line(raw, source, len(t_s)) if raw is not None and header.delimiter == "," else None
+    return Log(
+        t=t_s,
+        wrench=np.asarray(wrench, dtype=np.float64) * scale,
+        extra=extra,
+        source=source,
+        units=_units_label(force_unit, moment_unit),
+        repeated_t=repeated,
+        warnings=tuple(time_notes) + ((cut,) if cut else ()),
+        first_line=first_line,
+        notes=tuple(notes),
+        force_unit=force_unit,
+        moment_unit=moment_unit,
+        time_suspect=next((n for n in time_notes if "--time-units" in n), None),
+    )
 
 
 # --------------------------------------------------------------------------------------
@@ -137,6 +299,12 @@ def read_log(
     units: str | None = None,
     *,
     progress: Callable[[int], object] | None = None,
+    columns: Mapping[str, str] | str | None = None,
+    force_units: str | None = None,
+    moment_units: str | None = None,
+    time_units: str | None = None,
+    missing: str = "fail",
+    skip_rows: int | None = None,
 ) -> Log:
     """Read a force/torque log from a CSV or Parquet file, or a CSV text stream.
 
@@ -144,16 +312,34 @@ def read_log(
     ----------
     path : str, path-like or text stream
         File to read (a name ending in ``.parquet`` is read as Parquet, anything else as
-        CSV), or an open CSV stream (``sys.stdin``, ``io.StringIO``; a binary stream is
-        decoded as UTF-8). A stream is read to its end and not closed.
+        CSV, gzip/bzip2/xz/zstd-compressed CSV recognised by its first bytes), or an open
+        CSV stream (``sys.stdin``, ``io.StringIO``; a binary stream is decoded as UTF-8).
+        A stream is read to its end and not closed.
     units : {"si", "kgf-mm"} or None
         Units of the wrench columns in the file: ``"si"`` (N, N·m) or ``"kgf-mm"`` (kgf,
-        kgf·mm; 1 kgf = 9.80665 N). ``t`` is always in seconds. ``None`` (default): SI, or
-        for Parquet the units its metadata names (``softtip.units``); a Parquet file whose
-        metadata names other units than ``units`` is an error.
+        kgf·mm; 1 kgf = 9.80665 N). ``None`` (default): SI, or for Parquet the units its
+        metadata names (``softtip.units``); a Parquet file whose metadata names other units
+        than ``units`` is an error. A CSV header that gives a column's unit (``Fx (N)``)
+        wins over the default; one that contradicts ``units`` is an error.
     progress : callable, optional
         Called with the number of bytes parsed after each block of a CSV file (e.g.
         ``tqdm.update`` with the file's size as total).
+    columns : mapping or str, optional
+        Role (``t``, ``fx`` … ``mz``) → header name (or 1-based position in a file without
+        a header row); a string ``"t=Time,fx=Fx,…"`` is parsed. Without it the headers of
+        the sources in :data:`softtip.io.formats.SOURCES` are recognised.
+    force_units, moment_units, time_units : str, optional
+        Units of the force (N, kgf, lbf), moment (N*m, N*mm, kgf*mm, lbf*in) and time
+        (s, ms, us, ns) columns whose header does not say (docs/guide/input-formats.md).
+        Absolute stamps (from 1e8 s on) are counted from the first; the stamps go along
+        as an extra column ``stamp_ns``.
+    missing : {"fail", "drop", "interpolate"}
+        An empty or ``nan`` cell in a required column: an error naming this option
+        (default), its row dropped, or its value interpolated linearly in ``t`` (a row
+        without ``t`` is dropped). Either way :attr:`Log.notes` counts them.
+    skip_rows : int, optional
+        Lines before the header row (a preamble); by default found (blank, ``#`` and lines
+        before the first line that names the columns).
 
     Returns
     -------
@@ -167,8 +353,9 @@ def read_log(
         Unknown ``units``; file missing, unreadable or not UTF-8; empty file; no data rows;
         missing or duplicate columns; a row with the wrong number of cells; an empty,
         non-numeric, NaN or infinite cell in a required column; ``t`` going back; a blank
-        line between data rows. The message names the file, the line (Parquet: the row)
-        and the column, and says what was expected. The first problem in file order wins.
+        line between data rows; a quote that swallows lines. The message names the file,
+        the line (Parquet: the row) and the column, and says what was expected (and the
+        option that fixes it). The first problem in file order wins.
 
     Notes
     -----
@@ -179,28 +366,66 @@ def read_log(
     source = _source_name(path)
     if units is not None and units not in UNIT_SYSTEMS:
         raise InputError(f"{source}: unknown units {units!r}; expected one of: {', '.join(UNIT_SYSTEMS)}")
+    fmt = _log_format(source, units, columns, force_units, moment_units, time_units, missing, skip_rows)
     if not hasattr(path, "read") and _is_parquet(path):
+        if not fmt.plain or (force_units or moment_units):
+            raise InputError(
+                f"{source}: --columns, --force-units, --moment-units, --time-units, --missing and --skip-rows apply to "
+                "CSV logs; expected a Parquet log with softtip's columns (and its softtip.units metadata)"
+            )
         return _read_parquet(path, source, units)  # type: ignore[arg-type]
-    units = units or "si"
     data = _read_data(path, source)
-    parsed = _parse_arrow(data, source, progress) if isinstance(data, bytes) else None
+    if isinstance(data, bytes):
+        data = _decompress(data, source)
+    parsed = _parse_arrow(data, source, progress, fmt) if isinstance(data, bytes) else None
     if parsed is None:  # something is off (or a stream that is not UTF-8-encodable): say what
         text = _decode(data, source) if isinstance(data, bytes) else _strip_bom(data)
-        parsed = _parse(text, source)
-    t, wrench, extra, first_line, quoted = parsed
+        parsed = _parse_with_header(text, source, fmt)
+    t, wrench, extra, first_line, quoted, header = parsed
     raw = data if isinstance(data, bytes) else None
-    repeated, notes = _time_notes(t, source, None if quoted else first_line)
-    cut = _cut_last_line(raw, source, len(t)) if raw is not None else None
-    return Log(
-        t=t,
-        wrench=wrench_to_si(wrench, units),
-        extra=extra,
-        source=source,
-        units=units,
-        repeated_t=repeated,
-        warnings=tuple(notes) + ((cut,) if cut else ()),
-        first_line=None if quoted else first_line,
-    )
+    first_line = None if quoted else first_line
+    return _finish(t, wrench, extra, header, fmt, source, units or "si", first_line, raw)
+
+
+def _log_format(source: str, units: str | None, columns: Any, force_units: str | None, moment_units: str | None,
+                time_units: str | None, missing: str, skip_rows: int | None) -> LogFormat:
+    """The :class:`LogFormat` of :func:`read_log`'s arguments; a bad one raises :class:`InputError`."""
+    try:
+        if isinstance(columns, str):
+            columns = parse_column_spec(columns)
+        if skip_rows is not None and (not isinstance(skip_rows, int) or skip_rows < 0):
+            raise ValueError(f"skip_rows must be a non-negative integer, got {skip_rows!r}")
+        return LogFormat.of(
+            units, columns=dict(columns or {}), force_unit=force_units, moment_unit=moment_units,
+            time_unit=time_units, missing=missing, skip_rows=skip_rows,
+        )  # fmt: skip
+    except ValueError as exc:
+        raise InputError(f"{source}: {exc}") from None
+
+
+#: First bytes of the compressed files :func:`_decompress` takes, and pyarrow's codec for each.
+_COMPRESSION_MAGIC = ((b"\x1f\x8b", "gzip"), (b"BZh", "bz2"), (b"\xfd7zXZ\x00", "xz"), (b"\x28\xb5\x2f\xfd", "zstd"))
+
+
+def _decompress(data: bytes, source: str) -> bytes:
+    """The CSV text of a gzip, bzip2, xz or zstd file (found by its first bytes); other data as it is."""
+    codec = next((name for magic, name in _COMPRESSION_MAGIC if data.startswith(magic)), None)
+    if codec is None:
+        return data
+    if codec == "xz":  # pyarrow's builds often lack lzma
+        import lzma
+
+        try:
+            return lzma.decompress(data)
+        except lzma.LZMAError as exc:
+            raise InputError(f"{source}: not a readable xz file ({exc}); expected xz-compressed CSV") from None
+    import pyarrow as pa
+
+    try:
+        with pa.CompressedInputStream(pa.BufferReader(data), codec) as stream:
+            return stream.read()
+    except (pa.ArrowException, OSError) as exc:
+        raise InputError(f"{source}: not a readable {codec} file ({exc}); expected {codec}-compressed CSV") from None
 
 
 def _is_parquet(path: str | os.PathLike[str]) -> bool:
@@ -288,18 +513,159 @@ class _Suspect(Exception):
 @dataclass
 class _Header:
     names: list[str]  # stripped header names
-    line: int  # line number of the header (its first line)
+    line: int  # line number of the header (its first line); a file without one: the line before the data
     data_base: int  # a data record's physical line = data_base + csv line_num
     lines: io.StringIO  # the text, positioned just after the header record
     comments: list[tuple[int, str]]  # (line, text) of the comment lines before the header
+    delimiter: str = ","
+    decimal: str = "."
+    cmap: ColumnMap | None = None  # the roles' columns and units; None: not every role found
+    preamble: int = 0  # lines skipped before the header that were neither blank nor comments
+    headerless: bool = False
+    t_in_ns: bool = False  # set by a parser that read absolute decimal seconds exactly, as int64 ns
+
+    @property
+    def index(self) -> dict[str, int]:
+        return self.cmap.index if self.cmap is not None else {}
+
+
+# Delimiters sniffed, in order of preference on a tie.
+_DELIMITERS = (",", "\t", ";")
+# Lines looked at for a header row after a preamble.
+_PREAMBLE_LINES = 50
+
+
+def _split_line(line: str, delimiter: str) -> list[str]:
+    try:
+        return [c.strip() for c in next(csv.reader([line], delimiter=delimiter))]
+    except (csv.Error, StopIteration):
+        return []
+
+
+def _sniff_delimiter(line: str) -> str:
+    """The delimiter of a header (or first data) line: the most frequent of comma, tab, semicolon."""
+    counts = {d: line.count(d) for d in _DELIMITERS}
+    best = max(_DELIMITERS, key=lambda d: (counts[d], -_DELIMITERS.index(d)))
+    return best if counts[best] else ","
+
+
+_DECIMAL_COMMA = re.compile(r"^[-+]?\d+,\d*(?:[eE][-+]?\d+)?$")
+
+
+def _try_columns(names: list[str], fmt: LogFormat, source: str, line: int, headerless: bool = False) -> ColumnMap | None:
+    try:
+        return resolve_columns(names, fmt, headerless=headerless)
+    except ColumnError as exc:
+        raise InputError(f"{source}:{line}: {exc}") from None
+
+
+def _read_header(text: str, source: str, fmt: LogFormat | None = None) -> _Header:
+    """Find the header row: after ``fmt.skip_rows`` lines, or the first line that is not blank
+    or a comment, or (when that line names no recognised columns) the first of the next
+    :data:`_PREAMBLE_LINES` that does (a preamble). Sniff its delimiter and decimal mark, and
+    map its columns. A file whose first line is the ``ros2 topic echo --csv`` layout has no header."""
+    fmt = fmt or LogFormat()
+    lines = io.StringIO(text, newline="")
+    lineno = 0
+    comments: list[tuple[int, str]] = []
+    line = ""
+    skip = fmt.skip_rows
+    for line in lines:
+        lineno += 1
+        stripped = line.strip()
+        if skip is not None and lineno <= skip:
+            comments.append((lineno, stripped))
+            continue
+        if not stripped:
+            continue
+        if stripped.startswith("#"):
+            comments.append((lineno, stripped))
+            continue
+        break
+    else:
+        what = "only comments and blank lines" if comments else "empty file"
+        raise InputError(f"{source}: {what}; expected a CSV header row naming {_EXPECTED_HEADER}")
+
+    delimiter = _sniff_delimiter(line)
+    first = _split_line(line, delimiter)
+    headerless = _headerless(first, fmt)
+    preamble = 0
+    if headerless:
+        cmap = _try_columns(_positional_names(first, fmt), fmt, source, lineno, headerless=True)
+        if cmap is not None:
+            names = _positional_names(first, fmt)
+            lines.seek(lines.tell() - len(line))
+            return _Header(names=names, line=lineno - 1, data_base=lineno - 1, lines=lines, comments=comments,
+                           delimiter=delimiter, decimal=_sniff_decimal(text, lines.tell(), delimiter), cmap=cmap,
+                           headerless=True)  # fmt: skip
+    cmap = _try_columns(first, fmt, source, lineno)
+    if cmap is None and skip is None and not headerless:
+        # a preamble: the header is the first of the next lines that names the columns
+        start = lines.tell()
+        ahead, k = [], lineno
+        for later in itertools.islice(lines, _PREAMBLE_LINES):
+            k += 1
+            ahead.append((k, later))
+            d = _sniff_delimiter(later)
+            found = _try_columns(_split_line(later, d), fmt, source, k) if later.strip() else None
+            if found is not None:
+                comments += [(lineno, line.strip())] + [(n, x.strip()) for n, x in ahead[:-1]]
+                preamble = k - lineno
+                line, lineno, delimiter, cmap = later, k, d, found
+                break
+        else:
+            lines.seek(start)
+    reader = csv.reader(itertools.chain([line], lines), delimiter=delimiter)
+    try:
+        names = [name.strip() for name in next(reader)]
+    except csv.Error as exc:
+        raise InputError(f"{source}:{lineno}: malformed CSV header ({exc}); expected {_EXPECTED_HEADER}") from None
+    # csv pulls lines one at a time, so ``lines`` now sits right after the header record.
+    data_base = lineno - 1 + reader.line_num
+    decimal = _sniff_decimal(text, lines.tell(), delimiter)
+    return _Header(names=names, line=lineno, data_base=data_base, lines=lines, comments=comments,
+                   delimiter=delimiter, decimal=decimal, cmap=cmap, preamble=preamble)  # fmt: skip
+
+
+def _sniff_decimal(text: str, pos: int, delimiter: str) -> str:
+    """``","`` when the data's numbers use a decimal comma (only with tab or semicolon delimiters)."""
+    if delimiter == ",":
+        return "."
+    sample = text[pos : pos + 4096].splitlines()[:20]
+    cells = [c.strip() for ln in sample for c in ln.split(delimiter)]
+    return "," if any(_DECIMAL_COMMA.match(c) for c in cells) else "."
+
+
+def _headerless(cells: list[str], fmt: LogFormat) -> bool:
+    """Whether a first line is data: every cell but text ones a number (``ros2 topic echo --csv``)."""
+    numeric = [_is_number(c.replace(",", ".")) for c in cells]
+    if len(cells) == 9 and all(numeric[:2]) and not numeric[2] and all(numeric[3:]):
+        return True  # ros2 topic echo --csv of a WrenchStamped
+    return bool(fmt.columns) and all(v.isdigit() for v in fmt.columns.values()) and sum(numeric) >= len(ROLES)
+
+
+def _positional_names(cells: list[str], fmt: LogFormat) -> list[str]:
+    from softtip.io.formats import ROS2_CSV_NAMES
+
+    if len(cells) == len(ROS2_CSV_NAMES) and not fmt.columns:
+        return list(ROS2_CSV_NAMES)
+    return [str(j + 1) for j in range(len(cells))]
 
 
 def _parse(
-    text: str, source: str
-) -> tuple[NDArray[np.float64], NDArray[np.float64], dict[str, list[str]], int, bool]:
+    text: str, source: str, fmt: LogFormat | None = None
+) -> tuple[NDArray[Any], NDArray[np.float64], dict[str, list[str]], int, bool]:
     """``t`` (N,), wrench (N, 6) in the file's units, the extra columns, the line of the
     first data row, and whether the data holds a quote (then rows may span lines)."""
-    header = _read_header(text, source)
+    return _parse_with_header(text, source, fmt)[:5]  # type: ignore[return-value]
+
+
+def _parse_with_header(
+    text: str, source: str, fmt: LogFormat | None = None
+) -> tuple[NDArray[Any], NDArray[np.float64], dict[str, list[str]], int, bool, _Header]:
+    """:func:`_parse`, and the header it found."""
+    fmt = fmt or LogFormat()
+    header = _read_header(text, source, fmt)
     index = _column_index(header, source)
     # Millions of small lists/strings trigger the cyclic GC over and over (quadratic-ish);
     # none of them form cycles.
@@ -308,23 +674,51 @@ def _parse(
     start = (header.lines.tell(), 0)
     quoted = '"' in text[start[0]:]
     try:
-        try:
-            return (*_parse_fast(header, index), header.data_base + 1, quoted)
-        except _Suspect as suspect:
-            resume = suspect.resume
+        if fmt.missing == "fail":
+            try:
+                return (*_parse_fast(header, index), header.data_base + 1, quoted, header)
+            except _Suspect as suspect:
+                resume = suspect.resume
+        else:  # empty cells to keep: row by row
+            resume = start
         # Re-read row by row from just before the problem: on a 1e6-row file with a bad last
         # row this costs one block, not the whole file again.
         try:
-            found = _parse_careful(header, index, source, resume)  # normally raises
+            found = _parse_careful(header, index, source, resume, fmt.missing)  # normally raises
             if resume != start:
                 # Nothing wrong after all (not expected): never return a partial log.
-                found = _parse_careful(header, index, source, start)
+                found = _parse_careful(header, index, source, start, fmt.missing)
         except InputError as exc:
             raise _with_cut_hint(exc, text, source, header.data_base) from None
-        return (*found, header.data_base + 1, quoted)
+        return (*found, header.data_base + 1, quoted, header)
     finally:
         if gc_was_enabled:
             gc.enable()
+
+
+def _ns_of(cell: str) -> int | None:
+    """A decimal number of seconds as integer ns when that is exact (at most 9 decimals), else None."""
+    from decimal import Decimal, InvalidOperation
+
+    try:
+        ns = Decimal(cell.strip()).scaleb(9)
+    except InvalidOperation:
+        return None
+    return int(ns) if ns.is_finite() and ns == ns.to_integral_value() and 0 <= ns < 2**63 else None
+
+
+def _swallowed(cell: str, delimiter: str, ncol: int) -> int:
+    """How many of the lines inside a cell that spans lines look like data rows (a stray quote)."""
+    return sum(1 for ln in re.split(r"\r\n|\r|\n", cell)[1:] if ln.count(delimiter) >= ncol - 1 >= 1)
+
+
+def _swallow_error(source: str, line: int, column: str, cell: str, end_line: int, at_end: bool, k: int) -> InputError:
+    where = "is never closed" if at_end else f"is closed only on line {end_line}"
+    return InputError(
+        f"{source}:{line}: column {column!r}: a quote opened on this line {where}, so the {k} line{'s' if k > 1 else ''} "
+        f"after it that look{'' if k > 1 else 's'} like data rows would be read as text of this cell; expected each row "
+        "on its own line: close the quote on this line or remove it (rows read must equal the file's)"
+    )
 
 
 def _with_cut_hint(exc: InputError, text: str, source: str, data_base: int) -> InputError:
@@ -345,17 +739,19 @@ _HEADER_PREFIX = 1 << 16
 
 
 def _parse_arrow(
-    data: bytes, source: str, progress: Callable[[int], object] | None = None
-) -> tuple[NDArray[np.float64], NDArray[np.float64], dict[str, list[str]], int, bool] | None:
+    data: bytes, source: str, progress: Callable[[int], object] | None = None, fmt: LogFormat | None = None
+) -> tuple[NDArray[Any], NDArray[np.float64], dict[str, list[str]], int, bool, _Header] | None:
     """Parse a well-formed CSV log with pyarrow; ``None`` at the first oddity of any kind.
 
     Accepts only what :func:`_parse_careful` accepts, with the same values (both parse
     numbers correctly rounded); everything else, including header problems, is left to
-    the text parser, which words the error.
+    the text parser, which words the error. With ``fmt.missing`` other than ``"fail"``
+    empty and ``nan`` cells of the required columns come back as NaN.
     """
     import pyarrow as pa
     from pyarrow import csv as pacsv
 
+    fmt = fmt or LogFormat()
     skip = 3 if data.startswith(b"\xef\xbb\xbf") else 0
     prefix = data[skip : skip + _HEADER_PREFIX]
     whole = skip + len(prefix) == len(data)
@@ -363,7 +759,7 @@ def _parse_arrow(
         prefix = prefix[: prefix.rfind(b"\n") + 1]
     try:
         prefix_text = prefix.decode("utf-8")
-        header = _read_header(prefix_text, source)
+        header = _read_header(prefix_text, source, fmt)
         index = _column_index(header, source)
     except (UnicodeDecodeError, InputError):
         return None
@@ -381,47 +777,92 @@ def _parse_arrow(
     else:
         end = min(breaks) if breaks else len(data)
     names = header.names
-    types = {name: pa.float64() if j in index.values() else pa.string() for j, name in enumerate(names)}
+    roles = _roles(index)
+    exact = {index[r] for r in ("t", "nanosec") if r in index and (r == "nanosec" or "nanosec" in index)}
+    first_row = bytes(data[start : data.find(b"\n", start) if data.find(b"\n", start) > 0 else end])
+    first_t = _split_line(first_row.decode("utf-8", "replace"), header.delimiter)[index["t"] :][:1]
+    long_int = bool(first_t) and first_t[0].isdigit() and len(first_t[0]) >= 16
+    if (header.cmap is not None and header.cmap.units["t"].name == "ns") or long_int:
+        exact.add(index["t"])  # integer ns stamps: int64, exact beyond 2**53
+    decimal_t = bool(first_t) and _exact_seconds(first_t[0], header) and "nanosec" not in index
+    if decimal_t:  # absolute seconds with decimals (PlotJuggler, bag converters): exact, as ns
+        exact.discard(index["t"])
+    types = {
+        name: (pa.int64() if j in exact else pa.float64()) if j in index.values() else pa.string()
+        for j, name in enumerate(names)
+    }
+    if decimal_t:
+        types[names[index["t"]]] = pa.decimal128(19, 9)
     body = memoryview(data)[start:end]
     try:
         reader = pacsv.open_csv(  # block by block, so that progress can be shown
             pa.BufferReader(pa.py_buffer(body)),
             # one thread: faster than pyarrow's default threads on a busy 2-core machine
             read_options=pacsv.ReadOptions(column_names=names, use_threads=False),
-            parse_options=pacsv.ParseOptions(newlines_in_values=True, ignore_empty_lines=False),
+            parse_options=pacsv.ParseOptions(
+                delimiter=header.delimiter, newlines_in_values=True, ignore_empty_lines=False
+            ),
             convert_options=pacsv.ConvertOptions(
-                column_types=types, check_utf8=True, strings_can_be_null=False, quoted_strings_can_be_null=False
+                column_types=types, check_utf8=True, strings_can_be_null=False, quoted_strings_can_be_null=False,
+                decimal_point=header.decimal,
             ),
         )
-        # bytes per row, from the first lines: progress in bytes without tracking them
-        sample = body[: 1 << 16]
-        row_bytes = len(sample) / max(1, bytes(sample).count(b"\n"))
-        batches, reported = [], 0
-        for batch in reader:
-            batches.append(batch)
-            if progress is not None:
-                step = min(int(batch.num_rows * row_bytes), len(body) - reported)
-                reported += step
-                progress(step)
-        table = pa.Table.from_batches(batches, schema=reader.schema)
+        try:
+            # bytes per row, from the first lines: progress in bytes without tracking them
+            sample = body[: 1 << 16]
+            row_bytes = len(sample) / max(1, bytes(sample).count(b"\n"))
+            batches, reported = [], 0
+            for batch in reader:
+                batches.append(batch)
+                if progress is not None:
+                    step = min(int(batch.num_rows * row_bytes), len(body) - reported)
+                    reported += step
+                    progress(step)
+            table = pa.Table.from_batches(batches, schema=reader.schema)
+        finally:
+            reader.close()  # its read-ahead thread ends here, not at exit (a SIGABRT otherwise)
     except (pa.ArrowException, ValueError):
         return None
     if progress is not None and reported < len(body):
         progress(len(body) - reported)
     n = table.num_rows
-    wanted = [table.column(index[name]) for name in REQUIRED_COLUMNS]
-    if n == 0 or any(col.null_count for col in wanted):
+    wanted = [table.column(index[name]) for name in roles]
+    if n == 0 or (fmt.missing == "fail" and any(col.null_count for col in wanted)):
         return None
+    quoted = data.find(b'"', start, end) >= 0
+    if quoted and bytes(body).count(b"\n") + (not bytes(body).endswith(b"\n")) != n:
+        return None  # a record spans lines: the text parser tells a note from a stray quote
     # filled in place: fresh pages cost more than the copy itself, so no temporaries
-    t = np.array(wanted[0].to_numpy(), dtype=np.float64)
+    if decimal_t:
+        if wanted[0].null_count:
+            return None
+        # a decimal128's 16 bytes are its unscaled integer, little-endian: here the stamp in ns (< 2**63)
+        t = np.concatenate([np.frombuffer(c.buffers()[1], dtype=np.int64)[2 * c.offset : 2 * (c.offset + len(c)) : 2]
+                            for c in wanted[0].chunks]) if wanted[0].num_chunks else np.zeros(0, dtype=np.int64)
+        header.t_in_ns = True
+    elif index["t"] in exact and "nanosec" not in index:
+        t = wanted[0].to_numpy(zero_copy_only=False).astype(np.float64) if wanted[0].null_count else np.array(
+            wanted[0].to_numpy(), dtype=np.int64
+        )
+    elif "nanosec" in index:
+        if any(c.null_count for c in (wanted[0], wanted[-1])):
+            return None  # the text parser words (or drops) it
+        t = np.array(wanted[0].to_numpy(), dtype=np.int64) * 1_000_000_000 + np.array(wanted[-1].to_numpy(), dtype=np.int64)
+    else:
+        t = np.array(wanted[0].to_numpy(zero_copy_only=False), dtype=np.float64)
     wrench = np.empty((n, 6))
-    for i, col in enumerate(wanted[1:]):
-        wrench[:, i] = col.to_numpy()
-    if not (np.isfinite(t).all() and np.isfinite(wrench).all()) or (np.diff(t) < 0).any():
+    for i, col in enumerate(wanted[1:7]):
+        wrench[:, i] = col.to_numpy(zero_copy_only=False)
+    tf = t.astype(np.float64, copy=False)
+    if fmt.missing == "fail":
+        if not (np.isfinite(tf).all() and np.isfinite(wrench).all()):
+            return None
+    elif np.isinf(tf).any() or np.isinf(wrench).any():
+        return None
+    if (np.diff(tf[~np.isnan(tf)]) < 0).any():
         return None
     extra = {names[j]: table.column(j).to_pylist() for j in range(len(names)) if j not in index.values()}
-    quoted = data.find(b'"', start, end) >= 0
-    return t, wrench, extra, header.data_base + 1, quoted
+    return t, wrench, extra, header.data_base + 1, quoted, header
 
 
 def _end_of_content(data: bytes) -> int:
@@ -438,14 +879,17 @@ def _end_of_content(data: bytes) -> int:
 # A force/torque log is sampled at this many Hz or more, and at most this many (ATI's
 # Net F/T streams 7 kHz; DAQ systems some tens of kHz).
 _PLAUSIBLE_RATE_HZ = (2.0, 100e3)
-_TIME_UNITS = (("milliseconds", 1e-3), ("microseconds", 1e-6), ("nanoseconds", 1e-9))
+_TIME_UNITS = (("milliseconds", 1e-3, "ms"), ("microseconds", 1e-6, "us"), ("nanoseconds", 1e-9, "ns"))
 
 
-def _time_notes(t: NDArray[np.float64], source: str, first_line: int | None) -> tuple[int, list[str]]:
+def _time_notes(
+    t: NDArray[np.float64], source: str, first_line: int | None, *, explicit: bool = False
+) -> tuple[int, list[str]]:
     """Count repeated stamps and say what looks wrong with the time scale.
 
     ``first_line`` is the line of the first data row when every row is one line (then row
     ``i`` is on line ``first_line + i``), else ``None`` (rows are then named by number).
+    ``explicit``: the time unit was given (header or option), so it is not second-guessed.
     """
 
     def where(i: int) -> str:
@@ -468,9 +912,9 @@ def _time_notes(t: NDArray[np.float64], source: str, first_line: int | None) -> 
         rate = 1.0 / median
         if not low <= rate <= high:
             guesses = [
-                f"in {name} {1.0 / (median * scale):.3g} Hz"
-                for name, scale in _TIME_UNITS
-                if low <= 1.0 / (median * scale) <= high
+                f"in {name} {1.0 / (median * scale):.3g} Hz (--time-units {option})"
+                for name, scale, option in _TIME_UNITS
+                if low <= 1.0 / (median * scale) <= high and not explicit
             ]
             guess = f"; if t is {', or '.join(guesses)}" if guesses else ""
             notes.append(
@@ -597,33 +1041,6 @@ def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None) 
     )
 
 
-def _read_header(text: str, source: str) -> _Header:
-    lines = io.StringIO(text, newline="")
-    lineno = 0
-    comments: list[tuple[int, str]] = []
-    for line in lines:
-        lineno += 1
-        stripped = line.strip()
-        if not stripped:
-            continue
-        if stripped.startswith("#"):
-            comments.append((lineno, stripped))
-            continue
-        break
-    else:
-        what = "only comments and blank lines" if comments else "empty file"
-        raise InputError(f"{source}: {what}; expected a CSV header row naming {_EXPECTED_HEADER}")
-
-    reader = csv.reader(itertools.chain([line], lines))
-    try:
-        names = [name.strip() for name in next(reader)]
-    except csv.Error as exc:
-        raise InputError(f"{source}:{lineno}: malformed CSV header ({exc}); expected {_EXPECTED_HEADER}") from None
-    # csv pulls lines one at a time, so ``lines`` now sits right after the header record.
-    data_base = lineno - 1 + reader.line_num
-    return _Header(names=names, line=lineno, data_base=data_base, lines=lines, comments=comments)
-
-
 def _column_index(header: _Header, source: str) -> dict[str, int]:
     """Map each required column to its position; raise on duplicate or missing names."""
     names, line = header.names, header.line
@@ -636,6 +1053,8 @@ def _column_index(header: _Header, source: str) -> dict[str, int]:
             )
         seen[name] = j
 
+    if header.cmap is not None:
+        return {r: header.cmap.index[r] for r in (*ROLES, "nanosec") if r in header.cmap.index}
     missing = [c for c in REQUIRED_COLUMNS if c not in seen]
     if missing:
         msg = (
@@ -656,9 +1075,16 @@ def _column_index(header: _Header, source: str) -> dict[str, int]:
         ]
         if commented:
             hints.append(f"Line {commented[-1]} looks like the header commented out with '#'; remove the '#'.")
-        elif all(_is_number(n) for n in names):
-            hints.append(f"Line {line} looks like data; expected the header row first.")
-        raise InputError(" ".join([msg + ".", *hints]) if hints else msg)
+        elif all(_is_number(n.replace(",", ".")) for n in names):
+            positions = ",".join(f"{c}={k + 1}" for k, c in enumerate(REQUIRED_COLUMNS))
+            hints.append(
+                f"Line {line} looks like data; expected the header row first (a file without one: give the columns "
+                f"by position, e.g. --columns {positions})."
+            )
+        hints.append(
+            "Other names: map them with --columns t=NAME,fx=NAME,… (docs/guide/input-formats.md lists the headers read as they are)."
+        )
+        raise InputError(" ".join([msg + ".", *hints]))
     return {c: seen[c] for c in REQUIRED_COLUMNS}
 
 
@@ -699,16 +1125,46 @@ def _near_misses(missing: list[str], names: list[str]) -> list[str]:
     return hints
 
 
+_DECIMAL_SECONDS = re.compile(r"^\s*\d{9,10}\.\d{1,9}\s*$")
+
+
+def _exact_seconds(cell: str, header: _Header) -> bool:
+    """Whether a first ``t`` cell is an absolute stamp in seconds with decimals (read exactly, as ns)."""
+    cmap = header.cmap
+    return (
+        header.decimal == "."
+        and bool(_DECIMAL_SECONDS.match(cell))
+        and (cmap is None or cmap.units["t"].name == "s")
+        and ABSOLUTE_STAMP_S <= float(cell) < 1e10
+    )
+
+
+def _roles(index: Mapping[str, int]) -> list[str]:
+    """The roles of ``index`` in block order: ``t``, ``fx`` … ``mz``, then ``nanosec`` if there."""
+    return [r for r in (*ROLES, "nanosec") if r in index]
+
+
+def _combine_time(block: NDArray[np.float64], roles: list[str]) -> NDArray[Any]:
+    """``t`` of a block: its first column, or seconds and nanoseconds combined as int64 ns."""
+    if "nanosec" not in roles:
+        return np.ascontiguousarray(block[:, 0])
+    sec, nsec = block[:, 0], block[:, roles.index("nanosec")]
+    if not (np.isfinite(sec).all() and np.isfinite(nsec).all()):
+        return np.full(len(sec), np.nan)
+    return sec.astype(np.int64) * 1_000_000_000 + nsec.astype(np.int64)
+
+
 def _parse_fast(
     header: _Header, index: dict[str, int]
-) -> tuple[NDArray[np.float64], NDArray[np.float64], dict[str, list[str]]]:
+) -> tuple[NDArray[Any], NDArray[np.float64], dict[str, list[str]]]:
     """Parse a well-formed log in blocks; raise :class:`_Suspect` at the first oddity.
 
     Work per block is in C (csv, ``zip``, numpy's string-to-float), so a 1e6-row log takes
     a few seconds. Error reporting is left to :func:`_parse_careful`.
     """
     ncol = len(header.names)
-    reader = csv.reader(header.lines)
+    roles = _roles(index)
+    reader = csv.reader(header.lines, delimiter=header.delimiter)
     extra_idx = [j for j, name in enumerate(header.names) if j not in index.values()]
     extra: dict[str, list[str]] = {header.names[j]: [] for j in extra_idx}
     blocks: list[NDArray[np.float64]] = []
@@ -723,7 +1179,7 @@ def _parse_fast(
             rows = list(itertools.islice(reader, _CHUNK_ROWS))
             if not rows:
                 break
-            k = len(rows)
+            k = n_read = len(rows)
             while k and _is_blank(rows[k - 1]):
                 k -= 1
             if k and first_blank_block is not None:
@@ -737,12 +1193,18 @@ def _parse_fast(
             if set(map(len, rows)) != {ncol}:
                 raise _Suspect(previous)
             cols = list(zip(*rows))
-            block = np.empty((len(rows), 7))
-            for i, name in enumerate(REQUIRED_COLUMNS):
-                block[:, i] = np.array(cols[index[name]], dtype=np.float64)
+            block = np.empty((len(rows), len(roles)))
+            for i, name in enumerate(roles):
+                cells = cols[index[name]]
+                if header.decimal == ",":
+                    cells = [c.replace(",", ".") for c in cells]
+                block[:, i] = np.array(cells, dtype=np.float64)
             t = block[:, 0]
             if not np.isfinite(block).all() or t[0] < last_t or (np.diff(t) < 0).any():
                 raise _Suspect(previous)  # from the previous block: t's predecessor is there
+            if reader.line_num - current[1] != n_read:  # a record spans lines
+                if any(_swallowed(c, header.delimiter, ncol) for j in extra_idx for c in cols[j]):
+                    raise _Suspect(previous)
             last_t = t[-1]
             blocks.append(block)
             for j in extra_idx:
@@ -752,28 +1214,40 @@ def _parse_fast(
     if not blocks:
         raise _Suspect(previous)  # header only: the careful parser words it
     data = np.concatenate(blocks) if len(blocks) > 1 else blocks[0]
-    return np.ascontiguousarray(data[:, 0]), np.ascontiguousarray(data[:, 1:]), extra
+    return _combine_time(data, roles), np.ascontiguousarray(data[:, 1:7]), extra
 
 
 def _parse_careful(
-    header: _Header, index: dict[str, int], source: str, start: tuple[int, int]
-) -> tuple[NDArray[np.float64], NDArray[np.float64], dict[str, list[str]]]:
+    header: _Header, index: dict[str, int], source: str, start: tuple[int, int], missing: str = "fail"
+) -> tuple[NDArray[Any], NDArray[np.float64], dict[str, list[str]]]:
     """Row-by-row parse that raises the first problem in file order, with its line.
 
     Starts at ``start`` = ``(text position, csv line_num)`` of a record boundary in the data
     (``line_num`` 0: the first data record). Returns the rows from there if, against
-    expectation, nothing is wrong.
+    expectation, nothing is wrong. ``missing`` other than ``"fail"``: an empty or ``nan``
+    cell of a required column is kept as NaN.
     """
     names = header.names
     ncol = len(names)
+    roles = _roles(index)
     # Required cells are checked left to right as they appear in the file.
     checks = sorted((j, name) for name, j in index.items())
     extra_idx = [j for j in range(ncol) if j not in index.values()]
     header.lines.seek(start[0])
-    reader = csv.reader(header.lines)
+    reader = csv.reader(header.lines, delimiter=header.delimiter)
+    comma = header.decimal == ","
+    fix = "; or give --missing drop (skip the row) or --missing interpolate (fill it)"
     # A record ends on line base + line_num and starts one after the previous one ended.
     base = header.data_base + start[1]
     values: list[list[float]] = []
+    big_t: list[int | float] = []  # t cells as Python numbers (ints beyond 2**53 kept exact)
+    exact_ns: list[int | None] | None = None  # absolute decimal seconds as ns, as the pyarrow path reads them
+    if start[1] == 0 and "nanosec" not in index:
+        first = header.lines.readline()
+        header.lines.seek(start[0])
+        cells = _split_line(first, header.delimiter)
+        if len(cells) == ncol and _exact_seconds(cells[index["t"]], header):
+            exact_ns = []
     extra: dict[str, list[str]] = {names[j]: [] for j in extra_idx}
     prev_end = 0
     first_blank: int | None = None
@@ -788,6 +1262,7 @@ def _parse_careful(
                 f"{source}:{base + reader.line_num}: malformed CSV ({exc}); expected {ncol} cells"
             ) from None
         line = base + prev_end + 1
+        span = reader.line_num - prev_end
         prev_end = reader.line_num
         if _is_blank(row):
             if first_blank is None:
@@ -798,22 +1273,34 @@ def _parse_careful(
                 f"{source}:{first_blank}: blank line between data rows (data continues on line {line}); "
                 "expected blank lines only at the end of the file"
             )
+        if span > 1:  # a quoted cell spans lines: fine for a note, not when it takes in data rows
+            for j, cell in enumerate(row):
+                k = _swallowed(cell, header.delimiter, ncol)
+                if k:
+                    at_end = header.lines.tell() >= len(header.lines.getvalue()) and cell.endswith(("\n", "\r"))
+                    raise _swallow_error(source, line, names[j], cell, base + prev_end, at_end, k)
         if len(row) != ncol:
             raise InputError(
                 f"{source}:{line}: expected {ncol} cells (one per header column), got {len(row)}"
             )
-        sample = [0.0] * 7
+        sample = [0.0] * len(roles)
         for j, name in checks:
             cell = row[j]
-            where = f"{source}:{line}: column {name!r}"
+            where = f"{source}:{line}: column {names[j]!r}"
             if not cell.strip():
-                raise InputError(f"{where}: empty cell; expected a number")
+                if missing != "fail":
+                    sample[roles.index(name)] = math.nan
+                    continue
+                raise InputError(f"{where}: empty cell; expected a number{fix}")
             try:
-                value = float(cell)
+                value = float(cell.replace(",", ".") if comma else cell)
             except ValueError:
                 raise InputError(f"{where}: expected a number, got {cell!r}") from None
+            if math.isnan(value) and missing != "fail":
+                sample[roles.index(name)] = math.nan
+                continue
             if not math.isfinite(value):
-                raise InputError(f"{where}: expected a finite number, got {cell!r}")
+                raise InputError(f"{where}: expected a finite number, got {cell!r}{fix if math.isnan(value) else ''}")
             if name == "t":
                 if value < last_t:
                     raise InputError(
@@ -821,7 +1308,15 @@ def _parse_careful(
                         f"t = {cell.strip()} on line {line} after t = {last_t_text} on line {last_t_line}"
                     )
                 last_t, last_t_text, last_t_line = value, cell.strip(), line
-            sample[REQUIRED_COLUMNS.index(name)] = value
+                if abs(value) > 2.0**53:
+                    try:
+                        value = int(cell)  # type: ignore[assignment]
+                    except ValueError:
+                        pass
+            sample[roles.index(name)] = value
+        big_t.append(sample[0])
+        if exact_ns is not None:
+            exact_ns.append(_ns_of(row[index["t"]]))
         values.append(sample)
         for j in extra_idx:
             extra[names[j]].append(row[j])
@@ -830,8 +1325,14 @@ def _parse_careful(
             f"{source}:{header.line}: header only, no data rows; expected at least one row of "
             f"{_EXPECTED_HEADER} after the header"
         )
-    data = np.array(values, dtype=np.float64).reshape(-1, 7)
-    return np.ascontiguousarray(data[:, 0]), np.ascontiguousarray(data[:, 1:]), extra
+    data = np.array(values, dtype=np.float64).reshape(-1, len(roles))
+    t = _combine_time(data, roles)
+    if any(isinstance(v, int) for v in big_t) and all(isinstance(v, int) for v in big_t):
+        t = np.array(big_t, dtype=np.int64)
+    if exact_ns and all(v is not None for v in exact_ns):
+        t = np.array(exact_ns, dtype=np.int64)
+        header.t_in_ns = True
+    return t, np.ascontiguousarray(data[:, 1:7]), extra
 
 
 # --------------------------------------------------------------------------------------
@@ -1274,6 +1775,12 @@ class LogBlocks:
 
     def __iter__(self) -> Any:
         blocks = self._parquet_blocks() if self.parquet else self._csv_blocks()
+        try:
+            yield from self._checked(blocks)
+        finally:
+            blocks.close()  # at once, not when collected: a native reader thread must not outlive the run
+
+    def _checked(self, blocks: Any) -> Any:
         for t, wrench, extra in blocks:
             if not (np.isfinite(t).all() and np.isfinite(wrench).all()) or (np.diff(t) < 0).any() or t[0] < self._last_t:
                 raise NotStreamable("a value to word")
@@ -1283,6 +1790,9 @@ class LogBlocks:
                 self._repeat_t = float(t[same[0]])
             self.repeated += len(same)
             if self._first_t is None:
+                if not self.parquet and (t[0] >= ABSOLUTE_STAMP_S or _time_notes(t, self.source, None)[1] and any(
+                        "--time-units" in note for note in _time_notes(t, self.source, None)[1])):  # fmt: skip
+                    raise NotStreamable("absolute stamps or a time unit to guess: read_log counts or refuses them")
                 self._first_t = t
             self._last_t = float(t[-1])
             self.n += len(t)
@@ -1332,6 +1842,8 @@ class LogBlocks:
             index = _column_index(header, self.source)
         except (UnicodeDecodeError, InputError):
             raise NotStreamable("header") from None
+        if header.cmap is None or not header.cmap.native(header.names) or header.delimiter != "," or header.preamble:
+            raise NotStreamable("not softtip's own layout: read_log maps it")
         pos = header.lines.tell()
         if not whole and pos >= len(text):
             raise NotStreamable("long header")
@@ -1342,6 +1854,7 @@ class LogBlocks:
         extra_idx = [j for j in range(len(names)) if j not in index.values()]
         self._size, self._start = size, start
         stream = pa.OSFile(self.path)
+        reader = None
         try:
             stream.seek(start)
             reader = pacsv.open_csv(
@@ -1367,12 +1880,17 @@ class LogBlocks:
                 for i, col in enumerate(cols[1:]):
                     wrench[:, i] = col.to_numpy()
                 extra = {names[j]: np.asarray(batch.column(j).to_pylist(), dtype=str) for j in extra_idx}
+                if any(np.char.find(col, "\n").max(initial=-1) >= 0 or np.char.find(col, "\r").max(initial=-1) >= 0
+                       for col in extra.values()):  # fmt: skip
+                    raise NotStreamable("a cell spans lines: read_log tells a note from a stray quote")
                 if self.progress is not None:
                     self.progress(batch.num_rows)
                 yield t, wrench, extra
         except (pa.ArrowException, ValueError, OSError):
             raise NotStreamable("parser") from None
         finally:
+            if reader is not None:
+                reader.close()  # end its read-ahead thread before the file goes (a SIGABRT at exit otherwise)
             stream.close()
 
     def _ends_with_break(self) -> bool:
