@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import signal
 import sys
 
 import click
@@ -23,7 +24,7 @@ __all__ = ["main"]
 class _Group(click.Group):
     def invoke(self, ctx):
         from softtip.io.atomic import cannot_write, silence_stdout
-        from softtip.io.interrupt import Interrupted, exit_code, exit_now, terminate_like_ctrl_c
+        from softtip.io.interrupt import Interrupted, exit_code, exit_now, interrupted_signal, terminate_like_ctrl_c
 
         try:
             with terminate_like_ctrl_c():
@@ -54,6 +55,15 @@ class _Group(click.Group):
             click.echo(f"softtip: interrupted ({name})", err=True)
             exit_now(exit_code(exc))  # by a real signal: now, whatever follows it
             ctx.exit(exit_code(exc))
+        except Exception:
+            sig = interrupted_signal()
+            if sig is None:
+                raise
+            # a signal a library swallowed (an interrupted import, say) surfaced as another error:
+            # the outputs were discarded on the way; end as the signal
+            click.echo(f"softtip: interrupted ({signal.Signals(sig).name})", err=True)
+            exit_now(128 + sig)
+            ctx.exit(128 + sig)
 
 
 @click.group(cls=_Group, help="softtip: intrinsic tactile sensing with a soft fingertip on a six-axis F/T sensor.\n\n" + FRAMES_HELP)

@@ -37,6 +37,7 @@ from pathlib import Path
 from typing import IO, Any
 
 from softtip.errors import InputError
+from softtip.io.interrupt import check_interrupted
 
 __all__ = ["AtomicFile", "Outputs", "atomic_write", "atomic_write_text", "cannot_write", "check_distinct", "commit_all", "write_stdout"]
 
@@ -214,12 +215,14 @@ class AtomicFile:
             except OSError as exc:
                 if exc.errno != errno.ENXIO:  # ENXIO: no reader yet
                     raise
+                check_interrupted()
                 time.sleep(0.05)
         try:
             with open(self.tmp, "rb") as src:
                 while chunk := src.read(1 << 16):
                     view = memoryview(chunk)
                     while view:
+                        check_interrupted()
                         select.select([], [fd], [], 0.1)
                         try:
                             view = view[os.write(fd, view) :]
@@ -358,6 +361,7 @@ class Outputs:
             return
         self._done = True
         try:
+            check_interrupted()  # a signal some library swallowed: never commit after one
             for f in self._files:  # devices and pipes first: they can block or fail
                 if f.is_device:
                     f.commit()

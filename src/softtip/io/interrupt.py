@@ -15,7 +15,7 @@ import signal
 import threading
 from collections.abc import Iterator
 
-__all__ = ["Interrupted", "exit_code", "exit_now", "terminate_like_ctrl_c"]
+__all__ = ["Interrupted", "check_interrupted", "exit_code", "exit_now", "interrupted_signal", "terminate_like_ctrl_c"]
 
 _SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
 
@@ -38,6 +38,28 @@ def exit_code(exc: BaseException) -> int:
 
 
 _interrupted = threading.Event()
+_first_signal: list[int] = []
+
+
+def interrupted_signal() -> int | None:
+    """The signal that interrupted this process (within :func:`terminate_like_ctrl_c`), or None."""
+    return _first_signal[0] if _first_signal else None
+
+
+def check_interrupted() -> None:
+    """Raise the interrupt again if a signal came (code that swallowed it must not go on to commit outputs).
+
+    Raises
+    ------
+    KeyboardInterrupt
+        :class:`Interrupted` for SIGTERM and SIGHUP.
+    """
+    sig = interrupted_signal()
+    if sig is None:
+        return
+    if sig == signal.SIGINT:
+        raise KeyboardInterrupt
+    raise Interrupted(sig)
 
 
 def _ignore(signum, frame) -> None:
@@ -75,11 +97,13 @@ def exit_now(code: int) -> None:
 
 
 def _raise(signum, frame) -> None:
+    _first_signal.append(signum)
     _ignore_further_signals()
     raise Interrupted(signum)
 
 
 def _raise_keyboard_interrupt(signum, frame) -> None:
+    _first_signal.append(signum)
     _ignore_further_signals()
     raise KeyboardInterrupt
 
