@@ -30,7 +30,14 @@ from softtip.cli.options import (
 )  # fmt: skip
 from softtip.cli.types import check_lowpass, option
 from softtip.core.fingertip import load_fingertip
-from softtip.core.fullscale import DEFAULT_SENSOR, SENSOR_RANGES, check_full_scale, parse_full_scale
+from softtip.core.fullscale import (
+    COARSE_MARGIN,
+    DEFAULT_SENSOR,
+    SENSOR_RANGES,
+    check_full_scale,
+    full_scale_error,
+    parse_full_scale,
+)
 from softtip.core.units import UNIT_SYSTEMS, wrench_to_si
 from softtip.errors import InputError
 from softtip.estimator import STATES
@@ -258,7 +265,8 @@ def _estimate(
         size = os.path.getsize(input_path) if os.path.isfile(input_path) else 0
         with progress_bar(size, "reading", unit="B") as bar:
             log = read_log(input_path, units=units, progress=bar.update, **formats)
-    check_full_scale(log.t, log.wrench, sensor_range, log.source, units=log.units)
+    # far beyond the sensor's range: refused before any estimate (just beyond it: after the units check)
+    check_full_scale(log.t, log.wrench, sensor_range, log.source, units=log.units, margin=COARSE_MARGIN)
     print_log_notes(log)  # how a foreign file was read; repeated stamps, an implausible time scale, a cut last line
     if topic is not None and bag_log is None:
         raise click.UsageError("--topic applies to bag input only")
@@ -289,6 +297,7 @@ def _estimate(
     except ValueError as exc:  # e.g. a low-pass cutoff above Nyquist for this log's rate
         raise click.UsageError(str(exc)) from None
     check_units(est, fingertip, config, log)
+    check_full_scale(log.t, log.wrench, sensor_range, log.source, units=log.units)
 
     carried = _carried(None if example or bag_log is not None else input_path, output)
     notes: list[str] = []
@@ -458,6 +467,7 @@ def _estimate_in_pieces(
     # (and memory stays bounded: that floor is at most MAX_FLOOR_ROWS)
     rows = max(rows, min(-(-_row_estimate(input_path) // MAX_PIECES), MAX_FLOOR_ROWS))
     parquet = output is not None and output.lower().endswith(".parquet")
+    beyond: list[InputError] = []  # the first sample just beyond the sensor's range
     carried = _carried(input_path, output)
     names: dict[str, list[str]] = {}  # the first piece's output and extra column names
     notes: list[str] = []
@@ -482,7 +492,12 @@ def _estimate_in_pieces(
                     check_lowpass(estimator_opts["lowpass"], block[0])
                     first_wrench.append(block[1])
                     first = False
-                check_full_scale(block[0], block[1], sensor_range, input_path, first_sample=n, units=units or "si")
+                check_full_scale(block[0], block[1], sensor_range, input_path, first_sample=n, units=units or "si",
+                                 margin=COARSE_MARGIN)  # fmt: skip
+                if not beyond:  # just beyond the range: said after the units vote, as the one-shot run does
+                    err = full_scale_error(block[0], block[1], sensor_range, input_path, first_sample=n, units=units or "si")
+                    if err is not None:
+                        beyond.append(err)
                 n += len(block[0])
                 yield block
 
@@ -517,6 +532,8 @@ def _estimate_in_pieces(
                 writer.close()
             if vote.n >= 5 and vote.median_above():
                 raise NotStreamable("wrong units: the one-shot run says so")  # as check_units decides
+            if beyond:
+                raise beyond[0]
 
         try:
             try:

@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike
 
 from softtip.errors import InputError
 
-__all__ = ["FullScale", "SENSOR_RANGES", "DEFAULT_SENSOR", "ANY_SENSOR", "parse_full_scale", "check_full_scale"]
+__all__ = ["FullScale", "SENSOR_RANGES", "DEFAULT_SENSOR", "ANY_SENSOR", "COARSE_MARGIN", "parse_full_scale", "check_full_scale", "full_scale_error"]
 
 _AXES = ("fx", "fy", "fz", "mx", "my", "mz")
 
@@ -110,11 +110,29 @@ def parse_full_scale(text: str) -> FullScale | None:
     return FullScale(force, force, moment, f"{force:g},{moment:g}")
 
 
+#: ``margin`` of the check made before any estimate: values this far beyond the range are refused
+#: at once (a corrupted row, an overflow to come); those just beyond it after the units check,
+#: which names a wrong unit better.
+COARSE_MARGIN = 1000.0
+
+
 def check_full_scale(
     t: ArrayLike, wrench: ArrayLike, full_scale: FullScale | None, source: str, *, first_sample: int = 0,
-    option: str = "--full-scale", units: str | None = None,
+    option: str = "--full-scale", units: str | None = None, margin: float = 1.0,
 ) -> None:
-    """Refuse a wrench outside the sensor's range (exit 2 on the command line).
+    """Raise :func:`full_scale_error`'s error, if any (same parameters)."""
+    err = full_scale_error(
+        t, wrench, full_scale, source, first_sample=first_sample, option=option, units=units, margin=margin
+    )
+    if err is not None:
+        raise err
+
+
+def full_scale_error(
+    t: ArrayLike, wrench: ArrayLike, full_scale: FullScale | None, source: str, *, first_sample: int = 0,
+    option: str = "--full-scale", units: str | None = None, margin: float = 1.0,
+) -> InputError | None:
+    """The error for a wrench outside the sensor's range (exit 2 on the command line), or None.
 
     Parameters
     ----------
@@ -133,21 +151,23 @@ def check_full_scale(
     units : str, optional
         The units the log was read in: for ``"si"``, a log that would fit the range in
         kgf and kgf·mm is pointed to ``--units kgf-mm``.
+    margin : float
+        Only values beyond ``margin`` times the range count (:data:`COARSE_MARGIN`).
 
-    Raises
-    ------
-    InputError
+    Returns
+    -------
+    InputError or None
         Naming the first sample beyond the range: its number (1-based), time, axis and value.
     """
     if full_scale is None:
-        return
+        return None
     w = np.asarray(wrench, dtype=float)
     if not len(w):
-        return
-    over = np.abs(w) > full_scale.bounds
+        return None
+    over = np.abs(w) > full_scale.bounds * margin
     rows = np.flatnonzero(over.any(axis=1))
     if not len(rows):
-        return
+        return None
     i = int(rows[0])
     j = int(np.flatnonzero(over[i])[0])
     unit = "N" if j < 3 else "N·m"
@@ -158,12 +178,12 @@ def check_full_scale(
 
         # |w| · scale > bound as |w| > bound / scale: no overflow near the float range
         if not np.any(np.abs(w) > full_scale.bounds / np.array([KGF] * 3 + [KGF * 1e-3] * 3)):
-            raise InputError(
+            return InputError(
                 f"{source}: sample {first_sample + i + 1} (t = {float(np.asarray(t)[i]):g} s): {_AXES[j]} = {w[i, j]:g} "
                 f"{unit} is beyond the sensor's full-scale range (±{bound:g} {unit}, {option} {full_scale.name}){more}, "
                 "but every sample fits it in kgf and kgf·mm: wrong units? Give --units kgf-mm"
             )
-    raise InputError(
+    return InputError(
         f"{source}: sample {first_sample + i + 1} (t = {float(np.asarray(t)[i]):g} s): {_AXES[j]} = {w[i, j]:g} {unit} "
         f"is beyond the sensor's full-scale range (±{bound:g} {unit}, {option} {full_scale.name}){more}; expected a "
         f"wrench the sensor can measure (a corrupted row?). For a larger sensor give {option} with its name "
