@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import signal
 import sys
 
 import click
@@ -23,7 +24,7 @@ __all__ = ["main"]
 class _Group(click.Group):
     def invoke(self, ctx):
         from softtip.io.atomic import cannot_write, silence_stdout
-        from softtip.io.interrupt import Interrupted, exit_code, terminate_like_ctrl_c
+        from softtip.io.interrupt import Interrupted, exit_code, exit_now, interrupted_signal, terminate_like_ctrl_c
 
         try:
             with terminate_like_ctrl_c():
@@ -37,11 +38,32 @@ class _Group(click.Group):
         except InputError as exc:
             click.echo(f"softtip: error: {exc}", err=True)
             ctx.exit(2)
+        except MemoryError:
+            click.echo(
+                "softtip: error: out of memory; for a large log write to a file in pieces (-o FILE --chunk-rows N), "
+                "or free memory (nothing was written)",
+                err=True,
+            )
+            ctx.exit(1)
+        except OSError as exc:  # the last line of defence: an OS failure no command worded itself
+            where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
+            click.echo(f"softtip: error: {where}{exc.strerror or exc} (check the path and its permissions)", err=True)
+            ctx.exit(2)
         except KeyboardInterrupt as exc:
             # Ctrl-C, SIGTERM, SIGHUP: every temporary file is gone by now (unwound like an error)
             name = exc.signal_name if isinstance(exc, Interrupted) else "SIGINT"
             click.echo(f"softtip: interrupted ({name})", err=True)
+            exit_now(exit_code(exc))  # by a real signal: now, whatever follows it
             ctx.exit(exit_code(exc))
+        except Exception:
+            sig = interrupted_signal()
+            if sig is None:
+                raise
+            # a signal a library swallowed (an interrupted import, say) surfaced as another error:
+            # the outputs were discarded on the way; end as the signal
+            click.echo(f"softtip: interrupted ({signal.Signals(sig).name})", err=True)
+            exit_now(128 + sig)
+            ctx.exit(128 + sig)
 
 
 @click.group(cls=_Group, help="softtip: intrinsic tactile sensing with a soft fingertip on a six-axis F/T sensor.\n\n" + FRAMES_HELP)

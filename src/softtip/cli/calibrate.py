@@ -6,7 +6,13 @@ import sys
 
 import click
 
-from softtip.cli.options import log_format_kwargs, log_format_options, sensor_noise
+from softtip.cli.options import (
+    MAX_FORCE_NOISE,
+    MAX_MOMENT_NOISE_NMM,
+    log_format_kwargs,
+    log_format_options,
+    sensor_noise,
+)
 from softtip.cli.types import Length, Number, option
 from softtip.core.fingertip import SHAPES
 from softtip.core.noise import NANO17
@@ -127,8 +133,8 @@ capsule's offset of its axis from the sensor's z axis is its axis_offset.
 @option("--mesh", "mesh_path", type=click.Path(dir_okay=False), help="--shape mesh: the fingertip mesh (a mesh fingertip .toml, or .stl/.obj/.ply with --mesh-units); its shift on the sensor is fitted.")
 @option("--mesh-units", type=click.Choice(["m", "cm", "mm", "um", "in"]), help="Length unit of a bare --mesh file.")
 @option("--rotation", is_flag=True, help="--shape mesh: fit a small rotation as well as the shift (6 DOF).")
-@option("--force-noise", type=click.FloatRange(min=0.0, min_open=True), default=NANO17.force_std[0], show_default=True, metavar="N", help="Per-axis standard deviation of the sensor's force noise, N (Nano17-class default).")
-@option("--moment-noise", type=click.FloatRange(min=0.0, min_open=True), default=NANO17.moment_std[0] * 1e3, show_default=True, metavar="N·mm", help="Per-axis standard deviation of the sensor's moment noise, N·mm.")
+@option("--force-noise", type=Number("N", 0.0, MAX_FORCE_NOISE, min_open=True), default=NANO17.force_std[0], show_default=True, metavar="N", help="Per-axis standard deviation of the sensor's force noise, N (Nano17-class default).")
+@option("--moment-noise", type=Number("N·mm", 0.0, MAX_MOMENT_NOISE_NMM, min_open=True), default=NANO17.moment_std[0] * 1e3, show_default=True, metavar="N·mm", help="Per-axis standard deviation of the sensor's moment noise, N·mm.")
 @option("--sensor", type=click.Choice(["nano17", "nano25", "mini40"]), help="The sensor's noise preset for --force-noise and --moment-noise where they are not given. [default: nano17]")
 @option(
     "--skin-thickness", type=Length("mm", 0.0, min_open=True), metavar="LENGTH",

@@ -30,6 +30,14 @@ from softtip.cli.options import (
 )  # fmt: skip
 from softtip.cli.types import check_lowpass, option
 from softtip.core.fingertip import load_fingertip
+from softtip.core.fullscale import (
+    COARSE_MARGIN,
+    DEFAULT_SENSOR,
+    SENSOR_RANGES,
+    check_full_scale,
+    full_scale_error,
+    parse_full_scale,
+)
 from softtip.core.units import UNIT_SYSTEMS, wrench_to_si
 from softtip.errors import InputError
 from softtip.estimator import STATES
@@ -124,14 +132,29 @@ from the bag's /tf.
 @option("--save-bias", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Write the bias used (the tare's) to FILE.toml, for --bias of a later run.")
 @option(
     "--chunk-rows", type=click.IntRange(min=1), metavar="N",
-    help="Process INPUT in pieces of at least N rows, in bounded memory, with the result of the one-shot run (a piece ends "
+    help="Process INPUT in pieces of at least N rows (and at least 1/256 of the log, up to 8192), in bounded memory, with the result of the one-shot run (a piece ends "
     "only out of contact: a contact longer than N rows makes its piece as long). [default: pieces of 131072 rows for a CSV "
     "file over 24 MB or a Parquet file over 262144 rows; only for a CSV or Parquet file without --plot, --to-bag, --rerun, "
     "--rerun-save, --payload]",
 )  # fmt: skip
+@option(
+    "--full-scale", metavar="SENSOR|FORCE,MOMENT|off",
+    help="The sensor's full-scale range: a sample beyond it (a corrupted row) stops the run naming it. A sensor ("
+    + ", ".join(SENSOR_RANGES) + "; rated range per axis), FORCE,MOMENT in N and N·m for every axis, or off "
+    "(then only values no sensor gives).  [default: the --sensor's, nano17]",
+)  # fmt: skip
 @log_format_options
 @estimator_options
-def estimate(
+def estimate(**kwargs) -> None:
+    from softtip.io.atomic import Outputs
+
+    # one transaction for every output of the run: all appear, or none (an error, a signal)
+    with Outputs() as outputs:
+        _estimate(outputs, **kwargs)
+
+
+def _estimate(
+    outputs,
     input_path,
     example,
     output,
@@ -152,9 +175,15 @@ def estimate(
     frame_id=None,
     gravity_frame=None,
     chunk_rows=None,
+    full_scale=None,
     **estimator_opts,
 ):
     from softtip.io.examples import EXAMPLE_ANGLE_DEG, EXAMPLE_PATH
+
+    try:  # default: the range of --sensor (the noise preset), else a Nano17's
+        sensor_range = parse_full_scale(full_scale or estimator_opts.get("sensor") or DEFAULT_SENSOR)
+    except ValueError as exc:
+        raise click.BadParameter(str(exc), param_hint="'--full-scale'") from None
     from softtip.io.tables import Log, read_log
 
     formats = log_format_kwargs(estimator_opts)
@@ -169,6 +198,16 @@ def estimate(
          ("--bias", estimator_opts.get("bias_file"))],
         [("-o", output), ("--plot", plot_path), ("--to-bag", to_bag), ("--rerun-save", rerun_save), ("--save-bias", save_bias)],
     )
+    # every output file staged before any work: a missing folder or no permission stops the run at once
+    for path in (output, plot_path, rerun_save, save_bias):
+        if path is not None:
+            outputs.file(path)
+    staged_bag = None
+    if to_bag is not None:
+        from softtip.ros.bagout import bag_format
+
+        bag_format(to_bag, ros_distro)  # a name that does not fit the distribution: stop before the work
+        staged_bag = outputs.path(to_bag)
     if rerun_spawn:  # at once: without a display the viewer would fail only after the whole run
         from softtip.viz.rerun import check_viewer  # rerun itself is imported later
 
@@ -220,12 +259,14 @@ def estimate(
             rows = chunk_rows or _auto_chunk_rows(input_path)
             if rows and _estimate_in_pieces(
                 input_path, units, rows, fingertip, config, estimator_opts, output=output, output_units=output_units,
-                tip=tip, quiet=quiet, save_bias=save_bias,
+                tip=tip, quiet=quiet, save_bias=save_bias, outputs=outputs, sensor_range=sensor_range,
             ):  # fmt: skip
                 return
         size = os.path.getsize(input_path) if os.path.isfile(input_path) else 0
         with progress_bar(size, "reading", unit="B") as bar:
             log = read_log(input_path, units=units, progress=bar.update, **formats)
+    # far beyond the sensor's range: refused before any estimate (just beyond it: after the units check)
+    check_full_scale(log.t, log.wrench, sensor_range, log.source, units=log.units, margin=COARSE_MARGIN)
     print_log_notes(log)  # how a foreign file was read; repeated stamps, an implausible time scale, a cut last line
     if topic is not None and bag_log is None:
         raise click.UsageError("--topic applies to bag input only")
@@ -233,10 +274,6 @@ def estimate(
         raise click.UsageError("--allow-partial applies to bag input only")
     if to_bag is None and (ros_distro is not None or frame_id is not None):
         raise click.UsageError("--ros-distro and --frame-id apply to --to-bag")
-    if to_bag is not None:
-        from softtip.ros.bagout import bag_format
-
-        bag_format(to_bag, ros_distro)  # a name that does not fit the distribution: stop before the work
     if gravity_frame is not None and (payload is None or bag_log is None):
         raise click.UsageError("--gravity-frame needs --payload and a bag INPUT (with /tf)")
     if payload is not None:  # gravity compensation first: the tare then removes only the sensor bias
@@ -260,8 +297,13 @@ def estimate(
     except ValueError as exc:  # e.g. a low-pass cutoff above Nyquist for this log's rate
         raise click.UsageError(str(exc)) from None
     check_units(est, fingertip, config, log)
+    check_full_scale(log.t, log.wrench, sensor_range, log.source, units=log.units)
 
-    columns = _output_columns(est, log.extra, output_units)
+    carried = _carried(None if example or bag_log is not None else input_path, output)
+    notes: list[str] = []
+    columns = _output_columns(est, log.extra, output_units, carried, notes)
+    for note in notes:
+        click.echo(f"softtip: warning: {note}", err=True)
 
     source = "example grasp" if example else Path(log.source).name
     _write_estimate_outputs(
@@ -269,15 +311,16 @@ def estimate(
         output=output, plot_path=plot_path, plot_units=plot_units, title=f"softtip: {source}",
         truth_angle=EXAMPLE_ANGLE_DEG if example else None,
         to_bag=to_bag, rerun_spawn=rerun_spawn, rerun_save=rerun_save, ros_distro=ros_distro, frame_id=frame_id,
-        metadata=parquet_metadata(fingertip, tip, output_units, log),
+        metadata=parquet_metadata(fingertip, tip, output_units, log), outputs=outputs, staged_bag=staged_bag,
     )  # fmt: skip
+    _carry(input_path, output, outputs, list(est.columns(units=output_units)), list(log.extra), carried)
 
     from softtip.estimator.summary import summarise_contacts
 
     _report_run(
         _RunTotals.of(est, summarise_contacts(est) if not quiet else []),
         input_path=input_path, output=output, plot_path=plot_path, to_bag=to_bag, rerun_save=rerun_save,
-        save_bias=save_bias, quiet=quiet,
+        save_bias=save_bias, quiet=quiet, outputs=outputs,
     )  # fmt: skip
 
 
@@ -318,19 +361,28 @@ class _RunTotals:
         self.warnings += [w for w in est.warnings if w not in self.warnings]
 
 
-def _report_run(totals: _RunTotals, *, input_path, output, plot_path, to_bag, rerun_save, save_bias, quiet) -> None:
-    """The end of ``softtip estimate``: tare and warnings, ``--save-bias``, the summary."""
-    # in the one-shot run's order: a drift alarm (of any piece) after the contact warnings
-    totals.warnings.sort(key=lambda w: w.startswith("the sensor bias drifted"))
-    tare_warnings(totals, quiet)
+def _report_run(
+    totals: _RunTotals, *, input_path, output, plot_path, to_bag, rerun_save, save_bias, quiet, outputs
+) -> None:
+    """The end of ``softtip estimate``: ``--save-bias``, every output put in place (``outputs``
+    committed), then tare and warnings and the summary."""
     if save_bias is not None:
         if any(p is not None and Path(p).resolve() == Path(save_bias).resolve() for p in (input_path, output, plot_path)):
             raise InputError(f"--save-bias {save_bias}: is also an input or output of this run")
         if not np.all(np.isfinite(totals.bias)):
             raise InputError(f"--save-bias {save_bias}: no bias: the whole log lies within the tare")
-        from softtip.io.atomic import atomic_write_text
+        from softtip.io.atomic import cannot_write
 
-        atomic_write_text(save_bias, bias_to_toml(totals.bias, f"softtip sensor bias ({totals.tare.summary()})"))
+        try:
+            with outputs.get(save_bias).open() as fh:
+                fh.write(bias_to_toml(totals.bias, f"softtip sensor bias ({totals.tare.summary()})"))
+        except OSError as exc:
+            raise cannot_write(save_bias, exc) from None
+    outputs.commit()
+    # in the one-shot run's order: a drift alarm (of any piece) after the contact warnings
+    totals.warnings.sort(key=lambda w: w.startswith("the sensor bias drifted"))
+    tare_warnings(totals, quiet)
+    if save_bias is not None:
         click.echo(f"softtip: bias -> {save_bias}", err=True)
     if totals.n_pulling:
         click.echo(
@@ -360,6 +412,23 @@ def _report_run(totals: _RunTotals, *, input_path, output, plot_path, to_bag, re
 #: the same output, in less memory and, measured on a 1e6-row log, 2.3 s less system CPU
 #: time (the one-shot run's page faults on 1.3 GB of fresh arrays).
 AUTO_CHUNK_CSV_BYTES = 24_000_000
+#: ``--chunk-rows`` makes pieces of at least 1/MAX_PIECES of the log (a smaller N is taken as
+#: that): the result is the same whatever the piece size, the time is not (a fixed cost per piece).
+MAX_PIECES = 256
+MAX_FLOOR_ROWS = 8192
+
+
+def _row_estimate(path: str) -> int:
+    """The rows of a log, or an upper estimate (a CSV row takes at least 14 bytes: 7 one-digit cells)."""
+    try:
+        if path.lower().endswith(".parquet"):
+            import pyarrow.parquet as pq
+
+            with pq.ParquetFile(path) as pf:
+                return int(pf.metadata.num_rows)
+        return os.path.getsize(path) // 14
+    except Exception:  # noqa: BLE001 - unreadable: the reader says why
+        return 0
 AUTO_CHUNK_PARQUET_ROWS = 262_144
 
 
@@ -381,18 +450,27 @@ def _auto_chunk_rows(path: str) -> int | None:
 
 
 def _estimate_in_pieces(
-    input_path, units, rows, fingertip, config, estimator_opts, *, output, output_units, tip, quiet, save_bias
+    input_path, units, rows, fingertip, config, estimator_opts, *, output, output_units, tip, quiet, save_bias, outputs,
+    sensor_range=None,
 ) -> bool:
     """``softtip estimate`` piece by piece (:mod:`softtip.io.chunked`) into ``output`` (a path);
     ``False`` when the log holds something only the one-shot reader takes or words (nothing
     written then)."""
     from softtip.core.lever import LEVER_MARGIN, LeverVote, fingertip_reach, lever_distances
     from softtip.estimator.summary import summarise_contacts
-    from softtip.io.atomic import atomic_write
+    from softtip.io.atomic import cannot_write
     from softtip.io.chunked import estimate_pieces
     from softtip.io.tables import NotStreamable, TableWriter, iter_log
 
+    # pieces of a few rows give the same result, but each piece costs a fixed overhead
+    # (--chunk-rows 1 took minutes for 5e4 rows): at most about MAX_PIECES pieces
+    # (and memory stays bounded: that floor is at most MAX_FLOOR_ROWS)
+    rows = max(rows, min(-(-_row_estimate(input_path) // MAX_PIECES), MAX_FLOOR_ROWS))
     parquet = output is not None and output.lower().endswith(".parquet")
+    beyond: list[InputError] = []  # the first sample just beyond the sensor's range
+    carried = _carried(input_path, output)
+    names: dict[str, list[str]] = {}  # the first piece's output and extra column names
+    notes: list[str] = []
     totals = _RunTotals()
     vote = LeverVote(LEVER_MARGIN * fingertip_reach(fingertip))  # the units check, over the whole log
     total = None
@@ -408,11 +486,19 @@ def _estimate_in_pieces(
 
         def checked():
             first = True
+            n = 0
             for block in blocks:
                 if first:
                     check_lowpass(estimator_opts["lowpass"], block[0])
                     first_wrench.append(block[1])
                     first = False
+                check_full_scale(block[0], block[1], sensor_range, input_path, first_sample=n, units=units or "si",
+                                 margin=COARSE_MARGIN)  # fmt: skip
+                if not beyond:  # just beyond the range: said after the units vote, as the one-shot run does
+                    err = full_scale_error(block[0], block[1], sensor_range, input_path, first_sample=n, units=units or "si")
+                    if err is not None:
+                        beyond.append(err)
+                n += len(block[0])
                 yield block
 
         def noise_fits(est) -> None:
@@ -436,7 +522,9 @@ def _estimate_in_pieces(
                     if k == 0:
                         noise_fits(est)
                     vote.add(lever_distances(est.wrench[~est.taring], max(0.1, config.contact_threshold)))
-                    columns = _output_columns(est, extra, output_units)
+                    columns = _output_columns(est, extra, output_units, carried, notes if not names else None)
+                    names.setdefault("est", list(est.columns(units=output_units)))
+                    names.setdefault("extra", list(extra))
                     writer.write(columns)
                     bar.update(len(est))
                     totals.add(est, summarise_contacts(est) if not quiet else [])
@@ -444,93 +532,121 @@ def _estimate_in_pieces(
                 writer.close()
             if vote.n >= 5 and vote.median_above():
                 raise NotStreamable("wrong units: the one-shot run says so")  # as check_units decides
+            if beyond:
+                raise beyond[0]
 
         try:
-            with atomic_write(output) as fh:
-                run(fh)
+            try:
+                with outputs.get(output).open() as fh:  # the staged file: put in place with the others
+                    run(fh)
+                if names:
+                    _carry(input_path, output, outputs, names["est"], names["extra"], carried)
+            except OSError as exc:
+                raise cannot_write(output, exc) from None
         except NotStreamable:  # nothing written: the one-shot run takes it, or says what is wrong
             return False
         except ValueError as exc:  # e.g. a low-pass cutoff above Nyquist for this log's rate
             if isinstance(exc, InputError):
                 raise
             raise click.UsageError(str(exc)) from None
-    for note in blocks.warnings():
+    for note in [*notes, *blocks.warnings()]:
         click.echo(f"softtip: warning: {note}", err=True)
     _report_run(
         totals, input_path=input_path, output=output, plot_path=None, to_bag=None, rerun_save=None,
-        save_bias=save_bias, quiet=quiet,
+        save_bias=save_bias, quiet=quiet, outputs=outputs,
     )  # fmt: skip
     return True
 
 
-def _output_columns(est, extra, output_units: str) -> dict:
-    """The output table: the estimates' columns in ``output_units`` (``Estimates.columns``), then the input's extra columns."""
+def _output_columns(est, extra, output_units: str, carried=(), notes: list[str] | None = None) -> dict:
+    """The output table: the estimates' columns in ``output_units`` (``Estimates.columns``), then the input's
+    extra columns (renamed ``input_NAME`` when named like an output column, said in ``notes``; a ``carried``
+    column as a placeholder for :func:`softtip.io.carry.carry_columns`)."""
+    from softtip.io.carry import extra_names, placeholder
+
     columns = est.columns(units=output_units)
+    names = extra_names(list(columns), list(extra))
     for name, values in extra.items():
-        columns[name if name not in columns else f"input_{name}"] = np.asarray(values)
+        columns[names[name]] = placeholder(len(est)) if name in carried else np.asarray(values)
+        if notes is not None and names[name] != name:
+            notes.append(f"input column {name!r} is named like an output column; written as {names[name]!r}")
     return columns
+
+
+def _carried(input_path, output) -> list[str]:
+    """The input's Parquet extra columns to carry with their Arrow type (Parquet in and out), else none."""
+    if input_path in (None, "-") or output is None or not (
+        input_path.lower().endswith(".parquet") and output.lower().endswith(".parquet")
+    ):
+        return []
+    from softtip.io.carry import typed_extras
+    from softtip.io.tables import REQUIRED_COLUMNS
+
+    return typed_extras(input_path, tuple(REQUIRED_COLUMNS))
+
+
+def _carry(input_path, output, outputs, est_names: list[str], extra_names_in: list[str], carried: list[str]) -> None:
+    """Put the carried columns (:func:`_carried`) into the staged output."""
+    if not carried:
+        return
+    from softtip.io.carry import carry_columns, extra_names
+
+    names = extra_names(est_names, extra_names_in)
+    carry_columns(input_path, outputs.get(output).tmp, {c: names[c] for c in carried})
 
 
 def _write_estimate_outputs(
     est, columns, log, bag_log, config, fingertip, *, output, plot_path, plot_units, title, to_bag, rerun_spawn, rerun_save,
-    metadata, ros_distro=None, frame_id=None, truth_angle=None,
+    metadata, outputs, staged_bag=None, ros_distro=None, frame_id=None, truth_angle=None,
 ) -> None:
-    """Write every output of ``estimate``; all appear together, or none (and no temporary file stays)."""
+    """Write every output of ``estimate`` into its staged file (``outputs``, committed by the caller)."""
     import io as _io
 
-    from softtip.io.atomic import AtomicFile, cannot_write, commit_all, write_stdout
+    from softtip.io.atomic import cannot_write, write_stdout
     from softtip.io.tables import write_table
 
     viz = optional_extra("softtip.viz.rerun", "viz") if (rerun_spawn or rerun_save) else None
-    pending: list[AtomicFile] = []
-    bag_written = False
-    try:
-        if plot_path is not None:
-            from softtip.viz.plot import plot_estimates
+    if plot_path is not None:
+        from softtip.viz.plot import plot_estimates
 
-            # drawn in memory first: a full disk then gives the OS's reason, not the image writer's
-            image = _io.BytesIO()
-            threshold = config.line_threshold(est.h_std)
-            plot_estimates(
-                est, image, units=plot_units, title=title, h_threshold=threshold,
-                reference_angles=None if truth_angle is None else [truth_angle], fmt=Path(plot_path).suffix.lower().lstrip("."),
-            )  # fmt: skip
-            pending.append(AtomicFile(plot_path))
-            try:
-                with pending[-1].open("wb") as fh:
-                    fh.write(image.getbuffer())
-            except OSError as exc:
-                raise cannot_write(plot_path, exc) from None
-        if viz is not None:
-            rerun_file = None
-            if rerun_save:
-                pending.append(rerun_file := AtomicFile(rerun_save))
-            logger = viz.RerunLogger(fingertip, save=None if rerun_file is None else rerun_file.tmp, spawn=rerun_spawn)
-            logger.log_estimates(est)
-            logger.close()
-        if to_bag is not None:
-            bag = optional_extra("softtip.io.bag", "ros")
-            frame = output_frame_id(frame_id, bag_log.frame_id if bag_log is not None else "")
+        # drawn in memory first: a full disk then gives the OS's reason, not the image writer's
+        image = _io.BytesIO()
+        threshold = config.line_threshold(est.h_std)
+        plot_estimates(
+            est, image, units=plot_units, title=title, h_threshold=threshold,
+            reference_angles=None if truth_angle is None else [truth_angle], fmt=Path(plot_path).suffix.lower().lstrip("."),
+        )  # fmt: skip
+        try:
+            with outputs.get(plot_path).open("wb") as fh:
+                fh.write(image.getbuffer())
+        except OSError as exc:
+            raise cannot_write(plot_path, exc) from None
+    if viz is not None:
+        rerun_file = outputs.get(rerun_save)
+        logger = viz.RerunLogger(fingertip, save=None if rerun_file is None else rerun_file.tmp, spawn=rerun_spawn)
+        logger.log_estimates(est)
+        logger.close()
+    if to_bag is not None:
+        bag = optional_extra("softtip.io.bag", "ros")
+        frame = output_frame_id(frame_id, bag_log.frame_id if bag_log is not None else "")
+        try:
             if bag_log is not None:
-                bag.write_estimates_bag(to_bag, est, bag_log.wrench, bag_log.stamps_ns, frame, bag_log.topic, distro=ros_distro)
+                bag.write_estimates_bag(staged_bag, est, bag_log.wrench, bag_log.stamps_ns, frame, bag_log.topic, distro=ros_distro)
             else:
-                bag.write_estimates_bag(to_bag, est, log.wrench, frame_id=frame, distro=ros_distro)
-            bag_written = True
-        # the table last, atomically (softtip.io.atomic, through write_table); then the others are put in place
-        if output is not None:
-            with progress_bar(len(est), "writing") as bar:
-                write_table(columns, output, metadata=metadata, progress=bar.update)
-        elif to_bag is None:
-            with progress_bar(len(est), "writing") as bar:
-                write_stdout(lambda out: write_table(columns, out, progress=bar.update))
-        commit_all(pending)
-        bag_written = False  # every output is in place: keep the bag
-    finally:
-        for f in pending:
-            f.discard()
-        if bag_written:
-            from softtip.ros.bagout import remove_bag
+                bag.write_estimates_bag(staged_bag, est, log.wrench, frame_id=frame, distro=ros_distro)
+        except InputError as exc:  # name the destination, not where it was staged
+            raise InputError(str(exc).replace(str(staged_bag), str(to_bag))) from None
+    if output is not None:
+        from softtip.io.tables import TableWriter
 
-            remove_bag(to_bag)
-
-
+        with progress_bar(len(est), "writing") as bar:
+            try:
+                with outputs.get(output).open() as fh:  # the staged file
+                    writer = TableWriter(fh, parquet=output.lower().endswith(".parquet"), metadata=metadata)
+                    writer.write(columns, progress=bar.update)
+                    writer.close()
+            except OSError as exc:
+                raise cannot_write(output, exc) from None
+    elif to_bag is None:
+        with progress_bar(len(est), "writing") as bar:
+            write_stdout(lambda out: write_table(columns, out, progress=bar.update))

@@ -176,47 +176,51 @@ def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, 
         raise click.UsageError(str(exc)) from None
     for finger in fingers:
         tare_warnings(finger.estimates, name=finger.name)
-    rrd = None
     truth = None
     if truth_file:
         from softtip.fusion.viz import read_truth
 
         truth = read_truth(truth_file, fused.t)
-    if rerun_spawn or rerun_save:  # the view first, put in place with the table
-        from softtip.fusion.viz import log_fused
-        from softtip.io.atomic import AtomicFile
+    from softtip.io.atomic import Outputs, cannot_write
 
-        rrd = AtomicFile(rerun_save) if rerun_save else None
-        try:
-            log_fused(fused, fingers, fingertip, save=None if rrd is None else rrd.tmp, spawn=rerun_spawn, truth=truth)
-        except BaseException:
-            if rrd is not None:
-                rrd.discard()
-            raise
-    try:
+    # one transaction for every output: all appear, or none (an error, a signal)
+    with Outputs() as outputs:
+        staged = {p: outputs.file(p) for p in (output, plot_path, rerun_save) if p is not None}
+        staged_bag = outputs.path(to_bag) if to_bag is not None else None
+        if rerun_spawn or rerun_save:
+            from softtip.fusion.viz import log_fused
+
+            log_fused(
+                fused, fingers, fingertip, save=staged[rerun_save].tmp if rerun_save else None, spawn=rerun_spawn,
+                truth=truth,
+            )  # fmt: skip
         if to_bag is not None:  # the fused grasp as standard messages (softtip.ros.fused)
-            from softtip.ros.bagout import remove_bag
             from softtip.ros.fused import write_fused_bag
 
-            write_fused_bag(to_bag, fused, fingers, stamps, output_frame_id(frame_id, common), distro=ros_distro)
-        try:
-            if output is not None or to_bag is None:
-                write_table(fused.columns(), output)
-            if rrd is not None:
-                rrd.commit()
-        except BaseException:
-            if to_bag is not None:
-                remove_bag(to_bag)
-            raise
-    finally:
-        if rrd is not None:
-            rrd.discard()
-    if plot_path is not None:
-        from softtip.fusion.plot import plot_fused
+            try:
+                write_fused_bag(staged_bag, fused, fingers, stamps, output_frame_id(frame_id, common), distro=ros_distro)
+            except InputError as exc:  # name the destination, not where it was staged
+                raise InputError(str(exc).replace(str(staged_bag), str(to_bag))) from None
+        if plot_path is not None:
+            from softtip.fusion.plot import plot_fused
 
-        up = -np.asarray(gravity) if np.linalg.norm(gravity) > 0 else (0.0, 0.0, 1.0)
-        plot_fused(fused, fingers, plot_path, up=up, truth_line=None if truth is None else truth["line"],
-                   truth_normal=None if truth is None else truth["plane_normal"])  # fmt: skip
+            up = -np.asarray(gravity) if np.linalg.norm(gravity) > 0 else (0.0, 0.0, 1.0)
+            plot_fused(fused, fingers, staged[plot_path].tmp, up=up, truth_line=None if truth is None else truth["line"],
+                       truth_normal=None if truth is None else truth["plane_normal"])  # fmt: skip
+        if output is not None:
+            from softtip.io.tables import TableWriter
+
+            try:
+                with staged[output].open() as fh:
+                    writer = TableWriter(fh, parquet=output.lower().endswith(".parquet"))
+                    writer.write(fused.columns())
+                    writer.close()
+            except OSError as exc:
+                raise cannot_write(output, exc) from None
+        elif to_bag is None:
+            from softtip.io.atomic import write_stdout
+
+            write_stdout(lambda out: write_table(fused.columns(), out))
     for line in _summary(fused):
         click.echo(f"softtip: {line}", err=True)
 

@@ -29,6 +29,10 @@ are the force and moment the touched object exerts on the fingertip, moment abou
 sensor origin; in contact f pushes into the fingertip.
 """
 
+#: Upper bounds of --force-noise (N) and --moment-noise (N·mm): far above any six-axis F/T sensor's noise
+MAX_FORCE_NOISE, MAX_MOMENT_NOISE_NMM = 100.0, 10_000.0
+
+
 def NON_NEGATIVE(unit: str) -> Number:  # noqa: N802 - reads as a type
     return Number(unit, 0.0)
 
@@ -160,7 +164,7 @@ _ESTIMATOR_OPTIONS = [
     option("--h-min", type=NON_NEGATIVE("N·mm"), default=0.5, show_default=True, metavar="N·mm", help="Smallest |h| reported as a line contact, N·mm."),
     option(
         "--force-noise",
-        type=NON_NEGATIVE("N"),
+        type=Number("N", 0.0, MAX_FORCE_NOISE),
         default=NANO17.force_std[0],
         show_default=True,
         metavar="N",
@@ -168,7 +172,7 @@ _ESTIMATOR_OPTIONS = [
     ),
     option(
         "--moment-noise",
-        type=NON_NEGATIVE("N·mm"),
+        type=Number("N·mm", 0.0, MAX_MOMENT_NOISE_NMM),
         default=round(NANO17.moment_std[0] * 1e3, 12),
         show_default=True,
         metavar="N·mm",
@@ -422,7 +426,20 @@ def check_outputs(inputs, outputs) -> None:
     """Exit 2 when an output is an input or another output of the run (:func:`softtip.io.atomic.check_distinct`)."""
     from softtip.io.atomic import check_distinct
 
+    outputs = list(outputs)
+    check_output_names(outputs)
     check_distinct(inputs, outputs)
+
+
+def check_output_names(outputs) -> None:
+    """Exit 2 naming the option when an output is given as an empty name or as an existing directory."""
+    for label, path in outputs:
+        if path is None:
+            continue
+        text = os.fspath(path)
+        if text == "" or (isinstance(path, Path) and not path.name):
+            text = "" if text == "." else text
+            raise click.BadParameter(f"{text!r} is an empty file name; expected a file name", param_hint=f"'{label}'")
 
 
 

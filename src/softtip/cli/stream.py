@@ -104,13 +104,8 @@ def stream(
     payload=None,
     **estimator_opts,
 ):
-    import signal
-    import threading
 
-    from softtip.estimator import Estimator
-    from softtip.io.live import KeyReader, LiveStats, Recorder, TerminalView, run_live
     from softtip.io.netft import FAULTS
-    from softtip.io.sources import Interrupted, LogSource, SourceError
 
     if (host is None) == (replay is None):
         raise click.UsageError("give either --netft HOST or --replay LOG.csv")
@@ -133,6 +128,33 @@ def stream(
          ("--bias", estimator_opts.get("bias_file"))],
         [("-o", record), ("--rerun-save", rerun_save)],
     )
+    from softtip.io.atomic import Outputs
+
+    outputs = Outputs()  # the Rerun recording, put in place when the session ends (the -o recording is written as it comes)
+    rerun_file = outputs.file(rerun_save) if rerun_save else None  # a missing folder: stop before the sensor is opened
+    try:
+        _stream(
+            ctx, host, replay, speed, units, rdt_port, http_port, timeout, device_bias, faults, duration, record, view,
+            rerun_spawn, rerun_file, tip, payload, estimator_opts, outputs,
+        )  # fmt: skip
+    except BaseException:
+        outputs.discard()
+        raise
+    outputs.commit()
+
+
+def _stream(
+    ctx, host, replay, speed, units, rdt_port, http_port, timeout, device_bias, faults, duration, record, view,
+    rerun_spawn, rerun_file, tip, payload, estimator_opts, outputs,
+) -> None:
+    import signal
+    import threading
+
+    from softtip.estimator import Estimator
+    from softtip.io.live import KeyReader, LiveStats, Recorder, TerminalView, run_live
+    from softtip.io.sources import Interrupted, LogSource, SourceError
+
+    rerun_save = None if rerun_file is None else rerun_file.tmp
     fingertip = load_fingertip(tip)
     recorder = Recorder(record) if record is not None else None
     if rerun_spawn:  # before the sensor is opened: without a display the viewer fails late
@@ -216,6 +238,7 @@ def stream(
             for w in getattr(source, "warnings", None) or []:
                 click.echo(f"softtip: warning: {source.name}: {w}", err=True)
             click.echo(f"softtip: error: {exc}", err=True)
+            outputs.commit()  # what was seen up to the fault stays viewable
             ctx.exit(1)
     finally:
         for sig, handler in previous.items():

@@ -25,6 +25,11 @@ __all__ = [
 #: then the design itself fails with "Singular matrix").
 MIN_LOWPASS_FRACTION = 1e-4
 
+#: Largest magnitude any number option takes (in SI) when it names no bound of its own:
+#: beyond every physical quantity softtip works with, and far enough from the float range
+#: that squares and products of it stay finite (no overflow, no numpy RuntimeWarning).
+MAX_MAGNITUDE = 1e15
+
 
 class Number(click.ParamType):
     """A finite float in a range, reported with its unit.
@@ -69,6 +74,8 @@ class Number(click.ParamType):
             self.fail(f"{value!r} is not a finite number; expected {self.expected()}", param, ctx)
         if not self._inside(v):
             self.fail(f"{value!r}; expected {self.expected()}", param, ctx)
+        if abs(v) > MAX_MAGNITUDE:
+            self.fail(f"{value!r} is beyond any plausible value; expected {self.expected()} of at most {MAX_MAGNITUDE:g}", param, ctx)
         return v
 
     def _inside(self, v: float) -> bool:
@@ -115,6 +122,8 @@ class _Quantity(Number):
             self.fail(f"{value!r} is {v:g} {self.bare}; give a unit, e.g. '{value}mm'", param, ctx)
         if not self._inside(v):
             self.fail(f"{value!r}; expected {self.expected()}", param, ctx)
+        if abs(v) > MAX_MAGNITUDE:
+            self.fail(f"{value!r} is beyond any plausible value; expected {self.expected()} of at most {MAX_MAGNITUDE:g} in SI", param, ctx)
         return v
 
 

@@ -23,19 +23,23 @@ or the same file under another name: a hard link).
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import secrets
+import select
 import shutil
 import stat
 import sys
 import tempfile
+import time
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import IO, Any
 
 from softtip.errors import InputError
+from softtip.io.interrupt import check_interrupted
 
-__all__ = ["AtomicFile", "atomic_write", "atomic_write_text", "cannot_write", "check_distinct", "commit_all", "write_stdout"]
+__all__ = ["AtomicFile", "Outputs", "atomic_write", "atomic_write_text", "cannot_write", "check_distinct", "commit_all", "write_stdout"]
 
 PathLike = str | os.PathLike[str]
 
@@ -131,14 +135,18 @@ class AtomicFile:
 
     def __init__(self, path: PathLike) -> None:
         self.path = os.fspath(path)
+        if not self.path:
+            raise InputError("'': an empty file name; expected a file name for the output")
         target = os.path.realpath(self.path)  # a symlink's target is replaced, not the link
         try:
-            st = os.stat(target)
+            st = os.stat(self.path)  # follows links, also /dev/stdout -> /proc/self/fd/1 -> pipe:[...]
         except FileNotFoundError:
             st = None
         except OSError as exc:
             raise cannot_write(self.path, exc) from None
         self._device = st is not None and not stat.S_ISREG(st.st_mode)
+        if self._device:
+            target = self.path  # a pipe's "real path" (pipe:[123]) cannot be opened; the name can
         if st is not None:
             if stat.S_ISDIR(st.st_mode):
                 raise InputError(f"{self.path}: is a directory; expected a file name for the output")
@@ -178,19 +186,59 @@ class AtomicFile:
             return
         try:
             if self._device:
-                with open(self.tmp, "rb") as src, open(self._target, "wb") as dst:
-                    shutil.copyfileobj(src, dst, 1 << 20)
-                os.unlink(self.tmp)
+                self._copy_into_device()
             else:
-                with open(self.tmp, "rb+") as fh:
-                    os.fsync(fh.fileno())
-                if self._mode is not None:
-                    os.chmod(self.tmp, self._mode)
+                self._prepare()
                 os.replace(self.tmp, self._target)
         except OSError as exc:
             self.discard()
             raise cannot_write(self.path, exc) from None
         self._done = True
+
+    def _copy_into_device(self) -> None:
+        """Copy the content into a character device or FIFO.
+
+        A FIFO waits for its reader, as ``cat > FIFO`` does, but in short steps that let
+        Ctrl-C, SIGTERM and SIGHUP through (the kernel may hand a signal to another thread,
+        which would not interrupt a blocking open or write of the main one).
+        """
+        if not stat.S_ISFIFO(os.stat(self._target).st_mode):
+            with open(self.tmp, "rb") as src, open(self._target, "wb") as dst:
+                shutil.copyfileobj(src, dst, 1 << 20)
+            os.unlink(self.tmp)
+            self._done = True
+            return
+        while True:
+            try:
+                fd = os.open(self._target, os.O_WRONLY | os.O_NONBLOCK)
+                break
+            except OSError as exc:
+                if exc.errno != errno.ENXIO:  # ENXIO: no reader yet
+                    raise
+                check_interrupted()
+                time.sleep(0.05)
+        try:
+            with open(self.tmp, "rb") as src:
+                while chunk := src.read(1 << 16):
+                    view = memoryview(chunk)
+                    while view:
+                        check_interrupted()
+                        select.select([], [fd], [], 0.1)
+                        try:
+                            view = view[os.write(fd, view) :]
+                        except BlockingIOError:
+                            continue
+        finally:
+            os.close(fd)
+        os.unlink(self.tmp)
+        self._done = True
+
+    def _prepare(self) -> None:
+        """Sync the temporary file and give it the destination's mode (before the rename)."""
+        with open(self.tmp, "rb+") as fh:
+            os.fsync(fh.fileno())
+        if self._mode is not None:
+            os.chmod(self.tmp, self._mode)
 
     def discard(self) -> None:
         """Remove the temporary file (the destination is untouched). Safe to call twice."""
@@ -230,15 +278,181 @@ def partial_dir(dest: PathLike) -> Path:
             continue
 
 
+class Outputs:
+    """Every output of one run, staged and then committed together: all appear, or none.
+
+    Files (:meth:`file`: result tables, figures, TOML files, Rerun recordings) and output
+    paths written by another writer (:meth:`path`: a bag, a directory) are prepared beside
+    their destinations. :meth:`commit` first copies into devices and FIFOs (``/dev/stdout``,
+    a named pipe: what can block or fail), then renames the staged files and directories
+    into place, keeping a hard link of each file it replaces until all renames succeeded;
+    a failure restores the replaced files, so every file that existed before the run is
+    byte-identical after a failed run. Leaving the ``with`` block by an exception (an
+    error, Ctrl-C, SIGTERM, SIGHUP) discards everything staged; leaving it normally
+    commits what :meth:`commit` has not.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> with Outputs() as out:
+    ...     with out.file(d / "a.txt").open() as fh:
+    ...         _ = fh.write("a")
+    ...     with out.file(d / "b.txt").open() as fh:
+    ...         _ = fh.write("b")
+    >>> sorted(p.name for p in d.iterdir())
+    ['a.txt', 'b.txt']
+    """
+
+    def __init__(self) -> None:
+        self._files: list[AtomicFile] = []
+        self._paths: list[tuple[str, Path, Path]] = []  # (destination, staged path, its staging folder)
+        self._done = False
+
+    def file(self, path: PathLike) -> AtomicFile:
+        """Stage one output file; write to the returned :class:`AtomicFile` (``.open()`` or ``.tmp``)."""
+        af = AtomicFile(path)
+        self._files.append(af)
+        return af
+
+    def get(self, path: PathLike | None) -> AtomicFile | None:
+        """The staged file for ``path`` (as given to :meth:`file`), or None."""
+        if path is None:
+            return None
+        return next((f for f in self._files if f.path == os.fspath(path)), None)
+
+    def path(self, dest: PathLike) -> Path:
+        """Stage an output a writer creates itself (a bag directory or file), which must not exist yet.
+
+        Returns
+        -------
+        pathlib.Path
+            Where to create it: a new name, with the destination's file name, in a hidden
+            folder beside ``dest``; moved to ``dest`` by :meth:`commit`.
+
+        Raises
+        ------
+        InputError
+            ``dest`` exists, or its folder does not exist or is not writable.
+        """
+        dest_s = os.fspath(dest)
+        if not dest_s:
+            raise InputError("'': an empty name; expected a name for the output")
+        if os.path.lexists(dest_s):
+            raise InputError(f"{dest_s}: exists already; expected a new name for the output")
+        try:
+            folder = partial_dir(dest_s)
+        except OSError as exc:
+            raise cannot_write(dest_s, exc) from None
+        staged = folder / Path(dest_s).name
+        self._paths.append((dest_s, staged, folder))
+        return staged
+
+    def commit(self) -> None:
+        """Put every staged output in place, or none (see the class notes).
+
+        Raises
+        ------
+        InputError
+            An output could not be put in place (naming it and the system's reason);
+            nothing staged stays behind and every replaced file is restored.
+        """
+        if self._done:
+            return
+        self._done = True
+        try:
+            check_interrupted()  # a signal some library swallowed: never commit after one
+            for f in self._files:  # devices and pipes first: they can block or fail
+                if f.is_device:
+                    f.commit()
+            for f in self._files:
+                if not f.is_device:
+                    try:
+                        f._prepare()
+                    except OSError as exc:
+                        raise cannot_write(f.path, exc) from None
+        except BaseException:
+            self.discard()
+            raise
+        backups: list[tuple[str, str | None]] = []  # (target, its backup or None: a new file)
+        try:
+            for f in self._files:
+                if f.is_device:
+                    continue
+                backup = None
+                if os.path.lexists(f._target):
+                    backup = f"{f._target}.{secrets.token_hex(4)}.bak"
+                    try:
+                        os.link(f._target, backup)
+                    except OSError:
+                        backup = None  # no hard links here: the rename is still atomic
+                try:
+                    os.replace(f.tmp, f._target)
+                except OSError as exc:
+                    if backup is not None:
+                        os.unlink(backup)
+                    raise cannot_write(f.path, exc) from None
+                f._done = True
+                backups.append((f._target, backup))
+            for dest, staged, _ in self._paths:
+                if os.path.lexists(dest):
+                    raise InputError(f"{dest}: appeared during the run; expected a new name for the output")
+                try:
+                    os.rename(staged, dest)
+                except OSError as exc:
+                    raise cannot_write(dest, exc) from None
+                backups.append((dest, "dir"))
+        except BaseException:
+            for target, backup in reversed(backups):
+                with contextlib.suppress(OSError):
+                    if backup == "dir":
+                        _remove(target)
+                    elif backup is None:
+                        os.unlink(target)
+                    else:
+                        os.replace(backup, target)
+            self.discard()
+            raise
+        for _target, backup in backups:
+            if backup not in (None, "dir"):
+                with contextlib.suppress(OSError):
+                    os.unlink(backup)
+        self.discard()  # the staging folders (empty by now)
+
+    def discard(self) -> None:
+        """Remove everything staged (destinations untouched). Safe to call twice."""
+        self._done = True
+        for f in self._files:
+            f.discard()
+        for _, _, folder in self._paths:
+            shutil.rmtree(folder, ignore_errors=True)
+
+    def __enter__(self) -> Outputs:
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is not None:
+            self.discard()
+        else:
+            self.commit()
+
+
+def _remove(path: str) -> None:
+    if os.path.isdir(path) and not os.path.islink(path):
+        shutil.rmtree(path, ignore_errors=True)
+    else:
+        os.unlink(path)
+
+
 def commit_all(files: Iterable[AtomicFile]) -> None:
     """Put several outputs in place: devices and pipes first (they can block or fail), then the renames.
 
     A failure (or an interrupt) while writing into a device leaves every regular file
-    untouched; the renames that follow do not fail in practice.
+    untouched; a failing rename restores the files already replaced (:class:`Outputs`).
     """
-    files = list(files)
-    for f in sorted(files, key=lambda f: not f.is_device):
-        f.commit()
+    transaction = Outputs()
+    transaction._files = list(files)
+    transaction.commit()
 
 
 @contextlib.contextmanager

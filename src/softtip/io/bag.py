@@ -190,12 +190,28 @@ def read_bag(path: str | os.PathLike[str], topic: str | None = None, *, allow_pa
         reader = AnyReader([p], default_typestore=default_typestore())
         reader.open()
     except Exception as exc:  # rosbags raises several unrelated types for a bad file
+        if allow_partial:  # a bag cut short has no summary: read it record by record
+            scanned = _read_scanned(p, source, topic, exc)
+            if scanned is not None:
+                return scanned
+        elif _scannable(p):
+            raise InputError(
+                f"{source}: cannot read as a ROS bag ({exc}); the bag is damaged or was cut short "
+                "(--allow-partial reads the messages before the damage)"
+            ) from None
         raise InputError(
             f"{source}: cannot read as a ROS bag ({exc}); expected a rosbag2 directory (sqlite3 or MCAP), "
             "a .mcap or .db3 file, or a ROS 1 .bag file"
         ) from None
     try:
-        topics = reader.topics
+        try:
+            topics = reader.topics
+            counts = {name: int(info.msgcount) for name, info in topics.items()}
+        except (TypeError, ValueError, AttributeError, KeyError) as exc:  # e.g. message_count: lots
+            raise InputError(
+                f"{source}: the bag's metadata is damaged ({exc}); expected whole message counts "
+                "(metadata.yaml: message_count)"
+            ) from None
         if topic is None:
             wrench_topics = [
                 name for name, info in topics.items() if info.msgtype == WRENCH_TYPE
@@ -215,7 +231,7 @@ def read_bag(path: str | os.PathLike[str], topic: str | None = None, *, allow_pa
             raise InputError(
                 f"{source}: topic {topic!r} has type {info.msgtype}; expected {WRENCH_TYPE}; {_topic_list(topics)}"
             )
-        expected = int(info.msgcount)
+        expected = counts[topic]
         if expected < 0:
             raise InputError(
                 f"{source}: topic {topic!r}: the bag's metadata lists {expected} messages; expected a count of "
@@ -424,6 +440,106 @@ def write_estimates_bag(
                     _finite3(direction[k]) if names[k] == "line" else None,
                 )
                 bag.write(topic["markers"], ns, bag.marker_array(marks, h))
+
+
+def _scannable(p: Path) -> bool:
+    """An MCAP or ROS 1 bag file (or a rosbag2 directory of one MCAP file), by its magic bytes."""
+    from softtip.io.bagscan import MCAP_MAGIC, ROS1_MAGIC
+
+    files = [p] if p.is_file() else sorted(q for q in p.iterdir() if q.suffix == ".mcap") if p.is_dir() else []
+    if len(files) != 1:
+        return False
+    try:
+        with open(files[0], "rb") as fh:
+            head = fh.read(16)
+    except OSError:
+        return False
+    return head.startswith(MCAP_MAGIC) or head.startswith(ROS1_MAGIC)
+
+
+def _read_scanned(p: Path, source: str, topic: str | None, exc: BaseException) -> BagLog | None:
+    """A damaged MCAP or ROS 1 bag read from its start (:mod:`softtip.io.bagscan`); None when it is neither."""
+    from softtip.io.bagscan import scan_messages
+
+    files = [p] if p.is_file() else sorted(q for q in p.iterdir() if q.suffix == ".mcap") if p.is_dir() else []
+    if len(files) != 1:
+        return None
+    try:
+        listing = scan_messages(files[0], None)
+    except (ValueError, OSError):
+        return None
+    wrench_topics = [name for name, kind in listing.topics.items() if kind == WRENCH_TYPE]
+    if topic is None:
+        if len(wrench_topics) != 1:
+            raise InputError(
+                f"{source}: damaged bag ({exc}); {'several' if wrench_topics else 'no'} {WRENCH_TYPE} topics "
+                f"found before the damage; give one with --topic ({', '.join(sorted(listing.topics)) or 'none'})"
+            )
+        topic = wrench_topics[0]
+    elif topic not in wrench_topics:
+        raise InputError(
+            f"{source}: damaged bag ({exc}); no {WRENCH_TYPE} topic {topic!r} found before the damage "
+            f"(found: {', '.join(sorted(listing.topics)) or 'none'})"
+        )
+    result = scan_messages(files[0], topic)
+    if result.ros_version == 1:
+        from rosbags.typesys import Stores, get_typestore
+
+        store = get_typestore(Stores.ROS1_NOETIC)
+        decode = lambda raw: store.deserialize_ros1(raw, WRENCH_TYPE)  # noqa: E731
+    else:
+        store = default_typestore()
+        decode = lambda raw: store.deserialize_cdr(raw, WRENCH_TYPE)  # noqa: E731
+    n = len(result.messages)
+    wrench, stamps = np.empty((n, 6)), np.empty(n, dtype=np.int64)
+    frame_ids: dict[str, None] = {}
+    record_time_used = 0
+    damage = result.damage
+    k = 0
+    for timestamp, raw in result.messages:
+        try:
+            msg = decode(raw)
+        except Exception as err:  # noqa: BLE001 - a corrupt message can fail in many ways
+            damage = f"message {k + 1} cannot be read ({err})"
+            break
+        st = msg.header.stamp
+        ns = st.sec * 1_000_000_000 + st.nanosec
+        if ns == 0:
+            ns = timestamp
+            record_time_used += 1
+        f, m = msg.wrench.force, msg.wrench.torque
+        wrench[k] = (f.x, f.y, f.z, m.x, m.y, m.z)
+        stamps[k] = ns
+        frame_ids.setdefault(msg.header.frame_id, None)
+        k += 1
+    if k == 0:
+        raise InputError(f"{source}: damaged bag ({exc}); no readable {WRENCH_TYPE} message on {topic!r} before the damage")
+    wrench, stamps = wrench[:k], stamps[:k]
+    bad = np.flatnonzero(~np.all(np.isfinite(wrench), axis=1))
+    if len(bad):
+        raise InputError(
+            f"{source}: topic {topic!r}: message {bad[0] + 1} has a NaN or infinite wrench component; expected finite values"
+        )
+    step = np.diff(stamps)
+    back = np.flatnonzero(step < 0)
+    if len(back):
+        i = back[0] + 1
+        raise InputError(
+            f"{source}: topic {topic!r}: message {i + 1} has time {stamps[i] * 1e-9:.9f} s, before message {i} "
+            f"({stamps[i - 1] * 1e-9:.9f} s); expected non-decreasing header stamps"
+        )
+    return BagLog(
+        t=(stamps - stamps[0]) * 1e-9,
+        wrench=wrench,
+        stamps_ns=stamps,
+        frame_ids=tuple(frame_ids),
+        topic=topic,
+        source=source,
+        record_time_used=record_time_used,
+        expected=k,
+        repeated_stamps=int(np.count_nonzero(step == 0)),
+        damage=f"{damage or 'damaged'} ({exc})",
+    )
 
 
 def _finite3(v) -> tuple[float, float, float] | None:

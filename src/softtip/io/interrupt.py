@@ -10,11 +10,12 @@ removes its temporary file) and the command exits with the shell's code for the 
 from __future__ import annotations
 
 import contextlib
+import os
 import signal
 import threading
 from collections.abc import Iterator
 
-__all__ = ["Interrupted", "exit_code", "terminate_like_ctrl_c"]
+__all__ = ["Interrupted", "check_interrupted", "exit_code", "exit_now", "interrupted_signal", "terminate_like_ctrl_c"]
 
 _SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
 
@@ -36,13 +37,82 @@ def exit_code(exc: BaseException) -> int:
     return 128 + (exc.signum if isinstance(exc, Interrupted) else int(signal.SIGINT))
 
 
+_interrupted = threading.Event()
+_first_signal: list[int] = []
+
+
+def interrupted_signal() -> int | None:
+    """The signal that interrupted this process (within :func:`terminate_like_ctrl_c`), or None."""
+    return _first_signal[0] if _first_signal else None
+
+
+def check_interrupted() -> None:
+    """Raise the interrupt again if a signal came (code that swallowed it must not go on to commit outputs).
+
+    Raises
+    ------
+    KeyboardInterrupt
+        :class:`Interrupted` for SIGTERM and SIGHUP.
+    """
+    sig = interrupted_signal()
+    if sig is None:
+        return
+    if sig == signal.SIGINT:
+        raise KeyboardInterrupt
+    raise Interrupted(sig)
+
+
+def _ignore(signum, frame) -> None:
+    """A further signal while the first one unwinds: nothing to do (the run is ending)."""
+
+
+def _ignore_further_signals() -> None:
+    """Ignore SIGINT, SIGTERM and SIGHUP from now on (also those already pending: a Python
+    handler that does nothing, not SIG_IGN, which makes Python report a "race condition"):
+    the cleanup of the first one (temporary files, worker processes) must not be cut short
+    by a second, and the exit code stays the first one's."""
+    _interrupted.set()
+    for sig in (signal.SIGINT, *_SIGNALS):
+        with contextlib.suppress(OSError, ValueError):
+            if signal.getsignal(sig) is not signal.SIG_IGN:
+                signal.signal(sig, _ignore)
+
+
+def exit_now(code: int) -> None:
+    """End the process at once with ``code`` after a signal was handled (the cleanup is done).
+
+    Skips the interpreter's finalisation: it restores the default signal actions (a second
+    signal would then kill the process with another status) and runs exit handlers that may
+    wait (multiprocessing joins its workers). Returns without exiting when no signal was
+    received (an in-process ``KeyboardInterrupt``, e.g. under a test runner).
+    """
+    if not _interrupted.is_set():
+        return
+    import sys
+
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    os._exit(code)
+
+
 def _raise(signum, frame) -> None:
+    _first_signal.append(signum)
+    _ignore_further_signals()
     raise Interrupted(signum)
+
+
+def _raise_keyboard_interrupt(signum, frame) -> None:
+    _first_signal.append(signum)
+    _ignore_further_signals()
+    raise KeyboardInterrupt
 
 
 @contextlib.contextmanager
 def terminate_like_ctrl_c() -> Iterator[None]:
-    """Within the block, SIGTERM and SIGHUP raise :class:`Interrupted`; handlers restored after.
+    """Within the block, SIGTERM and SIGHUP raise :class:`Interrupted` (SIGINT ``KeyboardInterrupt``);
+    handlers restored after. After the first, further signals are ignored until the block is
+    left, so that two signals in quick succession still unwind cleanly once.
 
     Signals left ignored by the parent (``nohup`` ignores SIGHUP) stay ignored. Does nothing
     outside the main thread, where Python cannot set signal handlers.
@@ -51,14 +121,15 @@ def terminate_like_ctrl_c() -> Iterator[None]:
         yield
         return
     previous = {}
-    for sig in _SIGNALS:
+    for sig in (signal.SIGINT, *_SIGNALS):
         current = signal.getsignal(sig)
         if current is signal.SIG_IGN:
             continue
         previous[sig] = current
-        signal.signal(sig, _raise)
+        signal.signal(sig, _raise_keyboard_interrupt if sig == signal.SIGINT else _raise)
     try:
         yield
     finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
+        if not _interrupted.is_set():  # after a signal the others stay ignored until the process ends
+            for sig, handler in previous.items():
+                signal.signal(sig, handler)

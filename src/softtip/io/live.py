@@ -22,9 +22,11 @@ is full, and those it then drops are counted apart from the network's losses.
 from __future__ import annotations
 
 import collections
+import contextlib
 import itertools
 import math
 import os
+import stat
 import sys
 import threading
 import time
@@ -172,8 +174,15 @@ class Recorder:
             raise InputError(
                 f"{self.path}: is a directory; expected a file name for the recording"
             )
+        try:
+            special = not stat.S_ISREG(os.stat(self.path).st_mode)  # /dev/null, /dev/stdout, a FIFO: written into
+        except OSError:
+            special = False
         directory = os.path.dirname(os.path.abspath(self.path))
-        if not os.path.isdir(directory) or not os.access(directory, os.W_OK):
+        if special:
+            if not os.access(self.path, os.W_OK):
+                raise InputError(f"{self.path}: cannot write there (permission denied); expected a writable file or device")
+        elif not os.path.isdir(directory) or not os.access(directory, os.W_OK):
             raise InputError(
                 f"{self.path}: cannot write there; expected an existing, writable directory"
             )
@@ -189,9 +198,15 @@ class Recorder:
         self._thread.start()
 
     def add(self, row: tuple) -> None:
-        """Queue one row (from the consumer loop; never blocks)."""
+        """Queue one row (from the consumer loop; never blocks).
+
+        Raises
+        ------
+        InputError
+            The writer thread could not write (disk full, a pipe or FIFO whose reader quit).
+        """
         if self._error is not None:
-            raise self._error
+            self.close()  # raises the InputError naming the file and the reason
         self._pending.append(row)
 
     def _write_pending(self) -> None:
@@ -229,13 +244,45 @@ class Recorder:
         try:
             if self._error is None:
                 self._write_pending()
+        except OSError as exc:
+            self._error = exc
         finally:
             if self._fh is not None:
-                self._fh.flush()
-                os.fsync(self._fh.fileno())
-                self._fh.close()
+                try:
+                    self._fh.flush()
+                    if stat.S_ISREG(os.fstat(self._fh.fileno()).st_mode):  # no fsync of a pipe, FIFO or device
+                        os.fsync(self._fh.fileno())
+                except OSError as exc:
+                    self._error = self._error or exc
+                finally:
+                    with contextlib.suppress(OSError):
+                        self._fh.close()
         if self._error is not None:
-            raise InputError(f"{self.path}: cannot write the recording ({self._error})")
+            reason = getattr(self._error, "strerror", None) or str(self._error)
+            raise InputError(
+                f"{self.path}: cannot write the recording ({reason}); {self.rows} row(s) were written before"
+            ) from None
+
+
+class _DurationWatchdog:
+    """Sets ``stop`` once ``deadline`` (``time.monotonic()``, adjustable) has passed; ``fired`` says it did."""
+
+    def __init__(self, deadline: float, stop: threading.Event) -> None:
+        self.deadline, self.stop, self.fired = deadline, stop, False
+        self._cancel = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True, name="softtip-duration")
+        self._thread.start()
+
+    def _run(self) -> None:
+        while not self._cancel.wait(min(0.05, max(0.0, self.deadline - time.monotonic()))):
+            if time.monotonic() >= self.deadline:
+                self.fired = True
+                self.stop.set()
+                return
+
+    def cancel(self) -> None:
+        self._cancel.set()
+        self._thread.join(1.0)
 
 
 def _fmt_vec(v, scale: float = 1.0, fmt: str = "{:+7.2f}") -> str:
@@ -489,12 +536,17 @@ def run_live(
     if view is not None:
         view.start()
     deadline = math.inf
+    # --duration also ends a session that never gives a sample (a device sending only
+    # malformed or repeated datagrams): a watchdog sets ``stop`` at the duration counted
+    # from now, then from the first sample
+    watchdog = _DurationWatchdog(time.monotonic() + duration, stop) if duration is not None else None
     try:
         for r in readings(source):
             if stats.started is None:
                 stats.started = time.monotonic()
                 if duration is not None:
                     deadline = stats.started + duration
+                    watchdog.deadline = deadline
             if tare_request is not None and tare_request.is_set():
                 tare_request.clear()
                 estimator.tare()
@@ -509,16 +561,18 @@ def run_live(
                 add(estimate_row(e, r))
             if on_estimate is not None:
                 on_estimate(e, r)
-            if stop.is_set():
-                reason = "interrupt"
-                break
             if time.monotonic() >= deadline:
                 reason = "duration"
                 break
+            if stop.is_set():
+                reason = "duration" if watchdog is not None and watchdog.fired else "interrupt"
+                break
         else:
             if stop.is_set():  # the source ended because it was asked to stop
-                reason = "interrupt"
+                reason = "duration" if watchdog is not None and watchdog.fired else "interrupt"
     finally:
+        if watchdog is not None:
+            watchdog.cancel()
         try:
             if recorder is not None:
                 recorder.close()

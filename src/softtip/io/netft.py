@@ -60,6 +60,7 @@ import time
 import urllib.request
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
+from typing import NoReturn
 
 from softtip.io.sources import Interrupted, Reading, SourceError
 
@@ -137,6 +138,13 @@ class DeviceInfo:
     rate_hz: float | None
 
 
+#: What a real Net F/T or Axia reports: counts per force or torque unit (ATI's calibrations use
+#: 1e3–1e7 counts per unit) and RDT output rates (at most 7 kHz on a Net F/T, 7.8 kHz on an Axia);
+#: values outside these ranges (a corrupted or hostile configuration page) are refused.
+COUNTS_PER_UNIT_RANGE = (1.0, 1e9)
+RDT_RATE_RANGE = (1.0, 1e5)
+
+
 def _field(text: str, name: str) -> str | None:
     m = re.search(rf"<{name}>\s*([^<]*?)\s*</{name}>", text)
     return m.group(1) if m else None
@@ -174,13 +182,23 @@ def parse_device_xml(text: str, where: str = "device") -> DeviceInfo:
             f"{where}: calibration in units {fu!r} / {tu!r}; expected force in "
             f"{', '.join(FORCE_UNITS_SI)} and torque in {', '.join(TORQUE_UNITS_SI)}"
         )
+    rate = _number(text, "comrdtrate")
+    checks = [("cfgcpf (counts per force unit)", cpf, COUNTS_PER_UNIT_RANGE), ("cfgcpt (counts per torque unit)", cpt, COUNTS_PER_UNIT_RANGE)]
+    if rate is not None:
+        checks.append(("comrdtrate (RDT output rate, Hz)", rate, RDT_RATE_RANGE))
+    for setting, value, (low, high) in checks:
+        if not low <= value <= high:
+            raise SourceError(
+                f"{where}: /netftapi2.xml reports {setting} = {value:g}, outside any Net F/T's or Axia's "
+                f"range [{low:g}, {high:g}]; refusing to believe it (check the sensor's configuration page)"
+            )
     return DeviceInfo(
         product=_field(text, "prodname") or "Net F/T",
         force_unit=fu,
         torque_unit=tu,
         counts_per_force=cpf,
         counts_per_torque=cpt,
-        rate_hz=_number(text, "comrdtrate"),
+        rate_hz=rate,
     )
 
 
@@ -893,6 +911,16 @@ class NetFTSource:
     def __exit__(self, *exc) -> None:
         self.close()
 
+    def _no_new_sample(self, tracker: RDTTracker) -> NoReturn:
+        """Raise the :class:`SourceError` of a stream that gave no new sample for ``timeout`` s."""
+        c = tracker.counters()
+        faults = ", ".join(f"{c[k]} {k}" for k in ("malformed", "duplicates", "late") if c.get(k))
+        raise SourceError(
+            f"{self._where()}: no new sample for {self.timeout:g} s (--timeout; after {tracker.received} samples"
+            + (f"; meanwhile {faults}" if faults else "")
+            + "); expected a continuous RDT stream (sensor unplugged or stopped, or sending only faulty records?)"
+        )
+
     def __iter__(self) -> Iterator[Reading]:
         """Samples until closed or ``stop`` is set.
 
@@ -912,12 +940,18 @@ class NetFTSource:
         stop = self.stop_event
         timeout_ns = int(self.timeout * 1e9)
         resend_ns = int(self.resend_s * 1e9)
-        last_ns = time.monotonic_ns()
+        last_ns = time.monotonic_ns()  # the last new sample's arrival (malformed, repeated and late datagrams do not count)
         while True:
             if queue:
+                if stop is not None and stop.is_set():  # a flood of datagrams must not hold off the end
+                    return
                 data, host, arrival, overflow = popleft()
-                last_ns = arrival
-                yield from feed(data, host, arrival, overflow)
+                out = feed(data, host, arrival, overflow)
+                if out:
+                    last_ns = arrival
+                    yield from out
+                elif arrival - last_ns >= timeout_ns:
+                    self._no_new_sample(tracker)
                 continue
             # nothing queued: check for the end, a silence, then wait a little
             if self._sock is None or (stop is not None and stop.is_set()):
@@ -927,10 +961,7 @@ class NetFTSource:
             now = time.monotonic_ns()
             silent = now - last_ns
             if silent >= timeout_ns:
-                raise SourceError(
-                    f"{self._where()}: no data for {self.timeout:g} s (after {tracker.received} samples); "
-                    "expected a continuous RDT stream (sensor unplugged or stopped?)"
-                )
+                self._no_new_sample(tracker)
             if silent >= resend_ns and time.monotonic() - self._last_request >= self.resend_s:
                 self._request(_CMD_START)  # a device that restarted streams again when asked
             self._waiting = True

@@ -30,8 +30,11 @@ within :data:`TOLERANCE_DEG`; an area (thick plate, plane) when ``line`` on at m
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
+import signal
+import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
@@ -277,6 +280,34 @@ def _grasp_key(c: Condition) -> tuple:
     return (c.experiment == "E6", c.kind, c.size, c.angle_deg, c.edge_radius, c.contact_point)
 
 
+def _worker_init() -> None:
+    """A worker of :func:`run_reproduction`'s pool: the parent decides when it ends.
+
+    Ctrl-C and SIGHUP reach the whole process group; the parent cancels the pool and
+    terminates the workers (SIGTERM, at its default action here).
+    """
+    for name in ("SIGINT", "SIGHUP"):
+        if hasattr(signal, name):
+            signal.signal(getattr(signal, name), signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def _end_pool(pool: ProcessPoolExecutor, timeout: float = 5.0) -> None:
+    """Cancel what is queued and end the workers (terminate, then kill after ``timeout`` s)."""
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for p in processes:
+        with contextlib.suppress(Exception):
+            p.terminate()
+    deadline = time.monotonic() + timeout
+    for p in processes:
+        with contextlib.suppress(Exception):
+            p.join(max(0.0, deadline - time.monotonic()))
+            if p.is_alive():
+                p.kill()
+                p.join(1.0)
+
+
 def _run_one(args):
     condition, seed = args
     return run_condition(condition, seed=seed)
@@ -322,14 +353,21 @@ def run_reproduction(
     -------
     list of ConditionResult
     """
+    out = Path(out_dir)
+    check_out_dir(out)  # before the work: a file in the way, or no permission
     todo = conditions(experiments)
     # E2's plate also appears in E3: simulate each distinct grasp once
     unique = list(dict.fromkeys(_grasp_key(c) for c in todo))
     args = [(next(c for c in todo if _grasp_key(c) == key), seed) for key in unique]
     if jobs > 1:
-        with ProcessPoolExecutor(max_workers=jobs) as pool:
+        pool = ProcessPoolExecutor(max_workers=jobs, initializer=_worker_init)
+        try:
             it = pool.map(_run_one, args)
             done = list(progress(it, total=len(args)) if progress else it)
+        except BaseException:  # an error, Ctrl-C, SIGTERM, SIGHUP: the pool goes now, not after its queue
+            _end_pool(pool)
+            raise
+        pool.shutdown()
     else:
         it = map(_run_one, args)
         done = list(progress(it, total=len(args)) if progress else it)
@@ -338,11 +376,57 @@ def run_reproduction(
     for c in todo:
         r = by_key[_grasp_key(c)]
         results.append(replace(r, condition=c, agrees=_measured(c.expect_measured, r.outcome)) if r.condition != c else r)
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    write_figures(results, out)
-    write_summary(results, out)
+    _write_report(results, out)
     return results
+
+
+def check_out_dir(out: Path) -> None:
+    """Refuse an output directory that cannot be one (a file or device in the way, no permission).
+
+    Raises
+    ------
+    InputError
+        Naming the directory and what is expected.
+    """
+    from softtip.errors import InputError
+
+    if out.exists() and not out.is_dir():
+        raise InputError(f"{out}: exists and is not a directory; expected a directory for the figures and the summary (-o DIR)")
+    existing = out
+    while not existing.exists():
+        if existing.parent == existing:
+            break
+        existing = existing.parent
+    if not existing.is_dir():
+        raise InputError(f"{out}: {existing} is not a directory; expected a directory path for -o DIR")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise InputError(f"{out}: cannot create or write it ({existing}: permission denied); expected a writable directory")
+
+
+def _write_report(results: Sequence[ConditionResult], out: Path) -> None:
+    """Figures and summary into ``out``, all together or none (:class:`softtip.io.atomic.Outputs`)."""
+    import shutil
+    import tempfile
+
+    from softtip.io.atomic import Outputs, cannot_write
+
+    staging = Path(tempfile.mkdtemp(prefix=".softtip-reproduce."))
+    try:
+        write_figures(results, staging)
+        write_summary(results, staging)
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise cannot_write(out, exc) from None
+        with Outputs() as outputs:
+            for f in sorted(staging.iterdir()):
+                staged = outputs.file(out / f.name)
+                try:
+                    shutil.move(f, staged.tmp)
+                except OSError as exc:
+                    raise cannot_write(out / f.name, exc) from None
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
 
 
 # -- report ----------------------------------------------------------------------------------
