@@ -21,11 +21,25 @@ from softtip.errors import InputError
 __all__ = ["main"]
 
 
+def _import_pandas_if_installed() -> None:
+    """pyarrow imports pandas lazily, the first time it converts a table, when pandas is
+    installed (it is not a dependency of softtip). A signal whose handler raises inside that
+    long import can leave the interpreter's import lock held, and the run then hangs at its
+    next import instead of ending. So the import happens here, before softtip's signal
+    handlers are armed (a signal now ends the process the default way); without pandas this
+    costs one look-up."""
+    import importlib.util
+
+    if importlib.util.find_spec("pandas") is not None:
+        import pandas  # noqa: F401
+
+
 class _Group(click.Group):
     def invoke(self, ctx):
         from softtip.io.atomic import cannot_write, silence_stdout
         from softtip.io.interrupt import Interrupted, exit_code, exit_now, interrupted_signal, terminate_like_ctrl_c
 
+        _import_pandas_if_installed()  # a command runs (the group's --help and --version end before)
         try:
             with terminate_like_ctrl_c():
                 result = super().invoke(ctx)
