@@ -544,6 +544,9 @@ def _estimate_in_pieces(
             except OSError as exc:
                 raise cannot_write(output, exc) from None
         except NotStreamable:  # nothing written: the one-shot run takes it, or says what is wrong
+            found = blocks.locate_error()  # an error in the log, found without reading it at once
+            if found is not None:
+                raise found from None
             return False
         except ValueError as exc:  # e.g. a low-pass cutoff above Nyquist for this log's rate
             if isinstance(exc, InputError):
