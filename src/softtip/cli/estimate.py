@@ -544,6 +544,9 @@ def _estimate_in_pieces(
             except OSError as exc:
                 raise cannot_write(output, exc) from None
         except NotStreamable:  # nothing written: the one-shot run takes it, or says what is wrong
+            found = blocks.locate_error()  # an error in the log, found without reading it at once
+            if found is not None:
+                raise found from None
             return False
         except ValueError as exc:  # e.g. a low-pass cutoff above Nyquist for this log's rate
             if isinstance(exc, InputError):
@@ -558,6 +561,16 @@ def _estimate_in_pieces(
     return True
 
 
+def _column(values) -> np.ndarray:
+    """An extra column as an array: text (a list of the CSV's cells) as str objects, not a unicode array
+    as wide as its longest cell in every row (one long note made it gigabytes)."""
+    from softtip.io.tables import text_column
+
+    if isinstance(values, list) and all(type(x) is str for x in values):
+        return text_column(values)
+    return np.asarray(values)
+
+
 def _output_columns(est, extra, output_units: str, carried=(), notes: list[str] | None = None) -> dict:
     """The output table: the estimates' columns in ``output_units`` (``Estimates.columns``), then the input's
     extra columns (renamed ``input_NAME`` when named like an output column, said in ``notes``; a ``carried``
@@ -567,7 +580,7 @@ def _output_columns(est, extra, output_units: str, carried=(), notes: list[str] 
     columns = est.columns(units=output_units)
     names = extra_names(list(columns), list(extra))
     for name, values in extra.items():
-        columns[names[name]] = placeholder(len(est)) if name in carried else np.asarray(values)
+        columns[names[name]] = placeholder(len(est)) if name in carried else _column(values)
         if notes is not None and names[name] != name:
             notes.append(f"input column {name!r} is named like an output column; written as {names[name]!r}")
     return columns

@@ -726,7 +726,14 @@ def _with_cut_hint(exc: InputError, text: str, source: str, data_base: int) -> I
     if text.endswith(("\n", "\r")):
         return exc
     last = text.count("\n") + 1
-    if last <= data_base or not str(exc).startswith(f"{source}:{last}: "):
+    if last <= data_base:
+        return exc
+    return _cut_hint(exc, source, last)
+
+
+def _cut_hint(exc: InputError, source: str, last: int) -> InputError:
+    """:func:`_with_cut_hint` for a file without a line break after its line ``last``."""
+    if not str(exc).startswith(f"{source}:{last}: "):
         return exc
     return InputError(
         f"{exc} (the file ends inside line {last}, with no line break after it: was it cut while being written? "
@@ -1461,6 +1468,11 @@ def _plan_table(columns: Mapping[str, Sequence[Any] | np.ndarray], float_format:
             converters.append(_str_cells)
             if _needs_quotes(arr):
                 quoting = "needed"
+        elif kind == "O" and _is_text(arr):  # a text column kept as str objects (text_column): as unicode
+            specs.append("%s")
+            converters.append(_str_cells)
+            if any(ch in "".join(arr.tolist()) for ch in _CSV_SPECIAL):
+                quoting = "needed"
         else:  # bytes, objects, complex, datetimes: their str(), quoted when needed
             specs.append("%s")
             converters.append(_object_cells)
@@ -1476,6 +1488,22 @@ def _plan_table(columns: Mapping[str, Sequence[Any] | np.ndarray], float_format:
     return _Plan(
         header, ",".join(specs) + "\n", converters, arrays, next(iter(lengths.values())), names, digits, quoting
     )
+
+
+def text_column(cells: Sequence[str]) -> np.ndarray:
+    """Text cells as a 1-D numpy array of ``str`` objects, for a table column.
+
+    Not a numpy unicode array: its cells are all as wide as the longest, so one 2000-character
+    note made every cell of a 250000-row column 8000 bytes (2 GB). Written as a unicode
+    column would be (quoted only when a cell needs it)."""
+    out = np.empty(len(cells), dtype=object)
+    out[:] = cells
+    return out
+
+
+def _is_text(arr: np.ndarray) -> bool:
+    """Whether every cell of an object array is a ``str``."""
+    return all(type(x) is str for x in arr.tolist())
 
 
 def _needs_quotes(arr: np.ndarray) -> bool:
@@ -1739,6 +1767,12 @@ def _write_atomic(path: str, plan: _Plan) -> None:
 
 #: Bytes of CSV text per block of :func:`iter_log`.
 _CSV_BLOCK_BYTES = 1 << 22
+#: Bytes of CSV text read at once to find the line of an error met by :func:`iter_log`.
+_LOCATE_BYTES = 1 << 22
+
+
+class _NoPlace(Exception):
+    """:meth:`LogBlocks.locate_error` cannot place an error in bounded memory."""
 
 
 class NotStreamable(Exception):
@@ -1772,6 +1806,10 @@ class LogBlocks:
         self._last_t = -math.inf
         self._first_line: int | None = None
         self._quoted: bool | None = None  # whether the data holds a quote (then rows may span lines); None: not looked
+        # CSV: rows (one line each) read and found good before the reader stopped on what looks like an error
+        self._error_at: int | None = None
+        self._header: _Header | None = None
+        self._index: dict[str, int] = {}
 
     def __iter__(self) -> Any:
         blocks = self._parquet_blocks() if self.parquet else self._csv_blocks()
@@ -1783,6 +1821,7 @@ class LogBlocks:
     def _checked(self, blocks: Any) -> Any:
         for t, wrench, extra in blocks:
             if not (np.isfinite(t).all() and np.isfinite(wrench).all()) or (np.diff(t) < 0).any() or t[0] < self._last_t:
+                self._error_at = self.n
                 raise NotStreamable("a value to word")
             same = np.flatnonzero(np.diff(np.concatenate(([self._last_t], t))) == 0)
             if len(same) and self._first_repeat < 0:
@@ -1823,6 +1862,7 @@ class LogBlocks:
 
     def _csv_blocks(self) -> Any:
         import pyarrow as pa
+        import pyarrow.compute as pc
         from pyarrow import csv as pacsv
 
         try:
@@ -1853,6 +1893,8 @@ class LogBlocks:
         types = {name: pa.float64() if j in index.values() else pa.string() for j, name in enumerate(names)}
         extra_idx = [j for j in range(len(names)) if j not in index.values()]
         self._size, self._start = size, start
+        self._header, self._index = header, index
+        done = 0  # rows yielded
         stream = pa.OSFile(self.path)
         reader = None
         try:
@@ -1874,24 +1916,130 @@ class LogBlocks:
                     continue
                 cols = [batch.column(index[name]) for name in REQUIRED_COLUMNS]
                 if any(c.null_count for c in cols):
+                    self._error_at = done
                     raise NotStreamable("empty cell")
                 t = np.array(cols[0].to_numpy(), dtype=np.float64)
                 wrench = np.empty((batch.num_rows, 6))
                 for i, col in enumerate(cols[1:]):
                     wrench[:, i] = col.to_numpy()
-                extra = {names[j]: np.asarray(batch.column(j).to_pylist(), dtype=str) for j in extra_idx}
-                if any(np.char.find(col, "\n").max(initial=-1) >= 0 or np.char.find(col, "\r").max(initial=-1) >= 0
-                       for col in extra.values()):  # fmt: skip
+                if any(pc.any(pc.match_substring(batch.column(j), "\n")).as_py()
+                       or pc.any(pc.match_substring(batch.column(j), "\r")).as_py() for j in extra_idx):  # fmt: skip
                     raise NotStreamable("a cell spans lines: read_log tells a note from a stray quote")
+                # object arrays of str: a numpy unicode array would take 4 bytes times the longest cell for every cell
+                extra = {names[j]: text_column(batch.column(j).to_pylist()) for j in extra_idx}
                 if self.progress is not None:
                     self.progress(batch.num_rows)
                 yield t, wrench, extra
-        except (pa.ArrowException, ValueError, OSError):
+                done += batch.num_rows
+        except (pa.ArrowException, ValueError):
+            self._error_at = done
+            raise NotStreamable("parser") from None
+        except OSError:
             raise NotStreamable("parser") from None
         finally:
             if reader is not None:
                 reader.close()  # end its read-ahead thread before the file goes (a SIGABRT at exit otherwise)
             stream.close()
+
+    def locate_error(self) -> InputError | None:
+        """After a :class:`NotStreamable` on what looks like an error in a CSV log: the error
+        :func:`read_log` would raise, found by reading the file from the last good row in
+        windows of :data:`_LOCATE_BYTES` (memory bounded by that, not by the file).
+
+        ``None`` when the reader did not stop on an error, or the window parser finds none
+        (a cell only Python's parser reads) or cannot place it (quotes, lone carriage
+        returns, a line longer than a window): :func:`read_log` on the whole file decides then.
+        """
+        if self.parquet or self._error_at is None or self._header is None or self._first_line is None:
+            return None
+        try:
+            with open(self.path, "rb") as fh:
+                return self._locate(fh)
+        except (OSError, UnicodeDecodeError, _NoPlace):
+            return None
+
+    def _locate(self, fh: BinaryIO) -> InputError | None:
+        bad_utf8 = self._first_bad_utf8(fh)
+        if bad_utf8 is not None:  # read_log decodes the whole file first: this error wins wherever it is
+            return bad_utf8
+        # the first byte of the last good row (the context of the next: t must not go back)
+        skip = max(self._error_at - 1, 0)
+        fh.seek(self._start)
+        pos, left = self._start, skip
+        while left:
+            chunk = fh.read(_LOCATE_BYTES)
+            if not chunk:
+                return None
+            if chunk.count(b"\r") != chunk.count(b"\r\n"):
+                return None  # lone CR line ends (or a CR LF cut by the chunk): lines not counted here
+            breaks = chunk.count(b"\n")
+            if breaks < left:
+                left -= breaks
+                pos += len(chunk)
+                continue
+            k = -1
+            for _ in range(left):
+                k = chunk.index(b"\n", k + 1)
+            pos += k + 1
+            left = 0
+        line = self._first_line + skip  # the line at pos
+        header, index = self._header, self._index
+        while True:
+            fh.seek(pos)
+            window = fh.read(_LOCATE_BYTES)
+            at_end = pos + len(window) >= self._size
+            if not at_end:
+                cut = window.rfind(b"\n") + 1
+                if cut == 0:
+                    return None  # a line longer than a window
+                window = window[:cut]
+                body = window.rstrip(b"\r\n")  # blank lines at a window's end may be followed by data
+                last = body.rfind(b"\n") + 1
+                if last == 0:
+                    return None
+            if b'"' in window or window.count(b"\r") != window.count(b"\r\n"):
+                return None  # the one-shot reader words quotes and lone CRs
+            if not window.strip():
+                return None
+            text = window.decode("utf-8")
+            lines = io.StringIO(text)
+            part = _Header(names=header.names, line=header.line, data_base=line - 1, lines=lines, comments=[],
+                           delimiter=header.delimiter, decimal=header.decimal, cmap=header.cmap)  # fmt: skip
+            try:
+                _parse_careful(part, index, self.source, (0, 0))
+            except InputError as exc:
+                if at_end and not window.endswith((b"\n", b"\r")):
+                    return _cut_hint(exc, self.source, line + window.count(b"\n"))
+                return exc
+            if at_end:
+                return None  # nothing wrong after all: read_log says what it takes
+            # on from the last data line of this window (the next one's context)
+            line += window.count(b"\n", 0, last)
+            pos += last
+
+    def _first_bad_utf8(self, fh: BinaryIO) -> InputError | None:
+        """The error :func:`read_log` gives for invalid UTF-8, from a pass over the file (bounded memory)."""
+        fh.seek(self._start)
+        pos, line, held = self._start, self._first_line or 1, b""
+        while True:
+            chunk = fh.read(_LOCATE_BYTES)
+            data = held + chunk
+            cut = len(data) if not chunk else data.rfind(b"\n") + 1  # whole lines: no character is split
+            if chunk and cut == 0 and len(data) > 4 * _LOCATE_BYTES:
+                raise _NoPlace("a line longer than 4 windows")
+            part, held = data[:cut], data[cut:]
+            try:
+                part.decode("utf-8")
+            except UnicodeDecodeError as exc:
+                at = line + part.count(b"\n", 0, exc.start)
+                return InputError(
+                    f"{self.source}:{at}: not valid UTF-8 (byte 0x{part[exc.start]:02x} at byte offset {pos + exc.start}); "
+                    "expected a UTF-8 text file (re-save it as UTF-8)"
+                )
+            if not chunk:
+                return None
+            line += part.count(b"\n")
+            pos += len(part)
 
     def _ends_with_break(self) -> bool:
         """Whether the file ends with a line break (else its last line may have been cut)."""
