@@ -349,7 +349,7 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
         with np.errstate(invalid="ignore"):
             above = np.asarray(ms.h_norm, dtype=float) > config.line_threshold(ms.h_std)
         idx, seg_start = _segment_starts(begin)
-        # area is a reading of the current window: more than half of the window's samples
+        # area is a reading of the current window: more than area_share of the window's samples
         # show h spread over both axes (a transient spread as a new rock begins does not make
         # one, and the reading ends when the window no longer shows it)
         area = _vote(t, located, seg_start, (area_now & above).astype(np.int64), config.evidence_window, config.area_share) == 1
@@ -574,7 +574,7 @@ class EvidenceTracker:
             minor > h_noise and h_ratio >= self._enter and hn > thr
             and ((f_minor > f_noise and f_minor >= self._fmin2) or minor >= self._hmin2)
         )  # fmt: skip
-        # area: more than half of the window's samples spread over both axes (the batch's vote)
+        # area: more than area_share of the window's samples spread over both axes (the batch's vote)
         areas = self._areas
         areas.append((t, spread))
         self._n_area += spread
