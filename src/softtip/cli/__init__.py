@@ -7,6 +7,6 @@ returns: :mod:`~softtip.cli.estimate`, :mod:`~softtip.cli.stream`, :mod:`~softti
 several commands share in :mod:`~softtip.cli.options`, the group in :mod:`~softtip.cli.app`.
 """
 
-from softtip.cli.app import main
+from softtip.cli.app import main, run
 
-__all__ = ["main"]
+__all__ = ["main", "run"]

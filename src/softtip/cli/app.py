@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import signal
 import sys
 
@@ -89,3 +90,27 @@ def main() -> None:
 
 for _command in (estimate, stream, simulate, reproduce, calibrate, calibrate_payload, fuse):
     main.add_command(_command)
+
+
+def run() -> None:
+    """The ``softtip`` console command: :data:`main`; a run that failed then ends at once.
+
+    After a failure every output has been discarded and the message written, so nothing is
+    left for the interpreter's finalisation to do but destroy native libraries' state; there a
+    reader thread of a native library that is still winding down occasionally aborts the
+    process (``terminate called without an active exception``, exit -6 instead of the
+    failure's code). So a failed run flushes its streams and exits with its code directly; a
+    successful one ends normally. In-process callers (tests) use :data:`main` itself.
+    """
+    try:
+        main(standalone_mode=True)
+    except SystemExit as exc:
+        code = exc.code
+        if code in (0, None):
+            raise
+        for stream in (sys.stdout, sys.stderr):
+            try:
+                stream.flush()
+            except Exception:  # noqa: BLE001 - a closed pipe: nothing more can be said
+                pass
+        os._exit(code if isinstance(code, int) else 1)

@@ -162,6 +162,7 @@ def _stream(
 
         check_viewer()
     viz = optional_extra("softtip.viz.rerun", "viz") if (rerun_spawn or rerun_save) else None
+    logger = None  # the Rerun view, once the sensor is open
 
     stop = threading.Event()
     # Ctrl-C, SIGTERM and SIGHUP end the loop between two samples (or a wait for one): the
@@ -238,6 +239,8 @@ def _stream(
             for w in getattr(source, "warnings", None) or []:
                 click.echo(f"softtip: warning: {source.name}: {w}", err=True)
             click.echo(f"softtip: error: {exc}", err=True)
+            if logger is not None:
+                logger.close()  # written out before it is put in place
             outputs.commit()  # what was seen up to the fault stays viewable
             ctx.exit(1)
     finally:
