@@ -282,6 +282,11 @@ def read_bag(path: str | os.PathLike[str], topic: str | None = None, *, allow_pa
                 f"{source}: topic {topic!r}: read {k} messages, but the bag's metadata lists {expected}; the bag "
                 f"is damaged or was cut short (--allow-partial uses the {k} messages read)"
             )
+    return _bag_log(wrench, stamps, frame_ids, topic, source, record_time_used, expected, damage)
+
+
+def _bag_log(wrench, stamps, frame_ids, topic: str, source: str, record_time_used: bool, expected, damage) -> BagLog:
+    """The messages read, checked (finite wrench, stamps that never go back) into a :class:`BagLog`."""
     bad = np.flatnonzero(~np.all(np.isfinite(wrench), axis=1))
     if len(bad):
         raise InputError(
@@ -515,31 +520,7 @@ def _read_scanned(p: Path, source: str, topic: str | None, exc: BaseException) -
     if k == 0:
         raise InputError(f"{source}: damaged bag ({exc}); no readable {WRENCH_TYPE} message on {topic!r} before the damage")
     wrench, stamps = wrench[:k], stamps[:k]
-    bad = np.flatnonzero(~np.all(np.isfinite(wrench), axis=1))
-    if len(bad):
-        raise InputError(
-            f"{source}: topic {topic!r}: message {bad[0] + 1} has a NaN or infinite wrench component; expected finite values"
-        )
-    step = np.diff(stamps)
-    back = np.flatnonzero(step < 0)
-    if len(back):
-        i = back[0] + 1
-        raise InputError(
-            f"{source}: topic {topic!r}: message {i + 1} has time {stamps[i] * 1e-9:.9f} s, before message {i} "
-            f"({stamps[i - 1] * 1e-9:.9f} s); expected non-decreasing header stamps"
-        )
-    return BagLog(
-        t=(stamps - stamps[0]) * 1e-9,
-        wrench=wrench,
-        stamps_ns=stamps,
-        frame_ids=tuple(frame_ids),
-        topic=topic,
-        source=source,
-        record_time_used=record_time_used,
-        expected=k,
-        repeated_stamps=int(np.count_nonzero(step == 0)),
-        damage=f"{damage or 'damaged'} ({exc})",
-    )
+    return _bag_log(wrench, stamps, frame_ids, topic, source, record_time_used, k, f"{damage or 'damaged'} ({exc})")
 
 
 def _finite3(v) -> tuple[float, float, float] | None:
