@@ -190,6 +190,18 @@ def _alive(pid: int) -> bool:
     return fields[0] != "Z"
 
 
+def _stderr_when_done(proc, timeout: float = 30.0) -> str:
+    """The standard error of ``proc`` once it has ended; killed (and the test failed) if it
+    does not end within ``timeout`` s."""
+    try:
+        _, err = proc.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.communicate()
+        raise
+    return err.decode()
+
+
 def _start(argv, tmp_path, env=None):
     return subprocess.Popen(
         [SOFTTIP, *map(str, argv)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=tmp_path, env=env,
@@ -265,13 +277,7 @@ def test_two_signals_in_quick_succession_leave_nothing(tmp_path, log, signals, g
         if k and gap:
             time.sleep(gap)
         proc.send_signal(sig)
-    try:
-        _, err = proc.communicate(timeout=30)
-    except subprocess.TimeoutExpired:
-        proc.kill()
-        proc.communicate()
-        raise
-    err = err.decode()
+    err = _stderr_when_done(proc)
     assert proc.returncode == 128 + signals[0], err
     assert "Traceback" not in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["b.toml", "grasp.csv", "pipe", "tmpdir"]
@@ -750,13 +756,7 @@ def test_signals_at_any_moment_of_a_chunked_run(tmp_path, delay):
     proc.send_signal(signal.SIGTERM)
     time.sleep(0.005)
     proc.send_signal(signal.SIGINT)
-    try:
-        _, err = proc.communicate(timeout=30)
-    except subprocess.TimeoutExpired:
-        proc.kill()
-        proc.communicate()
-        raise
-    err = err.decode()
+    err = _stderr_when_done(proc)
     assert "Traceback" not in err
     if proc.returncode == 0:  # finished before the signals
         return
