@@ -198,8 +198,10 @@ def test_one_axis_excitation_cannot_tell_and_says_unconfirmed(kind):
 
 def test_an_unconfirmed_line_carries_its_rolling_bias_in_its_std():
     """One axis of excitation: every line is unconfirmed, and its angle standard deviation is
-    the noise's with ``unconfirmed_model_std`` added in quadrature; confirmed lines (rocked
-    about two axes) and ``--line-evidence off`` (the papers') do not carry it."""
+    the noise's with ``unconfirmed_model_std`` added in quadrature. In a line confirmed by
+    rocking about two axes, a direction from a window excited about two axes does not carry
+    it and one from a one-axis window does (the bias follows the window's excitation);
+    ``--line-evidence off`` (the papers') never carries it."""
     t, w, _ = rocking_log("line", 30.0, excite="one", seed=3)
     u = EstimatorConfig().unconfirmed_model_std
     assert u == pytest.approx(math.radians(5.0))
@@ -215,7 +217,11 @@ def test_an_unconfirmed_line_carries_its_rolling_bias_in_its_std():
     rocked0 = estimate(t, w, "murakami2006", EstimatorConfig(unconfirmed_model_std=0.0))
     confirmed = rocked.line_evidence == 2
     assert confirmed.sum() > 100
-    assert np.array_equal(rocked.angle_std[confirmed], rocked0.angle_std[confirmed])
+    assert np.array_equal(rocked.angle[confirmed], rocked0.angle[confirmed])
+    two_axis = rocked.angle_std == rocked0.angle_std
+    one_axis = np.isclose(rocked.angle_std**2, rocked0.angle_std**2 + u * u, rtol=1e-12, atol=0.0)
+    assert np.all((two_axis | one_axis)[confirmed])
+    assert np.count_nonzero(two_axis & confirmed) > 20 and np.count_nonzero(one_axis & confirmed) > 20
     off = estimate(t, w, "murakami2006", EstimatorConfig(line_evidence=False))
     off0 = estimate(t, w, "murakami2006", EstimatorConfig(line_evidence=False, unconfirmed_model_std=0.0))
     assert np.array_equal(off.angle_std, off0.angle_std, equal_nan=True)

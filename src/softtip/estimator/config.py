@@ -167,15 +167,17 @@ class EstimatorConfig:
         rad; a window's line direction is used (and held) only when its own standard
         deviation (without ``evidence_model_std``) is at most this (default 10°).
     evidence_model_std : float
-        rad; the window direction's model error that no window shows, added in quadrature to
-        its standard deviation (default 0.4°). The axis of ``h``'s variation turns a little
+        rad; the model error of a direction from a window excited about two axes (a window
+        that confirms the line), which no window shows, added in quadrature to its standard
+        deviation (default 0.4°). The axis of ``h``'s variation turns a little
         with the pattern of excitation (the contact's small nonlinearity: on the simulator's
         rocked lines, 0.2–1.5° between rocking about two axes in turn and in a figure-eight),
         while the window's own standard deviation shrinks with the number of samples; without
         this term a window at 1–7 kHz claims a precision the physics does not give.
     unconfirmed_model_std : float
-        rad; model error of a line direction taken from one axis of excitation
-        (``line_evidence`` ``unconfirmed``), added in quadrature to the sample's standard
+        rad; model error of a line direction taken from one axis of excitation (an
+        ``unconfirmed`` line's, and a confirmed line's where the current window was excited
+        about one axis), added in quadrature to the sample's standard
         deviation (default 5°). The line's small resistance to rolling about its own edge
         follows the same excitation and turns the axis by an amount no window of it shows: on
         the simulator's papers' grasps of plates ≤ 3 mm, wedges and Ø 4–6 mm cylinders the

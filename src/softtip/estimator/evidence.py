@@ -32,14 +32,18 @@ seconds vote (most above the threshold: significant; most below its leaving shar
 unchanged), so noise near the threshold does not flicker (at 50 Hz the window holds one
 sample: each decides alone).
 
-The direction: in a confirmed line, the latest window of this segment that confirmed it
-(two-axis excitation, ``h`` on one axis; ``d = n × principal axis``) with the model error
-``evidence_model_std`` in quadrature (a window excited about one axis only would bias the
-axis: a line's small resistance to rolling about its own edge follows the same excitation);
-otherwise the current window's where it resolves an axis, with ``unconfirmed_model_std`` in
-quadrature while the line is unconfirmed (``evidence_model_std`` when confirmed); the
-sample's own only where the window resolves none. A sample's own angle standard deviation
-counts the window's across-axis spread beyond the noise as model error,
+The direction: the current window's where it resolves an axis (``d = n × principal axis``),
+with the model error ``evidence_model_std`` in quadrature where that window itself confirms
+the line and ``unconfirmed_model_std`` where it does not (a one-axis window's rolling bias
+follows its own excitation, whether or not the line was confirmed before); in a confirmed
+line whose current window resolves none (``h`` held still, or passing through zero), the
+latest window of this segment that confirmed it (two-axis excitation, ``h`` on one axis),
+with ``evidence_model_std``; the sample's own elsewhere. The current window is preferred to
+the confirming one: a confirming window is a moment of two-axis load, often where one rock
+ends and the next begins, and it can carry the contact's response to a roll about the line's
+own axis (on a stiffer, smaller hydroelastic tip: 8° off where the current windows were
+within 1°). A sample's own angle standard deviation counts the window's across-axis spread
+beyond the noise as model error,
 ``sqrt(σ_d² + minor / |h|²)``, plus ``unconfirmed_model_std`` while unconfirmed. The share of
 the standard deviation that is the sensor noise's alone (``angle_noise_std``: the window's
 noise term, or the sample's ``σ_d``) is kept apart: two sensors share the model error, not
@@ -87,7 +91,7 @@ class EvidenceStates(NamedTuple):
 
     state: NDArray  #: (N,) int8, POINT, LINE or AREA (where located)
     evidence: NDArray  #: (N,) int8, 1 unconfirmed, 2 confirmed (lines)
-    direction: NDArray  #: (N, 3) unit line direction, the window's under confirmed excitation
+    direction: NDArray  #: (N, 3) unit line direction (the current or the confirming window's, or the sample's)
     angle: NDArray  #: (N,) rad, the direction's angle in the tangent frame
     angle_std: NDArray  #: (N,) rad, its standard deviation
     angle_noise_std: NDArray  #: (N,) rad, the sensor noise's share of it (the rest is model error)
@@ -400,25 +404,33 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
     del minor
     use_win = confirmed & has_held
     line = ((sig | (axis_now & located)) & ~area) | use_win
+    # the held confirming window only where the current one resolves no axis: a confirming
+    # window is a moment of two-axis load, often where one rock ends and the next begins, and
+    # it can carry the response to a roll about the line's own axis
+    use_win &= ~axis_now
+    # the current window confirms the line itself (its direction is the held one)
+    confirming = has_held & (held == np.arange(n))
     del held, has_held
     state = np.where(area, 3, np.where(line, 2, 1)).astype(np.int8)
     evidence = np.where(line, np.where(confirmed, 2, 1), 0).astype(np.int8)
     if win is None:
         angle, angle_std, angle_noise_std = ms.angle, own_std, ms.angle_std
     else:
-        # otherwise (an unconfirmed line, or a confirmed one before its two-axis window) the
-        # current window's direction wherever h varied along one axis within it, with the
-        # model error of its kind; the sample's own only where the window resolves none
+        # the current window's direction wherever h varied along one axis within it (in a
+        # confirmed line too), with the model error of its kind; the held confirming window's
+        # where it resolves none; the sample's own where neither is there
         use_axis = line & ~use_win & axis_now
         w = np.where(use_win, hi, np.arange(n))
         w_std = win.angle_std[w]
         use = use_win | use_axis
         mv = config.evidence_model_std * config.evidence_model_std
         angle = np.where(use, win.angle[w], ms.angle)
-        angle_std = np.where(use, np.sqrt(w_std * w_std + np.where(confirmed, mv, uv)), own_std)
+        # the model error of the window's kind: two-axis (a confirming window) or one-axis
+        # (a rolling bias no window shows, whether or not the line was confirmed before)
+        angle_std = np.where(use, np.sqrt(w_std * w_std + np.where(use_win | confirming, mv, uv)), own_std)
         # the sample's own direction: its noise; a window's: the window's noise term
         angle_noise_std = np.where(use, win.angle_noise_std[w], ms.angle_std)
-        del w, w_std, use_axis
+        del w, w_std, use_axis, confirming
         use_win = use
     del win, hi, own_std, axis_now
     # the held window's direction, in the tangent frame of the sample
@@ -583,6 +595,7 @@ class EvidenceTracker:
             self._n_area -= areas.popleft()[1]
         area = self._n_area > self._area_share * len(areas)
         axis = None  # the current window's direction, where h varied along one axis
+        confirming = False  # the current window confirms the line (two-axis excitation)
         if area:
             self._verdict = _AREA
             self._held = None
@@ -602,6 +615,7 @@ class EvidenceTracker:
                         axis = (w_angle, w_std, w_noise)
                     if line_now:
                         self._held = (w_angle, math.sqrt(w_std * w_std + self._model_var), w_noise)
+                        confirming = True
         side = 1 if hn > thr else (0 if hn <= SIG_LEAVE * thr else -1)
         if self._vote_window > 0.0:
             votes = self._votes
@@ -620,7 +634,7 @@ class EvidenceTracker:
         verdict = self._verdict
         if area:
             return "area", "", _NAN3, math.nan, math.nan, math.nan, h_ratio, f_ratio
-        if verdict == _LINE and self._held is not None:
+        if verdict == _LINE and self._held is not None and axis is None:
             angle, angle_std, noise_std = self._held
             ca, sa = cos(angle), sin(angle)
             d = (ca * e1x + sa * e2x, ca * e1y + sa * e2y, ca * e1z + sa * e2z)
@@ -632,7 +646,7 @@ class EvidenceTracker:
             angle, w_std, noise_std = axis
             ca, sa = cos(angle), sin(angle)
             d = (ca * e1x + sa * e2x, ca * e1y + sa * e2y, ca * e1z + sa * e2z)
-            v = w_std * w_std + (self._model_var if verdict == _LINE else self._unconfirmed_var)
+            v = w_std * w_std + (self._model_var if confirming else self._unconfirmed_var)
             return "line", evidence, d, angle, sqrt(v), noise_std, h_ratio, f_ratio
         # the sample's own direction, the window's across-axis spread counted as model error
         dx, dy, dz, angle, a = sample_direction(hx, hy, hz, hn, ex, ey, ez, geo, self._sq)
