@@ -158,3 +158,35 @@ def test_the_ros_topics_are_the_registry_topics():
 
     assert ROS_TOPICS == {t.key: f"/softtip/{t.key}" for t in TOPICS}
     assert set(ROS_TOPICS) >= {"wrench", "state", "contact_point", "normal", "edge_direction", "line_evidence"}
+
+
+def test_a_bag_carries_each_column_in_its_topic_and_field(tmp_path, example):
+    """Every column with a topic that bags hold is in that topic's messages, at the field the
+    registry names, in SI (rad), one message per sample it is published for."""
+    import operator
+
+    pytest.importorskip("rosbags")
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
+
+    from softtip.io.bag import write_estimates_bag
+
+    write_estimates_bag(tmp_path / "bag", example, example.wrench, markers=False)
+    stamps = {int(s): k for k, s in enumerate(np.rint(example.t * 1e9).astype(np.int64))}
+    in_bag = {t.key: t.name for t in TOPICS if t.in_bag}
+    messages: dict[str, list] = {}
+    with AnyReader([tmp_path / "bag"], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
+        for conn, ts, raw in reader.messages():
+            messages.setdefault(conn.topic, []).append((stamps[ts], reader.deserialize(raw, conn.msgtype)))
+    checked = 0
+    for c in COLUMNS:
+        if c.topic not in in_bag:
+            continue
+        got = messages[in_bag[c.topic]]
+        assert got, c.name
+        for k, msg in got:
+            want = getattr(example, c.attr)[k]
+            want = c.codes[want] if c.codes is not None else want if c.index is None else want[c.index]
+            assert operator.attrgetter(c.field)(msg) == want, (c.name, k)
+            checked += 1
+    assert checked > 1000

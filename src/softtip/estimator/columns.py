@@ -5,7 +5,8 @@ values and types of :meth:`Estimates.columns <softtip.estimator.Estimates.column
 ``softtip estimate``'s CSV and Parquet files and :meth:`~softtip.estimator.Estimates.to_arrow`),
 the rows of a live recording (:mod:`softtip.io.live`), the columns paragraph of ``softtip
 estimate --help``, the table of manual §4 (``docs/guide/columns.md``, written by
-:func:`markdown_table` through ``scripts/make_column_table.py``) and the ROS topics that carry a column (:data:`TOPICS`).
+:func:`markdown_table` through ``scripts/make_column_table.py``) and the ROS topics that carry
+a column (:data:`TOPICS`).
 
 Adding an output column is one :class:`Column` here and the stage that fills its attribute of
 :class:`~softtip.estimator.Estimates` and :class:`~softtip.estimator.SampleEstimate`.
@@ -176,31 +177,29 @@ class Topic:
         The name :attr:`Column.topic` uses; the topic is ``/softtip/<key>``.
     msgtype : str
         The ROS 2 message type.
-    when : str
-        The samples it is published for.
     in_bag : bool
         ``--to-bag`` writes it (the ROS 2 node publishes every topic).
     """
 
     key: str
     msgtype: str
-    when: str
     in_bag: bool = True
 
     @property
     def name(self) -> str:
+        """The topic's name."""
         return f"/softtip/{self.key}"
 
 
 #: The topics of the estimates, in the order a bag declares them.
 TOPICS: tuple[Topic, ...] = (
-    Topic("wrench", "geometry_msgs/msg/WrenchStamped", "every sample but the tare's"),
-    Topic("state", "std_msgs/msg/String", "every sample"),
-    Topic("contact_point", "geometry_msgs/msg/PointStamped", "in contact"),
-    Topic("normal", "geometry_msgs/msg/Vector3Stamped", "in contact"),
-    Topic("edge_direction", "geometry_msgs/msg/Vector3Stamped", "line"),
-    Topic("line_evidence", "std_msgs/msg/String", "line"),
-    Topic("angle_std", "std_msgs/msg/Float64", "line", in_bag=False),
+    Topic("wrench", "geometry_msgs/msg/WrenchStamped"),
+    Topic("state", "std_msgs/msg/String"),
+    Topic("contact_point", "geometry_msgs/msg/PointStamped"),
+    Topic("normal", "geometry_msgs/msg/Vector3Stamped"),
+    Topic("edge_direction", "geometry_msgs/msg/Vector3Stamped"),
+    Topic("line_evidence", "std_msgs/msg/String"),
+    Topic("angle_std", "std_msgs/msg/Float64", in_bag=False),
 )
 
 
@@ -245,12 +244,15 @@ def markdown_table() -> str:
     lines = [
         "<!-- written by scripts/make_column_table.py from softtip.estimator.columns; do not edit -->",
         "",
-        "| column | unit | type | stage | meaning |",
-        "| --- | --- | --- | --- | --- |",
+        "| column | unit | type | stage | meaning | ROS topic (field) |",
+        "| --- | --- | --- | --- | --- | --- |",
     ]
+    names = {t.key: t.name for t in TOPICS}
     for group in _groups():
         c = group[0]
         name = f"`{_group_name(group, '` … `')}`"
-        lines.append(f"| {name} | {_unit_text(c)} | {c.dtype} | {c.stage} | {c.description} |")
+        field = c.field if len(group) == 1 or c.field is None else c.field.rsplit(".", 1)[0]
+        topic = f"`{names[c.topic]}` ({field})" if c.topic is not None else ""
+        lines.append(f"| {name} | {_unit_text(c)} | {c.dtype} | {c.stage} | {c.description} | {topic} |")
     return "\n".join(lines) + "\n"
 

@@ -204,8 +204,10 @@ class Estimates:
                 values = values[:, c.index]
             if c.codes is not None:
                 values = np.asarray(c.codes)[values]
-            elif c.degrees:
-                values = np.degrees(values)
+            else:  # the registry's type (no copy where the stage made it so already)
+                values = np.asarray(values, dtype=_NUMPY_TYPES[c.dtype])
+                if c.degrees:
+                    values = np.degrees(values)
             columns[c.name] = values
         if units != "si":
             force, moment = wrench_to_si(np.ones(6), units)[[0, 3]]  # one kgf in N, one kgf·mm in N·m
