@@ -220,8 +220,8 @@ def slide_section(seed: int = 1) -> None:
                 extra = f", {int(est.relatched.sum())} re-latch" if cfg.relatch_distance else ""
                 if cfg.contact_point == "line-fit":
                     after = (log.t > 7.0) & (log.t < 8.5)  # windows past the slide
-                    extra = (f"; std ≥ {np.degrees(np.nanmin(est.joint_angle_std[after])):.2f}°, "
-                             f"residual {np.nanmedian(est.joint_residual[sel]):.2f} σ")  # fmt: skip
+                    extra = (f"; std ≥ {np.degrees(np.nanmin(est.line_fit_angle_std[after])):.2f}°, "
+                             f"residual {np.nanmedian(est.line_fit_residual[sel]):.2f} σ")  # fmt: skip
                 cells.append(_cell(est, log.truth.angle, truth, sel) + extra)
             _row(f"{name} {ang:+.0f}°, {force_kgf} kgf", *cells)
 
@@ -238,7 +238,7 @@ def papers_section(seed: int = 2006) -> None:
             for cfg in (per_sample(depth_mode="off"), per_sample(depth_mode="off", contact_point="line-fit")):
                 est = estimate(log.t, log.wrench, TIP, cfg)
                 m = sel & (est.state > 0)
-                extra = f"; {est.joint_fallback[m].mean():.0%} on the latch" if cfg.contact_point == "line-fit" else ""
+                extra = f"; {est.line_fit_fallback[m].mean():.0%} on the latch" if cfg.contact_point == "line-fit" else ""
                 cells.append(_cell(est, log.truth.angle, log.truth.contact_point, sel) + extra)
             _row(f"{name} {ang:+.0f}°", *cells)
 
@@ -285,7 +285,7 @@ def noise_section() -> None:
                 g = synthetic_grasp(tip, point=cap(polar), rate=7000.0, duration=8.0, noise=real, seed=seed)
                 est = estimate(g.t, g.wrench, tip, per_sample(depth_mode="off", contact_point="line-fit"))
                 squeeze = (g.t > 2.5) & (g.t < 4.4) & (est.state > 0)
-                shares.append(1.0 - est.joint_fallback[squeeze].mean())
+                shares.append(1.0 - est.line_fit_fallback[squeeze].mean())
                 errors.append(np.max(np.linalg.norm(est.point[g.t > 6.5] - g.point, axis=1)) * 1e3)
             _row(f"{polar:.0f}° off the axis", f"{scale:.1f}", f"{min(shares):.0%}–{max(shares):.0%}",
                  f"{min(errors):.3f}–{max(errors):.3f} mm")  # fmt: skip
@@ -306,7 +306,7 @@ def noise_section() -> None:
             same = np.all(est.point == est.point[-1], axis=1)
             k = len(same) - int(np.argmin(same[::-1])) if not same.all() else 0
             errors.append((est.point[-1] - g.point) @ np.cross(g.normal, g.direction))
-            stds.append(est.joint_offset_std[k])
+            stds.append(est.line_fit_offset_std[k])
         spread, reported = np.std(errors) * 1e6, np.median(stds) * 1e6
         _row(f"{rate:.0f} Hz", "none" if cutoff is None else f"{cutoff:g} Hz", str(seeds), f"{spread:.1f} µm",
              f"{reported:.1f} µm", f"{spread / reported:.2f}")  # fmt: skip

@@ -260,11 +260,11 @@ def test_joint_mode_columns(tmp_path):
     cfg = EstimatorConfig(contact_point="line-fit", joint_window=0.8, joint_max_angle_std=np.radians(3.0),
                           joint_max_offset_std=0.3e-3)  # fmt: skip
     est = estimate(log.t, log.wrench, "murakami2006", cfg)
-    assert [r["joint_fallback"] for r in rows] == [str(int(v)) for v in est.joint_fallback]
-    for key, ref in (("joint_angle_std_deg", np.degrees(est.joint_angle_std)), ("joint_residual", est.joint_residual),
+    assert [r["line_fit_fallback"] for r in rows] == [str(int(v)) for v in est.line_fit_fallback]
+    for key, ref in (("line_fit_angle_std_deg", np.degrees(est.line_fit_angle_std)), ("line_fit_residual", est.line_fit_residual),
                      ("rx", est.point[:, 0])):  # fmt: skip
         np.testing.assert_allclose([float(r[key]) for r in rows], ref, rtol=1e-9, equal_nan=True)
-    assert np.isfinite(est.joint_conditioning).any()
+    assert np.isfinite(est.line_fit_conditioning).any()
     assert "exceeds the noise model" not in out.stderr
     # a noise model well below the sensor's: line-fit mode would take the rest for excitation
     low = run("estimate", "--example", "--contact-point", "line-fit", "--force-noise", "0.003", "-o", tmp_path / "k.csv")

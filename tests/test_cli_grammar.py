@@ -164,14 +164,16 @@ def test_rerun_without_a_display_stops_at_once(tmp_path: Path) -> None:
 
 
 def test_columns_in_the_papers_units_and_the_line_threshold() -> None:
-    from softtip.estimator.results import FORCE_COLUMNS, MOMENT_COLUMNS
+    from softtip.estimator.columns import COLUMNS
     from softtip.pipeline import EstimatorConfig
 
     est = _example_estimates()
     si, kgf = est.columns(), est.columns(units="kgf-mm")
     assert list(si) == list(kgf)
+    units = {c.name: c.unit for c in COLUMNS}
+    assert {n for n in si if units[n] == "N"} == {"fx", "fy", "fz", "drift_fx", "drift_fy", "drift_fz"}
     for name in si:
-        unit = KGF if name in FORCE_COLUMNS else KGF_MM if name in MOMENT_COLUMNS else None
+        unit = KGF if units[name] == "N" else KGF_MM if units[name] == "N·m" else None
         if unit is None:
             assert np.array_equal(np.asarray(si[name]), np.asarray(kgf[name]), equal_nan=si[name].dtype.kind == "f"), name
         else:  # exactly the division the CLI did before

@@ -161,8 +161,8 @@ def test_joint_follows_a_contact_that_slides_across_the_line_after_the_latch():
         direction = np.median(np.degrees(np.abs(axial_difference(est.angle[line], truth_angle))))
         errors[mode] = point, direction
         if mode == "line-fit":
-            assert not est.joint_fallback[late].any()
-            assert est.joint_fallback[(t > 2.5) & (t < 4.0)].all()  # a squeeze identifies nothing
+            assert not est.line_fit_fallback[late].any()
+            assert est.line_fit_fallback[(t > 2.5) & (t < 4.0)].all()  # a squeeze identifies nothing
     assert errors["latch"][0] > 2.5e-3 and errors["latch"][1] > 20.0
     assert errors["line-fit"][0] < 0.15e-3 and errors["line-fit"][1] < 2.0
 
@@ -173,7 +173,7 @@ def test_joint_keeps_the_latch_without_excitation():
     est = estimate(t, w, "murakami2006", EstimatorConfig(contact_point="line-fit", tare_duration=0.0))
     latch = estimate(t, w, "murakami2006", EstimatorConfig(tare_duration=0.0))
     inside = est.state > 0
-    assert est.joint_fallback[inside].all()
+    assert est.line_fit_fallback[inside].all()
     np.testing.assert_array_equal(est.point, latch.point)
     np.testing.assert_array_equal(est.latched, latch.latched)
 
@@ -218,7 +218,7 @@ def test_simulated_papers_grasp_at_45_degrees_keeps_the_latch():
     # the papers' latch: line-fit mode takes no depth compensation unless asked
     latch = estimate(log.t, log.wrench, "murakami2006", EstimatorConfig(depth_mode="off"))
     inside = joint.state > 0
-    assert joint.joint_fallback[inside].all()
+    assert joint.line_fit_fallback[inside].all()
     np.testing.assert_array_equal(joint.point, latch.point)
     np.testing.assert_array_equal(joint.angle, latch.angle)
 
@@ -231,7 +231,7 @@ def test_noise_at_a_high_sample_rate_is_not_excitation():
     g = synthetic_grasp(angle_deg=45.0, rate=1000.0, seed=1)
     est = estimate(g.t, g.wrench, "murakami2006", EstimatorConfig(contact_point="line-fit"))
     rising = (g.t > 2.5) & (g.t < 4.4)  # squeeze, no tangential spin torque yet
-    assert est.joint_fallback[rising & (est.state > 0)].all()
+    assert est.line_fit_fallback[rising & (est.state > 0)].all()
     late = g.t > 7.0
     assert np.median(np.linalg.norm(est.point[late] - g.point, axis=1)) < 0.05e-3
 
@@ -248,7 +248,7 @@ def test_noise_off_the_axis_with_depth_compensation_is_not_excitation():
     g = synthetic_grasp(tip, angle_deg=45.0, point=point, rate=7000.0, duration=8.0, seed=0)
     est = estimate(g.t, g.wrench, tip, EstimatorConfig(contact_point="line-fit", depth=MURAKAMI2006_DEPTH))
     rising = (g.t > 2.5) & (g.t < 4.4)
-    assert est.joint_fallback[rising & (est.state > 0)].all()
+    assert est.line_fit_fallback[rising & (est.state > 0)].all()
     # measured 0.024 mm (the synthetic grasp's friction acts at the surface: a depth law
     # shifts the point a little)
     assert np.max(np.linalg.norm(est.point[g.t > 6.5] - g.point, axis=1)) < 0.1e-3
@@ -323,4 +323,4 @@ def test_stream_survives_an_empty_window():
     t, w, _, _ = slide_across_log()
     cfg = EstimatorConfig(contact_point="line-fit", joint_window=1e-7, tare_duration=0.0)
     est = assert_stream_equals_batch(t + 1.7e9, w, "murakami2006", cfg)
-    assert est.joint_fallback[est.state > 0].all()
+    assert est.line_fit_fallback[est.state > 0].all()

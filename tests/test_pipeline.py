@@ -13,9 +13,9 @@ from softtip.estimator.results import EstimatorWarning
 from softtip.sim.synthetic import synthetic_grasp
 
 FIELDS_3 = ("wrench", "point", "normal", "h", "direction")
-FIELDS_1 = ("sigma", "h_norm", "h_std", "angle", "angle_std", "angle_noise_std", "depth", "depth_std", "joint_conditioning", "joint_angle_std",
-            "joint_offset_std", "joint_residual", "h_ratio", "excitation_ratio")  # fmt: skip
-FLAGS = ("latched", "latch_fallback", "pulling", "taring", "relatched", "joint_fallback", "depth_from_data", "contact_id")
+FIELDS_1 = ("sigma", "h_norm", "h_std", "angle", "angle_std", "angle_noise_std", "depth", "depth_std", "line_fit_conditioning", "line_fit_angle_std",
+            "line_fit_offset_std", "line_fit_residual", "h_ratio", "excitation_ratio")  # fmt: skip
+FLAGS = ("latched", "latch_fallback", "pulling", "taring", "relatched", "line_fit_fallback", "depth_from_data", "contact_id")
 #: The papers' method (no depth compensation): the synthetic grasps put the tangential force
 #: on the undeformed skin surface, as the papers' model does, so the tests of the papers'
 #: algorithm on them set it explicitly (the default learns the depth online).

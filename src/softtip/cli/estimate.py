@@ -42,6 +42,7 @@ from softtip.core.units import UNIT_SYSTEMS, wrench_to_si
 from softtip.errors import InputError
 from softtip.estimator import STATES
 from softtip.estimator import estimate as run_estimate
+from softtip.estimator.columns import help_text as column_help
 from softtip.estimator.results import EstimatorWarning
 from softtip.estimator.tare import bias_to_toml
 from softtip.ros.options import bag_output_options, output_frame_id
@@ -67,27 +68,12 @@ whose units make the fingertip geometry or the sensor's noise impossible stops, 
 unit pair that fits.
 
 The output CSV (standard output unless -o; Parquet when -o ends in .parquet, with the
-units and the fingertip in its key-value metadata) has the columns t, state (none|point|line|area),
-fx..mz (the wrench after bias removal and filtering, the one the estimates come from),
-rx, ry, rz (contact point, m), nx, ny, nz (outward normal), sigma (spin torque about the
-normal, N·m), hx, hy, hz, h_norm (tangential spin torque, N·m), dx, dy, dz (direction of
-the touched edge / strip, an axis), angle_deg (its angle in the tangent frame, degrees in
-(-90, 90]; at the tip: from the sensor x axis), h_std (noise level of h, N·m),
-angle_std_deg, angle_noise_std_deg (the sensor noise's share of it; the rest is model
-error), latched, latch_fallback, relatched (a new latch starts here), depth
-(m, the depth compensation used; 0 without it), joint_conditioning, joint_angle_std_deg,
-joint_offset_std (m), joint_residual and joint_fallback (the sliding window of
---contact-point line-fit: reciprocal condition number, standard deviations of its line angle
-and offset, RMS fit residual in noise standard deviations, and whether the latched point
-is used because no window has been accepted yet), depth_std (m, the depth's standard
-deviation), depth_from_data (the contact's own data, not the skin law, determined it),
-contact_id (1, 2, ... per contact, 0 out of contact), drift_fx..drift_mz (the bias drift
-followed while untouched since the tare, N and N·m), line_evidence (confirmed|unconfirmed on
-line samples: whether the contact was excited about two tangent axes with h staying on one),
-h_ratio and excitation_ratio (smaller/larger eigenvalue of the evidence window's covariance
-of h and of the tangential load, noise removed), then the input's extra columns. r, n, h are empty
-(nan) when state is none; d and the angle only for line contacts, where |h| stands out of
-the noise.
+units and the fingertip in its key-value metadata) has these columns, in order, then the
+input's extra columns; units are SI (N and N·m, or kgf and kgf·mm with --output-units
+kgf-mm), angles in degrees; an empty cell is nan. r, n, h are empty when state is none; d
+and the angle only for line contacts, where |h| stands out of the noise. """
+    + column_help()
+    + """
 
 INPUT may also be a ROS bag (rosbag2 directory with sqlite3 or MCAP storage, a .mcap or
 .db3 file, or a ROS 1 .bag; needs the rosbags package): the samples are the

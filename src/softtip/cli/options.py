@@ -67,7 +67,7 @@ _ESTIMATOR_OPTIONS = [
         help="latch: measure the contact point in the light-force window at the start of the grasp and hold it (the papers'); "
         "track: soft-finger solution every sample (h is then zero by construction: no directions); "
         "line-fit: latch, then move the point across the line to where a sliding window (--joint-window) fits the "
-        "line-contact model, wherever the window determines it (flagged joint_fallback until one does); "
+        "line-contact model, wherever the window determines it (flagged line_fit_fallback until one does); "
         "joint: its former name.",
     ),
     option(

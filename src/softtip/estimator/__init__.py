@@ -60,7 +60,7 @@ softtip's extensions (issue 5), each an :class:`EstimatorConfig` field:
   and its fit residual below ``joint_max_residual`` noise standard deviations. The point
   held is the accepted window since contact onset (or the last re-latch) with the
   smallest standard deviation aged by ``joint_drift``; before the first one the latched
-  point is used and ``joint_fallback`` set. The coordinate along the line is the latch's:
+  point is used and ``line_fit_fallback`` set. The coordinate along the line is the latch's:
   a line contact does not tell it.
 """
 

@@ -1,5 +1,5 @@
 """What the estimator returns: :class:`Estimates` (a whole log) and :class:`SampleEstimate`
-(one sample), with the one list of output columns."""
+(one sample); their output columns are those of :mod:`softtip.estimator.columns`."""
 
 from __future__ import annotations
 
@@ -11,19 +11,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from softtip.core.units import wrench_to_si
+from softtip.estimator.columns import COLUMNS, EVIDENCE, STATES
 
 __all__ = ["STATES", "NONE", "POINT", "LINE", "AREA", "EVIDENCE", "EstimatorWarning", "Estimates", "SampleEstimate"]
 
-#: Contact states, indexed by the integer codes in :attr:`Estimates.state`.
-STATES = ("none", "point", "line", "area")
-NONE, POINT, LINE, AREA = 0, 1, 2, 3
-#: Line evidence, indexed by the codes in :attr:`Estimates.line_evidence` (``""`` unless ``line``).
-EVIDENCE = ("", "unconfirmed", "confirmed")
-#: Names of the drift columns (:meth:`Estimates.columns`).
-DRIFT_COLUMNS = ("drift_fx", "drift_fy", "drift_fz", "drift_mx", "drift_my", "drift_mz")
-#: The force columns (N, or kgf in ``columns(units="kgf-mm")``) and the moment columns (N·m or kgf·mm).
-FORCE_COLUMNS = ("fx", "fy", "fz") + DRIFT_COLUMNS[:3]
-MOMENT_COLUMNS = ("mx", "my", "mz", "sigma", "hx", "hy", "hz", "h_norm", "h_std") + DRIFT_COLUMNS[3:]
+NONE, POINT, LINE, AREA = 0, 1, 2, 3  # codes into STATES
+#: numpy's type of each column's values (:attr:`Column.dtype <softtip.estimator.columns.Column.dtype>`)
+_NUMPY_TYPES = {"float64": np.float64, "bool": np.bool_, "int64": np.int64}
 
 
 class EstimatorWarning(UserWarning):
@@ -69,12 +63,12 @@ class Estimates:
     depth_std : (N,) its standard deviation, m (online depth; 0 for a fixed law or none)
     depth_from_data : (N,) online depth: the contact's own data, not the skin law (the
         prior), determined it (the data's information on it exceeds the prior's)
-    joint_conditioning, joint_angle_std, joint_offset_std, joint_residual : (N,) the
+    line_fit_conditioning, line_fit_angle_std, line_fit_offset_std, line_fit_residual : (N,) the
         ``line-fit`` window ending at this sample (:mod:`softtip.core.joint`): reciprocal condition
         number in [0, 1], standard deviations of its line angle (rad) and of its offset
         across the line (m), and the fit's RMS residual in units of the noise; NaN where no
         window was solved (other modes, ``none``, or no soft-finger solution)
-    joint_fallback : (N,) ``line-fit`` mode: no window of this contact accepted yet, so the
+    line_fit_fallback : (N,) ``line-fit`` mode: no window of this contact accepted yet, so the
         point is the latched one
     repeated_stamps : int
         samples whose time equals the previous sample's (accepted; time must not go back)
@@ -121,11 +115,11 @@ class Estimates:
     bias: NDArray[np.float64]
     relatched: NDArray[np.bool_]
     depth: NDArray[np.float64]
-    joint_conditioning: NDArray[np.float64]
-    joint_angle_std: NDArray[np.float64]
-    joint_offset_std: NDArray[np.float64]
-    joint_residual: NDArray[np.float64]
-    joint_fallback: NDArray[np.bool_]
+    line_fit_conditioning: NDArray[np.float64]
+    line_fit_angle_std: NDArray[np.float64]
+    line_fit_offset_std: NDArray[np.float64]
+    line_fit_residual: NDArray[np.float64]
+    line_fit_fallback: NDArray[np.bool_]
     line_evidence: NDArray[np.int8]
     h_ratio: NDArray[np.float64]
     excitation_ratio: NDArray[np.float64]
@@ -173,8 +167,9 @@ class Estimates:
         """
         import pyarrow as pa
 
-        return pa.table({name: pa.array(v.tolist() if v.dtype.kind == "U" else v)
-                         for name, v in ((k, np.asarray(x)) for k, x in self.columns(units=units).items())})  # fmt: skip
+        types = {c.name: pa.string() if c.dtype == "str" else pa.from_numpy_dtype(_NUMPY_TYPES[c.dtype]) for c in COLUMNS}
+        return pa.table({name: pa.array(v.tolist() if types[name] == pa.string() else v, type=types[name])
+                         for name, v in self.columns(units=units).items()})  # fmt: skip
 
     def to_pandas(self, units: str = "si") -> Any:
         """The output columns as a ``pandas.DataFrame`` (pandas is not a dependency of softtip).
@@ -191,7 +186,7 @@ class Estimates:
         return self.to_arrow(units).to_pandas()
 
     def columns(self, units: str = "si") -> dict[str, NDArray]:
-        """The output columns (manual §4), in order, then softtip's extras.
+        """The output columns (:data:`softtip.estimator.columns.COLUMNS`, manual §4), in order.
 
         Parameters
         ----------
@@ -200,45 +195,25 @@ class Estimates:
             ``sigma``, ``h``, ``h_norm``, ``h_std`` and the drift. Lengths are always in m,
             angles in degrees.
         """
-        w, p, n, h, d = self.wrench, self.point, self.normal, self.h, self.direction
-        columns = {
-            "t": self.t,
-            "state": self.state_names,
-            "fx": w[:, 0], "fy": w[:, 1], "fz": w[:, 2],
-            "mx": w[:, 3], "my": w[:, 4], "mz": w[:, 5],
-            "rx": p[:, 0], "ry": p[:, 1], "rz": p[:, 2],
-            "nx": n[:, 0], "ny": n[:, 1], "nz": n[:, 2],
-            "sigma": self.sigma,
-            "hx": h[:, 0], "hy": h[:, 1], "hz": h[:, 2],
-            "h_norm": self.h_norm,
-            "dx": d[:, 0], "dy": d[:, 1], "dz": d[:, 2],
-            "angle_deg": np.degrees(self.angle),
-            "h_std": self.h_std,
-            "angle_std_deg": np.degrees(self.angle_std),
-            "angle_noise_std_deg": np.degrees(self.angle_noise_std),
-            "latched": self.latched,
-            "latch_fallback": self.latch_fallback,
-            "relatched": self.relatched,
-            "depth": self.depth,
-            "joint_conditioning": self.joint_conditioning,
-            "joint_angle_std_deg": np.degrees(self.joint_angle_std),
-            "joint_offset_std": self.joint_offset_std,
-            "joint_residual": self.joint_residual,
-            "joint_fallback": self.joint_fallback,
-            **({"contact_id": self.contact_id} if self.contact_id is not None else {}),
-            **({k: self.drift[:, i] for i, k in enumerate(DRIFT_COLUMNS)} if self.drift is not None else {}),
-            "depth_std": self.depth_std,
-            "depth_from_data": self.depth_from_data,
-            "line_evidence": np.asarray(EVIDENCE)[self.line_evidence],
-            "h_ratio": self.h_ratio,
-            "excitation_ratio": self.excitation_ratio,
-        }  # fmt: skip
+        columns = {}
+        for c in COLUMNS:
+            values = getattr(self, c.attr)
+            if values is None:  # an optional attribute not filled (contact_id, drift, depth_std, depth_from_data)
+                continue
+            if c.index is not None:
+                values = values[:, c.index]
+            if c.codes is not None:
+                values = np.asarray(c.codes)[values]
+            else:  # the registry's type (no copy where the stage made it so already)
+                values = np.asarray(values, dtype=_NUMPY_TYPES[c.dtype])
+                if c.degrees:
+                    values = np.degrees(values)
+            columns[c.name] = values
         if units != "si":
             force, moment = wrench_to_si(np.ones(6), units)[[0, 3]]  # one kgf in N, one kgf·mm in N·m
-            for name in FORCE_COLUMNS:
-                columns[name] = columns[name] / force
-            for name in MOMENT_COLUMNS:
-                columns[name] = columns[name] / moment
+            for c in COLUMNS:
+                if c.name in columns and c.unit in ("N", "N·m"):
+                    columns[c.name] = columns[c.name] / (force if c.unit == "N" else moment)
         return columns
 
 
@@ -266,11 +241,11 @@ class SampleEstimate(NamedTuple):
     taring: bool
     relatched: bool = False
     depth: float = math.nan
-    joint_conditioning: float = math.nan
-    joint_angle_std: float = math.nan
-    joint_offset_std: float = math.nan
-    joint_residual: float = math.nan
-    joint_fallback: bool = False
+    line_fit_conditioning: float = math.nan
+    line_fit_angle_std: float = math.nan
+    line_fit_offset_std: float = math.nan
+    line_fit_residual: float = math.nan
+    line_fit_fallback: bool = False
     contact_id: int = 0
     drift: tuple[float, ...] = (0.0,) * 6
     depth_std: float = math.nan

@@ -41,6 +41,7 @@ from numpy.typing import ArrayLike, NDArray
 from softtip.core.units import seconds_from_ns
 from softtip.errors import InputError
 from softtip.estimator import Estimates
+from softtip.estimator.columns import TOPICS as COLUMN_TOPICS
 from softtip.ros import DEFAULT_FRAME_ID
 from softtip.ros import TOPICS as ROS_TOPICS
 
@@ -411,12 +412,7 @@ def write_estimates_bag(
             key: bag.add_topic(name, msgtype)
             for key, name, msgtype in (
                 ("raw", raw_topic, WRENCH_TYPE),
-                ("wrench", TOPICS["wrench"], WRENCH_TYPE),
-                ("state", TOPICS["state"], "std_msgs/msg/String"),
-                ("contact_point", TOPICS["contact_point"], "geometry_msgs/msg/PointStamped"),
-                ("normal", TOPICS["normal"], "geometry_msgs/msg/Vector3Stamped"),
-                ("edge_direction", TOPICS["edge_direction"], "geometry_msgs/msg/Vector3Stamped"),
-                ("line_evidence", TOPICS["line_evidence"], "std_msgs/msg/String"),
+                *((t.key, TOPICS[t.key], t.msgtype) for t in COLUMN_TOPICS if t.in_bag),
             )
             + ((("markers", MARKER_TOPIC, "visualization_msgs/msg/MarkerArray"),) if markers else ())
         }

@@ -36,6 +36,7 @@ from typing import TextIO
 
 from softtip.errors import InputError
 from softtip.estimator import Estimator, SampleEstimate
+from softtip.estimator.columns import COLUMNS
 from softtip.io.sources import Reading, readings
 
 __all__ = [
@@ -48,6 +49,10 @@ __all__ = [
     "run_live",
 ]
 
+_RAW_COLUMNS = ("t", "fx_raw", "fy_raw", "fz_raw", "mx_raw", "my_raw", "mz_raw")
+# the estimate's columns but t: the row's t is the reading's (the same value)
+_ESTIMATE_COLUMNS = tuple(c for c in COLUMNS if c.name != "t")
+_STREAM_COLUMNS = ("seq", "lost", "dropped", "late", "duplicates", "malformed", "status", "host_time")
 #: Columns of a live recording. First the samples as a log (``t`` and the raw, untared
 #: wrench ``fx_raw … mz_raw``: a recording is a log that ``softtip estimate`` and ``--replay``
 #: read as it is, :data:`softtip.io.formats.SOURCES` knows its header, and it reproduces the
@@ -58,39 +63,40 @@ __all__ = [
 #: softtip's queue (``dropped``); late packets, duplicates and malformed datagrams
 #: discarded since the previous row; the device's status word; the host receive time (s
 #: since the Unix epoch). Column sums give the totals (network loss: ``lost − late``).
-RECORD_COLUMNS: tuple[str, ...] = (
-    "t", "fx_raw", "fy_raw", "fz_raw", "mx_raw", "my_raw", "mz_raw",
-    "state", "fx", "fy", "fz", "mx", "my", "mz",
-    "rx", "ry", "rz", "nx", "ny", "nz", "sigma",
-    "hx", "hy", "hz", "h_norm", "dx", "dy", "dz", "angle_deg", "h_std", "angle_std_deg", "angle_noise_std_deg",
-    "latched", "latch_fallback", "relatched", "depth", "joint_conditioning", "joint_angle_std_deg", "joint_offset_std",
-    "joint_residual", "joint_fallback", "depth_std", "depth_from_data", "line_evidence", "h_ratio",
-    "excitation_ratio", "contact_id", "drift_fx", "drift_fy", "drift_fz", "drift_mx",
-    "drift_my", "drift_mz", "seq", "lost", "dropped", "late", "duplicates", "malformed",
-    "status", "host_time",
-)  # fmt: skip
-_INT_COLUMNS = ("latched", "latch_fallback", "relatched", "joint_fallback", "depth_from_data", "contact_id", "seq", "lost", "dropped", "late",
-                "duplicates", "malformed", "status")  # fmt: skip
+RECORD_COLUMNS: tuple[str, ...] = _RAW_COLUMNS + tuple(c.name for c in _ESTIMATE_COLUMNS) + _STREAM_COLUMNS
 # Time and raw wrench exactly (shortest repr: re-reading the file gives the same doubles),
 # the host time to the microsecond, the rest as softtip.io.tables.write_table formats numbers.
-_FORMATS = {"t": "%r", "fx_raw": "%r", "fy_raw": "%r", "fz_raw": "%r", "mx_raw": "%r", "my_raw": "%r", "mz_raw": "%r",
-            "state": "%s", "line_evidence": "%s", "host_time": "%.6f"}  # fmt: skip
-_ROW_FORMAT = ",".join(_FORMATS.get(c, "%d" if c in _INT_COLUMNS else "%.10g") for c in RECORD_COLUMNS) + "\n"
+_FORMATS = {
+    **{c: "%r" for c in _RAW_COLUMNS},
+    **{c.name: {"str": "%s", "bool": "%d", "int64": "%d"}.get(c.dtype, "%.10g") for c in _ESTIMATE_COLUMNS},
+    **{c: "%d" for c in _STREAM_COLUMNS}, "host_time": "%.6f",
+}  # fmt: skip
+_ROW_FORMAT = ",".join(_FORMATS[c] for c in RECORD_COLUMNS) + "\n"
 _DEG = 180.0 / math.pi
 _BLOCK = 32  # rows formatted per call by the recorder
 
 
-def estimate_row(e: SampleEstimate, r: Reading) -> tuple:
-    """One recording row (:data:`RECORD_COLUMNS`) from an estimate and its raw reading."""
-    w = r.wrench
-    return (
-        float(r.t), float(w[0]), float(w[1]), float(w[2]), float(w[3]), float(w[4]), float(w[5]),
-        e.state, *e.wrench, *e.point, *e.normal, e.sigma, *e.h, e.h_norm, *e.direction,
-        e.angle * _DEG, e.h_std, e.angle_std * _DEG, e.angle_noise_std * _DEG, e.latched, e.latch_fallback, e.relatched, e.depth,
-        e.joint_conditioning, e.joint_angle_std * _DEG, e.joint_offset_std, e.joint_residual, e.joint_fallback,
-        e.depth_std, e.depth_from_data, e.line_evidence, e.h_ratio, e.excitation_ratio, e.contact_id, *e.drift,
-        r.seq, r.lost, r.dropped, r.late, r.duplicates, r.malformed, r.status, r.host_time,
-    )  # fmt: skip
+def _row_function() -> Callable[[SampleEstimate, Reading], tuple]:
+    """:func:`estimate_row`, compiled once from the column registry into one tuple expression
+    (as :func:`collections.namedtuple` compiles its methods): it runs per sample at the
+    sensor's rate. A vector attribute whose components are all columns, in order (every one
+    of softtip's: ``tests/test_columns.py`` checks it), is unpacked whole."""
+    cells = ["float(r.t)", *(f"float(w[{i}])" for i in range(6))]
+    for c in _ESTIMATE_COLUMNS:
+        if c.index is None:
+            cells.append(f"e.{c.attr} * _DEG" if c.degrees else f"e.{c.attr}")
+        elif c.index == 0:
+            cells.append(f"*e.{c.attr}")
+    cells += [f"r.{name}" for name in _STREAM_COLUMNS]
+    namespace = {"_DEG": _DEG}
+    exec(f"def estimate_row(e, r):\n    w = r.wrench\n    return ({', '.join(cells)},)\n", namespace)  # noqa: S102 - source made above from the registry's names
+    row = namespace["estimate_row"]
+    row.__module__, row.__doc__ = __name__, "One recording row (:data:`RECORD_COLUMNS`) from an estimate and its raw reading."
+    row.__annotations__ = {"e": SampleEstimate, "r": Reading, "return": tuple}
+    return row
+
+
+estimate_row = _row_function()
 
 
 @dataclass

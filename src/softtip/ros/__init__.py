@@ -13,6 +13,7 @@ import math
 from typing import Any, NamedTuple
 
 from softtip.estimator import SampleEstimate
+from softtip.estimator.columns import TOPICS as COLUMN_TOPICS
 
 __all__ = [
     "TOPICS",
@@ -34,16 +35,9 @@ __all__ = [
     "MARKER_DELETE",
 ]
 
-#: Output topics, by what they carry.
-TOPICS = {
-    "wrench": "/softtip/wrench",
-    "state": "/softtip/state",
-    "contact_point": "/softtip/contact_point",
-    "normal": "/softtip/normal",
-    "edge_direction": "/softtip/edge_direction",
-    "line_evidence": "/softtip/line_evidence",
-    "angle_std": "/softtip/angle_std",  # std_msgs/msg/Float64, rad: the direction's standard deviation
-}
+#: Output topics, by what they carry (:data:`softtip.estimator.columns.TOPICS`: their message
+#: types and the output columns each carries).
+TOPICS = {t.key: t.name for t in COLUMN_TOPICS}
 #: Topic of the RViz markers (``visualization_msgs/msg/MarkerArray``).
 MARKER_TOPIC = "/softtip/markers"
 #: ``header.frame_id`` when the input has none (a CSV log): RViz needs a frame to draw in.

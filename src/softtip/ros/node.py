@@ -97,6 +97,7 @@ def main(args: list[str] | None = None) -> None:  # pragma: no cover - needs a R
         ) from None
     import softtip.ros as sr
     from softtip.estimator import Estimator
+    from softtip.estimator.columns import TOPICS as COLUMN_TOPICS
 
     class SofttipNode(Node):
         def __init__(self):
@@ -107,16 +108,11 @@ def main(args: list[str] | None = None) -> None:  # pragma: no cover - needs a R
             self.estimator = Estimator(params["tip"], config_from_parameters(params))
             self.frame_id = params["frame_id"]
             self.publish_markers = bool(params["publish_markers"])
-            self.pub = {
-                "wrench": self.create_publisher(WrenchStamped, sr.TOPICS["wrench"], 10),
-                "state": self.create_publisher(String, sr.TOPICS["state"], 10),
-                "contact_point": self.create_publisher(PointStamped, sr.TOPICS["contact_point"], 10),
-                "normal": self.create_publisher(Vector3Stamped, sr.TOPICS["normal"], 10),
-                "edge_direction": self.create_publisher(Vector3Stamped, sr.TOPICS["edge_direction"], 10),
-                "line_evidence": self.create_publisher(String, sr.TOPICS["line_evidence"], 10),
-                "angle_std": self.create_publisher(Float64, sr.TOPICS["angle_std"], 10),
-                "markers": self.create_publisher(MarkerArray, sr.MARKER_TOPIC, 10),
-            }
+            types = {"geometry_msgs/msg/WrenchStamped": WrenchStamped, "std_msgs/msg/String": String,
+                     "geometry_msgs/msg/PointStamped": PointStamped, "geometry_msgs/msg/Vector3Stamped": Vector3Stamped,
+                     "std_msgs/msg/Float64": Float64}  # fmt: skip
+            self.pub = {t.key: self.create_publisher(types[t.msgtype], t.name, 10) for t in COLUMN_TOPICS}
+            self.pub["markers"] = self.create_publisher(MarkerArray, sr.MARKER_TOPIC, 10)
             self.compensate = self.orientation = None
             if params["payload"]:
                 from softtip.core.gravity import PayloadCompensator, load_payload
