@@ -1516,6 +1516,17 @@ def _needs_quotes(arr: np.ndarray) -> bool:
 _POW10 = 10.0 ** np.arange(23)
 
 
+def _digit_exponents(x: np.ndarray, digits: int) -> np.ndarray:
+    """``digits - 1 - floor(log10(|x|))``: the power of ten that brings ``x`` to ``digits``
+    digits before the point (NaN for NaN, +inf for 0, -inf for ±inf). One function for the
+    rounding and the compiled formatter, so both take numpy's ``log10`` on the same slice."""
+    with np.errstate(all="ignore"):
+        k = np.log10(np.abs(x))
+        np.floor(k, out=k)
+        np.subtract(digits - 1, k, out=k)
+    return k
+
+
 def _round_significant(x: np.ndarray, digits: int) -> np.ndarray:
     """``x`` rounded to ``digits`` significant decimal digits, as the nearest float64.
 
@@ -1531,10 +1542,8 @@ def _round_significant(x: np.ndarray, digits: int) -> np.ndarray:
     """
     if digits >= 17:
         return x
+    k = _digit_exponents(x, digits)
     with np.errstate(all="ignore"):
-        k = np.log10(np.abs(x))
-        np.floor(k, out=k)
-        np.subtract(digits - 1, k, out=k)  # NaN for NaN, +inf for 0, -inf for ±inf
         finite = np.isfinite(k)
         up = finite & (k >= 0) & (k <= 22)
         if up.all():
@@ -1609,12 +1618,17 @@ def _write_rows(out: TextIO | BinaryIO, plan: _Plan, *, header: bool = True) -> 
     binary = getattr(out, "buffer", None)
     if binary is not None:
         out.flush()  # the header first
+    compiled = _compiled_csv(plan)
 
-    def text_of(start: int) -> bytes:
-        # formatting floats is the cost; pyarrow does it without the GIL, so blocks are
-        # formatted on the free cores while the file gets the ones before them, in order
+    def text_of(start: int) -> Any:
+        # formatting floats is the cost; the compiled formatter and pyarrow both run without
+        # the GIL, so blocks are formatted on the free cores while the file gets the ones
+        # before them, in order
+        stop = min(start + _CHUNK_ROWS, plan.n)
+        if compiled:
+            return _compiled_block(plan, start, stop)
         sink = io.BytesIO()
-        pacsv.write_csv(_arrow_block(plan, start, min(start + _CHUNK_ROWS, plan.n), rounded=True), sink, options)
+        pacsv.write_csv(_arrow_block(plan, start, stop, rounded=True), sink, options)
         return sink.getvalue()
 
     starts = range(0, plan.n, _CHUNK_ROWS)
@@ -1631,12 +1645,25 @@ def _write_rows(out: TextIO | BinaryIO, plan: _Plan, *, header: bool = True) -> 
         binary.flush()
 
 
+def _compiled_csv(plan: _Plan) -> bool:
+    """Whether the compiled formatter writes this table's CSV text: numba installed and allowed
+    (:func:`softtip.core._jit.jit_enabled`: from :data:`~softtip.core._jit.JIT_MIN_SAMPLES`
+    rows on, or at once when numba is loaded already), floats to at most
+    :data:`softtip.io._csvtext.MAX_DIGITS` digits. Else pyarrow's writer (the same bytes)."""
+    from softtip.core._jit import JIT_MIN_SAMPLES, jit_enabled
+    from softtip.io._csvtext import MAX_DIGITS
+
+    if plan.digits is None or plan.digits > MAX_DIGITS:
+        return False
+    return jit_enabled(JIT_MIN_SAMPLES if "numba" in sys.modules else plan.n)
+
+
 def _put_block(out, binary, plan: _Plan, start: int, done) -> None:
     data = done.result()
     if binary is not None:
         binary.write(data)
     else:
-        out.write(data.decode("utf-8"))
+        out.write(bytes(data).decode("utf-8"))
     if plan.progress is not None:
         plan.progress(min(start + _CHUNK_ROWS, plan.n) - start)
 
@@ -1661,6 +1688,102 @@ def _arrow_block(plan: _Plan, start: int, stop: int, *, rounded: bool) -> Any:
             cells = [x.decode("utf-8", "replace") if isinstance(x, bytes) else str(x) for x in a.tolist()]
             cols.append(pa.array(cells, type=pa.string()))
     return pa.Table.from_arrays(cols, names=plan.names)
+
+
+def _string_buffers(arr: Any) -> tuple[np.ndarray, np.ndarray]:
+    """A pyarrow string array's cell offsets (int64, ``len + 1``) and UTF-8 bytes, without copying the text."""
+    import pyarrow as pa
+
+    wide = pa.types.is_large_string(arr.type)
+    bufs = arr.buffers()
+    offsets = np.frombuffer(bufs[1], dtype=np.int64 if wide else np.int32)[arr.offset : arr.offset + len(arr) + 1]
+    data = np.frombuffer(bufs[2], dtype=np.uint8) if bufs[2] is not None else np.zeros(0, dtype=np.uint8)
+    return offsets.astype(np.int64), data
+
+
+def _compiled_block(plan: _Plan, start: int, stop: int) -> np.ndarray:
+    """Rows ``start:stop`` as CSV text (UTF-8 bytes) by the compiled formatter
+    (:mod:`softtip.io._csvtext`): the bytes :func:`_arrow_block` and pyarrow's writer give.
+
+    Floats are rounded and formatted in the compiled loop from the exponents numpy gives
+    (:func:`_digit_exponents`, on the same slices as the fallback); text, integer and boolean
+    cells are their pyarrow text (integers and booleans by pyarrow's own cast, as its writer
+    does), copied in by the loop, quoted as the writer quotes them.
+    """
+    import pyarrow as pa
+    import pyarrow.compute as pc
+
+    from softtip.io._csvtext import format_rows
+
+    n = stop - start
+    digits = plan.digits
+    assert digits is not None
+    kinds = [arr.dtype.kind for arr in plan.arrays]
+    nf = kinds.count("f")
+    floats = np.empty((n, nf))
+    exps = np.empty((n, nf))
+    layout = np.empty(len(kinds), dtype=np.int64)
+    far_cells: list[np.ndarray] = []  # per float column, the rows its far cells are on
+    texts: list[tuple[np.ndarray, np.ndarray, np.ndarray, bool]] = []  # codes, offsets, data, quoted
+    bound = n * (nf * 25 + len(kinds) + 1)
+    j = 0
+    for c, (arr, kind) in enumerate(zip(plan.arrays, kinds)):
+        a = arr[start:stop]
+        if kind == "f":
+            k = _digit_exponents(a, digits)
+            floats[:, j] = a
+            exps[:, j] = k
+            with np.errstate(invalid="ignore"):
+                far_cells.append(np.flatnonzero(np.isfinite(k) & (np.abs(k) > 22)))
+            layout[c] = j
+            j += 1
+            continue
+        if kind in "biu":
+            cells, quoted = pc.cast(pa.array(a.view(np.int8) if kind == "b" else a), pa.string()), False
+        elif kind == "U":
+            cells, quoted = _arrow_strings(a, plain=False), plan.quoting == "needed"
+        else:
+            text = [x.decode("utf-8", "replace") if isinstance(x, bytes) else str(x) for x in a.tolist()]
+            cells, quoted = pa.array(text, type=pa.string()), plan.quoting == "needed"
+        if isinstance(cells, pa.DictionaryArray):
+            codes = cells.indices.to_numpy().astype(np.int64)
+            offsets, data = _string_buffers(cells.dictionary)
+        else:
+            codes = np.arange(n, dtype=np.int64)
+            offsets, data = _string_buffers(cells)
+        lengths = np.diff(offsets)[codes]
+        bound += int(lengths.sum()) * (2 if quoted else 1) + 2 * n
+        layout[c] = -1 - len(texts)
+        texts.append((codes, offsets, data, quoted))
+    # the text cells of every column in one table: cell indices shifted by the columns before
+    nt = len(texts)
+    code_table = np.empty((nt, n), dtype=np.int64)
+    cell_off = [np.zeros(1, dtype=np.int64)]
+    data_parts = []
+    cells_before = bytes_before = 0
+    for t, (codes, offsets, data, _) in enumerate(texts):
+        code_table[t] = codes + cells_before
+        cell_off.append(offsets[1:] - offsets[0] + bytes_before)
+        data_parts.append(data[offsets[0] : offsets[-1]])
+        cells_before += len(offsets) - 1
+        bytes_before += int(offsets[-1] - offsets[0])
+    # the cells the rounding does not take in one step: the fallback's value, pyarrow's text, in row order
+    rows = np.concatenate(far_cells) if far_cells else np.zeros(0, dtype=np.intp)
+    if len(rows):
+        cols = np.concatenate([np.full(len(r), f) for f, r in enumerate(far_cells)])
+        order = np.lexsort((cols, rows))
+        rows, cols = rows[order], cols[order]
+        values = np.array([float(f"%.{digits}g" % v) for v in floats[rows, cols].tolist()])
+        far_off, far_data = _string_buffers(pc.cast(pa.array(values), pa.string()))
+    else:
+        far_off, far_data = np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.uint8)
+    out = np.empty(bound + int(far_off[-1]), dtype=np.uint8)
+    used = format_rows(
+        floats, exps, code_table, np.concatenate(cell_off),
+        np.concatenate(data_parts) if data_parts else np.zeros(0, dtype=np.uint8),
+        np.array([q for *_, q in texts], dtype=np.bool_), layout, far_off - far_off[0], far_data, out,
+    )  # fmt: skip
+    return out[:used]
 
 
 # A text column with at most this many distinct cells is dictionary-encoded on its way to pyarrow.
