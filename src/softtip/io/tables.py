@@ -73,7 +73,16 @@ from numpy.typing import NDArray
 
 from softtip.core.units import UNIT_SYSTEM_UNITS, UNIT_SYSTEMS, get_unit, seconds_from_ns, wrench_scale, wrench_to_si
 from softtip.errors import InputError
-from softtip.io.formats import ROLES, ColumnError, ColumnMap, LogFormat, parse_column_spec, resolve_columns
+from softtip.io.formats import (
+    ROLES,
+    TABLE_FORMATS,
+    ColumnError,
+    ColumnMap,
+    LogFormat,
+    parse_column_spec,
+    resolve_columns,
+    table_format,
+)
 
 __all__ = ["REQUIRED_COLUMNS", "Log", "LogBlocks", "NotStreamable", "TableWriter", "iter_log", "read_log", "write_table"]
 
@@ -367,13 +376,15 @@ def read_log(
     if units is not None and units not in UNIT_SYSTEMS:
         raise InputError(f"{source}: unknown units {units!r}; expected one of: {', '.join(UNIT_SYSTEMS)}")
     fmt = _log_format(source, units, columns, force_units, moment_units, time_units, missing, skip_rows)
-    if not hasattr(path, "read") and _is_parquet(path):
+    columnar = None if hasattr(path, "read") else _columnar(path)  # type: ignore[arg-type]
+    if columnar is not None:
         if not fmt.plain or (force_units or moment_units):
             raise InputError(
                 f"{source}: --columns, --force-units, --moment-units, --time-units, --missing and --skip-rows apply to "
-                "CSV logs; expected a Parquet log with softtip's columns (and its softtip.units metadata)"
+                f"CSV logs; expected a{'n' if columnar == 'arrow' else ''} {TABLE_FORMATS[columnar][1]} log with "
+                "softtip's columns (and its softtip.units metadata)"
             )
-        return _read_parquet(path, source, units)  # type: ignore[arg-type]
+        return _read_parquet(path, source, units, columnar)  # type: ignore[arg-type]
     data = _read_data(path, source)
     if isinstance(data, bytes):
         data = _decompress(data, source)
@@ -428,8 +439,73 @@ def _decompress(data: bytes, source: str) -> bytes:
         raise InputError(f"{source}: not a readable {codec} file ({exc}); expected {codec}-compressed CSV") from None
 
 
-def _is_parquet(path: str | os.PathLike[str]) -> bool:
-    return os.fspath(path).lower().endswith(".parquet")  # type: ignore[union-attr]
+def _columnar(path: str | os.PathLike[str]) -> str | None:
+    """``"parquet"`` or ``"arrow"`` for a table file of that format (by its name), None for CSV."""
+    fmt = table_format(path)
+    return None if fmt == "csv" else fmt
+
+
+class _ColumnarFile:
+    """A Parquet or Arrow IPC (Feather v2) file, opened for reading: one interface for both.
+
+    Attributes ``schema`` (with the key-value metadata) and ``num_rows``; :meth:`read` gives the
+    whole table, :meth:`iter_batches` record batches of at most ``rows`` rows. Opening raises
+    what pyarrow raises (``OSError``, ``pa.ArrowException``).
+    """
+
+    def __init__(self, path: str | os.PathLike[str], fmt: str):
+        import pyarrow as pa
+
+        self.fmt = fmt
+        if fmt == "parquet":
+            import pyarrow.parquet as pq
+
+            # ParquetFile, not read_table: the latter imports pyarrow.dataset (~0.2 s) for nothing here
+            self._file: Any = pq.ParquetFile(path)
+            self.schema = self._file.schema_arrow
+            self.num_rows = int(self._file.metadata.num_rows)
+        else:
+            source = pa.memory_map(os.fspath(path))
+            try:
+                self._file = pa.ipc.open_file(source)
+            except BaseException:
+                source.close()
+                raise
+            self._source = source
+            self.schema = self._file.schema
+            self.num_rows = sum(self._file.get_batch(i).num_rows for i in range(self._file.num_record_batches))
+
+    def read(self) -> Any:
+        return self._file.read() if self.fmt == "parquet" else self._file.read_all()
+
+    def iter_batches(self, rows: int, columns: list[str] | None = None) -> Any:
+        if self.fmt == "parquet":
+            yield from self._file.iter_batches(batch_size=rows, columns=columns)
+            return
+        for i in range(self._file.num_record_batches):
+            batch = self._file.get_batch(i)
+            if columns is not None:
+                batch = batch.select(columns)
+            for start in range(0, batch.num_rows, rows):
+                yield batch.slice(start, rows)
+
+    def close(self) -> None:
+        self._file.close() if self.fmt == "parquet" else self._source.close()
+
+    def __enter__(self) -> _ColumnarFile:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def columnar_rows(path: str | os.PathLike[str]) -> int | None:
+    """The rows of a Parquet or Arrow IPC file (from its footer, not its data); None for CSV."""
+    fmt = _columnar(path)
+    if fmt is None:
+        return None
+    with _ColumnarFile(path, fmt) as f:
+        return f.num_rows
 
 
 def _source_name(path: str | os.PathLike[str] | TextIO) -> str:
@@ -975,20 +1051,20 @@ PARQUET_UNITS_KEY = "softtip.units"
 PARQUET_FINGERTIP_KEY = "softtip.fingertip"
 
 
-def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None) -> Log:
-    """A log from a Parquet file: the same columns and checks as CSV, rows named by number."""
+def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None, fmt: str = "parquet") -> Log:
+    """A log from a Parquet or Arrow IPC (Feather v2) file (``fmt``): the same columns and checks as
+    CSV, rows named by number."""
     import pyarrow as pa
-    import pyarrow.parquet as pq
 
-    what = "Parquet log file"
+    name = TABLE_FORMATS[fmt][1]
+    what = f"{name} log file"
     try:
-        # ParquetFile, not read_table: the latter imports pyarrow.dataset (~0.2 s) for nothing here
-        with pq.ParquetFile(path) as pf:
+        with _ColumnarFile(path, fmt) as pf:
             table = pf.read()
     except (FileNotFoundError, IsADirectoryError, PermissionError) as exc:
         raise _opening_error(exc, source, what) from None
     except (pa.ArrowException, OSError) as exc:
-        raise InputError(f"{source}: not a readable Parquet file ({exc}); expected a {what}") from None
+        raise InputError(f"{source}: not a readable {name} file ({exc}); expected a{'n' if fmt == 'arrow' else ''} {what}") from None
     meta = {k.decode("utf-8", "replace"): v.decode("utf-8", "replace") for k, v in (table.schema.metadata or {}).items()}
     file_units = meta.get(PARQUET_UNITS_KEY)
     if file_units is not None and file_units not in UNIT_SYSTEMS:
@@ -1353,8 +1429,9 @@ def write_table(
     float_format: str = "%.10g",
     metadata: Mapping[str, str] | None = None,
     progress: Callable[[int], object] | None = None,
+    statistics: bool = False,
 ) -> None:
-    """Write columns as a CSV table with a header row, or as Parquet.
+    """Write columns as a CSV table with a header row, as Parquet or as Arrow IPC (Feather v2).
 
     Parameters
     ----------
@@ -1368,8 +1445,10 @@ def write_table(
         at ``dest`` is left untouched. A path ending in ``.parquet`` is written as Parquet
         (pyarrow; values exactly, booleans as booleans, text as strings, ``metadata`` in
         the schema's key-value metadata; :data:`PARQUET_COMPRESSION`, dictionary encoding
-        for the columns that are not floating point). :class:`TableWriter` writes a table
-        piece by piece.
+        for the columns that are not floating point, no column statistics unless
+        ``statistics``), one ending in ``.arrow`` or ``.feather`` as Arrow IPC (the Feather
+        v2 file format; the same columns and types, :data:`ARROW_COMPRESSION`).
+        :class:`TableWriter` writes a table piece by piece.
     float_format : str
         CSV only: a printf-style format for one float. ``"%.<d>g"`` with ``d`` ≤ 17 (the
         default ``"%.10g"``; ``"%.17g"`` round-trips float64 exactly) writes each value
@@ -1377,10 +1456,13 @@ def write_table(
         (pyarrow's writer: ``1e-05`` may come out as ``0.00001``, ``45.0`` as ``45``);
         any other format is applied by Python, cell by cell (slower).
     metadata : mapping of str to str, optional
-        Parquet only: key-value metadata stored with the schema (softtip writes the units
-        and the fingertip; see :data:`PARQUET_UNITS_KEY`, :data:`PARQUET_FINGERTIP_KEY`).
+        Parquet and Arrow IPC only: key-value metadata stored with the schema (softtip writes
+        the units and the fingertip; see :data:`PARQUET_UNITS_KEY`, :data:`PARQUET_FINGERTIP_KEY`).
     progress : callable, optional
         Called with the number of rows written after each block (e.g. ``tqdm.update``).
+    statistics : bool
+        Parquet only: write each column chunk's statistics (min, max, null count), which
+        readers use to skip row groups in queries; off by default (they cost write time).
 
     CSV blocks are formatted on up to :data:`_WRITE_THREADS` threads at once (pyarrow formats
     without holding the GIL) and written in order; at most twice that many wait in memory.
@@ -1406,9 +1488,10 @@ def write_table(
     elif hasattr(dest, "write"):
         _write_rows(dest, plan)  # type: ignore[arg-type]
     else:
-        if _is_parquet(dest):  # type: ignore[arg-type]
-            plan.parquet = True
-            plan.metadata = dict(metadata or {})
+        plan.columnar = _columnar(dest)  # type: ignore[arg-type]
+        plan.parquet = plan.columnar is not None
+        plan.metadata = dict(metadata or {})
+        plan.statistics = statistics
         _write_atomic(os.fspath(dest), plan)  # type: ignore[arg-type]
 
 
@@ -1422,8 +1505,10 @@ class _Plan:
     names: list[str]
     digits: int | None = None  # pyarrow writer, floats rounded to this many digits; None: Python's %
     quoting: str = "none"  # pyarrow's quoting_style
-    parquet: bool = False
+    parquet: bool = False  # a binary table (Parquet or Arrow IPC): booleans as booleans, text as plain strings
+    columnar: str | None = None  # "parquet" or "arrow"
     metadata: dict[str, str] | None = None
+    statistics: bool = False
     progress: Callable[[int], object] | None = None
 
 
@@ -1846,6 +1931,10 @@ _PARQUET_ROWS = 1 << 18
 #: (more bytes to write), 305 MB. Snappy: the fastest, and what every Parquet reader reads.
 PARQUET_COMPRESSION = "snappy"
 
+#: Arrow IPC (Feather v2) compression: none, chosen by measurement (see the docs' input and
+#: output formats page): the format is for speed, and compression would cost what it saves.
+ARROW_COMPRESSION: str | None = None
+
 
 def _write_parquet(out: TextIO, plan: _Plan) -> None:
     binary = getattr(out, "buffer", out)
@@ -1856,7 +1945,7 @@ def _write_parquet(out: TextIO, plan: _Plan) -> None:
             stop = min(start + _PARQUET_ROWS, plan.n)
             table = _arrow_block(plan, start, stop, rounded=False)
             if writer is None:
-                writer = _parquet_writer(binary, table, plan.metadata)
+                writer = _columnar_writer(binary, table, plan.metadata, plan.columnar or "parquet", statistics=plan.statistics)
             writer.write_table(table)
             if plan.progress is not None and stop > start:
                 plan.progress(stop - start)
@@ -1866,15 +1955,24 @@ def _write_parquet(out: TextIO, plan: _Plan) -> None:
     binary.flush()
 
 
-def _parquet_writer(binary: BinaryIO, first: Any, metadata: Mapping[str, str] | None) -> Any:
-    """A ``ParquetWriter`` for tables like ``first``: :data:`PARQUET_COMPRESSION`, dictionary
-    encoding for the columns that are not floating point, ``metadata`` in the schema."""
+def _columnar_writer(binary: BinaryIO, first: Any, metadata: Mapping[str, str] | None, fmt: str = "parquet", *,
+                     statistics: bool = False) -> Any:
+    """A writer (``write_table``, ``close``) of tables like ``first``, ``metadata`` in the schema.
+
+    Parquet: :data:`PARQUET_COMPRESSION`, dictionary encoding only for the columns that are not
+    floating point, column statistics only when asked (``statistics``). Arrow IPC (the Feather v2
+    file format): :data:`ARROW_COMPRESSION`.
+    """
     import pyarrow as pa
-    import pyarrow.parquet as pq
 
     schema = first.schema.with_metadata(dict(metadata or {}))
+    if fmt == "arrow":
+        options = pa.ipc.IpcWriteOptions(compression=ARROW_COMPRESSION)
+        return pa.ipc.new_file(binary, schema, options=options)
+    import pyarrow.parquet as pq
+
     coded = [field.name for field in schema if not pa.types.is_floating(field.type)]
-    return pq.ParquetWriter(binary, schema, compression=PARQUET_COMPRESSION, use_dictionary=coded)
+    return pq.ParquetWriter(binary, schema, compression=PARQUET_COMPRESSION, use_dictionary=coded, write_statistics=statistics)
 
 
 def _write_atomic(path: str, plan: _Plan) -> None:
@@ -1918,7 +2016,8 @@ class LogBlocks:
         self.path = os.fspath(path)
         if units is not None and units not in UNIT_SYSTEMS:
             raise InputError(f"{self.source}: unknown units {units!r}; expected one of: {', '.join(UNIT_SYSTEMS)}")
-        self.parquet = _is_parquet(self.path)
+        self.columnar = _columnar(self.path)  # Parquet or Arrow IPC, else None (CSV)
+        self.parquet = self.columnar is not None
         self.rows, self.progress = rows, progress
         self.units = units
         self.n = 0
@@ -2190,36 +2289,36 @@ class LogBlocks:
         return re.sub(rf"^{re.escape(self.source)}:\d+:", f"{self.source}:{line}:", note)
 
     def _parquet_blocks(self) -> Any:
+        """Blocks of a Parquet or Arrow IPC file."""
         import pyarrow as pa
-        import pyarrow.parquet as pq
 
         try:
-            pf = pq.ParquetFile(self.path)
+            pf = _ColumnarFile(self.path, self.columnar or "parquet")
         except (pa.ArrowException, OSError):
             raise NotStreamable("unreadable") from None
         with pf:
-            meta = {k.decode("utf-8", "replace"): v.decode("utf-8", "replace") for k, v in (pf.schema_arrow.metadata or {}).items()}
+            meta = {k.decode("utf-8", "replace"): v.decode("utf-8", "replace") for k, v in (pf.schema.metadata or {}).items()}
             file_units = meta.get(PARQUET_UNITS_KEY)
             if (file_units is not None and file_units not in UNIT_SYSTEMS) or (
                 self.units is not None and file_units is not None and self.units != file_units
             ):
                 raise NotStreamable("units")
             self.units = self.units or file_units or "si"
-            names = list(pf.schema_arrow.names)
+            names = list(pf.schema.names)
             header = _Header(names=[n.strip() for n in names], line=0, data_base=0, lines=io.StringIO(), comments=[])
             try:
                 index = _column_index(header, self.source)
             except InputError:
                 raise NotStreamable("columns") from None
             for name in REQUIRED_COLUMNS:
-                typ = pf.schema_arrow.field(index[name]).type
+                typ = pf.schema.field(index[name]).type
                 if not (pa.types.is_floating(typ) or pa.types.is_integer(typ)):
                     raise NotStreamable("types")
-            if pf.metadata.num_rows == 0:
+            if pf.num_rows == 0:
                 raise NotStreamable("no rows")
             extra_idx = [j for j in range(len(names)) if j not in index.values()]
             try:
-                for batch in pf.iter_batches(batch_size=self.rows):
+                for batch in pf.iter_batches(self.rows):
                     cols = [batch.column(index[name]) for name in REQUIRED_COLUMNS]
                     if any(c.null_count for c in cols):
                         raise NotStreamable("null")
@@ -2274,8 +2373,11 @@ class TableWriter:
     out : text or binary stream
         Left open.
     parquet : bool
-        Parquet (one row group per block) instead of CSV.
-    float_format, metadata
+        Parquet (one row group per block) instead of CSV: ``format="parquet"``.
+    format : {"csv", "parquet", "arrow"}, optional
+        The table's format (:func:`softtip.io.formats.table_format` of a file name gives it);
+        ``"arrow"``: Arrow IPC, the Feather v2 file format (one record batch per block).
+    float_format, metadata, statistics
         As :func:`write_table`.
 
     Each :meth:`write` appends rows with the same columns; the CSV header comes with the
@@ -2283,8 +2385,13 @@ class TableWriter:
     :func:`write_table` would quote it). Call :meth:`close` at the end.
     """
 
-    def __init__(self, out: TextIO | BinaryIO, *, parquet: bool, float_format: str = "%.10g", metadata: Mapping[str, str] | None = None):
-        self.out, self.parquet, self.float_format = out, parquet, float_format
+    def __init__(self, out: TextIO | BinaryIO, *, parquet: bool = False, format: str | None = None, float_format: str = "%.10g",
+                 metadata: Mapping[str, str] | None = None, statistics: bool = False):
+        self.format = format or ("parquet" if parquet else "csv")
+        if self.format not in TABLE_FORMATS:
+            raise ValueError(f"format {self.format!r}; expected one of: {', '.join(TABLE_FORMATS)}")
+        self.out, self.parquet, self.float_format = out, self.format != "csv", float_format
+        self.statistics = statistics
         self.metadata = dict(metadata or {})
         self.names: list[str] | None = None
         self._writer: Any = None
@@ -2308,7 +2415,7 @@ class TableWriter:
                 plan.parquet = True
                 table = _arrow_block(plan, start, stop, rounded=False)
                 if self._writer is None:
-                    self._writer = _parquet_writer(binary, table, self.metadata)
+                    self._writer = _columnar_writer(binary, table, self.metadata, self.format, statistics=self.statistics)
                 self._writer.write_table(table)
                 if progress is not None:
                     progress(stop - start)
