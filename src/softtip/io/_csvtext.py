@@ -43,9 +43,9 @@ def format_rows(floats, exps, codes, cell_off, data, quote, layout, far_off, far
 
     Parameters
     ----------
-    floats : ndarray of float64, shape (n, nf)
-        The float columns' values (not rounded).
-    exps : ndarray of float64, shape (n, nf)
+    floats : ndarray of float64, shape (nf, n)
+        The float columns' values (not rounded), a column a row.
+    exps : ndarray of float64, shape (nf, n)
         ``d - 1 - floor(log10(|x|))`` of each value, as numpy computes it (NaN for NaN,
         +inf for zero, -inf for infinities).
     codes : ndarray of int64, shape (nt, n)
@@ -62,7 +62,7 @@ def format_rows(floats, exps, codes, cell_off, data, quote, layout, far_off, far
     out : ndarray of uint8
         Large enough for the rows (the caller's bound).
     """
-    n = floats.shape[0] if floats.shape[1] else codes.shape[1]
+    n = floats.shape[1] if floats.shape[0] else codes.shape[1]
     ncols = layout.shape[0]
     digs = np.empty(24, dtype=np.uint8)
     pow10 = _POW10
@@ -96,8 +96,8 @@ def format_rows(floats, exps, codes, cell_off, data, quote, layout, far_off, far
                         out[pos] = data[p]
                         pos += 1
                 continue
-            x = floats[i, j]
-            k = exps[i, j]
+            x = floats[j, i]
+            k = exps[j, i]
             if x != x:
                 out[pos] = 110  # nan
                 out[pos + 1] = 97

@@ -1805,21 +1805,17 @@ def _compiled_block(plan: _Plan, start: int, stop: int) -> np.ndarray:
     assert digits is not None
     kinds = [arr.dtype.kind for arr in plan.arrays]
     nf = kinds.count("f")
-    floats = np.empty((n, nf))
-    exps = np.empty((n, nf))
+    floats = np.empty((nf, n))  # a column a row: each copied in one piece
+    exps = np.empty((nf, n))
     layout = np.empty(len(kinds), dtype=np.int64)
-    far_cells: list[np.ndarray] = []  # per float column, the rows its far cells are on
     texts: list[tuple[np.ndarray, np.ndarray, np.ndarray, bool]] = []  # codes, offsets, data, quoted
     bound = n * (nf * 25 + len(kinds) + 1)
     j = 0
     for c, (arr, kind) in enumerate(zip(plan.arrays, kinds)):
         a = arr[start:stop]
         if kind == "f":
-            k = _digit_exponents(a, digits)
-            floats[:, j] = a
-            exps[:, j] = k
-            with np.errstate(invalid="ignore"):
-                far_cells.append(np.flatnonzero(np.isfinite(k) & (np.abs(k) > 22)))
+            floats[j] = a
+            exps[j] = _digit_exponents(a, digits)
             layout[c] = j
             j += 1
             continue
@@ -1853,12 +1849,13 @@ def _compiled_block(plan: _Plan, start: int, stop: int) -> np.ndarray:
         cells_before += len(offsets) - 1
         bytes_before += int(offsets[-1] - offsets[0])
     # the cells the rounding does not take in one step: the fallback's value, pyarrow's text, in row order
-    rows = np.concatenate(far_cells) if far_cells else np.zeros(0, dtype=np.intp)
+    with np.errstate(invalid="ignore"):
+        cols, rows = np.nonzero(np.abs(exps) > 22)  # ±inf (zeros, infinities) and NaN are no cells of these
+    cols, rows = cols[np.isfinite(exps[cols, rows])], rows[np.isfinite(exps[cols, rows])]
     if len(rows):
-        cols = np.concatenate([np.full(len(r), f) for f, r in enumerate(far_cells)])
         order = np.lexsort((cols, rows))
         rows, cols = rows[order], cols[order]
-        values = np.array([float(f"%.{digits}g" % v) for v in floats[rows, cols].tolist()])
+        values = np.array([float(f"%.{digits}g" % v) for v in floats[cols, rows].tolist()])
         far_off, far_data = _string_buffers(pc.cast(pa.array(values), pa.string()))
     else:
         far_off, far_data = np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.uint8)
