@@ -1,8 +1,9 @@
-"""Reading force/torque logs and writing result tables (CSV and Parquet).
+"""Reading force/torque logs and writing result tables (CSV, Parquet and Arrow IPC / Feather v2).
 
 Input logs (see the manual, docs/manual.md, and docs/guide/input-formats.md) are CSV files with a
 header row naming at least the columns ``t, fx, fy, fz, mx, my, mz`` in any order, or Parquet
-files (by the name's ``.parquet`` extension) with those columns; other columns are kept and
+or Arrow IPC files (by the name's extension, :func:`softtip.io.formats.table_format`:
+``.parquet``; ``.arrow`` or ``.feather``) with those columns; other columns are kept and
 otherwise ignored. ``t`` is non-decreasing: a repeated stamp is accepted and counted, a stamp
 that goes back is an error. Everything is converted to SI (s, N, N·m) here, at the edge, and
 nowhere else.
@@ -41,7 +42,11 @@ run of ``python benchmarks/bench_core.py --only end-to-end`` (same machine, busy
 that log took 0.51 s of CPU against 3.44 s for the former reader, and writing the 46
 columns ``softtip estimate`` had then (47 now) for it 4.3 s (pyarrow's CSV writer formatting 46 M numbers,
 ~90 ns each) against 16 s for the former writer; Parquet: read 0.19 s, write 0.60 s (2.40 s
-with pyarrow's default dictionary encoding of every column).
+with pyarrow's default dictionary encoding of every column). CSV numbers are now formatted by a
+compiled loop where numba is installed (:mod:`softtip.io._csvtext`, the same bytes; about 59
+against 83 ns per number in ``python benchmarks/bench_core.py --only bounds``). pandas' C
+engine, measured in pyarrow's place on the same 93 MB (1e6 rows, 7 columns): 0.46 s of CPU
+against pyarrow's 0.32 s, the same values; pyarrow stays.
 
 Output tables are written atomically when going to a path: a failure never leaves a
 partial file behind and never touches an existing file at the destination.
@@ -320,8 +325,8 @@ def read_log(
     Parameters
     ----------
     path : str, path-like or text stream
-        File to read (a name ending in ``.parquet`` is read as Parquet, anything else as
-        CSV, gzip/bzip2/xz/zstd-compressed CSV recognised by its first bytes), or an open
+        File to read (a name ending in ``.parquet`` is read as Parquet, ``.arrow`` or
+        ``.feather`` as Arrow IPC (Feather v2), anything else as CSV, gzip/bzip2/xz/zstd-compressed CSV recognised by its first bytes), or an open
         CSV stream (``sys.stdin``, ``io.StringIO``; a binary stream is decoded as UTF-8).
         A stream is read to its end and not closed.
     units : {"si", "kgf-mm"} or None
@@ -1920,16 +1925,19 @@ def _write_rows_printf(out: TextIO, plan: _Plan) -> None:
 # Rows per Parquet row group (and per progress step).
 _PARQUET_ROWS = 1 << 18
 
-#: Parquet compression, chosen by measurement: the 46 columns ``softtip estimate`` had then for a
-#: 1e6-row log (2-core machine shared with other work, CPU s, file MB) with pyarrow's
-#: default dictionary encoding of every column 1.32 s, 158 MB; dictionary encoding only for
-#: the columns that are not floats (a float column of measurements has no repeats to find)
-#: with snappy 0.40 s, 154 MB; lz4 0.56 s, 146 MB; zstd level 1 0.82 s, 120 MB; none 0.54 s
-#: (more bytes to write), 305 MB. Snappy: the fastest, and what every Parquet reader reads.
+#: Parquet compression, chosen by measurement (``python benchmarks/bench_core.py --only bounds``:
+#: the 47 columns of ``softtip estimate``'s output for a 1e6-row log, 2-core machine shared with
+#: other work, CPU time of the write, file size), dictionary encoding only for the columns that
+#: are not floats (a float column of measurements has no repeats to find), no statistics:
+#: snappy 381 ns/row, 159 MB; none 401 ns/row, 313 MB (more bytes to write); lz4 393 ns/row,
+#: 150 MB; zstd 608 ns/row, 126 MB. Statistics add ~10 % (snappy 427 ns/row); pyarrow's defaults
+#: (dictionary on every column, statistics) 1725 ns/row, 176 MB. Snappy and lz4 are equally fast
+#: within the noise; snappy is what every Parquet reader reads.
 PARQUET_COMPRESSION = "snappy"
 
-#: Arrow IPC (Feather v2) compression: none, chosen by measurement (see the docs' input and
-#: output formats page): the format is for speed, and compression would cost what it saves.
+#: Arrow IPC (Feather v2) compression, chosen by the same measurement: none 139 ns/row, 339 MB
+#: (read back memory-mapped, without a copy); lz4 192 ns/row, 156 MB; zstd 406 ns/row, 120 MB.
+#: Arrow IPC is the format for speed; Parquet is the compact one.
 ARROW_COMPRESSION: str | None = None
 
 
@@ -2343,11 +2351,11 @@ def iter_log(
     Parameters
     ----------
     path : str or path-like
-        As :func:`read_log` (a file; ``.parquet`` by extension).
+        As :func:`read_log` (a file; Parquet or Arrow IPC by the extension).
     units : {"si", "kgf-mm"} or None
         As :func:`read_log`.
     rows : int
-        Parquet: rows per block (CSV blocks are pyarrow's, ~4 MB of text).
+        Parquet and Arrow IPC: rows per block (CSV blocks are pyarrow's, ~4 MB of text).
     progress : callable, optional
         Called with the number of rows of each block.
 
