@@ -21,7 +21,8 @@ the project's settings: the compiled CSV formatter, lean Parquet, uncompressed A
 writing the least output the command line contract allows (24 columns), and numpy filling that
 many columns: what any `softtip estimate` must stay below, whatever its pipeline. Then the CSV
 number formatters side by side (compiled, its fallback, pyarrow's own, printf) in ns per
-number, and the Parquet / Arrow IPC compressions measured on all the estimates' columns.
+number, the Parquet / Arrow IPC compressions measured on all the estimates' columns, and the
+log's CSV parsed by pyarrow as softtip's reader runs it and by pandas' C engine.
 
 Compiled (--only compiled): the pipeline at 1e5 and 1e6 rows with the sequential stages
 compiled by numba and with their numpy paths, and the start-up cost of the compiled kernels
@@ -494,6 +495,7 @@ def bounds(n: int) -> None:
         set_jit(None)
         csv_formatters(every)
         columnar_settings(every, Path(tmp, "settings"))
+        csv_readers(src["csv"])
     k = sum(1 for c in SPEC_COLUMNS if c not in ("state", "line_evidence"))
     m = 10 * n
     for label in ("first allocation", "again"):
@@ -555,6 +557,43 @@ def csv_formatters(columns: dict) -> None:
         print(f"    {'compiled formatter':52s}      -      (numba not installed)")
     for label, value in rows.items():
         print(f"    {label:52s} {value:6.0f} ns")
+
+
+def csv_readers(path: Path) -> None:
+    """The 7-column log's CSV body parsed as softtip's reader parses it (pyarrow, one thread, the
+    column types given) and by pandas' C engine (where pandas is installed), CPU time (best of 3),
+    and whether the values agree to the bit."""
+    import io
+
+    import pyarrow as pa
+    import pyarrow.csv as pcsv
+
+    data = path.read_bytes()
+    start = data.index(b"\n") + 1
+    body = memoryview(data)[start:]
+    names = data[: start - 1].decode().split(",")
+
+    def arrow():
+        reader = pcsv.open_csv(
+            pa.BufferReader(pa.py_buffer(body)), read_options=pcsv.ReadOptions(column_names=names, use_threads=False),
+            parse_options=pcsv.ParseOptions(newlines_in_values=True, ignore_empty_lines=False),
+            convert_options=pcsv.ConvertOptions(column_types=dict.fromkeys(names, pa.float64()), check_utf8=True,
+                                                strings_can_be_null=False, quoted_strings_can_be_null=False),
+        )  # fmt: skip
+        table = pa.Table.from_batches(list(reader), schema=reader.schema)
+        reader.close()
+        return np.column_stack([table.column(n).to_numpy() for n in names])
+
+    wa, ca, a = timed(arrow, 3)
+    print(f"  CSV readers on the log's {len(data) / 1e6:.0f} MB ({len(a):,} rows, {len(names)} columns), CPU time, best of 3:")
+    print(f"    {'pyarrow, as read_log runs it (one thread)':52s} {ca:6.3f} s")
+    try:
+        import pandas as pd
+    except ImportError:
+        print(f"    {'pandas C engine':52s}      -  (pandas not installed)")
+        return
+    wp, cp, p = timed(lambda: pd.read_csv(io.BytesIO(body), engine="c", header=None, names=names, dtype=np.float64).to_numpy(), 3)
+    print(f"    {'pandas C engine (read_csv, engine=c)':52s} {cp:6.3f} s   (the same values: {np.array_equal(a, p)})")
 
 
 def _fallback_bytes(plan, start: int, n: int) -> bytes:

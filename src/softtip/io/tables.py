@@ -43,10 +43,11 @@ that log took 0.51 s of CPU against 3.44 s for the former reader, and writing th
 columns ``softtip estimate`` had then (47 now) for it 4.3 s (pyarrow's CSV writer formatting 46 M numbers,
 ~90 ns each) against 16 s for the former writer; Parquet: read 0.19 s, write 0.60 s (2.40 s
 with pyarrow's default dictionary encoding of every column). CSV numbers are now formatted by a
-compiled loop where numba is installed (:mod:`softtip.io._csvtext`, the same bytes; about 59
-against 83 ns per number in ``python benchmarks/bench_core.py --only bounds``). pandas' C
-engine, measured in pyarrow's place on the same 93 MB (1e6 rows, 7 columns): 0.46 s of CPU
-against pyarrow's 0.32 s, the same values; pyarrow stays.
+compiled loop where numba is installed (:mod:`softtip.io._csvtext`, the same bytes; 48-59
+against 79-83 ns per number in ``python benchmarks/bench_core.py --only bounds``). pandas' C
+engine, measured in pyarrow's place on the same 93 MB (1e6 rows, 7 columns; six runs): 0.28-0.46 s
+of CPU against pyarrow's 0.27-0.42 s, the same values: not faster beyond the noise, and not a
+dependency; pyarrow stays.
 
 Output tables are written atomically when going to a path: a failure never leaves a
 partial file behind and never touches an existing file at the destination.
@@ -1709,6 +1710,8 @@ def _write_rows(out: TextIO | BinaryIO, plan: _Plan, *, header: bool = True) -> 
     if binary is not None:
         out.flush()  # the header first
     compiled = _compiled_csv(plan)
+    if compiled:
+        _compiled_block(plan, 0, min(plan.n, 1))  # compiled (or loaded from numba's cache) once, before the threads
 
     def text_of(start: int) -> Any:
         # formatting floats is the cost; the compiled formatter and pyarrow both run without
@@ -1927,16 +1930,16 @@ _PARQUET_ROWS = 1 << 18
 
 #: Parquet compression, chosen by measurement (``python benchmarks/bench_core.py --only bounds``:
 #: the 47 columns of ``softtip estimate``'s output for a 1e6-row log, 2-core machine shared with
-#: other work, CPU time of the write, file size), dictionary encoding only for the columns that
-#: are not floats (a float column of measurements has no repeats to find), no statistics:
-#: snappy 381 ns/row, 159 MB; none 401 ns/row, 313 MB (more bytes to write); lz4 393 ns/row,
-#: 150 MB; zstd 608 ns/row, 126 MB. Statistics add ~10 % (snappy 427 ns/row); pyarrow's defaults
-#: (dictionary on every column, statistics) 1725 ns/row, 176 MB. Snappy and lz4 are equally fast
-#: within the noise; snappy is what every Parquet reader reads.
+#: other work, CPU time of the write, file size; two runs), dictionary encoding only for the
+#: columns that are not floats (a float column of measurements has no repeats to find), no
+#: statistics: snappy 360-381 ns/row, 159 MB; none 386-401 ns/row, 313 MB (more bytes to write);
+#: lz4 364-393 ns/row, 150 MB; zstd 527-608 ns/row, 126 MB. Statistics add ~10 % (snappy
+#: 397-427 ns/row); pyarrow's defaults (dictionary on every column, statistics) 1390-1725 ns/row,
+#: 176 MB. Snappy and lz4 are equally fast within the noise; snappy is what every Parquet reader reads.
 PARQUET_COMPRESSION = "snappy"
 
-#: Arrow IPC (Feather v2) compression, chosen by the same measurement: none 139 ns/row, 339 MB
-#: (read back memory-mapped, without a copy); lz4 192 ns/row, 156 MB; zstd 406 ns/row, 120 MB.
+#: Arrow IPC (Feather v2) compression, chosen by the same measurement: none 125-139 ns/row, 339 MB
+#: (read back memory-mapped, without a copy); lz4 148-192 ns/row, 156 MB; zstd 381-406 ns/row, 120 MB.
 #: Arrow IPC is the format for speed; Parquet is the compact one.
 ARROW_COMPRESSION: str | None = None
 
