@@ -45,7 +45,7 @@ columns ``softtip estimate`` had then (47 now) for it 4.3 s (pyarrow's CSV write
 with pyarrow's default dictionary encoding of every column). CSV numbers are now formatted by a
 compiled loop where numba is installed (:mod:`softtip.io._csvtext`, the same bytes; 48-59
 against 79-83 ns per number in ``python benchmarks/bench_core.py --only bounds``). pandas' C
-engine, measured in pyarrow's place on the same 93 MB (1e6 rows, 7 columns; six runs): 0.28-0.46 s
+engine, measured in pyarrow's place on the same 93 MB (1e6 rows, 7 columns; seven runs): 0.28-0.46 s
 of CPU against pyarrow's 0.27-0.42 s, the same values: not faster beyond the noise, and not a
 dependency; pyarrow stays.
 
