@@ -16,9 +16,13 @@ Rates are rows per second of CPU time (the process's own, or the command's): on 
 machine that is the steady figure; the wall-clock time is printed beside it. Targets (manual §6) end to end: CSV >= 2 M rows/s, Parquet >= 10 M rows/s.
 Only this part: --only end-to-end; only the streaming rows: --only stream.
 
-Bounds (--only bounds): pyarrow alone reading the log and writing the least output the command
-line contract allows (24 columns), and numpy filling that many columns: what any `softtip
-estimate` must stay below, whatever its pipeline.
+Bounds (--only bounds): pyarrow reading the log and softtip's own writers (write_table, with
+the project's settings: the compiled CSV formatter, lean Parquet, uncompressed Arrow IPC)
+writing the least output the command line contract allows (24 columns), and numpy filling that
+many columns: what any `softtip estimate` must stay below, whatever its pipeline. Then the CSV
+number formatters side by side (compiled, its fallback, pyarrow's own, printf) in ns per
+number, the Parquet / Arrow IPC compressions measured on all the estimates' columns, and the
+log's CSV parsed by pyarrow as softtip's reader runs it and by pandas' C engine.
 
 Compiled (--only compiled): the pipeline at 1e5 and 1e6 rows with the sequential stages
 compiled by numba and with their numpy paths, and the start-up cost of the compiled kernels
@@ -437,46 +441,61 @@ SPEC_COLUMNS = (
 
 
 def bounds(n: int) -> None:
-    """What the end-to-end targets leave for softtip: pyarrow alone reading the n-row input log
-    and writing the least output the command line contract allows (:data:`SPEC_COLUMNS` of
-    softtip's own estimates), and numpy filling that many float64 columns, per CPU second on
-    one thread and with pyarrow's threads. Any `softtip estimate` is slower than read + write
-    here, whatever its pipeline."""
+    """What the end-to-end targets leave for softtip: reading the n-row input log with pyarrow and
+    writing the least output the command line contract allows (:data:`SPEC_COLUMNS` of softtip's
+    own estimates) with softtip's own writers and settings (``write_table``: CSV by the compiled
+    formatter, Parquet with :data:`~softtip.io.tables.PARQUET_COMPRESSION`, no dictionary on
+    floats, no statistics; Arrow IPC uncompressed), per CPU second on one thread and with
+    pyarrow's threads; numpy filling that many float64 columns; the CSV number formatters side
+    by side in ns per number; the Parquet and Arrow IPC compressions on all the estimates'
+    columns. Any `softtip estimate` is slower than read + write here, whatever its pipeline."""
     import pyarrow
     import pyarrow.csv as pcsv
     import pyarrow.parquet as pq
+
+    import softtip.io.tables as sio
+    from softtip.core._jit import set_jit
 
     g = synthetic_grasp("murakami2006", angle_deg=45.0, duration=10.0, rate=1000.0, seed=1)
     reps = max(1, n // len(g.t))
     t = np.arange(reps * len(g.t)) * 1e-3
     w = np.tile(g.wrench, (reps, 1))
     n = len(t)
-    cols = estimate(t, w, "murakami2006").columns()
-    out = pyarrow.table({k: pyarrow.array(cols[k]).dictionary_encode() if cols[k].dtype.kind == "U" else cols[k]
-                         for k in SPEC_COLUMNS})  # fmt: skip
+    every = estimate(t, w, "murakami2006").columns()
+    cols = {k: every[k] for k in SPEC_COLUMNS}
     log = pyarrow.table({"t": t, **{k: w[:, i] for i, k in enumerate(("fx", "fy", "fz", "mx", "my", "mz"))}})
-    print(f"bounds of end to end, {n:,}-row log, the {len(SPEC_COLUMNS)} columns the contract requires, pyarrow "
-          f"{pyarrow.__version__} alone; rows per second, best of 2 (targets, manual §6: CSV >= 2 M, Parquet >= 10 M)")  # fmt: skip
+    print(f"bounds of end to end, {n:,}-row log, the {len(SPEC_COLUMNS)} columns the contract requires: read by "
+          f"pyarrow {pyarrow.__version__}, written by softtip's write_table (its own settings); rows per second, "
+          "best of 2 (targets, manual §6: CSV >= 2 M, Parquet >= 10 M)")  # fmt: skip
+    old_threads = sio._WRITE_THREADS
     with tempfile.TemporaryDirectory() as tmp:
-        src = {"csv": Path(tmp, "in.csv"), "parquet": Path(tmp, "in.parquet")}
-        pcsv.write_csv(log, src["csv"])
-        pq.write_table(log, src["parquet"])
-        dest = Path(tmp, "out")
+        src = {"csv": Path(tmp, "in.csv"), "parquet": Path(tmp, "in.parquet"), "arrow": Path(tmp, "in.arrow")}
+        for path in src.values():
+            sio.write_table({name: log.column(name).to_numpy() for name in log.column_names}, path)
         steps = {
-            "CSV": (lambda: pcsv.read_csv(src["csv"]), lambda: pcsv.write_csv(out, dest)),
-            "Parquet": (lambda: pq.read_table(src["parquet"]), lambda: pq.write_table(out, dest)),
+            "CSV": (lambda: pcsv.read_csv(src["csv"]), Path(tmp, "out.csv")),
+            "Parquet": (lambda: pq.ParquetFile(src["parquet"]).read(), Path(tmp, "out.parquet")),
+            "Arrow IPC": (lambda: pyarrow.ipc.open_file(pyarrow.memory_map(str(src["arrow"]))).read_all(), Path(tmp, "out.arrow")),
         }
         cores = pyarrow.cpu_count()
+        set_jit(True)  # the compiled CSV formatter where numba is installed
         for threads in (1, cores):
             label = "one thread" if threads == 1 else f"{threads} threads (pyarrow's default)"
             pyarrow.set_cpu_count(threads)
-            for fmt, (read, write) in steps.items():
+            sio._WRITE_THREADS = threads
+            for fmt, (read, dest) in steps.items():
                 wr, cr, _ = timed(read)
-                ww, cw, _ = timed(write)
+                ww, cw, _ = timed(lambda: sio.write_table(cols, dest))
                 size = dest.stat().st_size / n
-                print(f"  {fmt:8s} {label:34s} read {n / cr / 1e6:6.2f} M/s, write {n / cw / 1e6:6.2f} M/s "
+                print(f"  {fmt:9s} {label:34s} read {n / cr / 1e6:6.2f} M/s, write {n / cw / 1e6:6.2f} M/s "
                       f"({size:.0f} B/row), read + write {n / (cr + cw) / 1e6:6.2f} M/s per CPU second, "
                       f"{n / (wr + ww) / 1e6:6.2f} M/s wall")  # fmt: skip
+        sio._WRITE_THREADS = old_threads
+        pyarrow.set_cpu_count(cores)
+        set_jit(None)
+        csv_formatters(every)
+        columnar_settings(every, Path(tmp, "settings"))
+        csv_readers(src["csv"])
     k = sum(1 for c in SPEC_COLUMNS if c not in ("state", "line_evidence"))
     m = 10 * n
     for label in ("first allocation", "again"):
@@ -488,6 +507,147 @@ def bounds(n: int) -> None:
         del arrays
         print(f"  numpy: allocate and fill {k} float64 columns of {m:,} rows, {label}: {c / m * 1e9:.0f} ns/row "
               f"(the pipeline target, 20 M rows/s, is 50 ns/row for everything)")  # fmt: skip
+
+
+def csv_formatters(columns: dict) -> None:
+    """CSV text of the estimates' float columns, ns per number of CPU time on one thread (best of
+    3): the compiled formatter (:mod:`softtip.io._csvtext`, rounding included), the fallback
+    (softtip's rounding then pyarrow's writer, the same bytes), pyarrow's shortest-repr writer
+    on the unrounded values, and Python's printf; every 65536-row block as ``write_table`` makes it."""
+    import io
+
+    import pyarrow
+    import pyarrow.csv as pcsv
+
+    import softtip.io.tables as sio
+
+    floats = {k: v for k, v in columns.items() if v.dtype.kind == "f"}
+    n = len(next(iter(floats.values())))
+    numbers = n * len(floats)
+    plan = sio._plan_table(floats, "%.10g")
+    starts = range(0, n, sio._CHUNK_ROWS)
+    options = pcsv.WriteOptions(include_header=False)
+
+    def per_number(fn, repeats=3) -> float:
+        return timed(fn, repeats)[1] / numbers * 1e9
+
+    def fallback():
+        for s in starts:
+            pcsv.write_csv(sio._arrow_block(plan, s, min(s + sio._CHUNK_ROWS, n), rounded=True), io.BytesIO(), options)
+
+    table = pyarrow.table(floats)
+    rows = {"fallback: softtip's rounding + pyarrow's writer": per_number(fallback),
+            "pyarrow's shortest-repr writer alone (not rounded)": per_number(lambda: pcsv.write_csv(table, io.BytesIO(), options))}  # fmt: skip
+    try:
+        import numba  # noqa: F401
+    except ImportError:
+        compiled = None
+    else:
+        sio._compiled_block(plan, 0, 1)  # compiled (or loaded from numba's cache) before the clock
+        compiled = per_number(lambda: [sio._compiled_block(plan, s, min(s + sio._CHUNK_ROWS, n)) for s in starts])
+        same = all(bytes(sio._compiled_block(plan, s, min(s + sio._CHUNK_ROWS, n))) == _fallback_bytes(plan, s, n) for s in starts[:4])
+    few = min(n, 1 << 16)
+    printf = timed(lambda: sio._write_rows_printf(io.StringIO(), sio._plan_table({k: v[:few] for k, v in floats.items()}, "%.10e")), 1)[1]
+    rows["Python's printf (%.10e, cell by cell in C)"] = printf / (few * len(floats)) * 1e9
+    print(f"  CSV number formatting, {len(floats)} float columns x {n:,} rows, ns per number of CPU time, one thread:")
+    if compiled is not None:
+        print(f"    {'compiled formatter (numba; rounding included)':52s} {compiled:6.0f} ns   "
+              f"(same bytes as the fallback on the first blocks: {same})")  # fmt: skip
+    else:
+        print(f"    {'compiled formatter':52s}      -      (numba not installed)")
+    for label, value in rows.items():
+        print(f"    {label:52s} {value:6.0f} ns")
+
+
+def csv_readers(path: Path) -> None:
+    """The 7-column log's CSV body parsed as softtip's reader parses it (pyarrow, one thread, the
+    column types given) and by pandas' C engine (where pandas is installed), CPU time (best of 3),
+    and whether the values agree to the bit."""
+    import io
+
+    import pyarrow as pa
+    import pyarrow.csv as pcsv
+
+    data = path.read_bytes()
+    start = data.index(b"\n") + 1
+    body = memoryview(data)[start:]
+    names = data[: start - 1].decode().split(",")
+
+    def arrow():
+        reader = pcsv.open_csv(
+            pa.BufferReader(pa.py_buffer(body)), read_options=pcsv.ReadOptions(column_names=names, use_threads=False),
+            parse_options=pcsv.ParseOptions(newlines_in_values=True, ignore_empty_lines=False),
+            convert_options=pcsv.ConvertOptions(column_types=dict.fromkeys(names, pa.float64()), check_utf8=True,
+                                                strings_can_be_null=False, quoted_strings_can_be_null=False),
+        )  # fmt: skip
+        table = pa.Table.from_batches(list(reader), schema=reader.schema)
+        reader.close()
+        return np.column_stack([table.column(n).to_numpy() for n in names])
+
+    wa, ca, a = timed(arrow, 3)
+    print(f"  CSV readers on the log's {len(data) / 1e6:.0f} MB ({len(a):,} rows, {len(names)} columns), CPU time, best of 3:")
+    print(f"    {'pyarrow, as read_log runs it (one thread)':52s} {ca:6.3f} s")
+    try:
+        import pandas as pd
+    except ImportError:
+        print(f"    {'pandas C engine':52s}      -  (pandas not installed)")
+        return
+    wp, cp, p = timed(lambda: pd.read_csv(io.BytesIO(body), engine="c", header=None, names=names, dtype=np.float64).to_numpy(), 3)
+    print(f"    {'pandas C engine (read_csv, engine=c)':52s} {cp:6.3f} s   (the same values: {np.array_equal(a, p)})")
+
+
+def _fallback_bytes(plan, start: int, n: int) -> bytes:
+    import io
+
+    import pyarrow.csv as pcsv
+
+    import softtip.io.tables as sio
+
+    sink = io.BytesIO()
+    block = sio._arrow_block(plan, start, min(start + sio._CHUNK_ROWS, n), rounded=True)
+    pcsv.write_csv(block, sink, pcsv.WriteOptions(include_header=False))
+    return sink.getvalue()
+
+
+def columnar_settings(columns: dict, dest: Path) -> None:
+    """Parquet and Arrow IPC writer settings on all the estimates' columns: compression none,
+    snappy, lz4, zstd (Parquet with softtip's dictionary and statistics settings, and with
+    pyarrow's defaults), write CPU time per row (best of 3) and file size; how
+    :data:`softtip.io.tables.PARQUET_COMPRESSION` and ``ARROW_COMPRESSION`` were chosen."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    import softtip.io.tables as sio
+
+    plan = sio._plan_table(columns, "%.10g")
+    plan.parquet = True
+    n = plan.n
+    tables = [sio._arrow_block(plan, s, min(s + sio._PARQUET_ROWS, n), rounded=False) for s in range(0, n, sio._PARQUET_ROWS)]
+    schema = tables[0].schema
+    coded = [f.name for f in schema if not pa.types.is_floating(f.type)]
+    configs = {f"Parquet {c:6s} (softtip's: no dictionary on floats, no statistics)": dict(compression=c, use_dictionary=coded, write_statistics=False)
+               for c in ("none", "snappy", "lz4", "zstd")}  # fmt: skip
+    configs["Parquet snappy with statistics"] = dict(compression="snappy", use_dictionary=coded)
+    configs["Parquet pyarrow's defaults (snappy, dictionary everywhere, statistics)"] = {}
+
+    def parquet(kw):
+        with pq.ParquetWriter(dest, schema, **kw) as writer:
+            for table in tables:
+                writer.write_table(table)
+
+    def arrow(compression):
+        with pa.OSFile(str(dest), "wb") as sink, pa.ipc.new_file(sink, schema, options=pa.ipc.IpcWriteOptions(compression=compression)) as writer:
+            for table in tables:
+                writer.write_table(table)
+
+    print(f"  file writers on all {len(columns)} columns of the estimates, {n:,} rows, CPU time of the write (best of 3), "
+          f"file size; chosen: Parquet {sio.PARQUET_COMPRESSION}, Arrow IPC {sio.ARROW_COMPRESSION or 'uncompressed'}")  # fmt: skip
+    for label, kw in configs.items():
+        c = timed(lambda: parquet(kw), 3)[1]
+        print(f"    {label:72s} {c / n * 1e9:5.0f} ns/row {dest.stat().st_size / 1e6:7.1f} MB")
+    for compression in (None, "lz4", "zstd"):
+        c = timed(lambda: arrow(compression), 3)[1]
+        print(f"    {'Arrow IPC ' + (compression or 'uncompressed'):72s} {c / n * 1e9:5.0f} ns/row {dest.stat().st_size / 1e6:7.1f} MB")
 
 
 def plausible_wrenches(tip, n, rng):

@@ -200,3 +200,22 @@ def test_orientation_columns_of_a_parquet_log(tmp_path: Path) -> None:
         f"{path}: data row 7: column 'qw': qw, qx, qy, qz = 2.0, 0.0, 0.0, 0.0 has norm 2; expected a unit "
         "quaternion (norm within 0.001 of 1)"
     )
+
+
+def test_lean_writer_settings(tmp_path: Path) -> None:
+    """No dictionary on float columns, no statistics unless asked (docs/guide/input-formats.md)."""
+    from softtip.io.tables import PARQUET_COMPRESSION
+
+    cols = {**_table(), "state": np.array(["none", "point"] * 25), "k": np.arange(50)}
+    path = tmp_path / "lean.parquet"
+    write_table(cols, path)
+    group = pq.ParquetFile(path).metadata.row_group(0)
+    chunks = {group.column(i).path_in_schema: group.column(i) for i in range(group.num_columns)}
+    assert all(not c.is_stats_set for c in chunks.values())
+    assert all(c.compression == PARQUET_COMPRESSION.upper() for c in chunks.values())
+    assert not any("DICTIONARY" in e for e in chunks["fx"].encodings)
+    assert any("DICTIONARY" in e for e in chunks["state"].encodings)
+    write_table(cols, path, statistics=True)
+    group = pq.ParquetFile(path).metadata.row_group(0)
+    assert all(group.column(i).is_stats_set for i in range(group.num_columns))
+    assert group.column(0).statistics.min == cols["t"].min()

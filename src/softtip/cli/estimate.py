@@ -56,8 +56,8 @@ from a force/torque log.
 
 INPUT is a CSV file with a header row and columns t, fx, fy, fz, mx, my, mz (t in s,
 non-decreasing: repeated stamps are counted and reported; extra columns are kept and copied
-to the output), or a Parquet file with those columns (name ending in .parquet; its
-softtip.units metadata gives the units). '-' reads CSV from standard input. With
+to the output), or a Parquet or Arrow IPC (Feather v2) file with those columns (name
+ending in .parquet, .arrow or .feather; its softtip.units metadata gives the units). '-' reads CSV from standard input. With
 --example, softtip's shipped example grasp is used instead. Logs as ATI's software,
 rostopic echo -p, ros2 topic echo --csv, PlotJuggler and bag converters write them are read
 as they are (units from the header; comma, tab or semicolon, a decimal comma; .gz, .bz2, .xz,
@@ -67,8 +67,9 @@ rest (docs/guide/input-formats.md). Absolute stamps count from the first (stamp_
 whose units make the fingertip geometry or the sensor's noise impossible stops, naming the
 unit pair that fits.
 
-The output CSV (standard output unless -o; Parquet when -o ends in .parquet, with the
-units and the fingertip in its key-value metadata) has these columns, in order, then the
+The output CSV (standard output unless -o; Parquet when -o ends in .parquet, Arrow IPC
+(Feather v2) when it ends in .arrow or .feather, with the units and the fingertip in its
+key-value metadata) has these columns, in order, then the
 input's extra columns; units are SI (N and N·m, or kgf and kgf·mm with --output-units
 kgf-mm), angles in degrees; an empty cell is nan. r, n, h are empty when state is none; d
 and the angle only for line contacts, where |h| stands out of the noise. """
@@ -91,7 +92,7 @@ from the bag's /tf.
 )
 @click.argument("input_path", metavar="INPUT", required=False, type=click.Path(allow_dash=True))
 @option("--example", is_flag=True, help="Use the shipped example grasp (a 45° line contact, murakami2006 tip) as INPUT.")
-@option("-o", "--output", type=click.Path(dir_okay=False, writable=True), help="Output CSV, or Parquet for a name ending in .parquet (default: CSV on standard output).")
+@option("-o", "--output", type=click.Path(dir_okay=False, writable=True), help="Output CSV, or Parquet for a name ending in .parquet, Arrow IPC (Feather v2) for .arrow or .feather (default: CSV on standard output).")
 @option(
     "--units",
     type=click.Choice(UNIT_SYSTEMS),
@@ -406,13 +407,11 @@ MAX_FLOOR_ROWS = 8192
 
 def _row_estimate(path: str) -> int:
     """The rows of a log, or an upper estimate (a CSV row takes at least 14 bytes: 7 one-digit cells)."""
-    try:
-        if path.lower().endswith(".parquet"):
-            import pyarrow.parquet as pq
+    from softtip.io.tables import columnar_rows
 
-            with pq.ParquetFile(path) as pf:
-                return int(pf.metadata.num_rows)
-        return os.path.getsize(path) // 14
+    try:
+        rows = columnar_rows(path)
+        return rows if rows is not None else os.path.getsize(path) // 14
     except Exception:  # noqa: BLE001 - unreadable: the reader says why
         return 0
 AUTO_CHUNK_PARQUET_ROWS = 262_144
@@ -421,15 +420,11 @@ AUTO_CHUNK_PARQUET_ROWS = 262_144
 def _auto_chunk_rows(path: str) -> int | None:
     """Rows per piece for a log this large (:data:`AUTO_CHUNK_CSV_BYTES`, :data:`AUTO_CHUNK_PARQUET_ROWS`), else None."""
     from softtip.io.chunked import DEFAULT_PIECE_ROWS
+    from softtip.io.tables import columnar_rows
 
     try:
-        if path.lower().endswith(".parquet"):
-            import pyarrow.parquet as pq
-
-            with pq.ParquetFile(path) as pf:
-                large = pf.metadata.num_rows > AUTO_CHUNK_PARQUET_ROWS
-        else:
-            large = os.path.getsize(path) > AUTO_CHUNK_CSV_BYTES
+        rows = columnar_rows(path)
+        large = rows > AUTO_CHUNK_PARQUET_ROWS if rows is not None else os.path.getsize(path) > AUTO_CHUNK_CSV_BYTES
     except Exception:  # noqa: BLE001 - unreadable in any way: the one-shot reader words it
         return None
     return DEFAULT_PIECE_ROWS if large else None
@@ -446,25 +441,21 @@ def _estimate_in_pieces(
     from softtip.estimator.summary import summarise_contacts
     from softtip.io.atomic import cannot_write
     from softtip.io.chunked import estimate_pieces
-    from softtip.io.tables import NotStreamable, TableWriter, iter_log
+    from softtip.io.formats import table_format
+    from softtip.io.tables import NotStreamable, TableWriter, columnar_rows, iter_log
 
     # pieces of a few rows give the same result, but each piece costs a fixed overhead
     # (--chunk-rows 1 took minutes for 5e4 rows): at most about MAX_PIECES pieces
     # (and memory stays bounded: that floor is at most MAX_FLOOR_ROWS)
     rows = max(rows, min(-(-_row_estimate(input_path) // MAX_PIECES), MAX_FLOOR_ROWS))
-    parquet = output is not None and output.lower().endswith(".parquet")
+    fmt = table_format(output)
     beyond: list[InputError] = []  # the first sample just beyond the sensor's range
     carried = _carried(input_path, output)
     names: dict[str, list[str]] = {}  # the first piece's output and extra column names
     notes: list[str] = []
     totals = _RunTotals()
     vote = LeverVote(LEVER_MARGIN * fingertip_reach(fingertip))  # the units check, over the whole log
-    total = None
-    if input_path.lower().endswith(".parquet"):
-        import pyarrow.parquet as pq
-
-        with pq.ParquetFile(input_path) as pf:
-            total = pf.metadata.num_rows
+    total = columnar_rows(input_path)
     with progress_bar(total, "estimating") as bar:  # rows estimated and written
         blocks = iter_log(input_path, units, rows=min(rows, 1 << 16))
 
@@ -502,7 +493,7 @@ def _estimate_in_pieces(
                 raise NotStreamable("wrong units: the one-shot run says so") from None
 
         def run(out) -> None:
-            writer = TableWriter(out, parquet=parquet, metadata=parquet_metadata(fingertip, tip, output_units, blocks))
+            writer = TableWriter(out, format=fmt, metadata=parquet_metadata(fingertip, tip, output_units, blocks))
             try:
                 for k, (est, extra) in enumerate(estimate_pieces(checked(), fingertip, config, rows)):
                     if k == 0:
@@ -573,10 +564,10 @@ def _output_columns(est, extra, output_units: str, carried=(), notes: list[str] 
 
 
 def _carried(input_path, output) -> list[str]:
-    """The input's Parquet extra columns to carry with their Arrow type (Parquet in and out), else none."""
-    if input_path in (None, "-") or output is None or not (
-        input_path.lower().endswith(".parquet") and output.lower().endswith(".parquet")
-    ):
+    """The input's extra columns to carry with their Arrow type (Parquet or Arrow IPC in and out), else none."""
+    from softtip.io.formats import table_format
+
+    if input_path in (None, "-") or output is None or "csv" in (table_format(input_path), table_format(output)):
         return []
     from softtip.io.carry import typed_extras
     from softtip.io.tables import REQUIRED_COLUMNS
@@ -602,6 +593,7 @@ def _write_estimate_outputs(
     import io as _io
 
     from softtip.io.atomic import cannot_write, write_stdout
+    from softtip.io.formats import table_format
     from softtip.io.tables import write_table
 
     viz = optional_extra("softtip.viz.rerun", "viz") if (rerun_spawn or rerun_save) else None
@@ -641,7 +633,7 @@ def _write_estimate_outputs(
         with progress_bar(len(est), "writing") as bar:
             try:
                 with outputs.get(output).open() as fh:  # the staged file
-                    writer = TableWriter(fh, parquet=output.lower().endswith(".parquet"), metadata=metadata)
+                    writer = TableWriter(fh, format=table_format(output), metadata=metadata)
                     writer.write(columns, progress=bar.update)
                     writer.close()
             except OSError as exc:

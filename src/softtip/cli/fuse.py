@@ -73,8 +73,8 @@ per time step of the first log: parallel_lines (a plate or a stick pinched acros
 common direction and the plane through both lines), crossing_lines (two edges: both, their
 angle and closest approach), line_and_face, faces, single or none; with the evidence of the
 lines (confirmed once the object was rocked about two axes) and flags (unbalanced forces,
-an area contact). Writes CSV (standard output without -o) or Parquet (-o ending in .parquet),
-the contact points as r1_x..r2_z of the first and second finger given (named on standard
+an area contact). Writes CSV (standard output without -o), Parquet (-o ending in .parquet) or
+Arrow IPC (.arrow, .feather), the contact points as r1_x..r2_z of the first and second finger given (named on standard
 error), whatever the input; a summary on standard error. --to-bag also writes the fused line and plane as
 geometry_msgs/msg/PoseStamped (x axis along the line, z axis the plane's normal), the contacts as
 PointStamped and RViz markers, in the common frame, in the format --ros-distro plays; with
@@ -82,7 +82,7 @@ PointStamped and RViz markers, in the common frame, in the format --ros-distro p
 """,
 )
 @click.argument("inputs", nargs=-1, required=True, type=click.Path(exists=False))
-@option("-o", "--output", type=click.Path(dir_okay=False, writable=True), help="Output CSV, or Parquet for a name ending in .parquet (default: CSV on standard output).")
+@option("-o", "--output", type=click.Path(dir_okay=False, writable=True), help="Output CSV, or Parquet for a name ending in .parquet, Arrow IPC (Feather v2) for .arrow or .feather (default: CSV on standard output).")
 @option("--hand", "hand_file", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Fingertip poses in the common frame ([hand] frame, [finger.NAME] translation m, rpy_deg or quaternion).")
 @option("--topics", nargs=2, metavar="TOPIC TOPIC", help="Bag input: the two fingertips' wrench topics.")
 @option("--frame", metavar="FRAME", help="Bag input: the common frame (e.g. hand, base_link).")
@@ -208,11 +208,12 @@ def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, 
             plot_fused(fused, fingers, staged[plot_path].tmp, up=up, truth_line=None if truth is None else truth["line"],
                        truth_normal=None if truth is None else truth["plane_normal"])  # fmt: skip
         if output is not None:
+            from softtip.io.formats import table_format
             from softtip.io.tables import TableWriter
 
             try:
                 with staged[output].open() as fh:
-                    writer = TableWriter(fh, parquet=output.lower().endswith(".parquet"))
+                    writer = TableWriter(fh, format=table_format(output))
                     writer.write(fused.columns())
                     writer.close()
             except OSError as exc:

@@ -1,4 +1,4 @@
-"""Extra columns of a Parquet log carried into a Parquet output with their Arrow type.
+"""Extra columns of a Parquet or Arrow IPC log carried into a Parquet or Arrow IPC output with their Arrow type.
 
 softtip's tables hold numpy columns: a Parquet extra column of type binary, list, struct,
 timestamp, date, decimal or a nullable integer would come out as text or floats (bytes
@@ -22,16 +22,17 @@ _BATCH = 1 << 16
 
 
 def typed_extras(path: str, required: tuple[str, ...]) -> list[str]:
-    """Extra columns of the Parquet file ``path`` whose Arrow type numpy would not keep.
+    """Extra columns of the Parquet or Arrow IPC file ``path`` whose Arrow type numpy would not keep.
 
     Kept as they are: floating point, strings, booleans (the table's own types). Carried:
     every other type (integers too: a null anywhere would make them floats).
     """
     import pyarrow as pa
-    import pyarrow.parquet as pq
 
-    with pq.ParquetFile(path) as pf:
-        schema = pf.schema_arrow
+    from softtip.io.tables import _columnar, _ColumnarFile
+
+    with _ColumnarFile(path, _columnar(path) or "parquet") as pf:
+        schema = pf.schema
     names = []
     for field in schema:
         if field.name.strip() in required:
@@ -63,39 +64,42 @@ def extra_names(output_names: list[str], extra: list[str]) -> dict[str, str]:
 
 
 def carry_columns(source: str, dest: str | os.PathLike[str], renamed: Mapping[str, str]) -> None:
-    """Replace the placeholder columns of the Parquet file ``dest`` by ``source``'s own columns.
+    """Replace the placeholder columns of the Parquet or Arrow IPC file ``dest`` by ``source``'s own columns.
 
     Parameters
     ----------
     source : str
-        The input Parquet file (same rows, same order, as ``dest``).
+        The input Parquet or Arrow IPC file (same rows, same order, as ``dest``).
     dest : path
-        The output Parquet file, rewritten in place (a temporary file beside it, then a rename).
+        The output file, rewritten in place in its format (a temporary file beside it, then a
+        rename), with the writer settings of :func:`softtip.io.tables.write_table`.
     renamed : mapping
         Input column name -> its name in ``dest``.
     """
     import pyarrow as pa
-    import pyarrow.parquet as pq
 
-    from softtip.io.tables import PARQUET_COMPRESSION
+    from softtip.io.tables import _columnar, _columnar_writer, _ColumnarFile
 
     if not renamed:
         return
     dest = os.fspath(dest)
-    tmp = f"{dest}.carry.parquet"
+    fmt = _columnar(source) or "parquet"
+    dest_fmt = _columnar(dest) or "parquet"
+    tmp = f"{dest}.carry.tmp"
     src_names = list(renamed)
     try:
-        with pq.ParquetFile(source) as src, pq.ParquetFile(dest) as out:
-            src_schema = src.schema_arrow
-            schema = out.schema_arrow
+        with _ColumnarFile(source, fmt) as src, _ColumnarFile(dest, dest_fmt) as out, open(tmp, "wb") as sink:
+            src_schema = src.schema
+            schema = out.schema
             for name, new in renamed.items():
                 i = schema.get_field_index(new)
                 schema = schema.set(i, pa.field(new, src_schema.field(name).type))
-            writer = pq.ParquetWriter(tmp, schema, compression=PARQUET_COMPRESSION)
+            writer = _columnar_writer(sink, schema.empty_table(), schema.metadata and {
+                k.decode("utf-8"): v.decode("utf-8") for k, v in schema.metadata.items()}, dest_fmt)  # fmt: skip
             try:
                 pending: pa.Table | None = None
-                src_batches = src.iter_batches(batch_size=_BATCH, columns=src_names)
-                for batch in out.iter_batches(batch_size=_BATCH):
+                src_batches = src.iter_batches(_BATCH, columns=src_names)
+                for batch in out.iter_batches(_BATCH):
                     n = batch.num_rows
                     while pending is None or pending.num_rows < n:
                         more = pa.Table.from_batches([next(src_batches)])

@@ -31,12 +31,39 @@ __all__ = [
     "parse_column_spec",
     "resolve_columns",
     "split_unit",
+    "TABLE_FORMATS",
+    "table_format",
 ]
 
 #: What a log's columns are read as, in wrench order after ``t``.
 ROLES: tuple[str, ...] = ("t", "fx", "fy", "fz", "mx", "my", "mz")
 #: The quantity (for units) of each role; ``nanosec`` is the nanosecond part of a stamp split in two.
 ROLE_QUANTITY = {"t": "time", "nanosec": "time", **dict.fromkeys(ROLES[1:4], "force"), **dict.fromkeys(ROLES[4:], "moment")}
+
+#: Table files by the name's suffix (lower case): format → (suffixes, name in messages). A name
+#: with none of these suffixes is CSV. The readers and writers of :mod:`softtip.io.tables` and
+#: the command line dispatch on :func:`table_format`; Arrow IPC is the file format Feather v2 is.
+TABLE_FORMATS: dict[str, tuple[tuple[str, ...], str]] = {
+    "parquet": ((".parquet",), "Parquet"),
+    "arrow": ((".arrow", ".feather"), "Arrow IPC (Feather v2)"),
+    "csv": ((), "CSV"),
+}
+
+
+def table_format(path: object) -> str:
+    """``"parquet"``, ``"arrow"`` or ``"csv"``: a table file's format by its name's suffix.
+
+    >>> table_format("run.feather"), table_format("RUN.PARQUET"), table_format("run.csv.gz")
+    ('arrow', 'parquet', 'csv')
+    """
+    import os
+
+    name = os.fspath(path).lower() if isinstance(path, (str, os.PathLike)) else ""  # type: ignore[arg-type]
+    for fmt, (suffixes, _) in TABLE_FORMATS.items():
+        if name.endswith(suffixes):
+            return fmt
+    return "csv"
+
 
 #: ``--missing``: what an empty or ``nan`` cell in a required column does.
 MISSING_POLICIES = ("fail", "drop", "interpolate")

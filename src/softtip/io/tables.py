@@ -1,8 +1,9 @@
-"""Reading force/torque logs and writing result tables (CSV and Parquet).
+"""Reading force/torque logs and writing result tables (CSV, Parquet and Arrow IPC / Feather v2).
 
 Input logs (see the manual, docs/manual.md, and docs/guide/input-formats.md) are CSV files with a
 header row naming at least the columns ``t, fx, fy, fz, mx, my, mz`` in any order, or Parquet
-files (by the name's ``.parquet`` extension) with those columns; other columns are kept and
+or Arrow IPC files (by the name's extension, :func:`softtip.io.formats.table_format`:
+``.parquet``; ``.arrow`` or ``.feather``) with those columns; other columns are kept and
 otherwise ignored. ``t`` is non-decreasing: a repeated stamp is accepted and counted, a stamp
 that goes back is an error. Everything is converted to SI (s, N, N·m) here, at the edge, and
 nowhere else.
@@ -41,7 +42,12 @@ run of ``python benchmarks/bench_core.py --only end-to-end`` (same machine, busy
 that log took 0.51 s of CPU against 3.44 s for the former reader, and writing the 46
 columns ``softtip estimate`` had then (47 now) for it 4.3 s (pyarrow's CSV writer formatting 46 M numbers,
 ~90 ns each) against 16 s for the former writer; Parquet: read 0.19 s, write 0.60 s (2.40 s
-with pyarrow's default dictionary encoding of every column).
+with pyarrow's default dictionary encoding of every column). CSV numbers are now formatted by a
+compiled loop where numba is installed (:mod:`softtip.io._csvtext`, the same bytes; 48-59
+against 79-83 ns per number in ``python benchmarks/bench_core.py --only bounds``). pandas' C
+engine, measured in pyarrow's place on the same 93 MB (1e6 rows, 7 columns; seven runs): 0.28-0.46 s
+of CPU against pyarrow's 0.27-0.42 s, the same values: not faster beyond the noise, and not a
+dependency; pyarrow stays.
 
 Output tables are written atomically when going to a path: a failure never leaves a
 partial file behind and never touches an existing file at the destination.
@@ -73,7 +79,16 @@ from numpy.typing import NDArray
 
 from softtip.core.units import UNIT_SYSTEM_UNITS, UNIT_SYSTEMS, get_unit, seconds_from_ns, wrench_scale, wrench_to_si
 from softtip.errors import InputError
-from softtip.io.formats import ROLES, ColumnError, ColumnMap, LogFormat, parse_column_spec, resolve_columns
+from softtip.io.formats import (
+    ROLES,
+    TABLE_FORMATS,
+    ColumnError,
+    ColumnMap,
+    LogFormat,
+    parse_column_spec,
+    resolve_columns,
+    table_format,
+)
 
 __all__ = ["REQUIRED_COLUMNS", "Log", "LogBlocks", "NotStreamable", "TableWriter", "iter_log", "read_log", "write_table"]
 
@@ -311,8 +326,8 @@ def read_log(
     Parameters
     ----------
     path : str, path-like or text stream
-        File to read (a name ending in ``.parquet`` is read as Parquet, anything else as
-        CSV, gzip/bzip2/xz/zstd-compressed CSV recognised by its first bytes), or an open
+        File to read (a name ending in ``.parquet`` is read as Parquet, ``.arrow`` or
+        ``.feather`` as Arrow IPC (Feather v2), anything else as CSV, gzip/bzip2/xz/zstd-compressed CSV recognised by its first bytes), or an open
         CSV stream (``sys.stdin``, ``io.StringIO``; a binary stream is decoded as UTF-8).
         A stream is read to its end and not closed.
     units : {"si", "kgf-mm"} or None
@@ -367,13 +382,15 @@ def read_log(
     if units is not None and units not in UNIT_SYSTEMS:
         raise InputError(f"{source}: unknown units {units!r}; expected one of: {', '.join(UNIT_SYSTEMS)}")
     fmt = _log_format(source, units, columns, force_units, moment_units, time_units, missing, skip_rows)
-    if not hasattr(path, "read") and _is_parquet(path):
+    columnar = None if hasattr(path, "read") else _columnar(path)  # type: ignore[arg-type]
+    if columnar is not None:
         if not fmt.plain or (force_units or moment_units):
             raise InputError(
                 f"{source}: --columns, --force-units, --moment-units, --time-units, --missing and --skip-rows apply to "
-                "CSV logs; expected a Parquet log with softtip's columns (and its softtip.units metadata)"
+                f"CSV logs; expected a{'n' if columnar == 'arrow' else ''} {TABLE_FORMATS[columnar][1]} log with "
+                "softtip's columns (and its softtip.units metadata)"
             )
-        return _read_parquet(path, source, units)  # type: ignore[arg-type]
+        return _read_parquet(path, source, units, columnar)  # type: ignore[arg-type]
     data = _read_data(path, source)
     if isinstance(data, bytes):
         data = _decompress(data, source)
@@ -428,8 +445,73 @@ def _decompress(data: bytes, source: str) -> bytes:
         raise InputError(f"{source}: not a readable {codec} file ({exc}); expected {codec}-compressed CSV") from None
 
 
-def _is_parquet(path: str | os.PathLike[str]) -> bool:
-    return os.fspath(path).lower().endswith(".parquet")  # type: ignore[union-attr]
+def _columnar(path: str | os.PathLike[str]) -> str | None:
+    """``"parquet"`` or ``"arrow"`` for a table file of that format (by its name), None for CSV."""
+    fmt = table_format(path)
+    return None if fmt == "csv" else fmt
+
+
+class _ColumnarFile:
+    """A Parquet or Arrow IPC (Feather v2) file, opened for reading: one interface for both.
+
+    Attributes ``schema`` (with the key-value metadata) and ``num_rows``; :meth:`read` gives the
+    whole table, :meth:`iter_batches` record batches of at most ``rows`` rows. Opening raises
+    what pyarrow raises (``OSError``, ``pa.ArrowException``).
+    """
+
+    def __init__(self, path: str | os.PathLike[str], fmt: str):
+        import pyarrow as pa
+
+        self.fmt = fmt
+        if fmt == "parquet":
+            import pyarrow.parquet as pq
+
+            # ParquetFile, not read_table: the latter imports pyarrow.dataset (~0.2 s) for nothing here
+            self._file: Any = pq.ParquetFile(path)
+            self.schema = self._file.schema_arrow
+            self.num_rows = int(self._file.metadata.num_rows)
+        else:
+            source = pa.memory_map(os.fspath(path))
+            try:
+                self._file = pa.ipc.open_file(source)
+            except BaseException:
+                source.close()
+                raise
+            self._source = source
+            self.schema = self._file.schema
+            self.num_rows = sum(self._file.get_batch(i).num_rows for i in range(self._file.num_record_batches))
+
+    def read(self) -> Any:
+        return self._file.read() if self.fmt == "parquet" else self._file.read_all()
+
+    def iter_batches(self, rows: int, columns: list[str] | None = None) -> Any:
+        if self.fmt == "parquet":
+            yield from self._file.iter_batches(batch_size=rows, columns=columns)
+            return
+        for i in range(self._file.num_record_batches):
+            batch = self._file.get_batch(i)
+            if columns is not None:
+                batch = batch.select(columns)
+            for start in range(0, batch.num_rows, rows):
+                yield batch.slice(start, rows)
+
+    def close(self) -> None:
+        self._file.close() if self.fmt == "parquet" else self._source.close()
+
+    def __enter__(self) -> _ColumnarFile:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def columnar_rows(path: str | os.PathLike[str]) -> int | None:
+    """The rows of a Parquet or Arrow IPC file (from its footer, not its data); None for CSV."""
+    fmt = _columnar(path)
+    if fmt is None:
+        return None
+    with _ColumnarFile(path, fmt) as f:
+        return f.num_rows
 
 
 def _source_name(path: str | os.PathLike[str] | TextIO) -> str:
@@ -975,20 +1057,20 @@ PARQUET_UNITS_KEY = "softtip.units"
 PARQUET_FINGERTIP_KEY = "softtip.fingertip"
 
 
-def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None) -> Log:
-    """A log from a Parquet file: the same columns and checks as CSV, rows named by number."""
+def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None, fmt: str = "parquet") -> Log:
+    """A log from a Parquet or Arrow IPC (Feather v2) file (``fmt``): the same columns and checks as
+    CSV, rows named by number."""
     import pyarrow as pa
-    import pyarrow.parquet as pq
 
-    what = "Parquet log file"
+    name = TABLE_FORMATS[fmt][1]
+    what = f"{name} log file"
     try:
-        # ParquetFile, not read_table: the latter imports pyarrow.dataset (~0.2 s) for nothing here
-        with pq.ParquetFile(path) as pf:
+        with _ColumnarFile(path, fmt) as pf:
             table = pf.read()
     except (FileNotFoundError, IsADirectoryError, PermissionError) as exc:
         raise _opening_error(exc, source, what) from None
     except (pa.ArrowException, OSError) as exc:
-        raise InputError(f"{source}: not a readable Parquet file ({exc}); expected a {what}") from None
+        raise InputError(f"{source}: not a readable {name} file ({exc}); expected a{'n' if fmt == 'arrow' else ''} {what}") from None
     meta = {k.decode("utf-8", "replace"): v.decode("utf-8", "replace") for k, v in (table.schema.metadata or {}).items()}
     file_units = meta.get(PARQUET_UNITS_KEY)
     if file_units is not None and file_units not in UNIT_SYSTEMS:
@@ -1353,8 +1435,9 @@ def write_table(
     float_format: str = "%.10g",
     metadata: Mapping[str, str] | None = None,
     progress: Callable[[int], object] | None = None,
+    statistics: bool = False,
 ) -> None:
-    """Write columns as a CSV table with a header row, or as Parquet.
+    """Write columns as a CSV table with a header row, as Parquet or as Arrow IPC (Feather v2).
 
     Parameters
     ----------
@@ -1368,8 +1451,10 @@ def write_table(
         at ``dest`` is left untouched. A path ending in ``.parquet`` is written as Parquet
         (pyarrow; values exactly, booleans as booleans, text as strings, ``metadata`` in
         the schema's key-value metadata; :data:`PARQUET_COMPRESSION`, dictionary encoding
-        for the columns that are not floating point). :class:`TableWriter` writes a table
-        piece by piece.
+        for the columns that are not floating point, no column statistics unless
+        ``statistics``), one ending in ``.arrow`` or ``.feather`` as Arrow IPC (the Feather
+        v2 file format; the same columns and types, :data:`ARROW_COMPRESSION`).
+        :class:`TableWriter` writes a table piece by piece.
     float_format : str
         CSV only: a printf-style format for one float. ``"%.<d>g"`` with ``d`` ≤ 17 (the
         default ``"%.10g"``; ``"%.17g"`` round-trips float64 exactly) writes each value
@@ -1377,10 +1462,13 @@ def write_table(
         (pyarrow's writer: ``1e-05`` may come out as ``0.00001``, ``45.0`` as ``45``);
         any other format is applied by Python, cell by cell (slower).
     metadata : mapping of str to str, optional
-        Parquet only: key-value metadata stored with the schema (softtip writes the units
-        and the fingertip; see :data:`PARQUET_UNITS_KEY`, :data:`PARQUET_FINGERTIP_KEY`).
+        Parquet and Arrow IPC only: key-value metadata stored with the schema (softtip writes
+        the units and the fingertip; see :data:`PARQUET_UNITS_KEY`, :data:`PARQUET_FINGERTIP_KEY`).
     progress : callable, optional
         Called with the number of rows written after each block (e.g. ``tqdm.update``).
+    statistics : bool
+        Parquet only: write each column chunk's statistics (min, max, null count), which
+        readers use to skip row groups in queries; off by default (they cost write time).
 
     CSV blocks are formatted on up to :data:`_WRITE_THREADS` threads at once (pyarrow formats
     without holding the GIL) and written in order; at most twice that many wait in memory.
@@ -1406,9 +1494,10 @@ def write_table(
     elif hasattr(dest, "write"):
         _write_rows(dest, plan)  # type: ignore[arg-type]
     else:
-        if _is_parquet(dest):  # type: ignore[arg-type]
-            plan.parquet = True
-            plan.metadata = dict(metadata or {})
+        plan.columnar = _columnar(dest)  # type: ignore[arg-type]
+        plan.parquet = plan.columnar is not None
+        plan.metadata = dict(metadata or {})
+        plan.statistics = statistics
         _write_atomic(os.fspath(dest), plan)  # type: ignore[arg-type]
 
 
@@ -1422,8 +1511,10 @@ class _Plan:
     names: list[str]
     digits: int | None = None  # pyarrow writer, floats rounded to this many digits; None: Python's %
     quoting: str = "none"  # pyarrow's quoting_style
-    parquet: bool = False
+    parquet: bool = False  # a binary table (Parquet or Arrow IPC): booleans as booleans, text as plain strings
+    columnar: str | None = None  # "parquet" or "arrow"
     metadata: dict[str, str] | None = None
+    statistics: bool = False
     progress: Callable[[int], object] | None = None
 
 
@@ -1516,6 +1607,17 @@ def _needs_quotes(arr: np.ndarray) -> bool:
 _POW10 = 10.0 ** np.arange(23)
 
 
+def _digit_exponents(x: np.ndarray, digits: int) -> np.ndarray:
+    """``digits - 1 - floor(log10(|x|))``: the power of ten that brings ``x`` to ``digits``
+    digits before the point (NaN for NaN, +inf for 0, -inf for ±inf). One function for the
+    rounding and the compiled formatter, so both take numpy's ``log10`` on the same slice."""
+    with np.errstate(all="ignore"):
+        k = np.log10(np.abs(x))
+        np.floor(k, out=k)
+        np.subtract(digits - 1, k, out=k)
+    return k
+
+
 def _round_significant(x: np.ndarray, digits: int) -> np.ndarray:
     """``x`` rounded to ``digits`` significant decimal digits, as the nearest float64.
 
@@ -1531,10 +1633,8 @@ def _round_significant(x: np.ndarray, digits: int) -> np.ndarray:
     """
     if digits >= 17:
         return x
+    k = _digit_exponents(x, digits)
     with np.errstate(all="ignore"):
-        k = np.log10(np.abs(x))
-        np.floor(k, out=k)
-        np.subtract(digits - 1, k, out=k)  # NaN for NaN, +inf for 0, -inf for ±inf
         finite = np.isfinite(k)
         up = finite & (k >= 0) & (k <= 22)
         if up.all():
@@ -1609,12 +1709,19 @@ def _write_rows(out: TextIO | BinaryIO, plan: _Plan, *, header: bool = True) -> 
     binary = getattr(out, "buffer", None)
     if binary is not None:
         out.flush()  # the header first
+    compiled = _compiled_csv(plan)
+    if compiled:
+        _compiled_block(plan, 0, min(plan.n, 1))  # compiled (or loaded from numba's cache) once, before the threads
 
-    def text_of(start: int) -> bytes:
-        # formatting floats is the cost; pyarrow does it without the GIL, so blocks are
-        # formatted on the free cores while the file gets the ones before them, in order
+    def text_of(start: int) -> Any:
+        # formatting floats is the cost; the compiled formatter and pyarrow both run without
+        # the GIL, so blocks are formatted on the free cores while the file gets the ones
+        # before them, in order
+        stop = min(start + _CHUNK_ROWS, plan.n)
+        if compiled:
+            return _compiled_block(plan, start, stop)
         sink = io.BytesIO()
-        pacsv.write_csv(_arrow_block(plan, start, min(start + _CHUNK_ROWS, plan.n), rounded=True), sink, options)
+        pacsv.write_csv(_arrow_block(plan, start, stop, rounded=True), sink, options)
         return sink.getvalue()
 
     starts = range(0, plan.n, _CHUNK_ROWS)
@@ -1631,12 +1738,25 @@ def _write_rows(out: TextIO | BinaryIO, plan: _Plan, *, header: bool = True) -> 
         binary.flush()
 
 
+def _compiled_csv(plan: _Plan) -> bool:
+    """Whether the compiled formatter writes this table's CSV text: numba installed and allowed
+    (:func:`softtip.core._jit.jit_enabled`: from :data:`~softtip.core._jit.JIT_MIN_SAMPLES`
+    rows on, or at once when numba is loaded already), floats to at most
+    :data:`softtip.io._csvtext.MAX_DIGITS` digits. Else pyarrow's writer (the same bytes)."""
+    from softtip.core._jit import JIT_MIN_SAMPLES, jit_enabled
+    from softtip.io._csvtext import MAX_DIGITS
+
+    if plan.digits is None or plan.digits > MAX_DIGITS:
+        return False
+    return jit_enabled(JIT_MIN_SAMPLES if "numba" in sys.modules else plan.n)
+
+
 def _put_block(out, binary, plan: _Plan, start: int, done) -> None:
     data = done.result()
     if binary is not None:
         binary.write(data)
     else:
-        out.write(data.decode("utf-8"))
+        out.write(bytes(data).decode("utf-8"))
     if plan.progress is not None:
         plan.progress(min(start + _CHUNK_ROWS, plan.n) - start)
 
@@ -1661,6 +1781,99 @@ def _arrow_block(plan: _Plan, start: int, stop: int, *, rounded: bool) -> Any:
             cells = [x.decode("utf-8", "replace") if isinstance(x, bytes) else str(x) for x in a.tolist()]
             cols.append(pa.array(cells, type=pa.string()))
     return pa.Table.from_arrays(cols, names=plan.names)
+
+
+def _string_buffers(arr: Any) -> tuple[np.ndarray, np.ndarray]:
+    """A pyarrow string array's cell offsets (int64, ``len + 1``) and UTF-8 bytes, without copying the text."""
+    import pyarrow as pa
+
+    wide = pa.types.is_large_string(arr.type)
+    bufs = arr.buffers()
+    offsets = np.frombuffer(bufs[1], dtype=np.int64 if wide else np.int32)[arr.offset : arr.offset + len(arr) + 1]
+    data = np.frombuffer(bufs[2], dtype=np.uint8) if bufs[2] is not None else np.zeros(0, dtype=np.uint8)
+    return offsets.astype(np.int64), data
+
+
+def _compiled_block(plan: _Plan, start: int, stop: int) -> np.ndarray:
+    """Rows ``start:stop`` as CSV text (UTF-8 bytes) by the compiled formatter
+    (:mod:`softtip.io._csvtext`): the bytes :func:`_arrow_block` and pyarrow's writer give.
+
+    Floats are rounded and formatted in the compiled loop from the exponents numpy gives
+    (:func:`_digit_exponents`, on the same slices as the fallback); text, integer and boolean
+    cells are their pyarrow text (integers and booleans by pyarrow's own cast, as its writer
+    does), copied in by the loop, quoted as the writer quotes them.
+    """
+    import pyarrow as pa
+    import pyarrow.compute as pc
+
+    from softtip.io._csvtext import format_rows
+
+    n = stop - start
+    digits = plan.digits
+    assert digits is not None
+    kinds = [arr.dtype.kind for arr in plan.arrays]
+    nf = kinds.count("f")
+    floats = np.empty((nf, n))  # a column a row: each copied in one piece
+    exps = np.empty((nf, n))
+    layout = np.empty(len(kinds), dtype=np.int64)
+    texts: list[tuple[np.ndarray, np.ndarray, np.ndarray, bool]] = []  # codes, offsets, data, quoted
+    bound = n * (nf * 25 + len(kinds) + 1)
+    j = 0
+    for c, (arr, kind) in enumerate(zip(plan.arrays, kinds)):
+        a = arr[start:stop]
+        if kind == "f":
+            floats[j] = a
+            exps[j] = _digit_exponents(a, digits)
+            layout[c] = j
+            j += 1
+            continue
+        if kind in "biu":
+            cells, quoted = pc.cast(pa.array(a.view(np.int8) if kind == "b" else a), pa.string()), False
+        elif kind == "U":
+            cells, quoted = _arrow_strings(a, plain=False), plan.quoting == "needed"
+        else:
+            text = [x.decode("utf-8", "replace") if isinstance(x, bytes) else str(x) for x in a.tolist()]
+            cells, quoted = pa.array(text, type=pa.string()), plan.quoting == "needed"
+        if isinstance(cells, pa.DictionaryArray):
+            codes = cells.indices.to_numpy().astype(np.int64)
+            offsets, data = _string_buffers(cells.dictionary)
+        else:
+            codes = np.arange(n, dtype=np.int64)
+            offsets, data = _string_buffers(cells)
+        lengths = np.diff(offsets)[codes]
+        bound += int(lengths.sum()) * (2 if quoted else 1) + 2 * n
+        layout[c] = -1 - len(texts)
+        texts.append((codes, offsets, data, quoted))
+    # the text cells of every column in one table: cell indices shifted by the columns before
+    nt = len(texts)
+    code_table = np.empty((nt, n), dtype=np.int64)
+    cell_off = [np.zeros(1, dtype=np.int64)]
+    data_parts = []
+    cells_before = bytes_before = 0
+    for t, (codes, offsets, data, _) in enumerate(texts):
+        code_table[t] = codes + cells_before
+        cell_off.append(offsets[1:] - offsets[0] + bytes_before)
+        data_parts.append(data[offsets[0] : offsets[-1]])
+        cells_before += len(offsets) - 1
+        bytes_before += int(offsets[-1] - offsets[0])
+    # the cells the rounding does not take in one step: the fallback's value, pyarrow's text, in row order
+    with np.errstate(invalid="ignore"):
+        cols, rows = np.nonzero(np.abs(exps) > 22)  # ±inf (zeros, infinities) and NaN are no cells of these
+    cols, rows = cols[np.isfinite(exps[cols, rows])], rows[np.isfinite(exps[cols, rows])]
+    if len(rows):
+        order = np.lexsort((cols, rows))
+        rows, cols = rows[order], cols[order]
+        values = np.array([float(f"%.{digits}g" % v) for v in floats[cols, rows].tolist()])
+        far_off, far_data = _string_buffers(pc.cast(pa.array(values), pa.string()))
+    else:
+        far_off, far_data = np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.uint8)
+    out = np.empty(bound + int(far_off[-1]), dtype=np.uint8)
+    used = format_rows(
+        floats, exps, code_table, np.concatenate(cell_off),
+        np.concatenate(data_parts) if data_parts else np.zeros(0, dtype=np.uint8),
+        np.array([q for *_, q in texts], dtype=np.bool_), layout, far_off - far_off[0], far_data, out,
+    )  # fmt: skip
+    return out[:used]
 
 
 # A text column with at most this many distinct cells is dictionary-encoded on its way to pyarrow.
@@ -1715,13 +1928,20 @@ def _write_rows_printf(out: TextIO, plan: _Plan) -> None:
 # Rows per Parquet row group (and per progress step).
 _PARQUET_ROWS = 1 << 18
 
-#: Parquet compression, chosen by measurement: the 46 columns ``softtip estimate`` had then for a
-#: 1e6-row log (2-core machine shared with other work, CPU s, file MB) with pyarrow's
-#: default dictionary encoding of every column 1.32 s, 158 MB; dictionary encoding only for
-#: the columns that are not floats (a float column of measurements has no repeats to find)
-#: with snappy 0.40 s, 154 MB; lz4 0.56 s, 146 MB; zstd level 1 0.82 s, 120 MB; none 0.54 s
-#: (more bytes to write), 305 MB. Snappy: the fastest, and what every Parquet reader reads.
+#: Parquet compression, chosen by measurement (``python benchmarks/bench_core.py --only bounds``:
+#: the 47 columns of ``softtip estimate``'s output for a 1e6-row log, 2-core machine shared with
+#: other work, CPU time of the write, file size; two runs), dictionary encoding only for the
+#: columns that are not floats (a float column of measurements has no repeats to find), no
+#: statistics: snappy 360-381 ns/row, 159 MB; none 386-401 ns/row, 313 MB (more bytes to write);
+#: lz4 364-393 ns/row, 150 MB; zstd 527-608 ns/row, 126 MB. Statistics add ~10 % (snappy
+#: 397-427 ns/row); pyarrow's defaults (dictionary on every column, statistics) 1390-1725 ns/row,
+#: 176 MB. Snappy and lz4 are equally fast within the noise; snappy is what every Parquet reader reads.
 PARQUET_COMPRESSION = "snappy"
+
+#: Arrow IPC (Feather v2) compression, chosen by the same measurement: none 125-139 ns/row, 339 MB
+#: (read back memory-mapped, without a copy); lz4 148-192 ns/row, 156 MB; zstd 381-406 ns/row, 120 MB.
+#: Arrow IPC is the format for speed; Parquet is the compact one.
+ARROW_COMPRESSION: str | None = None
 
 
 def _write_parquet(out: TextIO, plan: _Plan) -> None:
@@ -1733,7 +1953,7 @@ def _write_parquet(out: TextIO, plan: _Plan) -> None:
             stop = min(start + _PARQUET_ROWS, plan.n)
             table = _arrow_block(plan, start, stop, rounded=False)
             if writer is None:
-                writer = _parquet_writer(binary, table, plan.metadata)
+                writer = _columnar_writer(binary, table, plan.metadata, plan.columnar or "parquet", statistics=plan.statistics)
             writer.write_table(table)
             if plan.progress is not None and stop > start:
                 plan.progress(stop - start)
@@ -1743,15 +1963,24 @@ def _write_parquet(out: TextIO, plan: _Plan) -> None:
     binary.flush()
 
 
-def _parquet_writer(binary: BinaryIO, first: Any, metadata: Mapping[str, str] | None) -> Any:
-    """A ``ParquetWriter`` for tables like ``first``: :data:`PARQUET_COMPRESSION`, dictionary
-    encoding for the columns that are not floating point, ``metadata`` in the schema."""
+def _columnar_writer(binary: BinaryIO, first: Any, metadata: Mapping[str, str] | None, fmt: str = "parquet", *,
+                     statistics: bool = False) -> Any:
+    """A writer (``write_table``, ``close``) of tables like ``first``, ``metadata`` in the schema.
+
+    Parquet: :data:`PARQUET_COMPRESSION`, dictionary encoding only for the columns that are not
+    floating point, column statistics only when asked (``statistics``). Arrow IPC (the Feather v2
+    file format): :data:`ARROW_COMPRESSION`.
+    """
     import pyarrow as pa
-    import pyarrow.parquet as pq
 
     schema = first.schema.with_metadata(dict(metadata or {}))
+    if fmt == "arrow":
+        options = pa.ipc.IpcWriteOptions(compression=ARROW_COMPRESSION)
+        return pa.ipc.new_file(binary, schema, options=options)
+    import pyarrow.parquet as pq
+
     coded = [field.name for field in schema if not pa.types.is_floating(field.type)]
-    return pq.ParquetWriter(binary, schema, compression=PARQUET_COMPRESSION, use_dictionary=coded)
+    return pq.ParquetWriter(binary, schema, compression=PARQUET_COMPRESSION, use_dictionary=coded, write_statistics=statistics)
 
 
 def _write_atomic(path: str, plan: _Plan) -> None:
@@ -1795,7 +2024,8 @@ class LogBlocks:
         self.path = os.fspath(path)
         if units is not None and units not in UNIT_SYSTEMS:
             raise InputError(f"{self.source}: unknown units {units!r}; expected one of: {', '.join(UNIT_SYSTEMS)}")
-        self.parquet = _is_parquet(self.path)
+        self.columnar = _columnar(self.path)  # Parquet or Arrow IPC, else None (CSV)
+        self.parquet = self.columnar is not None
         self.rows, self.progress = rows, progress
         self.units = units
         self.n = 0
@@ -2067,36 +2297,36 @@ class LogBlocks:
         return re.sub(rf"^{re.escape(self.source)}:\d+:", f"{self.source}:{line}:", note)
 
     def _parquet_blocks(self) -> Any:
+        """Blocks of a Parquet or Arrow IPC file."""
         import pyarrow as pa
-        import pyarrow.parquet as pq
 
         try:
-            pf = pq.ParquetFile(self.path)
+            pf = _ColumnarFile(self.path, self.columnar or "parquet")
         except (pa.ArrowException, OSError):
             raise NotStreamable("unreadable") from None
         with pf:
-            meta = {k.decode("utf-8", "replace"): v.decode("utf-8", "replace") for k, v in (pf.schema_arrow.metadata or {}).items()}
+            meta = {k.decode("utf-8", "replace"): v.decode("utf-8", "replace") for k, v in (pf.schema.metadata or {}).items()}
             file_units = meta.get(PARQUET_UNITS_KEY)
             if (file_units is not None and file_units not in UNIT_SYSTEMS) or (
                 self.units is not None and file_units is not None and self.units != file_units
             ):
                 raise NotStreamable("units")
             self.units = self.units or file_units or "si"
-            names = list(pf.schema_arrow.names)
+            names = list(pf.schema.names)
             header = _Header(names=[n.strip() for n in names], line=0, data_base=0, lines=io.StringIO(), comments=[])
             try:
                 index = _column_index(header, self.source)
             except InputError:
                 raise NotStreamable("columns") from None
             for name in REQUIRED_COLUMNS:
-                typ = pf.schema_arrow.field(index[name]).type
+                typ = pf.schema.field(index[name]).type
                 if not (pa.types.is_floating(typ) or pa.types.is_integer(typ)):
                     raise NotStreamable("types")
-            if pf.metadata.num_rows == 0:
+            if pf.num_rows == 0:
                 raise NotStreamable("no rows")
             extra_idx = [j for j in range(len(names)) if j not in index.values()]
             try:
-                for batch in pf.iter_batches(batch_size=self.rows):
+                for batch in pf.iter_batches(self.rows):
                     cols = [batch.column(index[name]) for name in REQUIRED_COLUMNS]
                     if any(c.null_count for c in cols):
                         raise NotStreamable("null")
@@ -2124,11 +2354,11 @@ def iter_log(
     Parameters
     ----------
     path : str or path-like
-        As :func:`read_log` (a file; ``.parquet`` by extension).
+        As :func:`read_log` (a file; Parquet or Arrow IPC by the extension).
     units : {"si", "kgf-mm"} or None
         As :func:`read_log`.
     rows : int
-        Parquet: rows per block (CSV blocks are pyarrow's, ~4 MB of text).
+        Parquet and Arrow IPC: rows per block (CSV blocks are pyarrow's, ~4 MB of text).
     progress : callable, optional
         Called with the number of rows of each block.
 
@@ -2151,8 +2381,11 @@ class TableWriter:
     out : text or binary stream
         Left open.
     parquet : bool
-        Parquet (one row group per block) instead of CSV.
-    float_format, metadata
+        Parquet (one row group per block) instead of CSV: ``format="parquet"``.
+    format : {"csv", "parquet", "arrow"}, optional
+        The table's format (:func:`softtip.io.formats.table_format` of a file name gives it);
+        ``"arrow"``: Arrow IPC, the Feather v2 file format (one record batch per block).
+    float_format, metadata, statistics
         As :func:`write_table`.
 
     Each :meth:`write` appends rows with the same columns; the CSV header comes with the
@@ -2160,8 +2393,13 @@ class TableWriter:
     :func:`write_table` would quote it). Call :meth:`close` at the end.
     """
 
-    def __init__(self, out: TextIO | BinaryIO, *, parquet: bool, float_format: str = "%.10g", metadata: Mapping[str, str] | None = None):
-        self.out, self.parquet, self.float_format = out, parquet, float_format
+    def __init__(self, out: TextIO | BinaryIO, *, parquet: bool = False, format: str | None = None, float_format: str = "%.10g",
+                 metadata: Mapping[str, str] | None = None, statistics: bool = False):
+        self.format = format or ("parquet" if parquet else "csv")
+        if self.format not in TABLE_FORMATS:
+            raise ValueError(f"format {self.format!r}; expected one of: {', '.join(TABLE_FORMATS)}")
+        self.out, self.parquet, self.float_format = out, self.format != "csv", float_format
+        self.statistics = statistics
         self.metadata = dict(metadata or {})
         self.names: list[str] | None = None
         self._writer: Any = None
@@ -2185,7 +2423,7 @@ class TableWriter:
                 plan.parquet = True
                 table = _arrow_block(plan, start, stop, rounded=False)
                 if self._writer is None:
-                    self._writer = _parquet_writer(binary, table, self.metadata)
+                    self._writer = _columnar_writer(binary, table, self.metadata, self.format, statistics=self.statistics)
                 self._writer.write_table(table)
                 if progress is not None:
                     progress(stop - start)

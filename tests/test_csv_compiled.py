@@ -1,0 +1,106 @@
+"""The compiled CSV formatter (softtip.io._csvtext) writes the bytes pyarrow's writer writes.
+
+``write_table`` formats floats with the compiled loop when numba is installed and with
+pyarrow's writer otherwise; the two must give the same text, byte for byte, for every float
+(subnormals, -0.0, NaN, infinities, 1e±308, values that round at the last digit, integers
+near 2**53) and every other column kind (integers, booleans, text that needs quotes).
+"""
+
+import io
+import math
+
+import numpy as np
+import pytest
+from hypothesis import example, given, settings
+from hypothesis import strategies as st
+
+from softtip.core._jit import set_jit
+from softtip.io.tables import text_column, write_table
+
+pytest.importorskip("numba")
+
+
+@pytest.fixture(autouse=True)
+def _restore_jit():
+    old = set_jit(None)
+    yield
+    set_jit(old)
+
+
+def _text(columns, flag: bool, **kwargs) -> bytes:
+    set_jit(flag)
+    out = io.StringIO()
+    write_table(columns, out, **kwargs)
+    return out.getvalue().encode("utf-8")
+
+
+def _same(columns, **kwargs) -> None:
+    fallback = _text(columns, False, **kwargs)
+    compiled = _text(columns, True, **kwargs)
+    if compiled != fallback:
+        rows = [(i, a, b) for i, (a, b) in enumerate(zip(fallback.splitlines(), compiled.splitlines())) if a != b]
+        pytest.fail(f"first row that differs (fallback, compiled): {rows[:1]}")
+
+
+def _ties(draw_int: int, exp: int) -> float:
+    """A value whose 11th significant digit is 5: it rounds at the 10th."""
+    return float(f"{draw_int}5e{exp}")
+
+
+# floats of every kind: the whole range (subnormals, 1e±308), special values, and values near
+# the edges the formatter cares about (powers of ten, the 10th digit, 2**53)
+FLOATS = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.floats(allow_subnormal=True, min_value=-1e-300, max_value=1e-300),
+    st.sampled_from([0.0, -0.0, math.nan, -math.nan, math.inf, -math.inf, 5e-324, -5e-324, 2.2250738585072014e-308,
+                     1.7976931348623157e308, -1.7976931348623157e308, 1e308, 1e-308, 1e-7, 1e-6, 1e-5, 1e9, 1e10]),
+    st.builds(_ties, st.integers(10**9, 10**10 - 1), st.integers(-330, 300)),
+    st.builds(lambda k, s: float(2**53 + k) * s, st.integers(-5000, 5000), st.sampled_from([1.0, -1.0])),
+    st.builds(lambda m, e: m * 10.0**e, st.integers(-(10**12), 10**12), st.integers(-40, 40)),
+    st.builds(lambda x, e: math.nextafter(10.0**e, x), st.sampled_from([0.0, math.inf]), st.integers(-30, 30)),
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(FLOATS, min_size=1, max_size=40), st.sampled_from([10, 10, 1, 3, 6, 13]))
+@example([9.9999999995, 99999.999995, 0.1 + 0.2, 1 / 3, -2.5e-7, 1234567890.5, 12345678905.0], 10)
+def test_the_compiled_and_the_fallback_text_are_the_same_bytes(values, digits):
+    x = np.array(values, dtype=np.float64)
+    _same({"x": x, "y": x[::-1].copy()}, float_format=f"%.{digits}g")
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.lists(st.tuples(FLOATS, st.integers(-(2**63), 2**63 - 1), st.booleans(),
+                       st.sampled_from(["none", "contact", 'a "quoted" cell', "a,b", "two\nlines", "é", ""])),
+             min_size=1, max_size=30),
+    st.booleans(),
+)  # fmt: skip
+def test_every_column_kind_is_written_the_same(rows, as_objects):
+    x, i, b, s = map(list, zip(*rows))
+    cells = text_column(s) if as_objects else np.array(s)
+    _same({"x": np.array(x), "i": np.array(i, dtype=np.int64), "b": np.array(b), "s": cells,
+           "u": np.array([abs(v) for v in i], dtype=np.uint64), "i8": np.array(i, dtype=np.int64).astype(np.int8)})  # fmt: skip
+
+
+def test_a_long_table_in_blocks_and_threads_is_the_same():
+    rng = np.random.default_rng(8380)
+    n = 200_000  # several blocks, formatted on several threads
+    x = rng.standard_normal(n) * 10.0 ** rng.integers(-40, 40, n)
+    x[::97] = np.nan
+    x[::101] = 0.0
+    state = np.where(x > 0, "contact", "none")
+    _same({"t": np.arange(n) / 7000.0, "x": x, "state": state, "k": np.arange(n)})
+
+
+def test_the_compiled_path_is_taken():
+    """The comparison above compares two different writers (not pyarrow with itself)."""
+    from softtip.io import tables
+
+    plan = tables._plan_table({"x": np.array([1.5, np.nan])}, "%.10g")
+    set_jit(True)
+    assert tables._compiled_csv(plan)
+    assert bytes(tables._compiled_block(plan, 0, 2)) == b"1.5\nnan\n"
+    set_jit(False)
+    assert not tables._compiled_csv(plan)
+    assert not tables._compiled_csv(tables._plan_table({"x": np.array([1.5])}, "%.17g"))  # beyond its digits
