@@ -31,7 +31,7 @@ import time
 
 import numpy as np
 
-from softtip.io.live import LiveStats, Recorder, TerminalView, run_live
+from softtip.apps.live import LiveStats, Recorder, TerminalView, run_live
 from softtip.io.netft import NetFTSource
 from softtip.pipeline import Estimator
 

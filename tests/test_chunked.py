@@ -19,7 +19,7 @@ from hypothesis import strategies as st
 from softtip import EstimatorConfig, estimate
 from softtip.core.noise import NANO17
 from softtip.estimator.contact import track_contacts
-from softtip.io.chunked import estimate_pieces
+from softtip.apps.chunked import estimate_pieces
 from softtip.io.tables import write_table
 from softtip.sim.synthetic import sliding_presses
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from softtip import EXAMPLE_PATH, Estimator, load_example
-from softtip.io.live import RECORD_COLUMNS, LiveStats, Recorder, run_live
+from softtip.apps.live import RECORD_COLUMNS, LiveStats, Recorder, run_live
 from softtip.io.sources import LogSource, Reading, run
 from softtip.io.tables import write_table
 

@@ -17,7 +17,7 @@ from softtip.core.noise import NANO17, SensorNoise
 from softtip.estimator.contact import contact_thresholds
 from softtip.estimator.results import EstimatorWarning
 from softtip.estimator.tare import bias_to_toml, load_bias, tare_from_samples
-from softtip.io.live import KeyReader, run_live
+from softtip.apps.live import KeyReader, run_live
 from softtip.sim.synthetic import synthetic_grasp
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))

@@ -7,7 +7,7 @@ being touched (Murakami & Hasegawa 2004, 2006; Bicchi 1990). SI units, sensor fr
 """
 
 from softtip.core.axial import axial_difference, axial_mean, axial_median
-from softtip.core.contact import Contact, contact_from_wrench
+from softtip.core.location import Contact, contact_from_wrench
 from softtip.core.fingertip import (
     PRESETS,
     Capsule,

@@ -4,7 +4,7 @@ Why the obvious residual does not work
 --------------------------------------
 For one sample, Bicchi's soft-finger equations ``m − c × f = p × f + σ p / R``, ``|p| = R``
 have a solution for *any* trial centre ``c`` and radius ``R`` (that is what
-:func:`softtip.core.contact.contact_from_wrench` computes), so a single sample says nothing
+:func:`softtip.core.location.contact_from_wrench` computes), so a single sample says nothing
 about the geometry. Information comes only from a constraint shared by several samples.
 
 The model used here

@@ -44,7 +44,7 @@ from softtip.estimator import STATES
 from softtip.estimator import estimate as run_estimate
 from softtip.estimator.results import EstimatorWarning
 from softtip.estimator.tare import bias_to_toml
-from softtip.ros.options import bag_output_options, output_frame_id
+from softtip.cli.bag_options import bag_output_options, output_frame_id
 
 __all__ = ["estimate"]
 
@@ -434,7 +434,7 @@ AUTO_CHUNK_PARQUET_ROWS = 262_144
 
 def _auto_chunk_rows(path: str) -> int | None:
     """Rows per piece for a log this large (:data:`AUTO_CHUNK_CSV_BYTES`, :data:`AUTO_CHUNK_PARQUET_ROWS`), else None."""
-    from softtip.io.chunked import DEFAULT_PIECE_ROWS
+    from softtip.apps.chunked import DEFAULT_PIECE_ROWS
 
     try:
         if path.lower().endswith(".parquet"):
@@ -453,13 +453,13 @@ def _estimate_in_pieces(
     input_path, units, rows, fingertip, config, estimator_opts, *, output, output_units, tip, quiet, save_bias, outputs,
     sensor_range=None,
 ) -> bool:
-    """``softtip estimate`` piece by piece (:mod:`softtip.io.chunked`) into ``output`` (a path);
+    """``softtip estimate`` piece by piece (:mod:`softtip.apps.chunked`) into ``output`` (a path);
     ``False`` when the log holds something only the one-shot reader takes or words (nothing
     written then)."""
     from softtip.core.lever import LEVER_MARGIN, LeverVote, fingertip_reach, lever_distances
     from softtip.estimator.summary import summarise_contacts
     from softtip.io.atomic import cannot_write
-    from softtip.io.chunked import estimate_pieces
+    from softtip.apps.chunked import estimate_pieces
     from softtip.io.tables import NotStreamable, TableWriter, iter_log
 
     # pieces of a few rows give the same result, but each piece costs a fixed overhead

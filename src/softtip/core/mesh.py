@@ -1023,7 +1023,7 @@ class MeshFingertip(Fingertip):
         return best[1], best[2], best[3], best[4]
 
     def _contact_kernel(self, fx, fy, fz, mx, my, mz, xp=NP):
-        """Soft-finger contact on the mesh, component-wise (see :func:`softtip.core.contact.contact_kernel`).
+        """Soft-finger contact on the mesh, component-wise (see :func:`softtip.core.location.contact_kernel`).
 
         Returns ``(rx, ry, rz, nx, ny, nz, sigma, valid)``.
         """
@@ -1597,7 +1597,7 @@ def mesh_fingertip_from_table(table: dict, source: str = "<fingertip>") -> MeshF
 
 def load_mesh_fingertip(path: str | Path) -> MeshFingertip:
     """A mesh fingertip from a TOML fingertip file (see :func:`mesh_fingertip_from_table`)."""
-    from softtip.io.tomlfile import read_toml
+    from softtip.tomlfile import read_toml
 
     table = read_toml(path, "fingertip").get("fingertip")
     if not isinstance(table, dict):

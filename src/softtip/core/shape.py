@@ -244,7 +244,7 @@ class Fingertip(abc.ABC):
         """The soft-finger contact for the wrench ``(f, m)`` (N, N·m, sensor frame), component-wise.
 
         Returns ``(rx, ry, rz, nx, ny, nz, sigma, valid)`` (see
-        :func:`softtip.core.contact.contact_kernel`): floats with ``PY``, arrays with ``NP``.
+        :func:`softtip.core.location.contact_kernel`): floats with ``PY``, arrays with ``NP``.
         """
 
     # -- simulator skin ------------------------------------------------------------------------

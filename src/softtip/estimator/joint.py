@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from softtip.core._xp import NP, PY
-from softtip.core.contact import SoftFinger, contact_kernel
+from softtip.core.location import SoftFinger, contact_kernel
 from softtip.core.depth import depth_kernel
 from softtip.core.fingertip import Fingertip
 from softtip.core.joint import N_SUMS, joint_products, joint_solve_kernel

@@ -7,7 +7,7 @@ fringe). Scenarios reproduce the papers' grasps (manual §5); the sensor model a
 noise and quantisation.
 
 Modules: :mod:`~softtip.sim.skin` (surface elements), :mod:`~softtip.sim.objects` (SDF
-objects), :mod:`~softtip.sim.contact` (Winkler + friction), :mod:`~softtip.sim.scenario`
+objects), :mod:`~softtip.sim.foundation` (Winkler + friction), :mod:`~softtip.sim.scenario`
 (grasp time series, the papers' hand), :mod:`~softtip.sim.sensor` (noise),
 :mod:`~softtip.sim.truth` (ground truth), :mod:`~softtip.sim.simulate` (the loop and the
 writers), :mod:`~softtip.sim.probing` (probing logs for calibration); the ``simulate`` command is :mod:`softtip.cli.simulate`.
@@ -22,7 +22,7 @@ Example
 (500, 6)
 """
 
-from softtip.sim.contact import ContactModel, ContactParams, ContactResult, FrictionState
+from softtip.sim.foundation import ContactModel, ContactParams, ContactResult, FrictionState
 from softtip.sim.objects import (
     OBJECT_KINDS,
     Cylinder,
