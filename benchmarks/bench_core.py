@@ -509,8 +509,8 @@ def plausible_wrenches(tip, n, rng):
 
 def mesh_rows(args, rng) -> None:
     from softtip.core._xp import PY
-    from softtip.core.location import contact_kernel
     from softtip.core.fingertip import load_fingertip
+    from softtip.core.location import contact_kernel
     from softtip.io.examples import EXAMPLE_PATH
 
     t0 = time.perf_counter()

@@ -17,8 +17,8 @@ from softtip.calibration.probing import calibrate_fingertip
 from softtip.cli.calibrate import CALIBRATED_SHAPES, calibrate
 from softtip.cli.simulate import simulate
 from softtip.core._xp import PY
-from softtip.core.location import contact_kernel
 from softtip.core.fingertip import SHAPES, fingertip_from_mapping, load_fingertip
+from softtip.core.location import contact_kernel
 from softtip.core.mesh import capsule_mesh
 from softtip.core.shape import Fingertip
 from softtip.io.tables import read_log, write_table

@@ -10,6 +10,7 @@ from pathlib import Path
 import click
 import numpy as np
 
+from softtip.cli.bag_options import bag_output_options, output_frame_id
 from softtip.cli.options import (
     FRAMES_HELP,
     bag_warnings,
@@ -44,7 +45,6 @@ from softtip.estimator import STATES
 from softtip.estimator import estimate as run_estimate
 from softtip.estimator.results import EstimatorWarning
 from softtip.estimator.tare import bias_to_toml
-from softtip.cli.bag_options import bag_output_options, output_frame_id
 
 __all__ = ["estimate"]
 
@@ -456,10 +456,10 @@ def _estimate_in_pieces(
     """``softtip estimate`` piece by piece (:mod:`softtip.apps.chunked`) into ``output`` (a path);
     ``False`` when the log holds something only the one-shot reader takes or words (nothing
     written then)."""
+    from softtip.apps.chunked import estimate_pieces
     from softtip.core.lever import LEVER_MARGIN, LeverVote, fingertip_reach, lever_distances
     from softtip.estimator.summary import summarise_contacts
     from softtip.io.atomic import cannot_write
-    from softtip.apps.chunked import estimate_pieces
     from softtip.io.tables import NotStreamable, TableWriter, iter_log
 
     # pieces of a few rows give the same result, but each piece costs a fixed overhead

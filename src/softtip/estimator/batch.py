@@ -11,9 +11,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from softtip.core._blocks import blockwise
 from softtip.core._xp import NP
-from softtip.core.location import contact_arrays
 from softtip.core.filtering import lowpass_sos, sosfilt_state
 from softtip.core.fingertip import Fingertip, load_fingertip
+from softtip.core.location import contact_arrays
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.contact import (
     TrackState,

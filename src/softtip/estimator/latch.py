@@ -23,8 +23,8 @@ from numpy.typing import NDArray
 
 from softtip.core._jit import jit_enabled
 from softtip.core._xp import NP, PY
-from softtip.core.location import SoftFinger, contact_kernel
 from softtip.core.fingertip import Fingertip
+from softtip.core.location import SoftFinger, contact_kernel
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.sequential import latch_scan_kernel
 
