@@ -761,13 +761,3 @@ def write_fingertip_toml(cal: Calibration, path: str | os.PathLike[str], source:
         )
     text = "\n".join(header) + "\n" + cal.tip.to_toml()
     atomic_write_text(path, text)
-
-
-def __getattr__(name: str):
-    # the probing simulator moved to softtip.sim.probing (calibration does not depend on the
-    # simulator); its former names still resolve, on first use
-    if name in ("probing_presses", "simulate_probing"):
-        from softtip.sim import probing
-
-        return getattr(probing, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

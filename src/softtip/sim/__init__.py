@@ -51,7 +51,7 @@ from softtip.sim.scenario import (
     rock_scenario,
     smoothstep,
 )
-from softtip.sim.sensor import NANO17, NANO17_SENSOR, SensorModel
+from softtip.sim.sensor import NANO17_SENSOR, SensorModel
 from softtip.sim.simulate import SimLog, run_simulation, simulate_grasp, truth_dict, write_log_csv, write_truth_json
 from softtip.sim.skin import DEFAULT_ELEMENTS, SkinMesh, discretise_skin
 from softtip.sim.truth import GroundTruth, line_angle, tangent_frame
@@ -88,7 +88,6 @@ __all__ = [
     "push_scenario",
     "rock_scenario",
     "smoothstep",
-    "NANO17",
     "NANO17_SENSOR",
     "SensorModel",
     "SimLog",
