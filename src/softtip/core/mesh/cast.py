@@ -31,7 +31,6 @@ def _sides(p, line):
     )
 
 
-
 class AxisCast:
     """The axis cast of :class:`~softtip.core.mesh.MeshFingertip` (batch and one sample)."""
 

@@ -18,7 +18,6 @@ from softtip.core.mesh.topology import _LEAF, _NEAR_K
 __all__ = ["ClosestPoints"]
 
 
-
 def _closest_on_triangles(p: NDArray, v0: NDArray, v1: NDArray, v2: NDArray) -> tuple[NDArray, NDArray, NDArray]:
     """Closest points of triangles to points (pairwise, shape (P, 3) each).
 
@@ -73,7 +72,6 @@ def _closest_block(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz):
         else:
             bu, bv = np.where(closer, 1.0 - t, bu), np.where(closer, t, bv)
     return best, bu, bv
-
 
 
 class ClosestPoints:

@@ -32,7 +32,6 @@ def rotation_from_rpy(roll: float, pitch: float, yaw: float) -> NDArray[np.float
     )
 
 
-
 def _import_trimesh():
     try:
         import trimesh

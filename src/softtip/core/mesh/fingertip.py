@@ -400,7 +400,6 @@ class MeshFingertip(ClosestPoints, AxisCast, CreaseContact, NewtonRefine, Finger
         return tuple(o.reshape(shape) for o in out)
 
 
-
 def _toml_str(s: str) -> str:
     return '"' + s.replace("\\", "\\\\").replace('"', '\\"') + '"'
 

@@ -36,7 +36,6 @@ def _exit(b1, b2, db1, db2, xp):
     return k, xp.where(k == 0, t0, xp.where(k == 1, t1, t2))
 
 
-
 class NewtonRefine:
     """The Newton refinement and triangle walk of :class:`~softtip.core.mesh.MeshFingertip`."""
 
