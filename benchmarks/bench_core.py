@@ -212,7 +212,7 @@ def scaling_worker(n: int) -> None:
     import softtip.io.tables as sio
     from softtip import load_fingertip
     from softtip.core._jit import jit_enabled, set_jit
-    from softtip.core.contact import contact_arrays
+    from softtip.core.location import contact_arrays
 
     warnings.simplefilter("ignore")
     g = synthetic_grasp("murakami2006", angle_deg=45.0, duration=10.0, rate=1000.0, seed=1)
@@ -669,8 +669,8 @@ def plausible_wrenches(tip, n, rng):
 
 def mesh_rows(args, rng) -> None:
     from softtip.core._xp import PY
-    from softtip.core.contact import contact_kernel
     from softtip.core.fingertip import load_fingertip
+    from softtip.core.location import contact_kernel
     from softtip.io.examples import EXAMPLE_PATH
 
     t0 = time.perf_counter()

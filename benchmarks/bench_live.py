@@ -31,9 +31,9 @@ import time
 
 import numpy as np
 
-from softtip.io.live import LiveStats, Recorder, TerminalView, run_live
+from softtip.apps.live import LiveStats, Recorder, TerminalView, run_live
+from softtip.estimator import Estimator
 from softtip.io.netft import NetFTSource
-from softtip.pipeline import Estimator
 
 FAULT_ARGS = ["--duplicate-every", "97", "--reorder-every", "89", "--malformed-every", "83",
               "--drop-every", "101", "--status-every", "500"]  # fmt: skip

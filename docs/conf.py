@@ -111,11 +111,11 @@ def _write_data_pages() -> None:
 API_PAGES = {
     "softtip": "softtip",
     "estimator": "softtip.estimator",
-    "io": "softtip.io",
-    "calibration": "softtip.calibration",
+    "io": "softtip.io.tables",
+    "calibration": "softtip.calibration.probing",
     "sim": "softtip.sim",
     "fusion": "softtip.fusion",
-    "viz": "softtip.viz",
+    "viz": "softtip.viz.rerun",
     "ros": "softtip.ros",
     "cli": "softtip.cli",
 }

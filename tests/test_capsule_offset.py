@@ -8,8 +8,8 @@ from numpy.testing import assert_allclose
 
 from softtip import Capsule, InputError, contact_from_wrench, load_fingertip
 from softtip.core._xp import PY
-from softtip.core.contact import contact_kernel
 from softtip.core.fingertip import fingertip_from_mapping
+from softtip.core.location import contact_kernel
 from softtip.sim import discretise_skin
 from softtip.viz.rerun import surface_mesh
 

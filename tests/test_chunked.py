@@ -17,9 +17,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from softtip import EstimatorConfig, estimate
+from softtip.apps.chunked import estimate_pieces
 from softtip.core.noise import NANO17
 from softtip.estimator.contact import track_contacts
-from softtip.io.chunked import estimate_pieces
 from softtip.io.tables import write_table
 from softtip.sim.synthetic import sliding_presses
 

@@ -32,9 +32,9 @@ def run(*args, env=None, umask=None, cwd=None):
 
 def _example_estimates():
     from softtip.core.fingertip import load_fingertip
+    from softtip.estimator import estimate
     from softtip.estimator.results import EstimatorWarning
     from softtip.io.examples import load_example
-    from softtip.pipeline import estimate
 
     log = load_example()
     with warnings.catch_warnings():
@@ -164,8 +164,8 @@ def test_rerun_without_a_display_stops_at_once(tmp_path: Path) -> None:
 
 
 def test_columns_in_the_papers_units_and_the_line_threshold() -> None:
+    from softtip.estimator import EstimatorConfig
     from softtip.estimator.columns import COLUMNS
-    from softtip.pipeline import EstimatorConfig
 
     est = _example_estimates()
     si, kgf = est.columns(), est.columns(units="kgf-mm")

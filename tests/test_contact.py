@@ -6,7 +6,7 @@ from numpy.testing import assert_allclose
 
 from softtip import Capsule, Ellipsoid, ImplicitSurface, Sphere, contact_from_wrench
 from softtip.core._xp import PY
-from softtip.core.contact import contact_kernel
+from softtip.core.location import contact_kernel
 from strategies import TIPS, soft_contacts
 
 

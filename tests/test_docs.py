@@ -26,15 +26,16 @@ pytestmark = [
     pytest.mark.skipif(bool(MISSING), reason=f"the docs extra is not installed ({', '.join(MISSING)} missing): pip install -e '.[docs]'"),
 ]
 
-#: The public modules, each with its page in docs/api/
+#: The public modules, each with its page in docs/api/ (a package without ``__all__`` is
+#: documented by the module that holds its public names)
 MODULES = {
     "softtip": "softtip",
     "softtip.estimator": "estimator",
-    "softtip.io": "io",
-    "softtip.calibration": "calibration",
+    "softtip.io.tables": "io",
+    "softtip.calibration.probing": "calibration",
     "softtip.sim": "sim",
     "softtip.fusion": "fusion",
-    "softtip.viz": "viz",
+    "softtip.viz.rerun": "viz",
     "softtip.ros": "ros",
     "softtip.cli": "cli",
 }

@@ -11,7 +11,7 @@ from softtip import Capsule, EstimatorConfig, Sphere, axial_difference, estimate
 from softtip.core._xp import PY
 from softtip.core.joint import joint_products, joint_solve_kernel
 from softtip.core.noise import NANO17, SensorNoise
-from softtip.pipeline import _joint_accept
+from softtip.estimator.joint import joint_accept as _joint_accept
 from softtip.sim.synthetic import smoothstep
 from strategies import unit_vectors
 from test_pipeline import assert_stream_equals_batch

@@ -13,7 +13,7 @@ from numpy.testing import assert_allclose, assert_array_equal
 
 from softtip import Capsule, EstimatorConfig, InputError, contact_from_wrench, load_fingertip
 from softtip.core._xp import PY
-from softtip.core.contact import contact_kernel
+from softtip.core.location import contact_kernel
 from softtip.core.mesh import MeshFingertip, capsule_mesh, load_mesh_fingertip, rotation_from_rpy
 from softtip.sim.synthetic import synthetic_grasp
 from test_pipeline import assert_stream_equals_batch

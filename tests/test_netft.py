@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from softtip.io.live import RECORD_COLUMNS
+from softtip.apps.live import RECORD_COLUMNS
 from softtip.io.netft import NetFTSource
 from softtip.io.sources import SourceError
 from softtip.testing.netft_fake import FakeNetFT
@@ -275,7 +275,7 @@ def test_queue_overflow_is_counted_as_dropped_not_lost():
 def test_the_view_shows_every_counter_the_status_and_the_latest_warning():
     import io
 
-    from softtip.io.live import LiveStats, TerminalView
+    from softtip.apps.live import LiveStats, TerminalView
 
     counters = {"lost": 4, "dropped": 7, "duplicates": 2, "late": 3, "malformed": 5, "restarts": 1, "stalls": 6,
                 "status_records": 9}  # fmt: skip

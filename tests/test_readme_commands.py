@@ -102,10 +102,10 @@ def _seed(name: str, line: str, block: list[str], work: Path) -> None:
             shutil.rmtree(work / "_hand")
         else:  # one sensor's wrench on the topic the README names
             from softtip.core.fingertip import load_fingertip
+            from softtip.estimator import estimate
             from softtip.estimator.results import EstimatorWarning
             from softtip.io.bag import write_estimates_bag
             from softtip.io.tables import read_log
-            from softtip.pipeline import estimate
 
             log = read_log(EXAMPLE_PATH, units="si")
             with warnings.catch_warnings():  # what the tare says is the README line's business

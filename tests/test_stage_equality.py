@@ -14,7 +14,7 @@ from numpy.testing import assert_allclose, assert_array_equal
 from rocking import rocking_log
 from softtip import EstimatorConfig, load_fingertip
 from softtip.core._xp import NP, PY
-from softtip.core.contact import contact_arrays
+from softtip.core.location import contact_arrays
 from softtip.estimator.contact import ContactTracker, track_contacts
 from softtip.estimator.depth import DepthTracker, depth_points, resolve_depth
 from softtip.estimator.evidence import EvidenceTracker, evidence_states

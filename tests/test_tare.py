@@ -13,11 +13,11 @@ import pytest
 from numpy.testing import assert_allclose
 
 from softtip import Estimator, EstimatorConfig, InputError, axial_difference, estimate
+from softtip.apps.live import KeyReader, run_live
 from softtip.core.noise import NANO17, SensorNoise
 from softtip.estimator.contact import contact_thresholds
 from softtip.estimator.results import EstimatorWarning
 from softtip.estimator.tare import bias_to_toml, load_bias, tare_from_samples
-from softtip.io.live import KeyReader, run_live
 from softtip.sim.synthetic import synthetic_grasp
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))

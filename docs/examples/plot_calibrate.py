@@ -9,9 +9,9 @@ the presses touched.
 
 import matplotlib.pyplot as plt
 
-from softtip.calibration import calibrate_fingertip
-from softtip.io import read_log
+from softtip.calibration.probing import calibrate_fingertip
 from softtip.io.examples import EXAMPLE_PROBING_PATH
+from softtip.io.tables import read_log
 
 log = read_log(EXAMPLE_PROBING_PATH)
 cal = calibrate_fingertip(log.t, log.wrench, shape="sphere")

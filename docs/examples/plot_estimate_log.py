@@ -13,7 +13,7 @@ import numpy as np
 import softtip
 from softtip.viz.plot import plot_estimates
 
-log = softtip.load_example()  # or softtip.io.read_log("grasp.csv")
+log = softtip.load_example()  # or softtip.io.tables.read_log("grasp.csv")
 est = softtip.estimate(log.t, log.wrench, "murakami2006")
 
 line = est.state == softtip.STATES.index("line")

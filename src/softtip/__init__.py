@@ -6,8 +6,8 @@ or a strip (line), and the direction of the edge, stick, thin plate, thin cylind
 being touched (Murakami & Hasegawa 2004, 2006; Bicchi 1990). SI units, sensor frame.
 """
 
+from softtip.apps.live import run
 from softtip.core.axial import axial_difference, axial_mean, axial_median
-from softtip.core.contact import Contact, contact_from_wrench
 from softtip.core.fingertip import (
     PRESETS,
     Capsule,
@@ -18,6 +18,7 @@ from softtip.core.fingertip import (
     load_fingertip,
     murakami2006,
 )
+from softtip.core.location import Contact, contact_from_wrench
 from softtip.core.mesh import MeshFingertip
 from softtip.core.mounting import Mounted
 from softtip.core.noise import NANO17, SensorNoise, direction_angle_std, tangential_spin_torque_std
@@ -26,7 +27,6 @@ from softtip.core.units import KGF, KGF_MM, wrench_from_si, wrench_to_si
 from softtip.errors import InputError
 from softtip.estimator import STATES, Estimates, Estimator, EstimatorConfig, EstimatorWarning, SampleEstimate, estimate
 from softtip.io.examples import EXAMPLE_PATH, load_example
-from softtip.io.sources import run
 
 try:  # written by setuptools-scm from the git tag when softtip is built or installed
     from softtip._version import __version__

@@ -1,6 +1,3 @@
-"""Calibration of the fingertip (probing presses, meshes) and of the payload."""
-
-# the public names it had as one module, before it became this package; __getattr__ resolves
-# the probing simulator's former names (now softtip.sim.probing) on use
-from softtip.calibration.probing import *  # noqa: F403
-from softtip.calibration.probing import __all__, __getattr__  # noqa: F401
+"""Calibration of the fingertip from probing presses (:mod:`~softtip.calibration.probing`), of
+a mesh fingertip's placement (:mod:`~softtip.calibration.mesh`) and of the payload
+(:mod:`~softtip.calibration.payload`)."""

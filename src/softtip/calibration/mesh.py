@@ -302,12 +302,3 @@ def calibrate_mesh_file(
             raise InputError(f"{path}: give --mesh-units (mesh files carry no units)")
         tip = mesh_fingertip_from_table({"mesh": str(path.resolve()), "mesh_units": mesh_units}, source=str(path))
     return calibrate_mesh(t, wrench, tip, **kwargs)
-
-
-def __getattr__(name: str):
-    # moved to softtip.sim.probing; the former name still resolves, on first use
-    if name == "mesh_probing_log":
-        from softtip.sim import probing
-
-        return probing.mesh_probing_log
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

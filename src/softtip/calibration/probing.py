@@ -4,7 +4,7 @@ Why the obvious residual does not work
 --------------------------------------
 For one sample, Bicchi's soft-finger equations ``m − c × f = p × f + σ p / R``, ``|p| = R``
 have a solution for *any* trial centre ``c`` and radius ``R`` (that is what
-:func:`softtip.core.contact.contact_from_wrench` computes), so a single sample says nothing
+:func:`softtip.core.location.contact_from_wrench` computes), so a single sample says nothing
 about the geometry. Information comes only from a constraint shared by several samples.
 
 The model used here
@@ -761,13 +761,3 @@ def write_fingertip_toml(cal: Calibration, path: str | os.PathLike[str], source:
         )
     text = "\n".join(header) + "\n" + cal.tip.to_toml()
     atomic_write_text(path, text)
-
-
-def __getattr__(name: str):
-    # the probing simulator moved to softtip.sim.probing (calibration does not depend on the
-    # simulator); its former names still resolve, on first use
-    if name in ("probing_presses", "simulate_probing"):
-        from softtip.sim import probing
-
-        return getattr(probing, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -10,6 +10,7 @@ from pathlib import Path
 import click
 import numpy as np
 
+from softtip.cli.bag_options import bag_output_options, output_frame_id
 from softtip.cli.options import (
     FRAMES_HELP,
     bag_warnings,
@@ -45,7 +46,6 @@ from softtip.estimator import estimate as run_estimate
 from softtip.estimator.columns import help_text as column_help
 from softtip.estimator.results import EstimatorWarning
 from softtip.estimator.tare import bias_to_toml
-from softtip.ros.options import bag_output_options, output_frame_id
 
 __all__ = ["estimate"]
 
@@ -419,7 +419,7 @@ AUTO_CHUNK_PARQUET_ROWS = 262_144
 
 def _auto_chunk_rows(path: str) -> int | None:
     """Rows per piece for a log this large (:data:`AUTO_CHUNK_CSV_BYTES`, :data:`AUTO_CHUNK_PARQUET_ROWS`), else None."""
-    from softtip.io.chunked import DEFAULT_PIECE_ROWS
+    from softtip.apps.chunked import DEFAULT_PIECE_ROWS
     from softtip.io.tables import columnar_rows
 
     try:
@@ -434,13 +434,13 @@ def _estimate_in_pieces(
     input_path, units, rows, fingertip, config, estimator_opts, *, output, output_units, tip, quiet, save_bias, outputs,
     sensor_range=None,
 ) -> bool:
-    """``softtip estimate`` piece by piece (:mod:`softtip.io.chunked`) into ``output`` (a path);
+    """``softtip estimate`` piece by piece (:mod:`softtip.apps.chunked`) into ``output`` (a path);
     ``False`` when the log holds something only the one-shot reader takes or words (nothing
     written then)."""
+    from softtip.apps.chunked import estimate_pieces
     from softtip.core.lever import LEVER_MARGIN, LeverVote, fingertip_reach, lever_distances
     from softtip.estimator.summary import summarise_contacts
     from softtip.io.atomic import cannot_write
-    from softtip.io.chunked import estimate_pieces
     from softtip.io.formats import table_format
     from softtip.io.tables import NotStreamable, TableWriter, columnar_rows, iter_log
 

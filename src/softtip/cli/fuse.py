@@ -8,6 +8,7 @@ import warnings
 import click
 import numpy as np
 
+from softtip.cli.bag_options import bag_output_options, output_frame_id
 from softtip.cli.options import (
     check_figure_path,
     estimator_options,
@@ -22,7 +23,6 @@ from softtip.cli.types import Length, Number, option
 from softtip.core.units import UNIT_SYSTEMS, seconds_from_ns, wrench_to_si
 from softtip.errors import InputError
 from softtip.estimator.results import EstimatorWarning
-from softtip.ros.options import bag_output_options, output_frame_id
 
 __all__ = ["fuse"]
 

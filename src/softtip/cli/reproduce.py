@@ -49,7 +49,7 @@ tangent plane as a trace, and the state over time).
 def reproduce(out_dir, only, seed, jobs):
     from tqdm import tqdm
 
-    from softtip.sim.reproduce import run_reproduction
+    from softtip.apps.reproduce import run_reproduction
 
     experiments = [e.strip() for e in only.split(",") if e.strip()] if only else None
     try:

@@ -150,8 +150,8 @@ def _stream(
     import signal
     import threading
 
+    from softtip.apps.live import KeyReader, LiveStats, Recorder, TerminalView, run_live
     from softtip.estimator import Estimator
-    from softtip.io.live import KeyReader, LiveStats, Recorder, TerminalView, run_live
     from softtip.io.sources import Interrupted, LogSource, SourceError
 
     rerun_save = None if rerun_file is None else rerun_file.tmp

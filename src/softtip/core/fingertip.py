@@ -587,7 +587,7 @@ def load_fingertip(spec: str | Path | Fingertip) -> Fingertip:
                 f"{', '.join(sorted(PRESETS))} or a path to a .toml fingertip file"
             )
         raise InputError(f"{name}: fingertip file not found")
-    from softtip.io.tomlfile import read_toml
+    from softtip.tomlfile import read_toml
 
     return fingertip_from_mapping(read_toml(path, "fingertip"), source=str(path))
 

@@ -33,7 +33,7 @@ from scipy.spatial.transform import Rotation
 
 from softtip.core.units import STANDARD_GRAVITY
 from softtip.errors import InputError
-from softtip.io.tomlfile import read_toml_table
+from softtip.tomlfile import read_toml_table
 
 __all__ = ["Payload", "PayloadCompensator", "load_payload", "gravity_in_sensor", "payload_wrench", "compensate_payload"]
 

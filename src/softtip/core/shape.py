@@ -161,7 +161,7 @@ class PressModel(abc.ABC):
     @abc.abstractmethod
     def stds(self, std: NDArray) -> dict[str, float]:
         """The parameters' standard deviations (m) by name, the one reported first when
-        several are equally large first (:meth:`~softtip.calibration.Calibration.precision_warning`)."""
+        several are equally large first (:meth:`~softtip.calibration.probing.Calibration.precision_warning`)."""
 
     @abc.abstractmethod
     def report(self, x: NDArray, std: NDArray) -> tuple[list[str], list[str]]:
@@ -244,7 +244,7 @@ class Fingertip(abc.ABC):
         """The soft-finger contact for the wrench ``(f, m)`` (N, N·m, sensor frame), component-wise.
 
         Returns ``(rx, ry, rz, nx, ny, nz, sigma, valid)`` (see
-        :func:`softtip.core.contact.contact_kernel`): floats with ``PY``, arrays with ``NP``.
+        :func:`softtip.core.location.contact_kernel`): floats with ``PY``, arrays with ``NP``.
         """
 
     # -- simulator skin ------------------------------------------------------------------------

@@ -4,7 +4,7 @@
 runs it one sample at a time for live use (:mod:`.stream`). Each stage has its batch and its
 stream form side by side in one module: :mod:`.tare`, :mod:`.latch`, :mod:`.joint`,
 :mod:`.depth`, :mod:`.measure`; settings are in :mod:`.config`, results in :mod:`.results`. Both forms call
-the same kernels (:mod:`softtip.core.contact`, :mod:`softtip.core.spin`, :mod:`softtip.core.noise`) and
+the same kernels (:mod:`softtip.core.location`, :mod:`softtip.core.spin`, :mod:`softtip.core.noise`) and
 agree to rounding.
 
 Per sample (manual §3):

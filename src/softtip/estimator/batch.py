@@ -11,9 +11,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from softtip.core._blocks import blockwise
 from softtip.core._xp import NP
-from softtip.core.contact import contact_arrays
 from softtip.core.filtering import lowpass_sos, sosfilt_state
 from softtip.core.fingertip import Fingertip, load_fingertip
+from softtip.core.location import contact_arrays
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.contact import (
     TrackState,
@@ -121,7 +121,7 @@ def estimate(
         memory): the state the previous piece left (an empty :class:`Carry` for the first),
         updated in place. A piece must start at a sample where the previous piece's
         estimator was out of contact, no contact pending, the drift following (see
-        :func:`softtip.io.chunked.estimate_pieces`), and give ``config.sample_rate`` when it
+        :func:`softtip.apps.chunked.estimate_pieces`), and give ``config.sample_rate`` when it
         low-pass filters; then every piece gives the bits of the whole log's run over its
         samples. Warnings of the first piece's tare are given with the first piece only.
 

@@ -22,10 +22,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from softtip.core._xp import NP, PY
-from softtip.core.contact import SoftFinger, contact_kernel
 from softtip.core.depth import depth_kernel
 from softtip.core.fingertip import Fingertip
 from softtip.core.joint import N_SUMS, joint_products, joint_solve_kernel
+from softtip.core.location import SoftFinger, contact_kernel
 from softtip.core.noise import SensorNoise
 from softtip.core.spin import spin_torque_kernel
 from softtip.estimator.config import EstimatorConfig

@@ -23,8 +23,8 @@ from numpy.typing import NDArray
 
 from softtip.core._jit import jit_enabled
 from softtip.core._xp import NP, PY
-from softtip.core.contact import SoftFinger, contact_kernel
 from softtip.core.fingertip import Fingertip
+from softtip.core.location import SoftFinger, contact_kernel
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.sequential import latch_scan_kernel
 
@@ -228,7 +228,7 @@ class LatchTracker:
 
     Call :meth:`start` at contact onset (and at a re-latch), then :meth:`step` for every
     sample in contact. Soft-finger solutions (``sc``, the 8-tuple of
-    :func:`softtip.core.contact.contact_kernel`) are computed only when needed and handed back
+    :func:`softtip.core.location.contact_kernel`) are computed only when needed and handed back
     for reuse.
     """
 

@@ -18,9 +18,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from softtip.core._xp import PY
-from softtip.core.contact import contact_kernel
 from softtip.core.filtering import SosStream, lowpass_sos
 from softtip.core.fingertip import Fingertip, load_fingertip
+from softtip.core.location import contact_kernel
 from softtip.core.noise import SensorNoise
 from softtip.estimator.batch import sample_rate_mismatch
 from softtip.estimator.config import EstimatorConfig

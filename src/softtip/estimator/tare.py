@@ -39,7 +39,7 @@ from softtip.core.joint import MODEL_MARGIN
 from softtip.core.noise import SensorNoise
 from softtip.errors import InputError
 from softtip.estimator.config import EstimatorConfig
-from softtip.io.tomlfile import read_toml_table
+from softtip.tomlfile import read_toml_table
 
 __all__ = [
     "SPIKE_SIGMAS",

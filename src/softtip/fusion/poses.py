@@ -23,7 +23,7 @@ from scipy.spatial.transform import Rotation, Slerp
 
 from softtip.core.mounting import pose_from_table
 from softtip.errors import InputError
-from softtip.io.tomlfile import read_toml
+from softtip.tomlfile import read_toml
 
 __all__ = ["POSE_COLUMNS", "PoseSeries", "poses_from_columns", "read_hand_file", "HandFile"]
 

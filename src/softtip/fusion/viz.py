@@ -29,7 +29,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from softtip import Fingertip
+from softtip.core.fingertip import Fingertip
 from softtip.fusion.fuse import Finger, FusedGrasp
 from softtip.viz.rerun import import_rerun, surface_mesh
 

@@ -44,6 +44,7 @@ from softtip.estimator import Estimates
 from softtip.estimator.columns import TOPICS as COLUMN_TOPICS
 from softtip.ros import DEFAULT_FRAME_ID
 from softtip.ros import TOPICS as ROS_TOPICS
+from softtip.ros.bagout import import_rosbags
 
 __all__ = [
     "TOPICS",
@@ -62,20 +63,6 @@ TOPICS = ROS_TOPICS
 #: Topic of the raw wrench in an output bag when the input was not a bag.
 DEFAULT_RAW_TOPIC = "/softtip/wrench_raw"
 _BAG_SUFFIXES = (".bag", ".mcap", ".db3")
-
-
-def import_rosbags():
-    """Import ``rosbags`` or raise an :class:`ImportError` that names the extra to install."""
-    try:
-        import rosbags.highlevel
-        import rosbags.rosbag2
-        import rosbags.typesys
-    except ImportError as exc:
-        raise ImportError(
-            "ROS bag input and output need the 'rosbags' package: pip install 'rosbags>=0.11' "
-            "(or, from a softtip checkout, pip install -e '.[ros]')"
-        ) from exc
-    return rosbags
 
 
 def is_bag(path: str | os.PathLike[str]) -> bool:

@@ -1,4 +1,4 @@
-"""Sources of force/torque samples, and driving the streaming estimator from any of them.
+"""Sources of force/torque samples: what a log replay or a live sensor yields, one sample at a time.
 
 A **source** is anything iterable that yields samples ``(t, wrench)``: ``t`` in s (strictly
 increasing), ``wrench`` six numbers ``fx, fy, fz`` (N), ``mx, my, mz`` (N·m), raw (softtip
@@ -13,7 +13,7 @@ number, packets lost before this one, arrival time). A plain generator works as 
             t, w = read_my_driver()      # s, (fx, fy, fz, mx, my, mz) in N, N·m
             yield t, w
 
-    for est in softtip.run(my_sensor(), "murakami2006"):
+    for est in softtip.run(my_sensor(), "murakami2006"):   # softtip.apps.live.run
         if est.state == "line":
             print(est.angle)              # rad
 
@@ -34,10 +34,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-from softtip.core.fingertip import Fingertip
-from softtip.estimator import Estimator, EstimatorConfig, SampleEstimate
-
-__all__ = ["Interrupted", "LogSource", "Reading", "SourceError", "readings", "run"]
+__all__ = ["Interrupted", "LogSource", "Reading", "SourceError", "readings"]
 
 
 class SourceError(RuntimeError):
@@ -103,40 +100,6 @@ def readings(source: Iterable) -> Iterator[Reading]:
             t, w = item[0], item[1]
             w = w.tolist() if isinstance(w, np.ndarray) else w
             yield Reading(float(t), tuple(float(v) for v in w), seq, 0, 0, 0, math.nan, 0, 0, 0, 0)
-
-
-def run(
-    source: Iterable,
-    tip: Fingertip | str = "murakami2006",
-    config: EstimatorConfig | None = None,
-) -> Iterator[SampleEstimate]:
-    """Run the streaming :class:`~softtip.estimator.Estimator` over a source.
-
-    Parameters
-    ----------
-    source : iterable of (t, wrench) or Reading
-        ``t`` in s, increasing; ``wrench`` raw, shape (6,), N and N·m.
-    tip : Fingertip or str
-        Fingertip, preset name or TOML path.
-    config : EstimatorConfig, optional
-
-    Yields
-    ------
-    SampleEstimate
-        One per sample, as soon as it is computed.
-
-    Examples
-    --------
-    >>> import softtip
-    >>> log = softtip.load_example()
-    >>> states = [e.state for e in softtip.run(zip(log.t, log.wrench))]
-    >>> states[-1]
-    'line'
-    """
-    estimator = Estimator(tip, config)
-    update = estimator.update
-    for item in source:
-        yield update(item[0], item[1])
 
 
 class LogSource:

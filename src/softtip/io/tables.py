@@ -54,7 +54,7 @@ partial file behind and never touches an existing file at the destination.
 
 Logs larger than memory: :func:`iter_log` reads a CSV or Parquet file block by block with
 the values and warnings of :func:`read_log`, and :class:`TableWriter` writes a table piece
-by piece (``softtip estimate`` uses both through :mod:`softtip.io.chunked`).
+by piece (``softtip estimate`` uses both through :mod:`softtip.apps.chunked`).
 """
 
 from __future__ import annotations

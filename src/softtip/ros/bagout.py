@@ -47,9 +47,24 @@ __all__ = [
     "BagFormat",
     "BagWriter",
     "bag_format",
+    "import_rosbags",
     "metadata_yaml",
     "remove_bag",
 ]
+
+
+def import_rosbags():
+    """Import ``rosbags`` or raise an :class:`ImportError` that names the extra to install."""
+    try:
+        import rosbags.highlevel
+        import rosbags.rosbag2
+        import rosbags.typesys
+    except ImportError as exc:
+        raise ImportError(
+            "ROS bag input and output need the 'rosbags' package: pip install 'rosbags>=0.11' "
+            "(or, from a softtip checkout, pip install -e '.[ros]')"
+        ) from exc
+    return rosbags
 
 
 @dataclass(frozen=True)
@@ -179,8 +194,6 @@ class BagWriter:
     """
 
     def __init__(self, dest: str | os.PathLike[str], distro: str | None = None) -> None:
-        from softtip.io.bag import import_rosbags
-
         import_rosbags()
         from rosbags.typesys import Stores, get_typestore
 

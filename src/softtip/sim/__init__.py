@@ -7,7 +7,7 @@ fringe). Scenarios reproduce the papers' grasps (manual §5); the sensor model a
 noise and quantisation.
 
 Modules: :mod:`~softtip.sim.skin` (surface elements), :mod:`~softtip.sim.objects` (SDF
-objects), :mod:`~softtip.sim.contact` (Winkler + friction), :mod:`~softtip.sim.scenario`
+objects), :mod:`~softtip.sim.foundation` (Winkler + friction), :mod:`~softtip.sim.scenario`
 (grasp time series, the papers' hand), :mod:`~softtip.sim.sensor` (noise),
 :mod:`~softtip.sim.truth` (ground truth), :mod:`~softtip.sim.simulate` (the loop and the
 writers), :mod:`~softtip.sim.probing` (probing logs for calibration); the ``simulate`` command is :mod:`softtip.cli.simulate`.
@@ -22,7 +22,7 @@ Example
 (500, 6)
 """
 
-from softtip.sim.contact import ContactModel, ContactParams, ContactResult, FrictionState
+from softtip.sim.foundation import ContactModel, ContactParams, ContactResult, FrictionState
 from softtip.sim.objects import (
     OBJECT_KINDS,
     Cylinder,
@@ -51,7 +51,7 @@ from softtip.sim.scenario import (
     rock_scenario,
     smoothstep,
 )
-from softtip.sim.sensor import NANO17, NANO17_SENSOR, SensorModel
+from softtip.sim.sensor import NANO17_SENSOR, SensorModel
 from softtip.sim.simulate import SimLog, run_simulation, simulate_grasp, truth_dict, write_log_csv, write_truth_json
 from softtip.sim.skin import DEFAULT_ELEMENTS, SkinMesh, discretise_skin
 from softtip.sim.truth import GroundTruth, line_angle, tangent_frame
@@ -88,7 +88,6 @@ __all__ = [
     "push_scenario",
     "rock_scenario",
     "smoothstep",
-    "NANO17",
     "NANO17_SENSOR",
     "SensorModel",
     "SimLog",

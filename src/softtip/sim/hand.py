@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from softtip.core.fingertip import Fingertip
-from softtip.sim.contact import ContactParams
+from softtip.sim.foundation import ContactParams
 from softtip.sim.objects import RigidObject
 from softtip.sim.pose import Pose
 from softtip.sim.scenario import Disturbance, HandFrame, friction_scenario, paper_scenario, rock_scenario
@@ -145,7 +145,7 @@ def simulate_two_finger(
         Both sensors' model (rate, noise, bias, resolution; default Nano17 class at 50 Hz);
         each draws its own noise.
     params : ContactParams, optional
-        Both skins' material (default :class:`~softtip.sim.contact.ContactParams`; not with
+        Both skins' material (default :class:`~softtip.sim.foundation.ContactParams`; not with
         ``model``, which has its own).
     load : FrictionLoad, optional
         A friction load during the hold (:func:`~softtip.sim.scenario.friction_scenario`, as

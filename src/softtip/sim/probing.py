@@ -17,7 +17,7 @@ from softtip.core._vec import cross as _cross
 from softtip.core._vec import tangent_basis as _tangent_basis
 from softtip.core.fingertip import Fingertip
 from softtip.core.mesh import MeshFingertip
-from softtip.sim.contact import ContactModel, ContactParams
+from softtip.sim.foundation import ContactModel, ContactParams
 from softtip.sim.objects import HalfSpace
 from softtip.sim.scenario import Disturbance, push_scenario
 from softtip.sim.sensor import SensorModel

@@ -10,7 +10,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from softtip.core.noise import SensorNoise
 
-__all__ = ["SensorModel", "NANO17_SENSOR", "NANO17"]
+__all__ = ["SensorModel", "NANO17_SENSOR"]
 
 _FORCE_RES = 1.0 / 160.0  # N
 _TORQUE_RES = 1.0 / 32.0 * 1e-3  # N·m (1/32 N·mm)
@@ -100,5 +100,3 @@ class SensorModel:
 #: The default simulated sensor (ATI Nano17 class, 50 Hz): a :class:`SensorModel` (noise, bias,
 #: resolution, rate), not the estimator's noise model :data:`softtip.NANO17`.
 NANO17_SENSOR = SensorModel()
-#: Former name of :data:`NANO17_SENSOR`, kept so that old scripts run.
-NANO17 = NANO17_SENSOR

@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 
 from softtip.core.fingertip import Fingertip, load_fingertip
 from softtip.core.units import wrench_from_si
-from softtip.sim.contact import ContactModel, ContactParams, ContactResult, FrictionState
+from softtip.sim.foundation import ContactModel, ContactParams, ContactResult, FrictionState
 from softtip.sim.objects import RigidObject, make_object
 from softtip.sim.pose import Pose
 from softtip.sim.scenario import (
@@ -336,7 +336,7 @@ def simulate_grasp(
         Noise source, or a seed for ``numpy.random.default_rng`` (None: seed 0, so a run
         is reproducible unless a generator is passed).
     params : ContactParams, optional
-        Skin material (default :class:`~softtip.sim.contact.ContactParams`).
+        Skin material (default :class:`~softtip.sim.foundation.ContactParams`).
     n_elements : int
         Skin elements (≥ 10 000 by default).
     quadrature : int

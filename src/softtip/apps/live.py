@@ -1,5 +1,6 @@
 """The live path: a source through the streaming estimator to a terminal view and a recording.
 
+:func:`run` drives the streaming estimator over any source, one estimate per sample;
 :func:`run_live` is what ``softtip stream`` runs, for a live sensor and for a replayed log
 alike. Its consumer loop takes each :class:`~softtip.io.sources.Reading` from the source, runs
 :meth:`Estimator.update <softtip.estimator.Estimator.update>` on it and hands the result
@@ -30,12 +31,13 @@ import stat
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from typing import TextIO
 
+from softtip.core.fingertip import Fingertip
 from softtip.errors import InputError
-from softtip.estimator import Estimator, SampleEstimate
+from softtip.estimator import Estimator, EstimatorConfig, SampleEstimate
 from softtip.estimator.columns import COLUMNS
 from softtip.io.sources import Reading, readings
 
@@ -46,6 +48,7 @@ __all__ = [
     "Recorder",
     "TerminalView",
     "estimate_row",
+    "run",
     "run_live",
 ]
 
@@ -495,6 +498,40 @@ class LiveSummary:
     last: SampleEstimate | None
     counters: dict[str, int] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
+
+
+def run(
+    source: Iterable,
+    tip: Fingertip | str = "murakami2006",
+    config: EstimatorConfig | None = None,
+) -> Iterator[SampleEstimate]:
+    """Run the streaming :class:`~softtip.estimator.Estimator` over a source.
+
+    Parameters
+    ----------
+    source : iterable of (t, wrench) or Reading
+        ``t`` in s, increasing; ``wrench`` raw, shape (6,), N and N·m.
+    tip : Fingertip or str
+        Fingertip, preset name or TOML path.
+    config : EstimatorConfig, optional
+
+    Yields
+    ------
+    SampleEstimate
+        One per sample, as soon as it is computed.
+
+    Examples
+    --------
+    >>> import softtip
+    >>> log = softtip.load_example()
+    >>> states = [e.state for e in softtip.run(zip(log.t, log.wrench))]
+    >>> states[-1]
+    'line'
+    """
+    estimator = Estimator(tip, config)
+    update = estimator.update
+    for item in source:
+        yield update(item[0], item[1])
 
 
 def run_live(
