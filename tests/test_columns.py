@@ -90,7 +90,7 @@ def test_an_optional_attribute_left_empty_leaves_its_columns_out(example):
 
 
 def test_the_live_recording_has_the_registry_columns_in_order():
-    from softtip.io.live import RECORD_COLUMNS
+    from softtip.apps.live import RECORD_COLUMNS
 
     estimates = [n for n in RECORD_COLUMNS if n in set(column_names())]
     assert estimates == column_names()
@@ -101,7 +101,7 @@ def test_the_live_recording_has_the_registry_columns_in_order():
 def test_the_live_row_is_the_sample_estimate_by_the_registry():
     """A recorded row holds each column's value of the SampleEstimate, as the registry maps it."""
     import softtip
-    from softtip.io.live import RECORD_COLUMNS, estimate_row
+    from softtip.apps.live import RECORD_COLUMNS, estimate_row
     from softtip.io.sources import Reading
 
     log = load_example()

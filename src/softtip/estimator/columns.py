@@ -3,7 +3,7 @@
 Everything that lists softtip's per-sample outputs is made from this table: the order, cell
 values and types of :meth:`Estimates.columns <softtip.estimator.Estimates.columns>` (so of
 ``softtip estimate``'s CSV and Parquet files and :meth:`~softtip.estimator.Estimates.to_arrow`),
-the rows of a live recording (:mod:`softtip.io.live`), the columns paragraph of ``softtip
+the rows of a live recording (:mod:`softtip.apps.live`), the columns paragraph of ``softtip
 estimate --help``, the table of manual §4 (``docs/guide/columns.md``, written by
 :func:`markdown_table` through ``scripts/make_column_table.py``) and the ROS topics that carry
 a column (:data:`TOPICS`).
