@@ -761,6 +761,8 @@ def test_signals_at_any_moment_of_a_chunked_run(tmp_path, delay):
     if proc.returncode == 0:  # finished before the signals
         return
     # 143 from within the run; killed by the signal's default action (-15) while Python itself starts,
-    # before softtip handles signals (nothing is written yet then)
-    assert proc.returncode in (143, -signal.SIGTERM), err
+    # before softtip handles signals (nothing is written yet then); 130 when both signals were
+    # pending at once (the main thread in native code for more than 5 ms): Python then runs the
+    # handlers in signal-number order, SIGINT's first
+    assert proc.returncode in (143, 130, -signal.SIGTERM), err
     assert snapshot(tmp_path) == before
