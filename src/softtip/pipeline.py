@@ -16,6 +16,5 @@ from softtip.estimator import (  # noqa: F401
     SampleEstimate,
     estimate,
 )
-from softtip.estimator.joint import joint_accept as _joint_accept  # noqa: F401
 
 __all__ = ["STATES", "CONTACT_POINT_MODES", "EstimatorConfig", "Estimates", "SampleEstimate", "Estimator", "estimate"]
