@@ -154,21 +154,13 @@ def setting(default: Any, help: str, **kwargs: Any) -> Any:  # noqa: A002 - the 
 
 
 def settings_of(cls) -> Iterator[Setting]:
-    """The :class:`Setting` of every field of the dataclass ``cls``, in field order, named,
-    with the field's default as :attr:`default` (an attribute of the yielded copy)."""
+    """The :class:`Setting` of every field of the dataclass ``cls``, in field order, each with its
+    field's :attr:`~Setting.name` (a ``TypeError`` for a field without one)."""
     for f in dataclasses.fields(cls):
         s = f.metadata.get("setting")
         if s is None:
             raise TypeError(f"{cls.__name__}.{f.name} has no Setting in its metadata")
         yield dataclasses.replace(s, name=f.name)
-
-
-def defaults_of(cls) -> dict[str, Any]:
-    """Field name → default of the dataclass ``cls``."""
-    out = {}
-    for f in dataclasses.fields(cls):
-        out[f.name] = f.default_factory() if f.default is dataclasses.MISSING else f.default
-    return out
 
 
 def check_value(s: Setting, value: Any) -> Any:
@@ -201,6 +193,4 @@ def check_value(s: Setting, value: Any) -> Any:
         if value not in s.choices:
             raise ValueError(f"{s.name} must be one of {', '.join(s.choices)}, got {value!r}")
         return value
-    if s.kind in ("tuple", "tuples"):
-        return value  # relations between the parts: checked by the config itself
-    return value
+    return value  # a tuple, a list of tuples, a composite: checked by the config itself
