@@ -142,14 +142,14 @@ def test_noisy_windows_scatter_within_the_reported_std(rng):
 
 def test_default_is_online_for_a_skin_and_off_without_one():
     assert resolve_depth(EstimatorConfig(), TIP).depth_compensation == "online"
-    assert resolve_depth(EstimatorConfig(), TIP).depth == MURAKAMI2006_DEPTH
+    assert resolve_depth(EstimatorConfig(), TIP).skin_law == MURAKAMI2006_DEPTH
     assert resolve_depth(EstimatorConfig(), Capsule(0.016, 0.02)).depth_compensation == "off"
     assert resolve_depth(EstimatorConfig(contact_point="track"), TIP).depth_compensation == "off"
     assert resolve_depth(EstimatorConfig(contact_point="line-fit"), TIP).depth_compensation == "off"
     given = EstimatorConfig(contact_point="line-fit", skin_law=MURAKAMI2006_DEPTH)
     assert resolve_depth(given, TIP).depth_compensation == "law"  # a law given in line-fit mode: as before, fixed
     assert resolve_depth(EstimatorConfig(contact_point="line-fit", depth_compensation="online"), TIP).depth_compensation == "online"
-    assert resolve_depth(EstimatorConfig(depth_compensation="off"), TIP).depth is None
+    assert resolve_depth(EstimatorConfig(depth_compensation="off"), TIP).skin_law is None
     assert resolve_depth(EstimatorConfig(depth_compensation="law"), TIP).depth_compensation == "law"
     with pytest.raises(ValueError, match="skin law"):
         resolve_depth(EstimatorConfig(depth_compensation="online"), Sphere(0.02))
