@@ -56,7 +56,7 @@ method | error with softtip's extension``. Sections:
   a push ramped in over 6 → 6.5 s, a slow drag over 5.5 → 9.5 s, or a slip of 1.5 mm along
   the line), across or along the line, 0.2 and 0.5 of the normal force, on thin plates,
   Ø 4–6 mm cylinders, 60° and 90° wedges (and the fringe, outside the summary), at 0°, +30°
-  and −45°; direction error with the papers' method, the fixed skin law (``--fixed-depth``)
+  and −45°; direction error with the papers' method, the fixed skin law (``--depth-compensation law``)
   and the default online depth (and with the simulator's true depth, an oracle not
   available to softtip), and the online depth against the simulator's
   ``friction_depth`` (within its reported standard deviation or not). Medians over the
@@ -64,7 +64,7 @@ method | error with softtip's extension``. Sections:
   ``--sections friction`` (about 5 minutes on a quiet 2-core machine).
 
 Every section but **friction** and **cost** runs without depth compensation
-(``depth_mode="off"``, or the fixed law where a column says so), as they were measured
+(``depth_compensation="off"``, or the fixed law where a column says so), as they were measured
 before the online depth became the default.
 
 Room is left for other sections (calibration and gravity: ``bench_calibration.py``).
@@ -170,11 +170,11 @@ def depth_section(seed: int = 1) -> None:
 
 
 DEPTH_CONFIGS = (
-    per_sample(depth_mode="off"),
-    per_sample(depth_mode="law"),
-    per_sample(depth_mode="off", contact_point="track"),
-    per_sample(depth_mode="off", contact_point="line-fit"),
-    per_sample(contact_point="line-fit", depth_mode="law"),
+    per_sample(depth_compensation="off"),
+    per_sample(depth_compensation="law"),
+    per_sample(depth_compensation="off", contact_point="track"),
+    per_sample(depth_compensation="off", contact_point="line-fit"),
+    per_sample(contact_point="line-fit", depth_compensation="law"),
 )
 
 
@@ -183,18 +183,18 @@ def slide_section(seed: int = 1) -> None:
     print("contact-point error, direction error (line coverage), t > 8 s\n")
     print("joint: the default noise model (Nano17 class, 1.5–2x the simulator's sensor noise), with the")
     print("smallest angle std of a window ending in 7–8.5 s (past the slide) and the median fit residual after 8 s; then with")
-    print("--joint-max-std 3 0.2, and with the simulator's own noise model\n")
+    print("--line-fit-max-angle-std 3 --line-fit-max-offset-std 0.2, and with the simulator's own noise model\n")
     print("| condition | the papers' latch | re-latch at 3 mm | track | joint | joint, max std 3° | joint, simulator's noise |")
     print("| --- | --- | --- | --- | --- | --- | --- |")
     model = ContactModel(discretise_skin(TIP, 10000), ContactParams()).prepare()
     std = np.asarray(SIM_SENSOR.noise_std)
     configs = (
-        per_sample(depth_mode="off"),
-        per_sample(depth_mode="off", relatch_distance=3e-3),
-        per_sample(depth_mode="off", contact_point="track"),
-        per_sample(depth_mode="off", contact_point="line-fit"),
-        per_sample(depth_mode="off", contact_point="line-fit", joint_max_angle_std=math.radians(3.0)),
-        per_sample(depth_mode="off", contact_point="line-fit", noise=SensorNoise(tuple(std[:3]), tuple(std[3:]))),
+        per_sample(depth_compensation="off"),
+        per_sample(depth_compensation="off", relatch_distance=3e-3),
+        per_sample(depth_compensation="off", contact_point="track"),
+        per_sample(depth_compensation="off", contact_point="line-fit"),
+        per_sample(depth_compensation="off", contact_point="line-fit", line_fit_max_angle_std=math.radians(3.0)),
+        per_sample(depth_compensation="off", contact_point="line-fit", noise=SensorNoise(tuple(std[:3]), tuple(std[3:]))),
     )
     for name, obj, ang in (("plate 1 mm", Plate(0.001), 0.0), ("plate 1 mm", Plate(0.001), 45.0),
                            ("plate 1 mm", Plate(0.001), -45.0), ("plate 2 mm", Plate(0.002), 0.0)):  # fmt: skip
@@ -235,7 +235,7 @@ def papers_section(seed: int = 2006) -> None:
             log = simulate_grasp(TIP, obj, paper_scenario(math.radians(ang)), rng=seed)
             sel = log.t > HELD
             cells = []
-            for cfg in (per_sample(depth_mode="off"), per_sample(depth_mode="off", contact_point="line-fit")):
+            for cfg in (per_sample(depth_compensation="off"), per_sample(depth_compensation="off", contact_point="line-fit")):
                 est = estimate(log.t, log.wrench, TIP, cfg)
                 m = sel & (est.state > 0)
                 extra = f"; {est.line_fit_fallback[m].mean():.0%} on the latch" if cfg.contact_point == "line-fit" else ""
@@ -257,7 +257,7 @@ def start_section(seed: int = 1) -> None:
             t, angle, point = log.t[cut], log.truth.angle[cut], log.truth.contact_point[cut]
             sel = t > HELD
             for mode in ("latch", "track", "line-fit"):
-                est = estimate(t, log.wrench[cut], TIP, per_sample(depth_mode="off", contact_point=mode, bias=log.sensor.bias))
+                est = estimate(t, log.wrench[cut], TIP, per_sample(depth_compensation="off", contact_point=mode, bias=log.sensor.bias))
                 cells.append(_cell(est, angle, point, sel))
             _row(f"{name} {ang:+.0f}°", *cells)
 
@@ -283,7 +283,7 @@ def noise_section() -> None:
             shares, errors = [], []
             for seed in range(3):
                 g = synthetic_grasp(tip, point=cap(polar), rate=7000.0, duration=8.0, noise=real, seed=seed)
-                est = estimate(g.t, g.wrench, tip, per_sample(depth_mode="off", contact_point="line-fit"))
+                est = estimate(g.t, g.wrench, tip, per_sample(depth_compensation="off", contact_point="line-fit"))
                 squeeze = (g.t > 2.5) & (g.t < 4.4) & (est.state > 0)
                 shares.append(1.0 - est.line_fit_fallback[squeeze].mean())
                 errors.append(np.max(np.linalg.norm(est.point[g.t > 6.5] - g.point, axis=1)) * 1e3)
@@ -301,7 +301,7 @@ def noise_section() -> None:
         for seed in range(seeds):
             g = synthetic_grasp(tip, point=cap(30.0), rate=rate, seed=seed)
             kw = {} if cutoff is None else {"lowpass_hz": cutoff, "sample_rate": rate}
-            est = estimate(g.t, g.wrench, tip, per_sample(depth_mode="off", contact_point="line-fit", **kw))
+            est = estimate(g.t, g.wrench, tip, per_sample(depth_compensation="off", contact_point="line-fit", **kw))
             # the held window is the sample where the final point was taken up
             same = np.all(est.point == est.point[-1], axis=1)
             k = len(same) - int(np.argmin(same[::-1])) if not same.all() else 0
@@ -618,12 +618,12 @@ def stream_cost() -> None:
 
     g = synthetic_grasp(angle_deg=30.0, seed=1)
     for label, cfg in (
-        ("latch, the papers' method", EstimatorConfig(depth_mode="off")),
+        ("latch, the papers' method", EstimatorConfig(depth_compensation="off")),
         ("latch + online depth (default)", EstimatorConfig()),
-        ("latch, re-latch at 3 mm", EstimatorConfig(depth_mode="off", relatch_distance=3e-3)),
-        ("latch + fixed depth law", EstimatorConfig(depth_mode="law")),
-        ("track", EstimatorConfig(depth_mode="off", contact_point="track")),
-        ("line-fit", EstimatorConfig(depth_mode="off", contact_point="line-fit")),
+        ("latch, re-latch at 3 mm", EstimatorConfig(depth_compensation="off", relatch_distance=3e-3)),
+        ("latch + fixed depth law", EstimatorConfig(depth_compensation="law")),
+        ("track", EstimatorConfig(depth_compensation="off", contact_point="track")),
+        ("line-fit", EstimatorConfig(depth_compensation="off", contact_point="line-fit")),
     ):
         times = []
         for _ in range(3):
@@ -643,8 +643,8 @@ FRICTION_OBJECTS = (
     ("wedge 60°", Wedge(math.radians(60.0))), ("wedge 90°", Wedge(math.radians(90.0))),
 )  # fmt: skip
 FRICTION_CONFIGS = (
-    EstimatorConfig(depth_mode="off"),  # the papers' method
-    EstimatorConfig(depth_mode="law"),  # the fixed skin law (--fixed-depth)
+    EstimatorConfig(depth_compensation="off"),  # the papers' method
+    EstimatorConfig(depth_compensation="law"),  # the fixed skin law (--depth-compensation law)
     EstimatorConfig(),  # the default: online depth
 )
 

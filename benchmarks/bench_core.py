@@ -168,8 +168,8 @@ def stream_rows(args, g) -> None:
     print(f"streaming pipeline, one sample at a time ({args.stream_samples:,} samples of a 1 kHz grasp, best of 3)")
     for label, cfg in (
         ("latch, no filter (online depth)", EstimatorConfig()),
-        ("latch, the papers' method", EstimatorConfig(depth_mode="off")),
-        ("latch, --line-evidence off", EstimatorConfig(line_evidence=False)),
+        ("latch, the papers' method", EstimatorConfig(depth_compensation="off")),
+        ("latch, --no-line-evidence", EstimatorConfig(line_evidence=False)),
         ("latch, 4th-order low-pass", EstimatorConfig(lowpass_hz=30.0, sample_rate=1000.0, lowpass_order=4)),
         ("track", EstimatorConfig(contact_point="track")),
     ):

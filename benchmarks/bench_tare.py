@@ -4,7 +4,7 @@
 
 "plain" is the pipeline without this release's safeguards: mean tare, one contact
 threshold, no minimum duration, no drift tracking (``tare_method="mean",
-contact_hysteresis=0, contact_min_duration=0, track_drift=False``), which gives the same
+contact_hysteresis=0, min_contact_duration=0, drift_tracking=False``), which gives the same
 numbers as softtip before them. Prints, on synthetic logs (Nano17-class noise):
 
 - a −20 N spike in one sample of the 0.2 s tare: the median edge direction of a 45° grasp;
@@ -27,7 +27,7 @@ from softtip.core.noise import NANO17
 from softtip.estimator.results import EstimatorWarning
 from softtip.sim.synthetic import synthetic_grasp
 
-PLAIN = EstimatorConfig(tare_method="mean", contact_hysteresis=0.0, contact_min_duration=0.0, track_drift=False)
+PLAIN = EstimatorConfig(tare_method="mean", contact_hysteresis=0.0, min_contact_duration=0.0, drift_tracking=False)
 DEFAULT = EstimatorConfig()
 NOISE = np.r_[NANO17.force_std, NANO17.moment_std]
 
@@ -95,7 +95,7 @@ def main() -> None:
 
     print("contact segments per synthetic grasp (one true contact), and the median direction error (deg)")
     for rate, duration in ((1000.0, 10.0), (7000.0, 7.0)):
-        for name, cfg in (("plain", PLAIN), ("hysteresis only", EstimatorConfig(contact_min_duration=0.0)),
+        for name, cfg in (("plain", PLAIN), ("hysteresis only", EstimatorConfig(min_contact_duration=0.0)),
                           ("default", DEFAULT)):  # fmt: skip
             segs, errs = [], []
             for s in seeds:

@@ -40,7 +40,7 @@ def _log(seed: int, presses: int = 6) -> tuple[np.ndarray, np.ndarray]:
 CONFIGS = {
     "default": EstimatorConfig(),
     "lowpass": EstimatorConfig(lowpass_hz=20.0),
-    "no-drift-tracking": EstimatorConfig(track_drift=False, lowpass_hz=15.0),
+    "no-drift-tracking": EstimatorConfig(drift_tracking=False, lowpass_hz=15.0),
     "joint": EstimatorConfig(contact_point="line-fit"),
     "noise-from-tare": EstimatorConfig(noise_from_tare=True, tare_duration=0.4),
 }
@@ -106,7 +106,7 @@ def test_contact_tracker_cut_at_any_untouched_sample(seed: int, track: bool, whe
         x[a : a + int(rng.integers(1, 80)), :3] += rng.normal(0.0, 1.0, 3)
     x += np.linspace(0.0, rng.normal(0.0, 0.3), n)[:, None]
     t = np.cumsum(rng.uniform(0.5e-3, 2e-3, n))
-    config = EstimatorConfig(track_drift=track, drift_time_constant=tau)
+    config = EstimatorConfig(drift_tracking=track, drift_time_constant=tau)
     start = int(rng.integers(0, 30))
     whole = track_contacts(t, x, start, config, NANO17)
     free = np.flatnonzero(~whole.busy[start + 1 :]) + start + 1
@@ -135,7 +135,7 @@ def test_cli_in_pieces_writes_the_one_shot_output(tmp_path: Path, fmt: str) -> N
     outs = {}
     for label, extra in (("one", []), ("pieces", ["--chunk-rows", 50])):
         dest = tmp_path / f"{label}.{fmt}"
-        done = run("estimate", src, "-o", dest, "--lowpass", 20, *extra)
+        done = run("estimate", src, "-o", dest, "--lowpass-hz", 20, *extra)
         assert done.returncode == 0, done.stderr
         outs[label] = (dest, done.stderr.replace(str(dest), "OUT"))
     assert outs["one"][1] == outs["pieces"][1]

@@ -107,9 +107,9 @@ def test_tip_from_toml_and_track_mode(tmp_path):
 
 
 def test_lowpass_option(tmp_path):
-    out = run("estimate", "--example", "--lowpass", "5", "-o", tmp_path / "o.csv")
+    out = run("estimate", "--example", "--lowpass-hz", "5", "-o", tmp_path / "o.csv")
     assert out.returncode == 0, out.stderr
-    bad = run("estimate", "--example", "--lowpass", "40", "-o", tmp_path / "p.csv")
+    bad = run("estimate", "--example", "--lowpass-hz", "40", "-o", tmp_path / "p.csv")
     assert bad.returncode == 2 and "Nyquist" in bad.stderr
     assert not (tmp_path / "p.csv").exists()
 
@@ -161,8 +161,8 @@ def test_failure_leaves_an_existing_output_untouched(tmp_path):
         (["--tip", "nonexistent_preset"], ["nonexistent_preset", "murakami2006"]),
         (["--tip", "missing.toml"], ["missing.toml", "not found"]),
         (["--contact-point", "windowed"], ["windowed", "latch", "track", "line-fit"]),
-        (["--contact-point", "line-fit", "--joint-max-std", "0", "0.2"], ["--joint-max-std", "0"]),
-        (["--contact-point", "line-fit", "--joint-window", "-1"], ["--joint-window", "-1"]),
+        (["--contact-point", "line-fit", "--line-fit-max-angle-std", "0", "--line-fit-max-offset-std", "0.2"], ["--line-fit-max-angle-std", "0"]),
+        (["--contact-point", "line-fit", "--line-fit-window", "-1"], ["--line-fit-window", "-1"]),
     ],
 )
 def test_bad_options_exit_2(tmp_path, args, needles):
@@ -251,14 +251,14 @@ def test_tare_that_cannot_be_right_is_reported(tmp_path):
     assert "bias from the first 0.2 s" in untouched.stderr and "while taring" not in untouched.stderr
 
 
-def test_joint_mode_columns(tmp_path):
-    out = run("estimate", "--example", "--contact-point", "line-fit", "--joint-window", "0.8", "--joint-max-std", "3", "0.3",
+def test_line_fit_mode_columns(tmp_path):
+    out = run("estimate", "--example", "--contact-point", "line-fit", "--line-fit-window", "0.8", "--line-fit-max-angle-std", "3", "--line-fit-max-offset-std", "0.3",
               "-o", tmp_path / "j.csv")  # fmt: skip
     assert out.returncode == 0, out.stderr
     rows = read_csv(tmp_path / "j.csv")
     log = load_example()
-    cfg = EstimatorConfig(contact_point="line-fit", joint_window=0.8, joint_max_angle_std=np.radians(3.0),
-                          joint_max_offset_std=0.3e-3)  # fmt: skip
+    cfg = EstimatorConfig(contact_point="line-fit", line_fit_window=0.8, line_fit_max_angle_std=np.radians(3.0),
+                          line_fit_max_offset_std=0.3e-3)  # fmt: skip
     est = estimate(log.t, log.wrench, "murakami2006", cfg)
     assert [r["line_fit_fallback"] for r in rows] == [str(int(v)) for v in est.line_fit_fallback]
     for key, ref in (("line_fit_angle_std_deg", np.degrees(est.line_fit_angle_std)), ("line_fit_residual", est.line_fit_residual),
@@ -273,13 +273,11 @@ def test_joint_mode_columns(tmp_path):
     assert "exceeds the noise model" not in latch.stderr
 
 
-def test_joint_is_the_former_name_of_line_fit(tmp_path):
-    """``--contact-point joint`` (the former name) runs ``line-fit``, to the bit."""
-    a = run("estimate", "--example", "--contact-point", "line-fit", "-o", tmp_path / "a.csv", "-q")
+def test_joint_is_no_longer_a_mode(tmp_path):
+    """``joint``, the former name of ``line-fit``, is gone (0.x: no alias), on the command line and in the library."""
     b = run("estimate", "--example", "--contact-point", "joint", "-o", tmp_path / "b.csv", "-q")
-    assert a.returncode == 0 and b.returncode == 0, b.stderr
-    assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()
-    assert EstimatorConfig(contact_point="joint") == EstimatorConfig(contact_point="line-fit")
-    assert EstimatorConfig(contact_point="joint").contact_point == "line-fit"
+    assert b.returncode == 2 and "'joint'" in b.stderr and "line-fit" in b.stderr
+    with pytest.raises(ValueError, match="contact_point"):
+        EstimatorConfig(contact_point="joint")
     helptext = " ".join(run("estimate", "--help").stdout.split())
-    assert "line-fit: latch, then" in helptext and "joint: its former name" in helptext
+    assert "line-fit: latch, then" in helptext and "joint" not in helptext.split("--contact-point")[1].split("--")[0]

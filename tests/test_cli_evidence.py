@@ -43,7 +43,7 @@ def test_rocked_plane_is_an_area_and_off_gives_the_papers_lines(rocked_plane, tm
     assert all(r["line_evidence"] in ("confirmed", "unconfirmed") for r in rows if r["state"] == "line")
     assert all(r["line_evidence"] == "" and r["angle_deg"] == "nan" for r in rows if r["state"] != "line")
     assert " area" in out.stderr and "confirmed)" in out.stderr
-    off = run("estimate", rocked_plane, "-o", tmp_path / "off.csv", "--line-evidence", "off")
+    off = run("estimate", rocked_plane, "-o", tmp_path / "off.csv", "--no-line-evidence")
     assert off.returncode == 0, off.stderr
     rows = read_csv(tmp_path / "off.csv")
     assert not any(r["state"] == "area" for r in rows)
@@ -54,9 +54,10 @@ def test_rocked_plane_is_an_area_and_off_gives_the_papers_lines(rocked_plane, tm
     "args, word",
     [
         (["--area-ratio", "0.1", "0.3"], "area_ratio"),
-        (["--line-evidence", "maybe"], "--line-evidence"),
+        (["--line-evidence=off"], "--line-evidence"),
         (["--evidence-window", "0"], "--evidence-window"),
-        (["--excitation", "0.5"], "--excitation"),
+        (["--excitation-ratio", "0"], "--excitation-ratio"),
+        (["--excitation-min", "-1"], "--excitation-min"),
         (["--evidence-reset-distance", "-1"], "--evidence-reset-distance"),
         (["--evidence-model-std", "-0.5"], "--evidence-model-std"),
         (["--unconfirmed-model-std", "nan"], "--unconfirmed-model-std"),

@@ -94,7 +94,7 @@ def test_length_options_take_units(tmp_path: Path) -> None:
     for value in ("3", "3mm", "0.3cm"):
         out = tmp_path / f"{value}.csv"
         r = run("estimate", "--example", "--relatch-distance", value, "--evidence-reset-distance", "1mm",
-                "--joint-max-std", "2", "0.2mm", "-o", out, "-q")  # fmt: skip
+                "--line-fit-max-angle-std", "2", "--line-fit-max-offset-std", "0.2mm", "-o", out, "-q")  # fmt: skip
         assert r.returncode == 0, r.stderr
         outs[value] = out.read_bytes()
     assert outs["3"] == outs["3mm"] == outs["0.3cm"]

@@ -43,10 +43,10 @@ def test_depth_compensation_removes_the_friction_lever():
     law = MURAKAMI2006_DEPTH
     g, w = grasp_with_friction_at_depth(law)
     late = g.t > 6.5
-    plain = estimate(g.t, w, "murakami2006", EstimatorConfig(depth_mode="off"))  # the papers' method
+    plain = estimate(g.t, w, "murakami2006", EstimatorConfig(depth_compensation="off"))  # the papers' method
     # drift tracking off: it takes in the first samples of the touch, below the contact
     # threshold (~1e-4 N here), which this exactness check would see
-    comp = estimate(g.t, w, "murakami2006", EstimatorConfig(depth=law, depth_mode="law", track_drift=False))
+    comp = estimate(g.t, w, "murakami2006", EstimatorConfig(skin_law=law, depth_compensation="law", drift_tracking=False))
     err_plain = np.degrees(np.abs(axial_difference(plain.angle[late], g.angle)))
     err_comp = np.degrees(np.abs(axial_difference(comp.angle[late], g.angle)))
     assert np.nanmedian(err_plain) > 5.0  # the lever rotates the direction

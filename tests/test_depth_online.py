@@ -31,7 +31,7 @@ from softtip.sim import ContactModel, ContactParams, Plate, Wedge, discretise_sk
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 TIP = murakami2006()
-PAPERS = EstimatorConfig(depth_mode="off", line_evidence=False)  # the papers: per sample, on the surface
+PAPERS = EstimatorConfig(depth_compensation="off", line_evidence=False)  # the papers: per sample, on the surface
 
 
 @functools.cache
@@ -141,20 +141,20 @@ def test_noisy_windows_scatter_within_the_reported_std(rng):
 
 
 def test_default_is_online_for_a_skin_and_off_without_one():
-    assert resolve_depth(EstimatorConfig(), TIP).depth_mode == "online"
-    assert resolve_depth(EstimatorConfig(), TIP).depth == MURAKAMI2006_DEPTH
-    assert resolve_depth(EstimatorConfig(), Capsule(0.016, 0.02)).depth_mode == "off"
-    assert resolve_depth(EstimatorConfig(contact_point="track"), TIP).depth_mode == "off"
-    assert resolve_depth(EstimatorConfig(contact_point="line-fit"), TIP).depth_mode == "off"
-    given = EstimatorConfig(contact_point="line-fit", depth=MURAKAMI2006_DEPTH)
-    assert resolve_depth(given, TIP).depth_mode == "law"  # a law given in line-fit mode: as before, fixed
-    assert resolve_depth(EstimatorConfig(contact_point="line-fit", depth_mode="online"), TIP).depth_mode == "online"
-    assert resolve_depth(EstimatorConfig(depth_mode="off"), TIP).depth is None
-    assert resolve_depth(EstimatorConfig(depth_mode="law"), TIP).depth_mode == "law"
+    assert resolve_depth(EstimatorConfig(), TIP).depth_compensation == "online"
+    assert resolve_depth(EstimatorConfig(), TIP).skin_law == MURAKAMI2006_DEPTH
+    assert resolve_depth(EstimatorConfig(), Capsule(0.016, 0.02)).depth_compensation == "off"
+    assert resolve_depth(EstimatorConfig(contact_point="track"), TIP).depth_compensation == "off"
+    assert resolve_depth(EstimatorConfig(contact_point="line-fit"), TIP).depth_compensation == "off"
+    given = EstimatorConfig(contact_point="line-fit", skin_law=MURAKAMI2006_DEPTH)
+    assert resolve_depth(given, TIP).depth_compensation == "law"  # a law given in line-fit mode: as before, fixed
+    assert resolve_depth(EstimatorConfig(contact_point="line-fit", depth_compensation="online"), TIP).depth_compensation == "online"
+    assert resolve_depth(EstimatorConfig(depth_compensation="off"), TIP).skin_law is None
+    assert resolve_depth(EstimatorConfig(depth_compensation="law"), TIP).depth_compensation == "law"
     with pytest.raises(ValueError, match="skin law"):
-        resolve_depth(EstimatorConfig(depth_mode="online"), Sphere(0.02))
-    with pytest.raises(ValueError, match="depth_mode"):
-        EstimatorConfig(depth_mode="deep")
+        resolve_depth(EstimatorConfig(depth_compensation="online"), Sphere(0.02))
+    with pytest.raises(ValueError, match="depth_compensation"):
+        EstimatorConfig(depth_compensation="deep")
     with pytest.raises(ValueError, match="depth_prior_std"):
         EstimatorConfig(depth_prior_std=0.0)
 
@@ -255,15 +255,15 @@ def _last_row(out: str) -> dict:
 
 
 def test_cli_depth_options():
-    default, papers, fixed = _cli(), _cli("--no-depth-compensation"), _cli("--fixed-depth")
+    default, papers, fixed = _cli(), _cli("--depth-compensation", "off"), _cli("--depth-compensation", "law")
     for r in (default, papers, fixed):
         assert r.returncode == 0, r.stderr
     d, p, f = _last_row(default.stdout), _last_row(papers.stdout), _last_row(fixed.stdout)
     assert float(p["depth"]) == 0.0 and float(p["depth_std"]) == 0.0
     assert float(f["depth"]) > 0.0 and float(f["depth_std"]) == 0.0
     assert float(d["depth_std"]) > 0.0 and d["depth_from_data"] in ("0", "1")
-    bad = _cli("--fixed-depth", "--no-depth-compensation")
-    assert bad.returncode == 2 and "contradict" in bad.stderr and not bad.stdout
+    bad = _cli("--depth-compensation", "fixed")
+    assert bad.returncode == 2 and "'fixed'" in bad.stderr and "online" in bad.stderr and not bad.stdout
 
 
 def test_cli_simulates_a_friction_grasp_with_its_truth(tmp_path):

@@ -113,7 +113,7 @@ def test_noise_margin_grows_as_the_degrees_of_freedom_fall():
     # ν = 0.1 and went negative under 0.025)
     from scipy.stats import chi2, norm
 
-    from softtip.core.joint import EXCITATION_Z, _chi2_excess
+    from softtip.core.line_fit import EXCITATION_Z, _chi2_excess
 
     nu = np.logspace(-5, 3, 400)
     tail = _chi2_excess(nu, NP) / nu
@@ -130,7 +130,7 @@ def test_a_low_pass_at_7_khz_does_not_make_a_new_contact_an_area():
     # fraction of one independent noise sample; its noise margin must not vanish there (it
     # did: every contact was an area two samples after its onset, and stayed one)
     t, w, _ = rocking_log("line", 30.0, rate=7000.0, seed=2, excite="one", duration=3.5)
-    cfg = EstimatorConfig(depth_mode="off", lowpass_hz=20.0, sample_rate=7000.0)
+    cfg = EstimatorConfig(depth_compensation="off", lowpass_hz=20.0, sample_rate=7000.0)
     est = estimate(t, w, "murakami2006", cfg)
     assert not np.any(est.state == 3)
     assert np.mean(est.state[t > 2.6] == 2) == 1.0
@@ -201,7 +201,7 @@ def test_an_unconfirmed_line_carries_its_rolling_bias_in_its_std():
     the noise's with ``unconfirmed_model_std`` added in quadrature. In a line confirmed by
     rocking about two axes, a direction from a window excited about two axes does not carry
     it and one from a one-axis window does (the bias follows the window's excitation);
-    ``--line-evidence off`` (the papers') never carries it."""
+    ``--no-line-evidence`` (the papers') never carries it."""
     t, w, _ = rocking_log("line", 30.0, excite="one", seed=3)
     u = EstimatorConfig().unconfirmed_model_std
     assert u == pytest.approx(math.radians(5.0))
@@ -230,7 +230,7 @@ def test_an_unconfirmed_line_carries_its_rolling_bias_in_its_std():
 def test_the_noise_share_of_the_angle_std():
     """``angle_noise_std`` is the share of ``angle_std`` that the sensor noise gives: the same
     whatever model error is configured, never above ``angle_std``, and all of it where the
-    estimator counts no model error (``--line-evidence off``, the papers' noise only)."""
+    estimator counts no model error (``--no-line-evidence``, the papers' noise only)."""
     t, w, _ = rocking_log("line", 30.0, seed=3)  # rocked: unconfirmed, then confirmed lines
     est = estimate(t, w, "murakami2006")
     line = est.state == 2
@@ -277,7 +277,7 @@ def test_the_window_restarts_at_a_new_contact():
 
 
 def test_a_moved_contact_point_starts_the_evidence_afresh():
-    from test_joint import slide_across_log
+    from test_line_fit import slide_across_log
 
     # the contact slides 3 mm across the line after the latch: about the stale latched point
     # h carries a constant offset (the moved point's lever), so each sample's direction is

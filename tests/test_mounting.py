@@ -82,7 +82,7 @@ def test_a_tilted_grasp_gives_the_same_direction_as_the_upright_one():
     # per-sample method (the synthetic grasp's friction acts on the skin's surface, and a
     # noise-free window has no noise scale to judge a line from an area by)
     config = EstimatorConfig(
-        tare_duration=0, noise=SensorNoise((0.0,) * 3, (0.0,) * 3), depth_mode="off", line_evidence=False
+        tare_duration=0, noise=SensorNoise((0.0,) * 3, (0.0,) * 3), depth_compensation="off", line_evidence=False
     )
     upright = softtip.estimate(g.t, g.wrench - g.bias, "murakami2006", config)
     tip = Mounted(softtip.murakami2006(), R, t)  # with its skin, so the same depth compensation

@@ -300,7 +300,7 @@ BAD_OPTIONS = {
     "estimate-contact-threshold-1e308": (["estimate", "--example", "--contact-threshold", "1e308"], "--contact-threshold"),
     "estimate-contact-threshold-1e200": (["estimate", "--example", "--contact-threshold", "1e200"], "--contact-threshold"),
     "estimate-tare-duration-1e300": (["estimate", "--example", "--tare-duration", "1e300"], "--tare-duration"),
-    "estimate-joint-window-1e300": (["estimate", "--example", "--joint-window", "1e300"], "--joint-window"),
+    "estimate-line-fit-window-1e300": (["estimate", "--example", "--line-fit-window", "1e300"], "--line-fit-window"),
     "estimate-relatch-1e300": (["estimate", "--example", "--relatch-distance", "1e300m"], "--relatch-distance"),
     "estimate-o-empty": (["estimate", "--example", "-o", ""], "''"),
     "simulate-o-empty": (["simulate", "-o", ""], "-o"),

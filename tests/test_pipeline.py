@@ -19,7 +19,7 @@ FLAGS = ("latched", "latch_fallback", "pulling", "taring", "relatched", "line_fi
 #: The papers' method (no depth compensation): the synthetic grasps put the tangential force
 #: on the undeformed skin surface, as the papers' model does, so the tests of the papers'
 #: algorithm on them set it explicitly (the default learns the depth online).
-PAPERS = EstimatorConfig(depth_mode="off")
+PAPERS = EstimatorConfig(depth_compensation="off")
 
 
 def assert_stream_equals_batch(t, w, tip, config):
@@ -76,36 +76,36 @@ CASES = {
     "vote": EstimatorConfig(significance_window=0.3, relatch_distance=3e-3),
     "latch": EstimatorConfig(),  # the online depth (murakami2006 has a skin thickness)
     "latch-papers": PAPERS,
-    "latch-law": EstimatorConfig(depth_mode="law"),
+    "latch-law": EstimatorConfig(depth_compensation="law"),
     "online-short-window-lowpass-relatch": EstimatorConfig(
         depth_window=0.3, depth_prior_std=0.5, depth_drift=0.5, relatch_distance=3e-3, lowpass_hz=8.0, sample_rate=50.0
     ),
-    "online-given-law": EstimatorConfig(depth=MURAKAMI2006_DEPTH, depth_mode="online", depth_window=2.0),
-    "joint-online-relatch": EstimatorConfig(contact_point="line-fit", depth_mode="online", relatch_distance=3e-3),
+    "online-given-law": EstimatorConfig(skin_law=MURAKAMI2006_DEPTH, depth_compensation="online", depth_window=2.0),
+    "joint-online-relatch": EstimatorConfig(contact_point="line-fit", depth_compensation="online", relatch_distance=3e-3),
     "latch-relatch": EstimatorConfig(relatch_distance=3e-3),
     "latch-relatch-tight": EstimatorConfig(relatch_distance=0.3e-3),
-    "latch-depth": EstimatorConfig(depth=MURAKAMI2006_DEPTH),
+    "latch-depth": EstimatorConfig(skin_law=MURAKAMI2006_DEPTH),
     "latch-depth-relatch-lowpass": EstimatorConfig(
-        depth=MURAKAMI2006_DEPTH, relatch_distance=3e-3, lowpass_hz=8.0, sample_rate=50.0
+        skin_law=MURAKAMI2006_DEPTH, relatch_distance=3e-3, lowpass_hz=8.0, sample_rate=50.0
     ),
-    "track-depth": EstimatorConfig(contact_point="track", depth=MURAKAMI2006_DEPTH),
+    "track-depth": EstimatorConfig(contact_point="track", skin_law=MURAKAMI2006_DEPTH),
     "latch-lowpass": EstimatorConfig(lowpass_hz=8.0, sample_rate=50.0, lowpass_order=4),
     "track": EstimatorConfig(contact_point="track"),
     "given-bias": EstimatorConfig(bias=(0.12, -0.05, 0.3, 2e-3, -1e-3, 5e-4), lowpass_hz=5.0, sample_rate=50.0),
     "no-tare": EstimatorConfig(tare_duration=0.0),
     "joint": EstimatorConfig(contact_point="line-fit"),
     "joint-short-window-loose": EstimatorConfig(
-        contact_point="line-fit", joint_window=0.2, joint_max_angle_std=0.5, joint_max_offset_std=1e-3
+        contact_point="line-fit", line_fit_window=0.2, line_fit_max_angle_std=0.5, line_fit_max_offset_std=1e-3
     ),
     "joint-depth-relatch-lowpass": EstimatorConfig(
-        contact_point="line-fit", depth=MURAKAMI2006_DEPTH, relatch_distance=3e-3, lowpass_hz=8.0, sample_rate=50.0
+        contact_point="line-fit", skin_law=MURAKAMI2006_DEPTH, relatch_distance=3e-3, lowpass_hz=8.0, sample_rate=50.0
     ),
     # tare, drift and hysteresis (issue 13 items 9, 10, 14)
     "mean-tare": EstimatorConfig(tare_method="mean"),
     "single-threshold": EstimatorConfig(contact_hysteresis=0.0),
-    "min-duration-fast-drift": EstimatorConfig(contact_min_duration=0.05, drift_time_constant=0.3),
+    "min-duration-fast-drift": EstimatorConfig(min_contact_duration=0.05, drift_time_constant=0.3),
     "fast-drift-lowpass": EstimatorConfig(drift_time_constant=0.2, lowpass_hz=8.0, sample_rate=50.0),
-    "drift-reported-only": EstimatorConfig(track_drift=False, drift_time_constant=0.5),
+    "drift-reported-only": EstimatorConfig(drift_tracking=False, drift_time_constant=0.5),
     "evidence-off": EstimatorConfig(line_evidence=False),
     "evidence-short-window-loose": EstimatorConfig(
         evidence_window=0.3, area_ratio=(0.05, 0.02), excitation_ratio=0.05, excitation_min=1e-4
@@ -116,7 +116,7 @@ CASES = {
         noise_from_tare=True, tare_duration=1.0, contact_point="line-fit", lowpass_hz=8.0, sample_rate=50.0
     ),
     "evidence-joint-depth-relatch": EstimatorConfig(
-        contact_point="line-fit", depth=MURAKAMI2006_DEPTH, relatch_distance=3e-3, evidence_window=1.0
+        contact_point="line-fit", skin_law=MURAKAMI2006_DEPTH, relatch_distance=3e-3, evidence_window=1.0
     ),
 }
 
@@ -290,29 +290,26 @@ def test_filter_lowers_the_noise_level():
 
 def test_kgf_mm_config_values_are_si():
     cfg = EstimatorConfig()
-    assert cfg.latch_force_range == pytest.approx((0.2 * KGF, 0.5 * KGF))
-    assert cfg.latch_window == cfg.latch_force_range  # the former name still reads
+    assert cfg.latch_window == pytest.approx((0.2 * KGF, 0.5 * KGF))
     assert 0.5 * KGF_MM == pytest.approx(4.903325e-3)
 
 
 def test_config_rejects_nonsense():
     with pytest.raises(ValueError, match="contact_point"):
         EstimatorConfig(contact_point="windowed")
-    with pytest.raises(ValueError, match="joint_window"):
-        EstimatorConfig(joint_window=0.0)
-    with pytest.raises(ValueError, match="joint_max_angle_std"):
-        EstimatorConfig(joint_max_angle_std=math.nan)
-    with pytest.raises(ValueError, match="joint_iterations"):
-        EstimatorConfig(joint_iterations=0)
-    with pytest.raises(ValueError, match="joint_drift"):
-        EstimatorConfig(joint_drift=3e-5 * 1e6)  # µm/√s mistaken for m/√s
+    with pytest.raises(ValueError, match="line_fit_window"):
+        EstimatorConfig(line_fit_window=0.0)
+    with pytest.raises(ValueError, match="line_fit_max_angle_std"):
+        EstimatorConfig(line_fit_max_angle_std=math.nan)
+    with pytest.raises(ValueError, match="line_fit_iterations"):
+        EstimatorConfig(line_fit_iterations=0)
+    with pytest.raises(ValueError, match="line_fit_drift"):
+        EstimatorConfig(line_fit_drift=3e-5 * 1e6)  # µm/√s mistaken for m/√s
     with pytest.raises(ValueError, match="relatch_distance"):
         EstimatorConfig(relatch_distance=-1.0)
     with pytest.raises(ValueError, match="depth"):
-        EstimatorConfig(depth=2.0)
-    with pytest.raises(ValueError, match="latch_force_range"):
-        EstimatorConfig(latch_force_range=(5.0, 1.0))
-    with pytest.raises(ValueError, match="latch_force_range"):  # the former name is the same setting
+        EstimatorConfig(skin_law=2.0)
+    with pytest.raises(ValueError, match="latch_window"):
         EstimatorConfig(latch_window=(5.0, 1.0))
     with pytest.raises(ValueError, match="Nyquist"):
         EstimatorConfig(lowpass_hz=30.0, sample_rate=50.0)

@@ -102,11 +102,45 @@ def test_node_parameters_default_to_the_estimators_defaults():
         ({"contact_point": "latched"}, "contact_point"),
         ({"noise_from_tare": "false"}, "noise_from_tare must be true or false"),
         ({"noise_from_tare": True, "tare_duration": 0.0}, "noise_from_tare needs a tare"),
+        ({"line_fit_window": 0.0}, "line_fit_window must be a number > 0 s"),
+        ({"fallback_samples": 2.5}, "fallback_samples must be an integer"),
+        ({"latch_window": [1.0]}, "latch_window must be 2 numbers"),
+        ({"latch_window": [3.0, 1.0]}, "latch_window"),
+        ({"rocked": [1.0, 2.0, 3.0]}, "rocked must be pairs"),
+        ({"skin_law": [2e6, 2.0]}, "skin_law must be 3 numbers"),
+        ({"sensor": "nano99"}, "sensor must be one of"),
+        ({"relatch_distance": -1.0}, "relatch_distance must be non-negative"),
     ],
 )
 def test_node_parameters_are_checked(params, match):
     with pytest.raises(ValueError, match=match):
         config_from_parameters(params)
+
+
+def test_node_parameters_are_the_settings_in_si(tmp_path):
+    """Every estimator setting is a parameter of its field's name, in SI (angles in rad, lengths in m),
+    tuples as flat lists; the noise preset, its overrides and a bias file as the ``softtip`` options."""
+    from softtip.core.depth import DepthLaw
+    from softtip.core.noise import NANO25
+    from softtip.estimator.tare import bias_to_toml
+
+    bias = tmp_path / "bias.toml"
+    bias.write_text(bias_to_toml([0.1, 0.2, 0.3, 1e-3, 2e-3, 3e-3], "test"))
+    cfg = config_from_parameters({
+        "line_fit_max_angle_std": math.radians(3.0), "relatch_distance": 3e-3, "latch_window": [1.0, 4.0],
+        "rocked": [1.0, 2.0, 5.0, 6.5], "skin_law": [1e6, 1.5, 4e-3], "depth_compensation": "law",
+        "sensor": "nano25", "moment_noise": 2e-5, "bias": str(bias), "line_evidence": False, "line_fit_iterations": 3,
+    })  # fmt: skip
+    assert cfg.line_fit_max_angle_std == math.radians(3.0) and cfg.relatch_distance == 3e-3
+    assert cfg.latch_window == (1.0, 4.0) and cfg.rocked == ((1.0, 2.0), (5.0, 6.5))
+    assert cfg.skin_law == DepthLaw(1e6, 1.5, 4e-3) and cfg.depth_compensation == "law"
+    assert cfg.noise.force_std == NANO25.force_std and cfg.noise.moment_std == (2e-5,) * 3
+    assert cfg.bias == pytest.approx((0.1, 0.2, 0.3, 1e-3, 2e-3, 3e-3))
+    assert not cfg.line_evidence and cfg.line_fit_iterations == 3
+    # compensation asked for without any skin law: the murakami2006 skin, as on the command line
+    from softtip.core.depth import MURAKAMI2006_DEPTH
+
+    assert config_from_parameters({"depth_compensation": "online"}).skin_law == MURAKAMI2006_DEPTH
 
 
 def test_node_without_ros_says_what_to_do():

@@ -157,3 +157,17 @@ def test_params_yaml_holds_every_parameter_with_its_default() -> None:
     params = doc["softtip"]["ros__parameters"]
     assert params == PARAMETERS
     assert all(type(params[k]) is type(v) for k, v in PARAMETERS.items()), "ROS 2 parameters are typed"
+
+
+def test_params_yaml_is_generated_from_the_settings() -> None:
+    """The file is :func:`params_yaml` (the node's and the estimator settings' metadata) to the byte; the
+    parameters without a default stand in it as comments."""
+    from softtip.ros.node import UNSET_PARAMETERS, params_yaml
+
+    text = (ROS / "config" / "params.yaml").read_text(encoding="utf-8")
+    assert text == params_yaml(), (
+        "regenerate: python -c 'from softtip.ros.node import params_yaml; print(params_yaml(), end=\"\")' "
+        "> ros/config/params.yaml"
+    )
+    for name in UNSET_PARAMETERS:
+        assert re.search(rf"^    # {name}: \[\]  # ", text, re.M), name

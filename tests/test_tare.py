@@ -147,7 +147,7 @@ def test_tare_on_demand_re_tares_from_the_next_samples():
     w = g.wrench.copy()
     jump = np.array([0.0, 0.0, 0.4, 0.0, 0.0, 0.0])
     w[g.t >= 3.0] += jump
-    est = Estimator("murakami2006", EstimatorConfig(track_drift=False))
+    est = Estimator("murakami2006", EstimatorConfig(drift_tracking=False))
     out = []
     with pytest.warns(EstimatorWarning, match="in contact while taring"):  # the jump pulls, as a release does
         for ti, wi in zip(g.t, w):
@@ -285,7 +285,7 @@ def test_a_slowly_drifting_untouched_sensor_gives_no_false_contact(rate, seed):
 def test_without_drift_tracking_the_drift_is_reported_not_subtracted():
     t, w = drifting_untouched()
     with pytest.warns(EstimatorWarning, match="not subtracted"):
-        est = estimate(t, w, "murakami2006", EstimatorConfig(track_drift=False))
+        est = estimate(t, w, "murakami2006", EstimatorConfig(drift_tracking=False))
     assert est.n_contacts >= 1 and (est.state > 0).any()  # the papers' behaviour
     first = int(np.argmax(est.state > 0))
     assert 30.0 < t[first] < 40.0
@@ -299,7 +299,7 @@ def test_a_grasp_after_drift_is_measured():
     w[k] += g.wrench_true[: k.sum()]
     # the synthetic grasp puts its tangential force on the skin's surface, so the depth
     # compensation (a lever for friction inside the skin) is not for it
-    est = quiet_estimate(t, w, EstimatorConfig(depth_mode="off"))
+    est = quiet_estimate(t, w, EstimatorConfig(depth_compensation="off"))
     assert est.n_contacts == 1
     assert line_error_deg(est, g.angle) < 3.0
 
@@ -318,7 +318,7 @@ def test_a_rising_grasp_force_is_one_contact_at_1khz(seed):
 
 
 def test_a_single_threshold_flickers_so_the_test_can_fail():
-    counts = [quiet_estimate(g.t, g.wrench, EstimatorConfig(contact_hysteresis=0.0, contact_min_duration=0.0)).n_contacts
+    counts = [quiet_estimate(g.t, g.wrench, EstimatorConfig(contact_hysteresis=0.0, min_contact_duration=0.0)).n_contacts
               for g in (synthetic_grasp(rate=1000.0, seed=s, duration=4.0) for s in range(4))]  # fmt: skip
     assert np.mean(counts) > 2.0
 
@@ -341,14 +341,14 @@ def test_min_duration_rejects_a_spike_but_not_a_grasp():
     g = synthetic_grasp(angle_deg=20.0, rate=1000.0, seed=9, duration=5.0)
     w = g.wrench.copy()
     w[1000:1003, 0] += 0.8  # 3 ms spike while untouched
-    plain = quiet_estimate(g.t, w, EstimatorConfig(contact_min_duration=0.0))
+    plain = quiet_estimate(g.t, w, EstimatorConfig(min_contact_duration=0.0))
     debounced = quiet_estimate(g.t, w)  # 5 ms by default
     assert plain.n_contacts == 2 and debounced.n_contacts == 1
     assert (debounced.state[990:1010] == 0).all()
     onset = int(np.argmax(debounced.contact_id > 0))
     assert g.t[onset] - g.t[int(np.argmax(plain.contact_id == 2))] == pytest.approx(0.004)  # five samples
     slow = synthetic_grasp(angle_deg=20.0, rate=50.0, seed=9, duration=5.0)  # one sample covers 5 ms at 50 Hz
-    a = quiet_estimate(slow.t, slow.wrench, EstimatorConfig(contact_min_duration=0.0))
+    a = quiet_estimate(slow.t, slow.wrench, EstimatorConfig(min_contact_duration=0.0))
     b = quiet_estimate(slow.t, slow.wrench)
     assert (a.contact_id == b.contact_id).all() and (a.state == b.state).all()
 
@@ -408,7 +408,7 @@ def test_the_tare_summary_compares_its_noise_with_the_noise_model(scale, n, says
 
 
 #: The papers' per-sample std (line evidence and depth off): the noise's alone; a 1.5 s tare
-NOISE_ONLY = {"line_evidence": False, "depth_mode": "off", "tare_duration": 1.5}
+NOISE_ONLY = {"line_evidence": False, "depth_compensation": "off", "tare_duration": 1.5}
 
 
 def per_sample_z(est, angle):

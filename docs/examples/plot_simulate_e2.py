@@ -21,6 +21,6 @@ angles = [-45.0, 0.0, 45.0, 90.0]
 runs = []
 for angle in angles:
     log = simulate_grasp(tip, Plate(0.001), paper_scenario(math.radians(angle)), rng=2006, n_elements=2000)
-    runs.append(softtip.estimate(log.t, log.wrench, tip, softtip.EstimatorConfig(track_drift=False)))
+    runs.append(softtip.estimate(log.t, log.wrench, tip, softtip.EstimatorConfig(drift_tracking=False)))
 
 fig = plot_direction_chart([("plate 1 mm", runs, [f"{a:g}°" for a in angles], angles)])

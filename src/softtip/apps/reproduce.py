@@ -221,7 +221,7 @@ def _simulate(condition: Condition, tip: Fingertip, seed: int):
 
 #: The configuration of the reproduction: the defaults with drift tracking off (the papers
 #: tared once; softtip's drift tracking moves their medians by up to 0.02°).
-PAPERS_CONFIG = EstimatorConfig(track_drift=False)
+PAPERS_CONFIG = EstimatorConfig(drift_tracking=False)
 
 
 def run_condition(condition: Condition, *, seed: int = 2006, config: EstimatorConfig | None = None) -> ConditionResult:
@@ -231,7 +231,7 @@ def run_condition(condition: Condition, *, seed: int = 2006, config: EstimatorCo
     truth = log.truth
     if condition.experiment == "E6":
         # the papers' Fig. 7: soft-finger position error against the pushing force
-        est = estimate(log.t, log.wrench, tip, EstimatorConfig(contact_point="track", track_drift=False))
+        est = estimate(log.t, log.wrench, tip, EstimatorConfig(contact_point="track", drift_tracking=False))
         f_norm = np.linalg.norm(log.wrench_true[:, :3], axis=1)
         err = np.linalg.norm(est.point - truth.contact_point, axis=1)
         above = (f_norm >= 0.2 * KGF) & np.isfinite(err)

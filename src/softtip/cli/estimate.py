@@ -202,7 +202,7 @@ def _estimate(
     fingertip = load_fingertip(tip)
     config = make_config(estimator_opts, tip=fingertip)
     if (os.path.isfile(tip) and getattr(fingertip, "skin_thickness", None) is None and not quiet
-            and estimator_opts.get("depth_compensation") is None and estimator_opts.get("contact_point") == "latch"):  # fmt: skip
+            and estimator_opts.get("depth_compensation") == "auto" and estimator_opts.get("contact_point") == "latch"):  # fmt: skip
         click.echo(
             f"softtip: {tip}: no skin_thickness, so the depth compensation is off (add skin_thickness = <m> under "
             "[fingertip], e.g. from calibrate --skin-thickness, to turn it on)",
@@ -276,7 +276,7 @@ def _estimate(
 
             q = gravity_orientations(input_path, gravity_frame, bag_log.frame_ids, bag_log.stamps_ns, frame_id)
             log = replace(log, wrench=compensate_payload(log.wrench, q, load_payload(payload)))
-    check_lowpass(estimator_opts["lowpass"], log.t)
+    check_lowpass(estimator_opts["lowpass_hz"], log.t)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", EstimatorWarning)  # printed below, from est.warnings
@@ -466,7 +466,7 @@ def _estimate_in_pieces(
             n = 0
             for block in blocks:
                 if first:
-                    check_lowpass(estimator_opts["lowpass"], block[0])
+                    check_lowpass(estimator_opts["lowpass_hz"], block[0])
                     first_wrench.append(block[1])
                     first = False
                 check_full_scale(block[0], block[1], sensor_range, input_path, first_sample=n, units=units or "si",

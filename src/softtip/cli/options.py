@@ -12,13 +12,23 @@ import click
 import numpy as np
 
 from softtip import __version__
-from softtip.cli.types import ColumnSpec, Force, Length, Number, UnitName, check_pair_increasing, option
-from softtip.core.depth import MURAKAMI2006_DEPTH, DepthLaw
+from softtip.cli.types import (
+    ColumnSpec,
+    Force,
+    Length,
+    Number,
+    Scaled,
+    UnitName,
+    as_written,
+    check_pair_increasing,
+    option,
+)  # fmt: skip
 from softtip.core.fingertip import PRESETS, Fingertip
 from softtip.core.noise import NANO17, SensorNoise
 from softtip.errors import InputError
 from softtip.estimator import EstimatorConfig
-from softtip.estimator.depth import tip_depth_law
+from softtip.estimator.depth import asked_skin_law
+from softtip.estimator.settings import Setting, settings_of
 from softtip.estimator.tare import load_bias
 
 FRAMES_HELP = """\
@@ -33,270 +43,148 @@ sensor origin; in contact f pushes into the fingertip.
 MAX_FORCE_NOISE, MAX_MOMENT_NOISE_NMM = 100.0, 10_000.0
 
 
-def NON_NEGATIVE(unit: str) -> Number:  # noqa: N802 - reads as a type
-    return Number(unit, 0.0)
-
-
-def POSITIVE(unit: str) -> Number:  # noqa: N802
+def POSITIVE(unit: str) -> Number:  # noqa: N802 - reads as a type
     return Number(unit, 0.0, min_open=True)
 
 
-#: A positive length option of the estimator: a unit may be given (3mm, 0.3cm); a bare number is in mm
-MM_POSITIVE = Length("mm", 0.0, min_open=True)
+#: How a setting's command-line unit (:attr:`Setting.cli_unit`) is shown and converted to SI
+_SCALED_UNITS = {"deg": math.pi / 180.0, "N·mm": 1e-3, "mm/√s": 1e-3}
 
 
-def _model_std_option(name: str, default: float, what: str):
-    """A model-error standard deviation in degrees, added in quadrature to a reported one."""
-    return option(name, type=NON_NEGATIVE("deg"), default=default, show_default=True, metavar="DEG",
-                  help=f"Model error of {what}, added in quadrature to its standard deviation, degrees (0: none).")  # fmt: skip
+def _part_type(s: Setting) -> click.ParamType:
+    """The click type of a number setting (or a part of a tuple one), in the unit a person types."""
+    bounds = {"min_open": s.low_open, "max_open": s.high_open}
+    if s.cli_unit == "force":
+        return Force(s.low, s.high, **bounds)
+    if s.cli_unit == "mm":
+        return Length("mm", s.low, s.high, **bounds)
+    if s.cli_unit in _SCALED_UNITS:
+        scale = _SCALED_UNITS[s.cli_unit]
+        low, high = (None if b is None else b / scale for b in (s.low, s.high))
+        return Scaled(s.cli_unit, scale, low, high, **bounds)
+    if s.kind == "int":
+        return click.IntRange(None if s.low is None else int(s.low), None if s.high is None else int(s.high),
+                              min_open=s.low_open, max_open=s.high_open)  # fmt: skip
+    return Number(s.unit, s.low, s.high, **bounds)
 
 
-_ESTIMATOR_OPTIONS = [
-    option(
-        "--tip",
-        default="murakami2006",
-        show_default=True,
-        metavar="PRESET_OR_TOML",
-        help=f"Fingertip: a preset ({', '.join(sorted(PRESETS))}) or a TOML file ([fingertip] shape = sphere|capsule|ellipsoid, lengths in m).",
-    ),
-    option(
-        "--contact-point",
-        type=click.Choice(["latch", "track", "line-fit", "joint"]),
-        default="latch",
-        show_default=True,
-        help="latch: measure the contact point in the light-force window at the start of the grasp and hold it (the papers'); "
-        "track: soft-finger solution every sample (h is then zero by construction: no directions); "
-        "line-fit: latch, then move the point across the line to where a sliding window (--joint-window) fits the "
-        "line-contact model, wherever the window determines it (flagged line_fit_fallback until one does); "
-        "joint: its former name.",
-    ),
-    option(
-        "--joint-window",
-        type=POSITIVE("s"),
-        default=1.0,
-        show_default=True,
-        metavar="S",
-        help="Sliding window of --contact-point line-fit, s.",
-    ),
-    option(
-        "--joint-max-std",
-        type=(POSITIVE("deg"), MM_POSITIVE),
-        default=(2.0, "0.2mm"),
-        show_default=True,
-        metavar="DEG MM",
-        help="--contact-point line-fit accepts a window when the standard deviations of its line angle and of its "
-        "offset across the line are at most these (degrees, a length: mm unless a unit is given).",
-    ),
-    option(
-        "--joint-max-residual",
-        type=POSITIVE("noise standard deviations"),
-        default=3.0,
-        show_default=True,
-        metavar="SIGMAS",
-        help="... and the RMS residual of its fit is at most this many noise standard deviations.",
-    ),
-    option("--lowpass", type=POSITIVE("Hz"), metavar="HZ", help="Causal Butterworth low-pass cutoff in Hz (default: no filter)."),
-    option(
-        "--tare-duration",
-        type=NON_NEGATIVE("s"),
-        default=0.2,
-        show_default=True,
-        metavar="S",
-        help="Take the first S seconds (fingertip untouched) as the sensor bias; 0 if the wrench is already tared.",
-    ),
-    option(
-        "--tare-method",
-        type=click.Choice(["robust", "median", "mean"]),
-        default="robust",
-        show_default=True,
-        help="How the tare samples make the bias: robust (the mean of the samples that are not spikes), median, "
-        "or mean (of all: a spike moves it).",
-    ),
-    option(
-        "--bias",
-        "bias_file",
-        type=click.Path(dir_okay=False),
-        metavar="FILE.toml",
-        help="Subtract this sensor bias instead of taring ([bias] force = [N, N, N], moment = [N·m, N·m, N·m]; "
-        "written by --save-bias or calibrate-payload).",
-    ),
-    option(
-        "--hysteresis",
-        type=NON_NEGATIVE("noise standard deviations"),
-        default=3.0,
-        show_default=True,
-        metavar="SIGMAS",
-        help="Contact ends below --contact-threshold minus this many standard deviations of the noise of |f| "
-        "(from --force-noise, after --lowpass; at least half the threshold); 0: one threshold.",
-    ),
-    option(
-        "--min-contact-duration",
-        type=NON_NEGATIVE("s"),
-        default=0.005,
-        show_default=True,
-        metavar="S",
-        help="A contact is reported once |f| has stayed above the release threshold this long, each sample counting "
-        "for its sampling interval (a shorter spike is no contact).",
-    ),
-    option(
-        "--drift-time-constant",
-        type=POSITIVE("s"),
-        default=10.0,
-        show_default=True,
-        metavar="S",
-        help="While untouched, follow the sensor's bias drift with a moving average of this time constant.",
-    ),
-    option(
-        "--drift-tracking/--no-drift-tracking",
-        default=True,
-        show_default=True,
-        help="Subtract the drift followed while untouched (--no-drift-tracking: report it only, the papers').",
-    ),
-    option("--contact-threshold", type=Force(0.0), default=0.05, show_default=True, metavar="FORCE", help="In contact while |f| is at least this (N unless kgf is given)."),
-    option(
-        "--latch-window",
-        type=(Force(0.0), Force(0.0)),
-        default=("0.2kgf", "0.5kgf"),
-        show_default=True,
-        metavar="LOW HIGH",
-        help="Light-force window for latching the contact point (forces: N unless kgf is given).",
-    ),
-    option("--h-min", type=NON_NEGATIVE("N·mm"), default=0.5, show_default=True, metavar="N·mm", help="Smallest |h| reported as a line contact, N·mm."),
-    option(
-        "--force-noise",
-        type=Number("N", 0.0, MAX_FORCE_NOISE),
-        default=NANO17.force_std[0],
-        show_default=True,
-        metavar="N",
-        help="Per-axis standard deviation of the sensor's force noise, N (Nano17-class default).",
-    ),
-    option(
-        "--moment-noise",
-        type=Number("N·mm", 0.0, MAX_MOMENT_NOISE_NMM),
-        default=round(NANO17.moment_std[0] * 1e3, 12),
-        show_default=True,
-        metavar="N·mm",
-        help="Per-axis standard deviation of the sensor's moment noise, N·mm.",
-    ),
-    option(
-        "--sensor",
-        type=click.Choice(["nano17", "nano25", "mini40"]),
-        help="The sensor's noise preset (ATI Nano17, Nano25, Mini40 class; per axis, fz apart) for --force-noise and "
-        "--moment-noise where they are not given. [default: nano17]",
-    ),
-    option(
-        "--noise-from-tare",
-        is_flag=True,
-        help="Measure the noise model from the tare's samples (each axis's standard deviation) instead of "
-        "--force-noise/--moment-noise, which stay the fallback; needs at least 30 tare samples "
-        "(--tare-duration 1 at 50 Hz).",
-    ),
-    option(
-        "--relatch-distance",
-        type=MM_POSITIVE,
-        metavar="LENGTH",
-        help="Latch again when, at light force, the soft-finger contact point moves farther than this from the "
-        "latched one (3mm, 0.3cm; a bare number is in mm). Default: only when contact is lost and regained, the papers'.",
-    ),
-    option(
-        "--depth-compensation/--no-depth-compensation",
-        default=None,
-        help="Take the moment about the point inside the skin where friction acts, removing the spurious "
-        "tangential moment of a tangential force. Its depth is learnt per contact from the data, the skin law "
-        "(--skin-law) the prior; the depth, depth_std and depth_from_data columns report it. Default: on when "
-        "the fingertip gives a skin (the murakami2006 preset, a file with skin_thickness), in latch mode. "
-        "--no-depth-compensation: the papers' method.",
-    ),
-    option(
-        "--fixed-depth",
-        is_flag=True,
-        help="Depth compensation at the skin law's depth as it is, not learnt from the data.",
-    ),
-    option(
-        "--skin-law",
-        type=(POSITIVE("N/m^P"), POSITIVE(""), MM_POSITIVE),
-        default=None,
-        metavar="K P MAX_DEPTH",
-        help="Skin law of the depth compensation: normal force = K·depth^P (N, m), depth at most MAX_DEPTH (a length, mm unless a unit is given) "
-        "(default: the fingertip's skin; else the murakami2006 skin, "
-        f"{MURAKAMI2006_DEPTH.stiffness:g} {MURAKAMI2006_DEPTH.exponent:g} {MURAKAMI2006_DEPTH.max_depth * 1e3:g}mm).",
-    ),
-    option(
-        "--line-evidence",
-        type=click.Choice(["on", "off"]),
-        default="on",
-        show_default=True,
-        help="on: tell a line from an area over a sliding window (state area while the window shows h spread over "
-        "both tangent axes; line_evidence confirmed once the contact was excited about two tangent axes, by the load "
-        "or --rocked, and h stayed on one, else unconfirmed; the direction from the window wherever h varied along "
-        "one axis); off: the papers' per-sample line/point.",
-    ),
-    option("--evidence-window", type=POSITIVE("s"), default=2.0, show_default=True, metavar="S", help="Sliding window of the line evidence, s."),
-    option(
-        "--significance-window",
-        type=NON_NEGATIVE("s"),
-        default=0.015,
-        show_default=True,
-        metavar="S",
-        help="|h| turns significant (line) when most samples of the last S seconds are above the line threshold, "
-        "and not when most are below 2/3 of it (0, or a sample period longer than S: each sample alone, the papers').",
-    ),
-    option(
-        "--area-ratio",
-        type=(POSITIVE("(eigenvalue ratio)"), POSITIVE("(eigenvalue ratio)")),
-        default=(0.2, 0.1),
-        show_default=True,
-        metavar="ENTER LEAVE",
-        help="area when the smaller/larger eigenvalue ratio of h's window covariance (noise removed) reaches ENTER; "
-        "a confirmed line again only below LEAVE.",
-    ),
-    option(
-        "--area-share",
-        type=Number("(share of the window)", 0.0, 1.0, min_open=True, max_open=True),
-        default=0.35,
-        show_default=True,
-        metavar="SHARE",
-        help="area while more than this share of the evidence window's samples show h spread over both tangent axes "
-        "(a reading of the current window, revisited as it slides).",
-    ),
-    option(
-        "--rocked",
-        type=(Number("s"), Number("s")),
-        multiple=True,
-        metavar="START END",
-        help="The object was rocked about two tangent axes from START to END (s, the log's time; repeat for more): "
-        "a window wholly inside counts as excited about two axes, so h on one axis there confirms a line (for a "
-        "skin on which the load cannot show it, manual §3.5).",
-    ),
-    option(
-        "--excitation",
-        type=(POSITIVE("(eigenvalue ratio)"), POSITIVE("N")),
-        default=(0.5, 0.01),
-        show_default=True,
-        metavar="RATIO MIN_N",
-        help="Excited about two tangent axes when the tangential load's window covariance has its smaller eigenvalue "
-        "beyond the noise, at least RATIO times the larger and at least MIN_N² (N).",
-    ),
-    option(
-        "--evidence-reset-distance",
-        type=MM_POSITIVE,
-        default="1mm",
-        show_default=True,
-        metavar="LENGTH",
-        help="The line evidence starts afresh when the contact point moves farther than this (a bare number is in mm).",
-    ),
-    option(
-        "--evidence-max-std",
-        type=POSITIVE("deg"),
-        default=10.0,
-        show_default=True,
-        metavar="DEG",
-        help="A window's line direction is used only when its standard deviation is at most this, degrees.",
-    ),
-    _model_std_option("--evidence-model-std", 0.4, "a window's line direction (what no window shows)"),
-    _model_std_option("--unconfirmed-model-std", 5.0,
-                      "an unconfirmed line's direction (from one axis of excitation: its rolling bias)"),  # fmt: skip
-]
+def _as_typed(s: Setting, value) -> str:
+    """A default in the unit a person types it (:attr:`Setting.cli_unit`)."""
+    if s.cli_unit == "mm":
+        return f"{as_written(value * 1e3)}mm"
+    if s.cli_unit in _SCALED_UNITS:
+        return as_written(value / _SCALED_UNITS[s.cli_unit])
+    return as_written(value)
+
+
+def _help(s: Setting) -> str:
+    """The option's help: the setting's, with the unit it is typed in when the help does not say it."""
+    unit = s.cli_unit if s.cli_unit in _SCALED_UNITS else s.unit if s.cli_unit is None else ""
+    text = s.help
+    if unit and not unit.startswith("(") and unit not in text and s.kind in ("float", "int"):
+        more = text.endswith("...")
+        text = f"{text.rstrip('. ')}, {'degrees' if unit == 'deg' else unit}" + (" ..." if more else ".")
+    entries = {p.cli_unit for p in s.parts} | {s.cli_unit}
+    if "mm" in entries:  # how a length is typed
+        text += " Lengths: 3mm, 0.3cm; a bare number is in mm."
+    if "force" in entries:
+        text += " Forces: N unless kgf is given."
+    return text
+
+
+def setting_option(s: Setting):
+    """The click option of one estimator setting: ``--`` + its name, its type, range, default and help
+    from its :class:`~softtip.estimator.settings.Setting` (the keyword argument is the field's name)."""
+    default = getattr(EstimatorConfig, s.name, None) if s.kind != "composite" else None
+    attrs = {"help": _help(s), "metavar": s.metavar}
+    if s.kind == "bool":
+        return option(f"{s.option}/--no-{s.option[2:]}", s.name, default=default, show_default=True, help=s.help)
+    if s.kind == "choice":
+        return option(s.option, s.name, type=click.Choice(list(s.choices)), default=default, show_default=True,
+                      help=s.help)  # fmt: skip
+    if s.kind == "tuples":
+        return option(s.option, s.name, type=tuple(_part_type(p) for p in s.parts), multiple=True, **attrs)
+    if s.kind == "tuple":
+        attrs["type"] = tuple(_part_type(p) for p in s.parts)
+        if default is not None and s.make is None:
+            attrs["show_default"] = s.cli_default or " ".join(_as_typed(p, v) for p, v in zip(s.parts, default))
+    else:
+        attrs["type"] = _part_type(s)
+        if default is not None:
+            attrs["show_default"] = s.cli_default or _as_typed(s, default)
+    return option(s.option, s.name, default=default if s.make is None else None, **attrs)
+
+
+def config_options() -> list[str]:
+    """The command-line options of the estimator's settings, as :func:`estimator_options` adds them."""
+    out = []
+    for s in settings_of(EstimatorConfig):
+        out += list(s.options) if s.kind == "composite" else [s.option] if s.cli else []
+    return out
+
+
+#: The options of the composite settings (:attr:`Setting.options`), written here by hand: a
+#: noise preset whose per-axis values the two noise options override, a bias read from a file.
+_COMPOSITE_OPTIONS = {
+    "bias": [
+        option(
+            "--bias",
+            "bias_file",
+            type=click.Path(dir_okay=False),
+            metavar="FILE.toml",
+            help="Subtract this sensor bias instead of taring ([bias] force = [N, N, N], moment = [N·m, N·m, N·m]; "
+            "written by --save-bias or calibrate-payload).",
+        ),
+    ],
+    "noise": [
+        option(
+            "--sensor",
+            type=click.Choice(["nano17", "nano25", "mini40"]),
+            help="The sensor's noise preset (ATI Nano17, Nano25, Mini40 class; per axis, fz apart) for --force-noise "
+            "and --moment-noise where they are not given. [default: nano17]",
+        ),
+        option(
+            "--force-noise",
+            type=Number("N", 0.0, MAX_FORCE_NOISE),
+            default=NANO17.force_std[0],
+            show_default=True,
+            metavar="N",
+            help="Per-axis standard deviation of the sensor's force noise, N (Nano17-class default).",
+        ),
+        option(
+            "--moment-noise",
+            type=Number("N·mm", 0.0, MAX_MOMENT_NOISE_NMM),
+            default=round(NANO17.moment_std[0] * 1e3, 12),
+            show_default=True,
+            metavar="N·mm",
+            help="Per-axis standard deviation of the sensor's moment noise, N·mm.",
+        ),
+    ],
+}
+
+
+def _estimator_options() -> list:
+    """``--tip``, then one option per estimator setting in the config's order (:func:`setting_option`;
+    a composite setting's options in its place)."""
+    out = [
+        option(
+            "--tip",
+            default="murakami2006",
+            show_default=True,
+            metavar="PRESET_OR_TOML",
+            help=f"Fingertip: a preset ({', '.join(sorted(PRESETS))}) or a TOML file ([fingertip] shape = "
+            "sphere|capsule|ellipsoid, lengths in m).",
+        )
+    ]
+    for s in settings_of(EstimatorConfig):
+        if s.kind == "composite":
+            out += _COMPOSITE_OPTIONS[s.name]
+        elif s.cli:
+            out.append(setting_option(s))
+    return out
+
+
+_ESTIMATOR_OPTIONS = _estimator_options()
 
 
 _LOG_FORMAT_OPTIONS = [
@@ -518,59 +406,25 @@ def tare_warnings(est, quiet: bool = False, name: str | None = None) -> None:
 
 
 def make_config(opts: dict, sample_rate: float | None = None, tip: Fingertip | None = None) -> EstimatorConfig:
-    """The :class:`EstimatorConfig` of the shared estimator options (CLI units → SI)."""
+    """The :class:`EstimatorConfig` of the estimator options (:func:`estimator_options`; already in SI)."""
     check_pair_increasing("--latch-window", opts["latch_window"], "N")
+    values = {}
+    for s in settings_of(EstimatorConfig):
+        if s.kind == "composite" or not s.cli:
+            continue
+        v = opts[s.name]
+        if s.kind == "tuples":
+            v = tuple(v)
+        elif s.make is not None and v is not None:
+            v = s.make(*v)
+        values[s.name] = v
+    values["skin_law"] = asked_skin_law(values["depth_compensation"], values["skin_law"], tip)
     try:
-        comp, fixed = opts["depth_compensation"], opts["fixed_depth"]
-        if comp is False and fixed:
-            raise click.UsageError("--fixed-depth and --no-depth-compensation contradict each other")
-        depth = None
-        if opts["skin_law"] is not None:
-            k, p, max_depth = opts["skin_law"]
-            depth = DepthLaw(k, p, max_depth)
-        depth_mode = "auto"
-        if comp is False:
-            depth_mode = "off"
-        elif comp or fixed:
-            depth_mode = "law" if fixed else "online"
-            if depth is None and (tip is None or tip_depth_law(tip) is None):
-                depth = MURAKAMI2006_DEPTH
-        relatch = opts["relatch_distance"]
         return EstimatorConfig(
-            contact_point=opts["contact_point"],
-            contact_threshold=opts["contact_threshold"],
-            latch_force_range=opts["latch_window"],
+            **values,
             noise=sensor_noise(opts.get("sensor"), opts["force_noise"], opts["moment_noise"]),
-            h_min=opts["h_min"] * 1e-3,
-            lowpass_hz=opts["lowpass"],
             sample_rate=sample_rate,
-            tare_duration=opts["tare_duration"],
-            tare_method=opts["tare_method"],
             bias=None if opts["bias_file"] is None else load_bias(opts["bias_file"]),
-            contact_hysteresis=opts["hysteresis"],
-            contact_min_duration=opts["min_contact_duration"],
-            drift_time_constant=opts["drift_time_constant"],
-            track_drift=opts["drift_tracking"],
-            relatch_distance=relatch,
-            depth=depth,
-            depth_mode=depth_mode,
-            joint_window=opts["joint_window"],
-            joint_max_angle_std=math.radians(opts["joint_max_std"][0]),
-            joint_max_offset_std=opts["joint_max_std"][1],
-            joint_max_residual=opts["joint_max_residual"],
-            line_evidence=opts["line_evidence"] == "on",
-            evidence_window=opts["evidence_window"],
-            area_ratio=opts["area_ratio"],
-            area_share=opts["area_share"],
-            rocked=tuple(opts["rocked"]),
-            excitation_ratio=opts["excitation"][0],
-            excitation_min=opts["excitation"][1],
-            evidence_max_angle_std=math.radians(opts["evidence_max_std"]),
-            evidence_model_std=math.radians(opts["evidence_model_std"]),
-            unconfirmed_model_std=math.radians(opts["unconfirmed_model_std"]),
-            evidence_reset_distance=opts["evidence_reset_distance"],
-            significance_window=opts["significance_window"],
-            noise_from_tare=opts["noise_from_tare"],
         )
     except ValueError as exc:
         raise click.UsageError(str(exc)) from None

@@ -191,14 +191,14 @@ def _stream(
                 d = source.info
                 rate = f"{d.rate_hz:g} Hz" if d.rate_hz else "rate unknown"
                 info = f"({d.product}, {d.force_unit} / {d.torque_unit}, {rate})"
-            lowpass = estimator_opts["lowpass"]
+            lowpass = estimator_opts["lowpass_hz"]
             if lowpass is not None and source.rate_hz is not None:
                 check_lowpass(lowpass, source.rate_hz)
             config = make_config(
                 estimator_opts, sample_rate=source.rate_hz if lowpass is not None else None, tip=fingertip
             )
             if lowpass is not None and source.rate_hz is None:
-                raise click.UsageError("--lowpass needs the sample rate, which this source does not report")
+                raise click.UsageError("--lowpass-hz needs the sample rate, which this source does not report")
             estimator = Estimator(fingertip, config)
             tare_request = threading.Event()
             stats = LiveStats(

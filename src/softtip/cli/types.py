@@ -16,7 +16,7 @@ import numpy as np
 from softtip.core.units import FORCE_UNITS, LENGTH_UNITS, parse_quantity
 
 __all__ = [
-    "Number", "Length", "Force", "UnitName", "ColumnSpec", "Option", "option", "as_written", "PORT", "check_lowpass",
+    "Number", "Scaled", "Length", "Force", "UnitName", "ColumnSpec", "Option", "option", "as_written", "PORT", "check_lowpass",
     "check_pair_increasing",
 ]
 
@@ -87,6 +87,22 @@ class Number(click.ParamType):
 
     def __repr__(self) -> str:
         return f"Number({self.expected()!r})"
+
+
+class Scaled(Number):
+    """A number typed in one unit and converted to SI by a factor: degrees to rad
+    (``scale = π/180``), N·mm to N·m (``1e-3``). Bounds and messages in the typed unit; a
+    default given as a float is taken as already in SI."""
+
+    def __init__(self, unit: str, scale: float, min: float | None = None, max: float | None = None, *,
+                 min_open: bool = False, max_open: bool = False) -> None:  # fmt: skip
+        super().__init__(unit, min, max, min_open=min_open, max_open=max_open)
+        self.scale = scale
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, float) and math.isfinite(value):
+            return value  # a default, in SI
+        return super().convert(value, param, ctx) * self.scale
 
 
 class _Quantity(Number):
@@ -239,7 +255,7 @@ def check_pair_increasing(option: str, pair: tuple[float, float], unit: str) -> 
         raise click.BadParameter(f"{low:g} {high:g}; expected LOW < HIGH, {unit}", param_hint=f"'{option}'")
 
 
-def check_lowpass(cutoff_hz: float | None, t_or_rate, option: str = "--lowpass") -> None:
+def check_lowpass(cutoff_hz: float | None, t_or_rate, option: str = "--lowpass-hz") -> None:
     """A low-pass cutoff between ``MIN_LOWPASS_FRACTION`` of the Nyquist frequency and the Nyquist frequency.
 
     Parameters

@@ -47,7 +47,7 @@ not turn the direction).
 
 Errors in variables: the noise of ``f`` enters ``g`` (the regressor) and ``h``, and the two
 are correlated through ``r × f``, so the 12 window sums (:func:`depth_products`) are first
-corrected by their expected noise (:func:`depth_noise_kernel`), as in :mod:`softtip.core.joint`;
+corrected by their expected noise (:func:`depth_noise_kernel`), as in :mod:`softtip.core.line_fit`;
 the information counts only the excitation beyond the noise's scatter (the same χ² margin
 as the joint fit), and the standard deviation is inflated for the noise of ``a`` itself.
 :func:`depth_solve_kernel` returns the data's own estimate of ``κ`` and its variance; the
@@ -63,7 +63,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from softtip.core._xp import NP
-from softtip.core.joint import MODEL_MARGIN, _chi2_excess
+from softtip.core.line_fit import MODEL_MARGIN, _chi2_excess
 from softtip.core.noise import SensorNoise
 from softtip.core.spin import tangent_frame_kernel
 
@@ -326,7 +326,7 @@ def depth_solve_kernel(sums, count, cov, corr, iterations, xp):
         m11 = a11 + 2.0 * kc * b11 + kc * kc * c11
         m12 = a12 + kc * (b12 + b21) + kc * kc * c12
         m22 = a22 + 2.0 * kc * b22 + kc * kc * c22
-        # smallest eigenvector of [[m11, m12], [m12, m22]] (as in softtip.core.joint)
+        # smallest eigenvector of [[m11, m12], [m12, m22]] (as in softtip.core.line_fit)
         half = 0.5 * (m11 - m22)
         root = xp.sqrt(half * half + m12 * m12)
         big = m11 >= m22

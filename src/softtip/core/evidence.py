@@ -22,7 +22,7 @@ window sums are differences of the two. :func:`window_kernel` turns window sums 
   ``major ≥ minor`` (clamped at zero);
 * a noise level for each: what the noise alone may still leave in an eigenvalue, the upper
   3 σ tail of a χ² with ``ν = (N − 1) / L`` degrees of freedom (Wilson–Hilferty, as in
-  :mod:`softtip.core.joint`) plus a 25 % model margin, times the largest noise variance;
+  :mod:`softtip.core.line_fit`) plus a 25 % model margin, times the largest noise variance;
 * the window's line direction ``d = n × v`` with ``v`` the principal axis of ``h``'s
   variation, as an angle in the tangent frame, and its first-order standard deviation: the
   principal axis of a 2×2 covariance turns by ``C₁₂ / (λ₁ − λ₂)`` for an off-diagonal error
@@ -48,7 +48,7 @@ from __future__ import annotations
 import math
 from typing import Any, NamedTuple
 
-from softtip.core.joint import MODEL_MARGIN, _chi2_excess
+from softtip.core.line_fit import MODEL_MARGIN, _chi2_excess
 from softtip.core.noise import SensorNoise
 
 __all__ = [

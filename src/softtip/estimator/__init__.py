@@ -2,7 +2,7 @@
 
 :func:`estimate` runs it over a whole log, vectorised (:mod:`.batch`); :class:`Estimator`
 runs it one sample at a time for live use (:mod:`.stream`). Each stage has its batch and its
-stream form side by side in one module: :mod:`.tare`, :mod:`.latch`, :mod:`.joint`,
+stream form side by side in one module: :mod:`.tare`, :mod:`.latch`, :mod:`.line_fit`,
 :mod:`.depth`, :mod:`.measure`; settings are in :mod:`.config`, results in :mod:`.results`. Both forms call
 the same kernels (:mod:`softtip.core.location`, :mod:`softtip.core.spin`, :mod:`softtip.core.noise`) and
 agree to rounding.
@@ -20,8 +20,8 @@ Per sample (manual §3):
 2. **Filter** (optional): causal Butterworth low-pass, steady state at the first sample.
 3. **Contact** (:mod:`.contact`): onset at ``|f| ≥ contact_threshold``, release below a
    threshold lower by ``contact_hysteresis`` noise standard deviations, after at least
-   ``contact_min_duration``; contacts numbered (``contact_id``). While untouched the bias
-   drift is followed (``drift_time_constant``) and, with ``track_drift``, subtracted.
+   ``min_contact_duration``; contacts numbered (``contact_id``). While untouched the bias
+   drift is followed (``drift_time_constant``) and, with ``drift_tracking``, subtracted.
 4. **Contact point.** ``track``: the soft-finger solution of every sample. ``latch`` (the
    papers'): during the first rise of the force after onset (until ``|f|`` first exceeds the
    light-force window, or sets no new maximum for ``stall_time``), the soft-finger solutions
@@ -31,8 +31,8 @@ Per sample (manual §3):
    of the first ``fallback_samples`` solutions of the contact is latched and flagged.
 5. **Depth** (:mod:`.depth`, softtip's, issue 11): friction acts inside the skin, so the
    moment is taken about ``r − δ n``; with a skin law (the fingertip's ``skin_thickness``,
-   or ``depth``) ``δ`` is learnt per contact from a window of the data, the law its prior
-   (``depth_mode="online"``, the default then), or the law's as it is (``"law"``);
+   or ``skin_law``) ``δ`` is learnt per contact from a window of the data, the law its prior
+   (``depth_compensation="online"``, the default then), or the law's as it is (``"law"``);
    ``"off"`` is the papers' undeformed point. ``depth``, ``depth_std`` and
    ``depth_from_data`` report it.
 6. **Measurement**: spin torque, its tangential part ``h``, the noise level of ``h`` and
@@ -52,14 +52,14 @@ softtip's extensions (issue 5), each an :class:`EstimatorConfig` field:
   window) whose soft-finger solution lies farther than this from the latched point starts
   a new latch (a new first rise, from that sample); ``relatched`` flags that sample, and
   the first sample of every contact that follows a latched one (contact lost and regained).
-- ``depth``, ``depth_mode``: see step 5 (:mod:`softtip.core.depth`, :mod:`.depth`).
+- ``skin_law``, ``depth_compensation``: see step 5 (:mod:`softtip.core.depth`, :mod:`.depth`).
 - ``contact_point="line-fit"``: the latch of ``latch`` mode, then the contact point moved
-  across the line to where a window of the last ``joint_window`` seconds fits the line
-  contact model (:mod:`softtip.core.joint`). A window is accepted when its standard deviations
-  of line angle and offset are below ``joint_max_angle_std`` and ``joint_max_offset_std``
-  and its fit residual below ``joint_max_residual`` noise standard deviations. The point
+  across the line to where a window of the last ``line_fit_window`` seconds fits the line
+  contact model (:mod:`softtip.core.line_fit`). A window is accepted when its standard deviations
+  of line angle and offset are below ``line_fit_max_angle_std`` and ``line_fit_max_offset_std``
+  and its fit residual below ``line_fit_max_residual`` noise standard deviations. The point
   held is the accepted window since contact onset (or the last re-latch) with the
-  smallest standard deviation aged by ``joint_drift``; before the first one the latched
+  smallest standard deviation aged by ``line_fit_drift``; before the first one the latched
   point is used and ``line_fit_fallback`` set. The coordinate along the line is the latch's:
   a line contact does not tell it.
 """

@@ -24,8 +24,8 @@ from softtip.estimator.contact import (
 )
 from softtip.estimator.depth import depth_points, resolve_depth
 from softtip.estimator.evidence import evidence_states
-from softtip.estimator.joint import joint_points
 from softtip.estimator.latch import latch_points
+from softtip.estimator.line_fit import line_fit_points
 from softtip.estimator.measure import Measurement, effective_noise, measure, noise_correlation
 from softtip.estimator.results import LINE, NONE, Estimates, EstimatorWarning
 from softtip.estimator.tare import TareReport, noise_in_use, tare_log
@@ -182,7 +182,7 @@ def estimate(
             if carry is not None:
                 carry.had_latch = had_latch or bool(latched.any())
             if config.contact_point == "line-fit":
-                point, joint_stats, _, moved = joint_points(
+                point, joint_stats, _, moved = line_fit_points(
                     t, c, contact, sc, point, relatched, tip, config, noise, noise_correlation(sos)
                 )
                 latched, fallback, joint_fb = latched & ~moved, fallback & ~moved, contact & ~moved

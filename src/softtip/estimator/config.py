@@ -2,28 +2,26 @@
 
 from __future__ import annotations
 
-import inspect
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from softtip.core.depth import DepthLaw
+from softtip.core.depth import MURAKAMI2006_DEPTH, DepthLaw
 from softtip.core.filtering import lowpass_sos
 from softtip.core.noise import NANO17, SensorNoise
 from softtip.core.units import KGF
+from softtip.estimator.settings import Setting, check_value, setting, settings_of
 
 __all__ = ["CONTACT_POINT_MODES", "DEPTH_MODES", "TARE_METHODS", "EstimatorConfig"]
 
 #: Values of :attr:`EstimatorConfig.contact_point`.
 CONTACT_POINT_MODES = ("latch", "track", "line-fit")
-#: Former names of :attr:`EstimatorConfig.contact_point` values, still accepted.
-CONTACT_POINT_ALIASES = {"joint": "line-fit"}
 #: Values of :attr:`EstimatorConfig.tare_method`.
 TARE_METHODS = ("robust", "median", "mean")
-#: Values of :attr:`EstimatorConfig.depth_mode`.
+#: Values of :attr:`EstimatorConfig.depth_compensation`.
 DEPTH_MODES = ("auto", "online", "law", "off")
 
 
@@ -31,18 +29,21 @@ DEPTH_MODES = ("auto", "online", "law", "off")
 class EstimatorConfig:
     """Settings of the pipeline. SI units.
 
+    Each field carries its :class:`~softtip.estimator.settings.Setting` (unit, range, help) in
+    its metadata: the ``softtip`` options (``--`` + the name, ``_`` → ``-``) and the ROS node's
+    parameters (the name) are made from them.
+
     Parameters
     ----------
     contact_point : {"latch", "track", "line-fit"}
-        How the contact point is obtained (module docstring). ``"joint"`` is accepted as the
-        former name of ``"line-fit"`` (the joint estimate of the line's angle and offset over a
-        window; its settings and output columns keep the ``joint_`` prefix).
+        How the contact point is obtained (module docstring). ``"line-fit"``: the estimate of
+        the line's angle and offset over a sliding window (its settings have the ``line_fit_``
+        prefix; its output columns, for now, the ``joint_`` one).
     contact_threshold : float
         N; in contact while ``|f|`` (tared, filtered) is at least this.
-    latch_force_range : (float, float)
+    latch_window : (float, float)
         N; the light-force range ``|f|`` must lie in for a sample to be latched (default
-        0.2–0.5 kgf; the papers' "window" of force). ``latch_window=`` is accepted as its
-        former name.
+        0.2–0.5 kgf; the papers' "window" of force).
     stall_time : float
         s; the first rise ends when ``|f|`` has set no new maximum for this long.
     fallback_samples : int
@@ -65,21 +66,21 @@ class EstimatorConfig:
         s of samples averaged for the bias when ``bias`` is ``None``; 0 disables taring
         (the input is already tared).
     relatch_distance : float or None
-        m; re-latch when, with the latch held and ``|f|`` inside ``latch_force_range``, the
+        m; re-latch when, with the latch held and ``|f|`` inside ``latch_window``, the
         soft-finger solution lies farther than this from the latched point. ``None``
         (default, the papers'): only on contact loss. A few mm (e.g. 3 mm) is beyond the
         soft-finger bias of the papers' line contacts at light force (≈ ``|h| / |f|`` ≤ 1 mm).
-    depth : DepthLaw or None
+    skin_law : DepthLaw or None
         Skin law of the depth compensation (:mod:`softtip.core.depth`): the fixed law of
-        ``depth_mode="law"``, the prior of ``"online"``. ``None`` (default): the
+        ``depth_compensation="law"``, the prior of ``"online"``. ``None`` (default): the
         fingertip's own (:func:`softtip.estimator.depth.tip_depth_law`: the murakami2006
         preset and any fingertip file with a ``skin_thickness``).
-    depth_mode : {"auto", "online", "law", "off"}
+    depth_compensation : {"auto", "online", "law", "off"}
         ``online``: the depth learnt per contact from the data, the law its prior
         (:mod:`softtip.estimator.depth`); ``law``: the law's depth at the normal force
         (fixed); ``off``: the papers' undeformed contact point. ``auto`` (default):
-        ``online`` in ``latch`` mode when there is a law (``depth`` or the fingertip's),
-        else ``off``; in ``track`` and ``line-fit`` mode ``law`` when ``depth`` is given, else
+        ``online`` in ``latch`` mode when there is a law (``skin_law`` or the fingertip's),
+        else ``off``; in ``track`` and ``line-fit`` mode ``law`` when ``skin_law`` is given, else
         ``off``.
     depth_window : float
         s; sliding window of the online depth (default 1 s).
@@ -89,19 +90,19 @@ class EstimatorConfig:
     depth_drift : float
         1/√s; how fast the held factor of a contact ages (default 0.02/√s): the factor held
         is the window with the smallest ``variance + depth_drift² · age``.
-    joint_window : float
+    line_fit_window : float
         s; length of the sliding window of ``line-fit`` mode (default 1 s: 50 samples at the
         papers' 50 Hz).
-    joint_max_angle_std, joint_max_offset_std : float
+    line_fit_max_angle_std, line_fit_max_offset_std : float
         ``line-fit`` mode accepts a window when the standard deviations of its line angle (rad,
         default 2°) and of its offset across the line (m, default 0.2 mm) are at most these.
-    joint_max_residual : float
+    line_fit_max_residual : float
         ... and the RMS residual of its fit is at most this many noise standard deviations.
-    joint_drift : float
+    line_fit_drift : float
         m/√s; how fast the contact may wander unseen: the point held is the accepted window
-        with the smallest ``offset_std² + joint_drift² · age`` (default 0.03 mm/√s), so a
+        with the smallest ``offset_std² + line_fit_drift² · age`` (default 0.03 mm/√s), so a
         precise window is kept over later, weaker ones, but not for ever (positive, at most 1).
-    joint_iterations : int
+    line_fit_iterations : int
         Gauss–Newton steps of each window's solve.
     tare_method : {"robust", "median", "mean"}
         How the tare samples make the bias: ``robust`` (default), the mean of the samples that
@@ -114,7 +115,7 @@ class EstimatorConfig:
         with ``σ_f`` the noise of ``|f|`` (root sum of squares of the force noise model, after
         the filter; an untouched sensor's ``|f|`` is below ``2.5 σ_f`` 90 % of the time);
         0 for a single threshold.
-    contact_min_duration : float
+    min_contact_duration : float
         s; a contact is reported once ``|f|`` has stayed above the release threshold for this
         long since it first reached ``contact_threshold``, each sample counting for its
         sampling interval (default 5 ms: at once at 50 Hz, five samples at 1 kHz; 0: at
@@ -123,7 +124,7 @@ class EstimatorConfig:
         s; while untouched (no contact pending or held) the bias is tracked by an exponential moving average with this time constant (default 10 s: a
         drift of r N/s is followed with a lag of r · 10 s; a touch that builds up slower than
         that is taken for drift).
-    track_drift : bool
+    drift_tracking : bool
         Subtract the tracked drift (default). ``False`` (the papers' comparison): the drift
         is still estimated and reported, not subtracted.
     line_evidence : bool
@@ -210,49 +211,162 @@ class EstimatorConfig:
         rounding). Default off.
     """
 
-    contact_point: Literal["latch", "track", "line-fit", "joint"] = "latch"
-    contact_threshold: float = 0.05
-    latch_force_range: tuple[float, float] = (0.2 * KGF, 0.5 * KGF)
-    stall_time: float = 0.1
-    fallback_samples: int = 5
-    noise: SensorNoise = field(default=NANO17)
-    h_sigmas: float = 3.0
-    h_min: float = 5e-4
-    lowpass_hz: float | None = None
-    lowpass_order: int = 2
-    sample_rate: float | None = None
-    bias: tuple[float, ...] | None = None
-    tare_duration: float = 0.2
-    relatch_distance: float | None = None
-    depth: DepthLaw | None = None
-    joint_window: float = 1.0
-    joint_max_angle_std: float = math.radians(2.0)
-    joint_max_offset_std: float = 2e-4
-    joint_max_residual: float = 3.0
-    joint_drift: float = 3e-5
-    joint_iterations: int = 2
-    tare_method: Literal["robust", "median", "mean"] = "robust"
-    contact_hysteresis: float = 3.0
-    contact_min_duration: float = 0.005
-    drift_time_constant: float = 10.0
-    track_drift: bool = True
-    depth_mode: Literal["auto", "online", "law", "off"] = "auto"
-    depth_window: float = 1.0
-    depth_prior_std: float = 0.5
-    depth_drift: float = 0.02
-    line_evidence: bool = True
-    evidence_window: float = 2.0
-    area_ratio: tuple[float, float] = (0.2, 0.1)
-    area_share: float = 0.35
-    rocked: tuple[tuple[float, float], ...] = ()
-    excitation_ratio: float = 0.5
-    excitation_min: float = 0.01
-    evidence_max_angle_std: float = math.radians(10.0)
-    evidence_model_std: float = math.radians(0.4)
-    unconfirmed_model_std: float = math.radians(5.0)
-    evidence_reset_distance: float = 1e-3
-    significance_window: float = 0.015
-    noise_from_tare: bool = False
+    # -- contact: when the fingertip is touched ------------------------------------------------
+    contact_point: Literal["latch", "track", "line-fit"] = setting(
+        "latch", "latch: measure the contact point in the light-force window at the start of the grasp and hold it "
+        "(the papers'); track: the soft-finger solution every sample (h is then zero: no directions); line-fit: latch, "
+        "then move the point across the line to where a sliding window (--line-fit-window) fits the line-contact "
+        "model (flagged joint_fallback until one does).", choices=CONTACT_POINT_MODES, group="contact")
+    contact_threshold: float = setting(
+        0.05, "In contact while |f| is at least this.", unit="N", low=0.0, cli_unit="force", metavar="FORCE",
+        group="contact")
+    contact_hysteresis: float = setting(
+        3.0, "Contact ends below --contact-threshold minus this many standard deviations of the noise of |f| (after "
+        "the low-pass; at least half the threshold); 0: one threshold.", unit="noise standard deviations", low=0.0,
+        metavar="SIGMAS", group="contact")
+    min_contact_duration: float = setting(
+        0.005, "A contact is reported once |f| has stayed above the release threshold this long, each sample counting "
+        "for its sampling interval (a shorter spike is no contact).", unit="s", low=0.0, metavar="S", group="contact")
+    # -- tare and drift ----------------------------------------------------------------------------
+    tare_duration: float = setting(
+        0.2, "Take the first S seconds (fingertip untouched) as the sensor bias; 0 if the wrench is already tared.",
+        unit="s", low=0.0, metavar="S", group="tare")
+    tare_method: Literal["robust", "median", "mean"] = setting(
+        "robust", "How the tare samples make the bias: robust (the mean of the samples that are not spikes), median, "
+        "or mean (of all: a spike moves it).", choices=TARE_METHODS, group="tare")
+    bias: tuple[float, ...] | None = setting(
+        None, "Sensor bias to subtract instead of taring (N, N·m).", kind="composite", options=("--bias",),
+        group="tare")
+    drift_time_constant: float = setting(
+        10.0, "While untouched, follow the sensor's bias drift with a moving average of this time constant.",
+        unit="s", low=0.0, low_open=True, metavar="S", group="tare")
+    drift_tracking: bool = setting(
+        True, "Subtract the drift followed while untouched (off: report it only, the papers').",
+        group="tare")
+    # -- filter and noise --------------------------------------------------------------------------
+    lowpass_hz: float | None = setting(
+        None, "Causal Butterworth low-pass cutoff (default: no filter).", unit="Hz", low=0.0, low_open=True,
+        metavar="HZ", group="filter")
+    lowpass_order: int = setting(2, "Order of the low-pass Butterworth filter.", low=1, metavar="N", group="filter")
+    sample_rate: float | None = setting(
+        None, "Sample rate of the input, needed with the low-pass (the commands take it from the data).", unit="Hz",
+        low=0.0, low_open=True, cli=False, group="filter")
+    noise: SensorNoise = setting(
+        NANO17, "Standard deviations of the unfiltered sensor noise per axis (N, N·m).", kind="composite",
+        options=("--sensor", "--force-noise", "--moment-noise"), group="noise")
+    noise_from_tare: bool = setting(
+        False, "Measure the noise model from the tare's samples (each axis's standard deviation) instead of "
+        "--force-noise/--moment-noise, which stay the fallback; needs at least 30 tare samples "
+        "(--tare-duration 1 at 50 Hz).", group="noise")
+    h_sigmas: float = setting(
+        3.0, "|h| is significant (a line) above this many of its noise standard deviations (or --h-min).",
+        unit="noise standard deviations", low=0.0, metavar="SIGMAS", group="noise")
+    h_min: float = setting(
+        5e-4, "Smallest |h| reported as a line contact.", unit="N·m", low=0.0, cli_unit="N·mm", metavar="N·mm",
+        group="noise")
+    # -- latch: the papers' contact point -----------------------------------------------------------
+    latch_window: tuple[float, float] = setting(
+        (0.2 * KGF, 0.5 * KGF), "Light-force window for latching the contact point.",
+        unit="N", parts=(Setting("", unit="N", low=0.0, cli_unit="force", metavar="LOW"),
+                         Setting("", unit="N", low=0.0, cli_unit="force", metavar="HIGH")),
+        cli_default="0.2kgf 0.5kgf", metavar="LOW HIGH", group="latch")  # fmt: skip
+    stall_time: float = setting(
+        0.1, "The first rise ends when |f| has set no new maximum for this long.", unit="s", low=0.0, metavar="S",
+        group="latch")
+    fallback_samples: int = setting(
+        5, "Soft-finger solutions averaged for a latch when the rise has no sample in the window.", low=1,
+        metavar="N", group="latch")
+    relatch_distance: float | None = setting(
+        None, "Latch again when, at light force, the soft-finger contact point moves farther than this from the "
+        "latched one. Default: only when contact is lost and regained, the papers'.", unit="m", low=0.0, low_open=True, cli_unit="mm", metavar="LENGTH", group="latch")
+    # -- line-fit: the point and line over a sliding window -------------------------------------------
+    line_fit_window: float = setting(
+        1.0, "Sliding window of --contact-point line-fit.", unit="s", low=0.0, low_open=True, metavar="S",
+        group="line-fit")
+    line_fit_max_angle_std: float = setting(
+        math.radians(2.0), "--contact-point line-fit accepts a window when the standard deviation of its line angle "
+        "is at most this ...", unit="rad", low=0.0, low_open=True, cli_unit="deg", metavar="DEG", group="line-fit")
+    line_fit_max_offset_std: float = setting(
+        2e-4, "... and that of its offset across the line at most this ...", unit="m",
+        low=0.0, low_open=True, cli_unit="mm", metavar="LENGTH", group="line-fit")
+    line_fit_max_residual: float = setting(
+        3.0, "... and the RMS residual of its fit at most this many noise standard deviations.",
+        unit="noise standard deviations", low=0.0, low_open=True, metavar="SIGMAS", group="line-fit")
+    line_fit_drift: float = setting(
+        3e-5, "How fast the contact may wander unseen: the point held is the accepted window with the smallest "
+        "offset_std² + drift² · age.", unit="m/√s", low=0.0, high=1.0, low_open=True, cli_unit="mm/√s",
+        metavar="MM/√S", group="line-fit")
+    line_fit_iterations: int = setting(
+        2, "Gauss–Newton steps of each window's solve.", low=1, metavar="N", group="line-fit")
+    # -- depth: friction inside the skin ---------------------------------------------------------------
+    depth_compensation: Literal["auto", "online", "law", "off"] = setting(
+        "auto", "Take the moment about the point inside the skin where friction acts. online: its depth learnt per "
+        "contact from the data, the skin law (--skin-law) the prior; law: the skin law's depth as it is; off: the "
+        "papers' method; auto: online in latch mode when the fingertip gives a skin (the murakami2006 preset, a file "
+        "with skin_thickness), else off.", choices=DEPTH_MODES, group="depth")
+    skin_law: DepthLaw | None = setting(
+        None, "Skin law of the depth compensation: normal force = K·depth^P (N, m), depth at most MAX_DEPTH "
+        "(default: the fingertip's skin; else the murakami2006 skin, "
+        f"{MURAKAMI2006_DEPTH.stiffness:g} {MURAKAMI2006_DEPTH.exponent:g} {MURAKAMI2006_DEPTH.max_depth * 1e3:g}mm).",
+        parts=(Setting("", unit="N/m^P", low=0.0, low_open=True, metavar="K"),
+               Setting("", low=0.0, low_open=True, metavar="P"),
+               Setting("", unit="m", low=0.0, low_open=True, cli_unit="mm", metavar="MAX_DEPTH")),
+        make=DepthLaw, metavar="K P MAX_DEPTH", group="depth")  # fmt: skip
+    depth_window: float = setting(
+        1.0, "Sliding window of the online depth.", unit="s", low=0.0, low_open=True, metavar="S", group="depth")
+    depth_prior_std: float = setting(
+        0.5, "Standard deviation of the prior depth factor (mean 1), relative.", low=0.0, low_open=True,
+        metavar="STD", group="depth")
+    depth_drift: float = setting(
+        0.02, "How fast the held depth factor of a contact ages.", unit="1/√s", low=0.0, low_open=True,
+        metavar="RATE", group="depth")
+    # -- evidence: line or area ------------------------------------------------------------------------
+    line_evidence: bool = setting(
+        True, "Tell a line from an area over a sliding window (state area while the window shows h spread over both "
+        "tangent axes; line_evidence confirmed once the contact was excited about two tangent axes, by the load or "
+        "--rocked, and h stayed on one, else unconfirmed; the direction from the window wherever h varied along one "
+        "axis); off: the papers' per-sample line/point.", group="evidence")
+    evidence_window: float = setting(
+        2.0, "Sliding window of the line evidence.", unit="s", low=0.0, low_open=True, metavar="S", group="evidence")
+    significance_window: float = setting(
+        0.015, "|h| turns significant (line) when most samples of the last S seconds are above the line threshold, "
+        "and not when most are below 2/3 of it (0, or a sample period longer than S: each sample alone, the papers').",
+        unit="s", low=0.0, metavar="S", group="evidence")
+    area_ratio: tuple[float, float] = setting(
+        (0.2, 0.1), "area when the smaller/larger eigenvalue ratio of h's window covariance (noise removed) reaches "
+        "ENTER; a confirmed line again only below LEAVE.",
+        parts=(Setting("", unit="(eigenvalue ratio)", low=0.0, low_open=True, metavar="ENTER"),
+               Setting("", unit="(eigenvalue ratio)", low=0.0, low_open=True, metavar="LEAVE")),
+        metavar="ENTER LEAVE", group="evidence")  # fmt: skip
+    area_share: float = setting(
+        0.35, "area while more than this share of the evidence window's samples show h spread over both tangent axes "
+        "(a reading of the current window, revisited as it slides).", unit="(share of the window)", low=0.0,
+        high=1.0, low_open=True, high_open=True, metavar="SHARE", group="evidence")
+    rocked: tuple[tuple[float, float], ...] = setting(
+        (), "The object was rocked about two tangent axes from START to END (the log's time; repeat for more): a "
+        "window wholly inside counts as excited about two axes, so h on one axis there confirms a line (for a skin "
+        "on which the load cannot show it, manual §3.5).", kind="tuples",
+        parts=(Setting("", unit="s", metavar="START"), Setting("", unit="s", metavar="END")),
+        metavar="START END", group="evidence")  # fmt: skip
+    excitation_ratio: float = setting(
+        0.5, "Excited about two tangent axes when the tangential load's window covariance has its smaller eigenvalue "
+        "beyond the noise and at least this times the larger ...", unit="(eigenvalue ratio)", low=0.0,
+        low_open=True, metavar="RATIO", group="evidence")
+    excitation_min: float = setting(
+        0.01, "... and at least this squared (the load's standard deviation about its weaker axis).", unit="N",
+        low=0.0, low_open=True, metavar="N", group="evidence")
+    evidence_max_angle_std: float = setting(
+        math.radians(10.0), "A window's line direction is used only when its standard deviation is at most this.",
+        unit="rad", low=0.0, low_open=True, cli_unit="deg", metavar="DEG", group="evidence")
+    evidence_model_std: float = setting(
+        math.radians(0.4), "Model error of a window's line direction (what no window shows), added in quadrature to "
+        "its standard deviation (0: none).", unit="rad", low=0.0, cli_unit="deg", metavar="DEG", group="evidence")
+    unconfirmed_model_std: float = setting(
+        math.radians(5.0), "Model error of an unconfirmed line's direction (from one axis of excitation: its rolling "
+        "bias), added in quadrature to its standard deviation (0: none).", unit="rad", low=0.0, cli_unit="deg",
+        metavar="DEG", group="evidence")
+    evidence_reset_distance: float = setting(
+        1e-3, "The line evidence starts afresh when the contact point moves farther than this.", unit="m", low=0.0, low_open=True, cli_unit="mm", metavar="LENGTH", group="evidence")
 
     def stated_excitation(self, t):
         """Whether the evidence window ending at ``t`` (s, float or array) lies wholly inside a
@@ -277,61 +391,21 @@ class EstimatorConfig:
         return np.maximum(self.h_sigmas * np.asarray(h_std, dtype=float), self.h_min)
 
     def __post_init__(self) -> None:
-        if self.depth_mode not in DEPTH_MODES:
-            raise ValueError(f"depth_mode must be one of {', '.join(DEPTH_MODES)}, got {self.depth_mode!r}")
-        for name in ("depth_window", "depth_prior_std", "depth_drift"):
-            v = float(getattr(self, name))
-            if not (math.isfinite(v) and v > 0.0):
-                raise ValueError(f"{name} must be a positive number, got {getattr(self, name)!r}")
-            object.__setattr__(self, name, v)
-        object.__setattr__(self, "contact_point", CONTACT_POINT_ALIASES.get(self.contact_point, self.contact_point))
-        if self.contact_point not in CONTACT_POINT_MODES:
-            raise ValueError(f"contact_point must be one of {', '.join(CONTACT_POINT_MODES)}, got {self.contact_point!r}")
-        if self.relatch_distance is not None:
-            v = float(self.relatch_distance)
-            if not (math.isfinite(v) and v > 0.0):
-                raise ValueError(f"relatch_distance must be a positive distance in m or None, got {self.relatch_distance!r}")
-            object.__setattr__(self, "relatch_distance", v)
-        if self.depth is not None and not isinstance(self.depth, DepthLaw):
-            raise ValueError(f"depth must be a softtip.core.depth.DepthLaw or None, got {self.depth!r}")
-        lo, hi = (float(v) for v in self.latch_force_range)
-        if not (0.0 <= lo < hi):
-            raise ValueError(
-                f"latch_force_range must be (low, high) with 0 <= low < high, in N; got {self.latch_force_range!r}"
-            )
-        object.__setattr__(self, "latch_force_range", (lo, hi))
-        for name in ("joint_window", "joint_max_angle_std", "joint_max_offset_std", "joint_max_residual", "joint_drift"):
-            v = float(getattr(self, name))
-            if not (math.isfinite(v) and v > 0.0):
-                raise ValueError(f"{name} must be a positive number, got {getattr(self, name)!r}")
-            object.__setattr__(self, name, v)
-        if self.joint_drift > 1.0:
-            raise ValueError(f"joint_drift must be at most 1 m/√s, got {self.joint_drift!r}")
+        # each value against its Setting (field metadata): kind, range, choices
+        for s in settings_of(EstimatorConfig):
+            object.__setattr__(self, s.name, check_value(s, getattr(self, s.name)))
+        # what one field's range cannot say: the relations between values
+        if self.skin_law is not None and not isinstance(self.skin_law, DepthLaw):
+            raise ValueError(f"skin_law must be a softtip.core.depth.DepthLaw or None, got {self.skin_law!r}")
+        try:
+            lo, hi = (float(v) for v in self.latch_window)
+        except (TypeError, ValueError):
+            lo = hi = math.nan
+        if not (0.0 <= lo < hi < math.inf):
+            raise ValueError(f"latch_window must be (low, high) with 0 <= low < high, in N; got {self.latch_window!r}")
+        object.__setattr__(self, "latch_window", (lo, hi))
         if self.contact_point == "line-fit" and not any(self.noise.force_std + self.noise.moment_std):
             raise ValueError("contact_point='line-fit' needs a sensor noise model (noise is all zero)")
-        if int(self.joint_iterations) < 1:
-            raise ValueError(f"joint_iterations must be at least 1, got {self.joint_iterations!r}")
-        object.__setattr__(self, "joint_iterations", int(self.joint_iterations))
-        if self.tare_method not in TARE_METHODS:
-            raise ValueError(f"tare_method must be one of {', '.join(TARE_METHODS)}, got {self.tare_method!r}")
-        v = float(self.drift_time_constant)
-        if not (math.isfinite(v) and v > 0.0):
-            raise ValueError(f"drift_time_constant must be a positive number of s, got {self.drift_time_constant!r}")
-        object.__setattr__(self, "drift_time_constant", v)
-        object.__setattr__(self, "track_drift", bool(self.track_drift))
-        for name in ("contact_threshold", "stall_time", "h_sigmas", "h_min", "tare_duration", "contact_hysteresis",
-                     "contact_min_duration", "significance_window", "evidence_model_std",
-                     "unconfirmed_model_std"):  # fmt: skip
-            v = float(getattr(self, name))
-            if not (math.isfinite(v) and v >= 0.0):
-                raise ValueError(f"{name} must be a non-negative number, got {getattr(self, name)!r}")
-            object.__setattr__(self, name, v)
-        for name in ("evidence_window", "evidence_max_angle_std", "excitation_ratio", "excitation_min",
-                     "evidence_reset_distance"):  # fmt: skip
-            v = float(getattr(self, name))
-            if not (math.isfinite(v) and v > 0.0):
-                raise ValueError(f"{name} must be a positive number, got {getattr(self, name)!r}")
-            object.__setattr__(self, name, v)
         enter, leave = (float(v) for v in self.area_ratio)
         if not (0.0 < leave <= enter <= 1.0):
             raise ValueError(f"area_ratio must be (enter, leave) with 0 < leave <= enter <= 1, got {self.area_ratio!r}")
@@ -344,19 +418,11 @@ class EstimatorConfig:
             if not (math.isfinite(a) and math.isfinite(b) and a < b):
                 raise ValueError(f"rocked intervals must be finite with start < end, got ({a!r}, {b!r})")
         object.__setattr__(self, "rocked", rocked)
-        v = float(self.area_share)
-        if not (0.0 < v < 1.0):
-            raise ValueError(f"area_share must be a share between 0 and 1 (exclusive), got {self.area_share!r}")
-        object.__setattr__(self, "area_share", v)
-        object.__setattr__(self, "line_evidence", bool(self.line_evidence))
-        object.__setattr__(self, "noise_from_tare", bool(self.noise_from_tare))
         if self.noise_from_tare and (self.bias is not None or self.tare_duration <= 0.0):
             raise ValueError(
                 "noise_from_tare needs a tare to measure the noise from: tare_duration > 0 (--tare-duration) and no "
                 "bias given (--bias)"
             )
-        if int(self.fallback_samples) < 1:
-            raise ValueError(f"fallback_samples must be at least 1, got {self.fallback_samples!r}")
         if self.bias is not None:
             b = np.asarray(self.bias, dtype=float)
             if b.shape != (6,) or not np.all(np.isfinite(b)):
@@ -364,24 +430,3 @@ class EstimatorConfig:
             object.__setattr__(self, "bias", tuple(float(v) for v in b))
         if self.lowpass_hz is not None and self.sample_rate is not None:
             lowpass_sos(self.lowpass_hz, self.sample_rate, self.lowpass_order)  # validates
-
-
-
-
-_dataclass_init = EstimatorConfig.__init__
-
-
-def _init(self, *args, latch_window=None, **kwargs):
-    # ``latch_window`` is the former name of ``latch_force_range`` (a force range, not a time
-    # window like ``joint_window``); given, it wins (dataclasses.replace passes both)
-    if latch_window is not None:
-        kwargs["latch_force_range"] = latch_window
-    _dataclass_init(self, *args, **kwargs)
-
-
-_init.__doc__ = _dataclass_init.__doc__
-_init.__signature__ = inspect.signature(_dataclass_init)
-EstimatorConfig.__init__ = _init
-EstimatorConfig.latch_window = property(
-    lambda self: self.latch_force_range, doc="Former name of :attr:`latch_force_range`, N."
-)

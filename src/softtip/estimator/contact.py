@@ -1,7 +1,7 @@
 """Contact onset and release with hysteresis, contact counting, and bias drift tracking.
 
 Per sample after the tare, with ``b`` the drift tracked so far and ``f`` the force of the
-tared (filtered) wrench minus ``b`` (minus nothing when ``track_drift`` is off):
+tared (filtered) wrench minus ``b`` (minus nothing when ``drift_tracking`` is off):
 
 - **Hysteresis.** A contact starts when ``|f| ≥ contact_threshold`` (the onset threshold)
   and ends at the first sample with ``|f|`` below the release threshold
@@ -12,7 +12,7 @@ tared (filtered) wrench minus ``b`` (minus nothing when ``track_drift`` is off):
   the onset threshold in noise no longer makes several contacts, each resetting the latch.
 - **Minimum duration.** From the first sample at or above the onset threshold the contact is
   pending (reported ``none``) until ``|f|`` has stayed above the release threshold for
-  ``contact_min_duration`` s, each sample counting for its sampling interval (so at 50 Hz
+  ``min_contact_duration`` s, each sample counting for its sampling interval (so at 50 Hz
   one sample covers the default 5 ms, at 1 kHz five samples are needed); a spike shorter
   than that is not a contact.
 - **Contact count.** Each contact gets the next number, 1, 2, … (``contact_id``; 0 out of
@@ -20,11 +20,11 @@ tared (filtered) wrench minus ``b`` (minus nothing when ``track_drift`` is off):
 - **Drift.** While untouched (no contact pending or held: the drift-corrected force below
   the onset threshold, or below the release threshold since a contact), ``b ← b + α (w − b)`` with ``α = min(Δt / drift_time_constant,
   0.5)``: an exponential moving average of the untouched wrench, all six components. It is
-  reported per sample (the ``b`` subtracted from that sample) and, with ``track_drift``,
+  reported per sample (the ``b`` subtracted from that sample) and, with ``drift_tracking``,
   subtracted. A drift of the force beyond the contact threshold since the last tare is
   flagged (:attr:`ContactTrack.drift_alarm`).
 
-:func:`track_contacts` does it for a whole log: with ``track_drift``, long logs in one
+:func:`track_contacts` does it for a whole log: with ``drift_tracking``, long logs in one
 compiled pass (:func:`softtip.estimator.sequential.track_kernel`), otherwise vectorised
 (one iteration per contact, per run of samples between the thresholds, and per block of
 ~4000 untouched samples), both the same bits; :class:`ContactTracker` one sample at a time
@@ -209,7 +209,7 @@ def _norm3(v: NDArray) -> NDArray:
 def _follow_drift(
     t: NDArray, x: NDArray, start: int, alpha: NDArray, on: float, busy: NDArray, state: TrackState | None
 ) -> NDArray:
-    """The drift alone (``track_drift`` off): it follows every sample whose force is within
+    """The drift alone (``drift_tracking`` off): it follows every sample whose force is within
     ``on`` of it; the others are marked in ``busy``."""
     n = len(t)
     drift = np.zeros((n, 6))
@@ -273,7 +273,7 @@ def track_contacts(
     """
     n = len(t)
     on, off = contact_thresholds(config, noise)
-    min_dur = config.contact_min_duration
+    min_dur = config.min_contact_duration
     state = TrackState() if state is None else TrackState(**vars(state))
     alpha = drift_weights(t, config, state.t_last)
     dt = np.zeros(n)
@@ -282,7 +282,7 @@ def track_contacts(
         dt[0] = t[0] - state.t_last
     cid = np.zeros(n, dtype=np.int64)
     busy = np.zeros(n, dtype=bool)
-    if not config.track_drift:
+    if not config.drift_tracking:
         drift = _follow_drift(t, x, start, alpha, on, busy, state)
         state.count = _hysteresis(t, dt, _norm3(x[:, :3]), start, on, off, min_dur, cid, busy, state.count)
         y = x
@@ -370,7 +370,7 @@ class ContactTracker:
             self.drift_alarm = True
         fx, fy, fz = x[0] - b[0], x[1] - b[1], x[2] - b[2]
         dev = sqrt(fx * fx + fy * fy + fz * fz)
-        track = cfg.track_drift
+        track = cfg.drift_tracking
         if track:
             y = (fx, fy, fz, x[3] - b[3], x[4] - b[4], x[5] - b[5])
             f = dev
@@ -387,11 +387,11 @@ class ContactTracker:
         elif self._pending is not None:
             if f < self.off:
                 self._pending = None
-            elif (t - self._pending) + dt >= cfg.contact_min_duration:
+            elif (t - self._pending) + dt >= cfg.min_contact_duration:
                 code = self._start()
         elif f >= self.on:
             self._pending = t
-            if dt >= cfg.contact_min_duration:  # (t − t) + dt, as in the batch
+            if dt >= cfg.min_contact_duration:  # (t − t) + dt, as in the batch
                 code = self._start()
         if (not code and self._pending is None) if track else dev < self.on:  # untouched
             self._follow(min(dt / cfg.drift_time_constant, _MAX_ALPHA), x)
@@ -449,7 +449,7 @@ def started_in_contact_message(config: EstimatorConfig) -> str:
 
 def drift_message(config: EstimatorConfig, t: float) -> str:
     """The warning for a drift of the force beyond the contact threshold since the tare."""
-    what = "tracked and subtracted" if config.track_drift else "not subtracted (track_drift off): contacts may be false"
+    what = "tracked and subtracted" if config.drift_tracking else "not subtracted (drift_tracking off): contacts may be false"
     return (
         f"the sensor bias drifted by more than the contact threshold ({config.contact_threshold:g} N) since the tare "
         f"(at t = {t:.6g} s); the drift is {what}; re-tare when you can"

@@ -3,7 +3,7 @@ stream side by side.
 
 Friction acts inside the skin, at a depth ``δ`` below the contact point ``r`` on the
 undeformed surface, so the moment is taken about the effective point ``r − δ n``. With
-``depth_mode="online"`` the depth of each contact is ``δ = κ δ₀(F_n)``: ``δ₀`` the skin
+``depth_compensation="online"`` the depth of each contact is ``δ = κ δ₀(F_n)``: ``δ₀`` the skin
 law's depth at the normal force (the prior), ``κ`` a factor learnt from the contact's own
 data under the line-contact model (the maths is in :mod:`softtip.core.depth`).
 
@@ -17,7 +17,7 @@ variance aged by ``depth_drift``, combined with the prior ``1 ± depth_prior_std
 solve; the factor and its relative standard deviation hold until the next). Between
 solves only the sums and ``δ₀`` are updated, so the stream costs O(1) per sample.
 
-``depth_mode="law"`` is the fixed law (``κ = 1``, no standard deviation); ``"off"`` the
+``depth_compensation="law"`` is the fixed law (``κ = 1``, no standard deviation); ``"off"`` the
 papers' undeformed point (``δ = 0``).
 
 :func:`depth_points` does it for a whole log, :class:`DepthTracker` one sample at a time.
@@ -38,6 +38,7 @@ from softtip.core._jit import jit_enabled
 from softtip.core._xp import NP, PY
 from softtip.core.depth import (
     MIN_DEPTH_SAMPLES,
+    MURAKAMI2006_DEPTH,
     N_DEPTH_SUMS,
     DepthLaw,
     depth_frame_kernel,
@@ -52,7 +53,7 @@ from softtip.core.noise import SensorNoise
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.sequential import contact_window_sums_kernel, running_best_kernel
 
-__all__ = ["tip_depth_law", "resolve_depth", "depth_points", "DepthPoints", "DepthTracker", "SOLVES_PER_WINDOW"]
+__all__ = ["tip_depth_law", "asked_skin_law", "resolve_depth", "depth_points", "DepthPoints", "DepthTracker", "SOLVES_PER_WINDOW"]
 
 
 class DepthPoints(NamedTuple):
@@ -75,34 +76,44 @@ def tip_depth_law(tip: Fingertip) -> DepthLaw | None:
     return None if h is None else skin_depth_law(h)
 
 
+def asked_skin_law(mode: str, law: DepthLaw | None, tip: Fingertip | None) -> DepthLaw | None:
+    """The skin law of a depth compensation asked for by a user (``softtip`` options, ROS parameters):
+    ``law`` when given, and when not, with ``mode`` ``online`` or ``law`` and a fingertip that has no skin
+    of its own (or none known yet), the murakami2006 skin; otherwise ``None`` (:func:`resolve_depth`
+    takes the fingertip's)."""
+    if law is None and mode in ("online", "law") and (tip is None or tip_depth_law(tip) is None):
+        return MURAKAMI2006_DEPTH
+    return law
+
+
 def resolve_depth(config: EstimatorConfig, tip: Fingertip) -> EstimatorConfig:
-    """``config`` with ``depth_mode`` decided (``online``, ``law`` or ``off``) and ``depth``
+    """``config`` with ``depth_compensation`` decided (``online``, ``law`` or ``off``) and ``skin_law``
     the law it uses (``None`` when off). ``auto`` is ``online`` with a law in ``latch``
-    mode; in ``track`` and ``line-fit`` mode it is ``law`` when ``config.depth`` is given,
+    mode; in ``track`` and ``line-fit`` mode it is ``law`` when ``config.skin_law`` is given,
     else ``off``.
 
     Raises
     ------
     ValueError
-        ``online`` or ``law`` asked for with neither ``config.depth`` nor a fingertip skin
+        ``online`` or ``law`` asked for with neither ``config.skin_law`` nor a fingertip skin
         thickness.
     """
-    mode = config.depth_mode
+    mode = config.depth_compensation
     if mode == "auto" and config.contact_point != "latch":
         # track mode has no tangential spin torque; line-fit mode moves the point under a
         # tangential load (a slide), where the depth prior alone turned a measured slide
         # case by 26°: both keep the papers' point unless asked (a law given is used as is)
-        mode = "off" if config.depth is None else "law"
+        mode = "off" if config.skin_law is None else "law"
     if mode == "off":
-        return dataclasses.replace(config, depth=None, depth_mode="off")
-    law = config.depth if config.depth is not None else tip_depth_law(tip)
+        return dataclasses.replace(config, skin_law=None, depth_compensation="off")
+    law = config.skin_law if config.skin_law is not None else tip_depth_law(tip)
     if law is None:
         if mode == "auto":
-            return dataclasses.replace(config, depth_mode="off")
+            return dataclasses.replace(config, depth_compensation="off")
         raise ValueError(
-            f"depth_mode={mode!r} needs a skin law: give config.depth, or a fingertip with a skin_thickness"
+            f"depth_compensation={mode!r} needs a skin law: give config.skin_law, or a fingertip with a skin_thickness"
         )
-    return dataclasses.replace(config, depth=law, depth_mode="online" if mode == "auto" else mode)
+    return dataclasses.replace(config, skin_law=law, depth_compensation="online" if mode == "auto" else mode)
 
 
 def _combine(kappa_h, var_h, prior_std, xp):
@@ -120,12 +131,12 @@ def depth_points(t, c, contact, point, normal, config: EstimatorConfig, noise: S
     of the contact-point stage (NaN where none). Returns :class:`DepthPoints`; the depth is 0 with the papers' method and where there is no point.
     """
     n = len(t)
-    law = config.depth
+    law = config.skin_law
     zero = np.zeros(n)
     if law is None:
         return DepthPoints(zero, zero.copy(), np.zeros(n, dtype=bool))
     has = contact & np.all(np.isfinite(point), axis=-1)
-    if config.depth_mode == "law":
+    if config.depth_compensation == "law":
         fx, fy, fz = c[0], c[1], c[2]
         d0 = depth_kernel(-(fx * normal[:, 0] + fy * normal[:, 1] + fz * normal[:, 2]), law, NP)
         return DepthPoints(np.where(has, d0, 0.0), zero.copy(), np.zeros(n, dtype=bool))
@@ -244,8 +255,8 @@ class DepthTracker:
 
     def __init__(self, config: EstimatorConfig, noise: SensorNoise, corr: float):
         self.config = config
-        self.law = config.depth
-        self.online = config.depth_mode == "online"
+        self.law = config.skin_law
+        self.online = config.depth_compensation == "online"
         self.noise = noise
         self.corr = corr
         self._step = config.depth_window / SOLVES_PER_WINDOW

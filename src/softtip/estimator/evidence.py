@@ -50,7 +50,7 @@ noise term, or the sample's ``σ_d``) is kept apart: two sensors share the model
 their noise (:mod:`softtip.fusion`).
 
 :func:`evidence_states` does it for a whole log, :class:`EvidenceTracker` one sample at a
-time (running sums, O(1) per sample, as :mod:`softtip.estimator.joint`).
+time (running sums, O(1) per sample, as :mod:`softtip.estimator.line_fit`).
 """
 
 from __future__ import annotations

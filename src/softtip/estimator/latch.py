@@ -48,7 +48,7 @@ def _latch_segment(t, f_norm, valid, r_sc, tip: Fingertip, config: EstimatorConf
     start with the latch already fixed (where a drift re-latch may happen).
     """
     k = len(t)
-    lo, hi = config.latch_force_range
+    lo, hi = config.latch_window
     idx = np.arange(k)
     prev_peak = np.concatenate(([-np.inf], np.maximum.accumulate(f_norm)[:-1]))
     t_peak = t[np.maximum.accumulate(np.where(f_norm > prev_peak, idx, 0))]
@@ -100,7 +100,7 @@ def latch_points(t, f_norm, contact, sc, tip: Fingertip, config: EstimatorConfig
     relatched = np.zeros(n, dtype=bool)
     valid = np.asarray(sc.valid, dtype=bool)
     r_sc = np.where(valid[:, None], np.stack(sc.point, axis=-1), np.nan)
-    lo, hi = config.latch_force_range
+    lo, hi = config.latch_window
     dist = config.relatch_distance
     edges = np.diff(np.concatenate(([False], contact, [False])).astype(np.int8))
     starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
@@ -153,7 +153,7 @@ def _latch_compiled(t, f_norm, contact, sc, tip: Fingertip, config: EstimatorCon
     n = len(t)
     valid = np.asarray(sc.valid, dtype=bool)
     rx, ry, rz = (np.where(valid, np.asarray(c, dtype=float), np.nan) for c in sc.point)
-    lo, hi = config.latch_force_range
+    lo, hi = config.latch_window
     dist = config.relatch_distance
     onset = contact & ~np.concatenate(([False], contact[:-1]))
     begin = onset.copy()
@@ -254,7 +254,7 @@ class LatchTracker:
         """Re-latch test of a held latch: ``(moved, sc)``; ``moved`` when, at light force,
         this sample's soft-finger solution lies farther than ``relatch_distance`` from it."""
         dist = self.config.relatch_distance
-        lo, hi = self.config.latch_force_range
+        lo, hi = self.config.latch_window
         if self.point is None or dist is None or not lo <= f_norm <= hi:
             return False, sc
         sc = SoftFinger(*contact_kernel(self.tip, *x, xp=PY))
@@ -281,7 +281,7 @@ class LatchTracker:
         if valid and self._n_fb < cfg.fallback_samples:
             self._n_fb += 1
             self._sum_fb = [s + v for s, v in zip(self._sum_fb, sc.point)]
-        lo, hi = cfg.latch_force_range
+        lo, hi = cfg.latch_window
         if self.rising and (f_norm > hi or t - self._t_peak > cfg.stall_time):
             self.rising = False
             if self._n_win > 0:

@@ -64,7 +64,7 @@ class Estimates:
     depth_from_data : (N,) online depth: the contact's own data, not the skin law (the
         prior), determined it (the data's information on it exceeds the prior's)
     line_fit_conditioning, line_fit_angle_std, line_fit_offset_std, line_fit_residual : (N,) the
-        ``line-fit`` window ending at this sample (:mod:`softtip.core.joint`): reciprocal condition
+        ``line-fit`` window ending at this sample (:mod:`softtip.core.line_fit`): reciprocal condition
         number in [0, 1], standard deviations of its line angle (rad) and of its offset
         across the line (m), and the fit's RMS residual in units of the noise; NaN where no
         window was solved (other modes, ``none``, or no soft-finger solution)
@@ -76,7 +76,7 @@ class Estimates:
         threshold, release below the release threshold); 0 out of contact. A contact may have
         ``none`` samples (pulling, no contact point yet)
     drift : (N, 6) bias drift tracked while untouched since the tare, N and N·m: subtracted
-        from this sample's wrench unless ``track_drift`` is off
+        from this sample's wrench unless ``drift_tracking`` is off
     tare : TareReport or None
         what the tare did and its checks (:class:`~softtip.estimator.tare.TareReport`)
     started_in_contact : bool

@@ -297,7 +297,7 @@ def vote_kernel(t, located, seg_start, side, window, share, out):  # pragma: no 
 
 @lazy_jit
 def track_kernel(t, dt, x, alpha, start, on, off, min_dur, blk, tiny, avg, iavg, cid, busy, drift, y):  # pragma: no cover
-    """Contacts and drift of :func:`softtip.estimator.contact.track_contacts` (``track_drift``
+    """Contacts and drift of :func:`softtip.estimator.contact.track_contacts` (``drift_tracking``
     on) in one pass: per sample what the numpy path does with running products and sums
     over chunks of untouched samples (the same operations in the same order).
 

@@ -1,7 +1,7 @@
 """The estimator one sample at a time, for live use: :class:`Estimator`.
 
 Each stage is the stream form of the batch stage beside it (:mod:`~softtip.estimator.tare`,
-:mod:`~softtip.estimator.latch`, :mod:`~softtip.estimator.joint`,
+:mod:`~softtip.estimator.latch`, :mod:`~softtip.estimator.line_fit`,
 :mod:`~softtip.estimator.measure`), so :class:`Estimator` and
 :func:`~softtip.estimator.batch.estimate` agree to rounding. The per-sample arithmetic is
 written out on Python floats (:mod:`~softtip.estimator.floats`): a few microseconds per
@@ -33,8 +33,8 @@ from softtip.estimator.contact import (
 from softtip.estimator.depth import DepthTracker, resolve_depth
 from softtip.estimator.evidence import EvidenceTracker
 from softtip.estimator.floats import NoiseSquares, PointGeometry
-from softtip.estimator.joint import JointTracker
 from softtip.estimator.latch import LatchTracker
+from softtip.estimator.line_fit import LineFitTracker
 from softtip.estimator.measure import effective_noise, noise_correlation
 from softtip.estimator.results import EstimatorWarning, SampleEstimate
 from softtip.estimator.tare import StreamTare, TareReport, noise_in_use
@@ -101,13 +101,13 @@ class Estimator:
         corr = noise_correlation(self._sos)
         self._noise = effective_noise(noise, self._sos)
         self._evidence = EvidenceTracker(cfg, self._noise, corr)
-        self._joint = None
+        self._line_fit = None
         if cfg.contact_point == "line-fit":
-            self._joint = JointTracker(self.tip, cfg, self._noise, corr)
+            self._line_fit = LineFitTracker(self.tip, cfg, self._noise, corr)
         self._contacts.set_noise(self._noise)
         self._sq = NoiseSquares(self._noise)
         self._geo = PointGeometry((math.nan,) * 3, (0.0, 0.0, 1.0), self._sq)  # none yet
-        self._depth = None if cfg.depth is None else DepthTracker(cfg, self._noise, corr)
+        self._depth = None if cfg.skin_law is None else DepthTracker(cfg, self._noise, corr)
 
     @property
     def bias(self) -> tuple[float, ...] | None:
@@ -266,8 +266,8 @@ class Estimator:
         """A new first rise: at contact onset, and at a re-latch."""
         self._latch.start(f_norm, t)
         self._evidence.start_segment()
-        if self._joint is not None:
-            self._joint.start_segment(t)
+        if self._line_fit is not None:
+            self._line_fit.start_segment(t)
 
     def _step(self, t: float, dt: float, x: list[float]) -> SampleEstimate:
         cfg = self.config
@@ -304,8 +304,8 @@ class Estimator:
             if code == 2:
                 relatched = self._had_latch  # contact regained after a latched one
                 self._start_segment(f_norm, t)
-                if self._joint is not None:
-                    self._joint.start_contact()
+                if self._line_fit is not None:
+                    self._line_fit.start_contact()
             elif self._relatch:
                 moved, sc = self._latch.drifted(f_norm, x, sc)
                 if moved:
@@ -318,8 +318,8 @@ class Estimator:
                 point, latched, fallback, sc = latch.step(t, f_norm, x, sc)
             if latched:
                 self._had_latch = True
-            if self._joint is not None:
-                point, (j0, j1, j2, j3), moved = self._joint.step(t, x, point, sc)
+            if self._line_fit is not None:
+                point, (j0, j1, j2, j3), moved = self._line_fit.step(t, x, point, sc)
                 if moved:
                     latched = fallback = False
                 joint_fb = not moved

@@ -35,7 +35,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from softtip.core.joint import MODEL_MARGIN
+from softtip.core.line_fit import MODEL_MARGIN
 from softtip.core.noise import SensorNoise
 from softtip.errors import InputError
 from softtip.estimator.config import EstimatorConfig

@@ -20,9 +20,9 @@ skin and the step repeated (Gauss–Newton on the curved skin).
 
 Everything comes from 21 window sums of outer products of ``f`` and ``q_A = m − r_A × f``
 about an anchor ``r_A`` near the contact (the first soft-finger point of the contact, so
-that the sums carry no large cancelling ``r × f`` terms): :func:`joint_products` gives the
+that the sums carry no large cancelling ``r × f`` terms): :func:`line_fit_products` gives the
 per-sample products (cumulated by the batch, kept as running sums by the stream) and
-:func:`joint_solve_kernel` the solution from the window sums, component-wise for both
+:func:`line_fit_solve_kernel` the solution from the window sums, component-wise for both
 back ends of :mod:`softtip.core._xp`.
 
 **Identifiability.** ``θ`` and ``s`` are separable only when ``τ_k`` is not proportional to
@@ -68,14 +68,14 @@ from __future__ import annotations
 from softtip.core.noise import SensorNoise, _quad_kernel
 from softtip.core.spin import tangent_frame_kernel
 
-__all__ = ["N_SUMS", "joint_products", "joint_solve_kernel"]
+__all__ = ["N_SUMS", "line_fit_products", "line_fit_solve_kernel"]
 
 #: Number of window sums: Σ q qᵀ (6, symmetric), Σ q fᵀ (9), Σ f fᵀ (6, symmetric).
 N_SUMS = 21
 
 
-def joint_products(fx, fy, fz, qx, qy, qz):
-    """The 21 per-sample products whose window sums :func:`joint_solve_kernel` needs.
+def line_fit_products(fx, fy, fz, qx, qy, qz):
+    """The 21 per-sample products whose window sums :func:`line_fit_solve_kernel` needs.
 
     Parameters
     ----------
@@ -187,13 +187,13 @@ def _cross(ax, ay, az, bx, by, bz):
     return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
 
 
-def joint_solve_kernel(sums, count, r0x, r0y, r0z, ax, ay, az, tip, iterations, noise: SensorNoise, corr, xp):
+def line_fit_solve_kernel(sums, count, r0x, r0y, r0z, ax, ay, az, tip, iterations, noise: SensorNoise, corr, xp):
     """Joint contact point, direction and conditioning from the window sums, component-wise.
 
     Parameters
     ----------
     sums : sequence of 21 floats or arrays
-        Window sums of :func:`joint_products` (about the anchor ``a``).
+        Window sums of :func:`line_fit_products` (about the anchor ``a``).
     count : int or array
         Samples in the window.
     r0x, r0y, r0z : float or array

@@ -1,15 +1,15 @@
 """The ``line-fit`` contact-point stage, batch and stream side by side.
 
 The latch, then the contact point moved across the line to where a window of the last
-``joint_window`` seconds fits the line-contact model (the maths is in
-:mod:`softtip.core.joint`). A window is accepted when its standard deviations of line angle and
-offset are below ``joint_max_angle_std`` and ``joint_max_offset_std`` and its fit residual
-below ``joint_max_residual`` noise standard deviations. The point held is the accepted
+``line_fit_window`` seconds fits the line-contact model (the maths is in
+:mod:`softtip.core.line_fit`). A window is accepted when its standard deviations of line angle and
+offset are below ``line_fit_max_angle_std`` and ``line_fit_max_offset_std`` and its fit residual
+below ``line_fit_max_residual`` noise standard deviations. The point held is the accepted
 window since contact onset (or the last re-latch) with the smallest standard deviation aged
-by ``joint_drift``; before the first one the latched point is used. The coordinate along
+by ``line_fit_drift``; before the first one the latched point is used. The coordinate along
 the line is the latch's: a line contact does not tell it.
 
-:func:`joint_points` does it for a whole log, :class:`JointTracker` one sample at a time.
+:func:`line_fit_points` does it for a whole log, :class:`LineFitTracker` one sample at a time.
 """
 
 from __future__ import annotations
@@ -24,19 +24,19 @@ from numpy.typing import NDArray
 from softtip.core._xp import NP, PY
 from softtip.core.depth import depth_kernel
 from softtip.core.fingertip import Fingertip
-from softtip.core.joint import N_SUMS, joint_products, joint_solve_kernel
+from softtip.core.line_fit import N_SUMS, line_fit_products, line_fit_solve_kernel
 from softtip.core.location import SoftFinger, contact_kernel
 from softtip.core.noise import SensorNoise
 from softtip.core.spin import spin_torque_kernel
 from softtip.estimator.config import EstimatorConfig
 
-__all__ = ["joint_points", "LineFitPoints", "JointTracker", "joint_accept", "joint_moment"]
+__all__ = ["line_fit_points", "LineFitPoints", "LineFitTracker", "line_fit_accept", "line_fit_moment"]
 
 _NAN4 = (math.nan,) * 4
 
 
 class LineFitPoints(NamedTuple):
-    """What :func:`joint_points` gives for a whole log (N samples)."""
+    """What :func:`line_fit_points` gives for a whole log (N samples)."""
 
     point: NDArray  #: (N, 3) m, the contact point: the accepted window's, else the latch's
     stats: NDArray  #: (4, N) the window ending at each sample: conditioning, angle std (rad), offset std (m), residual (σ)
@@ -44,8 +44,8 @@ class LineFitPoints(NamedTuple):
     moved: NDArray  #: (N,) bool, the point is a window's, not the latch's
 
 
-def joint_moment(fx, fy, fz, mx, my, mz, nx, ny, nz, ax, ay, az, law, xp):
-    """Moment about the anchor ``a`` that enters the joint sums, component-wise.
+def line_fit_moment(fx, fy, fz, mx, my, mz, nx, ny, nz, ax, ay, az, law, xp):
+    """Moment about the anchor ``a`` that enters the line-fit sums, component-wise.
 
     With a depth law the moment is first moved to the undeformed surface, ``m + δ n × f``,
     so that the surface point is fitted; ``n`` is the normal at the latched point (the
@@ -59,24 +59,24 @@ def joint_moment(fx, fy, fz, mx, my, mz, nx, ny, nz, ax, ay, az, law, xp):
     return spin_torque_kernel(fx, fy, fz, mx, my, mz, ax, ay, az)
 
 
-def joint_accept(cond, angle_std, offset_std, residual, config: EstimatorConfig):
+def line_fit_accept(cond, angle_std, offset_std, residual, config: EstimatorConfig):
     # written so that NaN (undefined window) is never accepted, in both back ends
     return (
-        (angle_std <= config.joint_max_angle_std)
-        & (offset_std <= config.joint_max_offset_std)
-        & (residual <= config.joint_max_residual)
+        (angle_std <= config.line_fit_max_angle_std)
+        & (offset_std <= config.line_fit_max_offset_std)
+        & (residual <= config.line_fit_max_residual)
         & (cond >= 0.0)
     )
 
 
 
-def joint_points(t, c, contact, sc, base, relatched, tip: Fingertip, config: EstimatorConfig, noise: SensorNoise, corr) -> LineFitPoints:
+def line_fit_points(t, c, contact, sc, base, relatched, tip: Fingertip, config: EstimatorConfig, noise: SensorNoise, corr) -> LineFitPoints:
     """``line-fit`` mode over a whole log, vectorised within each contact.
 
     ``c`` are the six wrench components, ``sc`` the soft-finger solutions, ``base`` the
     latched points (N, 3) (start of each solve; their coordinate along the line is kept).
     Returns ``(point (N, 3), stats (4, N), used (N,), moved (N,))``: ``used`` marks the
-    windows that became the held point, ``moved`` the samples whose point is a joint one
+    windows that became the held point, ``moved`` the samples whose point is a line-fit one
     (the latched one elsewhere).
     """
     n = len(t)
@@ -90,25 +90,25 @@ def joint_points(t, c, contact, sc, base, relatched, tip: Fingertip, config: Est
             continue
         anchor = [float(c[v[0]]) for c in sc.point]  # first soft-finger point of the contact
         normal = np.stack([c[v] for c in sc.normal], axis=-1)
-        if config.depth is not None:
+        if config.skin_law is not None:
             has = np.all(np.isfinite(base[v]), axis=-1)
             normal[has] = tip.normal(base[v][has])
-        qa = joint_moment(*(ci[v] for ci in c), *normal.T, *anchor, config.depth, NP)
+        qa = line_fit_moment(*(ci[v] for ci in c), *normal.T, *anchor, config.skin_law, NP)
         tv = t[v]
         # window of sample k: the valid samples i with t_i > t_k − T (the stream's test)
-        first = np.searchsorted(tv, tv - config.joint_window, side="right")
+        first = np.searchsorted(tv, tv - config.line_fit_window, side="right")
         last = np.arange(1, len(v) + 1)
         sums = []
-        for p in joint_products(c[0][v], c[1][v], c[2][v], *qa):
+        for p in line_fit_products(c[0][v], c[1][v], c[2][v], *qa):
             cz = np.concatenate(([0.0], np.cumsum(p)))  # sequential, as the stream's running sums
             sums.append(cz[last] - cz[first])
         ok = np.all(np.isfinite(base[v]), axis=-1)
         count = (last - first).astype(float)
-        out = joint_solve_kernel(sums, count, *base[v].T, *anchor, tip, config.joint_iterations, noise, corr, NP)
+        out = line_fit_solve_kernel(sums, count, *base[v].T, *anchor, tip, config.line_fit_iterations, noise, corr, NP)
         jp[v[ok]] = np.stack(out[:3], axis=-1)[ok]
         stats[:, v[ok]] = np.stack(out[6:10])[:, ok]
     with np.errstate(invalid="ignore"):
-        accept = valid & joint_accept(*stats, config) & np.all(np.isfinite(jp), axis=-1)
+        accept = valid & line_fit_accept(*stats, config) & np.all(np.isfinite(jp), axis=-1)
     # the point held is the accepted window with the smallest offset_std² + drift² · age: an
     # accepted window replaces it when key = offset_std² − drift² (t − t_segment) sets a new
     # minimum (as the stream decides, sample by sample). A segment starts at contact onset
@@ -119,7 +119,7 @@ def joint_points(t, c, contact, sc, base, relatched, tip: Fingertip, config: Est
     starts = np.flatnonzero(begin)
     for a, b in zip(starts, np.append(starts[1:], n)):
         with np.errstate(invalid="ignore"):
-            key = np.where(accept[a:b], stats[2, a:b] ** 2 - config.joint_drift**2 * (t[a:b] - t[a]), np.inf)
+            key = np.where(accept[a:b], stats[2, a:b] ** 2 - config.line_fit_drift**2 * (t[a:b] - t[a]), np.inf)
         best = np.concatenate(([np.inf], np.minimum.accumulate(key)[:-1]))
         use[a:b] = key < best
         held_at[a:b] = np.maximum.accumulate(np.where(use[a:b], np.arange(a, b), -1))
@@ -129,11 +129,11 @@ def joint_points(t, c, contact, sc, base, relatched, tip: Fingertip, config: Est
     return LineFitPoints(point, stats, use, moved)
 
 
-class JointTracker:
-    """The ``line-fit`` stage of :func:`joint_points`, one sample at a time.
+class LineFitTracker:
+    """The ``line-fit`` stage of :func:`line_fit_points`, one sample at a time.
 
-    Running sums of the joint products since contact onset and, for each valid sample of the
-    last ``joint_window`` seconds, its time and the sums before it: window sums are
+    Running sums of the line-fit products since contact onset and, for each valid sample of the
+    last ``line_fit_window`` seconds, its time and the sums before it: window sums are
     differences, as in the batch.
     """
 
@@ -168,25 +168,25 @@ class JointTracker:
                 self._anchor = sc.point
             ax, ay, az = self._anchor
             nx, ny, nz = sc.normal
-            if cfg.depth is not None and point is not None:
+            if cfg.skin_law is not None and point is not None:
                 nx, ny, nz = self.tip._normal_kernel(*point, PY)
-            qa = joint_moment(*x, nx, ny, nz, ax, ay, az, cfg.depth, PY)
+            qa = line_fit_moment(*x, nx, ny, nz, ax, ay, az, cfg.skin_law, PY)
             hist = self._hist
             hist.append((t, self._cum))
-            self._cum = [c + p for c, p in zip(self._cum, joint_products(x[0], x[1], x[2], *qa))]
-            start = t - cfg.joint_window
+            self._cum = [c + p for c, p in zip(self._cum, line_fit_products(x[0], x[1], x[2], *qa))]
+            start = t - cfg.line_fit_window
             while hist and hist[0][0] <= start:
                 hist.popleft()
             if point is not None:
                 # an empty window (t − T rounds to t) has zero sums, as in the batch
                 sums = [c - o for c, o in zip(self._cum, hist[0][1] if hist else self._cum)]
-                out = joint_solve_kernel(
-                    sums, float(len(hist)), *point, ax, ay, az, self.tip, cfg.joint_iterations, self.noise,
+                out = line_fit_solve_kernel(
+                    sums, float(len(hist)), *point, ax, ay, az, self.tip, cfg.line_fit_iterations, self.noise,
                     self.corr, PY,
                 )  # fmt: skip
                 stats = out[6:10]
-                if joint_accept(*stats, cfg) and math.isfinite(out[0] + out[1] + out[2]):
-                    key = stats[2] ** 2 - cfg.joint_drift**2 * (t - self._t_segment)
+                if line_fit_accept(*stats, cfg) and math.isfinite(out[0] + out[1] + out[2]):
+                    key = stats[2] ** 2 - cfg.line_fit_drift**2 * (t - self._t_segment)
                     if key < self._key:
                         self._key, self._held = key, out[:3]
         if self._held is not None:

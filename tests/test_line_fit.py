@@ -9,9 +9,9 @@ from hypothesis import strategies as st
 
 from softtip import Capsule, EstimatorConfig, Sphere, axial_difference, estimate, murakami2006
 from softtip.core._xp import PY
-from softtip.core.joint import joint_products, joint_solve_kernel
+from softtip.core.line_fit import line_fit_products, line_fit_solve_kernel
 from softtip.core.noise import NANO17, SensorNoise
-from softtip.estimator.joint import joint_accept as _joint_accept
+from softtip.estimator.line_fit import line_fit_accept
 from softtip.sim.synthetic import smoothstep
 from strategies import unit_vectors
 from test_pipeline import assert_stream_equals_batch
@@ -49,8 +49,8 @@ def _window(r, n, d, rng, k=40, proportional=None, noise=None):
 
 def _solve(f, m, start, anchor, tip, iterations=12, noise=NANO17):
     qa = m - np.cross(anchor, f)
-    sums = [float(np.sum(p)) for p in joint_products(*f.T, *qa.T)]
-    return joint_solve_kernel(sums, float(len(f)), *start, *anchor, tip, iterations, noise, 1.0, PY)
+    sums = [float(np.sum(p)) for p in line_fit_products(*f.T, *qa.T)]
+    return line_fit_solve_kernel(sums, float(len(f)), *start, *anchor, tip, iterations, noise, 1.0, PY)
 
 
 @st.composite
@@ -113,7 +113,7 @@ def test_tangential_spin_proportional_to_the_normal_force_is_not_identifiable(da
     # the window fits a line through the latch as well as a point contact (h = 0) shifted
     # by κ, along which any direction fits; at high rates the noise alone must not pass for
     # excitation: the window must not be accepted
-    assert not _joint_accept(cond, angle_std, offset_std, residual, EstimatorConfig())
+    assert not line_fit_accept(cond, angle_std, offset_std, residual, EstimatorConfig())
 
 
 def slide_across_log(angle_deg=20.0, slide=3e-3, seed=0, tau_follows_force=False):
@@ -216,7 +216,7 @@ def test_simulated_papers_grasp_at_45_degrees_keeps_the_latch():
     log = simulate_grasp(murakami2006(), Plate(0.001), paper_scenario(math.radians(45.0)), rng=2006)
     joint = estimate(log.t, log.wrench, "murakami2006", EstimatorConfig(contact_point="line-fit"))
     # the papers' latch: line-fit mode takes no depth compensation unless asked
-    latch = estimate(log.t, log.wrench, "murakami2006", EstimatorConfig(depth_mode="off"))
+    latch = estimate(log.t, log.wrench, "murakami2006", EstimatorConfig(depth_compensation="off"))
     inside = joint.state > 0
     assert joint.line_fit_fallback[inside].all()
     np.testing.assert_array_equal(joint.point, latch.point)
@@ -246,7 +246,7 @@ def test_noise_off_the_axis_with_depth_compensation_is_not_excitation():
     tip = murakami2006()
     point = _cap_point(tip, 45.0)
     g = synthetic_grasp(tip, angle_deg=45.0, point=point, rate=7000.0, duration=8.0, seed=0)
-    est = estimate(g.t, g.wrench, tip, EstimatorConfig(contact_point="line-fit", depth=MURAKAMI2006_DEPTH))
+    est = estimate(g.t, g.wrench, tip, EstimatorConfig(contact_point="line-fit", skin_law=MURAKAMI2006_DEPTH))
     rising = (g.t > 2.5) & (g.t < 4.4)
     assert est.line_fit_fallback[rising & (est.state > 0)].all()
     # measured 0.024 mm (the synthetic grasp's friction acts at the surface: a depth law
@@ -283,8 +283,8 @@ def test_standard_deviations_hold_for_low_pass_filtered_noise():
     f, m = f + x[..., :3], m + x[..., 3:]
     start = tip.project(r + 0.3e-3 * d)
     qa = m - np.cross(start, f)
-    sums = [np.sum(p, axis=1) for p in joint_products(*np.moveaxis(f, -1, 0), *np.moveaxis(qa, -1, 0))]
-    out = joint_solve_kernel(sums, float(k), *start, *start, tip, 2, NANO17.scaled(g), 1.0 / g**2, NP)
+    sums = [np.sum(p, axis=1) for p in line_fit_products(*np.moveaxis(f, -1, 0), *np.moveaxis(qa, -1, 0))]
+    out = line_fit_solve_kernel(sums, float(k), *start, *start, tip, 2, NANO17.scaled(g), 1.0 / g**2, NP)
     point, direction = np.stack(out[0:3], axis=-1), np.stack(out[3:6], axis=-1)
     angle_err = np.arcsin(direction @ e)
     offset_err = (point - r) @ e
@@ -311,7 +311,7 @@ def test_low_pass_noise_in_a_proportional_dip_is_not_excitation():
         w[:, 3:] -= MURAKAMI2006_DEPTH.depth(f_normal)[:, None] * np.cross(g.normal, w[:, :3])
         rng = np.random.default_rng(seed + 77)
         w += g.bias + rng.normal(size=w.shape) * np.concatenate((NANO17.force_std, NANO17.moment_std))
-        cfg = EstimatorConfig(contact_point="line-fit", depth=MURAKAMI2006_DEPTH, lowpass_hz=2.0, sample_rate=rate)
+        cfg = EstimatorConfig(contact_point="line-fit", skin_law=MURAKAMI2006_DEPTH, lowpass_hz=2.0, sample_rate=rate)
         est = estimate(g.t, w, tip, cfg)
         before = np.argmin(np.abs(g.t - 10.95))
         moved = np.linalg.norm(est.point[g.t > 11.0] - est.point[before], axis=1)
@@ -319,8 +319,8 @@ def test_low_pass_noise_in_a_proportional_dip_is_not_excitation():
 
 
 def test_stream_survives_an_empty_window():
-    # t − joint_window rounds to t at Unix-epoch times: the window is empty, in both paths
+    # t − line_fit_window rounds to t at Unix-epoch times: the window is empty, in both paths
     t, w, _, _ = slide_across_log()
-    cfg = EstimatorConfig(contact_point="line-fit", joint_window=1e-7, tare_duration=0.0)
+    cfg = EstimatorConfig(contact_point="line-fit", line_fit_window=1e-7, tare_duration=0.0)
     est = assert_stream_equals_batch(t + 1.7e9, w, "murakami2006", cfg)
     assert est.line_fit_fallback[est.state > 0].all()
