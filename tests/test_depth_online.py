@@ -11,6 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from simcache import simulate_grasp
 from softtip import Capsule, EstimatorConfig, Sphere, axial_difference, estimate, murakami2006
 from softtip.core._xp import NP
 from softtip.core.depth import (
@@ -27,7 +28,7 @@ from softtip.core.noise import NANO17, SensorNoise
 from softtip.core.spin import direction_angle
 from softtip.errors import InputError
 from softtip.estimator.depth import DEPTH_ITERATIONS, resolve_depth, tip_depth_law
-from softtip.sim import ContactModel, ContactParams, Plate, Wedge, discretise_skin, friction_scenario, simulate_grasp
+from softtip.sim import ContactModel, ContactParams, Plate, Wedge, discretise_skin, friction_scenario
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 TIP = murakami2006()
