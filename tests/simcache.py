@@ -103,9 +103,14 @@ def _cached_properties(cls: type) -> frozenset[str]:
 
 def input_bytes(fn: Callable, args: tuple, kwargs: dict) -> bytes:
     """The call's inputs pickled (raises :class:`NotCacheable`)."""
+    # the function by its name: a subprocess may have put the cached one in its place
+    _KeyPickler._check(getattr(fn, "__module__", None), fn)
+    name = getattr(fn, "__qualname__", "<unknown>")
+    if "<" in name:
+        raise NotCacheable(f"{name} has no importable name")
     buf = io.BytesIO()
     try:
-        _KeyPickler(buf, protocol=_PROTOCOL).dump((fn, args, sorted(kwargs.items())))
+        _KeyPickler(buf, protocol=_PROTOCOL).dump((fn.__module__, name, args, sorted(kwargs.items())))
     except NotCacheable:
         raise
     except (pickle.PicklingError, TypeError, AttributeError) as exc:
@@ -181,13 +186,47 @@ class SimCache:
 
 #: The session's cache (conftest.py sets it when pytest starts)
 active = SimCache(None)
+# softtip's own functions, held here: install() puts the cached ones in their places
+_simulate_grasp = softtip.sim.simulate.simulate_grasp
+_simulate_probing = softtip.sim.probing.simulate_probing
 
 
 def simulate_grasp(*args, **kwargs) -> softtip.sim.SimLog:
     """:func:`softtip.sim.simulate_grasp`, cached (same arguments)."""
-    return active.call(softtip.sim.simulate.simulate_grasp, *args, **kwargs)
+    return active.call(_simulate_grasp, *args, **kwargs)
 
 
 def simulate_probing(*args, **kwargs):
     """:func:`softtip.sim.probing.simulate_probing`, cached (same arguments)."""
-    return active.call(softtip.sim.probing.simulate_probing, *args, **kwargs)
+    return active.call(_simulate_probing, *args, **kwargs)
+
+
+#: Where softtip's simulating code looks ``simulate_grasp`` up when it runs
+GRASP_CALLERS = ("softtip.sim", "softtip.sim.simulate", "softtip.sim.hand")
+_SITE = Path(__file__).resolve().parent / "simcache_site"
+_ENV = "SOFTTIP_TEST_SIM_CACHE_DIR"
+
+
+def install(directory: Path) -> None:
+    """In a ``softtip`` subprocess: use the cache in ``directory`` for every simulated grasp
+    (the reproduction, ``softtip simulate``, the two-finger hand). Run by
+    ``simcache_site/sitecustomize.py`` when :func:`subprocess_env` set the variable."""
+    import importlib
+
+    global active
+    if directory.name != version_key():  # another softtip than the tests' (e.g. another checkout's)
+        return
+    active = SimCache(directory)
+    for name in GRASP_CALLERS:
+        importlib.import_module(name).simulate_grasp = simulate_grasp
+
+
+def subprocess_env() -> dict[str, str] | None:
+    """The environment for a ``softtip`` subprocess that shares the session's cache (None:
+    no cache this session, the subprocess simulates)."""
+    if active.directory is None:
+        return None
+    env = dict(os.environ)
+    env[_ENV] = str(active.directory)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(_SITE), env.get("PYTHONPATH", "")) if p)
+    return env

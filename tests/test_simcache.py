@@ -8,6 +8,8 @@ import math
 import pickle
 import shutil
 import struct
+import subprocess
+import sys
 import threading
 from pathlib import Path
 
@@ -168,3 +170,27 @@ def test_the_session_cache_lives_in_pytests_cache_under_the_version(sim_cache, p
         pytest.skip("no pytest cache in this run (-p no:cacheprovider or SOFTTIP_TEST_SIM_CACHE=0)")
     assert sim_cache.directory.parent == Path(pytestconfig.cache.mkdir("softtip-sim"))
     assert sim_cache.directory.name == simcache.version_key()
+
+
+def test_a_softtip_subprocess_shares_the_cache_and_writes_the_same_bytes(tmp_path, monkeypatch):
+    # the README's `softtip simulate` / `softtip reproduce` lines run with simcache.subprocess_env()
+    cache_dir = tmp_path / simcache.version_key()  # a subprocess of another softtip would not use it
+    cache_dir.mkdir()
+    monkeypatch.setattr(simcache, "active", simcache.SimCache(cache_dir))
+    softtip_cmd = Path(sys.executable).with_name("softtip")
+    args = ["simulate", "--object", "plate", "--size", "2mm", "--angle", "30", "--duration", "3", "--elements", "1500"]
+
+    def run(out, env):
+        r = subprocess.run([softtip_cmd, *args, "-o", tmp_path / out], capture_output=True, text=True, timeout=300, env=env)
+        assert r.returncode == 0, r.stderr
+        return (tmp_path / out).read_bytes()
+
+    direct = run("direct.csv", None)
+    assert list(cache_dir.iterdir()) == []
+    first = run("first.csv", simcache.subprocess_env())
+    entries = list(cache_dir.iterdir())
+    assert len(entries) == 1 and entries[0].suffix == ".pickle"
+    mtime = entries[0].stat().st_mtime_ns
+    second = run("second.csv", simcache.subprocess_env())  # a hit: the entry is read, not written again
+    assert list(cache_dir.iterdir()) == entries and entries[0].stat().st_mtime_ns == mtime
+    assert direct == first == second
