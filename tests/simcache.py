@@ -7,8 +7,8 @@ softtip's that look the result up first in a cache under pytest's cache director
 
 - the simulator's inputs: the function and every argument, pickled (the bytes, hashed);
 - a version key: softtip's version, a hash of the sources of ``softtip/sim`` and ``softtip/core``
-  (the simulator and the shapes it touches), and the versions of Python, numpy and scipy. A
-  change to any of them gives a new version directory (the old ones are removed).
+  (the simulator and the shapes it touches), and the versions of Python, numpy, scipy, numba
+  and trimesh. A change to any of them gives a new version directory (the old ones are removed).
 
 An entry is the result pickled, written to a temporary file and renamed into place, so two
 workers that make the same entry at once both leave a whole file. A hit is unpickled afresh
@@ -37,6 +37,7 @@ import sys
 import tempfile
 import types
 from collections.abc import Callable
+from importlib import metadata
 from pathlib import Path
 from typing import Any
 
@@ -49,15 +50,22 @@ import softtip.sim
 SOURCE_PACKAGES = ("sim", "core")
 #: Roots of the modules whose code an input may refer to (their versions are in the key)
 TRUSTED_MODULES = frozenset({"softtip", "numpy", "builtins", "copyreg", "collections", "math", "functools", "_codecs"})
+#: Libraries whose versions may move the simulator's last bits (numba and trimesh: the mesh tips)
+NUMERIC_DISTRIBUTIONS = ("numpy", "scipy", "numba", "trimesh")
 _PROTOCOL = 5
+
+
+def _installed(distribution: str) -> str:
+    try:
+        return f"{distribution} {metadata.version(distribution)}"
+    except metadata.PackageNotFoundError:
+        return f"{distribution} absent"
 
 
 def version_key() -> str:
     """softtip's version, its simulator's sources and the numeric libraries' versions, hashed."""
-    import scipy
-
     h = hashlib.sha256()
-    for part in (softtip.__version__, sys.version, np.__version__, scipy.__version__):
+    for part in (softtip.__version__, sys.version, *map(_installed, NUMERIC_DISTRIBUTIONS)):
         h.update(part.encode() + b"\0")
     root = Path(softtip.__file__).parent
     for package in SOURCE_PACKAGES:
@@ -217,8 +225,10 @@ def install(directory: Path) -> None:
     if directory.name != version_key():  # another softtip than the tests' (e.g. another checkout's)
         return
     active = SimCache(directory)
-    for name in GRASP_CALLERS:
-        importlib.import_module(name).simulate_grasp = simulate_grasp
+    for name in GRASP_CALLERS:  # test_simcache checks that each holds simulate_grasp
+        module = importlib.import_module(name)
+        if hasattr(module, "simulate_grasp"):
+            module.simulate_grasp = simulate_grasp
 
 
 def subprocess_env() -> dict[str, str] | None:

@@ -172,6 +172,13 @@ def test_the_session_cache_lives_in_pytests_cache_under_the_version(sim_cache, p
     assert sim_cache.directory.name == simcache.version_key()
 
 
+def test_the_subprocess_hook_knows_where_softtip_looks_up_simulate_grasp():
+    import importlib
+
+    for name in simcache.GRASP_CALLERS:  # a module moved: update simcache.GRASP_CALLERS
+        assert importlib.import_module(name).simulate_grasp is simcache._simulate_grasp, name
+
+
 def test_a_softtip_subprocess_shares_the_cache_and_writes_the_same_bytes(tmp_path, monkeypatch):
     # the README's `softtip simulate` / `softtip reproduce` lines run with simcache.subprocess_env()
     cache_dir = tmp_path / simcache.version_key()  # a subprocess of another softtip would not use it
