@@ -21,6 +21,14 @@ test could change without changing the version key), random generators passed in
 simulation would advance them: pass a seed), and a call that changes its inputs (checked on
 every miss, an error: a hit would skip that change).
 
+A ``softtip`` subprocess (the README's ``softtip reproduce`` and ``softtip simulate`` lines, the
+CLI tests' ``simulate`` runs) shares the cache when started with :func:`subprocess_env`: a
+``sitecustomize`` on its PYTHONPATH puts the cached ``simulate_grasp`` where softtip looks it
+up (:data:`GRASP_CALLERS`), if the subprocess's softtip has the same version key.
+
+The simulator's own test files (``test_sim_*.py``) do not use the cache: they check the
+simulator, and simulate every time.
+
 Without a pytest cache (``-p no:cacheprovider``) or with ``SOFTTIP_TEST_SIM_CACHE=0`` the
 functions simulate every time.
 """
@@ -168,12 +176,14 @@ class SimCache:
             self.refused += 1
             return fn(*args, **kwargs)
         try:
-            data = path.read_bytes()
+            result = pickle.loads(path.read_bytes())
         except FileNotFoundError:
             pass
+        except (pickle.UnpicklingError, EOFError, AttributeError, ImportError, ValueError):
+            path.unlink(missing_ok=True)  # damaged by hand, or not ours: made again below
         else:
             self.hits += 1
-            return pickle.loads(data)
+            return result
         before = input_bytes(fn, args, kwargs)
         result = fn(*args, **kwargs)
         if input_bytes(fn, args, kwargs) != before:

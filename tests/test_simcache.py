@@ -139,6 +139,16 @@ def test_unsafe_inputs_are_computed_and_never_stored(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_a_damaged_entry_is_made_again(tmp_path):
+    cache = simcache.SimCache(tmp_path)
+    first = cache.call(rotation_matrix, np.array([0.0, 1.0, 0.0]), 0.5)
+    (entry,) = tmp_path.iterdir()
+    entry.write_bytes(entry.read_bytes()[:20])  # cut short
+    again = cache.call(rotation_matrix, np.array([0.0, 1.0, 0.0]), 0.5)
+    assert again.tobytes() == first.tobytes() and cache.misses == 2 and cache.hits == 0
+    assert pickle.loads(entry.read_bytes()).tobytes() == first.tobytes()
+
+
 def test_without_a_directory_every_call_computes():
     cache = simcache.SimCache(None)
     assert cache.call(rotation_matrix, np.array([1.0, 0.0, 0.0]), 0.2).shape == (3, 3)
