@@ -2,8 +2,21 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, settings
 
+import simcache
+
 settings.register_profile("softtip", deadline=None, max_examples=150, suppress_health_check=[HealthCheck.too_slow])
 settings.load_profile("softtip")
+
+
+def pytest_configure(config):
+    # the simulated logs that test files share: once per checkout and simulator version (simcache.py)
+    simcache.active = simcache.SimCache.in_pytest_cache(config)
+
+
+@pytest.fixture(scope="session")
+def sim_cache() -> simcache.SimCache:
+    """The session's cache of simulated logs (tests/simcache.py)."""
+    return simcache.active
 
 
 @pytest.fixture

@@ -10,6 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from simcache import simulate_probing
 from softtip.calibration.probing import PROBING_GUIDE, calibrate_fingertip, find_presses
 from softtip.core.fingertip import Capsule, Sphere, load_fingertip
 from softtip.core.noise import SensorNoise
@@ -17,7 +18,6 @@ from softtip.errors import InputError
 from softtip.io.examples import EXAMPLE_PROBING_PATH
 from softtip.io.tables import write_table
 from softtip.sim import SensorModel
-from softtip.sim.probing import simulate_probing
 from softtip.sim.synthetic import sliding_presses
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))

@@ -9,11 +9,14 @@ from pathlib import Path
 
 import pytest
 
+import simcache
+
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 
 
 def run(*args):
-    return subprocess.run([SOFTTIP, *map(str, args)], capture_output=True, text=True, timeout=120)
+    env = simcache.subprocess_env() if args[:1] == ("simulate",) else None  # the grasps from the tests' cache
+    return subprocess.run([SOFTTIP, *map(str, args)], capture_output=True, text=True, timeout=120, env=env)
 
 
 def read_csv(path):

@@ -11,6 +11,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+import simcache
+from simcache import simulate_grasp
 from softtip import Capsule, EstimatorConfig, Sphere, axial_difference, estimate, murakami2006
 from softtip.core._xp import NP
 from softtip.core.depth import (
@@ -27,7 +29,7 @@ from softtip.core.noise import NANO17, SensorNoise
 from softtip.core.spin import direction_angle
 from softtip.errors import InputError
 from softtip.estimator.depth import DEPTH_ITERATIONS, resolve_depth, tip_depth_law
-from softtip.sim import ContactModel, ContactParams, Plate, Wedge, discretise_skin, friction_scenario, simulate_grasp
+from softtip.sim import ContactModel, ContactParams, Plate, Wedge, discretise_skin, friction_scenario
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 TIP = murakami2006()
@@ -273,7 +275,7 @@ def test_cli_simulates_a_friction_grasp_with_its_truth(tmp_path):
     r = subprocess.run(
         [SOFTTIP, "simulate", "--scenario", "friction", "--object", "plate", "--size",
          "2mm", "--angle", "30", "--load", "0.4", "--elements", "2500", "--shear-modulus", "2e6", "-o", str(out)],
-        capture_output=True, text=True,
+        capture_output=True, text=True, env=simcache.subprocess_env(),
     )  # fmt: skip
     assert r.returncode == 0, r.stderr
     truth = json.loads((tmp_path / "fr.truth.json").read_text())
@@ -289,7 +291,7 @@ def test_cli_simulates_a_friction_grasp_with_its_truth(tmp_path):
     bad = subprocess.run(
         [SOFTTIP, "simulate", "--scenario", "friction", "--object", "wedge", "--load", "0.5", "--elements", "2500",
          "-o", str(tmp_path / "bad.csv")],
-        capture_output=True, text=True,
+        capture_output=True, text=True, env=simcache.subprocess_env(),
     )  # fmt: skip
     assert bad.returncode == 2 and "cannot be held" in bad.stderr
     assert not (tmp_path / "bad.csv").exists() and not (tmp_path / "bad.truth.json").exists()

@@ -10,6 +10,7 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from rocking import rocking_log
+from simcache import simulate_grasp
 from softtip import Estimator, EstimatorConfig, axial_difference, direction_angle, estimate, murakami2006
 from softtip.core._xp import NP, PY
 from softtip.core.evidence import (
@@ -21,7 +22,7 @@ from softtip.core.evidence import (
     window_kernel,
 )
 from softtip.core.noise import NANO17
-from softtip.sim import make_object, rock_scenario, simulate_grasp
+from softtip.sim import make_object, rock_scenario
 from softtip.sim.scenario import Disturbance
 
 

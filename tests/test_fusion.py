@@ -10,7 +10,9 @@ import pytest
 from numpy.testing import assert_allclose
 from scipy.spatial.transform import Rotation
 
+import simcache
 import softtip
+import softtip.sim.hand
 from softtip import EstimatorConfig, InputError
 from softtip.core.noise import NANO17
 from softtip.fusion import Finger, PoseSeries, fuse, fuse_logs, poses_from_columns, read_hand_file
@@ -157,7 +159,17 @@ def test_fuse_needs_two_fingers():
 
 
 def _run(*args):
-    return subprocess.run([SOFTTIP, *map(str, args)], capture_output=True, text=True, timeout=120)
+    env = simcache.subprocess_env() if args[:1] == ("simulate",) else None  # the grasps from the tests' cache
+    return subprocess.run([SOFTTIP, *map(str, args)], capture_output=True, text=True, timeout=120, env=env)
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _shared_grasps():
+    # the hand simulates each fingertip through softtip.sim.hand.simulate_grasp: from the
+    # session's cache (tests/simcache.py)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(softtip.sim.hand, "simulate_grasp", simcache.simulate_grasp)
+        yield
 
 
 @pytest.fixture(scope="module")

@@ -181,8 +181,9 @@ def test_joint_keeps_the_latch_without_excitation():
 def test_simulated_slide_across_the_line_then_the_papers_disturbance():
     # the bench_accuracy "slide" case: 1 mm plate at 0°, 0.5 kgf, 4 mm slide across the
     # line at 4.5–6 s, then the papers' joint disturbance at 6.5–7.5 s
+    from simcache import simulate_grasp
     from softtip.core.units import KGF
-    from softtip.sim import Disturbance, Plate, push_scenario, simulate_grasp
+    from softtip.sim import Disturbance, Plate, push_scenario
 
     tip = murakami2006()
     dist = (
@@ -211,7 +212,8 @@ def test_simulated_slide_across_the_line_then_the_papers_disturbance():
 def test_simulated_papers_grasp_at_45_degrees_keeps_the_latch():
     # the papers' disturbance at ±45° excites the line too little for a 2° window: joint
     # must fall back to the latch everywhere rather than move the point on noise
-    from softtip.sim import Plate, paper_scenario, simulate_grasp
+    from simcache import simulate_grasp
+    from softtip.sim import Plate, paper_scenario
 
     log = simulate_grasp(murakami2006(), Plate(0.001), paper_scenario(math.radians(45.0)), rng=2006)
     joint = estimate(log.t, log.wrench, "murakami2006", EstimatorConfig(contact_point="line-fit"))

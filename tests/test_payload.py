@@ -12,6 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
+from simcache import simulate_grasp
 from softtip import estimate, murakami2006
 from softtip.calibration.payload import (
     Payload,
@@ -27,7 +28,7 @@ from softtip.core.units import STANDARD_GRAVITY
 from softtip.errors import InputError
 from softtip.estimator import EstimatorWarning
 from softtip.io.tables import write_table
-from softtip.sim import HandFrame, SensorModel, Wedge, paper_scenario, simulate_grasp
+from softtip.sim import HandFrame, SensorModel, Wedge, paper_scenario
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 AXES = ("fx", "fy", "fz", "mx", "my", "mz")

@@ -26,6 +26,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import simcache
+
 SOFTTIP = Path(sys.executable).with_name("softtip")
 ROOT = Path(__file__).resolve().parents[1]
 README = ROOT / "README.md"
@@ -152,7 +154,9 @@ def _run_block(block: list[str], work: Path, slow: bool) -> list[str]:
                     made.add(name)
         argv = shlex.split(line)
         argv[0] = str(SOFTTIP)
-        run = subprocess.run(argv, cwd=work, capture_output=True, text=True, timeout=900)
+        # the grasps that `reproduce` and `simulate` simulate come from the tests' cache (simcache.py)
+        env = simcache.subprocess_env() if argv[1] in ("reproduce", "simulate") else None
+        run = subprocess.run(argv, cwd=work, capture_output=True, text=True, timeout=900, env=env)
         assert run.returncode == 0, f"README line failed (exit {run.returncode}): {line}\n{run.stderr[-3000:]}"
         assert "Traceback" not in run.stderr, f"{line}\n{run.stderr[-3000:]}"
         made |= _written(line) | {n.rstrip("/") + "/" for n in _written(line)}

@@ -8,6 +8,8 @@ samples with the median axial error stated per test; "not measured" means large 
 
 import pytest
 
+import simcache
+import softtip.sim
 from softtip.apps.reproduce import (
     LARGE_ERROR_DEG,
     POSITION_BOUND,
@@ -16,6 +18,15 @@ from softtip.apps.reproduce import (
     run_condition,
     run_reproduction,
 )
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _shared_grasps():
+    # the conditions simulate through softtip.sim.simulate_grasp: from the session's cache
+    # (tests/simcache.py), as other files simulate some of the same grasps
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(softtip.sim, "simulate_grasp", simcache.simulate_grasp)
+        yield
 
 
 def cond(exp, kind, size, angle, **kw):

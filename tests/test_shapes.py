@@ -9,6 +9,7 @@ from click.testing import CliRunner
 from numpy.testing import assert_allclose
 from scipy.spatial.transform import Rotation
 
+from simcache import simulate_grasp, simulate_probing
 from softtip import Capsule, Ellipsoid, ImplicitSurface, MeshFingertip, Mounted, Sphere, contact_from_wrench, estimate
 from softtip.calibration.probing import SHAPES as CALIBRATION_SHAPES
 from softtip.calibration.probing import calibrate_fingertip
@@ -20,8 +21,7 @@ from softtip.core.location import contact_kernel
 from softtip.core.mesh import capsule_mesh
 from softtip.core.shape import Fingertip
 from softtip.io.tables import read_log, write_table
-from softtip.sim import ContactModel, HalfSpace, SensorModel, discretise_skin, push_scenario, simulate_grasp
-from softtip.sim.probing import simulate_probing
+from softtip.sim import ContactModel, HalfSpace, SensorModel, discretise_skin, push_scenario
 
 if sys.version_info >= (3, 11):
     import tomllib
