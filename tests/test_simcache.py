@@ -164,7 +164,7 @@ def test_the_version_key_follows_the_simulators_sources(tmp_path, monkeypatch):
     monkeypatch.setattr(softtip, "__file__", str(copy / "__init__.py"))
     key = simcache.version_key()
     assert simcache.version_key() == key
-    contact = copy / "sim" / "contact.py"
+    contact = copy / "sim" / "foundation.py"
     contact.write_text(contact.read_text() + "\n# a change\n")
     changed = simcache.version_key()
     assert changed != key
