@@ -21,7 +21,7 @@ sampled at a constant rate): the sample rate a low-pass filter is designed for, 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
 import numpy as np
@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 
 from softtip.core.filtering import lowpass_sos, sosfilt_state
 from softtip.core.fingertip import Fingertip, load_fingertip
-from softtip.estimator.batch import Carry, estimate, infer_rate, validate_log
+from softtip.estimator.batch import Carry, carry_over, estimate, infer_rate, validate_log
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.contact import track_contacts
 from softtip.estimator.depth import resolve_depth
@@ -50,6 +50,8 @@ def estimate_pieces(
     tip: Fingertip | str = "murakami2006",
     config: EstimatorConfig | None = None,
     rows: int = DEFAULT_PIECE_ROWS,
+    *,
+    jobs: int = 1,
 ) -> Iterator[tuple[Estimates, dict[str, Any]]]:
     """Estimate a log given block by block; yield each piece's estimates and extra columns.
 
@@ -63,6 +65,10 @@ def estimate_pieces(
     config : EstimatorConfig, optional
     rows : int
         Samples per piece (at least; see the module's notes), ≥ 1.
+    jobs : int
+        Worker processes estimating pieces at the same time (1: all in this process, one
+        after the other). The pieces, and every bit of them, are those of ``jobs=1``; see
+        :func:`_parallel_pieces` for how.
 
     Yields
     ------
@@ -72,9 +78,23 @@ def estimate_pieces(
     """
     if rows < 1:
         raise ValueError(f"rows = {rows}; expected at least 1")
+    if jobs < 1:
+        raise ValueError(f"jobs = {jobs}; expected at least 1")
     tip = load_fingertip(tip)
     config = resolve_depth(config or EstimatorConfig(), tip)
+    if jobs > 1:
+        yield from _parallel_pieces(blocks, tip, config, rows, jobs)
+        return
     carry = Carry()
+    yield from _split(blocks, tip, config, rows, carry, lambda t, w, cfg: _piece(t, w, tip, cfg, carry))
+
+
+def _split(
+    blocks: Iterable[Block], tip: Fingertip, config: EstimatorConfig, rows: int, carry: Carry,
+    take: Callable[[NDArray, NDArray, EstimatorConfig], Any],
+) -> Iterator[tuple[Any, dict[str, Any]]]:
+    """Cut the log where :func:`_cut` allows; yield ``take(t, w, config)`` of each piece and its extra
+    columns. ``take`` must bring ``carry`` past the piece (the next cut is looked for from there)."""
     t_buf: list[NDArray] = []
     w_buf: list[NDArray] = []
     x_buf: dict[str, list[NDArray]] = {}
@@ -100,13 +120,13 @@ def estimate_pieces(
             if cut is None:
                 break  # a contact goes on past the rows held: read more
             xx = {k: _joined(v) for k, v in x_buf.items()}
-            yield _piece(tt[:cut], ww[:cut], tip, config, carry), {k: v[:cut] for k, v in xx.items()}
+            yield take(tt[:cut], ww[:cut], config), {k: v[:cut] for k, v in xx.items()}
             t_buf, w_buf = [tt[cut:]], [ww[cut:]]
             x_buf = {k: [v[cut:]] for k, v in xx.items()}
             held = len(tt) - cut
     if held:
         tt, ww = _joined(t_buf), _joined(w_buf)
-        yield _piece(tt, ww, tip, config, carry), {k: _joined(v) for k, v in x_buf.items()}
+        yield take(tt, ww, config), {k: _joined(v) for k, v in x_buf.items()}
 
 
 def _joined(parts: list[NDArray]) -> NDArray:
@@ -147,3 +167,151 @@ def _cut(t: NDArray, w: NDArray, tip: Fingertip, config: EstimatorConfig, carry:
     free[: max(start + 1, rows)] = False
     idx = np.flatnonzero(free)
     return int(idx[0]) if len(idx) else None
+
+
+# --- pieces in parallel (``jobs`` > 1) -------------------------------------------------------
+
+
+def _parallel_pieces(
+    blocks: Iterable[Block], tip: Fingertip, config: EstimatorConfig, rows: int, jobs: int
+) -> Iterator[tuple[Estimates, dict[str, Any]]]:
+    """:func:`estimate_pieces` with ``jobs`` worker processes: the same pieces, the same bits.
+
+    This process reads, finds the cuts (:func:`_cut`) and brings the carry past each piece with
+    the sequential stages alone (:func:`softtip.estimator.batch.carry_over`: tare, low-pass,
+    contact tracking, a few per cent of the work); the workers run the whole estimator on the
+    pieces from those carries, and the pieces are yielded in order. The one flag of the carry
+    the sequential stages cannot give, whether an earlier contact latched (it marks the next
+    contact's onset as re-latched), is guessed when a piece is sent and checked when its
+    predecessors are back: a piece sent with the wrong guess is estimated again, here, with
+    the right one. At most ``2 * jobs`` pieces are in flight (memory stays bounded).
+    """
+    import copy
+    from collections import deque
+
+    carry = Carry()  # the sequential stages' state, ahead of the workers
+    guess = _LatchGuess(config.contact_point != "track")
+    pool = _start_pool(tip, jobs)
+    pending: deque = deque()
+
+    def send(t: NDArray, w: NDArray, cfg: EstimatorConfig) -> _Sent:
+        before = copy.deepcopy(carry)
+        before.had_latch = guess.next()
+        future = pool.submit(_estimate_piece, t, w, cfg, before)
+        contacts = carry_over(t, w, tip, cfg, carry)
+        guess.sent(contacts)
+        return _Sent(future, t, w, cfg, before, contacts)
+
+    def back(sent: _Sent, extra: dict[str, Any]) -> tuple[Estimates, dict[str, Any]]:
+        est, had_latch = sent.future.result()
+        if sent.before.had_latch != guess.had_latch:  # guessed wrong: again with the flag now known
+            sent.before.had_latch = guess.had_latch
+            est = _piece(sent.t, sent.w, tip, sent.config, sent.before)
+            had_latch = sent.before.had_latch
+        guess.back(had_latch, sent.contacts)
+        return est, extra
+
+    try:
+        for sent, extra in _split(blocks, tip, config, rows, carry, send):
+            pending.append((sent, extra))
+            while len(pending) > 2 * jobs or pending[0][0].future.done():
+                yield back(*pending.popleft())
+                if not pending:
+                    break
+        while pending:
+            yield back(*pending.popleft())
+    except BaseException:  # an error, Ctrl-C, SIGTERM, a consumer that stops: the workers end now
+        _end_pool(pool)
+        raise
+    pool.shutdown()
+
+
+@dataclasses.dataclass
+class _Sent:
+    """A piece sent to a worker: its samples and the carry it was sent with (for a second run)."""
+
+    future: Any
+    t: NDArray
+    w: NDArray
+    config: EstimatorConfig
+    before: Carry
+    contacts: int
+
+
+class _LatchGuess:
+    """``Carry.had_latch`` for the next piece sent, guessed, and the exact flag as the pieces come back.
+
+    The guess: the exact flag if it is already true; otherwise, true when a piece in flight
+    holds a contact and no contact back so far failed to latch (a log's contacts usually
+    latch: the first one sets the flag for all that follow).
+    """
+
+    def __init__(self, latching: bool) -> None:
+        self.latching = latching  # False: contact_point "track", the flag is never used or set
+        self.had_latch = False  #: exact, after the pieces back so far
+        self.contacts_back = 0
+        self.contacts_out = 0
+
+    def next(self) -> bool:
+        if not self.latching or self.had_latch:
+            return self.had_latch
+        return self.contacts_out > 0 and self.contacts_back == 0
+
+    def sent(self, contacts: int) -> None:
+        self.contacts_out += contacts
+
+    def back(self, had_latch: bool, contacts: int) -> None:
+        self.had_latch = had_latch
+        self.contacts_out -= contacts
+        self.contacts_back += contacts
+
+
+_WORKER_TIP: list[Fingertip] = []  # a worker's fingertip, sent once (a mesh is large)
+
+
+def _worker_init(tip: Fingertip) -> None:
+    """A worker of :func:`_parallel_pieces`: the parent decides when it ends (Ctrl-C and SIGHUP
+    reach the whole process group; the parent ends the pool, SIGTERM at its default action)."""
+    import signal
+
+    for name in ("SIGINT", "SIGHUP"):
+        if hasattr(signal, name):
+            signal.signal(getattr(signal, name), signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    _WORKER_TIP[:] = [tip]
+
+
+def _estimate_piece(t: NDArray, w: NDArray, config: EstimatorConfig, carry: Carry) -> tuple[Estimates, bool]:
+    """In a worker: a piece's estimates from ``carry``, and whether a contact latched by its end."""
+    est = _piece(t, w, _WORKER_TIP[0], config, carry)
+    return est, carry.had_latch
+
+
+def _start_pool(tip: Fingertip, jobs: int) -> Any:
+    """``jobs`` worker processes, forked from a server that has imported softtip (not from this
+    process, which may hold threads and gigabytes)."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    ctx = multiprocessing.get_context("forkserver")
+    ctx.set_forkserver_preload([__name__])
+    return ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_worker_init, initargs=(tip,))
+
+
+def _end_pool(pool: Any, timeout: float = 5.0) -> None:
+    """Cancel what is queued and end the workers (terminate, then kill after ``timeout`` s)."""
+    import contextlib
+    import time
+
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for p in processes:
+        with contextlib.suppress(Exception):
+            p.terminate()
+    deadline = time.monotonic() + timeout
+    for p in processes:
+        with contextlib.suppress(Exception):
+            p.join(max(0.0, deadline - time.monotonic()))
+            if p.is_alive():
+                p.kill()
+                p.join(1.0)

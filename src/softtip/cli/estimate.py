@@ -125,6 +125,11 @@ from the bag's /tf.
     "--rerun-save, --payload]",
 )  # fmt: skip
 @option(
+    "--jobs", type=click.IntRange(1, 64), default=1, show_default=True, metavar="N",
+    help="Worker processes estimating the pieces of a log processed in pieces (see --chunk-rows) at the same time: "
+    "the output is the same, bit for bit, as with --jobs 1 (all in this process); each worker holds a piece in memory.",
+)  # fmt: skip
+@option(
     "--full-scale", metavar="SENSOR|FORCE,MOMENT|off",
     help="The sensor's full-scale range: a sample beyond it (a corrupted row) stops the run naming it. A sensor ("
     + ", ".join(SENSOR_RANGES) + "; rated range per axis), FORCE,MOMENT in N and N·m for every axis, or off "
@@ -163,6 +168,7 @@ def _estimate(
     gravity_frame=None,
     chunk_rows=None,
     full_scale=None,
+    jobs=1,
     **estimator_opts,
 ):
     from softtip.io.examples import EXAMPLE_ANGLE_DEG, EXAMPLE_PATH
@@ -246,7 +252,7 @@ def _estimate(
             rows = chunk_rows or _auto_chunk_rows(input_path)
             if rows and _estimate_in_pieces(
                 input_path, units, rows, fingertip, config, estimator_opts, output=output, output_units=output_units,
-                tip=tip, quiet=quiet, save_bias=save_bias, outputs=outputs, sensor_range=sensor_range,
+                tip=tip, quiet=quiet, save_bias=save_bias, outputs=outputs, sensor_range=sensor_range, jobs=jobs,
             ):  # fmt: skip
                 return
         size = os.path.getsize(input_path) if os.path.isfile(input_path) else 0
@@ -432,7 +438,7 @@ def _auto_chunk_rows(path: str) -> int | None:
 
 def _estimate_in_pieces(
     input_path, units, rows, fingertip, config, estimator_opts, *, output, output_units, tip, quiet, save_bias, outputs,
-    sensor_range=None,
+    sensor_range=None, jobs=1,
 ) -> bool:
     """``softtip estimate`` piece by piece (:mod:`softtip.apps.chunked`) into ``output`` (a path);
     ``False`` when the log holds something only the one-shot reader takes or words (nothing
@@ -495,7 +501,7 @@ def _estimate_in_pieces(
         def run(out) -> None:
             writer = TableWriter(out, format=fmt, metadata=parquet_metadata(fingertip, tip, output_units, blocks))
             try:
-                for k, (est, extra) in enumerate(estimate_pieces(checked(), fingertip, config, rows)):
+                for k, (est, extra) in enumerate(estimate_pieces(checked(), fingertip, config, rows, jobs=jobs)):
                     if k == 0:
                         noise_fits(est)
                     vote.add(lever_distances(est.wrench[~est.taring], max(0.1, config.contact_threshold)))

@@ -30,7 +30,7 @@ from softtip.estimator.measure import Measurement, effective_noise, measure, noi
 from softtip.estimator.results import LINE, NONE, Estimates, EstimatorWarning
 from softtip.estimator.tare import TareReport, noise_in_use, tare_log
 
-__all__ = ["Carry", "estimate"]
+__all__ = ["Carry", "carry_over", "estimate"]
 
 
 @dataclass
@@ -96,6 +96,70 @@ def sample_rate_mismatch(t: ArrayLike, sample_rate: float | None) -> str | None:
     )
 
 
+def _sequential_stages(t: NDArray, w: NDArray, config: EstimatorConfig, carry: Carry | None):
+    """The stages whose state crosses a cut (tare, low-pass filter, contact tracking) over ``t`` (N,) s and
+    ``w`` (N, 6) N and N·m, validated; ``carry`` (when given) updated to their state at the last sample.
+
+    Returns ``(bias, taring, tare_report, sos, noise, ct)``: the bias (6,), the taring mask (N,), the
+    :class:`TareReport`, the low-pass filter's sections (None without one), the noise in use and the
+    :class:`~softtip.estimator.contact.ContactTrack`.
+    """
+    n = len(t)
+    later = carry is not None and carry.tare is not None
+    if later:  # a later piece: the first piece's bias, no tare
+        tare_report = carry.tare
+        bias, taring = tare_report.bias, np.zeros(n, dtype=bool)
+    else:
+        bias, taring, tare_report = tare_log(t, w, config)
+    x = w - bias
+
+    sos = None
+    zf = None
+    if config.lowpass_hz is not None:
+        rate = config.sample_rate or infer_rate(t)
+        sos = lowpass_sos(config.lowpass_hz, rate, config.lowpass_order)
+        if np.all(np.isfinite(bias)):
+            x, zf = sosfilt_state(sos, x, carry.zi if later else None)
+    noise = effective_noise(noise_in_use(config, tare_report), sos)
+    ct = track_contacts(t, x, int(np.count_nonzero(taring)), config, noise, carry.track if later else None)
+    if carry is not None:
+        carry.tare, carry.zi, carry.track = tare_report, zf, ct.state
+    return bias, taring, tare_report, sos, noise, ct
+
+
+def carry_over(t: ArrayLike, wrench: ArrayLike, tip: Fingertip | str, config: EstimatorConfig, carry: Carry) -> int:
+    """Bring ``carry`` past a piece of a log with the sequential stages alone (no per-contact stage).
+
+    The tare, the low-pass filter's state and the contact tracker's state become what
+    :func:`estimate` (``carry=carry``) leaves after these samples, to the bit; ``carry.had_latch``
+    is left as it was (whether a contact latched needs the per-contact stages). A few per cent of
+    :func:`estimate`'s time: the pieces of a log can then be estimated in parallel
+    (:func:`softtip.io.chunked.estimate_pieces`, ``jobs``).
+
+    Parameters
+    ----------
+    t : array-like, shape (N,)
+        Sample times, s.
+    wrench : array-like, shape (N, 6)
+        Raw wrench, N and N·m, sensor frame.
+    tip : Fingertip or str
+    config : EstimatorConfig
+    carry : Carry
+        Updated in place.
+
+    Returns
+    -------
+    int
+        The contacts that began in these samples.
+    """
+    tip = load_fingertip(tip)
+    config = resolve_depth(config, tip)
+    t, w = validate_log(t, wrench)
+    before = carry.track.count if carry.track is not None else 0
+    _sequential_stages(t, w, config, carry)
+    return carry.track.count - before
+
+
 def estimate(
     t: ArrayLike,
     wrench: ArrayLike,
@@ -143,24 +207,7 @@ def estimate(
     n = len(t)
 
     later = carry is not None and carry.tare is not None
-    if later:  # a later piece: the first piece's bias, no tare
-        tare_report = carry.tare
-        bias, taring = tare_report.bias, np.zeros(n, dtype=bool)
-    else:
-        bias, taring, tare_report = tare_log(t, w, config)
-    x = w - bias
-
-    sos = None
-    zf = None
-    if config.lowpass_hz is not None:
-        rate = config.sample_rate or infer_rate(t)
-        sos = lowpass_sos(config.lowpass_hz, rate, config.lowpass_order)
-        if np.all(np.isfinite(bias)):
-            x, zf = sosfilt_state(sos, x, carry.zi if later else None)
-    noise = effective_noise(noise_in_use(config, tare_report), sos)
-    ct = track_contacts(t, x, int(np.count_nonzero(taring)), config, noise, carry.track if later else None)
-    if carry is not None:
-        carry.tare, carry.zi, carry.track = tare_report, zf, ct.state
+    bias, taring, tare_report, sos, noise, ct = _sequential_stages(t, w, config, carry)
     x = ct.wrench
 
     c = [np.ascontiguousarray(x[:, i]) for i in range(6)]
