@@ -34,6 +34,13 @@ CSV) side by side in rows per CPU second, the kernel/pipeline ratio, and the pea
 the pipeline per row (peak resident memory beyond its inputs). Target (manual §6): pipeline
 >= 20 M rows/s at 1e7 on one core, <= 400 B/row.
 
+Both cores (--only jobs): a log's pieces estimated in this process (jobs=1) and by two worker
+processes (jobs=2, softtip.io.chunked.estimate_pieces; the same bits), in the same run: wall
+time, and CPU time of this process and of the workers; then `softtip estimate --jobs 1` and
+`--jobs 2` on the same Parquet log, wall time. Target (issue 31): >= 1.7x in wall time on 2 cores.
+On a machine shared with other work the wall-time ratio is bounded by the share of the cores
+the run gets: the CPU times say what the workers cost.
+
 Mesh rows: the shipped mesh fingertip (the papers' capsule with a nail, 21.6k triangles),
 contact location per sample (streaming kernel, median and p99 of CPU time; target median <=
 50 us) on the example grasp's samples in contact (a contact moving continuously, noise
@@ -93,7 +100,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--samples", type=int, default=1_000_000)
     ap.add_argument("--stream-samples", type=int, default=20_000)
-    ap.add_argument("--only", choices=["end-to-end", "stream", "scaling", "compiled", "bounds"], help="Run only this part.")
+    ap.add_argument("--only", choices=["end-to-end", "stream", "scaling", "compiled", "bounds", "jobs"], help="Run only this part.")
     ap.add_argument("--sizes", default="1e5,1e6,1e7", help="log lengths of the scaling table (comma-separated)")
     ap.add_argument("--scaling-worker", type=float, help=argparse.SUPPRESS)
     ap.add_argument("--mesh-only", action="store_true", help="only the mesh fingertip rows")
@@ -122,6 +129,9 @@ def main() -> None:
         return
     if args.only == "bounds":
         bounds(n)
+        return
+    if args.only == "jobs":
+        both_cores(n)
         return
     print(f"batch contact location, {n:,} samples (best of 3; general solver: 1 run)")
 
@@ -158,6 +168,7 @@ def main() -> None:
     end_to_end(n)
     bounds(n)
     compiled_rows()
+    both_cores(n)
     scaling([int(float(x)) for x in args.sizes.split(",")])
     mesh_rows(args, rng)
 
@@ -430,6 +441,66 @@ def end_to_end(n: int) -> None:
         ww, cw, _ = timed(old_write, repeats=1)
         print(f"  {'before: Python CSV reader':34s} {cell(wr, cr):>36s}")
         print(f"  {'before: Python CSV writer':34s} {cell(ww, cw):>36s}")
+
+
+def _proc_cpu(pid: int) -> float:
+    """CPU time (user + system) of a live process, s (Linux /proc; 0 elsewhere)."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except OSError:
+        return 0.0
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def both_cores(n: int) -> None:
+    """jobs=1 against jobs=2 on an n-row log (the 1 kHz grasp repeated): the library's pieces, then the command."""
+    from softtip.io import chunked
+    from softtip.io.tables import iter_log, write_table
+
+    g = synthetic_grasp("murakami2006", angle_deg=45.0, duration=10.0, rate=1000.0, seed=1)
+    reps = max(1, n // len(g.t))
+    t = np.arange(reps * len(g.t)) * 1e-3
+    w = np.tile(g.wrench, (reps, 1))
+    n = len(t)
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    print(f"both cores: {n:,}-row log in pieces of {chunked.DEFAULT_PIECE_ROWS} rows, {os.cpu_count()} CPUs, load average {load:.1f} at the start")
+    pools: list = []
+    start_pool = chunked._start_pool
+
+    def recorded(*args):
+        pools.append(start_pool(*args))
+        return pools[-1]
+
+    chunked._start_pool = recorded  # to read the workers' CPU time before they end
+    with tempfile.TemporaryDirectory() as tmp:
+        src = Path(tmp, "in.parquet")
+        write_table({"t": t, **{name: w[:, i] for i, name in enumerate(("fx", "fy", "fz", "mx", "my", "mz"))}}, src)
+        walls = {}
+        try:
+            for jobs in (1, 2, 1, 2):  # twice each, alternating: the load changes
+                w0, c0, workers = time.perf_counter(), _cpu(), 0.0
+                rows = 0
+                for est, _ in chunked.estimate_pieces(iter_log(str(src), None, rows=1 << 16), "murakami2006", None, jobs=jobs):
+                    rows += len(est)
+                    if jobs > 1:
+                        workers = sum(_proc_cpu(pid) for pid in pools[-1]._processes)
+                wall, cpu = time.perf_counter() - w0, _cpu() - c0
+                assert rows == n
+                walls.setdefault(jobs, []).append(wall)
+                print(f"  estimate_pieces jobs={jobs}: wall {wall:6.2f} s  CPU this process {cpu:6.2f} s  workers {workers:6.2f} s"
+                      f"  ({n / wall / 1e6:5.2f} M rows/s wall)")
+        finally:
+            chunked._start_pool = start_pool
+        print(f"  wall-time ratio jobs=1 / jobs=2 (best of 2 each): {min(walls[1]) / min(walls[2]):.2f}x")
+        cmd = [str(Path(sys.executable).with_name("softtip")), "estimate", str(src), "-o", str(Path(tmp, "out.parquet")), "-q"]
+        cli = {}
+        for jobs in (1, 2, 1, 2):
+            wall, cpu, peak = command(cmd + ["--jobs", str(jobs)])
+            cli.setdefault(jobs, []).append(wall)
+            print(f"  `softtip estimate --jobs {jobs}` Parquet -> Parquet: wall {wall:6.2f} s  CPU (this process) {cpu:6.2f} s  peak {peak / 1e9:5.2f} GB")
+        print(f"  wall-time ratio of the command (best of 2 each): {min(cli[1]) / min(cli[2]):.2f}x")
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    print(f"  load average at the end {load:.1f} (other work on the machine shares the cores)")
 
 
 #: The output columns manual §6's end-to-end targets are bound to (the least the command line

@@ -20,7 +20,9 @@ sampled at a constant rate): the sample rate a low-pass filter is designed for, 
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
+import os
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
@@ -189,21 +191,28 @@ def _parallel_pieces(
     import copy
     from collections import deque
 
+    import itertools
+    import secrets
+    import tempfile
+
     carry = Carry()  # the sequential stages' state, ahead of the workers
     guess = _LatchGuess(config.contact_point != "track")
+    shared_dir, counter, token = _SHARED_DIR or tempfile.gettempdir(), itertools.count(), secrets.token_hex(4)
     pool = _start_pool(tip, jobs)
     pending: deque = deque()
 
     def send(t: NDArray, w: NDArray, cfg: EstimatorConfig) -> _Sent:
         before = copy.deepcopy(carry)
         before.had_latch = guess.next()
-        future = pool.submit(_estimate_piece, t, w, cfg, before)
+        path = os.path.join(shared_dir, f"softtip-piece-{os.getpid()}-{next(counter)}-{token}")
+        future = pool.submit(_estimate_piece, t, w, cfg, before, path)
         contacts = carry_over(t, w, tip, cfg, carry)
         guess.sent(contacts)
-        return _Sent(future, t, w, cfg, before, contacts)
+        return _Sent(future, t, w, cfg, before, contacts, path)
 
     def back(sent: _Sent, extra: dict[str, Any]) -> tuple[Estimates, dict[str, Any]]:
-        est, had_latch = sent.future.result()
+        shared, had_latch = sent.future.result()
+        est = _from_shared(shared, sent.path)
         if sent.before.had_latch != guess.had_latch:  # guessed wrong: again with the flag now known
             sent.before.had_latch = guess.had_latch
             est = _piece(sent.t, sent.w, tip, sent.config, sent.before)
@@ -222,6 +231,9 @@ def _parallel_pieces(
             yield back(*pending.popleft())
     except BaseException:  # an error, Ctrl-C, SIGTERM, a consumer that stops: the workers end now
         _end_pool(pool)
+        for sent, _ in pending:  # and what they left for this process goes
+            with contextlib.suppress(OSError):
+                os.unlink(sent.path)
         raise
     pool.shutdown()
 
@@ -236,6 +248,7 @@ class _Sent:
     config: EstimatorConfig
     before: Carry
     contacts: int
+    path: str  #: the file the worker leaves the estimates in
 
 
 class _LatchGuess:
@@ -281,26 +294,103 @@ def _worker_init(tip: Fingertip) -> None:
     _WORKER_TIP[:] = [tip]
 
 
-def _estimate_piece(t: NDArray, w: NDArray, config: EstimatorConfig, carry: Carry) -> tuple[Estimates, bool]:
-    """In a worker: a piece's estimates from ``carry``, and whether a contact latched by its end."""
+def _estimate_piece(t: NDArray, w: NDArray, config: EstimatorConfig, carry: Carry, path: str) -> tuple[Any, bool]:
+    """In a worker: a piece's estimates from ``carry`` (through the file ``path``: :func:`_to_shared`),
+    and whether a contact latched by its end."""
     est = _piece(t, w, _WORKER_TIP[0], config, carry)
-    return est, carry.had_latch
+    return _to_shared(est, path), carry.had_latch
+
+
+#: Where a worker leaves a piece's arrays for the parent: shared memory where there is one.
+_SHARED_DIR = "/dev/shm" if os.path.isdir("/dev/shm") and os.access("/dev/shm", os.W_OK) else None
+_ALIGN = 64
+
+
+def _to_shared(obj: Any, path: str) -> tuple[bytes, list[int]]:
+    """``obj`` pickled with its arrays' bytes written once into a new file ``path`` (not into
+    the pickle, which would copy them twice more and once again in the parent: a piece's
+    estimates are ~330 B per sample); :func:`_from_shared` maps them back without a copy."""
+    import pickle
+
+    buffers: list = []
+    head = pickle.dumps(obj, protocol=5, buffer_callback=buffers.append)
+    raws = [b.raw() for b in buffers]
+    sizes = [r.nbytes for r in raws]
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    try:  # written, not mapped: a mapping would fault in each new page (three times slower)
+        for r, n in zip(raws, sizes):
+            for part in (r, bytes(-n % _ALIGN)):
+                view = memoryview(part)
+                while len(view):
+                    view = view[os.write(fd, view) :]
+        if not sizes:
+            os.write(fd, b"\0")
+    finally:
+        os.close(fd)
+    return head, sizes
+
+
+def _from_shared(shared: tuple[bytes, list[int]], path: str) -> Any:
+    """The object :func:`_to_shared` left in ``path``; its arrays are views of the file's memory
+    (the file is removed at once; the memory goes with the last array)."""
+    import mmap
+    import pickle
+
+    head, sizes = shared
+    total = sum(-(-n // _ALIGN) * _ALIGN for n in sizes) or 1
+    fd = os.open(path, os.O_RDWR)
+    try:
+        mm = mmap.mmap(fd, total)
+    finally:
+        os.close(fd)
+        os.unlink(path)
+    view, at, buffers = memoryview(mm), 0, []
+    for n in sizes:
+        buffers.append(view[at : at + n])
+        at += -(-n // _ALIGN) * _ALIGN
+    return pickle.loads(head, buffers=buffers)
 
 
 def _start_pool(tip: Fingertip, jobs: int) -> Any:
-    """``jobs`` worker processes, forked from a server that has imported softtip (not from this
-    process, which may hold threads and gigabytes)."""
+    """``jobs`` worker processes, forked from a server that has imported softtip and loaded its
+    compiled kernels (``softtip.io._worker_preload``; not forked from this process, which may
+    hold threads and gigabytes). They are started at once: the server's imports then overlap
+    this process's reading of the first piece."""
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
     ctx = multiprocessing.get_context("forkserver")
-    ctx.set_forkserver_preload([__name__])
-    return ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_worker_init, initargs=(tip,))
+    ctx.set_forkserver_preload(["softtip.io._worker_preload"])
+    pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_worker_init, initargs=(tip,))
+    pool.submit(int)  # starts the workers now (a pool starts them on its first task)
+    return pool
+
+
+def warm_kernels() -> None:
+    """Load the compiled kernels the pipeline uses (numba's cache; compiled there the first time)
+    by running the estimator on the example grasp, latched and line-fit, with them forced on."""
+    import warnings
+
+    from softtip.core._jit import jit_enabled, set_jit
+    from softtip.estimator.results import EstimatorWarning
+    from softtip.io.examples import EXAMPLE_PATH
+    from softtip.io.tables import read_log
+
+    if not jit_enabled(1 << 62):  # no numba, or SOFTTIP_NUMBA=0: nothing to load
+        return
+    log = read_log(EXAMPLE_PATH, units="si")
+    old = set_jit(True)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", EstimatorWarning)
+            for config in (EstimatorConfig(), EstimatorConfig(contact_point="line-fit")):
+                estimate(log.t, log.wrench, "murakami2006", config)
+    finally:
+        set_jit(old)
 
 
 def _end_pool(pool: Any, timeout: float = 5.0) -> None:
     """Cancel what is queued and end the workers (terminate, then kill after ``timeout`` s)."""
-    import contextlib
     import time
 
     processes = list((getattr(pool, "_processes", None) or {}).values())
