@@ -189,11 +189,10 @@ def _parallel_pieces(
     the right one. At most ``2 * jobs`` pieces are in flight (memory stays bounded).
     """
     import copy
-    from collections import deque
-
     import itertools
     import secrets
     import tempfile
+    from collections import deque
 
     carry = Carry()  # the sequential stages' state, ahead of the workers
     guess = _LatchGuess(config.contact_point != "track")
