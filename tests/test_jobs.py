@@ -210,3 +210,20 @@ def test_cli_jobs_signal_ends_workers_and_leaves_no_output(tmp_path: Path, sig: 
         time.sleep(0.05)
     assert not any(_alive(p) for p in below)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["in.parquet"]
+
+
+def test_a_piece_crosses_through_shared_memory_or_in_the_pickle(tmp_path: Path) -> None:
+    """A worker's estimates come back through a file, removed when mapped; without a file
+    (shared memory full, no such folder) in the pickle, no file left."""
+    t, w = _log(seed=3, presses=2)
+    est = _pieces(t, w, EstimatorConfig(), 10**6, 1)[0][0]
+    path = tmp_path / "piece"
+    shared = chunked._to_shared(est, str(path))
+    assert shared[1] is not None and path.exists()
+    _same(est, chunked._from_shared(shared, str(path)), "mapped")
+    assert not path.exists()
+    nowhere = tmp_path / "missing" / "piece"
+    shared = chunked._to_shared(est, str(nowhere))
+    assert shared[1] is None
+    _same(est, chunked._from_shared(shared, str(nowhere)), "pickled")
+    assert sorted(os.listdir(tmp_path)) == []

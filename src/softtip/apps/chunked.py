@@ -305,17 +305,22 @@ _SHARED_DIR = "/dev/shm" if os.path.isdir("/dev/shm") and os.access("/dev/shm", 
 _ALIGN = 64
 
 
-def _to_shared(obj: Any, path: str) -> tuple[bytes, list[int]]:
+def _to_shared(obj: Any, path: str) -> tuple[bytes, list[int] | None]:
     """``obj`` pickled with its arrays' bytes written once into a new file ``path`` (not into
     the pickle, which would copy them twice more and once again in the parent: a piece's
-    estimates are ~330 B per sample); :func:`_from_shared` maps them back without a copy."""
+    estimates are ~330 B per sample); :func:`_from_shared` maps them back without a copy.
+    Where the file cannot be written (shared memory full, say) the arrays go in the pickle
+    (sizes ``None``), and no file is left."""
     import pickle
 
     buffers: list = []
     head = pickle.dumps(obj, protocol=5, buffer_callback=buffers.append)
     raws = [b.raw() for b in buffers]
     sizes = [r.nbytes for r in raws]
-    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    try:
+        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    except OSError:
+        return pickle.dumps(obj, protocol=5), None
     try:  # written, not mapped: a mapping would fault in each new page (three times slower)
         for r, n in zip(raws, sizes):
             for part in (r, bytes(-n % _ALIGN)):
@@ -324,18 +329,23 @@ def _to_shared(obj: Any, path: str) -> tuple[bytes, list[int]]:
                     view = view[os.write(fd, view) :]
         if not sizes:
             os.write(fd, b"\0")
-    finally:
+    except OSError:
         os.close(fd)
+        os.unlink(path)
+        return pickle.dumps(obj, protocol=5), None
+    os.close(fd)
     return head, sizes
 
 
-def _from_shared(shared: tuple[bytes, list[int]], path: str) -> Any:
+def _from_shared(shared: tuple[bytes, list[int] | None], path: str) -> Any:
     """The object :func:`_to_shared` left in ``path``; its arrays are views of the file's memory
     (the file is removed at once; the memory goes with the last array)."""
     import mmap
     import pickle
 
     head, sizes = shared
+    if sizes is None:  # the worker could not write the file
+        return pickle.loads(head)
     total = sum(-(-n // _ALIGN) * _ALIGN for n in sizes) or 1
     fd = os.open(path, os.O_RDWR)
     try:
