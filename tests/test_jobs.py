@@ -227,3 +227,15 @@ def test_a_piece_crosses_through_shared_memory_or_in_the_pickle(tmp_path: Path) 
     assert shared[1] is None
     _same(est, chunked._from_shared(shared, str(nowhere)), "pickled")
     assert sorted(os.listdir(tmp_path)) == []
+
+
+def test_cli_jobs_2_wrong_units_fall_back_to_the_one_shot_message(tmp_path: Path) -> None:
+    """A log in kgf and kgf·mm read as SI: with --jobs 2 the one-shot run's message, exit 2, nothing written."""
+    t, w = _log(seed=8, presses=3)
+    src = tmp_path / "kgf.csv"
+    write_table({"t": t, **{k: (w[:, i] / 9.80665) * (1e3 if i >= 3 else 1.0) for i, k in enumerate(WRENCH)}}, src)
+    dest = tmp_path / "out.csv"
+    one, two = run("estimate", src, "-o", dest), run("estimate", src, "-o", dest, "--chunk-rows", 50, "--jobs", 2)
+    assert one.returncode == two.returncode == 2
+    assert "--units kgf-mm" in two.stderr and two.stderr == one.stderr
+    assert sorted(os.listdir(tmp_path)) == ["kgf.csv"]

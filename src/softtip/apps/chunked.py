@@ -13,6 +13,13 @@ A piece holds at least ``rows`` samples, unless the log ends first, and more whe
 (or a pending one) lasts past them: a contact longer than ``rows`` samples makes its piece
 as long as the contact. The first piece holds the whole tare.
 
+With ``jobs`` > 1 worker processes estimate the pieces: this process reads, cuts and brings
+the carry past each piece with the stages that carry it alone
+(:func:`softtip.estimator.batch.carry_over`), the workers run the whole estimator from those
+carries, and the pieces are yielded in order, the bits of ``jobs=1``. Whether an earlier
+contact latched is guessed when a piece is sent and checked when it comes back; a wrong
+guess is estimated again, here.
+
 Two things are taken from the first block rather than the whole log (identical for a log
 sampled at a constant rate): the sample rate a low-pass filter is designed for, when
 ``config.sample_rate`` is not given (the median step of the first block's stamps).
@@ -69,8 +76,8 @@ def estimate_pieces(
         Samples per piece (at least; see the module's notes), ≥ 1.
     jobs : int
         Worker processes estimating pieces at the same time (1: all in this process, one
-        after the other). The pieces, and every bit of them, are those of ``jobs=1``; see
-        :func:`_parallel_pieces` for how.
+        after the other). The pieces, and every bit of them, are those of ``jobs=1`` (see the
+        module's notes); each worker holds a piece in memory.
 
     Yields
     ------

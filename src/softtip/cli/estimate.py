@@ -500,8 +500,9 @@ def _estimate_in_pieces(
 
         def run(out) -> None:
             writer = TableWriter(out, format=fmt, metadata=parquet_metadata(fingertip, tip, output_units, blocks))
+            pieces = estimate_pieces(checked(), fingertip, config, rows, jobs=jobs)
             try:
-                for k, (est, extra) in enumerate(estimate_pieces(checked(), fingertip, config, rows, jobs=jobs)):
+                for k, (est, extra) in enumerate(pieces):
                     if k == 0:
                         noise_fits(est)
                     vote.add(lever_distances(est.wrench[~est.taring], max(0.1, config.contact_threshold)))
@@ -512,6 +513,7 @@ def _estimate_in_pieces(
                     bar.update(len(est))
                     totals.add(est, summarise_contacts(est) if not quiet else [])
             finally:
+                pieces.close()  # with --jobs, the workers end now (an error, a signal), not when collected
                 writer.close()
             if vote.n >= 5 and vote.median_above():
                 raise NotStreamable("wrong units: the one-shot run says so")  # as check_units decides
