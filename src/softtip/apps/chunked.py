@@ -13,10 +13,11 @@ A piece holds at least ``rows`` samples, unless the log ends first, and more whe
 (or a pending one) lasts past them: a contact longer than ``rows`` samples makes its piece
 as long as the contact. The first piece holds the whole tare.
 
-With ``jobs`` > 1 worker processes estimate the pieces: this process reads, cuts and brings
-the carry past each piece with the stages that carry it alone
-(:func:`softtip.estimator.batch.carry_over`), the workers run the whole estimator from those
-carries, and the pieces are yielded in order, the bits of ``jobs=1``. Whether an earlier
+With ``jobs`` > 1, ``jobs - 1`` worker processes and this one estimate the pieces: this process
+reads, cuts and brings the carry past each piece with the stages that carry it alone
+(:func:`softtip.estimator.batch.carry_over`), a worker runs the whole estimator from that
+carry (this process does, when the workers have enough to do), and the pieces are yielded in
+order, the bits of ``jobs=1``. Whether an earlier
 contact latched is guessed when a piece is sent and checked when it comes back; a wrong
 guess is estimated again, here.
 
@@ -30,6 +31,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import os
+import sys
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
@@ -75,9 +77,9 @@ def estimate_pieces(
     rows : int
         Samples per piece (at least; see the module's notes), ≥ 1.
     jobs : int
-        Worker processes estimating pieces at the same time (1: all in this process, one
-        after the other). The pieces, and every bit of them, are those of ``jobs=1`` (see the
-        module's notes); each worker holds a piece in memory.
+        Processes estimating pieces at the same time: this one and ``jobs - 1`` workers (1:
+        all in this process, one after the other). The pieces, and every bit of them, are
+        those of ``jobs=1`` (see the module's notes); each worker holds a piece in memory.
 
     Yields
     ------
@@ -184,16 +186,19 @@ def _cut(t: NDArray, w: NDArray, tip: Fingertip, config: EstimatorConfig, carry:
 def _parallel_pieces(
     blocks: Iterable[Block], tip: Fingertip, config: EstimatorConfig, rows: int, jobs: int
 ) -> Iterator[tuple[Estimates, dict[str, Any]]]:
-    """:func:`estimate_pieces` with ``jobs`` worker processes: the same pieces, the same bits.
+    """:func:`estimate_pieces` by ``jobs`` processes, this one and ``jobs - 1`` workers: the same
+    pieces, the same bits.
 
     This process reads, finds the cuts (:func:`_cut`) and brings the carry past each piece with
     the sequential stages alone (:func:`softtip.estimator.batch.carry_over`: tare, low-pass,
-    contact tracking, a few per cent of the work); the workers run the whole estimator on the
-    pieces from those carries, and the pieces are yielded in order. The one flag of the carry
-    the sequential stages cannot give, whether an earlier contact latched (it marks the next
-    contact's onset as re-latched), is guessed when a piece is sent and checked when its
-    predecessors are back: a piece sent with the wrong guess is estimated again, here, with
-    the right one. At most ``2 * jobs`` pieces are in flight (memory stays bounded).
+    contact tracking, a small part of the work); a piece goes to a worker, which runs the whole
+    estimator on it from that carry, unless the workers have ``2`` pieces each to do already:
+    then this process estimates it (no transfer, and its carry comes with it). The pieces are
+    yielded in order. The one flag of the carry the sequential stages cannot give, whether an
+    earlier contact latched (it marks the next contact's onset as re-latched), is guessed when
+    a piece is started and checked when its predecessors are done: a piece started with the
+    wrong guess is estimated again, here, with the right one. At most ``2 * jobs + 1`` pieces
+    are held at once (memory stays bounded).
     """
     import copy
     import itertools
@@ -201,52 +206,63 @@ def _parallel_pieces(
     import tempfile
     from collections import deque
 
-    carry = Carry()  # the sequential stages' state, ahead of the workers
+    carry = Carry()  # the sequential stages' state, ahead of the pieces being estimated
     guess = _LatchGuess(config.contact_point != "track")
     shared_dir, counter, token = _SHARED_DIR or tempfile.gettempdir(), itertools.count(), secrets.token_hex(4)
-    pool = _start_pool(tip, jobs)
+    workers = jobs - 1
+    pool = None
     pending: deque = deque()
 
-    def send(t: NDArray, w: NDArray, cfg: EstimatorConfig) -> _Sent:
+    def start(t: NDArray, w: NDArray, cfg: EstimatorConfig) -> _Sent:
         before = copy.deepcopy(carry)
         before.had_latch = guess.next()
-        path = os.path.join(shared_dir, f"softtip-piece-{os.getpid()}-{next(counter)}-{token}")
-        future = pool.submit(_estimate_piece, t, w, cfg, before, path)
-        contacts = carry_over(t, w, tip, cfg, carry)
-        guess.sent(contacts)
-        return _Sent(future, t, w, cfg, before, contacts, path)
+        counted = before.track.count if before.track is not None else 0
+        if sum(p.future is not None and not p.future.done() for p, _ in pending) < 2 * workers:
+            path = os.path.join(shared_dir, f"softtip-piece-{os.getpid()}-{next(counter)}-{token}")
+            sent = _Sent(pool.submit(_estimate_piece, t, w, cfg, before, path), t, w, cfg, before, 0, path)
+            sent.contacts = carry_over(t, w, tip, cfg, carry)
+        else:  # every worker has work queued: estimated here, its carry with it
+            after = copy.deepcopy(before)
+            sent = _Sent(None, t, w, cfg, before, 0, None, (_piece(t, w, tip, cfg, after), after.had_latch))
+            carry.tare, carry.zi, carry.track = after.tare, after.zi, after.track
+            sent.contacts = after.track.count - counted
+        guess.sent(sent.contacts)
+        return sent
 
-    def back(sent: _Sent, extra: dict[str, Any]) -> tuple[Estimates, dict[str, Any]]:
-        shared, had_latch = sent.future.result()
-        est = _from_shared(shared, sent.path)
+    def done(sent: _Sent, extra: dict[str, Any]) -> tuple[Estimates, dict[str, Any]]:
+        if sent.future is None:
+            est, had_latch = sent.result
+        else:
+            shared, had_latch = sent.future.result()
+            est = _from_shared(shared, sent.path)
         if sent.before.had_latch != guess.had_latch:  # guessed wrong: again with the flag now known
-            sent.before.had_latch = guess.had_latch
-            est = _piece(sent.t, sent.w, tip, sent.config, sent.before)
-            had_latch = sent.before.had_latch
+            est, had_latch = _estimate_again(sent, tip, guess.had_latch)
         guess.back(had_latch, sent.contacts)
         return est, extra
 
     try:
-        for sent, extra in _split(blocks, tip, config, rows, carry, send):
+        pool = _start_pool(tip, workers)
+        for sent, extra in _split(blocks, tip, config, rows, carry, start):
             pending.append((sent, extra))
-            while len(pending) > 2 * jobs or pending[0][0].future.done():
-                yield back(*pending.popleft())
-                if not pending:
-                    break
+            while pending and (len(pending) > 2 * jobs or pending[0][0].future is None or pending[0][0].future.done()):
+                yield done(*pending.popleft())
         while pending:
-            yield back(*pending.popleft())
+            yield done(*pending.popleft())
     except BaseException:  # an error, Ctrl-C, SIGTERM, a consumer that stops: the workers end now
-        _end_pool(pool)
+        if pool is not None:
+            _end_pool(pool)
         for sent, _ in pending:  # and what they left for this process goes
-            with contextlib.suppress(OSError):
-                os.unlink(sent.path)
+            if sent.path is not None:
+                with contextlib.suppress(OSError):
+                    os.unlink(sent.path)
         raise
     pool.shutdown()
 
 
 @dataclasses.dataclass
 class _Sent:
-    """A piece sent to a worker: its samples and the carry it was sent with (for a second run)."""
+    """A piece started: its samples and the carry it was started with (for a second run), and
+    where its estimates come from (a worker's future and file, or this process's result)."""
 
     future: Any
     t: NDArray
@@ -254,7 +270,16 @@ class _Sent:
     config: EstimatorConfig
     before: Carry
     contacts: int
-    path: str  #: the file the worker leaves the estimates in
+    path: str | None  #: the file the worker leaves the estimates in
+    result: tuple[Estimates, bool] | None = None  #: estimated here: the estimates and the flag after
+
+
+def _estimate_again(sent: _Sent, tip: Fingertip, had_latch: bool) -> tuple[Estimates, bool]:
+    """A piece started with the wrong ``had_latch``, estimated again (here) with the right one;
+    and the flag after it."""
+    sent.before.had_latch = had_latch
+    est = _piece(sent.t, sent.w, tip, sent.config, sent.before)
+    return est, sent.before.had_latch
 
 
 class _LatchGuess:
@@ -297,7 +322,34 @@ def _worker_init(tip: Fingertip) -> None:
         if hasattr(signal, name):
             signal.signal(getattr(signal, name), signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    _end_with_parent()
     _WORKER_TIP[:] = [tip]
+
+
+def _end_with_parent() -> None:
+    """End this process (a worker, or the server that forks them) as soon as its parent has
+    ended: a signal that stops the run while the server loads softtip, or while a worker is
+    started before the pool knows it, must not leave them running on. A worker also closes
+    the server's keep-alive pipe it inherits (the server ends when the run's end closes it)."""
+    import threading
+    import time
+
+    parent = os.getppid()
+    if "multiprocessing.forkserver" in sys.modules:  # a worker: it starts no process of its own
+        from multiprocessing import forkserver
+
+        fd = getattr(forkserver._forkserver, "_forkserver_alive_fd", None)
+        if fd is not None and parent != 1:
+            with contextlib.suppress(OSError):
+                os.close(fd)
+            forkserver._forkserver._forkserver_alive_fd = None
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(0.2)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="softtip-parent-watch", daemon=True).start()
 
 
 def _estimate_piece(t: NDArray, w: NDArray, config: EstimatorConfig, carry: Carry, path: str) -> tuple[Any, bool]:
@@ -378,7 +430,11 @@ def _start_pool(tip: Fingertip, jobs: int) -> Any:
     ctx = multiprocessing.get_context("forkserver")
     ctx.set_forkserver_preload(["softtip.io._worker_preload"])
     pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_worker_init, initargs=(tip,))
-    pool.submit(int)  # starts the workers now (a pool starts them on its first task)
+    try:
+        pool.submit(int)  # starts the workers now (a pool starts them on its first task)
+    except BaseException:  # a signal while they start: none is left behind
+        _end_pool(pool)
+        raise
     return pool
 
 

@@ -126,8 +126,9 @@ from the bag's /tf.
 )  # fmt: skip
 @option(
     "--jobs", type=click.IntRange(1, 64), default=1, show_default=True, metavar="N",
-    help="Worker processes estimating the pieces of a log processed in pieces (see --chunk-rows) at the same time: "
-    "the output is the same, bit for bit, as with --jobs 1 (all in this process); each worker holds a piece in memory.",
+    help="Processes estimating the pieces of a log processed in pieces (see --chunk-rows) at the same time, this one and "
+    "N-1 workers: the output is the same, bit for bit, as with --jobs 1 (all in this process); each worker holds a piece "
+    "in memory.",
 )  # fmt: skip
 @option(
     "--full-scale", metavar="SENSOR|FORCE,MOMENT|off",
