@@ -35,7 +35,7 @@ the pipeline per row (peak resident memory beyond its inputs). Target (manual §
 >= 20 M rows/s at 1e7 on one core, <= 400 B/row.
 
 Both cores (--only jobs): a log's pieces estimated in this process (jobs=1) and by two worker
-processes (jobs=2, softtip.io.chunked.estimate_pieces; the same bits), in the same run: wall
+processes (jobs=2, softtip.apps.chunked.estimate_pieces; the same bits), in the same run: wall
 time, and CPU time of this process and of the workers; then `softtip estimate --jobs 1` and
 `--jobs 2` on the same Parquet log, wall time. Target (issue 31): >= 1.7x in wall time on 2 cores.
 On a machine shared with other work the wall-time ratio is bounded by the share of the cores
@@ -454,7 +454,7 @@ def _proc_cpu(pid: int) -> float:
 
 def both_cores(n: int) -> None:
     """jobs=1 against jobs=2 on an n-row log (the 1 kHz grasp repeated): the library's pieces, then the command."""
-    from softtip.io import chunked
+    from softtip.apps import chunked
     from softtip.io.tables import iter_log, write_table
 
     g = synthetic_grasp("murakami2006", angle_deg=45.0, duration=10.0, rate=1000.0, seed=1)

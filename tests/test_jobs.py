@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 from softtip import EstimatorConfig
-from softtip.io import chunked
-from softtip.io.chunked import estimate_pieces
+from softtip.apps import chunked
+from softtip.apps.chunked import estimate_pieces
 from softtip.io.tables import write_table
 from softtip.sim.synthetic import sliding_presses
 
@@ -29,7 +29,7 @@ CONFIGS = {
     "relatch": EstimatorConfig(relatch_distance=0.5e-3),
     "line-fit": EstimatorConfig(contact_point="line-fit", relatch_distance=0.5e-3, lowpass_hz=25.0),
     "track": EstimatorConfig(contact_point="track"),
-    "never-latches": EstimatorConfig(latch_force_range=(40.0, 50.0)),  # every guess of "an earlier latch" is wrong
+    "never-latches": EstimatorConfig(latch_window=(40.0, 50.0)),  # every guess of "an earlier latch" is wrong
 }
 
 
@@ -129,7 +129,7 @@ def run(*args: object, **kw) -> subprocess.CompletedProcess:
 
 
 @pytest.mark.parametrize("fmt", ["csv", "parquet"])
-@pytest.mark.parametrize("options", [[], ["--lowpass", 20, "--contact-point", "line-fit", "--relatch-distance", "1e-3"]], ids=["default", "line-fit"])
+@pytest.mark.parametrize("options", [[], ["--lowpass-hz", 20, "--contact-point", "line-fit", "--relatch-distance", "1mm"]], ids=["default", "line-fit"])
 def test_cli_jobs_2_writes_the_bytes_of_jobs_1(tmp_path: Path, fmt: str, options: list) -> None:
     t, w = _log(seed=11, presses=12)
     src = tmp_path / f"in.{fmt}"

@@ -421,14 +421,14 @@ def _from_shared(shared: tuple[bytes, list[int] | None], path: str) -> Any:
 
 def _start_pool(tip: Fingertip, jobs: int) -> Any:
     """``jobs`` worker processes, forked from a server that has imported softtip and loaded its
-    compiled kernels (``softtip.io._worker_preload``; not forked from this process, which may
+    compiled kernels (``softtip.apps._worker_preload``; not forked from this process, which may
     hold threads and gigabytes). They are started at once: the server's imports then overlap
     this process's reading of the first piece."""
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
 
     ctx = multiprocessing.get_context("forkserver")
-    ctx.set_forkserver_preload(["softtip.io._worker_preload"])
+    ctx.set_forkserver_preload(["softtip.apps._worker_preload"])
     pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_worker_init, initargs=(tip,))
     try:
         pool.submit(int)  # starts the workers now (a pool starts them on its first task)

@@ -134,7 +134,7 @@ def carry_over(t: ArrayLike, wrench: ArrayLike, tip: Fingertip | str, config: Es
     :func:`estimate` (``carry=carry``) leaves after these samples, to the bit; ``carry.had_latch``
     is left as it was (whether a contact latched needs the per-contact stages). A few per cent of
     :func:`estimate`'s time: the pieces of a log can then be estimated in parallel
-    (:func:`softtip.io.chunked.estimate_pieces`, ``jobs``).
+    (:func:`softtip.apps.chunked.estimate_pieces`, ``jobs``).
 
     Parameters
     ----------
