@@ -74,6 +74,9 @@ from softtip import (
 )
 from softtip.sim.synthetic import synthetic_grasp
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _markdown import run_with_markdown  # noqa: E402
+
 
 def pushing_wrenches(tip, n, rng):
     centre, radius = tip.bounding_sphere
@@ -96,7 +99,7 @@ def best_of(fn, repeats):
     return min(times)
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--samples", type=int, default=1_000_000)
     ap.add_argument("--stream-samples", type=int, default=20_000)
@@ -104,7 +107,7 @@ def main() -> None:
     ap.add_argument("--sizes", default="1e5,1e6,1e7", help="log lengths of the scaling table (comma-separated)")
     ap.add_argument("--scaling-worker", type=float, help=argparse.SUPPRESS)
     ap.add_argument("--mesh-only", action="store_true", help="only the mesh fingertip rows")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     rng = np.random.default_rng(6)
     if args.mesh_only:
         print(f"softtip core benchmark | python {platform.python_version()} | numpy {np.__version__} | {platform.machine()}")
@@ -237,11 +240,8 @@ def scaling_worker(n: int) -> None:
         set_jit(flag)
         estimate(t[:5000], w[:5000], tip)
     set_jit(None)
-    cols = [np.ascontiguousarray(w[:, i]) for i in range(6)]
     res: dict[str, float | bool] = {"n": n, "compiled": jit_enabled(n)}
-    best = min(_timed_cpu(lambda: contact_arrays(tip, *cols)) for _ in range(repeats))
-    res["kernel"] = best
-    cols = None  # freed before the pipeline's peak is measured
+    # the pipeline's peak first: the high-water mark must not already hold another run's
     base = _peak_rss()
     cpu = []
     for _ in range(repeats):
@@ -249,6 +249,9 @@ def scaling_worker(n: int) -> None:
         if len(cpu) == 1:
             res["peak_bytes"] = _peak_rss() - base
     res["pipeline"] = min(cpu)
+    cols = [np.ascontiguousarray(w[:, i]) for i in range(6)]
+    res["kernel"] = min(_timed_cpu(lambda: contact_arrays(tip, *cols)) for _ in range(repeats))
+    cols = None
     with tempfile.TemporaryDirectory() as tmp:
         for fmt in ("parquet", "csv"):
             src, dest = Path(tmp, f"in.{fmt}"), Path(tmp, f"out.{fmt}")
@@ -788,4 +791,4 @@ def mesh_rows(args, rng) -> None:
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run_with_markdown(main, "bench_core.py", code_block=True))

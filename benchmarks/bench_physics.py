@@ -106,6 +106,7 @@ from softtip.sim import (
 )
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _markdown import run_with_markdown  # noqa: E402
 from drake_physics import DRAKE_MISSING, drake_available, drake_version, pressure_check, simulate_drake  # noqa: E402
 
 CACHE = Path(__file__).resolve().parent / ".cache"
@@ -524,44 +525,5 @@ def main(argv=None) -> int:
     return 0
 
 
-class _Tee:
-    """Standard output also kept, for ``--markdown``."""
-
-    def __init__(self, out):
-        self.out, self.kept = out, []
-
-    def write(self, text: str) -> int:
-        self.kept.append(text)
-        return self.out.write(text)
-
-    def flush(self) -> None:
-        self.out.flush()
-
-
-def _main_with_markdown(argv=None) -> int:
-    """``main``, and with ``--markdown PATH`` its tables written to PATH too (the documentation's
-    benchmark page includes that file: its figures are this script's, not typed by hand)."""
-    argv = list(sys.argv[1:] if argv is None else argv)
-    if "--markdown" not in argv:
-        return main(argv)
-    k = argv.index("--markdown")
-    if k + 1 >= len(argv):
-        print("bench_physics: --markdown needs a PATH", file=sys.stderr)
-        return 2
-    path = Path(argv[k + 1])
-    del argv[k : k + 2]
-    tee = _Tee(sys.stdout)
-    sys.stdout = tee
-    try:
-        code = main(argv)
-    finally:
-        sys.stdout = tee.out
-    if code == 0:
-        command = " ".join(["python benchmarks/bench_physics.py", *argv])
-        path.write_text(f"<!-- written by {command} --markdown {path.name}; do not edit -->\n\n"
-                        f"Run: `{command}`\n\n" + "".join(tee.kept).replace("\n### ", "\n#### "), encoding="utf-8")  # fmt: skip
-    return code
-
-
 if __name__ == "__main__":
-    sys.exit(_main_with_markdown())
+    sys.exit(run_with_markdown(main, "bench_physics.py"))

@@ -38,6 +38,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from softtip.apps.pool import end_pool
 from softtip.core.filtering import lowpass_sos, sosfilt_state
 from softtip.core.fingertip import Fingertip, load_fingertip
 from softtip.estimator.batch import Carry, carry_over, estimate, infer_rate, validate_log
@@ -250,7 +251,7 @@ def _parallel_pieces(
             yield done(*pending.popleft())
     except BaseException:  # an error, Ctrl-C, SIGTERM, a consumer that stops: the workers end now
         if pool is not None:
-            _end_pool(pool)
+            end_pool(pool)
         for sent, _ in pending:  # and what they left for this process goes
             if sent.path is not None:
                 with contextlib.suppress(OSError):
@@ -433,7 +434,7 @@ def _start_pool(tip: Fingertip, jobs: int) -> Any:
     try:
         pool.submit(int)  # starts the workers now (a pool starts them on its first task)
     except BaseException:  # a signal while they start: none is left behind
-        _end_pool(pool)
+        end_pool(pool)
         raise
     return pool
 
@@ -459,21 +460,3 @@ def warm_kernels() -> None:
                 estimate(log.t, log.wrench, "murakami2006", config)
     finally:
         set_jit(old)
-
-
-def _end_pool(pool: Any, timeout: float = 5.0) -> None:
-    """Cancel what is queued and end the workers (terminate, then kill after ``timeout`` s)."""
-    import time
-
-    processes = list((getattr(pool, "_processes", None) or {}).values())
-    pool.shutdown(wait=False, cancel_futures=True)
-    for p in processes:
-        with contextlib.suppress(Exception):
-            p.terminate()
-    deadline = time.monotonic() + timeout
-    for p in processes:
-        with contextlib.suppress(Exception):
-            p.join(max(0.0, deadline - time.monotonic()))
-            if p.is_alive():
-                p.kill()
-                p.join(1.0)

@@ -30,11 +30,9 @@ within :data:`TOLERANCE_DEG`; an area (thick plate, plane) when ``line`` on at m
 
 from __future__ import annotations
 
-import contextlib
 import math
 import os
 import signal
-import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
@@ -42,6 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
+from softtip.apps.pool import end_pool
 from softtip.core.axial import axial_difference
 from softtip.core.fingertip import Fingertip, murakami2006
 from softtip.core.units import KGF
@@ -292,22 +291,6 @@ def _worker_init() -> None:
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
-def _end_pool(pool: ProcessPoolExecutor, timeout: float = 5.0) -> None:
-    """Cancel what is queued and end the workers (terminate, then kill after ``timeout`` s)."""
-    processes = list((getattr(pool, "_processes", None) or {}).values())
-    pool.shutdown(wait=False, cancel_futures=True)
-    for p in processes:
-        with contextlib.suppress(Exception):
-            p.terminate()
-    deadline = time.monotonic() + timeout
-    for p in processes:
-        with contextlib.suppress(Exception):
-            p.join(max(0.0, deadline - time.monotonic()))
-            if p.is_alive():
-                p.kill()
-                p.join(1.0)
-
-
 def _run_one(args):
     condition, seed = args
     return run_condition(condition, seed=seed)
@@ -365,7 +348,7 @@ def run_reproduction(
             it = pool.map(_run_one, args)
             done = list(progress(it, total=len(args)) if progress else it)
         except BaseException:  # an error, Ctrl-C, SIGTERM, SIGHUP: the pool goes now, not after its queue
-            _end_pool(pool)
+            end_pool(pool)
             raise
         pool.shutdown()
     else:
