@@ -168,9 +168,9 @@ class EstimatorConfig:
         rad; a window's line direction is used (and held) only when its own standard
         deviation (without ``evidence_model_std``) is at most this (default 10°).
     evidence_model_std : float
-        rad; the model error of a direction from a window excited about two axes (a window
-        that confirms the line), which no window shows, added in quadrature to its standard
-        deviation (default 0.4°). The axis of ``h``'s variation turns a little
+        rad; the model error of a direction from a window whose load turned about two axes
+        (a window that confirms the line from the load, not only by ``rocked``), which no
+        window shows, added in quadrature to its standard deviation (default 0.4°). The axis of ``h``'s variation turns a little
         with the pattern of excitation (the contact's small nonlinearity: on the simulator's
         rocked lines, 0.2–1.5° between rocking about two axes in turn and in a figure-eight),
         while the window's own standard deviation shrinks with the number of samples; without

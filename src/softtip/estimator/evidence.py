@@ -34,16 +34,16 @@ sample: each decides alone).
 
 The direction: the current window's where it resolves an axis (``d = n × principal axis``),
 with the model error ``evidence_model_std`` in quadrature where that window itself confirms
-the line and ``unconfirmed_model_std`` where it does not (a one-axis window's rolling bias
-follows its own excitation, whether or not the line was confirmed before); in a confirmed
-line whose current window resolves none (``h`` held still, or passing through zero), the
-latest window of this segment that confirmed it (two-axis excitation, ``h`` on one axis),
-with ``evidence_model_std``; the sample's own elsewhere. The current window is preferred to
-the confirming one: a confirming window is a moment of two-axis load, often where one rock
-ends and the next begins, and it can carry the contact's response to a roll about the line's
-own axis (on a stiffer, smaller hydroelastic tip: 8° off where the current windows were
-within 1°). A sample's own angle standard deviation counts the window's across-axis spread
-beyond the noise as model error,
+the line with the load turned about two axes, and ``unconfirmed_model_std`` where it does
+not, also where only a stated rocking confirms it (a one-axis window's rolling bias follows
+its own excitation, whether or not the line was confirmed before); in a confirmed line whose
+current window resolves none (``h`` held still, or passing through zero), the latest window
+of this segment that confirmed it (``h`` on one axis), with the model error of its kind; the
+sample's own elsewhere. The current window is preferred to the confirming one: a confirming
+window is a moment of two-axis load, often where one rock ends and the next begins, and it
+can carry the contact's response to a roll about the line's own axis (on a stiffer, smaller
+hydroelastic tip: 8° off where the current windows were within 1°). A sample's own angle
+standard deviation counts the window's across-axis spread beyond the noise as model error,
 ``sqrt(σ_d² + minor / |h|²)``, plus ``unconfirmed_model_std`` while unconfirmed. The share of
 the standard deviation that is the sensor noise's alone (``angle_noise_std``: the window's
 noise term, or the sample's ``σ_d``) is kept apart: two sensors share the model error, not
@@ -106,7 +106,7 @@ _NAN3 = (math.nan, math.nan, math.nan)
 
 
 def _decide(win, config: EstimatorConfig, xp, stated=False):
-    """``(area_now, line_now, resolved, axis_now, h_ratio, f_ratio)`` of a window (component-wise);
+    """``(area_now, line_now, resolved, axis_now, h_ratio, f_ratio, seen)`` of a window (component-wise);
     ``stated``: the window lies in a stated two-axis rocking (:attr:`EstimatorConfig.rocked`)."""
     enter, leave = config.area_ratio
     h_ratio = xp.where(win.h_major > win.h_noise, xp.div(win.h_minor, win.h_major), xp.nan)
@@ -136,7 +136,11 @@ def _decide(win, config: EstimatorConfig, xp, stated=False):
     # a confirmed line's direction comes from two-axis windows only (a line's small
     # resistance to rolling about its own edge follows the excitation)
     resolved = line_now & sharp
-    return area_now, line_now, resolved, axis_now, h_ratio, f_ratio
+    # resolved with the load showing the two axes (not only stated): a direction with the
+    # two-axis model error (a stated window may have seen one axis of the rocking, and on a
+    # frictionless cap it also carries the roll about the line's own axis)
+    seen = excited & one_axis & sharp
+    return area_now, line_now, resolved, axis_now, h_ratio, f_ratio, seen
 
 
 def _frame_terms(nx, ny, nz, hx, hy, hz, fx, fy, fz, xp):
@@ -231,6 +235,7 @@ class _Held(NamedTuple):
     angle: np.ndarray
     angle_std: np.ndarray
     angle_noise_std: np.ndarray
+    seen: np.ndarray  #: the window resolved the line with the load turned about two axes
 
 
 def _window_sum_blocks(t, located, begin, prods, window: float, block: int, sums=None, count=None):
@@ -329,7 +334,8 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
             nz = _frame_noise(*a[N_SUMS + 1 : N_SUMS + 7], noise, NP)
             w = window_kernel(a[:N_SUMS], a[N_SUMS], *nz, corr, NP)
             stated = config.stated_excitation(a[N_SUMS + 7]) if config.rocked else False
-            return (*_decide(w, config, NP, stated), w.h_minor, w.angle, w.angle_std, w.angle_noise_std)
+            *verdicts, seen = _decide(w, config, NP, stated)
+            return (*verdicts, w.h_minor, w.angle, w.angle_std, w.angle_noise_std, seen)
 
         with np.errstate(invalid="ignore", divide="ignore"):
             if jit_enabled(n):  # window sums block by block, never the whole log's
@@ -400,7 +406,11 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
     confirmed = located & (verdict == _LINE)
     uv = config.unconfirmed_model_std * config.unconfirmed_model_std
     with np.errstate(invalid="ignore", divide="ignore"):
-        own_std = _sample_std(ms.angle_std, ms.h_norm, minor, np.where(confirmed, 0.0, uv), NP)
+        # a sample's own direction carries the one-axis model error unless the line was
+        # confirmed by a window whose load turned about two axes
+        by_load = confirmed & has_held & (False if win is None else win.seen[hi])
+        own_std = _sample_std(ms.angle_std, ms.h_norm, minor, np.where(by_load, 0.0, uv), NP)
+        del by_load
     del minor
     use_win = confirmed & has_held
     line = ((sig | (axis_now & located)) & ~area) | use_win
@@ -425,12 +435,14 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
         use = use_win | use_axis
         mv = config.evidence_model_std * config.evidence_model_std
         angle = np.where(use, win.angle[w], ms.angle)
-        # the model error of the window's kind: two-axis (a confirming window) or one-axis
-        # (a rolling bias no window shows, whether or not the line was confirmed before)
-        angle_std = np.where(use, np.sqrt(w_std * w_std + np.where(use_win | confirming, mv, uv)), own_std)
+        # the model error of the window's kind: two-axis (a confirming window whose load
+        # turned about both axes) or one-axis (a rolling bias no window shows, whether or not
+        # the line was confirmed before, by the load or by the user)
+        two_axis = (use_win | confirming) & win.seen[w]
+        angle_std = np.where(use, np.sqrt(w_std * w_std + np.where(two_axis, mv, uv)), own_std)
         # the sample's own direction: its noise; a window's: the window's noise term
         angle_noise_std = np.where(use, win.angle_noise_std[w], ms.angle_std)
-        del w, w_std, use_axis, confirming
+        del w, w_std, use_axis, confirming, two_axis
         use_win = use
     del win, hi, own_std, axis_now
     # the held window's direction, in the tangent frame of the sample
@@ -480,7 +492,8 @@ class EvidenceTracker:
         self._cum = (0.0,) * N_SUMS
         self._hist: deque[tuple[float, tuple]] = deque()
         self._verdict = _UNKNOWN
-        self._held: tuple[float, float, float] | None = None  # angle, its std, the noise's share
+        # angle, its std, the noise's share, and whether the load showed the two axes
+        self._held: tuple[float, float, float, bool] | None = None
         self._sig = False
         self._anchor: tuple | None = None
         # the segment's samples of the last significance_window s: (t, side), and how many
@@ -601,10 +614,8 @@ class EvidenceTracker:
             self._held = None
         else:
             one_axis = varied and h_ratio < self._leave
-            line_now = one_axis and (
-                (f_minor > f_noise and f_minor >= self._f_ratio * f_major and f_minor >= self._fmin2)
-                or (bool(self._rocked) and bool(self.config.stated_excitation(t)))
-            )
+            excited = f_minor > f_noise and f_minor >= self._f_ratio * f_major and f_minor >= self._fmin2
+            line_now = one_axis and (excited or (bool(self._rocked) and bool(self.config.stated_excitation(t))))
             if line_now:
                 self._verdict = _LINE
             if one_axis:
@@ -614,8 +625,10 @@ class EvidenceTracker:
                     if major >= self._hmin2:
                         axis = (w_angle, w_std, w_noise)
                     if line_now:
-                        self._held = (w_angle, math.sqrt(w_std * w_std + self._model_var), w_noise)
-                        confirming = True
+                        # the two-axis model error where the load showed the two axes
+                        confirming = excited
+                        model = self._model_var if excited else self._unconfirmed_var
+                        self._held = (w_angle, math.sqrt(w_std * w_std + model), w_noise, excited)
         side = 1 if hn > thr else (0 if hn <= SIG_LEAVE * thr else -1)
         if self._vote_window > 0.0:
             votes = self._votes
@@ -635,7 +648,7 @@ class EvidenceTracker:
         if area:
             return "area", "", _NAN3, math.nan, math.nan, math.nan, h_ratio, f_ratio
         if verdict == _LINE and self._held is not None and axis is None:
-            angle, angle_std, noise_std = self._held
+            angle, angle_std, noise_std, _ = self._held
             ca, sa = cos(angle), sin(angle)
             d = (ca * e1x + sa * e2x, ca * e1y + sa * e2y, ca * e1z + sa * e2z)
             return "line", "confirmed", d, angle, angle_std, noise_std, h_ratio, f_ratio
@@ -651,5 +664,7 @@ class EvidenceTracker:
         # the sample's own direction, the window's across-axis spread counted as model error
         dx, dy, dz, angle, a = sample_direction(hx, hy, hz, hn, ex, ey, ez, geo, self._sq)
         v = hn * hn
-        v = a * a + (minor / v if v != 0.0 else _div(minor, v)) + (0.0 if verdict == _LINE else self._unconfirmed_var)
+        held = self._held
+        by_load = verdict == _LINE and held is not None and held[3]
+        v = a * a + (minor / v if v != 0.0 else _div(minor, v)) + (0.0 if by_load else self._unconfirmed_var)
         return "line", evidence, (dx, dy, dz), angle, sqrt(v) if v >= 0.0 else math.nan, a, h_ratio, f_ratio
