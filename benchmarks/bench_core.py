@@ -90,6 +90,21 @@ def pushing_wrenches(tip, n, rng):
     return np.ascontiguousarray(np.concatenate((f, m), axis=1))
 
 
+def benchmark_grasp():
+    """The benchmarks' grasp: 10 s of the murakami2006 tip on a line at 45°, 1 kHz."""
+    return synthetic_grasp("murakami2006", angle_deg=45.0, duration=10.0, rate=1000.0, seed=1)
+
+
+def grasp_log(n: int, *, whole: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """The benchmarks' log: the 10 s, 1 kHz synthetic grasp at 45° repeated, stamps at 1 ms.
+    ``whole``: as many whole grasps as fit in ``n`` rows (at least one); else exactly ``n`` rows."""
+    g = benchmark_grasp()
+    if whole:
+        reps = max(1, n // len(g.t))
+        return np.arange(reps * len(g.t)) * 1e-3, np.tile(g.wrench, (reps, 1))
+    return np.arange(n) * 1e-3, np.tile(g.wrench, (-(-n // len(g.t)), 1))[:n]
+
+
 def best_of(fn, repeats):
     times = []
     for _ in range(repeats):
@@ -122,7 +137,7 @@ def main(argv: list[str] | None = None) -> None:
         end_to_end(n)
         return
     if args.only == "stream":
-        stream_rows(args, synthetic_grasp("murakami2006", angle_deg=45.0, duration=10.0, rate=1000.0, seed=1))
+        stream_rows(args, benchmark_grasp())
         return
     if args.only == "scaling":
         scaling([int(float(x)) for x in args.sizes.split(",")])
@@ -160,14 +175,11 @@ def main(argv: list[str] | None = None) -> None:
         dt = best_of(lambda: contact_from_wrench(w, tip), repeats)
         print(f"  {name:30s} {n / dt / 1e6:8.2f} M samples/s   ({dt:.3f} s)")
 
-    g = synthetic_grasp("murakami2006", angle_deg=45.0, duration=10.0, rate=1000.0, seed=1)
-    reps = max(1, args.samples // len(g.t))
-    t_rep = np.arange(reps * len(g.t)) * 1e-3
-    w_rep = np.tile(g.wrench, (reps, 1))
+    t_rep, w_rep = grasp_log(args.samples)
     dt = best_of(lambda: estimate(t_rep, w_rep, "murakami2006"), 3)
     print(f"  {'whole batch pipeline (capsule)':30s} {len(t_rep) / dt / 1e6:8.2f} M samples/s   ({dt:.3f} s)")
 
-    stream_rows(args, g)
+    stream_rows(args, benchmark_grasp())
     end_to_end(n)
     bounds(n)
     compiled_rows()
@@ -239,10 +251,7 @@ def scaling_worker(n: int) -> None:
     from softtip.core.location import contact_arrays
 
     warnings.simplefilter("ignore")
-    g = synthetic_grasp("murakami2006", angle_deg=45.0, duration=10.0, rate=1000.0, seed=1)
-    reps = -(-n // len(g.t))
-    t = np.arange(n) * 1e-3
-    w = np.tile(g.wrench, (reps, 1))[:n]
+    t, w = grasp_log(n, whole=False)
     tip = load_fingertip("murakami2006")
     repeats = 1 if n >= 5_000_000 else 3
     # warm up: imports, the compiled kernels' cache (not what a row of the table measures)
@@ -310,12 +319,9 @@ def compiled_rows() -> None:
     from softtip.core._jit import set_jit
 
     print("sequential stages (latch, depth, evidence) compiled by numba vs their numpy paths; CPU s, best of 2")
-    g = synthetic_grasp("murakami2006", angle_deg=45.0, duration=10.0, rate=1000.0, seed=1)
     warnings.simplefilter("ignore")
     for n in (100_000, 1_000_000):
-        reps = -(-n // len(g.t))
-        t = np.arange(n) * 1e-3
-        w = np.tile(g.wrench, (reps, 1))[:n]
+        t, w = grasp_log(n, whole=False)
         cpu = {}
         for flag in (False, True):
             set_jit(flag)
@@ -403,10 +409,7 @@ def end_to_end(n: int) -> None:
     import softtip.io.tables as sio
     from softtip.io.tables import read_log, write_table
 
-    g = synthetic_grasp("murakami2006", angle_deg=45.0, duration=10.0, rate=1000.0, seed=1)
-    reps = max(1, n // len(g.t))
-    t = np.arange(reps * len(g.t)) * 1e-3
-    w = np.tile(g.wrench, (reps, 1))
+    t, w = grasp_log(n)
     n = len(t)
     log_columns = {"t": t, **{name: w[:, i] for i, name in enumerate(("fx", "fy", "fz", "mx", "my", "mz"))}}
     print(f"softtip estimate end to end, {n:,}-row log (1 kHz grasp repeated), pyarrow {pyarrow.__version__}; best of 2")
@@ -470,10 +473,7 @@ def both_cores(n: int) -> None:
     from softtip.apps import chunked
     from softtip.io.tables import iter_log, write_table
 
-    g = synthetic_grasp("murakami2006", angle_deg=45.0, duration=10.0, rate=1000.0, seed=1)
-    reps = max(1, n // len(g.t))
-    t = np.arange(reps * len(g.t)) * 1e-3
-    w = np.tile(g.wrench, (reps, 1))
+    t, w = grasp_log(n)
     n = len(t)
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"both cores: {n:,}-row log in pieces of {chunked.DEFAULT_PIECE_ROWS} rows, {os.cpu_count()} CPUs, load average {load:.1f} at the start")
@@ -540,10 +540,7 @@ def bounds(n: int) -> None:
     import softtip.io.tables as sio
     from softtip.core._jit import set_jit
 
-    g = synthetic_grasp("murakami2006", angle_deg=45.0, duration=10.0, rate=1000.0, seed=1)
-    reps = max(1, n // len(g.t))
-    t = np.arange(reps * len(g.t)) * 1e-3
-    w = np.tile(g.wrench, (reps, 1))
+    t, w = grasp_log(n)
     n = len(t)
     every = estimate(t, w, "murakami2006").columns()
     cols = {k: every[k] for k in SPEC_COLUMNS}
