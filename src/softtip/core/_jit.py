@@ -12,15 +12,24 @@ Importing numba and loading the cached kernels costs about 0.4 s of CPU once per
 (a first compile ~0.4 s more), so logs shorter than :data:`JIT_MIN_SAMPLES` take the numpy
 paths, which are faster than that for them. ``SOFTTIP_NUMBA=0`` in the environment (or no
 numba installed) selects the numpy paths always, ``SOFTTIP_NUMBA=1`` the compiled ones always.
+
+A stage written as one step function (:func:`lazy_jit`) has no numpy path: it runs compiled
+whenever numba may be used (:func:`use_numba`, whatever the log's length) and as the same
+source in Python otherwise. A compiled function may call another :func:`lazy_jit` function and
+the plain kernels marked :func:`jitable` (registered with numba when the first compiled function
+is built; Python calls them as they are). numba's disk cache only watches the file of the
+function it caches, not those of the functions compiled into it, so the cache of every
+function here is stamped with the sources of ``softtip.core`` and ``softtip.estimator`` too.
 """
 
 from __future__ import annotations
 
 import os
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
-__all__ = ["JIT_MIN_SAMPLES", "jit_enabled", "lazy_jit", "set_jit"]
+__all__ = ["JIT_MIN_SAMPLES", "jit_enabled", "jitable", "lazy_jit", "set_jit", "use_numba"]
 
 #: Logs of at least this many samples use the compiled kernels (when allowed).
 JIT_MIN_SAMPLES = 100_000
@@ -29,11 +38,14 @@ _state: dict[str, Any] = {"enabled": None}
 
 
 def _numba_importable() -> bool:
-    try:
-        import numba  # noqa: F401
-    except ImportError:  # numba is the optional extra softtip[fast]
-        return False
-    return True
+    if "importable" not in _state:
+        try:
+            import numba  # noqa: F401
+        except ImportError:  # numba is the optional extra softtip[fast]
+            _state["importable"] = False
+        else:
+            _state["importable"] = True
+    return _state["importable"]
 
 
 def _from_environment() -> bool | None:
@@ -66,8 +78,51 @@ def set_jit(enabled: bool | None) -> bool | None:
     return old
 
 
+def use_numba() -> bool:
+    """Whether the step functions (:func:`lazy_jit`) run compiled: as :func:`set_jit` or
+    ``SOFTTIP_NUMBA`` say when they do, else whenever numba is installed."""
+    forced = _state["enabled"]
+    if forced is None:
+        forced = _from_environment()
+    return _numba_importable() if forced is None else bool(forced)
+
+
+#: Plain functions compiled code may call (:func:`jitable`), and those registered with numba so far.
+_JITABLE: list[Callable] = []
+_REGISTERED: set[int] = set()
+#: Folders whose sources a compiled function may include (its cache is stamped with them).
+_SOURCES = ("core", "estimator")
+
+
+def jitable(func: Callable) -> Callable:
+    """Decorator: let compiled code call ``func``, a plain function (a kernel written for the
+    ``xp`` back ends, a helper of a step); ``func`` itself is returned unchanged. It is
+    registered with ``numba.extending.register_jitable`` when a compiled function is first built."""
+    _JITABLE.append(func)
+    return func
+
+
+def _register_jitables() -> None:
+    from numba.extending import register_jitable
+
+    for func in _JITABLE:
+        if id(func) not in _REGISTERED:
+            register_jitable(func)
+            _REGISTERED.add(id(func))
+
+
+def _sources_stamp() -> tuple:
+    root = Path(__file__).resolve().parents[1]
+    stamp = []
+    for folder in _SOURCES:
+        for path in sorted((root / folder).glob("*.py")):
+            st = path.stat()
+            stamp.append((path.name, st.st_mtime, st.st_size))
+    return tuple(stamp)
+
+
 class _Lazy:
-    """A function compiled by ``numba.njit(cache=True)`` on its first call."""
+    """A function compiled by ``numba.njit(cache=True)`` on its first compiled call."""
 
     def __init__(self, func: Callable):
         self.py_func = func
@@ -75,12 +130,33 @@ class _Lazy:
         self.__doc__ = func.__doc__
         self.__name__ = func.__name__
 
-    def __call__(self, *args):
+    def compiled(self) -> Callable:
+        """The numba dispatcher (built on first use; loaded from numba's disk cache when fresh)."""
         if self._compiled is None:
             import numba
 
-            self._compiled = numba.njit(cache=True, nogil=True)(self.py_func)
-        return self._compiled(*args)
+            _register_jitables()
+            compiled = numba.njit(cache=True, nogil=True)(self.py_func)
+            cache_file = getattr(getattr(compiled, "_cache", None), "_cache_file", None)
+            if cache_file is not None:  # stale when a function compiled into it changed (module docs)
+                cache_file._source_stamp = (cache_file._source_stamp, _sources_stamp())
+            self._compiled = compiled
+        return self._compiled
+
+    def function(self) -> Callable:
+        """What a call runs: :meth:`compiled` when numba is used (:func:`use_numba`), else
+        :attr:`py_func`. A caller that calls it per sample keeps this instead."""
+        return self.compiled() if use_numba() else self.py_func
+
+    @property
+    def _numba_type_(self):
+        # how a compiled caller sees this function: as its numba dispatcher
+        from numba.core import types
+
+        return types.Dispatcher(self.compiled())
+
+    def __call__(self, *args):
+        return self.function()(*args)
 
 
 def lazy_jit(func: Callable) -> _Lazy:

@@ -65,6 +65,7 @@ small. With a low-pass filter the noise model is the filtered one.
 
 from __future__ import annotations
 
+from softtip.core._jit import jitable
 from softtip.core.noise import SensorNoise, _quad_kernel
 from softtip.core.spin import tangent_frame_kernel
 
@@ -144,6 +145,7 @@ EXCITATION_Z = 3.0
 CHI2_MIN_DOF = 0.1
 
 
+@jitable
 def _chi2_excess(nu, xp):
     """Upper :data:`EXCITATION_Z` quantile of a χ² with ``nu`` degrees of freedom less its
     mean (Wilson–Hilferty), ``≈ z √(2ν)`` for large ``nu``: the right-skewed tail matters

@@ -20,6 +20,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from softtip.core._jit import jitable
 from softtip.core._xp import NP
 
 __all__ = [
@@ -63,6 +64,7 @@ def direction_kernel(hx, hy, hz, nx, ny, nz, xp):
     return hn, xp.div(cx, cn), xp.div(cy, cn), xp.div(cz, cn)
 
 
+@jitable
 def tangent_frame_kernel(nx, ny, nz, xp):
     """Tangent frame ``(e1, e2)`` at normal ``n`` (manual §3.4); returns 6 components."""
     # |x × n| = sqrt(ny² + nz²); below 0.1 the projected x axis is ill-defined, use y
