@@ -80,7 +80,7 @@ def _solve(w, r, n, noise):
     frame = depth_frame_kernel(*r, *n, NP)
     d0 = depth_kernel(-(w[:, :3] @ n), MURAKAMI2006_DEPTH, NP)
     sums = [float(np.sum(p)) for p in depth_products(*w.T, frame, d0)]
-    cov = depth_noise_kernel(frame, noise)
+    cov = depth_noise_kernel(frame, noise.force_std, noise.moment_std)
     kappa, var = depth_solve_kernel(sums, float(len(w)), cov, 1.0, DEPTH_ITERATIONS, NP)
     return float(kappa), float(var), float(np.mean(d0))
 

@@ -154,64 +154,6 @@ def test_short_logs_take_the_numpy_path(monkeypatch):
         set_jit(old)
 
 
-@settings(max_examples=40)
-@given(
-    n=st.integers(1, 300),
-    p_onset=st.floats(0.0, 0.1),
-    p_has=st.floats(0.0, 1.0),
-    seed=st.integers(0, 2**32 - 1),
-)
-def test_depth_window_sums_equal_numpy(n, p_onset, p_has, seed):
-    from softtip.estimator.depth import _window_sums as depth_window_sums
-
-    rng = np.random.default_rng(seed)
-    onset = rng.random(n) < p_onset
-    onset[0] = True
-    has = rng.random(n) < p_has
-    prods = rng.normal(size=(12, n)) * 10.0 ** rng.integers(-6, 3, size=(12, 1))
-    prods[:, ~has] = np.nan  # never read
-    # windows: within each contact, non-decreasing first and last samples
-    contact_of = np.cumsum(onset) - 1
-    starts = np.flatnonzero(onset)
-    k = np.sort(rng.choice(n, size=rng.integers(0, n + 1)))
-    first = np.maximum.accumulate(np.maximum(k - rng.integers(0, 40, size=len(k)), starts[contact_of[k]]))
-    first = np.minimum(first, k)
-    first = np.where(starts[contact_of[k]] > first, starts[contact_of[k]], first)
-    old = set_jit(True)
-    try:
-        fast = depth_window_sums(onset, has, prods, k, first)
-        set_jit(False)
-        slow = depth_window_sums(onset, has, prods, k, first)
-    finally:
-        set_jit(old)
-    assert np.array_equal(fast, slow)
-
-
-@settings(max_examples=40)
-@given(n=st.integers(0, 300), seed=st.integers(0, 2**32 - 1))
-def test_running_best_equals_numpy(n, seed):
-    from softtip.estimator.depth import _running_best
-
-    rng = np.random.default_rng(seed)
-    group = np.cumsum(rng.random(n) < 0.1)
-    key = np.where(rng.random(n) < 0.3, np.inf, rng.choice([0.5, 1.0, 2.0, -1.0], size=n) + rng.normal(size=n) * 0.1)
-    old = set_jit(True)
-    try:
-        fast = _running_best(group, key, n)
-        set_jit(False)
-        slow = _running_best(group, key, n)
-    finally:
-        set_jit(old)
-    assert np.array_equal(fast, slow)
-    for q in range(n):  # the definition, sample by sample
-        same = np.flatnonzero(group[: q + 1] == group[q])  # its run (groups are runs here)
-        finite = same[np.isfinite(key[same])]
-        if len(finite):
-            assert fast[q] == finite[np.argmin(key[finite])]  # argmin: the first of equal minima
-        else:
-            assert fast[q] == -1
-
-
 @settings(max_examples=60, deadline=None)
 @given(
     n=st.integers(1, 600),

@@ -5,6 +5,7 @@ say which stage. Each stage gets identical inputs (made by the batch stages befo
 outputs must agree to 1e-12 relative, sample by sample.
 """
 
+import dataclasses
 import math
 
 import numpy as np
@@ -13,7 +14,9 @@ from numpy.testing import assert_allclose, assert_array_equal
 
 from rocking import rocking_log
 from softtip import EstimatorConfig, load_fingertip
+from softtip.core._jit import set_jit
 from softtip.core._xp import NP, PY
+from softtip.core.depth import DepthLaw
 from softtip.core.location import contact_arrays
 from softtip.estimator.contact import ContactTracker, track_contacts
 from softtip.estimator.depth import DepthTracker, depth_points, resolve_depth
@@ -111,26 +114,73 @@ def test_contact_stage(staged):
     assert ct.contact_id.max() >= 1  # the logs do have contacts
 
 
-def test_depth_stage(staged):
-    """The online depth, fed the batch's contact points and normals sample by sample."""
-    t, _, s = staged
-    depth = DepthTracker(s["config"], s["noise"], s["corr"])
-    contact, point, normal = s["ct"].contact, s["point"], s["normal"]
+def _stream_depth(tracker, t, c, contact, point, normal):
+    """(N, 3): depth, depth_std, from_data of ``tracker`` fed the batch's inputs sample by sample."""
     onset = contact & ~np.concatenate(([False], contact[:-1]))
     got = np.zeros((len(t), 3))
     for i in np.flatnonzero(contact):
         if onset[i]:
-            depth.start_contact()
+            tracker.start_contact()
         if not np.all(np.isfinite(point[i])):
-            depth.gap()
+            tracker.gap()
             continue
-        x = [float(s["c"][k][i]) for k in range(6)]
-        d, d_std, data = depth.step(float(t[i]), x, tuple(point[i].tolist()), tuple(normal[i].tolist()))
+        x = [float(c[k][i]) for k in range(6)]
+        d, d_std, data = tracker.step(float(t[i]), x, tuple(point[i].tolist()), tuple(normal[i].tolist()))
         got[i] = d, d_std, float(data)
+    return got
+
+
+def test_depth_stage(staged):
+    """The online depth, fed the batch's contact points and normals sample by sample."""
+    t, _, s = staged
+    got = _stream_depth(DepthTracker(s["config"], s["noise"], s["corr"]), t, s["c"], s["ct"].contact, s["point"],
+                        s["normal"])  # fmt: skip
     delta, delta_std, from_data = s["depth"]
     assert_allclose(got[:, 0], delta, **CLOSE)
     assert_allclose(got[:, 1], delta_std, **CLOSE)
     assert_array_equal(got[:, 2].astype(bool), from_data)
+
+
+DEPTH_MODES = {
+    "latch": dict(),
+    # a new segment at every sample (the point moves): no window is ever solved
+    "track": dict(contact_point="track", depth_compensation="online"),
+    "law p=1.5": dict(skin_law=DepthLaw(3.0e5, 1.5, 0.004)),
+    "short window": dict(depth_window=0.05, depth_drift=0.2),
+    "law only": dict(depth_compensation="law"),
+}
+
+
+@pytest.mark.parametrize("mode", sorted(DEPTH_MODES))
+def test_depth_step_compiled_equals_python(staged, mode, request):
+    """One source: the depth step compiled (numba) and as Python (``SOFTTIP_NUMBA=0``) give the
+    same bits, in the batch's loop and in the stream, which give the same bits too."""
+    pytest.importorskip("numba")
+    t, _, s = staged
+    config = resolve_depth(dataclasses.replace(s["config"], **DEPTH_MODES[mode]), s["tip"])
+    contact, point, normal = s["ct"].contact, s["point"], s["normal"]
+    if config.contact_point == "track":
+        with np.errstate(invalid="ignore", divide="ignore"):
+            sc = contact_arrays(s["tip"], *s["c"])
+        point, normal = np.stack(sc.point, axis=-1), np.stack(sc.normal, axis=-1)
+    out = {}
+    old = set_jit(None)
+    try:
+        for compiled in (True, False):
+            set_jit(compiled)
+            batch = depth_points(t, s["c"], contact, point, normal, config, s["noise"], s["corr"])
+            tracker = DepthTracker(config, s["noise"], s["corr"])
+            out[compiled] = batch, _stream_depth(tracker, t, s["c"], contact, point, normal)
+    finally:
+        set_jit(old)
+    (batch, stream), (batch_py, stream_py) = out[True], out[False]
+    for a, b in zip(batch, batch_py):
+        assert_array_equal(a, b)
+    assert_array_equal(stream, stream_py)
+    assert_array_equal(stream, np.stack((batch[0], batch[1], batch[2].astype(float)), axis=-1))
+    assert np.count_nonzero(out[True][0].depth) > 100  # the log reaches the stage
+    if mode in ("latch", "law p=1.5") and request.node.callspec.params["staged"].startswith("two grasps"):
+        assert out[True][0].from_data.any()  # windows were solved and informed the depth
 
 
 def test_evidence_stage(staged):

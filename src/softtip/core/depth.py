@@ -62,9 +62,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from softtip.core._jit import jitable
 from softtip.core._xp import NP
 from softtip.core.line_fit import MODEL_MARGIN, _chi2_excess
-from softtip.core.noise import SensorNoise
 from softtip.core.spin import tangent_frame_kernel
 
 __all__ = [
@@ -200,6 +200,7 @@ def lever_depth(wrench: ArrayLike, point: ArrayLike, normal: ArrayLike, directio
 N_DEPTH_SUMS = 12
 
 
+@jitable
 def depth_frame_kernel(rx, ry, rz, nx, ny, nz, xp):
     """The 12 components the products need at a contact point ``r`` (m) with normal ``n``:
     the tangent frame ``t₁, t₂`` (``t₁ × t₂ = n``) and ``a_i = t_i × r``, so that
@@ -212,6 +213,7 @@ def depth_frame_kernel(rx, ry, rz, nx, ny, nz, xp):
     )  # fmt: skip
 
 
+@jitable
 def depth_products(fx, fy, fz, mx, my, mz, frame, d0):
     """The 12 per-sample products whose window sums :func:`depth_solve_kernel` needs.
 
@@ -228,16 +230,19 @@ def depth_products(fx, fy, fz, mx, my, mz, frame, d0):
     return (h1 * h1, h1 * h2, h2 * h2, h1 * g1, h1 * g2, h2 * g1, h2 * g2, g1 * g1, g1 * g2, g2 * g2, d0, d0 * d0)
 
 
-def depth_noise_kernel(frame, noise: SensorNoise):
-    """Per-sample noise covariances of ``h`` and ``g`` for a :func:`depth_frame_kernel` frame.
+@jitable
+def depth_noise_kernel(frame, force_std, moment_std):
+    """Per-sample noise covariances of ``h`` and ``g`` for a :func:`depth_frame_kernel` frame
+    and the sensor's noise (:class:`softtip.core.noise.SensorNoise`'s ``force_std``, N, and
+    ``moment_std``, N·m: 3 floats each).
 
     Returns the 10 covariances ``(hh₁₁, hh₁₂, hh₂₂, hg₁₁, hg₁₂, hg₂₁, hg₂₂, gg₁₁, gg₁₂,
     gg₂₂)``, ``g`` per unit ``δ₀`` (the sums scale them by ``Σ δ₀`` and ``Σ δ₀²``):
     ``h_i = t_i·m − a_i·f`` and ``g_i = b_i·f`` with ``b₁ = −t₂``, ``b₂ = t₁``.
     """
     t1x, t1y, t1z, t2x, t2y, t2z, a1x, a1y, a1z, a2x, a2y, a2z = frame
-    sfx, sfy, sfz = (s * s for s in noise.force_std)
-    smx, smy, smz = (s * s for s in noise.moment_std)
+    sfx, sfy, sfz = force_std[0] * force_std[0], force_std[1] * force_std[1], force_std[2] * force_std[2]
+    smx, smy, smz = moment_std[0] * moment_std[0], moment_std[1] * moment_std[1], moment_std[2] * moment_std[2]
     t1, t2 = (t1x, t1y, t1z), (t2x, t2y, t2z)
     a1, a2 = (a1x, a1y, a1z), (a2x, a2y, a2z)
     b1, b2 = (-t2x, -t2y, -t2z), t1
@@ -270,6 +275,7 @@ DEPTH_MODEL_STD = 0.1
 DEPTH_MISALIGNMENT = 0.1
 
 
+@jitable
 def depth_solve_kernel(sums, count, cov, corr, iterations, xp):
     """The data's own depth factor ``κ`` of a window, and its variance (module docs).
 

@@ -1,5 +1,5 @@
-"""The online depth stage (after the contact point, before the measurement), batch and
-stream side by side.
+"""The online depth stage (after the contact point, before the measurement): one step
+function for the batch and the stream.
 
 Friction acts inside the skin, at a depth ``δ`` below the contact point ``r`` on the
 undeformed surface, so the moment is taken about the effective point ``r − δ n``. With
@@ -15,26 +15,44 @@ window is solved on a grid of ``depth_window / 10`` from the segment's start (an
 first sample); the factor held is the solved window of the segment with the smallest
 variance aged by ``depth_drift``, combined with the prior ``1 ± depth_prior_std`` (at each
 solve; the factor and its relative standard deviation hold until the next). Between
-solves only the sums and ``δ₀`` are updated, so the stream costs O(1) per sample.
+solves only the sums are updated: O(1) per sample.
 
-``depth_compensation="law"`` is the fixed law (``κ = 1``, no standard deviation); ``"off"`` the
-papers' undeformed point (``δ = 0``).
+``depth_compensation="law"`` is the fixed law (``κ = 1``, no standard deviation): the kernel
+:func:`softtip.core.depth.depth_kernel` alone, no state; ``"off"`` the papers' undeformed point
+(``δ = 0``).
 
-:func:`depth_points` does it for a whole log, :class:`DepthTracker` one sample at a time.
+One source, two drivers (:mod:`softtip.core._jit`):
+
+- the **state record** (:func:`new_depth_state`): a float64 vector with named slots — the
+  running sums of the products since contact onset, the segment's point, tangent frame and
+  noise covariances, its start time and grid cell, the best window's key and factor, the
+  combination held, and the head and length of a **ring buffer** ``(capacity, 13)`` of the
+  window's samples: each row a sample's time and the running sums *before* it, so that a
+  window's sums are the running sums less its oldest row's;
+- :func:`depth_step`, one sample in contact with a contact point (compiled by numba, or the
+  same source as Python); :func:`depth_start_contact` at contact onset and :func:`depth_gap`
+  at a sample in contact without a point act on the same record;
+- :func:`depth_points` (a whole log): ``δ₀`` vectorised (numpy), then :func:`depth_run`, one
+  compiled loop over the log calling the step; :class:`DepthTracker` (the stream): ``δ₀``
+  per sample, then the step.
+
+The solve, the tangent frame and the noise covariances (:mod:`softtip.core.depth`, written with
+the ``xp`` back ends) are called inside the step with :mod:`softtip.core._xp_scalar`, so the
+stage is not split. Only ``δ₀`` is computed before the step: for a skin law's exponent other
+than 2 it is numpy's power, which compiled code cannot reproduce to the bit.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from collections import deque
 from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
-from softtip.core._blocks import blockwise
-from softtip.core._jit import jit_enabled
+from softtip.core import _xp_scalar as XS
+from softtip.core._jit import jitable, lazy_jit
 from softtip.core._xp import NP, PY
 from softtip.core.depth import (
     MIN_DEPTH_SAMPLES,
@@ -51,9 +69,11 @@ from softtip.core.depth import (
 from softtip.core.fingertip import Fingertip
 from softtip.core.noise import SensorNoise
 from softtip.estimator.config import EstimatorConfig
-from softtip.estimator.sequential import contact_window_sums_kernel, running_best_kernel
 
-__all__ = ["tip_depth_law", "asked_skin_law", "resolve_depth", "depth_points", "DepthPoints", "DepthTracker", "SOLVES_PER_WINDOW"]
+__all__ = [
+    "tip_depth_law", "asked_skin_law", "resolve_depth", "depth_points", "DepthPoints", "DepthTracker", "SOLVES_PER_WINDOW",
+    "depth_params", "new_depth_state", "depth_start_contact", "depth_gap", "depth_step", "depth_run",
+]  # fmt: skip
 
 
 class DepthPoints(NamedTuple):
@@ -62,6 +82,7 @@ class DepthPoints(NamedTuple):
     depth: NDArray  #: (N,) m, friction acts at ``r − depth · n`` (0 with the papers' method or no point)
     depth_std: NDArray  #: (N,) m, its standard deviation (0 where the depth is not estimated)
     from_data: NDArray  #: (N,) bool, the data outweighed the skin law's prior
+
 
 #: Solves per window length (the grid of the window solves).
 SOLVES_PER_WINDOW = 10
@@ -116,6 +137,82 @@ def resolve_depth(config: EstimatorConfig, tip: Fingertip) -> EstimatorConfig:
     return dataclasses.replace(config, skin_law=law, depth_compensation="online" if mode == "auto" else mode)
 
 
+# -- the state record -------------------------------------------------------------------------
+
+#: Slots of the state vector: the running sums since contact onset (12), the segment's point
+#: (3), whether a segment is open, its start time, its last grid cell (NaN: none yet), the
+#: smallest aged variance of its windows and that window's factor, the combination held
+#: (factor, relative std, from the data: 0/1), the ring's head and length, the segment's
+#: tangent frame (12, :func:`softtip.core.depth.depth_frame_kernel`), its noise covariances
+#: (10, :func:`softtip.core.depth.depth_noise_kernel`) and room for a window's sums (12).
+_CUM = 0
+_PX, _PY, _PZ = 12, 13, 14
+_OPEN = 15
+_T_SEG = 16
+_CELL = 17
+_KEY = 18
+_KAPPA = 19
+_HELD_KAPPA, _HELD_REL, _HELD_DATA = 20, 21, 22
+_HEAD, _COUNT = 23, 24
+_FRAME = 25
+_COV = _FRAME + 12
+_SUMS = _COV + 10
+N_STATE = _SUMS + N_DEPTH_SUMS
+#: Columns of a ring row: the sample's time, then the running sums before it.
+RING_COLUMNS = 1 + N_DEPTH_SUMS
+#: Rows of the stream's first ring (it doubles when full).
+_RING_START = 64
+
+#: Slots of the parameter vector (:func:`depth_params`).
+_WINDOW, _CELL_STEP, _DRIFT2, _PRIOR_STD, _CORR, _MAX_DEPTH = 0, 1, 2, 3, 4, 5
+_FORCE_STD, _MOMENT_STD = 6, 9
+N_PARAMS = 12
+
+
+def depth_params(config: EstimatorConfig, noise: SensorNoise, corr: float) -> NDArray[np.float64]:
+    """The step's parameters (N_PARAMS,) from a resolved ``config`` with a skin law: the window
+    (s) and its solve grid (s), ``depth_drift²`` (1/s), ``depth_prior_std``, the samples per
+    independent noise sample ``corr``, the law's cap (m) and the noise's standard deviations
+    (N, N·m)."""
+    p = np.empty(N_PARAMS)
+    p[_WINDOW] = config.depth_window
+    p[_CELL_STEP] = config.depth_window / SOLVES_PER_WINDOW
+    p[_DRIFT2] = config.depth_drift**2
+    p[_PRIOR_STD] = config.depth_prior_std
+    p[_CORR] = corr
+    p[_MAX_DEPTH] = config.skin_law.max_depth
+    p[_FORCE_STD : _FORCE_STD + 3] = noise.force_std
+    p[_MOMENT_STD : _MOMENT_STD + 3] = noise.moment_std
+    return p
+
+
+@jitable
+def new_depth_state():
+    """A state record (N_STATE,) before any contact."""
+    state = np.zeros(N_STATE)
+    state[_CELL] = np.nan
+    state[_KEY] = np.inf
+    state[_KAPPA] = np.nan
+    state[_HELD_KAPPA] = np.nan
+    state[_HELD_REL] = np.nan
+    return state
+
+
+@jitable
+def depth_start_contact(state) -> None:
+    """At contact onset: the running sums restart, the next sample starts a segment."""
+    for q in range(N_DEPTH_SUMS):
+        state[_CUM + q] = 0.0
+    state[_OPEN] = 0.0
+
+
+@jitable
+def depth_gap(state) -> None:
+    """A sample in contact without a contact point: the next one starts a segment."""
+    state[_OPEN] = 0.0
+
+
+@jitable
 def _combine(kappa_h, var_h, prior_std, xp):
     """``(κ, relative std, from_data)`` from the held factor (NaN and inf: none) and the prior."""
     w0 = 1.0 / (prior_std * prior_std)
@@ -124,222 +221,227 @@ def _combine(kappa_h, var_h, prior_std, xp):
     return xp.maximum(kappa, 0.0), xp.sqrt(xp.div(1.0, wh + w0)), wh > w0
 
 
+@jitable
+def _new_segment(state, params, t, rx, ry, rz, nx, ny, nz) -> None:
+    """A segment starts at this sample (point ``r``, normal ``n``): an empty window."""
+    state[_PX] = rx
+    state[_PY] = ry
+    state[_PZ] = rz
+    state[_OPEN] = 1.0
+    frame = depth_frame_kernel(rx, ry, rz, nx, ny, nz, XS)
+    for q in range(12):
+        state[_FRAME + q] = frame[q]
+    cov = depth_noise_kernel(frame, params[_FORCE_STD : _FORCE_STD + 3], params[_MOMENT_STD : _MOMENT_STD + 3])
+    for q in range(10):
+        state[_COV + q] = cov[q]
+    state[_HEAD] = 0.0
+    state[_COUNT] = 0.0
+    state[_T_SEG] = t
+    state[_CELL] = np.nan
+    state[_KEY] = np.inf
+    state[_KAPPA] = np.nan
+
+
+@jitable
+def _solve(state, ring, params, t, head, count) -> None:
+    """Solve the window (``count`` rows from ``head``), keep it if its aged variance is the
+    segment's smallest, and combine the one kept with the prior."""
+    kw = math.nan
+    var = math.inf
+    if count >= MIN_DEPTH_SAMPLES:  # shorter windows cannot inform the depth
+        for q in range(N_DEPTH_SUMS):
+            state[_SUMS + q] = state[_CUM + q] - ring[head, 1 + q]
+        kw, var = depth_solve_kernel(state[_SUMS : _SUMS + N_DEPTH_SUMS], float(count), state[_COV : _COV + 10],
+                                     params[_CORR], DEPTH_ITERATIONS, XS)  # fmt: skip
+    drift2 = params[_DRIFT2]
+    age = t - state[_T_SEG]
+    key = var - drift2 * age if var < math.inf else math.inf
+    if key < state[_KEY]:
+        state[_KEY] = key
+        state[_KAPPA] = kw
+    held = state[_KEY]
+    var_h = held + drift2 * age if held < math.inf else math.inf
+    kappa, rel, from_data = _combine(state[_KAPPA], var_h, params[_PRIOR_STD], XS)
+    state[_HELD_KAPPA] = kappa
+    state[_HELD_REL] = rel
+    state[_HELD_DATA] = 1.0 if from_data else 0.0
+
+
+@lazy_jit
+def depth_step(state, ring, params, t, fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, d0):
+    """One sample in contact with a contact point, online depth: ``(depth, depth_std, from_data)``.
+
+    Parameters
+    ----------
+    state : (N_STATE,) float64
+        The record (:func:`new_depth_state`), updated.
+    ring : (capacity, RING_COLUMNS) float64
+        The window's rows, updated; it must have room for one more (the window's length
+        before this sample < capacity).
+    params : (N_PARAMS,) float64
+        :func:`depth_params`.
+    t : float
+        s.
+    fx, fy, fz, mx, my, mz : float
+        The tared wrench, N and N·m.
+    rx, ry, rz, nx, ny, nz : float
+        The contact point (m) and its outward normal; a point other than the last one's
+        starts a segment.
+    d0 : float
+        The skin law's depth at the normal force, m (:func:`softtip.core.depth.depth_kernel`).
+
+    Returns
+    -------
+    tuple
+        ``depth`` (m, at most the law's cap), its standard deviation (m), and whether the
+        data outweighed the law's prior.
+    """
+    if state[_OPEN] == 0.0 or rx != state[_PX] or ry != state[_PY] or rz != state[_PZ]:
+        _new_segment(state, params, t, rx, ry, rz, nx, ny, nz)
+    cap = ring.shape[0]
+    head = int(state[_HEAD])
+    count = int(state[_COUNT])
+    row = head + count
+    if row >= cap:
+        row -= cap
+    ring[row, 0] = t  # this sample's row: its time and the sums before it
+    for q in range(N_DEPTH_SUMS):
+        ring[row, 1 + q] = state[_CUM + q]
+    count += 1
+    prods = depth_products(fx, fy, fz, mx, my, mz, state[_FRAME : _FRAME + 12], d0)
+    for q in range(N_DEPTH_SUMS):
+        state[_CUM + q] = state[_CUM + q] + prods[q]
+    start = t - params[_WINDOW]
+    while count > 0 and ring[head, 0] <= start:
+        head += 1
+        if head == cap:
+            head = 0
+        count -= 1
+    state[_HEAD] = head
+    state[_COUNT] = count
+    cell = float(math.floor((t - state[_T_SEG]) / params[_CELL_STEP]))
+    if cell != state[_CELL]:  # on the grid of the segment (NaN: its first sample)
+        state[_CELL] = cell
+        _solve(state, ring, params, t, head, count)
+    delta = state[_HELD_KAPPA] * d0
+    cap_depth = params[_MAX_DEPTH]
+    return (cap_depth if delta > cap_depth else delta), state[_HELD_REL] * d0, state[_HELD_DATA] != 0.0
+
+
+@jitable
+def _ring_capacity(t, window):
+    """The most samples any window of ``window`` seconds of ``t`` (non-decreasing) holds, + 2."""
+    most = 0
+    first = 0
+    for i in range(t.shape[0]):
+        start = t[i] - window
+        while first < i and t[first] <= start:
+            first += 1
+        if i + 1 - first > most:
+            most = i + 1 - first
+    return most + 2
+
+
+@lazy_jit
+def depth_run(t, contact, fx, fy, fz, mx, my, mz, point, normal, d0, params, depth, depth_std, from_data):
+    """The online depth of a whole log in one loop: :func:`depth_step` at every sample in
+    contact with a finite contact point, :func:`depth_start_contact` at contact onset,
+    :func:`depth_gap` in contact without a point.
+
+    ``t`` (N,) s; ``contact`` (N,) bool; ``fx .. mz`` (N,) the tared wrench; ``point``,
+    ``normal`` (N, 3); ``d0`` (N,) the skin law's depth, m; ``params`` :func:`depth_params`;
+    ``depth``, ``depth_std`` (N,) float and ``from_data`` (N,) bool written (0 and False where
+    the depth is not estimated). Returns ``depth``.
+    """
+    n = t.shape[0]
+    state = new_depth_state()
+    ring = np.empty((_ring_capacity(t, params[_WINDOW]), RING_COLUMNS))
+    for i in range(n):
+        depth[i] = 0.0
+        depth_std[i] = 0.0
+        from_data[i] = False
+        if not contact[i]:
+            continue
+        if i == 0 or not contact[i - 1]:
+            depth_start_contact(state)
+        rx, ry, rz = point[i, 0], point[i, 1], point[i, 2]
+        if not (math.isfinite(rx) and math.isfinite(ry) and math.isfinite(rz)):
+            depth_gap(state)
+            continue
+        d, d_std, data = depth_step(state, ring, params, t[i], fx[i], fy[i], fz[i], mx[i], my[i], mz[i],
+                                    rx, ry, rz, normal[i, 0], normal[i, 1], normal[i, 2], d0[i])  # fmt: skip
+        depth[i] = d
+        depth_std[i] = d_std
+        from_data[i] = data
+    return depth
+
+
 def depth_points(t, c, contact, point, normal, config: EstimatorConfig, noise: SensorNoise, corr) -> DepthPoints:
     """The depth of every sample (resolved ``config``, see :func:`resolve_depth`).
 
     ``c`` are the six wrench components, ``point`` and ``normal`` (N, 3) the contact points
-    of the contact-point stage (NaN where none). Returns :class:`DepthPoints`; the depth is 0 with the papers' method and where there is no point.
+    of the contact-point stage (NaN where none). Returns :class:`DepthPoints`; the depth is 0 with
+    the papers' method and where there is no point.
     """
     n = len(t)
     law = config.skin_law
-    zero = np.zeros(n)
     if law is None:
-        return DepthPoints(zero, zero.copy(), np.zeros(n, dtype=bool))
-    has = contact & np.all(np.isfinite(point), axis=-1)
-    if config.depth_compensation == "law":
-        fx, fy, fz = c[0], c[1], c[2]
+        return DepthPoints(np.zeros(n), np.zeros(n), np.zeros(n, dtype=bool))
+    fx, fy, fz = c[0], c[1], c[2]
+    with np.errstate(invalid="ignore"):
         d0 = depth_kernel(-(fx * normal[:, 0] + fy * normal[:, 1] + fz * normal[:, 2]), law, NP)
-        return DepthPoints(np.where(has, d0, 0.0), zero.copy(), np.zeros(n, dtype=bool))
-
-    def per_sample(fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, ok):
-        d0 = np.where(ok, depth_kernel(-(fx * nx + fy * ny + fz * nz), law, NP), 0.0)
-        return (d0, *depth_products(fx, fy, fz, mx, my, mz, depth_frame_kernel(rx, ry, rz, nx, ny, nz, NP), d0))
-
-    with np.errstate(invalid="ignore"):
-        out = blockwise(per_sample, (*c, *point.T, *normal.T, has), stacked=True)
-    d0, prods = out[0], out[1:]
-    kappa = np.ones(n)
-    rel = np.full(n, config.depth_prior_std)
-    from_data = np.zeros(n, dtype=bool)
-    same = np.zeros(n, dtype=bool)
-    same[1:] = has[1:] & has[:-1] & np.all(point[1:] == point[:-1], axis=-1)
-    seg_start = has & ~same
-    # the sums run from contact onset (as the stream's), windows start no earlier than
-    # their segment
-    idx = np.arange(n)
-    onset = contact & ~np.concatenate(([False], contact[:-1]))
-    onset_of = np.maximum.accumulate(np.where(onset, idx, 0))
-    seg_of = np.maximum.accumulate(np.where(seg_start, idx, -1))
-    seg_of = np.where(seg_of >= onset_of, seg_of, -1)  # a segment of this contact, or none yet
-    t_seg = np.where(seg_of >= 0, t[np.maximum(seg_of, 0)], np.nan)
-    # solve on the grid of the segment: at its first sample and when a new cell starts
-    step = config.depth_window / SOLVES_PER_WINDOW
-    cell = np.floor((t - t_seg) / step)
-    prev = np.concatenate(([np.nan], cell[:-1]))
-    prev[onset] = np.nan
-    solve = has & (seg_start | (cell != prev))
-    del cell, prev
-    k = np.flatnonzero(solve)
-    first = np.maximum(np.searchsorted(t, t[k] - config.depth_window, side="right"), seg_of[k])
-    count = (k + 1 - first).astype(float)
-    # windows too short to inform the depth are not solved (as in the stream)
-    big = count >= MIN_DEPTH_SAMPLES
-    kb = k[big]
-    kw = np.full(len(k), np.nan)
-    var = np.full(len(k), np.inf)
-    if len(kb):
-        sums = _window_sums(onset, has, prods, kb, first[big])
-        frame = depth_frame_kernel(*point[kb].T, *normal[kb].T, NP)
-        cov = depth_noise_kernel(frame, noise)
-        kw[big], var[big] = depth_solve_kernel(sums, count[big], cov, corr, DEPTH_ITERATIONS, NP)
-    d0 = d0.copy()  # a view of out would keep all of it (the products) to the end
-    del prods, out, first, count, big, kb
-    # held: the solved window of the segment with the smallest aged variance; it
-    # replaces the one held when var − drift² (t − t_segment) sets a new minimum
-    tk, tsk = t[k], t_seg[k]
-    del t_seg, onset_of
-    with np.errstate(invalid="ignore"):
-        key = np.where(var < np.inf, var - config.depth_drift**2 * (tk - tsk), np.inf)
-    held = _running_best(seg_of[k], key, n)
-    del seg_of
-    # the combination at each solve holds until the next one (of the same segment)
-    got = held >= 0
-    hi = held[got]
-    kh = np.full(len(k), np.nan)
-    vh = np.full(len(k), np.inf)
-    kh[got] = kw[hi]
-    vh[got] = key[hi] + config.depth_drift**2 * (tk[got] - tsk[got])
-    kc, rc, fc = _combine(kh, vh, config.depth_prior_std, NP)
-    last_solve = np.maximum.accumulate(np.where(solve, idx, -1))
-    del idx
-    pos = np.searchsorted(k, last_solve[has])
-    del last_solve
-    kappa[has], rel[has], from_data[has] = kc[pos], rc[pos], fc[pos]
-    delta = kappa * d0
-    delta = np.where(delta > law.max_depth, law.max_depth, delta)
-    return DepthPoints(np.where(has, delta, 0.0), np.where(has, rel * d0, 0.0), from_data & has)
-
-
-def _window_sums(onset, has, prods, k, first):
-    """Sums of ``prods`` (M, N) over samples ``first .. k`` (each within one contact) as
-    differences of masked running sums from the contact's onset: ``(M, len(k))``."""
-    if jit_enabled(onset.shape[0]):
-        return contact_window_sums_kernel(onset, has, prods, k, first, np.empty((len(prods), len(k))))
-    sums = np.empty((len(prods), len(k)))
-    starts = np.flatnonzero(onset)
-    which = np.searchsorted(starts, k, side="right") - 1  # the contact of each window
-    for w in np.unique(which):
-        s = starts[w]
-        q = np.flatnonzero(which == w)
-        e = k[q[-1]] + 1
-        ok = has[s:e]
-        for r, p in enumerate(prods):
-            cz = np.concatenate(([0.0], np.cumsum(np.where(ok, p[s:e], 0.0))))
-            sums[r, q] = cz[k[q] + 1 - s] - cz[first[q] - s]
-    return sums
-
-
-def _running_best(group, key, n: int):
-    """Index of the smallest ``key`` so far within each run of equal ``group`` (replaced
-    only by a strictly smaller one; -1 before any finite one); ``n`` the log's length."""
-    held = np.full(len(key), -1)
-    if jit_enabled(n):
-        return running_best_kernel(group, key, held)
-    cuts = np.flatnonzero(np.diff(group)) + 1
-    for a, b in zip(np.r_[0, cuts], np.r_[cuts, len(key)]):
-        kk = key[a:b]
-        if not np.isfinite(kk).any():
-            continue
-        best = np.concatenate(([np.inf], np.minimum.accumulate(kk)[:-1]))
-        held[a:b] = np.maximum.accumulate(np.where(kk < best, np.arange(a, b), -1))
-    return held
+    if config.depth_compensation == "law":
+        has = contact & np.all(np.isfinite(point), axis=-1)
+        return DepthPoints(np.where(has, d0, 0.0), np.zeros(n), np.zeros(n, dtype=bool))
+    depth, depth_std, from_data = np.empty(n), np.empty(n), np.empty(n, dtype=bool)
+    depth_run(
+        np.ascontiguousarray(t, dtype=float), np.ascontiguousarray(contact, dtype=bool),
+        *(np.ascontiguousarray(x, dtype=float) for x in c), np.ascontiguousarray(point, dtype=float),
+        np.ascontiguousarray(normal, dtype=float), d0, depth_params(config, noise, corr), depth, depth_std, from_data,
+    )  # fmt: skip
+    return DepthPoints(depth, depth_std, from_data)
 
 
 class DepthTracker:
-    """The online depth of :func:`depth_points`, one sample at a time (O(1) per sample).
-
-    Running sums of the products since contact onset and, for each sample of the current
-    segment within the last ``depth_window`` seconds, its time and the sums before it:
-    window sums are differences, as in the batch.
-    """
+    """The depth of :func:`depth_points`, one sample at a time: the state record and
+    :func:`depth_step` (compiled when numba is used), O(1) per sample."""
 
     def __init__(self, config: EstimatorConfig, noise: SensorNoise, corr: float):
         self.config = config
         self.law = config.skin_law
         self.online = config.depth_compensation == "online"
-        self.noise = noise
-        self.corr = corr
-        self._step = config.depth_window / SOLVES_PER_WINDOW
-        self._window = config.depth_window
-        self._sqrt_law = self.law is not None and self.law.exponent == 2.0
-        self.start_contact()
+        self._params = depth_params(config, noise, corr) if self.online else None
+        self._state = new_depth_state()
+        self._ring = np.empty((_RING_START, RING_COLUMNS))
+        self._step = depth_step.function() if self.online else None
 
     def start_contact(self) -> None:
         """At contact onset."""
-        self._cum = (0.0,) * N_DEPTH_SUMS
-        self._point = None
-        self._hist: deque = deque()
+        depth_start_contact(self._state)
 
     def gap(self) -> None:
         """A sample in contact without a contact point: the next one starts a segment."""
-        self._point = None
+        depth_gap(self._state)
 
-    def step(self, t: float, x: list[float], point, normal):
-        """``(depth, depth_std, from_data)`` of a sample in contact with contact point
-        ``point`` and its normal ``normal``.
-
-        The hot path is written out (the same operations, in the same order, as
-        :func:`softtip.core.depth.depth_kernel` and :func:`softtip.core.depth.depth_products`):
-        plain float arithmetic is several times cheaper than calls and ``map``."""
-        law = self.law
+    def step(self, t: float, x, point, normal) -> tuple[float, float, bool]:
+        """``(depth, depth_std, from_data)`` of a sample in contact (wrench ``x``, 6 floats)
+        with contact point ``point`` and its normal ``normal`` (3 floats each)."""
         fx, fy, fz, mx, my, mz = x
         nx, ny, nz = normal
-        if self._sqrt_law:
-            f_normal = -(fx * nx + fy * ny + fz * nz)
-            d0 = math.sqrt(f_normal / law.stiffness) if f_normal > 0.0 else 0.0
-            if d0 > law.max_depth:
-                d0 = law.max_depth
-        else:
-            d0 = depth_kernel(-(fx * nx + fy * ny + fz * nz), law, PY)
+        d0 = depth_kernel(-(fx * nx + fy * ny + fz * nz), self.law, PY)
         if not self.online:
             return d0, 0.0, False
-        if point != self._point:  # a new segment
-            self._new_segment(t, point, normal)
-        cum = self._cum
-        hist = self._hist
-        hist.append((t, cum))
-        t1x, t1y, t1z, t2x, t2y, t2z, a1x, a1y, a1z, a2x, a2y, a2z = self._frame
-        h1 = t1x * mx + t1y * my + t1z * mz - (a1x * fx + a1y * fy + a1z * fz)
-        h2 = t2x * mx + t2y * my + t2z * mz - (a2x * fx + a2y * fy + a2z * fz)
-        g1 = -d0 * (t2x * fx + t2y * fy + t2z * fz)
-        g2 = d0 * (t1x * fx + t1y * fy + t1z * fz)
-        c0, c1, c2, c3, c4, c5, c6, c7, c8, c9, c10, c11 = cum
-        self._cum = (
-            c0 + h1 * h1, c1 + h1 * h2, c2 + h2 * h2, c3 + h1 * g1, c4 + h1 * g2, c5 + h2 * g1, c6 + h2 * g2,
-            c7 + g1 * g1, c8 + g1 * g2, c9 + g2 * g2, c10 + d0, c11 + d0 * d0,
-        )  # fmt: skip
-        start = t - self._window
-        while hist and hist[0][0] <= start:
-            hist.popleft()
-        cell = math.floor((t - self._t_seg) / self._step)
-        if cell != self._cell:
-            self._cell = cell
-            self._solve(t)
-        kappa, rel, from_data = self._held
-        delta = kappa * d0
-        return (law.max_depth if delta > law.max_depth else delta), rel * d0, from_data
+        state = self._state
+        if state[_COUNT] >= len(self._ring):
+            self._grow()
+        rx, ry, rz = point
+        return self._step(state, self._ring, self._params, t, fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, d0)
 
-    def _new_segment(self, t: float, point, normal) -> None:
-        self._point = point
-        self._frame = depth_frame_kernel(*point, *normal, PY)
-        self._cov = depth_noise_kernel(self._frame, self.noise)
-        self._hist.clear()
-        self._t_seg = t
-        self._cell = None
-        self._key = math.inf
-        self._kappa = math.nan
-
-    def _solve(self, t: float) -> None:
-        cfg = self.config
-        hist = self._hist
-        kw, var = math.nan, math.inf
-        if len(hist) >= MIN_DEPTH_SAMPLES:  # shorter windows cannot inform the depth
-            old = hist[0][1]
-            sums = [a - b for a, b in zip(self._cum, old)]
-            kw, var = depth_solve_kernel(sums, float(len(hist)), self._cov, self.corr, DEPTH_ITERATIONS, PY)
-        drift2 = cfg.depth_drift**2
-        key = var - drift2 * (t - self._t_seg) if var < math.inf else math.inf
-        if key < self._key:
-            self._key, self._kappa = key, kw
-        var_h = self._key + drift2 * (t - self._t_seg) if self._key < math.inf else math.inf
-        self._held = _combine(self._kappa, var_h, cfg.depth_prior_std, PY)
+    def _grow(self) -> None:
+        """A ring twice as long, the window's rows first (oldest first)."""
+        old, state = self._ring, self._state
+        head, count = int(state[_HEAD]), int(state[_COUNT])
+        ring = np.empty((2 * len(old), RING_COLUMNS))
+        ring[:count] = np.roll(old, -head, axis=0)[:count]
+        self._ring = ring
+        state[_HEAD] = 0.0

@@ -13,8 +13,7 @@ import numpy as np
 
 from softtip.core._jit import lazy_jit
 
-__all__ = ["contact_window_sums_kernel", "point_moves_kernel", "running_best_kernel", "track_kernel", "vote_kernel",
-           "window_sums_kernel"]
+__all__ = ["point_moves_kernel", "track_kernel", "vote_kernel", "window_sums_kernel"]
 
 
 @lazy_jit
@@ -104,61 +103,6 @@ def window_sums_kernel(t, located, begin, prods, window, lo, hi, cum, cum_first,
         count[b] = n_in - n_out
     state[0], state[1], state[2] = j, n_in, n_out
     return count
-
-
-@lazy_jit
-def contact_window_sums_kernel(onset, has, prods, k, first, sums):  # pragma: no cover - compiled
-    """Sums of ``prods`` over the samples ``first[q] .. k[q]`` (inclusive) of one contact,
-    as differences of running sums from the contact's onset (adding 0 at samples without
-    ``has``, as the numpy path's masked cumulative sums).
-
-    ``onset``, ``has`` (N,) bool; ``prods`` (M, N) float; ``k``, ``first`` (Q,) int,
-    non-decreasing, each pair within one contact; ``sums`` (M, Q) float, written.
-    """
-    m = prods.shape[0]
-    cum = np.zeros(m)
-    cum_first = np.zeros(m)
-    i = 0  # next sample to add to cum
-    j = 0  # next sample to add to cum_first
-    for q in range(k.shape[0]):
-        while i <= k[q]:
-            if onset[i]:
-                for r in range(m):
-                    cum[r] = 0.0
-                    cum_first[r] = 0.0
-                j = i
-            h = has[i]
-            for r in range(m):
-                cum[r] += prods[r, i] if h else 0.0
-            i += 1
-        while j < first[q]:
-            h = has[j]
-            for r in range(m):
-                cum_first[r] += prods[r, j] if h else 0.0
-            j += 1
-        for r in range(m):
-            sums[r, q] = cum[r] - cum_first[r]
-    return sums
-
-
-@lazy_jit
-def running_best_kernel(group, key, held):  # pragma: no cover - compiled
-    """``held[q]``: the index of the smallest ``key`` so far within ``group[q]``'s run (a new
-    one replaces it only when strictly smaller; -1 before any finite one).
-
-    ``group`` (Q,) int, ``key`` (Q,) float, ``held`` (Q,) int, written.
-    """
-    best = np.inf
-    cur = -1
-    for q in range(key.shape[0]):
-        if q == 0 or group[q] != group[q - 1]:
-            best = np.inf
-            cur = -1
-        if key[q] < best:
-            best = key[q]
-            cur = q
-        held[q] = cur
-    return held
 
 
 @lazy_jit
