@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 
 import softtip.core._blocks
 from softtip import estimate
-from softtip.core._jit import JIT_MIN_SAMPLES, jit_enabled, set_jit
+from softtip.core._jit import JIT_MIN_SAMPLES, jit_enabled, set_jit, use_numba
 from softtip.estimator.evidence import _point_moves, _window_sums
 from softtip.sim.synthetic import synthetic_grasp
 from test_pipeline import CASES, drifting_grasp, grasp_with_two_contacts, impact_grasp, sliding_grasp
@@ -150,6 +150,22 @@ def test_short_logs_take_the_numpy_path(monkeypatch):
         assert not jit_enabled(10 * JIT_MIN_SAMPLES)
         monkeypatch.setenv("SOFTTIP_NUMBA", "1")
         assert jit_enabled(1)
+    finally:
+        set_jit(old)
+
+
+def test_step_functions_run_compiled_whenever_numba_is_used(monkeypatch):
+    # a step function has no numpy path: compiled at any length, as Python when SOFTTIP_NUMBA=0
+    from softtip.estimator.depth import depth_step
+
+    monkeypatch.delenv("SOFTTIP_NUMBA", raising=False)
+    old = set_jit(None)
+    try:
+        assert use_numba() and depth_step.function() is depth_step.compiled()
+        monkeypatch.setenv("SOFTTIP_NUMBA", "0")
+        assert not use_numba() and depth_step.function() is depth_step.py_func
+        set_jit(True)  # the setting outranks the environment
+        assert use_numba() and depth_step.function() is depth_step.compiled()
     finally:
         set_jit(old)
 

@@ -414,6 +414,8 @@ class DepthTracker:
         self._state = new_depth_state()
         self._ring = np.empty((_RING_START, RING_COLUMNS))
         self._step = depth_step.function() if self.online else None
+        if self.online:  # numba loads the compiled step at its first call: here, not at the first contact
+            self._step(new_depth_state(), np.empty((2, RING_COLUMNS)), self._params, 0.0, *(0.0,) * 11, 1.0, 0.0)
 
     def start_contact(self) -> None:
         """At contact onset."""
