@@ -67,20 +67,60 @@ def set_jit(enabled: bool | None) -> bool | None:
 
 
 class _Lazy:
-    """A function compiled by ``numba.njit(cache=True)`` on its first call."""
+    """A function compiled by ``numba.njit(cache=True)`` on its first call.
+
+    A lazy function may call another one (a stage's loop calls its step): compiled, numba
+    sees the callee as its dispatcher (:func:`_register_typeof`); :attr:`python` is the
+    same source run as Python throughout, the callees' Python forms included.
+    """
 
     def __init__(self, func: Callable):
         self.py_func = func
         self._compiled: Callable | None = None
+        self._python: Callable | None = None
         self.__doc__ = func.__doc__
         self.__name__ = func.__name__
 
-    def __call__(self, *args):
+    @property
+    def dispatcher(self) -> Callable:
+        """The numba dispatcher (compiles, or loads from the disk cache, on its first call)."""
         if self._compiled is None:
             import numba
 
+            _register_typeof()
             self._compiled = numba.njit(cache=True, nogil=True)(self.py_func)
-        return self._compiled(*args)
+        return self._compiled
+
+    @property
+    def python(self) -> Callable:
+        """``py_func`` calling the Python forms of the lazy functions it calls (no numba)."""
+        if self._python is None:
+            import types
+
+            f = self.py_func
+            names = {k: v.python for k, v in f.__globals__.items() if isinstance(v, _Lazy) and k in f.__code__.co_names}
+            if not names:
+                self._python = f
+            else:
+                self._python = types.FunctionType(f.__code__, {**f.__globals__, **names}, f.__name__, f.__defaults__,
+                                                  f.__closure__)
+        return self._python
+
+    def __call__(self, *args):
+        return self.dispatcher(*args)
+
+
+def _register_typeof() -> None:
+    """Let numba type a :class:`_Lazy` global as its dispatcher (once per process)."""
+    if _state.get("typeof"):
+        return
+    from numba.extending import typeof_impl
+
+    @typeof_impl.register(_Lazy)
+    def _typeof_lazy(val, c):
+        return typeof_impl(val.dispatcher, c)
+
+    _state["typeof"] = True
 
 
 def lazy_jit(func: Callable) -> _Lazy:
