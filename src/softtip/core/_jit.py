@@ -17,10 +17,11 @@ numba installed) selects the numpy paths always, ``SOFTTIP_NUMBA=1`` the compile
 from __future__ import annotations
 
 import os
+import sys
 from collections.abc import Callable
 from typing import Any
 
-__all__ = ["JIT_MIN_SAMPLES", "jit_enabled", "lazy_jit", "set_jit"]
+__all__ = ["JIT_MIN_SAMPLES", "jit_enabled", "lazy_jit", "set_jit", "use_compiled"]
 
 #: Logs of at least this many samples use the compiled kernels (when allowed).
 JIT_MIN_SAMPLES = 100_000
@@ -55,6 +56,13 @@ def jit_enabled(n: int) -> bool:
     if forced is not None:
         return bool(forced)
     return n >= JIT_MIN_SAMPLES and _numba_importable()
+
+
+def use_compiled(n: int) -> bool:
+    """Whether a loop over ``n`` samples runs compiled: when :func:`jit_enabled` says so, and for
+    any length once numba is loaded in this process (by a stream or another stage) and allowed,
+    since then only the loop's cached code is loaded (a few ms)."""
+    return jit_enabled(n) or ("numba" in sys.modules and jit_enabled(JIT_MIN_SAMPLES))
 
 
 def set_jit(enabled: bool | None) -> bool | None:

@@ -40,7 +40,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from softtip.core._jit import JIT_MIN_SAMPLES, jit_enabled, lazy_jit
+from softtip.core._jit import JIT_MIN_SAMPLES, jit_enabled, lazy_jit, use_compiled
 from softtip.core.noise import SensorNoise
 from softtip.estimator.config import EstimatorConfig
 
@@ -304,7 +304,7 @@ def track_contacts(
     cid = np.zeros(n, dtype=np.int64)
     busy = np.zeros(n, dtype=bool)
     drift, y = np.empty((n, 6)), np.empty((n, 6))
-    run = contact_run if jit_enabled(n) else contact_run.python
+    run = contact_run if use_compiled(n) else contact_run.python
     t = np.ascontiguousarray(t, dtype=float)
     x = np.ascontiguousarray(x, dtype=float)
     alarm = run(t, x, int(start), rec, contact_params(config, noise), cid, busy, drift, y)
