@@ -6,7 +6,12 @@ decision. numpy can only do them segment by segment (a Python loop per segment, 
 per log); a compiled loop does them in one pass. Each kernel here is plain Python over
 arrays (the same additions in the same order as the streaming classes), compiled by
 numba with ``cache=True`` the first time it runs; every caller keeps a pure-numpy path
-(segment by segment), tested equal.
+(segment by segment), tested equal, or runs the same source as Python (``.python``).
+
+A stage written as one step function (a scalar step over a state record, called per sample
+by the stream) and a loop over a log that calls it: both lazy; compiled, the loop calls the
+step's compiled code (numba inlines it), and ``loop.python`` is the whole source as Python,
+the step's Python form included.
 
 Importing numba and loading the cached kernels costs about 0.4 s of CPU once per process
 (a first compile ~0.4 s more), so logs shorter than :data:`JIT_MIN_SAMPLES` take the numpy

@@ -20,8 +20,10 @@ from numpy.typing import NDArray
 
 from softtip.core._jit import JIT_MIN_SAMPLES, jit_enabled, lazy_jit, use_compiled
 
-__all__ = ["lowpass_sos", "noise_gain", "sosfilt_batch", "sosfilt_state", "SosStream", "sos_step", "sos_run", "sos_coefficients",
-           "sos_initial_state"]
+__all__ = [
+    "lowpass_sos", "noise_gain", "sosfilt_batch", "sosfilt_state", "SosStream", "sos_step", "sos_run", "sos_coefficients",
+    "sos_initial_state",
+]  # fmt: skip
 
 
 def _signal():

@@ -112,9 +112,8 @@ def h_std_kernel(rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, noise: SensorNoise, x
 def h_std_parts_kernel(m1, m2, rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, noise: SensorNoise, xp):
     """:func:`h_std_kernel` given the moment-noise parts ``m1``, ``m2`` of the frame (which a
     stream keeps while a contact point is held)."""
-    return xp.sqrt(
-        _quad_force_kernel(m1, e1x, e1y, e1z, rx, ry, rz, noise) + _quad_force_kernel(m2, e2x, e2y, e2z, rx, ry, rz, noise)
-    )
+    v1 = _quad_force_kernel(m1, e1x, e1y, e1z, rx, ry, rz, noise)
+    return xp.sqrt(v1 + _quad_force_kernel(m2, e2x, e2y, e2z, rx, ry, rz, noise))
 
 
 def angle_std_kernel(dx, dy, dz, h_norm, rx, ry, rz, noise: SensorNoise, xp):
