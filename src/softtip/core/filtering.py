@@ -138,6 +138,8 @@ class SosStream:
         self._coef = sos_coefficients(sos)
         self._step = sos_step.dispatcher if jit_enabled(JIT_MIN_SAMPLES) else sos_step.python
         self._state: NDArray[np.float64] | None = None
+        # load (or compile) the step now, on scratch arrays, not at the first sample of a live run
+        self._step(self._coef, np.zeros((len(self._coef), 2, 6)), np.zeros(6), np.empty(6))
 
     def reset(self) -> None:
         """Forget the state; the next sample starts the filter again in steady state."""

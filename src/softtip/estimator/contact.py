@@ -324,6 +324,8 @@ class ContactTracker:
         self.state = new_contact_state()
         self.set_noise(noise)
         self.reset()
+        # load (or compile) the step now, on a scratch state, not at the first sample of a live run
+        self._step(new_contact_state(), self.params, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
     def set_noise(self, noise: SensorNoise) -> None:
         """Thresholds for the (filtered) noise model ``noise`` (a tare that measured it)."""
