@@ -115,8 +115,9 @@ class _Lazy:
             if not names:
                 self._python = f
             else:
-                self._python = types.FunctionType(f.__code__, {**f.__globals__, **names}, f.__name__, f.__defaults__,
-                                                  f.__closure__)
+                self._python = types.FunctionType(
+                    f.__code__, {**f.__globals__, **names}, f.__name__, f.__defaults__, f.__closure__
+                )
         return self._python
 
     def __call__(self, *args):
