@@ -268,17 +268,35 @@ def test_taring_and_bias():
 
 @pytest.mark.parametrize("order", [1, 2, 3, 4, 6])
 def test_stream_filter_equals_the_batch_filter(order, rng):
-    # one, two and more second-order sections (the stream writes out one and two)
-    from softtip.core.filtering import SosStream, lowpass_sos, sosfilt_batch
+    # one step (sos_step) for both: per sample in the stream, compiled in one loop or scipy's
+    # sosfilt in the batch, and as Python; all the same bits, the filter state too
+    from scipy import signal
+
+    from softtip.core._jit import set_jit
+    from softtip.core.filtering import SosStream, lowpass_sos, sos_coefficients, sos_run, sosfilt_state
 
     sos = lowpass_sos(30.0, 1000.0, order)
     x = rng.normal(size=(400, 6)) * np.r_[[0.5] * 3, [1e-3] * 3] + np.r_[1.0, -2.0, 5.0, 1e-3, 0.0, -2e-3]
-    stream = SosStream(sos)
-    got = np.array([stream(row) for row in x.tolist()])
-    assert_allclose(got, sosfilt_batch(sos, x), rtol=1e-12, atol=1e-15)
-    stream.reset()  # starts again in steady state at the next sample
-    again = np.array([stream(row) for row in x[200:].tolist()])
-    assert_allclose(again, sosfilt_batch(sos, x[200:]), rtol=1e-12, atol=1e-15)
+    zi = signal.sosfilt_zi(sos)[:, :, None] * x[0][None, None, :]
+    scipy_y, scipy_z = signal.sosfilt(sos, x, axis=0, zi=zi)
+    for jit in (True, False):
+        old = set_jit(jit)
+        try:
+            y, z = sosfilt_state(sos, x)
+            stream = SosStream(sos)
+            got = np.array([stream(row) for row in x.tolist()])
+            stream.reset()  # starts again in steady state at the next sample
+            again = np.array([stream(row) for row in x[200:].tolist()])
+        finally:
+            set_jit(old)
+        assert_array_equal(y, scipy_y)
+        assert_array_equal(z, scipy_z)
+        assert_array_equal(got, scipy_y)
+        assert_array_equal(again, sosfilt_state(sos, x[200:])[0])
+    zp, yp = np.array(zi), np.empty_like(x)
+    sos_run.python(sos_coefficients(sos), zp, x, yp)  # the step as Python
+    assert_array_equal(yp, scipy_y)
+    assert_array_equal(zp, scipy_z)
 
 
 def test_filter_lowers_the_noise_level():

@@ -114,6 +114,34 @@ def test_contact_stage(staged):
     assert ct.contact_id.max() >= 1  # the logs do have contacts
 
 
+def test_contact_step_compiled_equals_python(staged):
+    """contact_step is one source: compiled and as Python (the batch loop and the stream), the same bits."""
+    from softtip.core._jit import set_jit
+
+    t, _, s = staged
+    start = int(np.count_nonzero(s["taring"]))
+    runs = []
+    for jit in (True, False):
+        old = set_jit(jit)
+        try:
+            ct = track_contacts(t, s["x"], start, s["config"], s["noise"])
+            tracker = ContactTracker(s["config"], s["noise"])
+            prev, rows = None, []
+            for ti, xi in zip(t[start:].tolist(), s["x"][start:].tolist()):
+                y, code = tracker.step(ti, 0.0 if prev is None else ti - prev, xi)
+                prev = ti
+                rows.append((*y, code, tracker.contact_id, *tracker.drift_before))
+        finally:
+            set_jit(old)
+        runs.append((ct, np.array(rows), tracker.state.copy()))
+    (a, rows_a, state_a), (b, rows_b, state_b) = runs
+    for name in ("wrench", "drift", "contact_id", "busy"):
+        assert_array_equal(getattr(a, name), getattr(b, name))
+    assert np.array_equal(a.state.state, b.state.state, equal_nan=True)
+    assert_array_equal(rows_a, rows_b)
+    assert np.array_equal(state_a, state_b, equal_nan=True)
+
+
 def _stream_depth(tracker, t, c, contact, point, normal):
     """(N, 3): depth, depth_std, from_data of ``tracker`` fed the batch's inputs sample by sample."""
     onset = contact & ~np.concatenate(([False], contact[:-1]))

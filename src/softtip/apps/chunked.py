@@ -441,7 +441,8 @@ def _start_pool(tip: Fingertip, jobs: int) -> Any:
 
 def warm_kernels() -> None:
     """Load the compiled kernels the pipeline uses (numba's cache; compiled there the first time)
-    by running the estimator on the example grasp, latched and line-fit, with them forced on."""
+    by running the estimator on the example grasp, latched, line-fit and low-pass filtered, with them
+    forced on."""
     import warnings
 
     from softtip.core._jit import jit_enabled, set_jit
@@ -456,7 +457,8 @@ def warm_kernels() -> None:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", EstimatorWarning)
-            for config in (EstimatorConfig(), EstimatorConfig(contact_point="line-fit")):
+            configs = (EstimatorConfig(), EstimatorConfig(contact_point="line-fit"), EstimatorConfig(lowpass_hz=10.0))
+            for config in configs:
                 estimate(log.t, log.wrench, "murakami2006", config)
     finally:
         set_jit(old)

@@ -127,6 +127,7 @@ class _Lazy:
     def __init__(self, func: Callable):
         self.py_func = func
         self._compiled: Callable | None = None
+        self._python: Callable | None = None
         self.__doc__ = func.__doc__
         self.__name__ = func.__name__
 
@@ -154,6 +155,20 @@ class _Lazy:
         from numba.core import types
 
         return types.Dispatcher(self.compiled())
+
+    @property
+    def python(self) -> Callable:
+        """:attr:`py_func` calling the Python forms of the lazy functions it calls: the same
+        source run as Python throughout, with numba installed or not (tests compare the two)."""
+        if self._python is None:
+            import types
+
+            f = self.py_func
+            names = {k: v.python for k, v in f.__globals__.items() if isinstance(v, _Lazy) and k in f.__code__.co_names}
+            self._python = f if not names else types.FunctionType(
+                f.__code__, {**f.__globals__, **names}, f.__name__, f.__defaults__, f.__closure__
+            )  # fmt: skip
+        return self._python
 
     def __call__(self, *args):
         return self.function()(*args)

@@ -1,12 +1,14 @@
 """Causal low-pass filtering of the wrench.
 
-A Butterworth filter from :func:`scipy.signal.butter` in second-order sections. The batch
-path runs :func:`scipy.signal.sosfilt`; the streaming path carries the same state
-sample by sample with the same transposed direct-form II recurrence in plain floats,
-because one ``sosfilt`` call per sample costs ~60 µs in CPython, three times the whole
-per-sample budget. Both start from the steady state for the first sample
-(:func:`scipy.signal.sosfilt_zi`), so the filter has no start-up transient, and agree to
-rounding (tested).
+A Butterworth filter from :func:`scipy.signal.butter` in second-order sections, run as one
+per-sample step, :func:`sos_step`: transposed direct-form II per section, scipy's ``sosfilt``
+recurrence in its order of operations, so the two give the same bits (tested). The stream
+(:class:`SosStream`) calls the step per sample (one ``sosfilt`` call per sample would cost
+~60 µs in CPython); the batch (:func:`sosfilt_state`) runs it in one compiled loop
+(:func:`sos_run`, about 1.5 times as fast as ``sosfilt`` on a 1e6 × 6 log), and scipy's
+``sosfilt`` where numba is off or not loaded for a short log (the step as Python would take
+~10 µs a sample). Both start from the steady state for the first sample
+(:func:`scipy.signal.sosfilt_zi`), so the filter has no start-up transient.
 """
 
 from __future__ import annotations
@@ -16,7 +18,12 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["lowpass_sos", "noise_gain", "sosfilt_batch", "SosStream"]
+from softtip.core._jit import lazy_jit, use_numba
+
+__all__ = [
+    "lowpass_sos", "noise_gain", "sosfilt_batch", "sosfilt_state", "SosStream", "sos_step", "sos_run", "sos_coefficients",
+    "sos_initial_state",
+]  # fmt: skip
 
 
 def _signal():
@@ -74,26 +81,65 @@ def sosfilt_state(
     for an empty ``x``), to filter a log piece by piece with the bits of the whole."""
     if len(x) == 0:
         return x.copy(), zi
-    signal = _signal()
     if zi is None:
-        zi = signal.sosfilt_zi(sos)[:, :, None] * x[0][None, None, :]
-    return signal.sosfilt(sos, x, axis=0, zi=zi)
+        zi = sos_initial_state(sos, x[0])
+    if use_numba():  # the stream's step, compiled: scipy's bits, ~1.5x faster
+        z, y = np.array(zi, dtype=float), np.empty(x.shape)
+        sos_run(sos_coefficients(sos), z, np.ascontiguousarray(x, dtype=float), y)
+        return y, z
+    return _signal().sosfilt(sos, x, axis=0, zi=zi)
+
+
+@lazy_jit
+def sos_step(coef, z, x, y):  # pragma: no cover - compiled
+    """One sample of the filter: ``x`` (C,) in, ``y`` (C,) written; the state ``z``
+    (sections, 2, C), the layout of :func:`sosfilt_state`'s, read and written.
+
+    Transposed direct-form II per section, the recurrence and order of operations of
+    scipy's ``sosfilt`` (the same bits, tested); ``coef`` (sections, 5): ``b0, b1, b2, a1,
+    a2`` (``a0 = 1``).
+    """
+    for c in range(x.shape[0]):
+        v = x[c]
+        for s in range(coef.shape[0]):
+            u = coef[s, 0] * v + z[s, 0, c]
+            z[s, 0, c] = coef[s, 1] * v - coef[s, 3] * u + z[s, 1, c]
+            z[s, 1, c] = coef[s, 2] * v - coef[s, 4] * u
+            v = u
+        y[c] = v
+
+
+@lazy_jit
+def sos_run(coef, z, x, y):  # pragma: no cover - compiled
+    """:func:`sos_step` over the samples of ``x`` (N, C) into ``y`` (N, C); ``z`` as there."""
+    for i in range(x.shape[0]):
+        sos_step(coef, z, x[i], y[i])
+
+
+def sos_coefficients(sos: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``b0, b1, b2, a1, a2`` of each section (sections, 5), for :func:`sos_step`."""
+    sos = np.asarray(sos, dtype=float)
+    return np.ascontiguousarray(sos[:, [0, 1, 2, 4, 5]])
+
+
+def sos_initial_state(sos: NDArray[np.float64], x0: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The steady state for the first sample ``x0`` (C,): (sections, 2, C), as :func:`sosfilt_state` starts."""
+    return _signal().sosfilt_zi(sos)[:, :, None] * np.asarray(x0, dtype=float)[None, None, :]
 
 
 class SosStream:
-    """The same filter as :func:`sosfilt_batch`, one sample of ``C`` channels at a time.
+    """The same filter as :func:`sosfilt_batch`, one sample of ``C`` channels at a time:
+    :func:`sos_step` (compiled unless numba is off or missing, then the same source as Python)."""
 
-    Transposed direct-form II per section, the recurrence scipy's ``sosfilt`` uses, written
-    out for one and two sections (the 2nd- and 4th-order low-pass) and looped for more.
-    """
-
-    __slots__ = ("_coef", "_zi0", "_state")
+    __slots__ = ("_sos", "_coef", "_state", "_step", "_x", "_y")
 
     def __init__(self, sos: NDArray[np.float64]):
-        # b0, b1, b2, a1, a2 of each section (a0 = 1)
-        self._coef = [(float(r[0]), float(r[1]), float(r[2]), float(r[4]), float(r[5])) for r in np.asarray(sos)]
-        self._zi0 = [tuple(float(v) for v in row) for row in _signal().sosfilt_zi(sos)]
-        self._state: list[list[float]] | None = None
+        self._sos = np.asarray(sos, dtype=float)
+        self._coef = sos_coefficients(sos)
+        self._step = sos_step.function()
+        self._state: NDArray[np.float64] | None = None
+        # load (or compile) the step now, on scratch arrays, not at the first sample of a live run
+        self._step(self._coef, np.zeros((len(self._coef), 2, 6)), np.zeros(6), np.empty(6))
 
     def reset(self) -> None:
         """Forget the state; the next sample starts the filter again in steady state."""
@@ -101,36 +147,9 @@ class SosStream:
 
     def __call__(self, x: list[float]) -> list[float]:
         """Filter one sample (a sequence of ``C`` floats); returns the filtered sample."""
-        state = self._state
-        if state is None:  # the state of each channel's sections, channel after channel
-            state = self._state = [[z0 * xc, z1 * xc] for xc in x for (z0, z1) in self._zi0]
-        coef = self._coef
-        out = []
-        if len(coef) == 1:
-            b0, b1, b2, a1, a2 = coef[0]
-            for xc, z in zip(x, state):
-                y = b0 * xc + z[0]
-                z[0] = b1 * xc - a1 * y + z[1]
-                z[1] = b2 * xc - a2 * y
-                out.append(y)
-            return out
-        it = iter(state)
-        if len(coef) == 2:
-            (b0, b1, b2, a1, a2), (c0, c1, c2, d1, d2) = coef
-            for xc, z, w in zip(x, it, it):
-                y = b0 * xc + z[0]
-                z[0] = b1 * xc - a1 * y + z[1]
-                z[1] = b2 * xc - a2 * y
-                u = c0 * y + w[0]
-                w[0] = c1 * y - d1 * u + w[1]
-                w[1] = c2 * y - d2 * u
-                out.append(u)
-            return out
-        for xc in x:
-            for (b0, b1, b2, a1, a2), z in zip(coef, it):  # this channel's sections
-                y = b0 * xc + z[0]
-                z[0] = b1 * xc - a1 * y + z[1]
-                z[1] = b2 * xc - a2 * y
-                xc = y
-            out.append(xc)
-        return out
+        xa = np.array(x, dtype=float)
+        if self._state is None:
+            self._state = sos_initial_state(self._sos, xa)
+            self._y = np.empty(len(xa))
+        self._step(self._coef, self._state, xa, self._y)
+        return self._y.tolist()

@@ -83,26 +83,37 @@ MINI40 = SensorNoise(force_std=(1 / 100, 1 / 100, 1 / 50), moment_std=(1 / 4000,
 SENSOR_CLASSES = {"Nano17": NANO17, "Nano25": NANO25, "Mini40": MINI40}
 
 
-def _quad_kernel(vx, vy, vz, rx, ry, rz, noise: SensorNoise):
-    """``vᵀ Σ_h v`` for a tangent vector ``v`` at the contact point ``r``."""
-    sfx, sfy, sfz = noise.force_std
+def _quad_moment_kernel(vx, vy, vz, noise: SensorNoise):
+    """The moment-noise part of ``vᵀ Σ_h v`` (independent of the contact point)."""
     smx, smy, smz = noise.moment_std
+    return smx * smx * vx * vx + smy * smy * vy * vy + smz * smz * vz * vz
+
+
+def _quad_force_kernel(part, vx, vy, vz, rx, ry, rz, noise: SensorNoise):
+    """``part`` (the moment-noise part of ``vᵀ Σ_h v``) plus the force-noise part at the contact point ``r``."""
+    sfx, sfy, sfz = noise.force_std
     cx = vy * rz - vz * ry
     cy = vz * rx - vx * rz
     cz = vx * ry - vy * rx
-    return (
-        smx * smx * vx * vx
-        + smy * smy * vy * vy
-        + smz * smz * vz * vz
-        + sfx * sfx * cx * cx
-        + sfy * sfy * cy * cy
-        + sfz * sfz * cz * cz
-    )
+    return part + sfx * sfx * cx * cx + sfy * sfy * cy * cy + sfz * sfz * cz * cz
+
+
+def _quad_kernel(vx, vy, vz, rx, ry, rz, noise: SensorNoise):
+    """``vᵀ Σ_h v`` for a tangent vector ``v`` at the contact point ``r``."""
+    return _quad_force_kernel(_quad_moment_kernel(vx, vy, vz, noise), vx, vy, vz, rx, ry, rz, noise)
 
 
 def h_std_kernel(rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, noise: SensorNoise, xp):
     """``sqrt(trace Σ_h)`` component-wise, from any orthonormal tangent frame ``(e1, e2)``."""
-    return xp.sqrt(_quad_kernel(e1x, e1y, e1z, rx, ry, rz, noise) + _quad_kernel(e2x, e2y, e2z, rx, ry, rz, noise))
+    m1, m2 = _quad_moment_kernel(e1x, e1y, e1z, noise), _quad_moment_kernel(e2x, e2y, e2z, noise)
+    return h_std_parts_kernel(m1, m2, rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, noise, xp)
+
+
+def h_std_parts_kernel(m1, m2, rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, noise: SensorNoise, xp):
+    """:func:`h_std_kernel` given the moment-noise parts ``m1``, ``m2`` of the frame (which a
+    stream keeps while a contact point is held)."""
+    v1 = _quad_force_kernel(m1, e1x, e1y, e1z, rx, ry, rz, noise)
+    return xp.sqrt(v1 + _quad_force_kernel(m2, e2x, e2y, e2z, rx, ry, rz, noise))
 
 
 def angle_std_kernel(dx, dy, dz, h_norm, rx, ry, rz, noise: SensorNoise, xp):

@@ -24,31 +24,29 @@ tared (filtered) wrench minus ``b`` (minus nothing when ``drift_tracking`` is of
   subtracted. A drift of the force beyond the contact threshold since the last tare is
   flagged (:attr:`ContactTrack.drift_alarm`).
 
-:func:`track_contacts` does it for a whole log: with ``drift_tracking``, long logs in one
-compiled pass (:func:`softtip.estimator.sequential.track_kernel`), otherwise vectorised
-(one iteration per contact, per run of samples between the thresholds, and per block of
-~4000 untouched samples), both the same bits; :class:`ContactTracker` one sample at a time
-with O(1) float work.
+One source for batch and stream: :func:`contact_step` does one sample on a state record
+(:func:`new_contact_state`, a float64 vector with named slots) with the parameters of
+:func:`contact_params`; :class:`ContactTracker` calls it per sample (compiled when numba is
+allowed, as Python otherwise), :func:`track_contacts` runs it over a whole log in one loop
+(:func:`contact_run`).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from math import sqrt
 from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
-from softtip.core._jit import jit_enabled
+from softtip.core._jit import lazy_jit, use_numba
 from softtip.core.noise import SensorNoise
 from softtip.estimator.config import EstimatorConfig
-from softtip.estimator.sequential import track_kernel
 
 __all__ = [
     "RELEASE_FLOOR", "contact_thresholds", "ContactTrack", "TrackState", "track_contacts", "ContactTracker",
-    "START_PULL_TIME",
+    "START_PULL_TIME", "contact_params", "new_contact_state", "contact_step", "contact_run",
 ]  # fmt: skip
 
 #: The release threshold is at least this many ``σ_f``: an untouched sensor's ``|f|`` (noise
@@ -59,13 +57,34 @@ _MAX_ALPHA = 0.5
 #: The drift average runs in blocks of untouched samples (a block ends at a sample that is
 #: not untouched, after _BLOCK samples, or once the product of the (1 − α) falls below
 #: _TINY), in the closed form ``b_j = P_j (b_0 + Σ_{k ≤ j} α_k w_k / P_k)``,
-#: ``P_j = Π_{k ≤ j} (1 − α_k)``: only products, quotients and running sums, so the batch
-#: (cumprod, cumsum) and the stream give the same bits.
+#: ``P_j = Π_{k ≤ j} (1 − α_k)``: only products, quotients and running sums.
 _BLOCK = 4096
 _TINY = 1e-100
 #: s; the first contact after a tare that pulls (no pushing contact point) this long says the
 #: fingertip was touched while taring (the release then reads as a pull).
 START_PULL_TIME = 0.1
+
+# --- the state record: slots of a float64 vector -------------------------------------------
+_B = 0  #: 0:6, the drift after the last sample, N and N·m
+_B0 = 6  #: 6:12, the open block's start
+_ACC = 12  #: 12:18, the open block's running sums of α w / P
+_P = 18  #: the open block's product of (1 − α)
+_N_BLOCK = 19  #: samples in the open block (0: none open)
+_T_PENDING = 20  #: s, the time of a pending onset (NaN: none pending)
+_IN_CONTACT = 21  #: 1 in contact (onset confirmed, not released), else 0
+_CONTACT_ID = 22  #: the contact's number (0 out of contact)
+_COUNT = 23  #: contacts so far (not reset by a re-tare)
+_ALARMED = 24  #: 1 once the drift alarm went off
+_T_LAST = 25  #: s, the last sample's time in :func:`contact_run` (NaN: none yet)
+_STATE_SIZE = 26
+
+# --- the parameters: slots of a float64 vector ---------------------------------------------
+_ON = 0  #: onset threshold, N
+_OFF = 1  #: release threshold, N
+_MIN_DUR = 2  #: minimum contact duration, s
+_TAU = 3  #: drift time constant, s
+_TRACK = 4  #: 1: subtract the drift (drift_tracking), 0: track it only
+_PARAMS_SIZE = 5
 
 
 def contact_thresholds(config: EstimatorConfig, noise: SensorNoise) -> tuple[float, float]:
@@ -75,34 +94,187 @@ def contact_thresholds(config: EstimatorConfig, noise: SensorNoise) -> tuple[flo
     return on, max(on - config.contact_hysteresis * sigma, min(on, RELEASE_FLOOR * sigma))
 
 
-def drift_weights(t: NDArray, config: EstimatorConfig, t_before: float | None = None) -> NDArray:
-    """``α`` per sample (the first sample has none, unless ``t_before``, the time of the
-    sample before it, is given)."""
-    a = np.zeros(len(t))
-    a[1:] = np.minimum(np.diff(t) / config.drift_time_constant, _MAX_ALPHA)
-    if t_before is not None and len(t):
-        a[0] = min((t[0] - t_before) / config.drift_time_constant, _MAX_ALPHA)
-    return a
+def contact_params(config: EstimatorConfig, noise: SensorNoise) -> NDArray[np.float64]:
+    """The parameters of :func:`contact_step` (a float64 vector with named slots)."""
+    p = np.zeros(_PARAMS_SIZE)
+    p[_ON], p[_OFF] = contact_thresholds(config, noise)
+    p[_MIN_DUR] = config.min_contact_duration
+    p[_TAU] = config.drift_time_constant
+    p[_TRACK] = 1.0 if config.drift_tracking else 0.0
+    return p
+
+
+def new_contact_state() -> NDArray[np.float64]:
+    """A state record for :func:`contact_step`: no drift, no contact, none counted."""
+    s = np.zeros(_STATE_SIZE)
+    reset_contact_state(s)
+    s[_COUNT] = 0.0
+    s[_T_LAST] = math.nan
+    return s
+
+
+def reset_contact_state(state: NDArray[np.float64]) -> None:
+    """Forget the drift, the contact and the drift alarm (a new tare); the count goes on."""
+    state[_B : _P + 1] = 0.0
+    state[_P] = 1.0
+    state[_N_BLOCK] = 0.0
+    state[_T_PENDING] = math.nan
+    state[_IN_CONTACT] = 0.0
+    state[_CONTACT_ID] = 0.0
+    state[_ALARMED] = 0.0
+
+
+@lazy_jit
+def contact_step(state, params, t, dt, x0, x1, x2, x3, x4, x5):  # pragma: no cover - compiled
+    """One sample ``x`` (tared, filtered; N and N·m) at ``t``, ``dt`` s after the previous one.
+
+    Parameters
+    ----------
+    state : (_STATE_SIZE,) float
+        The state record (:func:`new_contact_state`), read and written.
+    params : (_PARAMS_SIZE,) float
+        :func:`contact_params`.
+    t, dt : float
+        s.
+    x0, x1, x2, x3, x4, x5 : float
+        The wrench.
+
+    Returns
+    -------
+    code : int
+        0 no contact (or pending), 1 in contact, 2 a new contact starts at this sample.
+    contact_id : int
+        The contact's number, 0 out of contact.
+    followed : bool
+        The drift average took this sample (the drift in ``state`` changed).
+    busy : bool
+        A contact pending or held, or the drift not following: a log may not be cut here.
+    alarm : bool
+        The drift alarm goes off at this sample: the drift before it exceeds the onset
+        threshold in force, for the first time since the state was reset.
+    y0, y1, y2, y3, y4, y5 : float
+        The wrench with the drift before this sample subtracted (``x`` itself when the drift
+        is only tracked).
+    """
+    on = params[_ON]
+    off = params[_OFF]
+    b0, b1, b2, b3, b4, b5 = state[_B], state[_B + 1], state[_B + 2], state[_B + 3], state[_B + 4], state[_B + 5]
+    alarm = False
+    if state[_ALARMED] == 0.0 and math.sqrt(b0 * b0 + b1 * b1 + b2 * b2) > on:
+        state[_ALARMED] = 1.0
+        alarm = True
+    fx, fy, fz = x0 - b0, x1 - b1, x2 - b2
+    dev = math.sqrt(fx * fx + fy * fy + fz * fz)
+    track = params[_TRACK] != 0.0
+    if track:
+        y0, y1, y2, y3, y4, y5 = fx, fy, fz, x3 - b3, x4 - b4, x5 - b5
+        f = dev
+    else:
+        y0, y1, y2, y3, y4, y5 = x0, x1, x2, x3, x4, x5
+        f = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+    code = 0
+    pending = state[_T_PENDING]
+    if state[_IN_CONTACT] != 0.0:
+        if f >= off:
+            code = 1
+        else:
+            state[_IN_CONTACT] = 0.0
+            state[_CONTACT_ID] = 0.0
+    elif pending == pending:  # pending (not NaN)
+        if f < off:
+            state[_T_PENDING] = math.nan
+        elif (t - pending) + dt >= params[_MIN_DUR]:
+            code = 2
+    elif f >= on:
+        state[_T_PENDING] = t
+        if dt >= params[_MIN_DUR]:  # (t − t) + dt
+            code = 2
+    if code == 2:
+        state[_T_PENDING] = math.nan
+        state[_IN_CONTACT] = 1.0
+        state[_COUNT] += 1.0
+        state[_CONTACT_ID] = state[_COUNT]
+    held = code != 0 or state[_T_PENDING] == state[_T_PENDING]
+    followed = not held if track else dev < on  # untouched
+    if followed:
+        if state[_N_BLOCK] == 0.0:  # a new block of the drift average
+            for q in range(6):
+                state[_B0 + q] = state[_B + q]
+                state[_ACC + q] = 0.0
+            state[_P] = 1.0
+        state[_N_BLOCK] += 1.0
+        a = min(dt / params[_TAU], _MAX_ALPHA)
+        p = state[_P] * (1.0 - a)
+        state[_P] = p
+        w = a / p
+        state[_ACC] += w * x0
+        state[_ACC + 1] += w * x1
+        state[_ACC + 2] += w * x2
+        state[_ACC + 3] += w * x3
+        state[_ACC + 4] += w * x4
+        state[_ACC + 5] += w * x5
+        for q in range(6):
+            state[_B + q] = p * (state[_B0 + q] + state[_ACC + q])
+        if state[_N_BLOCK] >= _BLOCK or p < _TINY:
+            state[_N_BLOCK] = 0.0
+    else:
+        state[_N_BLOCK] = 0.0
+    return code, int(state[_CONTACT_ID]), followed, held or not followed, alarm, y0, y1, y2, y3, y4, y5
+
+
+@lazy_jit
+def contact_run(t, x, start, state, params, cid, busy, drift, y):  # pragma: no cover - compiled
+    """:func:`contact_step` over a log: ``x`` (N, 6) at ``t`` (N,) s, from sample ``start`` on.
+
+    The samples before ``start`` (the tare's) only advance the time: ``y = x``, no drift, no
+    contact. ``state`` is read and written (its last time in the ``_T_LAST`` slot gives the
+    first sample's interval); ``cid`` (N,) int, ``busy`` (N,) bool, ``drift`` (N, 6) (the
+    drift before each sample) and ``y`` (N, 6) are written. Returns the sample at which the
+    drift alarm goes off, -1 if none.
+    """
+    n = t.shape[0]
+    alarm_at = -1
+    t_last = state[_T_LAST]
+    for i in range(n):
+        dt = 0.0 if t_last != t_last else t[i] - t_last
+        t_last = t[i]
+        if i < start:
+            for q in range(6):
+                y[i, q] = x[i, q]
+                drift[i, q] = 0.0
+            cid[i] = 0
+            busy[i] = False
+            continue
+        for q in range(6):
+            drift[i, q] = state[_B + q]
+        _, c, _, b, alarm, y0, y1, y2, y3, y4, y5 = contact_step(
+            state, params, t[i], dt, x[i, 0], x[i, 1], x[i, 2], x[i, 3], x[i, 4], x[i, 5]
+        )
+        y[i, 0], y[i, 1], y[i, 2], y[i, 3], y[i, 4], y[i, 5] = y0, y1, y2, y3, y4, y5
+        cid[i] = c
+        busy[i] = b
+        if alarm and alarm_at < 0:
+            alarm_at = i
+    state[_T_LAST] = t_last
+    return alarm_at
 
 
 @dataclass
 class TrackState:
-    """What :func:`track_contacts` carries from one piece of a log to the next.
+    """What :func:`track_contacts` carries from one piece of a log to the next: the state
+    record of :func:`contact_step` after the piece's last sample.
 
     A log may be tracked piece by piece, cut only at samples that are untouched (no contact
     pending or held, the drift following: ``~ContactTrack.busy``); with this state the
     pieces give the same bits as the whole log. SI units.
     """
 
-    t_last: float | None = None  #: s, time of the last sample tracked (None: none yet)
-    drift: NDArray[np.float64] = field(default_factory=lambda: np.zeros(6))  #: N, N·m, after the last sample
-    open: bool = False  #: a block of the drift average is open (its closed form goes on)
-    b0: NDArray[np.float64] = field(default_factory=lambda: np.zeros(6))  #: the open block's start
-    p0: float = 1.0  #: the open block's product of (1 − α)
-    acc0: NDArray[np.float64] = field(default_factory=lambda: np.zeros(6))  #: the open block's sums
-    block: int = 0  #: samples in the open block
-    count: int = 0  #: contacts so far
-    alarmed: bool = False  #: the drift alarm went off in an earlier piece
+    state: NDArray[np.float64] = field(default_factory=new_contact_state)
+
+    @property
+    def count(self) -> int:
+        """Contacts so far."""
+        return int(self.state[_COUNT])
 
 
 class ContactTrack(NamedTuple):
@@ -117,150 +289,6 @@ class ContactTrack(NamedTuple):
     state: TrackState | None = None  #: the state after the last sample, for the next piece
 
 
-class _DriftAverage:
-    """The drift average of :class:`ContactTracker` over a whole log, in chunks.
-
-    :meth:`follow` tries the closed form of :data:`_BLOCK` on the next samples as if all were
-    untouched; :meth:`keep` keeps the first ``k`` of them (all: the block goes on; fewer: the
-    sample after them is not untouched and ends the block, as in the stream). Chunks start
-    small after such an event and double, so the work is proportional to the samples.
-    """
-
-    def __init__(self, x: NDArray, alpha: NDArray, state: TrackState | None = None):
-        self.x, self.alpha = x, alpha
-        self.b = np.zeros(6)
-        self.open = False
-        self.size = 32
-        if state is not None:
-            self.b, self.open = np.array(state.drift, dtype=float), state.open
-            if state.open:
-                self.b0, self.p0, self.acc0, self.count = state.b0, state.p0, np.array(state.acc0), state.block
-
-    @staticmethod
-    def pack(state: TrackState) -> NDArray:
-        """``state``'s drift average as the compiled kernel's float state (see
-        :func:`softtip.estimator.sequential.track_kernel`)."""
-        avg = np.zeros(19)
-        avg[0:6], avg[18] = state.drift, 1.0
-        if state.open:
-            avg[6:12], avg[12:18], avg[18] = state.b0, state.acc0, state.p0
-        return avg
-
-    @staticmethod
-    def unpack(state: TrackState, avg: NDArray, iavg: NDArray) -> None:
-        """Store the compiled kernel's state into ``state`` (as :meth:`save` does)."""
-        state.drift, state.open, state.count = avg[0:6].copy(), bool(iavg[0]), int(iavg[2])
-        if state.open:
-            state.b0, state.acc0, state.p0, state.block = avg[6:12].copy(), avg[12:18].copy(), float(avg[18]), int(iavg[1])
-
-    def save(self, state: TrackState) -> None:
-        """Store the average's state into ``state`` (the end of a piece)."""
-        state.drift, state.open = self.b.copy(), self.open
-        if self.open:
-            state.b0, state.p0, state.acc0, state.block = self.b0, self.p0, self.acc0.copy(), self.count
-
-    def follow(self, i: int, n: int) -> tuple[int, NDArray]:
-        """``(e, before)``: the drift before each sample of ``[i, e)`` if all are untouched."""
-        if not self.open:
-            self.b0, self.p0, self.acc0, self.count, self.open = self.b, 1.0, np.zeros(6), 0, True
-        e = min(n, i + self.size, i + _BLOCK - self.count)
-        a = self.alpha[i:e]
-        p = np.cumprod(np.concatenate(([self.p0], 1.0 - a)))[1:]
-        small = p < _TINY
-        if small.any():
-            k = int(np.argmax(small)) + 1
-            e, a, p = i + k, a[:k], p[:k]
-        acc = np.cumsum(np.concatenate((self.acc0[None, :], (a / p)[:, None] * self.x[i:e])), axis=0)[1:]
-        self._p, self._acc = p, acc
-        self._after = after = p[:, None] * (self.b0 + acc)
-        return e, np.concatenate((self.b[None, :], after[:-1]), axis=0)
-
-    def keep(self, k: int) -> None:
-        """Keep the first ``k`` samples of the last :meth:`follow`."""
-        if k == len(self._p):
-            self.b, self.p0, self.acc0 = self._after[-1], float(self._p[-1]), self._acc[-1]
-            self.count += k
-            if self.count >= _BLOCK or self.p0 < _TINY:
-                self.open = False
-            self.size = min(2 * self.size, _BLOCK)
-        else:
-            if k:
-                self.b = self._after[k - 1]
-            self.open = False
-            self.size = 32
-
-
-def _first(cond, a: int, n: int) -> int:
-    """First index ``j ≥ a`` where ``cond(lo, hi)`` (a boolean array over ``[lo, hi)``) holds, or ``n``."""
-    size = 1024
-    while a < n:
-        hi = min(n, a + size)
-        c = cond(a, hi)
-        if c.any():
-            return a + int(np.argmax(c))
-        a, size = hi, size * 2
-    return n
-
-
-def _norm3(v: NDArray) -> NDArray:
-    return np.sqrt(v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1] + v[:, 2] * v[:, 2])
-
-
-def _follow_drift(
-    t: NDArray, x: NDArray, start: int, alpha: NDArray, on: float, busy: NDArray, state: TrackState | None
-) -> NDArray:
-    """The drift alone (``drift_tracking`` off): it follows every sample whose force is within
-    ``on`` of it; the others are marked in ``busy``."""
-    n = len(t)
-    drift = np.zeros((n, 6))
-    avg = _DriftAverage(x, alpha, state)
-    i = start
-    while i < n:
-        e, before = avg.follow(i, n)
-        far = _norm3(x[i:e, :3] - before[:, :3]) >= on
-        k = int(np.argmax(far)) if far.any() else e - i
-        drift[i : i + k] = before[:k]
-        avg.keep(k)
-        if k == e - i:
-            i = e
-            continue
-        j = i + k
-        b = avg.b
-        i = _first(lambda lo, hi, b=b: _norm3(x[lo:hi, :3] - b[:3]) < on, j + 1, n)
-        drift[j:i] = b
-        busy[j:i] = True
-    if state is not None:
-        avg.save(state)
-    return drift
-
-
-def _held(t: NDArray, dt: NDArray, j: int, m: int, min_dur: float) -> NDArray:
-    """Samples of ``[j, m)`` by which ``|f|`` has stayed up ``min_dur`` since sample ``j``,
-    each sample counting for its interval ``dt``."""
-    return (t[j:m] - t[j]) + dt[j:m] >= min_dur
-
-
-def _hysteresis(
-    t: NDArray, dt: NDArray, f: NDArray, start: int, on: float, off: float, min_dur: float, cid: NDArray,
-    busy: NDArray, count: int = 0,
-) -> int:
-    """Contacts of a given ``|f|`` (N,), from ``start`` on, numbered into ``cid`` after
-    ``count`` earlier ones; pending or held samples marked in ``busy``. Returns the count."""
-    n, i = len(t), start
-    while i < n:
-        j = _first(lambda lo, hi: f[lo:hi] >= on, i, n)
-        if j >= n:
-            break
-        m = _first(lambda lo, hi: f[lo:hi] < off, j + 1, n)
-        ok = _held(t, dt, j, m, min_dur)
-        if ok.any():
-            count += 1
-            cid[j + int(np.argmax(ok)) : m] = count
-        busy[j:m] = True
-        i = m
-    return count
-
-
 def track_contacts(
     t: NDArray, x: NDArray, start: int, config: EstimatorConfig, noise: SensorNoise, state: TrackState | None = None
 ) -> ContactTrack:
@@ -272,157 +300,69 @@ def track_contacts(
     is where it left off. Pieces tracked so give the bits of the whole log tracked at once.
     """
     n = len(t)
-    on, off = contact_thresholds(config, noise)
-    min_dur = config.min_contact_duration
-    state = TrackState() if state is None else TrackState(**vars(state))
-    alpha = drift_weights(t, config, state.t_last)
-    dt = np.zeros(n)
-    dt[1:] = np.diff(t)
-    if state.t_last is not None and n:
-        dt[0] = t[0] - state.t_last
+    rec = new_contact_state() if state is None else np.array(state.state, dtype=float)
     cid = np.zeros(n, dtype=np.int64)
     busy = np.zeros(n, dtype=bool)
-    if not config.drift_tracking:
-        drift = _follow_drift(t, x, start, alpha, on, busy, state)
-        state.count = _hysteresis(t, dt, _norm3(x[:, :3]), start, on, off, min_dur, cid, busy, state.count)
-        y = x
-    elif jit_enabled(n):  # the same loop compiled: one pass, no Python iteration per contact
-        drift, y = np.zeros((n, 6)), np.empty((n, 6))
-        y[:start] = x[:start]
-        avg, iavg = _DriftAverage.pack(state), np.array([state.open, state.block, state.count], dtype=np.int64)
-        track_kernel(t, dt, x, alpha, start, on, off, min_dur, _BLOCK, _TINY, avg, iavg, cid, busy, drift, y)
-        _DriftAverage.unpack(state, avg, iavg)
-    else:
-        # the contact decisions see the drift subtracted, and the drift follows only while
-        # untouched: one loop, an iteration per contact and per chunk of untouched samples
-        drift = np.zeros((n, 6))
-        avg = _DriftAverage(x, alpha, state)
-        count = state.count
-
-        def force_norm(lo, hi):  # |f| with the drift held at avg.b
-            return _norm3(x[lo:hi, :3] - avg.b[:3])
-
-        i = start
-        while i < n:
-            e, before = avg.follow(i, n)
-            far = _norm3(x[i:e, :3] - before[:, :3]) >= on
-            k = int(np.argmax(far)) if far.any() else e - i
-            drift[i : i + k] = before[:k]
-            avg.keep(k)
-            if k == e - i:
-                i = e
-                continue
-            j = i + k
-            # onset at j; the drift is held while the contact is pending or held
-            m = _first(lambda lo, hi: force_norm(lo, hi) < off, j + 1, n)
-            drift[j:m] = avg.b
-            busy[j:m] = True
-            ok = _held(t, dt, j, m, min_dur)
-            if ok.any():
-                count += 1
-                cid[j + int(np.argmax(ok)) : m] = count
-            i = m
-        y = x - drift
-        avg.save(state)
-        state.count = count
-    over = _norm3(drift[:, :3]) > on
-    alarm = int(np.argmax(over)) if over.any() and not state.alarmed else -1
-    state.alarmed = state.alarmed or alarm >= 0
-    if n:
-        state.t_last = float(t[-1])
-    return ContactTrack(y, drift, cid > 0, cid, alarm, busy, state)
+    drift, y = np.empty((n, 6)), np.empty((n, 6))
+    run = contact_run.compiled() if use_numba() else contact_run.python
+    t = np.ascontiguousarray(t, dtype=float)
+    x = np.ascontiguousarray(x, dtype=float)
+    alarm = run(t, x, int(start), rec, contact_params(config, noise), cid, busy, drift, y)
+    return ContactTrack(y, drift, cid > 0, cid, int(alarm), busy, TrackState(rec))
 
 
 class ContactTracker:
-    """:func:`track_contacts` one sample at a time.
+    """:func:`track_contacts` one sample at a time (:func:`contact_step` on a state record).
 
     Call :meth:`step` for every sample after the tare; :meth:`reset` after a (re-)tare.
     """
 
     def __init__(self, config: EstimatorConfig, noise: SensorNoise):
         self.config = config
+        # compiled unless numba is off or missing (then the same source as Python)
+        self._step = contact_step.function()
+        self.state = new_contact_state()
         self.set_noise(noise)
-        self.count = 0  #: contacts so far (not reset by a re-tare)
         self.reset()
+        # load (or compile) the step now, on a scratch state, not at the first sample of a live run
+        self._step(new_contact_state(), self.params, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
     def set_noise(self, noise: SensorNoise) -> None:
         """Thresholds for the (filtered) noise model ``noise`` (a tare that measured it)."""
-        self.on, self.off = contact_thresholds(self.config, noise)
+        self.params = contact_params(self.config, noise)
+        self.on, self.off = float(self.params[_ON]), float(self.params[_OFF])
 
     def reset(self) -> None:
-        """Forget the drift and the contact (a new tare)."""
+        """Forget the drift and the contact (a new tare); the count goes on."""
+        reset_contact_state(self.state)
         self.drift = self.drift_before = (0.0,) * 6
-        self._block = 0  # samples in the open block of the drift average (0: none open)
-        self.in_contact = False
         self.contact_id = 0
-        self._pending: float | None = None
         self.drift_alarm = False
 
-    def step(self, t: float, dt: float, x: list[float]) -> tuple[tuple[float, ...] | list[float], int]:
+    @property
+    def count(self) -> int:
+        """Contacts so far (not reset by a re-tare)."""
+        return int(self.state[_COUNT])
+
+    @count.setter
+    def count(self, value: int) -> None:
+        self.state[_COUNT] = float(value)
+
+    def step(self, t: float, dt: float, x: list[float]) -> tuple[tuple[float, ...], int]:
         """Sample ``x`` (tared, filtered) at ``t``, ``dt`` s after the previous sample.
 
         Returns the wrench with the drift subtracted (when tracked) and ``0`` (no contact),
         ``1`` (in contact) or ``2`` (a new contact starts at this sample).
         """
-        cfg = self.config
-        self.drift_before = b = self.drift
-        if not self.drift_alarm and b[0] * b[0] + b[1] * b[1] + b[2] * b[2] > self.on * self.on:
+        x0, x1, x2, x3, x4, x5 = x
+        r = self._step(self.state, self.params, t, dt, x0, x1, x2, x3, x4, x5)
+        self.drift_before = self.drift
+        self.contact_id = r[1]
+        if r[2]:  # the drift followed
+            self.drift = tuple(self.state[_B : _B + 6].tolist())
+        if r[4]:
             self.drift_alarm = True
-        fx, fy, fz = x[0] - b[0], x[1] - b[1], x[2] - b[2]
-        dev = sqrt(fx * fx + fy * fy + fz * fz)
-        track = cfg.drift_tracking
-        if track:
-            y = (fx, fy, fz, x[3] - b[3], x[4] - b[4], x[5] - b[5])
-            f = dev
-        else:
-            y = x
-            f = sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
-        code = 0
-        if self.in_contact:
-            if f >= self.off:
-                code = 1
-            else:
-                self.in_contact = False
-                self.contact_id = 0
-        elif self._pending is not None:
-            if f < self.off:
-                self._pending = None
-            elif (t - self._pending) + dt >= cfg.min_contact_duration:
-                code = self._start()
-        elif f >= self.on:
-            self._pending = t
-            if dt >= cfg.min_contact_duration:  # (t − t) + dt, as in the batch
-                code = self._start()
-        if (not code and self._pending is None) if track else dev < self.on:  # untouched
-            self._follow(min(dt / cfg.drift_time_constant, _MAX_ALPHA), x)
-        elif self._block:
-            self._block = 0
-        return y, code
-
-    def _follow(self, a: float, x: list[float]) -> None:
-        if not self._block:
-            self._b0, self._p, self._acc = self.drift, 1.0, [0.0] * 6
-        self._block += 1
-        self._p = p = self._p * (1.0 - a)
-        w = a / p
-        acc, b0 = self._acc, self._b0
-        acc[0] += w * x[0]
-        acc[1] += w * x[1]
-        acc[2] += w * x[2]
-        acc[3] += w * x[3]
-        acc[4] += w * x[4]
-        acc[5] += w * x[5]
-        self.drift = (p * (b0[0] + acc[0]), p * (b0[1] + acc[1]), p * (b0[2] + acc[2]),
-                      p * (b0[3] + acc[3]), p * (b0[4] + acc[4]), p * (b0[5] + acc[5]))  # fmt: skip
-        if self._block >= _BLOCK or p < _TINY:
-            self._block = 0
-
-    def _start(self) -> int:
-        self._pending = None
-        self.in_contact = True
-        self.count += 1
-        self.contact_id = self.count
-        return 2
+        return r[5:], r[0]
 
 
 def first_contact_pulls(t: NDArray, pulling: NDArray, contact_id: NDArray) -> bool:

@@ -1,12 +1,9 @@
-"""The stream's per-sample arithmetic on Python floats, written out.
+"""What the stream keeps per contact point, and the evidence stage's per-sample direction on floats.
 
-:class:`~softtip.estimator.stream.Estimator` handles one sample in a few microseconds, so the
-kernels of the batch (:func:`softtip.estimator.measure.measure` with the back end
-:data:`softtip.core._xp.PY`) are written out here for it: the same IEEE-754 operations in the same
-order, so the results are the same bits, without a function call per operation. What depends
-only on the contact point (its normal, the tangent frame, the moment-noise part of ``h``'s
-noise level) is computed once per point in :class:`PointGeometry`: while a latch holds, once
-per contact.
+What depends only on the contact point (its normal, the tangent frame, the moment-noise part of
+``h``'s noise level) is computed once per point in :class:`PointGeometry`, from the kernels of
+the batch (:mod:`softtip.core.spin`, :mod:`softtip.core.noise`): while a latch holds, once per
+contact. :func:`sample_direction` is the evidence stage's.
 """
 
 from __future__ import annotations
@@ -16,7 +13,7 @@ from math import atan2, sqrt
 
 from softtip.core._xp import PY
 from softtip.core.fingertip import Fingertip
-from softtip.core.noise import SensorNoise
+from softtip.core.noise import SensorNoise, _quad_moment_kernel
 from softtip.core.spin import tangent_frame_kernel
 
 __all__ = ["NoiseSquares", "PointGeometry", "sample_direction"]
@@ -29,9 +26,10 @@ class NoiseSquares:
     """The variances of a :class:`~softtip.core.noise.SensorNoise` (N², N²·m²), as the noise
     kernels of :mod:`softtip.core.noise` form them (``s * s``)."""
 
-    __slots__ = ("fx", "fy", "fz", "mx", "my", "mz")
+    __slots__ = ("fx", "fy", "fz", "mx", "my", "mz", "noise")
 
     def __init__(self, noise: SensorNoise):
+        self.noise = noise
         self.fx, self.fy, self.fz = (s * s for s in noise.force_std)
         self.mx, self.my, self.mz = (s * s for s in noise.moment_std)
 
@@ -49,8 +47,8 @@ class NoiseSquares:
 class PointGeometry:
     """What the stages need of a contact point ``point`` (m) with outward normal ``normal``:
     the tangent frame ``e1, e2`` (manual §3.4) and the moment-noise parts ``m1``, ``m2`` of
-    ``vᵀ Σ_h v`` for ``v = e1, e2`` (the first three terms of
-    :func:`softtip.core.noise._quad_kernel`, which do not depend on the point).
+    ``vᵀ Σ_h v`` for ``v = e1, e2`` (:func:`softtip.core.noise._quad_moment_kernel`, which
+    does not depend on the point; :func:`softtip.core.noise.h_std_parts_kernel` adds the rest).
 
     Stages that keep their own per-point terms recompute them when handed a geometry that
     ``is not`` the last one.
@@ -64,8 +62,8 @@ class PointGeometry:
         nx, ny, nz = self.nx, self.ny, self.nz = normal
         self.frame = tangent_frame_kernel(nx, ny, nz, PY)
         e1x, e1y, e1z, e2x, e2y, e2z = self.e1x, self.e1y, self.e1z, self.e2x, self.e2y, self.e2z = self.frame
-        self.m1 = sq.mx * e1x * e1x + sq.my * e1y * e1y + sq.mz * e1z * e1z
-        self.m2 = sq.mx * e2x * e2x + sq.my * e2y * e2y + sq.mz * e2z * e2z
+        self.m1 = _quad_moment_kernel(e1x, e1y, e1z, sq.noise)
+        self.m2 = _quad_moment_kernel(e2x, e2y, e2z, sq.noise)
 
     @classmethod
     def on_tip(cls, tip: Fingertip, point: tuple[float, float, float], sq: NoiseSquares) -> PointGeometry:

@@ -13,7 +13,7 @@ import numpy as np
 
 from softtip.core._jit import lazy_jit
 
-__all__ = ["point_moves_kernel", "track_kernel", "vote_kernel", "window_sums_kernel"]
+__all__ = ["point_moves_kernel", "vote_kernel", "window_sums_kernel"]
 
 
 @lazy_jit
@@ -237,95 +237,3 @@ def vote_kernel(t, located, seg_start, side, window, share, out):  # pragma: no 
         elif below > share * m:
             out[i] = 0
     return out
-
-
-@lazy_jit
-def track_kernel(t, dt, x, alpha, start, on, off, min_dur, blk, tiny, avg, iavg, cid, busy, drift, y):  # pragma: no cover
-    """Contacts and drift of :func:`softtip.estimator.contact.track_contacts` (``drift_tracking``
-    on) in one pass: per sample what the numpy path does with running products and sums
-    over chunks of untouched samples (the same operations in the same order).
-
-    Parameters
-    ----------
-    t, dt, alpha : (N,) float
-        Times (s), intervals (s) and drift weights.
-    x : (N, 6) float
-        The tared wrench.
-    start : int
-        First sample tracked.
-    on, off : float
-        Onset and release thresholds, N.
-    min_dur : float
-        Minimum contact duration, s.
-    blk : int
-        Samples per block of the drift average.
-    tiny : float
-        The block also ends once its product of ``(1 − α)`` falls below this.
-    avg : (19,) float
-        The drift average's state, read and written: the drift ``b`` (0:6), the open block's
-        start ``b0`` (6:12), its sums (12:18) and product (18).
-    iavg : (3,) int
-        Read and written: the block is open (0/1), its samples, the contacts so far.
-    cid : (N,) int, busy : (N,) bool, drift, y : (N, 6) float
-        Written from ``start`` on: contact numbers, samples pending or held, the drift
-        before each sample and the wrench minus it.
-    """
-    n = t.shape[0]
-    b = avg[0:6].copy()
-    b0 = avg[6:12].copy()
-    acc = avg[12:18].copy()
-    p = avg[18]
-    is_open, count, contacts = iavg[0], iavg[1], iavg[2]
-    after = np.empty(6)
-    i = start
-    while i < n:
-        dx, dy, dz = x[i, 0] - b[0], x[i, 1] - b[1], x[i, 2] - b[2]
-        if np.sqrt(dx * dx + dy * dy + dz * dz) < on:  # untouched: the average follows
-            if not is_open:
-                for q in range(6):
-                    b0[q] = b[q]
-                    acc[q] = 0.0
-                p, count, is_open = 1.0, 0, 1
-            for q in range(6):
-                drift[i, q] = b[q]
-                y[i, q] = x[i, q] - b[q]
-            p = p * (1.0 - alpha[i])
-            w = alpha[i] / p
-            for q in range(6):
-                acc[q] = acc[q] + w * x[i, q]
-                after[q] = p * (b0[q] + acc[q])
-            for q in range(6):
-                b[q] = after[q]
-            count += 1
-            if count >= blk or p < tiny:
-                is_open = 0
-            i += 1
-            continue
-        # onset at j: the block ends, the drift is held until the release
-        is_open = 0
-        j = i
-        m = j + 1
-        while m < n:
-            dx, dy, dz = x[m, 0] - b[0], x[m, 1] - b[1], x[m, 2] - b[2]
-            if np.sqrt(dx * dx + dy * dy + dz * dz) < off:
-                break
-            m += 1
-        first = -1
-        for k in range(j, m):
-            for q in range(6):
-                drift[k, q] = b[q]
-                y[k, q] = x[k, q] - b[q]
-            busy[k] = True
-            if first < 0 and (t[k] - t[j]) + dt[k] >= min_dur:
-                first = k
-        if first >= 0:
-            contacts += 1
-            for k in range(first, m):
-                cid[k] = contacts
-        i = m
-    avg[0:6] = b
-    avg[6:12] = b0
-    avg[12:18] = acc
-    avg[18] = p
-    iavg[0], iavg[1], iavg[2] = is_open, count, contacts
-    return contacts

@@ -3,9 +3,9 @@
 Each stage is the stream form of the batch stage beside it (:mod:`~softtip.estimator.tare`,
 :mod:`~softtip.estimator.latch`, :mod:`~softtip.estimator.line_fit`,
 :mod:`~softtip.estimator.measure`), so :class:`Estimator` and
-:func:`~softtip.estimator.batch.estimate` agree to rounding. The per-sample arithmetic is
-written out on Python floats (:mod:`~softtip.estimator.floats`): a few microseconds per
-sample in CPython.
+:func:`~softtip.estimator.batch.estimate` agree to rounding. The per-sample steps (contact
+tracking, the low-pass filter) run compiled when numba is allowed; the measurement calls the
+batch's kernels on floats (:data:`softtip.core._xp.PY`).
 """
 
 from __future__ import annotations
@@ -21,7 +21,8 @@ from softtip.core._xp import PY
 from softtip.core.filtering import SosStream, lowpass_sos
 from softtip.core.fingertip import Fingertip, load_fingertip
 from softtip.core.location import contact_kernel
-from softtip.core.noise import SensorNoise
+from softtip.core.noise import SensorNoise, h_std_parts_kernel
+from softtip.core.spin import spin_torque_kernel, tangential_kernel
 from softtip.estimator.batch import sample_rate_mismatch
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.contact import (
@@ -346,21 +347,11 @@ class Estimator:
             ex, ey, ez = rx - delta * nx, ry - delta * ny, rz - delta * nz
         if not fx * nx + fy * ny + fz * nz < 0.0:  # not pushing
             return self._none(t, x, pulling=True, relatched=relatched)
-        # the measurement stage (softtip.estimator.measure.measure), written out: q = m − r × f
-        # about the effective point, σ = q · n, h = q − σ n, and h's noise level
-        qx = mx - (ey * fz - ez * fy)
-        qy = my - (ez * fx - ex * fz)
-        qz = mz - (ex * fy - ey * fx)
-        sigma = qx * nx + qy * ny + qz * nz
-        hx, hy, hz = qx - sigma * nx, qy - sigma * ny, qz - sigma * nz
+        # the measurement stage's kernels (softtip.estimator.measure.measure): q = m − r × f about
+        # the effective point, σ = q · n, h = q − σ n, and h's noise level (its moment part per point)
+        sigma, hx, hy, hz = tangential_kernel(*spin_torque_kernel(fx, fy, fz, mx, my, mz, ex, ey, ez), nx, ny, nz)
         hn = sqrt(hx * hx + hy * hy + hz * hz)
-        sq = self._sq
-        e1x, e1y, e1z, e2x, e2y, e2z = geo.frame
-        cx, cy, cz = e1y * ez - e1z * ey, e1z * ex - e1x * ez, e1x * ey - e1y * ex
-        v = geo.m1 + sq.fx * cx * cx + sq.fy * cy * cy + sq.fz * cz * cz
-        cx, cy, cz = e2y * ez - e2z * ey, e2z * ex - e2x * ez, e2x * ey - e2y * ex
-        v = v + (geo.m2 + sq.fx * cx * cx + sq.fy * cy * cy + sq.fz * cz * cz)
-        h_std = sqrt(v) if v >= 0.0 else math.nan
+        h_std = h_std_parts_kernel(geo.m1, geo.m2, ex, ey, ez, *geo.frame, self._noise, PY)
         h = (hx, hy, hz)
         state, evidence, d, angle, angle_std, noise_std, h_ratio, f_ratio = self._evidence.step(
             t, geo, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, h_std
