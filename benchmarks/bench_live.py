@@ -65,9 +65,15 @@ def _start_device(command: list[str]) -> tuple[subprocess.Popen, int, int]:
     dev = subprocess.Popen(command, stdout=subprocess.PIPE, text=True)
     line = dev.stdout.readline().split()
     if "--rdt-port" not in line:
-        dev.kill()
+        _stop_device(dev)
         raise SystemExit(f"the fake device did not start ({' '.join(command)})")
     return dev, int(line[line.index("--rdt-port") + 1]), int(line[line.index("--http-port") + 1])
+
+
+def _stop_device(dev: subprocess.Popen) -> None:
+    dev.kill()
+    dev.wait()
+    dev.stdout.close()
 
 
 def bench(rate: float, seconds: float, record: bool = True, view: bool = True, faults: bool = True) -> dict:
@@ -110,8 +116,7 @@ def bench(rate: float, seconds: float, record: bool = True, view: bool = True, f
                 )
                 rows = recorder.rows if recorder else 0
     finally:
-        dev.kill()
-        dev.wait()
+        _stop_device(dev)
     lat = latencies[:n] * 1e-6  # ms
     c = summary.counters
     silent = longest * 1e-9 if faults else 0.0
@@ -255,8 +260,7 @@ def soak(rate: float = SOAK_RATE, seconds: float = 60.0, views: bool = True, fre
                     rerun_bytes = os.path.getsize(os.path.join(tmp, "view.rrd"))
             rows = recorder.rows
     finally:
-        dev.kill()
-        dev.wait()
+        _stop_device(dev)
     lat, own_us, inc = latency[:n] * 1e-3, own[:n] * 1e-3, contact[:n]
     gens = {g: [d for gg, d in collections if gg == g] for g in (0, 1, 2)}
     return {

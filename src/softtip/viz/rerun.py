@@ -340,14 +340,23 @@ class LiveRerun:
         if self._proc.poll() is None:
             self._proc.kill()
         self._proc.wait()
+        self._log.seek(0)
+        tail = self._log.read().decode(errors="replace").strip().splitlines()[-3:]
+        self._end()
         if isinstance(answer, tuple) and answer[0] == "import":
             raise ImportError(answer[1])
         if isinstance(answer, tuple):
             raise InputError(answer[1])
-        self._log.seek(0)
-        tail = self._log.read().decode(errors="replace").strip().splitlines()[-3:]
         why = " / ".join(tail) if tail else ("no answer" if reader.is_alive() else f"exit code {self._proc.returncode}")
         raise InputError(f"--rerun: the process drawing the Rerun view failed ({why})")
+
+    def _end(self) -> None:
+        """Close the pipes and the message file of an ended drawing process."""
+        for f in (self._proc.stdin, self._proc.stdout, self._log):
+            try:
+                f.close()
+            except OSError:  # a broken pipe's buffered bytes: the process has ended anyway
+                pass
 
     def log_sample(self, e: SampleEstimate) -> None:
         """Queue one estimate for drawing, unless one was queued less than ``1 / max_rate_hz`` s
@@ -402,6 +411,7 @@ class LiveRerun:
             pass
         self._answer(600.0)
         self._proc.wait()
+        self._end()
 
 
 def _draw(stdin, stdout) -> None:
