@@ -255,6 +255,7 @@ def soak(rate: float = SOAK_RATE, seconds: float = 60.0, views: bool = True, fre
                 finally:
                     sys.setswitchinterval(interval)
                     gc.callbacks.remove(on_gc)
+                behind = src.queued  # received, not estimated when the session ended
                 if rerun is not None:
                     rerun.close()
                     rerun_bytes = os.path.getsize(os.path.join(tmp, "view.rrd"))
@@ -274,6 +275,7 @@ def soak(rate: float = SOAK_RATE, seconds: float = 60.0, views: bool = True, fre
         "sustained": summary.samples / summary.seconds if summary.seconds else 0.0,
         "counters": summary.counters,
         "rows": rows,
+        "behind": behind,
         "in_contact": float(inc.mean()) if n else 0.0,
         "latency_contact": _percentiles(lat[inc]),
         "latency_all": _percentiles(lat),
@@ -300,6 +302,7 @@ def print_soak(r: dict) -> None:
     c = r["counters"]
     lost, dropped = c.get("lost", 0), c.get("dropped", 0)
     ok = lost == 0 and dropped == 0 and r["rows"] == r["samples"]
+    kept_up = r["behind"] <= 0.1 * r["rate"]  # at most 0.1 s of the stream still queued at the end
     lc, la, own = r["latency_contact"], r["latency_all"], r["own_contact"]
     print(f"  views {r['views']}{r['settings']}: {r['samples']:,} samples in {r['seconds']:.1f} s ({r['sustained']:.0f} Hz sustained), "
           f"{r['in_contact']:.0%} in contact, {r['rows']:,} rows recorded"
@@ -307,7 +310,9 @@ def print_soak(r: dict) -> None:
     print(f"    counters: lost {lost}, dropped by softtip {dropped}, late {c.get('late', 0)}, duplicates "
           f"{c.get('duplicates', 0)}, malformed {c.get('malformed', 0)}, restarts {c.get('restarts', 0)}, stalls "
           f"{c.get('stalls', 0)}, nonzero status {c.get('status_records', 0)}: "
-          + ("0 samples lost, every sample recorded" if ok else "SAMPLES LOST OR NOT RECORDED"))  # fmt: skip
+          + ("0 samples lost, every sample recorded" if ok else "SAMPLES LOST OR NOT RECORDED")
+          + f"; {r['behind']} received and not yet estimated at the end ({r['behind'] / r['rate']:.2f} s"
+          + ("" if kept_up else ": softtip DID NOT KEEP UP") + ")")  # fmt: skip
     print(f"    latency, arrival to estimate, in contact: median {_us(lc['median'])}   p99 {_us(lc['p99'])}   "
           f"p99.9 {_us(lc['p999'])}   max {_us(lc['max'])}")  # fmt: skip
     print(f"    latency, all samples:                     median {_us(la['median'])}   p99 {_us(la['p99'])}   "

@@ -4,6 +4,7 @@ collector frozen for a live run, and the 7 kHz soak's measurement (benchmarks/be
 import gc
 import os
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -120,3 +121,19 @@ def test_stream_saves_the_rerun_view_drawn_by_its_own_process(tmp_path):
     assert drawn[0] == log.t[0] and log.t[-1] - drawn[-1] <= 0.04
     assert np.diff(drawn).max() <= 0.04 + 1e-9  # at most 50 per s of the log's 50 Hz, none of them left out for long
     assert set(states.values()) >= {0.0, 2.0}
+
+
+def test_the_receiver_says_how_far_behind_its_consumer_is():
+    from softtip.io.netft import NetFTSource
+    from softtip.testing.netft_fake import FakeNetFT
+
+    with FakeNetFT(rate_hz=2000) as dev:
+        with NetFTSource("127.0.0.1", rdt_port=dev.rdt_port, http_port=dev.http_port, timeout=2.0) as src:
+            it = iter(src)
+            next(it)
+            time.sleep(0.3)  # the consumer stalls: about 600 datagrams wait
+            behind = src.queued
+            for _ in range(behind):
+                next(it)
+            after = src.queued
+    assert 300 <= behind <= 2000 and after < behind
