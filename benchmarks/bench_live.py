@@ -249,6 +249,7 @@ def soak(rate: float = SOAK_RATE, seconds: float = 60.0, views: bool = True, fre
                 interval = sys.getswitchinterval()
                 if switch_interval is not None:
                     sys.setswitchinterval(switch_interval)
+                cpu0, dev0 = time.process_time(), _cpu_of(dev.pid)
                 try:
                     summary = run_live(src, estimator, recorder=recorder, view=term, stats=stats, duration=seconds,
                                        on_estimate=hook, freeze_gc=freeze_gc)  # fmt: skip
@@ -256,6 +257,7 @@ def soak(rate: float = SOAK_RATE, seconds: float = 60.0, views: bool = True, fre
                     sys.setswitchinterval(interval)
                     gc.callbacks.remove(on_gc)
                 behind = src.queued  # received, not estimated when the session ended
+                cpu, dev_cpu = time.process_time() - cpu0, _cpu_of(dev.pid) - dev0
                 if rerun is not None:
                     rerun.close()
                     rerun_bytes = os.path.getsize(os.path.join(tmp, "view.rrd"))
@@ -276,6 +278,8 @@ def soak(rate: float = SOAK_RATE, seconds: float = 60.0, views: bool = True, fre
         "counters": summary.counters,
         "rows": rows,
         "behind": behind,
+        "cpu": cpu,  # s of CPU, softtip's process (every thread; the Rerun view's process not included)
+        "device_cpu": dev_cpu,  # s of CPU, the fake device's process (nan where unknown)
         "in_contact": float(inc.mean()) if n else 0.0,
         "latency_contact": _percentiles(lat[inc]),
         "latency_all": _percentiles(lat),
@@ -283,6 +287,16 @@ def soak(rate: float = SOAK_RATE, seconds: float = 60.0, views: bool = True, fre
         "gc": {g: (len(d), max(d, default=0) * 1e-6) for g, d in gens.items()},  # ms
         "load": os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan"),
     }
+
+
+def _cpu_of(pid: int) -> float:
+    """s of CPU a process has used (Linux: /proc; nan elsewhere)."""
+    try:
+        with open(f"/proc/{pid}/stat", encoding="ascii") as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError):
+        return float("nan")
 
 
 def _percentiles(x: np.ndarray) -> dict[str, float]:
@@ -319,6 +333,9 @@ def print_soak(r: dict) -> None:
           f"p99.9 {_us(la['p999'])}   max {_us(la['max'])}")  # fmt: skip
     print(f"    Estimator.update in contact (wall):       median {_us(own['median'])}   p99 {_us(own['p99'])}   "
           f"(issue 31: median <= 15 us, p99 <= 50 us)")  # fmt: skip
+    busy = r["seconds"] or float("nan")
+    print(f"    CPU: softtip {r['cpu'] / busy:.0%} of a core ({r['cpu'] / max(r['samples'], 1) * 1e6:.0f} us per sample, "
+          f"every thread), the fake device {r['device_cpu'] / busy:.0%}")  # fmt: skip
     g = r["gc"]
     print("    cyclic GC during the session: " + ", ".join(f"generation {k} {g[k][0]}x (longest {g[k][1]:.2f} ms)" for k in (0, 1, 2))
           + f"; load average at the end {r['load']:.1f}")  # fmt: skip
