@@ -25,6 +25,7 @@ from __future__ import annotations
 import math
 import os
 import pickle
+import queue
 import subprocess
 import sys
 import tempfile
@@ -275,8 +276,13 @@ class LiveRerun:
     tip : Fingertip
     save, spawn, force_scale, max_rate_hz, application_id, h_scale, trace_samples
         As in :class:`RerunLogger`.
+    wait : bool
+        Wait here until the drawing process has started (imported Rerun, logged the skin,
+        opened the viewer or the file: a second or more), raising its error. Otherwise it
+        starts while the session runs (samples queue meanwhile), and an error that stopped it
+        is raised by the next :meth:`log_sample` or by :meth:`close`.
     start_timeout : float
-        s to wait for the drawing process to start (import Rerun, log the skin, open the viewer).
+        s to wait for the drawing process to start.
 
     Raises
     ------
@@ -297,19 +303,25 @@ class LiveRerun:
         application_id: str = "softtip",
         h_scale: float = 1.0,
         trace_samples: int = 100,
+        *,
+        wait: bool = True,
         start_timeout: float = 120.0,
     ) -> None:
         import_rerun()  # here, so that a missing package says so at once
         self.min_dt = 1.0 / max_rate_hz
+        self.start_timeout = start_timeout
         self._last_t = -math.inf
         self._pending: deque[SampleEstimate] = deque(maxlen=max(1, int(60 * max_rate_hz)))  # 60 s of drawing
         self._wake = threading.Event()
-        self._stop = False
+        self._stop = self._closed = self._failed = False
         self._error: BaseException | None = None
         self._log = tempfile.TemporaryFile()  # the drawing process's stderr, for messages
         self._proc = subprocess.Popen(
             [sys.executable, "-m", "softtip.viz.rerun"], stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self._log,
         )  # fmt: skip
+        self._answers: queue.SimpleQueue = queue.SimpleQueue()
+        self._reader = threading.Thread(target=self._read_answers, daemon=True, name="softtip-rerun-answers")
+        self._reader.start()
         options = dict(save=None if save is None else os.fspath(save), spawn=spawn, force_scale=force_scale,
                        max_rate_hz=math.inf, application_id=application_id, h_scale=h_scale, trace_samples=trace_samples)  # fmt: skip
         try:
@@ -317,24 +329,33 @@ class LiveRerun:
             self._proc.stdin.flush()
         except OSError:
             pass  # the process ended at once: its answer says why
-        self._answer(start_timeout)
+        self._started = False
+        if wait:
+            self._answer(start_timeout)
+            self._started = True
         self._thread = threading.Thread(target=self._send, daemon=True, name="softtip-rerun-send")
         self._thread.start()
 
-    def _answer(self, timeout: float) -> None:
-        """Read the drawing process's answer (``ok`` or an error); raise the error."""
-        box: dict[str, object] = {}
-
-        def read() -> None:
+    def _read_answers(self) -> None:
+        """The drawing process's answers (``ok`` when started and when closed, else an error), as
+        they come; ``None`` when it ended."""
+        while True:
             try:
-                box["answer"] = pickle.load(self._proc.stdout)
-            except Exception:  # noqa: BLE001 - EOF or garbage: the process died, its stderr says why
-                box["answer"] = None
+                answer = pickle.load(self._proc.stdout)
+            except Exception:  # noqa: BLE001 - EOF or garbage: the process ended, its stderr says why
+                answer = None
+            if answer != "ok" and not self._closed:
+                self._failed = True
+            self._answers.put(answer)
+            if answer is None:
+                return
 
-        reader = threading.Thread(target=read, daemon=True, name="softtip-rerun-answer")
-        reader.start()
-        reader.join(timeout)
-        answer = box.get("answer")
+    def _answer(self, timeout: float) -> None:
+        """Take the drawing process's next answer; raise its error (or its end's)."""
+        try:
+            answer = self._answers.get(timeout=timeout)
+        except queue.Empty:
+            answer = "timeout"
         if answer == "ok":
             return
         if self._proc.poll() is None:
@@ -347,11 +368,12 @@ class LiveRerun:
             raise ImportError(answer[1])
         if isinstance(answer, tuple):
             raise InputError(answer[1])
-        why = " / ".join(tail) if tail else ("no answer" if reader.is_alive() else f"exit code {self._proc.returncode}")
+        why = " / ".join(tail) if tail else ("no answer" if answer == "timeout" else f"exit code {self._proc.returncode}")
         raise InputError(f"--rerun: the process drawing the Rerun view failed ({why})")
 
     def _end(self) -> None:
         """Close the pipes and the message file of an ended drawing process."""
+        self._closed = True
         for f in (self._proc.stdin, self._proc.stdout, self._log):
             try:
                 f.close()
@@ -365,11 +387,11 @@ class LiveRerun:
         Raises
         ------
         InputError
-            The drawing process can no longer be reached (its message, at :meth:`close`).
+            The drawing process failed (its message); the view is closed.
         """
         if e.t - self._last_t < self.min_dt:
             return
-        if self._error is not None:
+        if self._failed or self._error is not None:
             self.close()
         self._last_t = e.t
         self._pending.append(e)
@@ -380,13 +402,14 @@ class LiveRerun:
         dump = pickle.dumps
         try:
             while True:
-                wake.wait()
-                wake.clear()
+                wake.clear()  # before looking: a sample queued from here on wakes the wait below
                 while pending:
                     pipe.write(dump(pending.popleft(), protocol=pickle.HIGHEST_PROTOCOL))
-                pipe.flush()
-                if self._stop:
-                    return
+                pipe.flush()  # waits while the drawing process starts or lags: samples queue meanwhile
+                if not pending:
+                    if self._stop:
+                        return
+                    wake.wait()
         except (OSError, ValueError) as exc:  # the drawing process ended
             self._error = exc
 
@@ -399,7 +422,7 @@ class LiveRerun:
         InputError
             Drawing failed (the viewer could not be reached, the file could not be written).
         """
-        if self._proc.returncode is not None:
+        if self._closed:
             return
         self._stop = True
         self._wake.set()
@@ -409,6 +432,10 @@ class LiveRerun:
             self._proc.stdin.close()
         except OSError:
             pass
+        if not self._started:
+            self._answer(self.start_timeout)
+            self._started = True
+        self._closed = True  # from here, the answers are the end's
         self._answer(600.0)
         self._proc.wait()
         self._end()
