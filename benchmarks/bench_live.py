@@ -250,6 +250,7 @@ def soak(rate: float = SOAK_RATE, seconds: float = 60.0, views: bool = True, fre
                 if switch_interval is not None:
                     sys.setswitchinterval(switch_interval)
                 cpu0, dev0 = time.process_time(), _cpu_of(dev.pid)
+                view0 = _cpu_of(rerun._proc.pid) if rerun is not None else 0.0
                 try:
                     summary = run_live(src, estimator, recorder=recorder, view=term, stats=stats, duration=seconds,
                                        on_estimate=hook, freeze_gc=freeze_gc)  # fmt: skip
@@ -258,6 +259,7 @@ def soak(rate: float = SOAK_RATE, seconds: float = 60.0, views: bool = True, fre
                     gc.callbacks.remove(on_gc)
                 behind = src.queued  # received, not estimated when the session ended
                 cpu, dev_cpu = time.process_time() - cpu0, _cpu_of(dev.pid) - dev0
+                view_cpu = _cpu_of(rerun._proc.pid) - view0 if rerun is not None else 0.0
                 if rerun is not None:
                     rerun.close()
                     rerun_bytes = os.path.getsize(os.path.join(tmp, "view.rrd"))
@@ -280,6 +282,7 @@ def soak(rate: float = SOAK_RATE, seconds: float = 60.0, views: bool = True, fre
         "behind": behind,
         "cpu": cpu,  # s of CPU, softtip's process (every thread; the Rerun view's process not included)
         "device_cpu": dev_cpu,  # s of CPU, the fake device's process (nan where unknown)
+        "view_cpu": view_cpu,  # s of CPU, the Rerun view's process
         "in_contact": float(inc.mean()) if n else 0.0,
         "latency_contact": _percentiles(lat[inc]),
         "latency_all": _percentiles(lat),
@@ -335,7 +338,8 @@ def print_soak(r: dict) -> None:
           f"(issue 31: median <= 15 us, p99 <= 50 us)")  # fmt: skip
     busy = r["seconds"] or float("nan")
     print(f"    CPU: softtip {r['cpu'] / busy:.0%} of a core ({r['cpu'] / max(r['samples'], 1) * 1e6:.0f} us per sample, "
-          f"every thread), the fake device {r['device_cpu'] / busy:.0%}")  # fmt: skip
+          f"every thread), the fake device {r['device_cpu'] / busy:.0%}"
+          + (f", the Rerun view's process {r['view_cpu'] / busy:.0%}" if r["rerun_bytes"] else ""))  # fmt: skip
     g = r["gc"]
     print("    cyclic GC during the session: " + ", ".join(f"generation {k} {g[k][0]}x (longest {g[k][1]:.2f} ms)" for k in (0, 1, 2))
           + f"; load average at the end {r['load']:.1f}")  # fmt: skip
