@@ -95,6 +95,7 @@ def bench(rate: float, seconds: float, record: bool = True, view: bool = True, f
                 longest = r.arrival_ns - prev
             prev = r.arrival_ns
 
+        estimator = Estimator()  # before the stream starts (compiled stages load when it is built)
         with tempfile.TemporaryDirectory() as tmp, open(os.devnull, "w") as null:
             recorder = Recorder(os.path.join(tmp, "rec.csv")) if record else None
             with NetFTSource(
@@ -107,7 +108,7 @@ def bench(rate: float, seconds: float, record: bool = True, view: bool = True, f
                 )
                 summary = run_live(
                     src,
-                    Estimator(),
+                    estimator,
                     recorder=recorder,
                     view=term,
                     stats=stats,
@@ -212,7 +213,7 @@ def soak(rate: float = SOAK_RATE, seconds: float = 60.0, views: bool = True, fre
         elif n:  # not run_live's own collection before the first sample (freeze_gc)
             collections.append((info["generation"], time.thread_time_ns() - started[0]))
 
-    estimator = Estimator("murakami2006")
+    estimator = Estimator("murakami2006")  # before the stream starts (compiled stages load when it is built)
     update, clock, mono = estimator.update, time.perf_counter_ns, time.monotonic_ns
 
     def timed_update(t, w):  # run_live calls the instance's update: this one, timing the real one
