@@ -216,7 +216,8 @@ def _stream(
             ) if show else None  # fmt: skip
             on_estimate = None
             if viz is not None:
-                logger = viz.RerunLogger(fingertip, save=rerun_save, spawn=rerun_spawn)
+                # drawn by a process of its own, which starts while the stream runs
+                logger = viz.LiveRerun(fingertip, save=rerun_save, spawn=rerun_spawn, wait=False)
                 on_estimate = lambda e, r: logger.log_sample(e)
             keys = KeyReader({"t": tare_request.set}) if tare_key else None
             try:

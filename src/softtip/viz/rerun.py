@@ -15,14 +15,21 @@ is logged, sensor frame, metres, on the timeline ``t`` (s of the log):
 * ``series/...``: time series of force, moment, ``|h|`` with its significance level, the
   edge angle (degrees) and the state code (0 none, 1 point, 2 line, 3 area).
 
-``rerun FILE.rrd`` opens a saved recording.
+Live, :class:`LiveRerun` draws in a process of its own, so that Rerun's work (about 1 ms of
+CPU per drawn sample) never runs on the estimator's thread nor holds its interpreter (a
+thread would: Python runs one thread at a time). ``rerun FILE.rrd`` opens a saved recording.
 """
 
 from __future__ import annotations
 
 import math
 import os
+import pickle
+import queue
+import subprocess
 import sys
+import tempfile
+import threading
 from collections import deque
 
 import numpy as np
@@ -32,7 +39,7 @@ from softtip.core.fingertip import Fingertip
 from softtip.errors import InputError
 from softtip.estimator import STATES, Estimates, SampleEstimate
 
-__all__ = ["RerunLogger", "check_viewer", "import_rerun", "surface_mesh"]
+__all__ = ["LiveRerun", "RerunLogger", "check_viewer", "import_rerun", "surface_mesh"]
 
 
 def import_rerun():
@@ -252,3 +259,227 @@ class RerunLogger:
                 "--rerun-save FILE.rrd and open it with `rerun FILE.rrd`"
             ) from None
         self.rec.disconnect()
+
+
+class LiveRerun:
+    """The Rerun view of a live session (``softtip stream --rerun``, ``--rerun-save``), drawn by a
+    :class:`RerunLogger` in a process of its own.
+
+    :meth:`log_sample` is called by the consumer loop with every estimate: it keeps at most
+    ``max_rate_hz`` samples per second of ``t`` (the rest is skipped, as :meth:`RerunLogger.log_sample`
+    does) and queues them; a thread of this process sends them to the drawing process. The loop
+    never waits for Rerun, and Rerun's Python work does not share the estimator's interpreter.
+    If the drawing process falls behind, the oldest queued samples are skipped.
+
+    Parameters
+    ----------
+    tip : Fingertip
+    save, spawn, force_scale, max_rate_hz, application_id, h_scale, trace_samples
+        As in :class:`RerunLogger`.
+    wait : bool
+        Wait here until the drawing process has started (imported Rerun, logged the skin,
+        opened the viewer or the file: a second or more), raising its error. Otherwise it
+        starts while the session runs (samples queue meanwhile), and an error that stopped it
+        is raised by the next :meth:`log_sample` or by :meth:`close`.
+    start_timeout : float
+        s to wait for the drawing process to start.
+
+    Raises
+    ------
+    ImportError
+        ``rerun-sdk`` is not installed.
+    InputError
+        The viewer or the file could not be opened (also raised by :meth:`log_sample` and
+        :meth:`close` when drawing fails later).
+    """
+
+    def __init__(
+        self,
+        tip: Fingertip,
+        save: str | os.PathLike[str] | None = None,
+        spawn: bool = False,
+        force_scale: float = 0.005,
+        max_rate_hz: float = 50.0,
+        application_id: str = "softtip",
+        h_scale: float = 1.0,
+        trace_samples: int = 100,
+        *,
+        wait: bool = True,
+        start_timeout: float = 120.0,
+    ) -> None:
+        import_rerun()  # here, so that a missing package says so at once
+        self.min_dt = 1.0 / max_rate_hz
+        self.start_timeout = start_timeout
+        self._last_t = -math.inf
+        self._pending: deque[SampleEstimate] = deque(maxlen=max(1, int(60 * max_rate_hz)))  # 60 s of drawing
+        self._wake = threading.Event()
+        self._stop = self._closed = self._failed = False
+        self._error: BaseException | None = None
+        self._log = tempfile.TemporaryFile()  # the drawing process's stderr, for messages
+        self._proc = subprocess.Popen(
+            [sys.executable, "-m", "softtip.viz.rerun"], stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self._log,
+        )  # fmt: skip
+        self._answers: queue.SimpleQueue = queue.SimpleQueue()
+        self._reader = threading.Thread(target=self._read_answers, daemon=True, name="softtip-rerun-answers")
+        self._reader.start()
+        options = dict(save=None if save is None else os.fspath(save), spawn=spawn, force_scale=force_scale,
+                       max_rate_hz=math.inf, application_id=application_id, h_scale=h_scale, trace_samples=trace_samples)  # fmt: skip
+        try:
+            pickle.dump((tip, options), self._proc.stdin, protocol=pickle.HIGHEST_PROTOCOL)
+            self._proc.stdin.flush()
+        except OSError:
+            pass  # the process ended at once: its answer says why
+        self._started = False
+        if wait:
+            self._answer(start_timeout)
+            self._started = True
+        self._thread = threading.Thread(target=self._send, daemon=True, name="softtip-rerun-send")
+        self._thread.start()
+
+    def _read_answers(self) -> None:
+        """The drawing process's answers (``ok`` when started and when closed, else an error), as
+        they come; ``None`` when it ended."""
+        while True:
+            try:
+                answer = pickle.load(self._proc.stdout)
+            except Exception:  # noqa: BLE001 - EOF or garbage: the process ended, its stderr says why
+                answer = None
+            if answer != "ok" and not self._closed:
+                self._failed = True
+            self._answers.put(answer)
+            if answer is None:
+                return
+
+    def _answer(self, timeout: float) -> None:
+        """Take the drawing process's next answer; raise its error (or its end's)."""
+        try:
+            answer = self._answers.get(timeout=timeout)
+        except queue.Empty:
+            answer = "timeout"
+        if answer == "ok":
+            return
+        if self._proc.poll() is None:
+            self._proc.kill()
+        self._proc.wait()
+        self._log.seek(0)
+        tail = self._log.read().decode(errors="replace").strip().splitlines()[-3:]
+        self._end()
+        if isinstance(answer, tuple) and answer[0] == "import":
+            raise ImportError(answer[1])
+        if isinstance(answer, tuple):
+            raise InputError(answer[1])
+        why = " / ".join(tail) if tail else ("no answer" if answer == "timeout" else f"exit code {self._proc.returncode}")
+        raise InputError(f"--rerun: the process drawing the Rerun view failed ({why})")
+
+    def _end(self) -> None:
+        """Close the pipes and the message file of an ended drawing process."""
+        self._closed = True
+        for f in (self._proc.stdin, self._proc.stdout, self._log):
+            try:
+                f.close()
+            except OSError:  # a broken pipe's buffered bytes: the process has ended anyway
+                pass
+
+    def log_sample(self, e: SampleEstimate) -> None:
+        """Queue one estimate for drawing, unless one was queued less than ``1 / max_rate_hz`` s
+        (of ``t``) before. Never waits.
+
+        Raises
+        ------
+        InputError
+            The drawing process failed (its message); the view is closed.
+        """
+        if e.t - self._last_t < self.min_dt:
+            return
+        if self._failed or self._error is not None:
+            self.close()
+        self._last_t = e.t
+        self._pending.append(e)
+        self._wake.set()
+
+    def _send(self) -> None:
+        pending, wake, pipe = self._pending, self._wake, self._proc.stdin
+        dump = pickle.dumps
+        try:
+            while True:
+                wake.clear()  # before looking: a sample queued from here on wakes the wait below
+                while pending:
+                    pipe.write(dump(pending.popleft(), protocol=pickle.HIGHEST_PROTOCOL))
+                pipe.flush()  # waits while the drawing process starts or lags: samples queue meanwhile
+                if not pending:
+                    if self._stop:
+                        return
+                    wake.wait()
+        except (OSError, ValueError) as exc:  # the drawing process ended
+            self._error = exc
+
+    def close(self) -> None:
+        """Draw what is queued, then flush and close the recording (the ``.rrd`` file is complete
+        afterwards) and end the drawing process (idempotent).
+
+        Raises
+        ------
+        InputError
+            Drawing failed (the viewer could not be reached, the file could not be written).
+        """
+        if self._closed:
+            return
+        self._stop = True
+        self._wake.set()
+        self._thread.join()
+        try:
+            pickle.dump(None, self._proc.stdin)
+            self._proc.stdin.close()
+        except OSError:
+            pass
+        if not self._started:
+            self._answer(self.start_timeout)
+            self._started = True
+        self._closed = True  # from here, the answers are the end's
+        self._answer(600.0)
+        self._proc.wait()
+        self._end()
+
+
+def _draw(stdin, stdout) -> None:
+    """The drawing process of :class:`LiveRerun`: a setup ``(tip, options)`` then estimates, pickled
+    on ``stdin``, until ``None``; answers ``ok`` (started, then closed) or ``(kind, message)``."""
+
+    def answer(value) -> None:
+        pickle.dump(value, stdout)
+        stdout.flush()
+
+    tip, options = pickle.load(stdin)
+    try:
+        logger = RerunLogger(tip, **options)
+    except ImportError as exc:
+        answer(("import", str(exc)))
+        return
+    except InputError as exc:
+        answer(("input", str(exc)))
+        return
+    except Exception as exc:  # noqa: BLE001 - whatever rerun raises, the user gets one message
+        answer(("input", f"--rerun: could not open the Rerun view ({exc})"))
+        return
+    answer("ok")
+    try:
+        while (e := pickle.load(stdin)) is not None:
+            logger.log_sample(e)
+        logger.close()
+    except EOFError:  # the session ended without closing the view: keep what was drawn
+        logger.close()
+        return
+    except InputError as exc:
+        answer(("input", str(exc)))
+        return
+    except Exception as exc:  # noqa: BLE001
+        answer(("input", f"--rerun: drawing the Rerun view failed ({exc})"))
+        return
+    answer("ok")
+
+
+if __name__ == "__main__":
+    # the answers go on the original standard output; anything printed goes to standard error
+    _answers = os.fdopen(os.dup(sys.stdout.fileno()), "wb")
+    os.dup2(sys.stderr.fileno(), sys.stdout.fileno())
+    _draw(sys.stdin.buffer, _answers)

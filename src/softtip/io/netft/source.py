@@ -169,6 +169,11 @@ class NetFTSource:
         return self._rx_dropped
 
     @property
+    def queued(self) -> int:
+        """Datagrams received and not yet taken by the consumer (how far behind it is)."""
+        return len(self._queue)
+
+    @property
     def warnings(self) -> list[str]:
         return self.tracker.warnings if self.tracker else []
 

@@ -1,0 +1,149 @@
+"""The live path's views and its pauses: the Rerun view drawn in a process of its own, the garbage
+collector frozen for a live run, and the 7 kHz soak's measurement (benchmarks/bench_live.py)."""
+
+import gc
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from softtip import Estimator, load_fingertip
+from softtip.apps.live import run_live
+from softtip.errors import InputError
+from softtip.sim.synthetic import synthetic_grasp
+
+BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
+
+
+@pytest.fixture(scope="module")
+def estimates():
+    tip = load_fingertip("murakami2006")
+    g = synthetic_grasp(tip, duration=10.0, rate=1000.0, seed=1)  # 500 drawn: more than a pipe holds
+    est = Estimator(tip)
+    return tip, [est.update(t, w) for t, w in zip(g.t, g.wrench)]
+
+
+def _series(path: Path, entity: str) -> dict[float, float]:
+    """{t (s): value} of a scalar series in a saved recording."""
+    from rerun.chunk import RrdReader
+
+    out = {}
+    for chunk in RrdReader(str(path)).store().stream():
+        if chunk.entity_path == entity:
+            batch = chunk.to_record_batch()
+            for t, v in zip(batch.column("t").to_pylist(), batch.column("Scalars:scalars").to_pylist()):
+                out[t.total_seconds()] = v[0]
+    return out
+
+
+@pytest.mark.parametrize("wait", [True, False], ids=["started", "starting"])
+def test_the_live_rerun_view_draws_what_the_logger_draws_from_another_process(estimates, tmp_path, wait):
+    pytest.importorskip("rerun")
+    from softtip.viz.rerun import LiveRerun, RerunLogger
+
+    tip, es = estimates
+    live = LiveRerun(tip, save=tmp_path / "live.rrd", wait=wait)
+    assert live._proc.pid != os.getpid() and not hasattr(live, "rec")  # nothing of Rerun's in this process
+    for k, e in enumerate(es):
+        live.log_sample(e)
+        if k == len(es) // 2:  # more than the pipe holds is on its way (to a process still starting)
+            time.sleep(0.2)
+    live.close()
+    assert live._proc.returncode == 0
+    live.close()  # idempotent
+    ref = RerunLogger(tip, save=tmp_path / "ref.rrd")
+    for e in es:
+        ref.log_sample(e)
+    ref.close()
+    for entity in ("/series/state", "/series/h_norm", "/series/force/fz"):
+        got, want = _series(tmp_path / "live.rrd", entity), _series(tmp_path / "ref.rrd", entity)
+        assert len(want) > 400 and got.keys() == want.keys(), entity  # 50 samples per s of t, the same ones
+        assert np.array_equal(list(got.values()), list(want.values()), equal_nan=True), entity
+    assert set(_series(tmp_path / "live.rrd", "/series/state").values()) >= {0.0, 1.0, 2.0}  # none, point, line
+
+
+def test_the_live_rerun_view_says_why_it_cannot_start(estimates, tmp_path):
+    pytest.importorskip("rerun")
+    from softtip.viz.rerun import LiveRerun
+
+    tip, es = estimates
+    with pytest.raises(InputError, match="no-such-folder"):
+        LiveRerun(tip, save=tmp_path / "no-such-folder" / "view.rrd")
+    live = LiveRerun(tip, save=tmp_path / "no-such-folder" / "view.rrd", wait=False)  # starts meanwhile
+    with pytest.raises(InputError, match="no-such-folder"):
+        for e in es:  # the loop learns of it within a few samples of the failure
+            live.log_sample(e)
+            time.sleep(0.002)
+    assert live._proc.returncode is not None
+    live.close()  # closed already
+
+
+def test_a_live_run_freezes_the_start_up_heap_and_unfreezes_it_at_the_end():
+    g = synthetic_grasp("murakami2006", duration=1.0, rate=1000.0, seed=2)
+    frozen = []
+
+    def count(e, r):  # every 100th sample (the count walks the frozen objects)
+        if len(g.t) - r.t * 1000 < 1.5 or round(r.t * 1000) % 100 == 0:
+            frozen.append(gc.get_freeze_count())
+
+    before = gc.get_freeze_count()
+    run_live(zip(g.t, g.wrench), Estimator(), on_estimate=count)
+    assert len(frozen) == 11 and min(frozen) > before + 1000  # softtip, numpy, ... frozen while it runs
+    assert gc.get_freeze_count() == before and gc.isenabled()
+    frozen.clear()
+    run_live(zip(g.t, g.wrench), Estimator(), on_estimate=count, freeze_gc=False)
+    assert frozen == [before] * 11
+
+
+def test_the_soak_measures_a_clean_stream_in_contact_with_nothing_lost():
+    sys.path.insert(0, str(BENCHMARKS))
+    try:
+        import bench_live
+    finally:
+        sys.path.remove(str(BENCHMARKS))
+    w = bench_live.soak_wrench(1000.0, 25.0)
+    touched = np.linalg.norm(w[:, :3] - np.median(w[:900, :3], axis=0), axis=1) > 0.05  # N beyond the bias
+    assert w.shape == (25_000, 6) and not touched[:900].any() and 0.85 < touched.mean() < 0.95
+    r = bench_live.soak(rate=1000.0, seconds=2.5, views=False)
+    c = r["counters"]
+    assert c["lost"] == 0 and c["dropped"] == 0 and r["rows"] == r["samples"] > 2000
+    assert 0.3 < r["in_contact"] < 0.8  # the tare (1 s), then the press
+    assert 0 < r["own_contact"]["median"] <= r["own_contact"]["p99"] <= r["latency_contact"]["max"]
+
+
+def test_stream_saves_the_rerun_view_drawn_by_its_own_process(tmp_path):
+    pytest.importorskip("rerun")
+    import subprocess
+
+    from softtip.io.examples import EXAMPLE_PATH, load_example
+
+    view = tmp_path / "view.rrd"
+    r = subprocess.run([sys.executable, "-m", "softtip.cli", "stream", "--replay", str(EXAMPLE_PATH), "--speed", "0",
+                        "--rerun-save", str(view), "--no-view"], capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    log = load_example()
+    states = _series(view, "/series/state")
+    drawn = np.array(sorted(states))
+    assert np.abs(drawn[:, None] - log.t).min(axis=1).max() < 1e-6  # at the samples' t (rerun keeps ns)
+    assert drawn[0] == log.t[0] and log.t[-1] - drawn[-1] <= 0.04
+    assert np.diff(drawn).max() <= 0.04 + 1e-9  # at most 50 per s of the log's 50 Hz, none of them left out for long
+    assert set(states.values()) >= {0.0, 2.0}
+
+
+def test_the_receiver_says_how_far_behind_its_consumer_is():
+    from softtip.io.netft import NetFTSource
+    from softtip.testing.netft_fake import FakeNetFT
+
+    with FakeNetFT(rate_hz=2000) as dev:
+        with NetFTSource("127.0.0.1", rdt_port=dev.rdt_port, http_port=dev.http_port, timeout=2.0) as src:
+            it = iter(src)
+            next(it)
+            time.sleep(0.3)  # the consumer stalls: about 600 datagrams wait
+            behind = src.queued
+            for _ in range(behind):
+                next(it)
+            after = src.queued
+    assert 300 <= behind <= 2000 and after < behind
