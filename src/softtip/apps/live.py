@@ -572,7 +572,7 @@ def run_live(
     stats : LiveStats, optional
         Counters to update (the view's); a new one otherwise.
     duration : float, optional
-        s of wall-clock time after the first sample.
+        s of wall-clock time after the first sample (its arrival on this host, for a device).
     stop : threading.Event, optional
         Set it (e.g. from a SIGINT handler) to end the run cleanly.
     on_estimate : callable, optional
@@ -608,7 +608,8 @@ def run_live(
     try:
         for r in readings(source):
             if stats.started is None:
-                stats.started = time.monotonic()
+                # from the first sample's arrival (a device's), so a start-up backlog is not recorded on top
+                stats.started = r.arrival_ns * 1e-9 if r.arrival_ns else time.monotonic()
                 if duration is not None:
                     deadline = stats.started + duration
                     watchdog.deadline = deadline
