@@ -310,12 +310,16 @@ class LatchTracker:
         self.config = config
         self._params = latch_params(config)
         self._step, self._hold = pick(latch_step), pick(latch_hold)
+        lo, hi = config.latch_window
+        # a held latch is re-tested only at light force (all forces when never: an empty range)
+        self._test_lo, self._test_hi = (lo, hi) if config.relatch_distance is not None else (1.0, 0.0)
         self.reset()
 
     def reset(self) -> None:
         """No contact so far."""
         self.state = new_latch_state()
         self.point: tuple[float, float, float] | None = None  #: the latch held, m (None when none)
+        self._fallback = False  # the latch held is a fallback one
 
     def step(self, t: float, f_norm: float, x: list[float], sc, onset: bool):
         """A sample in contact at ``t`` (s) with tared wrench ``x`` and ``|f|`` ``f_norm`` (N);
@@ -325,6 +329,10 @@ class LatchTracker:
         when there is none yet (no valid soft-finger solution); ``begin``: a first rise starts
         (onset or re-latch).
         """
+        if self.point is not None and not onset and not self._test_lo <= f_norm <= self._test_hi:
+            # held, no re-latch test due: latch_step would return HELD and change nothing (a
+            # shortcut of its first lines, a compiled call less per sample of a held contact)
+            return self.point, True, self._fallback, False, False, sc
         state, params = self.state, self._params
         if sc is None:
             out = self._step(state, params, onset, t, f_norm, False, False, 0.0, 0.0, 0.0)
@@ -343,6 +351,7 @@ class LatchTracker:
             point = self.tip._project_kernel(mx, my, mz, PY)
         elif code == FIX:
             point = self.point = self.tip._project_kernel(mx, my, mz, PY)
+            self._fallback = fallback
             self._hold(state, *point)
         else:
             point = None
