@@ -335,12 +335,11 @@ class LineFitTracker:
         self._held = None
 
     def _grow(self) -> None:
-        """The ring buffer twice as large, its rows oldest first."""
+        """The ring buffer (full) twice as large, its rows oldest first."""
         ring, state = self._ring, self.state
-        cap, head = ring.shape[0], int(state[_HEAD])
+        head = int(state[_HEAD])
         self._ring = np.concatenate((ring[head:], ring[:head], np.zeros_like(ring)))
         state[_HEAD] = 0.0
-        assert int(state[_COUNT]) == cap
 
     def step(self, t: float, x: list[float], point, sc):
         """``(point, (conditioning, angle_std, offset_std, residual), moved)`` of a sample in
