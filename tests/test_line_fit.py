@@ -7,11 +7,13 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from softtip import Capsule, EstimatorConfig, Sphere, axial_difference, estimate, murakami2006
+from rocking import rocking_log
+from softtip import Capsule, Estimator, EstimatorConfig, Sphere, axial_difference, estimate, murakami2006
+from softtip.core._jit import set_jit
 from softtip.core._xp import PY
 from softtip.core.line_fit import line_fit_products, line_fit_solve_kernel
 from softtip.core.noise import NANO17, SensorNoise
-from softtip.estimator.line_fit import line_fit_accept
+from softtip.estimator.line_fit import _COUNT, LineFitTracker, line_fit_accept
 from softtip.sim.synthetic import smoothstep
 from strategies import unit_vectors
 from test_pipeline import assert_stream_equals_batch
@@ -326,3 +328,61 @@ def test_stream_survives_an_empty_window():
     cfg = EstimatorConfig(contact_point="line-fit", line_fit_window=1e-7, tare_duration=0.0)
     est = assert_stream_equals_batch(t + 1.7e9, w, "murakami2006", cfg)
     assert est.line_fit_fallback[est.state > 0].all()
+
+
+# -- one set of step functions, batch and stream (estimator/line_fit.py) --------------------------------
+
+LINE_FIT_COLUMNS = ("point", "line_fit_conditioning", "line_fit_angle_std", "line_fit_offset_std",
+                    "line_fit_residual", "line_fit_fallback", "latched", "relatched")  # fmt: skip
+
+
+def _line_fit_cases():
+    from test_relatch import NAIL, _sliding, taps_log
+
+    def lead_and_grasp():  # a rocked line at 1 kHz: a window of 1000 samples, the stream's ring buffer grows
+        t, w, _ = rocking_log("line", 40.0, rate=1000.0, seed=4, duration=6.0)
+        return t, w
+
+    line = dict(contact_point="line-fit", line_fit_max_angle_std=0.5, line_fit_max_offset_std=1e-3)
+    return {
+        "1khz-relatch": (lead_and_grasp, EstimatorConfig(relatch_distance=1e-3, **line), "murakami2006"),
+        "taps-short-window": (taps_log, EstimatorConfig(line_fit_window=0.05, **line), "murakami2006"),
+        "sliding-law-relatch": (_sliding, EstimatorConfig(depth_compensation="law", relatch_distance=1e-3, **line),
+                                "murakami2006"),  # fmt: skip
+        "sliding-nail": (_sliding, EstimatorConfig(relatch_distance=1e-3, **line), NAIL),
+    }
+
+
+@pytest.mark.parametrize("case", ["1khz-relatch", "taps-short-window", "sliding-law-relatch", "sliding-nail"])
+def test_line_fit_batch_equals_stream_to_the_bit(case, recwarn):
+    log, config, tip = _line_fit_cases()[case]
+    t, w = log()
+    out = []
+    old = set_jit(None)
+    try:
+        # compiled (numba, when installed) and as Python: the same steps, the same bits
+        for flag in (None, False):
+            set_jit(flag)
+            batch = estimate(t, w, tip, config)
+            stream = Estimator(tip, config).process(t, w)
+            out.append((batch, {name: np.array([getattr(s, name) for s in stream]) for name in LINE_FIT_COLUMNS}))
+    finally:
+        set_jit(old)
+    for batch, stream in out:
+        for name in LINE_FIT_COLUMNS:
+            assert np.array_equal(stream[name], getattr(batch, name), equal_nan=True), name
+        for name in LINE_FIT_COLUMNS:
+            assert np.array_equal(getattr(out[0][0], name), getattr(batch, name), equal_nan=True), name
+    batch = out[0][0]
+    assert np.any((batch.state > 0) & ~batch.line_fit_fallback), "no window was held"
+
+
+def test_the_line_fit_stream_grows_its_window(recwarn):
+    log, config, tip = _line_fit_cases()["1khz-relatch"]
+    t, w = log()
+    est = Estimator(tip, config)
+    ring = est._line_fit._ring.shape[0]
+    est.process(t, w)
+    tracker = est._line_fit
+    assert isinstance(tracker, LineFitTracker)
+    assert tracker._ring.shape[0] > ring and tracker._ring.shape[0] >= int(tracker.state[_COUNT]) >= 900

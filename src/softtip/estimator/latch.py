@@ -1,4 +1,4 @@
-"""The latched contact point (paper III-C), batch and stream side by side.
+"""The latched contact point (paper III-C): one step function for batch and stream.
 
 During the first rise of the force after onset (until ``|f|`` first exceeds the light-force
 window, or sets no new maximum for ``stall_time``), the soft-finger solutions of the samples
@@ -10,8 +10,18 @@ solutions of the contact is latched and flagged.
 Re-latching (``relatch_distance``): once the latch is held, a sample at light force whose
 soft-finger solution lies farther than this from the latched point starts a new first rise.
 
-:func:`latch_points` does it for a whole log (vectorised within each contact);
-:class:`LatchTracker` one sample at a time.
+One source: :func:`latch_step` advances the state record (:func:`new_latch_state`) by one
+sample in contact: the running sums, the rise, fallback and re-latch decisions. Putting a mean
+back on the skin depends on the fingertip's shape (``tip._project_kernel``), so it is not in
+the step: the step returns a code saying which point the sample has (none, the soft-finger
+solution, the projection of the mean it returns, or the held latch) and the caller projects.
+The re-latch test needs the held point projected; :class:`LatchTracker` (the stream) projects
+a latch when it is fixed and hands it back (:func:`latch_hold`) before the next sample.
+:func:`latch_points` (the batch) runs the step over the log in one compiled loop
+(:func:`latch_run`) and projects the means afterwards, vectorised; with re-latching the loop
+stops at the first re-latch test of a latch not yet projected, the wrapper projects it as the
+stream does (``xp=PY``) and the loop goes on from that sample: the decisions are the stream's
+to the bit.
 """
 
 from __future__ import annotations
@@ -21,14 +31,45 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from softtip.core._jit import jit_enabled
+from softtip.core._jit import lazy_jit
 from softtip.core._xp import NP, PY
 from softtip.core.fingertip import Fingertip
 from softtip.core.location import SoftFinger, contact_kernel
 from softtip.estimator.config import EstimatorConfig
-from softtip.estimator.sequential import latch_scan_kernel
 
-__all__ = ["latch_points", "LatchedPoints", "LatchTracker"]
+__all__ = ["latch_points", "LatchedPoints", "LatchTracker", "latch_params", "new_latch_state", "latch_step",
+           "latch_hold", "latch_run"]  # fmt: skip
+
+# the state record's slots
+_RISING = 0  # 1 during the first rise
+_PEAK = 1  # N, the largest |f| of the rise so far
+_T_PEAK = 2  # s, when it was set
+_N_WIN = 3  # soft-finger solutions in the light-force window during the rise
+_WX, _WY, _WZ = 4, 5, 6  # m, their sum
+_N_FB = 7  # the first valid soft-finger solutions (up to fallback_samples)
+_FX, _FY, _FZ = 8, 9, 10  # m, their sum
+_HOLD = 11  # 0: no latch fixed; 1: fixed on the window mean; 2: on the fallback mean
+_PENDING = 12  # 1: fixed, the held point not projected yet (_MX.. not yet put on the skin)
+_MX, _MY, _MZ = 13, 14, 15  # m, the mean fixed
+_LX, _LY, _LZ = 16, 17, 18  # m, the held point (the mean put back on the skin)
+_HAD = 19  # 1 once any sample was latched (a contact regained after it starts re-latched)
+_N_STATE = 20
+
+# the parameters' slots
+_LO, _HI = 0, 1  # N, the light-force window
+_STALL = 2  # s
+_N_FALLBACK = 3
+_DIST2 = 4  # m², relatch_distance squared; negative: no re-latching
+_N_PARAMS = 5
+
+# what point a sample has (the code latch_step returns)
+NONE = 0  #: none (no valid soft-finger solution yet)
+SOFT = 1  #: the sample's soft-finger solution
+MEAN = 2  #: the mean returned, put back on the skin
+FIX = 3  #: as MEAN, and the latch is fixed to it from here (the caller projects it, :func:`latch_hold`)
+HELD = 4  #: the latch held
+ASK_SC = 5  #: (nothing done) call again with the sample's soft-finger solution
+ASK_HOLD = 6  #: (nothing done) project the mean returned, :func:`latch_hold` it, call again
 
 
 class LatchedPoints(NamedTuple):
@@ -40,267 +81,278 @@ class LatchedPoints(NamedTuple):
     relatched: NDArray  #: (N,) bool, a new latch starts here (re-latch, or a contact after a latched one)
 
 
-def _latch_segment(t, f_norm, valid, r_sc, tip: Fingertip, config: EstimatorConfig):
-    """The latch of one segment (a contact, or its rest after a re-latch), vectorised.
-
-    The segment's first sample starts a first rise. Returns ``(point (k, 3), latched (k,),
-    fallback (k,), held (k,), latch point (3,))``, where ``held`` marks the samples that
-    start with the latch already fixed (where a drift re-latch may happen).
-    """
-    k = len(t)
+def latch_params(config: EstimatorConfig) -> NDArray:
+    """The latch's parameters from ``config``, a float64 vector (slots ``_LO`` ... ``_DIST2``)."""
     lo, hi = config.latch_window
-    idx = np.arange(k)
-    prev_peak = np.concatenate(([-np.inf], np.maximum.accumulate(f_norm)[:-1]))
-    t_peak = t[np.maximum.accumulate(np.where(f_norm > prev_peak, idx, 0))]
-    rise_over = (f_norm > hi) | (t - t_peak > config.stall_time)
-    end = int(np.argmax(rise_over)) if rise_over.any() else k
-    win = (idx < end) & (f_norm >= lo) & (f_norm <= hi) & valid
-    n_win = np.cumsum(win)
-    sum_win = np.cumsum(np.where(win[:, None], r_sc, 0.0), axis=0)
-    fb = valid & (np.cumsum(valid) <= config.fallback_samples)
-    n_fb = np.cumsum(fb)
-    sum_fb = np.cumsum(np.where(fb[:, None], r_sc, 0.0), axis=0)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        mean_win = tip.project(sum_win / n_win[:, None])
-        mean_fb = tip.project(sum_fb / n_fb[:, None])
-    total_win = n_win[end - 1] if end > 0 else 0
-    rising = idx < end
-    pe = np.where((rising & (n_win > 0))[:, None], mean_win, r_sc)
-    if total_win > 0:
-        pe[~rising] = mean_win[end - 1]
-        lat = rising & (n_win > 0) | ~rising
-        fbk = np.zeros(k, dtype=bool)
-        fixed, latch = end, mean_win[end - 1]
-    else:
-        after = ~rising
-        pe[after] = np.where((n_fb[after] > 0)[:, None], mean_fb[after], np.nan)
-        lat = after & (n_fb > 0)
-        fbk = lat
-        # the stream fixes the fallback latch once it has all its samples
-        done = after & (n_fb >= config.fallback_samples)
-        fixed = int(np.argmax(done)) if done.any() else k
-        latch = mean_fb[fixed] if fixed < k else np.full(3, np.nan)
-    return pe, lat, fbk, idx > fixed, latch
+    d = config.relatch_distance
+    return np.array([lo, hi, config.stall_time, config.fallback_samples, -1.0 if d is None else d * d], dtype=float)
+
+
+def new_latch_state(had_latch: bool = False) -> NDArray:
+    """A latch's state record before any contact; ``had_latch``: an earlier contact (an earlier
+    piece of the log) had a latched point."""
+    state = np.zeros(_N_STATE)
+    state[_HAD] = float(had_latch)
+    return state
+
+
+@lazy_jit
+def latch_start(state, f_norm, t):  # pragma: no cover - compiled
+    """A new first rise at force ``f_norm`` (N) and time ``t`` (s): at onset and at a re-latch."""
+    state[_RISING] = 1.0
+    state[_PEAK] = f_norm
+    state[_T_PEAK] = t
+    for k in range(_N_WIN, _LZ + 1):
+        state[k] = 0.0
+
+
+@lazy_jit
+def latch_hold(state, px, py, pz):  # pragma: no cover - compiled
+    """The fixed latch put back on the skin, ``p`` (m), handed to the state (after
+    :data:`FIX` or :data:`ASK_HOLD`)."""
+    state[_LX] = px
+    state[_LY] = py
+    state[_LZ] = pz
+    state[_PENDING] = 0.0
+
+
+@lazy_jit
+def latch_step(state, params, onset, t, f_norm, have_sc, valid, rx, ry, rz):  # pragma: no cover - compiled
+    """One sample in contact.
+
+    Parameters
+    ----------
+    state, params : float64 vectors
+        :func:`new_latch_state` (updated) and :func:`latch_params`.
+    onset : bool
+        The contact starts at this sample.
+    t, f_norm : float
+        s, and ``|f|`` (N).
+    have_sc : bool
+        ``valid, r`` are the sample's soft-finger solution (else :data:`ASK_SC` when needed).
+    valid : bool
+    rx, ry, rz : float
+        The soft-finger contact point, m.
+
+    Returns
+    -------
+    tuple
+        ``(code, mx, my, mz, latched, fallback, relatched, begin)``: which point the sample
+        has (:data:`NONE` ... :data:`HELD`, or a request :data:`ASK_SC`, :data:`ASK_HOLD`),
+        the mean to put back on the skin (m; for :data:`MEAN`, :data:`FIX`,
+        :data:`ASK_HOLD`), whether the sample is latched, latched on the fallback, re-latched
+        (a re-latch, or an onset after a latched contact), and whether a first rise begins.
+    """
+    nan = np.nan
+    lo = params[_LO]
+    hi = params[_HI]
+    dist2 = params[_DIST2]
+    held = state[_HOLD] > 0.0
+    test = (not onset) and held and dist2 >= 0.0 and lo <= f_norm and f_norm <= hi  # re-latch test due
+    if not have_sc and (onset or not held or test):
+        return ASK_SC, nan, nan, nan, False, False, False, False
+    relatched = False
+    begin = onset
+    if onset:
+        relatched = state[_HAD] > 0.0  # contact regained after a latched one
+    elif test and valid:
+        if state[_PENDING] > 0.0:
+            return ASK_HOLD, state[_MX], state[_MY], state[_MZ], False, False, False, False
+        dx, dy, dz = rx - state[_LX], ry - state[_LY], rz - state[_LZ]
+        if dx * dx + dy * dy + dz * dz > dist2:
+            relatched = True
+            begin = True
+    if begin:
+        latch_start(state, f_norm, t)
+    rising = state[_RISING] > 0.0
+    if rising and f_norm > state[_PEAK]:
+        state[_PEAK] = f_norm
+        state[_T_PEAK] = t
+    hold = state[_HOLD]
+    if hold > 0.0:
+        return HELD, nan, nan, nan, True, hold == 2.0, relatched, begin
+    n_fb = state[_N_FB]
+    if valid and n_fb < params[_N_FALLBACK]:
+        n_fb += 1.0
+        state[_N_FB] = n_fb
+        state[_FX] = state[_FX] + rx
+        state[_FY] = state[_FY] + ry
+        state[_FZ] = state[_FZ] + rz
+    code = NONE
+    mx = my = mz = nan
+    fallback = False
+    if rising and (f_norm > hi or t - state[_T_PEAK] > params[_STALL]):
+        rising = False
+        state[_RISING] = 0.0
+        n = state[_N_WIN]
+        if n > 0.0:
+            mx, my, mz = state[_WX] / n, state[_WY] / n, state[_WZ] / n
+            code = FIX
+            state[_HOLD] = 1.0
+    if rising:
+        n = state[_N_WIN]
+        if valid and lo <= f_norm and f_norm <= hi:
+            n += 1.0
+            state[_N_WIN] = n
+            state[_WX] = state[_WX] + rx
+            state[_WY] = state[_WY] + ry
+            state[_WZ] = state[_WZ] + rz
+        if n > 0.0:
+            mx, my, mz = state[_WX] / n, state[_WY] / n, state[_WZ] / n
+            code = MEAN
+        elif valid:
+            code = SOFT
+    elif code == NONE and n_fb > 0.0:
+        mx, my, mz = state[_FX] / n_fb, state[_FY] / n_fb, state[_FZ] / n_fb
+        fallback = True
+        code = MEAN
+        if n_fb >= params[_N_FALLBACK]:
+            code = FIX
+            state[_HOLD] = 2.0
+    if code == FIX:
+        state[_PENDING] = 1.0
+        state[_MX] = mx
+        state[_MY] = my
+        state[_MZ] = mz
+    latched = code != NONE and (state[_N_WIN] > 0.0 or fallback)
+    if latched:
+        state[_HAD] = 1.0
+    return code, mx, my, mz, latched, fallback, relatched, begin
+
+
+@lazy_jit
+def latch_run(state, params, contact, t, f_norm, valid, rx, ry, rz, start, code, point, latched, fallback,
+              relatched):  # pragma: no cover - compiled
+    """:func:`latch_step` over the samples ``start ..`` of a log; returns where it stopped.
+
+    Writes, per sample in contact, ``code`` (int8) and ``point`` (N, 3): the soft-finger point
+    (:data:`SOFT`), the mean not yet put on the skin (:data:`MEAN`, :data:`FIX`), NaN
+    otherwise; and the flags ``latched``, ``fallback``, ``relatched`` (N,) bool. Returns N when
+    done, or the sample ``i`` whose re-latch test needs the held point: its mean is in
+    ``point[i]``; project it, :func:`latch_hold` it and call again from ``i``.
+    """
+    n = t.shape[0]
+    for i in range(start, n):
+        if not contact[i]:
+            continue
+        onset = i == 0 or not contact[i - 1]
+        c, mx, my, mz, lat, fb, rel, _ = latch_step(state, params, onset, t[i], f_norm[i], True, valid[i], rx[i],
+                                                    ry[i], rz[i])  # fmt: skip
+        if c == SOFT:
+            mx, my, mz = rx[i], ry[i], rz[i]
+        point[i, 0] = mx
+        point[i, 1] = my
+        point[i, 2] = mz
+        if c == ASK_HOLD:
+            return i
+        code[i] = c
+        latched[i] = lat
+        fallback[i] = fb
+        relatched[i] = rel
+    return n
+
+
+@lazy_jit
+def _copy_held(code, point):  # pragma: no cover - compiled
+    """``point`` at the samples :data:`HELD`: that of the last :data:`FIX` before them."""
+    last = -1
+    for i in range(code.shape[0]):
+        if code[i] == FIX:
+            last = i
+        elif code[i] == HELD:
+            point[i, 0] = point[last, 0]
+            point[i, 1] = point[last, 1]
+            point[i, 2] = point[last, 2]
+    return point
 
 
 def latch_points(t, f_norm, contact, sc, tip: Fingertip, config: EstimatorConfig, had_latch: bool = False) -> LatchedPoints:
     """Contact point per sample in ``latch`` mode, with re-latching.
 
-    Returns :class:`LatchedPoints`. Long logs: one compiled pass
-    over all contacts (:func:`_latch_compiled`); short ones: one iteration per contact and
-    per re-latch, vectorised within each. ``had_latch``: a contact before these samples (an
-    earlier piece of the log) had a latch.
+    ``t`` (N,) s, ``f_norm`` (N,) N, ``contact`` (N,) bool, ``sc`` the soft-finger solutions
+    (:func:`softtip.core.location.contact_arrays`). Returns :class:`LatchedPoints`: one pass of
+    :func:`latch_run`, then the means put back on the skin at once. ``had_latch``: a contact
+    before these samples (an earlier piece of the log) had a latch.
     """
     n = len(t)
-    if jit_enabled(n):
-        return _latch_compiled(t, f_norm, contact, sc, tip, config, had_latch)
-    point = np.full((n, 3), np.nan)
-    latched = np.zeros(n, dtype=bool)
-    fallback = np.zeros(n, dtype=bool)
-    relatched = np.zeros(n, dtype=bool)
-    valid = np.asarray(sc.valid, dtype=bool)
-    r_sc = np.where(valid[:, None], np.stack(sc.point, axis=-1), np.nan)
-    lo, hi = config.latch_window
-    dist = config.relatch_distance
-    edges = np.diff(np.concatenate(([False], contact, [False])).astype(np.int8))
-    starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
-    for s, e in zip(starts, stops):
-        relatched[s] = had_latch  # contact regained after a latched one
-        a = s
-        while True:
-            pe, lat, fbk, held, latch = _latch_segment(t[a:e], f_norm[a:e], valid[a:e], r_sc[a:e], tip, config)
-            stop = e - a
-            if dist is not None and held.any():
-                fe = f_norm[a:e]
-                dx, dy, dz = (r_sc[a:e, i] - latch[i] for i in range(3))
-                with np.errstate(invalid="ignore"):
-                    drift = held & valid[a:e] & (fe >= lo) & (fe <= hi) & (dx * dx + dy * dy + dz * dz > dist * dist)
-                if drift.any():
-                    stop = int(np.argmax(drift))
-            point[a : a + stop], latched[a : a + stop], fallback[a : a + stop] = pe[:stop], lat[:stop], fbk[:stop]
-            if stop == e - a:
-                break
-            a += stop
-            relatched[a] = True
-        had_latch = had_latch or bool(latched[s:e].any())
-    return LatchedPoints(point, latched, fallback, relatched)
-
-
-
-def _projected_means(tip: Fingertip, sums, counts, use):
-    """``(k, means)``: the samples ``use`` (indices, increasing) and ``sums / counts`` there
-    put back on the skin, (len(k), 3) (only where used: no (N, 3) array)."""
-    k = np.flatnonzero(use)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return k, np.stack(tip._project_kernel(*(sums[:, k] / counts[k]), NP), axis=-1)
-
-
-def _means_at(k, means, rows):
-    """The means of :func:`_projected_means` at the samples ``rows``, (len(rows), 3) (NaN
-    at samples it did not use)."""
-    out = np.full((len(rows), 3), np.nan)
-    if len(k):
-        pos = np.minimum(np.searchsorted(k, rows), len(k) - 1)
-        hit = k[pos] == rows
-        out[hit] = means[pos[hit]]
-    return out
-
-
-def _latch_compiled(t, f_norm, contact, sc, tip: Fingertip, config: EstimatorConfig, had_latch: bool = False):
-    """:func:`latch_points` over all contacts at once: the running sums of every segment in
-    one compiled pass, the projections and the choices vectorised; with re-latching, one
-    more pass for each re-latch that follows another in the same contact."""
-    n = len(t)
-    valid = np.asarray(sc.valid, dtype=bool)
+    contact = np.ascontiguousarray(contact, dtype=bool)
+    valid = np.ascontiguousarray(sc.valid, dtype=bool)
     rx, ry, rz = (np.where(valid, np.asarray(c, dtype=float), np.nan) for c in sc.point)
-    lo, hi = config.latch_window
-    dist = config.relatch_distance
-    onset = contact & ~np.concatenate(([False], contact[:-1]))
-    begin = onset.copy()
-    idx = np.arange(n)
-    if not onset.any():
-        return LatchedPoints(np.full((n, 3), np.nan), np.zeros(n, dtype=bool), np.zeros(n, dtype=bool), np.zeros(n, dtype=bool))
-    while True:
-        n_win = np.zeros(n, dtype=np.int64)
-        n_fb = np.zeros(n, dtype=np.int64)
-        sum_win = np.zeros((3, n))
-        sum_fb = np.zeros((3, n))
-        rising = np.zeros(n, dtype=bool)
-        n_seg = int(np.count_nonzero(begin))
-        seg_end, seg_fixed, seg_total, seg_stop = (np.zeros(n_seg, dtype=np.int64) for _ in range(4))
-        latch_scan_kernel(
-            begin, contact, t, f_norm, valid, rx, ry, rz, float(lo), float(hi), float(config.stall_time),
-            int(config.fallback_samples), n_win, sum_win, n_fb, sum_fb, rising, seg_end, seg_fixed, seg_total, seg_stop,
-        )  # fmt: skip
-        # the latch of each segment: the rise's window mean, else the fallback mean once fixed
-        by_window = seg_total > 0
-        fb_fixed = ~by_window & (seg_fixed < seg_stop)
-        sid = np.where(contact, np.cumsum(begin) - 1, 0)  # segment of each sample in contact
-        win_seg = by_window[sid]
-        after = contact & ~rising
-        # the means, projected on the skin, where they are used
-        use_win = contact & rising & (n_win > 0)
-        use_win[seg_end[by_window] - 1] = True
-        use_fb = after & ~win_seg & (n_fb > 0)
-        use_fb[seg_fixed[fb_fixed]] = True
-        mean_win = _projected_means(tip, sum_win, n_win, use_win)
-        mean_fb = _projected_means(tip, sum_fb, n_fb, use_fb)
-        del sum_win, sum_fb, use_win, use_fb  # (N, 3) temporaries set the peak memory
-        latch = np.full((n_seg, 3), np.nan)
-        latch[by_window] = _means_at(*mean_win, seg_end[by_window] - 1)
-        latch[fb_fixed] = _means_at(*mean_fb, seg_fixed[fb_fixed])
-        # the point assembled in place, each choice over the one before (as nested np.where)
-        point = None  # the last pass's, dropped first
-        point = np.stack((rx, ry, rz), axis=-1)
-        m = np.flatnonzero(rising & (n_win > 0))
-        point[m] = _means_at(*mean_win, m)
-        m = after & win_seg
-        point[m] = latch[sid[m]]
-        m = np.flatnonzero(after & ~win_seg)
-        v = _means_at(*mean_fb, m)
-        v[n_fb[m] == 0] = np.nan
-        point[m] = v
-        del mean_win, mean_fb, m, v
-        latched = np.where(win_seg, rising & (n_win > 0) | after, after & (n_fb > 0)) & contact
-        fallback = latched & ~win_seg
-        if dist is None:
-            break
-        held = contact & (idx > seg_fixed[sid])
-        with np.errstate(invalid="ignore"):
-            dx, dy, dz = rx - latch[sid, 0], ry - latch[sid, 1], rz - latch[sid, 2]
-            drift = held & valid & (f_norm >= lo) & (f_norm <= hi) & (dx * dx + dy * dy + dz * dz > dist * dist)
-        # the first drift of each segment starts a new one (a re-latch)
-        d = np.flatnonzero(drift)
-        new = d[np.r_[True, sid[d][1:] != sid[d][:-1]]] if len(d) else d
-        if not len(new):
-            break
-        begin[new] = True
-    point[~contact] = np.nan
-    relatched = begin & ~onset
-    # contact regained after a latched one
-    had = (np.concatenate(([0], np.cumsum(latched)))[np.flatnonzero(onset)] > 0) | had_latch
-    relatched[np.flatnonzero(onset)] = had
+    state, params = new_latch_state(had_latch), latch_params(config)
+    code = np.zeros(n, dtype=np.int8)
+    point = np.full((n, 3), np.nan)
+    latched, fallback, relatched = (np.zeros(n, dtype=bool) for _ in range(3))
+    run, hold = latch_run.function(), latch_hold.function()
+    t, f_norm = np.ascontiguousarray(t, dtype=float), np.ascontiguousarray(f_norm, dtype=float)
+    i = 0
+    while (i := run(state, params, contact, t, f_norm, valid, rx, ry, rz, i, code, point, latched, fallback,
+                    relatched)) < n:  # fmt: skip
+        # a re-latch test of a latch not yet on the skin: projected as the stream does
+        hold(state, *tip._project_kernel(*(float(v) for v in point[i]), PY))
+    k = np.flatnonzero((code == MEAN) | (code == FIX))
+    if len(k):
+        point[k] = np.stack(tip._project_kernel(*point[k].T, NP), axis=-1)
+    _copy_held.function()(code, point)
     return LatchedPoints(point, latched, fallback, relatched)
 
 
 class LatchTracker:
-    """The latch of :func:`latch_points` for one contact, one sample at a time.
+    """The latch of :func:`latch_points` one sample at a time (the same :func:`latch_step`).
 
-    Call :meth:`start` at contact onset (and at a re-latch), then :meth:`step` for every
-    sample in contact. Soft-finger solutions (``sc``, the 8-tuple of
-    :func:`softtip.core.location.contact_kernel`) are computed only when needed and handed back
-    for reuse.
+    Call :meth:`step` for every sample in contact; :meth:`reset` forgets every contact.
+    Soft-finger solutions (``sc``, the 8-tuple of
+    :func:`softtip.core.location.contact_kernel`) are computed only when the step needs them
+    and handed back for reuse.
     """
 
     def __init__(self, tip: Fingertip, config: EstimatorConfig):
         self.tip = tip
         self.config = config
-        self.point: tuple[float, float, float] | None = None
-        self.is_fallback = False
+        self._params = latch_params(config)
+        self._step, self._hold = latch_step.function(), latch_hold.function()
+        lo, hi = config.latch_window
+        # a held latch is re-tested only at light force (all forces when never: an empty range)
+        self._test_lo, self._test_hi = (lo, hi) if config.relatch_distance is not None else (1.0, 0.0)
+        self.reset()
 
-    def start(self, f_norm: float, t: float) -> None:
-        """A new first rise at force ``f_norm`` (N) and time ``t`` (s)."""
-        self.rising = True
-        self._peak = f_norm
-        self._t_peak = t
-        self._n_win = 0
-        self._sum_win = [0.0, 0.0, 0.0]
-        self._n_fb = 0
-        self._sum_fb = [0.0, 0.0, 0.0]
-        self.point = None  # the latched point once fixed
-        self.is_fallback = False
+    def reset(self) -> None:
+        """No contact so far."""
+        self.state = new_latch_state()
+        self.point: tuple[float, float, float] | None = None  #: the latch held, m (None when none)
+        self._fallback = False  # the latch held is a fallback one
 
-    def drifted(self, f_norm: float, x: list[float], sc):
-        """Re-latch test of a held latch: ``(moved, sc)``; ``moved`` when, at light force,
-        this sample's soft-finger solution lies farther than ``relatch_distance`` from it."""
-        dist = self.config.relatch_distance
-        lo, hi = self.config.latch_window
-        if self.point is None or dist is None or not lo <= f_norm <= hi:
-            return False, sc
-        sc = SoftFinger(*contact_kernel(self.tip, *x, xp=PY))
-        if not sc.valid:
-            return False, sc
-        lx, ly, lz = self.point
-        dx, dy, dz = sc.rx - lx, sc.ry - ly, sc.rz - lz
-        return dx * dx + dy * dy + dz * dz > dist * dist, sc
+    def step(self, t: float, f_norm: float, x: list[float], sc, onset: bool):
+        """A sample in contact at ``t`` (s) with tared wrench ``x`` and ``|f|`` ``f_norm`` (N);
+        ``onset``: the contact starts here.
 
-    def step(self, t: float, f_norm: float, x: list[float], sc):
-        """The contact point of a sample in contact: ``(point, latched, fallback, sc)``.
-
-        ``point`` is ``None`` when there is none yet (no valid soft-finger solution)."""
-        cfg = self.config
-        if self.rising and f_norm > self._peak:
-            self._peak, self._t_peak = f_norm, t
-        point = self.point
-        if point is not None:
-            return point, True, self.is_fallback, sc
+        Returns ``(point, latched, fallback, relatched, begin, sc)``: ``point`` (m) is ``None``
+        when there is none yet (no valid soft-finger solution); ``begin``: a first rise starts
+        (onset or re-latch).
+        """
+        if self.point is not None and not onset and not self._test_lo <= f_norm <= self._test_hi:
+            # held, no re-latch test due: latch_step would return HELD and change nothing (a
+            # shortcut of its first lines, a compiled call less per sample of a held contact)
+            return self.point, True, self._fallback, False, False, sc
+        state, params = self.state, self._params
         if sc is None:
-            sc = SoftFinger(*contact_kernel(self.tip, *x, xp=PY))
-        fallback = False
-        valid = sc.valid
-        if valid and self._n_fb < cfg.fallback_samples:
-            self._n_fb += 1
-            self._sum_fb = [s + v for s, v in zip(self._sum_fb, sc.point)]
-        lo, hi = cfg.latch_window
-        if self.rising and (f_norm > hi or t - self._t_peak > cfg.stall_time):
-            self.rising = False
-            if self._n_win > 0:
-                self.point = point = self._mean(self._sum_win, self._n_win)
-        if self.rising:
-            if valid and lo <= f_norm <= hi:
-                self._n_win += 1
-                self._sum_win = [s + v for s, v in zip(self._sum_win, sc.point)]
-            if self._n_win > 0:
-                point = self._mean(self._sum_win, self._n_win)
-            elif valid:
-                point = sc.point
-        elif point is None and self._n_fb > 0:
-            point = self._mean(self._sum_fb, self._n_fb)
-            fallback = True
-            if self._n_fb >= cfg.fallback_samples:
-                self.point, self.is_fallback = point, True
-        latched = point is not None and (self._n_win > 0 or fallback)
-        return point, latched, fallback, sc
-
-    def _mean(self, total: list[float], count: int) -> tuple[float, float, float]:
-        return self.tip._project_kernel(total[0] / count, total[1] / count, total[2] / count, PY)
+            out = self._step(state, params, onset, t, f_norm, False, False, 0.0, 0.0, 0.0)
+            if out[0] == ASK_SC:
+                sc = SoftFinger(*contact_kernel(self.tip, *x, xp=PY))
+        if sc is not None:
+            out = self._step(state, params, onset, t, f_norm, True, sc.valid, sc.rx, sc.ry, sc.rz)
+        code, mx, my, mz, latched, fallback, relatched, begin = out
+        if begin:
+            self.point = None
+        if code == HELD:
+            point = self.point
+        elif code == SOFT:
+            point = sc.point
+        elif code == MEAN:
+            point = self.tip._project_kernel(mx, my, mz, PY)
+        elif code == FIX:
+            point = self.point = self.tip._project_kernel(mx, my, mz, PY)
+            self._fallback = fallback
+            self._hold(state, *point)
+        else:
+            point = None
+        return point, latched, fallback, relatched, begin, sc

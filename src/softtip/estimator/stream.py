@@ -87,7 +87,6 @@ class Estimator:
                 raise ValueError("streaming with a low-pass filter needs config.sample_rate (Hz)")
             self._sos = lowpass_sos(cfg.lowpass_hz, cfg.sample_rate, cfg.lowpass_order)
         self._track = cfg.contact_point == "track"
-        self._relatch = cfg.relatch_distance is not None
         self._tare = StreamTare(cfg)
         self._latch = LatchTracker(self.tip, cfg)
         self._contacts = ContactTracker(cfg, effective_noise(cfg.noise, self._sos))
@@ -137,7 +136,7 @@ class Estimator:
         self._filter = SosStream(self._sos) if self._sos is not None else None
         self._contacts.reset()
         self._contacts.count = 0
-        self._had_latch = False
+        self._latch.reset()
         self._t_prev: float | None = None
         self._rate_t: list[float] | None = [] if self.config.sample_rate is not None else None  # the first stamps
         self.repeated_stamps = 0
@@ -263,13 +262,6 @@ class Estimator:
             self.started_in_contact = True
             self._warn(started_in_contact_message(self.config))
 
-    def _start_segment(self, f_norm: float, t: float) -> None:
-        """A new first rise: at contact onset, and at a re-latch."""
-        self._latch.start(f_norm, t)
-        self._evidence.start_segment()
-        if self._line_fit is not None:
-            self._line_fit.start_segment(t)
-
     def _step(self, t: float, dt: float, x: list[float]) -> SampleEstimate:
         cfg = self.config
         contacts = self._contacts
@@ -301,24 +293,13 @@ class Estimator:
                     depth.gap()
                 return self._none(t, x, pulling=True)
         else:
-            sc = None
-            if code == 2:
-                relatched = self._had_latch  # contact regained after a latched one
-                self._start_segment(f_norm, t)
+            if code == 2 and self._line_fit is not None:
+                self._line_fit.start_contact()
+            point, latched, fallback, relatched, begin, sc = self._latch.step(t, f_norm, x, None, code == 2)
+            if begin:  # a new first rise: at contact onset, and at a re-latch
+                self._evidence.start_segment()
                 if self._line_fit is not None:
-                    self._line_fit.start_contact()
-            elif self._relatch:
-                moved, sc = self._latch.drifted(f_norm, x, sc)
-                if moved:
-                    relatched = True
-                    self._start_segment(f_norm, t)
-            latch = self._latch
-            if latch.point is not None and sc is None:  # held (LatchTracker.step returns it as is)
-                point, latched, fallback = latch.point, True, latch.is_fallback
-            else:
-                point, latched, fallback, sc = latch.step(t, f_norm, x, sc)
-            if latched:
-                self._had_latch = True
+                    self._line_fit.start_segment(t)
             if self._line_fit is not None:
                 point, (j0, j1, j2, j3), moved = self._line_fit.step(t, x, point, sc)
                 if moved:
