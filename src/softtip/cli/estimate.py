@@ -18,6 +18,8 @@ from softtip.cli.options import (
     check_outputs,
     check_units,
     estimator_options,
+    full_scale_option,
+    full_scale_range,
     is_bag,
     log_format_given,
     log_format_kwargs,
@@ -31,14 +33,7 @@ from softtip.cli.options import (
 )  # fmt: skip
 from softtip.cli.types import check_lowpass, option
 from softtip.core.fingertip import load_fingertip
-from softtip.core.fullscale import (
-    COARSE_MARGIN,
-    DEFAULT_SENSOR,
-    SENSOR_RANGES,
-    check_full_scale,
-    full_scale_error,
-    parse_full_scale,
-)
+from softtip.core.fullscale import COARSE_MARGIN, check_full_scale, full_scale_error
 from softtip.core.units import UNIT_SYSTEMS, wrench_to_si
 from softtip.errors import InputError
 from softtip.estimator import STATES
@@ -130,12 +125,7 @@ from the bag's /tf.
     "N-1 workers: the output is the same, bit for bit, as with --jobs 1 (all in this process); each worker holds a piece "
     "in memory.",
 )  # fmt: skip
-@option(
-    "--full-scale", metavar="SENSOR|FORCE,MOMENT|off",
-    help="The sensor's full-scale range: a sample beyond it (a corrupted row) stops the run naming it. A sensor ("
-    + ", ".join(SENSOR_RANGES) + "; rated range per axis), FORCE,MOMENT in N and N·m for every axis, or off "
-    "(then only values no sensor gives).  [default: the --sensor's, nano17]",
-)  # fmt: skip
+@full_scale_option
 @log_format_options
 @estimator_options
 def estimate(**kwargs) -> None:
@@ -174,10 +164,7 @@ def _estimate(
 ):
     from softtip.io.examples import EXAMPLE_ANGLE_DEG, EXAMPLE_PATH
 
-    try:  # default: the range of --sensor (the noise preset), else a Nano17's
-        sensor_range = parse_full_scale(full_scale or estimator_opts.get("sensor") or DEFAULT_SENSOR)
-    except ValueError as exc:
-        raise click.BadParameter(str(exc), param_hint="'--full-scale'") from None
+    sensor_range = full_scale_range(full_scale, estimator_opts.get("sensor"))  # default: the --sensor's, else a Nano17's
     from softtip.io.tables import Log, read_log
 
     formats = log_format_kwargs(estimator_opts)
