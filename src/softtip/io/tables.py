@@ -885,7 +885,7 @@ def _parse_arrow(
     body = memoryview(data)[start:end]
     try:
         reader = pacsv.open_csv(  # block by block, so that progress can be shown
-            pa.BufferReader(pa.py_buffer(body)),
+            pa.BufferReader(_arrow_owned(body)),
             # one thread: faster than pyarrow's default threads on a busy 2-core machine
             read_options=pacsv.ReadOptions(column_names=names, use_threads=False),
             parse_options=pacsv.ParseOptions(
@@ -952,6 +952,25 @@ def _parse_arrow(
         return None
     extra = {names[j]: table.column(j).to_pylist() for j in range(len(names)) if j not in index.values()}
     return t, wrench, extra, header.data_base + 1, quoted, header
+
+
+def _arrow_owned(data: memoryview) -> Any:
+    """A copy of ``data`` in memory pyarrow allocated (not a Python object's).
+
+    pyarrow's CSV reader reads ahead on its own threads, and one of them may drop the last
+    reference to a block a little after the reader is closed. A block of a Python object's
+    memory (``pa.py_buffer``) then takes the GIL to release the object; when that happens
+    while the interpreter finalises (a run that failed on the log ends at once), the thread
+    is ended inside a C++ destructor and the process aborts ("terminate called without an
+    active exception", exit -6; seen in a core dump, 3 of 143 runs under load). Memory
+    pyarrow owns is freed without the GIL. The copy costs the text's size for as long as
+    it is read.
+    """
+    import pyarrow as pa
+
+    buf = pa.allocate_buffer(len(data))
+    np.frombuffer(buf, dtype=np.uint8)[:] = np.frombuffer(data, dtype=np.uint8)
+    return buf
 
 
 def _end_of_content(data: bytes) -> int:
