@@ -146,3 +146,69 @@ def test_located_error_across_small_windows_is_read_logs(tmp_path: Path, monkeyp
         for _ in blocks:
             pass
     assert str(blocks.locate_error()) == str(one.value)
+
+
+# --------------------------------------------------------------------------------------
+# standard output, in pieces: memory bounded by the piece size (issue 32: a 1e7-row run to
+# standard output held the whole log)
+
+
+def _stdout_run(*args: object) -> subprocess.CompletedProcess:
+    return subprocess.run([SOFTTIP, *map(str, args)], capture_output=True, timeout=300, check=False)
+
+
+def test_pieces_onto_standard_output_are_the_one_shot_table_in_bounded_memory(tmp_path: Path) -> None:
+    src = tmp_path / "in.csv"
+    _log_with_note(src, 200000, "ok")
+    one = _stdout_run("estimate", src, "-q")  # the one-shot run (a 15 MB log: not in pieces by itself)
+    assert one.returncode == 0, one.stderr
+    for more in (["--chunk-rows", 20000], ["--chunk-rows", 20000, "-o", "-"]):
+        done = _stdout_run("estimate", src, "-q", *more)
+        assert done.returncode == 0, done.stderr
+        assert done.stdout == one.stdout
+    code, to_file = _peak_mb("estimate", src, "-q", "--chunk-rows", 20000, "-o", tmp_path / "out.csv")
+    code_out, to_stdout = _peak_mb("estimate", src, "-q", "--chunk-rows", 20000)  # into the runner's pipe
+    _, whole = _peak_mb("estimate", src, "-q")
+    assert code == code_out == 0
+    assert to_stdout < to_file + 50, (to_stdout, to_file)
+    assert to_stdout < whole - 50, (to_stdout, whole)
+
+
+@pytest.mark.skipif(not Path("/dev/stdout").exists(), reason="needs /dev/stdout")
+def test_dev_stdout_through_a_pipe_in_pieces(tmp_path: Path) -> None:
+    src = tmp_path / "in.csv"
+    _log_with_note(src, 50000, "ok")
+    one = _stdout_run("estimate", src, "-q")
+    done = subprocess.run(f"{SOFTTIP} estimate {src} -q --chunk-rows 5000 -o /dev/stdout | cat", shell=True,
+                          capture_output=True, timeout=300, check=False)  # fmt: skip
+    assert done.returncode == 0 and done.stdout == one.stdout, done.stderr
+    assert [p.name for p in tmp_path.iterdir()] == ["in.csv"]
+
+
+def test_a_failure_after_pieces_went_to_standard_output_says_so(tmp_path: Path) -> None:
+    """What was written stays written: the located message, exit 2, and before it a warning that the
+    table on standard output is cut; the rows there are the good run's first rows."""
+    good, bad = tmp_path / "good.csv", tmp_path / "bad.csv"
+    _log_with_note(good, 100000, "ok")
+    lines = good.read_text().splitlines(keepends=True)
+    lines[90001] = lines[90001].replace(",", ",abc", 1)
+    bad.write_text("".join(lines))
+    ok = _stdout_run("estimate", good, "-q", "--chunk-rows", 10000)
+    done = _stdout_run("estimate", bad, "-q", "--chunk-rows", 10000)
+    assert done.returncode == 2
+    err = done.stderr.decode()
+    assert err.endswith(f"softtip: error: {bad}:90002: column 'fx': expected a number, got {lines[90001].split(',')[1]!r}\n"), err
+    assert "standard output: " in err and "rows were written before the error below" in err
+    n = int(err.split("standard output: ")[1].split(" rows")[0])
+    assert 0 < n < 90000
+    assert done.stdout == b"".join(ok.stdout.splitlines(keepends=True)[: n + 1])  # the header and n rows
+
+
+def test_a_quoted_log_onto_standard_output_is_read_whole(tmp_path: Path) -> None:
+    """A log with quotes may need the one-shot reader after pieces were written: it goes whole."""
+    src = tmp_path / "in.csv"
+    _log_with_note(src, 20000, '"a note, quoted"')
+    one = _stdout_run("estimate", src, "-q", "-o", tmp_path / "one.csv")
+    done = _stdout_run("estimate", src, "-q", "--chunk-rows", 2000)
+    assert one.returncode == done.returncode == 0, done.stderr
+    assert done.stdout == (tmp_path / "one.csv").read_bytes()
