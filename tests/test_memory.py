@@ -212,3 +212,44 @@ def test_a_quoted_log_onto_standard_output_is_read_whole(tmp_path: Path) -> None
     done = _stdout_run("estimate", src, "-q", "--chunk-rows", 2000)
     assert one.returncode == done.returncode == 0, done.stderr
     assert done.stdout == (tmp_path / "one.csv").read_bytes()
+
+
+@pytest.mark.parametrize("line", [1, 2, 300])
+def test_bad_utf8_within_the_first_64_kb_is_located_in_windows(tmp_path: Path, line: int) -> None:
+    """Not UTF-8 in the header's 64 kB took the whole-file reader to be worded; now a pass in
+    bounded windows gives read_log's message."""
+    from softtip.errors import InputError
+    from softtip.io.tables import NotStreamable, read_log
+
+    src = tmp_path / "in.csv"
+    _log_with_note(src, 5000, "ok")
+    lines = src.read_bytes().splitlines(keepends=True)
+    lines[line - 1] = lines[line - 1].replace(b",", b",\xe9", 1)
+    src.write_bytes(b"".join(lines))
+    with pytest.raises(InputError) as whole:
+        read_log(src)
+    blocks = iter_log(src)
+    with pytest.raises(NotStreamable):
+        list(blocks)
+    found = blocks.locate_error()
+    assert found is not None and str(found) == str(whole.value)
+    assert f"in.csv:{line}: not valid UTF-8 (byte 0xe9" in str(found)
+
+
+def test_bad_utf8_near_the_start_in_pieces_takes_no_more_memory(tmp_path: Path) -> None:
+    good, bad = tmp_path / "good.csv", tmp_path / "bad.csv"
+    _log_with_note(good, 200000, "ok")
+    data = good.read_bytes()
+    cut = data.index(b"\n", 1000) + 1
+    bad.write_bytes(data[:cut] + data[cut:].replace(b",ok", b",\xe9", 1))
+    peaks = {}
+    for src in (good, bad):
+        code, peaks[src.name] = _peak_mb("estimate", src, "-o", tmp_path / f"out_{src.name}", "--chunk-rows", 20000)
+        assert code == (2 if src is bad else 0)
+    assert peaks["bad.csv"] < peaks["good.csv"] + 30, peaks
+    one = subprocess.run([SOFTTIP, "estimate", str(bad), "-o", str(tmp_path / "a.csv")], capture_output=True, text=True,
+                         timeout=120, check=False)  # fmt: skip
+    pieces = subprocess.run([SOFTTIP, "estimate", str(bad), "-o", str(tmp_path / "b.csv"), "--chunk-rows", "20000"],
+                            capture_output=True, text=True, timeout=120, check=False)  # fmt: skip
+    assert one.returncode == pieces.returncode == 2
+    assert pieces.stderr.replace("b.csv", "a.csv") == one.stderr and "not valid UTF-8" in one.stderr

@@ -2057,6 +2057,8 @@ class LogBlocks:
         self._quoted: bool | None = None  # whether the data holds a quote (then rows may span lines); None: not looked
         # CSV: rows (one line each) read and found good before the reader stopped on what looks like an error
         self._error_at: int | None = None
+        # CSV: where the text starts (after a BOM) when its first 64 kB are not UTF-8
+        self._bad_prefix: int | None = None
         self._header: _Header | None = None
         self._index: dict[str, int] = {}
 
@@ -2127,9 +2129,14 @@ class LogBlocks:
             prefix = prefix[: prefix.rfind(b"\n") + 1]
         try:
             text = prefix.decode("utf-8")
+        except UnicodeDecodeError:
+            if not any(prefix.startswith(magic) for magic, _ in _COMPRESSION_MAGIC):
+                self._size, self._bad_prefix = size, skip  # the error is located in windows, not by reading it all
+            raise NotStreamable("header") from None
+        try:
             header = _read_header(text, self.source)
             index = _column_index(header, self.source)
-        except (UnicodeDecodeError, InputError):
+        except InputError:
             raise NotStreamable("header") from None
         if header.cmap is None or not header.cmap.native(header.names) or header.delimiter != "," or header.preamble:
             raise NotStreamable("not softtip's own layout: read_log maps it")
@@ -2199,6 +2206,12 @@ class LogBlocks:
         (a cell only Python's parser reads) or cannot place it (quotes, lone carriage
         returns, a line longer than a window): :func:`read_log` on the whole file decides then.
         """
+        if not self.parquet and self._bad_prefix is not None:  # not UTF-8 within the header's 64 kB
+            try:
+                with open(self.path, "rb") as fh:
+                    return self._first_bad_utf8(fh, self._bad_prefix, 1)
+            except (OSError, _NoPlace):
+                return None
         if self.parquet or self._error_at is None or self._header is None or self._first_line is None:
             return None
         try:
@@ -2266,10 +2279,12 @@ class LogBlocks:
             line += window.count(b"\n", 0, last)
             pos += last
 
-    def _first_bad_utf8(self, fh: BinaryIO) -> InputError | None:
-        """The error :func:`read_log` gives for invalid UTF-8, from a pass over the file (bounded memory)."""
-        fh.seek(self._start)
-        pos, line, held = self._start, self._first_line or 1, b""
+    def _first_bad_utf8(self, fh: BinaryIO, start: int | None = None, line: int | None = None) -> InputError | None:
+        """The error :func:`read_log` gives for invalid UTF-8, from a pass over the file (bounded memory)
+        from byte ``start`` (line ``line``; default: the first data row's)."""
+        pos = self._start if start is None else start
+        fh.seek(pos)
+        line, held = (self._first_line or 1) if line is None else line, b""
         while True:
             chunk = fh.read(_LOCATE_BYTES)
             data = held + chunk
