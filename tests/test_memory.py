@@ -146,3 +146,110 @@ def test_located_error_across_small_windows_is_read_logs(tmp_path: Path, monkeyp
         for _ in blocks:
             pass
     assert str(blocks.locate_error()) == str(one.value)
+
+
+# --------------------------------------------------------------------------------------
+# standard output, in pieces: memory bounded by the piece size (issue 32: a 1e7-row run to
+# standard output held the whole log)
+
+
+def _stdout_run(*args: object) -> subprocess.CompletedProcess:
+    return subprocess.run([SOFTTIP, *map(str, args)], capture_output=True, timeout=300, check=False)
+
+
+def test_pieces_onto_standard_output_are_the_one_shot_table_in_bounded_memory(tmp_path: Path) -> None:
+    src = tmp_path / "in.csv"
+    _log_with_note(src, 200000, "ok")
+    one = _stdout_run("estimate", src, "-q")  # the one-shot run (a 15 MB log: not in pieces by itself)
+    assert one.returncode == 0, one.stderr
+    for more in (["--chunk-rows", 20000], ["--chunk-rows", 20000, "-o", "-"]):
+        done = _stdout_run("estimate", src, "-q", *more)
+        assert done.returncode == 0, done.stderr
+        assert done.stdout == one.stdout
+    code, to_file = _peak_mb("estimate", src, "-q", "--chunk-rows", 20000, "-o", tmp_path / "out.csv")
+    code_out, to_stdout = _peak_mb("estimate", src, "-q", "--chunk-rows", 20000)  # into the runner's pipe
+    _, whole = _peak_mb("estimate", src, "-q")
+    assert code == code_out == 0
+    assert to_stdout < to_file + 50, (to_stdout, to_file)
+    assert to_stdout < whole - 50, (to_stdout, whole)
+
+
+@pytest.mark.skipif(not Path("/dev/stdout").exists(), reason="needs /dev/stdout")
+def test_dev_stdout_through_a_pipe_in_pieces(tmp_path: Path) -> None:
+    src = tmp_path / "in.csv"
+    _log_with_note(src, 50000, "ok")
+    one = _stdout_run("estimate", src, "-q")
+    done = subprocess.run(f"{SOFTTIP} estimate {src} -q --chunk-rows 5000 -o /dev/stdout | cat", shell=True,
+                          capture_output=True, timeout=300, check=False)  # fmt: skip
+    assert done.returncode == 0 and done.stdout == one.stdout, done.stderr
+    assert [p.name for p in tmp_path.iterdir()] == ["in.csv"]
+
+
+def test_a_failure_after_pieces_went_to_standard_output_says_so(tmp_path: Path) -> None:
+    """What was written stays written: the located message, exit 2, and before it a warning that the
+    table on standard output is cut; the rows there are the good run's first rows."""
+    good, bad = tmp_path / "good.csv", tmp_path / "bad.csv"
+    _log_with_note(good, 100000, "ok")
+    lines = good.read_text().splitlines(keepends=True)
+    lines[90001] = lines[90001].replace(",", ",abc", 1)
+    bad.write_text("".join(lines))
+    ok = _stdout_run("estimate", good, "-q", "--chunk-rows", 10000)
+    done = _stdout_run("estimate", bad, "-q", "--chunk-rows", 10000)
+    assert done.returncode == 2
+    err = done.stderr.decode()
+    assert err.endswith(f"softtip: error: {bad}:90002: column 'fx': expected a number, got {lines[90001].split(',')[1]!r}\n"), err
+    assert "standard output: " in err and "rows were written before the error below" in err
+    n = int(err.split("standard output: ")[1].split(" rows")[0])
+    assert 0 < n < 90000
+    assert done.stdout == b"".join(ok.stdout.splitlines(keepends=True)[: n + 1])  # the header and n rows
+
+
+def test_a_quoted_log_onto_standard_output_is_read_whole(tmp_path: Path) -> None:
+    """A log with quotes may need the one-shot reader after pieces were written: it goes whole."""
+    src = tmp_path / "in.csv"
+    _log_with_note(src, 20000, '"a note, quoted"')
+    one = _stdout_run("estimate", src, "-q", "-o", tmp_path / "one.csv")
+    done = _stdout_run("estimate", src, "-q", "--chunk-rows", 2000)
+    assert one.returncode == done.returncode == 0, done.stderr
+    assert done.stdout == (tmp_path / "one.csv").read_bytes()
+
+
+@pytest.mark.parametrize("line", [1, 2, 300])
+def test_bad_utf8_within_the_first_64_kb_is_located_in_windows(tmp_path: Path, line: int) -> None:
+    """Not UTF-8 in the header's 64 kB took the whole-file reader to be worded; now a pass in
+    bounded windows gives read_log's message."""
+    from softtip.errors import InputError
+    from softtip.io.tables import NotStreamable, read_log
+
+    src = tmp_path / "in.csv"
+    _log_with_note(src, 5000, "ok")
+    lines = src.read_bytes().splitlines(keepends=True)
+    lines[line - 1] = lines[line - 1].replace(b",", b",\xe9", 1)
+    src.write_bytes(b"".join(lines))
+    with pytest.raises(InputError) as whole:
+        read_log(src)
+    blocks = iter_log(src)
+    with pytest.raises(NotStreamable):
+        list(blocks)
+    found = blocks.locate_error()
+    assert found is not None and str(found) == str(whole.value)
+    assert f"in.csv:{line}: not valid UTF-8 (byte 0xe9" in str(found)
+
+
+def test_bad_utf8_near_the_start_in_pieces_takes_no_more_memory(tmp_path: Path) -> None:
+    good, bad = tmp_path / "good.csv", tmp_path / "bad.csv"
+    _log_with_note(good, 200000, "ok")
+    data = good.read_bytes()
+    cut = data.index(b"\n", 1000) + 1
+    bad.write_bytes(data[:cut] + data[cut:].replace(b",ok", b",\xe9", 1))
+    peaks = {}
+    for src in (good, bad):
+        code, peaks[src.name] = _peak_mb("estimate", src, "-o", tmp_path / f"out_{src.name}", "--chunk-rows", 20000)
+        assert code == (2 if src is bad else 0)
+    assert peaks["bad.csv"] < peaks["good.csv"] + 30, peaks
+    one = subprocess.run([SOFTTIP, "estimate", str(bad), "-o", str(tmp_path / "a.csv")], capture_output=True, text=True,
+                         timeout=120, check=False)  # fmt: skip
+    pieces = subprocess.run([SOFTTIP, "estimate", str(bad), "-o", str(tmp_path / "b.csv"), "--chunk-rows", "20000"],
+                            capture_output=True, text=True, timeout=120, check=False)  # fmt: skip
+    assert one.returncode == pieces.returncode == 2
+    assert pieces.stderr.replace("b.csv", "a.csv") == one.stderr and "not valid UTF-8" in one.stderr

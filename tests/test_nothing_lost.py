@@ -182,6 +182,19 @@ def _children(pid: int) -> list[int]:
     return kids
 
 
+def _marked(mark: str) -> list[int]:
+    """Live processes whose environment holds ``mark`` (whoever their parent is by now)."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit() and int(entry.name) != os.getpid():
+            try:
+                if mark.encode() in (entry / "environ").read_bytes() and _alive(int(entry.name)):
+                    found.append(int(entry.name))
+            except OSError:
+                continue
+    return found
+
+
 def _alive(pid: int) -> bool:
     try:
         fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
@@ -219,11 +232,15 @@ needs_proc = pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="ne
     ids=["TERM", "INT", "HUP", "TERM-TERM", "INT-TERM"],
 )
 def test_reproduce_ends_its_pool_on_a_signal(tmp_path, signals):
-    proc = _start(["reproduce", "--only", "E2", "--jobs", "2", "-o", "rep"], tmp_path)
-    deadline = time.monotonic() + 60
-    while time.monotonic() < deadline and len(_children(proc.pid)) < 2 and proc.poll() is None:
+    import secrets
+
+    mark = f"SOFTTIP_TEST_MARK_{secrets.token_hex(6)}"  # the run's processes, whoever their parent is
+    proc = _start(["reproduce", "--only", "E2", "--jobs", "2", "-o", "rep"], tmp_path, env={**os.environ, mark: "1"})
+    deadline = time.monotonic() + 180  # the server loads softtip before it forks the workers: slow under load
+    # the workers come from a forkserver (as softtip estimate --jobs)
+    while time.monotonic() < deadline and len(set(_marked(mark)) - {proc.pid}) < 3 and proc.poll() is None:
         time.sleep(0.05)
-    workers = _children(proc.pid)
+    workers = sorted(set(_marked(mark)) - {proc.pid})
     assert proc.poll() is None and len(workers) >= 2
     time.sleep(0.3)
     start = time.monotonic()
@@ -248,6 +265,53 @@ def test_reproduce_ends_its_pool_on_a_signal(tmp_path, signals):
         time.sleep(0.05)
     assert not any(_alive(w) for w in workers)
     assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+@needs_proc
+@pytest.mark.slow
+@pytest.mark.parametrize("moment", ["server-starts", "server+0.1s", "server+0.5s", "workers-run"])
+def test_reproduce_signal_at_any_moment_of_its_pool_start_leaves_nothing(tmp_path, moment):
+    """SIGTERM while the pool's server and workers start (a worker started before the pool knew
+    it was orphaned with the default fork pool) or run: exit 143 within seconds, no process of
+    the run left (found by an environment mark, whoever their parent is by then), no file in the
+    folder or in the temporary folder."""
+    import secrets
+
+    mark = f"SOFTTIP_TEST_MARK_{secrets.token_hex(6)}"
+    tmp = tmp_path / "tmp"
+    tmp.mkdir()
+    work = tmp_path / "work"
+    work.mkdir()
+    env = {**os.environ, mark: "1", "TMPDIR": str(tmp)}
+    proc = _start(["reproduce", "--only", "E2", "--jobs", "2", "-o", "rep"], work, env=env)
+    seen: set[int] = set()
+    deadline = time.monotonic() + 180
+    want = 1 if moment.startswith("server") else 3  # the forkserver; then it, the tracker and a worker or two
+
+    def below() -> set[int]:
+        return set(_marked(mark)) - {proc.pid}
+
+    while time.monotonic() < deadline and len(below()) < want and proc.poll() is None:
+        time.sleep(0.01)
+    assert proc.poll() is None, _stderr_when_done(proc)
+    wait = {"server-starts": 0.0, "server+0.1s": 0.1, "server+0.5s": 0.5, "workers-run": 0.3}[moment]
+    end = time.monotonic() + wait
+    while time.monotonic() < end:
+        seen.update(below())
+        time.sleep(0.01)
+    seen.update(below())
+    proc.send_signal(signal.SIGTERM)
+    start = time.monotonic()
+    err = _stderr_when_done(proc, timeout=60)
+    assert time.monotonic() - start < 30
+    assert proc.returncode == 128 + signal.SIGTERM, err
+    assert "Traceback" not in err
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline and (_marked(mark) or any(_alive(p) for p in seen)):
+        time.sleep(0.05)
+    assert _marked(mark) == [] and not any(_alive(p) for p in seen)
+    assert sorted(p.name for p in work.iterdir()) == []
+    assert sorted(p.name for p in tmp.iterdir()) == []
 
 
 @posix_only
@@ -766,3 +830,162 @@ def test_signals_at_any_moment_of_a_chunked_run(tmp_path, delay):
     # handlers in signal-number order, SIGINT's first
     assert proc.returncode in (143, 130, -signal.SIGTERM), err
     assert snapshot(tmp_path) == before
+
+
+# ---------------------------------------------------------------------------------------
+# 2d. --full-scale for stream and calibrate too: the option estimate has, the same semantics
+
+
+def _probing_with(tmp_path: Path, value: str) -> Path:
+    from softtip.io.examples import EXAMPLE_PROBING_PATH
+
+    return _with_cell(Path(EXAMPLE_PROBING_PATH), tmp_path / "probe.csv", 301, "fz", value)
+
+
+@pytest.mark.parametrize("value", ["1e30", "1e308", "70.5"])
+def test_stream_replay_beyond_the_full_scale_is_refused(tmp_path, log, value):
+    bad = _with_cell(log, tmp_path / "bad.csv", 101, "fz", value)
+    r = run("stream", "--replay", bad, "--speed", "0", "--no-view", "-o", tmp_path / "rec.csv", timeout=60)
+    no_traceback(r)
+    assert r.returncode == 2, r.stderr
+    assert "bad.csv: sample 101" in r.stderr and "fz = " in r.stderr and "--full-scale nano17" in r.stderr
+    assert not (tmp_path / "rec.csv").exists()  # refused before the first sample: no recording
+
+
+def test_stream_full_scale_presets_and_the_sensor(tmp_path, log):
+    bad = _with_cell(log, tmp_path / "bad.csv", 101, "fz", "200")
+    for more in (["--full-scale", "nano25"], ["--sensor", "nano25"], ["--full-scale", "300,1"]):
+        r = run("stream", "--replay", bad, "--speed", "0", "--no-view", *more, timeout=60)
+        assert r.returncode == 0, (more, r.stderr)
+    r = run("stream", "--replay", bad, "--speed", "0", "--no-view", "--sensor", "nano25", "--full-scale", "nano17", timeout=60)
+    assert r.returncode == 2 and "--full-scale nano17" in r.stderr
+    r = run("stream", "--replay", log, "--speed", "0", "--no-view", "--full-scale", "nano99", timeout=60)
+    assert r.returncode == 2 and "'--full-scale'" in r.stderr and "nano17" in r.stderr
+    r = run("stream", "--replay", _with_cell(log, tmp_path / "far.csv", 101, "fz", "1e154"), "--speed", "0",
+            "--no-view", "--full-scale", "off", timeout=60)  # fmt: skip
+    no_traceback(r)
+    assert r.returncode == 2 and "sample 101" in r.stderr
+
+
+def test_stream_live_sample_beyond_the_full_scale_ends_the_session(tmp_path):
+    import numpy as np
+
+    from softtip.testing.netft_fake import FakeNetFT, example_wrench
+
+    w = example_wrench(500.0)
+    w[300:310, 2] = 100.0  # beyond a Nano17's 70 N in z, within a Nano25's
+    with FakeNetFT(wrench=w, rate_hz=500) as dev:
+        r = run(*_stream_args(dev, "--duration", "10", "-o", tmp_path / "rec.csv"), timeout=60)
+        ok = run(*_stream_args(dev, "--duration", "1", "--full-scale", "nano25"), timeout=60)
+    no_traceback(r)
+    assert r.returncode == 2, r.stderr
+    assert "fz = 100 N is beyond the sensor's full-scale range (±70 N, --full-scale nano17)" in r.stderr
+    rows = np.loadtxt(tmp_path / "rec.csv", delimiter=",", skiprows=1, usecols=3, ndmin=1)
+    assert len(rows) >= 1 and rows[-1] == pytest.approx(100.0)  # every sample up to it recorded, the last is it
+    assert ok.returncode == 0, ok.stderr
+
+
+@pytest.mark.parametrize("value", ["1e30", "1e308", "-1e30"])
+@pytest.mark.parametrize("shape", ["sphere", "mesh"])
+def test_calibrate_beyond_the_full_scale_is_refused(tmp_path, value, shape):
+    bad = _probing_with(tmp_path, value)
+    more = ["--mesh", Path(EXAMPLE_PATH).with_name("murakami2006_nail.stl"), "--mesh-units", "mm"] if shape == "mesh" else []
+    r = run("calibrate", bad, "--shape", shape, *more, "-o", tmp_path / "tip.toml", timeout=60)
+    no_traceback(r)
+    assert r.returncode == 2, r.stderr
+    assert "probe.csv: sample 301" in r.stderr and "fz = " in r.stderr and "--full-scale nano17" in r.stderr
+    assert not (tmp_path / "tip.toml").exists()
+
+
+def test_calibrate_full_scale_presets_and_the_sensor(tmp_path):
+    bad = _probing_with(tmp_path, "1e30")
+    r = run("calibrate", bad, "--shape", "sphere", "--full-scale", "off", timeout=60)
+    assert r.returncode == 2 and "--full-scale off" in r.stderr
+    r = run("calibrate", bad, "--shape", "sphere", "--full-scale", "1,2,3", timeout=60)
+    assert r.returncode == 2 and "'--full-scale'" in r.stderr
+    over = _with_cell(bad, tmp_path / "over.csv", 301, "fz", "100")  # a Nano17's 70 N < 100 N < a Nano25's 1000 N
+    r = run("calibrate", over, "--shape", "sphere", timeout=60)
+    assert r.returncode == 2 and "--full-scale nano17" in r.stderr
+    r = run("calibrate", over, "--shape", "sphere", "--sensor", "nano25", timeout=60)
+    assert "full-scale" not in r.stderr, r.stderr
+
+
+@pytest.mark.parametrize("command", ["estimate", "stream", "calibrate"])
+def test_full_scale_is_one_shared_option(command):
+    from softtip.cli import main
+
+    opt = next(p for p in main.commands[command].params if p.name == "full_scale")
+    assert opt.opts == ["--full-scale"] and opt.metavar == "SENSOR|FORCE,MOMENT|off"
+    assert "[default: the --sensor's, nano17]" in opt.help
+
+
+# ---------------------------------------------------------------------------------------
+# 2e. an input in a folder without search permission, as an unprivileged user (the tests run as root)
+
+
+def _unprivileged() -> list[str] | None:
+    """A command prefix that runs a program as the unprivileged user ``nobody`` (none needed when
+    the tests do not run as root); None when there is no way to drop the privileges here."""
+    if os.geteuid() != 0:
+        return []
+    # the interpreter is started directly, not through the console script's #! line: a
+    # user-installed Python under /root may not be reachable by path for nobody
+    for argv in (["setpriv", "--reuid=65534", "--regid=65534", "--clear-groups"], ["runuser", "-u", "nobody", "--"]):
+        if shutil.which(argv[0]) is None:
+            continue
+        probe = subprocess.run([*argv, sys.executable, "-c", "import os, softtip; print(os.geteuid())"],
+                               capture_output=True, text=True, timeout=60, env=os.environ.copy())  # fmt: skip
+        if probe.returncode == 0 and probe.stdout.strip() not in ("", "0"):
+            return argv
+    return None
+
+
+@pytest.fixture
+def locked_folder():
+    """A folder nobody may enter (mode 0600, holding a log and a probing log), beside an output
+    folder anyone may write to, in a folder anyone may search (pytest's tmp_path is root's only)."""
+    import tempfile
+
+    from softtip.io.examples import EXAMPLE_PROBING_PATH
+
+    base = Path(tempfile.mkdtemp(prefix="softtip-locked-"))
+    try:
+        base.chmod(0o755)
+        (base / "locked").mkdir()
+        shutil.copy(EXAMPLE_PATH, base / "locked" / "g.csv")
+        shutil.copy(EXAMPLE_PROBING_PATH, base / "locked" / "p.csv")
+        (base / "locked").chmod(0o600)  # readable names, no search: no file inside can be opened
+        (base / "out").mkdir()
+        (base / "out").chmod(0o777)
+        yield base
+    finally:
+        (base / "locked").chmod(0o700)
+        shutil.rmtree(base, ignore_errors=True)
+
+
+UNSEARCHABLE = {
+    "estimate": ["estimate", "../locked/g.csv", "-o", "o.csv"],
+    "estimate-pieces": ["estimate", "../locked/g.csv", "--chunk-rows", "100", "-o", "o.csv"],
+    "estimate-stdout": ["estimate", "../locked/g.csv"],
+    "stream-replay": ["stream", "--replay", "../locked/g.csv", "--speed", "0", "--no-view", "-o", "r.csv"],
+    "calibrate": ["calibrate", "../locked/p.csv", "--shape", "sphere", "-o", "t.toml"],
+    "output-inside": ["estimate", "--example", "-o", "../locked/o.csv"],
+}
+
+
+@posix_only
+@pytest.mark.parametrize("argv", list(UNSEARCHABLE.values()), ids=list(UNSEARCHABLE))
+def test_unsearchable_folder_as_an_unprivileged_user(locked_folder, argv):
+    prefix = _unprivileged()
+    if prefix is None:
+        pytest.skip("running as root with no setpriv or runuser that can start Python as nobody: privileges cannot be dropped")
+    if prefix and subprocess.run([*prefix, "ls", str(locked_folder / "locked" / "g.csv")], capture_output=True).returncode == 0:
+        pytest.skip("the unprivileged user can still open files in a folder without search permission here")
+    env = {**os.environ, "HOME": str(locked_folder / "out")}
+    r = subprocess.run([*prefix, sys.executable, SOFTTIP, *argv], capture_output=True, text=True, timeout=120,
+                       cwd=locked_folder / "out", env=env)  # fmt: skip
+    no_traceback(r)
+    assert r.returncode == 2, r.stderr
+    named = next(a for a in argv if a.startswith("../locked/"))
+    assert r.stderr.startswith(f"softtip: error: {named}: ") and "ermission denied" in r.stderr, r.stderr
+    assert sorted(p.name for p in (locked_folder / "out").iterdir()) == []

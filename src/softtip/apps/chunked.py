@@ -421,22 +421,11 @@ def _from_shared(shared: tuple[bytes, list[int] | None], path: str) -> Any:
 
 
 def _start_pool(tip: Fingertip, jobs: int) -> Any:
-    """``jobs`` worker processes, forked from a server that has imported softtip and loaded its
-    compiled kernels (``softtip.apps._worker_preload``; not forked from this process, which may
-    hold threads and gigabytes). They are started at once: the server's imports then overlap
-    this process's reading of the first piece."""
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
+    """``jobs`` worker processes (:func:`softtip.apps.pool.start_pool`), started at once: the
+    server's imports then overlap this process's reading of the first piece."""
+    from softtip.apps.pool import start_pool
 
-    ctx = multiprocessing.get_context("forkserver")
-    ctx.set_forkserver_preload(["softtip.apps._worker_preload"])
-    pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=_worker_init, initargs=(tip,))
-    try:
-        pool.submit(int)  # starts the workers now (a pool starts them on its first task)
-    except BaseException:  # a signal while they start: none is left behind
-        end_pool(pool)
-        raise
-    return pool
+    return start_pool(jobs, _worker_init, (tip,))
 
 
 def warm_kernels() -> None:

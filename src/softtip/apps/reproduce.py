@@ -34,13 +34,12 @@ import math
 import os
 import signal
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
-from softtip.apps.pool import end_pool
+from softtip.apps.pool import end_pool, start_pool
 from softtip.core.axial import axial_difference
 from softtip.core.fingertip import Fingertip, murakami2006
 from softtip.core.units import KGF
@@ -283,12 +282,16 @@ def _worker_init() -> None:
     """A worker of :func:`run_reproduction`'s pool: the parent decides when it ends.
 
     Ctrl-C and SIGHUP reach the whole process group; the parent cancels the pool and
-    terminates the workers (SIGTERM, at its default action here).
+    terminates the workers (SIGTERM, at its default action here). A worker whose parent has
+    ended (a signal while the pool started, before it knew the worker) ends too.
     """
+    from softtip.apps.chunked import _end_with_parent
+
     for name in ("SIGINT", "SIGHUP"):
         if hasattr(signal, name):
             signal.signal(getattr(signal, name), signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    _end_with_parent()
 
 
 def _run_one(args):
@@ -343,7 +346,9 @@ def run_reproduction(
     unique = list(dict.fromkeys(_grasp_key(c) for c in todo))
     args = [(next(c for c in todo if _grasp_key(c) == key), seed) for key in unique]
     if jobs > 1:
-        pool = ProcessPoolExecutor(max_workers=jobs, initializer=_worker_init)
+        # as softtip estimate --jobs: forked from a preloaded server, started at once, each
+        # worker ending with this process (a signal during the start-up leaves none behind)
+        pool = start_pool(jobs, _worker_init)
         try:
             it = pool.map(_run_one, args)
             done = list(progress(it, total=len(args)) if progress else it)

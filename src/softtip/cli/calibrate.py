@@ -9,12 +9,15 @@ import click
 from softtip.cli.options import (
     MAX_FORCE_NOISE,
     MAX_MOMENT_NOISE_NMM,
+    full_scale_option,
+    full_scale_range,
     log_format_kwargs,
     log_format_options,
     sensor_noise,
 )
 from softtip.cli.types import Length, Number, option
 from softtip.core.fingertip import SHAPES
+from softtip.core.fullscale import check_full_scale
 from softtip.core.noise import NANO17
 from softtip.core.units import UNIT_SYSTEMS
 from softtip.errors import InputError
@@ -141,11 +144,12 @@ capsule's offset of its axis from the sensor's z axis is its axis_offset.
     help="Thickness of the fingertip's soft skin (5mm; a bare number is in mm), written into the fingertip file: "
     "estimate's depth compensation needs it and is off for a file without it.",
 )  # fmt: skip
+@full_scale_option
 @log_format_options
 @click.pass_context
 def calibrate(
     ctx, input_path, shape, output, units, tare_duration, contact_threshold, min_force, rigid, force_noise, moment_noise,
-    example, guide, mesh_path, mesh_units, rotation, skin_thickness=None, sensor=None, **log_format,
+    example, guide, mesh_path, mesh_units, rotation, skin_thickness=None, sensor=None, full_scale=None, **log_format,
 ):
     from softtip.calibration.probing import (
         PROBING_GUIDE,
@@ -157,6 +161,7 @@ def calibrate(
     if guide:
         click.echo(PROBING_GUIDE)
         return
+    sensor_range = full_scale_range(full_scale, sensor)  # default: the --sensor's, else a Nano17's
     if shape is None:
         raise click.UsageError(f"Missing option '--shape' ({', '.join(CALIBRATED_SHAPES[:-1])} or {CALIBRATED_SHAPES[-1]}).")
     placement = SHAPES[shape].calibrates == "placement"  # a mesh's pose on the sensor: softtip.calibration.mesh
@@ -170,6 +175,7 @@ def calibrate(
             if not placement or mesh_path is None or rigid:
                 raise InputError("--shape mesh goes with --mesh FILE (and without --rigid)")
             log = _read(input_path, units, **formats)
+            check_full_scale(log.t, log.wrench, sensor_range, log.source, units=units)
             cal = calibrate_mesh_file(
                 log.t, log.wrench, mesh_path, mesh_units, rotation=rotation, tare_duration=tare_duration,
                 contact_threshold=contact_threshold, min_force=min_force,
@@ -188,6 +194,7 @@ def calibrate(
     try:
         _check_output(input_path, output)
         log = _read_probing(input_path, units, **formats)
+        check_full_scale(log.t, log.wrench, sensor_range, log.source, units=units)
         cal = calibrate_fingertip(
             log.t, log.wrench, shape, tare_duration=tare_duration, contact_threshold=contact_threshold,
             min_force=min_force, compliance=not rigid, source=log.source,

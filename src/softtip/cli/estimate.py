@@ -18,6 +18,8 @@ from softtip.cli.options import (
     check_outputs,
     check_units,
     estimator_options,
+    full_scale_option,
+    full_scale_range,
     is_bag,
     log_format_given,
     log_format_kwargs,
@@ -31,14 +33,7 @@ from softtip.cli.options import (
 )  # fmt: skip
 from softtip.cli.types import check_lowpass, option
 from softtip.core.fingertip import load_fingertip
-from softtip.core.fullscale import (
-    COARSE_MARGIN,
-    DEFAULT_SENSOR,
-    SENSOR_RANGES,
-    check_full_scale,
-    full_scale_error,
-    parse_full_scale,
-)
+from softtip.core.fullscale import COARSE_MARGIN, check_full_scale, full_scale_error
 from softtip.core.units import UNIT_SYSTEMS, wrench_to_si
 from softtip.errors import InputError
 from softtip.estimator import STATES
@@ -92,7 +87,7 @@ from the bag's /tf.
 )
 @click.argument("input_path", metavar="INPUT", required=False, type=click.Path(allow_dash=True))
 @option("--example", is_flag=True, help="Use the shipped example grasp (a 45° line contact, murakami2006 tip) as INPUT.")
-@option("-o", "--output", type=click.Path(dir_okay=False, writable=True), help="Output CSV, or Parquet for a name ending in .parquet, Arrow IPC (Feather v2) for .arrow or .feather (default: CSV on standard output).")
+@option("-o", "--output", type=click.Path(dir_okay=False, writable=True, allow_dash=True), help="Output CSV, or Parquet for a name ending in .parquet, Arrow IPC (Feather v2) for .arrow or .feather (default, or '-': CSV on standard output).")
 @option(
     "--units",
     type=click.Choice(UNIT_SYSTEMS),
@@ -120,7 +115,8 @@ from the bag's /tf.
 @option(
     "--chunk-rows", type=click.IntRange(min=1), metavar="N",
     help="Process INPUT in pieces of at least N rows (and at least 1/256 of the log, up to 8192), in bounded memory, with the result of the one-shot run (a piece ends "
-    "only out of contact: a contact longer than N rows makes its piece as long). [default: pieces of 131072 rows for a CSV "
+    "only out of contact: a contact longer than N rows makes its piece as long). On standard output each piece is "
+    "written as it is done: a failure after the first leaves a cut table there (exit 2). [default: pieces of 131072 rows for a CSV "
     "file over 24 MB or a Parquet file over 262144 rows; only for a CSV or Parquet file without --plot, --to-bag, --rerun, "
     "--rerun-save, --payload]",
 )  # fmt: skip
@@ -130,12 +126,7 @@ from the bag's /tf.
     "N-1 workers: the output is the same, bit for bit, as with --jobs 1 (all in this process); each worker holds a piece "
     "in memory.",
 )  # fmt: skip
-@option(
-    "--full-scale", metavar="SENSOR|FORCE,MOMENT|off",
-    help="The sensor's full-scale range: a sample beyond it (a corrupted row) stops the run naming it. A sensor ("
-    + ", ".join(SENSOR_RANGES) + "; rated range per axis), FORCE,MOMENT in N and N·m for every axis, or off "
-    "(then only values no sensor gives).  [default: the --sensor's, nano17]",
-)  # fmt: skip
+@full_scale_option
 @log_format_options
 @estimator_options
 def estimate(**kwargs) -> None:
@@ -174,10 +165,10 @@ def _estimate(
 ):
     from softtip.io.examples import EXAMPLE_ANGLE_DEG, EXAMPLE_PATH
 
-    try:  # default: the range of --sensor (the noise preset), else a Nano17's
-        sensor_range = parse_full_scale(full_scale or estimator_opts.get("sensor") or DEFAULT_SENSOR)
-    except ValueError as exc:
-        raise click.BadParameter(str(exc), param_hint="'--full-scale'") from None
+    if output == "-":  # standard output, as without -o
+        output = None
+
+    sensor_range = full_scale_range(full_scale, estimator_opts.get("sensor"))  # default: the --sensor's, else a Nano17's
     from softtip.io.tables import Log, read_log
 
     formats = log_format_kwargs(estimator_opts)
@@ -247,13 +238,19 @@ def _estimate(
         if chunk_rows is not None and any(others.values()):
             given = ", ".join(k for k, v in others.items() if v)
             raise click.UsageError(f"--chunk-rows: not with {given}; expected a run that writes only the table")
-        if chunk_rows is not None and output is None:
-            raise click.UsageError("--chunk-rows: needs -o FILE (a piece written to standard output cannot be taken back)")
-        if output is not None and topic is None and not allow_partial and not any(others.values()) and not log_format_given(formats):
+        if topic is None and not allow_partial and not any(others.values()) and not log_format_given(formats):
             rows = chunk_rows or _auto_chunk_rows(input_path)
+            # standard output (or -o naming it, a pipe): each piece is written as it is done, so
+            # memory stays bounded; what is written cannot be taken back (a failure after it:
+            # a message, exit 2, a cut table). A file with quotes or lone CRs goes whole to the
+            # one-shot reader (pieces of it might need it after some were written)
+            streamed = output is None or _is_own_stdout(output)
+            if streamed and rows and not _plain_text(input_path):
+                rows = None
             if rows and _estimate_in_pieces(
-                input_path, units, rows, fingertip, config, estimator_opts, output=output, output_units=output_units,
-                tip=tip, quiet=quiet, save_bias=save_bias, outputs=outputs, sensor_range=sensor_range, jobs=jobs,
+                input_path, units, rows, fingertip, config, estimator_opts, output=None if streamed else output,
+                output_units=output_units, tip=tip, quiet=quiet, save_bias=save_bias, outputs=outputs,
+                sensor_range=sensor_range, jobs=jobs, named=output,
             ):  # fmt: skip
                 return
         size = os.path.getsize(input_path) if os.path.isfile(input_path) else 0
@@ -437,17 +434,51 @@ def _auto_chunk_rows(path: str) -> int | None:
     return DEFAULT_PIECE_ROWS if large else None
 
 
+def _is_own_stdout(path) -> bool:
+    """Whether ``path`` (``/dev/stdout``, ``/dev/fd/1``) is this process's standard output, and not a regular file."""
+    import stat
+
+    try:
+        st, out = os.stat(path), os.fstat(sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):
+        return False
+    return not stat.S_ISREG(st.st_mode) and os.path.samestat(st, out)
+
+
+def _plain_text(path) -> bool:
+    """Whether a CSV log holds no quote and no lone carriage return (checked in bounded windows);
+    a Parquet or Arrow file is plain."""
+    from softtip.io.formats import table_format
+
+    if table_format(path) != "csv":
+        return True
+    try:
+        with open(path, "rb") as fh:
+            cr = False  # the previous window ended with a CR: its LF, if any, opens this one
+            while chunk := fh.read(1 << 22):
+                if b'"' in chunk or (cr and not chunk.startswith(b"\n")):
+                    return False
+                body = chunk[:-1] if chunk.endswith(b"\r") else chunk
+                if body.count(b"\r") != body.count(b"\r\n"):
+                    return False
+                cr = chunk.endswith(b"\r")
+        return not cr
+    except OSError:
+        return False
+
+
 def _estimate_in_pieces(
     input_path, units, rows, fingertip, config, estimator_opts, *, output, output_units, tip, quiet, save_bias, outputs,
-    sensor_range=None, jobs=1,
+    sensor_range=None, jobs=1, named=None,
 ) -> bool:
-    """``softtip estimate`` piece by piece (:mod:`softtip.apps.chunked`) into ``output`` (a path);
-    ``False`` when the log holds something only the one-shot reader takes or words (nothing
-    written then)."""
+    """``softtip estimate`` piece by piece (:mod:`softtip.apps.chunked`) into ``output`` (a path),
+    or, for ``output`` None, onto standard output as each piece is done (``named``: the ``-o``
+    that named it, whose staged file is dropped); ``False`` when the log holds something only
+    the one-shot reader takes or words (nothing written then)."""
     from softtip.apps.chunked import estimate_pieces
     from softtip.core.lever import LEVER_MARGIN, LeverVote, fingertip_reach, lever_distances
     from softtip.estimator.summary import summarise_contacts
-    from softtip.io.atomic import cannot_write
+    from softtip.io.atomic import cannot_write, silence_stdout
     from softtip.io.formats import table_format
     from softtip.io.tables import NotStreamable, TableWriter, columnar_rows, iter_log
 
@@ -455,7 +486,8 @@ def _estimate_in_pieces(
     # (--chunk-rows 1 took minutes for 5e4 rows): at most about MAX_PIECES pieces
     # (and memory stays bounded: that floor is at most MAX_FLOOR_ROWS)
     rows = max(rows, min(-(-_row_estimate(input_path) // MAX_PIECES), MAX_FLOOR_ROWS))
-    fmt = table_format(output)
+    fmt = table_format(output) if output is not None else "csv"
+    sent = [0]  # rows written to standard output: past the first, a failure cannot be taken back
     beyond: list[InputError] = []  # the first sample just beyond the sensor's range
     carried = _carried(input_path, output)
     names: dict[str, list[str]] = {}  # the first piece's output and extra column names
@@ -511,6 +543,7 @@ def _estimate_in_pieces(
                     names.setdefault("est", list(est.columns(units=output_units)))
                     names.setdefault("extra", list(extra))
                     writer.write(columns)
+                    sent[0] += len(est) if output is None else 0
                     bar.update(len(est))
                     totals.add(est, summarise_contacts(est) if not quiet else [])
             finally:
@@ -523,17 +556,40 @@ def _estimate_in_pieces(
 
         try:
             try:
-                with outputs.get(output).open() as fh:  # the staged file: put in place with the others
-                    run(fh)
-                if names:
-                    _carry(input_path, output, outputs, names["est"], names["extra"], carried)
+                if output is None:
+                    try:
+                        run(sys.stdout)
+                        sys.stdout.flush()
+                    except OSError as exc:
+                        silence_stdout()
+                        raise cannot_write("standard output", exc) from None
+                    if named is not None:
+                        outputs.get(named).discard()  # -o /dev/stdout: written into already
+                else:
+                    with outputs.get(output).open() as fh:  # the staged file: put in place with the others
+                        run(fh)
+                    if names:
+                        _carry(input_path, output, outputs, names["est"], names["extra"], carried)
             except OSError as exc:
                 raise cannot_write(output, exc) from None
-        except NotStreamable:  # nothing written: the one-shot run takes it, or says what is wrong
+        except NotStreamable as exc:  # nothing written: the one-shot run takes it, or says what is wrong
             found = blocks.locate_error()  # an error in the log, found without reading it at once
             if found is not None:
+                _said_cut(sent[0])
                 raise found from None
+            if sent[0]:  # on standard output already: the one-shot run cannot start over
+                _said_cut(sent[0])
+                if "units" in str(exc):
+                    raise InputError(
+                        f"{input_path}: the wrench does not fit the fingertip in these units (the contacts' lever arms "
+                        "lie beyond its reach); give --units (or run with -o FILE, which names the unit pair that fits)"
+                    ) from None
+                raise InputError(f"{input_path}: cannot be read in pieces past row {sent[0]} ({exc}); give -o FILE") from None
             return False
+        except InputError as exc:
+            if not str(exc).startswith("standard output"):  # a closed pipe, a full device: said already
+                _said_cut(sent[0])
+            raise
         except ValueError as exc:  # e.g. a low-pass cutoff above Nyquist for this log's rate
             if isinstance(exc, InputError):
                 raise
@@ -545,6 +601,16 @@ def _estimate_in_pieces(
         save_bias=save_bias, quiet=quiet, outputs=outputs,
     )  # fmt: skip
     return True
+
+
+def _said_cut(rows: int) -> None:
+    """Before the error of a run that wrote ``rows`` rows onto standard output: what is there."""
+    if rows:
+        click.echo(
+            f"softtip: warning: standard output: {rows} rows were written before the error below and cannot be taken "
+            "back; the table there is incomplete or wrong (use it only after exit status 0)",
+            err=True,
+        )
 
 
 def _column(values) -> np.ndarray:

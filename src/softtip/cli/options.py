@@ -24,6 +24,7 @@ from softtip.cli.types import (
     option,
 )  # fmt: skip
 from softtip.core.fingertip import PRESETS, Fingertip
+from softtip.core.fullscale import DEFAULT_SENSOR, SENSOR_RANGES, FullScale, parse_full_scale
 from softtip.core.noise import NANO17, SensorNoise
 from softtip.errors import InputError
 from softtip.estimator import EstimatorConfig
@@ -217,6 +218,29 @@ _LOG_FORMAT_OPTIONS = [
     ),
     option("--skip-rows", type=click.IntRange(min=0), metavar="N", help="Lines before the header row (a preamble). [default: found]"),
 ]
+
+
+#: ``--full-scale``, the same for every command that reads a wrench (estimate, stream, calibrate)
+_FULL_SCALE_OPTION = option(
+    "--full-scale", metavar="SENSOR|FORCE,MOMENT|off",
+    help="The sensor's full-scale range: a sample beyond it (a corrupted row) stops the run naming it. A sensor ("
+    + ", ".join(SENSOR_RANGES) + "; rated range per axis), FORCE,MOMENT in N and N·m for every axis, or off "
+    "(then only values no sensor gives).  [default: the --sensor's, nano17]",
+)  # fmt: skip
+
+
+def full_scale_option(f):
+    """``--full-scale``: the plausibility bound of every wrench read (:func:`full_scale_range`)."""
+    return _FULL_SCALE_OPTION(f)
+
+
+def full_scale_range(full_scale: str | None, sensor: str | None) -> FullScale:
+    """The range ``--full-scale`` gives: as given, else the ``--sensor``'s, else a Nano17's
+    (:func:`softtip.core.fullscale.parse_full_scale`); exit 2 naming the option for anything else."""
+    try:
+        return parse_full_scale(full_scale or sensor or DEFAULT_SENSOR)
+    except ValueError as exc:
+        raise click.BadParameter(str(exc), param_hint="'--full-scale'") from None
 
 
 def log_format_options(f):

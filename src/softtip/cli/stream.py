@@ -13,11 +13,14 @@ from softtip.cli.options import (
     POSITIVE,
     check_outputs,
     estimator_options,
+    full_scale_option,
+    full_scale_range,
     make_config,
     optional_extra,
 )
 from softtip.cli.types import PORT, Number, check_lowpass, option
 from softtip.core.fingertip import load_fingertip
+from softtip.core.fullscale import FullScale, check_full_scale
 from softtip.core.units import UNIT_SYSTEMS
 from softtip.estimator.results import EstimatorWarning
 
@@ -82,6 +85,7 @@ an error (exit 1).
 @option("--rerun", "rerun_spawn", is_flag=True, help="Show the 3-D view live in a Rerun viewer (needs the rerun-sdk package; at most 50 samples/s are drawn).")
 @option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save the 3-D view and time series to FILE.rrd.")
 @option("--payload", type=click.Path(dir_okay=False), metavar="FILE.toml", help="With --replay: remove the fingertip's weight per sample, using the log's qw, qx, qy, qz columns (recorded raw_* columns are then compensated).")
+@full_scale_option
 @estimator_options
 @click.pass_context
 def stream(
@@ -102,10 +106,13 @@ def stream(
     rerun_save,
     tip,
     payload=None,
+    full_scale=None,
     **estimator_opts,
 ):
 
     from softtip.io.netft import FAULTS
+
+    sensor_range = full_scale_range(full_scale, estimator_opts.get("sensor"))  # default: the --sensor's, else a Nano17's
 
     if (host is None) == (replay is None):
         raise click.UsageError("give either --netft HOST or --replay LOG.csv")
@@ -135,7 +142,7 @@ def stream(
     try:
         _stream(
             ctx, host, replay, speed, units, rdt_port, http_port, timeout, device_bias, faults, duration, record, view,
-            rerun_spawn, rerun_file, tip, payload, estimator_opts, outputs,
+            rerun_spawn, rerun_file, tip, payload, estimator_opts, outputs, sensor_range,
         )  # fmt: skip
     except BaseException:
         outputs.discard()
@@ -145,7 +152,7 @@ def stream(
 
 def _stream(
     ctx, host, replay, speed, units, rdt_port, http_port, timeout, device_bias, faults, duration, record, view,
-    rerun_spawn, rerun_file, tip, payload, estimator_opts, outputs,
+    rerun_spawn, rerun_file, tip, payload, estimator_opts, outputs, sensor_range,
 ) -> None:
     import signal
     import threading
@@ -180,6 +187,8 @@ def _stream(
 
                     source = replay_source(replay, units, speed, payload)
                 info = f"(replay x{speed:g})" if speed else "(replay, as fast as possible)"
+                raw = getattr(source, "source", source)  # the log as read (before any payload compensation)
+                check_full_scale(raw.t, raw.wrench, sensor_range, replay, units=units)  # before any sample is used
             else:
                 from softtip.io.netft import NetFTSource
 
@@ -217,11 +226,15 @@ def _stream(
                 stats, interval=0.2, h_threshold=config.h_min, recorder=recorder, estimator=estimator,
                 tare_key=tare_key,
             ) if show else None  # fmt: skip
-            on_estimate = None
+            on_estimate = _within_range(sensor_range, source.name, stats)  # a live sample beyond it ends the run
             if viz is not None:
                 # drawn by a process of its own, which starts while the stream runs
                 logger = viz.LiveRerun(fingertip, save=rerun_save, spawn=rerun_spawn, wait=False)
-                on_estimate = lambda e, r: logger.log_sample(e)
+                checked = on_estimate
+
+                def on_estimate(e, r):
+                    checked(e, r)
+                    logger.log_sample(e)
             keys = KeyReader({"t": tare_request.set}) if tare_key else None
             try:
                 with warnings.catch_warnings():
@@ -272,3 +285,19 @@ def _stream(
     for msg in dict.fromkeys(estimator.warnings):
         click.echo(f"softtip: warning: {msg}", err=True)
 
+
+
+def _within_range(full_scale: FullScale, name: str, stats):
+    """A per-sample check of a live source against ``--full-scale``: the first sample beyond it
+    ends the session (exit 2, naming the sample; every row before it is recorded). A replayed
+    log is checked whole before it starts."""
+    bounds = full_scale.bounds.tolist()
+
+    def check(e, r) -> None:
+        w = r.wrench
+        if any(not abs(v) <= b for v, b in zip(w, bounds)):
+            import numpy as np
+
+            check_full_scale([r.t], np.asarray([w], dtype=float), full_scale, name, first_sample=stats.received - 1)
+
+    return check

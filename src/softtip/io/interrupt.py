@@ -93,7 +93,24 @@ def exit_now(code: int) -> None:
     for stream in (sys.stdout, sys.stderr):
         with contextlib.suppress(Exception):
             stream.flush()
+    _remove_multiprocessing_tempdir()
     os._exit(code)
+
+
+def _remove_multiprocessing_tempdir() -> None:
+    """Remove the folder multiprocessing made in the temporary folder (``pymp-*``: a process
+    pool's forkserver socket), which its exit handler, skipped by ``os._exit``, would remove."""
+    import sys
+
+    mp = sys.modules.get("multiprocessing.process")
+    if mp is None:
+        return
+    with contextlib.suppress(Exception):
+        tempdir = mp.current_process()._config.get("tempdir")
+        if tempdir:
+            import shutil
+
+            shutil.rmtree(tempdir, ignore_errors=True)
 
 
 def _raise(signum, frame) -> None:

@@ -885,7 +885,7 @@ def _parse_arrow(
     body = memoryview(data)[start:end]
     try:
         reader = pacsv.open_csv(  # block by block, so that progress can be shown
-            pa.BufferReader(pa.py_buffer(body)),
+            pa.BufferReader(_arrow_owned(body)),
             # one thread: faster than pyarrow's default threads on a busy 2-core machine
             read_options=pacsv.ReadOptions(column_names=names, use_threads=False),
             parse_options=pacsv.ParseOptions(
@@ -952,6 +952,25 @@ def _parse_arrow(
         return None
     extra = {names[j]: table.column(j).to_pylist() for j in range(len(names)) if j not in index.values()}
     return t, wrench, extra, header.data_base + 1, quoted, header
+
+
+def _arrow_owned(data: memoryview) -> Any:
+    """A copy of ``data`` in memory pyarrow allocated (not a Python object's).
+
+    pyarrow's CSV reader reads ahead on its own threads, and one of them may drop the last
+    reference to a block a little after the reader is closed. A block of a Python object's
+    memory (``pa.py_buffer``) then takes the GIL to release the object; when that happens
+    while the interpreter finalises (a run that failed on the log ends at once), the thread
+    is ended inside a C++ destructor and the process aborts ("terminate called without an
+    active exception", exit -6; seen in a core dump, 3 of 143 runs under load). Memory
+    pyarrow owns is freed without the GIL. The copy costs the text's size for as long as
+    it is read.
+    """
+    import pyarrow as pa
+
+    buf = pa.allocate_buffer(len(data))
+    np.frombuffer(buf, dtype=np.uint8)[:] = np.frombuffer(data, dtype=np.uint8)
+    return buf
 
 
 def _end_of_content(data: bytes) -> int:
@@ -2038,6 +2057,8 @@ class LogBlocks:
         self._quoted: bool | None = None  # whether the data holds a quote (then rows may span lines); None: not looked
         # CSV: rows (one line each) read and found good before the reader stopped on what looks like an error
         self._error_at: int | None = None
+        # CSV: where the text starts (after a BOM) when its first 64 kB are not UTF-8
+        self._bad_prefix: int | None = None
         self._header: _Header | None = None
         self._index: dict[str, int] = {}
 
@@ -2108,9 +2129,14 @@ class LogBlocks:
             prefix = prefix[: prefix.rfind(b"\n") + 1]
         try:
             text = prefix.decode("utf-8")
+        except UnicodeDecodeError:
+            if not any(prefix.startswith(magic) for magic, _ in _COMPRESSION_MAGIC):
+                self._size, self._bad_prefix = size, skip  # the error is located in windows, not by reading it all
+            raise NotStreamable("header") from None
+        try:
             header = _read_header(text, self.source)
             index = _column_index(header, self.source)
-        except (UnicodeDecodeError, InputError):
+        except InputError:
             raise NotStreamable("header") from None
         if header.cmap is None or not header.cmap.native(header.names) or header.delimiter != "," or header.preamble:
             raise NotStreamable("not softtip's own layout: read_log maps it")
@@ -2180,6 +2206,12 @@ class LogBlocks:
         (a cell only Python's parser reads) or cannot place it (quotes, lone carriage
         returns, a line longer than a window): :func:`read_log` on the whole file decides then.
         """
+        if not self.parquet and self._bad_prefix is not None:  # not UTF-8 within the header's 64 kB
+            try:
+                with open(self.path, "rb") as fh:
+                    return self._first_bad_utf8(fh, self._bad_prefix, 1)
+            except (OSError, _NoPlace):
+                return None
         if self.parquet or self._error_at is None or self._header is None or self._first_line is None:
             return None
         try:
@@ -2247,10 +2279,12 @@ class LogBlocks:
             line += window.count(b"\n", 0, last)
             pos += last
 
-    def _first_bad_utf8(self, fh: BinaryIO) -> InputError | None:
-        """The error :func:`read_log` gives for invalid UTF-8, from a pass over the file (bounded memory)."""
-        fh.seek(self._start)
-        pos, line, held = self._start, self._first_line or 1, b""
+    def _first_bad_utf8(self, fh: BinaryIO, start: int | None = None, line: int | None = None) -> InputError | None:
+        """The error :func:`read_log` gives for invalid UTF-8, from a pass over the file (bounded memory)
+        from byte ``start`` (line ``line``; default: the first data row's)."""
+        pos = self._start if start is None else start
+        fh.seek(pos)
+        line, held = (self._first_line or 1) if line is None else line, b""
         while True:
             chunk = fh.read(_LOCATE_BYTES)
             data = held + chunk
