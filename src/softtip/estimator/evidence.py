@@ -221,8 +221,9 @@ def _oldest(counts, ring, n):
 
 @lazy_jit
 def _stated(params, t):
-    """The evidence window ending at ``t`` lies wholly inside a stated rocking interval
-    (:meth:`EstimatorConfig.stated_excitation`)."""
+    """The evidence window ending at ``t`` lies wholly inside a stated two-axis rocking
+    interval (:attr:`EstimatorConfig.rocked`: its start ``t − evidence_window`` at or after
+    the interval's start, ``t`` at or before its end)."""
     start = t - params[_WINDOW]
     for k in range(int(params[_N_ROCKED])):
         if start >= params[_ROCKED + 2 * k] and t <= params[_ROCKED + 2 * k + 1]:
