@@ -178,17 +178,25 @@ def test_cli_in_pieces_trailing_blank_lines_fall_back_to_the_one_shot_reader(tmp
     assert a.read_bytes() == b.read_bytes()
 
 
-@pytest.mark.parametrize("extra", [["--plot", "x.png"], []])
-def test_cli_chunk_rows_needs_a_table_output_only(tmp_path: Path, extra: list[str]) -> None:
+def test_cli_chunk_rows_needs_a_table_output_only(tmp_path: Path) -> None:
     t, w = _log(seed=7, presses=1)
     src = tmp_path / "in.csv"
     write_table({"t": t, **{k: w[:, i] for i, k in enumerate(WRENCH)}}, src)
-    args = ["estimate", src, "--chunk-rows", 10, *[tmp_path / e if e.endswith(".png") else e for e in extra]]
-    if extra:
-        args += ["-o", tmp_path / "o.csv"]
-    done = run(*args)
+    done = run("estimate", src, "--chunk-rows", 10, "--plot", tmp_path / "x.png", "-o", tmp_path / "o.csv")
     assert done.returncode == 2
     assert "--chunk-rows" in done.stderr and done.stdout == ""
+    assert sorted(os.listdir(tmp_path)) == ["in.csv"]
+
+
+def test_cli_chunk_rows_onto_standard_output_is_the_one_shot_table(tmp_path: Path) -> None:
+    # standard output is written piece by piece (memory bounded by the piece), the same text
+    t, w = _log(seed=7, presses=1)
+    src = tmp_path / "in.csv"
+    write_table({"t": t, **{k: w[:, i] for i, k in enumerate(WRENCH)}}, src)
+    whole = run("estimate", src, "-q")
+    pieces = run("estimate", src, "-q", "--chunk-rows", 10)
+    assert whole.returncode == 0 and pieces.returncode == 0, pieces.stderr
+    assert pieces.stdout == whole.stdout and len(whole.stdout.splitlines()) == len(t) + 1
     assert sorted(os.listdir(tmp_path)) == ["in.csv"]
 
 

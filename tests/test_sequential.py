@@ -10,7 +10,6 @@ from hypothesis import strategies as st
 import softtip.core._blocks
 from softtip import estimate
 from softtip.core._jit import JIT_MIN_SAMPLES, jit_enabled, set_jit, use_numba
-from softtip.estimator.evidence import _point_moves, _window_sums
 from softtip.sim.synthetic import synthetic_grasp
 from test_pipeline import CASES, drifting_grasp, grasp_with_two_contacts, impact_grasp, sliding_grasp
 
@@ -77,67 +76,6 @@ def test_small_blocks_equal_one_block(case, log, both_paths, monkeypatch, recwar
     c, d = both_paths(estimate, t, w, "murakami2006", CASES[case])
     for x in (b, c, d):
         assert_same_estimates(a, x)
-
-
-def _segments(draw_bits, n, rng):
-    """Random segment starts, located samples and non-decreasing times (repeats included)."""
-    begin = rng.random(n) < draw_bits[0]
-    located = rng.random(n) < draw_bits[1]
-    steps = rng.choice([0.0, 1e-3, 2.5e-3, 0.05], size=n, p=[0.1, 0.6, 0.2, 0.1])
-    t = 100.0 + np.cumsum(steps)
-    return t, begin, located
-
-
-@settings(max_examples=40)
-@given(
-    n=st.integers(0, 400),
-    p_begin=st.floats(0.0, 0.2),
-    p_located=st.floats(0.0, 1.0),
-    window=st.floats(0.0, 0.5),
-    seed=st.integers(0, 2**32 - 1),
-)
-def test_window_sums_equal_numpy(n, p_begin, p_located, window, seed):
-    rng = np.random.default_rng(seed)
-    t, begin, located = _segments((p_begin, p_located), n, rng)
-    prods = tuple(rng.normal(size=n) * 10.0 ** rng.integers(-6, 3) for _ in range(10))
-    old = set_jit(True)
-    try:
-        fast = _window_sums(t, located, begin, prods, window)
-        set_jit(False)
-        slow = _window_sums(t, located, begin, prods, window)
-    finally:
-        set_jit(old)
-    # the numpy path counts a window left empty by rounding (t − window == t, repeated
-    # stamps after it) as negative; both are empty windows
-    ok = slow[1] >= 0
-    assert np.array_equal(fast[0][:, ok], slow[0][:, ok], equal_nan=True)
-    assert np.array_equal(fast[1][ok], slow[1][ok], equal_nan=True)
-    assert np.all(np.isnan(fast[1][~located])) and np.all(fast[1][located] >= 0)
-
-
-@settings(max_examples=40)
-@given(
-    n=st.integers(0, 400),
-    p_begin=st.floats(0.0, 0.2),
-    p_located=st.floats(0.0, 1.0),
-    step=st.floats(1e-5, 2e-3),
-    distance=st.floats(1e-4, 5e-3),
-    seed=st.integers(0, 2**32 - 1),
-)
-def test_point_moves_equal_numpy(n, p_begin, p_located, step, distance, seed):
-    rng = np.random.default_rng(seed)
-    _, begin, located = _segments((p_begin, p_located), n, rng)
-    point = np.cumsum(rng.normal(scale=step, size=(n, 3)), axis=0)  # a wandering contact point
-    given_begin = begin.copy()
-    old = set_jit(True)
-    try:
-        fast = _point_moves(begin, located, point, distance)
-        set_jit(False)
-        slow = _point_moves(begin, located, point, distance)
-    finally:
-        set_jit(old)
-    assert np.array_equal(fast, slow)
-    assert np.all(fast[begin]) and np.array_equal(begin, given_begin)  # the input is not changed
 
 
 def test_short_logs_take_the_numpy_path(monkeypatch):

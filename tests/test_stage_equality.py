@@ -218,7 +218,7 @@ def test_evidence_stage(staged):
     h = np.stack((ms.hx, ms.hy, ms.hz), axis=-1)
     force = np.stack(s["c"][:3], axis=-1)
     state, evidence, d, angle, angle_std, noise_std, h_ratio, f_ratio = evidence_states(
-        t, s["located"], s["begin"], s["point"], s["normal"], h, force, ms, s["noise"], s["corr"], cfg
+        t, s["located"], s["begin"], s["point"], s["normal"], h, force, ms, s["noise"], s["corr"], cfg, s["depth"][0]
     )
     tracker = EvidenceTracker(cfg, s["noise"], s["corr"])
     sq = NoiseSquares(s["noise"])

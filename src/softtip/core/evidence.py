@@ -12,8 +12,8 @@ Per sample, in the tangent frame ``(e1, e2)`` at the contact point (the angle co
 the manual: ``e1`` the sensor x axis projected on the tangent plane):
 ``h`` and the tangential load ``f_t`` (the force projected on the tangent plane; the push
 that tilts the object turns with the tilt axis) give :data:`N_SUMS` products
-(:func:`evidence_products`); the batch cumulates them, the stream keeps running sums, and
-window sums are differences of the two. :func:`window_kernel` turns window sums into
+(:func:`evidence_products`); the evidence stage keeps running sums, and window sums are
+differences of them. :func:`window_eigen` and :func:`window_direction` turn window sums into
 
 * the covariance of ``h`` and of ``f_t`` over the window with the noise's expected share
   removed (``(1 − L / N) Σ``, ``Σ`` the 2×2 noise covariance from the sensor noise model at
@@ -39,8 +39,10 @@ window sums are differences of the two. :func:`window_kernel` turns window sums 
   is returned too (``angle_noise_std``).
 
 The decisions (thresholds, hysteresis, held verdicts) are the estimator's
-(:mod:`softtip.estimator.evidence`). All kernels are component-wise for both back ends of
-:mod:`softtip.core._xp`.
+(:mod:`softtip.estimator.evidence`). The kernels are scalar functions that the stage's compiled
+step calls (:func:`softtip.core._jit.lazy_jit`: compiled with it by numba, or run as Python);
+:func:`window_constants` is component-wise (:mod:`softtip.core._xp`'s ``NP``), a table by
+window length that the step reads.
 """
 
 from __future__ import annotations
@@ -48,12 +50,15 @@ from __future__ import annotations
 import math
 from typing import Any, NamedTuple
 
+import numpy as np
+
+from softtip.core._jit import lazy_jit
+from softtip.core._xp import NP
 from softtip.core.line_fit import MODEL_MARGIN, _chi2_excess
-from softtip.core.noise import SensorNoise
 
 __all__ = [
-    "N_SUMS", "Window", "evidence_products", "tangent_noise_kernel", "window_kernel", "window_floats",
-    "window_constants", "window_eigen_floats", "window_direction_floats", "noise_constants",
+    "N_SUMS", "Window", "evidence_products", "tangent_noise_kernel", "noise_constants", "window_eigen",
+    "window_direction", "window_constants", "window_floats",
 ]  # fmt: skip
 
 #: Number of window sums: ``Σ h1, Σ h2, Σ h1², Σ h1 h2, Σ h2²`` and the same for ``f_t``.
@@ -72,9 +77,22 @@ N_SUMS = 10
 #: cells reached 1.9 (an overstated noise model hides real spread).
 HIDDEN_SPREAD = 0.1
 
+_HALF_PI = 0.5 * math.pi
 
+
+@lazy_jit
+def _div(a, b):
+    """``a / b`` with IEEE-754 results for ``b = 0`` (numba's compiled division would raise)."""
+    if b != 0.0:
+        return a / b
+    if a != a or a == 0.0:
+        return math.nan
+    return math.copysign(math.inf, a) * math.copysign(1.0, b)
+
+
+@lazy_jit
 def evidence_products(h1, h2, f1, f2):
-    """The :data:`N_SUMS` per-sample products whose window sums :func:`window_kernel` needs.
+    """The :data:`N_SUMS` per-sample products whose window sums :func:`window_eigen` needs.
 
     Parameters
     ----------
@@ -86,14 +104,15 @@ def evidence_products(h1, h2, f1, f2):
     return (h1, h2, h1 * h1, h1 * h2, h2 * h2, f1, f2, f1 * f1, f1 * f2, f2 * f2)
 
 
-def tangent_noise_kernel(rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, noise: SensorNoise):
+@lazy_jit
+def tangent_noise_kernel(rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, sfx, sfy, sfz, smx, smy, smz):
     """Noise covariance of ``h`` (N²·m²) and of ``f_t`` (N²) in the tangent frame at ``r``.
 
+    ``sf*``, ``sm*``: the sensor noise's variances per axis (N², N²·m²; ``s * s`` of
+    :class:`~softtip.core.noise.SensorNoise`'s standard deviations, :func:`noise_variances`).
     Returns ``(h11, h12, h22, f11, f12, f22)``: ``Σ_h = P Σ_m P + P [r]× Σ_f [r]×ᵀ P`` and
     ``Σ_f`` projected on ``(e1, e2)`` (:mod:`softtip.core.noise`).
     """
-    sfx, sfy, sfz = (s * s for s in noise.force_std)
-    smx, smy, smz = (s * s for s in noise.moment_std)
     # u × r for u = e1, e2
     ax, ay, az = e1y * rz - e1z * ry, e1z * rx - e1x * rz, e1x * ry - e1y * rx
     bx, by, bz = e2y * rz - e2z * ry, e2z * rx - e2x * rz, e2x * ry - e2y * rx
@@ -106,8 +125,14 @@ def tangent_noise_kernel(rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, noise: Sensor
     return h11, h12, h22, f11, f12, f22
 
 
+def noise_variances(noise) -> tuple[float, float, float, float, float, float]:
+    """``(σ_fx², σ_fy², σ_fz², σ_mx², σ_my², σ_mz²)`` of a
+    :class:`~softtip.core.noise.SensorNoise` (N², N²·m²), as :func:`tangent_noise_kernel` takes them."""
+    return tuple(s * s for s in noise.force_std) + tuple(s * s for s in noise.moment_std)
+
+
 class Window(NamedTuple):
-    """What one window says, component-wise (floats or arrays of one shape)."""
+    """What one window says (:func:`window_floats`)."""
 
     h_major: Any  #: larger eigenvalue of h's covariance, noise removed, N²·m²
     h_minor: Any  #: smaller one (≥ 0), N²·m²
@@ -120,105 +145,10 @@ class Window(NamedTuple):
     angle_noise_std: Any  #: the noise's share of it alone, rad (the rest is model error)
 
 
-def _eig2(c11, c12, c22, xp):
-    half = 0.5 * (c11 - c22)
-    mean = 0.5 * (c11 + c22)
-    root = xp.sqrt(half * half + c12 * c12)
-    return mean + root, mean - root, half, root
-
-
-def _covariance(s1, s2, s11, s12, s22, count, n11, n12, n22, keep, xp):
-    """Window covariance less ``keep`` times the noise covariance: (c11, c12, c22)."""
-    m1, m2 = xp.div(s1, count), xp.div(s2, count)
-    c11 = xp.div(s11, count) - m1 * m1 - keep * n11
-    c12 = xp.div(s12, count) - m1 * m2 - keep * n12
-    c22 = xp.div(s22, count) - m2 * m2 - keep * n22
-    return c11, c12, c22
-
-
-_HALF_PI = 0.5 * math.pi
-
-
-def window_kernel(sums, count, h11, h12, h22, f11, f12, f22, corr: float, xp) -> Window:
-    """What a window says, from its sums (:func:`evidence_products`) and the noise.
-
-    Parameters
-    ----------
-    sums : sequence of 10 floats or arrays
-        Window sums.
-    count : float or array
-        Samples in the window (positive).
-    h11, h12, h22, f11, f12, f22 : float or array
-        Per-sample noise covariances (:func:`tangent_noise_kernel`).
-    corr : float
-        Samples per independent noise sample (1 unfiltered).
-    xp : namespace
-        :data:`softtip.core._xp.NP` or :data:`softtip.core._xp.PY`.
-
-    Returns
-    -------
-    Window
-    """
-    keep = xp.maximum(1.0 - xp.div(corr, count), 0.0)
-    nu = xp.maximum(count - 1.0, 0.0) / corr
-    tail = xp.div(_chi2_excess(nu, xp), nu) + MODEL_MARGIN
-    c11, c12, c22 = _covariance(*sums[0:5], count, h11, h12, h22, keep, xp)
-    big, small, half, root = _eig2(c11, c12, c22, xp)
-    s_big, s_small, _, _ = _eig2(h11, h12, h22, xp)
-    h_noise = tail * s_big
-    g11, g12, g22 = _covariance(*sums[5:10], count, f11, f12, f22, keep, xp)
-    f_big, f_small, _, _ = _eig2(g11, g12, g22, xp)
-    f_n, _, _, _ = _eig2(f11, f12, f22, xp)
-    # principal axis v of h's variation at angle phi; d = n × v is at phi + 90°
-    phi = 0.5 * xp.atan2(2.0 * c12, 2.0 * half)
-    a = phi + _HALF_PI
-    a = a - math.pi * (a > _HALF_PI)
-    small = xp.maximum(small, 0.0)
-    big = xp.maximum(big, 0.0)
-    s2 = 0.5 * (s_big + s_small)
-    gap = big - small
-    # noise (over ν independent noise samples: the products with the noise only; a low-pass
-    # leaves the noise under the excitation's few hertz as it was, so the cross products keep
-    # their unfiltered share s²·L / N = s² / ν) and model
-    # error: an across-axis spread of h (the line resisting a roll about its own edge a
-    # little) turns the axis by as much of √(minor / major) as the window's excitation about
-    # the two axes is correlated, which the tangential load tells: its correlation ρ between
-    # the axis and across it
-    cp, sp = xp.div(c11 - c22, 2.0 * root), xp.div(c12, root)  # cos 2φ, sin 2φ
-    fm, fd = 0.5 * (g11 + g22), 0.5 * (g11 - g22)
-    f_vv, f_ww, f_vw = fm + fd * cp + g12 * sp, fm - fd * cp - g12 * sp, g12 * cp - fd * sp
-    den = xp.maximum(f_vv, 0.0) * xp.maximum(f_ww, 0.0)
-    rho2 = xp.div(f_vw * f_vw, den)
-    # without load variation about both axes the correlation is unknown: count it as ρ² = ½
-    # the spread the noise correction may hide counts as well
-    hidden = xp.maximum(small, HIDDEN_SPREAD * s2)
-    model = xp.div(hidden, big) * xp.where(den > 0.0, xp.div(rho2, xp.maximum(1.0 - rho2, 0.0)), 1.0)
-    noise_var = xp.div(s2 * (big + small + s2), nu * gap * gap)
-    angle_std = xp.sqrt(noise_var + model)
-    return Window(
-        big, small, h_noise, xp.maximum(f_big, 0.0), xp.maximum(f_small, 0.0), tail * f_n, a, angle_std, xp.sqrt(noise_var)
-    )
-
-
-def window_floats(sums, count: float, noise_terms, tail: float, keep: float, nu: float):
-    """:func:`window_kernel` for one window of Python floats, unrolled for the stream (the
-    same operations, so the same results to rounding; no function call per operation).
-
-    ``tail``, ``keep`` and ``nu`` are :func:`window_constants` of ``count``. Returns the
-    fields of :class:`Window` as a plain tuple.
-    """
-    h11, h12, h22, f11, f12, f22 = noise_terms
-    s_big, s2, f_n = noise_constants(noise_terms)
-    e = window_eigen_floats(sums, count, noise_terms, keep)
-    big, small = e[0], e[1]
-    f_big, f_small = e[8], e[9]
-    angle, angle_std, noise_std = window_direction_floats(e, s2, nu)
-    return big, small, tail * s_big, f_big, f_small, tail * f_n, angle, angle_std, noise_std
-
-
-def noise_constants(noise_terms):
-    """``(largest noise variance of h, mean noise variance of h, largest of f_t)``."""
-    h11, h12, h22, f11, f12, f22 = noise_terms
+@lazy_jit
+def noise_constants(h11, h12, h22, f11, f12, f22):
+    """``(largest noise variance of h, mean noise variance of h, largest of f_t)`` from the
+    noise covariances of :func:`tangent_noise_kernel`."""
     nh = 0.5 * (h11 - h22)
     nm = 0.5 * (h11 + h22)
     nr = math.sqrt(nh * nh + h12 * h12)
@@ -228,43 +158,61 @@ def noise_constants(noise_terms):
     return s_big, 0.5 * (s_big + s_small), f_n
 
 
-def window_eigen_floats(sums, count: float, noise_terms, keep: float):
-    """The eigenvalues of a window's covariances (floats), with what the direction needs:
-    ``(big, small, c11, c12, c22, root, g11, g12, f_big, f_small, g22)`` less the last."""
-    h11, h12, h22, f11, f12, f22 = noise_terms
-    s1, s2_, s11, s12, s22, t1, t2, t11, t12, t22 = sums
-    m1, m2 = s1 / count, s2_ / count
-    c11 = s11 / count - m1 * m1 - keep * h11
-    c12 = s12 / count - m1 * m2 - keep * h12
-    c22 = s22 / count - m2 * m2 - keep * h22
+@lazy_jit
+def _clamp0(x):
+    """``max(x, 0)`` as numpy's: NaN stays NaN (an empty window's)."""
+    return x if x != x or x > 0.0 else 0.0
+
+
+@lazy_jit
+def window_eigen(s1, s2_, s11, s12, s22, t1, t2, t11, t12, t22, count, h11, h12, h22, f11, f12, f22, keep):
+    """The covariances of ``h`` and ``f_t`` over a window less ``keep`` times the noise's, and
+    their eigenvalues, from the window sums (:func:`evidence_products`) of ``count`` samples.
+
+    Returns ``(major, minor, c11, c12, c22, half, root, g11, g12, g22, f_major, f_minor)``:
+    ``h``'s eigenvalues clamped at zero and its covariance with ``half = (c11 − c22) / 2`` and
+    ``root = (major − minor) / 2`` unclamped, then the load's (NaN for an empty window).
+    """
+    m1, m2 = _div(s1, count), _div(s2_, count)
+    c11 = _div(s11, count) - m1 * m1 - keep * h11
+    c12 = _div(s12, count) - m1 * m2 - keep * h12
+    c22 = _div(s22, count) - m2 * m2 - keep * h22
     half = 0.5 * (c11 - c22)
     mean = 0.5 * (c11 + c22)
     root = math.sqrt(half * half + c12 * c12)
-    big, small = mean + root, mean - root
-    n1, n2 = t1 / count, t2 / count
-    g11 = t11 / count - n1 * n1 - keep * f11
-    g12 = t12 / count - n1 * n2 - keep * f12
-    g22 = t22 / count - n2 * n2 - keep * f22
+    n1, n2 = _div(t1, count), _div(t2, count)
+    g11 = _div(t11, count) - n1 * n1 - keep * f11
+    g12 = _div(t12, count) - n1 * n2 - keep * f12
+    g22 = _div(t22, count) - n2 * n2 - keep * f22
     gh = 0.5 * (g11 - g22)
     gm = 0.5 * (g11 + g22)
     gr = math.sqrt(gh * gh + g12 * g12)
-    f_big, f_small = gm + gr, gm - gr
     return (
-        big if big > 0.0 else 0.0, small if small > 0.0 else 0.0, c11, c12, c22, root, g11, g12,
-        f_big if f_big > 0.0 else 0.0, f_small if f_small > 0.0 else 0.0, g22, half,
+        _clamp0(mean + root), _clamp0(mean - root), c11, c12, c22, half, root, g11, g12, g22,
+        _clamp0(gm + gr), _clamp0(gm - gr),
     )  # fmt: skip
 
 
-def window_direction_floats(e, s2: float, nu: float):
-    """``(angle, angle_std, angle_noise_std)`` of a window from :func:`window_eigen_floats`."""
-    big, small, c11, c12, c22, root, g11, g12, _, _, g22, half = e
+@lazy_jit
+def window_direction(major, minor, c11, c12, c22, half, root, g11, g12, g22, s2, nu):
+    """``(angle, angle_std, angle_noise_std)`` of a window (rad) from :func:`window_eigen`,
+    ``s2`` the mean noise variance of ``h`` (:func:`noise_constants`) and ``nu`` the window's
+    independent noise samples (:func:`window_constants`)."""
+    # principal axis v of h's variation at angle phi; d = n × v is at phi + 90°
     a = 0.5 * math.atan2(2.0 * c12, 2.0 * half) + _HALF_PI
     if a > _HALF_PI:
         a -= math.pi
-    gap = big - small
-    hidden = small if small > HIDDEN_SPREAD * s2 else HIDDEN_SPREAD * s2
+    gap = major - minor
+    # the spread the noise correction may hide counts as well
+    hidden = minor if minor > HIDDEN_SPREAD * s2 else HIDDEN_SPREAD * s2
+    # model error: an across-axis spread of h (the line resisting a roll about its own edge a
+    # little) turns the axis by as much of √(minor / major) as the window's excitation about
+    # the two axes is correlated, which the tangential load tells: its correlation ρ between
+    # the axis and across it; without load variation about both axes (or no principal axis)
+    # the correlation is unknown: count it as ρ² = ½
+    model = _div(hidden, major)
     if root != 0.0:
-        cp, sp = (c11 - c22) / (2.0 * root), c12 / root
+        cp, sp = _div(c11 - c22, 2.0 * root), _div(c12, root)  # cos 2φ, sin 2φ
         fd = 0.5 * (g11 - g22)
         fm = 0.5 * (g11 + g22)
         f_vv, f_ww, f_vw = fm + fd * cp + g12 * sp, fm - fd * cp - g12 * sp, g12 * cp - fd * sp
@@ -272,29 +220,37 @@ def window_direction_floats(e, s2: float, nu: float):
         if den > 0.0:
             rho2 = f_vw * f_vw / den
             one = 1.0 - rho2
-            model = _div(hidden, big) * _div(rho2, one if one > 0.0 else 0.0)
+            model = model * _div(rho2, one if one > 0.0 else 0.0)
         else:
-            model = _div(hidden, big) * 1.0
-    else:  # no principal axis: the load's correlation is undefined, as in the kernel
-        model = _div(hidden, big) * 1.0
-    nv = _div(s2 * (big + small + s2), nu * gap * gap)
+            model = model * 1.0
+    else:
+        model = model * 1.0
+    # noise, over ν independent noise samples (the products with the noise only; a low-pass
+    # leaves the noise under the excitation's few hertz as it was, so the cross products keep
+    # their unfiltered share s²·L / N = s² / ν)
+    nv = _div(s2 * (major + minor + s2), nu * gap * gap)
     v = nv + model
     return a, (math.sqrt(v) if v >= 0.0 else math.nan), (math.sqrt(nv) if nv >= 0.0 else math.nan)
 
 
-def window_constants(count: float, corr: float, xp=None):
-    """``(tail, keep, nu)`` of a window of ``count`` samples (floats; see :func:`window_kernel`)."""
-    from softtip.core._xp import PY
-
-    keep = max(1.0 - _div(corr, count), 0.0)
-    nu = max(count - 1.0, 0.0) / corr
-    tail = _div(_chi2_excess(nu, PY), nu) + MODEL_MARGIN
+def window_constants(count, corr: float):
+    """``(tail, keep, nu)`` of windows of ``count`` samples (float or array; ``corr`` samples
+    per independent noise sample): what noise alone may leave in an eigenvalue per unit noise
+    variance (the upper χ² tail per degree of freedom and the model margin), the share of the
+    noise covariance to remove, and the independent noise samples."""
+    count = np.asarray(count, dtype=float)
+    keep = np.maximum(1.0 - NP.div(corr, count), 0.0)
+    nu = np.maximum(count - 1.0, 0.0) / corr
+    tail = NP.div(_chi2_excess(nu, NP), nu) + MODEL_MARGIN
     return tail, keep, nu
 
 
-def _div(a: float, b: float) -> float:
-    if b != 0.0:
-        return a / b
-    if a != a or a == 0.0:
-        return math.nan
-    return math.copysign(math.inf, a) * math.copysign(1.0, b)
+def window_floats(sums, count: float, noise_terms, corr: float) -> Window:
+    """What one window says (:class:`Window`) from its :data:`N_SUMS` sums of ``count``
+    samples and the noise covariances of :func:`tangent_noise_kernel`: the kernels of the
+    stage, composed for one window (tests, the manual's figures)."""
+    tail, keep, nu = (float(x) for x in window_constants(count, corr))
+    s_big, s2, f_n = noise_constants(*noise_terms)
+    e = window_eigen(*(float(x) for x in sums), float(count), *noise_terms, keep)
+    angle, angle_std, noise_std = window_direction(*e[:10], s2, nu)
+    return Window(e[0], e[1], tail * s_big, e[10], e[11], tail * f_n, angle, angle_std, noise_std)

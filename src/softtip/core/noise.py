@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from softtip.core._jit import lazy_jit
 from softtip.core._xp import NP
 from softtip.core.spin import tangent_frame_kernel
 
@@ -81,6 +82,17 @@ NANO25 = SensorNoise(force_std=(1 / 48, 1 / 48, 1 / 16), moment_std=(1 / 1320, 1
 MINI40 = SensorNoise(force_std=(1 / 100, 1 / 100, 1 / 50), moment_std=(1 / 4000, 1 / 4000, 1 / 4000))
 #: The presets by name.
 SENSOR_CLASSES = {"Nano17": NANO17, "Nano25": NANO25, "Mini40": MINI40}
+
+
+@lazy_jit
+def noise_quad(vx, vy, vz, rx, ry, rz, sfx, sfy, sfz, smx, smy, smz):
+    """``vᵀ Σ_h v`` for a tangent vector ``v`` at the contact point ``r``, from the sensor
+    noise's variances per axis (N², N²·m²): :func:`_quad_kernel` for compiled steps (which
+    cannot read a :class:`SensorNoise`), the same operations in the same order."""
+    cx = vy * rz - vz * ry
+    cy = vz * rx - vx * rz
+    cz = vx * ry - vy * rx
+    return smx * vx * vx + smy * vy * vy + smz * vz * vz + sfx * cx * cx + sfy * cy * cy + sfz * cz * cz
 
 
 def _quad_moment_kernel(vx, vy, vz, noise: SensorNoise):

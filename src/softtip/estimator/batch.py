@@ -255,7 +255,7 @@ def estimate(
     pulling = contact & ~located
     # line or area (evidence window): segments start at contact onset and at every re-latch
     begin = contact & ~np.concatenate(([False], contact[:-1])) | (relatched & contact)
-    ev = evidence_states(t, located, begin, point, normal, h, x[:, :3], ms, noise, noise_correlation(sos), config)
+    ev = evidence_states(t, located, begin, point, normal, h, x[:, :3], ms, noise, noise_correlation(sos), config, delta)
     state = np.where(located, ev.state, NONE).astype(np.int8)
     is_line = state == LINE
     started_in_contact = tare_report.source == "tare" and first_contact_pulls(t, pulling, ct.contact_id)

@@ -368,14 +368,6 @@ class EstimatorConfig:
     evidence_reset_distance: float = setting(
         1e-3, "The line evidence starts afresh when the contact point moves farther than this.", unit="m", low=0.0, low_open=True, cli_unit="mm", metavar="LENGTH", group="evidence")
 
-    def stated_excitation(self, t):
-        """Whether the evidence window ending at ``t`` (s, float or array) lies wholly inside a
-        stated two-axis rocking interval (:attr:`rocked`)."""
-        inside = False if np.ndim(t) == 0 else np.zeros(np.shape(t), dtype=bool)
-        for a, b in self.rocked:
-            inside = inside | ((t - self.evidence_window >= a) & (t <= b))
-        return inside
-
     def line_threshold(self, h_std: ArrayLike) -> NDArray[np.float64]:
         """The ``|h|`` above which a contact is a line: ``max(h_sigmas · h_std, h_min)``.
 

@@ -49,41 +49,49 @@ the standard deviation that is the sensor noise's alone (``angle_noise_std``: th
 noise term, or the sample's ``σ_d``) is kept apart: two sensors share the model error, not
 their noise (:mod:`softtip.fusion`).
 
-:func:`evidence_states` does it for a whole log, :class:`EvidenceTracker` one sample at a
-time (running sums, O(1) per sample, as :mod:`softtip.estimator.line_fit`).
+The stage is one step, :func:`evidence_step`, over a state record (:func:`new_evidence_state`):
+running sums of the products (:func:`~softtip.core.evidence.evidence_products`) since the
+segment's start and a ring buffer of the segment's latest located samples (their time, the
+running sums before them, their significance side and whether they spread over both axes),
+from which the three windows (the evidence window's sums, its area votes, and the
+significance votes) are read as differences and counts: O(1) per sample.
+:func:`evidence_states` runs it over a whole log in one compiled loop (:func:`evidence_run`),
+:class:`EvidenceTracker` one sample at a time; the same source runs compiled (numba) or as
+Python (:mod:`softtip.core._jit`). Each rule is written once: the window's readings in
+:func:`window_reading`, the verdict and the held window in :func:`_update_verdict`, the
+significance in :func:`_significance`, the sample's output in :func:`_choose`.
 """
 
 from __future__ import annotations
 
 import math
-from collections import deque
-from math import cos, sin, sqrt
 from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
-import softtip.core._blocks
-from softtip.core._blocks import blockwise
-from softtip.core._jit import jit_enabled
+from softtip.core._jit import lazy_jit, use_numba
 from softtip.core._xp import NP
 from softtip.core.evidence import (
     N_SUMS,
     _div,
     evidence_products,
     noise_constants,
+    noise_variances,
     tangent_noise_kernel,
     window_constants,
-    window_direction_floats,
-    window_kernel,
+    window_direction,
+    window_eigen,
 )  # fmt: skip
 from softtip.core.noise import SensorNoise
 from softtip.core.spin import tangent_frame_kernel
 from softtip.estimator.config import EstimatorConfig
-from softtip.estimator.floats import NoiseSquares, PointGeometry, sample_direction
-from softtip.estimator.sequential import point_moves_kernel, vote_kernel, window_sums_kernel
+from softtip.estimator.floats import PointGeometry, sample_direction
 
-__all__ = ["evidence_states", "EvidenceStates", "EvidenceTracker"]
+__all__ = [
+    "evidence_states", "EvidenceStates", "EvidenceTracker", "evidence_params", "new_evidence_state", "evidence_start",
+    "evidence_step", "evidence_run",
+]  # fmt: skip
 
 
 class EvidenceStates(NamedTuple):
@@ -91,202 +99,437 @@ class EvidenceStates(NamedTuple):
 
     state: NDArray  #: (N,) int8, POINT, LINE or AREA (where located)
     evidence: NDArray  #: (N,) int8, 1 unconfirmed, 2 confirmed (lines)
-    direction: NDArray  #: (N, 3) unit line direction (the current or the confirming window's, or the sample's)
+    direction: NDArray  #: (N, 3) unit line direction (the current or the confirming window's, or the sample's; NaN unless line)
     angle: NDArray  #: (N,) rad, the direction's angle in the tangent frame
     angle_std: NDArray  #: (N,) rad, its standard deviation
     angle_noise_std: NDArray  #: (N,) rad, the sensor noise's share of it (the rest is model error)
     h_ratio: NDArray  #: (N,) minor / major eigenvalue of h's covariance in the window
     excitation_ratio: NDArray  #: (N,) the same for the tangential force (how far it turned)
 
+
 #: A significant ``|h|`` stays significant down to this share of the threshold (hysteresis).
 SIG_LEAVE = 2.0 / 3.0
 #: Verdicts of a segment.
 _UNKNOWN, _LINE, _AREA = 0, 1, 2
-_NAN3 = (math.nan, math.nan, math.nan)
+#: The sample's state codes (:data:`~softtip.estimator.results.STATES`) and evidence codes.
+_POINT_CODE, _LINE_CODE, _AREA_CODE = 1, 2, 3
+_UNCONFIRMED, _CONFIRMED = 1, 2
+_NAN = math.nan
+
+# -- the parameters: a float64 vector (evidence_params) ----------------------------------------------
+_ON = 0  # line_evidence (1.0 or 0.0)
+_WINDOW = 1  # evidence_window, s
+_H_SIGMAS = 2
+_H_MIN = 3  # N·m
+_ENTER = 4  # area_ratio
+_LEAVE = 5
+_FMIN2 = 6  # excitation_min², N²
+_HMIN2 = 7  # h_min², N²·m²
+_F_RATIO = 8  # excitation_ratio
+_MAX_STD = 9  # evidence_max_angle_std, rad
+_MODEL_VAR = 10  # evidence_model_std², rad²
+_UNCONF_VAR = 11  # unconfirmed_model_std², rad²
+_RESET2 = 12  # evidence_reset_distance², m²
+_VOTE_WINDOW = 13  # significance_window, s
+_AREA_SHARE = 14
+_NOISE = 15  # the sensor noise's variances (after any filter): fx, fy, fz (N²), mx, my, mz (N²·m²)
+_N_ROCKED = 21  # how many stated rocking intervals follow
+_ROCKED = 22  # (start, end) of each, s
+
+# -- the state record: a float64 vector, an int64 vector of counters, a ring buffer ------------------
+_CUM = 0  # N_SUMS running sums of the products since the segment's start
+_ANCHOR = _CUM + N_SUMS  # 3: the located point where the segment's window started, m
+_HAS_ANCHOR = _ANCHOR + 3
+_VERDICT = _HAS_ANCHOR + 1  # _UNKNOWN, _LINE or _AREA
+_HAS_HELD = _VERDICT + 1  # a confirming window of this segment (since its last area reading) is held
+_HELD_ANGLE = _HAS_HELD + 1  # its direction, rad
+_HELD_STD = _HELD_ANGLE + 1  # its standard deviation with the model error of its kind, rad
+_HELD_NOISE = _HELD_STD + 1  # the noise's share, rad
+_HELD_SEEN = _HELD_NOISE + 1  # 1.0: its load turned about both axes (not only a stated rocking)
+_SIG = _HELD_SEEN + 1  # |h| significant (the last decided vote)
+_N_STATE = _SIG + 1
+
+_HEAD = 0  # the ring's slot of the latest sample
+_N_WIN = 1  # samples in the evidence window (t_i > t − evidence_window; may be none)
+_N_AREA = 2  # samples of the area vote (the evidence window, at least the latest)
+_N_SPREAD = 3  # of them spread over both axes
+_N_VOTE = 4  # samples of the significance vote (t_i > t − significance_window, at least the latest)
+_N_ABOVE = 5  # of them above the threshold
+_N_BELOW = 6  # of them below its leaving share
+_N_COUNTERS = 7
+
+_R_T = 0  # ring columns: the sample's time, s
+_R_CUM = 1  # N_SUMS: the running sums before it
+_R_SIDE = _R_CUM + N_SUMS  # its significance side: 1 above, 0 below the leaving share, −1 between
+_R_SPREAD = _R_SIDE + 1  # 1.0: its window spread over both axes (an area vote)
+_R_WIDTH = _R_SPREAD + 1
 
 
-def _decide(win, config: EstimatorConfig, xp, stated=False):
-    """``(area_now, line_now, resolved, axis_now, h_ratio, f_ratio, seen)`` of a window (component-wise);
-    ``stated``: the window lies in a stated two-axis rocking (:attr:`EstimatorConfig.rocked`)."""
+def evidence_params(config: EstimatorConfig, noise: SensorNoise) -> NDArray[np.float64]:
+    """The step's parameters (float64 vector) from the configuration and the noise model
+    (after any filter); the stated rocking intervals (:attr:`EstimatorConfig.rocked`) at its end."""
+    rocked = [float(x) for ab in config.rocked for x in ab]
+    p = np.zeros(_ROCKED + len(rocked))
     enter, leave = config.area_ratio
-    h_ratio = xp.where(win.h_major > win.h_noise, xp.div(win.h_minor, win.h_major), xp.nan)
-    f_ratio = xp.where(win.f_major > win.f_noise, xp.div(win.f_minor, win.f_major), xp.nan)
-    # comparisons written so that NaN is False in both back ends
-    varied = win.h_major > win.h_noise
+    p[_ON] = 1.0 if config.line_evidence else 0.0
+    p[_WINDOW] = config.evidence_window
+    p[_H_SIGMAS], p[_H_MIN] = config.h_sigmas, config.h_min
+    p[_ENTER], p[_LEAVE] = enter, leave
+    p[_FMIN2] = config.excitation_min * config.excitation_min
+    p[_HMIN2] = config.h_min * config.h_min
+    p[_F_RATIO] = config.excitation_ratio
+    p[_MAX_STD] = config.evidence_max_angle_std
+    p[_MODEL_VAR] = config.evidence_model_std * config.evidence_model_std
+    p[_UNCONF_VAR] = config.unconfirmed_model_std * config.unconfirmed_model_std
+    p[_RESET2] = float(config.evidence_reset_distance) * float(config.evidence_reset_distance)
+    p[_VOTE_WINDOW] = config.significance_window
+    p[_AREA_SHARE] = config.area_share
+    p[_NOISE : _NOISE + 6] = noise_variances(noise)
+    p[_N_ROCKED] = len(config.rocked)
+    p[_ROCKED:] = rocked
+    return p
+
+
+def new_evidence_state(capacity: int, corr: float):
+    """``(state, counts, ring, wconst)``: an empty state record whose ring holds ``capacity``
+    samples (at least one more than any window will), and the window constants
+    (:func:`~softtip.core.evidence.window_constants`) by window length ``0 … capacity``, (capacity + 1, 3)."""
+    ring = np.zeros((capacity, _R_WIDTH))
+    wconst = np.ascontiguousarray(np.stack(window_constants(np.arange(capacity + 1), corr), axis=-1))
+    return np.zeros(_N_STATE), np.zeros(_N_COUNTERS, dtype=np.int64), ring, wconst
+
+
+@lazy_jit
+def evidence_start(state, counts):
+    """A new segment (contact onset, re-latch, a moved point): empty windows, no verdict, no held window."""
+    for q in range(N_SUMS):
+        state[_CUM + q] = 0.0
+    state[_HAS_ANCHOR] = 0.0
+    state[_VERDICT] = _UNKNOWN
+    state[_HAS_HELD] = 0.0
+    state[_SIG] = 0.0
+    for q in range(_N_COUNTERS):
+        counts[q] = 0
+
+
+@lazy_jit
+def _oldest(counts, ring, n):
+    """The ring's slot of the oldest of the latest ``n ≥ 1`` samples."""
+    cap = ring.shape[0]
+    return (counts[_HEAD] + 1 - n + cap) % cap
+
+
+@lazy_jit
+def _stated(params, t):
+    """The evidence window ending at ``t`` lies wholly inside a stated two-axis rocking
+    interval (:attr:`EstimatorConfig.rocked`: its start ``t − evidence_window`` at or after
+    the interval's start, ``t`` at or before its end)."""
+    start = t - params[_WINDOW]
+    for k in range(int(params[_N_ROCKED])):
+        if start >= params[_ROCKED + 2 * k] and t <= params[_ROCKED + 2 * k + 1]:
+            return True
+    return False
+
+
+@lazy_jit
+def window_reading(major, minor, h_noise, f_major, f_minor, f_noise, hn, thr, params):
+    """What the window says: ``(h_ratio, f_ratio, spread, one_axis, excited)``.
+
+    ``spread``: the window spans both axes at a sample whose ``|h|`` is significant (``hn >
+    thr``), provided the load turned about its weaker axis too or ``minor ≥ h_min²`` (an
+    area vote); ``one_axis``: ``h`` varied along one axis; ``excited``: the load shows a
+    two-axis excitation. NaN comparisons are False."""
+    varied = major > h_noise
+    h_ratio = _div(minor, major) if varied else _NAN
+    f_ratio = _div(f_minor, f_major) if f_major > f_noise else _NAN
     # a two-axis h counts when the load turned about its weaker axis too, or when h's spread
     # about that axis exceeds the model's error floor h_min (a point gone stale, whatever the
-    # load); below it, without a turning load, it is the model's error (a grasp force settling)
-    turned = (win.f_minor > win.f_noise) & (win.f_minor >= config.excitation_min * config.excitation_min)
-    area_now = (win.h_minor > win.h_noise) & (h_ratio >= enter) & (turned | (win.h_minor >= config.h_min * config.h_min))
-    one_axis = varied & (h_ratio < leave)
-    excited = (
-        (win.f_minor > win.f_noise)
-        & (win.f_minor >= config.excitation_ratio * win.f_major)
-        & (win.f_minor >= config.excitation_min * config.excitation_min)
-    )
+    # load); below it, without a turning load, it is the model's error (a grasp force
+    # settling); and only where |h| itself is significant: sub-threshold h wanders about both
+    # axes with the model's error once a low-pass has removed the noise
+    turned = f_minor > f_noise and f_minor >= params[_FMIN2]
+    spread = minor > h_noise and h_ratio >= params[_ENTER] and hn > thr and (turned or minor >= params[_HMIN2])
+    one_axis = varied and h_ratio < params[_LEAVE]
+    excited = f_minor > f_noise and f_minor >= params[_F_RATIO] * f_major and f_minor >= params[_FMIN2]
+    return h_ratio, f_ratio, spread, one_axis, excited
+
+
+@lazy_jit
+def _update_verdict(state, params, t, area, one_axis, excited, e, s2, nu):
+    """The segment's verdict and held confirming window after this sample's window (``e``:
+    :func:`~softtip.core.evidence.window_eigen`); returns ``(axis, confirming, angle,
+    angle_std, angle_noise_std)``: the window resolves an axis (its direction, without model
+    error), and confirms the line with the load turned about two axes."""
+    if area:
+        # a confirmed line stays confirmed until the window reads an area
+        state[_VERDICT] = _AREA
+        state[_HAS_HELD] = 0.0
+        return False, False, _NAN, _NAN, _NAN
     # excited about two axes: the load shows it, or the user says so (where the load is locked
     # to h, as on a frictionless round skin, it cannot)
-    line_now = (excited | stated) & one_axis
+    line_now = one_axis and (excited or _stated(params, t))
+    if line_now:
+        state[_VERDICT] = _LINE
+    if not one_axis:
+        return False, False, _NAN, _NAN, _NAN
+    angle, angle_std, noise_std = window_direction(e[0], e[1], e[2], e[3], e[4], e[5], e[6], e[7], e[8], e[9], s2, nu)
+    if not angle_std <= params[_MAX_STD]:
+        return False, False, angle, angle_std, noise_std
     # h varied along one axis with an eigen-gap beyond the noise and by at least h_min: the
     # window's principal axis is the direction, confirmed or not (one axis of excitation
-    # leaves a rolling bias, which the unconfirmed model error covers), and the contact a line
-    # while the window shows it, also where h passes through zero
-    sharp = win.angle_std <= config.evidence_max_angle_std
-    axis_now = one_axis & sharp & (win.h_major >= config.h_min * config.h_min)
-    # a confirmed line's direction comes from two-axis windows only (a line's small
-    # resistance to rolling about its own edge follows the excitation)
-    resolved = line_now & sharp
-    # resolved with the load showing the two axes (not only stated): a direction with the
-    # two-axis model error (a stated window may have seen one axis of the rocking, and on a
-    # frictionless cap it also carries the roll about the line's own axis)
-    seen = excited & one_axis & sharp
-    return area_now, line_now, resolved, axis_now, h_ratio, f_ratio, seen
+    # leaves a rolling bias, which the unconfirmed model error covers)
+    axis = e[0] >= params[_HMIN2]
+    confirming = False
+    if line_now:
+        # a confirmed line's direction comes from two-axis windows only, with the two-axis
+        # model error where the load showed the two axes (a stated window may have seen one
+        # axis of the rocking, and on a frictionless cap it also carries the roll about the
+        # line's own axis)
+        confirming = excited
+        model = params[_MODEL_VAR] if excited else params[_UNCONF_VAR]
+        state[_HAS_HELD] = 1.0
+        state[_HELD_ANGLE] = angle
+        state[_HELD_STD] = math.sqrt(angle_std * angle_std + model)
+        state[_HELD_NOISE] = noise_std
+        state[_HELD_SEEN] = 1.0 if excited else 0.0
+    return axis, confirming, angle, angle_std, noise_std
 
 
-def _frame_terms(nx, ny, nz, hx, hy, hz, fx, fy, fz, xp):
-    """``h`` and the tangential load in the tangent frame: ``(h1, h2, f1, f2)``."""
-    e1x, e1y, e1z, e2x, e2y, e2z = tangent_frame_kernel(nx, ny, nz, xp)
+@lazy_jit
+def _significance(state, counts, ring, params, t, hn, thr):
+    """``|h|`` significant, with hysteresis (down to :data:`SIG_LEAVE` of the threshold) and
+    the vote of the segment's samples of the last ``significance_window`` s (most above: yes;
+    most below the leaving share: no; else unchanged)."""
+    side = 1 if hn > thr else (0 if hn <= SIG_LEAVE * thr else -1)
+    if params[_VOTE_WINDOW] > 0.0:
+        head = counts[_HEAD]
+        ring[head, _R_SIDE] = side
+        counts[_N_VOTE] += 1
+        counts[_N_ABOVE] += 1 if side == 1 else 0
+        counts[_N_BELOW] += 1 if side == 0 else 0
+        start = t - params[_VOTE_WINDOW]
+        while counts[_N_VOTE] > 1:
+            j = _oldest(counts, ring, counts[_N_VOTE])
+            if ring[j, _R_T] > start:
+                break
+            counts[_N_ABOVE] -= 1 if ring[j, _R_SIDE] == 1.0 else 0
+            counts[_N_BELOW] -= 1 if ring[j, _R_SIDE] == 0.0 else 0
+            counts[_N_VOTE] -= 1
+        m = counts[_N_VOTE]
+        side = 1 if 2 * counts[_N_ABOVE] > m else (0 if 2 * counts[_N_BELOW] > m else -1)
+    if side >= 0:
+        state[_SIG] = 1.0 if side == 1 else 0.0
+    return state[_SIG] != 0.0
+
+
+@lazy_jit
+def _own(hx, hy, hz, hn, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z, params):
+    """The sample's own direction (:func:`~softtip.estimator.floats.sample_direction`)."""
+    return sample_direction(
+        hx, hy, hz, hn, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z, params[_NOISE], params[_NOISE + 1],
+        params[_NOISE + 2], params[_NOISE + 3], params[_NOISE + 4], params[_NOISE + 5],
+    )  # fmt: skip
+
+
+@lazy_jit
+def evidence_step(state, counts, ring, params, wconst, t, px, py, pz, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z,
+                  ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, h_std):  # fmt: skip
+    """One located sample through the stage.
+
+    Parameters
+    ----------
+    state, counts, ring : arrays
+        The state record (:func:`new_evidence_state`), updated; the ring holds at least one
+        more sample than the largest of the three windows before the call.
+    params : (P,) float
+        :func:`evidence_params`.
+    wconst : (capacity + 1, 3) float
+        The window constants by window length (:func:`new_evidence_state`).
+    t : float
+        s.
+    px, py, pz, nx, ny, nz : float
+        The contact point (m) and its unit normal.
+    e1x, e1y, e1z, e2x, e2y, e2z : float
+        The tangent frame at the normal (:func:`~softtip.core.spin.tangent_frame_kernel`).
+    ex, ey, ez : float
+        m, the point ``h`` is taken about (the point, or the effective point under the depth).
+    hx, hy, hz, fx, fy, fz : float
+        ``h`` (N·m) and the force (N).
+    hn, h_std : float
+        ``|h|`` and ``h``'s noise level (N·m) of the measurement stage.
+
+    Returns
+    -------
+    tuple
+        ``(state, evidence, dx, dy, dz, angle, angle_std, angle_noise_std, h_ratio, f_ratio)``:
+        the state code (1 point, 2 line, 3 area), the evidence code (0, 1 unconfirmed, 2
+        confirmed), the direction and its angle (rad), standard deviation and noise share
+        (NaN unless line), and the window ratios.
+    """
+    thr = params[_H_SIGMAS] * h_std  # the measurement's line threshold, max(h_sigmas · h_std, h_min)
+    if thr < params[_H_MIN]:
+        thr = params[_H_MIN]
+    if params[_ON] == 0.0:  # the papers' per-sample line test
+        if hn > thr:
+            dx, dy, dz, angle, a = _own(hx, hy, hz, hn, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z, params)
+            return _LINE_CODE, _UNCONFIRMED, dx, dy, dz, angle, a, a, _NAN, _NAN
+        return _POINT_CODE, 0, _NAN, _NAN, _NAN, _NAN, _NAN, _NAN, _NAN, _NAN
+    # the contact point moved farther than evidence_reset_distance from where the window
+    # started (e.g. a line-fit point found): a new segment
+    if state[_HAS_ANCHOR] != 0.0:
+        dx, dy, dz = px - state[_ANCHOR], py - state[_ANCHOR + 1], pz - state[_ANCHOR + 2]
+        if dx * dx + dy * dy + dz * dz > params[_RESET2]:
+            evidence_start(state, counts)
+    if state[_HAS_ANCHOR] == 0.0:
+        state[_ANCHOR], state[_ANCHOR + 1], state[_ANCHOR + 2] = px, py, pz
+        state[_HAS_ANCHOR] = 1.0
+
+    # the sample joins the ring (its time and the running sums before it) and the sums
+    cap = ring.shape[0]
+    head = (counts[_HEAD] + 1) % cap
+    counts[_HEAD] = head
+    ring[head, _R_T] = t
     h1 = hx * e1x + hy * e1y + hz * e1z
     h2 = hx * e2x + hy * e2y + hz * e2z
     f1 = fx * e1x + fy * e1y + fz * e1z
     f2 = fx * e2x + fy * e2y + fz * e2z
-    return h1, h2, f1, f2
+    prods = evidence_products(h1, h2, f1, f2)
+    for q in range(N_SUMS):
+        ring[head, _R_CUM + q] = state[_CUM + q]
+        state[_CUM + q] = state[_CUM + q] + prods[q]
+    # the evidence window: the segment's samples with t_i > t − evidence_window; its sums are
+    # differences of the running sums
+    start = t - params[_WINDOW]
+    n = counts[_N_WIN] + 1
+    while n > 0 and ring[_oldest(counts, ring, n), _R_T] <= start:
+        n -= 1
+    counts[_N_WIN] = n
+    if n > 0:  # the running sums before the window's first sample
+        o, ob = ring[_oldest(counts, ring, n)], _R_CUM
+    else:  # an empty window (t − evidence_window rounds to t): no sums, 0 / 0 covariances
+        o, ob = state, _CUM
+    h11, h12, h22, f11, f12, f22 = tangent_noise_kernel(
+        px, py, pz, e1x, e1y, e1z, e2x, e2y, e2z, params[_NOISE], params[_NOISE + 1], params[_NOISE + 2],
+        params[_NOISE + 3], params[_NOISE + 4], params[_NOISE + 5],
+    )  # fmt: skip
+    s_big, s2, f_n = noise_constants(h11, h12, h22, f11, f12, f22)
+    tail, keep, nu = wconst[n, 0], wconst[n, 1], wconst[n, 2]
+    e = window_eigen(
+        state[_CUM] - o[ob], state[_CUM + 1] - o[ob + 1], state[_CUM + 2] - o[ob + 2], state[_CUM + 3] - o[ob + 3],
+        state[_CUM + 4] - o[ob + 4], state[_CUM + 5] - o[ob + 5], state[_CUM + 6] - o[ob + 6],
+        state[_CUM + 7] - o[ob + 7], state[_CUM + 8] - o[ob + 8], state[_CUM + 9] - o[ob + 9], float(n),
+        h11, h12, h22, f11, f12, f22, keep,
+    )  # fmt: skip
+    major, minor = e[0], e[1]
+    h_ratio, f_ratio, spread, one_axis, excited = window_reading(
+        major, minor, tail * s_big, e[10], e[11], tail * f_n, hn, thr, params
+    )
+    # area: more than area_share of the evidence window's samples spread over both axes (a
+    # reading of the current window: a transient spread neither makes nor locks an area)
+    ring[head, _R_SPREAD] = 1.0 if spread else 0.0
+    counts[_N_AREA] += 1
+    counts[_N_SPREAD] += 1 if spread else 0
+    while counts[_N_AREA] > 1:
+        j = _oldest(counts, ring, counts[_N_AREA])
+        if ring[j, _R_T] > start:
+            break
+        counts[_N_SPREAD] -= 1 if ring[j, _R_SPREAD] == 1.0 else 0
+        counts[_N_AREA] -= 1
+    area = counts[_N_SPREAD] > params[_AREA_SHARE] * counts[_N_AREA]
+    axis, confirming, w_angle, w_std, w_noise = _update_verdict(state, params, t, area, one_axis, excited, e, s2, nu)
+    sig = _significance(state, counts, ring, params, t, hn, thr)
+    return _choose(state, params, area, axis, confirming, sig, w_angle, w_std, w_noise, minor, h_ratio, f_ratio,
+                   hx, hy, hz, hn, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z)  # fmt: skip
 
 
-def _frame_noise(px, py, pz, nx, ny, nz, noise, xp):
-    """The noise covariances of ``h`` and of the load in the tangent frame at ``p``
-    (:func:`~softtip.core.evidence.tangent_noise_kernel`)."""
-    return tangent_noise_kernel(px, py, pz, *tangent_frame_kernel(nx, ny, nz, xp), noise)
+@lazy_jit
+def _choose(state, params, area, axis, confirming, sig, w_angle, w_std, w_noise, minor, h_ratio, f_ratio,
+            hx, hy, hz, hn, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z):  # fmt: skip
+    """The sample's state and direction (the returns of :func:`evidence_step`)."""
+    if area:
+        return _AREA_CODE, 0, _NAN, _NAN, _NAN, _NAN, _NAN, _NAN, h_ratio, f_ratio
+    confirmed = state[_VERDICT] == _LINE
+    held = confirmed and state[_HAS_HELD] != 0.0
+    if held and not axis:
+        # a confirmed line whose current window resolves no axis (h held still, or passing
+        # through zero): the latest window of this segment that confirmed it
+        angle, angle_std, noise_std = state[_HELD_ANGLE], state[_HELD_STD], state[_HELD_NOISE]
+    elif not sig and not axis:
+        return _POINT_CODE, 0, _NAN, _NAN, _NAN, _NAN, _NAN, _NAN, h_ratio, f_ratio
+    elif axis:
+        # the current window resolves the axis: its direction with the model error of its kind
+        # (two-axis where this window confirms the line by its load, else one-axis)
+        angle, noise_std = w_angle, w_noise
+        angle_std = math.sqrt(w_std * w_std + (params[_MODEL_VAR] if confirming else params[_UNCONF_VAR]))
+    else:
+        # the sample's own direction, the window's across-axis spread counted as model error,
+        # and the one-axis one unless a window whose load turned about two axes confirmed the line
+        dx, dy, dz, angle, a = _own(hx, hy, hz, hn, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z, params)
+        by_load = held and state[_HELD_SEEN] != 0.0
+        v = a * a + _div(minor, hn * hn) + (0.0 if by_load else params[_UNCONF_VAR])
+        ev = _CONFIRMED if confirmed else _UNCONFIRMED
+        return _LINE_CODE, ev, dx, dy, dz, angle, (math.sqrt(v) if v >= 0.0 else _NAN), a, h_ratio, f_ratio
+    ca, sa = math.cos(angle), math.sin(angle)
+    dx, dy, dz = ca * e1x + sa * e2x, ca * e1y + sa * e2y, ca * e1z + sa * e2z
+    ev = _CONFIRMED if confirmed else _UNCONFIRMED
+    return _LINE_CODE, ev, dx, dy, dz, angle, angle_std, noise_std, h_ratio, f_ratio
 
 
-def _sample_std(angle_std, h_norm, minor, model_var, xp):
-    """The sample's angle standard deviation with the window's across-axis spread and a model
-    error variance (rad², the unconfirmed line's; 0 otherwise) added."""
-    return xp.sqrt(angle_std * angle_std + xp.div(minor, h_norm * h_norm) + model_var)
+@lazy_jit
+def evidence_run(t, located, begin, point, normal, e1x, e1y, e1z, e2x, e2y, e2z, depth, h, force, h_norm, h_std,
+                 params, wconst, state, counts, ring, code, evidence, direction, out):  # fmt: skip
+    """:func:`evidence_step` over a log of N samples: a new segment at every ``begin``, the
+    located samples stepped, the others written as not located (state 1, evidence 0, NaN).
+
+    ``point``, ``normal``, ``h``, ``force`` (N, 3); ``e1x … e2z``, ``depth`` (m), ``h_norm``,
+    ``h_std`` (N,); ``code``, ``evidence`` (N,) int8, ``direction`` (N, 3) and ``out`` (N, 5:
+    angle, angle_std, angle_noise_std, h_ratio, f_ratio) written.
+    """
+    for i in range(t.shape[0]):
+        if begin[i]:
+            evidence_start(state, counts)
+        if not located[i]:
+            code[i], evidence[i] = _POINT_CODE, 0
+            for k in range(3):
+                direction[i, k] = _NAN
+            for k in range(5):
+                out[i, k] = _NAN
+            continue
+        nx, ny, nz = normal[i, 0], normal[i, 1], normal[i, 2]
+        d = depth[i]
+        px, py, pz = point[i, 0], point[i, 1], point[i, 2]
+        r = evidence_step(
+            state, counts, ring, params, wconst, t[i], px, py, pz, nx, ny, nz, e1x[i], e1y[i], e1z[i], e2x[i],
+            e2y[i], e2z[i], px - d * nx, py - d * ny, pz - d * nz, h[i, 0], h[i, 1], h[i, 2], force[i, 0],
+            force[i, 1], force[i, 2], h_norm[i], h_std[i],
+        )  # fmt: skip
+        code[i], evidence[i] = r[0], r[1]
+        direction[i, 0], direction[i, 1], direction[i, 2] = r[2], r[3], r[4]
+        out[i, 0], out[i, 1], out[i, 2], out[i, 3], out[i, 4] = r[5], r[6], r[7], r[8], r[9]
 
 
-def _segment_starts(begin):
-    """``(idx, seg_start)``: the sample indices and the start of each sample's segment."""
-    idx = np.arange(len(begin))
-    return idx, np.maximum.accumulate(np.where(begin, idx, 0))
+def _capacity(t, window: float) -> int:
+    """A ring capacity for the windows of ``window`` s over ``t`` (non-decreasing): the most
+    samples any window can hold, + 2 (the sample that joins before the oldest leaves, and
+    the window's latest kept even when rounding empties it)."""
+    if len(t) == 0:
+        return 2
+    first = np.searchsorted(t, t - window, side="right")
+    return int(np.max(np.arange(1, len(t) + 1) - np.minimum(first, np.arange(len(t))))) + 2
 
 
-def _vote(t, located, seg_start, side, window: float, share: float = 0.5):
-    """``side`` (1 above the threshold, 0 below its leaving share, −1 between) of each located
-    sample replaced by the vote of the located samples of its segment in the last ``window``
-    s (``t_j > t − window``, and itself): 1 or 0 when more than ``share`` of them are on that
-    side, else −1."""
-    if window <= 0.0:
-        return side
-    if jit_enabled(len(t)):
-        seg = np.ascontiguousarray(seg_start, dtype=np.int64)
-        return vote_kernel(t, located, seg, np.ascontiguousarray(side, dtype=np.int64), float(window), float(share),
-                           np.empty(len(t), dtype=np.int64))  # fmt: skip
-    loc = np.flatnonzero(located)
-    tl = t[loc]
-    pos = np.arange(len(loc))
-    # first located sample of each sample's segment (positions in loc; a segment may begin
-    # at a sample that is not located)
-    first = np.searchsorted(loc, seg_start[loc])
-    # the sample itself always votes (a window below the stamps' rounding keeps just it)
-    lo = np.maximum(np.minimum(np.searchsorted(tl, tl - window, side="right"), pos), first)
-    m = pos + 1 - lo
-    out = np.full_like(side, -1)
-    c = side[loc]
-    vote = np.full(len(loc), -1, dtype=side.dtype)
-    for v in (0, 1):
-        cum = np.concatenate(([0], np.cumsum(c == v)))
-        vote[cum[pos + 1] - cum[lo] > share * m] = v
-    out[loc] = vote
-    return out
-
-
-def _point_moves(begin, located, point, distance: float):
-    """``begin`` with a new segment wherever the contact point has moved farther than
-    ``distance`` from the first located point of its segment (one pass per move)."""
-    if jit_enabled(len(begin)):
-        px, py, pz = (np.ascontiguousarray(point[:, i]) for i in range(3))
-        return point_moves_kernel(begin, located, px, py, pz, float(distance) * float(distance), np.empty_like(begin))
-    begin = begin.copy()
-    idx = np.flatnonzero(begin | located)
-    seg = np.cumsum(begin)[idx]
-    block = 4096  # searched block by block: a move costs its distance to the next, not the log's length
-    for part in np.split(idx, np.flatnonzero(np.diff(seg)) + 1):
-        v = part[located[part]]
-        while len(v):
-            first = None
-            for s in range(0, len(v), block):
-                d = point[v[s : s + block]] - point[v[0]]
-                far = np.flatnonzero(np.einsum("ij,ij->i", d, d) > distance * distance)
-                if len(far):
-                    first = s + int(far[0])
-                    break
-            if first is None:
-                break
-            begin[v[first]] = True
-            v = v[first:]
-    return begin
-
-
-class _Held(NamedTuple):
-    """What the evidence stage keeps of the windows, per sample."""
-
-    h_minor: np.ndarray
-    angle: np.ndarray
-    angle_std: np.ndarray
-    angle_noise_std: np.ndarray
-    seen: np.ndarray  #: the window resolved the line with the load turned about two axes
-
-
-def _window_sum_blocks(t, located, begin, prods, window: float, block: int, sums=None, count=None):
-    """Yield ``(slice, sums (N_SUMS, k), count (k,))`` of :func:`_window_sums` block by
-    block (compiled; the running sums carried across blocks); into ``sums`` and ``count``
-    (N_SUMS, N) and (N,) when given."""
-    n = len(t)
-    cum, cum_first, state = np.zeros(N_SUMS), np.zeros(N_SUMS), np.zeros(3, dtype=np.int64)
-    for s in range(0, n, block):
-        e = min(n, s + block)
-        sb = np.empty((N_SUMS, e - s)) if sums is None else sums[:, s:e]
-        cb = np.empty(e - s) if count is None else count[s:e]
-        window_sums_kernel(t, located, begin, prods, float(window), s, e, cum, cum_first, state, sb, cb)
-        yield slice(s, e), sb, cb
-
-
-def _window_sums(t, located, begin, prods, window: float):
-    """``(sums (N_SUMS, N), count (N,))``: the products summed over the window of each
-    located sample (NaN elsewhere): the located samples ``i`` of its segment with
-    ``t_i > t_k − window``, as differences of running sums from the segment's start;
-    ``prods`` (N_SUMS, N) or a sequence of N_SUMS arrays (N,)."""
-    n = len(t)
-    if jit_enabled(n):
-        sums, count = np.empty((N_SUMS, n)), np.empty(n)
-        for _ in _window_sum_blocks(t, located, begin, np.asarray(prods), window, max(n, 1), sums, count):
-            pass
-        return sums, count
-    sums = np.full((N_SUMS, n), np.nan)
-    count = np.full(n, np.nan)
-    seg_id = np.cumsum(begin)
-    v_all = np.flatnonzero(located)
-    cuts = np.flatnonzero(np.diff(seg_id[v_all])) + 1
-    for v in np.split(v_all, cuts):
-        tv = t[v]
-        # window of sample k: the located samples i of its segment with t_i > t_k − T
-        first = np.searchsorted(tv, tv - window, side="right")
-        last = np.arange(1, len(v) + 1)
-        for j, p in enumerate(prods):
-            cz = np.concatenate(([0.0], np.cumsum(p[v])))  # sequential, as the stream's running sums
-            sums[j, v] = cz[last] - cz[first]
-        count[v] = last - first
-    return sums, count
+def _impl(fn):
+    """``fn`` compiled when the step functions run compiled, else its Python source."""
+    return fn.compiled() if use_numba() else fn.python
 
 
 def evidence_states(t, located, begin, point, normal, h, force, ms, noise: SensorNoise, corr: float,
-                    config: EstimatorConfig):  # fmt: skip
-    """The evidence stage over a whole log, vectorised within each segment.
+                    config: EstimatorConfig, depth=None):  # fmt: skip
+    """The evidence stage over a whole log: :func:`evidence_step` in one loop (:func:`evidence_run`).
 
     Parameters
     ----------
-    t : (N,) s
+    t : (N,) s, non-decreasing
     located : (N,) bool
         Samples with a contact point and a pushing force (the window's samples).
     begin : (N,) bool
@@ -294,16 +537,18 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
     point, normal : (N, 3)
         Contact point (m) and normal the measurement used.
     h : (N, 3)
-        Tangential spin torque, N·m.
+        Tangential spin torque, N·m, taken about ``point − depth · normal``.
     force : (N, 3)
         Force, N.
     ms : Measurement
-        The measurement stage's output (``line`` is the significance of ``|h|``).
+        The measurement stage's output (its ``h_norm`` and ``h_std``).
     noise : SensorNoise
         Per-sample noise (after any filter).
     corr : float
         Samples per independent noise sample.
     config : EstimatorConfig
+    depth : (N,) m, optional
+        The depth ``h`` is taken under (default none).
 
     Returns
     -------
@@ -314,357 +559,70 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
         deviation and the noise's share of it (NaN unless ``line``) and the window ratios.
     """
     n = len(t)
-    sig = located & np.asarray(ms.line, dtype=bool)
-    if config.line_evidence:
-        begin = _point_moves(begin, located, point, config.evidence_reset_distance)
-    if not config.line_evidence:
-        d = np.stack((ms.dx, ms.dy, ms.dz), axis=-1)
-        nan = np.full(n, np.nan)
-        return EvidenceStates(np.where(sig, 2, 1).astype(np.int8), np.where(sig, 1, 0).astype(np.int8), d, ms.angle,
-                              ms.angle_std, ms.angle_std, nan, nan)  # fmt: skip
+    t = np.ascontiguousarray(t, dtype=float)
+    capacity = _capacity(t, max(config.evidence_window, config.significance_window))
+    state, counts, ring, wconst = new_evidence_state(capacity, corr)
+    frame = tangent_frame_kernel(*(np.ascontiguousarray(normal[:, k]) for k in range(3)), NP)
+    depth = np.zeros(n) if depth is None else np.ascontiguousarray(depth, dtype=float)
+    code, evidence = np.empty(n, dtype=np.int8), np.empty(n, dtype=np.int8)
+    direction, out = np.empty((n, 3)), np.empty((n, 5))
+    _impl(evidence_run)(
+        t, np.ascontiguousarray(located, dtype=bool), np.ascontiguousarray(begin, dtype=bool), point, normal,
+        *(np.ascontiguousarray(e, dtype=float) for e in frame), depth, h, force,
+        np.ascontiguousarray(ms.h_norm, dtype=float), np.ascontiguousarray(ms.h_std, dtype=float),
+        evidence_params(config, noise), wconst, state, counts, ring, code, evidence, direction, out,
+    )  # fmt: skip
+    return EvidenceStates(code, evidence, direction, out[:, 0], out[:, 1], out[:, 2], out[:, 3], out[:, 4])
 
-    with np.errstate(invalid="ignore"):
-        prods = blockwise(lambda *a: evidence_products(*_frame_terms(*a, NP)), (*normal.T, *h.T, *force.T), stacked=True)
-    verdict = np.zeros(n, dtype=np.int8)
-    win = None
-    if np.any(located):
 
-        def per_window(*a):
-            # the sample's noise is computed here, block by block, not kept for the whole log
-            nz = _frame_noise(*a[N_SUMS + 1 : N_SUMS + 7], noise, NP)
-            w = window_kernel(a[:N_SUMS], a[N_SUMS], *nz, corr, NP)
-            stated = config.stated_excitation(a[N_SUMS + 7]) if config.rocked else False
-            *verdicts, seen = _decide(w, config, NP, stated)
-            return (*verdicts, w.h_minor, w.angle, w.angle_std, w.angle_noise_std, seen)
-
-        with np.errstate(invalid="ignore", divide="ignore"):
-            if jit_enabled(n):  # window sums block by block, never the whole log's
-                res = None
-                for b, sb, cb in _window_sum_blocks(t, located, begin, prods, config.evidence_window, softtip.core._blocks.BLOCK):
-                    r = per_window(*sb, cb, *(np.ascontiguousarray(z[b]) for z in (*point.T, *normal.T, t)))
-                    if res is None:
-                        res = [np.empty(n, dtype=np.asarray(x).dtype) for x in r]
-                    for dst, x in zip(res, r):
-                        dst[b] = x
-            else:
-                sums, count = _window_sums(t, located, begin, prods, config.evidence_window)
-                res = blockwise(per_window, (*sums, count, *point.T, *normal.T, t))
-                del sums, count
-        del prods
-        area_now, line_now, resolved, axis_now, h_ratio, f_ratio, *rest = res
-        win = _Held(*rest)
-        del res, rest  # temporaries are dropped as soon as done with: they set the peak memory
-        # an area only where |h| itself is significant: sub-threshold h wanders about both axes
-        # with the model's error (a grasp force settling) once a low-pass has removed the noise
-        with np.errstate(invalid="ignore"):
-            above = np.asarray(ms.h_norm, dtype=float) > config.line_threshold(ms.h_std)
-        idx, seg_start = _segment_starts(begin)
-        # area is a reading of the current window: more than area_share of the window's samples
-        # show h spread over both axes (a transient spread as a new rock begins does not make
-        # one, and the reading ends when the window no longer shows it)
-        area = _vote(t, located, seg_start, (area_now & above).astype(np.int64), config.evidence_window, config.area_share) == 1
-        area &= located
-        del area_now, above
-        event = np.where(area, _AREA, np.where(line_now, _LINE, _UNKNOWN))
-        del line_now
-        # the verdict is the latest event of the segment (a confirmed line stays confirmed until
-        # the window reads an area), the held windows the latest since the last area reading
-        ev_at = np.maximum.accumulate(np.where(located & (event > 0), idx, -1))
-        ok = ev_at >= seg_start
-        verdict[ok] = event[ev_at[ok]]
-        del ev_at, ok, event
-        floor = np.maximum(seg_start, np.maximum.accumulate(np.where(area, idx, -1)) + 1)
-        hd_at = np.maximum.accumulate(np.where(located & resolved, idx, -1))
-        held = np.where(hd_at >= floor, hd_at, -1)
-        del hd_at, floor, resolved
-    else:
-        del prods
-        held = np.full(n, -1)
-        area = axis_now = np.zeros(n, dtype=bool)
-        h_ratio, f_ratio = np.full(n, np.nan), np.full(n, np.nan)
-        idx, seg_start = _segment_starts(begin)
-    # in place: h_ratio and f_ratio are this function's own arrays
-    out_of = ~located
-    verdict[out_of] = 0
-    np.copyto(h_ratio, np.nan, where=out_of)
-    np.copyto(f_ratio, np.nan, where=out_of)
-    del out_of
-
-    # significance with hysteresis: a line stays significant down to SIG_LEAVE × threshold,
-    # decided by the vote of the last significance_window s
-    with np.errstate(invalid="ignore"):
-        thr = config.line_threshold(ms.h_std)
-        hn = np.asarray(ms.h_norm, dtype=float)
-        sig_ev = np.where(hn > thr, 1, np.where(hn <= SIG_LEAVE * thr, 0, -1))
-    sig_ev = _vote(t, located, seg_start, sig_ev, config.significance_window)
-    sig_at = np.maximum.accumulate(np.where(located & (sig_ev >= 0), idx, -1))
-    sig = located & (sig_at >= seg_start) & (sig_ev[np.maximum(sig_at, 0)] == 1)
-    del sig_ev, sig_at, seg_start, idx
-    has_held = held >= 0
-    hi = np.where(has_held, held, 0)
-    minor = np.zeros(n) if win is None else np.where(located, win.h_minor, 0.0)
-    confirmed = located & (verdict == _LINE)
-    uv = config.unconfirmed_model_std * config.unconfirmed_model_std
-    with np.errstate(invalid="ignore", divide="ignore"):
-        # a sample's own direction carries the one-axis model error unless the line was
-        # confirmed by a window whose load turned about two axes
-        by_load = confirmed & has_held & (False if win is None else win.seen[hi])
-        own_std = _sample_std(ms.angle_std, ms.h_norm, minor, np.where(by_load, 0.0, uv), NP)
-        del by_load
-    del minor
-    use_win = confirmed & has_held
-    line = ((sig | (axis_now & located)) & ~area) | use_win
-    # the held confirming window only where the current one resolves no axis: a confirming
-    # window is a moment of two-axis load, often where one rock ends and the next begins, and
-    # it can carry the response to a roll about the line's own axis
-    use_win &= ~axis_now
-    # the current window confirms the line itself (its direction is the held one)
-    confirming = has_held & (held == np.arange(n))
-    del held, has_held
-    state = np.where(area, 3, np.where(line, 2, 1)).astype(np.int8)
-    evidence = np.where(line, np.where(confirmed, 2, 1), 0).astype(np.int8)
-    if win is None:
-        angle, angle_std, angle_noise_std = ms.angle, own_std, ms.angle_std
-    else:
-        # the current window's direction wherever h varied along one axis within it (in a
-        # confirmed line too), with the model error of its kind; the held confirming window's
-        # where it resolves none; the sample's own where neither is there
-        use_axis = line & ~use_win & axis_now
-        w = np.where(use_win, hi, np.arange(n))
-        w_std = win.angle_std[w]
-        use = use_win | use_axis
-        mv = config.evidence_model_std * config.evidence_model_std
-        angle = np.where(use, win.angle[w], ms.angle)
-        # the model error of the window's kind: two-axis (a confirming window whose load
-        # turned about both axes) or one-axis (a rolling bias no window shows, whether or not
-        # the line was confirmed before, by the load or by the user)
-        two_axis = (use_win | confirming) & win.seen[w]
-        angle_std = np.where(use, np.sqrt(w_std * w_std + np.where(two_axis, mv, uv)), own_std)
-        # the sample's own direction: its noise; a window's: the window's noise term
-        angle_noise_std = np.where(use, win.angle_noise_std[w], ms.angle_std)
-        del w, w_std, use_axis, confirming, two_axis
-        use_win = use
-    del win, hi, own_std, axis_now
-    # the held window's direction, in the tangent frame of the sample
-    d = np.stack((ms.dx, ms.dy, ms.dz), axis=-1)
-    u = np.flatnonzero(use_win)
-    e1x, e1y, e1z, e2x, e2y, e2z = tangent_frame_kernel(*normal[u].T, NP)
-    ca, sa = np.cos(angle[u]), np.sin(angle[u])
-    d[u] = np.stack((ca * e1x + sa * e2x, ca * e1y + sa * e2y, ca * e1z + sa * e2z), axis=-1)
-    return EvidenceStates(state, evidence, d, angle, angle_std, angle_noise_std, h_ratio, f_ratio)
+_STATE_NAMES = ("", "point", "line", "area")
+_EVIDENCE_NAMES = ("", "unconfirmed", "confirmed")
 
 
 class EvidenceTracker:
-    """The stage of :func:`evidence_states`, one sample at a time.
-
-    Running sums of the products since the segment's start and, for each sample of the last
-    ``evidence_window`` seconds, its time and the sums before it: window sums are
-    differences, as in the batch. Plain float arithmetic (:func:`softtip.core.evidence.window_floats`
-    written out: the same operations, so the same results to rounding), O(1) per sample.
-    """
+    """The stage of :func:`evidence_states`, one sample at a time: :func:`evidence_step` on its
+    state record, whose ring grows (oldest first) when a window would fill it."""
 
     def __init__(self, config: EstimatorConfig, noise: SensorNoise, corr: float):
         self.config = config
         self.noise = noise
         self.corr = corr
-        self._sq = NoiseSquares(noise)
-        self._geo: PointGeometry | None = None
-        self._constants: dict[float, tuple[float, float, float]] = {}
-        enter, leave = config.area_ratio
-        self._enter, self._leave = enter, leave
-        self._on = config.line_evidence
-        self._window = config.evidence_window
-        self._h_sigmas, self._h_min = config.h_sigmas, config.h_min
-        self._fmin2 = config.excitation_min * config.excitation_min
-        self._hmin2 = config.h_min * config.h_min
-        self._f_ratio = config.excitation_ratio
-        self._max_std = config.evidence_max_angle_std
-        self._model_var = config.evidence_model_std * config.evidence_model_std
-        self._unconfirmed_var = config.unconfirmed_model_std * config.unconfirmed_model_std
-        self._reset2 = config.evidence_reset_distance * config.evidence_reset_distance
-        self._vote_window = config.significance_window
-        self._area_share = config.area_share
-        self._rocked = config.rocked
-        self.start_segment()
+        self._params = evidence_params(config, noise)
+        self._state, self._counts, self._ring, self._wconst = new_evidence_state(64, corr)
+        self._step = _impl(evidence_step)
+        self._start = _impl(evidence_start)
+        self._python = not use_numba()  # its floats read from arrays: numpy's
 
     def start_segment(self) -> None:
         """At contact onset and at a re-latch: empty window, no verdict, no held direction."""
-        self._cum = (0.0,) * N_SUMS
-        self._hist: deque[tuple[float, tuple]] = deque()
-        self._verdict = _UNKNOWN
-        # angle, its std, the noise's share, and whether the load showed the two axes
-        self._held: tuple[float, float, float, bool] | None = None
-        self._sig = False
-        self._anchor: tuple | None = None
-        # the segment's samples of the last significance_window s: (t, side), and how many
-        # are above the threshold and below its leaving share
-        self._votes: deque[tuple[float, int]] = deque()
-        self._n_above = self._n_below = 0
-        # the segment's samples of the last evidence_window s: (t, h spread over both axes)
-        # and how many are
-        self._areas: deque[tuple[float, bool]] = deque()
-        self._n_area = 0
+        self._start(self._state, self._counts)
+
+    def _grow(self) -> None:
+        """Twice the ring, its samples oldest first."""
+        old, c = self._ring, self._counts
+        m = int(max(c[_N_AREA], c[_N_VOTE]))
+        cap = old.shape[0]
+        state, counts, ring, wconst = new_evidence_state(2 * cap, self.corr)
+        idx = (int(c[_HEAD]) + 1 - m + np.arange(m)) % cap
+        ring[:m] = old[idx]
+        c[_HEAD] = m - 1 if m else 0
+        self._ring, self._wconst = ring, wconst
 
     def step(self, t, geo: PointGeometry, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, h_std):
         """``(state, evidence, direction, angle, angle_std, angle_noise_std, h_ratio, f_ratio)`` of a located
         sample at the contact point of ``geo``, with ``h`` (N·m) taken about ``e`` (m; the
         point, or the effective point under the depth), the force ``f`` (N), ``hn = |h|``
         and ``h_std`` ``h``'s noise level (N·m) of the measurement stage."""
-        if not self._on:
-            thr = self._h_sigmas * h_std
-            if hn > (self._h_min if self._h_min > thr else thr):  # the measurement's line test
-                dx, dy, dz, angle, a = sample_direction(hx, hy, hz, hn, ex, ey, ez, geo, self._sq)
-                return "line", "unconfirmed", (dx, dy, dz), angle, a, a, math.nan, math.nan
-            return "point", "", _NAN3, math.nan, math.nan, math.nan, math.nan, math.nan
-        point = geo.point
-        anchor = self._anchor
-        if anchor is None:
-            self._anchor = point
-        elif point is not anchor:
-            dx, dy, dz = point[0] - anchor[0], point[1] - anchor[1], point[2] - anchor[2]
-            if dx * dx + dy * dy + dz * dz > self._reset2:  # the contact moved: a new segment
-                self.start_segment()
-                self._anchor = point
-        if geo is not self._geo:  # per point: once per latch
-            self._geo = geo
-            self._noise_terms = tangent_noise_kernel(*point, *geo.frame, self.noise)
-            self._noise_k = noise_constants(self._noise_terms)
+        c = self._counts
+        if max(c[_N_AREA], c[_N_VOTE]) + 1 >= self._ring.shape[0]:
+            self._grow()
+        p = geo.point
         e1x, e1y, e1z, e2x, e2y, e2z = geo.frame
-        h1 = hx * e1x + hy * e1y + hz * e1z
-        h2 = hx * e2x + hy * e2y + hz * e2z
-        f1 = fx * e1x + fy * e1y + fz * e1z
-        f2 = fx * e2x + fy * e2y + fz * e2z
-        hist = self._hist
-        c0, c1, c2, c3, c4, c5, c6, c7, c8, c9 = cum = self._cum
-        hist.append((t, cum))
-        c0, c1, c2, c3, c4 = c0 + h1, c1 + h2, c2 + h1 * h1, c3 + h1 * h2, c4 + h2 * h2
-        c5, c6, c7, c8, c9 = c5 + f1, c6 + f2, c7 + f1 * f1, c8 + f1 * f2, c9 + f2 * f2
-        self._cum = (c0, c1, c2, c3, c4, c5, c6, c7, c8, c9)
-        start = t - self._window
-        while hist and hist[0][0] <= start:
-            hist.popleft()
-        count = float(len(hist))
-        k = self._constants.get(count)
-        if k is None:
-            k = self._constants[count] = window_constants(count, self.corr)
-        tail, keep, nu = k
-        s_big, s2, f_n = self._noise_k
-        h11, h12, h22, f11, f12, f22 = self._noise_terms
-        # the covariances and eigenvalues of window_kernel; window sums are differences
-        if hist:
-            o = hist[0][1]
-            s1, s2_, s11, s12, s22 = c0 - o[0], c1 - o[1], c2 - o[2], c3 - o[3], c4 - o[4]
-            t1, t2, t11, t12, t22 = c5 - o[5], c6 - o[6], c7 - o[7], c8 - o[8], c9 - o[9]
-            m1, m2 = s1 / count, s2_ / count
-            c11 = s11 / count - m1 * m1 - keep * h11
-            c12 = s12 / count - m1 * m2 - keep * h12
-            c22 = s22 / count - m2 * m2 - keep * h22
-            n1, n2 = t1 / count, t2 / count
-            g11 = t11 / count - n1 * n1 - keep * f11
-            g12 = t12 / count - n1 * n2 - keep * f12
-            g22 = t22 / count - n2 * n2 - keep * f22
-        else:  # an empty window (t − T rounds to t): no covariance, as the batch's 0 / 0
-            c11 = c12 = c22 = g11 = g12 = g22 = math.nan
-        half = 0.5 * (c11 - c22)
-        mean = 0.5 * (c11 + c22)
-        root = sqrt(half * half + c12 * c12)
-        major, minor = mean + root, mean - root
-        gh = 0.5 * (g11 - g22)
-        gm = 0.5 * (g11 + g22)
-        gr = sqrt(gh * gh + g12 * g12)
-        f_major, f_minor = gm + gr, gm - gr
-        # clamped at zero (NaN too)
-        if not major > 0.0:
-            major = 0.0
-        if not minor > 0.0:
-            minor = 0.0
-        if not f_major > 0.0:
-            f_major = 0.0
-        if not f_minor > 0.0:
-            f_minor = 0.0
-        h_noise, f_noise = tail * s_big, tail * f_n
-        # _decide, unrolled (NaN comparisons are False, as in the batch)
-        varied = major > h_noise
-        if varied:
-            h_ratio = minor / major if major != 0.0 else _div(minor, major)
-        else:
-            h_ratio = math.nan
-        if f_major > f_noise:
-            f_ratio = f_minor / f_major if f_major != 0.0 else _div(f_minor, f_major)
-        else:
-            f_ratio = math.nan
-        thr = self._h_sigmas * h_std
-        thr = thr if thr > self._h_min else self._h_min
-        spread = (
-            minor > h_noise and h_ratio >= self._enter and hn > thr
-            and ((f_minor > f_noise and f_minor >= self._fmin2) or minor >= self._hmin2)
+        code, ev, dx, dy, dz, angle, angle_std, noise_std, h_ratio, f_ratio = self._step(
+            self._state, c, self._ring, self._params, self._wconst, t, p[0], p[1], p[2], geo.nx, geo.ny, geo.nz,
+            e1x, e1y, e1z, e2x, e2y, e2z, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, h_std,
         )  # fmt: skip
-        # area: more than area_share of the window's samples spread over both axes (the batch's vote)
-        areas = self._areas
-        areas.append((t, spread))
-        self._n_area += spread
-        start = t - self._window
-        while len(areas) > 1 and areas[0][0] <= start:
-            self._n_area -= areas.popleft()[1]
-        area = self._n_area > self._area_share * len(areas)
-        axis = None  # the current window's direction, where h varied along one axis
-        confirming = False  # the current window confirms the line (two-axis excitation)
-        if area:
-            self._verdict = _AREA
-            self._held = None
-        else:
-            one_axis = varied and h_ratio < self._leave
-            excited = f_minor > f_noise and f_minor >= self._f_ratio * f_major and f_minor >= self._fmin2
-            line_now = one_axis and (excited or (bool(self._rocked) and bool(self.config.stated_excitation(t))))
-            if line_now:
-                self._verdict = _LINE
-            if one_axis:
-                e = (major, minor, c11, c12, c22, root, g11, g12, f_major, f_minor, g22, half)
-                w_angle, w_std, w_noise = window_direction_floats(e, s2, nu)
-                if w_std <= self._max_std:
-                    if major >= self._hmin2:
-                        axis = (w_angle, w_std, w_noise)
-                    if line_now:
-                        # the two-axis model error where the load showed the two axes
-                        confirming = excited
-                        model = self._model_var if excited else self._unconfirmed_var
-                        self._held = (w_angle, math.sqrt(w_std * w_std + model), w_noise, excited)
-        side = 1 if hn > thr else (0 if hn <= SIG_LEAVE * thr else -1)
-        if self._vote_window > 0.0:
-            votes = self._votes
-            votes.append((t, side))
-            self._n_above += side == 1
-            self._n_below += side == 0
-            start = t - self._vote_window
-            while len(votes) > 1 and votes[0][0] <= start:
-                old = votes.popleft()[1]
-                self._n_above -= old == 1
-                self._n_below -= old == 0
-            m = len(votes)
-            side = 1 if 2 * self._n_above > m else (0 if 2 * self._n_below > m else -1)
-        if side >= 0:
-            self._sig = side == 1
-        verdict = self._verdict
-        if area:
-            return "area", "", _NAN3, math.nan, math.nan, math.nan, h_ratio, f_ratio
-        if verdict == _LINE and self._held is not None and axis is None:
-            angle, angle_std, noise_std, _ = self._held
-            ca, sa = cos(angle), sin(angle)
-            d = (ca * e1x + sa * e2x, ca * e1y + sa * e2y, ca * e1z + sa * e2z)
-            return "line", "confirmed", d, angle, angle_std, noise_std, h_ratio, f_ratio
-        if not self._sig and axis is None:
-            return "point", "", _NAN3, math.nan, math.nan, math.nan, h_ratio, f_ratio
-        evidence = "confirmed" if verdict == _LINE else "unconfirmed"
-        if axis is not None:  # the current window resolves the axis
-            angle, w_std, noise_std = axis
-            ca, sa = cos(angle), sin(angle)
-            d = (ca * e1x + sa * e2x, ca * e1y + sa * e2y, ca * e1z + sa * e2z)
-            v = w_std * w_std + (self._model_var if confirming else self._unconfirmed_var)
-            return "line", evidence, d, angle, sqrt(v), noise_std, h_ratio, f_ratio
-        # the sample's own direction, the window's across-axis spread counted as model error
-        dx, dy, dz, angle, a = sample_direction(hx, hy, hz, hn, ex, ey, ez, geo, self._sq)
-        v = hn * hn
-        held = self._held
-        by_load = verdict == _LINE and held is not None and held[3]
-        v = a * a + (minor / v if v != 0.0 else _div(minor, v)) + (0.0 if by_load else self._unconfirmed_var)
-        return "line", evidence, (dx, dy, dz), angle, sqrt(v) if v >= 0.0 else math.nan, a, h_ratio, f_ratio
+        if self._python:
+            dx, dy, dz, angle, angle_std, noise_std = float(dx), float(dy), float(dz), float(angle), float(angle_std), float(noise_std)
+            h_ratio, f_ratio = float(h_ratio), float(f_ratio)
+        return _STATE_NAMES[code], _EVIDENCE_NAMES[ev], (dx, dy, dz), angle, angle_std, noise_std, h_ratio, f_ratio

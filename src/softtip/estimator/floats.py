@@ -9,11 +9,12 @@ contact. :func:`sample_direction` is the evidence stage's.
 from __future__ import annotations
 
 import math
-from math import atan2, sqrt
 
+from softtip.core._jit import lazy_jit
 from softtip.core._xp import PY
+from softtip.core.evidence import _div
 from softtip.core.fingertip import Fingertip
-from softtip.core.noise import SensorNoise, _quad_moment_kernel
+from softtip.core.noise import SensorNoise, _quad_moment_kernel, noise_quad
 from softtip.core.spin import tangent_frame_kernel
 
 __all__ = ["NoiseSquares", "PointGeometry", "sample_direction"]
@@ -32,16 +33,6 @@ class NoiseSquares:
         self.noise = noise
         self.fx, self.fy, self.fz = (s * s for s in noise.force_std)
         self.mx, self.my, self.mz = (s * s for s in noise.moment_std)
-
-    def quad(self, vx: float, vy: float, vz: float, rx: float, ry: float, rz: float) -> float:
-        """``vᵀ Σ_h v`` at the contact point ``r`` (:func:`softtip.core.noise._quad_kernel`)."""
-        cx = vy * rz - vz * ry
-        cy = vz * rx - vx * rz
-        cz = vx * ry - vy * rx
-        return (
-            self.mx * vx * vx + self.my * vy * vy + self.mz * vz * vz
-            + self.fx * cx * cx + self.fy * cy * cy + self.fz * cz * cz
-        )  # fmt: skip
 
 
 class PointGeometry:
@@ -71,22 +62,21 @@ class PointGeometry:
         return cls(point, tip._normal_kernel(point[0], point[1], point[2], PY), sq)
 
 
-def sample_direction(hx, hy, hz, hn, rx, ry, rz, geo: PointGeometry, sq: NoiseSquares):
-    """A sample's own direction ``d = n × h / |n × h|``, its angle in the tangent frame and
-    the angle's first-order standard deviation from the sensor noise (rad), with ``h``
-    taken about ``r`` (m) and ``hn = |h|``: ``(dx, dy, dz, angle, angle_std)`` as
-    :func:`softtip.estimator.measure.measure` gives them."""
-    nx, ny, nz = geo.nx, geo.ny, geo.nz
+@lazy_jit
+def sample_direction(hx, hy, hz, hn, rx, ry, rz, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z, sfx, sfy, sfz, smx, smy, smz):
+    """A sample's own direction ``d = n × h / |n × h|``, its angle in the tangent frame
+    ``(e1, e2)`` at the normal ``n`` and the angle's first-order standard deviation from the
+    sensor noise (rad; ``sf*``, ``sm*`` its variances per axis, N², N²·m²), with ``h`` taken
+    about ``r`` (m) and ``hn = |h|``: ``(dx, dy, dz, angle, angle_std)`` as
+    :func:`softtip.estimator.measure.measure` gives them (its ``atan2`` is numpy's there, the
+    C library's here: the angle may differ in the last bit). Compiled with the evidence step."""
     cx = ny * hz - nz * hy
     cy = nz * hx - nx * hz
     cz = nx * hy - ny * hx
-    cn = sqrt(cx * cx + cy * cy + cz * cz)
-    if cn != 0.0:
-        dx, dy, dz = cx / cn, cy / cn, cz / cn
-    else:
-        dx, dy, dz = PY.div(cx, cn), PY.div(cy, cn), PY.div(cz, cn)
-    a = atan2(dx * geo.e2x + dy * geo.e2y + dz * geo.e2z, dx * geo.e1x + dy * geo.e1y + dz * geo.e1z)
+    cn = math.sqrt(cx * cx + cy * cy + cz * cz)
+    dx, dy, dz = _div(cx, cn), _div(cy, cn), _div(cz, cn)
+    a = math.atan2(dx * e2x + dy * e2y + dz * e2z, dx * e1x + dy * e1y + dz * e1z)
     angle = a - _PI * (a > _HALF_PI) + _PI * (a <= -_HALF_PI)
-    q = sq.quad(dx, dy, dz, rx, ry, rz)
-    s = sqrt(q) if q >= 0.0 else math.nan
-    return dx, dy, dz, angle, (s / hn if hn != 0.0 else PY.div(s, hn))
+    q = noise_quad(dx, dy, dz, rx, ry, rz, sfx, sfy, sfz, smx, smy, smz)
+    s = math.sqrt(q) if q >= 0.0 else math.nan
+    return dx, dy, dz, angle, _div(s, hn)
