@@ -32,9 +32,9 @@ number formatters side by side (compiled, its fallback, pyarrow's own, printf) i
 number, the Parquet / Arrow IPC compressions measured on all the estimates' columns, and the
 log's CSV parsed by pyarrow as softtip's reader runs it and by pandas' C engine.
 
-Compiled (--only compiled): the pipeline at 1e5 and 1e6 rows with the sequential stages
-compiled by numba and with their numpy paths, and the start-up cost of the compiled kernels
-(importing numba; the first call, compiling them or loading them from the cache).
+Compiled (--only compiled): the pipeline at 2e4 rows with the stages' step functions compiled
+by numba and run as Python (the same source; the path without numba), and the start-up cost of
+the compiled steps (importing numba; the first call, compiling them or loading them from the cache).
 
 Scaling (--only scaling, --sizes 1e5,1e6,1e7): at each log length, in a process of its own,
 the contact kernel, the whole pipeline and end to end (read + estimate + write, Parquet and
@@ -271,19 +271,16 @@ def scaling_worker(n: int) -> None:
 
     import softtip.io.tables as sio
     from softtip import load_fingertip
-    from softtip.core._jit import jit_enabled, set_jit
+    from softtip.core._jit import use_numba
     from softtip.core.location import contact_arrays
 
     warnings.simplefilter("ignore")
     t, w = grasp_log(n, whole=False)
     tip = load_fingertip("murakami2006")
     repeats = 1 if n >= 5_000_000 else 3
-    # warm up: imports, the compiled kernels' cache (not what a row of the table measures)
-    for flag in (True, False):
-        set_jit(flag)
-        estimate(t[:5000], w[:5000], tip)
-    set_jit(None)
-    res: dict[str, float | bool] = {"n": n, "compiled": jit_enabled(n)}
+    # warm up: imports, the compiled steps' cache (not what a row of the table measures)
+    estimate(t[:5000], w[:5000], tip)
+    res: dict[str, float | bool] = {"n": n, "compiled": use_numba()}
     # the pipeline's peak first: the high-water mark must not already hold another run's
     base = _peak_rss()
     cpu = []
@@ -336,25 +333,25 @@ print(c1 - c0, c3 - c2)
 
 
 def compiled_rows() -> None:
-    """The numbers behind numba: the pipeline with the sequential stages compiled and with
-    their numpy paths, and what the compiled kernels cost at start-up."""
+    """The numbers behind numba: the pipeline with its stages' steps compiled and the same
+    steps run as Python (the path without numba), and what compiling costs at start-up."""
     import warnings
 
     from softtip.core._jit import set_jit
 
-    print("sequential stages (latch, depth, evidence) compiled by numba vs their numpy paths; CPU s, best of 2")
+    print("the stages' step functions compiled by numba vs the same source run as Python; CPU s, best of 2")
     warnings.simplefilter("ignore")
-    for n in (100_000, 1_000_000):
+    for n in (20_000,):  # as Python, about 30 µs a row: longer logs take minutes
         t, w = grasp_log(n, whole=False)
         cpu = {}
         for flag in (False, True):
             set_jit(flag)
-            estimate(t[:5000], w[:5000], "murakami2006")
+            estimate(t[:2000], w[:2000], "murakami2006")
             cpu[flag] = min(_timed_cpu(lambda: estimate(t, w, "murakami2006")) for _ in range(2))
         set_jit(None)
         print(
-            f"  {n:9,d} rows: numpy paths {cpu[False]:6.2f} s ({n / cpu[False] / 1e6:5.2f} M/s), compiled"
-            f" {cpu[True]:6.2f} s ({n / cpu[True] / 1e6:5.2f} M/s): {cpu[False] / cpu[True]:4.1f}×"
+            f"  {n:9,d} rows: as Python {cpu[False]:6.2f} s ({n / cpu[False] / 1e6:5.3f} M/s), compiled"
+            f" {cpu[True]:6.2f} s ({n / cpu[True] / 1e6:5.2f} M/s): {cpu[False] / cpu[True]:4.0f}×"
         )
     with tempfile.TemporaryDirectory() as cache:
         env = {**os.environ, "NUMBA_CACHE_DIR": cache}
@@ -389,7 +386,7 @@ def scaling(sizes: list[int]) -> None:
         print(
             f"  {n:11,d} {rate['kernel']:6.2f} M/s {rate['pipeline']:6.2f} M/s {rate['kernel'] / rate['pipeline']:5.0f}×"
             f" {rate['parquet']:8.2f} M/s {rate['csv']:6.2f} M/s {r['peak_bytes'] / n:11.0f}"
-            f"{'' if r['compiled'] else '   (numpy paths: shorter than softtip.core._jit.JIT_MIN_SAMPLES)'}"
+            f"{'' if r['compiled'] else '   (steps run as Python: numba not installed or SOFTTIP_NUMBA=0)'}"
         )
 
 

@@ -1,25 +1,20 @@
-"""Compiled sequential kernels (numba), imported and compiled only when first needed.
+"""Compiled step functions (numba), imported and compiled only when first needed.
 
-Some batch stages are sequential by nature: running sums restarted at segment starts, a
-sliding window over the samples of a segment, a test that depends on the previous
-decision. numpy can only do them segment by segment (a Python loop per segment, thousands
-per log); a compiled loop does them in one pass. Each kernel here is plain Python over
-arrays (the same additions in the same order as the streaming classes), compiled by
-numba with ``cache=True`` the first time it runs; every caller keeps a pure-numpy path
-(segment by segment), tested equal.
+Each stateful stage of the estimator is one step function over an explicit state record
+(:func:`lazy_jit`), run per sample by the stream and in one loop over the log by the batch.
+With numba (a dependency of softtip) both run it compiled, ``cache=True`` on disk: importing
+numba costs about 0.3 s of CPU once per process and loading the cached steps about 0.4 s (the
+first run after installing compiles them, about 9 s). Without numba, or with ``SOFTTIP_NUMBA=0``
+in the environment, the same source runs as Python (tested equal, about 40 times slower);
+``SOFTTIP_NUMBA=1`` insists on numba. :func:`jit_enabled` (from :data:`JIT_MIN_SAMPLES` samples)
+still decides for the CSV formatter of :mod:`softtip.io._csvtext`, whose fallback
+is pyarrow's writer (the same bytes).
 
-Importing numba and loading the cached kernels costs about 0.4 s of CPU once per process
-(a first compile ~0.4 s more), so logs shorter than :data:`JIT_MIN_SAMPLES` take the numpy
-paths, which are faster than that for them. ``SOFTTIP_NUMBA=0`` in the environment (or no
-numba installed) selects the numpy paths always, ``SOFTTIP_NUMBA=1`` the compiled ones always.
-
-A stage written as one step function (:func:`lazy_jit`) has no numpy path: it runs compiled
-whenever numba may be used (:func:`use_numba`, whatever the log's length) and as the same
-source in Python otherwise. A compiled function may call another :func:`lazy_jit` function and
-the plain kernels marked :func:`jitable` (registered with numba when the first compiled function
-is built; Python calls them as they are). numba's disk cache only watches the file of the
-function it caches, not those of the functions compiled into it, so the cache of every
-function here is stamped with the sources of ``softtip.core`` and ``softtip.estimator`` too.
+A compiled function may call another :func:`lazy_jit` function and the plain kernels marked
+:func:`jitable` (registered with numba when the first compiled function is built; Python calls
+them as they are). numba's disk cache only watches the file of the function it caches, not those
+of the functions compiled into it, so the cache of every function here is stamped with the
+sources of ``softtip.core`` and ``softtip.estimator`` too.
 """
 
 from __future__ import annotations
