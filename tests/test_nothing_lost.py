@@ -267,10 +267,20 @@ def test_reproduce_ends_its_pool_on_a_signal(tmp_path, signals):
     assert sorted(p.name for p in tmp_path.iterdir()) == []
 
 
+@pytest.fixture
+def short_tmp():
+    """An empty folder with a short path (removed after the test)."""
+    import tempfile
+
+    folder = Path(tempfile.mkdtemp(prefix="st-", dir="/tmp" if os.path.isdir("/tmp") else None))
+    yield folder
+    shutil.rmtree(folder, ignore_errors=True)
+
+
 @needs_proc
 @pytest.mark.slow
 @pytest.mark.parametrize("moment", ["server-starts", "server+0.1s", "server+0.5s", "workers-run"])
-def test_reproduce_signal_at_any_moment_of_its_pool_start_leaves_nothing(tmp_path, moment):
+def test_reproduce_signal_at_any_moment_of_its_pool_start_leaves_nothing(tmp_path, short_tmp, moment):
     """SIGTERM while the pool's server and workers start (a worker started before the pool knew
     it was orphaned with the default fork pool) or run: exit 143 within seconds, no process of
     the run left (found by an environment mark, whoever their parent is by then), no file in the
@@ -278,8 +288,9 @@ def test_reproduce_signal_at_any_moment_of_its_pool_start_leaves_nothing(tmp_pat
     import secrets
 
     mark = f"SOFTTIP_TEST_MARK_{secrets.token_hex(6)}"
-    tmp = tmp_path / "tmp"
-    tmp.mkdir()
+    # a short temporary folder: the pool's server socket lives there, and a Unix socket's path is
+    # limited to 107 bytes (pytest's tmp_path can be longer)
+    tmp = short_tmp
     work = tmp_path / "work"
     work.mkdir()
     env = {**os.environ, mark: "1", "TMPDIR": str(tmp)}

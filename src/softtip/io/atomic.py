@@ -37,7 +37,7 @@ from pathlib import Path
 from typing import IO, Any
 
 from softtip.errors import InputError
-from softtip.io.interrupt import check_interrupted
+from softtip.io.interrupt import check_interrupted, outputs_committed
 
 __all__ = ["AtomicFile", "Outputs", "atomic_write", "atomic_write_text", "cannot_write", "check_distinct", "commit_all", "write_stdout"]
 
@@ -413,6 +413,7 @@ class Outputs:
                         os.replace(backup, target)
             self.discard()
             raise
+        outputs_committed()  # a signal from here on does not turn the finished run into a failed one
         for _target, backup in backups:
             if backup not in (None, "dir"):
                 with contextlib.suppress(OSError):

@@ -15,7 +15,8 @@ import signal
 import threading
 from collections.abc import Iterator
 
-__all__ = ["Interrupted", "check_interrupted", "exit_code", "exit_now", "interrupted_signal", "terminate_like_ctrl_c"]
+__all__ = ["Interrupted", "check_interrupted", "exit_code", "exit_now", "interrupted_signal", "outputs_committed",
+           "terminate_like_ctrl_c"]
 
 _SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
 
@@ -111,6 +112,18 @@ def _remove_multiprocessing_tempdir() -> None:
             import shutil
 
             shutil.rmtree(tempdir, ignore_errors=True)
+
+
+def outputs_committed() -> None:
+    """A run's outputs are in place: from now on a termination signal is ignored within
+    :func:`terminate_like_ctrl_c` (also one already pending). The run is complete; unwinding
+    would exit 143 with every output written, which a caller reads as a failed run."""
+    if threading.current_thread() is not threading.main_thread():
+        return
+    for sig in (signal.SIGINT, *_SIGNALS):
+        with contextlib.suppress(OSError, ValueError):
+            if signal.getsignal(sig) in (_raise, _raise_keyboard_interrupt):
+                signal.signal(sig, _ignore)
 
 
 def _raise(signum, frame) -> None:
