@@ -75,10 +75,12 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import math
+import sys
 import time
 
 import numpy as np
-from bench_fusion import fusion_section  # noqa: E402  (benchmarks/ is the script's folder)
+from _markdown import run_with_markdown  # noqa: E402  (benchmarks/ is the script's folder)
+from bench_fusion import fusion_section  # noqa: E402
 
 from softtip import Capsule, EstimatorConfig, Sphere, axial_difference, estimate, murakami2006
 from softtip.core._xp import NP
@@ -750,24 +752,26 @@ def rolling_section(angles=(-60.0, -45.0, 0.0, 30.0, 60.0), seed: int = 3) -> No
     print(f"\naxes of h and of the tangential load {min(gaps):.0f}–{max(gaps):.0f}° apart over every case")
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--fit-depth", action="store_true", help="refit the default depth law and stop")
     ap.add_argument(
         "--sections", nargs="*",
         default=["depth", "slide", "papers", "start", "noise", "evidence", "friction", "fusion", "cost"],
     )  # fmt: skip
-    args = ap.parse_args()
+    # --markdown PATH (handled around main): also write the printed tables to PATH
+    args = ap.parse_args(argv)
     if args.fit_depth:
         fit_depth()
-        return
+        return 0
     print("murakami2006 tip (capsule R 16 mm, cylinder 20 mm), simulator with friction (μ = 1) and Nano17-class noise, 50 Hz")
     for name in args.sections:
         {"depth": depth_section, "slide": slide_section, "papers": papers_section, "start": start_section,
          "noise": noise_section, "evidence": evidence_section, "cost": stream_cost, "friction": friction_section,
          "fusion": fusion_section, "rates": rates_section, "tips": tips_section,
          "rolling": rolling_section}[name]()  # fmt: skip
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run_with_markdown(main, "bench_accuracy.py"))
