@@ -6,7 +6,10 @@ the documentation's benchmark pages include (their figures are the scripts', not
 
 from __future__ import annotations
 
+import os
+import resource
 import sys
+import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
@@ -28,7 +31,9 @@ class _Tee:
 def run_with_markdown(main: Callable[[list[str]], int | None], script: str, argv: Sequence[str] | None = None, *,
                       code_block: bool = False) -> int:  # fmt: skip
     """Run ``main(argv)``; with ``--markdown PATH`` in ``argv`` its standard output is also
-    written to PATH (only when it returns 0 or None), headed by the command that made it.
+    written to PATH (only when it returns 0 or None), headed by the command that made it and
+    how long it took (wall and CPU time, and the machine's load average, which says how
+    shared the machine was).
 
     Parameters
     ----------
@@ -53,14 +58,19 @@ def run_with_markdown(main: Callable[[list[str]], int | None], script: str, argv
     del argv[k : k + 2]
     tee = _Tee(sys.stdout)
     sys.stdout = tee
+    wall, load = time.perf_counter(), os.getloadavg()[0]
     try:
         code = main(argv) or 0
     finally:
         sys.stdout = tee.out
     if code == 0:
+        wall = time.perf_counter() - wall
+        cpu = sum(u.ru_utime + u.ru_stime for u in map(resource.getrusage, (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN)))
+        took = (f"{wall / 60:.1f} min ({cpu / 60:.1f} min CPU) on {os.cpu_count()} cores, load average "
+                f"{load:.1f} at the start and {os.getloadavg()[0]:.1f} at the end")  # fmt: skip
         command = " ".join([f"python benchmarks/{script}", *argv])
         text = "".join(tee.kept)
         body = f"```text\n{text}```\n" if code_block else text.replace("\n### ", "\n#### ")
         path.write_text(f"<!-- written by {command} --markdown {path.name}; do not edit -->\n\n"
-                        f"Run: `{command}`\n\n" + body, encoding="utf-8")  # fmt: skip
+                        f"Run: `{command}`, {took}\n\n" + body, encoding="utf-8")  # fmt: skip
     return code

@@ -75,18 +75,19 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import math
+import sys
 import time
 
 import numpy as np
-from bench_fusion import fusion_section  # noqa: E402  (benchmarks/ is the script's folder)
+from _markdown import run_with_markdown  # noqa: E402  (benchmarks/ is the script's folder)
+from bench_fusion import fusion_section  # noqa: E402
 
 from softtip import Capsule, EstimatorConfig, Sphere, axial_difference, estimate, murakami2006
 from softtip.core._xp import NP
 from softtip.core.depth import MURAKAMI2006_DEPTH, DepthLaw, lever_depth
 from softtip.core.noise import NANO17, SensorNoise
-from softtip.core.spin import direction_angle
+from softtip.core.spin import direction_angle, tangent_frame_kernel
 from softtip.core.units import KGF
-from softtip.estimator.evidence import _frame_terms
 from softtip.sim import NANO17_SENSOR as SIM_SENSOR
 from softtip.sim import (
     ContactModel,
@@ -740,7 +741,9 @@ def rolling_section(angles=(-60.0, -45.0, 0.0, 30.0, 60.0), seed: int = 3) -> No
                 continue
             bias = np.degrees(np.median(axial_difference(est.angle[sel], log.truth.angle[sel])))
             # h and the tangential load in the tangent frame, as the evidence window takes them
-            h1, h2, f1, f2 = _frame_terms(*est.normal[sel].T, *est.h[sel].T, *est.wrench[sel, :3].T, NP)
+            e = np.stack(tangent_frame_kernel(*est.normal[sel].T, NP), axis=-1)
+            h1, h2 = np.einsum("ij,ij->i", est.h[sel], e[:, :3]), np.einsum("ij,ij->i", est.h[sel], e[:, 3:])
+            f1, f2 = np.einsum("ij,ij->i", est.wrench[sel, :3], e[:, :3]), np.einsum("ij,ij->i", est.wrench[sel, :3], e[:, 3:])
             ah, af = _variation_axis(h1, h2), _variation_axis(f1, f2)
             gap = abs(np.degrees(axial_difference(ah, af)))
             gaps.append(gap)
@@ -750,24 +753,26 @@ def rolling_section(angles=(-60.0, -45.0, 0.0, 30.0, 60.0), seed: int = 3) -> No
     print(f"\naxes of h and of the tangential load {min(gaps):.0f}–{max(gaps):.0f}° apart over every case")
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--fit-depth", action="store_true", help="refit the default depth law and stop")
     ap.add_argument(
         "--sections", nargs="*",
         default=["depth", "slide", "papers", "start", "noise", "evidence", "friction", "fusion", "cost"],
     )  # fmt: skip
-    args = ap.parse_args()
+    # --markdown PATH (handled around main): also write the printed tables to PATH
+    args = ap.parse_args(argv)
     if args.fit_depth:
         fit_depth()
-        return
+        return 0
     print("murakami2006 tip (capsule R 16 mm, cylinder 20 mm), simulator with friction (μ = 1) and Nano17-class noise, 50 Hz")
     for name in args.sections:
         {"depth": depth_section, "slide": slide_section, "papers": papers_section, "start": start_section,
          "noise": noise_section, "evidence": evidence_section, "cost": stream_cost, "friction": friction_section,
          "fusion": fusion_section, "rates": rates_section, "tips": tips_section,
          "rolling": rolling_section}[name]()  # fmt: skip
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run_with_markdown(main, "bench_accuracy.py"))

@@ -24,6 +24,8 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
+from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -38,6 +40,9 @@ from softtip.errors import InputError
 from softtip.sim import HandFrame, SensorModel, Wedge, paper_scenario, simulate_grasp
 from softtip.sim.probing import simulate_probing
 from softtip.sim.synthetic import sliding_presses
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _markdown import run_with_markdown  # noqa: E402
 
 MM = 1e3
 
@@ -181,7 +186,7 @@ def honesty_rows(seeds: int, seed0: int, force_range=(1.5, 4.0), sim_only: bool 
             print(_honesty_row(f"issue's presses, {name}, plain least squares (before)", truth, [_fit(t, w, plain_noise, jackknife=False) for t, w in noisy]), flush=True)
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seed", type=int, default=3)
     ap.add_argument("--seeds", type=int, default=20, help="probing logs per noise level in the honesty section (0: skip it)")
@@ -190,7 +195,8 @@ def main() -> None:
                     help="held force of the simulated presses, N (default 1.5 4)")
     ap.add_argument("--sim-only", action="store_true", help="honesty section: only the simulated (held, sliding) presses")
     ap.add_argument("--issue-only", action="store_true", help="honesty section: only the issue's presses")
-    args = ap.parse_args()
+    # --markdown PATH (handled around main): also write the printed tables to PATH
+    args = ap.parse_args(argv)
     if not args.honesty_only:
         rows = calibration_rows(args.seed) + gravity_rows(args.seed)
         print("| condition | papers' method | softtip |")
@@ -199,14 +205,15 @@ def main() -> None:
             print(f"| {r[0]} | {r[1]} | {r[2]} |")
         print()
     if args.seeds < 1:
-        return
+        return 0
     print(f"Calibration under sensor noise, {args.seeds} logs per row, sphere r = 16 mm at (0.3, -0.2, 20) mm; "
           "each cell x / y / z / radius (errors and std in mm)")
     print()
     print("| log, sensor | bias | RMS error | largest error | median reported std | error/std mean | error/std spread |")
     print("| --- | --- | --- | --- | --- | --- | --- |")
     honesty_rows(args.seeds, args.seed, tuple(args.force_range), args.sim_only, args.issue_only)  # prints its rows as they come
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run_with_markdown(main, "bench_calibration.py"))

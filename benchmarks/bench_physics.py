@@ -361,53 +361,63 @@ def per_grasp_rows(name: str, res: dict) -> None:
 
 def plot_rocking(path: str, physics: list[Physics], args, tip) -> None:
     """h in the tangent plane under rocking, a thin plate (along the first rocking axis and at 25°)
-    and a plane, per physics."""
+    and a plane, per physics; in softtip's figure style (:mod:`softtip.viz.style`)."""
     import matplotlib
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from softtip.viz.style import PALETTE, TRUTH, label, styled
 
-    objs = (("plate 1 mm", Plate(0.001), 0.0), ("plate 1 mm", Plate(0.001), 25.0), ("plane", HalfSpace(), 25.0))
-    fig, axs = plt.subplots(len(physics), len(objs), figsize=(5 * len(objs), 4.6 * len(physics)), squeeze=False)
-    for i, phys in enumerate(physics):
-        for j, (label, obj, ang) in enumerate(objs):
-            scn = rock_scenario(math.radians(ang), rock_amplitude=math.radians(args.rock_amplitude),
-                                rock_axes=math.radians(args.rock_axes))  # fmt: skip
-            log = phys.simulate(tip, obj, scn, rocking=True)
-            t, w, truth = noisy(log, args, 101)
-            est = estimate(t, w, estimation_tip(tip))
-            a1 = next(d for d in scn.disturbances if d.label == "rock-a1")
-            ax = axs[i, j]
-            m = (t >= a1.start) & (est.state > 0)
-            e1, e2 = tangent_frame(est.normal[m])
-            h1 = np.sum(est.h[m] * e1, -1) * 1e3
-            h2 = np.sum(est.h[m] * e2, -1) * 1e3
-            sc = ax.scatter(h1, h2, c=t[m], s=6, cmap="viridis")
-            lim = max(np.abs(np.r_[h1, h2]).max() * 1.15, 0.5)
-            if obj.kind != "plane":
-                th = float(np.median(truth[m]))
-                d = np.array([math.cos(th), math.sin(th)])
-                hd = np.array([-d[1], d[0]])  # n × d: the axis h lies on for a line
-                ax.plot([-lim * d[0], lim * d[0]], [-lim * d[1], lim * d[1]], "k--", lw=1.2,
-                        label=f"truth line direction d ({math.degrees(th):+.0f}°)")  # fmt: skip
-                ax.plot([-lim * hd[0], lim * hd[0]], [-lim * hd[1], lim * hd[1]], "r:", lw=1.2, label="n × d (h of a line)")
-                ax.legend(loc="upper right", fontsize=8)
-            ax.set_xlim(-lim, lim)
-            ax.set_ylim(-lim, lim)
-            ax.set_aspect("equal")
-            ax.axhline(0, color="0.8", lw=0.5)
-            ax.axvline(0, color="0.8", lw=0.5)
-            ax.set_xlabel("h · e1 (N·mm)")
-            ax.set_ylabel("h · e2 (N·mm)")
-            a2 = next(d for d in scn.disturbances if d.label == "rock-a2")
-            share = np.mean(est.state[t >= a2.start + a2.period] == 2)
-            ax.set_title(f"{phys.name}: {label} at {ang:+.0f}°, rocked ({share:.0%} line after both axes)", fontsize=10)
-            fig.colorbar(sc, ax=ax, label="t (s)", shrink=0.8)
-    fig.suptitle("Tangential spin torque h under rocking (two tangent axes, then a figure-eight), murakami2006 tip, "
-                 "default estimator\ne1 = sensor x projected on the tangent plane, e2 = n × e1 (manual §3.4); "
-                 "from the rocking's start", fontsize=10)  # fmt: skip
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    @styled
+    def draw() -> None:
+        import matplotlib.pyplot as plt
+
+        objs = (("plate 1 mm", Plate(0.001), 0.0), ("plate 1 mm", Plate(0.001), 25.0), ("plane", HalfSpace(), 25.0))
+        fig, axs = plt.subplots(len(physics), len(objs), figsize=(4.6 * len(objs), 4.4 * len(physics) + 0.9),
+                                squeeze=False, layout="constrained")  # fmt: skip
+        handles = []
+        for i, phys in enumerate(physics):
+            for j, (name, obj, ang) in enumerate(objs):
+                scn = rock_scenario(math.radians(ang), rock_amplitude=math.radians(args.rock_amplitude),
+                                    rock_axes=math.radians(args.rock_axes))  # fmt: skip
+                log = phys.simulate(tip, obj, scn, rocking=True)
+                t, w, truth = noisy(log, args, 101)
+                est = estimate(t, w, estimation_tip(tip))
+                a1 = next(d for d in scn.disturbances if d.label == "rock-a1")
+                ax = axs[i, j]
+                m = (t >= a1.start) & (est.state > 0)
+                e1, e2 = tangent_frame(est.normal[m])
+                h1 = np.sum(est.h[m] * e1, -1) * 1e3
+                h2 = np.sum(est.h[m] * e2, -1) * 1e3
+                sc = ax.scatter(h1, h2, c=t[m], s=5, cmap="viridis", zorder=2)
+                lim = max(np.abs(np.r_[h1, h2]).max() * 1.15, 0.5)
+                if obj.kind != "plane":
+                    th = float(np.median(truth[m]))
+                    d = np.array([math.cos(th), math.sin(th)])
+                    hd = np.array([-d[1], d[0]])  # n × d: the axis h lies on for a line
+                    (a,) = ax.plot([-lim * d[0], lim * d[0]], [-lim * d[1], lim * d[1]], "--", color=TRUTH, lw=1.2,
+                                   label="the line's true direction d")  # fmt: skip
+                    (b,) = ax.plot([-lim * hd[0], lim * hd[0]], [-lim * hd[1], lim * hd[1]], ":", color=PALETTE[3], lw=1.4,
+                                   label="n × d: where h of a line lies")  # fmt: skip
+                    handles = handles or [a, b]
+                ax.set_xlim(-lim, lim)
+                ax.set_ylim(-lim, lim)
+                ax.set_aspect("equal")
+                ax.axhline(0, color="0.8", lw=0.5, zorder=1)
+                ax.axvline(0, color="0.8", lw=0.5, zorder=1)
+                ax.set_xlabel(label("h · e1", "N·mm"))
+                ax.set_ylabel(label("h · e2", "N·mm"))
+                a2 = next(d for d in scn.disturbances if d.label == "rock-a2")
+                share = np.mean(est.state[t >= a2.start + a2.period] == 2)
+                ax.set_title(f"{phys.name}: {name} at {ang:+.0f}°\n{share:.0%} line after both axes were rocked")
+                fig.colorbar(sc, ax=ax, label=label("time", "s"), shrink=0.8)
+        fig.legend(handles=handles, loc="outside lower center", ncol=2)
+        fig.suptitle("Tangential spin torque h under rocking (two tangent axes, then a figure-eight), from the rocking's "
+                     "start\nmurakami2006 tip, default estimator; e1: the sensor's x axis projected on the tangent "
+                     "plane, e2 = n × e1 (manual §3.4)")  # fmt: skip
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+
+    draw()
     print(f"\nfigure written to {path}")
 
 

@@ -40,6 +40,8 @@ exclude_patterns = [
     "manual.md",  # a pointer to guide/ kept for old links
     "benchmarks/physics-*.md",  # written by benchmarks/bench_physics.py --markdown, included by two-physics.md
     "benchmarks/performance-*.md",  # written by benchmarks/bench_core.py --markdown, included by performance.md
+    "benchmarks/accuracy-*run.md",  # written by benchmarks/bench_accuracy.py --markdown, included by accuracy.md
+    "benchmarks/calibration-*run.md",  # written by benchmarks/bench_calibration.py --markdown, included by accuracy.md
     "guide/columns.md",  # written by scripts/make_column_table.py, included by 04-data-and-command-line.md
     "examples/README.txt",
     "auto_examples/*.ipynb",

@@ -175,6 +175,25 @@ def test_the_readme_is_short() -> None:
     assert len(README.read_text(encoding="utf-8").splitlines()) <= 200
 
 
+def _references(text: str) -> list[str]:
+    """The bullets of a "How to cite" section, whitespace collapsed."""
+    section = text.split("## How to cite", 1)[1].split("\n## ", 1)[0]
+    return [" ".join(b.split()) for b in re.findall(r"^- (.*?)(?=^- |^\s*$)", section, re.DOTALL | re.MULTILINE)]
+
+
+def test_the_papers_references_agree() -> None:
+    """The README, the site's front page and CITATION.cff cite the two papers alike."""
+    readme = _references(README.read_text(encoding="utf-8"))
+    assert len(readme) == 2, readme
+    assert _references((ROOT / "docs" / "index.md").read_text(encoding="utf-8")) == readme
+    cff = (ROOT / "CITATION.cff").read_text(encoding="utf-8")
+    for ref in readme:
+        title = re.search(r'"(.+?)"', ref).group(1)
+        assert f'title: "{title}"' in cff, title
+    pages = re.search(r"pp\. (\d+)–(\d+)", readme[1]).groups()
+    assert f"start: {pages[0]}" in cff and f"end: {pages[1]}" in cff
+
+
 def test_the_readme_python_example_runs() -> None:
     """The README's Python blocks run as written (the shipped example needs no file)."""
     blocks = re.findall(r"```python\n(.*?)```", README.read_text(encoding="utf-8"), re.DOTALL)
@@ -198,6 +217,27 @@ def test_readme_block_runs_as_written_with_the_slow_lines(k: int, tmp_path: Path
     if not any(any(p in line for p in SLOW) for line in BLOCKS[k]):
         pytest.skip("no slow line in this block (the fast test ran it)")
     _run_block(BLOCKS[k], tmp_path, slow=True)
+
+
+@pytest.mark.skipif(shutil.which("make") is None, reason="needs make")
+def test_the_readmes_make_demo_runs(tmp_path: Path) -> None:
+    """The README's quick start ``make demo`` runs its recipe as written (the Makefile's, not a
+    copy), with the interpreter running the tests standing in for the ``.venv`` it would
+    create (no network: nothing is installed) and its output in a temporary directory.
+    (``make test`` runs the whole suite, and ``pip install`` / ``git clone`` need the network:
+    those README lines are not run.)"""
+    assert "make demo" in README.read_text(encoding="utf-8")
+    venv = tmp_path / "venv"
+    (venv / "bin").mkdir(parents=True)
+    for name in ("python", "softtip"):
+        (venv / "bin" / name).symlink_to(Path(sys.executable).with_name(name))
+    (venv / ".demo-installed").touch()  # newer than pyproject.toml: make installs nothing
+    out = tmp_path / "demo-output"
+    run = subprocess.run(["make", "--no-print-directory", "-C", str(ROOT), "demo", f"VENV={venv}", f"OUT={out}"],
+                         capture_output=True, text=True, timeout=300)  # fmt: skip
+    assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
+    assert "pip" not in run.stdout, run.stdout  # it used the stand-in, installed nothing
+    assert (out / "estimates.csv").stat().st_size > 0 and (out / "estimates.png").stat().st_size > 0
 
 
 def test_the_walk_fails_on_a_broken_line(tmp_path: Path) -> None:

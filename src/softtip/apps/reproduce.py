@@ -306,7 +306,7 @@ EXPERIMENTS: dict[str, tuple[str, str]] = {
     "E3": ("Plates 1–15 mm thick", "2006 IV-C, Figs. 14–17"),
     "E4": ("Cylinders Ø 4–14 mm", "2006 IV-D, Figs. 19–22"),
     "E5": ("Fringe of a Ø 40 mm cylinder bottom", "2006 IV-E, Fig. 24"),
-    "E6": ("Contact position error vs pushing force, judged above 0.2 kgf", "2006 IV-A, Fig. 7"),
+    "E6": ("Contact position error vs pushing force, judged above 1.96 N", "2006 IV-A, Fig. 7"),
     "X1": ("Line or area under two-axis rocking", "softtip extension"),
 }
 

@@ -185,7 +185,9 @@ def state_band(ax, runs: Sequence[Estimates], labels: Sequence[str] | None = Non
     ax.set_yticklabels(list(labels) if labels is not None else [""] * len(runs), fontsize=7)
     ax.set_ylabel("state", fontsize=8)
     handles = [Patch(facecolor=c, edgecolor="0.5", label=n) for c, n in zip(STATE_COLORS, STATE_BAND_LABELS)]
-    ax.legend(handles=handles, loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=5, fontsize=7, frameon=False, borderaxespad=0.1)
+    # compact: the five entries must fit over a narrow band (a half-width panel in the gallery)
+    ax.legend(handles=handles, loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=5, fontsize=7, frameon=False, borderaxespad=0.1,
+              columnspacing=0.9, handlelength=1.4, handletextpad=0.4)  # fmt: skip
 
 
 @styled
