@@ -478,7 +478,7 @@ def _estimate_in_pieces(
     from softtip.apps.chunked import estimate_pieces
     from softtip.core.lever import LEVER_MARGIN, LeverVote, fingertip_reach, lever_distances
     from softtip.estimator.summary import summarise_contacts
-    from softtip.io.atomic import cannot_write, silence_stdout
+    from softtip.io.atomic import cannot_write, write_stdout
     from softtip.io.formats import table_format
     from softtip.io.tables import NotStreamable, TableWriter, columnar_rows, iter_log
 
@@ -557,12 +557,7 @@ def _estimate_in_pieces(
         try:
             try:
                 if output is None:
-                    try:
-                        run(sys.stdout)
-                        sys.stdout.flush()
-                    except OSError as exc:
-                        silence_stdout()
-                        raise cannot_write("standard output", exc) from None
+                    write_stdout(run)
                     if named is not None:
                         outputs.get(named).discard()  # -o /dev/stdout: written into already
                 else:
