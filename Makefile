@@ -19,7 +19,7 @@ $(BIN)/python:
 
 # one stamp per install set, so that `make demo` never pulls the test extras
 $(VENV)/.demo-installed: pyproject.toml | $(BIN)/python
-	@echo "installing softtip and numpy, scipy, matplotlib, pyarrow, trimesh, click, tqdm into $(VENV) (a few hundred MB, a minute on first use)"
+	@echo "installing softtip and numpy, scipy, numba, matplotlib, pyarrow, trimesh, click, tqdm into $(VENV) (a few hundred MB, a minute on first use)"
 	$(BIN)/pip install --quiet -e .
 	touch $@
 
