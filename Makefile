@@ -3,7 +3,7 @@
 # experiments on the simulator (52 simulated grasps, about a minute of CPU time);
 # `make docs` builds the documentation site into docs/_build/html, warnings as errors.
 # All create ./.venv on first use: `demo` and `reproduce` install softtip alone, `test` adds
-# the test and docs tools and every optional extra (numba, ROS bags, Net F/T, the Rerun
+# the test and docs tools and every optional extra (ROS bags, Net F/T, the Rerun
 # viewer: about 1.3 GB), `docs` the docs tools.
 PYTHON ?= python3
 VENV := .venv
