@@ -36,7 +36,7 @@ def _numba_importable() -> bool:
     if "importable" not in _state:
         try:
             import numba  # noqa: F401
-        except ImportError:  # numba is the optional extra softtip[fast]
+        except ImportError:  # a dependency, but an environment may lack it: the steps then run as Python
             _state["importable"] = False
         else:
             _state["importable"] = True

@@ -3,9 +3,11 @@
 Each stage is the stream form of the batch stage beside it (:mod:`~softtip.estimator.tare`,
 :mod:`~softtip.estimator.latch`, :mod:`~softtip.estimator.line_fit`,
 :mod:`~softtip.estimator.measure`), so :class:`Estimator` and
-:func:`~softtip.estimator.batch.estimate` agree to rounding. The per-sample steps (contact
-tracking, the low-pass filter) run compiled when numba is allowed; the measurement calls the
-batch's kernels on floats (:data:`softtip.core._xp.PY`).
+:func:`~softtip.estimator.batch.estimate` give the same bits. Each stateful stage (contact
+tracking, the low-pass filter, the latch, the line fit, the depth, the line evidence) is one
+step function over a state record, called here once per sample and by the batch in a compiled
+loop (:mod:`softtip.core._jit`); the measurement calls the batch's kernels on floats
+(:data:`softtip.core._xp.PY`).
 """
 
 from __future__ import annotations
