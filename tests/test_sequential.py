@@ -1,6 +1,9 @@
-"""The compiled sequential kernels (numba) against the numpy paths they replace."""
+"""The stages' step functions: compiled and as Python, the same bits; when each runs."""
 
 import dataclasses
+import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -93,19 +96,36 @@ def test_short_logs_take_the_numpy_path(monkeypatch):
 
 
 def test_step_functions_run_compiled_whenever_numba_is_used(monkeypatch):
-    # a step function has no numpy path: compiled at any length, as Python when SOFTTIP_NUMBA=0
+    # a step function has no numpy path: compiled for a stream and for long logs (short ones too
+    # once numba is loaded), as Python when SOFTTIP_NUMBA=0
+    from softtip.core._jit import STEP_MIN_SAMPLES
     from softtip.estimator.depth import depth_step
 
     monkeypatch.delenv("SOFTTIP_NUMBA", raising=False)
     old = set_jit(None)
     try:
         assert use_numba() and depth_step.function() is depth_step.compiled()
+        assert use_numba(STEP_MIN_SAMPLES) and depth_step.function(STEP_MIN_SAMPLES) is depth_step.compiled()
+        assert use_numba(10)  # numba is loaded in this process by now: no start-up left to save
         monkeypatch.setenv("SOFTTIP_NUMBA", "0")
-        assert not use_numba() and depth_step.function() is depth_step.py_func
+        assert not use_numba() and depth_step.function() is depth_step.python
         set_jit(True)  # the setting outranks the environment
         assert use_numba() and depth_step.function() is depth_step.compiled()
     finally:
         set_jit(old)
+
+
+def test_a_short_log_in_a_fresh_process_does_not_load_numba():
+    # importing numba and loading the steps (about 0.7 s of CPU) costs more than a short log as Python
+    code = (
+        "import sys, warnings; warnings.simplefilter('ignore'); import softtip; log = softtip.load_example(); "
+        "e = softtip.estimate(log.t, log.wrench); print('numba' in sys.modules, int((e.state == 2).sum()))"
+    )
+    env = {k: v for k, v in os.environ.items() if k != "SOFTTIP_NUMBA"}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
+    assert out.returncode == 0, out.stderr
+    loaded, lines = out.stdout.split()
+    assert loaded == "False" and int(lines) > 0
 
 
 @settings(max_examples=60, deadline=None)

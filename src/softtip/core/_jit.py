@@ -20,11 +20,12 @@ sources of ``softtip.core`` and ``softtip.estimator`` too.
 from __future__ import annotations
 
 import os
+import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-__all__ = ["JIT_MIN_SAMPLES", "jit_enabled", "jitable", "lazy_jit", "set_jit", "use_numba"]
+__all__ = ["JIT_MIN_SAMPLES", "STEP_MIN_SAMPLES", "jit_enabled", "jitable", "lazy_jit", "set_jit", "use_numba"]
 
 #: Logs of at least this many samples use the compiled kernels (when allowed).
 JIT_MIN_SAMPLES = 100_000
@@ -73,13 +74,25 @@ def set_jit(enabled: bool | None) -> bool | None:
     return old
 
 
-def use_numba() -> bool:
+#: A batch loop over fewer samples runs its steps as Python unless numba is loaded already:
+#: below this, importing numba and loading the cached steps (about 0.7 s of CPU) costs more than
+#: running them as Python (about 30 µs a sample for every stage together).
+STEP_MIN_SAMPLES = 20_000
+
+
+def use_numba(n: int | None = None) -> bool:
     """Whether the step functions (:func:`lazy_jit`) run compiled: as :func:`set_jit` or
-    ``SOFTTIP_NUMBA`` say when they do, else whenever numba is installed."""
+    ``SOFTTIP_NUMBA`` say when they do; else, when numba is installed, always for a stream
+    (``n`` None) and for a batch loop over ``n`` samples from :data:`STEP_MIN_SAMPLES` on, or
+    at any length once numba is loaded in this process (the same bits either way)."""
     forced = _state["enabled"]
     if forced is None:
         forced = _from_environment()
-    return _numba_importable() if forced is None else bool(forced)
+    if forced is not None:
+        return bool(forced)
+    if n is not None and n < STEP_MIN_SAMPLES and "numba" not in sys.modules:
+        return False
+    return _numba_importable()
 
 
 #: Plain functions compiled code may call (:func:`jitable`), and those registered with numba so far.
@@ -139,10 +152,11 @@ class _Lazy:
             self._compiled = compiled
         return self._compiled
 
-    def function(self) -> Callable:
-        """What a call runs: :meth:`compiled` when numba is used (:func:`use_numba`), else
-        :attr:`py_func`. A caller that calls it per sample keeps this instead."""
-        return self.compiled() if use_numba() else self.py_func
+    def function(self, n: int | None = None) -> Callable:
+        """What a call runs: :meth:`compiled` when numba is used (:func:`use_numba`: ``n`` the
+        samples of a batch loop, None for a stream), else :attr:`python`. A caller that calls
+        it per sample keeps this instead."""
+        return self.compiled() if use_numba(n) else self.python
 
     @property
     def _numba_type_(self):

@@ -83,7 +83,7 @@ def sosfilt_state(
         return x.copy(), zi
     if zi is None:
         zi = sos_initial_state(sos, x[0])
-    if use_numba():  # the stream's step, compiled: scipy's bits, ~1.5x faster
+    if use_numba(len(x)):  # the stream's step, compiled: scipy's bits, ~1.5x faster
         z, y = np.array(zi, dtype=float), np.empty(x.shape)
         sos_run(sos_coefficients(sos), z, np.ascontiguousarray(x, dtype=float), y)
         return y, z

@@ -304,7 +304,7 @@ def track_contacts(
     cid = np.zeros(n, dtype=np.int64)
     busy = np.zeros(n, dtype=bool)
     drift, y = np.empty((n, 6)), np.empty((n, 6))
-    run = contact_run.compiled() if use_numba() else contact_run.python
+    run = contact_run.compiled() if use_numba(n) else contact_run.python
     t = np.ascontiguousarray(t, dtype=float)
     x = np.ascontiguousarray(x, dtype=float)
     alarm = run(t, x, int(start), rec, contact_params(config, noise), cid, busy, drift, y)

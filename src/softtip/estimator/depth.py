@@ -394,7 +394,7 @@ def depth_points(t, c, contact, point, normal, config: EstimatorConfig, noise: S
         has = contact & np.all(np.isfinite(point), axis=-1)
         return DepthPoints(np.where(has, d0, 0.0), np.zeros(n), np.zeros(n, dtype=bool))
     depth, depth_std, from_data = np.empty(n), np.empty(n), np.empty(n, dtype=bool)
-    depth_run(
+    depth_run.function(n)(
         np.ascontiguousarray(t, dtype=float), np.ascontiguousarray(contact, dtype=bool),
         *(np.ascontiguousarray(x, dtype=float) for x in c), np.ascontiguousarray(point, dtype=float),
         np.ascontiguousarray(normal, dtype=float), d0, depth_params(config, noise, corr), depth, depth_std, from_data,

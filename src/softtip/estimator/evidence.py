@@ -518,9 +518,10 @@ def _capacity(t, window: float) -> int:
     return int(np.max(np.arange(1, len(t) + 1) - np.minimum(first, np.arange(len(t))))) + 2
 
 
-def _impl(fn):
-    """``fn`` compiled when the step functions run compiled, else its Python source."""
-    return fn.compiled() if use_numba() else fn.python
+def _impl(fn, n: int | None = None):
+    """``fn`` compiled when the step functions run compiled (:func:`~softtip.core._jit.use_numba`,
+    ``n`` a batch loop's samples), else its Python source."""
+    return fn.compiled() if use_numba(n) else fn.python
 
 
 def evidence_states(t, located, begin, point, normal, h, force, ms, noise: SensorNoise, corr: float,
@@ -566,7 +567,7 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
     depth = np.zeros(n) if depth is None else np.ascontiguousarray(depth, dtype=float)
     code, evidence = np.empty(n, dtype=np.int8), np.empty(n, dtype=np.int8)
     direction, out = np.empty((n, 3)), np.empty((n, 5))
-    _impl(evidence_run)(
+    _impl(evidence_run, len(t))(
         t, np.ascontiguousarray(located, dtype=bool), np.ascontiguousarray(begin, dtype=bool), point, normal,
         *(np.ascontiguousarray(e, dtype=float) for e in frame), depth, h, force,
         np.ascontiguousarray(ms.h_norm, dtype=float), np.ascontiguousarray(ms.h_std, dtype=float),

@@ -282,7 +282,7 @@ def latch_points(t, f_norm, contact, sc, tip: Fingertip, config: EstimatorConfig
     code = np.zeros(n, dtype=np.int8)
     point = np.full((n, 3), np.nan)
     latched, fallback, relatched = (np.zeros(n, dtype=bool) for _ in range(3))
-    run, hold = latch_run.function(), latch_hold.function()
+    run, hold = latch_run.function(n), latch_hold.function(n)
     t, f_norm = np.ascontiguousarray(t, dtype=float), np.ascontiguousarray(f_norm, dtype=float)
     i = 0
     while (i := run(state, params, contact, t, f_norm, valid, rx, ry, rz, i, code, point, latched, fallback,
@@ -292,7 +292,7 @@ def latch_points(t, f_norm, contact, sc, tip: Fingertip, config: EstimatorConfig
     k = np.flatnonzero((code == MEAN) | (code == FIX))
     if len(k):
         point[k] = np.stack(tip._project_kernel(*point[k].T, NP), axis=-1)
-    _copy_held.function()(code, point)
+    _copy_held.function(n)(code, point)
     return LatchedPoints(point, latched, fallback, relatched)
 
 

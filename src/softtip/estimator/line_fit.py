@@ -270,7 +270,7 @@ def line_fit_points(t, c, contact, sc, base, relatched, tip: Fingertip, config: 
     law, window, drift2 = config.skin_law, float(config.line_fit_window), float(config.line_fit_drift**2)
     state = new_line_fit_state()
     ring = np.zeros((ring_capacity(t, window), 1 + N_SUMS))
-    anchor_run, window_run, hold_run = _anchor_run.function(), _window_run.function(), _hold_run.function()
+    anchor_run, window_run, hold_run = _anchor_run.function(n), _window_run.function(n), _hold_run.function(n)
     point = base.copy()
     stats = np.full((4, n), np.nan)
     use, moved = np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)
