@@ -102,6 +102,9 @@ def run() -> None:
     failure's code). So a failed run flushes its streams and exits with its code directly; a
     successful one ends normally. In-process callers (tests) use :data:`main` itself.
     """
+    from softtip.io.interrupt import ignore_signals_after_commit_until_exit
+
+    ignore_signals_after_commit_until_exit()
     try:
         main(standalone_mode=True)
     except SystemExit as exc:

@@ -15,7 +15,8 @@ import signal
 import threading
 from collections.abc import Iterator
 
-__all__ = ["Interrupted", "check_interrupted", "exit_code", "exit_now", "interrupted_signal", "outputs_committed",
+__all__ = ["Interrupted", "check_interrupted", "exit_code", "exit_now", "ignore_signals_after_commit_until_exit",
+           "interrupted_signal", "outputs_committed",
            "terminate_like_ctrl_c"]
 
 _SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
@@ -114,12 +115,24 @@ def _remove_multiprocessing_tempdir() -> None:
             shutil.rmtree(tempdir, ignore_errors=True)
 
 
+_after_commit = {"committed": False, "until_exit": False}
+
+
+def ignore_signals_after_commit_until_exit() -> None:
+    """For the console command: once a run's outputs are committed, termination signals stay
+    ignored after :func:`terminate_like_ctrl_c`'s block too, until the process ends (a signal
+    during the interpreter's exit would otherwise kill a finished run: exit -15, every output
+    written). In-process callers (tests) do not call it: their handlers come back."""
+    _after_commit["until_exit"] = True
+
+
 def outputs_committed() -> None:
     """A run's outputs are in place: from now on a termination signal is ignored within
     :func:`terminate_like_ctrl_c` (also one already pending). The run is complete; unwinding
     would exit 143 with every output written, which a caller reads as a failed run."""
     if threading.current_thread() is not threading.main_thread():
         return
+    _after_commit["committed"] = True
     for sig in (signal.SIGINT, *_SIGNALS):
         with contextlib.suppress(OSError, ValueError):
             if signal.getsignal(sig) in (_raise, _raise_keyboard_interrupt):
@@ -160,6 +173,8 @@ def terminate_like_ctrl_c() -> Iterator[None]:
     try:
         yield
     finally:
-        if not _interrupted.is_set():  # after a signal the others stay ignored until the process ends
+        # after a signal the others stay ignored until the process ends; so after a commit, for the
+        # console command
+        if not _interrupted.is_set() and not (_after_commit["committed"] and _after_commit["until_exit"]):
             for sig, handler in previous.items():
                 signal.signal(sig, handler)
