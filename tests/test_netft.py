@@ -186,12 +186,15 @@ def test_a_session_survives_network_and_device_faults(tmp_path):
     (k,) = np.nonzero(np.diff(seq) < 0)[0]
     assert seq[k + 1] == 1 and 0.6 <= t[k + 1] - t[k] <= 3.0  # 0.6 s deaf, then the next request
     assert set(status[seq % 500 == 0]) == {0x80010000} and set(status[seq % 500 != 0]) == {0}
-    # each fault was counted, none ended the session; the columns add up to the totals
+    # each fault was counted, none ended the session; the columns add up to the totals, but for
+    # datagrams the receive thread counted after the last recorded row (the session ends at its
+    # duration while the device still sends; seen once in a CI run: 15 duplicates, 14 in rows)
     col = {c: np.array([int(r[c]) for r in rows]) for c in ("lost", "dropped", "late", "duplicates", "malformed")}
     for what in ("lost", "late", "duplicates", "malformed"):
         n = int(out.stderr.split(f" {what}")[0].rsplit(" ", 1)[-1])
         assert n >= 5, (what, out.stderr)
-        assert n == col[what].sum() - (col["late"].sum() if what == "lost" else 0), what
+        in_rows = col[what].sum() - (col["late"].sum() if what == "lost" else 0)
+        assert (abs(n - in_rows) if what == "lost" else n - in_rows) in (0, 1, 2), (what, n, in_rows)
     assert "1 restarts" in out.stderr and "0 dropped by softtip" in out.stderr
     assert "status word 0x80010000" in out.stderr and "restarted its stream" in out.stderr
     # duplicates and late packets never reach the recording
