@@ -17,11 +17,10 @@ from softtip.core._xp import NP, PY
 from softtip.core.evidence import (
     evidence_products,
     noise_constants,
-    noise_variances,
     tangent_noise_kernel,
     window_floats,
 )
-from softtip.core.noise import NANO17
+from softtip.core.noise import NANO17, noise_variances
 from softtip.sim import make_object, rock_scenario
 from softtip.sim.scenario import Disturbance
 

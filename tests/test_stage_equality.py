@@ -18,10 +18,11 @@ from softtip.core._jit import set_jit
 from softtip.core._xp import NP, PY
 from softtip.core.depth import DepthLaw
 from softtip.core.location import contact_arrays
+from softtip.core.noise import noise_variances
 from softtip.estimator.contact import ContactTracker, track_contacts
 from softtip.estimator.depth import DepthTracker, depth_points, resolve_depth
 from softtip.estimator.evidence import EvidenceTracker, evidence_states
-from softtip.estimator.floats import NoiseSquares, PointGeometry
+from softtip.estimator.floats import PointGeometry
 from softtip.estimator.latch import latch_points
 from softtip.estimator.measure import effective_noise, measure, noise_correlation
 from softtip.estimator.tare import StreamTare, tare_log
@@ -221,7 +222,7 @@ def test_evidence_stage(staged):
         t, s["located"], s["begin"], s["point"], s["normal"], h, force, ms, s["noise"], s["corr"], cfg, s["depth"][0]
     )
     tracker = EvidenceTracker(cfg, s["noise"], s["corr"])
-    sq = NoiseSquares(s["noise"])
+    variances = noise_variances(s["noise"])
     names = {1: "point", 2: "line", 3: "area"}
     eff = s["point"] - s["depth"][0][:, None] * s["normal"]  # h is taken about the point under the depth
     geo = None
@@ -230,7 +231,7 @@ def test_evidence_stage(staged):
             tracker.start_segment()
         point, normal = tuple(s["point"][i].tolist()), tuple(s["normal"][i].tolist())
         if geo is None or geo.point != point or geo.normal != normal:  # one geometry per held point
-            geo = PointGeometry(point, normal, sq)
+            geo = PointGeometry(point, normal, variances)
         st, ev, di, an, an_std, an_noise, hr, fr = tracker.step(
             float(t[i]), geo, *eff[i].tolist(), *h[i].tolist(), *force[i].tolist(), float(ms.h_norm[i]),
             float(ms.h_std[i]),

@@ -55,6 +55,7 @@ import numpy as np
 from softtip.core._jit import lazy_jit
 from softtip.core._xp import NP
 from softtip.core.line_fit import MODEL_MARGIN, _chi2_excess
+from softtip.core.noise import noise_quad
 
 __all__ = [
     "N_SUMS", "Window", "evidence_products", "tangent_noise_kernel", "noise_constants", "window_eigen",
@@ -108,27 +109,21 @@ def evidence_products(h1, h2, f1, f2):
 def tangent_noise_kernel(rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, sfx, sfy, sfz, smx, smy, smz):
     """Noise covariance of ``h`` (N²·m²) and of ``f_t`` (N²) in the tangent frame at ``r``.
 
-    ``sf*``, ``sm*``: the sensor noise's variances per axis (N², N²·m²; ``s * s`` of
-    :class:`~softtip.core.noise.SensorNoise`'s standard deviations, :func:`noise_variances`).
-    Returns ``(h11, h12, h22, f11, f12, f22)``: ``Σ_h = P Σ_m P + P [r]× Σ_f [r]×ᵀ P`` and
-    ``Σ_f`` projected on ``(e1, e2)`` (:mod:`softtip.core.noise`).
+    ``sf*``, ``sm*``: the sensor noise's variances per axis (N², N²·m²;
+    :func:`~softtip.core.noise.noise_variances`). Returns ``(h11, h12, h22, f11, f12, f22)``:
+    ``Σ_h = P Σ_m P + P [r]× Σ_f [r]×ᵀ P`` (its diagonal :func:`~softtip.core.noise.noise_quad`)
+    and ``Σ_f`` projected on ``(e1, e2)`` (:mod:`softtip.core.noise`).
     """
-    # u × r for u = e1, e2
+    h11 = noise_quad(e1x, e1y, e1z, rx, ry, rz, sfx, sfy, sfz, smx, smy, smz)
+    h22 = noise_quad(e2x, e2y, e2z, rx, ry, rz, sfx, sfy, sfz, smx, smy, smz)
+    # the off-diagonal: the same form between u × r for u = e1, e2
     ax, ay, az = e1y * rz - e1z * ry, e1z * rx - e1x * rz, e1x * ry - e1y * rx
     bx, by, bz = e2y * rz - e2z * ry, e2z * rx - e2x * rz, e2x * ry - e2y * rx
-    h11 = smx * e1x * e1x + smy * e1y * e1y + smz * e1z * e1z + sfx * ax * ax + sfy * ay * ay + sfz * az * az
     h12 = smx * e1x * e2x + smy * e1y * e2y + smz * e1z * e2z + sfx * ax * bx + sfy * ay * by + sfz * az * bz
-    h22 = smx * e2x * e2x + smy * e2y * e2y + smz * e2z * e2z + sfx * bx * bx + sfy * by * by + sfz * bz * bz
     f11 = sfx * e1x * e1x + sfy * e1y * e1y + sfz * e1z * e1z
     f12 = sfx * e1x * e2x + sfy * e1y * e2y + sfz * e1z * e2z
     f22 = sfx * e2x * e2x + sfy * e2y * e2y + sfz * e2z * e2z
     return h11, h12, h22, f11, f12, f22
-
-
-def noise_variances(noise) -> tuple[float, float, float, float, float, float]:
-    """``(σ_fx², σ_fy², σ_fz², σ_mx², σ_my², σ_mz²)`` of a
-    :class:`~softtip.core.noise.SensorNoise` (N², N²·m²), as :func:`tangent_noise_kernel` takes them."""
-    return tuple(s * s for s in noise.force_std) + tuple(s * s for s in noise.moment_std)
 
 
 class Window(NamedTuple):

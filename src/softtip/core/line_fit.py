@@ -66,7 +66,7 @@ small. With a low-pass filter the noise model is the filtered one.
 from __future__ import annotations
 
 from softtip.core._jit import jitable
-from softtip.core.noise import SensorNoise, _quad_kernel
+from softtip.core.noise import SensorNoise, noise_quad, noise_variances
 from softtip.core.spin import tangent_frame_kernel
 
 __all__ = ["N_SUMS", "line_fit_products", "line_fit_solve_kernel"]
@@ -117,7 +117,7 @@ def _without_noise(sums, count, ax, ay, az, noise: SensorNoise):
     """The window sums less their expected noise: ``count`` times the noise covariance of
     ``(q_A, f)``, with ``q_A = m − a × f`` (``a`` the anchor), for the unbiased second
     moments of the noise-free wrench (errors in variables)."""
-    (fx, fy, fz), (mx, my, mz) = ((s * s for s in noise.force_std), (s * s for s in noise.moment_std))
+    fx, fy, fz, mx, my, mz = noise_variances(noise)
     # q_A = m − A f with A = [a]×: cov(q_A) = Σ_m + A Σ_f Aᵀ, cov(q_A, f) = −A Σ_f
     a = ((0.0, -az, ay), (az, 0.0, -ax), (-ay, ax, 0.0))
     sf = (fx, fy, fz)
@@ -226,6 +226,7 @@ def line_fit_solve_kernel(sums, count, r0x, r0y, r0z, ax, ay, az, tip, iteration
         linearisation point (NaN or inf when undefined).
     """
     qq, qf, ff = _without_noise(sums, count, ax, ay, az, noise)
+    variances = noise_variances(noise)
     rx, ry, rz = r0x, r0y, r0z
     dx = dy = dz = cond = angle_std = offset_std = residual = None
     for _ in range(iterations):
@@ -262,8 +263,8 @@ def line_fit_solve_kernel(sums, count, r0x, r0y, r0z, ax, ay, az, tip, iteration
         # the noise's expected share already removed) less a margin for the noise's own
         # scatter and for a noise model a little low; e = n × d is (−u2, u1) in the basis
         stt = u2 * u2 * q11 - 2.0 * u1 * u2 * q12 + u1 * u1 * q22
-        var = _quad_kernel(dx, dy, dz, rx, ry, rz, noise)  # residual noise per sample
-        var_t = _quad_kernel(ex, ey, ez, rx, ry, rz, noise)  # noise of τ per sample
+        var = noise_quad(dx, dy, dz, rx, ry, rz, *variances)  # residual noise per sample
+        var_t = noise_quad(ex, ey, ez, rx, ry, rz, *variances)  # noise of τ per sample
         k = xp.maximum(count - 1.0, 0.0)
         excess = 0.5 * (p11 + p22) + root - var_t * (corr * _chi2_excess(k / corr, xp) + MODEL_MARGIN * k)
         excess = xp.maximum(excess, 0.0)

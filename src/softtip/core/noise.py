@@ -24,9 +24,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from softtip.core._jit import lazy_jit
+from softtip.core._jit import jitable
 from softtip.core._xp import NP
-from softtip.core.spin import tangent_frame_kernel
+from softtip.core.spin import angle_kernel, direction_kernel, tangent_frame_kernel
 
 __all__ = ["SensorNoise", "NANO17", "NANO25", "MINI40", "SENSOR_CLASSES", "tangential_spin_torque_std", "direction_angle_std"]
 
@@ -84,53 +84,72 @@ MINI40 = SensorNoise(force_std=(1 / 100, 1 / 100, 1 / 50), moment_std=(1 / 4000,
 SENSOR_CLASSES = {"Nano17": NANO17, "Nano25": NANO25, "Mini40": MINI40}
 
 
-@lazy_jit
+def noise_variances(noise: SensorNoise) -> tuple[float, float, float, float, float, float]:
+    """``(σ_fx², σ_fy², σ_fz², σ_mx², σ_my², σ_mz²)`` of ``noise`` (N², N²·m²): what the
+    kernels below take (a compiled step cannot read a :class:`SensorNoise`)."""
+    return tuple(s * s for s in noise.force_std) + tuple(s * s for s in noise.moment_std)
+
+
+@jitable
+def noise_moment_part(vx, vy, vz, smx, smy, smz):
+    """The moment-noise part of ``vᵀ Σ_h v`` (``sm*`` the moment variances, N²·m²): the same at
+    every contact point, so a stream keeps it while a point is held."""
+    return smx * vx * vx + smy * vy * vy + smz * vz * vz
+
+
+@jitable
+def noise_quad_from(part, vx, vy, vz, rx, ry, rz, sfx, sfy, sfz):
+    """``vᵀ Σ_h v`` from its moment-noise part ``part`` (:func:`noise_moment_part`): plus the
+    force-noise part at the contact point ``r`` (m; ``sf*`` the force variances, N²)."""
+    cx = vy * rz - vz * ry
+    cy = vz * rx - vx * rz
+    cz = vx * ry - vy * rx
+    return part + sfx * cx * cx + sfy * cy * cy + sfz * cz * cz
+
+
+@jitable
 def noise_quad(vx, vy, vz, rx, ry, rz, sfx, sfy, sfz, smx, smy, smz):
-    """``vᵀ Σ_h v`` for a tangent vector ``v`` at the contact point ``r``, from the sensor
-    noise's variances per axis (N², N²·m²): :func:`_quad_kernel` for compiled steps (which
-    cannot read a :class:`SensorNoise`), the same operations in the same order."""
-    cx = vy * rz - vz * ry
-    cy = vz * rx - vx * rz
-    cz = vx * ry - vy * rx
-    return smx * vx * vx + smy * vy * vy + smz * vz * vz + sfx * cx * cx + sfy * cy * cy + sfz * cz * cz
+    """``vᵀ Σ_h v`` for a tangent vector ``v`` at the contact point ``r`` (m), from the sensor
+    noise's variances per axis (N², N²·m²; :func:`noise_variances`). The one form: every
+    noise level of ``h`` (``h_std``, the angle's, the evidence window's and the line fit's)
+    is made of it."""
+    return noise_quad_from(noise_moment_part(vx, vy, vz, smx, smy, smz), vx, vy, vz, rx, ry, rz, sfx, sfy, sfz)
 
 
-def _quad_moment_kernel(vx, vy, vz, noise: SensorNoise):
-    """The moment-noise part of ``vᵀ Σ_h v`` (independent of the contact point)."""
-    smx, smy, smz = noise.moment_std
-    return smx * smx * vx * vx + smy * smy * vy * vy + smz * smz * vz * vz
+def h_std_kernel(rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, sfx, sfy, sfz, smx, smy, smz, xp):
+    """``sqrt(trace Σ_h)`` component-wise, from any orthonormal tangent frame ``(e1, e2)`` and the
+    noise's variances (:func:`noise_variances`)."""
+    m1, m2 = noise_moment_part(e1x, e1y, e1z, smx, smy, smz), noise_moment_part(e2x, e2y, e2z, smx, smy, smz)
+    return h_std_parts_kernel(m1, m2, rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, sfx, sfy, sfz, xp)
 
 
-def _quad_force_kernel(part, vx, vy, vz, rx, ry, rz, noise: SensorNoise):
-    """``part`` (the moment-noise part of ``vᵀ Σ_h v``) plus the force-noise part at the contact point ``r``."""
-    sfx, sfy, sfz = noise.force_std
-    cx = vy * rz - vz * ry
-    cy = vz * rx - vx * rz
-    cz = vx * ry - vy * rx
-    return part + sfx * sfx * cx * cx + sfy * sfy * cy * cy + sfz * sfz * cz * cz
+def h_std_parts_kernel(m1, m2, rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, sfx, sfy, sfz, xp):
+    """:func:`h_std_kernel` given the moment-noise parts ``m1``, ``m2`` of the frame
+    (:func:`noise_moment_part`, which a stream keeps while a contact point is held)."""
+    v1 = noise_quad_from(m1, e1x, e1y, e1z, rx, ry, rz, sfx, sfy, sfz)
+    return xp.sqrt(v1 + noise_quad_from(m2, e2x, e2y, e2z, rx, ry, rz, sfx, sfy, sfz))
 
 
-def _quad_kernel(vx, vy, vz, rx, ry, rz, noise: SensorNoise):
-    """``vᵀ Σ_h v`` for a tangent vector ``v`` at the contact point ``r``."""
-    return _quad_force_kernel(_quad_moment_kernel(vx, vy, vz, noise), vx, vy, vz, rx, ry, rz, noise)
-
-
-def h_std_kernel(rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, noise: SensorNoise, xp):
-    """``sqrt(trace Σ_h)`` component-wise, from any orthonormal tangent frame ``(e1, e2)``."""
-    m1, m2 = _quad_moment_kernel(e1x, e1y, e1z, noise), _quad_moment_kernel(e2x, e2y, e2z, noise)
-    return h_std_parts_kernel(m1, m2, rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, noise, xp)
-
-
-def h_std_parts_kernel(m1, m2, rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, noise: SensorNoise, xp):
-    """:func:`h_std_kernel` given the moment-noise parts ``m1``, ``m2`` of the frame (which a
-    stream keeps while a contact point is held)."""
-    v1 = _quad_force_kernel(m1, e1x, e1y, e1z, rx, ry, rz, noise)
-    return xp.sqrt(v1 + _quad_force_kernel(m2, e2x, e2y, e2z, rx, ry, rz, noise))
-
-
-def angle_std_kernel(dx, dy, dz, h_norm, rx, ry, rz, noise: SensorNoise, xp):
+@jitable
+def angle_std_kernel(dx, dy, dz, h_norm, rx, ry, rz, sfx, sfy, sfz, smx, smy, smz, xp):
     """First-order standard deviation of the direction angle, radians."""
-    return xp.div(xp.sqrt(_quad_kernel(dx, dy, dz, rx, ry, rz, noise)), h_norm)
+    return xp.div(xp.sqrt(noise_quad(dx, dy, dz, rx, ry, rz, sfx, sfy, sfz, smx, smy, smz)), h_norm)
+
+
+@jitable
+def sample_direction_kernel(hx, hy, hz, rx, ry, rz, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z,
+                            sfx, sfy, sfz, smx, smy, smz, xp):  # fmt: skip
+    """A sample's own direction from its ``h`` (N·m, taken about ``r``, m) at the normal ``n``:
+    ``(|h|, dx, dy, dz, angle, angle_std)``, ``d = n × h / |n × h|``
+    (:func:`~softtip.core.spin.direction_kernel`), its angle in the tangent frame ``(e1, e2)``
+    (:func:`~softtip.core.spin.angle_kernel`) and the angle's first-order standard deviation
+    from the noise's variances (:func:`angle_std_kernel`), rad. The measurement stage's on
+    arrays (``xp`` :data:`~softtip.core._xp.NP`), the line evidence's in its compiled step
+    (:mod:`softtip.core._xp_scalar`: the C library's ``atan2``, numpy's on arrays, so the angle
+    may differ between the two in the last bit)."""
+    hn, dx, dy, dz = direction_kernel(hx, hy, hz, nx, ny, nz, xp)
+    angle = angle_kernel(dx, dy, dz, e1x, e1y, e1z, e2x, e2y, e2z, xp)
+    return hn, dx, dy, dz, angle, angle_std_kernel(dx, dy, dz, hn, rx, ry, rz, sfx, sfy, sfz, smx, smy, smz, xp)
 
 
 def _split3(a: ArrayLike, name: str) -> list[NDArray]:
@@ -152,7 +171,7 @@ def tangential_spin_torque_std(point: ArrayLike, normal: ArrayLike, noise: Senso
     noise : SensorNoise
     """
     frame = tangent_frame_kernel(*_split3(normal, "normal"), NP)
-    return np.asarray(h_std_kernel(*_split3(point, "point"), *frame, noise, NP))
+    return np.asarray(h_std_kernel(*_split3(point, "point"), *frame, *noise_variances(noise), NP))
 
 
 def direction_angle_std(
@@ -171,5 +190,7 @@ def direction_angle_std(
     noise : SensorNoise
     """
     return np.asarray(
-        angle_std_kernel(*_split3(direction, "direction"), np.asarray(h_norm, float), *_split3(point, "point"), noise, NP)
+        angle_std_kernel(
+            *_split3(direction, "direction"), np.asarray(h_norm, float), *_split3(point, "point"), *noise_variances(noise), NP
+        )
     )

@@ -49,6 +49,7 @@ def tangential_kernel(qx, qy, qz, nx, ny, nz):
     return sigma, qx - sigma * nx, qy - sigma * ny, qz - sigma * nz
 
 
+@jitable
 def direction_kernel(hx, hy, hz, nx, ny, nz, xp):
     """``|h|`` and ``d = n × h / |n × h|``; returns ``(|h|, dx, dy, dz)``.
 
@@ -81,6 +82,7 @@ def tangent_frame_kernel(nx, ny, nz, xp):
     return e1x, e1y, e1z, e2x, e2y, e2z
 
 
+@jitable
 def angle_kernel(dx, dy, dz, e1x, e1y, e1z, e2x, e2y, e2z, xp):
     """Axial angle of ``d`` in the tangent frame ``(e1, e2)``, radians in ``(−π/2, π/2]``."""
     a = xp.atan2(dx * e2x + dy * e2y + dz * e2z, dx * e1x + dy * e1y + dz * e1z)

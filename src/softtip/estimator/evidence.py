@@ -70,6 +70,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from softtip.core import _xp_scalar as XS
 from softtip.core._jit import lazy_jit, use_numba
 from softtip.core._xp import NP
 from softtip.core.evidence import (
@@ -77,16 +78,15 @@ from softtip.core.evidence import (
     _div,
     evidence_products,
     noise_constants,
-    noise_variances,
     tangent_noise_kernel,
     window_constants,
     window_direction,
     window_eigen,
 )  # fmt: skip
-from softtip.core.noise import SensorNoise
+from softtip.core.noise import SensorNoise, noise_variances, sample_direction_kernel
 from softtip.core.spin import tangent_frame_kernel
 from softtip.estimator.config import EstimatorConfig
-from softtip.estimator.floats import PointGeometry, sample_direction
+from softtip.estimator.floats import PointGeometry
 
 __all__ = [
     "evidence_states", "EvidenceStates", "EvidenceTracker", "evidence_params", "new_evidence_state", "evidence_start",
@@ -323,12 +323,13 @@ def _significance(state, counts, ring, params, t, hn, thr):
 
 
 @lazy_jit
-def _own(hx, hy, hz, hn, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z, params):
-    """The sample's own direction (:func:`~softtip.estimator.floats.sample_direction`)."""
-    return sample_direction(
-        hx, hy, hz, hn, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z, params[_NOISE], params[_NOISE + 1],
-        params[_NOISE + 2], params[_NOISE + 3], params[_NOISE + 4], params[_NOISE + 5],
-    )  # fmt: skip
+def _own(hx, hy, hz, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z, params):
+    """The sample's own direction, ``(dx, dy, dz, angle, angle_std)``
+    (:func:`~softtip.core.noise.sample_direction_kernel`)."""
+    return sample_direction_kernel(
+        hx, hy, hz, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z, params[_NOISE], params[_NOISE + 1],
+        params[_NOISE + 2], params[_NOISE + 3], params[_NOISE + 4], params[_NOISE + 5], XS,
+    )[1:]  # fmt: skip
 
 
 @lazy_jit
@@ -371,7 +372,7 @@ def evidence_step(state, counts, ring, params, wconst, t, px, py, pz, nx, ny, nz
         thr = params[_H_MIN]
     if params[_ON] == 0.0:  # the papers' per-sample line test
         if hn > thr:
-            dx, dy, dz, angle, a = _own(hx, hy, hz, hn, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z, params)
+            dx, dy, dz, angle, a = _own(hx, hy, hz, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z, params)
             return _LINE_CODE, _UNCONFIRMED, dx, dy, dz, angle, a, a, _NAN, _NAN
         return _POINT_CODE, 0, _NAN, _NAN, _NAN, _NAN, _NAN, _NAN, _NAN, _NAN
     # the contact point moved farther than evidence_reset_distance from where the window
@@ -464,7 +465,7 @@ def _choose(state, params, area, axis, confirming, sig, w_angle, w_std, w_noise,
     else:
         # the sample's own direction, the window's across-axis spread counted as model error,
         # and the one-axis one unless a window whose load turned about two axes confirmed the line
-        dx, dy, dz, angle, a = _own(hx, hy, hz, hn, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z, params)
+        dx, dy, dz, angle, a = _own(hx, hy, hz, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z, params)
         by_load = held and state[_HELD_SEEN] != 0.0
         v = a * a + _div(minor, hn * hn) + (0.0 if by_load else params[_UNCONF_VAR])
         ev = _CONFIRMED if confirmed else _UNCONFIRMED

@@ -12,14 +12,8 @@ from typing import Any, NamedTuple
 
 from softtip.core.depth import DepthLaw, depth_kernel
 from softtip.core.filtering import noise_gain
-from softtip.core.noise import SensorNoise, angle_std_kernel, h_std_kernel
-from softtip.core.spin import (
-    angle_kernel,
-    direction_kernel,
-    spin_torque_kernel,
-    tangent_frame_kernel,
-    tangential_kernel,
-)
+from softtip.core.noise import SensorNoise, h_std_kernel, noise_variances, sample_direction_kernel
+from softtip.core.spin import spin_torque_kernel, tangent_frame_kernel, tangential_kernel
 
 __all__ = ["Measurement", "measure", "effective_noise", "noise_correlation"]
 
@@ -60,12 +54,11 @@ def measure(
         rx, ry, rz = rx - delta * nx, ry - delta * ny, rz - delta * nz
     qx, qy, qz = spin_torque_kernel(fx, fy, fz, mx, my, mz, rx, ry, rz)
     sigma, hx, hy, hz = tangential_kernel(qx, qy, qz, nx, ny, nz)
-    hn, dx, dy, dz = direction_kernel(hx, hy, hz, nx, ny, nz, xp)
     frame = tangent_frame_kernel(nx, ny, nz, xp)
-    h_std = h_std_kernel(rx, ry, rz, *frame, noise, xp)
+    variances = noise_variances(noise)
+    hn, dx, dy, dz, angle, angle_std = sample_direction_kernel(hx, hy, hz, rx, ry, rz, nx, ny, nz, *frame, *variances, xp)
+    h_std = h_std_kernel(rx, ry, rz, *frame, *variances, xp)
     line = hn > xp.maximum(h_sigmas * h_std, h_min)
-    angle = angle_kernel(dx, dy, dz, *frame, xp)
-    angle_std = angle_std_kernel(dx, dy, dz, hn, rx, ry, rz, noise, xp)
     return Measurement(sigma, hx, hy, hz, hn, h_std, dx, dy, dz, angle, angle_std, line, pushing, delta)
 
 

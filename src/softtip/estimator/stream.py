@@ -23,7 +23,7 @@ from softtip.core._xp import PY
 from softtip.core.filtering import SosStream, lowpass_sos
 from softtip.core.fingertip import Fingertip, load_fingertip
 from softtip.core.location import contact_kernel
-from softtip.core.noise import SensorNoise, h_std_parts_kernel
+from softtip.core.noise import SensorNoise, h_std_parts_kernel, noise_variances
 from softtip.core.spin import spin_torque_kernel, tangential_kernel
 from softtip.estimator.batch import sample_rate_mismatch
 from softtip.estimator.config import EstimatorConfig
@@ -35,7 +35,7 @@ from softtip.estimator.contact import (
 )
 from softtip.estimator.depth import DepthTracker, resolve_depth
 from softtip.estimator.evidence import EvidenceTracker
-from softtip.estimator.floats import NoiseSquares, PointGeometry
+from softtip.estimator.floats import PointGeometry
 from softtip.estimator.latch import LatchTracker
 from softtip.estimator.line_fit import LineFitTracker
 from softtip.estimator.measure import effective_noise, noise_correlation
@@ -107,8 +107,9 @@ class Estimator:
         if cfg.contact_point == "line-fit":
             self._line_fit = LineFitTracker(self.tip, cfg, self._noise, corr)
         self._contacts.set_noise(self._noise)
-        self._sq = NoiseSquares(self._noise)
-        self._geo = PointGeometry((math.nan,) * 3, (0.0, 0.0, 1.0), self._sq)  # none yet
+        self._var = noise_variances(self._noise)
+        self._force_var = self._var[:3]
+        self._geo = PointGeometry((math.nan,) * 3, (0.0, 0.0, 1.0), self._var)  # none yet
         self._depth = None if cfg.skin_law is None else DepthTracker(cfg, self._noise, corr)
 
     @property
@@ -318,9 +319,9 @@ class Estimator:
         geo = self._geo
         if point is not geo.point:  # a new point (while a latch holds: once per contact)
             if self._track:
-                geo = self._geo = PointGeometry(point, normal, self._sq)
+                geo = self._geo = PointGeometry(point, normal, self._var)
             else:
-                geo = self._geo = PointGeometry.on_tip(tip, point, self._sq)
+                geo = self._geo = PointGeometry.on_tip(tip, point, self._var)
         nx, ny, nz = geo.nx, geo.ny, geo.nz
         if depth is None:
             delta, delta_std, from_data = 0.0, 0.0, False
@@ -334,7 +335,7 @@ class Estimator:
         # the effective point, σ = q · n, h = q − σ n, and h's noise level (its moment part per point)
         sigma, hx, hy, hz = tangential_kernel(*spin_torque_kernel(fx, fy, fz, mx, my, mz, ex, ey, ez), nx, ny, nz)
         hn = sqrt(hx * hx + hy * hy + hz * hz)
-        h_std = h_std_parts_kernel(geo.m1, geo.m2, ex, ey, ez, *geo.frame, self._noise, PY)
+        h_std = h_std_parts_kernel(geo.m1, geo.m2, ex, ey, ez, *geo.frame, *self._force_var, PY)
         h = (hx, hy, hz)
         state, evidence, d, angle, angle_std, noise_std, h_ratio, f_ratio = self._evidence.step(
             t, geo, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, h_std
