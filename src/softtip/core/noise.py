@@ -131,6 +131,14 @@ def h_std_parts_kernel(m1, m2, rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, sfx, sf
 
 
 @jitable
+def line_threshold_kernel(h_std, h_sigmas, h_min, xp):
+    """The ``|h|`` above which ``h`` is significant (a line): ``max(h_sigmas · h_std, h_min)``
+    (N·m; manual §3.5). The one form of the test: the measurement's, the line evidence's
+    compiled step's and :meth:`~softtip.estimator.config.EstimatorConfig.line_threshold`."""
+    return xp.maximum(h_sigmas * h_std, h_min)
+
+
+@jitable
 def angle_std_kernel(dx, dy, dz, h_norm, rx, ry, rz, sfx, sfy, sfz, smx, smy, smz, xp):
     """First-order standard deviation of the direction angle, radians."""
     return xp.div(xp.sqrt(noise_quad(dx, dy, dz, rx, ry, rz, sfx, sfy, sfz, smx, smy, smz)), h_norm)

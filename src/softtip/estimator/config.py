@@ -11,7 +11,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from softtip.core.depth import MURAKAMI2006_DEPTH, DepthLaw
 from softtip.core.filtering import lowpass_sos
-from softtip.core.noise import NANO17, SensorNoise
+from softtip.core._xp import NP
+from softtip.core.noise import NANO17, SensorNoise, line_threshold_kernel
 from softtip.core.units import KGF
 from softtip.estimator.settings import Setting, check_value, setting, settings_of
 
@@ -369,7 +370,8 @@ class EstimatorConfig:
         1e-3, "The line evidence starts afresh when the contact point moves farther than this.", unit="m", low=0.0, low_open=True, cli_unit="mm", metavar="LENGTH", group="evidence")
 
     def line_threshold(self, h_std: ArrayLike) -> NDArray[np.float64]:
-        """The ``|h|`` above which a contact is a line: ``max(h_sigmas · h_std, h_min)``.
+        """The ``|h|`` above which a contact is a line: ``max(h_sigmas · h_std, h_min)``
+        (:func:`~softtip.core.noise.line_threshold_kernel`).
 
         Parameters
         ----------
@@ -380,7 +382,7 @@ class EstimatorConfig:
         -------
         array of shape (...,), N·m
         """
-        return np.maximum(self.h_sigmas * np.asarray(h_std, dtype=float), self.h_min)
+        return line_threshold_kernel(np.asarray(h_std, dtype=float), self.h_sigmas, self.h_min, NP)
 
     def __post_init__(self) -> None:
         # each value against its Setting (field metadata): kind, range, choices

@@ -83,7 +83,7 @@ from softtip.core.evidence import (
     window_direction,
     window_eigen,
 )  # fmt: skip
-from softtip.core.noise import SensorNoise, noise_variances, sample_direction_kernel
+from softtip.core.noise import SensorNoise, line_threshold_kernel, noise_variances, sample_direction_kernel
 from softtip.core.spin import tangent_frame_kernel
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.floats import PointGeometry
@@ -367,9 +367,7 @@ def evidence_step(state, counts, ring, params, wconst, t, px, py, pz, nx, ny, nz
         confirmed), the direction and its angle (rad), standard deviation and noise share
         (NaN unless line), and the window ratios.
     """
-    thr = params[_H_SIGMAS] * h_std  # the measurement's line threshold, max(h_sigmas · h_std, h_min)
-    if thr < params[_H_MIN]:
-        thr = params[_H_MIN]
+    thr = line_threshold_kernel(h_std, params[_H_SIGMAS], params[_H_MIN], XS)  # the measurement's
     if params[_ON] == 0.0:  # the papers' per-sample line test
         if hn > thr:
             dx, dy, dz, angle, a = _own(hx, hy, hz, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z, params)

@@ -12,7 +12,7 @@ from typing import Any, NamedTuple
 
 from softtip.core.depth import DepthLaw, depth_kernel
 from softtip.core.filtering import noise_gain
-from softtip.core.noise import SensorNoise, h_std_kernel, noise_variances, sample_direction_kernel
+from softtip.core.noise import SensorNoise, h_std_kernel, line_threshold_kernel, noise_variances, sample_direction_kernel
 from softtip.core.spin import spin_torque_kernel, tangent_frame_kernel, tangential_kernel
 
 __all__ = ["Measurement", "measure", "effective_noise", "noise_correlation"]
@@ -58,7 +58,7 @@ def measure(
     variances = noise_variances(noise)
     hn, dx, dy, dz, angle, angle_std = sample_direction_kernel(hx, hy, hz, rx, ry, rz, nx, ny, nz, *frame, *variances, xp)
     h_std = h_std_kernel(rx, ry, rz, *frame, *variances, xp)
-    line = hn > xp.maximum(h_sigmas * h_std, h_min)
+    line = hn > line_threshold_kernel(h_std, h_sigmas, h_min, xp)
     return Measurement(sigma, hx, hy, hz, hn, h_std, dx, dy, dz, angle, angle_std, line, pushing, delta)
 
 
