@@ -31,7 +31,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from softtip.core._jit import lazy_jit
+from softtip.core._jit import jitable, lazy_jit
 from softtip.core._xp import NP, PY
 from softtip.core.fingertip import Fingertip
 from softtip.core.location import SoftFinger, contact_kernel
@@ -116,6 +116,16 @@ def latch_hold(state, px, py, pz):  # pragma: no cover - compiled
     state[_PENDING] = 0.0
 
 
+@jitable
+def latch_keeps(held, onset, f_norm, lo, hi, dist2):
+    """A sample in contact at ``|f|`` ``f_norm`` (N) only keeps the latch: one is ``held``, the
+    contact does not start here (``onset``) and no re-latch test is due (re-latching is off,
+    ``dist2 < 0``, or ``f_norm`` is outside the light-force window ``[lo, hi]``, N). Then
+    :func:`latch_step` returns :data:`HELD` and changes nothing: it tests this first, and the
+    stream (:class:`LatchTracker`) before calling it."""
+    return held and not onset and not (dist2 >= 0.0 and lo <= f_norm and f_norm <= hi)
+
+
 @lazy_jit
 def latch_step(state, params, onset, t, f_norm, have_sc, valid, rx, ry, rz):  # pragma: no cover - compiled
     """One sample in contact.
@@ -147,9 +157,12 @@ def latch_step(state, params, onset, t, f_norm, have_sc, valid, rx, ry, rz):  # 
     lo = params[_LO]
     hi = params[_HI]
     dist2 = params[_DIST2]
-    held = state[_HOLD] > 0.0
-    test = (not onset) and held and dist2 >= 0.0 and lo <= f_norm and f_norm <= hi  # re-latch test due
-    if not have_sc and (onset or not held or test):
+    hold = state[_HOLD]
+    held = hold > 0.0
+    if latch_keeps(held, onset, f_norm, lo, hi, dist2):  # (a held latch is never rising)
+        return HELD, nan, nan, nan, True, hold == 2.0, False, False
+    test = held and not onset  # here: a re-latch test is due
+    if not have_sc:
         return ASK_SC, nan, nan, nan, False, False, False, False
     relatched = False
     begin = onset
@@ -310,9 +323,8 @@ class LatchTracker:
         self.config = config
         self._params = latch_params(config)
         self._step, self._hold = latch_step.function(), latch_hold.function()
-        lo, hi = config.latch_window
-        # a held latch is re-tested only at light force (all forces when never: an empty range)
-        self._test_lo, self._test_hi = (lo, hi) if config.relatch_distance is not None else (1.0, 0.0)
+        p = self._params.tolist()
+        self._window = (p[_LO], p[_HI], p[_DIST2])  # latch_keeps's, as floats
         self.reset()
 
     def reset(self) -> None:
@@ -329,9 +341,8 @@ class LatchTracker:
         when there is none yet (no valid soft-finger solution); ``begin``: a first rise starts
         (onset or re-latch).
         """
-        if self.point is not None and not onset and not self._test_lo <= f_norm <= self._test_hi:
-            # held, no re-latch test due: latch_step would return HELD and change nothing (a
-            # shortcut of its first lines, a compiled call less per sample of a held contact)
+        if latch_keeps(self.point is not None, onset, f_norm, *self._window):
+            # latch_step's first test, here: a compiled call less per sample of a held contact
             return self.point, True, self._fallback, False, False, sc
         state, params = self.state, self._params
         if sc is None:
