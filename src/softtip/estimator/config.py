@@ -9,9 +9,9 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from softtip.core._xp import NP
 from softtip.core.depth import MURAKAMI2006_DEPTH, DepthLaw
 from softtip.core.filtering import lowpass_sos
-from softtip.core._xp import NP
 from softtip.core.noise import NANO17, SensorNoise, line_threshold_kernel
 from softtip.core.units import KGF
 from softtip.estimator.settings import Setting, check_value, setting, settings_of

@@ -12,7 +12,13 @@ from typing import Any, NamedTuple
 
 from softtip.core.depth import DepthLaw, depth_kernel
 from softtip.core.filtering import noise_gain
-from softtip.core.noise import SensorNoise, h_std_kernel, line_threshold_kernel, noise_variances, sample_direction_kernel
+from softtip.core.noise import (
+    SensorNoise,
+    h_std_kernel,
+    line_threshold_kernel,
+    noise_variances,
+    sample_direction_kernel,
+)
 from softtip.core.spin import spin_torque_kernel, tangent_frame_kernel, tangential_kernel
 
 __all__ = ["Measurement", "measure", "effective_noise", "noise_correlation"]

@@ -31,6 +31,7 @@ import sys
 import tempfile
 import threading
 from collections import deque
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -39,7 +40,7 @@ from softtip.core.fingertip import Fingertip
 from softtip.errors import InputError
 from softtip.estimator import STATES, Estimates, SampleEstimate
 
-__all__ = ["LiveRerun", "RerunLogger", "check_viewer", "import_rerun", "surface_mesh"]
+__all__ = ["LiveRerun", "RerunLogger", "RerunView", "check_viewer", "import_rerun", "surface_mesh"]
 
 
 def import_rerun():
@@ -99,6 +100,33 @@ def check_viewer() -> None:
         )
 
 
+@dataclass(frozen=True)
+class RerunView:
+    """How the view looks and how often it is drawn: the settings of :class:`RerunLogger` and
+    :class:`LiveRerun` besides where it goes.
+
+    Parameters
+    ----------
+    force_scale : float
+        Length of the force arrow, m per N.
+    max_rate_hz : float
+        Live: at most this many samples per second of ``t`` are logged in 3-D (the rest is
+        skipped, the consumer loop must not slow down).
+    application_id : str
+        Rerun's application id of the recording.
+    h_scale : float
+        Length of the ``h`` trace, m per N·m.
+    trace_samples : int
+        Logged samples the ``h`` trace holds.
+    """
+
+    force_scale: float = 0.005
+    max_rate_hz: float = 50.0
+    application_id: str = "softtip"
+    h_scale: float = 1.0
+    trace_samples: int = 100
+
+
 class RerunLogger:
     """Logs a fingertip and its estimates to Rerun.
 
@@ -109,11 +137,8 @@ class RerunLogger:
         Write a ``.rrd`` file.
     spawn : bool
         Open (or connect to) a Rerun viewer.
-    force_scale : float
-        Length of the force arrow, m per N.
-    max_rate_hz : float
-        Live: at most this many samples per second are logged in 3-D (the rest is skipped,
-        the consumer loop must not slow down).
+    view : RerunView, optional
+        The look and the drawing rate (default :class:`RerunView`'s).
     """
 
     def __init__(
@@ -121,18 +146,14 @@ class RerunLogger:
         tip: Fingertip,
         save: str | os.PathLike[str] | None = None,
         spawn: bool = False,
-        force_scale: float = 0.005,
-        max_rate_hz: float = 50.0,
-        application_id: str = "softtip",
-        h_scale: float = 1.0,
-        trace_samples: int = 100,
+        view: RerunView = RerunView(),
     ) -> None:
         rr = import_rerun()
         self.rr, self.tip = rr, tip
-        self.h_scale = h_scale
-        self._trace: deque[NDArray[np.float64]] = deque(maxlen=trace_samples)
-        self.force_scale, self.min_dt = force_scale, 1.0 / max_rate_hz
-        self.rec = rr.RecordingStream(application_id)
+        self.h_scale = view.h_scale
+        self._trace: deque[NDArray[np.float64]] = deque(maxlen=view.trace_samples)
+        self.force_scale, self.min_dt = view.force_scale, 1.0 / view.max_rate_hz
+        self.rec = rr.RecordingStream(view.application_id)
         sinks = [rr.FileSink(os.fspath(save))] if save is not None else []
         if spawn:
             check_viewer()
@@ -274,7 +295,7 @@ class LiveRerun:
     Parameters
     ----------
     tip : Fingertip
-    save, spawn, force_scale, max_rate_hz, application_id, h_scale, trace_samples
+    save, spawn, view
         As in :class:`RerunLogger`.
     wait : bool
         Wait here until the drawing process has started (imported Rerun, logged the skin,
@@ -298,16 +319,13 @@ class LiveRerun:
         tip: Fingertip,
         save: str | os.PathLike[str] | None = None,
         spawn: bool = False,
-        force_scale: float = 0.005,
-        max_rate_hz: float = 50.0,
-        application_id: str = "softtip",
-        h_scale: float = 1.0,
-        trace_samples: int = 100,
+        view: RerunView = RerunView(),
         *,
         wait: bool = True,
         start_timeout: float = 120.0,
     ) -> None:
         import_rerun()  # here, so that a missing package says so at once
+        max_rate_hz = view.max_rate_hz
         self.min_dt = 1.0 / max_rate_hz
         self.start_timeout = start_timeout
         self._last_t = -math.inf
@@ -322,10 +340,10 @@ class LiveRerun:
         self._answers: queue.SimpleQueue = queue.SimpleQueue()
         self._reader = threading.Thread(target=self._read_answers, daemon=True, name="softtip-rerun-answers")
         self._reader.start()
-        options = dict(save=None if save is None else os.fspath(save), spawn=spawn, force_scale=force_scale,
-                       max_rate_hz=math.inf, application_id=application_id, h_scale=h_scale, trace_samples=trace_samples)  # fmt: skip
+        # the drawing process draws every sample it gets: the rate is kept here
+        setup = (tip, None if save is None else os.fspath(save), spawn, replace(view, max_rate_hz=math.inf))
         try:
-            pickle.dump((tip, options), self._proc.stdin, protocol=pickle.HIGHEST_PROTOCOL)
+            pickle.dump(setup, self._proc.stdin, protocol=pickle.HIGHEST_PROTOCOL)
             self._proc.stdin.flush()
         except OSError:
             pass  # the process ended at once: its answer says why
@@ -442,16 +460,16 @@ class LiveRerun:
 
 
 def _draw(stdin, stdout) -> None:
-    """The drawing process of :class:`LiveRerun`: a setup ``(tip, options)`` then estimates, pickled
-    on ``stdin``, until ``None``; answers ``ok`` (started, then closed) or ``(kind, message)``."""
+    """The drawing process of :class:`LiveRerun`: a setup ``(tip, save, spawn, view)`` then estimates,
+    pickled on ``stdin``, until ``None``; answers ``ok`` (started, then closed) or ``(kind, message)``."""
 
     def answer(value) -> None:
         pickle.dump(value, stdout)
         stdout.flush()
 
-    tip, options = pickle.load(stdin)
+    tip, save, spawn, view = pickle.load(stdin)
     try:
-        logger = RerunLogger(tip, **options)
+        logger = RerunLogger(tip, save, spawn, view)
     except ImportError as exc:
         answer(("import", str(exc)))
         return
