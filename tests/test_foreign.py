@@ -239,15 +239,21 @@ def test_cli_missing_and_quotes_stop_with_the_line(tmp_path: Path) -> None:
             assert f"{name}:102: column 'note': a quote opened on this line" in done.stderr and not out.exists()
 
 
-@pytest.mark.parametrize("chunk", [[], ["--chunk-rows", "50"]])
-def test_inf_cell_exits_2_every_time(tmp_path: Path, chunk: list[str]) -> None:
-    """issue 32: the message, then no SIGABRT from a pyarrow thread still running at exit (repeated: it was intermittent)."""
+def _inf_cell_log(tmp_path: Path) -> Path:
+    """The reference with ``inf`` in fy on line 102 (issue 32's abort)."""
     lines = REFERENCE.read_text().splitlines()
     cells = lines[101].split(",")
     cells[2] = "inf"
     lines[101] = ",".join(cells)
     src = tmp_path / "in.csv"
     src.write_text("\n".join(lines) + "\n")
+    return src
+
+
+@pytest.mark.parametrize("chunk", [[], ["--chunk-rows", "50"]])
+def test_inf_cell_exits_2_every_time(tmp_path: Path, chunk: list[str]) -> None:
+    """issue 32: the message, then no SIGABRT from a pyarrow thread still running at exit (repeated: it was intermittent)."""
+    src = _inf_cell_log(tmp_path)
     for _ in range(6):
         done = run("estimate", src, *chunk, "-o", tmp_path / "out.csv")
         assert done.returncode == 2, done.stderr
@@ -283,12 +289,7 @@ def test_inf_cell_exits_2_under_normal_finalisation(tmp_path: Path) -> None:
     """issue 32: the abort happened in the interpreter's finalisation (3 of 143 runs of
     ``python -m softtip.cli`` under load before the fix, 0 of 200 after); the console command skips
     it after a failure, so this runs the module, which does not."""
-    lines = REFERENCE.read_text().splitlines()
-    cells = lines[101].split(",")
-    cells[2] = "inf"
-    lines[101] = ",".join(cells)
-    src = tmp_path / "in.csv"
-    src.write_text("\n".join(lines) + "\n")
+    src = _inf_cell_log(tmp_path)
     for _ in range(20):
         done = subprocess.run([sys.executable, "-m", "softtip.cli", "estimate", str(src), "-o", str(tmp_path / "o.csv")],
                               capture_output=True, text=True, timeout=180)  # fmt: skip
