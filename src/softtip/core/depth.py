@@ -64,7 +64,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from softtip.core._jit import jitable
 from softtip.core._xp import NP
-from softtip.core.line_fit import MODEL_MARGIN, _chi2_excess
+from softtip.core.line_fit import MODEL_MARGIN, _chi2_excess, smallest_eigenvector
 from softtip.core.spin import tangent_frame_kernel
 
 __all__ = [
@@ -332,14 +332,7 @@ def depth_solve_kernel(sums, count, cov, corr, iterations, xp):
         m11 = a11 + 2.0 * kc * b11 + kc * kc * c11
         m12 = a12 + kc * (b12 + b21) + kc * kc * c12
         m22 = a22 + 2.0 * kc * b22 + kc * kc * c22
-        # smallest eigenvector of [[m11, m12], [m12, m22]] (as in softtip.core.line_fit)
-        half = 0.5 * (m11 - m22)
-        root = xp.sqrt(half * half + m12 * m12)
-        big = m11 >= m22
-        v1 = xp.where(big, m12, half - root)
-        v2 = xp.where(big, -half - root, m12)
-        vn = xp.sqrt(v1 * v1 + v2 * v2)
-        u1, u2 = xp.div(v1, vn), xp.div(v2, vn)
+        u1, u2, _ = smallest_eigenvector(m11, m12, m22, xp)
         e1, e2 = -u2, u1
         # C = Σ g vᵀ = (Σ h gᵀ)ᵀ + κ Σ g gᵀ
         k11, k12, k21, k22 = b11 + kc * c11, b21 + kc * c12, b12 + kc * c12, b22 + kc * c22

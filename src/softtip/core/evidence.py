@@ -144,13 +144,29 @@ class Window(NamedTuple):
 def noise_constants(h11, h12, h22, f11, f12, f22):
     """``(largest noise variance of h, mean noise variance of h, largest of f_t)`` from the
     noise covariances of :func:`tangent_noise_kernel`."""
-    nh = 0.5 * (h11 - h22)
-    nm = 0.5 * (h11 + h22)
-    nr = math.sqrt(nh * nh + h12 * h12)
+    _, nm, nr = _eigen2(h11, h12, h22)
     s_big, s_small = nm + nr, nm - nr
-    fh = 0.5 * (f11 - f22)
-    f_n = 0.5 * (f11 + f22) + math.sqrt(fh * fh + f12 * f12)
-    return s_big, 0.5 * (s_big + s_small), f_n
+    _, fm, fr = _eigen2(f11, f12, f22)
+    return s_big, 0.5 * (s_big + s_small), fm + fr
+
+
+@lazy_jit
+def _eigen2(a11, a12, a22):
+    """``(half, mean, root)`` of the symmetric ``[[a11, a12], [a12, a22]]``: its eigenvalues are
+    ``mean ± root``, ``half = (a11 − a22) / 2``."""
+    half = 0.5 * (a11 - a22)
+    return half, 0.5 * (a11 + a22), math.sqrt(half * half + a12 * a12)
+
+
+@lazy_jit
+def _window_cov(s1, s2, s11, s12, s22, count, n11, n12, n22, keep):
+    """``(c11, c12, c22)``: the covariance of a pair over a window from its sums
+    (:func:`evidence_products`) of ``count`` samples, less ``keep`` times the noise's ``n``."""
+    m1, m2 = _div(s1, count), _div(s2, count)
+    c11 = _div(s11, count) - m1 * m1 - keep * n11
+    c12 = _div(s12, count) - m1 * m2 - keep * n12
+    c22 = _div(s22, count) - m2 * m2 - keep * n22
+    return c11, c12, c22
 
 
 @lazy_jit
@@ -168,20 +184,10 @@ def window_eigen(s1, s2_, s11, s12, s22, t1, t2, t11, t12, t22, count, h11, h12,
     ``h``'s eigenvalues clamped at zero and its covariance with ``half = (c11 − c22) / 2`` and
     ``root = (major − minor) / 2`` unclamped, then the load's (NaN for an empty window).
     """
-    m1, m2 = _div(s1, count), _div(s2_, count)
-    c11 = _div(s11, count) - m1 * m1 - keep * h11
-    c12 = _div(s12, count) - m1 * m2 - keep * h12
-    c22 = _div(s22, count) - m2 * m2 - keep * h22
-    half = 0.5 * (c11 - c22)
-    mean = 0.5 * (c11 + c22)
-    root = math.sqrt(half * half + c12 * c12)
-    n1, n2 = _div(t1, count), _div(t2, count)
-    g11 = _div(t11, count) - n1 * n1 - keep * f11
-    g12 = _div(t12, count) - n1 * n2 - keep * f12
-    g22 = _div(t22, count) - n2 * n2 - keep * f22
-    gh = 0.5 * (g11 - g22)
-    gm = 0.5 * (g11 + g22)
-    gr = math.sqrt(gh * gh + g12 * g12)
+    c11, c12, c22 = _window_cov(s1, s2_, s11, s12, s22, count, h11, h12, h22, keep)
+    half, mean, root = _eigen2(c11, c12, c22)
+    g11, g12, g22 = _window_cov(t1, t2, t11, t12, t22, count, f11, f12, f22, keep)
+    _, gm, gr = _eigen2(g11, g12, g22)
     return (
         _clamp0(mean + root), _clamp0(mean - root), c11, c12, c22, half, root, g11, g12, g22,
         _clamp0(gm + gr), _clamp0(gm - gr),

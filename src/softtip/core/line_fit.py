@@ -135,6 +135,21 @@ def _without_noise(sums, count, ax, ay, az, noise: SensorNoise):
     )
 
 
+@jitable
+def smallest_eigenvector(a11, a12, a22, xp):
+    """``(u1, u2, root)``: the unit eigenvector of the smaller eigenvalue of the symmetric
+    ``[[a11, a12], [a12, a22]]`` in closed form (square roots only, correctly rounded in both
+    back ends; each branch free of cancellation), and ``root``, half the eigenvalues' gap. The
+    line fit's and the depth solve's (:mod:`softtip.core.depth`)."""
+    half = 0.5 * (a11 - a22)
+    root = xp.sqrt(half * half + a12 * a12)
+    big = a11 >= a22
+    v1 = xp.where(big, a12, half - root)
+    v2 = xp.where(big, -half - root, a12)
+    vn = xp.sqrt(v1 * v1 + v2 * v2)
+    return xp.div(v1, vn), xp.div(v2, vn), root
+
+
 #: Standard normal quantile of the noise-only excitation that is not counted (≈ 3 σ).
 EXCITATION_Z = 3.0
 
@@ -247,15 +262,7 @@ def line_fit_solve_kernel(sums, count, r0x, r0y, r0z, ax, ay, az, tip, iteration
         p11 = q11 - xp.div(g1 * g1, scc)
         p12 = q12 - xp.div(g1 * g2, scc)
         p22 = q22 - xp.div(g2 * g2, scc)
-        # smallest eigenvector of [[p11, p12], [p12, p22]] in closed form (square roots
-        # only, correctly rounded in both back ends; each branch free of cancellation)
-        half = 0.5 * (p11 - p22)
-        root = xp.sqrt(half * half + p12 * p12)
-        big = p11 >= p22
-        v1 = xp.where(big, p12, half - root)
-        v2 = xp.where(big, -half - root, p12)
-        vn = xp.sqrt(v1 * v1 + v2 * v2)
-        u1, u2 = xp.div(v1, vn), xp.div(v2, vn)
+        u1, u2, root = smallest_eigenvector(p11, p12, p22, xp)
         dx, dy, dz = u1 * t1x + u2 * t2x, u1 * t1y + u2 * t2y, u1 * t1z + u2 * t2z
         ex, ey, ez = _cross(nx, ny, nz, dx, dy, dz)
         s = xp.div(u1 * g1 + u2 * g2, scc)
