@@ -113,11 +113,12 @@ def _sym(s, ux, uy, uz, vx, vy, vz):
 MODEL_MARGIN = 0.25
 
 
-def _without_noise(sums, count, ax, ay, az, noise: SensorNoise):
+def _without_noise(sums, count, ax, ay, az, variances):
     """The window sums less their expected noise: ``count`` times the noise covariance of
     ``(q_A, f)``, with ``q_A = m − a × f`` (``a`` the anchor), for the unbiased second
-    moments of the noise-free wrench (errors in variables)."""
-    fx, fy, fz, mx, my, mz = noise_variances(noise)
+    moments of the noise-free wrench (errors in variables); ``variances`` the noise's
+    (:func:`~softtip.core.noise.noise_variances`)."""
+    fx, fy, fz, mx, my, mz = variances
     # q_A = m − A f with A = [a]×: cov(q_A) = Σ_m + A Σ_f Aᵀ, cov(q_A, f) = −A Σ_f
     a = ((0.0, -az, ay), (az, 0.0, -ax), (-ay, ax, 0.0))
     sf = (fx, fy, fz)
@@ -240,8 +241,8 @@ def line_fit_solve_kernel(sums, count, r0x, r0y, r0z, ax, ay, az, tip, iteration
         and the root-mean-square residual of the fit in units of the noise, all at the last
         linearisation point (NaN or inf when undefined).
     """
-    qq, qf, ff = _without_noise(sums, count, ax, ay, az, noise)
     variances = noise_variances(noise)
+    qq, qf, ff = _without_noise(sums, count, ax, ay, az, variances)
     rx, ry, rz = r0x, r0y, r0z
     dx = dy = dz = cond = angle_std = offset_std = residual = None
     for _ in range(iterations):

@@ -87,7 +87,8 @@ SENSOR_CLASSES = {"Nano17": NANO17, "Nano25": NANO25, "Mini40": MINI40}
 def noise_variances(noise: SensorNoise) -> tuple[float, float, float, float, float, float]:
     """``(σ_fx², σ_fy², σ_fz², σ_mx², σ_my², σ_mz²)`` of ``noise`` (N², N²·m²): what the
     kernels below take (a compiled step cannot read a :class:`SensorNoise`)."""
-    return tuple(s * s for s in noise.force_std) + tuple(s * s for s in noise.moment_std)
+    (fx, fy, fz), (mx, my, mz) = noise.force_std, noise.moment_std
+    return fx * fx, fy * fy, fz * fz, mx * mx, my * my, mz * mz
 
 
 @jitable
