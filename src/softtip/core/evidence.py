@@ -54,6 +54,7 @@ import numpy as np
 
 from softtip.core._jit import lazy_jit
 from softtip.core._xp import NP
+from softtip.core._xp import _py_div as _div  # a / b with IEEE-754 results for b = 0 (compiled too)
 from softtip.core.line_fit import MODEL_MARGIN, _chi2_excess
 from softtip.core.noise import noise_quad
 
@@ -79,16 +80,6 @@ N_SUMS = 10
 HIDDEN_SPREAD = 0.1
 
 _HALF_PI = 0.5 * math.pi
-
-
-@lazy_jit
-def _div(a, b):
-    """``a / b`` with IEEE-754 results for ``b = 0`` (numba's compiled division would raise)."""
-    if b != 0.0:
-        return a / b
-    if a != a or a == 0.0:
-        return math.nan
-    return math.copysign(math.inf, a) * math.copysign(1.0, b)
 
 
 @lazy_jit
