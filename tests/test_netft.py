@@ -289,3 +289,20 @@ def test_the_view_shows_every_counter_the_status_and_the_latest_warning():
                  "status 0x00000000", "nonzero in 9 samples (last 0x80010000)", "restarts 1", "stalled 6",
                  "warning  device status word 0x80010000  (+1 more)"):  # fmt: skip
         assert part in text, (part, text)
+
+
+@pytest.mark.parametrize("h_sigmas", [3.0, 5.0])
+def test_the_view_shows_the_estimators_own_line_threshold(h_sigmas):
+    import io
+
+    from softtip import Estimator, EstimatorConfig, load_example
+    from softtip.apps.live import LiveStats, TerminalView
+
+    config = EstimatorConfig(h_sigmas=h_sigmas)
+    log = load_example()
+    est = Estimator(config=config)
+    e = [x for x in est.process(log.t, log.wrench) if x.state == "line"][-1]
+    stats = LiveStats(received=1, latest=e)
+    text = "\n".join(TerminalView(stats, out=io.StringIO(), config=config).render())
+    expected = max(h_sigmas * e.h_std, config.h_min) * 1e3
+    assert f"(significant above {expected:.3f} N·mm)" in text, text

@@ -322,8 +322,9 @@ class TerminalView:
         Where to draw (standard error by default, so standard output stays clean).
     interval : float
         s between redraws.
-    h_threshold : float
-        ``h_min`` of the configuration, N·m, shown next to ``|h|``.
+    config : EstimatorConfig, optional
+        The estimator's settings: the line threshold shown next to ``|h|``
+        (:meth:`EstimatorConfig.line_threshold`); the defaults when not given.
     recorder : Recorder, optional
         Its row count is shown.
     estimator : Estimator, optional
@@ -337,13 +338,13 @@ class TerminalView:
         stats: LiveStats,
         out: TextIO | None = None,
         interval: float = 0.2,
-        h_threshold: float = 5e-4,
+        config: EstimatorConfig | None = None,
         recorder: Recorder | None = None,
         estimator: Estimator | None = None,
         tare_key: bool = False,
     ) -> None:
         self.stats, self.out, self.interval = stats, out or sys.stderr, interval
-        self.h_threshold, self.recorder, self.estimator, self.tare_key = h_threshold, recorder, estimator, tare_key
+        self.config, self.recorder, self.estimator, self.tare_key = config or EstimatorConfig(), recorder, estimator, tare_key
         self._lines = 0
         self._stop = threading.Event()
         self._thread = threading.Thread(
@@ -393,7 +394,7 @@ class TerminalView:
                 f"|f|      {f_norm:8.3f} N      f = {_fmt_vec(e.wrench[:3])} N",
                 f"contact  r = {_fmt_vec(e.point, 1e3)} mm",
                 f"normal   n = {_fmt_vec(e.normal, 1.0, '{:+6.3f}')}",
-                f"|h|      {e.h_norm * 1e3:8.3f} N·mm   (significant above {max(3 * e.h_std, self.h_threshold) * 1e3:.3f} N·mm)"
+                f"|h|      {e.h_norm * 1e3:8.3f} N·mm   (significant above {float(self.config.line_threshold(e.h_std)) * 1e3:.3f} N·mm)"
                 if not math.isnan(e.h_norm) else "|h|             —",
                 f"edge     {e.angle * _DEG:+7.1f}° ± {e.angle_std * _DEG:.1f}°" if e.state == "line" else "edge            —",
             ]  # fmt: skip

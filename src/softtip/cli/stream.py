@@ -223,7 +223,7 @@ def _stream(
             show = sys.stderr.isatty() if view is None else view
             tare_key = show and sys.stdin.isatty()
             term = TerminalView(
-                stats, interval=0.2, h_threshold=config.h_min, recorder=recorder, estimator=estimator,
+                stats, interval=0.2, config=config, recorder=recorder, estimator=estimator,
                 tare_key=tare_key,
             ) if show else None  # fmt: skip
             on_estimate = _within_range(sensor_range, source.name, stats)  # a live sample beyond it ends the run
