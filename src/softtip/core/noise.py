@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from softtip.core._jit import lazy_jit
+from softtip.core._jit import jitable, lazy_jit
 from softtip.core._xp import NP
 from softtip.core.spin import tangent_frame_kernel
 
@@ -95,12 +95,14 @@ def noise_quad(vx, vy, vz, rx, ry, rz, sfx, sfy, sfz, smx, smy, smz):
     return smx * vx * vx + smy * vy * vy + smz * vz * vz + sfx * cx * cx + sfy * cy * cy + sfz * cz * cz
 
 
+@jitable
 def _quad_moment_kernel(vx, vy, vz, noise: SensorNoise):
     """The moment-noise part of ``vᵀ Σ_h v`` (independent of the contact point)."""
     smx, smy, smz = noise.moment_std
     return smx * smx * vx * vx + smy * smy * vy * vy + smz * smz * vz * vz
 
 
+@jitable
 def _quad_force_kernel(part, vx, vy, vz, rx, ry, rz, noise: SensorNoise):
     """``part`` (the moment-noise part of ``vᵀ Σ_h v``) plus the force-noise part at the contact point ``r``."""
     sfx, sfy, sfz = noise.force_std
@@ -110,6 +112,7 @@ def _quad_force_kernel(part, vx, vy, vz, rx, ry, rz, noise: SensorNoise):
     return part + sfx * sfx * cx * cx + sfy * sfy * cy * cy + sfz * sfz * cz * cz
 
 
+@jitable
 def _quad_kernel(vx, vy, vz, rx, ry, rz, noise: SensorNoise):
     """``vᵀ Σ_h v`` for a tangent vector ``v`` at the contact point ``r``."""
     return _quad_force_kernel(_quad_moment_kernel(vx, vy, vz, noise), vx, vy, vz, rx, ry, rz, noise)

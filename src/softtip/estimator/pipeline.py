@@ -31,6 +31,7 @@ short log in a process without numba, ``SOFTTIP_NUMBA=0``) take the staged path 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -62,9 +63,12 @@ from softtip.estimator.depth import depth_step, new_depth_state
 from softtip.estimator.evidence import evidence_params, evidence_start, evidence_step, new_evidence_state
 from softtip.estimator.latch import FIX, HELD, MEAN, SOFT, _LX, _LY, _LZ, _HAD
 from softtip.estimator.latch import latch_hold, latch_params, latch_step, new_latch_state
-from softtip.estimator.line_fit import line_fit_points
+from softtip.core.line_fit import N_SUMS, line_fit_products, line_fit_solve_kernel
+from softtip.estimator.line_fit import _start_anchor, _start_window, line_fit_accept, line_fit_anchor_step
+from softtip.estimator.line_fit import line_fit_hold_step, line_fit_points, line_fit_start_segment, line_fit_window_step
+from softtip.estimator.line_fit import new_line_fit_state
 
-__all__ = ["shape_record", "points_run", "tail_run", "fused_columns"]
+__all__ = ["ShapeRecord", "shape_record", "points_run", "line_fit_run", "tail_run", "fused_columns"]
 
 #: Shape codes of :func:`shape_record`.
 SPHERE, CAPSULE, ELLIPSOID = 0, 1, 2
@@ -77,47 +81,104 @@ _NAN = math.nan
 _NONE_CODE, _LINE_CODE = 0, 2
 
 
-def shape_record(tip: Fingertip) -> tuple[int, NDArray[np.float64]] | None:
-    """``(code, parameters)`` of a closed-form fingertip for the compiled loops: a sphere
-    ``(radius, centre)``, a capsule ``(radius, length, axis offset)``, an ellipsoid
-    ``(semi-axes, centre)`` (m); None for any other (subclasses included)."""
+class ShapeRecord(NamedTuple):
+    """A closed-form fingertip as compiled code takes it (:func:`shape_record`): its shape code and
+    parameters, with the :class:`~softtip.core.shape.Fingertip` kernels that
+    :func:`~softtip.core.line_fit.line_fit_solve_kernel` calls (in compiled code too, by
+    :func:`_register_methods`)."""
+
+    kind: int  #: :data:`SPHERE`, :data:`CAPSULE` or :data:`ELLIPSOID`
+    sp: NDArray[np.float64]  #: sphere (radius, centre), capsule (radius, length, axis offset), ellipsoid (semi-axes, centre), m
+
+    def _normal_kernel(self, x, y, z, xp):
+        return _normal(self.kind, self.sp, x, y, z, xp)
+
+    def _project_kernel(self, x, y, z, xp):
+        return _project(self.kind, self.sp, x, y, z, xp)
+
+
+class NoiseRecord(NamedTuple):
+    """A :class:`~softtip.core.noise.SensorNoise` as compiled code reads it (standard deviations, N and N·m)."""
+
+    force_std: tuple[float, float, float]
+    moment_std: tuple[float, float, float]
+
+
+class AcceptRecord(NamedTuple):
+    """The limits of :func:`~softtip.estimator.line_fit.line_fit_accept`, as compiled code reads them."""
+
+    line_fit_max_angle_std: float
+    line_fit_max_offset_std: float
+    line_fit_max_residual: float
+
+
+def shape_record(tip: Fingertip) -> ShapeRecord | None:
+    """The :class:`ShapeRecord` of a closed-form fingertip: a sphere ``(radius, centre)``, a capsule
+    ``(radius, length, axis offset)``, an ellipsoid ``(semi-axes, centre)`` (m); None for any
+    other (subclasses included)."""
     if type(tip) is Sphere:
-        return SPHERE, np.array([tip.radius, *tip.center], dtype=float)
+        return ShapeRecord(SPHERE, np.array([tip.radius, *tip.center], dtype=float))
     if type(tip) is Capsule:
-        return CAPSULE, np.array([tip.radius, tip.length, *tip.axis_offset], dtype=float)
+        return ShapeRecord(CAPSULE, np.array([tip.radius, tip.length, *tip.axis_offset], dtype=float))
     if type(tip) is Ellipsoid:
-        return ELLIPSOID, np.array([*tip.semi_axes, *tip.center], dtype=float)
+        return ShapeRecord(ELLIPSOID, np.array([*tip.semi_axes, *tip.center], dtype=float))
     return None
 
 
+_REGISTERED: list[bool] = []
+
+
+def _register_methods() -> None:
+    """Let compiled code call a :class:`ShapeRecord`'s ``_normal_kernel`` and ``_project_kernel``
+    (numba's ``overload_method``), once, before :func:`line_fit_run` is compiled."""
+    if _REGISTERED:
+        return
+    from numba.core import types
+    from numba.extending import overload_method
+
+    @overload_method(types.NamedTuple, "_normal_kernel")
+    def _normal_method(tip, x, y, z, xp):
+        if getattr(tip, "instance_class", None) is ShapeRecord:
+            return lambda tip, x, y, z, xp: _normal(tip.kind, tip.sp, x, y, z, xp)
+        return None
+
+    @overload_method(types.NamedTuple, "_project_kernel")
+    def _project_method(tip, x, y, z, xp):
+        if getattr(tip, "instance_class", None) is ShapeRecord:
+            return lambda tip, x, y, z, xp: _project(tip.kind, tip.sp, x, y, z, xp)
+        return None
+
+    _REGISTERED.append(True)
+
+
 @jitable
-def _contact(kind, sp, fx, fy, fz, mx, my, mz):
-    """The shape's soft-finger solution (``Fingertip._contact_kernel``) on floats."""
+def _contact(kind, sp, fx, fy, fz, mx, my, mz, xp):
+    """The shape's soft-finger solution (``Fingertip._contact_kernel``) on floats (``xp``: :mod:`softtip.core._xp_scalar`)."""
     if kind == SPHERE:
-        return sphere_kernel(fx, fy, fz, mx, my, mz, sp[0], sp[1], sp[2], sp[3], XS)
+        return sphere_kernel(fx, fy, fz, mx, my, mz, sp[0], sp[1], sp[2], sp[3], xp)
     if kind == CAPSULE:
-        return _capsule_kernel(fx, fy, fz, mx, my, mz, sp[0], sp[1], sp[2], sp[3], XS)
-    return _ellipsoid_kernel(fx, fy, fz, mx, my, mz, sp[0], sp[1], sp[2], sp[3], sp[4], sp[5], XS)
+        return _capsule_kernel(fx, fy, fz, mx, my, mz, sp[0], sp[1], sp[2], sp[3], xp)
+    return _ellipsoid_kernel(fx, fy, fz, mx, my, mz, sp[0], sp[1], sp[2], sp[3], sp[4], sp[5], xp)
 
 
 @jitable
-def _normal(kind, sp, x, y, z):
+def _normal(kind, sp, x, y, z, xp):
     """The shape's outward normal (``Fingertip._normal_kernel``) on floats."""
     if kind == SPHERE:
-        return sphere_normal_kernel(x, y, z, sp[1], sp[2], sp[3], XS)
+        return sphere_normal_kernel(x, y, z, sp[1], sp[2], sp[3], xp)
     if kind == CAPSULE:
-        return capsule_normal_kernel(x, y, z, sp[1], sp[2], sp[3], XS)
-    return ellipsoid_normal_kernel(x, y, z, sp[0], sp[1], sp[2], sp[3], sp[4], sp[5], XS)
+        return capsule_normal_kernel(x, y, z, sp[1], sp[2], sp[3], xp)
+    return ellipsoid_normal_kernel(x, y, z, sp[0], sp[1], sp[2], sp[3], sp[4], sp[5], xp)
 
 
 @jitable
-def _project(kind, sp, x, y, z):
+def _project(kind, sp, x, y, z, xp):
     """The shape's nearest skin point (``Fingertip._project_kernel``) on floats."""
     if kind == SPHERE:
-        return sphere_project_kernel(x, y, z, sp[0], sp[1], sp[2], sp[3], XS)
+        return sphere_project_kernel(x, y, z, sp[0], sp[1], sp[2], sp[3], xp)
     if kind == CAPSULE:
-        return capsule_project_kernel(x, y, z, sp[0], sp[1], sp[2], sp[3], XS)
-    return ellipsoid_project_kernel(x, y, z, sp[0], sp[1], sp[2], sp[3], sp[4], sp[5], XS)
+        return capsule_project_kernel(x, y, z, sp[0], sp[1], sp[2], sp[3], xp)
+    return ellipsoid_project_kernel(x, y, z, sp[0], sp[1], sp[2], sp[3], sp[4], sp[5], xp)
 
 
 @lazy_jit
@@ -170,7 +231,7 @@ def points_run(t, x, contact, kind, sp, mode, lparams, lstate, point, has, sc, s
                 fallback[i] = fb
                 relatched[i] = rel
                 continue
-        rx, ry, rz, nx, ny, nz, sig, valid = _contact(kind, sp, fx, fy, fz, mx, my, mz)
+        rx, ry, rz, nx, ny, nz, sig, valid = _contact(kind, sp, fx, fy, fz, mx, my, mz, XS)
         if mode == TRACK:
             point[i, 0], point[i, 1], point[i, 2] = rx, ry, rz
             has[i] = valid
@@ -185,7 +246,7 @@ def points_run(t, x, contact, kind, sp, mode, lparams, lstate, point, has, sc, s
         if code == SOFT:
             px, py, pz = rx, ry, rz
         elif code == MEAN or code == FIX:
-            px, py, pz = _project(kind, sp, qx, qy, qz)
+            px, py, pz = _project(kind, sp, qx, qy, qz, XS)
             if code == FIX:
                 latch_hold(lstate, px, py, pz)
         elif code == HELD:
@@ -197,6 +258,61 @@ def points_run(t, x, contact, kind, sp, mode, lparams, lstate, point, has, sc, s
         latched[i] = lat
         fallback[i] = fb
         relatched[i] = rel
+
+
+@lazy_jit
+def line_fit_run(t, x, contact, relatched, sc, sc_valid, point, tip, noise, accept, lstate, ring, window, drift2,
+                 iterations, corr, stats, moved, latched, fallback, joint_fb):  # pragma: no cover - compiled
+    """The ``line-fit`` stage over a log in one loop: per sample in contact, as the stream's
+    :class:`~softtip.estimator.line_fit.LineFitTracker` (no skin law), its anchor, window and hold
+    steps with the window's solve (:func:`~softtip.core.line_fit.line_fit_solve_kernel` on the
+    fingertip ``tip``, a :class:`ShapeRecord`) between them.
+
+    ``sc`` (N, 7) and ``sc_valid`` the soft-finger solutions, ``point`` (N, 3) the latched points
+    (where a window is held, its point written in place); ``noise`` a :class:`NoiseRecord`,
+    ``accept`` an :class:`AcceptRecord`; ``lstate`` and ``ring`` the stage's state record and
+    window ring; ``window`` (s), ``drift2`` (m²/s), ``iterations``, ``corr`` as in the stream.
+    Written: ``stats`` (4, N) (conditioning, angle std, offset std, residual; NaN where none),
+    ``moved``, ``joint_fb`` (N,) bool; ``latched`` and ``fallback`` cleared where moved.
+    """
+    prods, sums = np.empty(N_SUMS), np.empty(N_SUMS)
+    for i in range(t.shape[0]):
+        moved[i] = False
+        joint_fb[i] = False
+        for k in range(4):
+            stats[k, i] = _NAN
+        if not contact[i]:
+            continue
+        onset = i == 0 or not contact[i - 1]
+        if onset:
+            _start_anchor(lstate)
+            _start_window(lstate)
+        if onset or relatched[i]:  # a new first rise of the latch
+            line_fit_start_segment(lstate, t[i])
+        accepted, offset_std, jx, jy, jz = False, _NAN, _NAN, _NAN, _NAN
+        if sc_valid[i]:
+            ax, ay, az = line_fit_anchor_step(lstate, True, sc[i, 0], sc[i, 1], sc[i, 2])
+            # line_fit_moment without a skin law: the moment about the anchor
+            qx, qy, qz = spin_torque_kernel(x[i, 0], x[i, 1], x[i, 2], x[i, 3], x[i, 4], x[i, 5], ax, ay, az)
+            pr = line_fit_products(x[i, 0], x[i, 1], x[i, 2], qx, qy, qz)
+            for q in range(N_SUMS):
+                prods[q] = pr[q]
+            count = line_fit_window_step(lstate, ring, t[i], window, prods, sums)
+            px, py, pz = point[i, 0], point[i, 1], point[i, 2]
+            if math.isfinite(px) and math.isfinite(py) and math.isfinite(pz):
+                out = line_fit_solve_kernel(sums, float(count), px, py, pz, ax, ay, az, tip, iterations, noise, corr,
+                                            XS)  # fmt: skip
+                jx, jy, jz = out[0], out[1], out[2]
+                stats[0, i], stats[1, i], stats[2, i], stats[3, i] = out[6], out[7], out[8], out[9]
+                accepted = line_fit_accept(out[6], out[7], out[8], out[9], accept) and math.isfinite(jx + jy + jz)
+                offset_std = out[8]
+        _, mv, hx, hy, hz = line_fit_hold_step(lstate, t[i], accepted, offset_std, jx, jy, jz, drift2)
+        moved[i] = mv
+        joint_fb[i] = not mv
+        if mv:
+            point[i, 0], point[i, 1], point[i, 2] = hx, hy, hz
+            latched[i] = False
+            fallback[i] = False
 
 
 @lazy_jit
@@ -252,7 +368,7 @@ def tail_run(t, x, drift, contact, taring, kind, sp, normal_from_tip, point, has
             finite = math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)
             if normal_from_tip:
                 if not (px == lpx and py == lpy and pz == lpz):
-                    nx, ny, nz = _normal(kind, sp, px, py, pz)
+                    nx, ny, nz = _normal(kind, sp, px, py, pz, XS)
                     lpx, lpy, lpz = px, py, pz
             else:
                 nx, ny, nz = normal_in[i, 0], normal_in[i, 1], normal_in[i, 2]
@@ -339,7 +455,19 @@ def fused_columns(t: NDArray, x: NDArray, drift: NDArray, contact: NDArray, tari
                           latched, fallback, relatched)  # fmt: skip
     joint_fb = np.zeros(n, dtype=bool)
     stats = None
-    if config.contact_point == "line-fit":
+    if config.contact_point == "line-fit" and law is None:
+        stats, moved = np.empty((4, n)), np.empty(n, dtype=bool)
+        window = float(config.line_fit_window)
+        ring = np.zeros((int(ring_rows.compiled()(t, window)), 1 + N_SUMS))
+        accept = AcceptRecord(config.line_fit_max_angle_std, config.line_fit_max_offset_std, config.line_fit_max_residual)
+        _register_methods()
+        line_fit_run.compiled()(
+            t, x, contact, relatched, sc, sc_valid, point, rec, NoiseRecord(noise.force_std, noise.moment_std), accept,
+            new_line_fit_state(), ring, window, float(config.line_fit_drift**2), int(config.line_fit_iterations),
+            float(corr), stats, moved, latched, fallback, joint_fb,
+        )  # fmt: skip
+        has = np.all(np.isfinite(point), axis=-1)
+    elif config.contact_point == "line-fit":  # with a skin law: the stage's batch form (its solve vectorised)
         c = [np.ascontiguousarray(x[:, k]) for k in range(6)]
         soft = SoftFinger(*(sc[:, k] for k in range(7)), sc_valid)
         with np.errstate(invalid="ignore", divide="ignore"):
