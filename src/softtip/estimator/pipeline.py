@@ -320,7 +320,7 @@ def tail_run(t, x, drift, contact, taring, kind, sp, normal_from_tip, point, has
              depth_mode, law, dparams, noise_var, eparams, wconst, estate, counts, ring,
              latched, fallback, joint_fb, normal, sigma, h, h_norm, h_std, depth, depth_std, from_data,
              state, line_evidence, direction, angle, angle_std, angle_noise_std, h_ratio, f_ratio,
-             pulling):  # pragma: no cover - compiled
+             pulling, stats, fill_stats):  # pragma: no cover - compiled
     """Normal, depth, measurement and line evidence of every sample, outputs written once.
 
     Inputs (N rows): ``t``; ``x`` (N, 6) the tared wrench and ``drift`` (N, 6) (both set to NaN
@@ -337,8 +337,9 @@ def tail_run(t, x, drift, contact, taring, kind, sp, normal_from_tip, point, has
     normal, σ, ``h``, ``|h|``, ``h``'s noise level, the depth, its standard deviation and
     whether the data gave it, the state and evidence codes, the direction, its angle, standard
     deviation and noise share (NaN unless a line) and the window ratios; NaN (0, False)
-    elsewhere. ``point``, ``latched``, ``fallback``, ``joint_fb`` are masked in place;
-    ``pulling`` is in contact and not located.
+    elsewhere. ``point``, ``latched``, ``fallback``, ``joint_fb`` and the line fit's ``stats``
+    (4, N) are masked in place (``stats`` all NaN with ``fill_stats``); ``pulling`` is in
+    contact and not located.
     """
     n = t.shape[0]
     dstate = new_depth_state()
@@ -384,6 +385,9 @@ def tail_run(t, x, drift, contact, taring, kind, sp, normal_from_tip, point, has
             elif depth_mode == DEPTH_LAW and finite:
                 d = square_depth_kernel(-(fx * nx + fy * ny + fz * nz), law[0], law[1], XS)
             located = has[i] and fx * nx + fy * ny + fz * nz < 0.0
+        if fill_stats or not located:
+            for k in range(4):
+                stats[k, i] = _NAN
         if not located:
             pulling[i] = contact[i]
             latched[i] = False
@@ -428,7 +432,8 @@ def tail_run(t, x, drift, contact, taring, kind, sp, normal_from_tip, point, has
 
 
 def fused_columns(t: NDArray, x: NDArray, drift: NDArray, contact: NDArray, taring: NDArray, tip: Fingertip,
-                  config: EstimatorConfig, noise: SensorNoise, corr: float, had_latch: bool) -> dict | None:  # fmt: skip
+                  config: EstimatorConfig, noise: SensorNoise, corr: float, had_latch: bool,
+                  out: dict | None = None) -> dict | None:  # fmt: skip
     """The per-contact stages of :func:`~softtip.estimator.batch.estimate` over a log in the
     compiled loops, or None where they do not apply (module docs: the staged path then runs).
 
@@ -436,11 +441,24 @@ def fused_columns(t: NDArray, x: NDArray, drift: NDArray, contact: NDArray, tari
     both this call's to change (NaN where ``taring``); ``contact`` (N,) bool; ``config``
     resolved (:func:`~softtip.estimator.depth.resolve_depth`); ``noise`` the noise after any
     filter and ``corr`` its samples per independent sample; ``had_latch`` an earlier piece of
-    the log latched. Returns the :class:`~softtip.Estimates` columns by name, ``pulling`` and
-    ``had_latch`` (after these samples).
+    the log latched; ``out``: arrays to write into, by name, kept from an earlier call of the
+    same length and settings (filled in with new ones; a benchmark's reused buffers). Returns
+    the :class:`~softtip.Estimates` columns by name, ``pulling`` and ``had_latch`` (after
+    these samples).
     """
     n = len(t)
     rec = shape_record(tip)
+
+    def new(name, shape, dtype=float):
+        # an output or work array: the caller's (``out``, reused: benchmarks) or a new one
+        shape = shape if isinstance(shape, tuple) else (shape,)
+        a = None if out is None else out.get(name)
+        if a is None or a.shape != shape or a.dtype != np.dtype(dtype):
+            a = np.empty(shape, dtype=dtype)
+            if out is not None:
+                out[name] = a
+        return a
+
     law = config.skin_law
     if rec is None or (law is not None and law.exponent != 2.0) or not use_numba(n):
         return None
@@ -448,15 +466,18 @@ def fused_columns(t: NDArray, x: NDArray, drift: NDArray, contact: NDArray, tari
     contact = np.ascontiguousarray(contact, dtype=bool)
     mode = TRACK if config.contact_point == "track" else LATCH
     rows = n if config.contact_point != "latch" else 1  # the soft-finger solutions, kept for line-fit and track
-    point, has, sc, sc_valid = np.empty((n, 3)), np.empty(n, dtype=bool), np.empty((rows, 7)), np.empty(rows, dtype=bool)
-    latched, fallback, relatched = np.empty(n, dtype=bool), np.empty(n, dtype=bool), np.empty(n, dtype=bool)
+    point, has, sc, sc_valid = new("point", (n, 3)), new("has", n, bool), new("sc", (rows, 7)), new("sc_valid", rows, bool)
+    latched, fallback, relatched = new("latched", n, bool), new("fallback", n, bool), new("relatched", n, bool)
     lstate = new_latch_state(had_latch)
     points_run.compiled()(t, x, contact, kind, sp, mode, latch_params(config), lstate, point, has, sc, sc_valid,
                           latched, fallback, relatched)  # fmt: skip
-    joint_fb = np.zeros(n, dtype=bool)
-    stats = None
+    joint_fb = new("joint_fb", n, bool)
+    joint_fb[:] = False
+    stats = new("stats", (4, n))
+    fill_stats = True  # no line fit: every sample's statistics NaN
     if config.contact_point == "line-fit" and law is None:
-        stats, moved = np.empty((4, n)), np.empty(n, dtype=bool)
+        fill_stats = False
+        moved = new("moved", n, bool)
         window = float(config.line_fit_window)
         ring = np.zeros((int(ring_rows.compiled()(t, window)), 1 + N_SUMS))
         accept = AcceptRecord(config.line_fit_max_angle_std, config.line_fit_max_offset_std, config.line_fit_max_residual)
@@ -472,6 +493,7 @@ def fused_columns(t: NDArray, x: NDArray, drift: NDArray, contact: NDArray, tari
         soft = SoftFinger(*(sc[:, k] for k in range(7)), sc_valid)
         with np.errstate(invalid="ignore", divide="ignore"):
             point, stats, _, moved = line_fit_points(t, c, contact, soft, point, relatched, tip, config, noise, corr)
+        fill_stats = False
         del c, soft
         latched &= ~moved
         fallback &= ~moved
@@ -487,21 +509,17 @@ def fused_columns(t: NDArray, x: NDArray, drift: NDArray, contact: NDArray, tari
         dparams = depth_params(config, noise, corr)
     capacity = int(ring_rows.compiled()(t, max(config.evidence_window, config.significance_window)))
     estate, counts, ring, wconst = new_evidence_state(capacity, corr)
-    normal, h, direction = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3))
-    sigma, h_norm, h_std, depth, depth_std = (np.empty(n) for _ in range(5))
-    angle, angle_std, angle_noise_std, h_ratio, f_ratio = (np.empty(n) for _ in range(5))
-    from_data, pulling = np.empty(n, dtype=bool), np.empty(n, dtype=bool)
-    state, line_evidence = np.empty(n, dtype=np.int8), np.empty(n, dtype=np.int8)
+    normal, h, direction = new("normal", (n, 3)), new("h", (n, 3)), new("direction", (n, 3))
+    sigma, h_norm, h_std, depth, depth_std = (new(k, n) for k in ("sigma", "h_norm", "h_std", "depth", "depth_std"))
+    angle, angle_std, angle_noise_std = new("angle", n), new("angle_std", n), new("angle_noise_std", n)
+    h_ratio, f_ratio, from_data, pulling = new("h_ratio", n), new("f_ratio", n), new("from_data", n, bool), new("pulling", n, bool)
+    state, line_evidence = new("state", n, np.int8), new("line_evidence", n, np.int8)
     tail_run.compiled()(
         t, x, drift, contact, np.ascontiguousarray(taring, dtype=bool), kind, sp, mode == LATCH, point, has, normal_in,
         relatched, depth_mode, lawp, dparams, np.array(noise_variances(noise)), evidence_params(config, noise), wconst,
         estate, counts, ring, latched, fallback, joint_fb, normal, sigma, h, h_norm, h_std, depth, depth_std, from_data,
-        state, line_evidence, direction, angle, angle_std, angle_noise_std, h_ratio, f_ratio, pulling,
+        state, line_evidence, direction, angle, angle_std, angle_noise_std, h_ratio, f_ratio, pulling, stats, fill_stats,
     )  # fmt: skip
-    if stats is None:
-        stats = np.full((4, n), np.nan)
-    else:
-        stats[:, pulling | ~contact] = np.nan
     return dict(
         wrench=x, point=point, normal=normal, sigma=sigma, h=h, h_norm=h_norm, h_std=h_std, direction=direction,
         angle=angle, angle_std=angle_std, angle_noise_std=angle_noise_std, latched=latched, latch_fallback=fallback,
