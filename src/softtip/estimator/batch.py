@@ -1,4 +1,10 @@
-"""The estimator over a whole log, vectorised: :func:`estimate`."""
+"""The estimator over a whole log: :func:`estimate`.
+
+The stages whose state crosses a cut of the log (tare, low-pass filter, contact tracking) run
+first; the per-contact stages then run in the compiled loops of
+:mod:`softtip.estimator.pipeline` (the closed-form fingertips), or stage after stage with numpy
+between them (:func:`_staged_columns`: any fingertip, and the steps run as Python): the same bits.
+"""
 
 from __future__ import annotations
 
@@ -112,7 +118,7 @@ def _sequential_stages(t: NDArray, w: NDArray, config: EstimatorConfig, carry: C
         bias, taring = tare_report.bias, np.zeros(n, dtype=bool)
     else:
         bias, taring, tare_report = tare_log(t, w, config)
-    x = w - bias
+    x, sub = w, bias  # the tracker subtracts the bias (no tared copy) unless the filter needs it first
 
     sos = None
     zf = None
@@ -120,9 +126,10 @@ def _sequential_stages(t: NDArray, w: NDArray, config: EstimatorConfig, carry: C
         rate = config.sample_rate or infer_rate(t)
         sos = lowpass_sos(config.lowpass_hz, rate, config.lowpass_order)
         if np.all(np.isfinite(bias)):
-            x, zf = sosfilt_state(sos, x, carry.zi if later else None)
+            x, zf = sosfilt_state(sos, w - bias, carry.zi if later else None)
+            sub = None
     noise = effective_noise(noise_in_use(config, tare_report), sos)
-    ct = track_contacts(t, x, int(np.count_nonzero(taring)), config, noise, carry.track if later else None)
+    ct = track_contacts(t, x, int(np.count_nonzero(taring)), config, noise, carry.track if later else None, sub)
     if carry is not None:
         carry.tare, carry.zi, carry.track = tare_report, zf, ct.state
     return bias, taring, tare_report, sos, noise, ct

@@ -54,19 +54,46 @@ from softtip.core.fingertip import (
     sphere_normal_kernel,
     sphere_project_kernel,
 )
+from softtip.core.line_fit import N_SUMS, line_fit_products, line_fit_solve_kernel
 from softtip.core.noise import SensorNoise, noise_quad
 from softtip.core.shape import SoftFinger, sphere_kernel
 from softtip.core.spin import spin_torque_kernel, tangent_frame_kernel, tangential_kernel
 from softtip.estimator.config import EstimatorConfig
-from softtip.estimator.depth import RING_COLUMNS, _ring_capacity, depth_gap, depth_params, depth_start_contact
-from softtip.estimator.depth import depth_step, new_depth_state
+from softtip.estimator.depth import (
+    RING_COLUMNS,
+    _ring_capacity,
+    depth_gap,
+    depth_params,
+    depth_start_contact,
+    depth_step,
+    new_depth_state,
+)
 from softtip.estimator.evidence import evidence_params, evidence_start, evidence_step, new_evidence_state
-from softtip.estimator.latch import FIX, HELD, MEAN, SOFT, _LX, _LY, _LZ, _HAD
-from softtip.estimator.latch import latch_hold, latch_params, latch_step, new_latch_state
-from softtip.core.line_fit import N_SUMS, line_fit_products, line_fit_solve_kernel
-from softtip.estimator.line_fit import _start_anchor, _start_window, line_fit_accept, line_fit_anchor_step
-from softtip.estimator.line_fit import line_fit_hold_step, line_fit_points, line_fit_start_segment, line_fit_window_step
-from softtip.estimator.line_fit import new_line_fit_state
+from softtip.estimator.latch import (
+    _HAD,
+    _LX,
+    _LY,
+    _LZ,
+    FIX,
+    HELD,
+    MEAN,
+    SOFT,
+    latch_hold,
+    latch_params,
+    latch_step,
+    new_latch_state,
+)
+from softtip.estimator.line_fit import (
+    _start_anchor,
+    _start_window,
+    line_fit_accept,
+    line_fit_anchor_step,
+    line_fit_hold_step,
+    line_fit_points,
+    line_fit_start_segment,
+    line_fit_window_step,
+    new_line_fit_state,
+)
 
 __all__ = ["ShapeRecord", "shape_record", "points_run", "line_fit_run", "tail_run", "fused_columns"]
 
