@@ -10,8 +10,11 @@ here in compiled loops that call, per sample, the same step functions the stream
 1. :func:`points_run`: the soft-finger solution (the shape's own kernel, compiled), the latch
    (:func:`~softtip.estimator.latch.latch_step`, the mean put back on the skin at once, as the
    stream does) or the tracked point;
-2. in ``line-fit`` mode, the line-fit stage of :func:`~softtip.estimator.line_fit.line_fit_points`
-   (its steps in compiled loops, its window solve vectorised between them);
+2. in ``line-fit`` mode, :func:`line_fit_run`: the line-fit stage's anchor, window and hold
+   steps with the window's solve (:func:`~softtip.core.line_fit.line_fit_solve_kernel`, the
+   fingertip a :class:`ShapeRecord`) per sample, as the stream's
+   :class:`~softtip.estimator.line_fit.LineFitTracker`; with a skin law the stage's batch form
+   :func:`~softtip.estimator.line_fit.line_fit_points` (its solve vectorised);
 3. :func:`tail_run`: the normal and the tangent frame (once per contact point, as the stream's
    :class:`~softtip.estimator.floats.PointGeometry`), the depth
    (:func:`~softtip.estimator.depth.depth_step`), the measurement (the kernels of
@@ -21,7 +24,9 @@ here in compiled loops that call, per sample, the same step functions the stream
 
 Each step is the stage's one source; this module only sequences them (no stage is written
 again). The results are the staged path's to the bit (the stream's, which the staged batch
-equals): the kernels do the same IEEE operations compiled as in numpy. Other fingertips (a mesh,
+equals): the kernels do the same IEEE operations compiled as in numpy; only a line-fit window
+statistic that is NaN (the square root of a negative number) carries the stream's +NaN where
+numpy's square root gave −NaN. Other fingertips (a mesh,
 an implicit surface, a mounted shape), a skin law whose exponent is not 2 (numpy's power,
 which compiled code cannot reproduce to the bit) and a run whose steps are not compiled (a
 short log in a process without numba, ``SOFTTIP_NUMBA=0``) take the staged path of
