@@ -39,8 +39,17 @@ the compiled steps (importing numba; the first call, compiling them or loading t
 Scaling (--only scaling, --sizes 1e5,1e6,1e7): at each log length, in a process of its own,
 the contact kernel, the whole pipeline and end to end (read + estimate + write, Parquet and
 CSV) side by side in rows per CPU second, the kernel/pipeline ratio, and the peak memory of
-the pipeline per row (peak resident memory beyond its inputs). Target (manual §6): pipeline
->= 0.8x a one-pass compiled loop of the same computation (about 3 M rows/s per core), <= 400 B/row.
+the pipeline per row (peak resident memory beyond its inputs). Then, in the same processes, the
+pipeline (softtip.estimate) against its compiled reference for the default configuration, a
+20 Hz low-pass, re-latching (2 mm) and line-fit: the reference is the same computation with
+nothing around it, the pipeline's compiled loops (contact tracking, the contact point, the line
+fit, then normal, depth, measurement and evidence with every output column;
+softtip.estimator.pipeline, where each stage's step is called once per sample) and the low-pass
+filter, run back to back with no validation, tare or Python between them, their outputs
+allocated per call (as the pipeline's) and on buffers allocated once and reused (no page
+faults: memory the process already has); the ratio is the reference's time over the pipeline's.
+Target (manual §6, issue 31): pipeline >= 0.8x the reference, >= 3 M rows/s per core where the
+computation allows it, <= 400 B/row.
 
 Both cores (--only jobs): a log's pieces estimated in this process (jobs=1) and by two worker
 processes (jobs=2, softtip.apps.chunked.estimate_pieces; the same bits), in the same run: wall
@@ -292,6 +301,15 @@ def scaling_worker(n: int) -> None:
     cols = [np.ascontiguousarray(w[:, i]) for i in range(6)]
     res["kernel"] = min(_timed_cpu(lambda: contact_arrays(tip, *cols)) for _ in range(repeats))
     cols = None
+    sets = {}
+    for name, config in OPTION_SETS.items():
+        estimate(t[:5000], w[:5000], tip, config)  # warm up (the compiled loops of this setting)
+        ref, fresh = pipeline_reference(t, w, tip, config), pipeline_reference(t, w, tip, config, reuse=False)
+        ref()
+        sets[name] = (min(_timed_cpu(lambda: estimate(t, w, tip, config)) for _ in range(repeats)),
+                      min(_timed_cpu(fresh) for _ in range(repeats)), min(_timed_cpu(ref) for _ in range(repeats)))  # fmt: skip
+        ref = fresh = None
+    res["sets"] = sets
     with tempfile.TemporaryDirectory() as tmp:
         for fmt in ("parquet", "csv"):
             src, dest = Path(tmp, f"in.{fmt}"), Path(tmp, f"out.{fmt}")
@@ -305,6 +323,50 @@ def scaling_worker(n: int) -> None:
             src.unlink()
             dest.unlink()
     print(json.dumps(res))
+
+
+#: The settings of the pipeline's table (--only scaling); the benchmark log is at 1 kHz.
+OPTION_SETS = {
+    "default": EstimatorConfig(),
+    "low-pass 20 Hz": EstimatorConfig(lowpass_hz=20.0, sample_rate=1000.0),
+    "re-latch 2 mm": EstimatorConfig(relatch_distance=2e-3),
+    "line-fit": EstimatorConfig(contact_point="line-fit"),
+}
+
+
+def pipeline_reference(t, w, tip, config, reuse=True):
+    """The pipeline's computation with nothing around it: a function running the low-pass filter
+    (when configured) and the compiled loops of softtip.estimate (contact tracking, then
+    softtip.estimator.pipeline's) on buffers allocated here once and reused (module docs), or
+    allocated per call (``reuse`` False: what any run that returns new arrays pays)."""
+    from softtip.core.filtering import sosfilt_state
+    from softtip.estimator.batch import _sequential_stages
+    from softtip.estimator.contact import contact_params, contact_run, new_contact_state
+    from softtip.estimator.depth import resolve_depth
+    from softtip.estimator.measure import noise_correlation
+    from softtip.estimator.pipeline import fused_columns
+
+    config = resolve_depth(config, tip)
+    bias, taring, _, sos, noise, _ = _sequential_stages(t, w, config, None)
+    n, start = len(t), int(np.count_nonzero(taring))
+    params, corr = contact_params(config, noise), noise_correlation(sos)
+    cid, busy, contact = np.empty(n, dtype=np.int64), np.empty(n, dtype=bool), np.empty(n, dtype=bool)
+    drift, y, out = np.empty((n, 6)), np.empty((n, 6)), {}
+    run_contacts = contact_run.compiled()
+
+    def run():
+        nonlocal cid, busy, contact, drift, y
+        if not reuse:
+            cid, busy, contact = np.empty(n, dtype=np.int64), np.empty(n, dtype=bool), np.empty(n, dtype=bool)
+            drift, y = np.empty((n, 6)), np.empty((n, 6))
+        x, sub = (w, bias) if sos is None else (sosfilt_state(sos, w - bias, None)[0], np.zeros(6))
+        run_contacts(t, x, start, new_contact_state(), params, sub, cid, busy, drift, y)
+        np.greater(cid, 0, out=contact)
+        cols = fused_columns(t, y, drift, contact, taring, tip, config, noise, corr, False, out=out if reuse else None)
+        if cols is None:
+            raise SystemExit("the reference needs the compiled pipeline (a closed-form fingertip, numba)")
+
+    return run
 
 
 def _timed_cpu(fn) -> float:
@@ -375,6 +437,7 @@ def scaling(sizes: list[int]) -> None:
     )
     head = f"  {'rows':>11s} {'kernel':>10s} {'pipeline':>10s} {'ratio':>6s} {'Parquet e2e':>12s} {'CSV e2e':>10s} {'peak B/row':>11s}"
     print(head)
+    rows = []
     for n in sizes:
         done = subprocess.run(
             [sys.executable, __file__, "--scaling-worker", str(n)], capture_output=True, text=True
@@ -388,6 +451,19 @@ def scaling(sizes: list[int]) -> None:
             f" {rate['parquet']:8.2f} M/s {rate['csv']:6.2f} M/s {r['peak_bytes'] / n:11.0f}"
             f"{'' if r['compiled'] else '   (steps run as Python: numba not installed or SOFTTIP_NUMBA=0)'}"
         )
+        rows.append((n, r["sets"]))
+    print(
+        "pipeline (softtip.estimate) against its compiled reference (the same loops with nothing around them; their"
+        " outputs allocated per call, and reused), rows per CPU second, same process; ratio = reference time /"
+        " pipeline time (target >= 0.8)"
+    )
+    print(f"  {'rows':>11s} {'settings':16s} {'pipeline':>10s} {'ref. new':>10s} {'ratio':>6s} {'ref. reused':>11s} {'ratio':>6s}")
+    for n, sets in rows:
+        for name, (pipe, fresh, ref) in sets.items():
+            print(
+                f"  {n:11,d} {name:16s} {n / pipe / 1e6:6.2f} M/s {n / fresh / 1e6:6.2f} M/s {fresh / pipe:6.2f}"
+                f" {n / ref / 1e6:7.2f} M/s {ref / pipe:6.2f}"
+            )
 
 
 def timed(fn, repeats=2):

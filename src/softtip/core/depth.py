@@ -157,10 +157,20 @@ def skin_depth_law(thickness: float) -> DepthLaw:
 
 def depth_kernel(normal_force, law: DepthLaw, xp):
     """``δ = min((max(F_n, 0) / k)^(1/p), δ_max)`` component-wise (numpy or float)."""
+    if law.exponent == 2.0:
+        return square_depth_kernel(normal_force, law.stiffness, law.max_depth, xp)
     f_normal = xp.where(normal_force > 0.0, normal_force, 0.0 * normal_force)
-    # a square root where p = 2 (correctly rounded in both back ends, and cheaper)
-    d = xp.sqrt(f_normal / law.stiffness) if law.exponent == 2.0 else xp.pow(f_normal / law.stiffness, 1.0 / law.exponent)
+    d = xp.pow(f_normal / law.stiffness, 1.0 / law.exponent)
     return xp.where(d > law.max_depth, law.max_depth + 0.0 * d, d)
+
+
+@jitable
+def square_depth_kernel(normal_force, stiffness, max_depth, xp):
+    """:func:`depth_kernel` of a law of exponent 2 (stiffness N/m², cap m): a square root
+    (correctly rounded in every back end, and cheaper), which compiled code can call."""
+    f_normal = xp.where(normal_force > 0.0, normal_force, 0.0 * normal_force)
+    d = xp.sqrt(f_normal / stiffness)
+    return xp.where(d > max_depth, max_depth + 0.0 * d, d)
 
 
 def lever_depth(wrench: ArrayLike, point: ArrayLike, normal: ArrayLike, direction: ArrayLike) -> NDArray[np.float64]:

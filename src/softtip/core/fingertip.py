@@ -26,6 +26,7 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from softtip.core._jit import jitable
 from softtip.core.implicit import ImplicitSurface
 from softtip.core.mesh import MeshFingertip
 from softtip.core.mounting import mount_from_mapping
@@ -95,6 +96,21 @@ class _SphericalPress(PressModel):
         return f"radius std {std[3] * mm:.4f} mm; centre std " + ", ".join(f"{v * mm:.4f}" for v in std[:3]) + " mm"
 
 
+@jitable
+def sphere_normal_kernel(x, y, z, cx, cy, cz, xp):
+    """The outward unit normal of a sphere centred at ``c`` (m) through ``(x, y, z)``, component-wise."""
+    px, py, pz = x - cx, y - cy, z - cz
+    norm = xp.sqrt(px * px + py * py + pz * pz)
+    return xp.div(px, norm), xp.div(py, norm), xp.div(pz, norm)
+
+
+@jitable
+def sphere_project_kernel(x, y, z, radius, cx, cy, cz, xp):
+    """The point of a sphere of ``radius`` centred at ``c`` (m) nearest to ``(x, y, z)``, component-wise."""
+    nx, ny, nz = sphere_normal_kernel(x, y, z, cx, cy, cz, xp)
+    return cx + radius * nx, cy + radius * ny, cz + radius * nz
+
+
 @dataclass(frozen=True)
 class Sphere(Fingertip):
     """Spherical skin of ``radius`` (m) centred at ``center`` (m, sensor frame)."""
@@ -116,16 +132,10 @@ class Sphere(Fingertip):
         return xp.sqrt(px * px + py * py + pz * pz) - self.radius
 
     def _normal_kernel(self, x, y, z, xp):
-        cx, cy, cz = self.center
-        px, py, pz = x - cx, y - cy, z - cz
-        norm = xp.sqrt(px * px + py * py + pz * pz)
-        return xp.div(px, norm), xp.div(py, norm), xp.div(pz, norm)
+        return sphere_normal_kernel(x, y, z, *self.center, xp)
 
     def _project_kernel(self, x, y, z, xp):
-        cx, cy, cz = self.center
-        nx, ny, nz = self._normal_kernel(x, y, z, xp)
-        r = self.radius
-        return cx + r * nx, cy + r * ny, cz + r * nz
+        return sphere_project_kernel(x, y, z, self.radius, *self.center, xp)
 
     @property
     def bounding_sphere(self) -> tuple[NDArray[np.float64], float]:
@@ -200,6 +210,7 @@ class _CapPress(_SphericalPress):
         return head, [f"  length     {x[2] * mm:.3f} ± {std[2] * mm:.3f} mm (cap centre height); axis offset x, y = cap centre x, y"]
 
 
+@jitable
 def _capsule_kernel(fx, fy, fz, mx, my, mz, radius, length, ox, oy, xp):
     # an axis through (ox, oy): solve about that point (m' = m − o × f), then shift back
     mx = mx - oy * fz  # o × f = (oy fz, −ox fz, ox fy − oy fx)
@@ -209,6 +220,7 @@ def _capsule_kernel(fx, fy, fz, mx, my, mz, radius, length, ox, oy, xp):
     return rx + ox, ry + oy, rz, nx, ny, nz, sig, valid
 
 
+@jitable
 def _centred_capsule_kernel(fx, fy, fz, mx, my, mz, radius, length, xp):
     # hemisphere first (manual §3.2)
     sx, sy, sz, snx, sny, snz, ssig, sval = sphere_kernel(fx, fy, fz, mx, my, mz, radius, 0.0, 0.0, length, xp)
@@ -245,6 +257,31 @@ def _centred_capsule_kernel(fx, fy, fz, mx, my, mz, radius, length, xp):
     return rx, ry, rz, nx, ny, nz, sig, valid
 
 
+@jitable
+def _height_above_cap(z, length, xp):
+    # distance along the axis above the cap centre, 0 on the cylinder part
+    dz = z - length
+    return xp.where(dz > 0.0, dz, 0.0 * dz)
+
+
+@jitable
+def capsule_normal_kernel(x, y, z, length, ox, oy, xp):
+    """The outward unit normal of a capsule (cap centre at height ``length``, axis through
+    ``(ox, oy)``, m) at ``(x, y, z)``, component-wise."""
+    x, y = x - ox, y - oy
+    dz = _height_above_cap(z, length, xp)
+    norm = xp.sqrt(x * x + y * y + dz * dz)
+    return xp.div(x, norm), xp.div(y, norm), xp.div(dz, norm)
+
+
+@jitable
+def capsule_project_kernel(x, y, z, radius, length, ox, oy, xp):
+    """The point of a capsule's skin nearest to ``(x, y, z)`` (m), component-wise."""
+    nx, ny, nz = capsule_normal_kernel(x, y, z, length, ox, oy, xp)
+    zc = xp.where(z > length, length + 0.0 * z, z)
+    return ox + radius * nx, oy + radius * ny, zc + radius * nz
+
+
 @dataclass(frozen=True)
 class Capsule(Fingertip):
     """The papers' fingertip: cylinder of ``radius`` along +z from ``z = 0`` to ``length``,
@@ -275,27 +312,16 @@ class Capsule(Fingertip):
             raise ValueError(f"axis_offset must be 2 finite numbers (x, y) in metres, got {self.axis_offset!r}")
         object.__setattr__(self, "axis_offset", (float(off[0]), float(off[1])))
 
-    def _height_above_cap(self, z, xp):
-        # distance along the axis above the cap centre, 0 on the cylinder part
-        dz = z - self.length
-        return xp.where(dz > 0.0, dz, 0.0 * dz)
-
     def _surface_kernel(self, x, y, z, xp):
         x, y = x - self.axis_offset[0], y - self.axis_offset[1]
-        dz = self._height_above_cap(z, xp)
+        dz = _height_above_cap(z, self.length, xp)
         return xp.sqrt(x * x + y * y + dz * dz) - self.radius
 
     def _normal_kernel(self, x, y, z, xp):
-        x, y = x - self.axis_offset[0], y - self.axis_offset[1]
-        dz = self._height_above_cap(z, xp)
-        norm = xp.sqrt(x * x + y * y + dz * dz)
-        return xp.div(x, norm), xp.div(y, norm), xp.div(dz, norm)
+        return capsule_normal_kernel(x, y, z, self.length, *self.axis_offset, xp)
 
     def _project_kernel(self, x, y, z, xp):
-        nx, ny, nz = self._normal_kernel(x, y, z, xp)
-        r = self.radius
-        zc = xp.where(z > self.length, self.length + 0.0 * z, z)
-        return self.axis_offset[0] + r * nx, self.axis_offset[1] + r * ny, zc + r * nz
+        return capsule_project_kernel(x, y, z, self.radius, self.length, *self.axis_offset, xp)
 
     @property
     def bounding_sphere(self) -> tuple[NDArray[np.float64], float]:
@@ -415,6 +441,7 @@ class _EllipsoidPress(PressModel):
         )
 
 
+@jitable
 def _ellipsoid_kernel(fx, fy, fz, mx, my, mz, a, b, c, cx, cy, cz, xp):
     # With p = D s (D = diag(a, b, c)), m_c = p × f + κ D⁻² p becomes the unit-sphere problem
     # D m_c = s × f' + κ s with f' = det(D) D⁻¹ f, since D [f]× D = det(D) [D⁻¹ f]×.
@@ -437,6 +464,25 @@ def _ellipsoid_kernel(fx, fy, fz, mx, my, mz, a, b, c, cx, cy, cz, xp):
         kappa * gnorm,
         valid,
     )
+
+
+@jitable
+def ellipsoid_normal_kernel(x, y, z, a, b, c, cx, cy, cz, xp):
+    """The outward unit normal of an axis-aligned ellipsoid (semi-axes ``a, b, c``, centre ``c``, m)
+    at ``(x, y, z)``, component-wise."""
+    sx, sy, sz = (x - cx) / a, (y - cy) / b, (z - cz) / c
+    gx, gy, gz = sx / a, sy / b, sz / c
+    norm = xp.sqrt(gx * gx + gy * gy + gz * gz)
+    return xp.div(gx, norm), xp.div(gy, norm), xp.div(gz, norm)
+
+
+@jitable
+def ellipsoid_project_kernel(x, y, z, a, b, c, cx, cy, cz, xp):
+    """The point of an axis-aligned ellipsoid's skin on the ray from its centre through ``(x, y, z)``
+    (m), component-wise."""
+    sx, sy, sz = (x - cx) / a, (y - cy) / b, (z - cz) / c
+    s = xp.sqrt(sx * sx + sy * sy + sz * sz)
+    return cx + a * xp.div(sx, s), cy + b * xp.div(sy, s), cz + c * xp.div(sz, s)
 
 
 @dataclass(frozen=True)
@@ -468,18 +514,10 @@ class Ellipsoid(Fingertip):
         return xp.sqrt(sx * sx + sy * sy + sz * sz) - 1.0
 
     def _normal_kernel(self, x, y, z, xp):
-        a, b, c = self.semi_axes
-        sx, sy, sz = self._scaled(x, y, z)
-        gx, gy, gz = sx / a, sy / b, sz / c
-        norm = xp.sqrt(gx * gx + gy * gy + gz * gz)
-        return xp.div(gx, norm), xp.div(gy, norm), xp.div(gz, norm)
+        return ellipsoid_normal_kernel(x, y, z, *self.semi_axes, *self.center, xp)
 
     def _project_kernel(self, x, y, z, xp):
-        a, b, c = self.semi_axes
-        cx, cy, cz = self.center
-        sx, sy, sz = self._scaled(x, y, z)
-        s = xp.sqrt(sx * sx + sy * sy + sz * sz)
-        return cx + a * xp.div(sx, s), cy + b * xp.div(sy, s), cz + c * xp.div(sz, s)
+        return ellipsoid_project_kernel(x, y, z, *self.semi_axes, *self.center, xp)
 
     @property
     def bounding_sphere(self) -> tuple[NDArray[np.float64], float]:

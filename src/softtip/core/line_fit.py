@@ -75,6 +75,7 @@ __all__ = ["N_SUMS", "line_fit_products", "line_fit_solve_kernel"]
 N_SUMS = 21
 
 
+@jitable
 def line_fit_products(fx, fy, fz, qx, qy, qz):
     """The 21 per-sample products whose window sums :func:`line_fit_solve_kernel` needs.
 
@@ -98,6 +99,7 @@ def line_fit_products(fx, fy, fz, qx, qy, qz):
     )  # fmt: skip
 
 
+@jitable
 def _sym(s, ux, uy, uz, vx, vy, vz):
     """``uᵀ S v`` for a symmetric S given as (xx, xy, xz, yy, yz, zz)."""
     sxx, sxy, sxz, syy, syz, szz = s
@@ -113,27 +115,32 @@ def _sym(s, ux, uy, uz, vx, vy, vz):
 MODEL_MARGIN = 0.25
 
 
+@jitable
 def _without_noise(sums, count, ax, ay, az, variances):
     """The window sums less their expected noise: ``count`` times the noise covariance of
     ``(q_A, f)``, with ``q_A = m − a × f`` (``a`` the anchor), for the unbiased second
     moments of the noise-free wrench (errors in variables); ``variances`` the noise's
     (:func:`~softtip.core.noise.noise_variances`)."""
     fx, fy, fz, mx, my, mz = variances
-    # q_A = m − A f with A = [a]×: cov(q_A) = Σ_m + A Σ_f Aᵀ, cov(q_A, f) = −A Σ_f
-    a = ((0.0, -az, ay), (az, 0.0, -ax), (-ay, ax, 0.0))
-    sf = (fx, fy, fz)
-
-    def aa(i, j):
-        return a[i][0] * a[j][0] * fx + a[i][1] * a[j][1] * fy + a[i][2] * a[j][2] * fz
-
-    noise_qq = (mx + aa(0, 0), aa(0, 1), aa(0, 2), my + aa(1, 1), aa(1, 2), mz + aa(2, 2))
-    noise_qf = tuple(-a[i][j] * sf[j] for i in range(3) for j in range(3))
-    noise_ff = (fx, 0.0, 0.0, fy, 0.0, fz)
+    # q_A = m − A f with A = [a]× (rows a0*, a1*, a2*): cov(q_A) = Σ_m + A Σ_f Aᵀ, cov(q_A, f) = −A Σ_f
+    a00, a01, a02 = 0.0, -az, ay
+    a10, a11, a12 = az, 0.0, -ax
+    a20, a21, a22 = -ay, ax, 0.0
+    n00 = mx + (a00 * a00 * fx + a01 * a01 * fy + a02 * a02 * fz)
+    n01 = a00 * a10 * fx + a01 * a11 * fy + a02 * a12 * fz
+    n02 = a00 * a20 * fx + a01 * a21 * fy + a02 * a22 * fz
+    n11 = my + (a10 * a10 * fx + a11 * a11 * fy + a12 * a12 * fz)
+    n12 = a10 * a20 * fx + a11 * a21 * fy + a12 * a22 * fz
+    n22 = mz + (a20 * a20 * fx + a21 * a21 * fy + a22 * a22 * fz)
     return (
-        [v - count * w for v, w in zip(sums[0:6], noise_qq)],
-        [v - count * w for v, w in zip(sums[6:15], noise_qf)],
-        [v - count * w for v, w in zip(sums[15:21], noise_ff)],
-    )
+        (sums[0] - count * n00, sums[1] - count * n01, sums[2] - count * n02, sums[3] - count * n11,
+         sums[4] - count * n12, sums[5] - count * n22),
+        (sums[6] - count * (-a00 * fx), sums[7] - count * (-a01 * fy), sums[8] - count * (-a02 * fz),
+         sums[9] - count * (-a10 * fx), sums[10] - count * (-a11 * fy), sums[11] - count * (-a12 * fz),
+         sums[12] - count * (-a20 * fx), sums[13] - count * (-a21 * fy), sums[14] - count * (-a22 * fz)),
+        (sums[15] - count * fx, sums[16] - count * 0.0, sums[17] - count * 0.0, sums[18] - count * fy,
+         sums[19] - count * 0.0, sums[20] - count * fz),
+    )  # fmt: skip
 
 
 @jitable
@@ -178,10 +185,12 @@ def _chi2_excess(nu, xp):
     return nu * (b * b * b - 1.0)
 
 
+@jitable
 def _dot(a, x, y, z):
     return a[0] * x + a[1] * y + a[2] * z
 
 
+@jitable
 def _moments(qq, qf, ff, px, py, pz, ux, uy, uz):
     """``(Σ q_A (u·q), Σ f (u·q), p × u)`` for the moment ``q = q_A − p × f`` about ``p``."""
     hx, hy, hz = _cross(px, py, pz, ux, uy, uz)
@@ -201,10 +210,12 @@ def _moments(qq, qf, ff, px, py, pz, ux, uy, uz):
     return a, b, (hx, hy, hz)
 
 
+@jitable
 def _cross(ax, ay, az, bx, by, bz):
     return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
 
 
+@jitable
 def line_fit_solve_kernel(sums, count, r0x, r0y, r0z, ax, ay, az, tip, iterations, noise: SensorNoise, corr, xp):
     """Joint contact point, direction and conditioning from the window sums, component-wise.
 
@@ -220,11 +231,13 @@ def line_fit_solve_kernel(sums, count, r0x, r0y, r0z, ax, ay, az, tip, iteration
     ax, ay, az : float or array
         Anchor ``r_A`` of the sums, m.
     tip : Fingertip
-        For the skin normal and the projection onto the skin.
+        For the skin normal and the projection onto the skin (its ``_normal_kernel`` and
+        ``_project_kernel``; compiled code passes :class:`softtip.estimator.pipeline.ShapeRecord`).
     iterations : int
         Gauss–Newton steps (each: closed-form direction and offset, then projection).
     noise : SensorNoise
-        Per-sample noise of the wrench the sums were made from.
+        Per-sample noise of the wrench the sums were made from (or a named tuple with its
+        ``force_std`` and ``moment_std``, for compiled code).
     corr : float
         Samples per independent noise sample (1 for white noise; ``1 / g²`` after a filter
         of white-noise gain ``g``), for the margin on the noise excitation and the
@@ -244,7 +257,7 @@ def line_fit_solve_kernel(sums, count, r0x, r0y, r0z, ax, ay, az, tip, iteration
     variances = noise_variances(noise)
     qq, qf, ff = _without_noise(sums, count, ax, ay, az, variances)
     rx, ry, rz = r0x, r0y, r0z
-    dx = dy = dz = cond = angle_std = offset_std = residual = None
+    dx = dy = dz = cond = angle_std = offset_std = residual = xp.nan  # (iterations ≥ 1: replaced)
     for _ in range(iterations):
         nx, ny, nz = tip._normal_kernel(rx, ry, rz, xp)
         t1x, t1y, t1z, t2x, t2y, t2z = tangent_frame_kernel(nx, ny, nz, xp)

@@ -84,6 +84,7 @@ MINI40 = SensorNoise(force_std=(1 / 100, 1 / 100, 1 / 50), moment_std=(1 / 4000,
 SENSOR_CLASSES = {"Nano17": NANO17, "Nano25": NANO25, "Mini40": MINI40}
 
 
+@jitable
 def noise_variances(noise: SensorNoise) -> tuple[float, float, float, float, float, float]:
     """``(σ_fx², σ_fy², σ_fz², σ_mx², σ_my², σ_mz²)`` of ``noise`` (N², N²·m²): what the
     kernels below take (a compiled step cannot read a :class:`SensorNoise`)."""

@@ -34,6 +34,7 @@ from typing import Any, ClassVar, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from softtip.core._jit import jitable
 from softtip.core._xp import NP
 from softtip.errors import InputError
 
@@ -88,6 +89,7 @@ class SoftFinger(NamedTuple):
         return self[3], self[4], self[5]
 
 
+@jitable
 def sphere_kernel(fx, fy, fz, mx, my, mz, radius, cx, cy, cz, xp):
     """The soft-finger contact on a sphere of ``radius`` (m) centred at ``c`` (m), component-wise: point, normal, ``σ`` and validity."""
     # moment about the centre: m_c = m - c × f

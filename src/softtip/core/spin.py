@@ -34,6 +34,7 @@ __all__ = [
 _HALF_PI = 0.5 * math.pi
 
 
+@jitable
 def spin_torque_kernel(fx, fy, fz, mx, my, mz, rx, ry, rz):
     """``q = m − r × f`` component-wise."""
     return (
@@ -43,6 +44,7 @@ def spin_torque_kernel(fx, fy, fz, mx, my, mz, rx, ry, rz):
     )
 
 
+@jitable
 def tangential_kernel(qx, qy, qz, nx, ny, nz):
     """``σ = q · n`` and ``h = q − σ n`` component-wise; returns ``(σ, hx, hy, hz)``."""
     sigma = qx * nx + qy * ny + qz * nz

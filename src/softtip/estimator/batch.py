@@ -1,4 +1,10 @@
-"""The estimator over a whole log, vectorised: :func:`estimate`."""
+"""The estimator over a whole log: :func:`estimate`.
+
+The stages whose state crosses a cut of the log (tare, low-pass filter, contact tracking) run
+first; the per-contact stages then run in the compiled loops of
+:mod:`softtip.estimator.pipeline` (the closed-form fingertips), or stage after stage with numpy
+between them (:func:`_staged_columns`: any fingertip, and the steps run as Python): the same bits.
+"""
 
 from __future__ import annotations
 
@@ -27,6 +33,7 @@ from softtip.estimator.evidence import evidence_states
 from softtip.estimator.latch import latch_points
 from softtip.estimator.line_fit import line_fit_points
 from softtip.estimator.measure import Measurement, effective_noise, measure, noise_correlation
+from softtip.estimator.pipeline import fused_columns
 from softtip.estimator.results import LINE, NONE, Estimates, EstimatorWarning
 from softtip.estimator.tare import TareReport, noise_in_use, tare_log
 
@@ -111,7 +118,7 @@ def _sequential_stages(t: NDArray, w: NDArray, config: EstimatorConfig, carry: C
         bias, taring = tare_report.bias, np.zeros(n, dtype=bool)
     else:
         bias, taring, tare_report = tare_log(t, w, config)
-    x = w - bias
+    x, sub = w, bias  # the tracker subtracts the bias (no tared copy) unless the filter needs it first
 
     sos = None
     zf = None
@@ -119,9 +126,10 @@ def _sequential_stages(t: NDArray, w: NDArray, config: EstimatorConfig, carry: C
         rate = config.sample_rate or infer_rate(t)
         sos = lowpass_sos(config.lowpass_hz, rate, config.lowpass_order)
         if np.all(np.isfinite(bias)):
-            x, zf = sosfilt_state(sos, x, carry.zi if later else None)
+            x, zf = sosfilt_state(sos, w - bias, carry.zi if later else None)
+            sub = None
     noise = effective_noise(noise_in_use(config, tare_report), sos)
-    ct = track_contacts(t, x, int(np.count_nonzero(taring)), config, noise, carry.track if later else None)
+    ct = track_contacts(t, x, int(np.count_nonzero(taring)), config, noise, carry.track if later else None, sub)
     if carry is not None:
         carry.tare, carry.zi, carry.track = tare_report, zf, ct.state
     return bias, taring, tare_report, sos, noise, ct
@@ -204,10 +212,48 @@ def estimate(
     tip = load_fingertip(tip)
     config = resolve_depth(config or EstimatorConfig(), tip)
     t, w = validate_log(t, wrench)
-    n = len(t)
 
     later = carry is not None and carry.tare is not None
     bias, taring, tare_report, sos, noise, ct = _sequential_stages(t, w, config, carry)
+    had_latch = carry is not None and carry.had_latch
+    # the closed-form fingertips: the per-contact stages in compiled loops (softtip.estimator.pipeline)
+    cols = fused_columns(t, ct.wrench, ct.drift, ct.contact, taring, tip, config, noise, noise_correlation(sos), had_latch)
+    if cols is None:
+        cols = _staged_columns(t, ct, taring, tip, config, noise, sos, had_latch)
+    if carry is not None and config.contact_point != "track":
+        carry.had_latch = cols.pop("had_latch")
+    cols.pop("had_latch", None)
+    pulling = cols["pulling"]
+    started_in_contact = tare_report.source == "tare" and first_contact_pulls(t, pulling, ct.contact_id)
+    warn = [] if later else list(tare_report.warnings)
+    mismatch = None if later else sample_rate_mismatch(t, config.sample_rate)
+    if mismatch:
+        warn.append(mismatch)
+    if started_in_contact:
+        warn.append(started_in_contact_message(config))
+    if ct.drift_alarm >= 0:
+        warn.append(drift_message(config, float(t[ct.drift_alarm])))
+    for msg in warn:
+        warnings.warn(msg, EstimatorWarning, stacklevel=2)
+    return Estimates(
+        t=t,
+        taring=taring,
+        bias=bias,
+        tare_force_std=float(np.nanmax(tare_report.force_std)) if np.any(np.isfinite(tare_report.force_std)) else math.nan,
+        repeated_stamps=int(np.count_nonzero(np.diff(t) == 0)),
+        contact_id=ct.contact_id,
+        tare=tare_report,
+        started_in_contact=started_in_contact,
+        drift_alarm=ct.drift_alarm >= 0,
+        warnings=tuple(warn),
+        **cols,
+    )
+
+
+def _staged_columns(t, ct, taring, tip: Fingertip, config: EstimatorConfig, noise, sos, had_latch: bool) -> dict:
+    """The per-contact stages one after the other over the whole log, numpy between them (any
+    fingertip, and steps run as Python); the columns of :func:`softtip.estimator.pipeline.fused_columns`."""
+    n = len(t)
     x = ct.wrench
 
     c = [np.ascontiguousarray(x[:, i]) for i in range(6)]
@@ -224,10 +270,8 @@ def estimate(
             has = np.asarray(sc.valid, dtype=bool)
             latched = fallback = np.zeros(n, dtype=bool)
         else:
-            had_latch = carry is not None and carry.had_latch
             point, latched, fallback, relatched = latch_points(t, f_norm, contact, sc, tip, config, had_latch)
-            if carry is not None:
-                carry.had_latch = had_latch or bool(latched.any())
+            had_latch = had_latch or bool(latched.any())
             if config.contact_point == "line-fit":
                 point, joint_stats, _, moved = line_fit_points(
                     t, c, contact, sc, point, relatched, tip, config, noise, noise_correlation(sos)
@@ -258,17 +302,6 @@ def estimate(
     ev = evidence_states(t, located, begin, point, normal, h, x[:, :3], ms, noise, noise_correlation(sos), config, delta)
     state = np.where(located, ev.state, NONE).astype(np.int8)
     is_line = state == LINE
-    started_in_contact = tare_report.source == "tare" and first_contact_pulls(t, pulling, ct.contact_id)
-    warn = [] if later else list(tare_report.warnings)
-    mismatch = None if later else sample_rate_mismatch(t, config.sample_rate)
-    if mismatch:
-        warn.append(mismatch)
-    if started_in_contact:
-        warn.append(started_in_contact_message(config))
-    if ct.drift_alarm >= 0:
-        warn.append(drift_message(config, float(t[ct.drift_alarm])))
-    for msg in warn:
-        warnings.warn(msg, EstimatorWarning, stacklevel=2)
     if joint_stats is None:
         joint_stats = np.full((4, n), np.nan)
 
@@ -280,8 +313,7 @@ def estimate(
         np.copyto(a, np.nan, where=off.reshape(off.shape + (1,) * (a.ndim - 1)))
         return a
 
-    return Estimates(
-        t=t,
+    return dict(
         state=state,
         # the bias is not known while taring, so neither is the tared wrench (as in the stream)
         wrench=blank(x, taring),
@@ -298,9 +330,6 @@ def estimate(
         latched=latched & located,
         latch_fallback=fallback & located,
         pulling=pulling,
-        taring=taring,
-        bias=bias,
-        tare_force_std=float(np.nanmax(tare_report.force_std)) if np.any(np.isfinite(tare_report.force_std)) else math.nan,
         relatched=relatched,
         depth=blank(delta, not_located),
         line_fit_conditioning=blank(joint_stats[0], not_located),
@@ -311,13 +340,8 @@ def estimate(
         line_evidence=np.where(is_line, ev.evidence, 0).astype(np.int8),
         h_ratio=blank(ev.h_ratio, not_located),
         excitation_ratio=blank(ev.excitation_ratio, not_located),
-        repeated_stamps=int(np.count_nonzero(np.diff(t) == 0)),
-        contact_id=ct.contact_id,
         drift=blank(ct.drift, taring),
-        tare=tare_report,
-        started_in_contact=started_in_contact,
-        drift_alarm=ct.drift_alarm >= 0,
-        warnings=tuple(warn),
         depth_std=blank(delta_std, not_located),
         depth_from_data=from_data & located,
+        had_latch=had_latch,
     )

@@ -223,10 +223,11 @@ def contact_step(state, params, t, dt, x0, x1, x2, x3, x4, x5):  # pragma: no co
 
 
 @lazy_jit
-def contact_run(t, x, start, state, params, cid, busy, drift, y):  # pragma: no cover - compiled
-    """:func:`contact_step` over a log: ``x`` (N, 6) at ``t`` (N,) s, from sample ``start`` on.
+def contact_run(t, x, start, state, params, bias, cid, busy, drift, y):  # pragma: no cover - compiled
+    """:func:`contact_step` over a log: ``x − bias`` (``x`` (N, 6), ``bias`` (6,)) at ``t`` (N,) s,
+    from sample ``start`` on (the bias subtracted here: no tared copy of a raw log).
 
-    The samples before ``start`` (the tare's) only advance the time: ``y = x``, no drift, no
+    The samples before ``start`` (the tare's) only advance the time: ``y = x − bias``, no drift, no
     contact. ``state`` is read and written (its last time in the ``_T_LAST`` slot gives the
     first sample's interval); ``cid`` (N,) int, ``busy`` (N,) bool, ``drift`` (N, 6) (the
     drift before each sample) and ``y`` (N, 6) are written. Returns the sample at which the
@@ -238,18 +239,18 @@ def contact_run(t, x, start, state, params, cid, busy, drift, y):  # pragma: no 
     for i in range(n):
         dt = 0.0 if t_last != t_last else t[i] - t_last
         t_last = t[i]
+        x0, x1, x2 = x[i, 0] - bias[0], x[i, 1] - bias[1], x[i, 2] - bias[2]
+        x3, x4, x5 = x[i, 3] - bias[3], x[i, 4] - bias[4], x[i, 5] - bias[5]
         if i < start:
+            y[i, 0], y[i, 1], y[i, 2], y[i, 3], y[i, 4], y[i, 5] = x0, x1, x2, x3, x4, x5
             for q in range(6):
-                y[i, q] = x[i, q]
                 drift[i, q] = 0.0
             cid[i] = 0
             busy[i] = False
             continue
         for q in range(6):
             drift[i, q] = state[_B + q]
-        _, c, _, b, alarm, y0, y1, y2, y3, y4, y5 = contact_step(
-            state, params, t[i], dt, x[i, 0], x[i, 1], x[i, 2], x[i, 3], x[i, 4], x[i, 5]
-        )
+        _, c, _, b, alarm, y0, y1, y2, y3, y4, y5 = contact_step(state, params, t[i], dt, x0, x1, x2, x3, x4, x5)
         y[i, 0], y[i, 1], y[i, 2], y[i, 3], y[i, 4], y[i, 5] = y0, y1, y2, y3, y4, y5
         cid[i] = c
         busy[i] = b
@@ -290,10 +291,12 @@ class ContactTrack(NamedTuple):
 
 
 def track_contacts(
-    t: NDArray, x: NDArray, start: int, config: EstimatorConfig, noise: SensorNoise, state: TrackState | None = None
+    t: NDArray, x: NDArray, start: int, config: EstimatorConfig, noise: SensorNoise, state: TrackState | None = None,
+    bias: NDArray | None = None,
 ) -> ContactTrack:
     """Contacts and drift of the tared (filtered) wrench ``x`` (N, 6) at ``t`` (N,), from
-    sample ``start`` on (the samples before it are the tare's: no contact, no drift).
+    sample ``start`` on (the samples before it are the tare's: no contact, no drift); with
+    ``bias`` (6,), of ``x − bias`` (a raw log and its bias: the same bits without a tared copy).
 
     ``state``: a piece of a longer log that goes on from an earlier piece, cut where that
     one's samples were untouched; ``state`` (from that piece's :attr:`ContactTrack.state`)
@@ -307,7 +310,8 @@ def track_contacts(
     run = contact_run.compiled() if use_numba(n) else contact_run.python
     t = np.ascontiguousarray(t, dtype=float)
     x = np.ascontiguousarray(x, dtype=float)
-    alarm = run(t, x, int(start), rec, contact_params(config, noise), cid, busy, drift, y)
+    bias = np.zeros(6) if bias is None else np.ascontiguousarray(bias, dtype=float)
+    alarm = run(t, x, int(start), rec, contact_params(config, noise), bias, cid, busy, drift, y)
     return ContactTrack(y, drift, cid > 0, cid, int(alarm), busy, TrackState(rec))
 
 

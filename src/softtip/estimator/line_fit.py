@@ -36,7 +36,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from softtip.core._blocks import BLOCK
-from softtip.core._jit import lazy_jit
+from softtip.core._jit import jitable, lazy_jit
 from softtip.core._xp import NP, PY
 from softtip.core.depth import depth_kernel
 from softtip.core.fingertip import Fingertip
@@ -88,6 +88,7 @@ def line_fit_moment(fx, fy, fz, mx, my, mz, nx, ny, nz, ax, ay, az, law, xp):
     return spin_torque_kernel(fx, fy, fz, mx, my, mz, ax, ay, az)
 
 
+@jitable
 def line_fit_accept(cond, angle_std, offset_std, residual, config: EstimatorConfig):
     # written so that NaN (undefined window) is never accepted, in both back ends
     return (

@@ -1,0 +1,562 @@
+"""The batch pipeline after the sequential stages, as compiled loops over the log: :func:`fused_columns`.
+
+:func:`~softtip.estimator.batch.estimate` runs the tare, the low-pass filter and the contact
+tracking first (their state crosses a cut of the log); what follows is per contact, and for
+the closed-form fingertips (:class:`~softtip.core.fingertip.Sphere`,
+:class:`~softtip.core.fingertip.Capsule`, :class:`~softtip.core.fingertip.Ellipsoid`) it runs
+here in compiled loops that call, per sample, the same step functions the stream
+(:class:`~softtip.estimator.stream.Estimator`) calls, in the stream's order:
+
+1. :func:`points_run`: the soft-finger solution (the shape's own kernel, compiled), the latch
+   (:func:`~softtip.estimator.latch.latch_step`, the mean put back on the skin at once, as the
+   stream does) or the tracked point;
+2. in ``line-fit`` mode, :func:`line_fit_run`: the line-fit stage's anchor, window and hold
+   steps with the window's solve (:func:`~softtip.core.line_fit.line_fit_solve_kernel`, the
+   fingertip a :class:`ShapeRecord`) per sample, as the stream's
+   :class:`~softtip.estimator.line_fit.LineFitTracker`; with a skin law the stage's batch form
+   :func:`~softtip.estimator.line_fit.line_fit_points` (its solve vectorised);
+3. :func:`tail_run`: the normal and the tangent frame (once per contact point, as the stream's
+   :class:`~softtip.estimator.floats.PointGeometry`), the depth
+   (:func:`~softtip.estimator.depth.depth_step`), the measurement (the kernels of
+   :mod:`softtip.core.spin` and :func:`~softtip.core.noise.noise_quad`), the line evidence
+   (:func:`~softtip.estimator.evidence.evidence_step`), every output column written once, NaN
+   where the sample has no value (no separate blanking pass).
+
+Each step is the stage's one source; this module only sequences them (no stage is written
+again). The results are the staged path's to the bit (the stream's, which the staged batch
+equals): the kernels do the same IEEE operations compiled as in numpy; only a line-fit window
+statistic that is NaN (the square root of a negative number) carries the stream's +NaN where
+numpy's square root gave −NaN. Other fingertips (a mesh,
+an implicit surface, a mounted shape), a skin law whose exponent is not 2 (numpy's power,
+which compiled code cannot reproduce to the bit) and a run whose steps are not compiled (a
+short log in a process without numba, ``SOFTTIP_NUMBA=0``) take the staged path of
+:mod:`softtip.estimator.batch`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from softtip.core import _xp_scalar as XS
+from softtip.core._jit import jitable, lazy_jit, use_numba
+from softtip.core.depth import square_depth_kernel
+from softtip.core.fingertip import (
+    Capsule,
+    Ellipsoid,
+    Fingertip,
+    Sphere,
+    _capsule_kernel,
+    _ellipsoid_kernel,
+    capsule_normal_kernel,
+    capsule_project_kernel,
+    ellipsoid_normal_kernel,
+    ellipsoid_project_kernel,
+    sphere_normal_kernel,
+    sphere_project_kernel,
+)
+from softtip.core.line_fit import N_SUMS, line_fit_products, line_fit_solve_kernel
+from softtip.core.noise import SensorNoise, noise_quad, noise_variances
+from softtip.core.shape import SoftFinger, sphere_kernel
+from softtip.core.spin import spin_torque_kernel, tangent_frame_kernel, tangential_kernel
+from softtip.estimator.config import EstimatorConfig
+from softtip.estimator.depth import (
+    RING_COLUMNS,
+    _ring_capacity,
+    depth_gap,
+    depth_params,
+    depth_start_contact,
+    depth_step,
+    new_depth_state,
+)
+from softtip.estimator.evidence import evidence_params, evidence_start, evidence_step, new_evidence_state
+from softtip.estimator.latch import (
+    _HAD,
+    _LX,
+    _LY,
+    _LZ,
+    FIX,
+    HELD,
+    MEAN,
+    SOFT,
+    latch_hold,
+    latch_params,
+    latch_step,
+    new_latch_state,
+)
+from softtip.estimator.line_fit import (
+    _start_anchor,
+    _start_window,
+    line_fit_accept,
+    line_fit_anchor_step,
+    line_fit_hold_step,
+    line_fit_points,
+    line_fit_start_segment,
+    line_fit_window_step,
+    new_line_fit_state,
+)
+
+__all__ = ["ShapeRecord", "shape_record", "points_run", "line_fit_run", "tail_run", "fused_columns"]
+
+#: Shape codes of :func:`shape_record`.
+SPHERE, CAPSULE, ELLIPSOID = 0, 1, 2
+#: Contact-point modes of :func:`points_run`.
+TRACK, LATCH = 0, 1
+#: Depth modes of :func:`tail_run`.
+DEPTH_OFF, DEPTH_LAW, DEPTH_ONLINE = 0, 1, 2
+_NAN = math.nan
+#: State codes (:data:`softtip.estimator.results.STATES`).
+_NONE_CODE, _LINE_CODE = 0, 2
+
+
+class ShapeRecord(NamedTuple):
+    """A closed-form fingertip as compiled code takes it (:func:`shape_record`): its shape code and
+    parameters, with the :class:`~softtip.core.shape.Fingertip` kernels that
+    :func:`~softtip.core.line_fit.line_fit_solve_kernel` calls (in compiled code too, by
+    :func:`_register_methods`)."""
+
+    kind: int  #: :data:`SPHERE`, :data:`CAPSULE` or :data:`ELLIPSOID`
+    sp: NDArray[np.float64]  #: sphere (radius, centre), capsule (radius, length, axis offset), ellipsoid (semi-axes, centre), m
+
+    def _normal_kernel(self, x, y, z, xp):
+        return _normal(self.kind, self.sp, x, y, z, xp)
+
+    def _project_kernel(self, x, y, z, xp):
+        return _project(self.kind, self.sp, x, y, z, xp)
+
+
+class NoiseRecord(NamedTuple):
+    """A :class:`~softtip.core.noise.SensorNoise` as compiled code reads it (standard deviations, N and N·m)."""
+
+    force_std: tuple[float, float, float]
+    moment_std: tuple[float, float, float]
+
+
+class AcceptRecord(NamedTuple):
+    """The limits of :func:`~softtip.estimator.line_fit.line_fit_accept`, as compiled code reads them."""
+
+    line_fit_max_angle_std: float
+    line_fit_max_offset_std: float
+    line_fit_max_residual: float
+
+
+def shape_record(tip: Fingertip) -> ShapeRecord | None:
+    """The :class:`ShapeRecord` of a closed-form fingertip: a sphere ``(radius, centre)``, a capsule
+    ``(radius, length, axis offset)``, an ellipsoid ``(semi-axes, centre)`` (m); None for any
+    other (subclasses included)."""
+    if type(tip) is Sphere:
+        return ShapeRecord(SPHERE, np.array([tip.radius, *tip.center], dtype=float))
+    if type(tip) is Capsule:
+        return ShapeRecord(CAPSULE, np.array([tip.radius, tip.length, *tip.axis_offset], dtype=float))
+    if type(tip) is Ellipsoid:
+        return ShapeRecord(ELLIPSOID, np.array([*tip.semi_axes, *tip.center], dtype=float))
+    return None
+
+
+_REGISTERED: list[bool] = []
+
+
+def _register_methods() -> None:
+    """Let compiled code call a :class:`ShapeRecord`'s ``_normal_kernel`` and ``_project_kernel``
+    (numba's ``overload_method``), once, before :func:`line_fit_run` is compiled."""
+    if _REGISTERED:
+        return
+    from numba.core import types
+    from numba.extending import overload_method
+
+    @overload_method(types.NamedTuple, "_normal_kernel")
+    def _normal_method(tip, x, y, z, xp):
+        if getattr(tip, "instance_class", None) is ShapeRecord:
+            return lambda tip, x, y, z, xp: _normal(tip.kind, tip.sp, x, y, z, xp)
+        return None
+
+    @overload_method(types.NamedTuple, "_project_kernel")
+    def _project_method(tip, x, y, z, xp):
+        if getattr(tip, "instance_class", None) is ShapeRecord:
+            return lambda tip, x, y, z, xp: _project(tip.kind, tip.sp, x, y, z, xp)
+        return None
+
+    _REGISTERED.append(True)
+
+
+@jitable
+def _contact(kind, sp, fx, fy, fz, mx, my, mz, xp):
+    """The shape's soft-finger solution (``Fingertip._contact_kernel``) on floats (``xp``: :mod:`softtip.core._xp_scalar`)."""
+    if kind == SPHERE:
+        return sphere_kernel(fx, fy, fz, mx, my, mz, sp[0], sp[1], sp[2], sp[3], xp)
+    if kind == CAPSULE:
+        return _capsule_kernel(fx, fy, fz, mx, my, mz, sp[0], sp[1], sp[2], sp[3], xp)
+    return _ellipsoid_kernel(fx, fy, fz, mx, my, mz, sp[0], sp[1], sp[2], sp[3], sp[4], sp[5], xp)
+
+
+@jitable
+def _normal(kind, sp, x, y, z, xp):
+    """The shape's outward normal (``Fingertip._normal_kernel``) on floats."""
+    if kind == SPHERE:
+        return sphere_normal_kernel(x, y, z, sp[1], sp[2], sp[3], xp)
+    if kind == CAPSULE:
+        return capsule_normal_kernel(x, y, z, sp[1], sp[2], sp[3], xp)
+    return ellipsoid_normal_kernel(x, y, z, sp[0], sp[1], sp[2], sp[3], sp[4], sp[5], xp)
+
+
+@jitable
+def _project(kind, sp, x, y, z, xp):
+    """The shape's nearest skin point (``Fingertip._project_kernel``) on floats."""
+    if kind == SPHERE:
+        return sphere_project_kernel(x, y, z, sp[0], sp[1], sp[2], sp[3], xp)
+    if kind == CAPSULE:
+        return capsule_project_kernel(x, y, z, sp[0], sp[1], sp[2], sp[3], xp)
+    return ellipsoid_project_kernel(x, y, z, sp[0], sp[1], sp[2], sp[3], sp[4], sp[5], xp)
+
+
+@lazy_jit
+def ring_rows(t, window):  # pragma: no cover - compiled
+    """The rows a ring buffer of windows of ``window`` s over ``t`` needs (the most samples
+    any window holds, + 2)."""
+    return _ring_capacity(t, window)
+
+
+@lazy_jit
+def points_run(t, x, contact, kind, sp, mode, lparams, lstate, point, has, sc, sc_valid, latched, fallback,
+               relatched):  # pragma: no cover - compiled
+    """The contact point of every sample in contact, in one loop (the stream's order).
+
+    ``t`` (N,) s, ``x`` (N, 6) the tared wrench, ``contact`` (N,) bool; ``kind``, ``sp`` the
+    fingertip (:func:`shape_record`); ``mode`` :data:`TRACK` (the soft-finger point, its
+    validity in ``has``) or :data:`LATCH` (:func:`~softtip.estimator.latch.latch_step` on
+    ``lstate`` with ``lparams``, each mean put back on the skin when returned, a latch held
+    when fixed). Written: ``point`` (N, 3) (NaN without one), ``has`` (N,) bool, ``sc`` (N, 7)
+    the soft-finger solution (point, normal, σ; NaN out of contact or invalid in latch mode) and
+    ``sc_valid`` (N,) its validity when they have N rows (line-fit and track mode), ``latched``, ``fallback``, ``relatched`` (N,) bool.
+    """
+    n = t.shape[0]
+    keep = sc.shape[0] == n  # the soft-finger solutions are wanted (else sc, sc_valid are placeholders)
+    for i in range(n):
+        latched[i] = False
+        fallback[i] = False
+        relatched[i] = False
+        if not contact[i]:
+            for k in range(3):
+                point[i, k] = _NAN
+            has[i] = False
+            if keep:
+                for k in range(7):
+                    sc[i, k] = _NAN
+                sc_valid[i] = False
+            continue
+        fx, fy, fz, mx, my, mz = x[i, 0], x[i, 1], x[i, 2], x[i, 3], x[i, 4], x[i, 5]
+        onset = i == 0 or not contact[i - 1]
+        f_norm = math.sqrt(fx * fx + fy * fy + fz * fz)
+        if mode == LATCH and not keep:
+            # a latch held and no re-latch test due needs no soft-finger solution (as in the stream)
+            code, qx, qy, qz, lat, fb, rel, _ = latch_step(lstate, lparams, onset, t[i], f_norm, False, False, 0.0,
+                                                           0.0, 0.0)  # fmt: skip
+            if code == HELD:
+                px, py, pz = lstate[_LX], lstate[_LY], lstate[_LZ]
+                point[i, 0], point[i, 1], point[i, 2] = px, py, pz
+                has[i] = math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)
+                latched[i] = lat
+                fallback[i] = fb
+                relatched[i] = rel
+                continue
+        rx, ry, rz, nx, ny, nz, sig, valid = _contact(kind, sp, fx, fy, fz, mx, my, mz, XS)
+        if mode == TRACK:
+            point[i, 0], point[i, 1], point[i, 2] = rx, ry, rz
+            has[i] = valid
+        elif not valid:
+            rx = ry = rz = nx = ny = nz = sig = _NAN
+        if keep:
+            sc_valid[i] = valid
+            sc[i, 0], sc[i, 1], sc[i, 2], sc[i, 3], sc[i, 4], sc[i, 5], sc[i, 6] = rx, ry, rz, nx, ny, nz, sig
+        if mode == TRACK:
+            continue
+        code, qx, qy, qz, lat, fb, rel, _ = latch_step(lstate, lparams, onset, t[i], f_norm, True, valid, rx, ry, rz)
+        if code == SOFT:
+            px, py, pz = rx, ry, rz
+        elif code == MEAN or code == FIX:
+            px, py, pz = _project(kind, sp, qx, qy, qz, XS)
+            if code == FIX:
+                latch_hold(lstate, px, py, pz)
+        elif code == HELD:
+            px, py, pz = lstate[_LX], lstate[_LY], lstate[_LZ]
+        else:
+            px = py = pz = _NAN
+        point[i, 0], point[i, 1], point[i, 2] = px, py, pz
+        has[i] = math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)
+        latched[i] = lat
+        fallback[i] = fb
+        relatched[i] = rel
+
+
+@lazy_jit
+def line_fit_run(t, x, contact, relatched, sc, sc_valid, point, tip, noise, accept, lstate, ring, window, drift2,
+                 iterations, corr, stats, moved, latched, fallback, joint_fb):  # pragma: no cover - compiled
+    """The ``line-fit`` stage over a log in one loop: per sample in contact, as the stream's
+    :class:`~softtip.estimator.line_fit.LineFitTracker` (no skin law), its anchor, window and hold
+    steps with the window's solve (:func:`~softtip.core.line_fit.line_fit_solve_kernel` on the
+    fingertip ``tip``, a :class:`ShapeRecord`) between them.
+
+    ``sc`` (N, 7) and ``sc_valid`` the soft-finger solutions, ``point`` (N, 3) the latched points
+    (where a window is held, its point written in place); ``noise`` a :class:`NoiseRecord`,
+    ``accept`` an :class:`AcceptRecord`; ``lstate`` and ``ring`` the stage's state record and
+    window ring; ``window`` (s), ``drift2`` (m²/s), ``iterations``, ``corr`` as in the stream.
+    Written: ``stats`` (4, N) (conditioning, angle std, offset std, residual; NaN where none),
+    ``moved``, ``joint_fb`` (N,) bool; ``latched`` and ``fallback`` cleared where moved.
+    """
+    prods, sums = np.empty(N_SUMS), np.empty(N_SUMS)
+    for i in range(t.shape[0]):
+        moved[i] = False
+        joint_fb[i] = False
+        for k in range(4):
+            stats[k, i] = _NAN
+        if not contact[i]:
+            continue
+        onset = i == 0 or not contact[i - 1]
+        if onset:
+            _start_anchor(lstate)
+            _start_window(lstate)
+        if onset or relatched[i]:  # a new first rise of the latch
+            line_fit_start_segment(lstate, t[i])
+        accepted, offset_std, jx, jy, jz = False, _NAN, _NAN, _NAN, _NAN
+        if sc_valid[i]:
+            ax, ay, az = line_fit_anchor_step(lstate, True, sc[i, 0], sc[i, 1], sc[i, 2])
+            # line_fit_moment without a skin law: the moment about the anchor
+            qx, qy, qz = spin_torque_kernel(x[i, 0], x[i, 1], x[i, 2], x[i, 3], x[i, 4], x[i, 5], ax, ay, az)
+            pr = line_fit_products(x[i, 0], x[i, 1], x[i, 2], qx, qy, qz)
+            for q in range(N_SUMS):
+                prods[q] = pr[q]
+            count = line_fit_window_step(lstate, ring, t[i], window, prods, sums)
+            px, py, pz = point[i, 0], point[i, 1], point[i, 2]
+            if math.isfinite(px) and math.isfinite(py) and math.isfinite(pz):
+                out = line_fit_solve_kernel(sums, float(count), px, py, pz, ax, ay, az, tip, iterations, noise, corr,
+                                            XS)  # fmt: skip
+                jx, jy, jz = out[0], out[1], out[2]
+                stats[0, i], stats[1, i], stats[2, i], stats[3, i] = out[6], out[7], out[8], out[9]
+                accepted = line_fit_accept(out[6], out[7], out[8], out[9], accept) and math.isfinite(jx + jy + jz)
+                offset_std = out[8]
+        _, mv, hx, hy, hz = line_fit_hold_step(lstate, t[i], accepted, offset_std, jx, jy, jz, drift2)
+        moved[i] = mv
+        joint_fb[i] = not mv
+        if mv:
+            point[i, 0], point[i, 1], point[i, 2] = hx, hy, hz
+            latched[i] = False
+            fallback[i] = False
+
+
+@lazy_jit
+def tail_run(t, x, drift, contact, taring, kind, sp, normal_from_tip, point, has, normal_in, relatched,
+             depth_mode, law, dparams, noise_var, eparams, wconst, estate, counts, ring,
+             latched, fallback, joint_fb, normal, sigma, h, h_norm, h_std, depth, depth_std, from_data,
+             state, line_evidence, direction, angle, angle_std, angle_noise_std, h_ratio, f_ratio,
+             pulling, stats, fill_stats):  # pragma: no cover - compiled
+    """Normal, depth, measurement and line evidence of every sample, outputs written once.
+
+    Inputs (N rows): ``t``; ``x`` (N, 6) the tared wrench and ``drift`` (N, 6) (both set to NaN
+    in place where ``taring``); ``contact``; the fingertip ``kind``, ``sp``; ``point`` (N, 3)
+    with ``has`` (the sample has a contact point) and, unless ``normal_from_tip``, the normal
+    ``normal_in`` (N, 3) (track mode: the soft-finger one); ``relatched``. ``depth_mode``
+    (:data:`DEPTH_OFF`, :data:`DEPTH_LAW`, :data:`DEPTH_ONLINE`) with ``law`` (stiffness N/m²,
+    cap m; exponent 2) and ``dparams`` (:func:`~softtip.estimator.depth.depth_params`);
+    ``noise_var`` the noise's variances (fx, fy, fz, mx, my, mz); the evidence stage's
+    ``eparams``, ``wconst``, ``estate``, ``counts``, ``ring``
+    (:func:`~softtip.estimator.evidence.new_evidence_state`).
+
+    Outputs, where the sample is located (in contact, a point, the force pushing in): the
+    normal, σ, ``h``, ``|h|``, ``h``'s noise level, the depth, its standard deviation and
+    whether the data gave it, the state and evidence codes, the direction, its angle, standard
+    deviation and noise share (NaN unless a line) and the window ratios; NaN (0, False)
+    elsewhere. ``point``, ``latched``, ``fallback``, ``joint_fb`` and the line fit's ``stats``
+    (4, N) are masked in place (``stats`` all NaN with ``fill_stats``); ``pulling`` is in
+    contact and not located.
+    """
+    n = t.shape[0]
+    dstate = new_depth_state()
+    dring = np.empty((1, RING_COLUMNS))
+    if depth_mode == DEPTH_ONLINE:
+        dring = np.empty((_ring_capacity(t, dparams[0]), RING_COLUMNS))
+    sfx, sfy, sfz, smx, smy, smz = noise_var[0], noise_var[1], noise_var[2], noise_var[3], noise_var[4], noise_var[5]
+    # the geometry of the last point (its normal, tangent frame): recomputed when the point changes
+    lpx = lpy = lpz = _NAN
+    nx = ny = nz = _NAN
+    lnx = lny = lnz = _NAN
+    e1x = e1y = e1z = e2x = e2y = e2z = _NAN
+    for i in range(n):
+        if taring[i]:
+            for k in range(6):
+                x[i, k] = _NAN
+                drift[i, k] = _NAN
+        onset = contact[i] and (i == 0 or not contact[i - 1])
+        if onset or (relatched[i] and contact[i]):  # a new segment of the line evidence
+            evidence_start(estate, counts)
+        located = False
+        fx = fy = fz = mx = my = mz = px = py = pz = d = d_std = 0.0
+        data = False
+        if contact[i]:
+            fx, fy, fz, mx, my, mz = x[i, 0], x[i, 1], x[i, 2], x[i, 3], x[i, 4], x[i, 5]
+            px, py, pz = point[i, 0], point[i, 1], point[i, 2]
+            finite = math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)
+            if normal_from_tip:
+                if not (px == lpx and py == lpy and pz == lpz):
+                    nx, ny, nz = _normal(kind, sp, px, py, pz, XS)
+                    lpx, lpy, lpz = px, py, pz
+            else:
+                nx, ny, nz = normal_in[i, 0], normal_in[i, 1], normal_in[i, 2]
+            if depth_mode == DEPTH_ONLINE:
+                if onset:
+                    depth_start_contact(dstate)
+                if finite:
+                    d0 = square_depth_kernel(-(fx * nx + fy * ny + fz * nz), law[0], law[1], XS)
+                    d, d_std, data = depth_step(dstate, dring, dparams, t[i], fx, fy, fz, mx, my, mz, px, py, pz,
+                                                nx, ny, nz, d0)  # fmt: skip
+                else:
+                    depth_gap(dstate)
+            elif depth_mode == DEPTH_LAW and finite:
+                d = square_depth_kernel(-(fx * nx + fy * ny + fz * nz), law[0], law[1], XS)
+            located = has[i] and fx * nx + fy * ny + fz * nz < 0.0
+        if fill_stats or not located:
+            for k in range(4):
+                stats[k, i] = _NAN
+        if not located:
+            pulling[i] = contact[i]
+            latched[i] = False
+            fallback[i] = False
+            joint_fb[i] = False
+            from_data[i] = False
+            state[i] = _NONE_CODE
+            line_evidence[i] = 0
+            for k in range(3):
+                point[i, k] = _NAN
+                normal[i, k] = _NAN
+                h[i, k] = _NAN
+                direction[i, k] = _NAN
+            sigma[i] = h_norm[i] = h_std[i] = depth[i] = depth_std[i] = _NAN
+            angle[i] = angle_std[i] = angle_noise_std[i] = h_ratio[i] = f_ratio[i] = _NAN
+            continue
+        if not (nx == lnx and ny == lny and nz == lnz):
+            e1x, e1y, e1z, e2x, e2y, e2z = tangent_frame_kernel(nx, ny, nz, XS)
+            lnx, lny, lnz = nx, ny, nz
+        # friction acts at r − δ n, inside the skin: the moment is taken about it
+        ex, ey, ez = px - d * nx, py - d * ny, pz - d * nz
+        qx, qy, qz = spin_torque_kernel(fx, fy, fz, mx, my, mz, ex, ey, ez)
+        sg, hx, hy, hz = tangential_kernel(qx, qy, qz, nx, ny, nz)
+        hn = XS.sqrt(hx * hx + hy * hy + hz * hz)
+        hs = XS.sqrt(noise_quad(e1x, e1y, e1z, ex, ey, ez, sfx, sfy, sfz, smx, smy, smz)
+                     + noise_quad(e2x, e2y, e2z, ex, ey, ez, sfx, sfy, sfz, smx, smy, smz))  # fmt: skip
+        r = evidence_step(estate, counts, ring, eparams, wconst, t[i], px, py, pz, nx, ny, nz, e1x, e1y, e1z, e2x,
+                          e2y, e2z, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, hs)  # fmt: skip
+        pulling[i] = False
+        from_data[i] = data
+        normal[i, 0], normal[i, 1], normal[i, 2] = nx, ny, nz
+        h[i, 0], h[i, 1], h[i, 2] = hx, hy, hz
+        sigma[i] = sg
+        h_norm[i] = hn
+        h_std[i] = hs
+        depth[i] = d
+        depth_std[i] = d_std
+        state[i] = r[0]
+        line_evidence[i] = r[1] if r[0] == _LINE_CODE else 0
+        direction[i, 0], direction[i, 1], direction[i, 2] = r[2], r[3], r[4]
+        angle[i], angle_std[i], angle_noise_std[i], h_ratio[i], f_ratio[i] = r[5], r[6], r[7], r[8], r[9]
+
+
+def fused_columns(t: NDArray, x: NDArray, drift: NDArray, contact: NDArray, taring: NDArray, tip: Fingertip,
+                  config: EstimatorConfig, noise: SensorNoise, corr: float, had_latch: bool,
+                  out: dict | None = None) -> dict | None:  # fmt: skip
+    """The per-contact stages of :func:`~softtip.estimator.batch.estimate` over a log in the
+    compiled loops, or None where they do not apply (module docs: the staged path then runs).
+
+    ``t`` (N,) s; ``x`` (N, 6) the tared (filtered, drift-corrected) wrench and ``drift`` (N, 6),
+    both this call's to change (NaN where ``taring``); ``contact`` (N,) bool; ``config``
+    resolved (:func:`~softtip.estimator.depth.resolve_depth`); ``noise`` the noise after any
+    filter and ``corr`` its samples per independent sample; ``had_latch`` an earlier piece of
+    the log latched; ``out``: arrays to write into, by name, kept from an earlier call of the
+    same length and settings (filled in with new ones; a benchmark's reused buffers). Returns
+    the :class:`~softtip.Estimates` columns by name, ``pulling`` and ``had_latch`` (after
+    these samples).
+    """
+    n = len(t)
+    rec = shape_record(tip)
+
+    def new(name, shape, dtype=float):
+        # an output or work array: the caller's (``out``, reused: benchmarks) or a new one
+        shape = shape if isinstance(shape, tuple) else (shape,)
+        a = None if out is None else out.get(name)
+        if a is None or a.shape != shape or a.dtype != np.dtype(dtype):
+            a = np.empty(shape, dtype=dtype)
+            if out is not None:
+                out[name] = a
+        return a
+
+    law = config.skin_law
+    if rec is None or (law is not None and law.exponent != 2.0) or not use_numba(n):
+        return None
+    kind, sp = rec
+    contact = np.ascontiguousarray(contact, dtype=bool)
+    mode = TRACK if config.contact_point == "track" else LATCH
+    rows = n if config.contact_point != "latch" else 1  # the soft-finger solutions, kept for line-fit and track
+    point, has, sc, sc_valid = new("point", (n, 3)), new("has", n, bool), new("sc", (rows, 7)), new("sc_valid", rows, bool)
+    latched, fallback, relatched = new("latched", n, bool), new("fallback", n, bool), new("relatched", n, bool)
+    lstate = new_latch_state(had_latch)
+    points_run.compiled()(t, x, contact, kind, sp, mode, latch_params(config), lstate, point, has, sc, sc_valid,
+                          latched, fallback, relatched)  # fmt: skip
+    joint_fb = new("joint_fb", n, bool)
+    joint_fb[:] = False
+    stats = new("stats", (4, n))
+    fill_stats = True  # no line fit: every sample's statistics NaN
+    if config.contact_point == "line-fit" and law is None:
+        fill_stats = False
+        moved = new("moved", n, bool)
+        window = float(config.line_fit_window)
+        ring = np.zeros((int(ring_rows.compiled()(t, window)), 1 + N_SUMS))
+        accept = AcceptRecord(config.line_fit_max_angle_std, config.line_fit_max_offset_std, config.line_fit_max_residual)
+        _register_methods()
+        line_fit_run.compiled()(
+            t, x, contact, relatched, sc, sc_valid, point, rec, NoiseRecord(noise.force_std, noise.moment_std), accept,
+            new_line_fit_state(), ring, window, float(config.line_fit_drift**2), int(config.line_fit_iterations),
+            float(corr), stats, moved, latched, fallback, joint_fb,
+        )  # fmt: skip
+        has = np.all(np.isfinite(point), axis=-1)
+    elif config.contact_point == "line-fit":  # with a skin law: the stage's batch form (its solve vectorised)
+        c = [np.ascontiguousarray(x[:, k]) for k in range(6)]
+        soft = SoftFinger(*(sc[:, k] for k in range(7)), sc_valid)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            point, stats, _, moved = line_fit_points(t, c, contact, soft, point, relatched, tip, config, noise, corr)
+        fill_stats = False
+        del c, soft
+        latched &= ~moved
+        fallback &= ~moved
+        joint_fb = contact & ~moved
+        has = np.all(np.isfinite(point), axis=-1)
+    normal_in = sc[:, 3:6]  # the soft-finger normal (used in track mode)
+    if law is None:
+        depth_mode, lawp, dparams = DEPTH_OFF, np.zeros(2), np.zeros(1)
+    elif config.depth_compensation == "law":
+        depth_mode, lawp, dparams = DEPTH_LAW, np.array([law.stiffness, law.max_depth]), np.zeros(1)
+    else:
+        depth_mode, lawp = DEPTH_ONLINE, np.array([law.stiffness, law.max_depth])
+        dparams = depth_params(config, noise, corr)
+    capacity = int(ring_rows.compiled()(t, max(config.evidence_window, config.significance_window)))
+    estate, counts, ring, wconst = new_evidence_state(capacity, corr)
+    normal, h, direction = new("normal", (n, 3)), new("h", (n, 3)), new("direction", (n, 3))
+    sigma, h_norm, h_std, depth, depth_std = (new(k, n) for k in ("sigma", "h_norm", "h_std", "depth", "depth_std"))
+    angle, angle_std, angle_noise_std = new("angle", n), new("angle_std", n), new("angle_noise_std", n)
+    h_ratio, f_ratio, from_data, pulling = new("h_ratio", n), new("f_ratio", n), new("from_data", n, bool), new("pulling", n, bool)
+    state, line_evidence = new("state", n, np.int8), new("line_evidence", n, np.int8)
+    tail_run.compiled()(
+        t, x, drift, contact, np.ascontiguousarray(taring, dtype=bool), kind, sp, mode == LATCH, point, has, normal_in,
+        relatched, depth_mode, lawp, dparams, np.array(noise_variances(noise)), evidence_params(config, noise), wconst,
+        estate, counts, ring, latched, fallback, joint_fb, normal, sigma, h, h_norm, h_std, depth, depth_std, from_data,
+        state, line_evidence, direction, angle, angle_std, angle_noise_std, h_ratio, f_ratio, pulling, stats, fill_stats,
+    )  # fmt: skip
+    return dict(
+        wrench=x, point=point, normal=normal, sigma=sigma, h=h, h_norm=h_norm, h_std=h_std, direction=direction,
+        angle=angle, angle_std=angle_std, angle_noise_std=angle_noise_std, latched=latched, latch_fallback=fallback,
+        pulling=pulling, relatched=relatched, depth=depth, line_fit_conditioning=stats[0],
+        line_fit_angle_std=stats[1], line_fit_offset_std=stats[2], line_fit_residual=stats[3],
+        line_fit_fallback=joint_fb, line_evidence=line_evidence, h_ratio=h_ratio, excitation_ratio=f_ratio,
+        drift=drift, depth_std=depth_std, depth_from_data=from_data, state=state,
+        had_latch=bool(lstate[_HAD]) if mode == LATCH else had_latch,
+    )
