@@ -29,8 +29,10 @@ up (:data:`GRASP_CALLERS`), if the subprocess's softtip has the same version key
 The simulator's own test files (``test_sim_*.py``) do not use the cache: they check the
 simulator, and simulate every time.
 
-Without a pytest cache (``-p no:cacheprovider``) or with ``SOFTTIP_TEST_SIM_CACHE=0`` the
-functions simulate every time.
+Without a pytest cache (``-p no:cacheprovider``) the cache lives for the run only: a temporary
+directory made by the process that starts pytest-xdist's workers (they inherit its environment,
+:data:`_RUN_ENV`) and removed when that process ends, so that a grasp is still simulated once per
+run. With ``SOFTTIP_TEST_SIM_CACHE=0`` the functions simulate every time.
 """
 
 from __future__ import annotations
@@ -61,6 +63,8 @@ TRUSTED_MODULES = frozenset({"softtip", "numpy", "builtins", "copyreg", "collect
 #: Libraries whose versions may move the simulator's last bits (numba and trimesh: the mesh tips)
 NUMERIC_DISTRIBUTIONS = ("numpy", "scipy", "numba", "trimesh")
 _PROTOCOL = 5
+#: Where a run without a pytest cache keeps its cache (set by the process that starts the workers)
+_RUN_ENV = "SOFTTIP_TEST_SIM_RUN_DIR"
 
 
 def _installed(distribution: str) -> str:
@@ -150,15 +154,31 @@ class SimCache:
     @classmethod
     def in_pytest_cache(cls, config) -> SimCache:
         """The cache of this checkout's pytest cache, under the current version key."""
-        cache = getattr(config, "cache", None)
-        if cache is None or os.environ.get("SOFTTIP_TEST_SIM_CACHE", "1") == "0":
+        if os.environ.get("SOFTTIP_TEST_SIM_CACHE", "1") == "0":
             return cls(None)
+        cache = getattr(config, "cache", None)
+        if cache is None:
+            return cls.for_this_run(config)
         base = Path(cache.mkdir("softtip-sim"))
         version = version_key()
         for old in base.iterdir():  # entries of an older simulator are never read again
             if old.name != version and old.is_dir():
                 shutil.rmtree(old, ignore_errors=True)
         directory = base / version
+        directory.mkdir(exist_ok=True)
+        return cls(directory)
+
+    @classmethod
+    def for_this_run(cls, config) -> SimCache:
+        """A cache for this run alone (no pytest cache): a temporary directory, made by the process
+        that was started (a pytest-xdist worker takes its controller's, from :data:`_RUN_ENV`)
+        and removed when that process's pytest ends."""
+        base = os.environ.get(_RUN_ENV)
+        if base is None or not hasattr(config, "workerinput") or not Path(base).is_dir():
+            base = tempfile.mkdtemp(prefix="softtip-sim-")
+            os.environ[_RUN_ENV] = base  # before the workers start: they inherit it
+            config.add_cleanup(functools.partial(shutil.rmtree, base, ignore_errors=True))
+        directory = Path(base) / version_key()
         directory.mkdir(exist_ok=True)
         return cls(directory)
 

@@ -281,3 +281,22 @@ def test_joint_is_no_longer_a_mode(tmp_path):
         EstimatorConfig(contact_point="joint")
     helptext = " ".join(run("estimate", "--help").stdout.split())
     assert "line-fit: latch, then" in helptext and "joint" not in helptext.split("--contact-point")[1].split("--")[0]
+
+
+def test_the_command_runs_without_importing_pandas(tmp_path):
+    # pandas comes with the test extras, not with softtip: the console command never imports it
+    # (pyarrow would, converting a column: a third of a short run's CPU) and writes the same
+    # bytes as a process where pyarrow has pandas
+    pytest.importorskip("pandas")
+    outs = []
+    for first in ("", "import pandas; "):
+        outs.append(tmp_path / f"est{len(outs)}.csv")
+        code = (
+            f"import atexit, sys; {first}from softtip.cli import run; "
+            "atexit.register(lambda: print('pandas loaded:', 'pandas' in sys.modules, file=sys.stderr)); "
+            f"sys.argv = ['softtip', 'estimate', '--example', '-o', {str(outs[-1])!r}]; run()"
+        )
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+        assert out.returncode == 0, out.stderr
+        assert f"pandas loaded: {bool(first)}" in out.stderr
+    assert outs[0].read_bytes() == outs[1].read_bytes()

@@ -203,8 +203,18 @@ def test_the_readme_python_example_runs() -> None:
         assert run.returncode == 0, run.stderr[-3000:]
 
 
+def _has_slow_line(block: list[str]) -> bool:
+    return any(any(p in line for p in SLOW) for line in block)
+
+
 @pytest.mark.parametrize("k", range(len(BLOCKS)), ids=[b[0][:40] for b in BLOCKS])
-def test_readme_block_runs_as_written(k: int, tmp_path: Path) -> None:
+def test_readme_block_runs_as_written(k: int, tmp_path: Path, request: pytest.FixtureRequest) -> None:
+    slow_test = test_readme_block_runs_as_written_with_the_slow_lines.__name__
+    if _has_slow_line(BLOCKS[k]) and any(
+        item.name == f"{slow_test}[{request.node.callspec.id}]" and item.path == request.node.path
+        for item in request.session.items
+    ):  # fmt: skip
+        pytest.skip("the slow test of this block runs every line of it in this session")
     skipped = _run_block(BLOCKS[k], tmp_path, slow=False)
     for why in skipped:  # in the report with -rA; every skip reason is one of SKIP's or SLOW's
         print("skipped:", why)
@@ -214,7 +224,7 @@ def test_readme_block_runs_as_written(k: int, tmp_path: Path) -> None:
 @pytest.mark.slow
 @pytest.mark.parametrize("k", range(len(BLOCKS)), ids=[b[0][:40] for b in BLOCKS])
 def test_readme_block_runs_as_written_with_the_slow_lines(k: int, tmp_path: Path) -> None:
-    if not any(any(p in line for p in SLOW) for line in BLOCKS[k]):
+    if not _has_slow_line(BLOCKS[k]):
         pytest.skip("no slow line in this block (the fast test ran it)")
     _run_block(BLOCKS[k], tmp_path, slow=True)
 

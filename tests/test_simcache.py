@@ -5,6 +5,7 @@ version key follows the simulator's sources."""
 from __future__ import annotations
 
 import math
+import os
 import pickle
 import shutil
 import struct
@@ -12,6 +13,7 @@ import subprocess
 import sys
 import threading
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -177,9 +179,31 @@ def test_the_version_key_follows_the_simulators_sources(tmp_path, monkeypatch):
 
 def test_the_session_cache_lives_in_pytests_cache_under_the_version(sim_cache, pytestconfig):
     if sim_cache.directory is None:
-        pytest.skip("no pytest cache in this run (-p no:cacheprovider or SOFTTIP_TEST_SIM_CACHE=0)")
-    assert sim_cache.directory.parent == Path(pytestconfig.cache.mkdir("softtip-sim"))
+        pytest.skip("no cache in this run (SOFTTIP_TEST_SIM_CACHE=0)")
+    if getattr(pytestconfig, "cache", None) is None:  # -p no:cacheprovider: the run's own
+        assert sim_cache.directory.parent == Path(os.environ[simcache._RUN_ENV])
+    else:
+        assert sim_cache.directory.parent == Path(pytestconfig.cache.mkdir("softtip-sim"))
     assert sim_cache.directory.name == simcache.version_key()
+
+
+def test_without_a_pytest_cache_the_workers_share_one_for_the_run(monkeypatch):
+    # the process that starts the workers makes it (and removes it when it ends); a worker
+    # takes the one in its environment, which it inherited
+    cleanups = []
+    controller = SimpleNamespace(cache=None, add_cleanup=cleanups.append)
+    monkeypatch.delenv(simcache._RUN_ENV, raising=False)
+    monkeypatch.delenv("SOFTTIP_TEST_SIM_CACHE", raising=False)
+    made = simcache.SimCache.in_pytest_cache(controller)
+    assert made.directory.is_dir() and made.directory.name == simcache.version_key()
+    assert made.directory.parent == Path(os.environ[simcache._RUN_ENV])
+    worker = SimpleNamespace(cache=None, workerinput={}, add_cleanup=cleanups.append)
+    assert simcache.SimCache.in_pytest_cache(worker).directory == made.directory
+    assert len(cleanups) == 1  # the worker leaves its removal to the controller
+    cleanups[0]()
+    assert not made.directory.parent.exists()
+    monkeypatch.setenv("SOFTTIP_TEST_SIM_CACHE", "0")
+    assert simcache.SimCache.in_pytest_cache(controller).directory is None
 
 
 def test_the_subprocess_hook_knows_where_softtip_looks_up_simulate_grasp():
