@@ -72,6 +72,9 @@ error / std 1.98 / 1.68 / 1.86); Drake (SAP, μ = 1) 26.5° / 82.5° (54 % line,
 13 % point; RMS error / std 8.35 / 3.09 / 4.18; the 1 mm plate loaded across at 0.5 slides
 off). Every load of 0.5 across reads ``area`` on both physics; on Drake the 1 mm plate
 loaded along the line reads a line 82° off (0.2) and 52° off (0.5).
+(Those Drake figures came from the SAP harness with the tip's 2 mm tetrahedra, on which the
+1 mm plate carried a spurious friction couple about its own line and the 0.5 load across slid
+off; the tip is now refined to half a plate's thickness: ``docs/benchmarks/physics-friction.md``.)
 """
 
 from __future__ import annotations

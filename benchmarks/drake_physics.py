@@ -92,23 +92,23 @@ the tilt of its face along the line turns the force; a plane and a 15 mm plate a
 depth carry none, so the load stays at the target).
 
 With friction (``sap``) the lever of the friction force about ``r_c`` is not the depth of
-the contact surface: side faces of a thin plate carry friction couples (on a 1 mm plate
-loaded across at 0.2 of the normal force the lever ``−(m_fr − r_c × f_fr) · (n × f_fr) /
-|n × f_fr|²`` is 7.3 mm while the surface lies 2–3 mm deep), and tractions left by the
-tilt before the load add a couple. :attr:`GroundTruth.friction_depth` therefore records
+the contact surface: side faces of a thin plate carry friction couples (a 1 mm plate pressed
+3.1 mm deep carries 12.6 N of pressure on its side faces and 4.9 N on its edge), and
+tractions left by the disturbances before the load add couples (SAP's friction has no
+tangential compliance, so the rotations slide the embedded faces at the Coulomb limit: the
+1° gravity spin leaves −16.5 N·mm about the normal on a 1 mm plate, −12.7 on a 2 mm plate,
+which reach ``h`` through the line's 3° tilt out of the tangent plane; tetrahedra fine
+enough, see :func:`sap_tip_resolution`). :attr:`GroundTruth.friction_depth` therefore records
 the pressure-weighted depth of the contact surface below ``r_c`` (the depth where the
-tractions act if they follow the pressure, as on the Winkler skin). A 1 mm plate
-loaded across at 0.5 of the normal force slides off at μ = 1 (it slips at about 0.47; most
-likely the side faces' friction carries part of the push, leaving the top face less normal
-force to hold the load with): such a grasp raises
-RuntimeError ("friction cannot hold the load"), remembered in the cache.
+tractions act if they follow the pressure, as on the Winkler skin). With the tip's 2 mm
+tetrahedra a 1 mm plate loaded across at 0.5 slid off at μ = 1; refined to 0.5 mm it holds.
 
 Truth that differs from softtip's simulator: ``pressure_centre`` is on the contact surface
 (the rigid object's surface, deformed skin), not on the undeformed skin; ``slip_fraction``
 is NaN (not available); ``depth`` is the largest pressure over ``E / R``.
 
 Logs are cached on disk (``benchmarks/.cache/drake/<hash>.npz``, the noise-free wrench and
-the truth; the noise is drawn on loading) because a log takes 10–60 s.
+the truth; the noise is drawn on loading) because a log takes 5–450 s.
 """
 
 from __future__ import annotations
@@ -252,10 +252,12 @@ def sap_tip_resolution(obj: RigidObject, mesh_resolution: float) -> float:
 
     SAP applies friction once per contact polygon, and the polygons are the object's faces cut
     by the tip's tetrahedra: with tetrahedra wider than the plate, the two side faces of a
-    1 mm plate embedded 3 mm deep (12.6 N of pressure on them, 4.9 N on the edge) are cut
-    unalike, and the joint rotation leaves a friction couple of 4.1 N·mm about the plate's own
-    line at a 2 mm hint (1.8 at 1.5 mm, −0.2 at 1 mm, −0.5 at 0.75 mm, −0.85 at 0.5 mm; the
-    2 mm plate: −0.47 at 2 mm, −0.67 at 1 mm, −0.73 at 0.5 mm), 40° of the moment's direction.
+    1 mm plate embedded 3.1 mm deep (12.6 N of pressure on them, 4.9 N on the edge) are cut
+    unalike, and the joint rotation leaves a friction couple of 4.4 N·mm about the plate's own
+    line at a 2 mm hint (0.02 N·mm at 0.5 mm; the 2 mm plate −0.01 at 2 and 1 mm): ``h`` in the
+    tangent plane 40° off ``n × d`` before the load. ``h`` along the line at 6 s, by hint:
+    4.1 N·mm at 2 mm, 1.8 at 1.5, −0.2 at 1, −0.5 at 0.75, −0.85 at 0.5, −0.92 at 0.35 (what
+    remains is the gravity spin's friction couple seen through the line's 3° tilt).
     Frictionless solves integrate the pressure exactly on the polygons and keep the hint.
     """
     if isinstance(obj, Plate):
