@@ -72,6 +72,9 @@ error / std 1.98 / 1.68 / 1.86); Drake (SAP, μ = 1) 26.5° / 82.5° (54 % line,
 13 % point; RMS error / std 8.35 / 3.09 / 4.18; the 1 mm plate loaded across at 0.5 slides
 off). Every load of 0.5 across reads ``area`` on both physics; on Drake the 1 mm plate
 loaded along the line reads a line 82° off (0.2) and 52° off (0.5).
+(Those Drake figures came from the SAP harness with the tip's 2 mm tetrahedra, on which the
+1 mm plate carried a spurious friction couple about its own line and the 0.5 load across slid
+off; the tip is now refined to half a plate's thickness: ``docs/benchmarks/physics-friction.md``.)
 """
 
 from __future__ import annotations
@@ -107,7 +110,14 @@ from softtip.sim import (
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _markdown import run_with_markdown  # noqa: E402
-from drake_physics import DRAKE_MISSING, drake_available, drake_version, pressure_check, simulate_drake  # noqa: E402
+from drake_physics import (  # noqa: E402
+    DRAKE_MISSING,
+    drake_available,
+    drake_version,
+    pressure_check,
+    sap_tip_resolution,
+    simulate_drake,
+)
 
 CACHE = Path(__file__).resolve().parent / ".cache"
 HELD = 6.0  # s: the papers' grasp is held (disturbances done) from here
@@ -421,6 +431,76 @@ def plot_rocking(path: str, physics: list[Physics], args, tip) -> None:
     print(f"\nfigure written to {path}")
 
 
+def plot_sap_trace(path: str, args, tip) -> None:
+    """The Drake SAP harness over time for the friction objects (first friction angle, 0.2 across):
+    the object's orientation error from the scenario's, the pressure centre relative to the nominal
+    contact point, and h along ``n × d`` and ``d``, with the harness's tip hint and, for a plate that
+    hint refines, with ``--mesh-resolution`` (the harness before the refinement)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from softtip.viz.style import PALETTE, label, styled
+
+    chosen = args.friction_objects or QUICK_FRICTION
+    ang = (args.friction_angles or [30.0])[0]
+    scn = friction_scenario(tip, math.radians(ang), 0.2, across=True, joint_rotation=math.radians(args.tilt))
+    runs = []
+    for name, _, make in (o for o in LINES if o[0] in chosen):
+        obj = make()
+        hints = [sap_tip_resolution(obj, args.mesh_resolution)]
+        if hints[0] != args.mesh_resolution:
+            hints.append(args.mesh_resolution)
+        for hint in hints:
+            try:
+                log = simulate_drake(tip, obj, scn, SensorModel(rate=50.0), 0, modulus=args.modulus,
+                                     mesh_resolution=args.mesh_resolution, friction=args.friction, solver="sap",
+                                     tip_resolution=hint, progress=not args.no_progress)  # fmt: skip
+            except RuntimeError as exc:
+                print(f"  sap trace {name}, tip hint {hint * 1e3:g} mm: {exc}", file=sys.stderr)
+                continue
+            runs.append((f"{name}, tip hint {hint * 1e3:g} mm", log))
+
+    @styled
+    def draw() -> None:
+        import matplotlib.pyplot as plt
+
+        fig, axs = plt.subplots(4, 1, figsize=(8.0, 10.0), sharex=True, layout="constrained")
+        for k, (lab, log) in enumerate(runs):
+            c = PALETTE[k % len(PALETTE)]
+            t, tr, w = log.t, log.truth, log.wrench_true
+            r_c, n = tr.contact_point[0], tr.contact_normal[0]
+            d = tr.direction
+            a = np.cross(n, d)
+            q = w[:, 3:] - np.cross(r_c, w[:, :3])
+            turn = log.diagnostics.get("object_turn")
+            if turn is not None:
+                axs[0].plot(t, np.degrees(np.linalg.norm(turn, axis=1)), color=c, label=lab)
+            pc = tr.pressure_centre - r_c
+            axs[1].plot(t, np.sum(pc * d, -1) * 1e3, color=c, label=f"{lab}: along d")
+            axs[1].plot(t, np.sum(pc * a, -1) * 1e3, "--", color=c, label=f"{lab}: across")
+            axs[2].plot(t, np.sum(q * a, -1) * 1e3, color=c, label=f"{lab}: h · (n × d)")
+            axs[2].plot(t, np.sum(q * d, -1) * 1e3, "--", color=c, label=f"{lab}: h · d")
+            axs[3].plot(t, np.degrees(np.arctan2(np.sum(q * d, -1), np.sum(q * a, -1))), color=c, label=lab)
+        axs[0].set_ylabel(label("orientation error", "°"))
+        axs[1].set_ylabel(label("pressure centre − r_c", "mm"))
+        axs[2].set_ylabel(label("h", "N·mm"))
+        axs[3].set_ylabel(label("h off n × d", "°"))
+        axs[3].set_ylim(-90, 90)
+        axs[3].set_xlabel(label("time", "s"))
+        for ax in axs:
+            ax.axvspan(scn.t_stable, scn.t_stable + 1.5, color="0.92", zorder=0)
+            ax.axvspan(scn.load_start, scn.load_end, color="#fbe3ea", zorder=0)
+            ax.legend(fontsize=6, ncol=2)
+        axs[0].set_xlim(scn.t_stable - 0.3, scn.duration)
+        fig.suptitle(f"Drake SAP harness, friction load 0.2 across at {ang:+.0f}°: the joint disturbance (grey), "
+                     "the load ramp (pink)")  # fmt: skip
+        fig.savefig(path, dpi=100)
+        plt.close(fig)
+
+    draw()
+    print(f"\nfigure written to {path}")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--physics", choices=("winkler", "drake", "both"), default="both")
@@ -455,6 +535,9 @@ def main(argv=None) -> int:
                     help="the rocked grasps estimated with the rocking stated (EstimatorConfig.rocked, --rocked: from the "
                          "second rocking axis to the end), as a user who rocked the object would")  # fmt: skip
     ap.add_argument("--plot", metavar="PATH", help="write the rocking figure (h in the tangent plane)")
+    ap.add_argument("--sap-trace", metavar="PATH",
+                    help="write the Drake SAP harness over time (orientation error, pressure centre, h) for the "
+                         "friction objects at the first friction angle, 0.2 across")  # fmt: skip
     ap.add_argument("--no-progress", action="store_true")
     args = ap.parse_args(argv)
     if args.seeds is None:
@@ -480,7 +563,8 @@ def main(argv=None) -> int:
             rocking = "SAP" if args.rock_solver == "sap" else "frictionless quasi-static"
             print(f"drake {drake_version()}: hydroelastic modulus {args.modulus / 1e6:g} MPa, resolution hint "
                   f"{args.mesh_resolution * 1e3:g} mm; rocking: {rocking}; single tilt: frictionless quasi-static; "
-                  f"friction loads: SAP, μ = {args.friction:g}")  # fmt: skip
+                  f"friction loads: SAP, μ = {args.friction:g}, tip hint at most half a plate's thickness, the object's "
+                  "orientation held within 0.5° and its contact kept (checked per sample)")  # fmt: skip
         else:
             print(f"winkler: softtip's skin, E = {p.winkler_modulus / 1e6:g} MPa over 5 mm, μ = {args.friction:g} "
                   "(shear G = 2 MPa for the friction loads)")  # fmt: skip
@@ -532,6 +616,8 @@ def main(argv=None) -> int:
             per_grasp_rows(n, r)
     if args.plot:
         plot_rocking(args.plot, physics, args, tip)
+    if args.sap_trace and any(p.name == "drake" for p in physics):
+        plot_sap_trace(args.sap_trace, args, tip)
     return 0
 
 

@@ -58,11 +58,19 @@ Which scenario uses which solver, and why
   :class:`~pydrake.multibody.plant.MultibodyPlant` with the SAP solver
   (``DiscreteContactApproximation.kSap``), hydroelastic contact with Hunt–Crossley
   dissipation and Coulomb friction ``friction``: the object hangs on three prismatic joints
-  (along ``u`` and the two tangent axes) and a ball joint; the orientation follows the
-  scenario through stiff implicit PD actuators, the translations are *force-driven* (the
+  (along ``u`` and the two tangent axes) and three revolute joints; the orientation follows
+  the scenario through stiff implicit PD actuators, the translations are *force-driven* (the
   force targets applied as actuation, heavily damped), and the whole grasp is simulated
   continuously at ``sap_dt`` (the friction state carries over from sample to sample, as
-  stick and slip need), sampled at the sensor rate. The wrench is the contact wrench on the
+  stick and slip need), sampled at the sensor rate. The tip's tetrahedra are refined to half
+  a plate's thickness (:func:`sap_tip_resolution`: SAP's friction acts once per contact
+  polygon, and tetrahedra wider than the plate cut its two side faces unalike). The harness
+  checks every sample that the object is still in the scenario: its orientation within
+  0.5° of the scenario's (the PD holds it within 0.03°), its contact kept and its slide
+  across the skin below 1 mm once the grasp is stable; otherwise the grasp raises
+  RuntimeError ("the object left the scenario", "friction cannot hold the load"),
+  remembered in the cache. The object's pose over time is kept in
+  :attr:`DrakeSimLog.diagnostics` (``bench_physics.py --sap-trace`` plots it). The wrench is the contact wrench on the
   fingertip from the contact results (:class:`HydroelasticContactInfo`), moved to the
   sensor origin; its normal part is recomputed from the pressure on the contact surface and
   the rest is the friction, whose lever below the surface point gives
@@ -84,23 +92,23 @@ the tilt of its face along the line turns the force; a plane and a 15 mm plate a
 depth carry none, so the load stays at the target).
 
 With friction (``sap``) the lever of the friction force about ``r_c`` is not the depth of
-the contact surface: side faces of a thin plate carry friction couples (on a 1 mm plate
-loaded across at 0.2 of the normal force the lever ``−(m_fr − r_c × f_fr) · (n × f_fr) /
-|n × f_fr|²`` is 7.3 mm while the surface lies 2–3 mm deep), and tractions left by the
-tilt before the load add a couple. :attr:`GroundTruth.friction_depth` therefore records
+the contact surface: side faces of a thin plate carry friction couples (a 1 mm plate pressed
+3.1 mm deep carries 12.6 N of pressure on its side faces and 4.9 N on its edge), and
+tractions left by the disturbances before the load add couples (SAP's friction has no
+tangential compliance, so the rotations slide the embedded faces at the Coulomb limit: the
+1° gravity spin leaves −16.5 N·mm about the normal on a 1 mm plate, −12.7 on a 2 mm plate,
+which reach ``h`` through the line's 3° tilt out of the tangent plane; tetrahedra fine
+enough, see :func:`sap_tip_resolution`). :attr:`GroundTruth.friction_depth` therefore records
 the pressure-weighted depth of the contact surface below ``r_c`` (the depth where the
-tractions act if they follow the pressure, as on the Winkler skin). A 1 mm plate
-loaded across at 0.5 of the normal force slides off at μ = 1 (it slips at about 0.47; most
-likely the side faces' friction carries part of the push, leaving the top face less normal
-force to hold the load with): such a grasp raises
-RuntimeError ("friction cannot hold the load"), remembered in the cache.
+tractions act if they follow the pressure, as on the Winkler skin). With the tip's 2 mm
+tetrahedra a 1 mm plate loaded across at 0.5 slid off at μ = 1; refined to 0.5 mm it holds.
 
 Truth that differs from softtip's simulator: ``pressure_centre`` is on the contact surface
 (the rigid object's surface, deformed skin), not on the undeformed skin; ``slip_fraction``
 is NaN (not available); ``depth`` is the largest pressure over ``E / R``.
 
 Logs are cached on disk (``benchmarks/.cache/drake/<hash>.npz``, the noise-free wrench and
-the truth; the noise is drawn on loading) because a log takes 10–60 s.
+the truth; the noise is drawn on loading) because a log takes 5–450 s.
 """
 
 from __future__ import annotations
@@ -137,7 +145,8 @@ from softtip.sim import (
 )
 from softtip.sim.pose import Pose
 
-__all__ = ["DRAKE_MISSING", "DrakeSimLog", "drake_available", "drake_version", "pressure_check", "simulate_drake", "CACHE_DIR"]
+__all__ = ["DRAKE_MISSING", "DrakeSimLog", "drake_available", "drake_version", "pressure_check", "sap_tip_resolution",
+           "simulate_drake", "CACHE_DIR"]
 
 #: The message printed when Drake is not installed.
 DRAKE_MISSING = (
@@ -172,9 +181,14 @@ def drake_version() -> str:
 
 @dataclass(frozen=True, eq=False)
 class DrakeSimLog(SimLog):
-    """A :class:`~softtip.sim.SimLog` from Drake; ``drake``: the physics' settings and notes."""
+    """A :class:`~softtip.sim.SimLog` from Drake; ``drake``: the physics' settings and notes;
+    ``diagnostics``: per-sample arrays of the harness (``sap``: ``object_turn``, (n, 3) rad, the
+    rotation vector from the scenario's orientation to the object's, world frame, NaN before
+    contact; ``object_offset``, (n, 3) m, the object's origin relative to the nominal contact
+    point)."""
 
     drake: dict = field(default_factory=dict)
+    diagnostics: dict = field(default_factory=dict)
 
     def metadata(self) -> dict:
         out = super().metadata()
@@ -230,6 +244,25 @@ def _object_geometry(obj: RigidObject, resolution: float):
     if isinstance(obj, HalfSpace):
         return [(Box(0.02, 0.1, 0.1), RigidTransform([-0.01, 0.0, 0.0]))]
     raise ValueError(f"drake physics builds plates, cylinders, wedges and planes, got {type(obj).__name__}")
+
+
+def sap_tip_resolution(obj: RigidObject, mesh_resolution: float) -> float:
+    """The fingertip's resolution hint of a ``sap`` grasp of ``obj``, m: ``mesh_resolution``,
+    refined to half the thickness of a plate thinner than twice it.
+
+    SAP applies friction once per contact polygon, and the polygons are the object's faces cut
+    by the tip's tetrahedra: with tetrahedra wider than the plate, the two side faces of a
+    1 mm plate embedded 3.1 mm deep (12.6 N of pressure on them, 4.9 N on the edge) are cut
+    unalike, and the joint rotation leaves a friction couple of 4.4 N·mm about the plate's own
+    line at a 2 mm hint (0.02 N·mm at 0.5 mm; the 2 mm plate −0.01 at 2 and 1 mm): ``h`` in the
+    tangent plane 40° off ``n × d`` before the load. ``h`` along the line at 6 s, by hint:
+    4.1 N·mm at 2 mm, 1.8 at 1.5, −0.2 at 1, −0.5 at 0.75, −0.85 at 0.5, −0.92 at 0.35 (what
+    remains is the gravity spin's friction couple seen through the line's 3° tilt).
+    Frictionless solves integrate the pressure exactly on the polygons and keep the hint.
+    """
+    if isinstance(obj, Plate):
+        return min(mesh_resolution, 0.5 * obj.thickness)
+    return mesh_resolution
 
 
 def _object_resolution(obj: RigidObject, mesh_resolution: float) -> float:
@@ -428,15 +461,19 @@ _TRUTH_FIELDS = [f.name for f in dataclasses.fields(GroundTruth)]
 def _save(path: Path, t, wrench, truth: GroundTruth, info: dict) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_suffix(f".{os.getpid()}.tmp.npz")
+    diag = info.get("diagnostics", {})
+    info = {k: v for k, v in info.items() if k != "diagnostics"}
     np.savez_compressed(tmp, t=t, wrench_true=wrench, info=json.dumps(info),
-                        **{f"truth_{k}": getattr(truth, k) for k in _TRUTH_FIELDS})  # fmt: skip
+                        **{f"truth_{k}": getattr(truth, k) for k in _TRUTH_FIELDS},
+                        **{f"diag_{k}": v for k, v in diag.items()})  # fmt: skip
     os.replace(tmp, path)
 
 
 def _load(path: Path):
     with np.load(path) as z:
         truth = GroundTruth(**{k: z[f"truth_{k}"] for k in _TRUTH_FIELDS})
-        return z["t"], z["wrench_true"], truth, json.loads(str(z["info"]))
+        diag = {k[5:]: z[k] for k in z.files if k.startswith("diag_")}
+        return z["t"], z["wrench_true"], truth, {**json.loads(str(z["info"])), "diagnostics": diag}
 
 
 # -- the simulation -----------------------------------------------------------------------
@@ -453,6 +490,7 @@ def simulate_drake(
     solver: str = "quasistatic",
     dissipation: float = 5.0,
     sap_dt: float = 1e-3,
+    tip_resolution: float | None = None,
     cache: bool | str | os.PathLike = True,
     progress: bool = True,
 ) -> DrakeSimLog:
@@ -475,6 +513,8 @@ def simulate_drake(
         Hunt–Crossley dissipation, s/m (``sap``).
     sap_dt : float
         Time step of the ``sap`` simulation, s.
+    tip_resolution : float, optional
+        The tip's resolution hint of a ``sap`` grasp, m (None: :func:`sap_tip_resolution`).
     cache : bool or path
         Cache the noise-free result (True: :data:`CACHE_DIR`; a path: that folder; False: no).
     progress : bool
@@ -494,7 +534,9 @@ def simulate_drake(
     settings = {"modulus": modulus, "mesh_resolution": mesh_resolution, "solver": solver,
                 "friction": friction if solver == "sap" else 0.0}  # fmt: skip
     if solver == "sap":
-        settings.update(dissipation=dissipation, sap_dt=sap_dt)
+        settings.update(dissipation=dissipation, sap_dt=sap_dt, sap_harness=_SAP_HARNESS,
+                        tip_resolution=sap_tip_resolution(obj, mesh_resolution) if tip_resolution is None
+                        else float(tip_resolution))  # fmt: skip
     path = None
     if cache:
         folder = CACHE_DIR if cache is True else Path(cache)
@@ -522,7 +564,8 @@ def simulate_drake(
     return DrakeSimLog(
         t=t, wrench=sensor.measure(wrench, rng), wrench_true=wrench, truth=truth, tip=tip, obj=obj,
         scenario=scenario, sensor=sensor, params=ContactParams(modulus=modulus, friction=max(friction, 0.0)),
-        n_elements=0, quadrature=0, seed=seed, drake={**settings, **info},
+        n_elements=0, quadrature=0, seed=seed, drake={**settings, **{k: v for k, v in info.items() if k != "diagnostics"}},
+        diagnostics=info.get("diagnostics", {}),
     )  # fmt: skip
 
 
@@ -686,6 +729,11 @@ _SAP_DAMPING = 30.0  # N·s/m: damping of the force-driven translations (overdam
 _SAP_PD = (50.0, 0.05)  # N·m/rad, N·m·s/rad: the implicit PD that holds the prescribed orientation
 _SAP_INPUT_DT = 5e-3  # s: the force targets and the orientation are updated this often
 _SAP_SLID = 1e-3  # m: a slide across the skin beyond this means friction did not hold the load
+#: rad: the object's orientation may differ from the scenario's by this much (measured: ≤ 0.03°)
+_SAP_TURN_MAX = math.radians(0.5)
+#: Bumped whenever the sap harness changes (its logs only): 2 = tip hint by the plate's
+#: thickness, the object's pose recorded and checked.
+_SAP_HARNESS = 2
 
 
 def _frame_axes(u: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -740,7 +788,7 @@ def _run_sap(tip, obj, scenario, sensor, settings, progress):
             parent = child
         return joints
 
-    w, _ = _build(tip, obj, modulus=settings["modulus"], mesh_resolution=settings["mesh_resolution"],
+    w, _ = _build(tip, obj, modulus=settings["modulus"], mesh_resolution=settings["tip_resolution"],
                   friction=settings["friction"], dissipation=settings["dissipation"], time_step=settings["sap_dt"],
                   joints=chain)  # fmt: skip
     plant = w.plant
@@ -791,6 +839,8 @@ def _run_sap(tip, obj, scenario, sensor, settings, progress):
     centre = np.full((n, 3), np.nan)
     area, depth, push, fdepth = np.zeros(n), np.zeros(n), np.zeros(n), np.full(n, np.nan)
     in_contact = np.zeros(n, dtype=bool)
+    turn = np.full((n, 3), np.nan)  # rotation vector from the scenario's orientation to the object's, world
+    offset = np.full((n, 3), np.nan)  # the object's origin relative to the nominal contact point, world
     target = np.where(t >= scenario.t_contact, scenario.force_target(t), 0.0)
     has_line = not isinstance(obj, HalfSpace)
     # a friction load (a force target across) must be held; a rocked object may roll and creep further
@@ -820,8 +870,18 @@ def _run_sap(tip, obj, scenario, sensor, settings, progress):
                       f"v {np.round(v[[vidx['slide0'], vidx['slide1'], vidx['slide2']]] * 1e3, 4)} mm/s f {np.round(wr[:3], 3)}",
                       file=sys.stderr)
             in_contact[i] = st["area"] > 0.0
+            X = plant.EvalBodyPoseInWorld(pc, w.body)
+            turn[i] = _rotation_vector(X.rotation().matrix() @ pose_rot.rotation.T)
+            offset[i] = X.translation() - r_c
             across = np.hypot(joints["slide1"].get_translation(pc), joints["slide2"].get_translation(pc))
-            if ti > scenario.t_stable and (not in_contact[i] or across > slid_limit):
+            # the scenario holds only while the object keeps its orientation and its contact
+            off = float(np.linalg.norm(turn[i]))
+            if off > _SAP_TURN_MAX:
+                raise RuntimeError(f"the object left the scenario: turned {math.degrees(off):.2f}° from its commanded "
+                                   f"orientation at t = {ti:.2f} s (bound {math.degrees(_SAP_TURN_MAX):g}°)")  # fmt: skip
+            if ti > scenario.t_stable and not in_contact[i]:
+                raise RuntimeError(f"the object left the scenario: contact lost at t = {ti:.2f} s")
+            if ti > scenario.t_stable and across > slid_limit:
                 raise RuntimeError(f"friction cannot hold the load (μ = {settings['friction']:g}): the object slid "
                                    f"{across * 1e3:.1f} mm across the skin by t = {ti:.2f} s")  # fmt: skip
         if bar is not None:
@@ -829,7 +889,22 @@ def _run_sap(tip, obj, scenario, sensor, settings, progress):
     if bar is not None:
         bar.close()
     truth = _truth(direction, r_c, n_c, u, wrench, centre, area, depth, push, target, in_contact, fdepth)
-    return t, wrench, truth, {"sap_damping": _SAP_DAMPING, "sap_pd": list(_SAP_PD)}
+    held = np.isfinite(turn[:, 0])
+    info = {"sap_damping": _SAP_DAMPING, "sap_pd": list(_SAP_PD),
+            "max_turn_deg": float(np.degrees(np.linalg.norm(turn[held], axis=1).max(initial=0.0))),
+            "max_offset_tangential_mm": float(1e3 * np.linalg.norm(offset[held] - np.outer(offset[held] @ u, u),
+                                                                   axis=1).max(initial=0.0)),
+            "diagnostics": {"object_turn": turn, "object_offset": offset}}  # fmt: skip
+    return t, wrench, truth, info
+
+
+def _rotation_vector(R: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Rotation vector (axis × angle, rad) of a rotation matrix (angles below π)."""
+    c = float(np.clip(0.5 * (np.trace(R) - 1.0), -1.0, 1.0))
+    angle = math.acos(c)
+    v = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    s = math.sin(angle)
+    return v * (0.5 * angle / s) if s > 1e-12 else 0.5 * v
 
 
 def _truth(direction, r_c, n_c, u, wrench, centre, area, depth, push, target, in_contact, friction_depth) -> GroundTruth:
