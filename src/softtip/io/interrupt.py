@@ -12,6 +12,7 @@ from __future__ import annotations
 import contextlib
 import os
 import signal
+import sys
 import threading
 from collections.abc import Iterator
 
@@ -164,6 +165,8 @@ def terminate_like_ctrl_c() -> Iterator[None]:
         yield
         return
     previous = {}
+    hook = sys.unraisablehook
+    sys.unraisablehook = _deliver_again_if_swallowed
     for sig in (signal.SIGINT, *_SIGNALS):
         current = signal.getsignal(sig)
         if current is signal.SIG_IGN:
@@ -178,3 +181,36 @@ def terminate_like_ctrl_c() -> Iterator[None]:
         if not _interrupted.is_set() and not (_after_commit["committed"] and _after_commit["until_exit"]):
             for sig, handler in previous.items():
                 signal.signal(sig, handler)
+            sys.unraisablehook = hook
+
+
+def _deliver_again_if_swallowed(unraisable) -> None:
+    """:data:`sys.unraisablehook` within :func:`terminate_like_ctrl_c`: a signal's exception
+    raised where Python can only print it (a callback from native code, such as llvmlite's
+    object-cache notice while numba compiles; a ``__del__``) was lost, the run going on with
+    further signals ignored and a traceback on standard error. It is delivered again instead,
+    so that it unwinds the run from the next line of Python outside that callback."""
+    exc = unraisable.exc_value
+    if isinstance(exc, KeyboardInterrupt) and _first_signal and threading.current_thread() is threading.main_thread():
+        while True:
+            try:
+                sig = _first_signal.pop()
+                _interrupted.clear()
+                signal.signal(sig, _raise_keyboard_interrupt if sig == signal.SIGINT else _raise)
+                # from another thread, a moment later: here its handler would run inside this
+                # hook, still within the callback
+                threading.Thread(target=_interrupt_main_soon, args=(sig,), daemon=True).start()
+                return
+            except KeyboardInterrupt:  # it came while this thread was still in here: once more
+                continue
+            except (OSError, ValueError):
+                break
+    sys.__unraisablehook__(unraisable)
+
+
+def _interrupt_main_soon(sig: int) -> None:
+    import _thread
+    import time
+
+    time.sleep(0.02)
+    _thread.interrupt_main(sig)
