@@ -853,7 +853,7 @@ try:
         # Python code called back from native code, as llvmlite's object-cache notice while numba
         # compiles: an exception raised there is printed ("Exception ignored ...") and lost
         ctypes.CFUNCTYPE(None)(lambda: time.sleep(2.0))()
-        for _ in range(300):
+        for _ in range(600):
             time.sleep(0.01)
         print("not interrupted", flush=True)
 except KeyboardInterrupt as exc:
@@ -879,8 +879,10 @@ def test_a_signal_inside_a_callback_from_native_code_still_ends_the_run(signals)
     out, err = proc.communicate(timeout=30)
     assert err.decode() == ""
     words = out.decode().split()
-    assert words[:2] == ["interrupted", str(128 + signals[0])], out
-    assert float(words[2]) < 1.5  # at once, not after the callback's 2 s and the loop's 3 s
+    # two signals both pending when Python runs its handlers: in signal-number order (SIGINT's first)
+    assert words[0] == "interrupted" and int(words[1]) in {128 + s for s in signals}, out
+    # within the callback's 2 s (a signal that came just before its sleep waits for it), not after the loop's 6 s
+    assert float(words[2]) < 4.0
 
 
 # ---------------------------------------------------------------------------------------
