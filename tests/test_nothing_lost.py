@@ -800,6 +800,30 @@ def test_out_of_memory_is_a_message_not_a_traceback(log, monkeypatch):
     assert "out of memory" in result.output and "--chunk-rows" in result.output
 
 
+def test_out_of_memory_after_pieces_went_to_standard_output_says_so(log, monkeypatch):
+    """A run onto standard output in pieces that runs out of memory after its first piece: the
+    warning that the table there is cut (it said 'nothing was written', with the header and
+    rows on standard output)."""
+    from click.testing import CliRunner
+
+    import softtip.cli.estimate as estimate
+    from softtip.cli import main
+
+    real, calls = estimate._output_columns, []
+
+    def exhausted_on_the_second(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 2:
+            raise MemoryError
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(estimate, "_output_columns", exhausted_on_the_second)
+    result = CliRunner().invoke(main, ["estimate", str(log), "--chunk-rows", "100", "-q"])
+    assert result.exit_code == 1
+    assert "standard output: 100 rows were written before the error below" in result.output
+    assert "out of memory" in result.output and "no output file was written" in result.output
+
+
 def test_full_scale_follows_the_sensor_preset(tmp_path, log):
     bad = _with_cell(log, tmp_path / "bad.csv", 101, "fz", "200")
     r = run("estimate", bad, "-o", tmp_path / "a.csv", "--sensor", "nano25", timeout=60)

@@ -242,11 +242,8 @@ def _estimate(
             rows = chunk_rows or _auto_chunk_rows(input_path)
             # standard output (or -o naming it, a pipe): each piece is written as it is done, so
             # memory stays bounded; what is written cannot be taken back (a failure after it:
-            # a message, exit 2, a cut table). A file with quotes or lone CRs goes whole to the
-            # one-shot reader (pieces of it might need it after some were written)
+            # a message, exit 2, a cut table)
             streamed = output is None or _is_own_stdout(output)
-            if streamed and rows and not _plain_text(input_path):
-                rows = None
             if rows and _estimate_in_pieces(
                 input_path, units, rows, fingertip, config, estimator_opts, output=None if streamed else output,
                 output_units=output_units, tip=tip, quiet=quiet, save_bias=save_bias, outputs=outputs,
@@ -445,28 +442,6 @@ def _is_own_stdout(path) -> bool:
     return not stat.S_ISREG(st.st_mode) and os.path.samestat(st, out)
 
 
-def _plain_text(path) -> bool:
-    """Whether a CSV log holds no quote and no lone carriage return (checked in bounded windows);
-    a Parquet or Arrow file is plain."""
-    from softtip.io.formats import table_format
-
-    if table_format(path) != "csv":
-        return True
-    try:
-        with open(path, "rb") as fh:
-            cr = False  # the previous window ended with a CR: its LF, if any, opens this one
-            while chunk := fh.read(1 << 22):
-                if b'"' in chunk or (cr and not chunk.startswith(b"\n")):
-                    return False
-                body = chunk[:-1] if chunk.endswith(b"\r") else chunk
-                if body.count(b"\r") != body.count(b"\r\n"):
-                    return False
-                cr = chunk.endswith(b"\r")
-        return not cr
-    except OSError:
-        return False
-
-
 def _estimate_in_pieces(
     input_path, units, rows, fingertip, config, estimator_opts, *, output, output_units, tip, quiet, save_bias, outputs,
     sensor_range=None, jobs=1, named=None,
@@ -488,6 +463,7 @@ def _estimate_in_pieces(
     rows = max(rows, min(-(-_row_estimate(input_path) // MAX_PIECES), MAX_FLOOR_ROWS))
     fmt = table_format(output) if output is not None else "csv"
     sent = [0]  # rows written to standard output: past the first, a failure cannot be taken back
+    began = [False]  # whether writing onto standard output began (the header may be there with no row)
     beyond: list[InputError] = []  # the first sample just beyond the sensor's range
     carried = _carried(input_path, output)
     names: dict[str, list[str]] = {}  # the first piece's output and extra column names
@@ -542,6 +518,7 @@ def _estimate_in_pieces(
                     columns = _output_columns(est, extra, output_units, carried, notes if not names else None)
                     names.setdefault("est", list(est.columns(units=output_units)))
                     names.setdefault("extra", list(extra))
+                    began[0] = output is None  # from here standard output may hold a part of the table
                     writer.write(columns)
                     sent[0] += len(est) if output is None else 0
                     bar.update(len(est))
@@ -589,6 +566,9 @@ def _estimate_in_pieces(
             if isinstance(exc, InputError):
                 raise
             raise click.UsageError(str(exc)) from None
+        except MemoryError:
+            _said_cut(sent[0], began[0])  # the command's message follows
+            raise
     for note in [*notes, *blocks.warnings()]:
         click.echo(f"softtip: warning: {note}", err=True)
     _report_run(
@@ -598,9 +578,10 @@ def _estimate_in_pieces(
     return True
 
 
-def _said_cut(rows: int) -> None:
-    """Before the error of a run that wrote ``rows`` rows onto standard output: what is there."""
-    if rows:
+def _said_cut(rows: int, began: bool = False) -> None:
+    """Before the error of a run that wrote ``rows`` rows onto standard output (``began``: or
+    started writing there): what is there."""
+    if rows or began:
         click.echo(
             f"softtip: warning: standard output: {rows} rows were written before the error below and cannot be taken "
             "back; the table there is incomplete or wrong (use it only after exit status 0)",
