@@ -364,3 +364,29 @@ def test_quoted_lines_and_lone_crs_in_pieces_in_bounded_memory(tmp_path: Path) -
     one = _stdout_run("estimate", cr, "-q")
     assert one.returncode == 0 and one.stdout == (tmp_path / "p.csv").read_bytes()  # lone CRs: the plain log's bytes
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.csv", "cr.csv", "n.csv", "note.csv", "p.csv", "plain.csv"]
+
+
+@pytest.mark.parametrize("noise", [["--force-noise", "0", "--moment-noise", "0"], ["--moment-noise", "40"]], ids=["lever-only", "noise"])
+def test_wrong_units_after_pieces_went_to_standard_output_name_the_pairs_that_fit(tmp_path: Path, noise: list) -> None:
+    """Moments in N·mm read as N·m, the tare's noise not telling (a sensor noise given to fit): the
+    lever vote over every piece fails after pieces went onto standard output. The message names the
+    unit pairs that fit and their options as the one-shot run's does (it said only 'give --units')."""
+    from softtip.io.examples import load_example
+    from softtip.io.tables import write_table
+
+    ex = load_example()
+    t = np.concatenate([ex.t + k * (ex.t[-1] + ex.t[1]) for k in range(4)])
+    w = np.tile(ex.wrench, (4, 1)) * np.array([1, 1, 1, 1e3, 1e3, 1e3])
+    src = tmp_path / "nmm.csv"
+    write_table({"t": t, **{c: w[:, i] for i, c in enumerate(("fx", "fy", "fz", "mx", "my", "mz"))}}, src)
+    one = _stdout_run("estimate", src, "-q", *noise, "-o", tmp_path / "one.csv")
+    done = _stdout_run("estimate", src, "-q", *noise, "--chunk-rows", 500)
+    assert one.returncode == done.returncode == 2
+    said, err = one.stderr.decode(), done.stderr.decode()
+    assert "standard output: 2000 rows were written before the error below" in err
+    # the same samples, and the same pairs named (or none)
+    assert "over 1568 samples with |f| ≥ 0.1 N, read in N and N·m)" in said and "over 1568 samples with |f| ≥ 0.1 N, read in N and N·m)" in err
+    fits = said.split("read in N and N·m), but the fingertip reaches only 42.1 mm: ")[1]
+    assert err.endswith(f"read in N and N·m): {fits}") and "the fingertip's reach (42.1 mm)" in err
+    assert ("--moment-units N*mm" in fits) == (noise[1] == "0")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["nmm.csv"]

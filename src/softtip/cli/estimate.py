@@ -470,6 +470,8 @@ def _estimate_in_pieces(
     notes: list[str] = []
     totals = _RunTotals()
     vote = LeverVote(LEVER_MARGIN * fingertip_reach(fingertip))  # the units check, over the whole log
+    pair_votes: dict[tuple[str, str], LeverVote] = {}  # the same vote for each unit pair, to name those that fit
+    first_ratio: list = []  # the tare's noise over the sensor's, from the first piece
     total = columnar_rows(input_path)
     with progress_bar(total, "estimating") as bar:  # rows estimated and written
         blocks = iter_log(input_path, units, rows=min(rows, 1 << 16))
@@ -514,7 +516,11 @@ def _estimate_in_pieces(
                 for k, (est, extra) in enumerate(pieces):
                     if k == 0:
                         noise_fits(est)
-                    vote.add(lever_distances(est.wrench[~est.taring], max(0.1, config.contact_threshold)))
+                        _start_pair_votes(pair_votes, first_ratio, vote.limit, blocks.units, est, first_wrench[0], config)
+                    distances = lever_distances(est.wrench[~est.taring], max(0.1, config.contact_threshold))
+                    vote.add(distances)
+                    for pair_vote in pair_votes.values():
+                        pair_vote.add(distances)
                     columns = _output_columns(est, extra, output_units, carried, notes if not names else None)
                     names.setdefault("est", list(est.columns(units=output_units)))
                     names.setdefault("extra", list(extra))
@@ -552,10 +558,8 @@ def _estimate_in_pieces(
             if sent[0]:  # on standard output already: the one-shot run cannot start over
                 _said_cut(sent[0])
                 if "units" in str(exc):
-                    raise InputError(
-                        f"{input_path}: the wrench does not fit the fingertip in these units (the contacts' lever arms "
-                        "lie beyond its reach); give --units (or run with -o FILE, which names the unit pair that fits)"
-                    ) from None
+                    raise _units_error(input_path, vote, pair_votes, first_ratio[0], blocks.units, fingertip,
+                                       max(0.1, config.contact_threshold)) from None  # fmt: skip
                 raise InputError(f"{input_path}: cannot be read in pieces past row {sent[0]} ({exc}); give -o FILE") from None
             return False
         except InputError as exc:
@@ -576,6 +580,40 @@ def _estimate_in_pieces(
         save_bias=save_bias, quiet=quiet, outputs=outputs,
     )  # fmt: skip
     return True
+
+
+def _start_pair_votes(pair_votes, first_ratio, limit, units, est, first_wrench, config) -> None:
+    """The units vote of each unit pair (its lever limit in the units read), and the tare's noise
+    ratio, at the first piece of a run in pieces: what :func:`_units_error` names the fix from."""
+    from softtip.cli.options import quiet_samples
+    from softtip.core.lever import LeverVote, noise_ratio, pair_scales
+    from softtip.core.units import UNIT_SYSTEM_UNITS
+
+    force_unit, moment_unit = UNIT_SYSTEM_UNITS[units or "si"]
+    for pair, (kf, km) in pair_scales(force_unit, moment_unit).items():
+        pair_votes[pair] = LeverVote(limit * kf / km)  # a pair fits when median * km / kf <= limit
+    quiet = quiet_samples(est, first_wrench)
+    first_ratio.append(noise_ratio(quiet, config.noise) if config.noise is not None else None)
+
+
+def _units_error(input_path, vote, pair_votes, ratio, units, fingertip, min_force: float) -> InputError:
+    """The units check's message for a run whose pieces went onto standard output already (the
+    one-shot run cannot start over to word it): the unit pairs that fit and their options, decided
+    as the one-shot check decides (the median lever of every piece, the first piece's noise)."""
+    from softtip.core.lever import LEVER_MARGIN, describe_pairs, fingertip_reach, pairs_that_fit
+    from softtip.core.units import UNIT_SYSTEM_UNITS, find_unit
+
+    force_unit, moment_unit = UNIT_SYSTEM_UNITS[units or "si"]
+    fits = pairs_that_fit({pair: not (v.n >= 5 and v.median_above()) for pair, v in pair_votes.items()}, ratio,
+                          force_unit, moment_unit)  # fmt: skip
+    read_in = f"{find_unit(force_unit, 'force').label} and {find_unit(moment_unit, 'moment').label}"
+    return InputError(
+        f"{input_path}: the forces act more than {LEVER_MARGIN:g} times the fingertip's reach "
+        f"({fingertip_reach(fingertip) * 1e3:.3g} mm) from the sensor origin (median of the moment-to-force ratio over "
+        f"{vote.n} samples with |f| ≥ {min_force:g} N, read in {read_in}): "
+        f"{describe_pairs(fits, (force_unit, moment_unit))}; or is the fingertip (--tip) the wrong one? "
+        "Expected moments in N·m about the sensor origin"
+    )
 
 
 def _said_cut(rows: int, began: bool = False) -> None:
