@@ -40,7 +40,22 @@ def exit_code(exc: BaseException) -> int:
     return 128 + (exc.signum if isinstance(exc, Interrupted) else int(signal.SIGINT))
 
 
-_interrupted = threading.Event()
+class _Flag:
+    """Set once, never cleared, with no lock: the signal handlers set it, and Python may run a
+    second signal's handler inside the first one's, at any line (a ``threading.Event`` there
+    deadlocked on its own lock: two signals 5 ms apart, now and then a run that never ended)."""
+
+    def __init__(self) -> None:
+        self._set = False
+
+    def set(self) -> None:
+        self._set = True
+
+    def is_set(self) -> bool:
+        return self._set
+
+
+_interrupted = _Flag()
 _first_signal: list[int] = []
 
 
@@ -74,7 +89,7 @@ def _ignore_further_signals() -> None:
     handler that does nothing, not SIG_IGN, which makes Python report a "race condition"):
     the cleanup of the first one (temporary files, worker processes) must not be cut short
     by a second, and the exit code stays the first one's."""
-    _interrupted.set()
+    _interrupted.set()  # no lock: a second handler may run from here on (see _Flag)
     for sig in (signal.SIGINT, *_SIGNALS):
         with contextlib.suppress(OSError, ValueError):
             if signal.getsignal(sig) is not signal.SIG_IGN:
@@ -188,29 +203,26 @@ def _deliver_again_if_swallowed(unraisable) -> None:
     """:data:`sys.unraisablehook` within :func:`terminate_like_ctrl_c`: a signal's exception
     raised where Python can only print it (a callback from native code, such as llvmlite's
     object-cache notice while numba compiles; a ``__del__``) was lost, the run going on with
-    further signals ignored and a traceback on standard error. It is delivered again instead,
-    so that it unwinds the run from the next line of Python outside that callback."""
+    further signals ignored and a traceback on standard error. It is raised again instead, by
+    an alarm a moment later (a real signal: it also ends a blocking call), from the next line of
+    Python outside that callback; an alarm that lands in such a place again is set again. Code
+    that checks :func:`check_interrupted` meanwhile stops too."""
     exc = unraisable.exc_value
-    if isinstance(exc, KeyboardInterrupt) and _first_signal and threading.current_thread() is threading.main_thread():
-        while True:
+    alarm = getattr(signal, "SIGALRM", None)
+    if isinstance(exc, KeyboardInterrupt) and _first_signal and alarm is not None and hasattr(signal, "setitimer") \
+            and threading.current_thread() is threading.main_thread():  # fmt: skip
+        while True:  # no thread started, no lock taken: this may run inside any finaliser
             try:
-                sig = _first_signal.pop()
-                _interrupted.clear()
-                signal.signal(sig, _raise_keyboard_interrupt if sig == signal.SIGINT else _raise)
-                # from another thread, a moment later: here its handler would run inside this
-                # hook, still within the callback
-                threading.Thread(target=_interrupt_main_soon, args=(sig,), daemon=True).start()
+                signal.signal(alarm, _raise_again)
+                signal.setitimer(signal.ITIMER_REAL, 0.02)
                 return
-            except KeyboardInterrupt:  # it came while this thread was still in here: once more
+            except KeyboardInterrupt:  # the alarm came while this was still running: once more
                 continue
             except (OSError, ValueError):
                 break
     sys.__unraisablehook__(unraisable)
 
 
-def _interrupt_main_soon(sig: int) -> None:
-    import _thread
-    import time
-
-    time.sleep(0.02)
-    _thread.interrupt_main(sig)
+def _raise_again(signum, frame) -> None:
+    """The alarm of :func:`_deliver_again_if_swallowed`: the first signal's exception, again."""
+    check_interrupted()
