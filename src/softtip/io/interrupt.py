@@ -151,8 +151,18 @@ def outputs_committed() -> None:
     _after_commit["committed"] = True
     for sig in (signal.SIGINT, *_SIGNALS):
         with contextlib.suppress(OSError, ValueError):
-            if signal.getsignal(sig) in (_raise, _raise_keyboard_interrupt):
+            if _after_commit["until_exit"] and signal.getsignal(sig) in (_raise, _raise_keyboard_interrupt, _ignore):
+                # the console command: ignored by the kernel, which lasts through the interpreter's
+                # exit (Python puts its own handlers back to the default action there: a SIGTERM
+                # then killed a finished run, -15 with every output written)
+                signal.signal(sig, signal.SIG_IGN)
+            elif signal.getsignal(sig) in (_raise, _raise_keyboard_interrupt):
                 signal.signal(sig, _ignore)
+    if hasattr(signal, "SIGALRM") and signal.getsignal(signal.SIGALRM) is _raise_again:
+        # a signal swallowed during the commit (after its last check): the run is complete all the same
+        with contextlib.suppress(OSError, ValueError):
+            signal.setitimer(signal.ITIMER_REAL, 0.0)
+            signal.signal(signal.SIGALRM, _ignore)
 
 
 def _raise(signum, frame) -> None:
@@ -208,6 +218,8 @@ def _deliver_again_if_swallowed(unraisable) -> None:
     Python outside that callback; an alarm that lands in such a place again is set again. Code
     that checks :func:`check_interrupted` meanwhile stops too."""
     exc = unraisable.exc_value
+    if _after_commit["committed"] and isinstance(exc, OSError) and "ignored due to race condition" in str(exc):
+        return  # a signal that came as it was set to be ignored after the commit: ignored, as meant
     alarm = getattr(signal, "SIGALRM", None)
     if isinstance(exc, KeyboardInterrupt) and _first_signal and alarm is not None and hasattr(signal, "setitimer") \
             and threading.current_thread() is threading.main_thread():  # fmt: skip
@@ -224,5 +236,7 @@ def _deliver_again_if_swallowed(unraisable) -> None:
 
 
 def _raise_again(signum, frame) -> None:
-    """The alarm of :func:`_deliver_again_if_swallowed`: the first signal's exception, again."""
-    check_interrupted()
+    """The alarm of :func:`_deliver_again_if_swallowed`: the first signal's exception, again
+    (not once the outputs are committed: the run is complete)."""
+    if not _after_commit["committed"]:
+        check_interrupted()
