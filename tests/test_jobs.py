@@ -239,3 +239,22 @@ def test_cli_jobs_2_wrong_units_fall_back_to_the_one_shot_message(tmp_path: Path
     assert one.returncode == two.returncode == 2
     assert "--units kgf-mm" in two.stderr and two.stderr == one.stderr
     assert sorted(os.listdir(tmp_path)) == ["kgf.csv"]
+
+
+@pytest.mark.skipif(not hasattr(__import__("socket"), "AF_UNIX"), reason="the pool's server socket is a Unix socket")
+def test_cli_jobs_with_a_temporary_folder_too_long_for_a_socket(tmp_path: Path) -> None:
+    """A TMPDIR whose path leaves no room for the pool's server socket (a Unix socket address
+    holds about 107 bytes): the pool's private folder goes elsewhere, the run gives the bytes
+    of --jobs 1 and leaves nothing in TMPDIR (it stopped with 'AF_UNIX path too long')."""
+    t, w = _log(seed=5, presses=3)
+    src = tmp_path / "in.csv"
+    write_table({"t": t, **{k: w[:, i] for i, k in enumerate(WRENCH)}}, src)
+    long_tmp = tmp_path / ("t" * (110 - len(str(tmp_path))))
+    long_tmp.mkdir()
+    assert len(str(long_tmp)) >= 110
+    env = {**os.environ, "TMPDIR": str(long_tmp)}
+    one = run("estimate", src, "-o", tmp_path / "one.csv", "--chunk-rows", 50, "-q")
+    two = run("estimate", src, "-o", tmp_path / "two.csv", "--chunk-rows", 50, "--jobs", 2, "-q", env=env)
+    assert one.returncode == 0 and two.returncode == 0, two.stderr
+    assert (tmp_path / "one.csv").read_bytes() == (tmp_path / "two.csv").read_bytes()
+    assert os.listdir(long_tmp) == []

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import subprocess
 import sys
 from pathlib import Path
@@ -204,14 +205,21 @@ def test_a_failure_after_pieces_went_to_standard_output_says_so(tmp_path: Path) 
     assert done.stdout == b"".join(ok.stdout.splitlines(keepends=True)[: n + 1])  # the header and n rows
 
 
-def test_a_quoted_log_onto_standard_output_is_read_whole(tmp_path: Path) -> None:
-    """A log with quotes may need the one-shot reader after pieces were written: it goes whole."""
+def test_a_quoted_log_onto_standard_output_in_pieces(tmp_path: Path) -> None:
+    """A log with quotes goes in pieces onto standard output too (it was read whole): the bytes
+    of the run in pieces into a file (text cells quoted piece by piece, manual §4), the cells of
+    the one-shot run."""
+    import csv
+
     src = tmp_path / "in.csv"
     _log_with_note(src, 20000, '"a note, quoted"')
     one = _stdout_run("estimate", src, "-q", "-o", tmp_path / "one.csv")
+    pieces = _stdout_run("estimate", src, "-q", "--chunk-rows", 2000, "-o", tmp_path / "pieces.csv")
     done = _stdout_run("estimate", src, "-q", "--chunk-rows", 2000)
-    assert one.returncode == done.returncode == 0, done.stderr
-    assert done.stdout == (tmp_path / "one.csv").read_bytes()
+    assert one.returncode == pieces.returncode == done.returncode == 0, done.stderr
+    assert done.stdout == (tmp_path / "pieces.csv").read_bytes()
+    with open(tmp_path / "one.csv", newline="") as fh:
+        assert list(csv.reader(io.StringIO(done.stdout.decode()))) == list(csv.reader(fh))
 
 
 @pytest.mark.parametrize("line", [1, 2, 300])
@@ -253,3 +261,132 @@ def test_bad_utf8_near_the_start_in_pieces_takes_no_more_memory(tmp_path: Path) 
                             capture_output=True, text=True, timeout=120, check=False)  # fmt: skip
     assert one.returncode == pieces.returncode == 2
     assert pieces.stderr.replace("b.csv", "a.csv") == one.stderr and "not valid UTF-8" in one.stderr
+
+
+# --------------------------------------------------------------------------------------
+# quoted cells that span lines and lone carriage returns: read in pieces too (they were read
+# whole: 1e6 rows with --chunk-rows 20000 took 1.05-1.08 GB against 0.45 GB without them)
+
+
+def _layout(lines: list[str], layout: str) -> bytes:
+    """The lines (each ending in a line feed) with the line ends of ``layout``."""
+    text = "".join(lines)
+    if layout == "lone-cr":
+        text = text.replace("\n", "\r")
+    elif layout == "crlf":
+        text = text.replace("\n", "\r\n")
+    return text.encode("latin-1")
+
+
+_NOTE = '"a note\nover two lines, with a comma"'
+_CHANGES = {
+    "none": lambda line: line,
+    "t-back": lambda line: "0.0001" + line[line.index(",") :],
+    "cells": lambda line: line.replace(",", ",,", 1),
+    "blank": lambda line: "\n" + line,
+    "nan": lambda line: line.replace(",", ",nan", 1),
+    "utf8": lambda line: line.replace(",", ",\xe9", 1),
+    "stray-quote": lambda line: line.replace(",ok\n", ',"5 mm plate, edge\n'),
+    "cut": lambda line: line.rstrip("\n").replace(",", ",x", 1),
+}
+
+
+@pytest.mark.parametrize("layout", ["lf", "lone-cr", "crlf"])
+@pytest.mark.parametrize("notes", [0, 1, 3], ids=["no-note", "one-note", "notes"])
+@pytest.mark.parametrize("change, row", [("none", 0), ("t-back", 3000), ("cells", 4999), ("blank", 2000), ("nan", 1200),
+                                         ("utf8", 2200), ("stray-quote", 1500), ("stray-quote", 4999), ("cut", 4999)])  # fmt: skip
+def test_quoted_lines_and_lone_crs_read_in_pieces_as_read_log(tmp_path: Path, monkeypatch, layout: str, notes: int,
+                                                              change: str, row: int) -> None:  # fmt: skip
+    """Blocks of 8 kB, windows of 4 kB: the rows read_log gives, or its error to the letter."""
+    import softtip.io.tables as tables
+    from softtip.errors import InputError
+    from softtip.io.tables import NotStreamable, read_log
+
+    if notes == 0 and layout == "lf":
+        pytest.skip("plain lines: test_located_error_across_small_windows_is_read_logs")
+    monkeypatch.setattr(tables, "_LOCATE_BYTES", 4096)
+    monkeypatch.setattr(tables, "_CSV_BLOCK_BYTES", 8192)
+    src = tmp_path / "in.csv"
+    _log_with_note(src, 5000, "ok")
+    lines = src.read_text().splitlines(keepends=True)
+    for k in (30, 2600, 4000)[:notes]:  # notes before, between and after the changed rows
+        lines[k] = lines[k][: -len("ok\n")] + _NOTE + "\n"
+    lines[row + 1] = _CHANGES[change](lines[row + 1])
+    src.write_bytes(_layout(lines, layout))
+    blocks = iter_log(src, rows=1000)
+    try:
+        one = read_log(src)
+    except InputError as exc:
+        with pytest.raises(NotStreamable):
+            for _ in blocks:
+                pass
+        assert str(blocks.locate_error()) == str(exc)
+        return
+    got = list(blocks)
+    np.testing.assert_array_equal(np.concatenate([b[0] for b in got]), one.t)
+    np.testing.assert_array_equal(np.concatenate([b[1] for b in got]), one.wrench)
+    assert [c for b in got for c in b[2]["note"]] == list(one.extra["note"])
+    assert blocks.warnings() == one.warnings
+
+
+@pytest.mark.slow
+def test_quoted_lines_and_lone_crs_in_pieces_in_bounded_memory(tmp_path: Path) -> None:
+    """A quoted note over two lines (to a file, and with a bad last line) and lone CR line ends
+    (onto standard output): no more memory than the plain log's run (they were read whole), the
+    one-shot run's table, the one-shot run's message."""
+    import csv
+
+    plain, note, cr, bad = (tmp_path / f"{name}.csv" for name in ("plain", "note", "cr", "bad"))
+    _log_with_note(plain, 200000, "ok")
+    lines = plain.read_text().splitlines(keepends=True)
+    cr.write_bytes(_layout(lines, "lone-cr"))
+    lines[101] = lines[101][: -len("ok\n")] + _NOTE + "\n"
+    note.write_text("".join(lines))
+    lines[-1] = lines[-1].replace(",", ",abc", 1)
+    bad.write_text("".join(lines))
+    code, base = _peak_mb("estimate", plain, "-q", "--chunk-rows", 20000, "-o", tmp_path / "p.csv")
+    assert code == 0
+    code, to_file = _peak_mb("estimate", note, "-q", "--chunk-rows", 20000, "-o", tmp_path / "n.csv")
+    assert code == 0
+    code, to_stdout = _peak_mb("estimate", cr, "-q", "--chunk-rows", 20000)
+    assert code == 0
+    code, failed = _peak_mb("estimate", bad, "-q", "--chunk-rows", 20000, "-o", tmp_path / "b.csv")
+    assert code == 2
+    assert max(to_file, to_stdout, failed) < base + 50, (base, to_file, to_stdout, failed)
+    done = _stdout_run("estimate", bad, "-q", "--chunk-rows", 20000, "-o", tmp_path / "b.csv")
+    fx = lines[-1].split(",")[1]
+    assert done.stderr.decode() == f"softtip: error: {bad}:200002: column 'fx': expected a number, got {fx!r}\n"
+    # the plain log's estimates; the note carried (quoted piece by piece, so compared as cells)
+    with open(tmp_path / "p.csv", newline="") as a, open(tmp_path / "n.csv", newline="") as b:
+        rows_a, rows_b = list(csv.reader(a)), list(csv.reader(b))
+    assert len(rows_a) == len(rows_b) == 200001 and rows_b[101][-1] == _NOTE.strip('"')
+    assert [r[:-1] for r in rows_a] == [r[:-1] for r in rows_b]
+    one = _stdout_run("estimate", cr, "-q")
+    assert one.returncode == 0 and one.stdout == (tmp_path / "p.csv").read_bytes()  # lone CRs: the plain log's bytes
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.csv", "cr.csv", "n.csv", "note.csv", "p.csv", "plain.csv"]
+
+
+@pytest.mark.parametrize("noise", [["--force-noise", "0", "--moment-noise", "0"], ["--moment-noise", "40"]], ids=["lever-only", "noise"])
+def test_wrong_units_after_pieces_went_to_standard_output_name_the_pairs_that_fit(tmp_path: Path, noise: list) -> None:
+    """Moments in N·mm read as N·m, the tare's noise not telling (a sensor noise given to fit): the
+    lever vote over every piece fails after pieces went onto standard output. The message names the
+    unit pairs that fit and their options as the one-shot run's does (it said only 'give --units')."""
+    from softtip.io.examples import load_example
+    from softtip.io.tables import write_table
+
+    ex = load_example()
+    t = np.concatenate([ex.t + k * (ex.t[-1] + ex.t[1]) for k in range(4)])
+    w = np.tile(ex.wrench, (4, 1)) * np.array([1, 1, 1, 1e3, 1e3, 1e3])
+    src = tmp_path / "nmm.csv"
+    write_table({"t": t, **{c: w[:, i] for i, c in enumerate(("fx", "fy", "fz", "mx", "my", "mz"))}}, src)
+    one = _stdout_run("estimate", src, "-q", *noise, "-o", tmp_path / "one.csv")
+    done = _stdout_run("estimate", src, "-q", *noise, "--chunk-rows", 500)
+    assert one.returncode == done.returncode == 2
+    said, err = one.stderr.decode(), done.stderr.decode()
+    assert "standard output: 2000 rows were written before the error below" in err
+    # the same samples, and the same pairs named (or none)
+    assert "over 1568 samples with |f| ≥ 0.1 N, read in N and N·m)" in said and "over 1568 samples with |f| ≥ 0.1 N, read in N and N·m)" in err
+    fits = said.split("read in N and N·m), but the fingertip reaches only 42.1 mm: ")[1]
+    assert err.endswith(f"read in N and N·m): {fits}") and "the fingertip's reach (42.1 mm)" in err
+    assert ("--moment-units N*mm" in fits) == (noise[1] == "0")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["nmm.csv"]

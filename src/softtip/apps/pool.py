@@ -5,6 +5,8 @@ that stops early."""
 from __future__ import annotations
 
 import contextlib
+import os
+import tempfile
 import time
 from concurrent.futures import ProcessPoolExecutor
 
@@ -23,6 +25,7 @@ def start_pool(jobs: int, initializer, initargs: tuple = ()) -> ProcessPoolExecu
     """
     import multiprocessing
 
+    _short_socket_folder()
     ctx = multiprocessing.get_context("forkserver")
     ctx.set_forkserver_preload(["softtip.apps._worker_preload"])
     pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=initializer, initargs=initargs)
@@ -32,6 +35,38 @@ def start_pool(jobs: int, initializer, initargs: tuple = ()) -> ProcessPoolExecu
         end_pool(pool)
         raise
     return pool
+
+
+#: the longest Unix socket path (``sun_path`` holds 108 bytes on Linux, 104 on macOS, with its NUL)
+_SOCKET_PATH_MAX = 103
+#: what multiprocessing adds to its folder's path for the forkserver's socket
+#: (``/pymp-XXXXXXXX/listener-XXXXXXXX``)
+_SOCKET_SUFFIX = len("/pymp-XXXXXXXX/listener-XXXXXXXX")
+
+
+def _short_socket_folder() -> None:
+    """Make multiprocessing's private folder (``pymp-*``, which holds the forkserver's Unix
+    socket) in a folder with a short path when the temporary folder's is too long for a socket
+    address: a long ``TMPDIR`` would otherwise stop every pool with ``AF_UNIX path too long``.
+    The folder is multiprocessing's own (mode 0700, removed at exit, and on a signal by
+    :func:`softtip.io.interrupt.exit_now`)."""
+    from multiprocessing import process, util
+
+    if process.current_process()._config.get("tempdir") is not None:
+        return  # made already: its path was checked then
+    base = tempfile.gettempdir()
+    if len(os.fsencode(base)) + _SOCKET_SUFFIX <= _SOCKET_PATH_MAX:
+        return
+    for short in ("/tmp", "/var/tmp", "/dev/shm", os.path.expanduser("~")):
+        fits = len(os.fsencode(short)) + _SOCKET_SUFFIX <= _SOCKET_PATH_MAX
+        if fits and os.path.isdir(short) and os.access(short, os.W_OK | os.X_OK):
+            saved, tempfile.tempdir = tempfile.tempdir, short
+            try:
+                util.get_temp_dir()  # made in ``short`` and remembered for this process
+            finally:
+                tempfile.tempdir = saved
+            return
+    # no short folder is writable: multiprocessing's own message names the limit
 
 
 def end_pool(pool: ProcessPoolExecutor, timeout: float = 5.0) -> None:

@@ -70,8 +70,8 @@ class _Group(click.Group):
             ctx.exit(2)
         except MemoryError:
             click.echo(
-                "softtip: error: out of memory; for a large log write to a file in pieces (-o FILE --chunk-rows N), "
-                "or free memory (nothing was written)",
+                "softtip: error: out of memory; for a large log give --chunk-rows N (pieces of N rows: memory "
+                "bounded by N), or free memory (no output file was written)",
                 err=True,
             )
             ctx.exit(1)

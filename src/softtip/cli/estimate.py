@@ -242,11 +242,8 @@ def _estimate(
             rows = chunk_rows or _auto_chunk_rows(input_path)
             # standard output (or -o naming it, a pipe): each piece is written as it is done, so
             # memory stays bounded; what is written cannot be taken back (a failure after it:
-            # a message, exit 2, a cut table). A file with quotes or lone CRs goes whole to the
-            # one-shot reader (pieces of it might need it after some were written)
+            # a message, exit 2, a cut table)
             streamed = output is None or _is_own_stdout(output)
-            if streamed and rows and not _plain_text(input_path):
-                rows = None
             if rows and _estimate_in_pieces(
                 input_path, units, rows, fingertip, config, estimator_opts, output=None if streamed else output,
                 output_units=output_units, tip=tip, quiet=quiet, save_bias=save_bias, outputs=outputs,
@@ -445,28 +442,6 @@ def _is_own_stdout(path) -> bool:
     return not stat.S_ISREG(st.st_mode) and os.path.samestat(st, out)
 
 
-def _plain_text(path) -> bool:
-    """Whether a CSV log holds no quote and no lone carriage return (checked in bounded windows);
-    a Parquet or Arrow file is plain."""
-    from softtip.io.formats import table_format
-
-    if table_format(path) != "csv":
-        return True
-    try:
-        with open(path, "rb") as fh:
-            cr = False  # the previous window ended with a CR: its LF, if any, opens this one
-            while chunk := fh.read(1 << 22):
-                if b'"' in chunk or (cr and not chunk.startswith(b"\n")):
-                    return False
-                body = chunk[:-1] if chunk.endswith(b"\r") else chunk
-                if body.count(b"\r") != body.count(b"\r\n"):
-                    return False
-                cr = chunk.endswith(b"\r")
-        return not cr
-    except OSError:
-        return False
-
-
 def _estimate_in_pieces(
     input_path, units, rows, fingertip, config, estimator_opts, *, output, output_units, tip, quiet, save_bias, outputs,
     sensor_range=None, jobs=1, named=None,
@@ -488,12 +463,15 @@ def _estimate_in_pieces(
     rows = max(rows, min(-(-_row_estimate(input_path) // MAX_PIECES), MAX_FLOOR_ROWS))
     fmt = table_format(output) if output is not None else "csv"
     sent = [0]  # rows written to standard output: past the first, a failure cannot be taken back
+    began = [False]  # whether writing onto standard output began (the header may be there with no row)
     beyond: list[InputError] = []  # the first sample just beyond the sensor's range
     carried = _carried(input_path, output)
     names: dict[str, list[str]] = {}  # the first piece's output and extra column names
     notes: list[str] = []
     totals = _RunTotals()
     vote = LeverVote(LEVER_MARGIN * fingertip_reach(fingertip))  # the units check, over the whole log
+    pair_votes: dict[tuple[str, str], LeverVote] = {}  # the same vote for each unit pair, to name those that fit
+    first_ratio: list = []  # the tare's noise over the sensor's, from the first piece
     total = columnar_rows(input_path)
     with progress_bar(total, "estimating") as bar:  # rows estimated and written
         blocks = iter_log(input_path, units, rows=min(rows, 1 << 16))
@@ -538,10 +516,15 @@ def _estimate_in_pieces(
                 for k, (est, extra) in enumerate(pieces):
                     if k == 0:
                         noise_fits(est)
-                    vote.add(lever_distances(est.wrench[~est.taring], max(0.1, config.contact_threshold)))
+                        _start_pair_votes(pair_votes, first_ratio, vote.limit, blocks.units, est, first_wrench[0], config)
+                    distances = lever_distances(est.wrench[~est.taring], max(0.1, config.contact_threshold))
+                    vote.add(distances)
+                    for pair_vote in pair_votes.values():
+                        pair_vote.add(distances)
                     columns = _output_columns(est, extra, output_units, carried, notes if not names else None)
                     names.setdefault("est", list(est.columns(units=output_units)))
                     names.setdefault("extra", list(extra))
+                    began[0] = output is None  # from here standard output may hold a part of the table
                     writer.write(columns)
                     sent[0] += len(est) if output is None else 0
                     bar.update(len(est))
@@ -575,10 +558,8 @@ def _estimate_in_pieces(
             if sent[0]:  # on standard output already: the one-shot run cannot start over
                 _said_cut(sent[0])
                 if "units" in str(exc):
-                    raise InputError(
-                        f"{input_path}: the wrench does not fit the fingertip in these units (the contacts' lever arms "
-                        "lie beyond its reach); give --units (or run with -o FILE, which names the unit pair that fits)"
-                    ) from None
+                    raise _units_error(input_path, vote, pair_votes, first_ratio[0], blocks.units, fingertip,
+                                       max(0.1, config.contact_threshold)) from None  # fmt: skip
                 raise InputError(f"{input_path}: cannot be read in pieces past row {sent[0]} ({exc}); give -o FILE") from None
             return False
         except InputError as exc:
@@ -589,6 +570,9 @@ def _estimate_in_pieces(
             if isinstance(exc, InputError):
                 raise
             raise click.UsageError(str(exc)) from None
+        except MemoryError:
+            _said_cut(sent[0], began[0])  # the command's message follows
+            raise
     for note in [*notes, *blocks.warnings()]:
         click.echo(f"softtip: warning: {note}", err=True)
     _report_run(
@@ -598,9 +582,44 @@ def _estimate_in_pieces(
     return True
 
 
-def _said_cut(rows: int) -> None:
-    """Before the error of a run that wrote ``rows`` rows onto standard output: what is there."""
-    if rows:
+def _start_pair_votes(pair_votes, first_ratio, limit, units, est, first_wrench, config) -> None:
+    """The units vote of each unit pair (its lever limit in the units read), and the tare's noise
+    ratio, at the first piece of a run in pieces: what :func:`_units_error` names the fix from."""
+    from softtip.cli.options import quiet_samples
+    from softtip.core.lever import LeverVote, noise_ratio, pair_scales
+    from softtip.core.units import UNIT_SYSTEM_UNITS
+
+    force_unit, moment_unit = UNIT_SYSTEM_UNITS[units or "si"]
+    for pair, (kf, km) in pair_scales(force_unit, moment_unit).items():
+        pair_votes[pair] = LeverVote(limit * kf / km)  # a pair fits when median * km / kf <= limit
+    quiet = quiet_samples(est, first_wrench)
+    first_ratio.append(noise_ratio(quiet, config.noise) if config.noise is not None else None)
+
+
+def _units_error(input_path, vote, pair_votes, ratio, units, fingertip, min_force: float) -> InputError:
+    """The units check's message for a run whose pieces went onto standard output already (the
+    one-shot run cannot start over to word it): the unit pairs that fit and their options, decided
+    as the one-shot check decides (the median lever of every piece, the first piece's noise)."""
+    from softtip.core.lever import LEVER_MARGIN, describe_pairs, fingertip_reach, pairs_that_fit
+    from softtip.core.units import UNIT_SYSTEM_UNITS, find_unit
+
+    force_unit, moment_unit = UNIT_SYSTEM_UNITS[units or "si"]
+    fits = pairs_that_fit({pair: not (v.n >= 5 and v.median_above()) for pair, v in pair_votes.items()}, ratio,
+                          force_unit, moment_unit)  # fmt: skip
+    read_in = f"{find_unit(force_unit, 'force').label} and {find_unit(moment_unit, 'moment').label}"
+    return InputError(
+        f"{input_path}: the forces act more than {LEVER_MARGIN:g} times the fingertip's reach "
+        f"({fingertip_reach(fingertip) * 1e3:.3g} mm) from the sensor origin (median of the moment-to-force ratio over "
+        f"{vote.n} samples with |f| ≥ {min_force:g} N, read in {read_in}): "
+        f"{describe_pairs(fits, (force_unit, moment_unit))}; or is the fingertip (--tip) the wrong one? "
+        "Expected moments in N·m about the sensor origin"
+    )
+
+
+def _said_cut(rows: int, began: bool = False) -> None:
+    """Before the error of a run that wrote ``rows`` rows onto standard output (``began``: or
+    started writing there): what is there."""
+    if rows or began:
         click.echo(
             f"softtip: warning: standard output: {rows} rows were written before the error below and cannot be taken "
             "back; the table there is incomplete or wrong (use it only after exit status 0)",

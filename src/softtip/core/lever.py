@@ -32,7 +32,7 @@ from softtip.errors import InputError
 
 __all__ = [
     "LEVER_MARGIN", "UNIT_PAIRS", "ForceLever", "force_lever", "check_force_lever", "check_wrench_units", "lever_distances",
-    "LeverVote", "fingertip_reach", "noise_ratio",
+    "LeverVote", "fingertip_reach", "noise_ratio", "pair_scales", "pairs_that_fit", "describe_pairs",
 ]
 
 #: How far beyond the fingertip's reach the median line of action may lie before the
@@ -217,6 +217,52 @@ def _pair_option(force: str, moment: str, given: tuple[str, str]) -> str:
     return " ".join([*parts, f"--moment-units {moment}"])
 
 
+def pair_scales(force_unit: str, moment_unit: str) -> dict[tuple[str, str], tuple[float, float]]:
+    """For each of :data:`UNIT_PAIRS`, the factors ``(kf, km)`` by which a force and a moment
+    read in ``force_unit`` and ``moment_unit`` grow when read in that pair instead (a lever
+    read in the given units is ``km / kf`` times the pair's)."""
+    f_unit, m_unit = find_unit(force_unit, "force"), find_unit(moment_unit, "moment")
+    if f_unit is None or m_unit is None:
+        raise ValueError(f"unknown units {force_unit!r}, {moment_unit!r}")
+    return {
+        (force, moment): (find_unit(force, "force").si / f_unit.si, find_unit(moment, "moment").si / m_unit.si)  # type: ignore[union-attr]
+        for force, moment in UNIT_PAIRS
+    }
+
+
+def pairs_that_fit(lever_fits: dict[tuple[str, str], bool], ratio: tuple[float, float] | None, force_unit: str,
+                   moment_unit: str) -> list[tuple[str, str]]:  # fmt: skip
+    """The unit pairs other than the given one that fit a log, best first: those whose lever
+    fits (``lever_fits``, by pair) and, with the tare's noise ``ratio`` (:func:`noise_ratio`
+    in the given units), that put the noise within :data:`NOISE_FITS` of the sensor's."""
+    given = (find_unit(force_unit, "force").name, find_unit(moment_unit, "moment").name)  # type: ignore[union-attr]
+    fits: list[tuple[float, str, str]] = []
+    for (force, moment), (kf, km) in pair_scales(force_unit, moment_unit).items():
+        if not lever_fits[(force, moment)]:
+            continue
+        if ratio is not None:
+            off = max(abs(np.log(ratio[0] * kf)), abs(np.log(ratio[1] * km)))
+            if off > np.log(NOISE_FITS):
+                continue
+        else:
+            off = 0.0
+        fits.append((off, force, moment))
+    fits.sort()
+    return [(fo, mo) for _, fo, mo in fits if (fo, mo) != given]
+
+
+def describe_pairs(named: list[tuple[str, str]], given: tuple[str, str]) -> str:
+    """What a units message says of the pairs that fit (:func:`pairs_that_fit`), with their options."""
+    if not named:
+        return "no unit pair F/T software writes fits the data"
+    pairs = [
+        f"forces in {find_unit(fo, 'force').label} with moments in {find_unit(mo, 'moment').label} "  # type: ignore[union-attr]
+        f"({_pair_option(fo, mo, given)})"
+        for fo, mo in named
+    ]
+    return "the data fit " + ", or ".join(pairs)
+
+
 def check_wrench_units(
     wrench: ArrayLike,
     fingertip: Fingertip,
@@ -264,33 +310,16 @@ def check_wrench_units(
         raise ValueError(f"unknown units {force_unit!r}, {moment_unit!r}")
     given = (f_unit.name, m_unit.name)
     limit = LEVER_MARGIN * lever.reach
-    fits: list[tuple[float, str, str]] = []
-    for force, moment in UNIT_PAIRS:
-        kf = find_unit(force, "force").si / f_unit.si  # type: ignore[union-attr]
-        km = find_unit(moment, "moment").si / m_unit.si  # type: ignore[union-attr]
-        if lever.n_samples >= 5 and not lever.median * km / kf <= limit:
-            continue
-        if ratio is not None:
-            off = max(abs(np.log(ratio[0] * kf)), abs(np.log(ratio[1] * km)))
-            if off > np.log(NOISE_FITS):
-                continue
-        else:
-            off = 0.0
-        fits.append((off, force, moment))
-    fits.sort()
-    named = [(fo, mo) for _, fo, mo in fits if (fo, mo) != given]
+    named = pairs_that_fit(
+        {pair: not (lever.n_samples >= 5 and not lever.median * km / kf <= limit)
+         for pair, (kf, km) in pair_scales(force_unit, moment_unit).items()},
+        ratio, force_unit, moment_unit,
+    )  # fmt: skip
     labels = {u: find_unit(u, q).label for u, q in ((f_unit.name, "force"), (m_unit.name, "moment"))}  # type: ignore[union-attr]
     read_in = f"{labels[f_unit.name]} and {labels[m_unit.name]}"
 
     def fit_text() -> str:
-        if not named:
-            return "no unit pair F/T software writes fits the data"
-        pairs = [
-            f"forces in {find_unit(fo, 'force').label} with moments in {find_unit(mo, 'moment').label} "  # type: ignore[union-attr]
-            f"({_pair_option(fo, mo, given)})"
-            for fo, mo in named
-        ]
-        return "the data fit " + ", or ".join(pairs)
+        return describe_pairs(named, given)
 
     where = f"{source}: " if source else ""
     if not lever.plausible:

@@ -12,6 +12,7 @@ from __future__ import annotations
 import contextlib
 import os
 import signal
+import sys
 import threading
 from collections.abc import Iterator
 
@@ -39,7 +40,22 @@ def exit_code(exc: BaseException) -> int:
     return 128 + (exc.signum if isinstance(exc, Interrupted) else int(signal.SIGINT))
 
 
-_interrupted = threading.Event()
+class _Flag:
+    """Set once, never cleared, with no lock: the signal handlers set it, and Python may run a
+    second signal's handler inside the first one's, at any line (a ``threading.Event`` there
+    deadlocked on its own lock: two signals 5 ms apart, now and then a run that never ended)."""
+
+    def __init__(self) -> None:
+        self._set = False
+
+    def set(self) -> None:
+        self._set = True
+
+    def is_set(self) -> bool:
+        return self._set
+
+
+_interrupted = _Flag()
 _first_signal: list[int] = []
 
 
@@ -73,7 +89,7 @@ def _ignore_further_signals() -> None:
     handler that does nothing, not SIG_IGN, which makes Python report a "race condition"):
     the cleanup of the first one (temporary files, worker processes) must not be cut short
     by a second, and the exit code stays the first one's."""
-    _interrupted.set()
+    _interrupted.set()  # no lock: a second handler may run from here on (see _Flag)
     for sig in (signal.SIGINT, *_SIGNALS):
         with contextlib.suppress(OSError, ValueError):
             if signal.getsignal(sig) is not signal.SIG_IGN:
@@ -135,8 +151,18 @@ def outputs_committed() -> None:
     _after_commit["committed"] = True
     for sig in (signal.SIGINT, *_SIGNALS):
         with contextlib.suppress(OSError, ValueError):
-            if signal.getsignal(sig) in (_raise, _raise_keyboard_interrupt):
+            if _after_commit["until_exit"] and signal.getsignal(sig) in (_raise, _raise_keyboard_interrupt, _ignore):
+                # the console command: ignored by the kernel, which lasts through the interpreter's
+                # exit (Python puts its own handlers back to the default action there: a SIGTERM
+                # then killed a finished run, -15 with every output written)
+                signal.signal(sig, signal.SIG_IGN)
+            elif signal.getsignal(sig) in (_raise, _raise_keyboard_interrupt):
                 signal.signal(sig, _ignore)
+    if hasattr(signal, "SIGALRM") and signal.getsignal(signal.SIGALRM) is _raise_again:
+        # a signal swallowed during the commit (after its last check): the run is complete all the same
+        with contextlib.suppress(OSError, ValueError):
+            signal.setitimer(signal.ITIMER_REAL, 0.0)
+            signal.signal(signal.SIGALRM, _ignore)
 
 
 def _raise(signum, frame) -> None:
@@ -164,6 +190,8 @@ def terminate_like_ctrl_c() -> Iterator[None]:
         yield
         return
     previous = {}
+    hook = sys.unraisablehook
+    sys.unraisablehook = _deliver_again_if_swallowed
     for sig in (signal.SIGINT, *_SIGNALS):
         current = signal.getsignal(sig)
         if current is signal.SIG_IGN:
@@ -178,3 +206,37 @@ def terminate_like_ctrl_c() -> Iterator[None]:
         if not _interrupted.is_set() and not (_after_commit["committed"] and _after_commit["until_exit"]):
             for sig, handler in previous.items():
                 signal.signal(sig, handler)
+            sys.unraisablehook = hook
+
+
+def _deliver_again_if_swallowed(unraisable) -> None:
+    """:data:`sys.unraisablehook` within :func:`terminate_like_ctrl_c`: a signal's exception
+    raised where Python can only print it (a callback from native code, such as llvmlite's
+    object-cache notice while numba compiles; a ``__del__``) was lost, the run going on with
+    further signals ignored and a traceback on standard error. It is raised again instead, by
+    an alarm a moment later (a real signal: it also ends a blocking call), from the next line of
+    Python outside that callback; an alarm that lands in such a place again is set again. Code
+    that checks :func:`check_interrupted` meanwhile stops too."""
+    exc = unraisable.exc_value
+    if _after_commit["committed"] and isinstance(exc, OSError) and "ignored due to race condition" in str(exc):
+        return  # a signal that came as it was set to be ignored after the commit: ignored, as meant
+    alarm = getattr(signal, "SIGALRM", None)
+    if isinstance(exc, KeyboardInterrupt) and _first_signal and alarm is not None and hasattr(signal, "setitimer") \
+            and threading.current_thread() is threading.main_thread():  # fmt: skip
+        while True:  # no thread started, no lock taken: this may run inside any finaliser
+            try:
+                signal.signal(alarm, _raise_again)
+                signal.setitimer(signal.ITIMER_REAL, 0.02)
+                return
+            except KeyboardInterrupt:  # the alarm came while this was still running: once more
+                continue
+            except (OSError, ValueError):
+                break
+    sys.__unraisablehook__(unraisable)
+
+
+def _raise_again(signum, frame) -> None:
+    """The alarm of :func:`_deliver_again_if_swallowed`: the first signal's exception, again
+    (not once the outputs are committed: the run is complete)."""
+    if not _after_commit["committed"]:
+        check_interrupted()

@@ -569,11 +569,17 @@ def _decode(data: bytes, source: str) -> str:
         return data[skip:].decode("utf-8")
     except UnicodeDecodeError as exc:
         offset = skip + exc.start
-        line = data.count(b"\n", 0, offset) + 1
+        line = _line_breaks(data, offset) + 1
         raise InputError(
             f"{source}:{line}: not valid UTF-8 (byte 0x{data[offset]:02x} at byte offset {offset}); "
             "expected a UTF-8 text file (re-save it as UTF-8)"
         ) from None
+
+
+def _line_breaks(data: bytes, end: int | None = None) -> int:
+    """Line breaks in ``data[:end]`` as a text editor counts them: CR LF, LF or a lone CR."""
+    end = len(data) if end is None else end
+    return data.count(b"\n", 0, end) + data.count(b"\r", 0, end) - data.count(b"\r\n", 0, end)
 
 
 def _is_blank(row: list[str]) -> bool:
@@ -1325,15 +1331,53 @@ def _parse_fast(
     return _combine_time(data, roles), np.ascontiguousarray(data[:, 1:7]), extra
 
 
+def _lines_at_end(lines: Any) -> bool:
+    """Whether the text ``lines`` reads from (an :class:`io.StringIO` or :class:`_FileLines`) is all read."""
+    if isinstance(lines, _FileLines):
+        return lines.at_end()
+    return lines.tell() >= len(lines.getvalue())
+
+
+class _FileLines:
+    """The lines of a text file from its current position, for :func:`_parse_careful` in place
+    of an :class:`io.StringIO` of the whole text (a line at a time in memory): ``seek`` takes
+    it back to where it started (the only position that parser seeks to here)."""
+
+    def __init__(self, text: io.TextIOWrapper) -> None:
+        self._text = text
+        self._begin = text.tell()
+
+    def seek(self, pos: int) -> int:
+        self._text.seek(self._begin)
+        return pos
+
+    def readline(self) -> str:
+        return self._text.readline()
+
+    def __iter__(self) -> _FileLines:
+        return self
+
+    def __next__(self) -> str:
+        line = self._text.readline()  # not iteration: that would turn tell() off
+        if not line:
+            raise StopIteration
+        return line
+
+    def at_end(self) -> bool:
+        return self._text.read(1) == ""
+
+
 def _parse_careful(
-    header: _Header, index: dict[str, int], source: str, start: tuple[int, int], missing: str = "fail"
+    header: _Header, index: dict[str, int], source: str, start: tuple[int, int], missing: str = "fail", keep: bool = True
 ) -> tuple[NDArray[Any], NDArray[np.float64], dict[str, list[str]]]:
     """Row-by-row parse that raises the first problem in file order, with its line.
 
     Starts at ``start`` = ``(text position, csv line_num)`` of a record boundary in the data
     (``line_num`` 0: the first data record). Returns the rows from there if, against
     expectation, nothing is wrong. ``missing`` other than ``"fail"``: an empty or ``nan``
-    cell of a required column is kept as NaN.
+    cell of a required column is kept as NaN. ``keep`` False: the rows are checked, not
+    kept (memory bounded by a row: :meth:`LogBlocks.locate_error` over a whole file), and
+    empty arrays come back.
     """
     names = header.names
     ncol = len(names)
@@ -1358,6 +1402,7 @@ def _parse_careful(
             exact_ns = []
     extra: dict[str, list[str]] = {names[j]: [] for j in extra_idx}
     prev_end = 0
+    rows = 0
     first_blank: int | None = None
     last_t, last_t_text, last_t_line = -math.inf, "", 0
     while True:
@@ -1385,7 +1430,7 @@ def _parse_careful(
             for j, cell in enumerate(row):
                 k = _swallowed(cell, header.delimiter, ncol)
                 if k:
-                    at_end = header.lines.tell() >= len(header.lines.getvalue()) and cell.endswith(("\n", "\r"))
+                    at_end = _lines_at_end(header.lines) and cell.endswith(("\n", "\r"))
                     raise _swallow_error(source, line, names[j], cell, base + prev_end, at_end, k)
         if len(row) != ncol:
             raise InputError(
@@ -1422,13 +1467,16 @@ def _parse_careful(
                     except ValueError:
                         pass
             sample[roles.index(name)] = value
+        rows += 1
+        if not keep:
+            continue
         big_t.append(sample[0])
         if exact_ns is not None:
             exact_ns.append(_ns_of(row[index["t"]]))
         values.append(sample)
         for j in extra_idx:
             extra[names[j]].append(row[j])
-    if not values and start[1] == 0:
+    if not rows and start[1] == 0:
         raise InputError(
             f"{source}:{header.line}: header only, no data rows; expected at least one row of "
             f"{_EXPECTED_HEADER} after the header"
@@ -2125,8 +2173,8 @@ class LogBlocks:
         skip = 3 if prefix.startswith(b"\xef\xbb\xbf") else 0
         prefix = prefix[skip:]
         whole = skip + len(prefix) >= size
-        if not whole:
-            prefix = prefix[: prefix.rfind(b"\n") + 1]
+        if not whole:  # whole lines (lone CR line ends too)
+            prefix = prefix[: max(prefix.rfind(b"\n"), prefix.rfind(b"\r")) + 1]
         try:
             text = prefix.decode("utf-8")
         except UnicodeDecodeError:
@@ -2178,9 +2226,15 @@ class LogBlocks:
                 wrench = np.empty((batch.num_rows, 6))
                 for i, col in enumerate(cols[1:]):
                     wrench[:, i] = col.to_numpy()
-                if any(pc.any(pc.match_substring(batch.column(j), "\n")).as_py()
-                       or pc.any(pc.match_substring(batch.column(j), "\r")).as_py() for j in extra_idx):  # fmt: skip
-                    raise NotStreamable("a cell spans lines: read_log tells a note from a stray quote")
+                for j in extra_idx:  # a quoted cell spanning lines: a note, unless it takes in data rows
+                    col = batch.column(j)
+                    spans = pc.or_(pc.match_substring(col, "\n"), pc.match_substring(col, "\r"))
+                    if pc.any(spans).as_py():
+                        self._quoted = True  # line numbers are not row numbers from here on
+                        cells = col.filter(spans).to_pylist()
+                        if any(_swallowed(cell, ",", len(names)) for cell in cells):
+                            self._error_at = done
+                            raise NotStreamable("a quote takes in lines that look like data rows")
                 # object arrays of str: a numpy unicode array would take 4 bytes times the longest cell for every cell
                 extra = {names[j]: text_column(batch.column(j).to_pylist()) for j in extra_idx}
                 if self.progress is not None:
@@ -2202,9 +2256,11 @@ class LogBlocks:
         :func:`read_log` would raise, found by reading the file from the last good row in
         windows of :data:`_LOCATE_BYTES` (memory bounded by that, not by the file).
 
-        ``None`` when the reader did not stop on an error, or the window parser finds none
-        (a cell only Python's parser reads) or cannot place it (quotes, lone carriage
-        returns, a line longer than a window): :func:`read_log` on the whole file decides then.
+        Where line breaks cannot be counted as rows (quoted cells that may span lines, lone
+        carriage returns, a line longer than a window) the file is parsed row by row from its
+        first data row instead, a line at a time. ``None`` when the reader did not stop on an
+        error, or the parser finds none (a cell only Python's parser reads):
+        :func:`read_log` on the whole file decides then.
         """
         if not self.parquet and self._bad_prefix is not None:  # not UTF-8 within the header's 64 kB
             try:
@@ -2224,6 +2280,46 @@ class LogBlocks:
         bad_utf8 = self._first_bad_utf8(fh)
         if bad_utf8 is not None:  # read_log decodes the whole file first: this error wins wherever it is
             return bad_utf8
+        try:
+            return self._locate_in_windows(fh)
+        except _NoPlace:
+            return self._locate_row_by_row(fh)
+
+    def _locate_row_by_row(self, fh: BinaryIO) -> InputError | None:
+        """:meth:`_locate` for a file that cannot be cut into windows by counting line breaks
+        (quoted cells that may span lines, lone carriage returns, a line longer than a window):
+        :func:`read_log`'s row-by-row parser over the whole data, a line at a time in memory."""
+        header, index = self._header, self._index
+        fh.seek(self._start)
+        text = io.TextIOWrapper(fh, encoding="utf-8", newline="")
+        try:
+            lines = _FileLines(text)
+            part = _Header(names=header.names, line=header.line, data_base=header.data_base, lines=lines, comments=[],
+                           delimiter=header.delimiter, decimal=header.decimal, cmap=header.cmap)  # fmt: skip
+            try:
+                _parse_careful(part, index, self.source, (0, 0), keep=False)
+            except InputError as exc:
+                if self._ends_with_break():
+                    return exc
+                # as read_log's hint: the last line counted by its line feeds
+                last = self._count(fh, b"\n") + 1
+                return _cut_hint(exc, self.source, last) if last > header.data_base else exc
+            return None
+        finally:
+            text.detach()  # the caller closes the file
+
+    def _count(self, fh: BinaryIO, what: bytes) -> int:
+        """How often ``what`` (one byte) occurs in the file after a BOM (bounded memory)."""
+        fh.seek(0)
+        head = fh.read(3)
+        n = 0 if head == b"\xef\xbb\xbf" else head.count(what)
+        while chunk := fh.read(1 << 24):
+            n += chunk.count(what)
+        return n
+
+    def _locate_in_windows(self, fh: BinaryIO) -> InputError | None:
+        """:meth:`_locate` from the last good row, in windows; :class:`_NoPlace` where line
+        breaks cannot be counted as rows."""
         # the first byte of the last good row (the context of the next: t must not go back)
         skip = max(self._error_at - 1, 0)
         fh.seek(self._start)
@@ -2232,8 +2328,8 @@ class LogBlocks:
             chunk = fh.read(_LOCATE_BYTES)
             if not chunk:
                 return None
-            if chunk.count(b"\r") != chunk.count(b"\r\n"):
-                return None  # lone CR line ends (or a CR LF cut by the chunk): lines not counted here
+            if chunk.count(b"\r") != chunk.count(b"\r\n") or b'"' in chunk:
+                raise _NoPlace("lone CR line ends (or a CR LF cut by the chunk), or quotes: lines are not rows here")
             breaks = chunk.count(b"\n")
             if breaks < left:
                 left -= breaks
@@ -2253,14 +2349,14 @@ class LogBlocks:
             if not at_end:
                 cut = window.rfind(b"\n") + 1
                 if cut == 0:
-                    return None  # a line longer than a window
+                    raise _NoPlace("a line longer than a window")
                 window = window[:cut]
                 body = window.rstrip(b"\r\n")  # blank lines at a window's end may be followed by data
                 last = body.rfind(b"\n") + 1
                 if last == 0:
-                    return None
+                    raise _NoPlace("one line in a window")
             if b'"' in window or window.count(b"\r") != window.count(b"\r\n"):
-                return None  # the one-shot reader words quotes and lone CRs
+                raise _NoPlace("quotes or lone CRs: a record may span lines")
             if not window.strip():
                 return None
             text = window.decode("utf-8")
@@ -2288,21 +2384,22 @@ class LogBlocks:
         while True:
             chunk = fh.read(_LOCATE_BYTES)
             data = held + chunk
-            cut = len(data) if not chunk else data.rfind(b"\n") + 1  # whole lines: no character is split
+            # whole lines (lone CR line ends too): no character is split; a CR that may be a CR LF's waits
+            cut = len(data) if not chunk else max(data.rfind(b"\n"), data.rfind(b"\r", 0, len(data) - 1)) + 1
             if chunk and cut == 0 and len(data) > 4 * _LOCATE_BYTES:
                 raise _NoPlace("a line longer than 4 windows")
             part, held = data[:cut], data[cut:]
             try:
                 part.decode("utf-8")
             except UnicodeDecodeError as exc:
-                at = line + part.count(b"\n", 0, exc.start)
+                at = line + _line_breaks(part, exc.start)
                 return InputError(
                     f"{self.source}:{at}: not valid UTF-8 (byte 0x{part[exc.start]:02x} at byte offset {pos + exc.start}); "
                     "expected a UTF-8 text file (re-save it as UTF-8)"
                 )
             if not chunk:
                 return None
-            line += part.count(b"\n")
+            line += _line_breaks(part)
             pos += len(part)
 
     def _ends_with_break(self) -> bool:
