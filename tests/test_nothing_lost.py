@@ -353,7 +353,9 @@ def test_two_signals_in_quick_succession_leave_nothing(tmp_path, log, signals, g
             time.sleep(gap)
         proc.send_signal(sig)
     err = _stderr_when_done(proc)
-    assert proc.returncode == 128 + signals[0], err
+    # within a few ms the kernel may hand the second signal to another of the process's threads
+    # before the first one's handler has run: either signal's code is then the run's answer
+    assert proc.returncode in {128 + s for s in signals}, err
     assert "Traceback" not in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["b.toml", "grasp.csv", "pipe", "tmpdir"]
     assert list(tmpdir.iterdir()) == []
