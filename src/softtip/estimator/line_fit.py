@@ -295,7 +295,9 @@ def line_fit_points(t, c, contact, sc, base, relatched, tip: Fingertip, config: 
                                         config.line_fit_iterations, noise, corr, NP)  # fmt: skip
             jp = np.full((3, b - a), np.nan)
             jp[:, s - a] = out[:3]
-            stats[:, s] = out[6:10]
+            # NaN as the compiled loops and the stream write it (numpy's square root of a
+            # negative gives −NaN): a log's bytes must not depend on the path that ran it
+            stats[:, s] = [np.where(np.isnan(v), np.nan, v) for v in out[6:10]]
             accepted = np.zeros(b - a, dtype=bool)
             accepted[s - a] = line_fit_accept(*out[6:10], config) & np.all(np.isfinite(jp[:, s - a]), axis=0)
         hold_run(state, contact[a:b], begin[a:b], t[a:b], accepted, stats[2, a:b], jp, drift2, point[a:b],
