@@ -326,17 +326,19 @@ def test_the_command_list_is_the_commands_own_help() -> None:
 
 
 def test_a_command_imports_only_its_own_module() -> None:
-    """``import softtip`` imports none of its public names' modules, and the ``softtip`` group
-    imports a command's module only when the command runs (most of a short run's start-up)."""
+    """``import softtip`` imports none of its public names' modules, the ``softtip`` group (its
+    --help, --version) not the estimator, and a command's module is imported only when the
+    command runs (most of a short run's start-up)."""
     code = (
         "import atexit, json, sys; import softtip; before = sorted(sys.modules); from softtip.cli import run; "
-        "sys.argv = ['softtip', 'estimate', '--help']; "
-        "atexit.register(lambda: print(json.dumps([before, sorted(sys.modules)]))); run()"
+        "group = sorted(sys.modules); sys.argv = ['softtip', 'estimate', '--help']; "
+        "atexit.register(lambda: print(json.dumps([before, group, sorted(sys.modules)]))); run()"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
-    at_import, loaded = json.loads(out.stdout.splitlines()[-1])
+    at_import, group, loaded = json.loads(out.stdout.splitlines()[-1])
     assert [m for m in at_import if m.startswith("softtip.") and m != "softtip._version"] == []
+    assert not {"softtip.cli.options", "softtip.estimator", "softtip.core.fingertip"} & set(group)  # softtip --help
     assert "softtip.cli.estimate" in loaded
     others = {"softtip.cli.calibrate", "softtip.cli.calibrate_payload", "softtip.cli.fuse", "softtip.cli.reproduce",
               "softtip.cli.simulate", "softtip.cli.stream", "softtip.apps.live"}  # fmt: skip

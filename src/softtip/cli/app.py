@@ -11,7 +11,7 @@ from collections.abc import Iterator, Mapping
 import click
 
 from softtip import __version__
-from softtip.cli.options import FRAMES_HELP
+from softtip.cli.frames import FRAMES_HELP
 from softtip.errors import InputError
 
 __all__ = ["main"]
