@@ -1,6 +1,7 @@
 """The installed ``softtip`` command, run as a user would."""
 
 import csv
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -300,3 +301,45 @@ def test_the_command_runs_without_importing_pandas(tmp_path):
         assert out.returncode == 0, out.stderr
         assert f"pandas loaded: {bool(first)}" in out.stderr
     assert outs[0].read_bytes() == outs[1].read_bytes()
+
+
+def test_the_command_list_is_the_commands_own_help() -> None:
+    """``softtip --help`` lists the commands from the registry without importing them: the
+    same lines, at every width, as the commands themselves would give."""
+    import click
+    from click.testing import CliRunner
+
+    from softtip.cli.app import COMMANDS, main
+
+    real = click.Group("softtip", commands=[main.commands[name] for name in COMMANDS])
+    assert sorted(real.commands) == sorted(COMMANDS)
+    for name, (_, _, summary) in COMMANDS.items():
+        assert real.commands[name].name == name
+        assert summary.split() == real.commands[name].help.split("\n\n")[0].split()
+    for width in (40, 60, 80):
+        lazy, full = click.Context(main, terminal_width=width), click.Context(real, terminal_width=width)
+        for group, ctx in ((main, lazy), (real, full)):
+            ctx.formatter = ctx.make_formatter()
+            group.format_commands(ctx, ctx.formatter)
+        assert lazy.formatter.getvalue() == full.formatter.getvalue() and "Commands:" in lazy.formatter.getvalue()
+    assert CliRunner().invoke(main, ["estimat"]).output.endswith("(Did you mean one of: 'estimate', 'simulate'?)\n")
+
+
+def test_a_command_imports_only_its_own_module() -> None:
+    """``import softtip`` imports none of its public names' modules, the ``softtip`` group (its
+    --help, --version) not the estimator, and a command's module is imported only when the
+    command runs (most of a short run's start-up)."""
+    code = (
+        "import atexit, json, sys; import softtip; before = sorted(sys.modules); from softtip.cli import run; "
+        "group = sorted(sys.modules); sys.argv = ['softtip', 'estimate', '--help']; "
+        "atexit.register(lambda: print(json.dumps([before, group, sorted(sys.modules)]))); run()"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    at_import, group, loaded = json.loads(out.stdout.splitlines()[-1])
+    assert [m for m in at_import if m.startswith("softtip.") and m != "softtip._version"] == []
+    assert not {"softtip.cli.options", "softtip.estimator", "softtip.core.fingertip"} & set(group)  # softtip --help
+    assert "softtip.cli.estimate" in loaded
+    others = {"softtip.cli.calibrate", "softtip.cli.calibrate_payload", "softtip.cli.fuse", "softtip.cli.reproduce",
+              "softtip.cli.simulate", "softtip.cli.stream", "softtip.apps.live"}  # fmt: skip
+    assert not others & set(loaded), others & set(loaded)

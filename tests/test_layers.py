@@ -248,3 +248,22 @@ def test_the_layer_check_names_an_upward_import(toy):
     (toy / "extra.py").write_text("", encoding="utf-8")
     (toy / "io" / "f.py").write_text("from softtip import extra\n", encoding="utf-8")
     assert "softtip/io/f.py:1: softtip.io.f (io) imports softtip.extra (no layer)" in upward_imports(toy, TOY_LAYERS)
+
+
+def test_every_public_name_resolves_to_the_module_the_package_names() -> None:
+    """``softtip/__init__`` imports its public names lazily (``__getattr__``); the names its
+    ``if TYPE_CHECKING`` block imports, ``__all__`` and the lazy table are the same, and each
+    name is the object of the module the block names."""
+    import importlib
+
+    import softtip
+
+    block = next(n for n in ast.parse((SRC / "__init__.py").read_text(encoding="utf-8")).body
+                 if isinstance(n, ast.If) and getattr(n.test, "id", None) == "TYPE_CHECKING")  # fmt: skip
+    named = {a.name: node.module for node in block.body if isinstance(node, ast.ImportFrom) for a in node.names}
+    assert set(named) == set(softtip.__all__) and named == softtip._HOMES
+    for name, module in named.items():
+        assert getattr(softtip, name) is getattr(importlib.import_module(module), name), name
+    assert set(softtip.__all__) <= set(dir(softtip))
+    with pytest.raises(AttributeError, match="no attribute 'nothing'"):
+        softtip.nothing  # noqa: B018

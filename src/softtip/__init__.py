@@ -6,27 +6,77 @@ or a strip (line), and the direction of the edge, stick, thin plate, thin cylind
 being touched (Murakami & Hasegawa 2004, 2006; Bicchi 1990). SI units, sensor frame.
 """
 
-from softtip.apps.live import run
-from softtip.core.axial import axial_difference, axial_mean, axial_median
-from softtip.core.fingertip import (
-    PRESETS,
-    Capsule,
-    Ellipsoid,
-    Fingertip,
-    ImplicitSurface,
-    Sphere,
-    load_fingertip,
-    murakami2006,
-)
-from softtip.core.location import Contact, contact_from_wrench
-from softtip.core.mesh import MeshFingertip
-from softtip.core.mounting import Mounted
-from softtip.core.noise import NANO17, SensorNoise, direction_angle_std, tangential_spin_torque_std
-from softtip.core.spin import direction_angle, edge_direction, spin_torque, tangent_frame, tangential_spin_torque
-from softtip.core.units import KGF, KGF_MM, wrench_from_si, wrench_to_si
-from softtip.errors import InputError
-from softtip.estimator import STATES, Estimates, Estimator, EstimatorConfig, EstimatorWarning, SampleEstimate, estimate
-from softtip.io.examples import EXAMPLE_PATH, load_example
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # the names, for readers and type checkers; at run time :func:`__getattr__` imports them
+    from softtip.apps.live import run
+    from softtip.core.axial import axial_difference, axial_mean, axial_median
+    from softtip.core.fingertip import (
+        PRESETS,
+        Capsule,
+        Ellipsoid,
+        Fingertip,
+        ImplicitSurface,
+        Sphere,
+        load_fingertip,
+        murakami2006,
+    )
+    from softtip.core.location import Contact, contact_from_wrench
+    from softtip.core.mesh import MeshFingertip
+    from softtip.core.mounting import Mounted
+    from softtip.core.noise import NANO17, SensorNoise, direction_angle_std, tangential_spin_torque_std
+    from softtip.core.spin import direction_angle, edge_direction, spin_torque, tangent_frame, tangential_spin_torque
+    from softtip.core.units import KGF, KGF_MM, wrench_from_si, wrench_to_si
+    from softtip.errors import InputError
+    from softtip.estimator import (
+        STATES,
+        Estimates,
+        Estimator,
+        EstimatorConfig,
+        EstimatorWarning,
+        SampleEstimate,
+        estimate,
+    )
+    from softtip.io.examples import EXAMPLE_PATH, load_example
+
+#: Each public name -> the module that defines it, imported the first time the name is used:
+#: ``import softtip`` itself stays light (the ``softtip`` command starts without the estimator,
+#: the fingertips or the live loop when the command does not need them).
+_HOMES = {
+    "run": "softtip.apps.live",
+    **dict.fromkeys(("axial_difference", "axial_mean", "axial_median"), "softtip.core.axial"),
+    **dict.fromkeys(("PRESETS", "Capsule", "Ellipsoid", "Fingertip", "ImplicitSurface", "Sphere", "load_fingertip",
+                     "murakami2006"), "softtip.core.fingertip"),
+    **dict.fromkeys(("Contact", "contact_from_wrench"), "softtip.core.location"),
+    "MeshFingertip": "softtip.core.mesh",
+    "Mounted": "softtip.core.mounting",
+    **dict.fromkeys(("NANO17", "SensorNoise", "direction_angle_std", "tangential_spin_torque_std"), "softtip.core.noise"),
+    **dict.fromkeys(("direction_angle", "edge_direction", "spin_torque", "tangent_frame", "tangential_spin_torque"),
+                    "softtip.core.spin"),
+    **dict.fromkeys(("KGF", "KGF_MM", "wrench_from_si", "wrench_to_si"), "softtip.core.units"),
+    "InputError": "softtip.errors",
+    **dict.fromkeys(("STATES", "Estimates", "Estimator", "EstimatorConfig", "EstimatorWarning", "SampleEstimate",
+                     "estimate"), "softtip.estimator"),
+    **dict.fromkeys(("EXAMPLE_PATH", "load_example"), "softtip.io.examples"),
+}  # fmt: skip
+
+
+def __getattr__(name: str):
+    """A public name, imported from its module the first time it is used (then it is an
+    attribute of the package like any other)."""
+    if name not in _HOMES:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(_HOMES[name]), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *__all__})
+
 
 try:  # written by setuptools-scm from the git tag when softtip is built or installed
     from softtip._version import __version__

@@ -2,24 +2,59 @@
 
 from __future__ import annotations
 
+import importlib
 import os
 import signal
 import sys
+from collections.abc import Iterator, Mapping
 
 import click
 
 from softtip import __version__
-from softtip.cli.calibrate import calibrate
-from softtip.cli.calibrate_payload import calibrate_payload
-from softtip.cli.estimate import estimate
-from softtip.cli.fuse import fuse
-from softtip.cli.options import FRAMES_HELP
-from softtip.cli.reproduce import reproduce
-from softtip.cli.simulate import simulate
-from softtip.cli.stream import stream
+from softtip.cli.frames import FRAMES_HELP
 from softtip.errors import InputError
 
 __all__ = ["main"]
+
+#: The commands: name -> (module, the command in it, the first paragraph of its help, which
+#: ``softtip --help`` lists). A command's module is imported only when the command runs or its
+#: help is shown: importing all of them took most of the start-up of every run.
+COMMANDS: dict[str, tuple[str, str, str]] = {
+    "calibrate": ("softtip.cli.calibrate", "calibrate",
+                  "Calibrate the fingertip geometry from a probing log of plane presses."),
+    "calibrate-payload": ("softtip.cli.calibrate_payload", "calibrate_payload",
+                          "Estimate the fingertip's mass, centre of mass and the sensor bias."),
+    "estimate": ("softtip.cli.estimate", "estimate",
+                 "Estimate contact point, normal, spin torque, contact state and edge direction from a force/torque log."),
+    "fuse": ("softtip.cli.fuse", "fuse",
+             "Fuse two fingertips into the grasped object's local geometry, in a common frame."),
+    "reproduce": ("softtip.cli.reproduce", "reproduce",
+                  "Reproduce the papers' experiments (manual §5, E1–E6) on the simulator."),
+    "simulate": ("softtip.cli.simulate", "simulate",
+                 "Simulate a grasp of an object by the soft fingertip and write the F/T log."),
+    "stream": ("softtip.cli.stream", "stream",
+               "Estimate live: from an ATI Net F/T or Axia sensor, or a replayed log."),
+}  # fmt: skip
+
+
+class _Commands(Mapping):
+    """The group's commands by name (click's ``Group.commands``), from :data:`COMMANDS`: a
+    command's module is imported the first time the command is looked up."""
+
+    def __init__(self) -> None:
+        self._loaded: dict[str, click.Command] = {}
+
+    def __getitem__(self, name: str) -> click.Command:
+        if name not in self._loaded:
+            module, attribute, _ = COMMANDS[name]  # KeyError: no such command
+            self._loaded[name] = getattr(importlib.import_module(module), attribute)
+        return self._loaded[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(COMMANDS)
+
+    def __len__(self) -> int:
+        return len(COMMANDS)
 
 
 def _import_pandas_if_installed() -> None:
@@ -51,10 +86,20 @@ class _WithoutPandas:
 
 
 class _Group(click.Group):
+    def format_commands(self, ctx, formatter):
+        # the list from the registry's one-line help, without importing every command's module
+        listed = click.Group(commands=[click.Command(name, help=help) for name, (_, _, help) in COMMANDS.items()])
+        click.Group.format_commands(listed, ctx, formatter)
+
     def invoke(self, ctx):
         from softtip.io.atomic import cannot_write, silence_stdout
         from softtip.io.interrupt import Interrupted, exit_code, exit_now, interrupted_signal, terminate_like_ctrl_c
 
+        # the command's module is imported now, before the signal handlers are armed, for the
+        # reason pandas is (click keeps the command's name there until Group.invoke)
+        name = next(iter(getattr(ctx, "_protected_args", ())), None)
+        if name is not None:
+            self.get_command(ctx, name)
         _import_pandas_if_installed()  # a command runs (the group's --help and --version end before)
         try:
             with terminate_like_ctrl_c():
@@ -102,9 +147,7 @@ def main() -> None:
     pass
 
 
-
-for _command in (estimate, stream, simulate, reproduce, calibrate, calibrate_payload, fuse):
-    main.add_command(_command)
+main.commands = _Commands()
 
 
 def run() -> None:

@@ -12,6 +12,7 @@ import click
 import numpy as np
 
 from softtip import __version__
+from softtip.cli.frames import FRAMES_HELP  # noqa: F401 - the commands import it from here
 from softtip.cli.types import (
     ColumnSpec,
     Force,
@@ -31,14 +32,6 @@ from softtip.estimator import EstimatorConfig
 from softtip.estimator.depth import asked_skin_law
 from softtip.estimator.settings import Setting, settings_of
 from softtip.estimator.tare import load_bias
-
-FRAMES_HELP = """\
-Frames and units: every vector is in the sensor frame (origin at the F/T sensor's
-measuring point, z along the finger axis toward the tip, right-handed). Inside and in
-every file softtip uses SI: N, N·m, m, s; angles are degrees in files and plots. f and m
-are the force and moment the touched object exerts on the fingertip, moment about the
-sensor origin; in contact f pushes into the fingertip.
-"""
 
 #: Upper bounds of --force-noise (N) and --moment-noise (N·mm): far above any six-axis F/T sensor's noise
 MAX_FORCE_NOISE, MAX_MOMENT_NOISE_NMM = 100.0, 10_000.0
