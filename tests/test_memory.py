@@ -39,6 +39,17 @@ def _log_with_note(path: Path, rows: int, note: str, bad_last: bool = False) -> 
     path.write_text("".join(lines))
 
 
+def _small_blocks_log(tmp_path: Path, monkeypatch) -> tuple[Path, list[str]]:
+    """A 5000-row log with a note column, read in windows of 4 kB and blocks of 8 kB: its path and lines."""
+    import softtip.io.tables as tables
+
+    monkeypatch.setattr(tables, "_LOCATE_BYTES", 4096)
+    monkeypatch.setattr(tables, "_CSV_BLOCK_BYTES", 8192)
+    src = tmp_path / "in.csv"
+    _log_with_note(src, 5000, "ok")
+    return src, src.read_text().splitlines(keepends=True)
+
+
 def test_block_reader_text_columns_are_not_as_wide_as_the_longest_cell(tmp_path: Path) -> None:
     src = tmp_path / "in.csv"
     _log_with_note(src, 20000, "x" * 2000)
@@ -118,7 +129,6 @@ def test_errors_met_in_pieces_word_as_the_one_shot_reader(tmp_path: Path, where:
 @pytest.mark.parametrize("change", ["t-back", "cells", "blank", "nan", "utf8"])
 def test_located_error_across_small_windows_is_read_logs(tmp_path: Path, monkeypatch, row: int, change: str) -> None:
     """Windows of 4 kB (a few dozen lines each): the error's line and wording are read_log's wherever it falls."""
-    import softtip.io.tables as tables
     from softtip.errors import InputError
     from softtip.io.tables import NotStreamable, read_log
 
@@ -126,11 +136,7 @@ def test_located_error_across_small_windows_is_read_logs(tmp_path: Path, monkeyp
         pytest.skip("t = 0.0001 goes back only from the third row on")
     if change == "utf8" and row < 1000:
         pytest.skip("within the header's 64 kB the block reader does not start: read_log words it")
-    monkeypatch.setattr(tables, "_LOCATE_BYTES", 4096)
-    monkeypatch.setattr(tables, "_CSV_BLOCK_BYTES", 8192)
-    src = tmp_path / "in.csv"
-    _log_with_note(src, 5000, "ok")
-    lines = src.read_text().splitlines(keepends=True)
+    src, lines = _small_blocks_log(tmp_path, monkeypatch)
     k = row + 1
     lines[k] = {
         "t-back": lambda line: "0.0001" + line[line.index(",") :],
@@ -298,17 +304,12 @@ _CHANGES = {
 def test_quoted_lines_and_lone_crs_read_in_pieces_as_read_log(tmp_path: Path, monkeypatch, layout: str, notes: int,
                                                               change: str, row: int) -> None:  # fmt: skip
     """Blocks of 8 kB, windows of 4 kB: the rows read_log gives, or its error to the letter."""
-    import softtip.io.tables as tables
     from softtip.errors import InputError
     from softtip.io.tables import NotStreamable, read_log
 
     if notes == 0 and layout == "lf":
         pytest.skip("plain lines: test_located_error_across_small_windows_is_read_logs")
-    monkeypatch.setattr(tables, "_LOCATE_BYTES", 4096)
-    monkeypatch.setattr(tables, "_CSV_BLOCK_BYTES", 8192)
-    src = tmp_path / "in.csv"
-    _log_with_note(src, 5000, "ok")
-    lines = src.read_text().splitlines(keepends=True)
+    src, lines = _small_blocks_log(tmp_path, monkeypatch)
     for k in (30, 2600, 4000)[:notes]:  # notes before, between and after the changed rows
         lines[k] = lines[k][: -len("ok\n")] + _NOTE + "\n"
     lines[row + 1] = _CHANGES[change](lines[row + 1])
