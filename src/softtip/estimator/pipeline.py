@@ -24,9 +24,10 @@ here in compiled loops that call, per sample, the same step functions the stream
 
 Each step is the stage's one source; this module only sequences them (no stage is written
 again). The results are the staged path's to the bit (the stream's, which the staged batch
-equals): the kernels do the same IEEE operations compiled as in numpy; only a line-fit window
-statistic that is NaN (the square root of a negative number) carries the stream's +NaN where
-numpy's square root gave −NaN. Other fingertips (a mesh,
+equals): the kernels do the same IEEE operations compiled as in numpy, and a line-fit window
+statistic that is NaN (the square root of a negative number) is +NaN on both paths, as in the
+stream (the staged path rewrites numpy's −NaN), so a written log's bytes do not depend on the
+path. Other fingertips (a mesh,
 an implicit surface, a mounted shape), a skin law whose exponent is not 2 (numpy's power,
 which compiled code cannot reproduce to the bit) and a run whose steps are not compiled (a
 short log in a process without numba, ``SOFTTIP_NUMBA=0``) take the staged path of
