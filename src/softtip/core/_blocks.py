@@ -15,7 +15,9 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["BLOCK", "blockwise"]
+from softtip.core._jit import jitable, lazy_jit
+
+__all__ = ["BLOCK", "blockwise", "ring_capacity", "ring_rows"]
 
 #: Samples per block.
 BLOCK = 8192
@@ -67,3 +69,26 @@ def blockwise(
         for dst, r in zip(dst_all, res):
             dst[s : s + block] = r
     return dst_all if stacked else tuple(dst_all)
+
+
+@jitable
+def ring_capacity(t, window):
+    """The rows a ring buffer of the windows of ``window`` s over the times ``t`` (s,
+    non-decreasing) needs: the most samples any window holds, + 2 (the sample that joins
+    before the oldest leaves, and the window's latest kept even when rounding empties it).
+    A loop for the stages' compiled runs; :func:`ring_rows` from Python."""
+    most = 0
+    first = 0
+    for i in range(t.shape[0]):
+        start = t[i] - window
+        while first < i and t[first] <= start:
+            first += 1
+        if i + 1 - first > most:
+            most = i + 1 - first
+    return most + 2
+
+
+@lazy_jit
+def ring_rows(t, window):  # pragma: no cover - compiled
+    """:func:`ring_capacity`, compiled, for a caller in Python."""
+    return ring_capacity(t, window)

@@ -52,6 +52,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from softtip.core import _xp_scalar as XS
+from softtip.core._blocks import ring_capacity
 from softtip.core._jit import jitable, lazy_jit
 from softtip.core._xp import NP, PY
 from softtip.core.depth import (
@@ -328,20 +329,6 @@ def depth_step(state, ring, params, t, fx, fy, fz, mx, my, mz, rx, ry, rz, nx, n
     return (cap_depth if delta > cap_depth else delta), state[_HELD_REL] * d0, state[_HELD_DATA] != 0.0
 
 
-@jitable
-def _ring_capacity(t, window):
-    """The most samples any window of ``window`` seconds of ``t`` (non-decreasing) holds, + 2."""
-    most = 0
-    first = 0
-    for i in range(t.shape[0]):
-        start = t[i] - window
-        while first < i and t[first] <= start:
-            first += 1
-        if i + 1 - first > most:
-            most = i + 1 - first
-    return most + 2
-
-
 @lazy_jit
 def depth_run(t, contact, fx, fy, fz, mx, my, mz, point, normal, d0, params, depth, depth_std, from_data):
     """The online depth of a whole log in one loop: :func:`depth_step` at every sample in
@@ -355,7 +342,7 @@ def depth_run(t, contact, fx, fy, fz, mx, my, mz, point, normal, d0, params, dep
     """
     n = t.shape[0]
     state = new_depth_state()
-    ring = np.empty((_ring_capacity(t, params[_WINDOW]), RING_COLUMNS))
+    ring = np.empty((ring_capacity(t, params[_WINDOW]), RING_COLUMNS))
     for i in range(n):
         depth[i] = 0.0
         depth_std[i] = 0.0

@@ -71,6 +71,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from softtip.core import _xp_scalar as XS
+from softtip.core._blocks import ring_rows
 from softtip.core._jit import lazy_jit, use_numba
 from softtip.core._xp import NP
 from softtip.core.evidence import (
@@ -507,16 +508,6 @@ def evidence_run(t, located, begin, point, normal, e1x, e1y, e1z, e2x, e2y, e2z,
         out[i, 0], out[i, 1], out[i, 2], out[i, 3], out[i, 4] = r[5], r[6], r[7], r[8], r[9]
 
 
-def _capacity(t, window: float) -> int:
-    """A ring capacity for the windows of ``window`` s over ``t`` (non-decreasing): the most
-    samples any window can hold, + 2 (the sample that joins before the oldest leaves, and
-    the window's latest kept even when rounding empties it)."""
-    if len(t) == 0:
-        return 2
-    first = np.searchsorted(t, t - window, side="right")
-    return int(np.max(np.arange(1, len(t) + 1) - np.minimum(first, np.arange(len(t))))) + 2
-
-
 def _impl(fn, n: int | None = None):
     """``fn`` compiled when the step functions run compiled (:func:`~softtip.core._jit.use_numba`,
     ``n`` a batch loop's samples), else its Python source."""
@@ -560,7 +551,7 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
     """
     n = len(t)
     t = np.ascontiguousarray(t, dtype=float)
-    capacity = _capacity(t, max(config.evidence_window, config.significance_window))
+    capacity = int(ring_rows.function(n)(t, max(config.evidence_window, config.significance_window)))
     state, counts, ring, wconst = new_evidence_state(capacity, corr)
     frame = tangent_frame_kernel(*(np.ascontiguousarray(normal[:, k]) for k in range(3)), NP)
     depth = np.zeros(n) if depth is None else np.ascontiguousarray(depth, dtype=float)

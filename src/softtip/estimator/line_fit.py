@@ -35,7 +35,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from softtip.core._blocks import BLOCK
+from softtip.core._blocks import BLOCK, ring_rows
 from softtip.core._jit import jitable, lazy_jit
 from softtip.core._xp import NP, PY
 from softtip.core.depth import depth_kernel
@@ -104,15 +104,6 @@ def new_line_fit_state() -> NDArray:
     state = np.zeros(_N_STATE)
     state[_KEY] = math.inf
     return state
-
-
-def ring_capacity(t: NDArray, window: float) -> int:
-    """Rows a window ring buffer needs over the times ``t`` (s, non-decreasing): the most samples
-    any window of ``window`` s holds, + 2 (the sample added before the oldest leave)."""
-    if not len(t):
-        return 2
-    first = np.searchsorted(t, t - window, side="right")
-    return int(np.max(np.arange(1, len(t) + 1) - first)) + 2
 
 
 @lazy_jit
@@ -270,7 +261,7 @@ def line_fit_points(t, c, contact, sc, base, relatched, tip: Fingertip, config: 
     r_sc = [np.ascontiguousarray(v, dtype=float) for v in sc.point]
     law, window, drift2 = config.skin_law, float(config.line_fit_window), float(config.line_fit_drift**2)
     state = new_line_fit_state()
-    ring = np.zeros((ring_capacity(t, window), 1 + N_SUMS))
+    ring = np.zeros((int(ring_rows.function(len(t))(t, window)), 1 + N_SUMS))
     anchor_run, window_run, hold_run = _anchor_run.function(n), _window_run.function(n), _hold_run.function(n)
     point = base.copy()
     stats = np.full((4, n), np.nan)

@@ -43,6 +43,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from softtip.core import _xp_scalar as XS
+from softtip.core._blocks import ring_capacity, ring_rows
 from softtip.core._jit import jitable, lazy_jit, use_numba
 from softtip.core.depth import square_depth_kernel
 from softtip.core.fingertip import (
@@ -66,7 +67,6 @@ from softtip.core.spin import spin_torque_kernel, tangent_frame_kernel, tangenti
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.depth import (
     RING_COLUMNS,
-    _ring_capacity,
     depth_gap,
     depth_params,
     depth_start_contact,
@@ -211,13 +211,6 @@ def _project(kind, sp, x, y, z, xp):
     if kind == CAPSULE:
         return capsule_project_kernel(x, y, z, sp[0], sp[1], sp[2], sp[3], xp)
     return ellipsoid_project_kernel(x, y, z, sp[0], sp[1], sp[2], sp[3], sp[4], sp[5], xp)
-
-
-@lazy_jit
-def ring_rows(t, window):  # pragma: no cover - compiled
-    """The rows a ring buffer of windows of ``window`` s over ``t`` needs (the most samples
-    any window holds, + 2)."""
-    return _ring_capacity(t, window)
 
 
 @lazy_jit
@@ -377,7 +370,7 @@ def tail_run(t, x, drift, contact, taring, kind, sp, normal_from_tip, point, has
     dstate = new_depth_state()
     dring = np.empty((1, RING_COLUMNS))
     if depth_mode == DEPTH_ONLINE:
-        dring = np.empty((_ring_capacity(t, dparams[0]), RING_COLUMNS))
+        dring = np.empty((ring_capacity(t, dparams[0]), RING_COLUMNS))
     sfx, sfy, sfz, smx, smy, smz = noise_var[0], noise_var[1], noise_var[2], noise_var[3], noise_var[4], noise_var[5]
     # the geometry of the last point (its normal, tangent frame): recomputed when the point changes
     lpx = lpy = lpz = _NAN
