@@ -203,6 +203,22 @@ def test_plot_shows_h_as_missing_while_latching(tmp_path: Path) -> None:
     assert (tmp_path / "p.png").stat().st_size > 10_000
 
 
+@pytest.mark.parametrize(("truth", "drawn"), [(45.0, [45.0]), (90.0, [-90.0, 90.0]), (-88.0, [-88.0, 92.0]), (135.0, [-45.0])])
+def test_a_true_direction_is_drawn_where_its_measurements_fall(truth: float, drawn: list[float]) -> None:
+    """A direction is axial: a truth near ±90° is dashed on both edges of the direction chart."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from softtip.viz.plot import draw_truth
+
+    fig, ax = plt.subplots()
+    draw_truth(ax, truth, color="k")
+    assert sorted(line.get_ydata()[0] for line in ax.lines) == drawn
+    plt.close(fig)
+
+
 def test_calibration_noise_warning_comes_from_the_library(tmp_path: Path) -> None:
     r = run("calibrate", "--example", "--shape", "sphere", "--force-noise", "0.2", "--moment-noise", "2", "-o", tmp_path / "t.toml")
     assert r.returncode == 0, r.stderr

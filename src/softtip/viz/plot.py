@@ -115,7 +115,7 @@ def plot_estimates(
                   color=line.get_color(), label=name)  # fmt: skip
         ax_d.fill_between(est.t, angle - std, angle + std, color=line.get_color(), alpha=0.15, lw=0)
         if reference_angles is not None:  # the truth: black for one log, the log's colour for several
-            ax_d.axhline(reference_angles[k], ls="--", lw=1.0, color=TRUTH if len(runs) == 1 else line.get_color(), zorder=3)
+            draw_truth(ax_d, reference_angles[k], lw=1.0, color=TRUTH if len(runs) == 1 else line.get_color(), zorder=3)
     shade = latching(first)
     if shade.any():
         ax_h.fill_between(
@@ -147,6 +147,15 @@ def plot_estimates(
         fig.suptitle(title)
     save_figure(fig, plt, path)
     return fig
+
+
+def draw_truth(ax, degrees: float, **kwargs) -> None:
+    """A true direction (degrees), dashed across the direction chart (−95°…95°): a direction is
+    axial (θ and θ ± 180° are one), so one near ±90° is drawn on both edges, where its
+    measurements fall on either side."""
+    for y in float(degrees) + np.array([-180.0, 0.0, 180.0]):
+        if abs(y) <= 95.0:
+            ax.axhline(y, ls="--", **kwargs)
 
 
 def latching(est: Estimates) -> np.ndarray:
@@ -317,7 +326,7 @@ def plot_direction_chart(
             marker = MARKERS[k % len(MARKERS)]
             # each angle's markers on every n-th sample, offset: where angles coincide all show
             ax_d.plot(est.t, angle, marker, ms=3.5, mfc="none", mew=0.8, color=ln.get_color(), markevery=(k, len(runs)))
-            ax_d.axhline(truth, ls="--", lw=0.9, color=ln.get_color(), zorder=3)
+            draw_truth(ax_d, truth, lw=0.9, color=ln.get_color(), zorder=3)
             handles.setdefault(lab, Line2D([], [], color=ln.get_color(), ls=LINESTYLES[k % len(LINESTYLES)], marker=marker,
                                            mfc="none", ms=4, label=lab))  # fmt: skip
         ax_h.set_ylabel(label("|h|", "N·mm"))
