@@ -4,6 +4,7 @@ as typed, simulate's report and file modes, --rerun without a display, the --plo
 from __future__ import annotations
 
 import csv
+import math
 import os
 import re
 import subprocess
@@ -216,6 +217,28 @@ def test_a_true_direction_is_drawn_where_its_measurements_fall(truth: float, dra
     fig, ax = plt.subplots()
     draw_truth(ax, truth, color="k")
     assert sorted(line.get_ydata()[0] for line in ax.lines) == drawn
+    plt.close(fig)
+
+
+def test_the_line_or_area_figure_dashes_where_h_of_the_true_line_lies() -> None:
+    """X1's left panel: with a true direction d, the dashed line is n × d (d turned by 90°), and
+    the example grasp's h (a 45° line) lies along it; without one, nothing is dashed."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from softtip.viz.plot import plot_line_or_area
+
+    est = _example_estimates()
+    fig = plot_line_or_area([("with", est, 45.0), ("without", est, None)], t_from=6.0)
+    with_ax, without_ax = (ax for ax in fig.axes if ax.get_xlabel().startswith("h·e1"))
+    (dashed,) = [ln for ln in with_ax.lines if ln.get_linestyle() == "--"]
+    x, y = dashed.get_data()
+    assert math.degrees(math.atan2(y[1] - y[0], x[1] - x[0])) % 180 == pytest.approx(135.0)
+    h1, h2 = with_ax.lines[0].get_data()  # the trace: along n × d, up to the noise
+    assert math.degrees(math.atan2(np.median(h2), np.median(h1))) % 180 == pytest.approx(135.0, abs=3.0)
+    assert not [ln for ln in without_ax.lines if ln.get_linestyle() == "--"]
     plt.close(fig)
 
 
