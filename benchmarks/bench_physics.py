@@ -439,7 +439,7 @@ def plot_sap_trace(path: str, args, tip) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
-    from softtip.viz.style import PALETTE, label, styled
+    from softtip.viz.style import PALETTE, label, legend_outside, styled
 
     chosen = args.friction_objects or QUICK_FRICTION
     ang = (args.friction_angles or [30.0])[0]
@@ -487,10 +487,16 @@ def plot_sap_trace(path: str, args, tip) -> None:
         axs[3].set_ylabel(label("h off n × d", "°"))
         axs[3].set_ylim(-90, 90)
         axs[3].set_xlabel(label("time", "s"))
+        from matplotlib.lines import Line2D
+
         for ax in axs:
             ax.axvspan(scn.t_stable, scn.t_stable + 1.5, color="0.92", zorder=0)
             ax.axvspan(scn.load_start, scn.load_end, color="#fbe3ea", zorder=0)
-            ax.legend(fontsize=6, ncol=2)
+        # legends off the data: the runs' colours once, below; each panel's line styles above it
+        for ax, (solid, dashed) in ((axs[1], ("along d", "across")), (axs[2], ("h · (n × d)", "h · d"))):
+            legend_outside(ax, handles=[Line2D([], [], color="0.3", label=solid), Line2D([], [], color="0.3", ls="--", label=dashed)])
+        fig.legend(handles=[Line2D([], [], color=PALETTE[k % len(PALETTE)], label=lab) for k, (lab, _) in enumerate(runs)],
+                   loc="outside lower center", ncol=2, frameon=False)  # fmt: skip
         axs[0].set_xlim(scn.t_stable - 0.3, scn.duration)
         fig.suptitle(f"Drake SAP harness, friction load 0.2 across at {ang:+.0f}°: the joint disturbance (grey), "
                      "the load ramp (pink)")  # fmt: skip

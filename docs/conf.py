@@ -120,6 +120,7 @@ API_PAGES = {
     "fusion": "softtip.fusion",
     "viz": "softtip.viz.rerun",
     "ros": "softtip.ros",
+    "apps": "softtip.apps.chunked",
     "cli": "softtip.cli",
 }
 _write_data_pages()

@@ -21,7 +21,7 @@ setup(
     install_requires=["setuptools"],
     zip_safe=True,
     maintainer="softtip developers",
-    maintainer_email="softtip@users.noreply.github.com",
+    maintainer_email="maintainers@softtip.invalid",
     description="The softtip ROS 2 node: contact point, state and edge direction from a wrench topic.",
     license="BSD-3-Clause",
     entry_points={"console_scripts": [f"softtip_node = {PACKAGE}.node:main"]},

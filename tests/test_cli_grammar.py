@@ -4,6 +4,7 @@ as typed, simulate's report and file modes, --rerun without a display, the --plo
 from __future__ import annotations
 
 import csv
+import math
 import os
 import re
 import subprocess
@@ -201,6 +202,44 @@ def test_plot_shows_h_as_missing_while_latching(tmp_path: Path) -> None:
     assert any(isinstance(c, PolyCollection) and c.get_label().startswith("latching") for c in ax_h.collections)
     assert any(ax.get_ylabel() == "state" for ax in fig.axes)  # the state band
     assert (tmp_path / "p.png").stat().st_size > 10_000
+
+
+@pytest.mark.parametrize(("truth", "drawn"), [(45.0, [45.0]), (90.0, [-90.0, 90.0]), (-88.0, [-88.0, 92.0]), (135.0, [-45.0])])
+def test_a_true_direction_is_drawn_where_its_measurements_fall(truth: float, drawn: list[float]) -> None:
+    """A direction is axial: a truth near ±90° is dashed on both edges of the direction chart."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from softtip.viz.plot import draw_truth
+
+    fig, ax = plt.subplots()
+    draw_truth(ax, truth, color="k")
+    assert sorted(line.get_ydata()[0] for line in ax.lines) == drawn
+    plt.close(fig)
+
+
+def test_the_line_or_area_figure_dashes_where_h_of_the_true_line_lies() -> None:
+    """X1's left panel: with a true direction d, the dashed line is n × d (d turned by 90°), and
+    the example grasp's h (a 45° line) lies along it; without one, nothing is dashed."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from softtip.viz.plot import plot_line_or_area
+
+    est = _example_estimates()
+    fig = plot_line_or_area([("with", est, 45.0), ("without", est, None)], t_from=6.0)
+    with_ax, without_ax = (ax for ax in fig.axes if ax.get_xlabel().startswith("h·e1"))
+    (dashed,) = [ln for ln in with_ax.lines if ln.get_linestyle() == "--"]
+    x, y = dashed.get_data()
+    assert math.degrees(math.atan2(y[1] - y[0], x[1] - x[0])) % 180 == pytest.approx(135.0)
+    h1, h2 = with_ax.lines[0].get_data()  # the trace: along n × d, up to the noise
+    assert math.degrees(math.atan2(np.median(h2), np.median(h1))) % 180 == pytest.approx(135.0, abs=3.0)
+    assert not [ln for ln in without_ax.lines if ln.get_linestyle() == "--"]
+    plt.close(fig)
 
 
 def test_calibration_noise_warning_comes_from_the_library(tmp_path: Path) -> None:

@@ -37,6 +37,7 @@ MODULES = {
     "softtip.fusion": "fusion",
     "softtip.viz.rerun": "viz",
     "softtip.ros": "ros",
+    "softtip.apps.chunked": "apps",
     "softtip.cli": "cli",
 }
 
@@ -73,6 +74,53 @@ def test_the_api_reference_covers_every_public_name(site: Path) -> None:
             at_top = name in top.__all__ and getattr(importlib.import_module(module), name) is getattr(top, name)
             if not (here or (at_top and f"softtip.{name}" in ids)):
                 missing.append(f"{module}.{name}")
+    assert not missing, missing
+
+
+def _split(dotted: str) -> tuple[str, str]:
+    """``softtip.io.bag.read_bag`` -> (``softtip.io.bag``, ``read_bag``): the longest importable module and the rest."""
+    parts = dotted.split(".")
+    for k in range(len(parts) - 1, 0, -1):
+        try:
+            importlib.import_module(".".join(parts[:k]))
+        except ImportError:
+            continue
+        return ".".join(parts[:k]), ".".join(parts[k:])
+    raise AssertionError(dotted)
+
+
+def _taught_names() -> set[tuple[str, str]]:
+    """(module, name) of every softtip name the README, the guide and the gallery show a reader
+    importing (``from softtip.x import a, b``) or calling (``softtip.x.a(``)."""
+    texts = [ROOT / "README.md", *DOCS.glob("*.md"), *DOCS.glob("guide/*.md"), *DOCS.glob("examples/*.py")]
+    taught = set()
+    for path in texts:
+        text = path.read_text(encoding="utf-8")
+        imports = re.findall(r"^\s*from (softtip(?:\.\w+)*) import (?:\(([^)]*)\)|([\w, ]+))", text, re.M)
+        for module, wrapped, line in imports:
+            taught |= {(module, n.strip()) for n in (wrapped or line).split(",") if n.strip()}
+        for dotted in re.findall(r"\b(softtip(?:\.[A-Za-z_]\w*)+)\(", text):
+            taught.add(_split(dotted))
+    return taught
+
+
+def test_the_api_reference_covers_every_name_the_docs_teach(site: Path) -> None:
+    """A name the README, the guide or a gallery example imports or calls has its entry in the
+    API reference (under its module, or under ``softtip`` when that re-exports it)."""
+    ids = set()
+    for page in (site / "api").glob("*.html"):
+        ids |= set(re.findall(r'id="([^"]+)"', page.read_text(encoding="utf-8")))
+    top = importlib.import_module("softtip")
+    taught = _taught_names()
+    assert ("softtip.io.bag", "read_bag") in taught and ("softtip", "run") in taught, sorted(taught)
+    missing = []
+    for module, name in sorted(taught):
+        head = name.split(".")[0]
+        if not isinstance(getattr(importlib.import_module(module), head), type):
+            name = head  # a method of a constant (``STATES.index``): the constant's entry
+        if f"{module}.{name}" not in ids and not (getattr(top, head, None) is getattr(importlib.import_module(module), head)
+                                                 and f"softtip.{name}" in ids):  # fmt: skip
+            missing.append(f"{module}.{name}")
     assert not missing, missing
 
 

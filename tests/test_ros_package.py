@@ -171,3 +171,26 @@ def test_params_yaml_is_generated_from_the_settings() -> None:
     )
     for name in UNSET_PARAMETERS:
         assert re.search(rf"^    # {name}: \[\]  # ", text, re.M), name
+
+
+#: The node's parameters that no ``softtip estimate`` option has, and why
+ROS_ONLY = {
+    "wrench_topic": "the topic the node subscribes to",
+    "publish_markers": "RViz markers",
+    "orientation_topic": "the payload's orientation from a topic (the CLI reads it from the log)",
+    "sample_rate": "the commands take it from the data",
+}
+
+
+def test_params_yaml_names_are_the_cli_options() -> None:
+    """Every parameter of config/params.yaml is the ``softtip estimate`` option of its name
+    (``line_fit_window`` is ``--line-fit-window``), but the node's own few (ROS_ONLY)."""
+    import click
+
+    from softtip.cli import main
+    from softtip.ros.node import UNSET_PARAMETERS
+
+    cmd = main.commands["estimate"]
+    opts = {o for p in cmd.params if isinstance(p, click.Option) for o in p.opts + p.secondary_opts}
+    names = [*PARAMETERS, *UNSET_PARAMETERS]
+    assert {n for n in names if "--" + n.replace("_", "-") not in opts} == set(ROS_ONLY)

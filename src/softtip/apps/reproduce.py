@@ -531,7 +531,11 @@ def write_figures(results: Sequence[ConditionResult], out: Path) -> None:
                 detail=zero,
             )
         elif exp == "X1":
-            plot_line_or_area([(r.condition.variant, r.estimates) for r in rs], path, title=title)
+            plot_line_or_area(
+                [(r.condition.variant, r.estimates, r.truth_angle_deg if r.condition.expect_measured else None) for r in rs],
+                path,
+                title=title,
+            )
         elif exp == "E6":
             plot_position_error(
                 [(r.condition.variant, r.force_norm, r.position_error) for r in rs],

@@ -12,18 +12,18 @@ SI (REP-103), as softtip is.
 or a ROS 1 ``.bag``: :mod:`softtip.ros.bagout`) with standard message types, each message
 stamped with its input sample's time and one ``frame_id`` (``ft_sensor`` by default):
 
-=============================  =============================  ==================================
-topic                          type                           when
-=============================  =============================  ==================================
-(the input topic)              geometry_msgs/msg/WrenchStamped every sample: the raw wrench, copied
-``/softtip/wrench``            geometry_msgs/msg/WrenchStamped tared (and filtered), after taring
-``/softtip/state``             std_msgs/msg/String            every sample: none, point, line or area
-``/softtip/line_evidence``     std_msgs/msg/String            line contacts: confirmed or unconfirmed
-``/softtip/contact_point``     geometry_msgs/msg/PointStamped in contact (point, line); m
-``/softtip/normal``            geometry_msgs/msg/Vector3Stamped in contact: outward unit normal
-``/softtip/edge_direction``    geometry_msgs/msg/Vector3Stamped line contacts: unit direction (an axis)
-``/softtip/markers``           visualization_msgs/msg/MarkerArray up to 50 Hz and at state changes: RViz markers
-=============================  =============================  ==================================
+=============================  ==================================  ==============================================
+topic                          type                                when
+=============================  ==================================  ==============================================
+(the input topic)              geometry_msgs/msg/WrenchStamped     every sample: the raw wrench, copied
+``/softtip/wrench``            geometry_msgs/msg/WrenchStamped     tared (and filtered), after taring
+``/softtip/state``             std_msgs/msg/String                 every sample: none, point, line or area
+``/softtip/line_evidence``     std_msgs/msg/String                 line contacts: confirmed or unconfirmed
+``/softtip/contact_point``     geometry_msgs/msg/PointStamped      in contact (point, line); m
+``/softtip/normal``            geometry_msgs/msg/Vector3Stamped    in contact: outward unit normal
+``/softtip/edge_direction``    geometry_msgs/msg/Vector3Stamped    line contacts: unit direction (an axis)
+``/softtip/markers``           visualization_msgs/msg/MarkerArray  up to 50 Hz and at state changes: RViz markers
+=============================  ==================================  ==============================================
 
 Nothing is published where a value is undefined (no NaN messages). The bag is written to a
 temporary directory beside the destination and renamed into place: a failure leaves nothing.

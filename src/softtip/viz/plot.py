@@ -115,7 +115,7 @@ def plot_estimates(
                   color=line.get_color(), label=name)  # fmt: skip
         ax_d.fill_between(est.t, angle - std, angle + std, color=line.get_color(), alpha=0.15, lw=0)
         if reference_angles is not None:  # the truth: black for one log, the log's colour for several
-            ax_d.axhline(reference_angles[k], ls="--", lw=1.0, color=TRUTH if len(runs) == 1 else line.get_color(), zorder=3)
+            draw_truth(ax_d, reference_angles[k], lw=1.0, color=TRUTH if len(runs) == 1 else line.get_color(), zorder=3)
     shade = latching(first)
     if shade.any():
         ax_h.fill_between(
@@ -147,6 +147,15 @@ def plot_estimates(
         fig.suptitle(title)
     save_figure(fig, plt, path)
     return fig
+
+
+def draw_truth(ax, degrees: float, **kwargs) -> None:
+    """A true direction (degrees), dashed across the direction chart (−95°…95°): a direction is
+    axial (θ and θ ± 180° are one), so one near ±90° is drawn on both edges, where its
+    measurements fall on either side."""
+    for y in float(degrees) + np.array([-180.0, 0.0, 180.0]):
+        if abs(y) <= 95.0:
+            ax.axhline(y, ls="--", **kwargs)
 
 
 def latching(est: Estimates) -> np.ndarray:
@@ -191,14 +200,22 @@ def state_band(ax, runs: Sequence[Estimates], labels: Sequence[str] | None = Non
 
 
 @styled
-def plot_line_or_area(rows: Sequence[tuple[str, Estimates]], path=None, *, title: str | None = None, t_from: float = 4.0):
+def plot_line_or_area(
+    rows: Sequence[tuple[str, Estimates] | tuple[str, Estimates, float | None]],
+    path=None,
+    *,
+    title: str | None = None,
+    t_from: float = 4.0,
+):
     """Line or area, one row per log: ``h`` in the tangent plane as a trace (left; N·mm,
     tangent frame at the contact point: a line for a strip, a blob for an area contact) and
     its components and the state over time (right, with the state band below).
 
     Parameters
     ----------
-    rows : sequence of (label, Estimates)
+    rows : sequence of (label, Estimates) or (label, Estimates, true direction in degrees)
+        With a true direction d (a strip contact; None for none), the line where h of that
+        line contact lies, n × d, is dashed on the left.
     path : str or PathLike, optional
     title : str, optional
     t_from : float
@@ -217,7 +234,7 @@ def plot_line_or_area(rows: Sequence[tuple[str, Estimates]], path=None, *, title
     fig = plt.figure(figsize=(10, 2.3 * len(rows) + 0.8), constrained_layout=True)
     grid = fig.add_gridspec(2 * len(rows), 2, width_ratios=[1.0, 2.6], height_ratios=[1.0, 0.22] * len(rows))
     ax_last = None
-    for k, (name, est) in enumerate(rows):
+    for k, (name, est, *truth) in enumerate(rows):
         ax_tr = fig.add_subplot(grid[2 * k : 2 * k + 2, 0])
         ax_ts = fig.add_subplot(grid[2 * k, 1], sharex=ax_last)
         ax_st = fig.add_subplot(grid[2 * k + 1, 1], sharex=ax_ts)
@@ -230,6 +247,10 @@ def plot_line_or_area(rows: Sequence[tuple[str, Estimates]], path=None, *, title
         ax_tr.plot(h1[sel], h2[sel], lw=0.6, color=PALETTE[4])
         ax_tr.plot([0], [0], "+", color=TRUTH)
         lim = max(1.0, float(np.nanmax(np.abs(np.concatenate((h1[sel], h2[sel]))))) if sel.any() else 1.0) * 1.1
+        if truth and truth[0] is not None and np.isfinite(truth[0]):  # n × d: d turned by +90° in the tangent plane
+            across = np.radians(truth[0]) + np.pi / 2
+            ax_tr.plot([-lim * np.cos(across), lim * np.cos(across)], [-lim * np.sin(across), lim * np.sin(across)],
+                       ls="--", lw=0.9, color=TRUTH, zorder=1)  # fmt: skip
         ax_tr.set_xlim(-lim, lim)
         ax_tr.set_ylim(-lim, lim)
         ax_tr.set_aspect("equal")
@@ -249,14 +270,16 @@ def plot_line_or_area(rows: Sequence[tuple[str, Estimates]], path=None, *, title
             ax_st.tick_params(labelbottom=False)
         else:
             ax_st.set_xlabel(label("time", "s"))
+    with_truth = any(len(r) > 2 and r[2] is not None for r in rows)
     fig.text(
         0.01, 0.0,
         "h: the tangential spin torque; e1, e2: the tangent frame at the contact point (e1: the sensor's x axis "
         "projected on the tangent plane,\nits y axis where x is nearly normal; e2 = n × e1). "
-        f"Left: h in that plane from {t_from:g} s on, a line for a strip contact, a blob for an area.",
+        f"Left: h in that plane from {t_from:g} s on, a line for a strip contact, a blob for an area"
+        + (";\ndashed: where h of the true line lies (n × d, d its true direction)." if with_truth else "."),
         fontsize=8, ha="left", va="bottom",
     )  # fmt: skip
-    fig.get_layout_engine().set(rect=(0, 0.035, 1, 0.965))
+    fig.get_layout_engine().set(rect=(0, 0.05 if with_truth else 0.035, 1, 0.95 if with_truth else 0.965))
     if title:
         fig.suptitle(title)
     save_figure(fig, plt, path)
@@ -317,7 +340,7 @@ def plot_direction_chart(
             marker = MARKERS[k % len(MARKERS)]
             # each angle's markers on every n-th sample, offset: where angles coincide all show
             ax_d.plot(est.t, angle, marker, ms=3.5, mfc="none", mew=0.8, color=ln.get_color(), markevery=(k, len(runs)))
-            ax_d.axhline(truth, ls="--", lw=0.9, color=ln.get_color(), zorder=3)
+            draw_truth(ax_d, truth, lw=0.9, color=ln.get_color(), zorder=3)
             handles.setdefault(lab, Line2D([], [], color=ln.get_color(), ls=LINESTYLES[k % len(LINESTYLES)], marker=marker,
                                            mfc="none", ms=4, label=lab))  # fmt: skip
         ax_h.set_ylabel(label("|h|", "N·mm"))
