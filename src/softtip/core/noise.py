@@ -125,6 +125,7 @@ def h_std_kernel(rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, sfx, sfy, sfz, smx, s
     return h_std_parts_kernel(m1, m2, rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, sfx, sfy, sfz, xp)
 
 
+@jitable
 def h_std_parts_kernel(m1, m2, rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, sfx, sfy, sfz, xp):
     """:func:`h_std_kernel` given the moment-noise parts ``m1``, ``m2`` of the frame
     (:func:`noise_moment_part`, which a stream keeps while a contact point is held)."""

@@ -10,18 +10,20 @@ from __future__ import annotations
 
 from typing import Any, NamedTuple
 
+from softtip.core._jit import jitable
 from softtip.core.depth import DepthLaw, depth_kernel
 from softtip.core.filtering import noise_gain
 from softtip.core.noise import (
     SensorNoise,
-    h_std_kernel,
+    h_std_parts_kernel,
     line_threshold_kernel,
+    noise_moment_part,
     noise_variances,
     sample_direction_kernel,
 )
 from softtip.core.spin import spin_torque_kernel, tangent_frame_kernel, tangential_kernel
 
-__all__ = ["Measurement", "measure", "effective_noise", "noise_correlation"]
+__all__ = ["Measurement", "measure", "measure_kernel", "effective_noise", "noise_correlation"]
 
 
 class Measurement(NamedTuple):
@@ -43,6 +45,26 @@ class Measurement(NamedTuple):
     depth: Any  #: depth ``δ`` of the point the moment is taken about, m (0 without a law)
 
 
+@jitable
+def measure_kernel(fx, fy, fz, mx, my, mz, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z, m1, m2,
+                   sfx, sfy, sfz, xp):  # fmt: skip
+    """The measurement about the point ``e`` (m) where the load acts, at the unit normal ``n``:
+    ``(σ, hx, hy, hz, |h|, h_std)``, N·m.
+
+    ``q = m − e × f``, ``σ = q · n``, ``h = q − σ n`` and ``h``'s noise level
+    ``sqrt(trace Σ_h)`` in the tangent frame ``(e1, e2)``, whose moment-noise parts ``m1``, ``m2``
+    (:func:`~softtip.core.noise.noise_moment_part`) depend on the normal alone (a stream or a
+    compiled loop keeps them while the normal holds); ``sf*`` the force variances, N². The one
+    composition of the stage: :func:`measure` (arrays), the stream (floats) and the batch's
+    compiled loop (:mod:`softtip.estimator.pipeline`) call it.
+    """
+    qx, qy, qz = spin_torque_kernel(fx, fy, fz, mx, my, mz, ex, ey, ez)
+    sigma, hx, hy, hz = tangential_kernel(qx, qy, qz, nx, ny, nz)
+    hn = xp.sqrt(hx * hx + hy * hy + hz * hz)
+    h_std = h_std_parts_kernel(m1, m2, ex, ey, ez, e1x, e1y, e1z, e2x, e2y, e2z, sfx, sfy, sfz, xp)
+    return sigma, hx, hy, hz, hn, h_std
+
+
 def measure(
     fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz,
     noise: SensorNoise, h_sigmas: float, h_min: float, law: DepthLaw | None, xp,
@@ -58,12 +80,13 @@ def measure(
     else:
         delta = depth_kernel(-(fx * nx + fy * ny + fz * nz), law, xp)
         rx, ry, rz = rx - delta * nx, ry - delta * ny, rz - delta * nz
-    qx, qy, qz = spin_torque_kernel(fx, fy, fz, mx, my, mz, rx, ry, rz)
-    sigma, hx, hy, hz = tangential_kernel(qx, qy, qz, nx, ny, nz)
     frame = tangent_frame_kernel(nx, ny, nz, xp)
     variances = noise_variances(noise)
-    hn, dx, dy, dz, angle, angle_std = sample_direction_kernel(hx, hy, hz, rx, ry, rz, nx, ny, nz, *frame, *variances, xp)
-    h_std = h_std_kernel(rx, ry, rz, *frame, *variances, xp)
+    m1, m2 = noise_moment_part(*frame[:3], *variances[3:]), noise_moment_part(*frame[3:], *variances[3:])
+    sigma, hx, hy, hz, hn, h_std = measure_kernel(
+        fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, *frame, m1, m2, *variances[:3], xp
+    )
+    _, dx, dy, dz, angle, angle_std = sample_direction_kernel(hx, hy, hz, rx, ry, rz, nx, ny, nz, *frame, *variances, xp)
     line = hn > line_threshold_kernel(h_std, h_sigmas, h_min, xp)
     return Measurement(sigma, hx, hy, hz, hn, h_std, dx, dy, dz, angle, angle_std, line, pushing, delta)
 

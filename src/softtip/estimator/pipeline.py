@@ -17,8 +17,8 @@ here in compiled loops that call, per sample, the same step functions the stream
    :func:`~softtip.estimator.line_fit.line_fit_points` (its solve vectorised);
 3. :func:`tail_run`: the normal and the tangent frame (once per contact point, as the stream's
    :class:`~softtip.estimator.floats.PointGeometry`), the depth
-   (:func:`~softtip.estimator.depth.depth_step`), the measurement (the kernels of
-   :mod:`softtip.core.spin` and :func:`~softtip.core.noise.noise_quad`), the line evidence
+   (:func:`~softtip.estimator.depth.depth_step`), the measurement
+   (:func:`~softtip.estimator.measure.measure_kernel`), the line evidence
    (:func:`~softtip.estimator.evidence.evidence_step`), every output column written once, NaN
    where the sample has no value (no separate blanking pass).
 
@@ -61,9 +61,9 @@ from softtip.core.fingertip import (
     sphere_project_kernel,
 )
 from softtip.core.line_fit import N_SUMS, line_fit_products, line_fit_solve_kernel
-from softtip.core.noise import SensorNoise, noise_quad, noise_variances
+from softtip.core.noise import SensorNoise, noise_moment_part, noise_variances
 from softtip.core.shape import SoftFinger, sphere_kernel
-from softtip.core.spin import spin_torque_kernel, tangent_frame_kernel, tangential_kernel
+from softtip.core.spin import spin_torque_kernel, tangent_frame_kernel
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.depth import (
     RING_COLUMNS,
@@ -99,6 +99,7 @@ from softtip.estimator.line_fit import (
     line_fit_window_step,
     new_line_fit_state,
 )
+from softtip.estimator.measure import measure_kernel
 
 __all__ = ["ShapeRecord", "shape_record", "points_run", "line_fit_run", "tail_run", "fused_columns"]
 
@@ -376,7 +377,7 @@ def tail_run(t, x, drift, contact, taring, kind, sp, normal_from_tip, point, has
     lpx = lpy = lpz = _NAN
     nx = ny = nz = _NAN
     lnx = lny = lnz = _NAN
-    e1x = e1y = e1z = e2x = e2y = e2z = _NAN
+    e1x = e1y = e1z = e2x = e2y = e2z = m1 = m2 = _NAN
     for i in range(n):
         if taring[i]:
             for k in range(6):
@@ -431,14 +432,12 @@ def tail_run(t, x, drift, contact, taring, kind, sp, normal_from_tip, point, has
             continue
         if not (nx == lnx and ny == lny and nz == lnz):
             e1x, e1y, e1z, e2x, e2y, e2z = tangent_frame_kernel(nx, ny, nz, XS)
+            m1, m2 = noise_moment_part(e1x, e1y, e1z, smx, smy, smz), noise_moment_part(e2x, e2y, e2z, smx, smy, smz)
             lnx, lny, lnz = nx, ny, nz
         # friction acts at r − δ n, inside the skin: the moment is taken about it
         ex, ey, ez = px - d * nx, py - d * ny, pz - d * nz
-        qx, qy, qz = spin_torque_kernel(fx, fy, fz, mx, my, mz, ex, ey, ez)
-        sg, hx, hy, hz = tangential_kernel(qx, qy, qz, nx, ny, nz)
-        hn = XS.sqrt(hx * hx + hy * hy + hz * hz)
-        hs = XS.sqrt(noise_quad(e1x, e1y, e1z, ex, ey, ez, sfx, sfy, sfz, smx, smy, smz)
-                     + noise_quad(e2x, e2y, e2z, ex, ey, ez, sfx, sfy, sfz, smx, smy, smz))  # fmt: skip
+        sg, hx, hy, hz, hn, hs = measure_kernel(fx, fy, fz, mx, my, mz, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z,
+                                                e2x, e2y, e2z, m1, m2, sfx, sfy, sfz, XS)  # fmt: skip
         r = evidence_step(estate, counts, ring, eparams, wconst, t[i], px, py, pz, nx, ny, nz, e1x, e1y, e1z, e2x,
                           e2y, e2z, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, hs)  # fmt: skip
         pulling[i] = False

@@ -23,8 +23,7 @@ from softtip.core._xp import PY
 from softtip.core.filtering import SosStream, lowpass_sos
 from softtip.core.fingertip import Fingertip, load_fingertip
 from softtip.core.location import contact_kernel
-from softtip.core.noise import SensorNoise, h_std_parts_kernel, noise_variances
-from softtip.core.spin import spin_torque_kernel, tangential_kernel
+from softtip.core.noise import SensorNoise, noise_variances
 from softtip.estimator.batch import sample_rate_mismatch
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.contact import (
@@ -38,7 +37,7 @@ from softtip.estimator.evidence import EvidenceTracker
 from softtip.estimator.floats import PointGeometry
 from softtip.estimator.latch import LatchTracker
 from softtip.estimator.line_fit import LineFitTracker
-from softtip.estimator.measure import effective_noise, noise_correlation
+from softtip.estimator.measure import effective_noise, measure_kernel, noise_correlation
 from softtip.estimator.results import EstimatorWarning, SampleEstimate
 from softtip.estimator.tare import StreamTare, TareReport, noise_in_use
 
@@ -331,11 +330,10 @@ class Estimator:
             ex, ey, ez = rx - delta * nx, ry - delta * ny, rz - delta * nz
         if not fx * nx + fy * ny + fz * nz < 0.0:  # not pushing
             return self._none(t, x, pulling=True, relatched=relatched)
-        # the measurement stage's kernels (softtip.estimator.measure.measure): q = m − r × f about
-        # the effective point, σ = q · n, h = q − σ n, and h's noise level (its moment part per point)
-        sigma, hx, hy, hz = tangential_kernel(*spin_torque_kernel(fx, fy, fz, mx, my, mz, ex, ey, ez), nx, ny, nz)
-        hn = sqrt(hx * hx + hy * hy + hz * hz)
-        h_std = h_std_parts_kernel(geo.m1, geo.m2, ex, ey, ez, *geo.frame, *self._force_var, PY)
+        # the measurement about the effective point (its noise's moment part kept per point)
+        sigma, hx, hy, hz, hn, h_std = measure_kernel(
+            fx, fy, fz, mx, my, mz, ex, ey, ez, nx, ny, nz, *geo.frame, geo.m1, geo.m2, *self._force_var, PY
+        )
         h = (hx, hy, hz)
         state, evidence, d, angle, angle_std, noise_std, h_ratio, f_ratio = self._evidence.step(
             t, geo, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, h_std
