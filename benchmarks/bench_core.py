@@ -594,10 +594,42 @@ def both_cores(n: int, repeats: int = 3) -> None:
                 cells = "  ".join(f"{wl:5.2f} {c:5.2f} {p / 1e9:4.2f} ({ld:.1f})" for wl, c, p, ld in rs)
                 print(f"  {fmt:7s} --jobs {jobs:7s}: {cells}")
             med = {j: (float(np.median([r[0] for r in rs])), float(np.median([r[1] for r in rs]))) for j, rs in runs.items()}
+            print(f"  {fmt:7s} the cores this process got: {cores_granted():.2f}x (two threads of a compiled loop against one;"
+                  " 2.0 on an idle 2-core machine, ~1 when other work takes the cores)")
             print(f"  {fmt:7s} wall ratio {med['1'][0] / med['2'][0]:.2f}x, CPU jobs 2 / jobs 1 {med['2'][1] / med['1'][1]:.2f};"
                   f" output bytes identical: {same}")
         stage_cpu(Path(tmp), n, softtip_cmd)
     print(f"  load average at the end {_load():.1f} (other work on the machine shares the cores)")
+
+
+def cores_granted(seconds: float = 0.5) -> float:
+    """How much faster two threads of a compiled loop (numba, no GIL) run than one, now: the
+    wall-time ratio any two-thread design can reach on this machine at this load (Linux shares
+    the cores between sessions, not threads: under load a second thread gets little more)."""
+    import threading
+
+    import numba
+
+    @numba.njit(nogil=True)
+    def spin(n):
+        s = 0.0
+        for i in range(n):
+            s += (i % 7) * 1e-9
+        return s
+
+    spin(10)
+    n = int(seconds * 3e8)
+    walls: dict[int, list[float]] = {1: [], 2: []}
+    for _ in range(3):  # alternating, the median of each: the load changes
+        for threads in (1, 2):
+            workers = [threading.Thread(target=spin, args=(n,)) for _ in range(threads)]
+            w0 = time.perf_counter()
+            for th in workers:
+                th.start()
+            for th in workers:
+                th.join()
+            walls[threads].append((time.perf_counter() - w0) / threads)
+    return float(np.median(walls[1]) / np.median(walls[2]))
 
 
 def stage_cpu(tmp: Path, n: int, softtip_cmd: str) -> None:
