@@ -126,8 +126,8 @@ from the bag's /tf.
 )  # fmt: skip
 @option(
     "--jobs", type=click.IntRange(1, 64), default=None, metavar="N",
-    help="Threads (cores) for a log processed in pieces (see --chunk-rows): N estimating pieces at the same time and "
-    "N formatting CSV, while one reads the log and this one writes; 1: one after the other. The output is the same, "
+    help="Threads (cores) for a log processed in pieces (see --chunk-rows): N estimate pieces at the same time and "
+    "N format CSV, while one more reads the log and the main one writes; 1: all on one thread. The output is the same, "
     "bit for bit, whatever N; up to N+3 pieces are held in memory. [default: the cores this process may use, at most "
     f"{DEFAULT_JOBS_MAX}]",
 )  # fmt: skip
