@@ -195,10 +195,11 @@ def _parallel_pieces(
     contact's onset as re-latched), is guessed when a piece is started and checked when its
     predecessors are done: a piece started with the wrong guess is estimated again, in the
     caller's thread, with the right one. At most ``jobs + 1`` pieces are started and not yet
-    taken (memory stays bounded). An error in the reading thread (a bad row, a check of ``blocks``) is raised
-    in the caller's thread after the pieces before it; when the caller stops (an error, a
-    signal, a consumer that stops early), no further piece is read or started and the reading
-    thread has ended when this generator is closed (a piece being estimated finishes on its own).
+    taken (memory stays bounded). An error in the reading thread (a bad row, a check of
+    ``blocks``) is raised in the caller's thread after the pieces before it; when the caller
+    stops (an error, a signal, a consumer that stops early), no further piece is read or
+    started, and the reading thread has ended when this generator is closed (a piece being
+    estimated finishes on its own).
     """
     from concurrent.futures import ThreadPoolExecutor
 
