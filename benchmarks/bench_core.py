@@ -51,12 +51,15 @@ faults: memory the process already has); the ratio is the reference's time over 
 Target (manual §6, issue 31): pipeline >= 0.8x the reference, >= 3 M rows/s per core where the
 computation allows it, <= 400 B/row.
 
-Both cores (--only jobs): a log's pieces estimated in this process (jobs=1) and by two worker
-processes (jobs=2, softtip.apps.chunked.estimate_pieces; the same bits), in the same run: wall
-time, and CPU time of this process and of the workers; then `softtip estimate --jobs 1` and
-`--jobs 2` on the same Parquet log, wall time. Target (issue 31): >= 1.7x in wall time on 2 cores.
-On a machine shared with other work the wall-time ratio is bounded by the share of the cores
-the run gets: the CPU times say what the workers cost.
+Both cores (--only jobs): `softtip estimate --jobs 1`, `--jobs 2` and without --jobs (the
+default) on the same --samples-row log, CSV -> CSV and Parquet -> Parquet, three runs each,
+alternating: wall time, CPU time of the whole command (every thread), peak memory, the load
+average before each run, and whether the outputs are the same bytes; then where the CPU time
+goes on one thread: the command's start-up (interpreter, imports, compiled kernels loaded) and
+each stage of the pieces (read, cut, carry_over, estimate, columns, write), from which the
+critical path on two cores follows. Target (issue 31): >= 1.7x in wall time on 2 cores. On a
+machine shared with other work the wall-time ratio is bounded by the share of the cores the run
+gets: the CPU times say what the threads cost.
 
 Mesh rows: the shipped mesh fingertip (the papers' capsule with a nail, 21.6k triangles),
 contact location per sample (streaming kernel, median and p99 of CPU time; target median <=
@@ -558,61 +561,147 @@ def end_to_end(n: int) -> None:
         print(f"  {'before: Python CSV writer':34s} {cell(ww, cw):>36s}")
 
 
-def _proc_cpu(pid: int) -> float:
-    """CPU time (user + system) of a live process, s (Linux /proc; 0 elsewhere)."""
-    try:
-        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    except OSError:
-        return 0.0
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+def _load() -> float:
+    return os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
 
 
-def both_cores(n: int) -> None:
-    """jobs=1 against jobs=2 on an n-row log (the 1 kHz grasp repeated): the library's pieces, then the command."""
-    from softtip.apps import chunked
-    from softtip.io.tables import iter_log, write_table
+def both_cores(n: int, repeats: int = 3) -> None:
+    """`softtip estimate --jobs 1` against `--jobs 2` on an n-row log (the 1 kHz grasp repeated),
+    CSV -> CSV and Parquet -> Parquet, end to end (new processes), alternating; then where the
+    CPU time goes on one thread (start-up, then the pieces' stages), for the critical path."""
+    from softtip.io.tables import write_table
 
     t, w = grasp_log(n)
     n = len(t)
-    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
-    print(f"both cores: {n:,}-row log in pieces of {chunked.DEFAULT_PIECE_ROWS} rows, {os.cpu_count()} CPUs, load average {load:.1f} at the start")
-    pools: list = []
-    start_pool = chunked._start_pool
-
-    def recorded(*args):
-        pools.append(start_pool(*args))
-        return pools[-1]
-
-    chunked._start_pool = recorded  # to read the workers' CPU time before they end
+    softtip_cmd = str(Path(sys.executable).with_name("softtip"))
+    print(f"both cores: `softtip estimate` on a {n:,}-row log, {os.cpu_count()} CPUs, load average {_load():.1f} at the start;")
+    print(f"  {repeats} runs of each, alternating (1 2 1 2 ...): wall s, CPU s (user + system, every thread), peak GB, load average")
+    print("  before the run; a ratio is jobs 1 / jobs 2 of the medians")
     with tempfile.TemporaryDirectory() as tmp:
-        src = Path(tmp, "in.parquet")
-        write_table({"t": t, **{name: w[:, i] for i, name in enumerate(("fx", "fy", "fz", "mx", "my", "mz"))}}, src)
-        walls = {}
-        try:
-            for jobs in (1, 2, 1, 2):  # twice each, alternating: the load changes
-                w0, c0, workers = time.perf_counter(), _cpu(), 0.0
-                rows = 0
-                for est, _ in chunked.estimate_pieces(iter_log(str(src), None, rows=1 << 16), "murakami2006", None, jobs=jobs):
-                    rows += len(est)
-                    if jobs > 1:
-                        workers = sum(_proc_cpu(pid) for pid in pools[-1]._processes)
-                wall, cpu = time.perf_counter() - w0, _cpu() - c0
-                assert rows == n
-                walls.setdefault(jobs, []).append(wall)
-                print(f"  estimate_pieces jobs={jobs}: wall {wall:6.2f} s  CPU this process {cpu:6.2f} s  workers {workers:6.2f} s"
-                      f"  ({n / wall / 1e6:5.2f} M rows/s wall)")
-        finally:
-            chunked._start_pool = start_pool
-        print(f"  wall-time ratio jobs=1 / jobs=2 (best of 2 each): {min(walls[1]) / min(walls[2]):.2f}x")
-        cmd = [str(Path(sys.executable).with_name("softtip")), "estimate", str(src), "-o", str(Path(tmp, "out.parquet")), "-q"]
-        cli = {}
-        for jobs in (1, 2, 1, 2):
-            wall, cpu, peak = command(cmd + ["--jobs", str(jobs)])
-            cli.setdefault(jobs, []).append(wall)
-            print(f"  `softtip estimate --jobs {jobs}` Parquet -> Parquet: wall {wall:6.2f} s  CPU (this process) {cpu:6.2f} s  peak {peak / 1e9:5.2f} GB")
-        print(f"  wall-time ratio of the command (best of 2 each): {min(cli[1]) / min(cli[2]):.2f}x")
-    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
-    print(f"  load average at the end {load:.1f} (other work on the machine shares the cores)")
+        log_columns = {"t": t, **{name: w[:, i] for i, name in enumerate(("fx", "fy", "fz", "mx", "my", "mz"))}}
+        for fmt in ("csv", "parquet"):
+            src, dest = Path(tmp, f"in.{fmt}"), Path(tmp, f"out.{fmt}")
+            write_table(log_columns, src)
+            runs: dict[str, list[tuple[float, float, float, float]]] = {}
+            outputs = {}
+            for _ in range(repeats):
+                for jobs in ("1", "2", "default"):
+                    load = _load()
+                    extra = [] if jobs == "default" else ["--jobs", jobs]
+                    wall, cpu, peak = command([softtip_cmd, "estimate", str(src), "-o", str(dest), "-q", *extra])
+                    runs.setdefault(jobs, []).append((wall, cpu, peak, load))
+                    outputs[jobs] = dest.read_bytes()
+            same = outputs["1"] == outputs["2"] == outputs["default"]
+            for jobs, rs in runs.items():
+                cells = "  ".join(f"{wl:5.2f} {c:5.2f} {p / 1e9:4.2f} ({ld:.1f})" for wl, c, p, ld in rs)
+                print(f"  {fmt:7s} --jobs {jobs:7s}: {cells}")
+            med = {j: (float(np.median([r[0] for r in rs])), float(np.median([r[1] for r in rs]))) for j, rs in runs.items()}
+            print(f"  {fmt:7s} the cores this process got: {cores_granted():.2f}x (two threads of a compiled loop against one;"
+                  " 2.0 on an idle 2-core machine, ~1 when other work takes the cores)")
+            print(f"  {fmt:7s} wall ratio {med['1'][0] / med['2'][0]:.2f}x, CPU jobs 2 / jobs 1 {med['2'][1] / med['1'][1]:.2f};"
+                  f" output bytes identical: {same}")
+        stage_cpu(Path(tmp), n, softtip_cmd)
+    print(f"  load average at the end {_load():.1f} (other work on the machine shares the cores)")
+
+
+def cores_granted(seconds: float = 0.5) -> float:
+    """How much faster two threads of a compiled loop (numba, no GIL) run than one, now: the
+    wall-time ratio any two-thread design can reach on this machine at this load (Linux shares
+    the cores between sessions, not threads: under load a second thread gets little more)."""
+    import threading
+
+    import numba
+
+    @numba.njit(nogil=True)
+    def spin(n):
+        s = 0.0
+        for i in range(n):
+            s += (i % 7) * 1e-9
+        return s
+
+    spin(10)
+    n = int(seconds * 3e8)
+    walls: dict[int, list[float]] = {1: [], 2: []}
+    for _ in range(3):  # alternating, the median of each: the load changes
+        for threads in (1, 2):
+            workers = [threading.Thread(target=spin, args=(n,)) for _ in range(threads)]
+            w0 = time.perf_counter()
+            for th in workers:
+                th.start()
+            for th in workers:
+                th.join()
+            walls[threads].append((time.perf_counter() - w0) / threads)
+    return float(np.median(walls[1]) / np.median(walls[2]))
+
+
+def stage_cpu(tmp: Path, n: int, softtip_cmd: str) -> None:
+    """CPU time of each stage of `softtip estimate` in pieces, on one thread (best of 2), and of its start-up."""
+    from softtip.apps import chunked
+    from softtip.apps.pool import warm_kernels
+    from softtip.cli.estimate import _output_columns
+    from softtip.core.fingertip import load_fingertip
+    from softtip.estimator.batch import Carry, carry_over
+    from softtip.estimator.config import EstimatorConfig
+    from softtip.estimator.depth import resolve_depth
+    from softtip.io.tables import TableWriter, iter_log, write_table
+
+    small = tmp / "small.parquet"
+    t, w = grasp_log(20_000, whole=False)
+    write_table({"t": t, **{name: w[:, i] for i, name in enumerate(("fx", "fy", "fz", "mx", "my", "mz"))}}, small)
+    env = {**os.environ, "SOFTTIP_NUMBA": "1"}  # the compiled kernels loaded, as a long log's run loads them
+    startup = min(
+        subprocess_cpu([softtip_cmd, "estimate", str(small), "-o", str(tmp / "small.out.parquet"), "-q"], env) for _ in range(2)
+    )
+    warm_kernels()
+    tip = load_fingertip("murakami2006")
+    config = resolve_depth(EstimatorConfig(), tip)
+    print(f"  where the CPU time goes (s, one thread, best of 2; {n:,} rows, pieces of {chunked.DEFAULT_PIECE_ROWS}):")
+    print(f"    start-up (`softtip estimate` of 20,000 rows, kernels loaded): {startup:.2f}")
+    for fmt in ("csv", "parquet"):
+        best: dict[str, float] = {}
+        for _ in range(2):
+            spent: dict[str, float] = {}
+
+            def timed_call(key, fn, *args):
+                c0 = time.thread_time()
+                out = fn(*args)
+                spent[key] = spent.get(key, 0.0) + time.thread_time() - c0
+                return out
+
+            c0 = time.thread_time()
+            blocks = list(iter_log(str(tmp / f"in.{fmt}"), None, rows=1 << 16))
+            spent["read"] = time.thread_time() - c0
+            carry, ahead = Carry(), Carry()
+
+            def take(t, w, cfg):
+                timed_call("carry_over (jobs > 1)", carry_over, t, w, tip, cfg, ahead)
+                return timed_call("estimate", chunked._piece, t, w, tip, cfg, carry)
+
+            cut = chunked._cut
+            chunked._cut = lambda *args: timed_call("cut", cut, *args)
+            try:
+                with open(os.devnull, "wb") as sink:
+                    writer = TableWriter(sink, format=fmt, threads=1)
+                    c0, p0 = time.thread_time(), time.process_time()
+                    for est, extra in chunked._split(iter(blocks), tip, config, chunked.DEFAULT_PIECE_ROWS, carry, take):
+                        columns = timed_call("columns", _output_columns, est, extra, "si")
+                        timed_call("write (this thread)", writer.write, columns)
+                    writer.close()
+            finally:
+                chunked._cut = cut
+            loop_thread, loop_process = time.thread_time() - c0, time.process_time() - p0
+            spent["write (its formatting thread)"] = max(0.0, loop_process - loop_thread)
+            for key, value in spent.items():
+                best[key] = min(best.get(key, np.inf), value)
+        print(f"    {fmt:7s} " + ", ".join(f"{k} {v:.2f}" for k, v in best.items()) + f"; sum {sum(best.values()):.2f}")
+
+
+def subprocess_cpu(cmd: list[str], env: dict[str, str]) -> float:
+    """CPU time (user + system) of a command run to its end."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    subprocess.run(cmd, env=env, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
 
 
 #: The output columns manual §6's end-to-end targets are bound to (the least the command line

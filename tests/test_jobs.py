@@ -1,4 +1,4 @@
-"""A log's pieces estimated by worker processes (``estimate_pieces(..., jobs=2)``, ``softtip estimate
+"""A log's pieces estimated on threads (``estimate_pieces(..., jobs=2)``, ``softtip estimate
 --jobs 2``) give the bits of the pieces estimated one after the other (``jobs=1``)."""
 
 from __future__ import annotations
@@ -71,7 +71,7 @@ def _pieces(t, w, config, rows, jobs):
 
 
 @pytest.mark.parametrize("name", sorted(CONFIGS))
-def test_pieces_in_workers_give_the_bits_of_jobs_1(name: str) -> None:
+def test_pieces_on_threads_give_the_bits_of_jobs_1(name: str) -> None:
     t, w = _log(seed=4, presses=14)
     config = CONFIGS[name]
     one = _pieces(t, w, config, 90, 1)
@@ -102,20 +102,51 @@ def test_a_wrong_latch_guess_is_estimated_again(monkeypatch, guess: bool) -> Non
         _same(ea, eb, f"piece {k}")
 
 
-def test_a_consumer_that_stops_ends_the_workers(monkeypatch) -> None:
-    pools = []
-    start = chunked._start_pool
-    monkeypatch.setattr(chunked, "_start_pool", lambda *a: pools.append(start(*a)) or pools[-1])
-    t, w = _log(seed=2, presses=10)
+def _threads(prefix: str) -> list:
+    import threading
+
+    return [th for th in threading.enumerate() if th.name.startswith(prefix)]
+
+
+def test_a_consumer_that_stops_ends_the_threads(monkeypatch) -> None:
+    """Closing the pieces stops the reading thread at once and starts no further piece; the
+    pool's threads end when the pieces they hold are done."""
+    started = []
+    real = chunked._estimate_piece
+    monkeypatch.setattr(chunked, "_estimate_piece", lambda *a: started.append(1) or real(*a))
+    t, w = _log(seed=2, presses=30)
     it = estimate_pieces(_blocks(t, w, 41), "murakami2006", EstimatorConfig(), 60, jobs=3)
     next(it)
-    workers = list(pools[0]._processes.values())
-    assert len(workers) == 2  # and this process
+    assert _threads("softtip-read") and _threads("softtip-piece")
     it.close()
+    assert not _threads("softtip-read")
+    count = len(started)
+    assert count < len(_pieces(t, w, EstimatorConfig(), 60, 1))  # not all were started
     deadline = time.monotonic() + 10
-    while time.monotonic() < deadline and any(p.is_alive() for p in workers):
+    while time.monotonic() < deadline and _threads("softtip-piece"):
         time.sleep(0.05)
-    assert not any(p.is_alive() for p in workers)
+    assert not _threads("softtip-piece") and len(started) == count
+
+
+def test_an_error_while_reading_comes_after_the_pieces_before_it() -> None:
+    """A bad block (time going back) stops the run in the caller's thread once the pieces read
+    before it are handed out, as with jobs=1; the reading thread has ended."""
+    t, w = _log(seed=6, presses=6)
+    blocks = _blocks(t, w, 41)
+    bad = len(blocks) * 2 // 3
+    tb, wb, xb = blocks[bad]
+    blocks[bad] = (tb - 1.0, wb, xb)
+    got = {}
+    for jobs in (1, 2):
+        got[jobs] = []
+        with pytest.raises(ValueError, match="time must not go back"):
+            for est, _ in estimate_pieces(iter(blocks), "murakami2006", None, 60, jobs=jobs):
+                got[jobs].append(est)
+    assert len(got[1]) == len(got[2]) > 3
+    assert sum(len(e) for e in got[1]) <= bad * 41
+    for k, (a, b) in enumerate(zip(got[1], got[2])):
+        _same(a, b, f"piece {k}")
+    assert not _threads("softtip-read")
 
 
 def test_jobs_must_be_positive() -> None:
@@ -128,7 +159,7 @@ def run(*args: object, **kw) -> subprocess.CompletedProcess:
     return subprocess.run([SOFTTIP, *map(str, args)], capture_output=True, text=True, timeout=300, check=False, **kw)
 
 
-@pytest.mark.parametrize("fmt", ["csv", "parquet"])
+@pytest.mark.parametrize("fmt", ["csv", "parquet", "arrow"])
 @pytest.mark.parametrize("options", [[], ["--lowpass-hz", 20, "--contact-point", "line-fit", "--relatch-distance", "1mm"]], ids=["default", "line-fit"])
 def test_cli_jobs_2_writes_the_bytes_of_jobs_1(tmp_path: Path, fmt: str, options: list) -> None:
     t, w = _log(seed=11, presses=12)
@@ -145,42 +176,42 @@ def test_cli_jobs_2_writes_the_bytes_of_jobs_1(tmp_path: Path, fmt: str, options
     assert (tmp_path / "b1.toml").read_bytes() == (tmp_path / "b2.toml").read_bytes()
 
 
+@pytest.mark.parametrize("fmt", ["csv", "parquet"])
+def test_cli_jobs_2_and_the_default_on_standard_output(tmp_path: Path, fmt: str) -> None:
+    """Onto standard output (each piece written as it is done), --jobs 2 and no --jobs (both
+    cores where there are two) give the bytes of --jobs 1."""
+    t, w = _log(seed=13, presses=10)
+    src = tmp_path / f"in.{fmt}"
+    write_table({"t": t, **{k: w[:, i] for i, k in enumerate(WRENCH)}}, src)
+    outs = []
+    for jobs in (["--jobs", 1], ["--jobs", 2], []):
+        done = subprocess.run([SOFTTIP, "estimate", str(src), "--chunk-rows", "70", *map(str, jobs)], capture_output=True,
+                              timeout=300, check=False)  # fmt: skip
+        assert done.returncode == 0, done.stderr
+        outs.append((done.stdout, done.stderr))
+    assert outs[0] == outs[1] == outs[2]
+    assert outs[0][0].count(b"\n") == len(t) + 1
+
+
 def test_cli_jobs_is_checked(tmp_path: Path) -> None:
     done = run("estimate", "--example", "-o", tmp_path / "o.csv", "--jobs", 0)
     assert done.returncode == 2 and "--jobs" in done.stderr
     assert os.listdir(tmp_path) == []
 
 
-def _descendants(pid: int) -> list[int]:
-    """Process ids below ``pid`` (Linux /proc): the forkserver's workers are grandchildren."""
-    parents = {}
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                parents[int(entry.name)] = int((entry / "stat").read_text().rsplit(")", 1)[1].split()[1])
-            except OSError:
-                continue
-    found, todo = [], [pid]
-    while todo:
-        p = todo.pop()
-        kids = [c for c, pp in parents.items() if pp == p]
-        found += kids
-        todo += kids
-    return found
-
-
-def _alive(pid: int) -> bool:
+def _threads_of(pid: int) -> int:
+    """Threads of a process (Linux /proc)."""
     try:
-        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+        return len(os.listdir(f"/proc/{pid}/task"))
     except OSError:
-        return False
+        return 0
 
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs Linux /proc")
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
-def test_cli_jobs_signal_ends_workers_and_leaves_no_output(tmp_path: Path, sig: int) -> None:
+def test_cli_jobs_signal_while_the_threads_run_leaves_no_output(tmp_path: Path, sig: int) -> None:
     t, w = _log(seed=12, presses=40)
-    reps = 60  # a log the workers take seconds over
+    reps = 60  # a log the threads take seconds over
     t = np.concatenate([t + k * (t[-1] + 0.01) for k in range(reps)])
     w = np.tile(w, (reps, 1))
     src = tmp_path / "in.parquet"
@@ -191,10 +222,9 @@ def test_cli_jobs_signal_ends_workers_and_leaves_no_output(tmp_path: Path, sig: 
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )  # fmt: skip
     deadline = time.monotonic() + 120
-    while time.monotonic() < deadline and len(_descendants(proc.pid)) < 2 and proc.poll() is None:
-        time.sleep(0.05)  # the forkserver and its worker
-    below = _descendants(proc.pid)
-    assert proc.poll() is None and len(below) >= 2, proc.stderr.read().decode() if proc.poll() is not None else below
+    while time.monotonic() < deadline and _threads_of(proc.pid) < 4 and proc.poll() is None:
+        time.sleep(0.05)  # the reading thread and two estimating
+    assert proc.poll() is None, proc.stderr.read().decode()
     time.sleep(0.5)
     proc.send_signal(sig)
     try:
@@ -205,28 +235,7 @@ def test_cli_jobs_signal_ends_workers_and_leaves_no_output(tmp_path: Path, sig: 
     err = err.decode()
     assert proc.returncode == 128 + sig, err
     assert "Traceback" not in err
-    deadline = time.monotonic() + 10
-    while time.monotonic() < deadline and any(_alive(p) for p in below):
-        time.sleep(0.05)
-    assert not any(_alive(p) for p in below)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["in.parquet"]
-
-
-def test_a_piece_crosses_through_shared_memory_or_in_the_pickle(tmp_path: Path) -> None:
-    """A worker's estimates come back through a file, removed when mapped; without a file
-    (shared memory full, no such folder) in the pickle, no file left."""
-    t, w = _log(seed=3, presses=2)
-    est = _pieces(t, w, EstimatorConfig(), 10**6, 1)[0][0]
-    path = tmp_path / "piece"
-    shared = chunked._to_shared(est, str(path))
-    assert shared[1] is not None and path.exists()
-    _same(est, chunked._from_shared(shared, str(path)), "mapped")
-    assert not path.exists()
-    nowhere = tmp_path / "missing" / "piece"
-    shared = chunked._to_shared(est, str(nowhere))
-    assert shared[1] is None
-    _same(est, chunked._from_shared(shared, str(nowhere)), "pickled")
-    assert sorted(os.listdir(tmp_path)) == []
 
 
 def test_cli_jobs_2_wrong_units_fall_back_to_the_one_shot_message(tmp_path: Path) -> None:
@@ -241,20 +250,25 @@ def test_cli_jobs_2_wrong_units_fall_back_to_the_one_shot_message(tmp_path: Path
     assert sorted(os.listdir(tmp_path)) == ["kgf.csv"]
 
 
+_POOL_IN_LONG_TMP = """
+from softtip.apps.pool import _end_with_parent, end_pool, start_pool
+pool = start_pool(2, _end_with_parent)
+print(sorted(pool.map(abs, [-1, -2, -3])))
+end_pool(pool)
+"""
+
+
 @pytest.mark.skipif(not hasattr(__import__("socket"), "AF_UNIX"), reason="the pool's server socket is a Unix socket")
-def test_cli_jobs_with_a_temporary_folder_too_long_for_a_socket(tmp_path: Path) -> None:
-    """A TMPDIR whose path leaves no room for the pool's server socket (a Unix socket address
-    holds about 107 bytes): the pool's private folder goes elsewhere, the run gives the bytes
-    of --jobs 1 and leaves nothing in TMPDIR (it stopped with 'AF_UNIX path too long')."""
-    t, w = _log(seed=5, presses=3)
-    src = tmp_path / "in.csv"
-    write_table({"t": t, **{k: w[:, i] for i, k in enumerate(WRENCH)}}, src)
+def test_the_process_pool_with_a_temporary_folder_too_long_for_a_socket(tmp_path: Path) -> None:
+    """A TMPDIR whose path leaves no room for the process pool's server socket (``softtip
+    reproduce --jobs``; a Unix socket address holds about 107 bytes): the pool's private folder
+    goes elsewhere, the pool runs and leaves nothing in TMPDIR (it stopped with 'AF_UNIX path
+    too long')."""
     long_tmp = tmp_path / ("t" * (110 - len(str(tmp_path))))
     long_tmp.mkdir()
     assert len(str(long_tmp)) >= 110
     env = {**os.environ, "TMPDIR": str(long_tmp)}
-    one = run("estimate", src, "-o", tmp_path / "one.csv", "--chunk-rows", 50, "-q")
-    two = run("estimate", src, "-o", tmp_path / "two.csv", "--chunk-rows", 50, "--jobs", 2, "-q", env=env)
-    assert one.returncode == 0 and two.returncode == 0, two.stderr
-    assert (tmp_path / "one.csv").read_bytes() == (tmp_path / "two.csv").read_bytes()
+    done = subprocess.run([sys.executable, "-c", _POOL_IN_LONG_TMP], capture_output=True, text=True, timeout=300, env=env)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines()[0] == "[1, 2, 3]"
     assert os.listdir(long_tmp) == []

@@ -13,13 +13,15 @@ A piece holds at least ``rows`` samples, unless the log ends first, and more whe
 (or a pending one) lasts past them: a contact longer than ``rows`` samples makes its piece
 as long as the contact. The first piece holds the whole tare.
 
-With ``jobs`` > 1, ``jobs - 1`` worker processes and this one estimate the pieces: this process
-reads, cuts and brings the carry past each piece with the stages that carry it alone
-(:func:`softtip.estimator.batch.carry_over`), a worker runs the whole estimator from that
-carry (this process does, when the workers have enough to do), and the pieces are yielded in
-order, the bits of ``jobs=1``. Whether an earlier
-contact latched is guessed when a piece is sent and checked when it comes back; a wrong
-guess is estimated again, here.
+With ``jobs`` > 1 the work runs on ``jobs`` threads besides the caller's: one reads, cuts and
+brings the carry past each piece with the stages that carry it alone
+(:func:`softtip.estimator.batch.carry_over`), ``jobs`` threads run the whole estimator on the
+pieces from those carries, and the caller gets the pieces in order, the bits of ``jobs=1``
+(and writes them, say, while the next are estimated). The compiled loops and numpy's and
+pyarrow's work run without the GIL, and threads share the loaded kernels and the arrays: no
+second interpreter to start, nothing to copy between processes. Whether an earlier contact
+latched is guessed when a piece is started and checked when it is handed out; a wrong guess is
+estimated again then.
 
 Two things are taken from the first block rather than the whole log (identical for a log
 sampled at a constant rate): the sample rate a low-pass filter is designed for, when
@@ -28,20 +30,19 @@ sampled at a constant rate): the sample rate a low-pass filter is designed for, 
 
 from __future__ import annotations
 
-import contextlib
+import copy
 import dataclasses
-import os
-import sys
+import queue
+import threading
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from softtip.apps.pool import end_pool
 from softtip.core.filtering import lowpass_sos, sosfilt_state
 from softtip.core.fingertip import Fingertip, load_fingertip
-from softtip.estimator.batch import Carry, carry_over, estimate, infer_rate, validate_log
+from softtip.estimator.batch import Carry, _estimate, carry_over, infer_rate, validate_log
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.contact import track_contacts
 from softtip.estimator.depth import resolve_depth
@@ -78,9 +79,10 @@ def estimate_pieces(
     rows : int
         Samples per piece (at least; see the module's notes), ≥ 1.
     jobs : int
-        Processes estimating pieces at the same time: this one and ``jobs - 1`` workers (1:
-        all in this process, one after the other). The pieces, and every bit of them, are
-        those of ``jobs=1`` (see the module's notes); each worker holds a piece in memory.
+        Threads estimating pieces at the same time (1: all in the caller's thread, one after
+        the other; more: besides them a thread reads and cuts the log). The pieces, and every
+        bit of them, are those of ``jobs=1`` (see the module's notes); up to ``jobs + 3``
+        pieces are held in memory at once (started, being read, and the caller's).
 
     Yields
     ------
@@ -146,13 +148,8 @@ def _joined(parts: list[NDArray]) -> NDArray:
 
 
 def _piece(t: NDArray, w: NDArray, tip: Fingertip, config: EstimatorConfig, carry: Carry) -> Estimates:
-    import warnings
-
-    from softtip.estimator.results import EstimatorWarning
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", EstimatorWarning)  # they are in Estimates.warnings
-        return estimate(t, w, tip, config, carry=carry)
+    # the warnings are in Estimates.warnings; not issued (catch_warnings is not thread-safe)
+    return _estimate(t, w, tip, config, carry)
 
 
 def _cut(t: NDArray, w: NDArray, tip: Fingertip, config: EstimatorConfig, carry: Carry, rows: int) -> int | None:
@@ -187,267 +184,145 @@ def _cut(t: NDArray, w: NDArray, tip: Fingertip, config: EstimatorConfig, carry:
 def _parallel_pieces(
     blocks: Iterable[Block], tip: Fingertip, config: EstimatorConfig, rows: int, jobs: int
 ) -> Iterator[tuple[Estimates, dict[str, Any]]]:
-    """:func:`estimate_pieces` by ``jobs`` processes, this one and ``jobs - 1`` workers: the same
-    pieces, the same bits.
+    """:func:`estimate_pieces` on threads: the same pieces, the same bits.
 
-    This process reads, finds the cuts (:func:`_cut`) and brings the carry past each piece with
-    the sequential stages alone (:func:`softtip.estimator.batch.carry_over`: tare, low-pass,
-    contact tracking, a small part of the work); a piece goes to a worker, which runs the whole
-    estimator on it from that carry, unless the workers have ``2`` pieces each to do already:
-    then this process estimates it (no transfer, and its carry comes with it). The pieces are
-    yielded in order. The one flag of the carry the sequential stages cannot give, whether an
-    earlier contact latched (it marks the next contact's onset as re-latched), is guessed when
-    a piece is started and checked when its predecessors are done: a piece started with the
-    wrong guess is estimated again, here, with the right one. At most ``2 * jobs + 1`` pieces
-    are held at once (memory stays bounded).
+    A thread of its own reads ``blocks``, finds the cuts (:func:`_cut`), hands each piece with
+    a copy of the carry before it to a pool of ``jobs`` threads (the whole estimator, from that
+    carry) and brings the carry past the piece with the sequential stages alone
+    (:func:`softtip.estimator.batch.carry_over`: tare, low-pass, contact tracking, a small part
+    of the work). The caller's thread takes the pieces in order. The one flag of the carry the
+    sequential stages cannot give, whether an earlier contact latched (it marks the next
+    contact's onset as re-latched), is guessed when a piece is started and checked when its
+    predecessors are done: a piece started with the wrong guess is estimated again, in the
+    caller's thread, with the right one. At most ``jobs + 1`` pieces are started and not yet
+    taken (memory stays bounded). An error in the reading thread (a bad row, a check of
+    ``blocks``) is raised in the caller's thread after the pieces before it; when the caller
+    stops (an error, a signal, a consumer that stops early), no further piece is read or
+    started, and the reading thread has ended when this generator is closed (a piece being
+    estimated finishes on its own).
     """
-    import copy
-    import itertools
-    import secrets
-    import tempfile
-    from collections import deque
+    from concurrent.futures import ThreadPoolExecutor
 
     carry = Carry()  # the sequential stages' state, ahead of the pieces being estimated
     guess = _LatchGuess(config.contact_point != "track")
-    shared_dir, counter, token = _SHARED_DIR or tempfile.gettempdir(), itertools.count(), secrets.token_hex(4)
-    workers = jobs - 1
-    pool = None
-    pending: deque = deque()
+    pool = ThreadPoolExecutor(max_workers=jobs, thread_name_prefix="softtip-piece")
+    ready: queue.Queue = queue.Queue(maxsize=jobs)  # and one more started while the reader waits to put it
+    stop = threading.Event()
 
     def start(t: NDArray, w: NDArray, cfg: EstimatorConfig) -> _Sent:
         before = copy.deepcopy(carry)
         before.had_latch = guess.next()
-        counted = before.track.count if before.track is not None else 0
-        if sum(p.future is not None and not p.future.done() for p, _ in pending) < 2 * workers:
-            path = os.path.join(shared_dir, f"softtip-piece-{os.getpid()}-{next(counter)}-{token}")
-            sent = _Sent(pool.submit(_estimate_piece, t, w, cfg, before, path), t, w, cfg, before, 0, path)
-            sent.contacts = carry_over(t, w, tip, cfg, carry)
-        else:  # every worker has work queued: estimated here, its carry with it
-            after = copy.deepcopy(before)
-            sent = _Sent(None, t, w, cfg, before, 0, None, (_piece(t, w, tip, cfg, after), after.had_latch))
-            carry.tare, carry.zi, carry.track = after.tare, after.zi, after.track
-            sent.contacts = after.track.count - counted
+        future = pool.submit(_estimate_piece, t, w, tip, cfg, copy.deepcopy(before))
+        sent = _Sent(future, t, w, cfg, before, carry_over(t, w, tip, cfg, carry))
         guess.sent(sent.contacts)
         return sent
 
-    def done(sent: _Sent, extra: dict[str, Any]) -> tuple[Estimates, dict[str, Any]]:
-        if sent.future is None:
-            est, had_latch = sent.result
-        else:
-            shared, had_latch = sent.future.result()
-            est = _from_shared(shared, sent.path)
-        if sent.before.had_latch != guess.had_latch:  # guessed wrong: again with the flag now known
-            est, had_latch = _estimate_again(sent, tip, guess.had_latch)
-        guess.back(had_latch, sent.contacts)
-        return est, extra
+    def put(item: Any) -> bool:
+        while not stop.is_set():
+            try:
+                ready.put(item, timeout=0.05)
+                return True
+            except queue.Full:
+                continue
+        return False
 
+    def read() -> None:
+        try:
+            for item in _split(blocks, tip, config, rows, carry, start):
+                if not put(item):
+                    return
+            put(_END)
+        except BaseException as exc:  # noqa: BLE001 - raised again in the caller's thread, in order
+            put(_Failed(exc))
+
+    reader = threading.Thread(target=read, name="softtip-read", daemon=True)
+    reader.start()
     try:
-        pool = _start_pool(tip, workers)
-        for sent, extra in _split(blocks, tip, config, rows, carry, start):
-            pending.append((sent, extra))
-            while pending and (len(pending) > 2 * jobs or pending[0][0].future is None or pending[0][0].future.done()):
-                yield done(*pending.popleft())
-        while pending:
-            yield done(*pending.popleft())
-    except BaseException:  # an error, Ctrl-C, SIGTERM, a consumer that stops: the workers end now
-        if pool is not None:
-            end_pool(pool)
-        for sent, _ in pending:  # and what they left for this process goes
-            if sent.path is not None:
-                with contextlib.suppress(OSError):
-                    os.unlink(sent.path)
-        raise
-    pool.shutdown()
+        while True:
+            item = ready.get()
+            if item is _END:
+                break
+            if isinstance(item, _Failed):
+                raise item.error
+            sent, extra = item
+            est, had_latch = sent.future.result()
+            if sent.before.had_latch != guess.had_latch:  # guessed wrong: again with the flag now known
+                est, had_latch = _estimate_again(sent, tip, guess.had_latch)
+            guess.back(had_latch, sent.contacts)
+            yield est, extra
+    finally:  # the end, an error, a signal, a consumer that stops: nothing more is read or started
+        stop.set()
+        pool.shutdown(wait=False, cancel_futures=True)
+        reader.join()  # it starts nothing more: the pool takes no new piece after its shutdown
+
+
+_END = object()  #: the reading thread's last item
+
+
+@dataclasses.dataclass
+class _Failed:
+    """What stopped the reading thread, for the caller's thread to raise."""
+
+    error: BaseException
 
 
 @dataclasses.dataclass
 class _Sent:
-    """A piece started: its samples and the carry it was started with (for a second run), and
-    where its estimates come from (a worker's future and file, or this process's result)."""
+    """A piece started: the estimates' future, its samples and the carry it was started with (for a second run)."""
 
     future: Any
     t: NDArray
     w: NDArray
     config: EstimatorConfig
     before: Carry
-    contacts: int
-    path: str | None  #: the file the worker leaves the estimates in
-    result: tuple[Estimates, bool] | None = None  #: estimated here: the estimates and the flag after
+    contacts: int  #: the contacts that began in it
+
+
+def _estimate_piece(t: NDArray, w: NDArray, tip: Fingertip, config: EstimatorConfig, carry: Carry) -> tuple[Estimates, bool]:
+    """On a thread of the pool: a piece's estimates from ``carry``, and whether a contact latched by its end."""
+    est = _piece(t, w, tip, config, carry)
+    return est, carry.had_latch
 
 
 def _estimate_again(sent: _Sent, tip: Fingertip, had_latch: bool) -> tuple[Estimates, bool]:
-    """A piece started with the wrong ``had_latch``, estimated again (here) with the right one;
-    and the flag after it."""
+    """A piece started with the wrong ``had_latch``, estimated again (in the caller's thread) with
+    the right one; and the flag after it."""
     sent.before.had_latch = had_latch
     est = _piece(sent.t, sent.w, tip, sent.config, sent.before)
     return est, sent.before.had_latch
 
 
 class _LatchGuess:
-    """``Carry.had_latch`` for the next piece sent, guessed, and the exact flag as the pieces come back.
+    """``Carry.had_latch`` for the next piece started, guessed (the reading thread), and the exact
+    flag as the pieces are handed out (the caller's thread).
 
-    The guess: the exact flag if it is already true; otherwise, true when a piece in flight
-    holds a contact and no contact back so far failed to latch (a log's contacts usually
-    latch: the first one sets the flag for all that follow).
+    The guess: the exact flag if it is already true; otherwise, true when a piece started holds a
+    contact and no contact handed out so far failed to latch (a log's contacts usually latch:
+    the first one sets the flag for all that follow). A guess read while the counts change is
+    only a worse guess: the exact flag decides.
     """
 
     def __init__(self, latching: bool) -> None:
         self.latching = latching  # False: contact_point "track", the flag is never used or set
-        self.had_latch = False  #: exact, after the pieces back so far
+        self.had_latch = False  #: exact, after the pieces handed out so far
         self.contacts_back = 0
         self.contacts_out = 0
+        self._lock = threading.Lock()
 
     def next(self) -> bool:
-        if not self.latching or self.had_latch:
-            return self.had_latch
-        return self.contacts_out > 0 and self.contacts_back == 0
+        with self._lock:
+            if not self.latching or self.had_latch:
+                return self.had_latch
+            return self.contacts_out > 0 and self.contacts_back == 0
 
     def sent(self, contacts: int) -> None:
-        self.contacts_out += contacts
+        with self._lock:
+            self.contacts_out += contacts
 
     def back(self, had_latch: bool, contacts: int) -> None:
-        self.had_latch = had_latch
-        self.contacts_out -= contacts
-        self.contacts_back += contacts
+        with self._lock:
+            self.had_latch = had_latch
+            self.contacts_out -= contacts
+            self.contacts_back += contacts
 
 
-_WORKER_TIP: list[Fingertip] = []  # a worker's fingertip, sent once (a mesh is large)
-
-
-def _worker_init(tip: Fingertip) -> None:
-    """A worker of :func:`_parallel_pieces`: the parent decides when it ends (Ctrl-C and SIGHUP
-    reach the whole process group; the parent ends the pool, SIGTERM at its default action)."""
-    import signal
-
-    for name in ("SIGINT", "SIGHUP"):
-        if hasattr(signal, name):
-            signal.signal(getattr(signal, name), signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    _end_with_parent()
-    _WORKER_TIP[:] = [tip]
-
-
-def _end_with_parent() -> None:
-    """End this process (a worker, or the server that forks them) as soon as its parent has
-    ended: a signal that stops the run while the server loads softtip, or while a worker is
-    started before the pool knows it, must not leave them running on. A worker also closes
-    the server's keep-alive pipe it inherits (the server ends when the run's end closes it)."""
-    import threading
-    import time
-
-    parent = os.getppid()
-    if "multiprocessing.forkserver" in sys.modules:  # a worker: it starts no process of its own
-        from multiprocessing import forkserver
-
-        fd = getattr(forkserver._forkserver, "_forkserver_alive_fd", None)
-        if fd is not None and parent != 1:
-            with contextlib.suppress(OSError):
-                os.close(fd)
-            forkserver._forkserver._forkserver_alive_fd = None
-
-    def watch() -> None:
-        while os.getppid() == parent:
-            time.sleep(0.2)
-        os._exit(1)
-
-    threading.Thread(target=watch, name="softtip-parent-watch", daemon=True).start()
-
-
-def _estimate_piece(t: NDArray, w: NDArray, config: EstimatorConfig, carry: Carry, path: str) -> tuple[Any, bool]:
-    """In a worker: a piece's estimates from ``carry`` (through the file ``path``: :func:`_to_shared`),
-    and whether a contact latched by its end."""
-    est = _piece(t, w, _WORKER_TIP[0], config, carry)
-    return _to_shared(est, path), carry.had_latch
-
-
-#: Where a worker leaves a piece's arrays for the parent: shared memory where there is one.
-_SHARED_DIR = "/dev/shm" if os.path.isdir("/dev/shm") and os.access("/dev/shm", os.W_OK) else None
-_ALIGN = 64
-
-
-def _to_shared(obj: Any, path: str) -> tuple[bytes, list[int] | None]:
-    """``obj`` pickled with its arrays' bytes written once into a new file ``path`` (not into
-    the pickle, which would copy them twice more and once again in the parent: a piece's
-    estimates are ~330 B per sample); :func:`_from_shared` maps them back without a copy.
-    Where the file cannot be written (shared memory full, say) the arrays go in the pickle
-    (sizes ``None``), and no file is left."""
-    import pickle
-
-    buffers: list = []
-    head = pickle.dumps(obj, protocol=5, buffer_callback=buffers.append)
-    raws = [b.raw() for b in buffers]
-    sizes = [r.nbytes for r in raws]
-    try:
-        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
-    except OSError:
-        return pickle.dumps(obj, protocol=5), None
-    try:  # written, not mapped: a mapping would fault in each new page (three times slower)
-        for r, n in zip(raws, sizes):
-            for part in (r, bytes(-n % _ALIGN)):
-                view = memoryview(part)
-                while len(view):
-                    view = view[os.write(fd, view) :]
-        if not sizes:
-            os.write(fd, b"\0")
-    except OSError:
-        os.close(fd)
-        os.unlink(path)
-        return pickle.dumps(obj, protocol=5), None
-    os.close(fd)
-    return head, sizes
-
-
-def _from_shared(shared: tuple[bytes, list[int] | None], path: str) -> Any:
-    """The object :func:`_to_shared` left in ``path``; its arrays are views of the file's memory
-    (the file is removed at once; the memory goes with the last array)."""
-    import mmap
-    import pickle
-
-    head, sizes = shared
-    if sizes is None:  # the worker could not write the file
-        return pickle.loads(head)
-    total = sum(-(-n // _ALIGN) * _ALIGN for n in sizes) or 1
-    fd = os.open(path, os.O_RDWR)
-    try:
-        mm = mmap.mmap(fd, total)
-    finally:
-        os.close(fd)
-        os.unlink(path)
-    view, at, buffers = memoryview(mm), 0, []
-    for n in sizes:
-        buffers.append(view[at : at + n])
-        at += -(-n // _ALIGN) * _ALIGN
-    return pickle.loads(head, buffers=buffers)
-
-
-def _start_pool(tip: Fingertip, jobs: int) -> Any:
-    """``jobs`` worker processes (:func:`softtip.apps.pool.start_pool`), started at once: the
-    server's imports then overlap this process's reading of the first piece."""
-    from softtip.apps.pool import start_pool
-
-    return start_pool(jobs, _worker_init, (tip,))
-
-
-def warm_kernels() -> None:
-    """Load the compiled kernels the pipeline uses (numba's cache; compiled there the first time)
-    by running the estimator on the example grasp, latched, line-fit and low-pass filtered, with them
-    forced on."""
-    import warnings
-
-    from softtip.core._jit import jit_enabled, set_jit
-    from softtip.estimator.results import EstimatorWarning
-    from softtip.io.examples import EXAMPLE_PATH
-    from softtip.io.tables import read_log
-
-    if not jit_enabled(1 << 62):  # no numba, or SOFTTIP_NUMBA=0: nothing to load
-        return
-    log = read_log(EXAMPLE_PATH, units="si")
-    old = set_jit(True)
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", EstimatorWarning)
-            configs = (EstimatorConfig(), EstimatorConfig(contact_point="line-fit"), EstimatorConfig(lowpass_hz=10.0))
-            for config in configs:
-                estimate(log.t, log.wrench, "murakami2006", config)
-    finally:
-        set_jit(old)

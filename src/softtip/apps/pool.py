@@ -1,16 +1,17 @@
-"""Ending a process pool at once: the applications' worker pools (the reproduction's
-conditions, the pieces of ``softtip estimate --jobs``) on an error, an interrupt or a caller
-that stops early."""
+"""Worker processes for the reproduction's conditions (``softtip reproduce --jobs``): started
+from a server that has loaded softtip's compiled kernels, ended at once on an error, an
+interrupt or a caller that stops early."""
 
 from __future__ import annotations
 
 import contextlib
 import os
+import sys
 import tempfile
 import time
 from concurrent.futures import ProcessPoolExecutor
 
-__all__ = ["end_pool", "start_pool"]
+__all__ = ["end_pool", "start_pool", "warm_kernels"]
 
 
 def start_pool(jobs: int, initializer, initargs: tuple = ()) -> ProcessPoolExecutor:
@@ -19,7 +20,7 @@ def start_pool(jobs: int, initializer, initargs: tuple = ()) -> ProcessPoolExecu
     (which may hold threads, gigabytes, and signal handlers that raise).
 
     ``initializer`` runs first in each worker; it should call
-    :func:`softtip.apps.chunked._end_with_parent`, so that a worker started while a signal
+    :func:`_end_with_parent`, so that a worker started while a signal
     stops this process (before the pool knows the worker) ends with it. A signal while the
     workers start ends those already started (:func:`end_pool`) and is raised again.
     """
@@ -86,3 +87,55 @@ def end_pool(pool: ProcessPoolExecutor, timeout: float = 5.0) -> None:
             if p.is_alive():
                 p.kill()
                 p.join(1.0)
+
+
+def _end_with_parent() -> None:
+    """End this process (a worker, or the server that forks them) as soon as its parent has
+    ended: a signal that stops the run while the server loads softtip, or while a worker is
+    started before the pool knows it, must not leave them running on. A worker also closes
+    the server's keep-alive pipe it inherits (the server ends when the run's end closes it)."""
+    import threading
+    import time
+
+    parent = os.getppid()
+    if "multiprocessing.forkserver" in sys.modules:  # a worker: it starts no process of its own
+        from multiprocessing import forkserver
+
+        fd = getattr(forkserver._forkserver, "_forkserver_alive_fd", None)
+        if fd is not None and parent != 1:
+            with contextlib.suppress(OSError):
+                os.close(fd)
+            forkserver._forkserver._forkserver_alive_fd = None
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(0.2)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="softtip-parent-watch", daemon=True).start()
+
+
+def warm_kernels() -> None:
+    """Load the compiled kernels the pipeline uses (numba's cache; compiled there the first time)
+    by running the estimator on the example grasp, latched, line-fit and low-pass filtered, with them
+    forced on."""
+    import warnings
+
+    from softtip.core._jit import jit_enabled, set_jit
+    from softtip.estimator import EstimatorConfig, estimate
+    from softtip.estimator.results import EstimatorWarning
+    from softtip.io.examples import EXAMPLE_PATH
+    from softtip.io.tables import read_log
+
+    if not jit_enabled(1 << 62):  # no numba, or SOFTTIP_NUMBA=0: nothing to load
+        return
+    log = read_log(EXAMPLE_PATH, units="si")
+    old = set_jit(True)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", EstimatorWarning)
+            configs = (EstimatorConfig(), EstimatorConfig(contact_point="line-fit"), EstimatorConfig(lowpass_hz=10.0))
+            for config in configs:
+                estimate(log.t, log.wrench, "murakami2006", config)
+    finally:
+        set_jit(old)

@@ -285,7 +285,7 @@ def _worker_init() -> None:
     terminates the workers (SIGTERM, at its default action here). A worker whose parent has
     ended (a signal while the pool started, before it knew the worker) ends too.
     """
-    from softtip.apps.chunked import _end_with_parent
+    from softtip.apps.pool import _end_with_parent
 
     for name in ("SIGINT", "SIGHUP"):
         if hasattr(signal, name):

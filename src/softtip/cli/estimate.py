@@ -44,6 +44,10 @@ from softtip.estimator.tare import bias_to_toml
 
 __all__ = ["estimate"]
 
+#: ``--jobs`` when not given, for a log processed in pieces: the cores this process may use, at
+#: most this many (more were not measured).
+DEFAULT_JOBS_MAX = 2
+
 @click.command(
     "estimate",
     help="""Estimate contact point, normal, spin torque, contact state and edge direction
@@ -121,10 +125,11 @@ from the bag's /tf.
     "--rerun-save, --payload]",
 )  # fmt: skip
 @option(
-    "--jobs", type=click.IntRange(1, 64), default=1, show_default=True, metavar="N",
-    help="Processes estimating the pieces of a log processed in pieces (see --chunk-rows) at the same time, this one and "
-    "N-1 workers: the output is the same, bit for bit, as with --jobs 1 (all in this process); each worker holds a piece "
-    "in memory.",
+    "--jobs", type=click.IntRange(1, 64), default=None, metavar="N",
+    help="Threads (cores) for a log processed in pieces (see --chunk-rows): N estimate pieces at the same time and "
+    "N format CSV, while one more reads the log and the main one writes; 1: all on one thread. The output is the same, "
+    "bit for bit, whatever N; up to N+3 pieces are held in memory. [default: the cores this process may use, at most "
+    f"{DEFAULT_JOBS_MAX}]",
 )  # fmt: skip
 @full_scale_option
 @log_format_options
@@ -160,7 +165,7 @@ def _estimate(
     gravity_frame=None,
     chunk_rows=None,
     full_scale=None,
-    jobs=1,
+    jobs=None,
     **estimator_opts,
 ):
     from softtip.io.examples import EXAMPLE_ANGLE_DEG, EXAMPLE_PATH
@@ -431,6 +436,15 @@ def _auto_chunk_rows(path: str) -> int | None:
     return DEFAULT_PIECE_ROWS if large else None
 
 
+def _default_jobs() -> int:
+    """``--jobs`` when not given: the cores this process may run on, at most :data:`DEFAULT_JOBS_MAX`."""
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        cores = os.cpu_count() or 1
+    return max(1, min(cores, DEFAULT_JOBS_MAX))
+
+
 def _is_own_stdout(path) -> bool:
     """Whether ``path`` (``/dev/stdout``, ``/dev/fd/1``) is this process's standard output, and not a regular file."""
     import stat
@@ -444,7 +458,7 @@ def _is_own_stdout(path) -> bool:
 
 def _estimate_in_pieces(
     input_path, units, rows, fingertip, config, estimator_opts, *, output, output_units, tip, quiet, save_bias, outputs,
-    sensor_range=None, jobs=1, named=None,
+    sensor_range=None, jobs=None, named=None,
 ) -> bool:
     """``softtip estimate`` piece by piece (:mod:`softtip.apps.chunked`) into ``output`` (a path),
     or, for ``output`` None, onto standard output as each piece is done (``named``: the ``-o``
@@ -461,6 +475,7 @@ def _estimate_in_pieces(
     # (--chunk-rows 1 took minutes for 5e4 rows): at most about MAX_PIECES pieces
     # (and memory stays bounded: that floor is at most MAX_FLOOR_ROWS)
     rows = max(rows, min(-(-_row_estimate(input_path) // MAX_PIECES), MAX_FLOOR_ROWS))
+    jobs = jobs or _default_jobs()
     fmt = table_format(output) if output is not None else "csv"
     sent = [0]  # rows written to standard output: past the first, a failure cannot be taken back
     began = [False]  # whether writing onto standard output began (the header may be there with no row)
@@ -510,7 +525,7 @@ def _estimate_in_pieces(
                 raise NotStreamable("wrong units: the one-shot run says so") from None
 
         def run(out) -> None:
-            writer = TableWriter(out, format=fmt, metadata=parquet_metadata(fingertip, tip, output_units, blocks))
+            writer = TableWriter(out, format=fmt, metadata=parquet_metadata(fingertip, tip, output_units, blocks), threads=jobs)
             pieces = estimate_pieces(checked(), fingertip, config, rows, jobs=jobs)
             try:
                 for k, (est, extra) in enumerate(pieces):
@@ -530,7 +545,7 @@ def _estimate_in_pieces(
                     bar.update(len(est))
                     totals.add(est, summarise_contacts(est) if not quiet else [])
             finally:
-                pieces.close()  # with --jobs, the workers end now (an error, a signal), not when collected
+                pieces.close()  # with --jobs, no piece is read or started from now (an error, a signal)
                 writer.close()
             if vote.n >= 5 and vote.median_above():
                 raise NotStreamable("wrong units: the one-shot run says so")  # as check_units decides

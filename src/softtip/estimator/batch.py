@@ -209,6 +209,16 @@ def estimate(
     >>> sorted(set(est.state_names.tolist()))
     ['line', 'none', 'point']
     """
+    est = _estimate(t, wrench, tip, config, carry)
+    for msg in est.warnings:
+        warnings.warn(msg, EstimatorWarning, stacklevel=2)
+    return est
+
+
+def _estimate(t: ArrayLike, wrench: ArrayLike, tip: Fingertip | str, config: EstimatorConfig | None,
+              carry: Carry | None) -> Estimates:  # fmt: skip
+    """:func:`estimate` without issuing its warnings (they are in :attr:`Estimates.warnings`): what
+    a thread may call (``warnings.catch_warnings`` is not thread-safe)."""
     tip = load_fingertip(tip)
     config = resolve_depth(config or EstimatorConfig(), tip)
     t, w = validate_log(t, wrench)
@@ -233,8 +243,6 @@ def estimate(
         warn.append(started_in_contact_message(config))
     if ct.drift_alarm >= 0:
         warn.append(drift_message(config, float(t[ct.drift_alarm])))
-    for msg in warn:
-        warnings.warn(msg, EstimatorWarning, stacklevel=2)
     return Estimates(
         t=t,
         taring=taring,

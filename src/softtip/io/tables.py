@@ -1749,15 +1749,16 @@ def _object_cells(a: np.ndarray) -> list[str]:
     return [_quote(c) for c in cells]
 
 
-def _write_rows(out: TextIO | BinaryIO, plan: _Plan, *, header: bool = True) -> None:
+def _write_rows(out: TextIO | BinaryIO, plan: _Plan, *, header: bool = True, threads: int | None = None) -> None:
     """Write the table to a text stream (Parquet: to its binary buffer), in blocks.
 
-    A binary stream (an atomic writer's temporary file, say) is written to as UTF-8.
+    A binary stream (an atomic writer's temporary file, say) is written to as UTF-8. ``threads``:
+    the most threads formatting CSV blocks at once (default :data:`_WRITE_THREADS`).
     """
     if not hasattr(out, "encoding"):
         text = io.TextIOWrapper(out, encoding="utf-8", newline="", write_through=True)  # type: ignore[arg-type]
         try:
-            _write_rows(text, plan, header=header)
+            _write_rows(text, plan, header=header, threads=threads)
         finally:
             text.flush()
             text.detach()
@@ -1792,7 +1793,7 @@ def _write_rows(out: TextIO | BinaryIO, plan: _Plan, *, header: bool = True) -> 
         return sink.getvalue()
 
     starts = range(0, plan.n, _CHUNK_ROWS)
-    workers = min(_WRITE_THREADS, os.cpu_count() or 1, len(starts))
+    workers = min(threads or _WRITE_THREADS, os.cpu_count() or 1, len(starts))
     with ThreadPoolExecutor(max_workers=max(workers, 1)) as pool:
         pending: deque = deque()
         for start in starts:
@@ -2518,6 +2519,8 @@ class TableWriter:
         ``"arrow"``: Arrow IPC, the Feather v2 file format (one record batch per block).
     float_format, metadata, statistics
         As :func:`write_table`.
+    threads : int, optional
+        CSV: the most threads formatting blocks at once (default: as :func:`write_table`).
 
     Each :meth:`write` appends rows with the same columns; the CSV header comes with the
     first. CSV text cells are quoted, when one needs it, piece by piece (each piece as
@@ -2525,8 +2528,9 @@ class TableWriter:
     """
 
     def __init__(self, out: TextIO | BinaryIO, *, parquet: bool = False, format: str | None = None, float_format: str = "%.10g",
-                 metadata: Mapping[str, str] | None = None, statistics: bool = False):
+                 metadata: Mapping[str, str] | None = None, statistics: bool = False, threads: int | None = None):
         self.format = format or ("parquet" if parquet else "csv")
+        self.threads = threads
         if self.format not in TABLE_FORMATS:
             raise ValueError(f"format {self.format!r}; expected one of: {', '.join(TABLE_FORMATS)}")
         self.out, self.parquet, self.float_format = out, self.format != "csv", float_format
@@ -2559,7 +2563,7 @@ class TableWriter:
                 if progress is not None:
                     progress(stop - start)
         else:
-            _write_rows(out, plan, header=self.names is None)  # type: ignore[arg-type]
+            _write_rows(out, plan, header=self.names is None, threads=self.threads)  # type: ignore[arg-type]
         self.names = plan.names
 
     def close(self) -> None:
