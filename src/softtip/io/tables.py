@@ -181,7 +181,10 @@ def _to_seconds(t: NDArray[np.float64], si: float) -> NDArray[np.float64]:
 
 def _to_seconds_like(wrench: NDArray[np.float64], scale: NDArray[np.float64]) -> NDArray[np.float64]:
     """Each column times its ``scale``, dividing by an exact power of ten where the scale is one's
-    inverse (N·mm: ``/ 1000``, correctly rounded), multiplying otherwise."""
+    inverse (N·mm: ``/ 1000``, correctly rounded), multiplying otherwise. SI columns: ``wrench``
+    itself (each value would be divided by 1)."""
+    if (scale == 1.0).all():
+        return wrench
     out = np.empty_like(wrench)
     for k, si in enumerate(scale):
         out[:, k] = _to_seconds(wrench[:, k], float(si))
@@ -291,7 +294,8 @@ def _finish(
     cut = _cut_last_line(raw, source, len(t_s)) if raw is not None and header.delimiter == "," else None
     return Log(
         t=t_s,
-        wrench=np.asarray(wrench, dtype=np.float64) * scale,
+        # in SI already: the values as they are (x * 1.0 is x), without two copies of the wrench
+        wrench=np.ascontiguousarray(wrench, dtype=np.float64) if (scale == 1.0).all() else np.asarray(wrench, dtype=np.float64) * scale,
         extra=extra,
         source=source,
         units=_units_label(force_unit, moment_unit),
@@ -1118,7 +1122,10 @@ def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None, 
     n = table.num_rows
     if n == 0:
         raise InputError(f"{source}: no rows; expected at least one row of {_EXPECTED_HEADER}")
-    block = np.empty((n, 7))
+    # t and the wrench filled in place, each once (a block of 7 columns copied out again cost a
+    # third of the read)
+    t = np.empty(n)
+    wrench = np.empty((n, 6))
     for i, name in enumerate(REQUIRED_COLUMNS):
         col = table.column(index[name])
         where = f"{source}: column {names[index[name]]!r}"
@@ -1127,12 +1134,12 @@ def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None, 
         if col.null_count:
             row = int(np.argmax(col.is_null().to_numpy(zero_copy_only=False))) + 1
             raise InputError(f"{where}, row {row}: empty (null); expected a number")
-        block[:, i] = col.to_numpy()
-        bad = ~np.isfinite(block[:, i])
+        values = t if i == 0 else wrench[:, i - 1]
+        values[:] = col.to_numpy()
+        bad = ~np.isfinite(values)
         if bad.any():
             row = int(np.argmax(bad))
-            raise InputError(f"{where}, row {row + 1}: expected a finite number, got {float(block[row, i])!r}")
-    t = block[:, 0]
+            raise InputError(f"{where}, row {row + 1}: expected a finite number, got {float(values[row])!r}")
     back = np.diff(t) < 0
     if back.any():
         row = int(np.argmax(back)) + 1
@@ -1145,8 +1152,8 @@ def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None, 
     }
     repeated, notes = _time_notes(t, source, None)
     return Log(
-        t=np.ascontiguousarray(t),
-        wrench=wrench_to_si(np.ascontiguousarray(block[:, 1:]), units),
+        t=t,
+        wrench=wrench if units == "si" else wrench_to_si(wrench, units),  # SI already: x * 1.0 is x
         extra=extra,
         source=source,
         units=units,
@@ -1554,7 +1561,8 @@ def write_table(
         ``dest`` cannot be created or replaced (missing directory, no permission, a
         directory at ``dest``). It is a ``ValueError`` too.
     """
-    plan = _plan_table(columns, float_format)
+    text = dest is None or hasattr(dest, "write") or _columnar(dest) is None  # type: ignore[arg-type]
+    plan = _plan_table(columns, float_format, text=text)
     plan.progress = progress
     if dest is None:
         _write_rows(sys.stdout, plan)
@@ -1586,8 +1594,9 @@ class _Plan:
     compiled: _Columns | None = None  # how the compiled CSV formatter takes the columns
 
 
-def _plan_table(columns: Mapping[str, Sequence[Any] | np.ndarray], float_format: str) -> _Plan:
-    """Validate the columns and decide each one's cell format, before touching ``dest``."""
+def _plan_table(columns: Mapping[str, Sequence[Any] | np.ndarray], float_format: str, *, text: bool = True) -> _Plan:
+    """Validate the columns and decide each one's cell format, before touching ``dest``
+    (``text``: for CSV; a binary table needs no quoting, which is not looked for then)."""
     if not columns:
         raise ValueError("write_table: no columns; expected at least one")
     try:
@@ -1625,12 +1634,12 @@ def _plan_table(columns: Mapping[str, Sequence[Any] | np.ndarray], float_format:
         elif kind == "U":
             specs.append("%s")
             converters.append(_str_cells)
-            if _needs_quotes(arr):
+            if text and _needs_quotes(arr):
                 quoting = "needed"
         elif kind == "O" and _is_text(arr):  # a text column kept as str objects (text_column): as unicode
             specs.append("%s")
             converters.append(_str_cells)
-            if any(ch in "".join(arr.tolist()) for ch in _CSV_SPECIAL):
+            if text and any(ch in "".join(arr.tolist()) for ch in _CSV_SPECIAL):
                 quoting = "needed"
         else:  # bytes, objects, complex, datetimes: their str(), quoted when needed
             specs.append("%s")
@@ -2659,7 +2668,7 @@ class TableWriter:
 
     def write(self, columns: Mapping[str, Sequence[Any] | np.ndarray], progress: Callable[[int], object] | None = None) -> None:
         """Append the rows of ``columns`` (the same names, in the same order, every time)."""
-        plan = _plan_table(columns, self.float_format)
+        plan = _plan_table(columns, self.float_format, text=not self.parquet)
         if self.names is not None and plan.names != self.names:
             raise ValueError(f"columns {plan.names} differ from the first piece's {self.names}")
         plan.progress = progress
