@@ -58,7 +58,7 @@ _TENS = np.array([float(f"1e{q}") for q in range(-_TEN_LOW, 310)])
 # "00" "01" ... "99": two digits of an integer at a time.
 # unsigned constants: the digits' arithmetic stays unsigned (no float promotion in numba)
 _U8, _U10 = np.uint64(10**8), np.uint64(10)
-_U1, _U2B, _U8B, _U56, _U64 = np.uint64(1), np.uint64(2), np.uint64(8), np.uint64(56), np.uint64(64)
+_U1, _U2B, _U8B, _U48, _U56, _U64 = np.uint64(1), np.uint64(2), np.uint64(8), np.uint64(48), np.uint64(56), np.uint64(64)
 # eight '0' characters; "0.000000"
 _ZEROS = np.uint64(0x3030303030303030)
 _DECIMAL_ZEROS = np.uint64(int.from_bytes(b"0.000000", "little"))
@@ -288,7 +288,11 @@ def format_rows(floats, ints, codes, cell_off, data, quote, layout, digits, far_
                 d0 = (lo_text >> shift) | pad0
                 d1 = _ZEROS
             else:
-                hi_text = _text8(hi)
+                if digits <= 10:  # hi < 100: its two digits by one multiplication, in the word's top bytes
+                    tens_digit = (hi * np.uint64(103)) >> np.uint64(10)
+                    hi_text = (tens_digit | ((hi - tens_digit * _U10) << _U8B) | np.uint64(0x3030)) << _U48
+                else:
+                    hi_text = _text8(hi)
                 d0 = (hi_text >> shift) | (lo_text << back)
                 d1 = (lo_text >> shift) | pad1
             # nd: the digits up to the last that is not a zero (the first is not)
