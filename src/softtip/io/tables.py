@@ -43,11 +43,12 @@ that log took 0.51 s of CPU against 3.44 s for the former reader, and writing th
 columns ``softtip estimate`` had then (47 now) for it 4.3 s (pyarrow's CSV writer formatting 46 M numbers,
 ~90 ns each) against 16 s for the former writer; Parquet: read 0.19 s, write 0.60 s (2.40 s
 with pyarrow's default dictionary encoding of every column). CSV numbers are now formatted by a
-compiled loop where numba is installed (:mod:`softtip.io._csvtext`, the same bytes; 48-59
-against 79-83 ns per number in ``python benchmarks/bench_core.py --only bounds``). pandas' C
+compiled loop where numba is installed (:mod:`softtip.io._csvtext`, the same bytes; 18 ns
+per number against 83 ns for the fallback in ``python benchmarks/bench_core.py --only bounds``,
+48-59 before its digits were made a word at a time). pandas' C
 engine, measured in pyarrow's place on the same 93 MB (1e6 rows, 7 columns; seven runs): 0.28-0.46 s
-of CPU against pyarrow's 0.27-0.42 s, the same values: not faster beyond the noise, and not a
-dependency; pyarrow stays.
+of CPU against pyarrow's 0.27-0.42 s, the same values (re-measured with ``--only bounds``: 0.27
+against 0.26 s): not faster beyond the noise, and not a dependency; pyarrow stays.
 
 Output tables are written atomically when going to a path: a failure never leaves a
 partial file behind and never touches an existing file at the destination.
