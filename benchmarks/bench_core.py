@@ -812,9 +812,16 @@ def csv_formatters(columns: dict) -> None:
     except ImportError:
         compiled = None
     else:
-        sio._compiled_block(plan, 0, 1)  # compiled (or loaded from numba's cache) before the clock
-        compiled = per_number(lambda: [sio._compiled_block(plan, s, min(s + sio._CHUNK_ROWS, n)) for s in starts])
-        same = all(bytes(sio._compiled_block(plan, s, min(s + sio._CHUNK_ROWS, n))) == _fallback_bytes(plan, s, n) for s in starts[:4])
+        buffers = sio._TextBuffers()  # reused block after block, as write_table does
+
+        def text(s):
+            out, used = sio._compiled_block(plan, s, min(s + sio._CHUNK_ROWS, n), buffers)
+            buffers.put(out, used)
+            return bytes(out[:used])
+
+        text(0)  # compiled (or loaded from numba's cache) before the clock
+        compiled = per_number(lambda: [buffers.put(*sio._compiled_block(plan, s, min(s + sio._CHUNK_ROWS, n), buffers)) for s in starts])
+        same = all(text(s) == _fallback_bytes(plan, s, n) for s in starts[:4])
     few = min(n, 1 << 16)
     printf = timed(lambda: sio._write_rows_printf(io.StringIO(), sio._plan_table({k: v[:few] for k, v in floats.items()}, "%.10e")), 1)[1]
     rows["Python's printf (%.10e, cell by cell in C)"] = printf / (few * len(floats)) * 1e9

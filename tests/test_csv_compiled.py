@@ -47,6 +47,15 @@ def _ties(draw_int: int, exp: int) -> float:
     return float(f"{draw_int}5e{exp}")
 
 
+def _near_power_of_ten(q: int, steps: int, sign: float) -> float:
+    """The float nearest 10**q moved ``steps`` units in the last place (where the exponent of
+    the first digit changes)."""
+    x = float(f"1e{q}")
+    for _ in range(abs(steps)):
+        x = math.nextafter(x, math.inf if steps > 0 else 0.0)
+    return sign * x
+
+
 # floats of every kind: the whole range (subnormals, 1e±308), special values, and values near
 # the edges the formatter cares about (powers of ten, the 10th digit, 2**53)
 FLOATS = st.one_of(
@@ -58,11 +67,12 @@ FLOATS = st.one_of(
     st.builds(lambda k, s: float(2**53 + k) * s, st.integers(-5000, 5000), st.sampled_from([1.0, -1.0])),
     st.builds(lambda m, e: m * 10.0**e, st.integers(-(10**12), 10**12), st.integers(-40, 40)),
     st.builds(lambda x, e: math.nextafter(10.0**e, x), st.sampled_from([0.0, math.inf]), st.integers(-30, 30)),
+    st.builds(_near_power_of_ten, st.integers(-325, 308), st.integers(-3, 3), st.sampled_from([1.0, -1.0])),
 )
 
 
 @settings(max_examples=300, deadline=None)
-@given(st.lists(FLOATS, min_size=1, max_size=40), st.sampled_from([10, 10, 1, 3, 6, 13]))
+@given(st.lists(FLOATS, min_size=1, max_size=40), st.sampled_from([10, 10, 10, *range(1, 14)]))
 @example([9.9999999995, 99999.999995, 0.1 + 0.2, 1 / 3, -2.5e-7, 1234567890.5, 12345678905.0], 10)
 def test_the_compiled_and_the_fallback_text_are_the_same_bytes(values, digits):
     x = np.array(values, dtype=np.float64)
@@ -100,7 +110,55 @@ def test_the_compiled_path_is_taken():
     plan = tables._plan_table({"x": np.array([1.5, np.nan])}, "%.10g")
     set_jit(True)
     assert tables._compiled_csv(plan)
-    assert bytes(tables._compiled_block(plan, 0, 2)) == b"1.5\nnan\n"
+    out, used = tables._compiled_block(plan, 0, 2)
+    assert bytes(out[:used]) == b"1.5\nnan\n"
     set_jit(False)
     assert not tables._compiled_csv(plan)
     assert not tables._compiled_csv(tables._plan_table({"x": np.array([1.5])}, "%.17g"))  # beyond its digits
+
+
+@settings(max_examples=300, deadline=None)
+@given(FLOATS)
+def test_the_exponent_of_the_first_digit_is_exact_but_next_to_a_power_of_ten(x):
+    """floor(log10(|x|)) from the binary exponent (no log10): exact, except that a value
+    between 10**q and the float nearest it may take the other side (the text is the same)."""
+    from fractions import Fraction
+
+    from softtip.io.tables import _digit_exponents
+
+    k = _digit_exponents(np.array([x]), 10)[0]
+    if math.isnan(x):
+        assert math.isnan(k)
+        return
+    if x == 0 or math.isinf(x):
+        assert k == (math.inf if x == 0 else -math.inf)
+        return
+    p = 9 - int(k)
+    a = Fraction(abs(x))
+    exact = math.floor(math.log10(abs(x)))  # then made exact: 10**exact <= |x| < 10**(exact + 1)
+    while Fraction(10) ** exact > a:
+        exact -= 1
+    while Fraction(10) ** (exact + 1) <= a:
+        exact += 1
+    if p != exact:  # |x| between 10**q and the float nearest it
+        q = max(p, exact)
+        assert abs(p - exact) == 1
+        nearest = Fraction(float(f"1e{q}"))
+        assert min(Fraction(10) ** q, nearest) <= a <= max(Fraction(10) ** q, nearest)
+
+
+def test_a_writer_reuses_its_buffers_across_pieces_and_tables_of_other_shapes():
+    """The compiled formatter's memory is kept from one block (and piece) to the next: a
+    piece of other columns, or more rows, must not see the previous piece's values."""
+    from softtip.io.tables import TableWriter
+
+    set_jit(True)
+    rng = np.random.default_rng(8380)
+    pieces = [{"t": rng.normal(size=n), "s": np.array(["a", "b"] * (n // 2)), "k": np.arange(n)} for n in (6, 10, 4)]
+    out = io.StringIO()
+    writer = TableWriter(out)
+    for piece in pieces:
+        writer.write(piece)
+    writer.close()
+    whole = {k: np.concatenate([p[k] for p in pieces]) for k in pieces[0]}
+    assert out.getvalue().encode() == _text(whole, False)

@@ -43,11 +43,12 @@ that log took 0.51 s of CPU against 3.44 s for the former reader, and writing th
 columns ``softtip estimate`` had then (47 now) for it 4.3 s (pyarrow's CSV writer formatting 46 M numbers,
 ~90 ns each) against 16 s for the former writer; Parquet: read 0.19 s, write 0.60 s (2.40 s
 with pyarrow's default dictionary encoding of every column). CSV numbers are now formatted by a
-compiled loop where numba is installed (:mod:`softtip.io._csvtext`, the same bytes; 48-59
-against 79-83 ns per number in ``python benchmarks/bench_core.py --only bounds``). pandas' C
+compiled loop where numba is installed (:mod:`softtip.io._csvtext`, the same bytes; 18 ns
+per number against 83 ns for the fallback in ``python benchmarks/bench_core.py --only bounds``,
+48-59 before its digits were made a word at a time). pandas' C
 engine, measured in pyarrow's place on the same 93 MB (1e6 rows, 7 columns; seven runs): 0.28-0.46 s
-of CPU against pyarrow's 0.27-0.42 s, the same values: not faster beyond the noise, and not a
-dependency; pyarrow stays.
+of CPU against pyarrow's 0.27-0.42 s, the same values (re-measured with ``--only bounds``: 0.27
+against 0.26 s): not faster beyond the noise, and not a dependency; pyarrow stays.
 
 Output tables are written atomically when going to a path: a failure never leaves a
 partial file behind and never touches an existing file at the destination.
@@ -181,7 +182,10 @@ def _to_seconds(t: NDArray[np.float64], si: float) -> NDArray[np.float64]:
 
 def _to_seconds_like(wrench: NDArray[np.float64], scale: NDArray[np.float64]) -> NDArray[np.float64]:
     """Each column times its ``scale``, dividing by an exact power of ten where the scale is one's
-    inverse (N·mm: ``/ 1000``, correctly rounded), multiplying otherwise."""
+    inverse (N·mm: ``/ 1000``, correctly rounded), multiplying otherwise. SI columns: ``wrench``
+    itself (each value would be divided by 1)."""
+    if (scale == 1.0).all():
+        return wrench
     out = np.empty_like(wrench)
     for k, si in enumerate(scale):
         out[:, k] = _to_seconds(wrench[:, k], float(si))
@@ -291,7 +295,8 @@ def _finish(
     cut = _cut_last_line(raw, source, len(t_s)) if raw is not None and header.delimiter == "," else None
     return Log(
         t=t_s,
-        wrench=np.asarray(wrench, dtype=np.float64) * scale,
+        # in SI already: the values as they are (x * 1.0 is x), without two copies of the wrench
+        wrench=np.ascontiguousarray(wrench, dtype=np.float64) if (scale == 1.0).all() else np.asarray(wrench, dtype=np.float64) * scale,
         extra=extra,
         source=source,
         units=_units_label(force_unit, moment_unit),
@@ -1118,7 +1123,10 @@ def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None, 
     n = table.num_rows
     if n == 0:
         raise InputError(f"{source}: no rows; expected at least one row of {_EXPECTED_HEADER}")
-    block = np.empty((n, 7))
+    # t and the wrench filled in place, each once (a block of 7 columns copied out again cost a
+    # third of the read)
+    t = np.empty(n)
+    wrench = np.empty((n, 6))
     for i, name in enumerate(REQUIRED_COLUMNS):
         col = table.column(index[name])
         where = f"{source}: column {names[index[name]]!r}"
@@ -1127,12 +1135,12 @@ def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None, 
         if col.null_count:
             row = int(np.argmax(col.is_null().to_numpy(zero_copy_only=False))) + 1
             raise InputError(f"{where}, row {row}: empty (null); expected a number")
-        block[:, i] = col.to_numpy()
-        bad = ~np.isfinite(block[:, i])
+        values = t if i == 0 else wrench[:, i - 1]
+        values[:] = col.to_numpy()
+        bad = ~np.isfinite(values)
         if bad.any():
             row = int(np.argmax(bad))
-            raise InputError(f"{where}, row {row + 1}: expected a finite number, got {float(block[row, i])!r}")
-    t = block[:, 0]
+            raise InputError(f"{where}, row {row + 1}: expected a finite number, got {float(values[row])!r}")
     back = np.diff(t) < 0
     if back.any():
         row = int(np.argmax(back)) + 1
@@ -1145,8 +1153,8 @@ def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None, 
     }
     repeated, notes = _time_notes(t, source, None)
     return Log(
-        t=np.ascontiguousarray(t),
-        wrench=wrench_to_si(np.ascontiguousarray(block[:, 1:]), units),
+        t=t,
+        wrench=wrench if units == "si" else wrench_to_si(wrench, units),  # SI already: x * 1.0 is x
         extra=extra,
         source=source,
         units=units,
@@ -1554,7 +1562,8 @@ def write_table(
         ``dest`` cannot be created or replaced (missing directory, no permission, a
         directory at ``dest``). It is a ``ValueError`` too.
     """
-    plan = _plan_table(columns, float_format)
+    text = dest is None or hasattr(dest, "write") or _columnar(dest) is None  # type: ignore[arg-type]
+    plan = _plan_table(columns, float_format, text=text)
     plan.progress = progress
     if dest is None:
         _write_rows(sys.stdout, plan)
@@ -1583,10 +1592,12 @@ class _Plan:
     metadata: dict[str, str] | None = None
     statistics: bool = False
     progress: Callable[[int], object] | None = None
+    compiled: _Columns | None = None  # how the compiled CSV formatter takes the columns
 
 
-def _plan_table(columns: Mapping[str, Sequence[Any] | np.ndarray], float_format: str) -> _Plan:
-    """Validate the columns and decide each one's cell format, before touching ``dest``."""
+def _plan_table(columns: Mapping[str, Sequence[Any] | np.ndarray], float_format: str, *, text: bool = True) -> _Plan:
+    """Validate the columns and decide each one's cell format, before touching ``dest``
+    (``text``: for CSV; a binary table needs no quoting, which is not looked for then)."""
     if not columns:
         raise ValueError("write_table: no columns; expected at least one")
     try:
@@ -1624,12 +1635,12 @@ def _plan_table(columns: Mapping[str, Sequence[Any] | np.ndarray], float_format:
         elif kind == "U":
             specs.append("%s")
             converters.append(_str_cells)
-            if _needs_quotes(arr):
+            if text and _needs_quotes(arr):
                 quoting = "needed"
         elif kind == "O" and _is_text(arr):  # a text column kept as str objects (text_column): as unicode
             specs.append("%s")
             converters.append(_str_cells)
-            if any(ch in "".join(arr.tolist()) for ch in _CSV_SPECIAL):
+            if text and any(ch in "".join(arr.tolist()) for ch in _CSV_SPECIAL):
                 quoting = "needed"
         else:  # bytes, objects, complex, datetimes: their str(), quoted when needed
             specs.append("%s")
@@ -1676,12 +1687,24 @@ _POW10 = 10.0 ** np.arange(23)
 
 def _digit_exponents(x: np.ndarray, digits: int) -> np.ndarray:
     """``digits - 1 - floor(log10(|x|))``: the power of ten that brings ``x`` to ``digits``
-    digits before the point (NaN for NaN, +inf for 0, -inf for ±inf). One function for the
-    rounding and the compiled formatter, so both take numpy's ``log10`` on the same slice."""
+    digits before the point (NaN for NaN, +inf for 0, -inf for ±inf).
+
+    ``floor(log10(|x|))`` as the compiled formatter (:mod:`softtip.io._csvtext`) takes it:
+    ``floor(e2 * log10(2))`` of the binary exponent ``e2``, one more where ``|x|`` reaches the
+    float nearest the next power of ten; not numpy's ``log10``, whose last bit varies with the
+    machine's vector unit (the text is the same: see the module of the compiled formatter)."""
+    from softtip.io._csvtext import _TEN_LOW, _TENS
+
     with np.errstate(all="ignore"):
-        k = np.log10(np.abs(x))
-        np.floor(k, out=k)
-        np.subtract(digits - 1, k, out=k)
+        a = np.abs(x)
+        e2 = np.frexp(a)[1].astype(np.int64) - 1
+        p = (e2 * 78913) >> 18  # floor(e2 * log10(2)) for |e2| < 1650 (tested)
+        np.clip(p, -_TEN_LOW - 1, len(_TENS) - _TEN_LOW - 2, out=p)
+        p += a >= _TENS[p + 1 + _TEN_LOW]
+        k = (digits - 1 - p).astype(np.float64)
+        k[a == 0] = np.inf
+        k[np.isinf(a)] = -np.inf
+        k[np.isnan(a)] = np.nan
     return k
 
 
@@ -1749,16 +1772,19 @@ def _object_cells(a: np.ndarray) -> list[str]:
     return [_quote(c) for c in cells]
 
 
-def _write_rows(out: TextIO | BinaryIO, plan: _Plan, *, header: bool = True, threads: int | None = None) -> None:
+def _write_rows(out: TextIO | BinaryIO, plan: _Plan, *, header: bool = True, threads: int | None = None,
+                buffers: _TextBuffers | None = None) -> None:  # fmt: skip
     """Write the table to a text stream (Parquet: to its binary buffer), in blocks.
 
     A binary stream (an atomic writer's temporary file, say) is written to as UTF-8. ``threads``:
     the most threads formatting CSV blocks at once (default :data:`_WRITE_THREADS`).
+    ``buffers``: the compiled formatter's memory, kept from one call to the next (a
+    :class:`TableWriter`'s pieces).
     """
     if not hasattr(out, "encoding"):
         text = io.TextIOWrapper(out, encoding="utf-8", newline="", write_through=True)  # type: ignore[arg-type]
         try:
-            _write_rows(text, plan, header=header, threads=threads)
+            _write_rows(text, plan, header=header, threads=threads, buffers=buffers)
         finally:
             text.flush()
             text.detach()
@@ -1779,7 +1805,8 @@ def _write_rows(out: TextIO | BinaryIO, plan: _Plan, *, header: bool = True, thr
         out.flush()  # the header first
     compiled = _compiled_csv(plan)
     if compiled:
-        _compiled_block(plan, 0, min(plan.n, 1))  # compiled (or loaded from numba's cache) once, before the threads
+        buffers = buffers or _TextBuffers()
+        buffers.put(*_compiled_block(plan, 0, min(plan.n, 1), buffers))  # compiled (or loaded from numba's cache) once, before the threads
 
     def text_of(start: int) -> Any:
         # formatting floats is the cost; the compiled formatter and pyarrow both run without
@@ -1787,10 +1814,10 @@ def _write_rows(out: TextIO | BinaryIO, plan: _Plan, *, header: bool = True, thr
         # before them, in order
         stop = min(start + _CHUNK_ROWS, plan.n)
         if compiled:
-            return _compiled_block(plan, start, stop)
+            return _compiled_block(plan, start, stop, buffers)
         sink = io.BytesIO()
         pacsv.write_csv(_arrow_block(plan, start, stop, rounded=True), sink, options)
-        return sink.getvalue()
+        return sink.getvalue(), None
 
     starts = range(0, plan.n, _CHUNK_ROWS)
     workers = min(threads or _WRITE_THREADS, os.cpu_count() or 1, len(starts))
@@ -1799,9 +1826,9 @@ def _write_rows(out: TextIO | BinaryIO, plan: _Plan, *, header: bool = True, thr
         for start in starts:
             pending.append((start, pool.submit(text_of, start)))
             if len(pending) > 2 * workers:  # a bounded number of blocks in memory
-                _put_block(out, binary, plan, *pending.popleft())
+                _put_block(out, binary, plan, *pending.popleft(), buffers)
         while pending:
-            _put_block(out, binary, plan, *pending.popleft())
+            _put_block(out, binary, plan, *pending.popleft(), buffers)
     if binary is not None:
         binary.flush()
 
@@ -1819,12 +1846,15 @@ def _compiled_csv(plan: _Plan) -> bool:
     return jit_enabled(JIT_MIN_SAMPLES if "numba" in sys.modules else plan.n)
 
 
-def _put_block(out, binary, plan: _Plan, start: int, done) -> None:
-    data = done.result()
+def _put_block(out, binary, plan: _Plan, start: int, done, buffers: _TextBuffers | None) -> None:
+    data, used = done.result()
+    text = data if used is None else memoryview(data)[:used]
     if binary is not None:
-        binary.write(data)
+        binary.write(text)
     else:
-        out.write(bytes(data).decode("utf-8"))
+        out.write(bytes(text).decode("utf-8"))
+    if used is not None and buffers is not None:
+        buffers.put(data, used)
     if plan.progress is not None:
         plan.progress(min(start + _CHUNK_ROWS, plan.n) - start)
 
@@ -1862,86 +1892,195 @@ def _string_buffers(arr: Any) -> tuple[np.ndarray, np.ndarray]:
     return offsets.astype(np.int64), data
 
 
-def _compiled_block(plan: _Plan, start: int, stop: int) -> np.ndarray:
-    """Rows ``start:stop`` as CSV text (UTF-8 bytes) by the compiled formatter
-    (:mod:`softtip.io._csvtext`): the bytes :func:`_arrow_block` and pyarrow's writer give.
+class _TextBuffers:
+    """Memory the compiled CSV formatter reuses from block to block (and a :class:`TableWriter`
+    from piece to piece): the columns' values gathered for the loop, and the blocks' text
+    until it is written. Fresh arrays for each block were paid in page faults, a third of the
+    write's CPU time (system time). At most as many sets as blocks in flight are made."""
 
-    Floats are rounded and formatted in the compiled loop from the exponents numpy gives
-    (:func:`_digit_exponents`, on the same slices as the fallback); text, integer and boolean
-    cells are their pyarrow text (integers and booleans by pyarrow's own cast, as its writer
-    does), copied in by the loop, quoted as the writer quotes them.
-    """
+    def __init__(self) -> None:
+        self._scratch: list[dict[str, np.ndarray]] = []
+        self._out: list[np.ndarray] = []
+
+    def scratch(self, nf: int, ni: int, nt: int, rows: int) -> dict[str, np.ndarray]:
+        """Arrays ``floats`` (nf, >= rows), ``ints`` (ni, ...), ``codes`` (nt, ...) and
+        ``far`` (nf * rows values), taken until :meth:`give` hands them back."""
+        try:
+            got = self._scratch.pop()  # atomic under the GIL: threads take different sets
+        except IndexError:
+            got = {}
+        if not got or got["floats"].shape[0] != nf or got["ints"].shape[0] != ni or got["codes"].shape[0] != nt or got["floats"].shape[1] < rows:
+            got = {"floats": np.empty((nf, rows)), "ints": np.empty((ni, rows), dtype=np.int64),
+                   "codes": np.empty((nt, rows), dtype=np.int64), "far": np.empty(nf * rows)}  # fmt: skip
+        return got
+
+    def give(self, scratch: dict[str, np.ndarray]) -> None:
+        self._scratch.append(scratch)
+
+    def out(self, size: int) -> np.ndarray:
+        """A byte buffer of at least ``size`` bytes, taken until :meth:`put` hands it back."""
+        try:
+            got = self._out.pop()
+        except IndexError:
+            got = None
+        if got is None or len(got) < size:
+            got = np.empty(size, dtype=np.uint8)  # untouched pages cost nothing: the bound may be loose
+        return got
+
+    def put(self, data: np.ndarray, used: int | None = None) -> None:
+        self._out.append(data)
+
+
+@dataclass
+class _Columns:
+    """How the compiled formatter takes a table's columns (the same for every block)."""
+
+    floats: list[int]  # column indices
+    ints: list[int]  # integers and booleans that fit int64
+    texts: list[int]  # everything else, as text cells
+    layout: np.ndarray  # (ncols, 2): kind (0 float, 1 integer, 2 text) and index within the kind
+    quote: np.ndarray  # (nt,) bool
+
+
+def _compiled_columns(plan: _Plan) -> _Columns:
+    if plan.compiled is not None:
+        return plan.compiled
+    floats: list[int] = []
+    ints: list[int] = []
+    texts: list[int] = []
+    layout = np.empty((len(plan.arrays), 2), dtype=np.int64)
+    quote = []
+    for c, arr in enumerate(plan.arrays):
+        kind = arr.dtype.kind
+        if kind == "f":
+            layout[c] = 0, len(floats)
+            floats.append(c)
+        elif kind in "bi" or (kind == "u" and (arr.dtype.itemsize < 8 or not len(arr) or int(arr.max()) < 2**63)):
+            layout[c] = 1, len(ints)
+            ints.append(c)
+        else:
+            layout[c] = 2, len(texts)
+            texts.append(c)
+            quote.append(kind not in "iu" and plan.quoting == "needed")
+    plan.compiled = _Columns(floats, ints, texts, layout, np.array(quote, dtype=np.bool_))
+    return plan.compiled
+
+
+def _text_cells(a: np.ndarray) -> tuple[np.ndarray | None, np.ndarray, np.ndarray]:
+    """A block of a text column as cell indices (None: one cell a row, in order), cell offsets
+    (int64, cells + 1) and UTF-8 bytes, the text pyarrow's writer gives each cell."""
     import pyarrow as pa
     import pyarrow.compute as pc
 
-    from softtip.io._csvtext import format_rows
+    kind = a.dtype.kind
+    if kind == "U":
+        found = _levels(a)
+        if found is not None:
+            codes, levels = found
+            text = [cell.encode("utf-8") for cell in levels]
+            offsets = np.zeros(len(text) + 1, dtype=np.int64)
+            np.cumsum([len(t) for t in text], out=offsets[1:])
+            return codes, offsets, np.frombuffer(b"".join(text), dtype=np.uint8)
+        cells = pa.array(a, type=pa.string())
+    elif kind in "iu":  # beyond int64: pyarrow's own text of the integer
+        cells = pc.cast(pa.array(a), pa.string())
+    else:
+        text = [x.decode("utf-8", "replace") if isinstance(x, bytes) else str(x) for x in a.tolist()]
+        cells = pa.array(text, type=pa.string())
+    offsets, data = _string_buffers(cells)
+    return None, offsets, data
 
+
+def _compiled_block(plan: _Plan, start: int, stop: int, buffers: _TextBuffers | None = None) -> tuple[np.ndarray, int]:
+    """Rows ``start:stop`` as CSV text (UTF-8 bytes ``[:used]`` of the array returned) by the
+    compiled formatter (:mod:`softtip.io._csvtext`): the bytes :func:`_arrow_block` and
+    pyarrow's writer give.
+
+    Floats are rounded and formatted in the compiled loop; integers and booleans too (as
+    pyarrow's writer writes them: ``-12``, ``0``/``1``); text cells are their pyarrow text,
+    copied in by the loop, quoted as the writer quotes them. ``buffers``: where the gathered
+    columns and the text go (reused; :meth:`_TextBuffers.put` the array back when written).
+    """
+    from softtip.io._csvtext import FLOAT_CELL_BYTES, SLACK_BYTES, format_rows
+
+    buffers = buffers or _TextBuffers()
+    cols = _compiled_columns(plan)
     n = stop - start
     digits = plan.digits
     assert digits is not None
-    kinds = [arr.dtype.kind for arr in plan.arrays]
-    nf = kinds.count("f")
-    floats = np.empty((nf, n))  # a column a row: each copied in one piece
-    exps = np.empty((nf, n))
-    layout = np.empty(len(kinds), dtype=np.int64)
-    texts: list[tuple[np.ndarray, np.ndarray, np.ndarray, bool]] = []  # codes, offsets, data, quoted
-    bound = n * (nf * 25 + len(kinds) + 1)
-    j = 0
-    for c, (arr, kind) in enumerate(zip(plan.arrays, kinds)):
-        a = arr[start:stop]
-        if kind == "f":
-            floats[j] = a
-            exps[j] = _digit_exponents(a, digits)
-            layout[c] = j
-            j += 1
-            continue
-        if kind in "biu":
-            cells, quoted = pc.cast(pa.array(a.view(np.int8) if kind == "b" else a), pa.string()), False
-        elif kind == "U":
-            cells, quoted = _arrow_strings(a, plain=False), plan.quoting == "needed"
-        else:
-            text = [x.decode("utf-8", "replace") if isinstance(x, bytes) else str(x) for x in a.tolist()]
-            cells, quoted = pa.array(text, type=pa.string()), plan.quoting == "needed"
-        if isinstance(cells, pa.DictionaryArray):
-            codes = cells.indices.to_numpy().astype(np.int64)
-            offsets, data = _string_buffers(cells.dictionary)
-        else:
-            codes = np.arange(n, dtype=np.int64)
-            offsets, data = _string_buffers(cells)
-        lengths = np.diff(offsets)[codes]
-        bound += int(lengths.sum()) * (2 if quoted else 1) + 2 * n
-        layout[c] = -1 - len(texts)
-        texts.append((codes, offsets, data, quoted))
+    sc = buffers.scratch(len(cols.floats), len(cols.ints), len(cols.texts), max(n, 1))
+    floats, ints, code_table = sc["floats"], sc["ints"], sc["codes"]
+    for j, c in enumerate(cols.floats):
+        np.copyto(floats[j, :n], plan.arrays[c][start:stop])
+    for j, c in enumerate(cols.ints):
+        np.copyto(ints[j, :n], plan.arrays[c][start:stop], casting="unsafe")  # booleans to 0/1; uint64 below 2**63
+    bound = n * (len(cols.floats) * (digits + FLOAT_CELL_BYTES) + len(cols.ints) * 20 + len(plan.arrays) + 1)
     # the text cells of every column in one table: cell indices shifted by the columns before
-    nt = len(texts)
-    code_table = np.empty((nt, n), dtype=np.int64)
     cell_off = [np.zeros(1, dtype=np.int64)]
     data_parts = []
     cells_before = bytes_before = 0
-    for t, (codes, offsets, data, _) in enumerate(texts):
-        code_table[t] = codes + cells_before
+    for t, c in enumerate(cols.texts):
+        codes, offsets, data = _text_cells(plan.arrays[c][start:stop])
+        lengths = np.diff(offsets)
+        if codes is None:
+            code_table[t, :n] = np.arange(cells_before, cells_before + n)
+            longest = int(lengths.sum())
+        else:
+            np.add(codes, cells_before, out=code_table[t, :n])
+            longest = int(lengths.max()) * n
+        bound += (longest + n) * (2 if cols.quote[t] else 1) + 2 * n
         cell_off.append(offsets[1:] - offsets[0] + bytes_before)
         data_parts.append(data[offsets[0] : offsets[-1]])
         cells_before += len(offsets) - 1
         bytes_before += int(offsets[-1] - offsets[0])
-    # the cells the rounding does not take in one step: the fallback's value, pyarrow's text, in row order
-    with np.errstate(invalid="ignore"):
-        cols, rows = np.nonzero(np.abs(exps) > 22)  # ±inf (zeros, infinities) and NaN are no cells of these
-    cols, rows = cols[np.isfinite(exps[cols, rows])], rows[np.isfinite(exps[cols, rows])]
-    if len(rows):
-        order = np.lexsort((cols, rows))
-        rows, cols = rows[order], cols[order]
-        values = np.array([float(f"%.{digits}g" % v) for v in floats[cols, rows].tolist()])
-        far_off, far_data = _string_buffers(pc.cast(pa.array(values), pa.string()))
-    else:
-        far_off, far_data = np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.uint8)
-    out = np.empty(bound + int(far_off[-1]), dtype=np.uint8)
-    used = format_rows(
-        floats, exps, code_table, np.concatenate(cell_off),
-        np.concatenate(data_parts) if data_parts else np.zeros(0, dtype=np.uint8),
-        np.array([q for *_, q in texts], dtype=np.bool_), layout, far_off - far_off[0], far_data, out,
-    )  # fmt: skip
-    return out[:used]
+    cells = np.concatenate(cell_off)
+    text = np.concatenate(data_parts) if data_parts else np.zeros(0, dtype=np.uint8)
+    far_off, far_data = np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.uint8)
+    bound += SLACK_BYTES  # the loop writes whole words past a cell's end
+    out = buffers.out(bound)
+    while True:
+        used, far = format_rows(floats, ints, code_table, cells, text, cols.quote, cols.layout, digits,
+                                far_off, far_data, sc["far"], out, n)  # fmt: skip
+        if far < len(far_off):
+            break
+        # values the rounding does not take in one step (rare): the fallback's value, pyarrow's text, again
+        far_off, far_data = _far_text(sc["far"][:far], digits)
+        if len(out) < bound + int(far_off[-1]):
+            out = np.empty(bound + int(far_off[-1]), dtype=np.uint8)
+    buffers.give(sc)
+    return out, used
+
+
+def _far_text(values: np.ndarray, digits: int) -> tuple[np.ndarray, np.ndarray]:
+    """pyarrow's text of ``values`` rounded by Python's printf (:func:`_round_significant`'s way
+    beyond one-step rounding), as cell offsets and UTF-8 bytes."""
+    import pyarrow as pa
+    import pyarrow.compute as pc
+
+    rounded = np.array([float(f"%.{digits}g" % v) for v in values.tolist()])
+    off, data = _string_buffers(pc.cast(pa.array(rounded), pa.string()))
+    return off - off[0], data
+
+
+def _levels(a: np.ndarray) -> tuple[np.ndarray, list[str]] | None:
+    """A numpy unicode column of at most :data:`_MAX_LEVELS` distinct cells as codes (int8,
+    a row each) and its cells in order of appearance; None for a column of more."""
+    n = len(a)
+    codes = np.zeros(n, dtype=np.int8)
+    levels: list[str] = []
+    left = np.ones(n, dtype=bool)
+    i = 0
+    while n:
+        same = a == a[i]
+        codes[same] = len(levels)
+        levels.append(str(a[i]))
+        left &= ~same
+        if not left.any():
+            break
+        if len(levels) >= _MAX_LEVELS:
+            return None
+        i = int(np.argmax(left))
+    return codes, levels
 
 
 # A text column with at most this many distinct cells is dictionary-encoded on its way to pyarrow.
@@ -1959,21 +2098,10 @@ def _arrow_strings(a: np.ndarray, *, plain: bool) -> Any:
     """
     import pyarrow as pa
 
-    n = len(a)
-    codes = np.zeros(n, dtype=np.int8)
-    levels: list[str] = []
-    left = np.ones(n, dtype=bool)
-    i = 0
-    while n:
-        same = a == a[i]
-        codes[same] = len(levels)
-        levels.append(str(a[i]))
-        left &= ~same
-        if not left.any():
-            break
-        if len(levels) >= _MAX_LEVELS:
-            return pa.array(a, type=pa.string())
-        i = int(np.argmax(left))
+    found = _levels(a)
+    if found is None:
+        return pa.array(a, type=pa.string())
+    codes, levels = found
     out = pa.DictionaryArray.from_arrays(pa.array(codes), pa.array(levels, type=pa.string()))
     return out.dictionary_decode() if plain else out
 
@@ -2538,6 +2666,7 @@ class TableWriter:
         self.metadata = dict(metadata or {})
         self.names: list[str] | None = None
         self._writer: Any = None
+        self._buffers = _TextBuffers()  # the compiled CSV formatter's memory, piece after piece
         if not hasattr(out, "encoding"):
             self._text = io.TextIOWrapper(out, encoding="utf-8", newline="", write_through=True)  # type: ignore[arg-type]
         else:
@@ -2545,7 +2674,7 @@ class TableWriter:
 
     def write(self, columns: Mapping[str, Sequence[Any] | np.ndarray], progress: Callable[[int], object] | None = None) -> None:
         """Append the rows of ``columns`` (the same names, in the same order, every time)."""
-        plan = _plan_table(columns, self.float_format)
+        plan = _plan_table(columns, self.float_format, text=not self.parquet)
         if self.names is not None and plan.names != self.names:
             raise ValueError(f"columns {plan.names} differ from the first piece's {self.names}")
         plan.progress = progress
@@ -2563,7 +2692,7 @@ class TableWriter:
                 if progress is not None:
                     progress(stop - start)
         else:
-            _write_rows(out, plan, header=self.names is None, threads=self.threads)  # type: ignore[arg-type]
+            _write_rows(out, plan, header=self.names is None, threads=self.threads, buffers=self._buffers)  # type: ignore[arg-type]
         self.names = plan.names
 
     def close(self) -> None:
