@@ -278,6 +278,8 @@ def run_cases(phys: Physics, args, tip, objects, kind: str, angles, results: dic
                     results.setdefault(kind, []).append(g)
                     if check is not None and seed == 101 and kind == "rock":
                         check.append((name, _locking(est, t >= start)))
+                    if seed == 101 and kind == "friction" and args.decompose:
+                        results.setdefault("decompose", []).append((name, _decompose(est, log, t, t >= start, tip)))
 
 
 def _locking(est, sel) -> tuple[float, float]:
@@ -294,6 +296,74 @@ def _locking(est, sel) -> tuple[float, float]:
     k = float(np.sum(h * b) / np.sum(b * b))
     res = float(np.sqrt(np.sum((h - k * b) ** 2) / np.sum(h * h)))
     return k * 1e3, res
+
+
+def _decompose(est, log: SimLog, t, sel, tip) -> dict:
+    """Where the friction load's moment goes on one grasp (``--decompose``), medians over the
+    ``line`` samples of ``sel``, from the *noise-free* wrench about the estimator's latched point
+    ``r₀``, normal ``n₀`` and depth ``δ``:
+
+    ``depth``: the estimator's ``δ``; ``lever``: the depth that zeroes the moment about the true
+    line's own 3-D axis ``d₃`` (``d₃ · (q + δ n₀ × f) = 0``, ``q = m − r₀ × f``; loads across
+    only, NaN along); ``surface``: the truth's pressure-weighted depth of the contact
+    (:attr:`GroundTruth.friction_depth`); ``tilt``: the line's angle out of the tangent plane
+    (deg); ``twist``: the moment about the normal, ``q_n = n₀ · q`` (N·mm); ``leak``:
+    ``atan(q_n / (R F_n))`` (deg), the angle by which a twist about the object's own axis (the
+    normal tilted with the line: ``h ∥ R F_n (n₀ × d) + q_n d`` for a line pressed into a cap of
+    radius ``R``) turns ``h``; ``axial``: ``d₃ · (q + δ n₀ × f)`` (N·mm), what the 3-D line model
+    leaves; ``err``: the papers' direction ``n₀ × h`` from the noise-free wrench (deg);
+    ``err_twist``: the direction with the twist taken about the object's axis,
+    ``R F_n (n₀ × h) − q_n h`` (deg); ``err_est``: the estimator's (noisy wrench, deg)."""
+    m = sel & (est.state == 2)
+    nan = {k: math.nan for k in ("depth", "lever", "surface", "tilt", "twist", "leak", "axial", "err", "err_twist", "err_est")}
+    if m.sum() < 3:
+        return nan
+    idx = np.minimum(np.searchsorted(log.t, t[m]), len(log.t) - 1)
+    r0, n0, dep = est.point[m], est.normal[m], est.depth[m]
+    f, mo = log.wrench_true[idx, :3], log.wrench_true[idx, 3:]
+    d3 = log.truth.direction[idx]
+    d3 = d3 / np.linalg.norm(d3, axis=-1, keepdims=True)
+    dt = d3 - np.sum(d3 * n0, -1, keepdims=True) * n0
+    dt /= np.linalg.norm(dt, axis=-1, keepdims=True)
+    q = mo - np.cross(r0, f)
+    nxf = np.cross(n0, f)
+    qe = q + dep[:, None] * nxf  # about the effective point r0 − δ n0
+    qn = np.sum(qe * n0, -1)
+    h = qe - qn[:, None] * n0
+    fn = -np.sum(f * n0, -1)
+    across = np.sum(d3 * nxf, -1)
+    lever = np.where(np.abs(across) > 0.05 * np.linalg.norm(f, axis=-1), -np.sum(d3 * q, -1) / across, np.nan)
+    rf = tip.radius * fn
+
+    def off(v):
+        c = np.abs(np.sum(v * dt, -1)) / np.linalg.norm(v, axis=-1)
+        return np.degrees(np.arccos(np.clip(c, -1.0, 1.0)))
+
+    err_est = np.degrees(np.abs(axial_difference(est.angle[m], log.truth.angle[idx])))
+    med = lambda x: float(np.nanmedian(x)) if np.isfinite(x).any() else math.nan  # noqa: E731
+    return {"depth": med(dep) * 1e3, "lever": med(lever) * 1e3, "surface": med(log.truth.friction_depth[idx]) * 1e3,
+            "tilt": med(np.degrees(np.arcsin(np.sum(d3 * n0, -1)))), "twist": med(qn) * 1e3,
+            "leak": med(np.degrees(np.arctan(qn / rf))), "axial": med(np.sum(d3 * qe, -1)) * 1e3,
+            "err": med(off(np.cross(n0, h))), "err_twist": med(off(rf[:, None] * np.cross(n0, h) - qn[:, None] * h)),
+            "err_est": med(err_est)}  # fmt: skip
+
+
+def decompose_rows(name: str, rows: list) -> None:
+    """The ``--decompose`` table of one physics (:func:`_decompose`)."""
+    print(f"\n#### where the friction load's moment goes, {name} (first seed; medians after the load, line samples)\n")
+    print("| grasp | depth δ (est.) | 3-D lever | contact surface | line tilt | twist q_n | leak atan(q_n/RF) "
+          "| d₃·q left | error n₀ × h | error, twist about the object's axis | estimator |")  # fmt: skip
+    print("| --- |" + " --- |" * 10)
+    for nm, r in rows:
+        print(f"| {nm} | {r['depth']:.2f} mm | {r['lever']:.2f} mm | {r['surface']:.2f} mm | {r['tilt']:+.1f}° | "
+              f"{r['twist']:+.2f} N·mm | {r['leak']:+.1f}° | {r['axial']:+.2f} N·mm | {r['err']:.1f}° | {r['err_twist']:.1f}° "
+              f"| {r['err_est']:.1f}° |")  # fmt: skip
+    e0 = np.array([r["err"] for _, r in rows])
+    e1 = np.array([r["err_twist"] for _, r in rows])
+    if len(rows):
+        print(f"\nnoise-free direction over these grasps, median / worst of the grasps' medians: n₀ × h "
+              f"{np.nanmedian(e0):.1f}° / {np.nanmax(e0):.1f}°; twist about the object's axis {np.nanmedian(e1):.1f}° / "
+              f"{np.nanmax(e1):.1f}°")  # fmt: skip
 
 
 # -- the table ----------------------------------------------------------------------------
@@ -536,6 +606,9 @@ def main(argv=None) -> int:
                          "walks 4 mm across the skin within 2 s of rocking and is reported as not simulated)")
     ap.add_argument("--check", action="store_true", help="also fit h = k n0 × f_t on the rocked lines (locking)")
     ap.add_argument("--per-grasp", action="store_true", help="print every grasp's row")
+    ap.add_argument("--decompose", action="store_true",
+                    help="with the friction section: per grasp, the estimator's depth against the lever about the true "
+                         "3-D line, the twist about the normal and the angle it turns h (first seed, noise-free wrench)")
     # --markdown PATH (handled around main): also write the printed tables to PATH
     ap.add_argument("--stated-rocking", action="store_true",
                     help="the rocked grasps estimated with the rocking stated (EstimatorConfig.rocked, --rocked: from the "
@@ -620,6 +693,9 @@ def main(argv=None) -> int:
     if args.per_grasp:
         for n, r in all_res.items():
             per_grasp_rows(n, r)
+    if args.decompose:
+        for n, r in all_res.items():
+            decompose_rows(n, r.get("decompose", []))
     if args.plot:
         plot_rocking(args.plot, physics, args, tip)
     if args.sap_trace and any(p.name == "drake" for p in physics):

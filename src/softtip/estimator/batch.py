@@ -29,7 +29,7 @@ from softtip.estimator.contact import (
     track_contacts,
 )
 from softtip.estimator.depth import depth_points, resolve_depth
-from softtip.estimator.evidence import evidence_states
+from softtip.estimator.evidence import evidence_states, twist_curvature
 from softtip.estimator.latch import latch_points
 from softtip.estimator.line_fit import line_fit_points
 from softtip.estimator.measure import Measurement, effective_noise, measure, noise_correlation
@@ -307,7 +307,8 @@ def _staged_columns(t, ct, taring, tip: Fingertip, config: EstimatorConfig, nois
     pulling = contact & ~located
     # line or area (evidence window): segments start at contact onset and at every re-latch
     begin = contact & ~np.concatenate(([False], contact[:-1])) | (relatched & contact)
-    ev = evidence_states(t, located, begin, point, normal, h, x[:, :3], ms, noise, noise_correlation(sos), config, delta)
+    ev = evidence_states(t, located, begin, point, normal, h, x[:, :3], ms, noise, noise_correlation(sos), config, delta,
+                         twist_curvature(tip))
     state = np.where(located, ev.state, NONE).astype(np.int8)
     is_line = state == LINE
     if joint_stats is None:

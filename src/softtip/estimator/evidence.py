@@ -49,6 +49,18 @@ the standard deviation that is the sensor noise's alone (``angle_noise_std``: th
 noise term, or the sample's ``σ_d``) is kept apart: two sensors share the model error, not
 their noise (:mod:`softtip.fusion`).
 
+Every ``line`` sample's standard deviation also counts, in quadrature, the **twist** of the
+contact, ``atan(|σ| / (R F_n))`` with ``σ = q · n`` the moment about the normal, ``F_n`` the
+normal force and ``R`` the skin's radius at the contact (:func:`twist_curvature`): a line
+pressed into a cap of radius ``R`` whose ``h`` comes from its tilt lies out of the tangent
+plane by ``|h| / (R F_n)``, so a twist about the *object's* own axis (friction on the faces
+of a plate sunk into the skin: Drake's hydroelastic contact with SAP friction, 5–13 N·mm on
+1–2 mm plates) shows in the tangent plane as ``σ`` times that tilt, along the line, and turns
+``h`` by ``atan(σ / (R F_n))``; a twist in the skin's own surface (softtip's Winkler shear
+layer) turns nothing. The wrench does not say which of the two it is (manual §3.7, friction
+depth). Not counted with ``line_evidence`` off (the papers' noise only) or on a fingertip
+without a known radius.
+
 The stage is one step, :func:`evidence_step`, over a state record (:func:`new_evidence_state`):
 running sums of the products (:func:`~softtip.core.evidence.evidence_products`) since the
 segment's start and a ring buffer of the segment's latest located samples (their time, the
@@ -91,7 +103,7 @@ from softtip.estimator.floats import PointGeometry
 
 __all__ = [
     "evidence_states", "EvidenceStates", "EvidenceTracker", "evidence_params", "new_evidence_state", "evidence_start",
-    "evidence_step", "evidence_run",
+    "evidence_step", "evidence_run", "twist_curvature",
 ]  # fmt: skip
 
 
@@ -134,8 +146,9 @@ _RESET2 = 12  # evidence_reset_distance², m²
 _VOTE_WINDOW = 13  # significance_window, s
 _AREA_SHARE = 14
 _NOISE = 15  # the sensor noise's variances (after any filter): fx, fy, fz (N²), mx, my, mz (N²·m²)
-_N_ROCKED = 21  # how many stated rocking intervals follow
-_ROCKED = 22  # (start, end) of each, s
+_INV_RADIUS = 21  # 1 / R of the twist term (twist_curvature), 1/m; 0: not counted
+_N_ROCKED = 22  # how many stated rocking intervals follow
+_ROCKED = 23  # (start, end) of each, s
 
 # -- the state record: a float64 vector, an int64 vector of counters, a ring buffer ------------------
 _CUM = 0  # N_SUMS running sums of the products since the segment's start
@@ -166,9 +179,21 @@ _R_SPREAD = _R_SIDE + 1  # 1.0: its window spread over both axes (an area vote)
 _R_WIDTH = _R_SPREAD + 1
 
 
-def evidence_params(config: EstimatorConfig, noise: SensorNoise) -> NDArray[np.float64]:
-    """The step's parameters (float64 vector) from the configuration and the noise model
-    (after any filter); the stated rocking intervals (:attr:`EstimatorConfig.rocked`) at its end."""
+def twist_curvature(tip) -> float:
+    """``1 / R`` (1/m) of the twist term of the standard deviation (module docs): the radius of a
+    spherical fingertip or of a capsule's caps; 0.0 (no term) for other shapes, whose
+    curvature along the line is not one number."""
+    from softtip.core.fingertip import Capsule, Sphere
+
+    if type(tip) in (Sphere, Capsule):
+        return 1.0 / float(tip.radius)
+    return 0.0
+
+
+def evidence_params(config: EstimatorConfig, noise: SensorNoise, inv_radius: float = 0.0) -> NDArray[np.float64]:
+    """The step's parameters (float64 vector) from the configuration, the noise model (after
+    any filter) and the twist term's ``1 / R`` (:func:`twist_curvature`, 1/m; 0: none); the
+    stated rocking intervals (:attr:`EstimatorConfig.rocked`) at its end."""
     rocked = [float(x) for ab in config.rocked for x in ab]
     p = np.zeros(_ROCKED + len(rocked))
     enter, leave = config.area_ratio
@@ -186,6 +211,7 @@ def evidence_params(config: EstimatorConfig, noise: SensorNoise) -> NDArray[np.f
     p[_VOTE_WINDOW] = config.significance_window
     p[_AREA_SHARE] = config.area_share
     p[_NOISE : _NOISE + 6] = noise_variances(noise)
+    p[_INV_RADIUS] = float(inv_radius)
     p[_N_ROCKED] = len(config.rocked)
     p[_ROCKED:] = rocked
     return p
@@ -335,7 +361,7 @@ def _own(hx, hy, hz, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z, param
 
 @lazy_jit
 def evidence_step(state, counts, ring, params, wconst, t, px, py, pz, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z,
-                  ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, h_std):  # fmt: skip
+                  ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, h_std, sg):  # fmt: skip
     """One located sample through the stage.
 
     Parameters
@@ -359,6 +385,9 @@ def evidence_step(state, counts, ring, params, wconst, t, px, py, pz, nx, ny, nz
         ``h`` (N·m) and the force (N).
     hn, h_std : float
         ``|h|`` and ``h``'s noise level (N·m) of the measurement stage.
+    sg : float
+        ``σ = q · n``, the moment about the normal (N·m) of the measurement stage: the
+        twist term of the standard deviation (module docs).
 
     Returns
     -------
@@ -438,8 +467,13 @@ def evidence_step(state, counts, ring, params, wconst, t, px, py, pz, nx, ny, nz
     area = counts[_N_SPREAD] > params[_AREA_SHARE] * counts[_N_AREA]
     axis, confirming, w_angle, w_std, w_noise = _update_verdict(state, params, t, area, one_axis, excited, e, s2, nu)
     sig = _significance(state, counts, ring, params, t, hn, thr)
-    return _choose(state, params, area, axis, confirming, sig, w_angle, w_std, w_noise, minor, h_ratio, f_ratio,
-                   hx, hy, hz, hn, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z)  # fmt: skip
+    r = _choose(state, params, area, axis, confirming, sig, w_angle, w_std, w_noise, minor, h_ratio, f_ratio,
+                hx, hy, hz, hn, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z)  # fmt: skip
+    if r[0] != _LINE_CODE or params[_INV_RADIUS] == 0.0:
+        return r
+    # the twist about the object's own axis, seen through the line's tilt (module docs)
+    tw = math.atan(abs(sg) * params[_INV_RADIUS] / -(fx * nx + fy * ny + fz * nz))
+    return r[0], r[1], r[2], r[3], r[4], r[5], math.sqrt(r[6] * r[6] + tw * tw), r[7], r[8], r[9]
 
 
 @lazy_jit
@@ -477,12 +511,12 @@ def _choose(state, params, area, axis, confirming, sig, w_angle, w_std, w_noise,
 
 @lazy_jit
 def evidence_run(t, located, begin, point, normal, e1x, e1y, e1z, e2x, e2y, e2z, depth, h, force, h_norm, h_std,
-                 params, wconst, state, counts, ring, code, evidence, direction, out):  # fmt: skip
+                 sigma, params, wconst, state, counts, ring, code, evidence, direction, out):  # fmt: skip
     """:func:`evidence_step` over a log of N samples: a new segment at every ``begin``, the
     located samples stepped, the others written as not located (state 1, evidence 0, NaN).
 
     ``point``, ``normal``, ``h``, ``force`` (N, 3); ``e1x … e2z``, ``depth`` (m), ``h_norm``,
-    ``h_std`` (N,); ``code``, ``evidence`` (N,) int8, ``direction`` (N, 3) and ``out`` (N, 5:
+    ``h_std``, ``sigma`` (N,); ``code``, ``evidence`` (N,) int8, ``direction`` (N, 3) and ``out`` (N, 5:
     angle, angle_std, angle_noise_std, h_ratio, f_ratio) written.
     """
     for i in range(t.shape[0]):
@@ -501,7 +535,7 @@ def evidence_run(t, located, begin, point, normal, e1x, e1y, e1z, e2x, e2y, e2z,
         r = evidence_step(
             state, counts, ring, params, wconst, t[i], px, py, pz, nx, ny, nz, e1x[i], e1y[i], e1z[i], e2x[i],
             e2y[i], e2z[i], px - d * nx, py - d * ny, pz - d * nz, h[i, 0], h[i, 1], h[i, 2], force[i, 0],
-            force[i, 1], force[i, 2], h_norm[i], h_std[i],
+            force[i, 1], force[i, 2], h_norm[i], h_std[i], sigma[i],
         )  # fmt: skip
         code[i], evidence[i] = r[0], r[1]
         direction[i, 0], direction[i, 1], direction[i, 2] = r[2], r[3], r[4]
@@ -515,7 +549,7 @@ def _impl(fn, n: int | None = None):
 
 
 def evidence_states(t, located, begin, point, normal, h, force, ms, noise: SensorNoise, corr: float,
-                    config: EstimatorConfig, depth=None):  # fmt: skip
+                    config: EstimatorConfig, depth=None, inv_radius: float = 0.0):  # fmt: skip
     """The evidence stage over a whole log: :func:`evidence_step` in one loop (:func:`evidence_run`).
 
     Parameters
@@ -532,7 +566,8 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
     force : (N, 3)
         Force, N.
     ms : Measurement
-        The measurement stage's output (its ``h_norm`` and ``h_std``).
+        The measurement stage's output (its ``h_norm``, ``h_std``, and ``sigma`` with the twist
+        term).
     noise : SensorNoise
         Per-sample noise (after any filter).
     corr : float
@@ -540,6 +575,8 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
     config : EstimatorConfig
     depth : (N,) m, optional
         The depth ``h`` is taken under (default none).
+    inv_radius : float
+        ``1 / R`` of the twist term (:func:`twist_curvature`), 1/m; 0: none.
 
     Returns
     -------
@@ -561,7 +598,8 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
         t, np.ascontiguousarray(located, dtype=bool), np.ascontiguousarray(begin, dtype=bool), point, normal,
         *(np.ascontiguousarray(e, dtype=float) for e in frame), depth, h, force,
         np.ascontiguousarray(ms.h_norm, dtype=float), np.ascontiguousarray(ms.h_std, dtype=float),
-        evidence_params(config, noise), wconst, state, counts, ring, code, evidence, direction, out,
+        np.ascontiguousarray(ms.sigma, dtype=float) if inv_radius else np.zeros(n),
+        evidence_params(config, noise, inv_radius), wconst, state, counts, ring, code, evidence, direction, out,
     )  # fmt: skip
     return EvidenceStates(code, evidence, direction, out[:, 0], out[:, 1], out[:, 2], out[:, 3], out[:, 4])
 
@@ -574,11 +612,11 @@ class EvidenceTracker:
     """The stage of :func:`evidence_states`, one sample at a time: :func:`evidence_step` on its
     state record, whose ring grows (oldest first) when a window would fill it."""
 
-    def __init__(self, config: EstimatorConfig, noise: SensorNoise, corr: float):
+    def __init__(self, config: EstimatorConfig, noise: SensorNoise, corr: float, inv_radius: float = 0.0):
         self.config = config
         self.noise = noise
         self.corr = corr
-        self._params = evidence_params(config, noise)
+        self._params = evidence_params(config, noise, inv_radius)
         self._state, self._counts, self._ring, self._wconst = new_evidence_state(64, corr)
         self._step = _impl(evidence_step)
         self._start = _impl(evidence_start)
@@ -599,11 +637,12 @@ class EvidenceTracker:
         c[_HEAD] = m - 1 if m else 0
         self._ring, self._wconst = ring, wconst
 
-    def step(self, t, geo: PointGeometry, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, h_std):
+    def step(self, t, geo: PointGeometry, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, h_std, sg=0.0):
         """``(state, evidence, direction, angle, angle_std, angle_noise_std, h_ratio, f_ratio)`` of a located
         sample at the contact point of ``geo``, with ``h`` (N·m) taken about ``e`` (m; the
         point, or the effective point under the depth), the force ``f`` (N), ``hn = |h|``
-        and ``h_std`` ``h``'s noise level (N·m) of the measurement stage."""
+        and ``h_std`` ``h``'s noise level (N·m) of the measurement stage; ``sg`` its moment about
+        the normal (N·m), for the twist term."""
         c = self._counts
         if max(c[_N_AREA], c[_N_VOTE]) + 1 >= self._ring.shape[0]:
             self._grow()
@@ -611,7 +650,7 @@ class EvidenceTracker:
         e1x, e1y, e1z, e2x, e2y, e2z = geo.frame
         code, ev, dx, dy, dz, angle, angle_std, noise_std, h_ratio, f_ratio = self._step(
             self._state, c, self._ring, self._params, self._wconst, t, p[0], p[1], p[2], geo.nx, geo.ny, geo.nz,
-            e1x, e1y, e1z, e2x, e2y, e2z, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, h_std,
+            e1x, e1y, e1z, e2x, e2y, e2z, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, h_std, sg,
         )  # fmt: skip
         if self._python:
             dx, dy, dz, angle, angle_std, noise_std = float(dx), float(dy), float(dz), float(angle), float(angle_std), float(noise_std)

@@ -73,7 +73,13 @@ from softtip.estimator.depth import (
     depth_step,
     new_depth_state,
 )
-from softtip.estimator.evidence import evidence_params, evidence_start, evidence_step, new_evidence_state
+from softtip.estimator.evidence import (
+    evidence_params,
+    evidence_start,
+    evidence_step,
+    new_evidence_state,
+    twist_curvature,
+)
 from softtip.estimator.latch import (
     _HAD,
     _LX,
@@ -439,7 +445,7 @@ def tail_run(t, x, drift, contact, taring, kind, sp, normal_from_tip, point, has
         sg, hx, hy, hz, hn, hs = measure_kernel(fx, fy, fz, mx, my, mz, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z,
                                                 e2x, e2y, e2z, m1, m2, sfx, sfy, sfz, XS)  # fmt: skip
         r = evidence_step(estate, counts, ring, eparams, wconst, t[i], px, py, pz, nx, ny, nz, e1x, e1y, e1z, e2x,
-                          e2y, e2z, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, hs)  # fmt: skip
+                          e2y, e2z, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, hs, sg)  # fmt: skip
         pulling[i] = False
         from_data[i] = data
         normal[i, 0], normal[i, 1], normal[i, 2] = nx, ny, nz
@@ -540,7 +546,8 @@ def fused_columns(t: NDArray, x: NDArray, drift: NDArray, contact: NDArray, tari
     state, line_evidence = new("state", n, np.int8), new("line_evidence", n, np.int8)
     tail_run.compiled()(
         t, x, drift, contact, np.ascontiguousarray(taring, dtype=bool), kind, sp, mode == LATCH, point, has, normal_in,
-        relatched, depth_mode, lawp, dparams, np.array(noise_variances(noise)), evidence_params(config, noise), wconst,
+        relatched, depth_mode, lawp, dparams, np.array(noise_variances(noise)),
+        evidence_params(config, noise, twist_curvature(tip)), wconst,
         estate, counts, ring, latched, fallback, joint_fb, normal, sigma, h, h_norm, h_std, depth, depth_std, from_data,
         state, line_evidence, direction, angle, angle_std, angle_noise_std, h_ratio, f_ratio, pulling, stats, fill_stats,
     )  # fmt: skip

@@ -33,7 +33,7 @@ from softtip.estimator.contact import (
     started_in_contact_message,
 )
 from softtip.estimator.depth import DepthTracker, resolve_depth
-from softtip.estimator.evidence import EvidenceTracker
+from softtip.estimator.evidence import EvidenceTracker, twist_curvature
 from softtip.estimator.floats import PointGeometry
 from softtip.estimator.latch import LatchTracker
 from softtip.estimator.line_fit import LineFitTracker
@@ -101,7 +101,7 @@ class Estimator:
         cfg = self.config
         corr = noise_correlation(self._sos)
         self._noise = effective_noise(noise, self._sos)
-        self._evidence = EvidenceTracker(cfg, self._noise, corr)
+        self._evidence = EvidenceTracker(cfg, self._noise, corr, twist_curvature(self.tip))
         self._line_fit = None
         if cfg.contact_point == "line-fit":
             self._line_fit = LineFitTracker(self.tip, cfg, self._noise, corr)
@@ -336,7 +336,7 @@ class Estimator:
         )
         h = (hx, hy, hz)
         state, evidence, d, angle, angle_std, noise_std, h_ratio, f_ratio = self._evidence.step(
-            t, geo, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, h_std
+            t, geo, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, h_std, sigma
         )
         if self._lead:
             self._lead = False
