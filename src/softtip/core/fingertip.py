@@ -138,6 +138,10 @@ class Sphere(Fingertip):
         return sphere_project_kernel(x, y, z, self.radius, *self.center, xp)
 
     @property
+    def twist_radius(self) -> float:
+        return float(self.radius)
+
+    @property
     def bounding_sphere(self) -> tuple[NDArray[np.float64], float]:
         return np.array(self.center), self.radius
 
@@ -322,6 +326,10 @@ class Capsule(Fingertip):
 
     def _project_kernel(self, x, y, z, xp):
         return capsule_project_kernel(x, y, z, self.radius, self.length, *self.axis_offset, xp)
+
+    @property
+    def twist_radius(self) -> float:
+        return float(self.radius)
 
     @property
     def bounding_sphere(self) -> tuple[NDArray[np.float64], float]:

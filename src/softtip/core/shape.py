@@ -218,6 +218,13 @@ class Fingertip(abc.ABC):
     def _project_kernel(self, x, y, z, xp):
         """The point of the skin nearest ``(x, y, z)`` (see :meth:`project`)."""
 
+    @property
+    def twist_radius(self) -> float | None:
+        """The skin's radius of curvature (m) where one number describes it at every contact (a
+        sphere's radius, a capsule's), else None: the lever of a line's tilt in the line
+        evidence's twist term (:func:`softtip.estimator.evidence.twist_curvature`)."""
+        return None
+
     def surface(self, points: ArrayLike) -> NDArray[np.float64]:
         """Value of ``S`` at ``points``, shape ``(...,)``; negative inside, 0 on the skin."""
         return np.asarray(self._surface_kernel(*_split(points), NP), dtype=float)

@@ -180,14 +180,11 @@ _R_WIDTH = _R_SPREAD + 1
 
 
 def twist_curvature(tip) -> float:
-    """``1 / R`` (1/m) of the twist term of the standard deviation (module docs): the radius of a
-    spherical fingertip or of a capsule's caps; 0.0 (no term) for other shapes, whose
-    curvature along the line is not one number."""
-    from softtip.core.fingertip import Capsule, Sphere
-
-    if type(tip) in (Sphere, Capsule):
-        return 1.0 / float(tip.radius)
-    return 0.0
+    """``1 / R`` (1/m) of the twist term of the standard deviation (module docs), ``R`` the
+    fingertip's :attr:`~softtip.core.shape.Fingertip.twist_radius` (a sphere's, a capsule's);
+    0.0 (no term) for shapes whose curvature along the line is not one number."""
+    radius = tip.twist_radius
+    return 0.0 if radius is None else 1.0 / radius
 
 
 def evidence_params(config: EstimatorConfig, noise: SensorNoise, inv_radius: float = 0.0) -> NDArray[np.float64]:
