@@ -672,5 +672,6 @@ def test_the_twist_term_widens_only_the_line_std_by_atan_of_the_twist_over_r_fn(
     assert np.all(twist[line] > 0.0)
     assert_allclose(on.angle_std[line] ** 2, off.angle_std[line] ** 2 + twist[line] ** 2, rtol=1e-12)
     assert twist_curvature(load_fingertip("murakami2006")) == inv_r
-    mesh = type("Other", (), {"radius": 0.016})()
-    assert twist_curvature(mesh) == 0.0
+    from softtip.core.fingertip import Ellipsoid
+
+    assert twist_curvature(Ellipsoid(semi_axes=(0.016, 0.016, 0.02))) == 0.0  # curvature not one number
