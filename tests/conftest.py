@@ -35,6 +35,12 @@ def _bytecode_for_the_run(config) -> None:
 def pytest_configure(config):
     if not hasattr(config, "workerinput"):
         _bytecode_for_the_run(config)
+        # the workers pytest-xdist starts now share the cores: each with a BLAS thread pool
+        # would spend CPU starting it and then oversubscribe them; one thread each, as the
+        # softtip command runs (softtip.cli.app._one_blas_thread), unless the user said otherwise
+        from softtip.cli.app import _one_blas_thread
+
+        _one_blas_thread()
     # the simulated logs that test files share: once per checkout and simulator version (simcache.py)
     simcache.active = simcache.SimCache.in_pytest_cache(config)
     # pytest-xdist's loadfile hands out the files ordered by their number of tests unless told

@@ -303,6 +303,34 @@ def test_the_command_runs_without_importing_pandas(tmp_path):
     assert outs[0].read_bytes() == outs[1].read_bytes()
 
 
+def test_the_command_runs_blas_on_one_thread_unless_told(tmp_path):
+    # a BLAS thread pool costs every command its start (0.1-0.3 s of CPU) and helps none of its
+    # small-matrix maths: the command sets OpenBLAS to one thread before numpy loads, unless the
+    # user's environment says how many; the output is the same bytes either way
+    import os
+
+    from softtip.cli.app import _one_blas_thread
+
+    for given, expected in (({}, "1"), ({"OPENBLAS_NUM_THREADS": "4"}, "4"), ({"OMP_NUM_THREADS": "2"}, None)):
+        environ = dict(given)
+        _one_blas_thread(environ)
+        assert environ.get("OPENBLAS_NUM_THREADS") == expected and {k: environ[k] for k in given} == given
+    env = {k: v for k, v in os.environ.items() if k not in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS")}
+    outs = []
+    for extra in ({}, {"OPENBLAS_NUM_THREADS": "2"}):
+        outs.append(tmp_path / f"est{len(outs)}.csv")
+        code = (
+            "import atexit, os, sys; from softtip.cli import run; "
+            "assert 'numpy' not in sys.modules, 'numpy loaded before the command set its threads'; "
+            "atexit.register(lambda: print('blas threads:', os.environ.get('OPENBLAS_NUM_THREADS'), file=sys.stderr)); "
+            f"sys.argv = ['softtip', 'estimate', '--example', '-o', {str(outs[-1])!r}]; run()"
+        )
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, env={**env, **extra})
+        assert out.returncode == 0, out.stderr
+        assert f"blas threads: {extra.get('OPENBLAS_NUM_THREADS', '1')}" in out.stderr
+    assert outs[0].read_bytes() == outs[1].read_bytes()
+
+
 def test_the_command_list_is_the_commands_own_help() -> None:
     """``softtip --help`` lists the commands from the registry without importing them: the
     same lines, at every width, as the commands themselves would give."""
