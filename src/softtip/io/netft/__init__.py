@@ -34,7 +34,9 @@ What happens on :meth:`NetFTSource.open`:
      or jumping further than the host clock allows) re-synchronises once the next record
      confirms it: time goes on from the last sample plus the host-clock gap. The first
      record, too, waits for the next to confirm it. A record that no other follows (a stray
-     datagram of the right size) is counted as malformed;
+     datagram of the right size) is counted as malformed; two such records in a row whose RDT
+     sequences continue each other (1 to 64 apart) cannot be told from a restarted stream, as
+     RDT carries no stream identity, and are taken as one;
    * a silent device is asked again to stream (every ``resend_s``), so a device that
      rebooted streams again;
    * the rate in the XML is checked against the host clock (from 2 s on, by the lower
