@@ -135,23 +135,22 @@ def best_of(fn, repeats):
 
 
 def _bytecode_kept() -> None:
-    """Let the commands this benchmark starts keep their compiled bytecode (a temporary
-    ``PYTHONPYCACHEPREFIX`` for the run) where ``PYTHONDONTWRITEBYTECODE`` is set and no prefix
-    is: else every ``softtip`` subprocess compiles softtip's and its libraries' sources again,
-    which an installed softtip never does, and its start-up measured 1.66 s of CPU instead of
-    1.09 s. The first command of the run fills the prefix."""
-    if os.environ.get("PYTHONDONTWRITEBYTECODE") and not os.environ.get("PYTHONPYCACHEPREFIX"):
-        import atexit
-        import shutil
+    """The commands this benchmark times keep their bytecode (:func:`softtip.testing._bytecode.keep_bytecode`)
+    where ``PYTHONDONTWRITEBYTECODE`` is set: else each ``softtip`` subprocess compiles its sources
+    again, which an installed softtip never does (start-up measured 1.66 s of CPU instead of
+    1.09 s). The directory is filled before anything is timed and removed at the end."""
+    import atexit
+    import shutil
 
-        prefix = tempfile.mkdtemp(prefix="softtip-bench-pyc-")
-        del os.environ["PYTHONDONTWRITEBYTECODE"]
-        os.environ["PYTHONPYCACHEPREFIX"] = prefix
-        atexit.register(shutil.rmtree, prefix, ignore_errors=True)
-        # fill it before anything is timed
-        subprocess.run([str(Path(sys.executable).with_name("softtip")), "--version"], capture_output=True)
-        subprocess.run([sys.executable, "-c", "import numba, pyarrow.parquet, scipy.linalg, softtip.cli.estimate"],
-                       capture_output=True)  # fmt: skip
+    from softtip.testing._bytecode import keep_bytecode
+
+    prefix = keep_bytecode()
+    if prefix is None:
+        return
+    atexit.register(shutil.rmtree, prefix, ignore_errors=True)
+    subprocess.run([str(Path(sys.executable).with_name("softtip")), "--version"], capture_output=True)
+    subprocess.run([sys.executable, "-c", "import numba, pyarrow.parquet, scipy.linalg, softtip.cli.estimate"],
+                   capture_output=True)  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -1,7 +1,5 @@
 import functools
-import os
 import shutil
-import tempfile
 
 import numpy as np
 import pytest
@@ -14,22 +12,15 @@ settings.load_profile("softtip")
 
 
 def _bytecode_for_the_run(config) -> None:
-    """Let the run's Python processes keep the bytecode they compile, in a temporary directory.
+    """The run's Python processes (pytest-xdist's workers and the ``softtip`` commands they start)
+    keep the bytecode they compile, in a temporary directory removed when the run ends
+    (:func:`softtip.testing._bytecode.keep_bytecode`): else several hundred commands compile
+    softtip from source again."""
+    from softtip.testing._bytecode import keep_bytecode
 
-    With ``PYTHONDONTWRITEBYTECODE`` set (and no ``PYTHONPYCACHEPREFIX`` of the user's), no
-    process writes bytecode and no ``__pycache__`` of softtip's sources exists, so each of the
-    several hundred ``softtip`` commands that the tests start compiles softtip's ~60 modules
-    from source again: about 0.15 s of CPU of a 0.5 s short run. Here the run's processes
-    (pytest-xdist's workers and the commands they start inherit the environment) write their
-    bytecode under a temporary directory instead, made by the process that was started and
-    removed when it ends: the source tree stays without bytecode, as the setting asks. Python
-    checks each cached file against its source, so what runs is the same code."""
-    if not os.environ.get("PYTHONDONTWRITEBYTECODE") or os.environ.get("PYTHONPYCACHEPREFIX"):
-        return  # bytecode is kept already (beside the sources or where the user said), or we are a worker
-    prefix = tempfile.mkdtemp(prefix="softtip-pyc-")
-    del os.environ["PYTHONDONTWRITEBYTECODE"]
-    os.environ["PYTHONPYCACHEPREFIX"] = prefix
-    config.add_cleanup(functools.partial(shutil.rmtree, prefix, ignore_errors=True))
+    prefix = keep_bytecode()
+    if prefix is not None:
+        config.add_cleanup(functools.partial(shutil.rmtree, prefix, ignore_errors=True))
 
 
 def pytest_configure(config):
