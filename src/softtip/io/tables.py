@@ -1806,7 +1806,7 @@ def _write_rows(out: TextIO | BinaryIO, plan: _Plan, *, header: bool = True, thr
     compiled = _compiled_csv(plan)
     if compiled:
         buffers = buffers or _TextBuffers()
-        buffers.put(*_compiled_block(plan, 0, min(plan.n, 1), buffers))  # compiled (or loaded from numba's cache) once, before the threads
+        buffers.put(_compiled_block(plan, 0, min(plan.n, 1), buffers)[0])  # compiled (or loaded from numba's cache) once, before the threads
 
     def text_of(start: int) -> Any:
         # formatting floats is the cost; the compiled formatter and pyarrow both run without
@@ -1854,7 +1854,7 @@ def _put_block(out, binary, plan: _Plan, start: int, done, buffers: _TextBuffers
     else:
         out.write(bytes(text).decode("utf-8"))
     if used is not None and buffers is not None:
-        buffers.put(data, used)
+        buffers.put(data)
     if plan.progress is not None:
         plan.progress(min(start + _CHUNK_ROWS, plan.n) - start)
 
@@ -1927,7 +1927,8 @@ class _TextBuffers:
             got = np.empty(size, dtype=np.uint8)  # untouched pages cost nothing: the bound may be loose
         return got
 
-    def put(self, data: np.ndarray, used: int | None = None) -> None:
+    def put(self, data: np.ndarray) -> None:
+        """Hand back a buffer of :meth:`out` (its text written)."""
         self._out.append(data)
 
 
