@@ -149,7 +149,7 @@ def main() -> None:
         t0 = time.process_time()
         out, used = sio._compiled_block(plan, 0, rows, buffers)
         mine = bytes(out[:used])
-        buffers.put(out, used)
+        buffers.put(out)
         seconds["compiled"] += time.process_time() - t0
         t0 = time.process_time()
         sink = io.BytesIO()
