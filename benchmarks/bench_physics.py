@@ -29,7 +29,10 @@ scenario uses which solver), then estimated with softtip's **default settings**
 
 ``--check`` adds the locking test of the issue: on each rocked thin line, relative to the
 estimator's latched point ``r₀`` and normal ``n₀``, the least-squares fit ``h = k n₀ × f_t``
-over the rocked samples (k in mm and the relative residual).
+over the rocked samples (k in mm and the relative residual); and, on every rocked grasp, the
+truth's side of row (b): how the true pressure centre travelled (standard deviation along the
+principal axes of its travel, noise-free) and the contact area. A strip-like contact only rolls
+along itself (minor travel far below the major); an area travels alike both ways.
 
 Varied settings (what the estimator was not tuned on): ``--modulus`` (Drake's hydroelastic
 modulus; the Winkler skin's modulus is scaled by the same factor from its 0.6 MPa), ``--tip-radius``,
@@ -75,6 +78,18 @@ loaded along the line reads a line 82° off (0.2) and 52° off (0.5).
 (Those Drake figures came from the SAP harness with the tip's 2 mm tetrahedra, on which the
 1 mm plate carried a spurious friction couple about its own line and the 0.5 load across slid
 off; the tip is now refined to half a plate's thickness: ``docs/benchmarks/physics-friction.md``.)
+
+Row (b) against the truth (main at 1e9e4cf, default settings, ``--sections rock --check``): on
+Drake the 10 mm plate is a strip. Its face is as wide as the contact patch (the plane's
+88 mm², 10.6 mm across), whose sides the plate's two edges cut off (78–84 mm²); rocked about
+two axes, the true pressure centre travels 0.42–0.52 mm along the plate and 0.12 mm across it,
+against 0.42 mm both ways on the plane; on Winkler the same plate's patch travels 0.40–0.44 mm
+across, as the plane's. softtip reports the Drake 10 mm plate a line on 92–100 % of the rocked
+samples with the plate's direction (0.6–1.9° median error, as the thin lines), and the
+Winkler one an area. The row's target (≤ 5 % line) assumes a 10 mm plate is an area, which
+holds only where the patch fits on the plate. Without it, Drake's row (b) is the 15 mm plate
+(37 %, 5 %, 61 %, 0 % line at 0°, 90°, −35°, 25°; its true travel across 0.29–0.45 mm, an area)
+and the plane (5 % at each angle): about 15 % line, over the target; on Winkler 5 %.
 """
 
 from __future__ import annotations
@@ -277,9 +292,23 @@ def run_cases(phys: Physics, args, tip, objects, kind: str, angles, results: dic
                     g.name, g.group, g.angle = name, group, ang
                     results.setdefault(kind, []).append(g)
                     if check is not None and seed == 101 and kind == "rock":
-                        check.append((name, _locking(est, t >= start)))
+                        check.append((name, _locking(est, t >= start) if group not in ("thick", "plane") else None,
+                                      _travel(log, start)))  # fmt: skip
                     if seed == 101 and kind == "friction" and args.decompose:
                         results.setdefault("decompose", []).append((name, _decompose(est, log, t, t >= start, tip)))
+
+
+def _travel(log: SimLog, start: float) -> tuple[float, float, float]:
+    """How the true pressure centre moved over the rocking (after both axes, noise-free): its
+    standard deviation along the principal axes of its travel in the tangent plane, major and
+    minor (mm), and the median contact area (mm²). A strip-like contact, which only rolls
+    along itself, has a minor travel far below the major; an area's two are alike."""
+    sel = (log.t >= start) & log.truth.in_contact.astype(bool)
+    pc = log.truth.pressure_centre[sel]
+    if len(pc) < 3:
+        return math.nan, math.nan, math.nan
+    lam = np.linalg.eigvalsh(np.cov((pc - pc.mean(axis=0)).T))  # ascending; the normal's is ~0
+    return math.sqrt(max(lam[2], 0.0)) * 1e3, math.sqrt(max(lam[1], 0.0)) * 1e3, float(np.median(log.truth.contact_area[sel])) * 1e6
 
 
 def _locking(est, sel) -> tuple[float, float]:
@@ -655,7 +684,7 @@ def main(argv=None) -> int:
         if "rock" in args.sections:
             run_cases(p, args, tip, lines, "rock", angles, sub := {}, chk)
             res["rock_lines"] = sub.get("rock", [])
-            run_cases(p, args, tip, areas, "rock", angles, sub := {})
+            run_cases(p, args, tip, areas, "rock", angles, sub := {}, chk)
             res["rock_areas"] = sub.get("rock", [])
         if "friction" in args.sections:
             chosen = args.friction_objects or (QUICK_FRICTION if args.quick else FRICTION_LINES)
@@ -686,8 +715,19 @@ def main(argv=None) -> int:
         print("|" + " --- |" * (len(physics) + 1))
         rows = {}
         for p in physics:
-            for nm, (k, rr) in checks[p.name]:
-                rows.setdefault(nm, {})[p.name] = f"{k:+.1f} mm, {rr:.0%}"
+            for nm, lock, _ in checks[p.name]:
+                if lock is not None:
+                    rows.setdefault(nm, {})[p.name] = f"{lock[0]:+.1f} mm, {lock[1]:.0%}"
+        for nm, cells in rows.items():
+            print(f"| {nm} | " + " | ".join(cells.get(p.name, "—") for p in physics) + " |")
+        print("\n### the truth under rocking (after both axes, noise-free): the pressure centre's travel, standard "
+              "deviation along its major / minor axis (mm), and the contact area (mm²)\n")  # fmt: skip
+        print("| grasp | " + " | ".join(f"{p.name}: major / minor, area" for p in physics) + " |")
+        print("|" + " --- |" * (len(physics) + 1))
+        rows = {}
+        for p in physics:
+            for nm, _, (major, minor, area) in checks[p.name]:
+                rows.setdefault(nm, {})[p.name] = f"{major:.2f} / {minor:.2f} mm, {area:.0f} mm²"
         for nm, cells in rows.items():
             print(f"| {nm} | " + " | ".join(cells.get(p.name, "—") for p in physics) + " |")
     if args.per_grasp:
