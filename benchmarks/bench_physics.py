@@ -82,8 +82,8 @@ off; the tip is now refined to half a plate's thickness: ``docs/benchmarks/physi
 Row (b) against the truth (main at 1e9e4cf, default settings, ``--sections rock --check``): on
 Drake the 10 mm plate is a strip. Its face is as wide as the contact patch (the plane's
 88 mm², 10.6 mm across), whose sides the plate's two edges cut off (78–84 mm²); rocked about
-two axes, the true pressure centre travels 0.42–0.52 mm along the plate and 0.12 mm across it,
-against 0.42 mm both ways on the plane; on Winkler the same plate's patch travels 0.40–0.44 mm
+two axes, the true pressure centre travels (standard deviation) 0.42–0.52 mm along the plate
+(the travel's major axis within 3° of it) and 0.12 mm across, against 0.42 mm both ways on the plane; on Winkler the same plate's patch travels 0.40–0.44 mm
 across, as the plane's. softtip reports the Drake 10 mm plate a line on 92–100 % of the rocked
 samples with the plate's direction (0.6–1.9° median error, as the thin lines), and the
 Winkler one an area. The row's target (≤ 5 % line) assumes a 10 mm plate is an area, which
