@@ -366,12 +366,11 @@ class _NoProgress:
 
 def progress_bar(total: int, what: str, *, unit: str = " rows", file=None, delay: float = 2.0):
     """A tqdm bar on standard error, shown only on a terminal and only after ``delay`` s."""
-    from tqdm import tqdm
-
     file = sys.stderr if file is None else file
     tty = file.isatty()
     if not tty:
         return _NoProgress()
+    from tqdm import tqdm  # only on a terminal: importing it costs a command 20 ms of start-up
     # no monitor thread: a daemon thread alive at interpreter exit, with pyarrow loaded,
     # aborted the process ("terminate called without an active exception") in ~half the
     # runs that ended on an error
