@@ -269,6 +269,9 @@ def stream_rows(args, g) -> None:
             if best is None or np.median(per[contact]) < np.median(best[0][contact]):
                 best = per, contact
         per, contact = best
+        if not contact.any():  # the targets are about the samples in contact
+            raise SystemExit(f"bench_core.py: --stream-samples {args.stream_samples}: no sample in contact (the grasp "
+                             "touches about 2 s in, sample 2,000 at 1 kHz); give more samples")  # fmt: skip
         print(
             f"  {label:30s} median {np.median(per) * 1e6:6.1f} us   p99 {np.percentile(per, 99) * 1e6:6.1f} us"
             f"   (in contact, {contact.mean():.0%}: median {np.median(per[contact]) * 1e6:6.1f} us"
