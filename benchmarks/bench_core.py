@@ -1018,8 +1018,9 @@ def mesh_rows(args, rng) -> None:
         contact = g.t[: len(per)] > 2.2
         print(
             f"  {label:30s} median {np.median(per) * 1e6:6.1f} us   p99 {np.percentile(per, 99) * 1e6:6.1f} us"
-            f"   (in contact: median {np.median(per[contact]) * 1e6:6.1f} us)"
-        )
+            + (f"   (in contact: median {np.median(per[contact]) * 1e6:6.1f} us)" if contact.any() else
+               f"   (no sample in contact in the first {len(per):,}: give more --stream-samples)")
+        )  # fmt: skip
 
 
 if __name__ == "__main__":

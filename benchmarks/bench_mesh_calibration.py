@@ -26,7 +26,8 @@ from softtip.sim.probing import mesh_probing_log
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--trials", type=int, default=100)
-    ap.add_argument("--presses", type=int, default=20)
+    ap.add_argument("--presses", type=int, default=20,
+                    help="plane presses per trial (calibrate_mesh needs 6 usable ones for the offset, 9 with the rotation)")
     args = ap.parse_args()
     v, f = capsule_mesh(0.016, 0.020, segments=64)
     nominal = MeshFingertip(v, f)
