@@ -793,6 +793,7 @@ def bounds(n: int) -> None:
     # memory the process has not touched yet costs the system a page fault per page, and on a
     # virtual machine that hands freed memory back to its host (free page reporting) far more:
     # then the first touch, and the first touch after the machine idled, is what varies
+    gib = k * m * 8 / 2**30
     for label, idle in (("first allocation", 0.0), ("again", 0.0), ("again after 5 s idle", 5.0)):
         time.sleep(idle)
         r0 = resource.getrusage(resource.RUSAGE_SELF)
@@ -802,8 +803,8 @@ def bounds(n: int) -> None:
         r1 = resource.getrusage(resource.RUSAGE_SELF)
         user, system = r1.ru_utime - r0.ru_utime, r1.ru_stime - r0.ru_stime
         del arrays
-        print(f"  numpy: allocate and fill {k} float64 columns of {m:,} rows ({k * m * 8 / 2**30:.2f} GiB), {label}: "
-              f"{(user + system) / m * 1e9:.0f} ns/row, system time {system / (k * m * 8 / 2**30):.2f} s/GiB "
+        print(f"  numpy: allocate and fill {k} float64 columns of {m:,} rows ({gib:.2f} GiB), {label}: "
+              f"{(user + system) / m * 1e9:.0f} ns/row, system time {system / gib:.2f} s/GiB "
               "(3 M rows/s, about the pipeline target, is 330 ns/row for everything)")  # fmt: skip
 
 

@@ -27,7 +27,7 @@ scenario uses which solver), then estimated with softtip's **default settings**
     axes at 90° is the papers' unobservable case);
 (f) ``line_evidence == "confirmed"`` samples over every grasp.
 
-``--check`` adds the locking test of the issue: on each rocked thin line, relative to the
+``--check`` adds the locking test of the issue: on each rocked grasp, relative to the
 estimator's latched point ``r₀`` and normal ``n₀``, the least-squares fit ``h = k n₀ × f_t``
 over the rocked samples (k in mm and the relative residual); and, on every rocked grasp, the
 truth's side of row (b): how the true pressure centre travelled (standard deviation along the
@@ -292,8 +292,7 @@ def run_cases(phys: Physics, args, tip, objects, kind: str, angles, results: dic
                     g.name, g.group, g.angle = name, group, ang
                     results.setdefault(kind, []).append(g)
                     if check is not None and seed == 101 and kind == "rock":
-                        check.append((name, _locking(est, t >= start) if group not in ("thick", "plane") else None,
-                                      _travel(log, start)))  # fmt: skip
+                        check.append((name, _locking(est, t >= start), _travel(log, start)))
                     if seed == 101 and kind == "friction" and args.decompose:
                         results.setdefault("decompose", []).append((name, _decompose(est, log, t, t >= start, tip)))
 
@@ -710,14 +709,13 @@ def main(argv=None) -> int:
               f"force {pc['force_N']:.3f} N (the field integrated exactly: {pc['force_field_N']:.3f} N); "
               f"area {pc['area_mm2']:.1f} mm²")  # fmt: skip
     if args.check:
-        print("\n### locking: h = k n0 × f_t on the rocked thin lines (after both axes), first seed\n")
+        print("\n### locking: h = k n0 × f_t on every rocked grasp (after both axes), first seed\n")
         print("| grasp | " + " | ".join(f"{p.name}: k, residual" for p in physics) + " |")
         print("|" + " --- |" * (len(physics) + 1))
         rows = {}
         for p in physics:
-            for nm, lock, _ in checks[p.name]:
-                if lock is not None:
-                    rows.setdefault(nm, {})[p.name] = f"{lock[0]:+.1f} mm, {lock[1]:.0%}"
+            for nm, (k, rr), _ in checks[p.name]:
+                rows.setdefault(nm, {})[p.name] = f"{k:+.1f} mm, {rr:.0%}"
         for nm, cells in rows.items():
             print(f"| {nm} | " + " | ".join(cells.get(p.name, "—") for p in physics) + " |")
         print("\n### the truth under rocking (after both axes, noise-free): the pressure centre's travel, standard "
