@@ -1,6 +1,7 @@
 """Two-finger fusion on the simulator: the object's line and plane from both fingertips.
 
     python benchmarks/bench_fusion.py          # ~4 min on a quiet 2-core machine
+    python benchmarks/bench_fusion.py --physics drake --objects "plate 1 mm" "cube edge (90°)"
 
 The papers' two-fingered hand (softtip.sim.hand) with both fingertips on one object: a
 plate's two edges pinched across its 30 mm width, a stick's two sides, a cube's two opposite
@@ -33,12 +34,23 @@ load on. ``--rock-axes 0 30 60`` rocks each grasp three ways (the tangent axes o
 a confirmed line stands for how the axis turns with the pattern of excitation, which one
 pattern per run shows as a fixed offset. ``--tip sphere`` puts a 12 mm sphere on both
 fingers, a fingertip the defaults were not set on.
+
+``--physics drake`` (or ``both``) simulates each fingertip with Drake's hydroelastic contact
+instead of softtip's Winkler skin (``benchmarks/drake_physics.py``: the same scenarios, seeds
+and sensor model; frictionless quasi-static for the papers' grasp and the rocking, SAP with
+friction for ``--load``; logs cached under ``benchmarks/.cache/drake``, 5–60 s each the first
+time). On that frictionless cap every thin line gives the same wrench (see the module), so a
+plate and a cube's edge differ only by the loads they carry; ``--objects`` takes names from
+either object list to run fewer of them.
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import math
+import sys
+from pathlib import Path
 
 import numpy as np
 
@@ -60,6 +72,9 @@ from softtip.sim import (
 )
 from softtip.sim.hand import FrictionLoad, simulate_two_finger
 from softtip.sim.sensor import SensorModel
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _markdown import run_with_markdown  # noqa: E402
 
 HELD = 6.0
 OBJECTS = {
@@ -86,9 +101,20 @@ def _axial_deg(a, b):
     return np.degrees(np.arccos(np.clip(np.abs(np.sum(a * b, axis=-1)), 0.0, 1.0)))
 
 
-def run_case(tip, model, obj, angle_deg, seed, rock=False, noise=1.0, told="preset", load=None, rock_axes=0.0):
+def _drake(load) -> functools.partial:
+    """Each finger simulated by Drake: frictionless quasi-static, or SAP with friction for a load."""
+    from drake_physics import DRAKE_MISSING, drake_available, simulate_drake
+
+    if not drake_available():
+        raise SystemExit(DRAKE_MISSING)
+    return functools.partial(simulate_drake, solver="quasistatic" if load is None else "sap", progress=sys.stderr.isatty())
+
+
+def run_case(tip, model, obj, angle_deg, seed, rock=False, noise=1.0, told="preset", load=None, rock_axes=0.0,
+             simulate=None):  # fmt: skip
     kw = {"rock_axes": math.radians(rock_axes)} if rock else {}
-    g = simulate_two_finger(tip, obj, math.radians(angle_deg), rng=seed, model=model, rock=rock, load=load, **kw)
+    kw.update({"model": model} if simulate is None else {"simulate": simulate})
+    g = simulate_two_finger(tip, obj, math.radians(angle_deg), rng=seed, rock=rock, load=load, **kw)
     sensor = SensorModel(noise_std=tuple(noise * np.asarray(SensorModel().noise_std)))
     if told == "true":  # the estimator told the simulated sensor's noise with its quantisation, not the Nano17 preset's
         config = EstimatorConfig(noise=sensor.noise_model())
@@ -139,29 +165,40 @@ def run_case(tip, model, obj, angle_deg, seed, rock=False, noise=1.0, told="pres
 
 def fusion_section(
     seeds=(1,), angles=(-45.0, 0.0, 30.0), objects=None, noise=1.0, told="preset", load=None, rock_axes=(0.0,),
-    tip_name="murakami2006",
+    tip_name="murakami2006", physics="winkler",
 ) -> None:
     objects = objects or OBJECTS
     tip = TIPS[tip_name]()
-    if load is None:
+    simulate = _drake(load) if physics == "drake" else None
+    if simulate is not None:
+        model = None
+    elif load is None:
         model = ContactModel(discretise_skin(tip), ContactParams(), 2)
     else:  # the stiffer shear layer of bench_accuracy's friction section: the default cannot hold the loads
         model = ContactModel(discretise_skin(tip, 10000), ContactParams(shear_modulus=2e6), 2)
-    print("\n## fusion: two fingertips on one object (median over the held grasp, t > 6 s, or once rocked about")
-    print("both axes, t > 8 s; z = rms(error / reported std); each finger's own z against its own line; shared:")
+    print(f"\n### fusion: two fingertips on one object, {'Winkler skin' if simulate is None else 'Drake'}\n")
+    print("Median over the held grasp (t > 6 s, or once rocked about both axes, t > 8 s); z = rms(error / reported std);")
+    print("each finger's own z against its own line; shared:")
     what = {
         "true": "told the simulated sensor's",
         "tare": "measured it from a 1.5 s tare",
         "preset": "told the Nano17 preset's (1.7 times the simulated force noise, 1.4 times the moment noise)",
     }[told]
-    print(f"both fingers' errors of one sign in the hand frame); sensor noise × {noise:g}; the estimator {what}; "
+    print(f"both fingers' errors of one sign in the hand frame; sensor noise × {noise:g}; the estimator {what}; "
           f"fingertips: {tip_name}")
+    if simulate is None:
+        print("physics: softtip's Winkler skin")
+    else:
+        from drake_physics import drake_version
+
+        print(f"physics: drake {drake_version()}, hydroelastic modulus 2 MPa, resolution hint 2 mm, "
+              + ("frictionless quasi-static" if load is None else "SAP with friction μ = 1"))
     if load is not None:
         way = "across" if load.across else "along"
+        skin = "shear modulus 2 MPa, 10 000 skin elements; " if simulate is None else ""
         print(f"With a friction load, {load.profile} {way} the line at the right fingertip"
               + (f", {load.ratio:g} of the grasp force" if load.profile != "slip" else "")
-              + f", errors from t > {9.5 if load.profile == 'drag' else 7.0:g} s; shear modulus 2 MPa, 10 000 skin "
-              "elements; no rocking")  # fmt: skip
+              + f", errors from t > {9.5 if load.profile == 'drag' else 7.0:g} s; {skin}no rocking")  # fmt: skip
     print()
     print("| object | rocked | angle | seed | parallel | right / left alone | finger z | shared | fused | z | plane normal | z |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
@@ -173,7 +210,7 @@ def fusion_section(
         for name, make, a, s, ax in cases:
             rocked = ("yes" if ax == 0.0 else f"axes {ax:+.0f}°") if rock else "no"
             try:
-                r = run_case(tip, model, make(), a, s, rock, noise, told, load, ax)
+                r = run_case(tip, model, make(), a, s, rock, noise, told, load, ax, simulate)
             except RuntimeError as exc:  # the simulator cannot hold the grasp (friction)
                 print(f"| {name} | {rocked} | {a:+.0f}° | {s} | simulator: {exc} |")
                 continue
@@ -204,12 +241,17 @@ def fusion_section(
             print(f"direction z per object (rms over its runs): {each}\n")
 
 
-if __name__ == "__main__":
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+def main(argv: list[str]) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0],
+                                 epilog="--markdown PATH also writes the printed tables to PATH")
     ap.add_argument("--seeds", type=int, nargs="*", default=[1])
     ap.add_argument("--angles", type=float, nargs="*", default=[-45.0, 0.0, 30.0], help="degrees at the right fingertip")
     ap.add_argument("--noise", type=float, default=1.0, help="sensor noise × this (the estimator told the Nano17 preset × this)")
-    ap.add_argument("--objects", choices=("default", "more"), default="default", help="the default grid's objects or four others")
+    ap.add_argument("--objects", nargs="+", default=["default"], metavar="NAME",
+                    help="'default' (the grid's four), 'more' (four others) or objects by name from either: "
+                    + ", ".join(repr(k) for k in {**OBJECTS, **MORE_OBJECTS}))
+    ap.add_argument("--physics", choices=("winkler", "drake", "both"), default="winkler",
+                    help="each fingertip's contact model: softtip's Winkler skin, Drake's hydroelastic contact, or both in turn")
     told = ap.add_mutually_exclusive_group()
     told.add_argument("--told-true-noise", action="store_true", help="tell the estimator the simulated sensor's noise (default: the Nano17 preset)")
     told.add_argument("--noise-from-tare", action="store_true", help="the estimator measures the noise from a 1.5 s tare (default: the Nano17 preset)")
@@ -219,8 +261,16 @@ if __name__ == "__main__":
     ap.add_argument("--tip", choices=sorted(TIPS), default="murakami2006", help="both fingertips' shape (sphere: R 12 mm)")
     ap.add_argument("--rock-axes", type=float, nargs="+", default=[0.0], metavar="DEG",
                     help="rock about tangent axes turned by these angles (one rocked run each; rock_scenario's rock_axes)")
-    args = ap.parse_args()
-    objects = OBJECTS if args.objects == "default" else MORE_OBJECTS
+    args = ap.parse_args(argv)
+    known = {**OBJECTS, **MORE_OBJECTS}
+    objects = {}
+    for name in args.objects:
+        if name in ("default", "more"):
+            objects.update(OBJECTS if name == "default" else MORE_OBJECTS)
+        elif name in known:
+            objects[name] = known[name]
+        else:
+            ap.error(f"--objects: unknown object {name!r}; choose 'default', 'more' or one of {', '.join(map(repr, known))}")
     load = None
     if (args.load is not None or args.load_profile == "slip") and args.rock_axes != [0.0]:
         ap.error("--rock-axes goes with the rocked runs; a friction load is not rocked")
@@ -229,4 +279,10 @@ if __name__ == "__main__":
     if args.load is not None or args.load_profile == "slip":
         load = FrictionLoad(args.load or 0.0, args.load_direction == "across", args.load_profile)
     told = "true" if args.told_true_noise else "tare" if args.noise_from_tare else "preset"
-    fusion_section(tuple(args.seeds), tuple(args.angles), objects, args.noise, told, load, tuple(args.rock_axes), args.tip)
+    for physics in ("winkler", "drake") if args.physics == "both" else (args.physics,):
+        fusion_section(tuple(args.seeds), tuple(args.angles), objects, args.noise, told, load, tuple(args.rock_axes),
+                       args.tip, physics)  # fmt: skip
+
+
+if __name__ == "__main__":
+    sys.exit(run_with_markdown(main, "bench_fusion.py"))

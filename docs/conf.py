@@ -38,7 +38,7 @@ root_doc = "index"
 exclude_patterns = [
     "_build",
     "manual.md",  # a pointer to guide/ kept for old links
-    "benchmarks/physics-*.md",  # written by benchmarks/bench_physics.py --markdown, included by two-physics.md
+    "benchmarks/physics-*.md",  # written by benchmarks/bench_physics.py and bench_fusion.py --markdown, included by two-physics.md
     "benchmarks/performance-*.md",  # written by benchmarks/bench_core.py --markdown, included by performance.md
     "benchmarks/accuracy-*run.md",  # written by benchmarks/bench_accuracy.py --markdown, included by accuracy.md
     "benchmarks/calibration-*run.md",  # written by benchmarks/bench_calibration.py --markdown, included by accuracy.md

@@ -278,6 +278,33 @@ def test_the_simulator_options_reach_both_fingertips(tmp_path):
     assert not np.array_equal(stiff["mx"], soft["mx"])
 
 
+def test_another_contact_model_simulates_each_finger_from_the_same_scenarios():
+    """``simulate_two_finger(simulate=...)``: each finger's scenario, sensor and seed reach the
+    given contact model (the benchmarks pass Drake's); the default model through that hook gives
+    the default grasp to the bit."""
+    import functools
+
+    from softtip.sim import Plate, simulate_grasp
+    from softtip.sim.hand import simulate_two_finger
+
+    tip, angle = softtip.murakami2006(), math.radians(30)
+    calls = []
+
+    def recording(tip_, obj, scenario, sensor, rng):
+        calls.append((round(math.degrees(scenario.angle)), rng, sensor, scenario.hand.rotation))
+        return simulate_grasp(tip_, obj, scenario, sensor, rng=rng, n_elements=1500)
+
+    hooked = simulate_two_finger(tip, Plate(0.001), angle, rng=4, duration=4.0, simulate=recording)
+    plain = simulate_two_finger(tip, Plate(0.001), angle, rng=4, duration=4.0, n_elements=1500)
+    assert [c[:2] for c in calls] == [(30, 4), (-30, 5)] and calls[0][2] is calls[1][2]
+    assert np.array_equal(calls[1][3], softtip.sim.HandFrame.paper(side="left").rotation)
+    for side in ("right", "left"):
+        assert np.array_equal(hooked.logs[side].wrench, plain.logs[side].wrench)
+        assert np.array_equal(hooked.logs[side].truth.angle, plain.logs[side].truth.angle, equal_nan=True)
+    with pytest.raises(ValueError, match="give them to your simulate"):
+        simulate_two_finger(tip, Plate(0.001), angle, n_elements=1500, simulate=functools.partial(simulate_grasp))
+
+
 def test_a_friction_load_on_the_grasped_object(tmp_path):
     """A friction load pushes the pinched plate (100 g) across its line (0.25 of the grasp
     force at each fingertip, one vector in the hand): both fingertips carry the same

@@ -8,6 +8,8 @@ the left on ``−x``, each touching at its apex). Each finger is simulated by
 joints' about ``y``, gravity's about ``x``), each finger carrying half the weight. The two
 contacts are solved independently — each finger's push settles on its own — so the object's
 pose is common up to the skin's compression (a few tenths of a millimetre along ``x``).
+Because they are independent, another contact model can simulate each finger from the same
+scenarios (``simulate``: the benchmarks pass Drake's hydroelastic contact).
 
 What each finger touches is given per finger: the two edges of a plate pinched across its
 width, a stick's two sides, or an edge on one finger and a plane on the other (an
@@ -21,6 +23,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -113,6 +116,7 @@ def simulate_two_finger(
     sensor: SensorModel | None = None,
     params: ContactParams | None = None,
     load: FrictionLoad | None = None,
+    simulate: Callable[..., SimLog] | None = None,
     **scenario_kwargs,
 ) -> TwoFingerGrasp:
     """Simulate the papers' grasp with both fingertips.
@@ -153,6 +157,11 @@ def simulate_two_finger(
         hand for both fingertips (the object pushed or slid as one), on top of the weight
         (a ``slip`` moves the object kinematically, from the start: what moves it holds its
         weight, and the grasp's ``object_mass`` is 0); not with ``rock``.
+    simulate : callable, optional
+        The contact model of each finger, called as ``simulate(tip, obj, scenario, sensor,
+        rng=seed)`` and returning a :class:`~softtip.sim.simulate.SimLog` (default:
+        :func:`~softtip.sim.simulate.simulate_grasp` with ``n_elements``, ``model`` or ``params``,
+        which a custom model does not take).
     **scenario_kwargs
         Other :func:`~softtip.sim.scenario.paper_scenario` (or, rocked,
         :func:`~softtip.sim.scenario.rock_scenario`) arguments.
@@ -171,6 +180,10 @@ def simulate_two_finger(
         kw["params"] = params
     if load is not None and rock:
         raise ValueError("a friction load goes with the papers' grasp, not with rocking")
+    if simulate is None:
+        simulate = simulate_grasp
+    elif kw:
+        raise ValueError("n_elements, model and params are simulate_grasp's skin: give them to your simulate instead")
     pitch = scenario_kwargs.get("finger_pitch", 0.0)
     poses = {side: sensor_pose_in_hand(tip, side, width, pitch) for side in SIDES}
     if load is not None:
@@ -182,7 +195,7 @@ def simulate_two_finger(
             for side in SIDES
         }
     logs = {
-        side: simulate_grasp(tip, objs[side], scenarios[side], sensor, rng=rng + k, **kw) for k, side in enumerate(SIDES)
+        side: simulate(tip, objs[side], scenarios[side], sensor, rng=rng + k, **kw) for k, side in enumerate(SIDES)
     }
     # a slip moves the object kinematically: the fingers carry none of its weight
     carried = 0.0 if load is not None and load.profile == "slip" else float(object_mass)
