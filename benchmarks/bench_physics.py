@@ -107,6 +107,8 @@ from pathlib import Path
 import numpy as np
 
 from softtip import Capsule, EstimatorConfig, axial_difference, estimate
+from softtip.core.fingertip import Fingertip
+from softtip.core.mesh import MeshFingertip, capsule_mesh
 from softtip.sim import (
     ContactParams,
     Cylinder,
@@ -198,9 +200,15 @@ class Physics:
         return log
 
 
-def estimation_tip(tip: Capsule) -> Capsule:
+def estimation_tip(tip: Capsule, shape: str = "capsule") -> Fingertip:
     """The fingertip as its user's file states it: with its 5 mm skin, which the default depth
-    compensation needs (a capsule without ``skin_thickness`` is estimated without it)."""
+    compensation needs (a capsule without ``skin_thickness`` is estimated without it).
+    ``shape="mesh"``: the same capsule as a closed triangle mesh
+    (:func:`softtip.core.mesh.capsule_mesh`, 160 vertices around the axis), as a user's CAD file
+    gives it, estimated by softtip's mesh solver."""
+    if shape == "mesh":
+        vertices, faces = capsule_mesh(tip.radius, tip.length)
+        return MeshFingertip(vertices, faces, skin_thickness=SKIN_THICKNESS, source="capsule_mesh")
     return dataclasses.replace(tip, skin_thickness=SKIN_THICKNESS)
 
 
@@ -287,7 +295,7 @@ def run_cases(phys: Physics, args, tip, objects, kind: str, angles, results: dic
                     cfg = EstimatorConfig(rocked=((a2.start, scn.duration),))
                 for seed in range(101, 101 + args.seeds):
                     t, w, truth = noisy(log, args, seed)
-                    est = estimate(t, w, estimation_tip(tip), cfg)
+                    est = estimate(t, w, estimation_tip(tip, args.estimate_tip), cfg)
                     g = Grasp(est, truth, t >= start)
                     g.name, g.group, g.angle = name, group, ang
                     results.setdefault(kind, []).append(g)
@@ -494,7 +502,7 @@ def plot_rocking(path: str, physics: list[Physics], args, tip) -> None:
                                     rock_axes=math.radians(args.rock_axes))  # fmt: skip
                 log = phys.simulate(tip, obj, scn, rocking=True)
                 t, w, truth = noisy(log, args, 101)
-                est = estimate(t, w, estimation_tip(tip))
+                est = estimate(t, w, estimation_tip(tip, args.estimate_tip))
                 a1 = next(d for d in scn.disturbances if d.label == "rock-a1")
                 ax = axs[i, j]
                 m = (t >= a1.start) & (est.state > 0)
@@ -650,6 +658,9 @@ def main(argv=None) -> int:
     ap.add_argument("--sap-trace", metavar="PATH",
                     help="write the Drake SAP harness over time (orientation error, pressure centre, h) for the "
                          "friction objects at the first friction angle, 0.2 across")  # fmt: skip
+    ap.add_argument("--estimate-tip", choices=("capsule", "mesh"), default="capsule",
+                    help="the fingertip the estimator is given: the capsule, or the same capsule as a triangle mesh "
+                         "(softtip's mesh solver); the physics is the capsule's either way")
     ap.add_argument("--no-progress", action="store_true")
     args = ap.parse_args(argv)
     if args.seeds is None:
@@ -669,7 +680,9 @@ def main(argv=None) -> int:
     print(f"capsule R {args.tip_radius * 1e3:g} mm, cylinder 20 mm; noise ×{args.noise_scale:g} (5 mN, 0.05 N·mm); "
           f"{args.rate:g} Hz; object angles {', '.join(f'{a:+.0f}°' for a in angles)}; {args.seeds} noise seed(s); "
           f"tilt {args.tilt:g}°, rocking ±{args.rock_amplitude:g}° about axes at {args.rock_axes:g}°"
-          + ("; the rocking stated (--rocked)" if args.stated_rocking else "; default settings"))  # fmt: skip
+          + ("; the rocking stated (--rocked)" if args.stated_rocking else "; default settings")
+          + ("; estimated with the capsule as a triangle mesh (capsule_mesh, the mesh solver)"
+             if args.estimate_tip == "mesh" else ""))  # fmt: skip
     for p in physics:
         if p.name == "drake":
             rocking = "SAP" if args.rock_solver == "sap" else "frictionless quasi-static"

@@ -193,14 +193,26 @@ def noise_ratio(quiet: ArrayLike, noise: SensorNoise) -> tuple[float, float] | N
     tuple of float or None
         ``(σ_f / σ_f,sensor, σ_m / σ_m,sensor)``, each a median over the three axes of a robust
         standard deviation (from the median absolute difference of successive samples, so a
-        slow drift does not count); None with fewer than 6 samples or a constant axis group.
+        slow drift does not count; on a quantised axis, where successive samples repeat (2 % or
+        more of them), from their mean absolute difference);
+        None with fewer than 6 samples or a constant axis group.
     """
     w = np.asarray(quiet, dtype=float).reshape(-1, 6)
     w = w[np.isfinite(w).all(axis=1)]
     if len(w) < 6:
         return None
     step = np.diff(w, axis=0)
-    sigma = np.median(np.abs(step - np.median(step, axis=0)), axis=0) * 1.4826 / np.sqrt(2.0)
+    dev = np.abs(step - np.median(step, axis=0))
+    sigma = np.median(dev, axis=0) * 1.4826 / np.sqrt(2.0)
+    # A quantised sensor repeats its value: the differences take discrete values and their
+    # median lands on one of them, a multiple of the quantum (0 from a quantum of 2σ on: the
+    # check was then skipped, and a log read in impossible units passed; 0.8–1.8 σ from a
+    # quantum of σ). Their mean absolute deviation, √(2/π) times a normal difference's σ,
+    # measures the noise within 5 % up to a quantum of 2σ (measured on simulated draws).
+    # Continuous data (no repeats) keep the median, which ignores spikes.
+    coarse = np.mean(step == 0.0, axis=0) >= 0.02
+    if coarse.any():
+        sigma[coarse] = dev[:, coarse].mean(axis=0) * np.sqrt(np.pi / 2.0) / np.sqrt(2.0)
     f, m = float(np.median(sigma[:3])), float(np.median(sigma[3:]))
     f0, m0 = float(np.median(noise.force_std)), float(np.median(noise.moment_std))
     if not (f > 0 and m > 0 and f0 > 0 and m0 > 0):
