@@ -40,42 +40,6 @@ def _read(input_path: str, units: str, **formats):
     return log
 
 
-_WRENCH = ("fx", "fy", "fz", "mx", "my", "mz")
-
-
-def _read_probing(input_path: str, units: str, **formats):
-    """A probing log; a `softtip stream --record` file is read through its raw (untared) wrench.
-
-    A recording's fx..mz are the stream's tared estimates (NaN during its tare); its
-    raw_fx..raw_mz columns hold what the sensor gave, which is what calibration fits.
-    """
-    import csv
-    import io
-
-    from softtip.io.tables import read_log
-
-    if input_path == "-":
-        return _read(input_path, units, **formats)
-    try:
-        with open(input_path, encoding="utf-8-sig", newline="") as fh:
-            text = fh.read()
-    except (OSError, UnicodeDecodeError):
-        return _read(input_path, units, **formats)  # read_log says what is wrong (or decompresses it)
-    lines = text.splitlines(keepends=True)
-    k = next((i for i, line in enumerate(lines) if line.strip() and not line.lstrip().startswith("#")), None)
-    if k is None:
-        return _read(input_path, units, **formats)
-    header = next(csv.reader([lines[k]]))
-    names = [h.strip() for h in header]
-    if not all(f"raw_{c}" in names for c in _WRENCH):
-        return _read(input_path, units, **formats)
-    rename = {c: f"tared_{c}" for c in _WRENCH} | {f"raw_{c}": c for c in _WRENCH}
-    lines[k] = ",".join(rename.get(h, h) for h in names) + "\n"
-    stream = io.StringIO("".join(lines))
-    stream.name = input_path
-    return read_log(stream, units=units, **formats)
-
-
 def _example_or_log(input_path, example: bool, units: str, path, what: str) -> str:
     if example == (input_path is not None):
         raise click.UsageError(f"give either LOG or --example (the shipped example {what})")
@@ -104,7 +68,7 @@ LOG is a CSV log (t, fx, fy, fz, mx, my, mz; '-' reads standard input) of the fi
 pressed against a flat, rigid surface at many points spread over the skin (20 or more,
 ±60° around the tip; untouched for the first --tare-duration seconds), for instance
 recorded by `softtip stream --netft ADDRESS --record probe.csv` (of a recording, the raw
-columns raw_fx..raw_mz are used). During each press the
+columns fx_raw..mz_raw are used). During each press the
 surface must not tilt relative to the fingertip, and it should slide a little sideways so
 that the friction force turns (40° or more): that is what pins each contact point.
 --guide prints the procedure step by step; --example runs on a shipped simulated log.
@@ -193,7 +157,7 @@ def calibrate(
     input_path = _example_or_log(input_path, example, units, EXAMPLE_PROBING_PATH, "probing log")
     try:
         _check_output(input_path, output)
-        log = _read_probing(input_path, units, **formats)
+        log = _read(input_path, units, **formats)  # a `stream --record` file: its fx_raw..mz_raw (the registry)
         check_full_scale(log.t, log.wrench, sensor_range, log.source, units=units)
         cal = calibrate_fingertip(
             log.t, log.wrench, shape, tare_duration=tare_duration, contact_threshold=contact_threshold,

@@ -217,13 +217,14 @@ class EstimatorConfig:
         "latch", "latch: measure the contact point in the light-force window at the start of the grasp and hold it "
         "(the papers'); track: the soft-finger solution every sample (h is then zero: no directions); line-fit: latch, "
         "then move the point across the line to where a sliding window (--line-fit-window) fits the line-contact "
-        "model (flagged joint_fallback until one does).", choices=CONTACT_POINT_MODES, group="contact")
+        "model (flagged line_fit_fallback until one does).", choices=CONTACT_POINT_MODES, group="contact")
     contact_threshold: float = setting(
         0.05, "In contact while |f| is at least this.", unit="N", low=0.0, cli_unit="force", metavar="FORCE",
         group="contact")
     contact_hysteresis: float = setting(
         3.0, "Contact ends below --contact-threshold minus this many standard deviations of the noise of |f| (after "
-        "the low-pass; at least half the threshold); 0: one threshold.", unit="noise standard deviations", low=0.0,
+        "the low-pass), but not below the smaller of the threshold and 2.5 of them; 0: one threshold.",
+        unit="noise standard deviations", low=0.0,
         metavar="SIGMAS", group="contact")
     min_contact_duration: float = setting(
         0.005, "A contact is reported once |f| has stayed above the release threshold this long, each sample counting "
