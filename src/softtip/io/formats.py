@@ -271,6 +271,15 @@ class ColumnError(ValueError):
     """The columns cannot be mapped; ``hint`` says what would fix it."""
 
 
+class ColumnAbsent(ColumnError):
+    """A column ``--columns`` names is not on this line (the header may be further down);
+    ``found``: how many of the columns it names the line has."""
+
+    def __init__(self, message: str, found: int) -> None:
+        super().__init__(message)
+        self.found = found
+
+
 def _match(patterns: tuple[str, ...], bases: list[str], taken: set[int]) -> list[int]:
     for pattern in patterns:
         hits = [j for j, b in enumerate(bases) if j not in taken and re.fullmatch(pattern, b)]
@@ -299,7 +308,7 @@ def resolve_columns(names: Sequence[str], fmt: LogFormat, *, headerless: bool = 
             if want.isdigit() and (headerless or want not in names):
                 j = int(want) - 1
                 if not 0 <= j < len(names):
-                    raise ColumnError(f"--columns {role}={want}: the file has {len(names)} columns")
+                    raise ColumnAbsent(f"--columns {role}={want}: the file has {len(names)} columns", len(chosen))
             elif want in names:
                 j = list(names).index(want)
             else:
@@ -309,7 +318,11 @@ def resolve_columns(names: Sequence[str], fmt: LogFormat, *, headerless: bool = 
                 elif want.lower() in bases:
                     j = bases.index(want.lower())
                 else:
-                    raise ColumnError(f"--columns {role}={want}: no column {want!r} in the header ({', '.join(map(repr, names))})")
+                    present = sum(w.lower() in lower or w.lower() in bases for w in fmt.columns.values())
+                    raise ColumnAbsent(
+                        f"--columns {role}={want}: no column {want!r} in the header ({', '.join(map(repr, names))})",
+                        present,
+                    )
             chosen[role] = j
         source = "--columns"
     candidates = ((ROS2_CSV,) if headerless else SOURCES) if len(fmt.columns) < len(ROLES) else ()

@@ -83,6 +83,7 @@ from softtip.errors import InputError
 from softtip.io.formats import (
     ROLES,
     TABLE_FORMATS,
+    ColumnAbsent,
     ColumnError,
     ColumnMap,
     LogFormat,
@@ -645,11 +646,20 @@ def _sniff_delimiter(line: str) -> str:
 _DECIMAL_COMMA = re.compile(r"^[-+]?\d+,\d*(?:[eE][-+]?\d+)?$")
 
 
-def _try_columns(names: list[str], fmt: LogFormat, source: str, line: int, headerless: bool = False) -> ColumnMap | None:
+def _try_columns(names: list[str], fmt: LogFormat, source: str, line: int, headerless: bool = False,
+                 absent: list[tuple[int, InputError]] | None = None) -> ColumnMap | None:  # fmt: skip
+    """The line's :class:`ColumnMap`, or None; ``absent`` given: a column ``--columns`` names that
+    this line lacks is put there (the header may come later), not raised: the error of the line
+    with the most of the named columns, the first such."""
     try:
         return resolve_columns(names, fmt, headerless=headerless)
     except ColumnError as exc:
-        raise InputError(f"{source}:{line}: {exc}") from None
+        error = InputError(f"{source}:{line}: {exc}")
+        if absent is None or not isinstance(exc, ColumnAbsent):
+            raise error from None
+        if not absent or exc.found > absent[0][0]:
+            absent[:] = [(exc.found, error)]
+        return None
 
 
 def _read_header(text: str, source: str, fmt: LogFormat | None = None) -> _Header:
@@ -691,7 +701,9 @@ def _read_header(text: str, source: str, fmt: LogFormat | None = None) -> _Heade
             return _Header(names=names, line=lineno - 1, data_base=lineno - 1, lines=lines, comments=comments,
                            delimiter=delimiter, decimal=_sniff_decimal(text, lines.tell(), delimiter), cmap=cmap,
                            headerless=True)  # fmt: skip
-    cmap = _try_columns(first, fmt, source, lineno)
+    # --columns naming what the first line lacks: that line may be a preamble's
+    absent: list[tuple[int, InputError]] = []
+    cmap = _try_columns(first, fmt, source, lineno, absent=absent if skip is None else None)
     if cmap is None and skip is None and not headerless:
         # a preamble: the header is the first of the next lines that names the columns
         start = lines.tell()
@@ -700,13 +712,16 @@ def _read_header(text: str, source: str, fmt: LogFormat | None = None) -> _Heade
             k += 1
             ahead.append((k, later))
             d = _sniff_delimiter(later)
-            found = _try_columns(_split_line(later, d), fmt, source, k) if later.strip() else None
+            found = _try_columns(_split_line(later, d), fmt, source, k, absent=absent) if later.strip() else None
             if found is not None:
                 comments += [(lineno, line.strip())] + [(n, x.strip()) for n, x in ahead[:-1]]
                 preamble = k - lineno
                 line, lineno, delimiter, cmap = later, k, d, found
                 break
         else:
+            if absent:
+                looked = f"lines {lineno}–{k} looked at; " if k > lineno else ""
+                raise InputError(f"{absent[0][1]} ({looked}a header further down: --skip-rows N skips the N lines before it)")
             lines.seek(start)
     reader = csv.reader(itertools.chain([line], lines), delimiter=delimiter)
     try:
