@@ -29,6 +29,7 @@ __all__ = [
     "ColumnMap",
     "MISSING_POLICIES",
     "parse_column_spec",
+    "recognised_roles",
     "resolve_columns",
     "split_unit",
     "TABLE_FORMATS",
@@ -123,7 +124,8 @@ SOURCES: tuple[Source, ...] = (
     Source(
         "PlotJuggler (CSV export)",
         "__time,/ft/wrench/force/x,…,/ft/wrench/torque/z",
-        {"t": ("__time",), **_axes(r".*/wrench/force/{a}", r".*/wrench/torque/{a}")},
+        # a WrenchStamped topic's fields, else a Wrench topic's (no header: no "wrench" in the path)
+        {"t": ("__time",), **_axes(r".*/wrench/force/{a}|.*/force/{a}", r".*/wrench/torque/{a}|.*/torque/{a}")},
     ),
     Source(
         "rosbag to CSV converters (bagpy, rosbags, rqt_bag)",
@@ -224,12 +226,18 @@ class ColumnMap:
         Role → whether the header gave the unit.
     source : str
         The dialect recognised (or ``"--columns"``).
+    units_row : int
+        The line of a row of units under the header, 0 without one.
+    row_units : frozenset of str
+        The roles whose unit that row gave.
     """
 
     index: dict[str, int]
     units: dict[str, Unit]
     from_header: dict[str, bool]
     source: str
+    units_row: int = 0
+    row_units: frozenset[str] = frozenset()
 
     def native(self, names: Sequence[str]) -> bool:
         """Whether this is softtip's own layout: columns named exactly ``t, fx … mz``, SI, no unit in the header."""
@@ -247,6 +255,8 @@ class ColumnMap:
             if role in self.index:
                 unit = self.units[role]
                 how = "" if self.from_header[role] else ", not in the header"
+                if role in self.row_units:
+                    how = f", from the units row on line {self.units_row}"
                 parts.append(f"{role} ← {names[self.index[role]]!r} ({unit.label}{how})")
         return ", ".join(parts)
 
@@ -265,6 +275,19 @@ def parse_column_spec(text: str) -> dict[str, str]:
             raise ValueError(f"{role!r} is given twice")
         out[role] = name.strip()
     return out
+
+
+def recognised_roles(names: Sequence[str]) -> dict[str, int]:
+    """Role → position of the first column some dialect of :data:`SOURCES` reads as it (each
+    dialect on its own; for the message that names what no dialect reads)."""
+    bases = [split_unit(n)[0].lower() for n in names]
+    found: dict[str, int] = {}
+    for source in SOURCES:
+        for role, patterns in source.patterns.items():
+            hits = _match(patterns, bases, set()) if role in ROLES and role not in found else []
+            if hits:
+                found[role] = hits[0]
+    return found
 
 
 class ColumnError(ValueError):
