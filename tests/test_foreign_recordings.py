@@ -116,6 +116,12 @@ def test_a_units_row_under_the_header_gives_the_units(tmp_path: Path) -> None:
     (note,) = [n for n in log.notes if "read as" in n]
     assert "mx ← 'Tx' (N·mm, from the units row on line 2)" in note and "t ← 'Time' (s, from the units row" in note
     assert log.first_line == 3
+    lines = path.read_text().splitlines()
+    lines[4] = lines[4].replace(",", ",x", 1)
+    bad = tmp_path / "bad.csv"
+    bad.write_text("\n".join(lines) + "\n")
+    with pytest.raises(InputError, match=r"bad\.csv:5: column 'Fx': expected a number, got 'x"):
+        read_log(bad)  # lines counted as in the file, the units row among them
 
 
 @settings(max_examples=40, deadline=None)
@@ -204,11 +210,21 @@ def test_missing_columns_name_only_what_no_dialect_reads(tmp_path: Path) -> None
     assert "did you mean" not in message  # 'time', 'Fx', 'f_y' are read as they are
 
 
-def test_plotjuggler_export_of_an_unstamped_wrench_topic(tmp_path: Path) -> None:
-    """A geometry_msgs/Wrench topic (no header, so no 'wrench' in the field path): /ft/force/x … /ft/torque/z."""
-    names = ["__time", *(f"/ft/{q}/{a}" for q in ("force", "torque") for a in "xyz")]
-    path = tmp_path / "pj.csv"
-    path.write_text("\n".join([",".join(names), *(",".join(r) for r in _rows())]) + "\n")
+_UNSTAMPED = [
+    ("PlotJuggler (CSV export)", "__time", "/ft/{q}/{a}", 0, 1),
+    ("ROS 1 rostopic echo -p", "%time", "field.{q}.{a}", 1_764_328_620 * 10**9, 10**9),
+    ("rosbag to CSV converters (bagpy, rosbags, rqt_bag)", "Time", "{q}.{a}", 0, 1),
+]
+
+
+@pytest.mark.parametrize(("source", "time", "pattern", "base", "per_s"), _UNSTAMPED, ids=[s[0].split()[0] for s in _UNSTAMPED])
+def test_exports_of_an_unstamped_wrench_topic(tmp_path: Path, source: str, time: str, pattern: str, base: int,
+                                              per_s: int) -> None:  # fmt: skip
+    """A geometry_msgs/Wrench topic (no header, so no 'wrench' in the field path): force.x … torque.z."""
+    names = [time, *(pattern.format(q=q, a=a) for q in ("force", "torque") for a in "xyz")]
+    rows = [[str(base + round(float(r[0]) * per_s)) if per_s > 1 else r[0], *r[1:]] for r in _rows()]
+    path = tmp_path / "unstamped.csv"
+    path.write_text("\n".join([",".join(names), *(",".join(r) for r in rows)]) + "\n")
     log = read_log(path)
     _check(log)
-    assert "read as PlotJuggler (CSV export): t ← '__time' (s, not in the header), fx ← '/ft/force/x'" in log.notes[0]
+    assert f"read as {source}: t ← '{time}'" in log.notes[0] and f"fx ← '{names[1]}'" in log.notes[0], log.notes

@@ -102,7 +102,8 @@ class Source:
     time_unit: str = "s"
 
 
-#: Header dialects, most specific first (the first that maps every role wins).
+#: Header dialects, most specific first (the first that maps every role wins). The ROS ones read a
+#: WrenchStamped topic's fields, else a Wrench topic's (no header: no "wrench" in the field path).
 SOURCES: tuple[Source, ...] = (
     Source(
         "softtip live recording (stream --record)",
@@ -118,13 +119,13 @@ SOURCES: tuple[Source, ...] = (
     Source(
         "ROS 1 rostopic echo -p",
         "%time,field.header.seq,field.header.stamp,field.header.frame_id,field.wrench.force.x,…,field.wrench.torque.z",
-        {"t": (r"field\.header\.stamp", "%time"), **_axes(r"field\.wrench\.force\.{a}", r"field\.wrench\.torque\.{a}")},
+        {"t": (r"field\.header\.stamp", "%time"),
+         **_axes(r"field\.wrench\.force\.{a}|field\.force\.{a}", r"field\.wrench\.torque\.{a}|field\.torque\.{a}")},
         time_unit="ns",
     ),
     Source(
         "PlotJuggler (CSV export)",
         "__time,/ft/wrench/force/x,…,/ft/wrench/torque/z",
-        # a WrenchStamped topic's fields, else a Wrench topic's (no header: no "wrench" in the path)
         {"t": ("__time",), **_axes(r".*/wrench/force/{a}|.*/force/{a}", r".*/wrench/torque/{a}|.*/torque/{a}")},
     ),
     Source(
@@ -132,7 +133,7 @@ SOURCES: tuple[Source, ...] = (
         "Time,header.seq,header.stamp.secs,header.stamp.nsecs,header.frame_id,wrench.force.x,…",
         {"t": (r"(.*[./_])?header[./_]stamp[./_]secs?", "time", "timestamp", r"%time"),
          "nanosec": (r"(.*[./_])?header[./_]stamp[./_]n(ano)?secs?",),
-         **_axes(r"(.*[./_])?wrench[./_]force[./_]{a}", r"(.*[./_])?wrench[./_]torque[./_]{a}")},
+         **_axes(r"(.*[./_])?wrench[./_]force[./_]{a}|force\.{a}", r"(.*[./_])?wrench[./_]torque[./_]{a}|torque\.{a}")},
     ),
 )
 
