@@ -228,3 +228,27 @@ def test_exports_of_an_unstamped_wrench_topic(tmp_path: Path, source: str, time:
     log = read_log(path)
     _check(log)
     assert f"read as {source}: t ← '{time}'" in log.notes[0] and f"fx ← '{names[1]}'" in log.notes[0], log.notes
+
+
+def test_a_header_without_time_below_a_preamble_is_the_one_named(tmp_path: Path) -> None:
+    """A Net F/T export in counts has no time column: the error is on its header (line 9, below
+    the preamble), naming only t, not the first preamble line with every column 'missing'."""
+    path = tmp_path / "netft_counts.csv"
+    body = [",".join(["0x00000000", str(k + 1), str(1000 + k), *(str(round(float(v) * 1e6)) for v in r[1:])])
+            for k, r in enumerate(_rows(20))]  # fmt: skip
+    path.write_text("\n".join([*_NETFT_PREAMBLE, "", "Status (hex),RDT Sequence,F/T Sequence,Fx,Fy,Fz,Tx,Ty,Tz", *body]) + "\n")
+    with pytest.raises(InputError) as info:
+        read_log(path)
+    assert str(info.value).startswith(f"{path}:9: missing column 't';"), str(info.value)
+    assert "--columns t=NAME" in str(info.value)
+
+
+def test_a_stray_quote_in_a_cell_beyond_the_header_fails_cleanly(tmp_path: Path) -> None:
+    """A quote left open in a row with a cell more than the header has ("a, ""b"," — a damaged note
+    column) swallows the next row: an InputError naming the line, not an IndexError."""
+    rows = [",".join([*r, '"a, ""b"""']) for r in _rows(6)]
+    rows[0] = rows[0][:-2] + ',"'
+    path = tmp_path / "stray.csv"
+    path.write_text("\n".join(["t,fx,fy,fz,mx,my,mz,note", *rows]) + "\n")
+    with pytest.raises(InputError, match=r"stray\.csv:2: .*quote opened on this line"):
+        read_log(path)

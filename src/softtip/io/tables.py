@@ -722,21 +722,32 @@ def _read_header(text: str, source: str, fmt: LogFormat | None = None) -> _Heade
         # a preamble: the header is the first of the next lines that names the columns
         start = lines.tell()
         ahead, k = [], lineno
+        # no line names them all: the one naming most (4 roles at least), for the error to be on it
+        partial = (max(3, len(recognised_roles(first))), 0, 0, "", "")
         for later in itertools.islice(lines, _PREAMBLE_LINES):
             k += 1
             ahead.append((k, later))
             d = _sniff_delimiter(later)
-            found = _try_columns(_split_line(later, d), fmt, source, k, absent=absent) if later.strip() else None
+            cells = _split_line(later, d)
+            found = _try_columns(cells, fmt, source, k, absent=absent) if later.strip() else None
             if found is not None:
                 comments += [(lineno, line.strip())] + [(n, x.strip()) for n, x in ahead[:-1]]
                 preamble = k - lineno
                 line, lineno, delimiter, cmap = later, k, d, found
                 break
+            if later.strip() and len(recognised_roles(cells)) > partial[0]:
+                partial = (len(recognised_roles(cells)), k, lines.tell(), later, d)
         else:
             if absent:
                 looked = f"lines {lineno}–{k} looked at; " if k > lineno else ""
                 raise InputError(f"{absent[0][1]} ({looked}a header further down: --skip-rows N skips the N lines before it)")
             lines.seek(start)
+            if partial[1]:
+                _, k, pos, later, d = partial
+                comments += [(lineno, line.strip())] + [(n, x.strip()) for n, x in ahead[: k - lineno - 1]]
+                preamble = k - lineno
+                line, lineno, delimiter = later, k, d
+                lines.seek(pos)
     reader = csv.reader(itertools.chain([line], lines), delimiter=delimiter)
     try:
         names = [name.strip() for name in next(reader)]
@@ -1523,7 +1534,8 @@ def _parse_careful(
                 k = _swallowed(cell, header.delimiter, ncol)
                 if k:
                     at_end = _lines_at_end(header.lines) and cell.endswith(("\n", "\r"))
-                    raise _swallow_error(source, line, names[j], cell, base + prev_end, at_end, k)
+                    column = names[j] if j < len(names) else f"#{j + 1}, beyond the header's {len(names)}"
+                    raise _swallow_error(source, line, column, cell, base + prev_end, at_end, k)
         if len(row) != ncol:
             raise InputError(
                 f"{source}:{line}: expected {ncol} cells (one per header column), got {len(row)}"
