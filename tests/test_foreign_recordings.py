@@ -252,3 +252,14 @@ def test_a_stray_quote_in_a_cell_beyond_the_header_fails_cleanly(tmp_path: Path)
     path.write_text("\n".join(["t,fx,fy,fz,mx,my,mz,note", *rows]) + "\n")
     with pytest.raises(InputError, match=r"stray\.csv:2: .*quote opened on this line"):
         read_log(path)
+
+
+def test_a_time_unit_option_on_a_stamp_split_in_seconds_and_nanoseconds_is_refused(tmp_path: Path) -> None:
+    """ros2 topic echo --csv and bag converters split the stamp in sec + nanosec: a --time-units
+    other than s cannot apply (it was ignored while the note said 't ← … (ms)')."""
+    rows = [[str(1_764_328_620 + int(r[0].split(".")[0])), str(round(float(r[0]) % 1 * 1e9)), "ft", *r[1:]] for r in _rows(30)]
+    path = tmp_path / "echo.csv"
+    path.write_text("\n".join(",".join(r) for r in rows) + "\n")
+    with pytest.raises(InputError, match=r"echo\.csv:1: column 'header\.stamp\.sec' holds the whole seconds of a stamp .*--time-units ms"):
+        read_log(path, time_units="ms")
+    np.testing.assert_array_equal(read_log(path, time_units="s").t, read_log(path).t)

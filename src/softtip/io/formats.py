@@ -395,6 +395,11 @@ def resolve_columns(names: Sequence[str], fmt: LogFormat, *, headerless: bool = 
         if role == "nanosec":
             units[role], from_header[role] = get_unit("ns", "time"), True
             continue
+        if role == "t" and "nanosec" in chosen and option is not None and get_unit(option, "time").name != "s":
+            raise ColumnError(
+                f"column {names[j]!r} holds the whole seconds of a stamp split in seconds and nanoseconds "
+                f"({names[chosen['nanosec']]!r}); --time-units {option} does not apply: leave it out"
+            )
         if text is not None:
             unit = find_unit(text, quantity)
             if unit is None:
