@@ -235,12 +235,17 @@ def test_header_only(tmp_path: Path, tail: str) -> None:
 
 
 def test_missing_columns_with_suggestions(tmp_path: Path) -> None:
+    # time, Fx and f_y are read as they are (test_common_names_are_read_and_said): only mz is missing
     path = _write(tmp_path, "time,Fx,f_y,fz,mx,my,torque_zz\n0,1,2,3,4,5,6\n")
     assert _error(path) == (
-        f"{path}:1: missing columns 't', 'fx', 'fy', 'mz'; expected a header with columns "
+        f"{path}:1: missing column 'mz'; expected a header with columns "
+        "t, fx, fy, fz, mx, my, mz (any order, exact case)." + COLUMNS_HINT
+    )
+    path = _write(tmp_path, "tt,fxx,fy,fz,mx,my,mz\n0,1,2,3,4,5,6\n")
+    assert _error(path) == (
+        f"{path}:1: missing columns 't', 'fx'; expected a header with columns "
         "t, fx, fy, fz, mx, my, mz (any order, exact case). "
-        "Column 1 is 'time': did you mean 't'? Column 2 is 'Fx': did you mean 'fx'? "
-        "Column 3 is 'f_y': did you mean 'fy'?" + COLUMNS_HINT
+        "Column 1 is 'tt': did you mean 't'? Column 2 is 'fxx': did you mean 'fx'?" + COLUMNS_HINT
     )
 
 

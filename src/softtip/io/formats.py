@@ -29,6 +29,7 @@ __all__ = [
     "ColumnMap",
     "MISSING_POLICIES",
     "parse_column_spec",
+    "recognised_roles",
     "resolve_columns",
     "split_unit",
     "TABLE_FORMATS",
@@ -101,7 +102,8 @@ class Source:
     time_unit: str = "s"
 
 
-#: Header dialects, most specific first (the first that maps every role wins).
+#: Header dialects, most specific first (the first that maps every role wins). The ROS ones read a
+#: WrenchStamped topic's fields, else a Wrench topic's (no header: no "wrench" in the field path).
 SOURCES: tuple[Source, ...] = (
     Source(
         "softtip live recording (stream --record)",
@@ -117,20 +119,21 @@ SOURCES: tuple[Source, ...] = (
     Source(
         "ROS 1 rostopic echo -p",
         "%time,field.header.seq,field.header.stamp,field.header.frame_id,field.wrench.force.x,…,field.wrench.torque.z",
-        {"t": (r"field\.header\.stamp", "%time"), **_axes(r"field\.wrench\.force\.{a}", r"field\.wrench\.torque\.{a}")},
+        {"t": (r"field\.header\.stamp", "%time"),
+         **_axes(r"field\.wrench\.force\.{a}|field\.force\.{a}", r"field\.wrench\.torque\.{a}|field\.torque\.{a}")},
         time_unit="ns",
     ),
     Source(
         "PlotJuggler (CSV export)",
         "__time,/ft/wrench/force/x,…,/ft/wrench/torque/z",
-        {"t": ("__time",), **_axes(r".*/wrench/force/{a}", r".*/wrench/torque/{a}")},
+        {"t": ("__time",), **_axes(r".*/wrench/force/{a}|.*/force/{a}", r".*/wrench/torque/{a}|.*/torque/{a}")},
     ),
     Source(
         "rosbag to CSV converters (bagpy, rosbags, rqt_bag)",
         "Time,header.seq,header.stamp.secs,header.stamp.nsecs,header.frame_id,wrench.force.x,…",
         {"t": (r"(.*[./_])?header[./_]stamp[./_]secs?", "time", "timestamp", r"%time"),
          "nanosec": (r"(.*[./_])?header[./_]stamp[./_]n(ano)?secs?",),
-         **_axes(r"(.*[./_])?wrench[./_]force[./_]{a}", r"(.*[./_])?wrench[./_]torque[./_]{a}")},
+         **_axes(r"(.*[./_])?wrench[./_]force[./_]{a}|force\.{a}", r"(.*[./_])?wrench[./_]torque[./_]{a}|torque\.{a}")},
     ),
 )
 
@@ -224,12 +227,18 @@ class ColumnMap:
         Role → whether the header gave the unit.
     source : str
         The dialect recognised (or ``"--columns"``).
+    units_row : int
+        The line of a row of units under the header, 0 without one.
+    row_units : frozenset of str
+        The roles whose unit that row gave.
     """
 
     index: dict[str, int]
     units: dict[str, Unit]
     from_header: dict[str, bool]
     source: str
+    units_row: int = 0
+    row_units: frozenset[str] = frozenset()
 
     def native(self, names: Sequence[str]) -> bool:
         """Whether this is softtip's own layout: columns named exactly ``t, fx … mz``, SI, no unit in the header."""
@@ -247,6 +256,8 @@ class ColumnMap:
             if role in self.index:
                 unit = self.units[role]
                 how = "" if self.from_header[role] else ", not in the header"
+                if role in self.row_units:
+                    how = f", from the units row on line {self.units_row}"
                 parts.append(f"{role} ← {names[self.index[role]]!r} ({unit.label}{how})")
         return ", ".join(parts)
 
@@ -267,8 +278,30 @@ def parse_column_spec(text: str) -> dict[str, str]:
     return out
 
 
+def recognised_roles(names: Sequence[str]) -> dict[str, int]:
+    """Role → position of the first column some dialect of :data:`SOURCES` reads as it (each
+    dialect on its own; for the message that names what no dialect reads)."""
+    bases = [split_unit(n)[0].lower() for n in names]
+    found: dict[str, int] = {}
+    for source in SOURCES:
+        for role, patterns in source.patterns.items():
+            hits = _match(patterns, bases, set()) if role in ROLES and role not in found else []
+            if hits:
+                found[role] = hits[0]
+    return found
+
+
 class ColumnError(ValueError):
     """The columns cannot be mapped; ``hint`` says what would fix it."""
+
+
+class ColumnAbsent(ColumnError):
+    """A column ``--columns`` names is not on this line (the header may be further down);
+    ``found``: how many of the columns it names the line has."""
+
+    def __init__(self, message: str, found: int) -> None:
+        super().__init__(message)
+        self.found = found
 
 
 def _match(patterns: tuple[str, ...], bases: list[str], taken: set[int]) -> list[int]:
@@ -299,7 +332,7 @@ def resolve_columns(names: Sequence[str], fmt: LogFormat, *, headerless: bool = 
             if want.isdigit() and (headerless or want not in names):
                 j = int(want) - 1
                 if not 0 <= j < len(names):
-                    raise ColumnError(f"--columns {role}={want}: the file has {len(names)} columns")
+                    raise ColumnAbsent(f"--columns {role}={want}: the file has {len(names)} columns", len(chosen))
             elif want in names:
                 j = list(names).index(want)
             else:
@@ -309,7 +342,11 @@ def resolve_columns(names: Sequence[str], fmt: LogFormat, *, headerless: bool = 
                 elif want.lower() in bases:
                     j = bases.index(want.lower())
                 else:
-                    raise ColumnError(f"--columns {role}={want}: no column {want!r} in the header ({', '.join(map(repr, names))})")
+                    present = sum(w.lower() in lower or w.lower() in bases for w in fmt.columns.values())
+                    raise ColumnAbsent(
+                        f"--columns {role}={want}: no column {want!r} in the header ({', '.join(map(repr, names))})",
+                        present,
+                    )
             chosen[role] = j
         source = "--columns"
     candidates = ((ROS2_CSV,) if headerless else SOURCES) if len(fmt.columns) < len(ROLES) else ()
@@ -358,6 +395,11 @@ def resolve_columns(names: Sequence[str], fmt: LogFormat, *, headerless: bool = 
         if role == "nanosec":
             units[role], from_header[role] = get_unit("ns", "time"), True
             continue
+        if role == "t" and "nanosec" in chosen and option is not None and get_unit(option, "time").name != "s":
+            raise ColumnError(
+                f"column {names[j]!r} holds the whole seconds of a stamp split in seconds and nanoseconds "
+                f"({names[chosen['nanosec']]!r}); --time-units {option} does not apply: leave it out"
+            )
         if text is not None:
             unit = find_unit(text, quantity)
             if unit is None:

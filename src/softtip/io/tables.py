@@ -72,21 +72,33 @@ import sys
 from collections import deque
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, BinaryIO, TextIO
 
 import numpy as np
 from numpy.typing import NDArray
 
-from softtip.core.units import UNIT_SYSTEM_UNITS, UNIT_SYSTEMS, get_unit, seconds_from_ns, wrench_scale, wrench_to_si
+from softtip.core.units import (
+    UNIT_SYSTEM_UNITS,
+    UNIT_SYSTEMS,
+    find_unit,
+    get_unit,
+    seconds_from_ns,
+    unit_names,
+    wrench_scale,
+    wrench_to_si,
+)
 from softtip.errors import InputError
 from softtip.io.formats import (
+    ROLE_QUANTITY,
     ROLES,
     TABLE_FORMATS,
+    ColumnAbsent,
     ColumnError,
     ColumnMap,
     LogFormat,
     parse_column_spec,
+    recognised_roles,
     resolve_columns,
     table_format,
 )
@@ -212,7 +224,8 @@ def _finish(
     def where(i: int) -> str:
         return f"line {first_line + i}" if first_line is not None else f"data row {i + 1}"
 
-    if cmap is not None and not cmap.native(names):
+    read_as = cmap is not None and not cmap.native(names)
+    if read_as:
         notes.append(f"{source}: read as {cmap.source}: {cmap.describe(names)}")
     if header.preamble:
         notes.append(
@@ -265,6 +278,8 @@ def _finish(
             tunit = get_unit(dated[0], "time")
             start = float(t[0]) * tunit.si
             explicit_time = True
+            if read_as:  # the unit read, not the default the columns were mapped with
+                notes[0] = f"{source}: read as {cmap.source}: {replace(cmap, units={**cmap.units, 't': tunit}).describe(names)}"
             notes.append(
                 f"{source}: column {names[header.index['t']]!r}: t read in {tunit.label}, the only unit that makes its "
                 f"first stamp a date (give --time-units to say otherwise)"
@@ -645,11 +660,20 @@ def _sniff_delimiter(line: str) -> str:
 _DECIMAL_COMMA = re.compile(r"^[-+]?\d+,\d*(?:[eE][-+]?\d+)?$")
 
 
-def _try_columns(names: list[str], fmt: LogFormat, source: str, line: int, headerless: bool = False) -> ColumnMap | None:
+def _try_columns(names: list[str], fmt: LogFormat, source: str, line: int, headerless: bool = False,
+                 absent: list[tuple[int, InputError]] | None = None) -> ColumnMap | None:  # fmt: skip
+    """The line's :class:`ColumnMap`, or None; ``absent`` given: a column ``--columns`` names that
+    this line lacks is put there (the header may come later), not raised: the error of the line
+    with the most of the named columns, the first such."""
     try:
         return resolve_columns(names, fmt, headerless=headerless)
     except ColumnError as exc:
-        raise InputError(f"{source}:{line}: {exc}") from None
+        error = InputError(f"{source}:{line}: {exc}")
+        if absent is None or not isinstance(exc, ColumnAbsent):
+            raise error from None
+        if not absent or exc.found > absent[0][0]:
+            absent[:] = [(exc.found, error)]
+        return None
 
 
 def _read_header(text: str, source: str, fmt: LogFormat | None = None) -> _Header:
@@ -691,23 +715,39 @@ def _read_header(text: str, source: str, fmt: LogFormat | None = None) -> _Heade
             return _Header(names=names, line=lineno - 1, data_base=lineno - 1, lines=lines, comments=comments,
                            delimiter=delimiter, decimal=_sniff_decimal(text, lines.tell(), delimiter), cmap=cmap,
                            headerless=True)  # fmt: skip
-    cmap = _try_columns(first, fmt, source, lineno)
+    # --columns naming what the first line lacks: that line may be a preamble's
+    absent: list[tuple[int, InputError]] = []
+    cmap = _try_columns(first, fmt, source, lineno, absent=absent if skip is None else None)
     if cmap is None and skip is None and not headerless:
         # a preamble: the header is the first of the next lines that names the columns
         start = lines.tell()
         ahead, k = [], lineno
+        # no line names them all: the one naming most (4 roles at least), for the error to be on it
+        partial = (max(3, len(recognised_roles(first))), 0, 0, "", "")
         for later in itertools.islice(lines, _PREAMBLE_LINES):
             k += 1
             ahead.append((k, later))
             d = _sniff_delimiter(later)
-            found = _try_columns(_split_line(later, d), fmt, source, k) if later.strip() else None
+            cells = _split_line(later, d)
+            found = _try_columns(cells, fmt, source, k, absent=absent) if later.strip() else None
             if found is not None:
                 comments += [(lineno, line.strip())] + [(n, x.strip()) for n, x in ahead[:-1]]
                 preamble = k - lineno
                 line, lineno, delimiter, cmap = later, k, d, found
                 break
+            if later.strip() and len(recognised_roles(cells)) > partial[0]:
+                partial = (len(recognised_roles(cells)), k, lines.tell(), later, d)
         else:
+            if absent:
+                looked = f"lines {lineno}–{k} looked at; " if k > lineno else ""
+                raise InputError(f"{absent[0][1]} ({looked}a header further down: --skip-rows N skips the N lines before it)")
             lines.seek(start)
+            if partial[1]:
+                _, k, pos, later, d = partial
+                comments += [(lineno, line.strip())] + [(n, x.strip()) for n, x in ahead[: k - lineno - 1]]
+                preamble = k - lineno
+                line, lineno, delimiter = later, k, d
+                lines.seek(pos)
     reader = csv.reader(itertools.chain([line], lines), delimiter=delimiter)
     try:
         names = [name.strip() for name in next(reader)]
@@ -715,9 +755,54 @@ def _read_header(text: str, source: str, fmt: LogFormat | None = None) -> _Heade
         raise InputError(f"{source}:{lineno}: malformed CSV header ({exc}); expected {_EXPECTED_HEADER}") from None
     # csv pulls lines one at a time, so ``lines`` now sits right after the header record.
     data_base = lineno - 1 + reader.line_num
+    if cmap is not None:
+        cmap = _units_row(names, cmap, lines, fmt, source, data_base + 1, delimiter)
+        data_base += bool(cmap.units_row)
     decimal = _sniff_decimal(text, lines.tell(), delimiter)
     return _Header(names=names, line=lineno, data_base=data_base, lines=lines, comments=comments,
                    delimiter=delimiter, decimal=decimal, cmap=cmap, preamble=preamble)  # fmt: skip
+
+
+_BRACKETED = re.compile(r"^[\[(]\s*(.*?)\s*[\])]$")
+
+
+def _units_row(names: list[str], cmap: ColumnMap, lines: io.StringIO, fmt: LogFormat, source: str, line: int,
+               delimiter: str) -> ColumnMap:  # fmt: skip
+    """A row of units under the header (``s,N,N,N,N-mm,…``, as loggers write one) read into the
+    column map, ``lines`` then past it; else ``cmap`` as it is and ``lines`` where it was.
+
+    It is one when no cell of ``t``, ``fx`` … ``mz`` on it is a number and one at least is a
+    unit of its quantity; a cell there that is no such unit, or that contradicts the header's
+    unit or a unit option, is an error naming the line and column."""
+    pos = lines.tell()
+    cells = _split_line(lines.readline(), delimiter)
+    roles = [r for r in ROLES if cmap.index[r] < len(cells)]
+    given = {r: _BRACKETED.sub(r"\1", cells[cmap.index[r]]) for r in roles}
+    found = {r: find_unit(c, ROLE_QUANTITY[r]) for r, c in given.items() if c}
+    if not any(found.values()) or any(_is_number(c.replace(",", ".")) for c in given.values()):
+        lines.seek(pos)
+        return cmap
+    units, from_header = dict(cmap.units), dict(cmap.from_header)
+    for role, unit in found.items():
+        quantity, column = ROLE_QUANTITY[role], names[cmap.index[role]]
+        option = {"force": fmt.force_unit, "moment": fmt.moment_unit, "time": fmt.time_unit}[quantity]
+        if unit is None:
+            raise InputError(
+                f"{source}:{line}: column {column!r}: unknown {quantity} unit {given[role]!r} in the units row; "
+                f"expected one of: {', '.join(unit_names(quantity))}"
+            )
+        if cmap.from_header[role] and cmap.units[role] is not unit:
+            raise InputError(
+                f"{source}:{line}: column {column!r}: the units row says {unit.label} but the header says "
+                f"{cmap.units[role].label}; expected one unit per column"
+            )
+        if option is not None and get_unit(option, quantity) is not unit:
+            raise InputError(
+                f"{source}:{line}: column {column!r}: the units row says {unit.label} but --{quantity}-units (or --units) "
+                f"says {option}; leave the option out to use the units row's"
+            )
+        units[role], from_header[role] = unit, True
+    return replace(cmap, units=units, from_header=from_header, units_row=line, row_units=frozenset(found))
 
 
 def _sniff_decimal(text: str, pos: int, delimiter: str) -> str:
@@ -1117,7 +1202,7 @@ def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None, 
     names = list(table.column_names)
     header = _Header(names=[n.strip() for n in names], line=0, data_base=0, lines=io.StringIO(), comments=[])
     try:
-        index = _column_index(header, source)
+        index = _column_index(header, source, dialects=False)
     except InputError as exc:  # the CSV wording, without a header line
         raise InputError(str(exc).replace(f"{source}:0: ", f"{source}: ", 1)) from None
     n = table.num_rows
@@ -1163,8 +1248,12 @@ def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None, 
     )
 
 
-def _column_index(header: _Header, source: str) -> dict[str, int]:
-    """Map each required column to its position; raise on duplicate or missing names."""
+def _column_index(header: _Header, source: str, *, dialects: bool = True) -> dict[str, int]:
+    """Map each required column to its position; raise on duplicate or missing names.
+
+    ``dialects``: the header's names may be those of :data:`~softtip.io.formats.SOURCES`
+    (CSV); a missing column is then one no dialect reads, and no column a dialect reads is
+    offered as a misspelling."""
     names, line = header.names, header.line
     seen: dict[str, int] = {}
     for j, name in enumerate(names):
@@ -1178,13 +1267,18 @@ def _column_index(header: _Header, source: str) -> dict[str, int]:
     if header.cmap is not None:
         return {r: header.cmap.index[r] for r in (*ROLES, "nanosec") if r in header.cmap.index}
     missing = [c for c in REQUIRED_COLUMNS if c not in seen]
+    read = recognised_roles(names) if dialects else {}
+    if any(c not in read for c in missing):  # else each is read, by dialects that do not go together
+        missing = [c for c in missing if c not in read]
+    else:
+        read = {}
     if missing:
         msg = (
             f"{source}:{line}: missing column{'s' if len(missing) > 1 else ''} "
             f"{', '.join(repr(c) for c in missing)}; expected a header with columns "
             f"{_EXPECTED_HEADER} (any order, exact case)"
         )
-        hints = _near_misses(missing, names)
+        hints = _near_misses(missing, names, set(read.values()))
         if len(names) == 1:
             for delim, label in ((";", "semicolon"), ("\t", "tab")):
                 if delim in names[0]:
@@ -1218,18 +1312,19 @@ def _is_number(cell: str) -> bool:
     return True
 
 
-def _near_misses(missing: list[str], names: list[str]) -> list[str]:
+def _near_misses(missing: list[str], names: list[str], read: set[int] | None = None) -> list[str]:
     """'did you mean' hints: header names that look like a missing required column.
 
     Names are compared after lower-casing and dropping everything but letters and digits,
-    so ``Fx``, ``f_x``, ``f x`` and ``fx [N]`` all point at ``fx``.
+    so ``Fx``, ``f_x``, ``f x`` and ``fx [N]`` all point at ``fx``. ``read``: positions of
+    columns a dialect reads already (not a misspelling).
     """
 
     def norm(s: str) -> str:
         return "".join(ch for ch in s.lower() if ch.isalnum())
 
     # Only names that are not already a required column can be the misspelling.
-    candidates = {j: norm(n) for j, n in enumerate(names) if n not in REQUIRED_COLUMNS}
+    candidates = {j: norm(n) for j, n in enumerate(names) if n not in REQUIRED_COLUMNS and j not in (read or ())}
     hints = []
     for col in missing:
         best: int | None = None
@@ -1439,7 +1534,8 @@ def _parse_careful(
                 k = _swallowed(cell, header.delimiter, ncol)
                 if k:
                     at_end = _lines_at_end(header.lines) and cell.endswith(("\n", "\r"))
-                    raise _swallow_error(source, line, names[j], cell, base + prev_end, at_end, k)
+                    column = names[j] if j < len(names) else f"#{j + 1}, beyond the header's {len(names)}"
+                    raise _swallow_error(source, line, column, cell, base + prev_end, at_end, k)
         if len(row) != ncol:
             raise InputError(
                 f"{source}:{line}: expected {ncol} cells (one per header column), got {len(row)}"
