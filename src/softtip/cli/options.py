@@ -24,7 +24,7 @@ from softtip.cli.types import (
     check_pair_increasing,
     option,
 )  # fmt: skip
-from softtip.core.fingertip import PRESETS, Fingertip
+from softtip.core.fingertip import PRESETS, SHAPES, Fingertip
 from softtip.core.fullscale import DEFAULT_SENSOR, SENSOR_RANGES, FullScale, parse_full_scale
 from softtip.core.noise import NANO17, SensorNoise
 from softtip.errors import InputError
@@ -167,7 +167,7 @@ def _estimator_options() -> list:
             show_default=True,
             metavar="PRESET_OR_TOML",
             help=f"Fingertip: a preset ({', '.join(sorted(PRESETS))}) or a TOML file ([fingertip] shape = "
-            "sphere|capsule|ellipsoid, lengths in m).",
+            f"{'|'.join(SHAPES)}, lengths in m; a mesh's file in the units it states).",
         )
     ]
     for s in settings_of(EstimatorConfig):
