@@ -76,8 +76,8 @@ def _log_with_note(path: Path, rows: int, note: str, bad_last: bool = False) -> 
 @functools.cache
 def _log_text(rows: int, note: str, bad_last: bool) -> str:
     """The text of :func:`_log_with_note`'s log, formatted once per process: the same few logs
-    (5000 rows in a hundred tests, 60000 in ten, 200000 in four) took 0.02-0.8 s each to format
-    again (a string: a test that changes its log changes its own copy, read back from its file)."""
+    (5000 rows in about a hundred tests, 60000 in ten) took 0.02-0.23 s each to format again
+    (a string: a test that changes its log changes its own copy, read back from its file)."""
     rng = np.random.default_rng(0)
     w = rng.normal(0.0, 1.0, (rows, 6)) * np.array([3e-3] * 3 + [1.5e-5] * 3)
     lines = ["t,fx,fy,fz,mx,my,mz,note\n"]
