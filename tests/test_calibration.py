@@ -1,5 +1,6 @@
 """Fingertip calibration from simulated plane presses (softtip.calibration.probing, `softtip calibrate`)."""
 
+import functools
 import math
 import subprocess
 import sys
@@ -182,21 +183,30 @@ def press_log(seed, n_presses=30, center=(0.3e-3, -0.2e-3, 20e-3), radius=16e-3,
     return t, w
 
 
+#: press_log's noise (5 mN, 0.05 N·mm per axis) as the fit's noise model
+PRESS_NOISE = SensorNoise((0.005,) * 3, (0.05e-3,) * 3)
+
+
+@functools.cache
+def press_fit(seed):
+    """``press_log(seed)`` calibrated as a sphere with :data:`PRESS_NOISE`: once per seed (two
+    tests fit seed 5 alike; read, never changed)."""
+    return calibrate_fingertip(*press_log(seed), "sphere", noise=PRESS_NOISE)
+
+
 def test_force_noise_no_longer_biases_the_geometry():
     # the issue's case: plain least squares put the centre ~1 mm too high and the radius
     # ~1 mm short (5-13 std); weighting by the propagated noise removes most of it. These
     # presses excite weakly (the friction turns only while the force ramps), and a
     # second-order bias of about one std (0.1-0.2 mm) is left: stated in the README.
     truth = np.r_[0.3e-3, -0.2e-3, 20e-3, 16e-3]
-    noise = SensorNoise((0.005,) * 3, (0.05e-3,) * 3)
     err, err_plain, z = [], [], []
     for seed in range(6):
-        t, w = press_log(seed)
-        cal = calibrate_fingertip(t, w, "sphere", noise=noise)
+        cal = press_fit(seed)
         err.append(np.r_[cal.center, cal.radius] - truth)
         z.append(err[-1] / np.r_[cal.center_std, cal.radius_std])
         if seed < 3:
-            plain = calibrate_fingertip(t, w, "sphere", noise=UNWEIGHTED)
+            plain = calibrate_fingertip(*press_log(seed), "sphere", noise=UNWEIGHTED)
             err_plain.append(np.r_[plain.center, plain.radius] - truth)
     err, err_plain, z = np.array(err), np.array(err_plain), np.array(z)
     assert err_plain[:, 2].mean() > 0.5 * MM and err_plain[:, 3].mean() < -0.4 * MM  # the bias the issue reports
@@ -214,8 +224,7 @@ def test_warns_when_presses_excite_too_little_for_the_noise():
     # the noise (|noise| ≈ 0.06 N untouched) does not make presses of its own
     assert cal.n_presses == 30 and cal.n_skipped == 0
     # ... the same presses with a Nano17-class noise give none
-    t, w = press_log(5)
-    assert calibrate_fingertip(t, w, "sphere", noise=SensorNoise((0.005,) * 3, (0.05e-3,) * 3)).warning == ""
+    assert press_fit(5).warning == ""
 
 
 def test_weak_fit_reports_jackknife_standard_deviations_that_cover_its_error():

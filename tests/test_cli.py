@@ -80,11 +80,19 @@ def test_kgf_mm_input_gives_the_si_result(tmp_path):
         )
 
 
-def test_output_units_kgf_mm(tmp_path):
-    si = run("estimate", "--example", "-o", tmp_path / "si.csv")
+@pytest.fixture(scope="module")
+def example_run(tmp_path_factory):
+    """``softtip estimate --example -o si.csv`` (the defaults): the run and its output, which two
+    tests read (each ran this command)."""
+    out = tmp_path_factory.mktemp("example") / "si.csv"
+    return run("estimate", "--example", "-o", out), out
+
+
+def test_output_units_kgf_mm(tmp_path, example_run):
+    si, si_csv = example_run
     kg = run("estimate", "--example", "--output-units", "kgf-mm", "-o", tmp_path / "kg.csv")
     assert si.returncode == kg.returncode == 0
-    a, b = read_csv(tmp_path / "si.csv")[-1], read_csv(tmp_path / "kg.csv")[-1]
+    a, b = read_csv(si_csv)[-1], read_csv(tmp_path / "kg.csv")[-1]
     assert float(b["fz"]) == pytest.approx(float(a["fz"]) / KGF, rel=1e-8)
     assert float(b["h_norm"]) == pytest.approx(float(a["h_norm"]) / KGF_MM, rel=1e-8)
     assert float(b["rz"]) == pytest.approx(float(a["rz"]))
@@ -239,7 +247,7 @@ def test_bad_plot_paths_and_values_exit_2(tmp_path, args, needles):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_tare_that_cannot_be_right_is_reported(tmp_path):
+def test_tare_that_cannot_be_right_is_reported(tmp_path, example_run):
     log = read_log(EXAMPLE_PATH)
     for name, keep in (("short.csv", log.t < 0.1), ("in_contact.csv", log.t > 3.0)):
         cols = {"t": log.t[keep], **{n: log.wrench[keep, i] for i, n in enumerate(("fx", "fy", "fz", "mx", "my", "mz"))}}
@@ -248,7 +256,7 @@ def test_tare_that_cannot_be_right_is_reported(tmp_path):
     assert short.returncode == 0 and "whole log lies within" in short.stderr
     touched = run("estimate", tmp_path / "in_contact.csv", "-o", tmp_path / "b.csv")
     assert touched.returncode == 0 and "while taring" in touched.stderr
-    untouched = run("estimate", "--example", "-o", tmp_path / "c.csv")
+    untouched, _ = example_run  # estimate --example -o si.csv
     assert "bias from the first 0.2 s" in untouched.stderr and "while taring" not in untouched.stderr
 
 

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import functools
 import io
+import itertools
 import subprocess
 import sys
 from pathlib import Path
@@ -14,21 +16,68 @@ from softtip.io.tables import iter_log
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 
-# Runs a command and prints its peak resident memory (kB on Linux).
+# Runs a command on the standard output and error it was given (the test's pipes) and then
+# writes its exit code and peak resident memory (kB on Linux) onto the standard error, after a mark.
+_MARK = "\0peak "
 _PEAK = (
-    "import resource, subprocess, sys; done = subprocess.run(sys.argv[1:], capture_output=True); "
-    "print(done.returncode, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)"
+    "import resource, subprocess, sys; code = subprocess.run(sys.argv[1:]).returncode; "
+    f"sys.stderr.write({_MARK!r} + f'{{code}} {{resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss}}')"
 )
 
 
+def _measured(*args: object, timeout: float = 120) -> tuple[int, float, bytes, str]:
+    """A ``softtip`` command's exit code, peak resident memory (MB), standard output and error:
+    the run a test measures is the run whose output it checks (one run, not two alike)."""
+    done = subprocess.run([sys.executable, "-c", _PEAK, SOFTTIP, *map(str, args)], capture_output=True,
+                          timeout=timeout, check=True)  # fmt: skip
+    err, mark, stats = done.stderr.decode().rpartition(_MARK)
+    assert mark, done.stderr[-3000:]
+    code, kb = stats.split()
+    return int(code), int(kb) / 1024, done.stdout, err
+
+
 def _peak_mb(*args: object) -> tuple[int, float]:
-    done = subprocess.run([sys.executable, "-c", _PEAK, SOFTTIP, *map(str, args)], capture_output=True, text=True,
-                          timeout=120, check=True)  # fmt: skip
-    code, kb = done.stdout.split()
-    return int(code), int(kb) / 1024
+    code, mb, _, _ = _measured(*args)
+    return code, mb
+
+
+@pytest.fixture(scope="module")
+def plain_log(tmp_path_factory) -> Path:
+    """The 200000-row plain log of :func:`_log_with_note` (read, never changed, by the tests)."""
+    log = tmp_path_factory.mktemp("plain") / "plain.csv"
+    _log_with_note(log, 200000, "ok")
+    return log
+
+
+def _plain_in_pieces(tmp_path_factory, plain_log: Path, *quiet: str) -> tuple[int, float, Path]:
+    out = tmp_path_factory.mktemp("pieces") / "p.csv"
+    code, mb = _peak_mb("estimate", plain_log, *quiet, "--chunk-rows", 20000, "-o", out)
+    assert code == 0 and [p.name for p in out.parent.iterdir()] == ["p.csv"]  # nothing else left behind
+    return code, mb, out
+
+
+@pytest.fixture(scope="module")
+def plain_in_pieces_quiet(tmp_path_factory, plain_log: Path) -> tuple[int, float, Path]:
+    """``softtip estimate plain.csv -q --chunk-rows 20000 -o p.csv``: exit code, peak memory (MB)
+    and the output. The measure two tests compare against (each ran this command on this log)."""
+    return _plain_in_pieces(tmp_path_factory, plain_log, "-q")
+
+
+@pytest.fixture(scope="module")
+def plain_in_pieces_loud(tmp_path_factory, plain_log: Path) -> tuple[int, float, Path]:
+    """The same without ``-q``: the measure of two other tests (each ran it)."""
+    return _plain_in_pieces(tmp_path_factory, plain_log)
 
 
 def _log_with_note(path: Path, rows: int, note: str, bad_last: bool = False) -> None:
+    path.write_text(_log_text(rows, note, bad_last))
+
+
+@functools.cache
+def _log_text(rows: int, note: str, bad_last: bool) -> str:
+    """The text of :func:`_log_with_note`'s log, formatted once per process: the same few logs
+    (5000 rows in about a hundred tests, 60000 in ten) took 0.02-0.23 s each to format again
+    (a string: a test that changes its log changes its own copy, read back from its file)."""
     rng = np.random.default_rng(0)
     w = rng.normal(0.0, 1.0, (rows, 6)) * np.array([3e-3] * 3 + [1.5e-5] * 3)
     lines = ["t,fx,fy,fz,mx,my,mz,note\n"]
@@ -36,7 +85,7 @@ def _log_with_note(path: Path, rows: int, note: str, bad_last: bool = False) -> 
     lines[101] = lines[101][: -len("ok\n")] + note + "\n"
     if bad_last:
         lines[-1] = lines[-1].replace(",", ",abc", 1)
-    path.write_text("".join(lines))
+    return "".join(lines)
 
 
 def _small_blocks_log(tmp_path: Path, monkeypatch) -> tuple[Path, list[str]]:
@@ -73,24 +122,19 @@ def test_one_long_text_cell_does_not_multiply_memory(tmp_path: Path, pieces: lis
     assert ("x" * 2000) in (tmp_path / "b.csv").read_text()
 
 
-def test_bad_last_line_in_pieces_does_not_read_the_whole_file(tmp_path: Path) -> None:
+def test_bad_last_line_in_pieces_does_not_read_the_whole_file(tmp_path: Path, plain_in_pieces_loud) -> None:
     """The error of a bad last line read in pieces was found by reading the whole file at once
     (6.8 GB for 1e7 rows; here +235 MB for 4e5 rows); now from the last good row on, in bounded windows:
     no more memory than the run without the bad line."""
-    good, bad = tmp_path / "good.csv", tmp_path / "bad.csv"
-    _log_with_note(good, 200000, "ok")
+    bad = tmp_path / "bad.csv"
     _log_with_note(bad, 200000, "ok", bad_last=True)
-    peaks = {}
-    for src in (good, bad):
-        code, peaks[src.name] = _peak_mb("estimate", src, "-o", tmp_path / f"out_{src.name}", "--chunk-rows", 20000)
-        assert code == (2 if src is bad else 0)
-    assert peaks["bad.csv"] < peaks["good.csv"] + 50, peaks
-    args = ["estimate", bad, "-o", tmp_path / "out.csv", "--chunk-rows", 20000]
-    done = subprocess.run([SOFTTIP, *map(str, args)], capture_output=True, text=True, timeout=120, check=False)
-    assert done.returncode == 2
+    _, good_mb, _ = plain_in_pieces_loud  # the good log's run (plain.csv: the same 200000 rows)
+    code, bad_mb, _, err = _measured("estimate", bad, "-o", tmp_path / "out_bad.csv", "--chunk-rows", 20000)
+    assert code == 2
+    assert bad_mb < good_mb + 50, (good_mb, bad_mb)
     # the one-shot reader's message, to the letter
-    assert done.stderr == f"softtip: error: {bad}:200001: column 'fx': expected a number, got {_last_fx(bad)!r}\n"
-    assert not (tmp_path / "out.csv").exists() and not (tmp_path / "out_bad.csv").exists()
+    assert err == f"softtip: error: {bad}:200001: column 'fx': expected a number, got {_last_fx(bad)!r}\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["bad.csv"]
 
 
 def _last_fx(path: Path) -> str:
@@ -164,19 +208,20 @@ def _stdout_run(*args: object) -> subprocess.CompletedProcess:
     return subprocess.run([SOFTTIP, *map(str, args)], capture_output=True, timeout=300, check=False)
 
 
-def test_pieces_onto_standard_output_are_the_one_shot_table_in_bounded_memory(tmp_path: Path) -> None:
-    src = tmp_path / "in.csv"
-    _log_with_note(src, 200000, "ok")
-    one = _stdout_run("estimate", src, "-q")  # the one-shot run (a 15 MB log: not in pieces by itself)
-    assert one.returncode == 0, one.stderr
-    for more in (["--chunk-rows", 20000], ["--chunk-rows", 20000, "-o", "-"]):
-        done = _stdout_run("estimate", src, "-q", *more)
-        assert done.returncode == 0, done.stderr
-        assert done.stdout == one.stdout
-    code, to_file = _peak_mb("estimate", src, "-q", "--chunk-rows", 20000, "-o", tmp_path / "out.csv")
-    code_out, to_stdout = _peak_mb("estimate", src, "-q", "--chunk-rows", 20000)  # into the runner's pipe
-    _, whole = _peak_mb("estimate", src, "-q")
-    assert code == code_out == 0
+def test_pieces_onto_standard_output_are_the_one_shot_table_in_bounded_memory(plain_log: Path,
+                                                                            plain_in_pieces_quiet) -> None:  # fmt: skip
+    src = plain_log  # 200000 rows
+    # the one-shot run (a 15 MB log: not in pieces by itself), into the runner's pipe
+    code_one, whole, one, err = _measured("estimate", src, "-q")
+    assert code_one == 0, err
+    code_out, to_stdout, done, err = _measured("estimate", src, "-q", "--chunk-rows", 20000)  # into the runner's pipe
+    assert code_out == 0, err
+    assert done == one
+    dash = _stdout_run("estimate", src, "-q", "--chunk-rows", 20000, "-o", "-")
+    assert dash.returncode == 0, dash.stderr
+    assert dash.stdout == one
+    code, to_file, _ = plain_in_pieces_quiet  # ... -q --chunk-rows 20000 -o p.csv
+    assert code == 0
     assert to_stdout < to_file + 50, (to_stdout, to_file)
     assert to_stdout < whole - 50, (to_stdout, whole)
 
@@ -250,23 +295,20 @@ def test_bad_utf8_within_the_first_64_kb_is_located_in_windows(tmp_path: Path, l
     assert f"in.csv:{line}: not valid UTF-8 (byte 0xe9" in str(found)
 
 
-def test_bad_utf8_near_the_start_in_pieces_takes_no_more_memory(tmp_path: Path) -> None:
-    good, bad = tmp_path / "good.csv", tmp_path / "bad.csv"
-    _log_with_note(good, 200000, "ok")
-    data = good.read_bytes()
+def test_bad_utf8_near_the_start_in_pieces_takes_no_more_memory(tmp_path: Path, plain_log: Path,
+                                                                 plain_in_pieces_loud) -> None:  # fmt: skip
+    bad = tmp_path / "bad.csv"
+    data = plain_log.read_bytes()  # the good log (200000 rows)
     cut = data.index(b"\n", 1000) + 1
     bad.write_bytes(data[:cut] + data[cut:].replace(b",ok", b",\xe9", 1))
-    peaks = {}
-    for src in (good, bad):
-        code, peaks[src.name] = _peak_mb("estimate", src, "-o", tmp_path / f"out_{src.name}", "--chunk-rows", 20000)
-        assert code == (2 if src is bad else 0)
-    assert peaks["bad.csv"] < peaks["good.csv"] + 30, peaks
+    _, good_mb, _ = plain_in_pieces_loud  # the good log's run: ... -o p.csv --chunk-rows 20000
+    code, bad_mb, _, pieces = _measured("estimate", bad, "-o", tmp_path / "b.csv", "--chunk-rows", 20000)
+    assert code == 2
+    assert bad_mb < good_mb + 30, (good_mb, bad_mb)
     one = subprocess.run([SOFTTIP, "estimate", str(bad), "-o", str(tmp_path / "a.csv")], capture_output=True, text=True,
                          timeout=120, check=False)  # fmt: skip
-    pieces = subprocess.run([SOFTTIP, "estimate", str(bad), "-o", str(tmp_path / "b.csv"), "--chunk-rows", "20000"],
-                            capture_output=True, text=True, timeout=120, check=False)  # fmt: skip
-    assert one.returncode == pieces.returncode == 2
-    assert pieces.stderr.replace("b.csv", "a.csv") == one.stderr and "not valid UTF-8" in one.stderr
+    assert one.returncode == 2
+    assert pieces.replace("b.csv", "a.csv") == one.stderr and "not valid UTF-8" in one.stderr
 
 
 # --------------------------------------------------------------------------------------
@@ -331,40 +373,46 @@ def test_quoted_lines_and_lone_crs_read_in_pieces_as_read_log(tmp_path: Path, mo
 
 
 @pytest.mark.slow
-def test_quoted_lines_and_lone_crs_in_pieces_in_bounded_memory(tmp_path: Path) -> None:
+def test_quoted_lines_and_lone_crs_in_pieces_in_bounded_memory(tmp_path: Path, plain_log: Path,
+                                                                plain_in_pieces_quiet) -> None:  # fmt: skip
     """A quoted note over two lines (to a file, and with a bad last line) and lone CR line ends
     (onto standard output): no more memory than the plain log's run (they were read whole), the
     one-shot run's table, the one-shot run's message."""
     import csv
 
-    plain, note, cr, bad = (tmp_path / f"{name}.csv" for name in ("plain", "note", "cr", "bad"))
-    _log_with_note(plain, 200000, "ok")
-    lines = plain.read_text().splitlines(keepends=True)
+    note, cr, bad = (tmp_path / f"{name}.csv" for name in ("note", "cr", "bad"))
+    lines = plain_log.read_text().splitlines(keepends=True)  # 200000 rows
     cr.write_bytes(_layout(lines, "lone-cr"))
     lines[101] = lines[101][: -len("ok\n")] + _NOTE + "\n"
     note.write_text("".join(lines))
     lines[-1] = lines[-1].replace(",", ",abc", 1)
     bad.write_text("".join(lines))
-    code, base = _peak_mb("estimate", plain, "-q", "--chunk-rows", 20000, "-o", tmp_path / "p.csv")
+    code, base, plain_out = plain_in_pieces_quiet  # estimate plain.csv -q --chunk-rows 20000 -o p.csv
     assert code == 0
     code, to_file = _peak_mb("estimate", note, "-q", "--chunk-rows", 20000, "-o", tmp_path / "n.csv")
     assert code == 0
     code, to_stdout = _peak_mb("estimate", cr, "-q", "--chunk-rows", 20000)
     assert code == 0
-    code, failed = _peak_mb("estimate", bad, "-q", "--chunk-rows", 20000, "-o", tmp_path / "b.csv")
+    code, failed, _, err = _measured("estimate", bad, "-q", "--chunk-rows", 20000, "-o", tmp_path / "b.csv")
     assert code == 2
     assert max(to_file, to_stdout, failed) < base + 50, (base, to_file, to_stdout, failed)
-    done = _stdout_run("estimate", bad, "-q", "--chunk-rows", 20000, "-o", tmp_path / "b.csv")
     fx = lines[-1].split(",")[1]
-    assert done.stderr.decode() == f"softtip: error: {bad}:200002: column 'fx': expected a number, got {fx!r}\n"
-    # the plain log's estimates; the note carried (quoted piece by piece, so compared as cells)
-    with open(tmp_path / "p.csv", newline="") as a, open(tmp_path / "n.csv", newline="") as b:
-        rows_a, rows_b = list(csv.reader(a)), list(csv.reader(b))
-    assert len(rows_a) == len(rows_b) == 200001 and rows_b[101][-1] == _NOTE.strip('"')
-    assert [r[:-1] for r in rows_a] == [r[:-1] for r in rows_b]
+    assert err == f"softtip: error: {bad}:200002: column 'fx': expected a number, got {fx!r}\n"
+    # the plain log's estimates; the note carried (quoted piece by piece, so compared as cells),
+    # row by row (lists of 200001 rows sliced took seconds): every cell but the note's the same
+    with open(plain_out, newline="") as a, open(tmp_path / "n.csv", newline="") as b:
+        rows = 0
+        for rows, (row_a, row_b) in enumerate(itertools.zip_longest(csv.reader(a), csv.reader(b)), 1):
+            assert row_a is not None and row_b is not None, rows  # as many rows in each
+            note_b = row_b.pop()
+            row_a.pop()
+            assert row_a == row_b, rows
+            if rows == 102:  # rows_b[101]
+                assert note_b == _NOTE.strip('"')
+    assert rows == 200001
     one = _stdout_run("estimate", cr, "-q")
-    assert one.returncode == 0 and one.stdout == (tmp_path / "p.csv").read_bytes()  # lone CRs: the plain log's bytes
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.csv", "cr.csv", "n.csv", "note.csv", "p.csv", "plain.csv"]
+    assert one.returncode == 0 and one.stdout == plain_out.read_bytes()  # lone CRs: the plain log's bytes
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.csv", "cr.csv", "n.csv", "note.csv"]
 
 
 @pytest.mark.parametrize("noise", [["--force-noise", "0", "--moment-noise", "0"], ["--moment-noise", "40"]], ids=["lever-only", "noise"])
