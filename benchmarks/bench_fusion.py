@@ -1,7 +1,7 @@
 """Two-finger fusion on the simulator: the object's line and plane from both fingertips.
 
-    python benchmarks/bench_fusion.py          # ~4 min on a quiet 2-core machine
-    python benchmarks/bench_fusion.py --physics drake --objects "plate 1 mm" "cube edge (90°)"
+    python benchmarks/bench_fusion.py          # about a minute of CPU time
+    python benchmarks/bench_fusion.py --physics drake --objects "plate 1 mm" "cube edge (90°)"   # Drake: 5-60 s a log the first time
 
 The papers' two-fingered hand (softtip.sim.hand) with both fingertips on one object: a
 plate's two edges pinched across its 30 mm width, a stick's two sides, a cube's two opposite
