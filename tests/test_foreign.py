@@ -76,7 +76,8 @@ REFUSED = [
     ("missing_cells.csv", {}, ":122: column 'fy': empty cell; expected a number; or give --missing drop"),
     ("stray_quote.csv", {}, ":102: column 'note': a quote opened on this line is closed only on line 202, so the 100"),
     ("unterminated_quote.csv", {}, ":102: column 'note': a quote opened on this line is never closed"),
-    ("ati_ms_n_nmm.csv", {"moment_units": "N*m"}, "column 'Tx (N-mm)' says N·mm but --moment-units (or --units) says N*m"),
+    ("ati_ms_n_nmm.csv", {"moment_units": "N*m"},
+     "column 'Tx (N-mm)': the header says N·mm but --moment-units (or --units) says N*m; leave the option out"),
     ("si_reference.csv", {"columns": "t=time"}, "--columns t=time: no column 'time' in the header"),
     ("si_reference.csv", {"units": "kgf-mm", "force_units": "N"}, "--units kgf-mm says force in kgf, --force-units says N"),
 ]

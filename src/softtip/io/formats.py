@@ -32,6 +32,7 @@ __all__ = [
     "recognised_roles",
     "resolve_columns",
     "split_unit",
+    "stated_unit",
     "TABLE_FORMATS",
     "table_format",
 ]
@@ -401,18 +402,7 @@ def resolve_columns(names: Sequence[str], fmt: LogFormat, *, headerless: bool = 
                 f"({names[chosen['nanosec']]!r}); --time-units {option} does not apply: leave it out"
             )
         if text is not None:
-            unit = find_unit(text, quantity)
-            if unit is None:
-                raise ColumnError(
-                    f"column {names[j]!r}: unknown {quantity} unit {text!r}; expected one of: "
-                    f"{', '.join(u for u in _names(quantity))} (or rename the column and give --{quantity}-units)"
-                )
-            if option is not None and get_unit(option, quantity) is not unit:
-                raise ColumnError(
-                    f"column {names[j]!r} says {unit.label} but --{quantity}-units (or --units) says {option}; "
-                    "leave the option out to use the header's"
-                )
-            units[role], from_header[role] = unit, True
+            units[role], from_header[role] = stated_unit(text, quantity, option, names[j], "the header"), True
         else:
             if role == "t" and "nanosec" in chosen:
                 default = "s"
@@ -420,6 +410,30 @@ def resolve_columns(names: Sequence[str], fmt: LogFormat, *, headerless: bool = 
                 default = time_default if quantity == "time" else ("N" if quantity == "force" else "N*m")
             units[role], from_header[role] = get_unit(option or default, quantity), False
     return ColumnMap(index=chosen, units=units, from_header=from_header, source=source)
+
+
+def stated_unit(text: str, quantity: str, option: str | None, column: str, stated_by: str) -> Unit:
+    """The unit a file states for ``column`` (``stated_by``: ``"the header"``, ``"the units row"``),
+    checked against the unit option given for its ``quantity`` (``option``, None: none given).
+
+    Raises
+    ------
+    ColumnError
+        No unit of ``quantity`` is named ``text``, or the option names another unit.
+    """
+    unit = find_unit(text, quantity)
+    if unit is None:
+        hint = f" (or rename the column and give --{quantity}-units)" if stated_by == "the header" else ""
+        raise ColumnError(
+            f"column {column!r}: unknown {quantity} unit {text!r} in {stated_by}; expected one of: "
+            f"{', '.join(_names(quantity))}{hint}"
+        )
+    if option is not None and get_unit(option, quantity) is not unit:
+        raise ColumnError(
+            f"column {column!r}: {stated_by} says {unit.label} but --{quantity}-units (or --units) says {option}; "
+            f"leave the option out to use the unit {stated_by} gives"
+        )
+    return unit
 
 
 def _names(quantity: str) -> list[str]:

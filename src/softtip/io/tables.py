@@ -84,7 +84,6 @@ from softtip.core.units import (
     find_unit,
     get_unit,
     seconds_from_ns,
-    unit_names,
     wrench_scale,
     wrench_to_si,
 )
@@ -100,6 +99,7 @@ from softtip.io.formats import (
     parse_column_spec,
     recognised_roles,
     resolve_columns,
+    stated_unit,
     table_format,
 )
 
@@ -783,23 +783,17 @@ def _units_row(names: list[str], cmap: ColumnMap, lines: io.StringIO, fmt: LogFo
         lines.seek(pos)
         return cmap
     units, from_header = dict(cmap.units), dict(cmap.from_header)
-    for role, unit in found.items():
+    for role in found:
         quantity, column = ROLE_QUANTITY[role], names[cmap.index[role]]
         option = {"force": fmt.force_unit, "moment": fmt.moment_unit, "time": fmt.time_unit}[quantity]
-        if unit is None:
-            raise InputError(
-                f"{source}:{line}: column {column!r}: unknown {quantity} unit {given[role]!r} in the units row; "
-                f"expected one of: {', '.join(unit_names(quantity))}"
-            )
+        try:
+            unit = stated_unit(given[role], quantity, option, column, "the units row")
+        except ColumnError as exc:
+            raise InputError(f"{source}:{line}: {exc}") from None
         if cmap.from_header[role] and cmap.units[role] is not unit:
             raise InputError(
                 f"{source}:{line}: column {column!r}: the units row says {unit.label} but the header says "
                 f"{cmap.units[role].label}; expected one unit per column"
-            )
-        if option is not None and get_unit(option, quantity) is not unit:
-            raise InputError(
-                f"{source}:{line}: column {column!r}: the units row says {unit.label} but --{quantity}-units (or --units) "
-                f"says {option}; leave the option out to use the units row's"
             )
         units[role], from_header[role] = unit, True
     return replace(cmap, units=units, from_header=from_header, units_row=line, row_units=frozenset(found))
