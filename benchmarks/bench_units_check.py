@@ -1,6 +1,6 @@
 """The units check (softtip.core.lever) over simulated grasps: false alarms and detections.
 
-    python benchmarks/bench_units_check.py      # 72 grasps (~5 min on a shared 2-core machine)
+    python benchmarks/bench_units_check.py      # 72 grasps (about 15 s of CPU time)
 
 For two fingertips, six objects, three edge angles and both scenarios (the papers' grasp and a
 plain push), simulate a grasp (20 Hz, 1500 skin elements), tare it on its first samples and
