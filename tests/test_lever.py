@@ -93,16 +93,20 @@ def test_the_noise_of_a_sensor_as_coarse_as_its_noise_is_measured(sigma, quantum
 
 def test_cli_stops_a_simulated_si_log_read_as_kgf_mm(tmp_path):
     """softtip's own simulated sensor quantises its samples about as coarsely as its noise: an SI
-    log read as kgf and kgf·mm stops on the noise of a 1 s tare (50 samples). The default 0.2 s
-    tare at 50 Hz (10 samples) measures the moment noise 3.4 times low on this log, no unit pair
-    fits it, and the run passes with the tare's warning (a limit, said in the manual's input formats)."""
+    log read as kgf and kgf·mm stops on the noise. With a 1 s tare (50 samples) SI fits it; with
+    the default 0.2 s tare (10 samples) the moment noise comes out 3.4 times low, no pair fits
+    within 3 times, and the pair 100 times nearer than kgf-mm is named (it ran on, exit 0)."""
     sim = subprocess.run([SOFTTIP, "simulate", "-o", tmp_path / "log.csv"], capture_output=True, text=True, timeout=120)
     assert sim.returncode == 0, sim.stderr
-    args = ["--tare-duration", "1", "-o", tmp_path / "e.csv"]
-    out = subprocess.run([SOFTTIP, "estimate", tmp_path / "log.csv", "--units", "kgf-mm", *args], capture_output=True,
-                         text=True, timeout=120)  # fmt: skip
-    assert out.returncode == 2, out.stderr
-    assert "the noise while taring" in out.stderr and "N·m (the default" in out.stderr, out.stderr
-    assert not (tmp_path / "e.csv").exists()
-    out = subprocess.run([SOFTTIP, "estimate", tmp_path / "log.csv", *args], capture_output=True, text=True, timeout=120)
-    assert out.returncode == 0, out.stderr
+    for tare, named in ((["--tare-duration", "1"], "the data fit forces in N with moments in N·m (the default"),
+                        ([], "no unit pair puts it within 3 times the sensor's; 102 times nearer: forces in N with "
+                             "moments in N·m (the default")):  # fmt: skip
+        out = subprocess.run([SOFTTIP, "estimate", tmp_path / "log.csv", "--units", "kgf-mm", *tare, "-o", tmp_path / "e.csv"],
+                             capture_output=True, text=True, timeout=120)  # fmt: skip
+        assert out.returncode == 2, out.stderr
+        assert "the noise while taring" in out.stderr and named in out.stderr, out.stderr
+        assert not (tmp_path / "e.csv").exists()
+        out = subprocess.run([SOFTTIP, "estimate", tmp_path / "log.csv", *tare, "-o", tmp_path / "e.csv"],
+                             capture_output=True, text=True, timeout=120)  # fmt: skip
+        assert out.returncode == 0, out.stderr
+        (tmp_path / "e.csv").unlink()
