@@ -86,8 +86,8 @@ def test_missing_and_misspelled_columns(tmp_path: Path) -> None:
     path = _write_pq(tmp_path / "m.parquet", cols)
     assert _error(path) == (
         f"{path}: missing column 'fx'; expected a header with columns t, fx, fy, fz, mx, my, mz (any order, exact "
-        "case). Column 7 is 'Fx': did you mean 'fx'? Other names: map them with --columns t=NAME,fx=NAME,… "
-        "(docs/guide/input-formats.md lists the headers read as they are)."
+        "case). Column 7 is 'Fx': did you mean 'fx'? Other names: rename the columns (a Parquet or Arrow file is read "
+        "by its column names; --columns applies to CSV)."
     )
 
 

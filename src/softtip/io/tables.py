@@ -1270,7 +1270,7 @@ def _column_index(header: _Header, source: str, *, dialects: bool = True) -> dic
         msg = (
             f"{source}:{line}: missing column{'s' if len(missing) > 1 else ''} "
             f"{', '.join(repr(c) for c in missing)}; expected a header with columns "
-            f"{_EXPECTED_HEADER} (any order, exact case)"
+            f"{_EXPECTED_HEADER} (any order{'' if dialects else ', exact case'})"
         )
         hints = _near_misses(missing, names, set(read.values()))
         if len(names) == 1:
@@ -1293,6 +1293,8 @@ def _column_index(header: _Header, source: str, *, dialects: bool = True) -> dic
             )
         hints.append(
             "Other names: map them with --columns t=NAME,fx=NAME,… (docs/guide/input-formats.md lists the headers read as they are)."
+            if dialects else "Other names: rename the columns (a Parquet or Arrow file is read by its column names; --columns "
+            "applies to CSV)."
         )
         raise InputError(" ".join([msg + ".", *hints]))
     return {c: seen[c] for c in REQUIRED_COLUMNS}
