@@ -6,6 +6,7 @@ the documentation's benchmark pages include (their figures are the scripts', not
 
 from __future__ import annotations
 
+import argparse
 import os
 import resource
 import sys
@@ -26,6 +27,14 @@ class _Tee:
 
     def flush(self) -> None:
         self.out.flush()
+
+
+def markdown_option(parser: argparse.ArgumentParser) -> None:
+    """List ``--markdown PATH`` in ``parser``'s help (:func:`run_with_markdown` takes it out of the
+    arguments before the parser sees them)."""
+    parser.add_argument("--markdown", metavar="PATH",
+                        help="also write what the run prints to PATH, headed by the command and its time (the "
+                             "generated pages of docs/benchmarks/)")  # fmt: skip
 
 
 def run_with_markdown(main: Callable[[list[str]], int | None], script: str, argv: Sequence[str] | None = None, *,
@@ -70,7 +79,7 @@ def run_with_markdown(main: Callable[[list[str]], int | None], script: str, argv
                 f"{load:.1f} at the start and {os.getloadavg()[0]:.1f} at the end")  # fmt: skip
         command = " ".join([f"python benchmarks/{script}", *argv])
         text = "".join(tee.kept)
-        body = f"```text\n{text}```\n" if code_block else text.replace("\n### ", "\n#### ")
+        body = f"```text\n{text}```\n" if code_block else ("\n" + text).replace("\n### ", "\n#### ")[1:]
         path.write_text(f"<!-- written by {command} --markdown {path.name}; do not edit -->\n\n"
                         f"Run: `{command}`, {took}\n\n" + body, encoding="utf-8")  # fmt: skip
     return code

@@ -79,7 +79,7 @@ import sys
 import time
 
 import numpy as np
-from _markdown import run_with_markdown  # noqa: E402  (benchmarks/ is the script's folder)
+from _markdown import markdown_option, run_with_markdown  # noqa: E402  (benchmarks/ is the script's folder)
 from bench_fusion import fusion_section  # noqa: E402
 
 from softtip import Capsule, EstimatorConfig, Sphere, axial_difference, estimate, murakami2006
@@ -755,6 +755,7 @@ def rolling_section(angles=(-60.0, -45.0, 0.0, 30.0, 60.0), seed: int = 3) -> No
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    markdown_option(ap)
     ap.add_argument("--fit-depth", action="store_true", help="refit the default depth law and stop")
     ap.add_argument(
         "--sections", nargs="*",

@@ -42,7 +42,7 @@ from softtip.sim.probing import simulate_probing
 from softtip.sim.synthetic import sliding_presses
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _markdown import run_with_markdown  # noqa: E402
+from _markdown import markdown_option, run_with_markdown  # noqa: E402
 
 MM = 1e3
 
@@ -188,6 +188,7 @@ def honesty_rows(seeds: int, seed0: int, force_range=(1.5, 4.0), sim_only: bool 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    markdown_option(ap)
     ap.add_argument("--seed", type=int, default=3)
     ap.add_argument("--seeds", type=int, default=20, help="probing logs per noise level in the honesty section (0: skip it)")
     ap.add_argument("--honesty-only", action="store_true", help="print only the calibration-under-noise section")

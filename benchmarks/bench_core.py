@@ -95,7 +95,7 @@ from softtip import (
 from softtip.sim.synthetic import synthetic_grasp
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _markdown import run_with_markdown  # noqa: E402
+from _markdown import markdown_option, run_with_markdown  # noqa: E402
 
 
 def pushing_wrenches(tip, n, rng):
@@ -156,6 +156,7 @@ def _bytecode_kept() -> None:
 def main(argv: list[str] | None = None) -> None:
     _bytecode_kept()
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    markdown_option(ap)
     ap.add_argument("--samples", type=int, default=1_000_000)
     ap.add_argument("--stream-samples", type=int, default=20_000)
     ap.add_argument("--only", choices=["end-to-end", "stream", "soak", "scaling", "compiled", "bounds", "jobs"], help="Run only this part.")

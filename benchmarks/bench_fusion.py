@@ -74,7 +74,7 @@ from softtip.sim.hand import FrictionLoad, simulate_two_finger
 from softtip.sim.sensor import SensorModel
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _markdown import run_with_markdown  # noqa: E402
+from _markdown import markdown_option, run_with_markdown  # noqa: E402
 
 HELD = 6.0
 OBJECTS = {
@@ -242,8 +242,8 @@ def fusion_section(
 
 
 def main(argv: list[str]) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0],
-                                 epilog="--markdown PATH also writes the printed tables to PATH")
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    markdown_option(ap)
     ap.add_argument("--seeds", type=int, nargs="*", default=[1])
     ap.add_argument("--angles", type=float, nargs="*", default=[-45.0, 0.0, 30.0], help="degrees at the right fingertip")
     ap.add_argument("--noise", type=float, default=1.0, help="sensor noise × this (the estimator told the Nano17 preset × this)")

@@ -126,7 +126,7 @@ from softtip.sim import (
 )
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _markdown import run_with_markdown  # noqa: E402
+from _markdown import markdown_option, run_with_markdown  # noqa: E402
 from drake_physics import (  # noqa: E402
     DRAKE_MISSING,
     drake_available,
@@ -620,6 +620,7 @@ def plot_sap_trace(path: str, args, tip) -> None:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    markdown_option(ap)
     ap.add_argument("--physics", choices=("winkler", "drake", "both"), default="both")
     ap.add_argument("--quick", action="store_true", help="a small subset (4 lines, 2 areas, 2 angles, 1 seed)")
     ap.add_argument("--seeds", type=int, default=None, help="noise seeds per grasp (default 3; --quick: 1)")
@@ -650,7 +651,6 @@ def main(argv=None) -> int:
     ap.add_argument("--decompose", action="store_true",
                     help="with the friction section: per grasp, the estimator's depth against the lever about the true "
                          "3-D line, the twist about the normal and the angle it turns h (first seed, noise-free wrench)")
-    # --markdown PATH (handled around main): also write the printed tables to PATH
     ap.add_argument("--stated-rocking", action="store_true",
                     help="the rocked grasps estimated with the rocking stated (EstimatorConfig.rocked, --rocked: from the "
                          "second rocking axis to the end), as a user who rocked the object would")  # fmt: skip
