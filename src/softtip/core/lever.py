@@ -242,25 +242,27 @@ def pair_scales(force_unit: str, moment_unit: str) -> dict[tuple[str, str], tupl
     }
 
 
+def _ranked_pairs(lever_fits: dict[tuple[str, str], bool], ratio: tuple[float, float] | None, force_unit: str,
+                 moment_unit: str) -> list[tuple[float, tuple[str, str]]]:  # fmt: skip
+    """The unit pairs other than the given one whose lever fits (``lever_fits``, by pair), nearest
+    first, each with how far it puts the tare's noise ``ratio`` (:func:`noise_ratio` in the given
+    units) from the sensor's: the larger of the force's and the moment's ``|log|`` (0 without a
+    ratio)."""
+    given = (find_unit(force_unit, "force").name, find_unit(moment_unit, "moment").name)  # type: ignore[union-attr]
+    ranked = [
+        (0.0 if ratio is None else max(abs(np.log(ratio[0] * kf)), abs(np.log(ratio[1] * km))), pair)
+        for pair, (kf, km) in pair_scales(force_unit, moment_unit).items()
+        if lever_fits[pair] and pair != given
+    ]
+    return sorted(ranked)
+
+
 def pairs_that_fit(lever_fits: dict[tuple[str, str], bool], ratio: tuple[float, float] | None, force_unit: str,
                    moment_unit: str) -> list[tuple[str, str]]:  # fmt: skip
     """The unit pairs other than the given one that fit a log, best first: those whose lever
     fits (``lever_fits``, by pair) and, with the tare's noise ``ratio`` (:func:`noise_ratio`
     in the given units), that put the noise within :data:`NOISE_FITS` of the sensor's."""
-    given = (find_unit(force_unit, "force").name, find_unit(moment_unit, "moment").name)  # type: ignore[union-attr]
-    fits: list[tuple[float, str, str]] = []
-    for (force, moment), (kf, km) in pair_scales(force_unit, moment_unit).items():
-        if not lever_fits[(force, moment)]:
-            continue
-        if ratio is not None:
-            off = max(abs(np.log(ratio[0] * kf)), abs(np.log(ratio[1] * km)))
-            if off > np.log(NOISE_FITS):
-                continue
-        else:
-            off = 0.0
-        fits.append((off, force, moment))
-    fits.sort()
-    return [(fo, mo) for _, fo, mo in fits if (fo, mo) != given]
+    return [pair for off, pair in _ranked_pairs(lever_fits, ratio, force_unit, moment_unit) if off <= np.log(NOISE_FITS)]
 
 
 def describe_pairs(named: list[tuple[str, str]], given: tuple[str, str], lead: str = "the data fit ") -> str:
@@ -274,19 +276,6 @@ def describe_pairs(named: list[tuple[str, str]], given: tuple[str, str], lead: s
         for fo, mo in named
     ]
     return lead + ", or ".join(pairs)
-
-
-def _closest_pair(lever_fits: dict[tuple[str, str], bool], ratio: tuple[float, float], force_unit: str,
-                  moment_unit: str) -> tuple[tuple[str, str], float] | None:  # fmt: skip
-    """The unit pair other than the given one whose lever fits and that puts the tare's noise
-    nearest the sensor's, and how far (the larger of the force's and the moment's ``|log|``)."""
-    given = (find_unit(force_unit, "force").name, find_unit(moment_unit, "moment").name)  # type: ignore[union-attr]
-    offs = [
-        (max(abs(np.log(ratio[0] * kf)), abs(np.log(ratio[1] * km))), pair)
-        for pair, (kf, km) in pair_scales(force_unit, moment_unit).items()
-        if lever_fits[pair] and pair != given
-    ]
-    return min(offs)[::-1] if offs else None
 
 
 def check_wrench_units(
@@ -361,10 +350,10 @@ def check_wrench_units(
         # roughly (10 samples at 50 Hz). A pair NOISE_OFF times nearer than the units read is
         # still the answer: no noise model is off by both factors (an SI log read as kgf-mm:
         # 500 times off, SI 5 times).
-        closest = _closest_pair(lever_fits, ratio, force_unit, moment_unit)  # type: ignore[arg-type]
-        if closest is not None and off - closest[1] > np.log(NOISE_OFF):
-            named = [closest[0]]
-            lead = f"no unit pair puts it within {NOISE_FITS:g} times the sensor's; {np.exp(off - closest[1]):.3g} times nearer: "
+        ranked = _ranked_pairs(lever_fits, ratio, force_unit, moment_unit)
+        if ranked and off - ranked[0][0] > np.log(NOISE_OFF):
+            named = [ranked[0][1]]
+            lead = f"no unit pair puts it within {NOISE_FITS:g} times the sensor's; {np.exp(off - ranked[0][0]):.3g} times nearer: "
     if off > np.log(NOISE_OFF) and named:
         f0, m0 = float(np.median(noise.force_std)), float(np.median(noise.moment_std))  # type: ignore[union-attr]
         raise InputError(
