@@ -191,23 +191,24 @@ def test_the_note_names_the_time_unit_read_from_absolute_stamps(tmp_path: Path, 
 # a header softtip cannot map: the message names what is missing, not what it reads
 
 
-def test_missing_columns_name_only_what_no_dialect_reads(tmp_path: Path) -> None:
-    """'Fx' … 'Mz' are read (any case): only the unknown time column 'Zeit' is missing, and
-    no column that is read is offered as a misspelling."""
-    path = tmp_path / "zeit.csv"
-    path.write_text("Zeit;Fx;Fy;Fz;Mx;My;Mz\n0;1;2;3;4;5;6\n")
+@pytest.mark.parametrize(
+    ("text", "missing", "also"),
+    [
+        ("Zeit;Fx;Fy;Fz;Mx;My;Mz\n0;1;2;3;4;5;6\n", "t", "--columns t=NAME"),
+        ("time,Fx,f_y,fz,mx,my,torque_zz\n0,1,2,3,4,5,6\n", "mz", ""),  # 'time', 'Fx', 'f_y' are read as they are
+    ],
+    ids=["zeit", "typo"],
+)
+def test_missing_columns_name_only_what_no_dialect_reads(tmp_path: Path, text: str, missing: str, also: str) -> None:
+    """'Fx' … 'Mz' are read (any case): only a column no dialect reads is missing ('Zeit', or
+    'torque_zz'), and no column that is read is offered as a misspelling."""
+    path = tmp_path / "log.csv"
+    path.write_text(text)
     with pytest.raises(InputError) as info:
         read_log(path)
     message = str(info.value)
-    assert message.startswith(f"{path}:1: missing column 't';"), message
-    assert "did you mean" not in message and "--columns t=NAME" in message
-    typo = tmp_path / "typo.csv"
-    typo.write_text("time,Fx,f_y,fz,mx,my,torque_zz\n0,1,2,3,4,5,6\n")
-    with pytest.raises(InputError) as info:
-        read_log(typo)
-    message = str(info.value)
-    assert message.startswith(f"{typo}:1: missing column 'mz';"), message
-    assert "did you mean" not in message  # 'time', 'Fx', 'f_y' are read as they are
+    assert message.startswith(f"{path}:1: missing column {missing!r};"), message
+    assert "did you mean" not in message and also in message
 
 
 _UNSTAMPED = [
