@@ -207,6 +207,10 @@ class LogFormat:
                 object.__setattr__(fmt, f"{name}_unit", value)
         return fmt
 
+    def unit_option(self, quantity: str) -> str | None:
+        """The unit an option gives ``quantity`` (``"force"``, ``"moment"``, ``"time"``), or None."""
+        return getattr(self, f"{quantity}_unit")
+
     @property
     def plain(self) -> bool:
         """Whether nothing beyond softtip's own layout was asked for."""
@@ -392,7 +396,7 @@ def resolve_columns(names: Sequence[str], fmt: LogFormat, *, headerless: bool = 
     for role, j in chosen.items():
         quantity = ROLE_QUANTITY[role]
         text = split[j][1]
-        option = {"force": fmt.force_unit, "moment": fmt.moment_unit, "time": fmt.time_unit}[quantity]
+        option = fmt.unit_option(quantity)
         if role == "nanosec":
             units[role], from_header[role] = get_unit("ns", "time"), True
             continue

@@ -735,8 +735,9 @@ def _read_header(text: str, source: str, fmt: LogFormat | None = None) -> _Heade
                 preamble = k - lineno
                 line, lineno, delimiter, cmap = later, k, d, found
                 break
-            if later.strip() and len(recognised_roles(cells)) > partial[0]:
-                partial = (len(recognised_roles(cells)), k, lines.tell(), later, d)
+            roles = len(recognised_roles(cells)) if later.strip() else 0
+            if roles > partial[0]:
+                partial = (roles, k, lines.tell(), later, d)
         else:
             if absent:
                 looked = f"lines {lineno}–{k} looked at; " if k > lineno else ""
@@ -785,7 +786,7 @@ def _units_row(names: list[str], cmap: ColumnMap, lines: io.StringIO, fmt: LogFo
     units, from_header = dict(cmap.units), dict(cmap.from_header)
     for role in found:
         quantity, column = ROLE_QUANTITY[role], names[cmap.index[role]]
-        option = {"force": fmt.force_unit, "moment": fmt.moment_unit, "time": fmt.time_unit}[quantity]
+        option = fmt.unit_option(quantity)
         try:
             unit = stated_unit(given[role], quantity, option, column, "the units row")
         except ColumnError as exc:
