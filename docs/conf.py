@@ -148,3 +148,23 @@ html_static_path: list[str] = []
 html_last_updated_fmt = None
 html_show_sourcelink = False
 suppress_warnings = ["myst.header"]
+
+
+def _collapsed_navigation(app, pagename, templatename, context, doctree) -> None:
+    """Furo draws the whole site's navigation into every page (``collapse=False``): Sphinx
+    copies every document's table of contents for each page, which took 12 of the build's 27 s
+    of CPU. Collapsed, each page's sidebar holds the top-level pages and the branch it is on
+    (the table of contents on the right is unchanged); the build takes 15 s."""
+    toctree = context.get("toctree")
+    if toctree is None:
+        return
+
+    def collapsed(**kwargs):
+        return toctree(**{**kwargs, "collapse": True})
+
+    context["toctree"] = collapsed
+
+
+def setup(app):
+    # before furo's handler (priority 500), which calls context["toctree"]
+    app.connect("html-page-context", _collapsed_navigation, priority=100)

@@ -322,3 +322,20 @@ def _example():
 
     log = read_log(EXAMPLE_PROBING_PATH)
     return log.t, log.wrench
+
+
+
+def test_a_spike_while_taring_is_left_out_as_the_estimators_tare_does():
+    """One corrupted sample among the untouched first 0.2 s (30 N in z): the plain mean moved every
+    press by 1.5 N (the example log then had 1 press instead of 30); the estimator's tare leaves
+    it out and says so."""
+    from softtip.io.tables import read_log
+
+    log = read_log(EXAMPLE_PROBING_PATH)
+    spiked = log.wrench.copy()
+    spiked[5, 2] += 30.0
+    clean, got = (calibrate_fingertip(log.t, w, "sphere") for w in (log.wrench, spiked))
+    assert got.tare.spikes == 1 and "left out" in got.tare.warnings[0] and clean.tare.spikes == 0
+    assert got.n_presses == clean.n_presses == 30
+    moved = np.r_[got.center - clean.center, got.radius - clean.radius]
+    assert np.all(np.abs(moved) < 0.2 * np.r_[clean.center_std, clean.radius_std]), moved

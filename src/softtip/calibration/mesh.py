@@ -37,7 +37,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from softtip.calibration.probing import find_presses, force_spread
+from softtip.calibration.probing import find_presses, force_spread, tare_probing_log
 from softtip.core._vec import tangent_basis as _tangent_basis
 from softtip.core.mesh import MeshFingertip
 from softtip.errors import InputError
@@ -161,7 +161,8 @@ def calibrate_mesh(
     rotation : bool
         Also fit a small rotation (6 DOF); default: the translation only.
     tare_duration : float
-        s; 0 when the log is already tared.
+        s, the untouched start whose mean without spikes is the bias
+        (:func:`~softtip.calibration.probing.tare_probing_log`); 0 when the log is already tared.
     contact_threshold, min_force : float
         A press lasts while ``|f|`` is at least ``contact_threshold``; only its samples with
         ``|f| ≥ min_force`` are used, N.
@@ -173,9 +174,7 @@ def calibrate_mesh(
     """
     t = np.asarray(t, dtype=float)
     w = np.asarray(wrench, dtype=float)
-    if tare_duration > 0:
-        still = t - t[0] < tare_duration
-        w = w - w[still].mean(axis=0)
+    w, _ = tare_probing_log(t, w, tare_duration)
     f_norm = np.linalg.norm(w[:, :3], axis=1)
     presses, skipped = [], 0
     for idx in find_presses(f_norm, contact_threshold):

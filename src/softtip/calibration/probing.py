@@ -73,7 +73,7 @@ jackknife too (:func:`_jackknife_std`; the larger of the two per parameter). On 
 curvature's are honest; the radius is then the least precise parameter because it trades
 off against the indentation ``κ`` unless the presses span a wide range of forces.
 ``benchmarks/bench_calibration.py`` prints both kinds of log. The sensor's noise is taken
-as white and the tare (the mean of the first ``tare_duration`` s) as exact.
+as white and the tare (the mean of the first ``tare_duration`` s without spikes) as exact.
 """
 
 from __future__ import annotations
@@ -95,6 +95,8 @@ from softtip.core.fingertip import Fingertip
 from softtip.core.noise import NANO17, SensorNoise
 from softtip.core.shape import PressModel, sphere_kernel
 from softtip.errors import InputError
+from softtip.estimator.config import EstimatorConfig
+from softtip.estimator.tare import TareReport, tare_from_samples
 from softtip.io.atomic import atomic_write_text
 
 __all__ = [
@@ -220,6 +222,10 @@ class Calibration:
         ``"jackknife"``: per parameter the larger of those and a delete-one-press
         jackknife's (fits with a :attr:`start_shift` above :data:`JACKKNIFE_SHIFT`, which
         includes every fit with a :attr:`warning`, or when asked).
+    tare : TareReport or None
+        The bias taken from the first ``tare_duration`` s (the estimator's tare: spikes left
+        out) and its warnings (spikes, a fingertip touched while taring); None when the log
+        was already tared.
     """
 
     tip: Fingertip
@@ -240,6 +246,7 @@ class Calibration:
     parameters_std: NDArray[np.float64] = field(repr=False)
     normals: NDArray[np.float64] = field(repr=False)
     std_method: str = "curvature"
+    tare: TareReport | None = field(default=None, repr=False)
 
     @property
     def shape(self) -> str:
@@ -409,6 +416,19 @@ def _not_excited(detail: str, model: PressModel) -> InputError:
     )
 
 
+def tare_probing_log(
+    t: NDArray[np.float64], w: NDArray[np.float64], tare_duration: float, noise: SensorNoise = NANO17
+) -> tuple[NDArray[np.float64], TareReport | None]:
+    """The wrench ``w`` (N, 6) less its bias from the first ``tare_duration`` s, by the
+    estimator's tare (the mean without spikes: one corrupted sample among the untouched ones
+    would otherwise move every press by its share of the mean), and that tare's report
+    (None, and ``w`` as it is, when ``tare_duration`` is 0: the log is already tared)."""
+    if not tare_duration > 0:
+        return w, None
+    tare = tare_from_samples(w[t - t[0] < tare_duration], EstimatorConfig(noise=noise, tare_duration=tare_duration))
+    return w - tare.bias, tare
+
+
 def calibrate_fingertip(
     t: ArrayLike,
     wrench: ArrayLike,
@@ -435,8 +455,8 @@ def calibrate_fingertip(
         One of :data:`SHAPES`. Capsule: cylinder axis along z, cap centre ``(x, y, length)``;
         ellipsoid: axis-aligned, centre and semi-axes.
     tare_duration : float
-        The mean of the first ``tare_duration`` s (fingertip untouched) is the bias; 0 if
-        the log is already tared.
+        The first ``tare_duration`` s (fingertip untouched) give the bias, their mean without
+        spikes (:func:`tare_probing_log`); 0 if the log is already tared.
     contact_threshold : float
         N; presses are the runs with ``|f|`` at least this (raised to 4 times the force
         noise's magnitude ``sqrt(Σ σ_f²)`` when that is larger, so that noise alone does not
@@ -485,9 +505,7 @@ def calibrate_fingertip(
         raise InputError(f"{source}: expected t (N,) and wrench (N, 6), got {t.shape} and {w.shape}")
     if len(t) == 0:
         raise InputError(f"{source}: no samples")
-    if tare_duration > 0:
-        tare = t - t[0] < tare_duration
-        w = w - w[tare].mean(axis=0)
+    w, tare = tare_probing_log(t, w, tare_duration, noise)
     f_all, m_all = w[:, :3], w[:, 3:]
     fn_all = np.linalg.norm(f_all, axis=1)
 
@@ -552,7 +570,7 @@ def calibrate_fingertip(
         if compliance:
             sol["compliance_std"] = max(sol["compliance_std"], float(jk[n_shape]) * 1e-3)
         std_method = "jackknife"
-    return Calibration(tip=tip, n_skipped=n_skipped, start_shift=start_shift, std_method=std_method, **sol)
+    return Calibration(tip=tip, n_skipped=n_skipped, start_shift=start_shift, std_method=std_method, tare=tare, **sol)
 
 
 def _radius(model: PressModel, values: NDArray) -> float:

@@ -185,6 +185,8 @@ def calibrate(
     except InputError as exc:
         _fail(ctx, exc)
         return
+    for note in getattr(cal.tare, "warnings", ()):
+        click.echo(f"softtip: warning: {note}", err=True)
     if cal.warning:
         click.echo(f"softtip: warning: {cal.warning}", err=True)
     elif cal.precision_warning():
