@@ -67,6 +67,7 @@ def test_calibrate_command_writes_a_mesh_fingertip(tmp_path):
     trimesh.Trimesh(V * 1e3, F, process=False).export(tmp_path / "tip.stl")
     shift = np.array([0.3e-3, 0.2e-3, -0.4e-3])
     t, w = mesh_probing_log(shifted(shift), 16, np.random.default_rng(6))
+    w[3, 2] += 30.0  # a spike while taring: left out, and said
     cols = dict(zip(("fx", "fy", "fz", "mx", "my", "mz"), w.T))
     write_table({"t": t, **cols}, tmp_path / "probe.csv")
     out = subprocess.run(
@@ -75,7 +76,7 @@ def test_calibrate_command_writes_a_mesh_fingertip(tmp_path):
         capture_output=True, text=True, timeout=120,
     )  # fmt: skip
     assert out.returncode == 0, out.stderr
-    assert "mesh shift" in out.stdout
+    assert "mesh shift" in out.stdout and "1 spike(s) among the 40 tare samples" in out.stderr
     tip = load_fingertip(tmp_path / "tip.toml")
     assert_allclose(np.sort(tip.vertices, axis=0), np.sort(V + shift, axis=0), atol=1e-6)
     bad = subprocess.run(
@@ -119,5 +120,5 @@ def test_a_spike_while_taring_is_left_out(nominal):
     spiked = w.copy()
     spiked[3, 2] += 30.0
     clean, got = calibrate_mesh(t, w, nominal), calibrate_mesh(t, spiked, nominal)
-    assert got.n_presses == clean.n_presses == 20
+    assert got.n_presses == clean.n_presses == 20 and got.tare.spikes == 1 and clean.tare.spikes == 0
     assert_allclose(got.translation, clean.translation, atol=0.2 * np.max(clean.translation_std))

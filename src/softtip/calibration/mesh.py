@@ -31,7 +31,7 @@ The result moves the mesh: ``p_sensor = R(ω) p + t`` applied after the file's t
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -41,6 +41,7 @@ from softtip.calibration.probing import find_presses, force_spread, tare_probing
 from softtip.core._vec import tangent_basis as _tangent_basis
 from softtip.core.mesh import MeshFingertip
 from softtip.errors import InputError
+from softtip.estimator.tare import TareReport
 
 __all__ = ["MeshCalibration", "calibrate_mesh", "calibrate_mesh_file", "press_points"]
 
@@ -66,6 +67,9 @@ class MeshCalibration:
         RMS distance of the press points from the fitted skin (indentation included), m.
     tip : MeshFingertip
         The fingertip moved to the fitted pose.
+    tare : TareReport or None
+        The bias from the untouched start and its warnings
+        (:func:`~softtip.calibration.probing.tare_probing_log`); None for a tared log.
     """
 
     translation: NDArray[np.float64]
@@ -78,6 +82,7 @@ class MeshCalibration:
     n_skipped: int
     rms_residual: float
     tip: MeshFingertip
+    tare: TareReport | None = field(default=None, repr=False)
 
     def summary(self) -> str:
         t = ", ".join(f"{v * 1e3:+.3f}" for v in self.translation)
@@ -174,7 +179,7 @@ def calibrate_mesh(
     """
     t = np.asarray(t, dtype=float)
     w = np.asarray(wrench, dtype=float)
-    w, _ = tare_probing_log(t, w, tare_duration)
+    w, tare = tare_probing_log(t, w, tare_duration)
     f_norm = np.linalg.norm(w[:, :3], axis=1)
     presses, skipped = [], 0
     for idx in find_presses(f_norm, contact_threshold):
@@ -241,6 +246,7 @@ def calibrate_mesh(
         n_skipped=skipped,
         rms_residual=float(np.sqrt(np.mean(res * res))),
         tip=moved,
+        tare=tare,
     )
 
 

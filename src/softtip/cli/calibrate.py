@@ -153,6 +153,8 @@ def calibrate(
                 click.echo(cal.tip.to_toml(), nl=False)
         except InputError as exc:
             _fail(ctx, exc)
+            return
+        _tare_warnings(cal)
         return
     input_path = _example_or_log(input_path, example, units, EXAMPLE_PROBING_PATH, "probing log")
     try:
@@ -185,8 +187,7 @@ def calibrate(
     except InputError as exc:
         _fail(ctx, exc)
         return
-    for note in getattr(cal.tare, "warnings", ()):
-        click.echo(f"softtip: warning: {note}", err=True)
+    _tare_warnings(cal)
     if cal.warning:
         click.echo(f"softtip: warning: {cal.warning}", err=True)
     elif cal.precision_warning():
@@ -196,3 +197,9 @@ def calibrate(
             f"softtip: warning: {cal.noise_warning} (--force-noise {force_noise:g} N, --moment-noise {moment_noise:g} N·mm)",
             err=True,
         )
+
+
+def _tare_warnings(cal) -> None:
+    """The warnings of the calibration's tare (spikes left out, a fingertip touched while taring)."""
+    for note in cal.tare.warnings if cal.tare is not None else ():
+        click.echo(f"softtip: warning: {note}", err=True)
