@@ -73,6 +73,31 @@ def test_replay_record_matches_estimate(tmp_path):
     assert [[float(r[k + "_raw"]) for k in wrench] for r in rows] == log.wrench.tolist()
 
 
+def test_a_short_replay_runs_the_steps_as_python_with_the_compiled_bits(tmp_path):
+    """A replay of fewer than STEP_MIN_SAMPLES samples does not load numba (about 0.7 s of CPU
+    before the first sample): its recording is the one of the compiled steps to the byte."""
+    import os
+
+    runs = {}
+    for name, numba in (("python", None), ("compiled", "1")):
+        env = {k: v for k, v in os.environ.items() if k != "SOFTTIP_NUMBA"}
+        if numba is not None:
+            env["SOFTTIP_NUMBA"] = numba
+        rec = tmp_path / f"{name}.csv"
+        out = subprocess.run(
+            [sys.executable, "-X", "importtime", "-m", "softtip.cli", "stream", "--replay", EXAMPLE_PATH,
+             "--speed", "0", "--no-view", "--record", rec],
+            capture_output=True, text=True, timeout=120, env=env,
+        )  # fmt: skip
+        assert out.returncode == 0, out.stderr[-3000:]
+        imported = {line.rsplit("|", 1)[-1].strip() for line in out.stderr.splitlines() if line.startswith("import time:")}
+        rows = rec.read_text().splitlines()
+        host = rows[0].split(",").index("host_time")  # the arrival on this host: differs from run to run
+        runs[name] = ([",".join(c for k, c in enumerate(r.split(",")) if k != host) for r in rows], "numba" in imported)
+    assert runs["python"][1] is False and runs["compiled"][1] is True
+    assert len(runs["python"][0]) == 501 and runs["python"][0] == runs["compiled"][0]
+
+
 def test_a_recording_is_a_log_estimate_and_replay_read_as_it_is(tmp_path):
     rec, again = tmp_path / "rec.csv", tmp_path / "again.csv"
     out = subprocess.run(

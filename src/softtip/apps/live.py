@@ -36,6 +36,7 @@ import contextlib
 import gc
 import itertools
 import math
+import operator
 import os
 import stat
 import sys
@@ -541,7 +542,8 @@ def run(
     >>> states[-1]
     'line'
     """
-    estimator = Estimator(tip, config)
+    # a source of known length (a list, a replayed log) tells the estimator whether compiling pays
+    estimator = Estimator(tip, config, expected_samples=operator.length_hint(source) or None)
     update = estimator.update
     for item in source:
         yield update(item[0], item[1])

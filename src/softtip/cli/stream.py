@@ -211,7 +211,8 @@ def _stream(
             )
             if lowpass is not None and source.rate_hz is None:
                 raise click.UsageError("--lowpass-hz needs the sample rate, which this source does not report")
-            estimator = Estimator(fingertip, config)
+            # a short replay runs the steps as Python: loading numba would cost more (the same bits)
+            estimator = Estimator(fingertip, config, expected_samples=len(raw.t) if replay is not None else None)
             tare_request = threading.Event()
             stats = LiveStats(
                 source_name=source.name,

@@ -82,9 +82,10 @@ STEP_MIN_SAMPLES = 20_000
 
 def use_numba(n: int | None = None) -> bool:
     """Whether the step functions (:func:`lazy_jit`) run compiled: as :func:`set_jit` or
-    ``SOFTTIP_NUMBA`` say when they do; else, when numba is installed, always for a stream
-    (``n`` None) and for a batch loop over ``n`` samples from :data:`STEP_MIN_SAMPLES` on, or
-    at any length once numba is loaded in this process (the same bits either way)."""
+    ``SOFTTIP_NUMBA`` say when they do; else, when numba is installed, always for a stream of
+    unknown length (``n`` None) and for a batch loop or a stream of ``n`` samples from
+    :data:`STEP_MIN_SAMPLES` on, or at any length once numba is loaded in this process (the
+    same bits either way)."""
     forced = _state["enabled"]
     if forced is None:
         forced = _from_environment()
@@ -154,7 +155,7 @@ class _Lazy:
 
     def function(self, n: int | None = None) -> Callable:
         """What a call runs: :meth:`compiled` when numba is used (:func:`use_numba`: ``n`` the
-        samples of a batch loop, None for a stream), else :attr:`python`. A caller that calls
+        samples of a batch loop or of a stream when known, else None), else :attr:`python`. A caller that calls
         it per sample keeps this instead."""
         return self.compiled() if use_numba(n) else self.python
 

@@ -133,10 +133,10 @@ class SosStream:
 
     __slots__ = ("_sos", "_coef", "_state", "_step", "_x", "_y")
 
-    def __init__(self, sos: NDArray[np.float64]):
+    def __init__(self, sos: NDArray[np.float64], *, expected_samples: int | None = None):
         self._sos = np.asarray(sos, dtype=float)
         self._coef = sos_coefficients(sos)
-        self._step = sos_step.function()
+        self._step = sos_step.function(expected_samples)
         self._state: NDArray[np.float64] | None = None
         # load (or compile) the step now, on scratch arrays, not at the first sample of a live run
         self._step(self._coef, np.zeros((len(self._coef), 2, 6)), np.zeros(6), np.empty(6))

@@ -321,10 +321,10 @@ class ContactTracker:
     Call :meth:`step` for every sample after the tare; :meth:`reset` after a (re-)tare.
     """
 
-    def __init__(self, config: EstimatorConfig, noise: SensorNoise):
+    def __init__(self, config: EstimatorConfig, noise: SensorNoise, *, expected_samples: int | None = None):
         self.config = config
-        # compiled unless numba is off or missing (then the same source as Python)
-        self._step = contact_step.function()
+        # compiled unless numba is off or missing, or the stream is short (then the same source as Python)
+        self._step = contact_step.function(expected_samples)
         self.state = new_contact_state()
         self.set_noise(noise)
         self.reset()

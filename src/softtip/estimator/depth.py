@@ -393,14 +393,14 @@ class DepthTracker:
     """The depth of :func:`depth_points`, one sample at a time: the state record and
     :func:`depth_step` (compiled when numba is used), O(1) per sample."""
 
-    def __init__(self, config: EstimatorConfig, noise: SensorNoise, corr: float):
+    def __init__(self, config: EstimatorConfig, noise: SensorNoise, corr: float, *, expected_samples: int | None = None):
         self.config = config
         self.law = config.skin_law
         self.online = config.depth_compensation == "online"
         self._params = depth_params(config, noise, corr) if self.online else None
         self._state = new_depth_state()
         self._ring = np.empty((_RING_START, RING_COLUMNS))
-        self._step = depth_step.function() if self.online else None
+        self._step = depth_step.function(expected_samples) if self.online else None
         if self.online:  # numba loads the compiled step at its first call: here, not at the first contact
             self._step(new_depth_state(), np.empty((2, RING_COLUMNS)), self._params, 0.0, *(0.0,) * 11, 1.0, 0.0)
 

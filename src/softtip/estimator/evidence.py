@@ -84,7 +84,7 @@ from numpy.typing import NDArray
 
 from softtip.core import _xp_scalar as XS
 from softtip.core._blocks import ring_rows
-from softtip.core._jit import lazy_jit, use_numba
+from softtip.core._jit import lazy_jit
 from softtip.core._xp import NP
 from softtip.core.evidence import (
     N_SUMS,
@@ -539,12 +539,6 @@ def evidence_run(t, located, begin, point, normal, e1x, e1y, e1z, e2x, e2y, e2z,
         out[i, 0], out[i, 1], out[i, 2], out[i, 3], out[i, 4] = r[5], r[6], r[7], r[8], r[9]
 
 
-def _impl(fn, n: int | None = None):
-    """``fn`` compiled when the step functions run compiled (:func:`~softtip.core._jit.use_numba`,
-    ``n`` a batch loop's samples), else its Python source."""
-    return fn.compiled() if use_numba(n) else fn.python
-
-
 def evidence_states(t, located, begin, point, normal, h, force, ms, noise: SensorNoise, corr: float,
                     config: EstimatorConfig, depth=None, inv_radius: float = 0.0):  # fmt: skip
     """The evidence stage over a whole log: :func:`evidence_step` in one loop (:func:`evidence_run`).
@@ -591,7 +585,7 @@ def evidence_states(t, located, begin, point, normal, h, force, ms, noise: Senso
     depth = np.zeros(n) if depth is None else np.ascontiguousarray(depth, dtype=float)
     code, evidence = np.empty(n, dtype=np.int8), np.empty(n, dtype=np.int8)
     direction, out = np.empty((n, 3)), np.empty((n, 5))
-    _impl(evidence_run, len(t))(
+    evidence_run.function(len(t))(
         t, np.ascontiguousarray(located, dtype=bool), np.ascontiguousarray(begin, dtype=bool), point, normal,
         *(np.ascontiguousarray(e, dtype=float) for e in frame), depth, h, force,
         np.ascontiguousarray(ms.h_norm, dtype=float), np.ascontiguousarray(ms.h_std, dtype=float),
@@ -609,15 +603,18 @@ class EvidenceTracker:
     """The stage of :func:`evidence_states`, one sample at a time: :func:`evidence_step` on its
     state record, whose ring grows (oldest first) when a window would fill it."""
 
-    def __init__(self, config: EstimatorConfig, noise: SensorNoise, corr: float, inv_radius: float = 0.0):
+    def __init__(
+        self, config: EstimatorConfig, noise: SensorNoise, corr: float, inv_radius: float = 0.0, *,
+        expected_samples: int | None = None,
+    ):  # fmt: skip
         self.config = config
         self.noise = noise
         self.corr = corr
         self._params = evidence_params(config, noise, inv_radius)
         self._state, self._counts, self._ring, self._wconst = new_evidence_state(64, corr)
-        self._step = _impl(evidence_step)
-        self._start = _impl(evidence_start)
-        self._python = not use_numba()  # its floats read from arrays: numpy's
+        self._step = evidence_step.function(expected_samples)
+        self._start = evidence_start.function(expected_samples)
+        self._python = self._step is evidence_step.python  # its floats read from arrays: numpy's
 
     def start_segment(self) -> None:
         """At contact onset and at a re-latch: empty window, no verdict, no held direction."""

@@ -318,11 +318,11 @@ class LatchTracker:
     and handed back for reuse.
     """
 
-    def __init__(self, tip: Fingertip, config: EstimatorConfig):
+    def __init__(self, tip: Fingertip, config: EstimatorConfig, *, expected_samples: int | None = None):
         self.tip = tip
         self.config = config
         self._params = latch_params(config)
-        self._step, self._hold = latch_step.function(), latch_hold.function()
+        self._step, self._hold = latch_step.function(expected_samples), latch_hold.function(expected_samples)
         p = self._params.tolist()
         self._window = (p[_LO], p[_HI], p[_DIST2])  # latch_keeps's, as floats
         self.reset()

@@ -302,7 +302,9 @@ class LineFitTracker:
     The ring buffer of the window grows (doubling, oldest first) when full.
     """
 
-    def __init__(self, tip: Fingertip, config: EstimatorConfig, noise: SensorNoise, corr: float):
+    def __init__(
+        self, tip: Fingertip, config: EstimatorConfig, noise: SensorNoise, corr: float, *, expected_samples: int | None = None
+    ):
         self.tip = tip
         self.config = config
         self.noise = noise
@@ -313,10 +315,11 @@ class LineFitTracker:
         self._ring = np.zeros((64, 1 + N_SUMS))
         self._sums = np.zeros(N_SUMS)
         self._held: tuple[float, float, float] | None = None
+        n = expected_samples
         self._anchor_step, self._window_step, self._hold_step = (
-            line_fit_anchor_step.function(), line_fit_window_step.function(), line_fit_hold_step.function())  # fmt: skip
+            line_fit_anchor_step.function(n), line_fit_window_step.function(n), line_fit_hold_step.function(n))  # fmt: skip
         self._start_anchor, self._start_window, self._start_segment = (
-            _start_anchor.function(), _start_window.function(), line_fit_start_segment.function())  # fmt: skip
+            _start_anchor.function(n), _start_window.function(n), line_fit_start_segment.function(n))  # fmt: skip
 
     def start_contact(self) -> None:
         """At contact onset: empty sums and window."""

@@ -57,6 +57,11 @@ class Estimator:
         Fingertip, preset name or TOML path.
     config : EstimatorConfig, optional
         With ``lowpass_hz`` set, ``config.sample_rate`` is required.
+    expected_samples : int, optional
+        How many samples the stream will see, when known (a replayed log). Below
+        :data:`~softtip.core._jit.STEP_MIN_SAMPLES` the steps run as Python unless numba is loaded
+        already: loading it and the compiled steps (about 0.7 s of CPU) costs more than they save
+        (the same bits either way). None (a sensor): compiled.
 
     Attributes
     ----------
@@ -78,7 +83,11 @@ class Estimator:
     'line'
     """
 
-    def __init__(self, tip: Fingertip | str = "murakami2006", config: EstimatorConfig | None = None):
+    def __init__(
+        self, tip: Fingertip | str = "murakami2006", config: EstimatorConfig | None = None, *,
+        expected_samples: int | None = None,
+    ):  # fmt: skip
+        self._n = expected_samples
         self.tip = load_fingertip(tip)
         self.config = resolve_depth(config or EstimatorConfig(), self.tip)
         cfg = self.config
@@ -89,8 +98,8 @@ class Estimator:
             self._sos = lowpass_sos(cfg.lowpass_hz, cfg.sample_rate, cfg.lowpass_order)
         self._track = cfg.contact_point == "track"
         self._tare = StreamTare(cfg)
-        self._latch = LatchTracker(self.tip, cfg)
-        self._contacts = ContactTracker(cfg, effective_noise(cfg.noise, self._sos))
+        self._latch = LatchTracker(self.tip, cfg, expected_samples=self._n)
+        self._contacts = ContactTracker(cfg, effective_noise(cfg.noise, self._sos), expected_samples=self._n)
         self._use_noise(cfg.noise)
         self.reset()
 
@@ -101,15 +110,15 @@ class Estimator:
         cfg = self.config
         corr = noise_correlation(self._sos)
         self._noise = effective_noise(noise, self._sos)
-        self._evidence = EvidenceTracker(cfg, self._noise, corr, twist_curvature(self.tip))
+        self._evidence = EvidenceTracker(cfg, self._noise, corr, twist_curvature(self.tip), expected_samples=self._n)
         self._line_fit = None
         if cfg.contact_point == "line-fit":
-            self._line_fit = LineFitTracker(self.tip, cfg, self._noise, corr)
+            self._line_fit = LineFitTracker(self.tip, cfg, self._noise, corr, expected_samples=self._n)
         self._contacts.set_noise(self._noise)
         self._var = noise_variances(self._noise)
         self._force_var = self._var[:3]
         self._geo = PointGeometry((math.nan,) * 3, (0.0, 0.0, 1.0), self._var)  # none yet
-        self._depth = None if cfg.skin_law is None else DepthTracker(cfg, self._noise, corr)
+        self._depth = None if cfg.skin_law is None else DepthTracker(cfg, self._noise, corr, expected_samples=self._n)
 
     @property
     def bias(self) -> tuple[float, ...] | None:
@@ -135,7 +144,7 @@ class Estimator:
     def reset(self) -> None:
         """Forget everything: bias (unless given), filter state, drift, contacts."""
         self._tare.reset()
-        self._filter = SosStream(self._sos) if self._sos is not None else None
+        self._filter = SosStream(self._sos, expected_samples=self._n) if self._sos is not None else None
         self._contacts.reset()
         self._contacts.count = 0
         self._latch.reset()
@@ -161,7 +170,7 @@ class Estimator:
         if not (math.isfinite(d) and d > 0.0):
             raise ValueError(f"tare duration must be a positive number of s, got {duration!r}")
         self._tare.reset(d)
-        self._filter = SosStream(self._sos) if self._sos is not None else None
+        self._filter = SosStream(self._sos, expected_samples=self._n) if self._sos is not None else None
         self._contacts.reset()
         self._after_tare()
 
