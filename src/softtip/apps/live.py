@@ -524,7 +524,9 @@ def run(
     Parameters
     ----------
     source : iterable of (t, wrench) or Reading
-        ``t`` in s, increasing; ``wrench`` raw, shape (6,), N and N·m.
+        ``t`` in s, increasing; ``wrench`` raw, shape (6,), N and N·m. A source with a length
+        (a list) is the estimator's ``expected_samples``: below 20 000 its steps run as Python
+        unless numba is loaded already (the same bits).
     tip : Fingertip or str
         Fingertip, preset name or TOML path.
     config : EstimatorConfig, optional
