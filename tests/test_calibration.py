@@ -324,7 +324,6 @@ def _example():
     return log.t, log.wrench
 
 
-
 def test_a_spike_while_taring_is_left_out_as_the_estimators_tare_does():
     """One corrupted sample among the untouched first 0.2 s (30 N in z): the plain mean moved every
     press by 1.5 N (the example log then had 1 press instead of 30); the estimator's tare leaves
