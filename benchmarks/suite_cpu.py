@@ -24,6 +24,9 @@ from pathlib import Path
 
 _ENV = "SOFTTIP_SUITE_CPU"
 _rows: list[tuple[str, float, float, float]] = []
+#: When this pytest process loaded the plugin, its first test started and its last ended (epoch s)
+_loaded = time.time()
+_span: list[float] = []
 
 
 def _cpu() -> tuple[float, float]:
@@ -42,8 +45,11 @@ if pytest is not None:
     def pytest_runtest_protocol(item, nextitem):
         """One row per test: its own CPU, its reaped subprocesses' CPU, its wall time (s)."""
         before, start = _cpu(), time.perf_counter()
+        if not _span:
+            _span.append(time.time())
         yield
         after = _cpu()
+        _span[1:] = [time.time()]
         _rows.append((item.nodeid, after[0] - before[0], after[1] - before[1], time.perf_counter() - start))
 
     def pytest_sessionfinish(session):
@@ -53,9 +59,9 @@ if pytest is not None:
         Path(folder).mkdir(parents=True, exist_ok=True)
         own, children = _cpu()
         worker = os.environ.get("PYTEST_XDIST_WORKER", "main")
-        (Path(folder) / f"{worker}.json").write_text(
-            json.dumps({"rows": _rows, "process_cpu": own, "children_cpu": children}), encoding="utf-8"
-        )
+        record = {"rows": _rows, "process_cpu": own, "children_cpu": children, "loaded": _loaded}
+        record.update(first_test=_span[0], last_test_end=_span[-1], finished=time.time())
+        (Path(folder) / f"{worker}.json").write_text(json.dumps(record), encoding="utf-8")
 
 
 def table(folder: Path, top: int) -> str:
@@ -64,10 +70,12 @@ def table(folder: Path, top: int) -> str:
     workers = sorted(folder.glob("*.json"))
     if not workers:
         raise SystemExit(f"{folder}: no <worker>.json (run the suite with -p suite_cpu and {_ENV}={folder})")
-    busy = []
+    busy, spans = [], []
     for path in workers:
-        rows = json.loads(path.read_text(encoding="utf-8"))["rows"]
+        record = json.loads(path.read_text(encoding="utf-8"))
+        rows = record["rows"]
         busy.append(f"{path.stem} {sum(r[3] for r in rows):.0f} s")
+        spans.append((path.stem, record))
         for nodeid, own, children, seconds in rows:
             name = nodeid.split("::")[0]
             files[name] += own + children
@@ -77,6 +85,14 @@ def table(folder: Path, top: int) -> str:
     total = sum(files.values())
     lines = [f"test CPU {total:.0f} s (own + reaped subprocesses); each worker's time in tests: {', '.join(busy)}", "",
              "| file | CPU s | of it subprocesses | wall s |", "| --- | ---: | ---: | ---: |"]  # fmt: skip
+    timed = all("loaded" in r for _, r in spans)  # not in records written before it was kept
+    start = min(r["loaded"] for _, r in spans) if timed else 0.0
+    lines[1:1] = [] if not timed else [
+        "", "| worker (s from the first worker's start) | started | first test | last test ended | session ended |",
+        "| --- | ---: | ---: | ---: | ---: |",
+        *(f"| {name} | {r['loaded'] - start:.1f} | {r['first_test'] - start:.1f} | {r['last_test_end'] - start:.1f} "
+          f"| {r['finished'] - start:.1f} |" for name, r in spans),
+    ]  # fmt: skip
     lines += [f"| {f} | {c:.1f} | {sub[f]:.1f} | {wall[f]:.1f} |" for f, c in files.most_common()]
     lines += ["", f"| the {top} costliest tests | CPU s | of it subprocesses |", "| --- | ---: | ---: |"]
     lines += [f"| {n} | {c:.1f} | {s:.1f} |" for c, s, n in sorted(tests, reverse=True)[:top]]
