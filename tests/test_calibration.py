@@ -324,6 +324,22 @@ def _example():
     return log.t, log.wrench
 
 
+def test_a_probing_log_touched_while_taring_names_what_the_calibration_takes():
+    """A fingertip touched in the first 0.2 s (the force swings by ±0.1 N about its untouched level,
+    no spike; the mean, and so the presses, kept): the warning gives the calibration's remedies;
+    the estimator's ("give a bias") is not an option of calibrate."""
+    from softtip.io.tables import read_log
+
+    log = read_log(EXAMPLE_PROBING_PATH)
+    touched = log.wrench.copy()
+    first = log.t - log.t[0] < 0.2
+    touched[first, 0] += 0.1 * np.sin(4 * np.pi * (log.t[first] - log.t[0]) / 0.2)  # two whole swings
+    got = calibrate_fingertip(log.t, touched, "sphere")
+    warning = next(w for w in got.tare.warnings if "touched" in w)
+    assert "--tare-duration 0" in warning and "untouched at its start" in warning and "give a bias" not in warning
+    assert got.tare.spikes == 0
+
+
 def test_a_spike_while_taring_is_left_out_as_the_estimators_tare_does():
     """One corrupted sample among the untouched first 0.2 s (30 N in z): the plain mean moved every
     press by 1.5 N (the example log then had 1 press instead of 30); the estimator's tare leaves

@@ -416,6 +416,13 @@ def _not_excited(detail: str, model: PressModel) -> InputError:
     )
 
 
+#: A probing log touched while taring: the calibration takes no bias of its own
+PROBING_TOUCHED_REMEDY = (
+    "record the probing log again with the fingertip untouched at its start, or tare_duration 0 "
+    "(--tare-duration 0) for a log that is already tared"
+)
+
+
 def tare_probing_log(
     t: NDArray[np.float64], w: NDArray[np.float64], tare_duration: float, noise: SensorNoise = NANO17
 ) -> tuple[NDArray[np.float64], TareReport | None]:
@@ -425,7 +432,8 @@ def tare_probing_log(
     (None, and ``w`` as it is, when ``tare_duration`` is 0: the log is already tared)."""
     if not tare_duration > 0:
         return w, None
-    tare = tare_from_samples(w[t - t[0] < tare_duration], EstimatorConfig(noise=noise, tare_duration=tare_duration))
+    config = EstimatorConfig(noise=noise, tare_duration=tare_duration)
+    tare = tare_from_samples(w[t - t[0] < tare_duration], config, touched_remedy=PROBING_TOUCHED_REMEDY)
     return w - tare.bias, tare
 
 

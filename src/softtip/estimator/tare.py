@@ -44,6 +44,7 @@ from softtip.tomlfile import read_toml_table
 __all__ = [
     "SPIKE_SIGMAS",
     "TOUCHED_RATIO",
+    "TOUCHED_REMEDY",
     "NOISE_MIN_SAMPLES",
     "TareReport",
     "noise_in_use",
@@ -59,6 +60,8 @@ __all__ = [
 SPIKE_SIGMAS = 8.0
 #: The tare's noise this many times the noise model: the fingertip was touched while taring.
 TOUCHED_RATIO = 5.0
+#: What a fingertip touched while taring leaves the user to do, for the estimator's inputs
+TOUCHED_REMEDY = "tare again untouched, give a bias, or tare_duration 0 for an input that is already tared"
 #: The tare's noise below this share of the noise model on every axis, over at least
 #: :data:`OVERSTATED_MIN_SAMPLES` samples (its standard deviation then known to about 13 %):
 #: the model overstates the sensor's noise, and the summary says so.
@@ -215,7 +218,9 @@ def _given(config: EstimatorConfig) -> TareReport:
     return TareReport(np.zeros(6), "none", config.tare_method, 0, 0.0)
 
 
-def tare_from_samples(samples: NDArray, config: EstimatorConfig, duration: float | None = None) -> TareReport:
+def tare_from_samples(
+    samples: NDArray, config: EstimatorConfig, duration: float | None = None, *, touched_remedy: str = TOUCHED_REMEDY
+) -> TareReport:
     """The bias of the tare samples ``samples`` (k, 6), with its checks.
 
     Parameters
@@ -226,6 +231,10 @@ def tare_from_samples(samples: NDArray, config: EstimatorConfig, duration: float
         ``tare_method``, the noise model and, for the joint-mode check, ``contact_point``.
     duration : float, optional
         s of the tare (default ``config.tare_duration``), for the messages.
+    touched_remedy : str
+        What to do when the samples vary beyond the noise model (a fingertip touched while
+        taring), in that warning's parentheses: the caller's own options (default the
+        estimator's, :data:`TOUCHED_REMEDY`).
     """
     s = np.asarray(samples, dtype=float).reshape(-1, 6)
     duration = config.tare_duration if duration is None else float(duration)
@@ -268,7 +277,7 @@ def tare_from_samples(samples: NDArray, config: EstimatorConfig, duration: float
                 f"the {name} varied by {np.nanmax(std[sl]) * fmt:.3g} {unit} (standard deviation) while taring, "
                 f"{np.nanmax(r):.3g} times the noise model ({np.max(model[sl]) * fmt:g} {unit}): was the fingertip "
                 f"touched in the first {duration:g} s? The bias, and every estimate, would then be wrong "
-                "(tare again untouched, give a bias, or tare_duration 0 for an input that is already tared)"
+                f"({touched_remedy})"
             )
     measured = None
     if config.noise_from_tare:
