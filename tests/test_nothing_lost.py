@@ -267,6 +267,45 @@ def test_reproduce_ends_its_pool_on_a_signal(tmp_path, signals):
     assert sorted(p.name for p in tmp_path.iterdir()) == []
 
 
+_SIGNAL_IN_THE_FOLDERS_MAKING = """
+import os, signal, sys
+from multiprocessing import process, util
+from softtip.apps.pool import start_pool
+
+class Stop(Exception):
+    pass
+
+def stop(*_):
+    raise Stop
+
+signal.signal(signal.SIGTERM, stop)
+info = util.info
+def info_then_a_signal(msg, *args):  # called between the folder's mkdtemp and multiprocessing's note of it
+    info(msg, *args)
+    if msg.startswith("created temp directory"):
+        os.kill(os.getpid(), signal.SIGTERM)
+util.info = info_then_a_signal
+try:
+    start_pool(1, int)
+except Stop:
+    print("stopped", process.current_process()._config.get("tempdir"))
+"""
+
+
+@needs_proc
+def test_a_signal_while_the_pools_folder_is_made_leaves_no_folder(short_tmp):
+    """SIGTERM right after multiprocessing made its ``pymp-*`` folder and before it noted it (seen
+    once in a full run, a pool's start stopped at that moment under load): the signal waits until
+    the folder is noted, so the exit handlers remove it; no folder is left in the temporary folder
+    (a short one: under a long one the folder is made in /tmp)."""
+    tmp = short_tmp
+    out = subprocess.run([sys.executable, "-c", _SIGNAL_IN_THE_FOLDERS_MAKING], capture_output=True, text=True,
+                         timeout=60, env={**os.environ, "TMPDIR": str(tmp)})  # fmt: skip
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.startswith(f"stopped {tmp}/pymp-"), out.stdout  # handled after multiprocessing noted it
+    assert sorted(p.name for p in tmp.iterdir()) == []
+
+
 @pytest.fixture
 def short_tmp():
     """An empty folder with a short path (removed after the test)."""

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import signal
 import sys
 import tempfile
 import time
@@ -26,7 +27,7 @@ def start_pool(jobs: int, initializer, initargs: tuple = ()) -> ProcessPoolExecu
     """
     import multiprocessing
 
-    _short_socket_folder()
+    _socket_folder()
     ctx = multiprocessing.get_context("forkserver")
     ctx.set_forkserver_preload(["softtip.apps._worker_preload"])
     pool = ProcessPoolExecutor(max_workers=jobs, mp_context=ctx, initializer=initializer, initargs=initargs)
@@ -45,29 +46,36 @@ _SOCKET_PATH_MAX = 103
 _SOCKET_SUFFIX = len("/pymp-XXXXXXXX/listener-XXXXXXXX")
 
 
-def _short_socket_folder() -> None:
+def _socket_folder() -> None:
     """Make multiprocessing's private folder (``pymp-*``, which holds the forkserver's Unix
-    socket) in a folder with a short path when the temporary folder's is too long for a socket
-    address: a long ``TMPDIR`` would otherwise stop every pool with ``AF_UNIX path too long``.
-    The folder is multiprocessing's own (mode 0700, removed at exit, and on a signal by
-    :func:`softtip.io.interrupt.exit_now`)."""
+    socket) now, with the termination signals held until multiprocessing has noted it: a signal
+    between the folder's creation and that note (``multiprocessing.util.get_temp_dir``) would
+    leave it behind, known neither to multiprocessing's exit handler nor to
+    :func:`softtip.io.interrupt.exit_now`, which remove it. Held, the signal is handled right
+    after, and the folder goes with the run.
+
+    The folder is made in a folder with a short path when the temporary folder's is too long for
+    a socket address: a long ``TMPDIR`` would otherwise stop every pool with ``AF_UNIX path too
+    long`` (mode 0700, multiprocessing's own)."""
     from multiprocessing import process, util
 
     if process.current_process()._config.get("tempdir") is not None:
         return  # made already: its path was checked then
     base = tempfile.gettempdir()
-    if len(os.fsencode(base)) + _SOCKET_SUFFIX <= _SOCKET_PATH_MAX:
-        return
-    for short in ("/tmp", "/var/tmp", "/dev/shm", os.path.expanduser("~")):
-        fits = len(os.fsencode(short)) + _SOCKET_SUFFIX <= _SOCKET_PATH_MAX
-        if fits and os.path.isdir(short) and os.access(short, os.W_OK | os.X_OK):
-            saved, tempfile.tempdir = tempfile.tempdir, short
-            try:
-                util.get_temp_dir()  # made in ``short`` and remembered for this process
-            finally:
-                tempfile.tempdir = saved
-            return
-    # no short folder is writable: multiprocessing's own message names the limit
+    if len(os.fsencode(base)) + _SOCKET_SUFFIX > _SOCKET_PATH_MAX:
+        shorts = ("/tmp", "/var/tmp", "/dev/shm", os.path.expanduser("~"))
+        fits = (d for d in shorts if len(os.fsencode(d)) + _SOCKET_SUFFIX <= _SOCKET_PATH_MAX)
+        base = next((d for d in fits if os.path.isdir(d) and os.access(d, os.W_OK | os.X_OK)), None)
+        if base is None:
+            return  # no short folder is writable: multiprocessing's own message names the limit
+    held = {getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name)}
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, held)
+    saved, tempfile.tempdir = tempfile.tempdir, base
+    try:
+        util.get_temp_dir()  # made in ``base`` and remembered for this process
+    finally:
+        tempfile.tempdir = saved
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
 
 
 def end_pool(pool: ProcessPoolExecutor, timeout: float = 5.0) -> None:
