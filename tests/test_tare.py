@@ -10,6 +10,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from softtip import Estimator, EstimatorConfig, InputError, axial_difference, estimate
@@ -17,7 +19,7 @@ from softtip.apps.live import KeyReader, run_live
 from softtip.core.noise import NANO17, SensorNoise
 from softtip.estimator.contact import contact_thresholds
 from softtip.estimator.results import EstimatorWarning
-from softtip.estimator.tare import bias_to_toml, load_bias, tare_from_samples
+from softtip.estimator.tare import StreamTare, bias_to_toml, load_bias, tare_from_samples, tare_log
 from softtip.sim.synthetic import synthetic_grasp
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
@@ -48,6 +50,22 @@ def spiked_grasp(seed=1, spike=-20.0, at=5):
     w = g.wrench.copy()
     w[at, 2] += spike  # one sample of the 0.2 s tare
     return g, w
+
+
+@settings(max_examples=60, deadline=None)
+@given(t0=st.floats(-1e4, 1e4, allow_nan=False), rate=st.sampled_from([10.0, 50.0, 100.0, 1000.0, 7000.0]),
+       periods=st.integers(1, 50))  # fmt: skip
+def test_the_tare_takes_duration_times_rate_samples_from_any_start(t0, rate, periods):
+    # stamps are not exact in binary: from t0 = 1.3 s at 10 Hz a bare t - t0 < 1 took the
+    # sample at 2.3 s (0.9999999999999998 s after t0) into a 1 s tare, and not from t0 = 0
+    duration = periods / rate
+    t = t0 + np.arange(periods + 5) / rate
+    w = np.zeros((len(t), 6))
+    config = EstimatorConfig(tare_duration=duration)
+    assert tare_log(t, w, config).taring.sum() == periods
+    stream = StreamTare(config)
+    assert sum(stream.update(float(ti), list(wi)) is None for ti, wi in zip(t, w)) == periods
+    assert stream.report.n_samples == periods
 
 
 @pytest.mark.parametrize("method", ["robust", "median"])

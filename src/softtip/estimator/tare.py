@@ -4,8 +4,9 @@ Unless a bias is given, the samples in the first ``tare_duration`` seconds make 
 (``tare_method``: ``robust``, the default, the mean of those that are not spikes;
 ``median``, per component; ``mean``, of all); those samples are reported as ``none``
 (``taring``). :func:`tare_log` does it for a whole log,
-:class:`StreamTare` one sample at a time; both use the same comparison
-``t − t₀ < tare_duration`` so they agree on the boundary sample, and the same
+:class:`StreamTare` one sample at a time; both take a sample by the same
+comparison, :func:`in_tare` (``t − t₀`` short of ``tare_duration`` by more than
+:data:`TIME_TOLERANCE`), so they agree on the boundary sample, and the same
 :func:`tare_from_samples`, which also checks the samples against the noise model
 (:class:`TareReport`):
 
@@ -46,6 +47,8 @@ __all__ = [
     "TOUCHED_RATIO",
     "TOUCHED_REMEDY",
     "NOISE_MIN_SAMPLES",
+    "TIME_TOLERANCE",
+    "in_tare",
     "TareReport",
     "noise_in_use",
     "tare_from_samples",
@@ -62,6 +65,11 @@ SPIKE_SIGMAS = 8.0
 TOUCHED_RATIO = 5.0
 #: What a fingertip touched while taring leaves the user to do, for the estimator's inputs
 TOUCHED_REMEDY = "tare again untouched, give a bias, or tare_duration 0 for an input that is already tared"
+#: s: a sample this close to the end of the tare is on the end (not the tare's). Time stamps are
+#: not exact in binary: at 10 Hz from ``t₀ = 1.3`` s the sample at 2.3 s is ``0.9999999999999998``
+#: s after ``t₀``, so a bare ``t − t₀ < 1`` took 11 samples into a 1 s tare there and 10 from 0 s.
+#: A nanosecond is below any F/T sensor's clock and far above the rounding of stamps under 10⁶ s.
+TIME_TOLERANCE = 1e-9
 #: The tare's noise below this share of the noise model on every axis, over at least
 #: :data:`OVERSTATED_MIN_SAMPLES` samples (its standard deviation then known to about 13 %):
 #: the model overstates the sensor's noise, and the summary says so.
@@ -74,6 +82,12 @@ _AXES = ("fx", "fy", "fz", "mx", "my", "mz")
 
 
 _LABELS = {"robust": "mean without spikes", "median": "median", "mean": "mean"}
+
+
+def in_tare(elapsed, duration: float):
+    """Whether a sample ``elapsed`` s after the tare's first (s; float or array) is one of the
+    tare's ``duration`` s: ``elapsed < duration − TIME_TOLERANCE``, for the batch and the stream."""
+    return elapsed < duration - TIME_TOLERANCE
 
 
 @dataclass(frozen=True)
@@ -317,7 +331,7 @@ def tare_log(t: NDArray, w: NDArray, config: EstimatorConfig) -> LogTare:
     if config.bias is not None or config.tare_duration <= 0 or not n:
         rep = _given(config)
         return LogTare(rep.bias, taring, rep)
-    n_tare = int(np.count_nonzero(t - t[0] < config.tare_duration))
+    n_tare = int(np.count_nonzero(in_tare(t - t[0], config.tare_duration)))
     taring[:n_tare] = True
     rep = tare_from_samples(w[:n_tare], config)
     if n_tare == n:
@@ -373,7 +387,7 @@ class StreamTare:
             return self.bias
         if self._t0 is None:
             self._t0 = t
-        if t - self._t0 < self._duration:
+        if in_tare(t - self._t0, self._duration):
             self.samples.append(tuple(w))
             return None
         self.report = tare_from_samples(np.array(self.samples), self.config, self._duration)
