@@ -84,7 +84,7 @@ _AXES = ("fx", "fy", "fz", "mx", "my", "mz")
 _LABELS = {"robust": "mean without spikes", "median": "median", "mean": "mean"}
 
 
-def in_tare(elapsed, duration: float):
+def in_tare(elapsed: float | NDArray[np.float64], duration: float) -> bool | NDArray[np.bool_]:
     """Whether a sample ``elapsed`` s after the tare's first (s; float or array) is one of the
     tare's ``duration`` s: ``elapsed < duration − TIME_TOLERANCE``, for the batch and the stream."""
     return elapsed < duration - TIME_TOLERANCE
