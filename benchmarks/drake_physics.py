@@ -108,7 +108,10 @@ Truth that differs from softtip's simulator: ``pressure_centre`` is on the conta
 is NaN (not available); ``depth`` is the largest pressure over ``E / R``.
 
 Logs are cached on disk (``benchmarks/.cache/drake/<hash>.npz``, the noise-free wrench and
-the truth; the noise is drawn on loading) because a log takes 5–450 s.
+the truth; the noise is drawn on loading) because a log takes 5–450 s. The key holds this
+file's own source (:data:`HARNESS`): a log is simulated again whenever the harness changed,
+so no figure comes from a log an older harness made (a version number bumped by hand was
+once left behind: the two-physics page quoted an old log of the 15 mm plate for a while).
 """
 
 from __future__ import annotations
@@ -155,8 +158,9 @@ DRAKE_MISSING = (
 )
 #: Where simulated logs are cached.
 CACHE_DIR = Path(__file__).resolve().parent / ".cache" / "drake"
-#: Bumped whenever the simulation changes what it computes (invalidates the cache).
-_MODEL_VERSION = 3
+#: This file's source, hashed: part of every cache key, so that editing the harness
+#: invalidates the logs it made (a comment too: simulating again is cheaper than a stale figure).
+HARNESS = hashlib.sha256(Path(__file__).read_bytes()).hexdigest()[:16]
 _FTOL = 5e-5  # N: force tolerance of the quasi-static solve (the sensor resolves 6 mN)
 _FTOL_JUMP = 5e-3  # N: residual accepted where the piecewise-linear force jumps (a mesh face enters)
 _STEP_MAX = 5e-4  # m: largest Newton step of an offset
@@ -449,7 +453,7 @@ def _tip_key(tip: Fingertip) -> dict:
 
 
 def _cache_key(tip, obj, scenario, rate, settings) -> str:
-    payload = {"v": _MODEL_VERSION, "tip": _tip_key(tip), "obj": obj.describe(), "scenario": scenario.as_dict(),
+    payload = {"harness": HARNESS, "tip": _tip_key(tip), "obj": obj.describe(), "scenario": scenario.as_dict(),
                "rate": rate, **settings}  # fmt: skip
     text = json.dumps(payload, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:24]
