@@ -2,6 +2,7 @@
 schema checked against excerpts of ros2/rosbag2's sources (tests/data/rosbag2/<branch>.txt);
 ROS 1 bags; markers; frame_id; gravity from /tf. No ROS installation is used."""
 
+import csv
 import re
 import sqlite3
 import subprocess
@@ -292,12 +293,26 @@ def test_cli_distro_and_frame_id(tmp_path):
     out = run("estimate", "--example", "--to-bag", tmp_path / "one.bag", "-q")
     assert out.returncode == 0, out.stderr
     assert (tmp_path / "one.bag").read_bytes()[:13] == b"#ROSBAG V2.0\n"
-    with reader(tmp_path / "one.bag") as r:  # t = 0 recorded at ros::TIME_MIN, its stamp kept
-        first = next((t, r.deserialize(d, c.msgtype)) for c, t, d in r.messages() if c.topic == "/softtip/wrench_raw")
-    assert first[0] == 1 and (first[1].header.stamp.sec, first[1].header.stamp.nanosec) == (0, 0)
+    with reader(tmp_path / "one.bag") as r:  # the log moved to start at ros::TIME_MIN, stamps and record times alike
+        raw = [(t, r.deserialize(d, c.msgtype).header.stamp) for c, t, d in r.messages() if c.topic == "/softtip/wrench_raw"]
+    assert [t for t, _ in raw] == [st.sec * 10**9 + st.nanosec for _, st in raw] == (1 + np.rint(load_example().t * 1e9)).tolist()
     out = run("estimate", "--example", "--to-bag", tmp_path / "x.bag", "--ros-distro", "humble")
     assert out.returncode == 2 and "ROS 1 bag, but --ros-distro humble" in out.stderr, out.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["j", "one.bag"]
+
+
+@pytest.mark.parametrize("distro", ["noetic", "jazzy"])
+def test_a_bag_of_the_example_estimates_as_its_csv_does(tmp_path, distro):
+    # a ROS 1 bag's first sample once kept header stamp 0 beside a 1 ns record time: read back,
+    # the others sat 1 ns early, and the windows' edges moved angle_std_deg by up to 2.4°
+    bag = tmp_path / ("x.bag" if distro == "noetic" else "x")
+    assert run("estimate", "--example", "--to-bag", bag, "--ros-distro", distro, "-q").returncode == 0
+    out = [run("estimate", *src, "-q", "-o", tmp_path / f"{name}.csv")
+           for name, src in (("csv", ["--example"]), ("bag", [bag, "--topic", "/softtip/wrench_raw"]))]  # fmt: skip
+    assert all(o.returncode == 0 for o in out), [o.stderr for o in out]
+    plain, back = (list(csv.DictReader((tmp_path / f"{n}.csv").read_text().splitlines())) for n in ("csv", "bag"))
+    assert set(back[0]) - set(plain[0]) == {"stamp_ns"}
+    assert [{k: r[k] for k in plain[0]} for r in back] == plain  # the same text, column by column
 
 
 # --- gravity from /tf ---------------------------------------------------------------------

@@ -38,9 +38,11 @@ from softtip.core.units import UNIT_SYSTEMS, wrench_to_si
 from softtip.errors import InputError
 from softtip.estimator import STATES
 from softtip.estimator import estimate as run_estimate
+from softtip.estimator.columns import TOPICS
 from softtip.estimator.columns import help_text as column_help
 from softtip.estimator.results import EstimatorWarning
 from softtip.estimator.tare import bias_to_toml
+from softtip.ros import MARKER_TOPIC
 
 __all__ = ["estimate"]
 
@@ -80,9 +82,10 @@ INPUT may also be a ROS bag (rosbag2 directory with sqlite3 or MCAP storage, a .
 geometry_msgs/msg/WrenchStamped messages of --topic, timed by header.stamp (t counts
 from the first message; the stamps are copied to a stamp_ns column). --to-bag
 writes the estimates as a bag --ros-distro plays (default humble: rosbag2 metadata version
-5, sqlite3; a name ending in .bag: ROS 1) with standard messages on /softtip/state,
-/softtip/contact_point, /softtip/normal, /softtip/edge_direction, /softtip/wrench and RViz
-markers on /softtip/markers, plus the raw wrench, all with --frame-id; with --to-bag and
+5, sqlite3; a name ending in .bag: ROS 1) with standard messages on """
+    + ", ".join(t.name for t in TOPICS if t.in_bag)
+    + f""" and RViz
+markers on {MARKER_TOPIC}, plus the raw wrench, all with --frame-id; with --to-bag and
 no -o no CSV is written. With --payload, --gravity-frame takes the sensor's orientation
 from the bag's /tf.
 

@@ -379,6 +379,7 @@ def write_estimates_bag(
         est.direction.tolist(),
     )
     with BagWriter(dest, distro) as bag:
+        stamps = bag.stamps(stamps)
         msg = bag.message
 
         def wrench_msg(h, w):

@@ -37,6 +37,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from softtip.errors import InputError
 
@@ -44,6 +45,7 @@ __all__ = [
     "DEFAULT_DISTRO",
     "DISTROS",
     "HUMBLE_SQLITE_SCHEMA",
+    "ROS1_TIME_MIN",
     "BagFormat",
     "BagWriter",
     "bag_format",
@@ -88,6 +90,8 @@ DISTROS: dict[str, BagFormat] = {
     "noetic": BagFormat("noetic", 1, "rosbag1", None, None, "ROS1_NOETIC"),
 }
 DEFAULT_DISTRO = "humble"
+#: ns: ROS 1's ``ros::TIME_MIN``; rosbag refuses, and its views skip, record times before it
+ROS1_TIME_MIN = 1
 
 #: The sqlite3 database of a Humble bag: ``SqliteStorage::initialize`` of rosbag2's ``humble``
 #: branch (``rosbag2_storage_default_plugins/src/rosbag2_storage_default_plugins/sqlite/
@@ -215,6 +219,19 @@ class BagWriter:
         message definitions; fields not given take their defaults (0, "", empty)."""
         return _build(self.typestore, msgtype, fields, self._defaults)
 
+    def stamps(self, stamps_ns: ArrayLike) -> NDArray[np.int64]:
+        """The stamps (ns) as this bag writes them, header stamps and record times alike.
+
+        A ROS 1 bag cannot record before :data:`ROS1_TIME_MIN`, and a header stamp of 0 reads
+        as "not stamped" (:func:`softtip.io.bag.read_bag` then takes the record time): a log
+        that starts before it (a CSV log's ``t = 0``) is moved later as a whole, so that its
+        first sample is not 1 ns apart from the others when read back. Elsewhere unchanged.
+        """
+        s = np.asarray(stamps_ns, dtype=np.int64)
+        if self.format.ros_version == 1 and len(s) and s.min() < ROS1_TIME_MIN:
+            return s + (ROS1_TIME_MIN - s.min())
+        return s
+
     def header(self, stamp_ns: int, frame_id: str) -> Any:
         """A ``std_msgs/msg/Header`` (ROS 1's ``seq`` left 0)."""
         stamp = self.message("builtin_interfaces/msg/Time", sec=int(stamp_ns // 1_000_000_000), nanosec=int(stamp_ns % 1_000_000_000))
@@ -305,9 +322,9 @@ class BagWriter:
         if self.format.storage == "sqlite3":
             self._impl.execute("INSERT INTO messages (timestamp, topic_id, data) VALUES (?, ?, ?)", (int(stamp_ns), conn, data))
         elif self.format.ros_version == 1:
-            # ROS 1's rosbag refuses, and its views skip, record times before ros::TIME_MIN (1 ns):
-            # a CSV log's first sample (t = 0) is recorded at 1 ns; its header stamp stays 0
-            self._impl.write(conn, max(int(stamp_ns), 1), data)
+            # rosbag refuses record times before ros::TIME_MIN; a log's stamps are moved as a
+            # whole by stamps(), this only keeps a caller's stray 0 writable
+            self._impl.write(conn, max(int(stamp_ns), ROS1_TIME_MIN), data)
         else:
             self._impl.write(conn, int(stamp_ns), data)
         self._counts[key] += 1

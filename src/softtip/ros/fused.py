@@ -219,6 +219,7 @@ def write_fused_bag(
     poses = fused_poses(fused, fingers[0].estimates.state_names == "line")
     labels = [" ".join(w for w in words if w) for words in zip(fused.grasp_names.tolist(), fused.evidence.tolist(), fused.flag.tolist())]
     with BagWriter(dest, distro) as bag:
+        stamps = bag.stamps(stamps)
         msg = bag.message
         topic = {
             key: bag.add_topic(FUSED_TOPICS[key], msgtype)
