@@ -331,7 +331,7 @@ def _significance(state, counts, ring, params, t, hn, thr):
         counts[_N_VOTE] += 1
         counts[_N_ABOVE] += 1 if side == 1 else 0
         counts[_N_BELOW] += 1 if side == 0 else 0
-        start = t - params[_VOTE_WINDOW]
+        start = t - params[_VOTE_WINDOW] + 1e-6
         while counts[_N_VOTE] > 1:
             j = _oldest(counts, ring, counts[_N_VOTE])
             if ring[j, _R_T] > start:
@@ -425,7 +425,7 @@ def evidence_step(state, counts, ring, params, wconst, t, px, py, pz, nx, ny, nz
         state[_CUM + q] = state[_CUM + q] + prods[q]
     # the evidence window: the segment's samples with t_i > t − evidence_window; its sums are
     # differences of the running sums
-    start = t - params[_WINDOW]
+    start = t - params[_WINDOW] + 1e-6
     n = counts[_N_WIN] + 1
     while n > 0 and ring[_oldest(counts, ring, n), _R_T] <= start:
         n -= 1

@@ -160,7 +160,7 @@ def line_fit_window_step(state, ring, t, window, prods, sums):  # pragma: no cov
         ring[k, 1 + q] = state[_CUM + q]
         state[_CUM + q] = state[_CUM + q] + prods[q]
     count += 1
-    start = t - window
+    start = t - window + 1e-6
     while count > 0 and ring[head, 0] <= start:
         head = (head + 1) % cap
         count -= 1
