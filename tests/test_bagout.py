@@ -315,6 +315,16 @@ def test_a_bag_of_the_example_estimates_as_its_csv_does(tmp_path, distro):
     assert [{k: r[k] for k in plain[0]} for r in back] == plain  # the same text, column by column
 
 
+@pytest.mark.parametrize("name", ["out.mcap", "out.bag", "out.DB3"])
+def test_o_refuses_a_bags_name_and_says_to_bag(tmp_path, name):
+    # -o writes tables: a bag's name used to get CSV text (exit 0), unreadable as the bag it looks like
+    out = run("estimate", "--example", "-o", tmp_path / name)
+    assert out.returncode == 2 and "named like a ROS bag" in out.stderr and f"--to-bag {tmp_path / name}" in out.stderr
+    replay = run("stream", "--replay", load_example().source, "--speed", "0", "-o", tmp_path / name)
+    assert replay.returncode == 2 and "named like a ROS bag" in replay.stderr and "--to-bag" not in replay.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
 # --- gravity from /tf ---------------------------------------------------------------------
 
 

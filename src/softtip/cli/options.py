@@ -333,7 +333,25 @@ def check_outputs(inputs, outputs) -> None:
 
     outputs = list(outputs)
     check_output_names(outputs)
+    check_table_names(outputs)
     check_distinct(inputs, outputs)
+
+
+def check_table_names(outputs) -> None:
+    """Exit 2 when ``-o`` (a table: CSV, or Parquet / Arrow IPC by its name where the command
+    writes them) is named like a ROS bag, which it would otherwise fill with CSV text; the
+    remedy names ``--to-bag`` where the command has it."""
+    from softtip.io.bag import BAG_SUFFIXES
+
+    labels = [label for label, _ in outputs]
+    for label, path in outputs:
+        if label != "-o" or path is None or Path(os.fspath(path)).suffix.lower() not in BAG_SUFFIXES:
+            continue
+        remedy = f"; a bag is written by --to-bag {path}" if "--to-bag" in labels else ""
+        raise click.BadParameter(
+            f"{path} is named like a ROS bag, but -o writes a table (CSV unless --help says otherwise), not a bag; "
+            f"expected another name{remedy}", param_hint="'-o'",
+        )  # fmt: skip
 
 
 def check_output_names(outputs) -> None:

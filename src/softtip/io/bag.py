@@ -62,7 +62,8 @@ WRENCH_TYPE = "geometry_msgs/msg/WrenchStamped"
 TOPICS = ROS_TOPICS
 #: Topic of the raw wrench in an output bag when the input was not a bag.
 DEFAULT_RAW_TOPIC = "/softtip/wrench_raw"
-_BAG_SUFFIXES = (".bag", ".mcap", ".db3")
+#: A file named so is read as a bag (:func:`is_bag`); ``-o`` refuses such a name (softtip.cli)
+BAG_SUFFIXES = (".bag", ".mcap", ".db3")
 
 
 def is_bag(path: str | os.PathLike[str]) -> bool:
@@ -72,7 +73,7 @@ def is_bag(path: str | os.PathLike[str]) -> bool:
         return (p / "metadata.yaml").is_file() or any(
             q.suffix in (".mcap", ".db3") for q in p.iterdir()
         )
-    return p.suffix.lower() in _BAG_SUFFIXES
+    return p.suffix.lower() in BAG_SUFFIXES
 
 
 @dataclass(frozen=True, eq=False)
