@@ -40,6 +40,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from softtip.core._blocks import TIME_EDGE
 from softtip.core._jit import lazy_jit, use_numba
 from softtip.core.noise import SensorNoise
 from softtip.estimator.config import EstimatorConfig
@@ -183,11 +184,11 @@ def contact_step(state, params, t, dt, x0, x1, x2, x3, x4, x5):  # pragma: no co
     elif pending == pending:  # pending (not NaN)
         if f < off:
             state[_T_PENDING] = math.nan
-        elif (t - pending) + dt >= params[_MIN_DUR]:
+        elif (t - pending) + dt >= params[_MIN_DUR] - TIME_EDGE:
             code = 2
     elif f >= on:
         state[_T_PENDING] = t
-        if dt >= params[_MIN_DUR]:  # (t − t) + dt
+        if dt >= params[_MIN_DUR] - TIME_EDGE:  # (t − t) + dt
             code = 2
     if code == 2:
         state[_T_PENDING] = math.nan
@@ -378,7 +379,7 @@ def first_contact_pulls(t: NDArray, pulling: NDArray, contact_id: NDArray) -> bo
         return False
     lead = pulling[idx]
     run = len(lead) if lead.all() else int(np.argmin(lead))
-    return run > 0 and bool(t[idx[run - 1]] - t[idx[0]] >= START_PULL_TIME)
+    return run > 0 and bool(t[idx[run - 1]] - t[idx[0]] >= START_PULL_TIME - TIME_EDGE)
 
 
 def started_in_contact_message(config: EstimatorConfig) -> str:

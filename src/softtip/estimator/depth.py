@@ -52,7 +52,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from softtip.core import _xp_scalar as XS
-from softtip.core._blocks import ring_capacity
+from softtip.core._blocks import TIME_EDGE, ring_capacity
 from softtip.core._jit import jitable, lazy_jit
 from softtip.core._xp import NP, PY
 from softtip.core.depth import (
@@ -312,7 +312,7 @@ def depth_step(state, ring, params, t, fx, fy, fz, mx, my, mz, rx, ry, rz, nx, n
     prods = depth_products(fx, fy, fz, mx, my, mz, state[_FRAME : _FRAME + 12], d0)
     for q in range(N_DEPTH_SUMS):
         state[_CUM + q] = state[_CUM + q] + prods[q]
-    start = t - params[_WINDOW] + 1e-6
+    start = t - params[_WINDOW] + TIME_EDGE
     while count > 0 and ring[head, 0] <= start:
         head += 1
         if head == cap:
@@ -320,7 +320,7 @@ def depth_step(state, ring, params, t, fx, fy, fz, mx, my, mz, rx, ry, rz, nx, n
         count -= 1
     state[_HEAD] = head
     state[_COUNT] = count
-    cell = float(math.floor((t - state[_T_SEG] + 1e-6) / params[_CELL_STEP]))
+    cell = float(math.floor((t - state[_T_SEG] + TIME_EDGE) / params[_CELL_STEP]))
     if cell != state[_CELL]:  # on the grid of the segment (NaN: its first sample)
         state[_CELL] = cell
         _solve(state, ring, params, t, head, count)

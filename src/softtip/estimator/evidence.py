@@ -83,7 +83,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from softtip.core import _xp_scalar as XS
-from softtip.core._blocks import ring_rows
+from softtip.core._blocks import TIME_EDGE, ring_rows
 from softtip.core._jit import lazy_jit
 from softtip.core._xp import NP
 from softtip.core.evidence import (
@@ -248,9 +248,9 @@ def _stated(params, t):
     """The evidence window ending at ``t`` lies wholly inside a stated two-axis rocking
     interval (:attr:`EstimatorConfig.rocked`: its start ``t − evidence_window`` at or after
     the interval's start, ``t`` at or before its end)."""
-    start = t - params[_WINDOW]
+    start = t - params[_WINDOW] + TIME_EDGE
     for k in range(int(params[_N_ROCKED])):
-        if start >= params[_ROCKED + 2 * k] and t <= params[_ROCKED + 2 * k + 1]:
+        if start >= params[_ROCKED + 2 * k] and t - TIME_EDGE <= params[_ROCKED + 2 * k + 1]:
             return True
     return False
 
@@ -331,7 +331,7 @@ def _significance(state, counts, ring, params, t, hn, thr):
         counts[_N_VOTE] += 1
         counts[_N_ABOVE] += 1 if side == 1 else 0
         counts[_N_BELOW] += 1 if side == 0 else 0
-        start = t - params[_VOTE_WINDOW] + 1e-6
+        start = t - params[_VOTE_WINDOW] + TIME_EDGE
         while counts[_N_VOTE] > 1:
             j = _oldest(counts, ring, counts[_N_VOTE])
             if ring[j, _R_T] > start:
@@ -425,7 +425,7 @@ def evidence_step(state, counts, ring, params, wconst, t, px, py, pz, nx, ny, nz
         state[_CUM + q] = state[_CUM + q] + prods[q]
     # the evidence window: the segment's samples with t_i > t − evidence_window; its sums are
     # differences of the running sums
-    start = t - params[_WINDOW] + 1e-6
+    start = t - params[_WINDOW] + TIME_EDGE
     n = counts[_N_WIN] + 1
     while n > 0 and ring[_oldest(counts, ring, n), _R_T] <= start:
         n -= 1

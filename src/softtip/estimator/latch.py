@@ -31,6 +31,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from softtip.core._blocks import TIME_EDGE
 from softtip.core._jit import jitable, lazy_jit
 from softtip.core._xp import NP, PY
 from softtip.core.fingertip import Fingertip
@@ -194,7 +195,7 @@ def latch_step(state, params, onset, t, f_norm, have_sc, valid, rx, ry, rz):  # 
     code = NONE
     mx = my = mz = nan
     fallback = False
-    if rising and (f_norm > hi or t - state[_T_PEAK] > params[_STALL]):
+    if rising and (f_norm > hi or t - state[_T_PEAK] > params[_STALL] + TIME_EDGE):
         rising = False
         state[_RISING] = 0.0
         n = state[_N_WIN]

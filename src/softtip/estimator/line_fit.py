@@ -35,7 +35,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
-from softtip.core._blocks import BLOCK, ring_rows
+from softtip.core._blocks import BLOCK, TIME_EDGE, ring_rows
 from softtip.core._jit import jitable, lazy_jit
 from softtip.core._xp import NP, PY
 from softtip.core.depth import depth_kernel
@@ -160,7 +160,7 @@ def line_fit_window_step(state, ring, t, window, prods, sums):  # pragma: no cov
         ring[k, 1 + q] = state[_CUM + q]
         state[_CUM + q] = state[_CUM + q] + prods[q]
     count += 1
-    start = t - window + 1e-6
+    start = t - window + TIME_EDGE
     while count > 0 and ring[head, 0] <= start:
         head = (head + 1) % cap
         count -= 1

@@ -19,6 +19,7 @@ from math import isfinite, sqrt
 import numpy as np
 from numpy.typing import ArrayLike
 
+from softtip.core._blocks import TIME_EDGE
 from softtip.core._xp import PY
 from softtip.core.filtering import SosStream, lowpass_sos
 from softtip.core.fingertip import Fingertip, load_fingertip
@@ -268,7 +269,7 @@ class Estimator:
             return
         if self._t_pull is None:
             self._t_pull = t
-        if t - self._t_pull >= START_PULL_TIME:
+        if t - self._t_pull >= START_PULL_TIME - TIME_EDGE:
             self._lead = False
             self.started_in_contact = True
             self._warn(started_in_contact_message(self.config))

@@ -6,7 +6,7 @@ Unless a bias is given, the samples in the first ``tare_duration`` seconds make 
 (``taring``). :func:`tare_log` does it for a whole log,
 :class:`StreamTare` one sample at a time; both take a sample by the same
 comparison, :func:`in_tare` (``t − t₀`` short of ``tare_duration`` by more than
-:data:`TIME_TOLERANCE`), so they agree on the boundary sample, and the same
+:data:`~softtip.core._blocks.TIME_EDGE`), so they agree on the boundary sample, and the same
 :func:`tare_from_samples`, which also checks the samples against the noise model
 (:class:`TareReport`):
 
@@ -36,6 +36,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from softtip.core._blocks import TIME_EDGE
 from softtip.core.line_fit import MODEL_MARGIN
 from softtip.core.noise import SensorNoise
 from softtip.errors import InputError
@@ -47,7 +48,6 @@ __all__ = [
     "TOUCHED_RATIO",
     "TOUCHED_REMEDY",
     "NOISE_MIN_SAMPLES",
-    "TIME_TOLERANCE",
     "in_tare",
     "TareReport",
     "noise_in_use",
@@ -65,11 +65,6 @@ SPIKE_SIGMAS = 8.0
 TOUCHED_RATIO = 5.0
 #: What a fingertip touched while taring leaves the user to do, for the estimator's inputs
 TOUCHED_REMEDY = "tare again untouched, give a bias, or tare_duration 0 for an input that is already tared"
-#: s: a sample this close to the end of the tare is on the end (not the tare's). Time stamps are
-#: not exact in binary: at 10 Hz from ``t₀ = 1.3`` s the sample at 2.3 s is ``0.9999999999999998``
-#: s after ``t₀``, so a bare ``t − t₀ < 1`` took 11 samples into a 1 s tare there and 10 from 0 s.
-#: A nanosecond is below any F/T sensor's clock and far above the rounding of stamps under 10⁶ s.
-TIME_TOLERANCE = 1e-9
 #: The tare's noise below this share of the noise model on every axis, over at least
 #: :data:`OVERSTATED_MIN_SAMPLES` samples (its standard deviation then known to about 13 %):
 #: the model overstates the sensor's noise, and the summary says so.
@@ -86,8 +81,11 @@ _LABELS = {"robust": "mean without spikes", "median": "median", "mean": "mean"}
 
 def in_tare(elapsed: float | NDArray[np.float64], duration: float) -> bool | NDArray[np.bool_]:
     """Whether a sample ``elapsed`` s after the tare's first (s; float or array) is one of the
-    tare's ``duration`` s: ``elapsed < duration − TIME_TOLERANCE``, for the batch and the stream."""
-    return elapsed < duration - TIME_TOLERANCE
+    tare's ``duration`` s: ``elapsed < duration − TIME_EDGE`` (a sample at the end is not), for
+    the batch and the stream. Time stamps are not exact in binary: at 10 Hz from ``t₀ = 1.3`` s
+    the sample at 2.3 s is ``0.9999999999999998`` s after ``t₀``, so a bare ``t − t₀ < 1`` took 11
+    samples into a 1 s tare there and 10 from 0 s."""
+    return elapsed < duration - TIME_EDGE
 
 
 @dataclass(frozen=True)
