@@ -772,7 +772,7 @@ def test_csv_extra_column_named_like_an_output_is_renamed_with_a_warning(tmp_pat
     src.write_text("\n".join(lines) + "\n")
     r = run("estimate", src, "-o", tmp_path / "out.csv", timeout=60)
     assert r.returncode == 0, r.stderr
-    assert "written as 'input_state'" in r.stderr and "written as 'input_input_state'" in r.stderr
+    assert "'state' -> 'input_state'" in r.stderr and "'input_state' -> 'input_input_state'" in r.stderr
     import csv
 
     with open(tmp_path / "out.csv", newline="") as fh:
