@@ -457,6 +457,38 @@ def test_damaged_foreign_logs_read_or_fail_cleanly(tmp_path_factory, name: str, 
     assert all(len(v) == len(log.t) for v in log.extra.values())
 
 
+@pytest.mark.parametrize("row", [0, 250, 499])
+@pytest.mark.parametrize(("part", "cell"), [
+    ("sec", "1700000000e12"), ("sec", "1700000000.5"), ("sec", "-1700000000"),
+    ("nanosec", "183456789e12"), ("nanosec", "183456789.5"), ("nanosec", "1183456789"), ("nanosec", "-1"),
+])  # fmt: skip
+@pytest.mark.parametrize("missing", ["fail", "drop"])
+def test_a_split_stamp_part_out_of_range_is_located(tmp_path: Path, row: int, part: str, cell: str, missing: str) -> None:
+    """A ROS stamp's seconds or nanoseconds that are not whole, negative, beyond int64 nanoseconds or
+    (nanoseconds) a second or more: a located error on any row, never a wrapped or truncated stamp."""
+    lines = (DATA / "ros2_topic_echo.csv").read_text().splitlines()
+    cells = lines[row].split(",")
+    cells[0 if part == "sec" else 1] = cell
+    lines[row] = ",".join(cells)
+    path = tmp_path / "stamps.csv"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(InputError, match=rf"^{path}:{row + 1}: column 'header\.stamp\.{part}': expected whole "
+                       rf"{'seconds' if part == 'sec' else 'nanoseconds'} from 0 to .*got '{cell}'"):  # fmt: skip
+        read_log(path, missing=missing)
+
+
+def test_a_split_stamp_part_out_of_range_in_pieces_exits_2(tmp_path: Path) -> None:
+    lines = (DATA / "ros2_topic_echo.csv").read_text().splitlines()
+    cells = lines[-1].split(",")
+    cells[1] += "0"  # the last row's nanoseconds ×10: beyond a second
+    lines[-1] = ",".join(cells)
+    path = tmp_path / "stamps.csv"
+    path.write_text("\n".join(lines) + "\n")
+    done = run("estimate", path, "--chunk-rows", 100, "-o", tmp_path / "out.csv")
+    assert done.returncode == 2 and f"{path}:{len(lines)}: column 'header.stamp.nanosec'" in done.stderr, done.stderr
+    assert not (tmp_path / "out.csv").exists()
+
+
 def test_bag_converter_header_stamp_in_secs_and_nsecs(tmp_path: Path) -> None:
     """bagpy/rosbags exports: the header stamp (secs + nsecs, exact), not the recording Time."""
     ros2 = (DATA / "ros2_topic_echo.csv").read_text().splitlines()

@@ -219,3 +219,17 @@ def test_a_stopped_replay_ends_at_once_with_every_row(tmp_path):
     summary = run_live(src, Estimator(), recorder=rec, stop=stop)
     assert time.monotonic() - t0 < 1.5 and summary.reason == "interrupt"
     assert summary.samples == 1 and len(read_rows(tmp_path / "r.csv")) == 1
+
+
+def test_estimating_a_recording_says_its_renamed_columns_in_one_line(tmp_path):
+    # a recording holds softtip's own output columns: estimating it again renames them all to
+    # input_NAME, which took one warning line per column (46)
+    rec = tmp_path / "rec.csv"
+    r = subprocess.run([SOFTTIP, "stream", "--replay", str(EXAMPLE_PATH), "--speed", "0", "-o", str(rec)],
+                       capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    r = subprocess.run([SOFTTIP, "estimate", str(rec), "-o", str(tmp_path / "again.csv")], capture_output=True, text=True,
+                       timeout=120)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    lines = [line for line in r.stderr.splitlines() if "named like" in line]
+    assert len(lines) == 1 and "input columns are named like output columns" in lines[0] and "'state' -> 'input_state'" in lines[0]

@@ -665,8 +665,12 @@ def _output_columns(est, extra, output_units: str, carried=(), notes: list[str] 
     names = extra_names(list(columns), list(extra))
     for name, values in extra.items():
         columns[names[name]] = placeholder(len(est)) if name in carried else _column(values)
-        if notes is not None and names[name] != name:
-            notes.append(f"input column {name!r} is named like an output column; written as {names[name]!r}")
+    renamed = [name for name in extra if names[name] != name]
+    if notes is not None and len(renamed) == 1:
+        notes.append(f"input column {renamed[0]!r} is named like an output column; written as {names[renamed[0]]!r}")
+    elif notes is not None and renamed:  # one line, not one per column (a recording of softtip's own has dozens)
+        notes.append(f"{len(renamed)} input columns are named like output columns and written as input_NAME: "
+                     + ", ".join(f"{n!r} -> {names[n]!r}" for n in renamed))  # fmt: skip
     return columns
 
 

@@ -1027,7 +1027,10 @@ def _parse_arrow(
     elif "nanosec" in index:
         if any(c.null_count for c in (wanted[0], wanted[-1])):
             return None  # the text parser words (or drops) it
-        t = np.array(wanted[0].to_numpy(), dtype=np.int64) * 1_000_000_000 + np.array(wanted[-1].to_numpy(), dtype=np.int64)
+        sec, nsec = np.array(wanted[0].to_numpy(), dtype=np.int64), np.array(wanted[-1].to_numpy(), dtype=np.int64)
+        if not (_split_stamp_valid("t", sec).all() and _split_stamp_valid("nanosec", nsec).all()):
+            return None  # the text parser words it
+        t = sec * 1_000_000_000 + nsec
     else:
         t = np.array(wanted[0].to_numpy(zero_copy_only=False), dtype=np.float64)
     wrench = np.empty((n, 6))
@@ -1358,6 +1361,17 @@ def _roles(index: Mapping[str, int]) -> list[str]:
     return [r for r in (*ROLES, "nanosec") if r in index]
 
 
+#: A stamp split in seconds and nanoseconds (ROS): whole seconds that int64 nanoseconds hold
+#: (to 2262), whole nanoseconds below a second.
+_SPLIT_STAMP = {"t": (9.2e9, "whole seconds from 0 to 9.2e9"), "nanosec": (1e9, "whole nanoseconds from 0 to 999999999")}
+
+
+def _split_stamp_valid(role: str, value: Any) -> Any:
+    """Whether ``value`` (a number or an array) is a valid ``role`` part of a split stamp."""
+    v = np.asarray(value)
+    return (v >= 0) & (v < _SPLIT_STAMP[role][0]) & (v == np.floor(v))
+
+
 def _combine_time(block: NDArray[np.float64], roles: list[str]) -> NDArray[Any]:
     """``t`` of a block: its first column, or seconds and nanoseconds combined as int64 ns."""
     if "nanosec" not in roles:
@@ -1416,6 +1430,8 @@ def _parse_fast(
             t = block[:, 0]
             if not np.isfinite(block).all() or t[0] < last_t or (np.diff(t) < 0).any():
                 raise _Suspect(previous)  # from the previous block: t's predecessor is there
+            if "nanosec" in roles and not all(_split_stamp_valid(r, block[:, roles.index(r)]).all() for r in _SPLIT_STAMP):
+                raise _Suspect(previous)
             if reader.line_num - current[1] != n_read:  # a record spans lines
                 if any(_swallowed(c, header.delimiter, ncol) for j in extra_idx for c in cols[j]):
                     raise _Suspect(previous)
@@ -1555,6 +1571,11 @@ def _parse_careful(
                 continue
             if not math.isfinite(value):
                 raise InputError(f"{where}: expected a finite number, got {cell!r}{fix if math.isnan(value) else ''}")
+            if "nanosec" in index and name in _SPLIT_STAMP and not _split_stamp_valid(name, value):
+                raise InputError(
+                    f"{where}: expected {_SPLIT_STAMP[name][1]} (the stamp is split in seconds and nanoseconds), "
+                    f"got {cell.strip()!r}; if this column is not a stamp's part, map the columns with --columns"
+                )
             if name == "t":
                 if value < last_t:
                     raise InputError(
