@@ -518,6 +518,7 @@ def test_the_vote_changes_nothing_at_50_hz_and_delays_a_clear_line_by_at_most_it
     st.floats(0.0, 0.1),
 )
 def test_the_vote_counts_only_located_samples_of_the_segment_in_the_window(rows, window):
+    from softtip.core._blocks import TIME_EDGE
     from softtip.estimator.evidence import evidence_states
 
     # |h| on a side of the threshold h_min (h_std 0): above it, below its leaving share, or
@@ -544,7 +545,8 @@ def test_the_vote_counts_only_located_samples_of_the_segment_in_the_window(rows,
         if window <= 0.0:
             vote = side[i]
         else:
-            mine = [j for j in range(seg_start[i], i) if located[j] and t[j] > t[i] - window] + [i]
+            # a sample within TIME_EDGE of the window's start is on its edge: out
+            mine = [j for j in range(seg_start[i], i) if located[j] and t[j] > t[i] - window + TIME_EDGE] + [i]
             n1 = sum(side[j] == 1 for j in mine)
             n0 = sum(side[j] == 0 for j in mine)
             vote = 1 if n1 > 0.5 * len(mine) else (0 if n0 > 0.5 * len(mine) else -1)
