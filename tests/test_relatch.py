@@ -92,7 +92,9 @@ LATCH_CASES = {
     "tight-relatch-nail": (_sliding, EstimatorConfig(relatch_distance=0.3e-3), NAIL),
     "taps": (taps_log, EstimatorConfig(relatch_distance=3e-3), "murakami2006"),
     # the rise stalls before the light-force window: a fallback latch, re-latched at light force
-    "stall-fallback-relatch": (_grasp, EstimatorConfig(stall_time=0.02, relatch_distance=1e-3), "murakami2006"),
+    # (a stall time under the 50 Hz period: one sample without a new peak stalls; at exactly one
+    # period a sample sits on the stall's edge, which does not count)
+    "stall-fallback-relatch": (_grasp, EstimatorConfig(stall_time=0.015, relatch_distance=1e-3), "murakami2006"),
     # a window no sample falls in: every latch is a fallback one
     "fallback-nail": (_sliding, EstimatorConfig(latch_window=(0.01, 0.02), fallback_samples=3), NAIL),
 }
