@@ -261,6 +261,15 @@ def _finish(
             raise InputError(f"{source}: every row has an empty or nan cell; expected at least one complete row")
         if np.isnan(wrench).any():
             raise InputError(f"{source}: a wrench column has no value at all; expected at least one number in each")
+    if len(t) > 1 and (t == t[0]).all():  # no time at all: every window would hold the whole log
+        t_name = names[header.index["t"]]
+        others = [n for j, n in enumerate(names) if j != header.index["t"] and re.search("time|stamp", n, re.IGNORECASE)]
+        raise InputError(
+            f"{source}: column {t_name!r}: every one of the {len(t)} stamps is {t[0]}; expected stamps that increase "
+            "(a driver that never fills the header stamp writes 0). If another column holds the time, map it: "
+            + (f"--columns t={others[0]}" if len(others) == 1 else
+               f"--columns t=NAME{' (named like a time here: ' + ', '.join(map(repr, others)) + ')' if others else ''}")
+        )
     # time: unit and origin
     tunit = cmap.units["t"] if cmap is not None else get_unit("s", "time")
     if "nanosec" in header.index or header.t_in_ns:
@@ -285,6 +294,8 @@ def _finish(
                 f"first stamp a date (give --time-units to say otherwise)"
             )
     if ABSOLUTE_STAMP_S <= start < 1e10:  # from 1973 to 2286 in Unix time
+        if t.dtype.kind == "f" and tunit.name != "s" and np.abs(t).max() < 2.0**53 and (t == np.floor(t)).all():
+            t = t.astype(np.int64)  # whole ms or µs read as floats: exact as integers (ms × 1e6 is not in float64)
         if t.dtype.kind in "iu":
             ns = t * round(tunit.si * 1e9)
             t_s = seconds_from_ns(ns)
@@ -1081,6 +1092,9 @@ def _end_of_content(data: bytes) -> int:
 # A force/torque log is sampled at this many Hz or more, and at most this many (ATI's
 # Net F/T streams 7 kHz; DAQ systems some tens of kHz).
 _PLAUSIBLE_RATE_HZ = (2.0, 100e3)
+#: Hz: below this a t read in seconds is also a sensor's rate read in milliseconds (7 Hz or
+#: 7 kHz, an ATI Net F/T's rate): with no unit given, the run asks which
+_AMBIGUOUS_RATE_HZ = 20.0
 _TIME_UNITS = (("milliseconds", 1e-3, "ms"), ("microseconds", 1e-6, "us"), ("nanoseconds", 1e-9, "ns"))
 
 
@@ -1123,6 +1137,12 @@ def _time_notes(
                 f"{source}: column 't': median step {median:.6g} s, i.e. {rate:.3g} samples/s: implausible for a "
                 f"force/torque log (expected {low:g} Hz to {high / 1e3:g} kHz with t in seconds){guess}. "
                 "Give t in seconds: the tare duration and every time window are in seconds"
+            )
+        elif rate < _AMBIGUOUS_RATE_HZ and not explicit:
+            notes.append(
+                f"{source}: column 't': median step {median:.6g}: {rate:.4g} Hz if t is in seconds, {rate * 1e3:.4g} Hz "
+                "if in milliseconds, and no unit in the header says which (a force/torque sensor may stream at "
+                "either): give --time-units s or --time-units ms"
             )
     return n_repeated, notes
 
