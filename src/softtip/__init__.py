@@ -14,7 +14,6 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:  # the names, for readers and type checkers; at run time :func:`__getattr__` imports them
     from softtip.apps.live import run
     from softtip.core.axial import axial_difference, axial_mean, axial_median
-    from softtip.core.lever import check_wrench_units
     from softtip.core.fingertip import (
         PRESETS,
         Capsule,
@@ -25,6 +24,7 @@ if TYPE_CHECKING:  # the names, for readers and type checkers; at run time :func
         load_fingertip,
         murakami2006,
     )
+    from softtip.core.lever import check_wrench_units
     from softtip.core.location import Contact, contact_from_wrench
     from softtip.core.mesh import MeshFingertip
     from softtip.core.mounting import Mounted
