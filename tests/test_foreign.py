@@ -529,3 +529,54 @@ def test_the_pandas_example_of_the_input_formats_page_runs() -> None:
 
     log = read_log(Path(__file__).parent / "data" / "foreign" / "ati_ms_n_nmm.csv")
     assert int(run.stdout.split()[-1]) == int(np.sum(estimate(log.t, log.wrench).state_names == "line"))
+
+
+# --------------------------------------------------------------------------------------
+# time columns a user's recorder gets wrong (an outsider's files)
+
+
+def _with_t(tmp_path: Path, name: str, cells: list[str], header: str = "t") -> Path:
+    lines = REFERENCE.read_text().splitlines()
+    path = tmp_path / name
+    rows = [f"{c},{ln.split(',', 1)[1]}" for c, ln in zip(cells, lines[1:])]
+    path.write_text("\n".join([f"{header},fx,fy,fz,mx,my,mz", *rows]) + "\n")
+    return path
+
+
+@pytest.mark.parametrize("rate_hz", [3000.0, 7000.0, 19000.0])
+def test_ms_stamps_at_a_sensor_rate_without_a_unit_stop_the_command(tmp_path: Path, rate_hz: float) -> None:
+    """t in ms at 3–19 kHz reads as 3–19 Hz in seconds, as plausible a rate on its face: before, the
+    one-sample tare and the drift tracker swallowed a grasp (no contact, exit 0). Now the command
+    asks for the unit, and runs when told."""
+    n = len(REFERENCE.read_text().splitlines()) - 1
+    path = _with_t(tmp_path, "ms.csv", [f"{k * 1e3 / rate_hz:.6f}" for k in range(n)])
+    done = run("estimate", path, "-o", tmp_path / "o.csv")
+    assert done.returncode == 2 and not (tmp_path / "o.csv").exists(), done.stderr
+    assert f"{rate_hz / 1e3:.4g} Hz if t is in seconds, {rate_hz:.4g} Hz if in milliseconds" in done.stderr, done.stderr
+    assert "give --time-units s or --time-units ms" in done.stderr
+    told = run("estimate", path, "--time-units", "ms", "-o", tmp_path / "o.csv")
+    assert told.returncode == 0, told.stderr
+    assert read_log(path, time_units="ms").t[-1] == pytest.approx((n - 1) / rate_hz, rel=1e-5)
+    # a log above 20 Hz in seconds is read as it is
+    assert not any("--time-units" in w for w in read_log(_with_t(tmp_path, "s.csv", [f"{k / 25.0:.6f}" for k in range(n)])).warnings)
+
+
+def test_a_stamp_column_that_never_changes_stops_naming_the_time_column(tmp_path: Path) -> None:
+    """A driver that never fills header.stamp writes 0 on every row (rostopic echo -p keeps %time)."""
+    lines = (DATA / "rostopic_echo_p.csv").read_text().splitlines()
+    rows = [ln.split(",") for ln in lines[1:]]
+    for row in rows:
+        row[2] = "0"
+    path = tmp_path / "stamp0.csv"
+    path.write_text("\n".join([lines[0], *(",".join(r) for r in rows)]) + "\n")
+    with pytest.raises(InputError, match=rf"column 'field\.header\.stamp': every one of the {len(rows)} stamps is 0; .*--columns t=%time$"):
+        read_log(path)
+    assert len(read_log(path, columns="t=%time").t) == len(rows)
+
+
+def test_whole_millisecond_dates_are_exact_in_nanoseconds(tmp_path: Path) -> None:
+    """1700000000123 ms is 1700000000123000000 ns exactly (its float times 1e6 is 64 ns off)."""
+    n = len(REFERENCE.read_text().splitlines()) - 1
+    log = read_log(_with_t(tmp_path, "ms.csv", [str(1700000000123 + 20 * k) for k in range(n)]))
+    assert log.extra["stamp_ns"][:2] == ["1700000000123000000", "1700000000143000000"]
+    np.testing.assert_array_equal(log.t, read_log(REFERENCE).t)

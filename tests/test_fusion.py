@@ -185,6 +185,25 @@ def simulated(tmp_path_factory):
     return g, out
 
 
+def test_fuse_stops_on_impossible_units_as_estimate_does(simulated, tmp_path):
+    """One finger's moments in N·mm read as N·m: exit 2 naming that file, nothing written (the options'
+    units apply to both logs; a header's unit is per file)."""
+    g, out = simulated
+    lines = (out / "grasp/left.csv").read_text().splitlines()
+    head = lines[0].split(",")
+    moments = [head.index(c) for c in ("mx", "my", "mz")]
+    rows = [ln.split(",") for ln in lines[1:]]
+    for row in rows:
+        for j in moments:
+            row[j] = repr(float(row[j]) * 1e3)
+    left = tmp_path / "left_nmm.csv"
+    left.write_text("\n".join([lines[0], *(",".join(r) for r in rows)]) + "\n")
+    done = _run("fuse", out / "grasp/right.csv", left, "--hand", out / "grasp/hand.toml", "-o", tmp_path / "f.csv")
+    assert done.returncode == 2, done.stderr
+    assert f"softtip: error: {left}: the forces act " in done.stderr and "fingertip reaches only" in done.stderr, done.stderr
+    assert not (tmp_path / "f.csv").exists()
+
+
 def test_fuse_command_on_csv_and_on_a_bag_agree(simulated):
     g, out = simulated
     a = _run(

@@ -277,7 +277,13 @@ def test_missing_header_hints(tmp_path: Path) -> None:
     assert read_log(semicolons).wrench.tolist() == [[1, 2, 3, 4, 5, 6]]
     commented = _write(tmp_path, "# t,fx,fy,fz,mx,my,mz\n0,1,2,3,4,5,6\n", "b.csv")
     assert _error(commented).startswith(f"{commented}:2: missing columns 't', 'fx',")
-    assert _error(commented).endswith("Line 1 looks like the header commented out with '#'; remove the '#'." + COLUMNS_HINT)
+    assert _error(commented).endswith(
+        "Line 1 looks like the header commented out with '#'; remove the '#', or read the columns by position: "
+        "--columns t=1,fx=2,fy=3,fz=4,mx=5,my=6,mz=7." + COLUMNS_HINT
+    )
+    assert read_log(commented, columns="t=1,fx=2,fy=3,fz=4,mx=5,my=6,mz=7").wrench.tolist() == [[1, 2, 3, 4, 5, 6]]
+    spaces = _write(tmp_path, "t fx fy fz mx my mz\n0 1 2 3 4 5 6\n", "s.csv")
+    assert "The header looks space-separated; softtip reads comma, tab or semicolon delimiters" in _error(spaces)
     no_header = _write(tmp_path, "0,1,2,3,4,5,6\n", "c.csv")
     assert _error(no_header).endswith(
         "Line 1 looks like data; expected the header row first (a file without one: give the columns by position, "
@@ -295,6 +301,35 @@ def test_duplicate_column(tmp_path: Path) -> None:
 def test_wrong_number_of_cells(tmp_path: Path, row: str, got: int) -> None:
     path = _write(tmp_path, f"{HEADER}\n0,1,2,3,4,5,6\n{row}\n0.2,1,2,3,4,5,6\n")
     assert _error(path) == f"{path}:3: expected 7 cells (one per header column), got {got}"
+
+
+def test_a_trailing_delimiter_and_a_footer_are_named(tmp_path: Path) -> None:
+    rows = "0,1,2,3,4,5,6,\n0.1,1,2,3,4,5,6,\n"
+    path = _write(tmp_path, f"{HEADER}\n{rows}", "comma.csv")
+    assert _error(path) == (
+        f"{path}:2: expected 7 cells (one per header column), got 8; its last cell is empty: a delimiter at the end "
+        "of each row that the header lacks? Remove it"
+    )
+    for footer, got in (("# end of recording", 1), ("Total samples: 2", 1), ("stopped, 2 samples", 2)):
+        path = _write(tmp_path, f"{HEADER}\n0,1,2,3,4,5,6\n0.1,1,2,3,4,5,6\n{footer}\n\n", "footer.csv")
+        assert _error(path) == (
+            f"{path}:4: expected 7 cells (one per header column), got {got}; this is the file's last line: a footer "
+            "after the data, or a row cut short? Delete it"
+        )
+
+
+def test_clock_times_and_utf16_are_named(tmp_path: Path) -> None:
+    path = _write(tmp_path, f"{HEADER}\n12:03:04.000,1,2,3,4,5,6\n", "clock.csv")
+    assert _error(path) == (
+        f"{path}:2: column 't': expected a number, got '12:03:04.000'; clock times (hh:mm:ss) are not read: give t "
+        "in seconds, or map a column of seconds or stamps with --columns t=NAME"
+    )
+    utf16 = tmp_path / "u16.txt"
+    utf16.write_bytes(f"{HEADER}\n0,1,2,3,4,5,6\n".encode("utf-16"))  # with its byte-order mark, as Excel writes
+    assert _error(utf16) == (
+        f"{utf16}:1: not valid UTF-8 (byte 0xff at byte offset 0) (a UTF-16 file: it starts with UTF-16's byte-order "
+        'mark, as Excel\'s "Unicode text" writes); expected a UTF-8 text file (re-save it as UTF-8)'
+    )
 
 
 def test_non_numeric_cell(tmp_path: Path) -> None:

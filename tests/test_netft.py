@@ -214,6 +214,11 @@ def test_strict_ends_the_session_on_the_named_fault(tmp_path):
     assert "device status word 0x80010000 (fatal: --strict status)" in out.stderr
     rows = read_rows(rec)  # what came before is kept
     assert 250 <= len(rows) <= 299 and int(rows[-1]["seq"]) == 299
+    # the session's counters as at any end, then the error as the last line
+    lines = out.stderr.strip().splitlines()
+    (end,) = [ln for ln in lines if "ended by the fault below" in ln]
+    assert end.startswith(f"softtip: {len(rows)} samples in ") and " duplicates, " in end, end
+    assert lines[-1].startswith("softtip: error: ") and "fatal: --strict status" in lines[-1]
     out = subprocess.run([*stream_args(dev, "--strict", "statuss")], capture_output=True, text=True, timeout=30)
     assert out.returncode == 2 and "--strict: unknown fault(s) statuss" in out.stderr
 

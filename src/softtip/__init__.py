@@ -24,6 +24,7 @@ if TYPE_CHECKING:  # the names, for readers and type checkers; at run time :func
         load_fingertip,
         murakami2006,
     )
+    from softtip.core.lever import check_wrench_units
     from softtip.core.location import Contact, contact_from_wrench
     from softtip.core.mesh import MeshFingertip
     from softtip.core.mounting import Mounted
@@ -50,6 +51,7 @@ _HOMES = {
     **dict.fromkeys(("axial_difference", "axial_mean", "axial_median"), "softtip.core.axial"),
     **dict.fromkeys(("PRESETS", "Capsule", "Ellipsoid", "Fingertip", "ImplicitSurface", "Sphere", "load_fingertip",
                      "murakami2006"), "softtip.core.fingertip"),
+    "check_wrench_units": "softtip.core.lever",
     **dict.fromkeys(("Contact", "contact_from_wrench"), "softtip.core.location"),
     "MeshFingertip": "softtip.core.mesh",
     "Mounted": "softtip.core.mounting",
@@ -113,6 +115,7 @@ __all__ = [
     "axial_difference",
     "axial_mean",
     "axial_median",
+    "check_wrench_units",
     "contact_from_wrench",
     "direction_angle",
     "direction_angle_std",

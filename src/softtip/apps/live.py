@@ -499,7 +499,8 @@ class KeyReader:
 
 @dataclass
 class LiveSummary:
-    """How a live run ended. ``reason``: ``end`` (source exhausted), ``duration``, ``interrupt``.
+    """How a live run ended. ``reason``: ``end`` (source exhausted), ``duration``, ``interrupt``,
+    or ``fault`` (the source raised, e.g. a fault named in ``--strict`` or ``--timeout``).
 
     ``counters`` has every counter of :meth:`LiveStats.totals`; ``warnings`` the source's.
     """
@@ -512,6 +513,22 @@ class LiveSummary:
     last: SampleEstimate | None
     counters: dict[str, int] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
+
+    @classmethod
+    def of(cls, stats: LiveStats, reason: str) -> LiveSummary:
+        """The summary of a run whose counters are ``stats``, ended for ``reason``."""
+        seconds = time.monotonic() - stats.started if stats.started is not None else 0.0
+        totals = stats.totals()
+        return cls(
+            stats.received,
+            totals["lost"],
+            totals["dropped"],
+            seconds,
+            reason,
+            stats.latest,
+            totals,
+            list(stats.warnings()) if stats.warnings else [],
+        )
 
 
 def run(
@@ -652,15 +669,4 @@ def run_live(
         finally:
             if view is not None:
                 view.stop()  # after the recorder, so the last screen shows every row
-    seconds = time.monotonic() - stats.started if stats.started is not None else 0.0
-    totals = stats.totals()
-    return LiveSummary(
-        stats.received,
-        totals["lost"],
-        totals["dropped"],
-        seconds,
-        reason,
-        stats.latest,
-        totals,
-        list(stats.warnings()) if stats.warnings else [],
-    )
+    return LiveSummary.of(stats, reason)

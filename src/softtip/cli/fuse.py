@@ -11,6 +11,7 @@ import numpy as np
 from softtip.cli.bag_options import bag_output_options, output_frame_id
 from softtip.cli.options import (
     check_figure_path,
+    check_units,
     estimator_options,
     log_format_kwargs,
     log_format_options,
@@ -176,6 +177,9 @@ def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, 
         raise click.UsageError(str(exc)) from None
     for finger in fingers:
         tare_warnings(finger.estimates, name=finger.name)
+    if len(inputs) == 2:  # units the files say or the options give: checked as `estimate` checks them
+        for finger, log, path in zip(fingers, read, inputs):
+            check_units(finger.estimates, fingertip, config, log, source=str(path))
     truth = None
     if truth_file:
         from softtip.fusion.viz import read_truth

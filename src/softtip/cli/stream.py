@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import sys
 import warnings
+from typing import TYPE_CHECKING
 
 import click
 
@@ -23,6 +24,10 @@ from softtip.core.fingertip import load_fingertip
 from softtip.core.fullscale import FullScale, check_full_scale
 from softtip.core.units import UNIT_SYSTEMS
 from softtip.estimator.results import EstimatorWarning
+
+if TYPE_CHECKING:
+    from softtip.apps.live import LiveSummary
+    from softtip.estimator import Estimator
 
 __all__ = ["stream"]
 
@@ -157,7 +162,7 @@ def _stream(
     import signal
     import threading
 
-    from softtip.apps.live import KeyReader, LiveStats, Recorder, TerminalView, run_live
+    from softtip.apps.live import KeyReader, LiveStats, LiveSummary, Recorder, TerminalView, run_live
     from softtip.estimator import Estimator
     from softtip.io.sources import Interrupted, LogSource, SourceError
 
@@ -176,7 +181,7 @@ def _stream(
     # recording stays complete, on a whole line
     stop_signals = [signal.SIGINT, signal.SIGTERM] + ([signal.SIGHUP] if hasattr(signal, "SIGHUP") else [])
     previous = {sig: signal.signal(sig, lambda *_: stop.set()) for sig in stop_signals}
-    source = None
+    source = stats = estimator = None
     try:
         try:
             if replay is not None:
@@ -254,8 +259,11 @@ def _stream(
             click.echo("softtip: interrupted before the first sample; nothing recorded", err=True)
             return
         except SourceError as exc:
-            for w in getattr(source, "warnings", None) or []:
-                click.echo(f"softtip: warning: {source.name}: {w}", err=True)
+            if stats is not None and estimator is not None:  # the session ran: its counters as at any end
+                _report(LiveSummary.of(stats, "fault"), source.name, estimator, record)
+            else:
+                for w in getattr(source, "warnings", None) or []:
+                    click.echo(f"softtip: warning: {source.name}: {w}", err=True)
             click.echo(f"softtip: error: {exc}", err=True)
             if logger is not None:
                 logger.close()  # written out before it is put in place
@@ -268,13 +276,19 @@ def _stream(
             source.close()
         if recorder is not None:
             recorder.close()
+    _report(summary, source.name, estimator, record)
+
+
+def _report(summary: LiveSummary, name: str, estimator: Estimator, record: str | None) -> None:
+    """The end of a session on standard error: the source's warnings, the counters, the tare and
+    the estimator's warnings (also when a fault ended it, before the error)."""
     for w in summary.warnings:
-        click.echo(f"softtip: warning: {source.name}: {w}", err=True)
+        click.echo(f"softtip: warning: {name}: {w}", err=True)
     rate = summary.samples / summary.seconds if summary.seconds > 0 else 0.0
-    why = {"end": "end of log", "duration": "duration reached", "interrupt": "interrupted"}[summary.reason]
+    why = {"end": "end of log", "duration": "duration reached", "interrupt": "interrupted", "fault": "ended by the fault below"}[summary.reason]
     c = summary.counters
     more = "".join(f"{c[k]} {k}, " for k in ("late", "duplicates", "malformed") if k in c)
-    device = "".join(f", {c[k]} {name}" for k, name in (("restarts", "restarts"), ("stalls", "stalled records"), ("status_records", "with a nonzero status")) if c.get(k))
+    device = "".join(f", {c[k]} {label}" for k, label in (("restarts", "restarts"), ("stalls", "stalled records"), ("status_records", "with a nonzero status")) if c.get(k))
     click.echo(
         f"softtip: {summary.samples} samples in {summary.seconds:.2f} s ({rate:.1f} Hz), {summary.lost} lost, {more}"
         f"{summary.dropped} dropped by softtip{device}; {estimator.contacts} contact(s); {why}"
@@ -285,7 +299,6 @@ def _stream(
         click.echo(f"softtip: {estimator.tare_report.summary()}", err=True)
     for msg in dict.fromkeys(estimator.warnings):
         click.echo(f"softtip: warning: {msg}", err=True)
-
 
 
 def _within_range(full_scale: FullScale, name: str, stats):

@@ -261,6 +261,15 @@ def _finish(
             raise InputError(f"{source}: every row has an empty or nan cell; expected at least one complete row")
         if np.isnan(wrench).any():
             raise InputError(f"{source}: a wrench column has no value at all; expected at least one number in each")
+    if len(t) > 1 and (t == t[0]).all():  # no time at all: every window would hold the whole log
+        t_name = names[header.index["t"]]
+        others = [n for j, n in enumerate(names) if j != header.index["t"] and re.search("time|stamp", n, re.IGNORECASE)]
+        raise InputError(
+            f"{source}: column {t_name!r}: every one of the {len(t)} stamps is {t[0]}; expected stamps that increase "
+            "(a driver that never fills the header stamp writes 0). If another column holds the time, map it: "
+            + (f"--columns t={others[0]}" if len(others) == 1 else
+               f"--columns t=NAME{' (named like a time here: ' + ', '.join(map(repr, others)) + ')' if others else ''}")
+        )
     # time: unit and origin
     tunit = cmap.units["t"] if cmap is not None else get_unit("s", "time")
     if "nanosec" in header.index or header.t_in_ns:
@@ -285,6 +294,8 @@ def _finish(
                 f"first stamp a date (give --time-units to say otherwise)"
             )
     if ABSOLUTE_STAMP_S <= start < 1e10:  # from 1973 to 2286 in Unix time
+        if t.dtype.kind == "f" and tunit.name != "s" and np.abs(t).max() < 2.0**53 and (t == np.floor(t)).all():
+            t = t.astype(np.int64)  # whole ms or µs read as floats: exact as integers (ms × 1e6 is not in float64)
         if t.dtype.kind in "iu":
             ns = t * round(tunit.si * 1e9)
             t_s = seconds_from_ns(ns)
@@ -582,6 +593,16 @@ def _strip_bom(text: str) -> str:
     return text[1:] if text.startswith("\ufeff") else text
 
 
+def _not_utf8(source: str, line: int, byte: int, offset: int, start: bytes) -> InputError:
+    """The error of a byte that is not UTF-8 at ``offset`` of a file whose first bytes are ``start``."""
+    utf16 = start[:2] in (b"\xff\xfe", b"\xfe\xff")  # a UTF-16 byte-order mark: Excel's "Unicode text"
+    what = " (a UTF-16 file: it starts with UTF-16's byte-order mark, as Excel's \"Unicode text\" writes)" if utf16 else ""
+    return InputError(
+        f"{source}:{line}: not valid UTF-8 (byte 0x{byte:02x} at byte offset {offset}){what}; "
+        "expected a UTF-8 text file (re-save it as UTF-8)"
+    )
+
+
 def _decode(data: bytes, source: str) -> str:
     """The bytes as text, BOM removed; invalid UTF-8 is an error naming the line."""
     skip = 3 if data.startswith(b"\xef\xbb\xbf") else 0
@@ -589,11 +610,7 @@ def _decode(data: bytes, source: str) -> str:
         return data[skip:].decode("utf-8")
     except UnicodeDecodeError as exc:
         offset = skip + exc.start
-        line = _line_breaks(data, offset) + 1
-        raise InputError(
-            f"{source}:{line}: not valid UTF-8 (byte 0x{data[offset]:02x} at byte offset {offset}); "
-            "expected a UTF-8 text file (re-save it as UTF-8)"
-        ) from None
+        raise _not_utf8(source, _line_breaks(data, offset) + 1, data[offset], offset, data[:2]) from None
 
 
 def _line_breaks(data: bytes, end: int | None = None) -> int:
@@ -904,13 +921,17 @@ def _with_cut_hint(exc: InputError, text: str, source: str, data_base: int) -> I
     return _cut_hint(exc, source, last)
 
 
+#: The end of the message of a last line with too few or too many cells (said otherwise when the file was cut inside it)
+_FOOTER_HINT = "; this is the file's last line: a footer after the data, or a row cut short? Delete it"
+
+
 def _cut_hint(exc: InputError, source: str, last: int) -> InputError:
     """:func:`_with_cut_hint` for a file without a line break after its line ``last``."""
     if not str(exc).startswith(f"{source}:{last}: "):
         return exc
     return InputError(
-        f"{exc} (the file ends inside line {last}, with no line break after it: was it cut while being written? "
-        "Delete that line to use the rest)"
+        f"{str(exc).removesuffix(_FOOTER_HINT)} (the file ends inside line {last}, with no line break after it: was it "
+        "cut while being written? Delete that line to use the rest)"
     )
 
 
@@ -1081,6 +1102,9 @@ def _end_of_content(data: bytes) -> int:
 # A force/torque log is sampled at this many Hz or more, and at most this many (ATI's
 # Net F/T streams 7 kHz; DAQ systems some tens of kHz).
 _PLAUSIBLE_RATE_HZ = (2.0, 100e3)
+#: Hz: below this a t read in seconds is also a sensor's rate read in milliseconds (7 Hz or
+#: 7 kHz, an ATI Net F/T's rate): with no unit given, the run asks which
+_AMBIGUOUS_RATE_HZ = 20.0
 _TIME_UNITS = (("milliseconds", 1e-3, "ms"), ("microseconds", 1e-6, "us"), ("nanoseconds", 1e-9, "ns"))
 
 
@@ -1123,6 +1147,12 @@ def _time_notes(
                 f"{source}: column 't': median step {median:.6g} s, i.e. {rate:.3g} samples/s: implausible for a "
                 f"force/torque log (expected {low:g} Hz to {high / 1e3:g} kHz with t in seconds){guess}. "
                 "Give t in seconds: the tare duration and every time window are in seconds"
+            )
+        elif rate < _AMBIGUOUS_RATE_HZ and not explicit:
+            notes.append(
+                f"{source}: column 't': median step {median:.6g}: {rate:.4g} Hz if t is in seconds, {rate * 1e3:.4g} Hz "
+                "if in milliseconds, and no unit in the header says which (a force/torque sensor may stream at "
+                "either): give --time-units s or --time-units ms"
             )
     return n_repeated, notes
 
@@ -1281,6 +1311,9 @@ def _column_index(header: _Header, source: str, *, dialects: bool = True) -> dic
             for delim, label in ((";", "semicolon"), ("\t", "tab")):
                 if delim in names[0]:
                     hints.append(f"The header looks {label}-separated; expected commas between columns.")
+            if set(REQUIRED_COLUMNS) <= set(names[0].split()):
+                hints.append("The header looks space-separated; softtip reads comma, tab or semicolon delimiters: "
+                             "replace the spaces between cells (e.g. tr -s ' ' ',').")  # fmt: skip
         # numpy.savetxt(header=...) writes "# t,fx,...": point at it rather than guess.
         commented = [
             ln
@@ -1288,7 +1321,10 @@ def _column_index(header: _Header, source: str, *, dialects: bool = True) -> dic
             if set(REQUIRED_COLUMNS) <= {x.strip() for x in text.lstrip("#").split(",")}
         ]
         if commented:
-            hints.append(f"Line {commented[-1]} looks like the header commented out with '#'; remove the '#'.")
+            hints.append(
+                f"Line {commented[-1]} looks like the header commented out with '#'; remove the '#', or read the "
+                f"columns by position: --columns {','.join(f'{c}={k + 1}' for k, c in enumerate(REQUIRED_COLUMNS))}."
+            )
         elif all(_is_number(n.replace(",", ".")) for n in names):
             positions = ",".join(f"{c}={k + 1}" for k, c in enumerate(REQUIRED_COLUMNS))
             hints.append(
@@ -1550,9 +1586,12 @@ def _parse_careful(
                     column = names[j] if j < len(names) else f"#{j + 1}, beyond the header's {len(names)}"
                     raise _swallow_error(source, line, column, cell, base + prev_end, at_end, k)
         if len(row) != ncol:
-            raise InputError(
-                f"{source}:{line}: expected {ncol} cells (one per header column), got {len(row)}"
-            )
+            hint = ""
+            if len(row) == ncol + 1 and not row[-1].strip():
+                hint = "; its last cell is empty: a delimiter at the end of each row that the header lacks? Remove it"
+            elif all(_is_blank(more) for more in reader):  # the file's last line (the reader is not needed after this)
+                hint = _FOOTER_HINT
+            raise InputError(f"{source}:{line}: expected {ncol} cells (one per header column), got {len(row)}{hint}")
         sample = [0.0] * len(roles)
         for j, name in checks:
             cell = row[j]
@@ -1565,7 +1604,10 @@ def _parse_careful(
             try:
                 value = float(cell.replace(",", ".") if comma else cell)
             except ValueError:
-                raise InputError(f"{where}: expected a number, got {cell!r}") from None
+                clock = name in ("t", "nanosec") and re.fullmatch(r"\s*\d{1,2}:\d{2}(:\d{2}([.,]\d+)?)?\s*", cell)
+                hint = ("; clock times (hh:mm:ss) are not read: give t in seconds, or map a column of seconds or "
+                        "stamps with --columns t=NAME") if clock else ""  # fmt: skip
+                raise InputError(f"{where}: expected a number, got {cell!r}{hint}") from None
             if math.isnan(value) and missing != "fail":
                 sample[roles.index(name)] = math.nan
                 continue
@@ -2637,10 +2679,7 @@ class LogBlocks:
                 part.decode("utf-8")
             except UnicodeDecodeError as exc:
                 at = line + _line_breaks(part, exc.start)
-                return InputError(
-                    f"{self.source}:{at}: not valid UTF-8 (byte 0x{part[exc.start]:02x} at byte offset {pos + exc.start}); "
-                    "expected a UTF-8 text file (re-save it as UTF-8)"
-                )
+                return _not_utf8(self.source, at, part[exc.start], pos + exc.start, part[:2] if pos == 0 else b"")
             if not chunk:
                 return None
             line += _line_breaks(part)
