@@ -1109,13 +1109,15 @@ _TIME_UNITS = (("milliseconds", 1e-3, "ms"), ("microseconds", 1e-6, "us"), ("nan
 
 
 def _time_notes(
-    t: NDArray[np.float64], source: str, first_line: int | None, *, explicit: bool = False
+    t: NDArray[np.float64], source: str, first_line: int | None, *, explicit: bool = False, ask_unit: bool = True
 ) -> tuple[int, list[str]]:
     """Count repeated stamps and say what looks wrong with the time scale.
 
     ``first_line`` is the line of the first data row when every row is one line (then row
     ``i`` is on line ``first_line + i``), else ``None`` (rows are then named by number).
     ``explicit``: the time unit was given (header or option), so it is not second-guessed.
+    ``ask_unit``: a rate as plausible in seconds as in milliseconds asks for ``--time-units``
+    (not for a Parquet or Arrow file, whose ``t`` is in seconds by softtip's contract).
     """
 
     def where(i: int) -> str:
@@ -1148,7 +1150,7 @@ def _time_notes(
                 f"force/torque log (expected {low:g} Hz to {high / 1e3:g} kHz with t in seconds){guess}. "
                 "Give t in seconds: the tare duration and every time window are in seconds"
             )
-        elif rate < _AMBIGUOUS_RATE_HZ and not explicit:
+        elif rate < _AMBIGUOUS_RATE_HZ and not explicit and ask_unit:
             notes.append(
                 f"{source}: column 't': median step {median:.6g}: {rate:.4g} Hz if t is in seconds, {rate * 1e3:.4g} Hz "
                 "if in milliseconds, and no unit in the header says which (a force/torque sensor may stream at "
@@ -1264,7 +1266,7 @@ def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None, 
     extra = {
         names[j]: table.column(j).to_numpy(zero_copy_only=False) for j in range(len(names)) if j not in index.values()
     }
-    repeated, notes = _time_notes(t, source, None)
+    repeated, notes = _time_notes(t, source, None, ask_unit=False)
     return Log(
         t=t,
         wrench=wrench if units == "si" else wrench_to_si(wrench, units),  # SI already: x * 1.0 is x
