@@ -237,9 +237,12 @@ def _finish(
     bad = bad_t | np.isnan(wrench).any(axis=1)
     if bad.any():
         first = int(np.argmax(bad))
-        keep = ~bad_t if fmt.missing == "interpolate" else ~bad
+        # a row with no wrench value at all is not this sensor's sample (another topic's row of a
+        # PlotJuggler export): dropped, not invented by interpolation
+        no_wrench = np.isnan(wrench).all(axis=1)
+        keep = ~(bad_t | no_wrench) if fmt.missing == "interpolate" else ~bad
         if fmt.missing == "interpolate":
-            filled = int(np.count_nonzero(bad & ~bad_t))
+            filled = int(np.count_nonzero(keep & bad))
             tt = t[keep].astype(np.float64)
             w = wrench[keep]
             for k in range(6):
@@ -249,6 +252,8 @@ def _finish(
             what = f"{filled} row(s) filled by linear interpolation in t"
             if bad_t.any():
                 what += f", {int(np.count_nonzero(bad_t))} row(s) without t dropped"
+            if (no_wrench & ~bad_t).any():
+                what += f", {int(np.count_nonzero(no_wrench & ~bad_t))} row(s) without any wrench value dropped"
             wrench = w
         else:
             what = f"{int(np.count_nonzero(bad))} row(s) dropped (t keeps the gap)"
