@@ -580,3 +580,30 @@ def test_whole_millisecond_dates_are_exact_in_nanoseconds(tmp_path: Path) -> Non
     log = read_log(_with_t(tmp_path, "ms.csv", [str(1700000000123 + 20 * k) for k in range(n)]))
     assert log.extra["stamp_ns"][:2] == ["1700000000123000000", "1700000000143000000"]
     np.testing.assert_array_equal(log.t, read_log(REFERENCE).t)
+
+
+def test_interpolate_fills_cells_but_drops_another_topics_rows(tmp_path: Path) -> None:
+    """A PlotJuggler export of two topics: the other topic's rows have no wrench value at all.
+    --missing interpolate fills a row's empty cells, but does not invent samples at the other
+    topic's times: those rows are dropped, as --missing drop does."""
+    lines = (DATA / "plotjuggler.csv").read_text().splitlines()
+    head, rows = lines[0], lines[1:]
+    out = [head + ",/joint_states/position/0"]
+    for k, row in enumerate(rows):
+        cells = row.split(",")
+        if k == 7:
+            cells[3] = ""  # one cell missing in a wrench row: filled
+        out.append(",".join(cells) + ",")
+        if k % 5 == 0:
+            t = float(cells[0]) + 0.007
+            out.append(f"{t:.9f}" + "," * 6 + ",0.5")  # the other topic's row
+    path = tmp_path / "two_topics.csv"
+    path.write_text("\n".join(out) + "\n")
+    filled = read_log(path, missing="interpolate")
+    assert len(filled.t) == len(rows)
+    assert any(f"1 row(s) filled by linear interpolation in t, {len(range(0, len(rows), 5))} row(s) without any wrench "
+               "value dropped" in note for note in filled.notes), filled.notes  # fmt: skip
+    dropped = read_log(path, missing="drop")
+    assert len(dropped.t) == len(rows) - 1
+    reference = read_log(DATA / "plotjuggler.csv")
+    np.testing.assert_array_equal(np.delete(filled.wrench, 7, axis=0), np.delete(reference.wrench, 7, axis=0))

@@ -237,9 +237,12 @@ def _finish(
     bad = bad_t | np.isnan(wrench).any(axis=1)
     if bad.any():
         first = int(np.argmax(bad))
-        keep = ~bad_t if fmt.missing == "interpolate" else ~bad
+        # a row with no wrench value at all is not this sensor's sample (another topic's row of a
+        # PlotJuggler export): dropped, not invented by interpolation
+        no_wrench = np.isnan(wrench).all(axis=1)
+        keep = ~(bad_t | no_wrench) if fmt.missing == "interpolate" else ~bad
         if fmt.missing == "interpolate":
-            filled = int(np.count_nonzero(bad & ~bad_t))
+            filled = int(np.count_nonzero(keep & bad))
             tt = t[keep].astype(np.float64)
             w = wrench[keep]
             for k in range(6):
@@ -249,6 +252,8 @@ def _finish(
             what = f"{filled} row(s) filled by linear interpolation in t"
             if bad_t.any():
                 what += f", {int(np.count_nonzero(bad_t))} row(s) without t dropped"
+            if (no_wrench & ~bad_t).any():
+                what += f", {int(np.count_nonzero(no_wrench & ~bad_t))} row(s) without any wrench value dropped"
             wrench = w
         else:
             what = f"{int(np.count_nonzero(bad))} row(s) dropped (t keeps the gap)"
@@ -1109,13 +1114,15 @@ _TIME_UNITS = (("milliseconds", 1e-3, "ms"), ("microseconds", 1e-6, "us"), ("nan
 
 
 def _time_notes(
-    t: NDArray[np.float64], source: str, first_line: int | None, *, explicit: bool = False
+    t: NDArray[np.float64], source: str, first_line: int | None, *, explicit: bool = False, ask_unit: bool = True
 ) -> tuple[int, list[str]]:
     """Count repeated stamps and say what looks wrong with the time scale.
 
     ``first_line`` is the line of the first data row when every row is one line (then row
     ``i`` is on line ``first_line + i``), else ``None`` (rows are then named by number).
     ``explicit``: the time unit was given (header or option), so it is not second-guessed.
+    ``ask_unit``: a rate as plausible in seconds as in milliseconds asks for ``--time-units``
+    (not for a Parquet or Arrow file, whose ``t`` is in seconds by softtip's contract).
     """
 
     def where(i: int) -> str:
@@ -1148,7 +1155,7 @@ def _time_notes(
                 f"force/torque log (expected {low:g} Hz to {high / 1e3:g} kHz with t in seconds){guess}. "
                 "Give t in seconds: the tare duration and every time window are in seconds"
             )
-        elif rate < _AMBIGUOUS_RATE_HZ and not explicit:
+        elif rate < _AMBIGUOUS_RATE_HZ and not explicit and ask_unit:
             notes.append(
                 f"{source}: column 't': median step {median:.6g}: {rate:.4g} Hz if t is in seconds, {rate * 1e3:.4g} Hz "
                 "if in milliseconds, and no unit in the header says which (a force/torque sensor may stream at "
@@ -1264,7 +1271,7 @@ def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None, 
     extra = {
         names[j]: table.column(j).to_numpy(zero_copy_only=False) for j in range(len(names)) if j not in index.values()
     }
-    repeated, notes = _time_notes(t, source, None)
+    repeated, notes = _time_notes(t, source, None, ask_unit=False)
     return Log(
         t=t,
         wrench=wrench if units == "si" else wrench_to_si(wrench, units),  # SI already: x * 1.0 is x
