@@ -234,6 +234,12 @@ def test_header_only(tmp_path: Path, tail: str) -> None:
     )
 
 
+def test_a_time_column_with_its_unit_in_the_name_is_suggested_with_the_unit(tmp_path: Path) -> None:
+    path = _write(tmp_path, "timestamp_ms,fx,fy,fz,mx,my,mz\n0,1,2,3,4,5,6\n")
+    assert "Column 1 is 'timestamp_ms': did you mean 't'? (--columns t=timestamp_ms --time-units ms)" in _error(path)
+    assert read_log(path, columns="t=timestamp_ms", time_units="ms").wrench.tolist() == [[1, 2, 3, 4, 5, 6]]
+
+
 def test_missing_columns_with_suggestions(tmp_path: Path) -> None:
     # time, Fx and f_y are read as they are (test_common_names_are_read_and_said): only mz is missing
     path = _write(tmp_path, "time,Fx,f_y,fz,mx,my,torque_zz\n0,1,2,3,4,5,6\n")

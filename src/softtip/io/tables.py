@@ -1375,12 +1375,16 @@ def _near_misses(missing: list[str], names: list[str], read: set[int] | None = N
             if cand == col or (col == "t" and cand in _TIME_ALIASES):
                 best = j
                 break
+        if best is None and col == "t":  # a time column with a unit in its name: timestamp_ms, time_us
+            best = next((j for j, cand in candidates.items() if "time" in cand or "stamp" in cand), None)
         if best is None:
             match = difflib.get_close_matches(col, list(candidates.values()), n=1, cutoff=0.6)
             if match:
                 best = next(j for j, cand in candidates.items() if cand == match[0])
         if best is not None:
-            hints.append(f"Column {best + 1} is {names[best]!r}: did you mean {col!r}?")
+            unit = re.search(r"(?:^|[^a-z])(ms|us|ns|msec|usec|nsec)$", names[best].strip().lower()) if col == "t" else None
+            how = f" (--columns t={names[best]} --time-units {unit.group(1)[:2]})" if unit else ""
+            hints.append(f"Column {best + 1} is {names[best]!r}: did you mean {col!r}?{how}")
             del candidates[best]
     return hints
 
