@@ -64,6 +64,21 @@ def test_general_solver_round_trip(tip, data):
     assert abs(c.sigma - sigma) <= 1e-7 * max(1.0, np.linalg.norm(f))
 
 
+@pytest.mark.parametrize("azimuth_deg", [0.0, 45.0, 130.0])
+def test_general_solver_on_the_seam_of_a_capsule(azimuth_deg):
+    """A contact exactly where a capsule's cap meets its cylinder (hypothesis found one the
+    general solver stalled on, a few nm from the root: the surface's Hessian changes there)."""
+    tip = Capsule(0.016, 0.020)
+    a = np.radians(azimuth_deg)
+    r = tip.project(np.array([0.016 * np.cos(a), 0.016 * np.sin(a), 0.020]))
+    n = tip.normal(r)
+    t = np.cross(n, [0.0, 0.0, 1.0])
+    f = -0.0625 * n + 0.03125 * t
+    c = contact_from_wrench(wrench_of(r, n, f, 0.00390625), implicit_version(tip))
+    assert c.valid
+    assert np.linalg.norm(c.point - r) <= 1e-7
+
+
 @pytest.mark.parametrize("tip", TIPS, ids=lambda t: t.kind)
 def test_batch_matches_single_and_float_kernel(tip, rng):
     # random pushing contacts on the top half of the skin
