@@ -607,3 +607,13 @@ def test_interpolate_fills_cells_but_drops_another_topics_rows(tmp_path: Path) -
     assert len(dropped.t) == len(rows) - 1
     reference = read_log(DATA / "plotjuggler.csv")
     np.testing.assert_array_equal(np.delete(filled.wrench, 7, axis=0), np.delete(reference.wrench, 7, axis=0))
+
+
+def test_a_constant_stamp_column_stops_in_pieces_too(tmp_path: Path) -> None:
+    """softtip's own layout read in pieces: the same stop as read_log's, after the last piece."""
+    lines = REFERENCE.read_text().splitlines()
+    path = tmp_path / "const.csv"
+    path.write_text("\n".join([lines[0], *(f"0,{ln.split(',', 1)[1]}" for ln in lines[1:])]) + "\n")
+    done = run("estimate", path, "--chunk-rows", 100, "-o", tmp_path / "o.csv")
+    assert done.returncode == 2 and f"{path}: column 't': every one of the {len(lines) - 1} stamps is 0" in done.stderr, done.stderr
+    assert not (tmp_path / "o.csv").exists()

@@ -2432,6 +2432,8 @@ class LogBlocks:
             self._last_t = float(t[-1])
             self.n += len(t)
             yield t, wrench_to_si(wrench, self.units or "si"), extra
+        if self.n > 1 and self.repeated == self.n - 1:
+            raise NotStreamable("every time stamp is the same: read_log refuses the log")
 
     def warnings(self) -> tuple[str, ...]:
         """What :attr:`Log.warnings` holds for the whole log (after the last block)."""
