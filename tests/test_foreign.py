@@ -552,7 +552,7 @@ def test_ms_stamps_at_a_sensor_rate_without_a_unit_stop_the_command(tmp_path: Pa
     path = _with_t(tmp_path, "ms.csv", [f"{k * 1e3 / rate_hz:.6f}" for k in range(n)])
     done = run("estimate", path, "-o", tmp_path / "o.csv")
     assert done.returncode == 2 and not (tmp_path / "o.csv").exists(), done.stderr
-    assert f"{rate_hz / 1e3:.4g} Hz if t is in seconds, {rate_hz:.4g} Hz if in milliseconds" in done.stderr, done.stderr
+    assert f"{rate_hz / 1e3:.4g} Hz if t is in seconds, {rate_hz:.5g} Hz if in milliseconds" in done.stderr, done.stderr
     assert "give --time-units s or --time-units ms" in done.stderr
     told = run("estimate", path, "--time-units", "ms", "-o", tmp_path / "o.csv")
     assert told.returncode == 0, told.stderr

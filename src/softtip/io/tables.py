@@ -1157,7 +1157,7 @@ def _time_notes(
             )
         elif rate < _AMBIGUOUS_RATE_HZ and not explicit and ask_unit:
             notes.append(
-                f"{source}: column 't': median step {median:.6g}: {rate:.4g} Hz if t is in seconds, {rate * 1e3:.4g} Hz "
+                f"{source}: column 't': median step {median:.6g}: {rate:.4g} Hz if t is in seconds, {rate * 1e3:.5g} Hz "
                 "if in milliseconds, and no unit in the header says which (a force/torque sensor may stream at "
                 "either): give --time-units s or --time-units ms"
             )
