@@ -617,3 +617,21 @@ def test_a_constant_stamp_column_stops_in_pieces_too(tmp_path: Path) -> None:
     done = run("estimate", path, "--chunk-rows", 100, "-o", tmp_path / "o.csv")
     assert done.returncode == 2 and f"{path}: column 't': every one of the {len(lines) - 1} stamps is 0" in done.stderr, done.stderr
     assert not (tmp_path / "o.csv").exists()
+
+
+def test_stream_replays_a_foreign_file_as_estimate_reads_it(tmp_path: Path) -> None:
+    """--replay reads a user's file with estimate's reading options and notes, and stops where
+    estimate stops (t in ms at a sensor's rate, no unit), before anything is recorded."""
+    ati = DATA / "ati_ms_n_nmm.csv"
+    done = run("stream", "--replay", ati, "--speed", 0, "-o", tmp_path / "rec.csv")
+    assert done.returncode == 0, done.stderr
+    assert f"softtip: {ati}: read as" in done.stderr and "1 contact(s)" in done.stderr
+    n = len(REFERENCE.read_text().splitlines()) - 1
+    path = _with_t(tmp_path, "ms.csv", [f"{k / 7.0:.6f}" for k in range(n)])
+    stopped = run("stream", "--replay", path, "--speed", 0, "-o", tmp_path / "rec2.csv")
+    assert stopped.returncode == 2 and "give --time-units s or --time-units ms" in stopped.stderr, stopped.stderr
+    assert not (tmp_path / "rec2.csv").exists()
+    told = run("stream", "--replay", path, "--time-units", "ms", "--speed", 0, "-o", tmp_path / "rec2.csv")
+    assert told.returncode == 0, told.stderr
+    live = run("stream", "--netft", "192.0.2.1", "--time-units", "ms")
+    assert live.returncode == 2 and "apply to --replay" in live.stderr

@@ -16,8 +16,12 @@ from softtip.cli.options import (
     estimator_options,
     full_scale_option,
     full_scale_range,
+    log_format_given,
+    log_format_kwargs,
+    log_format_options,
     make_config,
     optional_extra,
+    print_log_notes,
 )
 from softtip.cli.types import PORT, Number, check_lowpass, option
 from softtip.core.fingertip import load_fingertip
@@ -91,6 +95,7 @@ an error (exit 1).
 @option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save the 3-D view and time series to FILE.rrd.")
 @option("--payload", type=click.Path(dir_okay=False), metavar="FILE.toml", help="With --replay: remove the fingertip's weight per sample, using the log's qw, qx, qy, qz columns (recorded raw_* columns are then compensated).")
 @full_scale_option
+@log_format_options
 @estimator_options
 @click.pass_context
 def stream(
@@ -135,6 +140,9 @@ def stream(
         raise click.UsageError(f"--strict: unknown fault(s) {', '.join(sorted(faults - set(FAULTS)))}; expected some of {', '.join(FAULTS)} or all")
     if faults and host is None:
         raise click.UsageError("--strict applies to a live sensor (--netft HOST)")
+    formats = log_format_kwargs(estimator_opts)
+    if host is not None and log_format_given(formats):
+        raise click.UsageError("--columns, --force-units, --moment-units, --time-units, --missing and --skip-rows apply to --replay")
     check_outputs(
         [("--replay", replay), ("--payload", payload), ("--tip", tip if os.path.isfile(tip) else None),
          ("--bias", estimator_opts.get("bias_file"))],
@@ -147,7 +155,7 @@ def stream(
     try:
         _stream(
             ctx, host, replay, speed, units, rdt_port, http_port, timeout, device_bias, faults, duration, record, view,
-            rerun_spawn, rerun_file, tip, payload, estimator_opts, outputs, sensor_range,
+            rerun_spawn, rerun_file, tip, payload, estimator_opts, outputs, sensor_range, formats,
         )  # fmt: skip
     except BaseException:
         outputs.discard()
@@ -157,7 +165,7 @@ def stream(
 
 def _stream(
     ctx, host, replay, speed, units, rdt_port, http_port, timeout, device_bias, faults, duration, record, view,
-    rerun_spawn, rerun_file, tip, payload, estimator_opts, outputs, sensor_range,
+    rerun_spawn, rerun_file, tip, payload, estimator_opts, outputs, sensor_range, formats,
 ) -> None:
     import signal
     import threading
@@ -185,12 +193,16 @@ def _stream(
     try:
         try:
             if replay is not None:
+                from softtip.io.tables import read_log
+
+                log = read_log(replay, units=units, **formats)
+                print_log_notes(log)  # as `estimate` reads it: a time unit it cannot guess stops here
                 if payload is None:
-                    source = LogSource.from_csv(replay, units=units, speed=speed, stop=stop)
+                    source = LogSource(log.t, log.wrench, speed=speed, name=os.path.basename(log.source), stop=stop)
                 else:
                     from softtip.io.payload import replay_source
 
-                    source = replay_source(replay, units, speed, payload)
+                    source = replay_source(log, speed, payload, stop=stop)
                 info = f"(replay x{speed:g})" if speed else "(replay, as fast as possible)"
                 raw = getattr(source, "source", source)  # the log as read (before any payload compensation)
                 check_full_scale(raw.t, raw.wrench, sensor_range, replay, units=units)  # before any sample is used

@@ -8,14 +8,19 @@ from __future__ import annotations
 
 import math
 import os
+import threading
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from softtip.core.gravity import Payload, PayloadCompensator, compensate_payload, load_payload
 from softtip.errors import InputError
+
+if TYPE_CHECKING:
+    from softtip.io.tables import Log
 
 __all__ = ["QUATERNION_COLUMNS", "UNIT_TOLERANCE", "read_orientation", "compensate_log", "CompensatedSource", "replay_source"]
 
@@ -147,13 +152,15 @@ class CompensatedSource:
             self.source.close()
 
 
-def replay_source(path: str | os.PathLike[str], units: str, speed: float, payload: Payload | str | os.PathLike[str]) -> CompensatedSource:
-    """``softtip stream --replay LOG --payload FILE``: the log replayed with per-sample compensation."""
+def replay_source(
+    log: Log, speed: float, payload: Payload | str | os.PathLike[str], stop: threading.Event | None = None
+) -> CompensatedSource:
+    """``softtip stream --replay LOG --payload FILE``: the log (:func:`~softtip.io.tables.read_log`'s)
+    replayed with per-sample compensation, its orientation from its ``qw, qx, qy, qz`` columns;
+    ``speed`` and ``stop`` as :class:`~softtip.io.sources.LogSource`'s."""
     from softtip.io.sources import LogSource
-    from softtip.io.tables import read_log
 
     payload = load_payload(payload)
-    log = read_log(path, units=units)
     q = read_orientation(log)
-    src = LogSource(log.t, log.wrench, speed=speed, name=os.path.basename(log.source))
+    src = LogSource(log.t, log.wrench, speed=speed, name=os.path.basename(log.source), stop=stop)
     return CompensatedSource(src, [tuple(row) for row in q.tolist()], payload)
