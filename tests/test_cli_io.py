@@ -117,3 +117,11 @@ def test_progress_bar_only_on_a_terminal() -> None:
         os.close(master)
         os.close(slave)
     assert "softtip: writing" in shown and "40.0/100" in shown
+
+
+def test_simulate_refuses_a_table_name_it_would_fill_with_csv(tmp_path: Path) -> None:
+    """simulate writes CSV: -o x.parquet / x.arrow / x.bag exits 2, and nothing is written."""
+    for name in ("x.parquet", "x.feather", "x.bag"):
+        done = subprocess.run([SOFTTIP, "simulate", "-o", str(tmp_path / name)], capture_output=True, text=True, timeout=120)
+        assert done.returncode == 2 and "Invalid value for '-o'" in done.stderr, done.stderr
+    assert not list(tmp_path.iterdir())

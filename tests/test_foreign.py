@@ -635,3 +635,21 @@ def test_stream_replays_a_foreign_file_as_estimate_reads_it(tmp_path: Path) -> N
     assert told.returncode == 0, told.stderr
     live = run("stream", "--netft", "192.0.2.1", "--time-units", "ms")
     assert live.returncode == 2 and "apply to --replay" in live.stderr
+
+
+def test_a_wrong_unit_in_the_header_is_said_to_be_the_headers(tmp_path: Path) -> None:
+    """The header says N·m, the data are N·mm: the units check names the pair that fits and says that
+    the header, which no option overrides, is what to correct (estimate and a replay alike)."""
+    lines = REFERENCE.read_text().splitlines()
+    rows = []
+    for ln in lines[1:]:
+        cells = ln.split(",")
+        rows.append(",".join(cells[:4] + [repr(float(c) * 1e3) for c in cells[4:]]))
+    path = tmp_path / "hdr.csv"
+    path.write_text("\n".join(["t,Fx (N),Fy (N),Fz (N),Tx (N-m),Ty (N-m),Tz (N-m)", *rows]) + "\n")
+    for args in (("estimate", path, "-o", tmp_path / "o.csv"), ("stream", "--replay", path, "--speed", 0, "-o", tmp_path / "r.csv")):
+        done = run(*args)
+        assert done.returncode == 2, done.stderr
+        assert "the data fit forces in N with moments in N·mm" in done.stderr
+        assert "an option cannot override a header's unit: if the data are in another unit, the header is wrong" in done.stderr
+    assert not (tmp_path / "o.csv").exists() and not (tmp_path / "r.csv").exists()

@@ -304,11 +304,20 @@ def check_units(est, fingertip, config: EstimatorConfig, log, source: str | None
     (:func:`softtip.core.lever.check_wrench_units`), naming the unit pairs that fit the data."""
     from softtip.core.lever import check_wrench_units
 
-    check_wrench_units(
-        est.wrench[~est.taring], fingertip, force_unit=getattr(log, "force_unit", "N"),
-        moment_unit=getattr(log, "moment_unit", "N*m"), quiet=quiet_samples(est, log.wrench), noise=config.noise,
-        source=source or log.source, min_force=max(0.1, config.contact_threshold),
-    )  # fmt: skip
+    try:
+        check_wrench_units(
+            est.wrench[~est.taring], fingertip, force_unit=getattr(log, "force_unit", "N"),
+            moment_unit=getattr(log, "moment_unit", "N*m"), quiet=quiet_samples(est, log.wrench), noise=config.noise,
+            source=source or log.source, min_force=max(0.1, config.contact_threshold),
+        )  # fmt: skip
+    except InputError as exc:
+        given = getattr(log, "units_in_header", ())
+        if not given:
+            raise
+        raise InputError(
+            f"{exc}. The header gives the units of {', '.join(map(repr, given))}, and an option cannot override a "
+            "header's unit: if the data are in another unit, the header is wrong; correct it in the file"
+        ) from None
 
 
 def quiet_samples(est, wrench):
@@ -337,21 +346,31 @@ def check_outputs(inputs, outputs) -> None:
     check_distinct(inputs, outputs)
 
 
-def check_table_names(outputs) -> None:
+def check_table_names(outputs, formats: tuple[str, ...] = ("csv", "parquet", "arrow")) -> None:
     """Exit 2 when ``-o`` (a table: CSV, or Parquet / Arrow IPC by its name where the command
-    writes them) is named like a ROS bag, which it would otherwise fill with CSV text; the
-    remedy names ``--to-bag`` where the command has it."""
+    writes them, ``formats``) is named like a ROS bag, or like a table format the command does
+    not write, which it would otherwise fill with CSV text; the remedy names ``--to-bag`` where
+    the command has it."""
     from softtip.io.bag import BAG_SUFFIXES
+    from softtip.io.formats import TABLE_FORMATS, table_format
 
     labels = [label for label, _ in outputs]
     for label, path in outputs:
-        if label != "-o" or path is None or Path(os.fspath(path)).suffix.lower() not in BAG_SUFFIXES:
+        if label != "-o" or path is None:
             continue
-        remedy = f"; a bag is written by --to-bag {path}" if "--to-bag" in labels else ""
-        raise click.BadParameter(
-            f"{path} is named like a ROS bag, but -o writes a table (CSV unless --help says otherwise), not a bag; "
-            f"expected another name{remedy}", param_hint="'-o'",
-        )  # fmt: skip
+        if Path(os.fspath(path)).suffix.lower() in BAG_SUFFIXES:
+            remedy = f"; a bag is written by --to-bag {path}" if "--to-bag" in labels else ""
+            raise click.BadParameter(
+                f"{path} is named like a ROS bag, but -o writes a table (CSV unless --help says otherwise), not a bag; "
+                f"expected another name{remedy}", param_hint="'-o'",
+            )  # fmt: skip
+        if table_format(path) not in formats:
+            kind = TABLE_FORMATS[table_format(path)][1]
+            raise click.BadParameter(
+                f"{path} is named like {'an' if kind[0] in 'AEIOU' else 'a'} {kind} file, but this command writes CSV; "
+                "expected a name ending in .csv (`softtip estimate LOG.csv -o OUT.parquet` converts a log)",
+                param_hint="'-o'",
+            )
 
 
 def check_output_names(outputs) -> None:

@@ -172,9 +172,10 @@ def simulate(
         return
     if left_object is not None or to_bag is not None:
         raise click.UsageError("--left-object and --to-bag go with --hand two-finger")
-    from softtip.cli.options import check_output_names
+    from softtip.cli.options import check_output_names, check_table_names
 
     check_output_names([("-o", output), ("--truth", truth)])
+    check_table_names([("-o", output)], formats=("csv",))
     if truth is None and output is not None:
         truth = output.with_name(output.stem + ".truth.json")
     tip = options["tip"]

@@ -13,6 +13,7 @@ from softtip.cli.options import (
     FRAMES_HELP,
     POSITIVE,
     check_outputs,
+    check_units,
     estimator_options,
     full_scale_option,
     full_scale_range,
@@ -25,7 +26,7 @@ from softtip.cli.options import (
 )
 from softtip.cli.types import PORT, Number, check_lowpass, option
 from softtip.core.fingertip import load_fingertip
-from softtip.core.fullscale import FullScale, check_full_scale
+from softtip.core.fullscale import COARSE_MARGIN, FullScale, check_full_scale
 from softtip.core.units import UNIT_SYSTEMS
 from softtip.estimator.results import EstimatorWarning
 
@@ -196,7 +197,9 @@ def _stream(
                 from softtip.io.tables import read_log
 
                 log = read_log(replay, units=units, **formats)
-                print_log_notes(log)  # as `estimate` reads it: a time unit it cannot guess stops here
+                # as `estimate` reads it: far beyond the sensor's range, or a time unit it cannot guess, stops here
+                check_full_scale(log.t, log.wrench, sensor_range, replay, units=units, margin=COARSE_MARGIN)
+                print_log_notes(log)
                 if payload is None:
                     source = LogSource(log.t, log.wrench, speed=speed, name=os.path.basename(log.source), stop=stop)
                 else:
@@ -205,7 +208,6 @@ def _stream(
                     source = replay_source(log, speed, payload, stop=stop)
                 info = f"(replay x{speed:g})" if speed else "(replay, as fast as possible)"
                 raw = getattr(source, "source", source)  # the log as read (before any payload compensation)
-                check_full_scale(raw.t, raw.wrench, sensor_range, replay, units=units)  # before any sample is used
             else:
                 from softtip.io.netft import NetFTSource
 
@@ -228,6 +230,9 @@ def _stream(
             )
             if lowpass is not None and source.rate_hz is None:
                 raise click.UsageError("--lowpass-hz needs the sample rate, which this source does not report")
+            if replay is not None:  # `estimate`'s units check, then its range check, before any sample is used
+                _check_replay_units(log, payload, fingertip, config)
+                check_full_scale(raw.t, raw.wrench, sensor_range, replay, units=units)
             # a short replay runs the steps as Python: loading numba would cost more (the same bits)
             estimator = Estimator(fingertip, config, expected_samples=len(raw.t) if replay is not None else None)
             tare_request = threading.Event()
@@ -289,6 +294,21 @@ def _stream(
         if recorder is not None:
             recorder.close()
     _report(summary, source.name, estimator, record)
+
+
+def _check_replay_units(log, payload, fingertip, config) -> None:
+    """Exit 2 when the replayed log's units cannot be right, naming the pair that fits, as
+    ``softtip estimate`` does: on its whole-log estimate (the payload removed first)."""
+    from softtip.estimator import estimate
+
+    if payload is not None:
+        from softtip.io.payload import compensate_log
+
+        log = compensate_log(log, payload)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", EstimatorWarning)  # the stream says them as they come
+        est = estimate(log.t, log.wrench, fingertip, config)
+    check_units(est, fingertip, config, log)
 
 
 def _report(summary: LiveSummary, name: str, estimator: Estimator, record: str | None) -> None:

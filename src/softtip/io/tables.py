@@ -160,6 +160,8 @@ class Log:
         cells dropped or filled. A command line tool prints them.
     force_unit, moment_unit : str
         The units the wrench columns were in (names of :data:`softtip.core.units.UNITS`).
+    units_in_header : tuple of str
+        The wrench columns whose unit the header (or a row of units under it) gave.
     time_suspect : str or None
         The warning about ``t``'s scale when its unit was not given and another one fits
         (``t`` in ms read as s): a command line tool stops with it (``--time-units``).
@@ -177,6 +179,7 @@ class Log:
     force_unit: str = "N"
     moment_unit: str = "N*m"
     time_suspect: str | None = None
+    units_in_header: tuple[str, ...] = ()
 
 
 #: A time stamp from this many seconds on is absolute (after 1973 in Unix time): ``t`` counts from the first.
@@ -338,6 +341,7 @@ def _finish(
         force_unit=force_unit,
         moment_unit=moment_unit,
         time_suspect=next((n for n in time_notes if "--time-units" in n), None),
+        units_in_header=tuple(names[header.index[r]] for r in ROLES[1:] if cmap is not None and cmap.from_header[r]),
     )
 
 
