@@ -297,9 +297,14 @@ def _stream(
 
 
 def _check_replay_units(log, payload, fingertip, config) -> None:
-    """Exit 2 when the replayed log's units cannot be right, naming the pair that fits, as
-    ``softtip estimate`` does: on its whole-log estimate (the payload removed first)."""
-    from softtip.estimator import estimate
+    """Exit 2 when the replayed log's units cannot be right, naming the pair that fits: the
+    check of ``softtip estimate`` on the log tared as the estimator tares it (the payload
+    removed first). The tare alone, not a whole estimate: a replay starts at once."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from softtip.estimator.tare import tare_log
 
     if payload is not None:
         from softtip.io.payload import compensate_log
@@ -307,8 +312,9 @@ def _check_replay_units(log, payload, fingertip, config) -> None:
         log = compensate_log(log, payload)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", EstimatorWarning)  # the stream says them as they come
-        est = estimate(log.t, log.wrench, fingertip, config)
-    check_units(est, fingertip, config, log)
+        tare = tare_log(log.t, log.wrench, config)
+    bias = tare.bias if np.isfinite(tare.bias).all() else np.zeros(6)
+    check_units(SimpleNamespace(wrench=log.wrench - bias, taring=tare.taring), fingertip, config, log)
 
 
 def _report(summary: LiveSummary, name: str, estimator: Estimator, record: str | None) -> None:
