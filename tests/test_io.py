@@ -324,6 +324,16 @@ def test_a_trailing_delimiter_and_a_footer_are_named(tmp_path: Path) -> None:
         )
 
 
+def test_a_quoted_decimal_comma_in_a_comma_separated_file_is_named(tmp_path: Path) -> None:
+    path = _write(tmp_path, f'{HEADER}\n0,"0,5",2,3,4,5,6\n', "dc.csv")
+    assert _error(path) == (
+        f"{path}:2: column 'fx': expected a number, got '0,5'; a decimal comma: read with semicolon or tab "
+        "delimiters only (a comma-separated file needs decimal points; re-export it with them, or with ';' between "
+        "cells)"
+    )
+    assert read_log(_write(tmp_path, "t;fx;fy;fz;mx;my;mz\n0;0,5;2;3;4;5;6\n", "sc.csv")).wrench[0, 0] == 0.5
+
+
 def test_clock_times_and_utf16_are_named(tmp_path: Path) -> None:
     path = _write(tmp_path, f"{HEADER}\n12:03:04.000,1,2,3,4,5,6\n", "clock.csv")
     assert _error(path) == (

@@ -1622,6 +1622,9 @@ def _parse_careful(
                 clock = name in ("t", "nanosec") and re.fullmatch(r"\s*\d{1,2}:\d{2}(:\d{2}([.,]\d+)?)?\s*", cell)
                 hint = ("; clock times (hh:mm:ss) are not read: give t in seconds, or map a column of seconds or "
                         "stamps with --columns t=NAME") if clock else ""  # fmt: skip
+                if not comma and re.fullmatch(r"\s*[-+]?\d+,\d+\s*", cell):  # a quoted decimal comma
+                    hint = ("; a decimal comma: read with semicolon or tab delimiters only (a comma-separated file "
+                            "needs decimal points; re-export it with them, or with ';' between cells)")
                 raise InputError(f"{where}: expected a number, got {cell!r}{hint}") from None
             if math.isnan(value) and missing != "fail":
                 sample[roles.index(name)] = math.nan
