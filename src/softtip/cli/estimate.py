@@ -23,6 +23,7 @@ from softtip.cli.options import (
     is_bag,
     log_format_given,
     log_format_kwargs,
+    log_format_names,
     log_format_options,
     make_config,
     optional_extra,
@@ -222,8 +223,8 @@ def _estimate(
         log = read_log(getattr(sys.stdin, "buffer", sys.stdin), units=units, **formats)  # bytes: compressed input too
     elif is_bag(input_path):
         if log_format_given(formats):
-            raise click.UsageError("--columns, --force-units, --moment-units, --time-units, --missing and --skip-rows "
-                                   "apply to CSV input; a bag's WrenchStamped messages are in N, N·m and ns")  # fmt: skip
+            raise click.UsageError(f"{log_format_names()} apply to CSV input; a bag's WrenchStamped messages are in "
+                                   "N, N·m and ns")  # fmt: skip
         bag = optional_extra("softtip.io.bag", "ros")
         bag_log = bag.read_bag(input_path, topic, allow_partial=allow_partial)
         bag_warnings(input_path, bag_log)

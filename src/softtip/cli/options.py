@@ -252,6 +252,12 @@ def log_format_kwargs(opts: dict) -> dict:
     }  # fmt: skip
 
 
+def log_format_names() -> str:
+    """The :func:`log_format_options` as a message names them: ``--columns, …, --missing and --skip-rows``."""
+    names = ["--" + key.replace("_", "-") for key in log_format_kwargs({})]
+    return f"{', '.join(names[:-1])} and {names[-1]}"
+
+
 def log_format_given(kwargs: dict) -> bool:
     """Whether any :func:`log_format_options` differs from its default."""
     return any(v not in (None, "fail", {}) for v in kwargs.values())

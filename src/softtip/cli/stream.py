@@ -19,6 +19,7 @@ from softtip.cli.options import (
     full_scale_range,
     log_format_given,
     log_format_kwargs,
+    log_format_names,
     log_format_options,
     make_config,
     optional_extra,
@@ -143,7 +144,7 @@ def stream(
         raise click.UsageError("--strict applies to a live sensor (--netft HOST)")
     formats = log_format_kwargs(estimator_opts)
     if host is not None and log_format_given(formats):
-        raise click.UsageError("--columns, --force-units, --moment-units, --time-units, --missing and --skip-rows apply to --replay")
+        raise click.UsageError(f"{log_format_names()} apply to --replay")
     check_outputs(
         [("--replay", replay), ("--payload", payload), ("--tip", tip if os.path.isfile(tip) else None),
          ("--bias", estimator_opts.get("bias_file"))],

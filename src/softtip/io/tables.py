@@ -1418,9 +1418,11 @@ _SPLIT_STAMP = {"t": (9.2e9, "whole seconds from 0 to 9.2e9"), "nanosec": (1e9, 
 
 
 def _split_stamp_valid(role: str, value: Any) -> Any:
-    """Whether ``value`` (a number or an array) is a valid ``role`` part of a split stamp."""
-    v = np.asarray(value)
-    return (v >= 0) & (v < _SPLIT_STAMP[role][0]) & (v == np.floor(v))
+    """Whether ``value`` (a float, or an array: elementwise) is a valid ``role`` part of a split stamp."""
+    high = _SPLIT_STAMP[role][0]
+    if isinstance(value, float):  # a cell of the row-by-row parser: no array per cell
+        return 0.0 <= value < high and value == math.floor(value)
+    return (value >= 0) & (value < high) & (value == np.floor(value))
 
 
 def _combine_time(block: NDArray[np.float64], roles: list[str]) -> NDArray[Any]:
