@@ -143,8 +143,8 @@ class EstimatorConfig:
     area_share : float
         The contact reads ``area`` while more than this share of the evidence window's samples
         show ``h`` spread over both tangent axes (the ``enter`` test of ``area_ratio``), and
-        stops reading it as soon as the sliding window no longer does (default 0.5: a sustained
-        spread, at the default window a second of it; a transient spread while a new rock
+        stops reading it as soon as the sliding window no longer does (default 0.35: a sustained
+        spread, at the default window 0.7 s of it; a transient spread while a new rock
         begins, when the window holds the end of one excitation and the start of the next,
         does not make an area). A reading of the current window, not a verdict.
     rocked : sequence of (float, float)
