@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import os
 import resource
+import shlex
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -77,9 +78,9 @@ def run_with_markdown(main: Callable[[list[str]], int | None], script: str, argv
         cpu = sum(u.ru_utime + u.ru_stime for u in map(resource.getrusage, (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN)))
         took = (f"{wall / 60:.1f} min ({cpu / 60:.1f} min CPU) on {os.cpu_count()} cores, load average "
                 f"{load:.1f} at the start and {os.getloadavg()[0]:.1f} at the end")  # fmt: skip
-        command = " ".join([f"python benchmarks/{script}", *argv])
+        command = shlex.join(["python", f"benchmarks/{script}", *argv])  # quoted: the line runs as printed
         text = "".join(tee.kept)
         body = f"```text\n{text}```\n" if code_block else ("\n" + text).replace("\n### ", "\n#### ")[1:]
-        path.write_text(f"<!-- written by {command} --markdown {path.name}; do not edit -->\n\n"
+        path.write_text(f"<!-- written by {command} --markdown {shlex.quote(path.name)}; do not edit -->\n\n"
                         f"Run: `{command}`, {took}\n\n" + body, encoding="utf-8")  # fmt: skip
     return code

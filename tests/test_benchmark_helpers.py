@@ -44,7 +44,7 @@ def test_the_csv_formatter_comparison_runs_and_finds_the_same_bytes(bench_core) 
 def test_markdown_pages_are_what_the_run_printed(tmp_path: Path, capsys) -> None:
     """``--markdown PATH`` (benchmarks/_markdown.py): listed in the script's help, taken out of the
     arguments before its parser sees them, and PATH holds what the run printed under the command
-    that made it; a failed run writes no page."""
+    that made it (quoted, so that it runs as printed); a failed run writes no page."""
     sys.path.insert(0, str(BENCHMARKS))
     try:
         from _markdown import markdown_option, run_with_markdown
@@ -55,6 +55,7 @@ def test_markdown_pages_are_what_the_run_printed(tmp_path: Path, capsys) -> None
     def main(argv):
         ap = argparse.ArgumentParser(prog="bench_x.py")
         ap.add_argument("--rows", type=int)
+        ap.add_argument("--label", nargs="*")
         markdown_option(ap)
         args = ap.parse_args(argv)
         assert args.markdown is None  # taken out before the parser
@@ -66,6 +67,10 @@ def test_markdown_pages_are_what_the_run_printed(tmp_path: Path, capsys) -> None
     text = page.read_text(encoding="utf-8")
     assert text.startswith("<!-- written by python benchmarks/bench_x.py --rows 3 --markdown page.md; do not edit -->")
     assert "Run: `python benchmarks/bench_x.py --rows 3`" in text and text.endswith("#### 3 rows\n\n| a |\n| --- |\n")
+    page.unlink()
+    # an argument with spaces is quoted: the printed command runs as it reads
+    assert run_with_markdown(main, "bench_x.py", ["--rows", "2", "--label", "plate 1 mm", "--markdown", str(page)]) == 0
+    assert "Run: `python benchmarks/bench_x.py --rows 2 --label 'plate 1 mm'`" in page.read_text(encoding="utf-8")
     page.unlink()
     assert run_with_markdown(main, "bench_x.py", ["--rows", "-1", "--markdown", str(page)]) == 1 and not page.exists()
     with pytest.raises(SystemExit):

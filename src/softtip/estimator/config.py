@@ -181,12 +181,17 @@ class EstimatorConfig:
         ``unconfirmed`` line's, and a confirmed line's where the current window was excited
         about one axis), added in quadrature to the sample's standard
         deviation (default 5°). The line's small resistance to rolling about its own edge
-        follows the same excitation and turns the axis by an amount no window of it shows: on
-        the simulator's papers' grasps of plates ≤ 3 mm, wedges and Ø 4–6 mm cylinders the
-        median errors were 2.5–7.7°, while the sensor noise alone accounted for about 3.3° at
-        any rate unfiltered and 0.3–0.7° behind a 20 Hz low-pass. A bound more than a
-        calibration (thin plates are off by less, thin cylinders at times by more); 0: the
-        noise only. Not applied with ``line_evidence`` off (the papers' behaviour).
+        follows the same excitation and turns the axis by an amount no window of it shows, and
+        that amount depends on the object and the skin: in the papers' single tilt on softtip's
+        Winkler skin it grows with the angle between the tilt axis and the line and with the
+        object's bluntness (1.5–1.8° with the line across the joint axis; at ±45° 2.2–2.9° on
+        1–2 mm plates and up to 10° on a 120° wedge), on Drake's hydroelastic contact it stays
+        1.5–3.2° up to ±60° for every object. Set on the Winkler skin's single tilts (the
+        largest biases: RMS error / standard deviation at most 1.5 per object group at the
+        benchmark's angles) and checked on Drake, where it is conservative (0.45–0.59); no
+        value suits every group of both (the benchmarks' two-physics page, "the one-axis model
+        error"). A bound more than a calibration; 0: the noise only. Not applied with
+        ``line_evidence`` off (the papers' behaviour).
     evidence_reset_distance : float
         m; the evidence starts afresh (window, verdict, held direction) when the contact
         point moves farther than this from where it started (default 1 mm): what a window
