@@ -123,6 +123,7 @@ from softtip.sim import (
     paper_scenario,
     rock_scenario,
     simulate_grasp,
+    simulator_digest,
     tangent_frame,
 )
 
@@ -172,6 +173,7 @@ class Physics:
 
     def __init__(self, name: str, args):
         self.name, self.args = name, args
+        self.digest = simulator_digest()  # keys the Winkler logs' cache
         scale = args.modulus / DRAKE_MODULUS
         self.winkler_modulus = WINKLER_MODULUS * scale
 
@@ -184,8 +186,9 @@ class Physics:
                                   friction=a.friction, solver=solver, progress=not a.no_progress)  # fmt: skip
         params = ContactParams(modulus=self.winkler_modulus, friction=a.friction,
                                shear_modulus=2e6 if friction_load else None)  # fmt: skip
-        key = json.dumps({"v": 1, "tip": repr(tip), "obj": obj.describe(), "scn": scn.as_dict(),
-                          "params": params.as_dict()}, sort_keys=True, default=str)  # fmt: skip
+        # the simulator's sources and libraries are in the key: a change to them simulates again
+        key = json.dumps({"simulator": self.digest, "tip": repr(tip), "obj": obj.describe(),
+                          "scn": scn.as_dict(), "params": params.as_dict()}, sort_keys=True, default=str)  # fmt: skip
         path = CACHE / "winkler" / f"{hashlib.sha256(key.encode()).hexdigest()[:24]}.npz"
         if path.exists():
             with np.load(path) as z:

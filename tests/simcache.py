@@ -43,11 +43,9 @@ import io
 import os
 import pickle
 import shutil
-import sys
 import tempfile
 import types
 from collections.abc import Callable
-from importlib import metadata
 from pathlib import Path
 from typing import Any
 
@@ -55,34 +53,20 @@ import numpy as np
 
 import softtip
 import softtip.sim
+from softtip.sim.digest import simulator_digest
 
-#: Packages whose sources decide what the simulator computes
-SOURCE_PACKAGES = ("sim", "core")
 #: Roots of the modules whose code an input may refer to (their versions are in the key)
 TRUSTED_MODULES = frozenset({"softtip", "numpy", "builtins", "copyreg", "collections", "math", "functools", "_codecs"})
-#: Libraries whose versions may move the simulator's last bits (numba and trimesh: the mesh tips)
-NUMERIC_DISTRIBUTIONS = ("numpy", "scipy", "numba", "trimesh")
 _PROTOCOL = 5
 #: Where a run without a pytest cache keeps its cache (set by the process that starts the workers)
 _RUN_ENV = "SOFTTIP_TEST_SIM_RUN_DIR"
 
 
-def _installed(distribution: str) -> str:
-    try:
-        return f"{distribution} {metadata.version(distribution)}"
-    except metadata.PackageNotFoundError:
-        return f"{distribution} absent"
-
-
 def version_key() -> str:
-    """softtip's version, its simulator's sources and the numeric libraries' versions, hashed."""
-    h = hashlib.sha256()
-    for part in (softtip.__version__, sys.version, *map(_installed, NUMERIC_DISTRIBUTIONS)):
-        h.update(part.encode() + b"\0")
-    root = Path(softtip.__file__).parent
-    for package in SOURCE_PACKAGES:
-        for path in sorted((root / package).rglob("*.py")):
-            h.update(path.relative_to(root).as_posix().encode() + b"\0" + path.read_bytes() + b"\0")
+    """softtip's version and :func:`softtip.sim.simulator_digest` (the simulator's sources and the
+    numeric libraries' versions), hashed."""
+    digest = simulator_digest(Path(softtip.__file__).parent)
+    h = hashlib.sha256(f"{softtip.__version__}\0{digest}".encode())
     return h.hexdigest()[:20]
 
 

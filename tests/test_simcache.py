@@ -22,6 +22,7 @@ import simcache
 import softtip
 from softtip.core.fingertip import murakami2006
 from softtip.sim import Plate, SensorModel, paper_scenario
+from softtip.sim.digest import SOURCE_PACKAGES
 from softtip.sim.pose import rotation_matrix
 from softtip.sim.simulate import simulate_grasp
 
@@ -160,7 +161,7 @@ def test_without_a_directory_every_call_computes():
 def test_the_version_key_follows_the_simulators_sources(tmp_path, monkeypatch):
     root = Path(softtip.__file__).parent
     copy = tmp_path / "softtip"
-    for package in simcache.SOURCE_PACKAGES:
+    for package in SOURCE_PACKAGES:
         shutil.copytree(root / package, copy / package, ignore=shutil.ignore_patterns("__pycache__"))
     (copy / "__init__.py").write_text("")
     monkeypatch.setattr(softtip, "__file__", str(copy / "__init__.py"))

@@ -10,7 +10,8 @@ Modules: :mod:`~softtip.sim.skin` (surface elements), :mod:`~softtip.sim.objects
 objects), :mod:`~softtip.sim.foundation` (Winkler + friction), :mod:`~softtip.sim.scenario`
 (grasp time series, the papers' hand), :mod:`~softtip.sim.sensor` (noise),
 :mod:`~softtip.sim.truth` (ground truth), :mod:`~softtip.sim.simulate` (the loop and the
-writers), :mod:`~softtip.sim.probing` (probing logs for calibration); the ``simulate`` command is :mod:`softtip.cli.simulate`.
+writers), :mod:`~softtip.sim.probing` (probing logs for calibration), :mod:`~softtip.sim.digest` (a key for
+caches of simulated logs); the ``simulate`` command is :mod:`softtip.cli.simulate`.
 
 Example
 -------
@@ -22,6 +23,7 @@ Example
 (500, 6)
 """
 
+from softtip.sim.digest import simulator_digest
 from softtip.sim.foundation import ContactModel, ContactParams, ContactResult, FrictionState
 from softtip.sim.objects import (
     OBJECT_KINDS,
@@ -57,6 +59,7 @@ from softtip.sim.skin import DEFAULT_ELEMENTS, SkinMesh, discretise_skin
 from softtip.sim.truth import GroundTruth, line_angle, tangent_frame
 
 __all__ = [
+    "simulator_digest",
     "ContactModel",
     "simulate_probing",
     "probing_presses",
