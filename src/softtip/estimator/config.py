@@ -148,9 +148,9 @@ class EstimatorConfig:
         begins, when the window holds the end of one excitation and the start of the next,
         does not make an area). A reading of the current window, not a verdict. Set on the
         benchmarks' rocked grasps on both contact models and checked on the held-out ones (a
-        stiffer, smaller tip, twice the noise at 1 kHz, 7 kHz): from 0.35, the rocked planes and
-        15 mm plates read ``line`` on 0–7 % of their samples where they read 3–20 %, while the
-        rocked thin lines' shares stay within 3 points.
+        stiffer, smaller tip, twice the noise at 1 kHz, 7 kHz): from 0.35, the rocked planes read
+        ``line`` on none of their samples where they read up to 7 %, the 15 mm plates on up to 12 %
+        where they read up to 20 %, while the rocked thin lines' shares stay within 3 points.
     rocked : sequence of (float, float)
         s, in the log's time: intervals during which the user rocked the object about two
         tangent axes (in turn or at once), stated because the wrench cannot always show it: on
