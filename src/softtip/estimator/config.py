@@ -187,15 +187,16 @@ class EstimatorConfig:
         deviation (default 5°). The line's small resistance to rolling about its own edge
         follows the same excitation and turns the axis by an amount no window of it shows, and
         that amount depends on the object and the skin: in the papers' single tilt on softtip's
-        Winkler skin it grows with the angle between the tilt axis and the line and with the
-        object's bluntness (1.5–1.8° with the line across the joint axis; at ±45° 2.2–2.9° on
-        1–2 mm plates and up to 10° on a 120° wedge), on Drake's hydroelastic contact it stays
-        1.5–3.2° up to ±60° for every object. Set on the Winkler skin's single tilts (the
-        largest biases: RMS error / standard deviation at most 1.5 per object group at the
-        benchmark's angles) and checked on Drake, where it is conservative (0.45–0.59); no
-        value suits every group of both (the benchmarks' two-physics page, "the one-axis model
-        error"). A bound more than a calibration; 0: the noise only. Not applied with
-        ``line_evidence`` off (the papers' behaviour).
+        Winkler skin it grows with the object's bluntness and as the line turns from across the
+        joint axis toward it (median errors 1.5–1.8° with the line across the joint axis; 45°
+        from it 2.2–2.9° on 1–2 mm plates and up to 10.1° on a 120° wedge), on Drake's
+        hydroelastic contact it is 1.5–3.2° up to 60° from across for every object. Set on the
+        Winkler skin's single tilts at the benchmarks' four line angles (RMS error / standard
+        deviation at most 1.5 per object group there) and checked on Drake, where the rocked
+        lines and single tilts are conservative (0.45–0.59) and the friction loads within
+        0.78–1.22; no value suits every group of both (docs/benchmarks/two-physics.md, "the
+        one-axis model error"). A bound more than a calibration; 0: the noise only. Not applied
+        with ``line_evidence`` off (the papers' behaviour).
     evidence_reset_distance : float
         m; the evidence starts afresh (window, verdict, held direction) when the contact
         point moves farther than this from where it started (default 1 mm): what a window
@@ -373,8 +374,9 @@ class EstimatorConfig:
         math.radians(0.4), "Model error of a window's line direction (what no window shows), added in quadrature to "
         "its standard deviation (0: none).", unit="rad", low=0.0, cli_unit="deg", metavar="DEG", group="evidence")
     unconfirmed_model_std: float = setting(
-        math.radians(5.0), "Model error of an unconfirmed line's direction (from one axis of excitation: its rolling "
-        "bias), added in quadrature to its standard deviation (0: none).", unit="rad", low=0.0, cli_unit="deg",
+        math.radians(5.0), "Model error of a line direction from one axis of excitation (an unconfirmed line's, or a "
+        "confirmed line's window that saw one axis: its rolling bias), added in quadrature to its standard deviation "
+        "(0: none).", unit="rad", low=0.0, cli_unit="deg",
         metavar="DEG", group="evidence")
     evidence_reset_distance: float = setting(
         1e-3, "The line evidence starts afresh when the contact point moves farther than this.", unit="m", low=0.0, low_open=True, cli_unit="mm", metavar="LENGTH", group="evidence")
