@@ -130,6 +130,7 @@ def run(*args: object) -> subprocess.CompletedProcess:
 def test_cli_in_pieces_writes_the_one_shot_output(tmp_path: Path, fmt: str) -> None:
     t, w = _log(seed=11)
     t[300] = t[299]  # a repeated stamp: the reader's warning says the same
+    t[len(t) // 2 :] += 0.5  # a recorder that lost half a second: so does its note on the gap
     src = tmp_path / f"in.{fmt}"
     write_table({"t": t, **{k: w[:, i] for i, k in enumerate(WRENCH)}, "trial": np.full(len(t), "a")}, src)
     outs = {}
@@ -140,6 +141,7 @@ def test_cli_in_pieces_writes_the_one_shot_output(tmp_path: Path, fmt: str) -> N
         outs[label] = (dest, done.stderr.replace(str(dest), "OUT"))
     assert outs["one"][1] == outs["pieces"][1]
     assert "repeated time stamp" in outs["one"][1] and "contact 3:" in outs["one"][1]
+    assert "t has 1 gap longer than 0.1 s (the largest 0.51 s" in outs["one"][1]
     if fmt == "csv":
         assert outs["one"][0].read_bytes() == outs["pieces"][0].read_bytes()
     else:

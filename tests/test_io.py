@@ -682,6 +682,21 @@ def test_repeated_stamps_are_kept_counted_and_located(tmp_path: Path) -> None:
     )
 
 
+def test_gaps_in_t_are_counted_and_the_largest_located(tmp_path: Path) -> None:
+    """Samples a recorder lost (a step of more than 10 median steps and 0.05 s): kept, and said
+    once with how many, the largest and the line after it; jitter and a clean log say nothing."""
+    t = np.arange(400) * 1e-3
+    t[100:] += 0.2  # 200 samples lost before line 102 (the header is line 1)
+    t[300:] += 0.06  # and 60 before line 302
+    log = read_log(_write(tmp_path, _log_text(t)))
+    np.testing.assert_array_equal(log.t, t)
+    (note,) = log.warnings
+    assert "t has 2 gaps longer than 0.05 s (the largest 0.201 s, before line 102: about 200 samples at one per " in note
+    jitter = np.arange(400) * 1e-3
+    jitter[200:] += 0.004  # 4 samples: a recorder's hiccup, not a gap
+    assert read_log(_write(tmp_path, _log_text(jitter))).warnings == ()
+
+
 def test_repeated_stamp_in_a_file_with_quoted_cells_names_the_row(tmp_path: Path) -> None:
     path = _write(tmp_path, f'{HEADER},note\n0,1,2,3,4,5,6,"a\nb"\n0.001,1,2,3,4,5,6,x\n0.001,1,2,3,4,5,6,x\n')
     log = read_log(path)

@@ -1115,6 +1115,25 @@ _PLAUSIBLE_RATE_HZ = (2.0, 100e3)
 #: 7 kHz, an ATI Net F/T's rate): with no unit given, the run asks which
 _AMBIGUOUS_RATE_HZ = 20.0
 _TIME_UNITS = (("milliseconds", 1e-3, "ms"), ("microseconds", 1e-6, "us"), ("nanoseconds", 1e-9, "ns"))
+#: A step in t longer than this many median steps, and than :data:`_GAP_MIN_S`, is a gap (samples
+#: a recorder lost): said, not refused
+_GAP_STEPS = 10.0
+_GAP_MIN_S = 0.05
+
+
+def _gap_threshold(median: float) -> float:
+    """s: the step in t beyond which samples are missing, for a log whose median step is ``median``."""
+    return max(_GAP_STEPS * median, _GAP_MIN_S)
+
+
+def _gap_note(source: str, count: int, largest: float, where: str, median: float) -> str:
+    """The note on the gaps in t: how many, the largest and where it ends."""
+    return (
+        f"{source}: t has {count} gap{'s' if count > 1 else ''} longer than {_gap_threshold(median):.3g} s (the largest "
+        f"{largest:.6g} s, before {where}: about {max(round(largest / median) - 1, 1)} samples at one per "
+        f"{median:.6g} s); the estimator runs on across a gap as if its two sides were consecutive samples (its time "
+        "windows hold none from inside it)"
+    )
 
 
 def _time_notes(
@@ -1165,6 +1184,11 @@ def _time_notes(
                 "if in milliseconds, and no unit in the header says which (a force/torque sensor may stream at "
                 "either): give --time-units s or --time-units ms"
             )
+        if low <= rate <= high:  # a time scale in doubt is said above; its gaps would say nothing
+            gaps = step > _gap_threshold(median)
+            if gaps.any():
+                i = int(np.argmax(step)) + 1
+                notes.append(_gap_note(source, int(np.count_nonzero(gaps)), float(step[i - 1]), where(i), median))
     return n_repeated, notes
 
 
@@ -2407,6 +2431,12 @@ class LogBlocks:
         self._repeat_t = math.nan
         self._first_t: NDArray[np.float64] | None = None
         self._last_t = -math.inf
+        # gaps in t (steps beyond _gap_threshold of the first block's median step): how many,
+        # the largest and the row after it
+        self._gap_median = math.nan
+        self._gaps = 0
+        self._gap_largest = 0.0
+        self._gap_row = -1
         self._first_line: int | None = None
         self._quoted: bool | None = None  # whether the data holds a quote (then rows may span lines); None: not looked
         # CSV: rows (one line each) read and found good before the reader stopped on what looks like an error
@@ -2438,6 +2468,19 @@ class LogBlocks:
                         "--time-units" in note for note in _time_notes(t, self.source, None)[1])):  # fmt: skip
                     raise NotStreamable("absolute stamps or a time unit to guess: read_log counts or refuses them")
                 self._first_t = t
+                moving = np.diff(t)
+                moving = moving[moving > 0]
+                if len(moving) >= 10 and _PLAUSIBLE_RATE_HZ[0] <= 1.0 / float(np.median(moving)) <= _PLAUSIBLE_RATE_HZ[1]:
+                    self._gap_median = float(np.median(moving))
+            if self._gap_median == self._gap_median:  # a rate to measure gaps against
+                step = np.diff(np.concatenate(([self._last_t], t)) if self.n else t)
+                gaps = np.flatnonzero(step > _gap_threshold(self._gap_median))
+                if len(gaps):
+                    self._gaps += len(gaps)
+                    k = int(gaps[np.argmax(step[gaps])])
+                    if step[k] > self._gap_largest:
+                        self._gap_largest = float(step[k])
+                        self._gap_row = self.n + k + (0 if self.n else 1)
             self._last_t = float(t[-1])
             self.n += len(t)
             yield t, wrench_to_si(wrench, self.units or "si"), extra
@@ -2461,6 +2504,9 @@ class LogBlocks:
             )
         if self._first_t is not None:
             notes += [n for n in _time_notes(self._first_t, self.source, first_line)[1] if "median step" in n]
+        if self._gaps:
+            where = f"line {first_line + self._gap_row}" if first_line is not None else f"data row {self._gap_row + 1}"
+            notes.append(_gap_note(self.source, self._gaps, self._gap_largest, where, self._gap_median))
         if not self.parquet and first_line is not None:
             cut = self._cut_tail(first_line)
             if cut:
