@@ -697,6 +697,28 @@ def test_gaps_in_t_are_counted_and_the_largest_located(tmp_path: Path) -> None:
     assert read_log(_write(tmp_path, _log_text(jitter))).warnings == ()
 
 
+@pytest.mark.parametrize("offset", [-1, 0, 1])
+def test_a_gap_read_in_blocks_is_said_as_read_at_once(tmp_path: Path, monkeypatch, offset: int) -> None:
+    """The block reader (``iter_log``, the run in pieces) says a gap in the words of ``read_log``,
+    also on a block's first row, its last, and the first row of the next."""
+    from softtip.io.tables import iter_log
+
+    monkeypatch.setattr(sio, "_CSV_BLOCK_BYTES", 8192)  # blocks of about 70 rows
+    monkeypatch.setattr(sio, "_LOCATE_BYTES", 4096)
+    t = np.arange(2000) * 1e-3
+    path = _write(tmp_path, _log_text(t))
+    sizes = [len(block[0]) for block in iter_log(path)]
+    assert len(sizes) > 5
+    at = int(np.cumsum(sizes)[3]) + offset  # the fifth block's first row, and either side of it
+    t[at:] += 0.3
+    path = _write(tmp_path, _log_text(t))
+    blocks = iter_log(path)
+    for _ in blocks:
+        pass
+    assert blocks.warnings() == read_log(path).warnings
+    assert f"before line {at + 2}: about 300 samples" in blocks.warnings()[0]
+
+
 def test_repeated_stamp_in_a_file_with_quoted_cells_names_the_row(tmp_path: Path) -> None:
     path = _write(tmp_path, f'{HEADER},note\n0,1,2,3,4,5,6,"a\nb"\n0.001,1,2,3,4,5,6,x\n0.001,1,2,3,4,5,6,x\n')
     log = read_log(path)

@@ -1121,6 +1121,13 @@ _GAP_STEPS = 10.0
 _GAP_MIN_S = 0.05
 
 
+def _median_step(step: NDArray[np.float64]) -> float:
+    """s: the median of the steps in t that move (NaN for fewer than 10: a few hand-typed rows
+    say nothing about a sensor's rate)."""
+    moving = step[step > 0]
+    return float(np.median(moving)) if len(moving) >= 10 else math.nan
+
+
 def _gap_threshold(median: float) -> float:
     """s: the step in t beyond which samples are missing, for a log whose median step is ``median``."""
     return max(_GAP_STEPS * median, _GAP_MIN_S)
@@ -1161,9 +1168,8 @@ def _time_notes(
             f"{source}: {n_repeated} repeated time stamp{'s' if n_repeated > 1 else ''} (the first on {where(i)}: "
             f"t = {float(t[i]):.10g} s as on the {'line' if first_line is not None else 'row'} before); kept in file order"
         )
-    moving = step[step > 0]
-    if len(moving) >= 10:  # a few hand-typed rows say nothing about a sensor's rate
-        median = float(np.median(moving))
+    median = _median_step(step)
+    if median == median:
         low, high = _PLAUSIBLE_RATE_HZ
         rate = 1.0 / median
         if not low <= rate <= high:
@@ -2458,7 +2464,8 @@ class LogBlocks:
             if not (np.isfinite(t).all() and np.isfinite(wrench).all()) or (np.diff(t) < 0).any() or t[0] < self._last_t:
                 self._error_at = self.n
                 raise NotStreamable("a value to word")
-            same = np.flatnonzero(np.diff(np.concatenate(([self._last_t], t))) == 0)
+            step = np.diff(t, prepend=self._last_t)  # step[k]: from the row before to row k (inf at the first)
+            same = np.flatnonzero(step == 0)
             if len(same) and self._first_repeat < 0:
                 self._first_repeat = self.n + int(same[0])
                 self._repeat_t = float(t[same[0]])
@@ -2468,19 +2475,16 @@ class LogBlocks:
                         "--time-units" in note for note in _time_notes(t, self.source, None)[1])):  # fmt: skip
                     raise NotStreamable("absolute stamps or a time unit to guess: read_log counts or refuses them")
                 self._first_t = t
-                moving = np.diff(t)
-                moving = moving[moving > 0]
-                if len(moving) >= 10 and _PLAUSIBLE_RATE_HZ[0] <= 1.0 / float(np.median(moving)) <= _PLAUSIBLE_RATE_HZ[1]:
-                    self._gap_median = float(np.median(moving))
-            if self._gap_median == self._gap_median:  # a rate to measure gaps against
-                step = np.diff(np.concatenate(([self._last_t], t)) if self.n else t)
-                gaps = np.flatnonzero(step > _gap_threshold(self._gap_median))
+                median = _median_step(step[1:])
+                if median == median and _PLAUSIBLE_RATE_HZ[0] <= 1.0 / median <= _PLAUSIBLE_RATE_HZ[1]:
+                    self._gap_median = median  # gaps are measured against the first block's rate
+            if self._gap_median == self._gap_median:
+                gaps = np.flatnonzero((step > _gap_threshold(self._gap_median)) & np.isfinite(step))
                 if len(gaps):
                     self._gaps += len(gaps)
                     k = int(gaps[np.argmax(step[gaps])])
                     if step[k] > self._gap_largest:
-                        self._gap_largest = float(step[k])
-                        self._gap_row = self.n + k + (0 if self.n else 1)
+                        self._gap_largest, self._gap_row = float(step[k]), self.n + k
             self._last_t = float(t[-1])
             self.n += len(t)
             yield t, wrench_to_si(wrench, self.units or "si"), extra
