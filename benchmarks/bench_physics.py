@@ -33,6 +33,9 @@ over the rocked samples (k in mm and the relative residual); and, on every rocke
 truth's side of row (b): how the true pressure centre travelled (standard deviation along the
 principal axes of its travel, noise-free) and the contact area. A strip-like contact only rolls
 along itself (minor travel far below the major); an area travels alike both ways.
+On every single tilt it prints the held wrench, noise-free (:func:`_held_wrench`): a line
+rolled about its own edge (along the joint axis) gives the load and ``h`` of a line at right
+angles to it tilted less (``--tilt 0.65 --angles 0``), on either physics.
 
 Varied settings (what the estimator was not tuned on): ``--modulus`` (Drake's hydroelastic
 modulus; the Winkler skin's modulus is scaled by the same factor from its 0.6 MPa), ``--tip-radius``,
@@ -316,6 +319,8 @@ def run_cases(phys: Physics, args, tip, objects, kind: str, angles, results: dic
                         results.setdefault("sweep", {}).setdefault((kind, deg), []).append(ga)
                     if check is not None and seed == 101 and kind == "rock":
                         check.append((name, _locking(est, t >= start), _travel(log, start)))
+                    if check is not None and seed == 101 and kind == "tilt":
+                        results.setdefault("held_wrench", []).append((name, _held_wrench(log, tip, args, start)))
                     if seed == 101 and kind == "friction" and args.decompose:
                         results.setdefault("decompose", []).append((name, _decompose(est, log, t, t >= start, tip)))
 
@@ -352,6 +357,28 @@ def _locking(est, sel) -> tuple[float, float]:
     k = float(np.sum(h * b) / np.sum(b * b))
     res = float(np.sqrt(np.sum((h - k * b) ** 2) / np.sum(h * h)))
     return k * 1e3, res
+
+
+def _held_wrench(log: SimLog, tip, args, start: float) -> dict:
+    """The single tilt's held wrench, noise-free (``--check``): medians after ``start`` of the
+    tangential force ``|f_t|`` (mN) and ``h`` about the latched point (N·mm), the locking fit
+    ``h = k n₀ × f_t`` (k in mm, relative residual), the angle of ``h`` to the true line (deg:
+    90° where ``h`` lies across the line, as a line tilted across it gives; 0° along it) and the
+    estimator's reading of the noise-free wrench (share ``line``, median direction error)."""
+    est = estimate(log.t, log.wrench_true, estimation_tip(tip, args.estimate_tip), EstimatorConfig())
+    sel = log.t >= start
+    k, res = _locking(est, sel)
+    m = sel & (est.state > 0)
+    n0, f = est.normal[m], est.wrench[m, :3]
+    ft = f - np.sum(f * n0, -1, keepdims=True) * n0
+    d = log.truth.direction[m]
+    cos = np.abs(np.sum(est.h[m] * d, -1)) / (np.linalg.norm(est.h[m], axis=-1) * np.linalg.norm(d, axis=-1))
+    line = m & (est.state == 2)
+    err = np.degrees(np.abs(axial_difference(est.angle[line], log.truth.angle[line])))
+    return {"ft": float(np.median(np.linalg.norm(ft, axis=-1))) * 1e3, "h": float(np.median(est.h_norm[m])) * 1e3,
+            "k": k, "res": res, "h_to_line": float(np.degrees(np.arccos(np.clip(np.median(cos), 0.0, 1.0)))),
+            "line": float(np.mean(est.state[m] == 2)) if m.any() else math.nan,
+            "err": float(np.median(err)) if len(err) else math.nan}  # fmt: skip
 
 
 def _decompose(est, log: SimLog, t, sel, tip) -> dict:
@@ -682,7 +709,9 @@ def main(argv=None) -> int:
                     help="Drake solver of the rocking grasps (default: frictionless quasi-static, as the issue's; "
                          "sap: with friction μ, where the load is not locked to h; experimental: a rocked 1 mm plate "
                          "walks 4 mm across the skin within 2 s of rocking and is reported as not simulated)")
-    ap.add_argument("--check", action="store_true", help="also fit h = k n0 × f_t on the rocked lines (locking)")
+    ap.add_argument("--check", action="store_true",
+                    help="also fit h = k n0 × f_t on the rocked lines (locking), the true pressure centre's travel, and "
+                         "the single tilt's held wrench (noise-free)")
     ap.add_argument("--per-grasp", action="store_true", help="print every grasp's row")
     ap.add_argument("--decompose", action="store_true",
                     help="with the friction section: per grasp, the estimator's depth against the lever about the true "
@@ -749,7 +778,7 @@ def main(argv=None) -> int:
             fa = args.friction_angles if args.friction_angles is not None else ([30.0] if args.quick else [0.0, 30.0, -45.0])
             run_cases(p, args, tip, fl, "friction", fa, res)
         if "tilt" in args.sections:
-            run_cases(p, args, tip, lines, "tilt", angles, res)
+            run_cases(p, args, tip, lines, "tilt", angles, res, chk)
         all_res[p.name], checks[p.name] = res, chk
 
     print("\n### issue 27's held-out table, default settings\n")
@@ -786,6 +815,21 @@ def main(argv=None) -> int:
                 rows.setdefault(nm, {})[p.name] = f"{major:.2f} / {minor:.2f} mm, {f'{off:.1f}°' if math.isfinite(off) else '—'}, {area:.0f} mm²"
         for nm, cells in rows.items():
             print(f"| {nm} | " + " | ".join(cells.get(p.name, "—") for p in physics) + " |")
+        held = {p.name: all_res[p.name].get("held_wrench", []) for p in physics}
+        if any(held.values()):
+            print("\n### the single tilt's held wrench, noise-free: tangential force |f_t|, |h| about the latched point, "
+                  "the locking fit h = k n0 × f_t, the angle of h to the true line, and the estimator's reading "
+                  "(share line, median error)\n")  # fmt: skip
+            print("| grasp | " + " | ".join(f"{p.name}: \\|f_t\\|, \\|h\\|; k, residual; h to the line; line, error" for p in physics) + " |")
+            print("|" + " --- |" * (len(physics) + 1))
+            rows = {}
+            for p in physics:
+                for nm, r in held[p.name]:
+                    err = f"{r['err']:.1f}°" if math.isfinite(r["err"]) else "—"
+                    rows.setdefault(nm, {})[p.name] = (f"{r['ft']:.1f} mN, {r['h']:.2f} N·mm; {r['k']:+.1f} mm, {r['res']:.0%}; "
+                                                       f"{r['h_to_line']:.0f}°; {r['line']:.0%}, {err}")  # fmt: skip
+            for nm, cells in rows.items():
+                print(f"| {nm} | " + " | ".join(cells.get(p.name, "—") for p in physics) + " |")
     if args.sweep_unconfirmed:
         sweep_rows(physics, all_res, args.sweep_unconfirmed)
     if args.per_grasp:
