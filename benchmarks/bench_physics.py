@@ -312,11 +312,11 @@ def run_cases(phys: Physics, args, tip, objects, kind: str, angles, results: dic
                     g = Grasp(est, truth, t >= start)
                     g.name, g.group, g.angle = name, group, ang
                     results.setdefault(kind, []).append(g)
-                    for deg in args.sweep_unconfirmed or ():  # the same log, one setting changed
-                        alt = dataclasses.replace(cfg, unconfirmed_model_std=math.radians(deg))
+                    for deg, setting in _sweeps(args):  # the same log, one setting changed
+                        alt = dataclasses.replace(cfg, **{setting: math.radians(deg)})
                         ga = Grasp(estimate(t, w, estimation_tip(tip, args.estimate_tip), alt), truth, t >= start)
                         ga.name, ga.group, ga.angle = name, group, ang
-                        results.setdefault("sweep", {}).setdefault((kind, deg), []).append(ga)
+                        results.setdefault("sweep", {}).setdefault((setting, kind, deg), []).append(ga)
                     if check is not None and seed == 101 and kind == "rock":
                         check.append((name, _locking(est, t >= start), _travel(log, start)))
                     if check is not None and seed == 101 and kind == "tilt":
@@ -508,10 +508,19 @@ ROWS = (
 )
 
 
-def sweep_rows(physics: list, all_res: dict, values: list) -> None:
-    """Row (d) against ``unconfirmed_model_std``: RMS error / reported std per physics, scenario
-    and line group, each value a re-estimate of the same noisy logs."""
-    print("\n### row d against unconfirmed_model_std: RMS error / reported angle_std per group "
+#: the model errors ``--sweep-unconfirmed`` and ``--sweep-window`` re-estimate with (option, setting)
+SWEEPS = (("sweep_unconfirmed", "unconfirmed_model_std"), ("sweep_window", "window_model_std"))
+
+
+def _sweeps(args) -> list[tuple[float, str]]:
+    """``(deg, setting)`` of every re-estimate the sweep options ask for."""
+    return [(deg, setting) for opt, setting in SWEEPS for deg in getattr(args, opt) or ()]
+
+
+def sweep_rows(physics: list, all_res: dict, setting: str, values: list) -> None:
+    """Row (d) against one model error (``setting``): RMS error / reported std per physics,
+    scenario and line group, each value a re-estimate of the same noisy logs."""
+    print(f"\n### row d against {setting}: RMS error / reported angle_std per group "
           "(the same logs re-estimated; in band 0.7–1.5 marked ✔; in brackets the share of samples beyond 3σ)\n")
     print("| physics | scenario | group | " + " | ".join(f"{v:g}°" for v in values) + " |")
     print("| --- | --- | --- |" + " --- |" * len(values))
@@ -521,7 +530,7 @@ def sweep_rows(physics: list, all_res: dict, values: list) -> None:
             for grp in ("plates", "cylinders", "wedges"):
                 cells = []
                 for v in values:
-                    r = [g.ratio for g in sweep.get((kind, v), []) if g.group == grp]
+                    r = [g.ratio for g in sweep.get((setting, kind, v), []) if g.group == grp]
                     q = _rms(r) if r else math.nan
                     beyond = np.mean(np.concatenate(r) > 3) if r else math.nan
                     cells.append("—" if not math.isfinite(q) else f"{q:.2f}{' ✔' if 0.7 <= q <= 1.5 else ''} ({beyond:.0%})")
@@ -728,7 +737,10 @@ def main(argv=None) -> int:
                          "(softtip's mesh solver); the physics is the capsule's either way")
     ap.add_argument("--sweep-unconfirmed", type=float, nargs="+", metavar="DEG",
                     help="also re-estimate every grasp with these values of unconfirmed_model_std (deg) and print "
-                         "row (d) for each (the one-axis direction's model error: how it was set)")
+                         "row (d) for each (the model error of a direction from a held h: how it was set)")
+    ap.add_argument("--sweep-window", type=float, nargs="+", metavar="DEG",
+                    help="also re-estimate every grasp with these values of window_model_std (deg) and print row (d) "
+                         "for each (the model error of a window that saw one axis: how it was set)")  # fmt: skip
     ap.add_argument("--no-progress", action="store_true")
     args = ap.parse_args(argv)
     if args.seeds is None:
@@ -830,8 +842,9 @@ def main(argv=None) -> int:
                                                        f"{r['h_to_line']:.0f}°; {r['line']:.0%}, {err}")  # fmt: skip
             for nm, cells in rows.items():
                 print(f"| {nm} | " + " | ".join(cells.get(p.name, "—") for p in physics) + " |")
-    if args.sweep_unconfirmed:
-        sweep_rows(physics, all_res, args.sweep_unconfirmed)
+    for opt, setting in SWEEPS:
+        if getattr(args, opt):
+            sweep_rows(physics, all_res, setting, getattr(args, opt))
     if args.per_grasp:
         for n, r in all_res.items():
             per_grasp_rows(n, r)

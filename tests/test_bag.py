@@ -17,7 +17,7 @@ from rosbags.typesys import Stores, get_typestore
 from softtip import load_example
 from softtip.errors import InputError
 from softtip.io.bag import TOPICS, read_bag
-from softtip.io.tables import write_table
+from softtip.io.tables import read_log, write_table
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
 WRENCH = "geometry_msgs/msg/WrenchStamped"
@@ -244,6 +244,19 @@ def test_csv_input_to_bag(tmp_path):
         frames = {reader.deserialize(raw, c.msgtype).header.frame_id for c, _, raw in reader.messages() if c.topic != TOPICS["state"]
                   and c.msgtype != "std_msgs/msg/String" and c.msgtype != "visualization_msgs/msg/MarkerArray"}
     assert frames == {"ft_sensor"}  # a CSV has no frame: RViz needs one
+
+
+def test_a_ros_export_keeps_its_stamps_in_the_bag(tmp_path):
+    """A ``rostopic echo -p`` export's header stamps (ns since the epoch) are the bag's message
+    stamps, as from the bag it was exported from: the robot's other logs still line up."""
+    src = Path(__file__).parent / "data" / "foreign" / "rostopic_echo_p.csv"
+    stamps = read_log(src).stamps_ns
+    out = run("estimate", src, "--to-bag", tmp_path / "b", "-q")
+    assert out.returncode == 0, out.stderr
+    with AnyReader([tmp_path / "b"], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
+        raw = [(ts, reader.deserialize(m, c.msgtype)) for c, ts, m in reader.messages() if c.topic == "/softtip/wrench_raw"]
+    np.testing.assert_array_equal([ts for ts, _ in raw], stamps)
+    np.testing.assert_array_equal([m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec for _, m in raw], stamps)
 
 
 # --- damaged bags, repeated stamps (issue 13, items 11 and 13) ----------------------------

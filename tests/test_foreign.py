@@ -119,6 +119,11 @@ def test_columns_option_and_headerless_positions(tmp_path: Path) -> None:
     with pytest.raises(InputError, match=r"looks like data.*--columns t=1,fx=2"):
         read_log(bare)
     np.testing.assert_array_equal(read_log(bare, columns="t=1,fx=2,fy=3,fz=4,mx=5,my=6,mz=7").t, read_log(REFERENCE).t)
+    # a first row of zeros repeats its "names": still named data, not a header with a duplicate
+    zeros = tmp_path / "zeros.csv"
+    zeros.write_text("0.0,0.0,0.0,0.0,0.0,0.0,0.0\n" + REFERENCE.read_text().split("\n", 1)[1])
+    with pytest.raises(InputError, match=r"zeros.csv:1: duplicate column '0.0'.*Line 1 looks like data.*--columns t=1,fx=2"):
+        read_log(zeros)
 
 
 def test_two_topics_in_one_plotjuggler_file_name_the_option(tmp_path: Path) -> None:
@@ -578,7 +583,7 @@ def test_whole_millisecond_dates_are_exact_in_nanoseconds(tmp_path: Path) -> Non
     """1700000000123 ms is 1700000000123000000 ns exactly (its float times 1e6 is 64 ns off)."""
     n = len(REFERENCE.read_text().splitlines()) - 1
     log = read_log(_with_t(tmp_path, "ms.csv", [str(1700000000123 + 20 * k) for k in range(n)]))
-    assert log.extra["stamp_ns"][:2] == ["1700000000123000000", "1700000000143000000"]
+    assert log.extra["stamp_ns"][:2].tolist() == [1700000000123000000, 1700000000143000000]
     np.testing.assert_array_equal(log.t, read_log(REFERENCE).t)
 
 
@@ -653,3 +658,11 @@ def test_a_wrong_unit_in_the_header_is_said_to_be_the_headers(tmp_path: Path) ->
         assert "the data fit forces in N with moments in N·mm" in done.stderr
         assert "an option cannot override a header's unit: if the data are in another unit, the header is wrong" in done.stderr
     assert not (tmp_path / "o.csv").exists() and not (tmp_path / "r.csv").exists()
+
+
+def test_a_time_unit_that_puts_the_stamps_beyond_2286_stops_naming_the_one_that_fits(tmp_path: Path) -> None:
+    out = tmp_path / "e.csv"
+    done = run("estimate", DATA / "rostopic_echo_p.csv", "--time-units", "ms", "-o", out)
+    assert done.returncode == 2 and not out.exists()
+    assert "column 'field.header.stamp': t in ms puts the first stamp 1.7e+15 s after 1970" in done.stderr
+    assert "(--time-units ns)" in done.stderr

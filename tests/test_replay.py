@@ -233,3 +233,29 @@ def test_estimating_a_recording_says_its_renamed_columns_in_one_line(tmp_path):
     assert r.returncode == 0, r.stderr
     lines = [line for line in r.stderr.splitlines() if "named like" in line]
     assert len(lines) == 1 and "input columns are named like output columns" in lines[0] and "'state' -> 'input_state'" in lines[0]
+
+
+def test_a_replayed_ros_export_keeps_its_stamps_in_the_recording(tmp_path):
+    """A ROS export's absolute stamps (ns since the epoch) go along: ``softtip estimate`` keeps
+    them as column ``stamp_ns``, and so does a replay's recording, exactly; the recording,
+    estimated again, keeps them too."""
+    from softtip.io.tables import read_log
+
+    src = Path(__file__).parent / "data" / "foreign" / "rostopic_echo_p.csv"
+    stamps = [str(s) for s in read_log(src).stamps_ns]
+    rec = tmp_path / "rec.csv"
+    out = subprocess.run([SOFTTIP, "stream", "--replay", src, "--speed", "0", "--record", rec, "--no-view"],
+                         capture_output=True, text=True, timeout=60)  # fmt: skip
+    assert out.returncode == 0, out.stderr
+    assert "the stamps go along as column stamp_ns" in out.stderr
+    rows = read_rows(rec)
+    assert list(rows[0])[-1] == "stamp_ns" and [r["stamp_ns"] for r in rows] == stamps
+    est = subprocess.run([SOFTTIP, "estimate", rec], capture_output=True, text=True, timeout=60)
+    assert est.returncode == 0, est.stderr
+    assert [r["stamp_ns"] for r in csv.DictReader(est.stdout.splitlines())] == stamps
+    # a log without absolute stamps records no such column
+    plain = tmp_path / "plain.csv"
+    out = subprocess.run([SOFTTIP, "stream", "--replay", EXAMPLE_PATH, "--speed", "0", "--record", plain, "--no-view"],
+                         capture_output=True, text=True, timeout=60)  # fmt: skip
+    assert out.returncode == 0, out.stderr
+    assert tuple(read_rows(plain)[0]) == RECORD_COLUMNS

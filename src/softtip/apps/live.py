@@ -83,27 +83,30 @@ RECORD_COLUMNS: tuple[str, ...] = _RAW_COLUMNS + tuple(c.name for c in _ESTIMATE
 _FORMATS = {
     **{c: "%r" for c in _RAW_COLUMNS},
     **{c.name: {"str": "%s", "bool": "%d", "int64": "%d"}.get(c.dtype, "%.10g") for c in _ESTIMATE_COLUMNS},
-    **{c: "%d" for c in _STREAM_COLUMNS}, "host_time": "%.6f",
+    **{c: "%d" for c in _STREAM_COLUMNS}, "host_time": "%.6f", "stamp_ns": "%d",
 }  # fmt: skip
-_ROW_FORMAT = ",".join(_FORMATS[c] for c in RECORD_COLUMNS) + "\n"
+#: The recording's last column where the source has its own absolute stamps (a replayed ROS
+#: export): :attr:`~softtip.io.sources.Reading.stamp_ns`, ns since the Unix epoch, exact.
+STAMP_COLUMN = "stamp_ns"
 _DEG = 180.0 / math.pi
 #: Rows the recorder formats per call and writes at once. One call holds the interpreter
 #: (about 10 us a row): the consumer loop waits for at most one block.
 _BLOCK = 8
 
 
-def _row_function() -> Callable[[SampleEstimate, Reading], tuple]:
+def _row_function(extra: tuple[str, ...] = ()) -> Callable[[SampleEstimate, Reading], tuple]:
     """:func:`estimate_row`, compiled once from the column registry into one tuple expression
     (as :func:`collections.namedtuple` compiles its methods): it runs per sample at the
     sensor's rate. A vector attribute whose components are all columns, in order (every one
-    of softtip's: ``tests/test_columns.py`` checks it), is unpacked whole."""
+    of softtip's: ``tests/test_columns.py`` checks it), is unpacked whole. ``extra``: the
+    reading's fields appended (:data:`STAMP_COLUMN`)."""
     cells = ["float(r.t)", *(f"float(w[{i}])" for i in range(6))]
     for c in _ESTIMATE_COLUMNS:
         if c.index is None:
             cells.append(f"e.{c.attr} * _DEG" if c.degrees else f"e.{c.attr}")
         elif c.index == 0:
             cells.append(f"*e.{c.attr}")
-    cells += [f"r.{name}" for name in _STREAM_COLUMNS]
+    cells += [f"r.{name}" for name in _STREAM_COLUMNS + extra]
     namespace = {"_DEG": _DEG}
     exec(f"def estimate_row(e, r):\n    w = r.wrench\n    return ({', '.join(cells)},)\n", namespace)  # noqa: S102 - source made above from the registry's names
     row = namespace["estimate_row"]
@@ -113,6 +116,7 @@ def _row_function() -> Callable[[SampleEstimate, Reading], tuple]:
 
 
 estimate_row = _row_function()
+_stamped_row = _row_function((STAMP_COLUMN,))
 
 
 @dataclass
@@ -186,6 +190,15 @@ class Recorder:
         CSV file; an existing file is replaced.
     flush_interval : float
         s between flushes (at most this much is lost if the process is killed).
+
+    Attributes
+    ----------
+    columns : tuple of str
+        The file's columns: :data:`RECORD_COLUMNS`, then :data:`STAMP_COLUMN` after
+        :meth:`keep_stamps`.
+    row : callable
+        ``row(estimate, reading)``: the tuple :meth:`add` takes (:func:`estimate_row`, or with
+        the reading's stamp after :meth:`keep_stamps`).
     """
 
     def __init__(
@@ -209,6 +222,9 @@ class Recorder:
                 f"{self.path}: cannot write there; expected an existing, writable directory"
             )
         self.flush_interval = flush_interval
+        self.columns: tuple[str, ...] = RECORD_COLUMNS
+        self.row: Callable[[SampleEstimate, Reading], tuple] = estimate_row
+        self._format = ",".join(_FORMATS[c] for c in self.columns) + "\n"
         self.rows = 0
         self._pending: collections.deque = collections.deque()
         self._fh: TextIO | None = None
@@ -218,6 +234,15 @@ class Recorder:
             target=self._loop, daemon=True, name="softtip-recorder"
         )
         self._thread.start()
+
+    def keep_stamps(self) -> None:
+        """Record each reading's own absolute stamp too (:data:`STAMP_COLUMN`: a replayed log's,
+        which ``softtip estimate`` keeps as a column as well); before the first row."""
+        if self._fh is not None or self._pending:
+            raise RuntimeError("keep_stamps() after the first row")
+        self.columns = RECORD_COLUMNS + (STAMP_COLUMN,)
+        self.row = _stamped_row
+        self._format = ",".join(_FORMATS[c] for c in self.columns) + "\n"
 
     def add(self, row: tuple) -> None:
         """Queue one row (from the consumer loop; never blocks).
@@ -238,7 +263,7 @@ class Recorder:
             return
         if self._fh is None:
             self._fh = open(self.path, "w", encoding="utf-8", newline="")
-            self._fh.write(",".join(RECORD_COLUMNS) + "\n")
+            self._fh.write(",".join(self.columns) + "\n")
         rows = [pending.popleft() for _ in range(n)]
         # one C-level format per block of rows (as softtip.io.tables.write_table does); small blocks,
         # because a format call holds the GIL and the consumer loop must not wait long for it; each
@@ -246,7 +271,7 @@ class Recorder:
         fh = self._fh
         for i in range(0, n, _BLOCK):
             block = rows[i : i + _BLOCK]
-            fh.write((_ROW_FORMAT * len(block)) % tuple(itertools.chain.from_iterable(block)))
+            fh.write((self._format * len(block)) % tuple(itertools.chain.from_iterable(block)))
             fh.flush()
         self.rows += n
 
@@ -615,6 +640,7 @@ def run_live(
     stop = stop or threading.Event()
     update = estimator.update
     add = recorder.add if recorder is not None else None
+    row = recorder.row if recorder is not None else None
     reason = "end"
     if view is not None:
         view.start()
@@ -646,7 +672,7 @@ def run_live(
             stats.status = r.status
             stats.latest = e
             if add is not None:
-                add(estimate_row(e, r))
+                add(row(e, r))
             if on_estimate is not None:
                 on_estimate(e, r)
             if time.monotonic() >= deadline:

@@ -229,7 +229,7 @@ def _estimate(
         bag_log = bag.read_bag(input_path, topic, allow_partial=allow_partial)
         bag_warnings(input_path, bag_log)
         # t counts from the first message; the absolute stamps go along as an extra column
-        extra = {"stamp_ns": [str(v) for v in bag_log.stamps_ns.tolist()]}
+        extra = {"stamp_ns": np.asarray(bag_log.stamps_ns, dtype=np.int64)}
         units = units or "si"
         log = Log(t=bag_log.t, wrench=wrench_to_si(bag_log.wrench, units), extra=extra, source=bag_log.source, units=units)
         frames = ", ".join(repr(f) for f in bag_log.frame_ids)
@@ -264,7 +264,7 @@ def _estimate(
             log = read_log(input_path, units=units, progress=bar.update, **formats)
     # far beyond the sensor's range: refused before any estimate (just beyond it: after the units check)
     check_full_scale(log.t, log.wrench, sensor_range, log.source, units=log.units, margin=COARSE_MARGIN)
-    print_log_notes(log)  # how a foreign file was read; repeated stamps, an implausible time scale, a cut last line
+    print_log_notes(log, quiet)  # how a foreign file was read; repeated stamps, an implausible time scale, a cut last line
     if topic is not None and bag_log is None:
         raise click.UsageError("--topic applies to bag input only")
     if allow_partial and bag_log is None:
@@ -735,8 +735,8 @@ def _write_estimate_outputs(
         try:
             if bag_log is not None:
                 bag.write_estimates_bag(staged_bag, est, bag_log.wrench, bag_log.stamps_ns, frame, bag_log.topic, distro=ros_distro)
-            else:
-                bag.write_estimates_bag(staged_bag, est, log.wrench, frame_id=frame, distro=ros_distro)
+            else:  # a table's absolute stamps (a ROS export's header.stamp) keep their time in the bag
+                bag.write_estimates_bag(staged_bag, est, log.wrench, log.stamps_ns, frame_id=frame, distro=ros_distro)
         except InputError as exc:  # name the destination, not where it was staged
             raise InputError(str(exc).replace(str(staged_bag), str(to_bag))) from None
     if output is not None:

@@ -263,9 +263,10 @@ def log_format_given(kwargs: dict) -> bool:
     return any(v not in (None, "fail", {}) for v in kwargs.values())
 
 
-def print_log_notes(log) -> None:
-    """How a foreign log was read (columns, units, skipped lines, missing cells), then its warnings."""
-    for note in getattr(log, "notes", ()):
+def print_log_notes(log, quiet: bool = False) -> None:
+    """How a foreign log was read (columns, units, skipped lines, missing cells; not with
+    ``quiet``), then its warnings."""
+    for note in () if quiet else getattr(log, "notes", ()):
         click.echo(f"softtip: {note}", err=True)
     suspect = getattr(log, "time_suspect", None)
     if suspect is not None:  # t in ms read as s: a one-sample tare and windows of thousands of samples

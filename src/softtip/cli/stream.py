@@ -201,8 +201,12 @@ def _stream(
                 # as `estimate` reads it: far beyond the sensor's range, or a time unit it cannot guess, stops here
                 check_full_scale(log.t, log.wrench, sensor_range, replay, units=units, margin=COARSE_MARGIN)
                 print_log_notes(log)
+                if recorder is not None and log.stamps_ns is not None:
+                    recorder.keep_stamps()  # the note above says they go along, as with `estimate`
                 if payload is None:
-                    source = LogSource(log.t, log.wrench, speed=speed, name=os.path.basename(log.source), stop=stop)
+                    source = LogSource(
+                        log.t, log.wrench, speed=speed, name=os.path.basename(log.source), stop=stop, stamps_ns=log.stamps_ns
+                    )
                 else:
                     from softtip.io.payload import replay_source
 

@@ -181,9 +181,10 @@ class EstimatorConfig:
         while the window's own standard deviation shrinks with the number of samples; without
         this term a window at 1–7 kHz claims a precision the physics does not give.
     unconfirmed_model_std : float
-        rad; model error of a line direction taken from one axis of excitation (an
-        ``unconfirmed`` line's, and a confirmed line's where the current window was excited
-        about one axis), added in quadrature to the sample's standard
+        rad; model error of a line direction taken from the sample's own ``h`` where no
+        window whose load turned about two axes confirmed the line (``h`` held after one
+        tilt, as in the papers' grasp), and of a confirming window that saw one axis, held for
+        the samples after it, added in quadrature to the sample's standard
         deviation (default 5°). The line's small resistance to rolling about its own edge
         follows the same excitation and turns the axis by an amount no window of it shows, and
         that amount depends on the object and the skin: in the papers' single tilt on softtip's
@@ -192,11 +193,24 @@ class EstimatorConfig:
         from it 2.2–2.9° on 1–2 mm plates and up to 10.1° on a 120° wedge), on Drake's
         hydroelastic contact it is 1.5–3.2° up to 60° from across for every object. Set on the
         Winkler skin's single tilts at the benchmarks' four line angles (RMS error / standard
-        deviation at most 1.5 per object group there) and checked on Drake, where the rocked
-        lines and single tilts are conservative (0.45–0.59) and the friction loads within
-        0.78–1.22; no value suits every group of both (docs/benchmarks/two-physics.md, "the
-        one-axis model error"). A bound more than a calibration; 0: the noise only. Not applied
-        with ``line_evidence`` off (the papers' behaviour).
+        deviation at most 1.5 per object group there) and checked on Drake, where the
+        single tilts are conservative (0.45–0.59) and the friction loads within 0.78–1.22; no
+        value suits every group of both (docs/benchmarks/two-physics.md, "the one-axis model
+        errors"). A bound more than a calibration; 0: the noise only. Not applied with
+        ``line_evidence`` off (the papers' behaviour).
+    window_model_std : float
+        rad; model error of a line direction from a window in which ``h`` varied along one
+        axis (its principal axis) while the load did not turn about two (a rock about one
+        axis; every rocked line on a frictionless round skin, whose load cannot show the
+        second axis), added in quadrature to the window's standard deviation (default 2°).
+        Measured apart from ``unconfirmed_model_std``: the rocked thin lines are 0.6°
+        (softtip's Winkler skin) and 1.2° (Drake's hydroelastic contact) off in the median,
+        the held ``h`` of the papers' single tilt up to 7.5° on a blunt wedge. Set where every
+        rocked line group of both physics lies within RMS error / standard deviation 0.7–1.5
+        or on its conservative side (Drake 0.97, Winkler 0.61–0.74), and checked on a stiffer,
+        smaller tip, at twice the noise and at 7 kHz, no group above 1.5
+        (docs/benchmarks/two-physics.md, "the one-axis model errors"). Not applied with
+        ``line_evidence`` off.
     evidence_reset_distance : float
         m; the evidence starts afresh (window, verdict, held direction) when the contact
         point moves farther than this from where it started (default 1 mm): what a window
@@ -374,10 +388,14 @@ class EstimatorConfig:
         math.radians(0.4), "Model error of a window's line direction (what no window shows), added in quadrature to "
         "its standard deviation (0: none).", unit="rad", low=0.0, cli_unit="deg", metavar="DEG", group="evidence")
     unconfirmed_model_std: float = setting(
-        math.radians(5.0), "Model error of a line direction from one axis of excitation (an unconfirmed line's, or a "
-        "confirmed line's window that saw one axis: its rolling bias), added in quadrature to its standard deviation "
-        "(0: none).", unit="rad", low=0.0, cli_unit="deg",
+        math.radians(5.0), "Model error of a line direction from a held h (one tilt: its rolling bias), added in "
+        "quadrature to its standard deviation (0: none).", unit="rad", low=0.0, cli_unit="deg",
         metavar="DEG", group="evidence")
+    window_model_std: float = setting(
+        math.radians(2.0), "Model error of a line direction from a window in which h varied along one axis and the "
+        "load did not turn about two (a rock about one axis), added in quadrature to its standard deviation "
+        "(0: none).", unit="rad", low=0.0,
+        cli_unit="deg", metavar="DEG", group="evidence")
     evidence_reset_distance: float = setting(
         1e-3, "The line evidence starts afresh when the contact point moves farther than this.", unit="m", low=0.0, low_open=True, cli_unit="mm", metavar="LENGTH", group="evidence")
 

@@ -33,21 +33,23 @@ unchanged), so noise near the threshold does not flicker (at 50 Hz the window ho
 sample: each decides alone).
 
 The direction: the current window's where it resolves an axis (``d = n × principal axis``),
-with the model error ``evidence_model_std`` in quadrature where that window itself confirms
-the line with the load turned about two axes, and ``unconfirmed_model_std`` where it does
-not, also where only a stated rocking confirms it (a one-axis window's rolling bias follows
-its own excitation, whether or not the line was confirmed before); in a confirmed line whose
-current window resolves none (``h`` held still, or passing through zero), the latest window
-of this segment that confirmed it (``h`` on one axis), with the model error of its kind; the
-sample's own elsewhere. The current window is preferred to the confirming one: a confirming
-window is a moment of two-axis load, often where one rock ends and the next begins, and it
-can carry the contact's response to a roll about the line's own axis (on a stiffer, smaller
-hydroelastic tip: 8° off where the current windows were within 1°). A sample's own angle
-standard deviation counts the window's across-axis spread beyond the noise as model error,
-``sqrt(σ_d² + minor / |h|²)``, plus ``unconfirmed_model_std`` while unconfirmed. The share of
-the standard deviation that is the sensor noise's alone (``angle_noise_std``: the window's
-noise term, or the sample's ``σ_d``) is kept apart: two sensors share the model error, not
-their noise (:mod:`softtip.fusion`).
+with the model error ``evidence_model_std`` in quadrature where that window itself confirms the
+line with the load turned about two axes, and ``window_model_std`` where it does not, also
+where only a stated rocking confirms it (a one-axis window's rolling bias follows its own
+excitation, whether or not the line was confirmed before); in a confirmed line whose current
+window resolves none (``h`` held still, or passing through zero), the latest window of this
+segment that confirmed it and resolved an axis (``h`` on one axis, varied by at least
+``h_min``), with ``evidence_model_std`` where its load turned about two axes and
+``unconfirmed_model_std`` where only a stated rocking confirmed it (held for later samples, it
+carries what the window saw of the roll); the sample's own elsewhere. The current window is
+preferred to the confirming one: a confirming window is a moment of two-axis load, often where
+one rock ends and the next begins, and it can carry the contact's response to a roll about the
+line's own axis (on a stiffer, smaller hydroelastic tip: 8° off where the current windows were
+within 1°). A sample's own angle standard deviation counts the window's across-axis spread
+beyond the noise as model error, ``sqrt(σ_d² + minor / |h|²)``, plus ``unconfirmed_model_std``
+while unconfirmed. The share of the standard deviation that is the sensor noise's alone
+(``angle_noise_std``: the window's noise term, or the sample's ``σ_d``) is kept apart: two
+sensors share the model error, not their noise (:mod:`softtip.fusion`).
 
 Every ``line`` sample's standard deviation also counts, in quadrature, the **twist** of the
 contact, ``atan(|σ| / (R F_n))`` with ``σ = q · n`` the moment about the normal, ``F_n`` the
@@ -147,8 +149,9 @@ _VOTE_WINDOW = 13  # significance_window, s
 _AREA_SHARE = 14
 _NOISE = 15  # the sensor noise's variances (after any filter): fx, fy, fz (N²), mx, my, mz (N²·m²)
 _INV_RADIUS = 21  # 1 / R of the twist term (twist_curvature), 1/m; 0: not counted
-_N_ROCKED = 22  # how many stated rocking intervals follow
-_ROCKED = 23  # (start, end) of each, s
+_WIN_VAR = 22  # window_model_std², rad²
+_N_ROCKED = 23  # how many stated rocking intervals follow
+_ROCKED = 24  # (start, end) of each, s
 
 # -- the state record: a float64 vector, an int64 vector of counters, a ring buffer ------------------
 _CUM = 0  # N_SUMS running sums of the products since the segment's start
@@ -209,6 +212,7 @@ def evidence_params(config: EstimatorConfig, noise: SensorNoise, inv_radius: flo
     p[_AREA_SHARE] = config.area_share
     p[_NOISE : _NOISE + 6] = noise_variances(noise)
     p[_INV_RADIUS] = float(inv_radius)
+    p[_WIN_VAR] = config.window_model_std * config.window_model_std
     p[_N_ROCKED] = len(config.rocked)
     p[_ROCKED:] = rocked
     return p
@@ -301,10 +305,10 @@ def _update_verdict(state, params, t, area, one_axis, excited, e, s2, nu):
         return False, False, angle, angle_std, noise_std
     # h varied along one axis with an eigen-gap beyond the noise and by at least h_min: the
     # window's principal axis is the direction, confirmed or not (one axis of excitation
-    # leaves a rolling bias, which the unconfirmed model error covers)
+    # leaves a rolling bias, which the one-axis window's model error covers)
     axis = e[0] >= params[_HMIN2]
     confirming = False
-    if line_now:
+    if line_now and axis:
         # a confirmed line's direction comes from two-axis windows only, with the two-axis
         # model error where the load showed the two axes (a stated window may have seen one
         # axis of the rocking, and on a frictionless cap it also carries the roll about the
@@ -491,7 +495,7 @@ def _choose(state, params, area, axis, confirming, sig, w_angle, w_std, w_noise,
         # the current window resolves the axis: its direction with the model error of its kind
         # (two-axis where this window confirms the line by its load, else one-axis)
         angle, noise_std = w_angle, w_noise
-        angle_std = math.sqrt(w_std * w_std + (params[_MODEL_VAR] if confirming else params[_UNCONF_VAR]))
+        angle_std = math.sqrt(w_std * w_std + (params[_MODEL_VAR] if confirming else params[_WIN_VAR]))
     else:
         # the sample's own direction, the window's across-axis spread counted as model error,
         # and the one-axis one unless a window whose load turned about two axes confirmed the line

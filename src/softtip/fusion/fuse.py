@@ -253,7 +253,8 @@ def fuse(
         rad, model-error standard deviation of a line direction that is not yet confirmed by
         excitation about two axes (its rolling bias), shared by both fingers, added here
         (default 0: the estimator already carries it in each finger's ``angle_std``,
-        ``EstimatorConfig.unconfirmed_model_std``, 5°, which ``finger_correlation``
+        ``EstimatorConfig.unconfirmed_model_std``, 5°, for a held ``h`` and
+        ``window_model_std``, 2°, for a window that saw one axis, which ``finger_correlation``
         treats as shared; give it here for estimates made without it).
     agree_sigmas : float
         Two lines agree when their axial angle is at most this many standard deviations:

@@ -76,6 +76,9 @@ class Reading(NamedTuple):
         did not keep up).
     late, duplicates, malformed : int
         Late packets, duplicates and malformed datagrams discarded since the previous reading.
+    stamp_ns : int
+        The sample's own stamp, ns since the Unix epoch, where the source has one (a replayed
+        log with absolute stamps: a ROS export's ``header.stamp``); 0 otherwise.
     """
 
     t: float
@@ -89,6 +92,7 @@ class Reading(NamedTuple):
     late: int = 0
     duplicates: int = 0
     malformed: int = 0
+    stamp_ns: int = 0
 
 
 def readings(source: Iterable) -> Iterator[Reading]:
@@ -117,6 +121,9 @@ class LogSource:
         Shown in the live view.
     stop : threading.Event, optional
         Set it to end the replay at once, also while it waits for the next sample.
+    stamps_ns : array-like of int, shape (N,), optional
+        The log's absolute stamps, ns since the Unix epoch (:attr:`~softtip.io.tables.Log.stamps_ns`),
+        passed on as each reading's ``stamp_ns``.
 
     Notes
     -----
@@ -131,6 +138,7 @@ class LogSource:
         speed: float = 1.0,
         name: str = "log",
         stop: threading.Event | None = None,
+        stamps_ns: ArrayLike | None = None,
     ) -> None:
         self.t = np.asarray(t, dtype=float)
         self.wrench = np.asarray(wrench, dtype=float)
@@ -144,6 +152,9 @@ class LogSource:
             )
         self.speed = float(speed)
         self.name = name
+        self.stamps_ns = None if stamps_ns is None else np.asarray(stamps_ns, dtype=np.int64)
+        if self.stamps_ns is not None and self.stamps_ns.shape != self.t.shape:
+            raise ValueError(f"expected stamps_ns {self.t.shape}, got {self.stamps_ns.shape}")
         self.stop_event = stop
         dt = np.diff(self.t)
         #: Recorded sample rate, Hz (median step); None for fewer than two samples.
@@ -161,7 +172,7 @@ class LogSource:
         from softtip.io.tables import read_log
 
         log = read_log(path, units=units)
-        return cls(log.t, log.wrench, speed=speed, name=os.path.basename(log.source), stop=stop)
+        return cls(log.t, log.wrench, speed=speed, name=os.path.basename(log.source), stop=stop, stamps_ns=log.stamps_ns)
 
     def __len__(self) -> int:
         return len(self.t)
@@ -169,19 +180,20 @@ class LogSource:
     def __iter__(self) -> Iterator[Reading]:
         ts = self.t.tolist()
         ws = [tuple(row) for row in self.wrench.tolist()]
+        stamps = [0] * len(ts) if self.stamps_ns is None else self.stamps_ns.tolist()
         clock, wall = time.monotonic_ns, time.time_ns
         stop = self.stop_event
         if self.speed == 0 or not ts:
-            for k, (t, w) in enumerate(zip(ts, ws)):
-                yield Reading(t, w, k, 0, clock(), 0, wall() * 1e-9, 0, 0, 0, 0)
+            for k, (t, w, st) in enumerate(zip(ts, ws, stamps)):
+                yield Reading(t, w, k, 0, clock(), 0, wall() * 1e-9, 0, 0, 0, 0, st)
             return
         start = time.monotonic()
         t0, speed = ts[0], self.speed
-        for k, (t, w) in enumerate(zip(ts, ws)):
+        for k, (t, w, st) in enumerate(zip(ts, ws, stamps)):
             wait = start + (t - t0) / speed - time.monotonic()
             if wait > 0:
                 if stop is None:
                     time.sleep(wait)
                 elif stop.wait(wait):
                     return
-            yield Reading(t, w, k, 0, clock(), 0, wall() * 1e-9, 0, 0, 0, 0)
+            yield Reading(t, w, k, 0, clock(), 0, wall() * 1e-9, 0, 0, 0, 0, st)

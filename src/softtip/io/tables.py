@@ -138,7 +138,7 @@ class Log:
     extra : dict of str to list of str or ndarray
         The input's other columns, in input order, N values each: from CSV a list of the
         cells' original text (surrounding whitespace included); from Parquet an array of
-        the column's values.
+        the column's values. Absolute stamps add ``stamp_ns`` (int64 ns, :attr:`stamps_ns`).
     source : str
         The file name as given, or the stream's name (``"<stdin>"``).
     units : str
@@ -180,6 +180,16 @@ class Log:
     moment_unit: str = "N*m"
     time_suspect: str | None = None
     units_in_header: tuple[str, ...] = ()
+
+    @property
+    def stamps_ns(self) -> NDArray[np.int64] | None:
+        """The absolute stamps, ns since the Unix epoch, that ``t`` counts from (the column
+        ``stamp_ns`` the reader added, or one the file had); ``None`` without any."""
+        stamps = self.extra.get("stamp_ns")
+        if stamps is None:
+            return None
+        stamps = np.asarray(stamps)  # softtip's own int64, or a file's column (text from CSV)
+        return stamps if stamps.dtype == np.int64 else np.array([int(s) for s in stamps.tolist()], dtype=np.int64)
 
 
 #: A time stamp from this many seconds on is absolute (after 1973 in Unix time): ``t`` counts from the first.
@@ -301,6 +311,14 @@ def _finish(
                 f"{source}: column {names[header.index['t']]!r}: t read in {tunit.label}, the only unit that makes its "
                 f"first stamp a date (give --time-units to say otherwise)"
             )
+    if start >= 1e10 and len(t):  # after 2286 in Unix time, in the unit given: no unit of a clock
+        dated = [u for u in ("s", "ms", "us", "ns") if ABSOLUTE_STAMP_S <= float(t[0]) * get_unit(u, "time").si < 1e10]
+        raise InputError(
+            f"{source}: column {names[header.index['t']]!r}: t in {tunit.label} puts the first stamp {start:.3g} s after "
+            "1970, beyond the year 2286; expected seconds since the epoch or since a start"
+            + (f": the unit that makes it a date is {dated[0]} (--time-units {dated[0]})" if len(dated) == 1 else
+               " (--time-units)")
+        )
     if ABSOLUTE_STAMP_S <= start < 1e10:  # from 1973 to 2286 in Unix time
         if t.dtype.kind == "f" and tunit.name != "s" and np.abs(t).max() < 2.0**53 and (t == np.floor(t)).all():
             t = t.astype(np.int64)  # whole ms or µs read as floats: exact as integers (ms × 1e6 is not in float64)
@@ -311,7 +329,7 @@ def _finish(
         else:
             t_s = _to_seconds(t - t[0], tunit.si)
             stamps = np.round(t * (tunit.si * 1e9)).astype(np.int64).tolist()
-        extra = {**extra, "stamp_ns": [str(v) for v in stamps]}
+        extra = {**extra, "stamp_ns": np.array(stamps, dtype=np.int64)}  # int64 in Parquet and Arrow, digits in CSV
         notes.append(f"{source}: absolute stamps ({tunit.label}): t counts from the first, {stamps[0]} ns; the stamps go along as column stamp_ns")
     else:
         t_s = _to_seconds(t.astype(np.float64), tunit.si)
@@ -1324,12 +1342,19 @@ def _column_index(header: _Header, source: str, *, dialects: bool = True) -> dic
     (CSV); a missing column is then one no dialect reads, and no column a dialect reads is
     offered as a misspelling."""
     names, line = header.names, header.line
+    positions = ",".join(f"{c}={k + 1}" for k, c in enumerate(REQUIRED_COLUMNS))
+    looks_like_data = (
+        f"Line {line} looks like data; expected the header row first (a file without one: give the columns "
+        f"by position, e.g. --columns {positions})."
+    )
     seen: dict[str, int] = {}
     for j, name in enumerate(names):
         if name in seen:
             raise InputError(
                 f"{source}:{line}: duplicate column {name!r} (columns {seen[name] + 1} and {j + 1}); "
                 "expected each column name once"
+                # a first row of data repeats values (zeros) as no header repeats a name
+                + (f". {looks_like_data}" if all(_is_number(n.replace(",", ".")) for n in names) else "")
             )
         seen[name] = j
 
@@ -1367,11 +1392,7 @@ def _column_index(header: _Header, source: str, *, dialects: bool = True) -> dic
                 f"columns by position: --columns {','.join(f'{c}={k + 1}' for k, c in enumerate(REQUIRED_COLUMNS))}."
             )
         elif all(_is_number(n.replace(",", ".")) for n in names):
-            positions = ",".join(f"{c}={k + 1}" for k, c in enumerate(REQUIRED_COLUMNS))
-            hints.append(
-                f"Line {line} looks like data; expected the header row first (a file without one: give the columns "
-                f"by position, e.g. --columns {positions})."
-            )
+            hints.append(looks_like_data)
         hints.append(
             "Other names: map them with --columns t=NAME,fx=NAME,… (docs/guide/input-formats.md lists the headers read as they are)."
             if dialects else "Other names: rename the columns (a Parquet or Arrow file is read by its column names; --columns "
