@@ -660,9 +660,27 @@ def test_a_wrong_unit_in_the_header_is_said_to_be_the_headers(tmp_path: Path) ->
     assert not (tmp_path / "o.csv").exists() and not (tmp_path / "r.csv").exists()
 
 
-def test_a_time_unit_that_puts_the_stamps_beyond_2286_stops_naming_the_one_that_fits(tmp_path: Path) -> None:
+def test_a_time_unit_that_puts_the_stamps_beyond_2261_stops_naming_the_one_that_fits(tmp_path: Path) -> None:
     out = tmp_path / "e.csv"
     done = run("estimate", DATA / "rostopic_echo_p.csv", "--time-units", "ms", "-o", out)
     assert done.returncode == 2 and not out.exists()
     assert "column 'field.header.stamp': t in ms puts the first stamp 1.7e+15 s after 1970" in done.stderr
     assert "(--time-units ns)" in done.stderr
+
+
+def test_a_stamp_going_back_in_a_headerless_ros2_export_names_line_and_columns(tmp_path: Path) -> None:
+    lines = (DATA / "ros2_topic_echo.csv").read_text().splitlines(keepends=True)
+    lines[300], lines[301] = lines[301], lines[300]  # lines 301 and 302 swapped: 302 goes back
+    src = tmp_path / "back.csv"
+    src.write_text("".join(lines))
+    with pytest.raises(InputError, match=r"back\.csv:302: columns 'header\.stamp\.sec', 'header\.stamp\.nanosec': "
+                                         r"expected the stamps non-decreasing"):  # fmt: skip
+        read_log(src)
+
+
+def test_a_cut_last_row_of_a_headerless_export_names_its_layout(tmp_path: Path) -> None:
+    text = (DATA / "ros2_topic_echo.csv").read_text().rstrip("\n")
+    src = tmp_path / "cut.csv"
+    src.write_text(text[: text.rindex(",", 0, len(text) - 40)])  # the last row cut a few cells short
+    with pytest.raises(InputError, match=r"cut\.csv:\d+: expected 9 cells \(one per column of the ROS 2 .* layout\)"):
+        read_log(src)

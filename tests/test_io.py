@@ -839,9 +839,11 @@ def test_fast_and_careful_parsers_agree(tmp_path_factory: pytest.TempPathFactory
         assert fast == careful
     elif isinstance(fast, str) and "expected stamps that increase" in fast:  # read_log's check of the whole log
         assert len(careful.t) > 1 and (careful.t == careful.t[0]).all(), fast
+    elif isinstance(fast, str) and "beyond the year 2261" in fast:  # read_log's check of the time unit
+        assert careful.t[0] >= sio.LATEST_STAMP_S, fast
     else:
         assert isinstance(fast, Log), fast
-        absolute = sio.ABSOLUTE_STAMP_S <= careful.t[0] < 1e10  # counted from the first, stamps kept
+        absolute = sio.ABSOLUTE_STAMP_S <= careful.t[0] < sio.LATEST_STAMP_S  # counted from the first, stamps kept
         np.testing.assert_array_equal(fast.t, careful.t - careful.t[0] if absolute else careful.t)
         np.testing.assert_array_equal(fast.wrench, careful.wrench)
         assert {k: v for k, v in fast.extra.items() if k != "stamp_ns"} == careful.extra
@@ -938,3 +940,14 @@ def test_csv_blocks_formatted_on_threads_are_written_in_order(tmp_path, monkeypa
     tables.write_table(cols, tmp_path / "one.csv")
     assert (tmp_path / "threads.csv").read_bytes() == (tmp_path / "one.csv").read_bytes()
     assert sum(seen) == n and len(seen) == 4
+
+
+def test_stamps_whose_nanoseconds_overflow_int64_stop(tmp_path) -> None:
+    """Whole seconds from 2262 on would overflow ``stamp_ns`` (int64 ns): a stamp that late is no
+    clock's, and the run stops; one just before it is an absolute stamp, kept exactly."""
+    late = _write(tmp_path, HEADER + "\n" + "".join(f"{9_223_372_037 + i},0,0,0,0,0,0\n" for i in range(3)))
+    with pytest.raises(InputError, match=r"puts the first stamp 9\.22e\+09 s after 1970, beyond the year 2261"):
+        read_log(late)
+    early = _write(tmp_path, HEADER + "\n" + "".join(f"{9_100_000_000 + i},0,0,0,0,0,0\n" for i in range(3)))
+    log = read_log(early)
+    assert log.t.tolist() == [0.0, 1.0, 2.0] and log.stamps_ns.tolist() == [9_100_000_000_000_000_000 + i * 10**9 for i in range(3)]

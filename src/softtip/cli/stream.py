@@ -323,10 +323,13 @@ def _check_replay_units(log, payload, fingertip, config) -> None:
 
 
 def _report(summary: LiveSummary, name: str, estimator: Estimator, record: str | None) -> None:
-    """The end of a session on standard error: the source's warnings, the counters, the tare and
-    the estimator's warnings (also when a fault ended it, before the error)."""
+    """The end of a session on standard error: the source's warnings, the tare (as `estimate`
+    says it, before its summary), the counters and the estimator's warnings (also when a fault
+    ended it, before the error)."""
     for w in summary.warnings:
         click.echo(f"softtip: warning: {name}: {w}", err=True)
+    if estimator.tare_report is not None and estimator.tare_report.source != "none":
+        click.echo(f"softtip: {estimator.tare_report.summary()}", err=True)
     rate = summary.samples / summary.seconds if summary.seconds > 0 else 0.0
     why = {"end": "end of log", "duration": "duration reached", "interrupt": "interrupted", "fault": "ended by the fault below"}[summary.reason]
     c = summary.counters
@@ -338,8 +341,6 @@ def _report(summary: LiveSummary, name: str, estimator: Estimator, record: str |
         + (f"; recorded -> {record}" if record else ""),
         err=True,
     )
-    if estimator.tare_report is not None and estimator.tare_report.source != "none":
-        click.echo(f"softtip: {estimator.tare_report.summary()}", err=True)
     for msg in dict.fromkeys(estimator.warnings):
         click.echo(f"softtip: warning: {msg}", err=True)
 

@@ -194,6 +194,8 @@ class Log:
 
 #: A time stamp from this many seconds on is absolute (after 1973 in Unix time): ``t`` counts from the first.
 ABSOLUTE_STAMP_S = 1e8
+#: ... and up to this many (2261 in Unix time): its nanoseconds fit int64 (to 2262), as ``stamp_ns`` keeps them.
+LATEST_STAMP_S = 9.2e9
 
 
 def _to_seconds(t: NDArray[np.float64], si: float) -> NDArray[np.float64]:
@@ -295,12 +297,17 @@ def _finish(
     back = np.flatnonzero(np.diff(t) < 0)
     if len(back):  # only a stamp split in seconds and nanoseconds gets here
         i = int(back[0]) + 1
-        raise InputError(f"{source}: {where(i)}: expected the stamps non-decreasing, got {t[i]} ns after {t[i - 1]} ns")
+        cols = [names[header.index[r]] for r in ("t", "nanosec") if r in header.index]
+        loc = f"{source}:{first_line + i}" if first_line is not None else f"{source}: {where(i)}"
+        raise InputError(
+            f"{loc}: column{'s' if len(cols) > 1 else ''} {', '.join(map(repr, cols))}: expected the stamps "
+            f"non-decreasing (a stamp may repeat, not go back), got {t[i]} ns after {t[i - 1]} ns on the row before"
+        )
     start = float(t[0]) * tunit.si
     explicit_time = fmt.time_unit is not None or (cmap is not None and (cmap.from_header["t"] or tunit.name != "s"))
-    if not explicit_time and start >= 1e10 and len(t) > 1:
+    if not explicit_time and start >= LATEST_STAMP_S and len(t) > 1:
         # no date in seconds: the one unit that makes the first stamp a date (Unix time ns, µs or ms)
-        dated = [u for u in ("ms", "us", "ns") if ABSOLUTE_STAMP_S <= float(t[0]) * get_unit(u, "time").si < 1e10]
+        dated = [u for u in ("ms", "us", "ns") if ABSOLUTE_STAMP_S <= float(t[0]) * get_unit(u, "time").si < LATEST_STAMP_S]
         if len(dated) == 1:
             tunit = get_unit(dated[0], "time")
             start = float(t[0]) * tunit.si
@@ -311,17 +318,17 @@ def _finish(
                 f"{source}: column {names[header.index['t']]!r}: t read in {tunit.label}, the only unit that makes its "
                 f"first stamp a date (give --time-units to say otherwise)"
             )
-    if start >= 1e10 and len(t):  # after 2286 in Unix time, in the unit given: no unit of a clock
-        dated = [u for u in ("s", "ms", "us", "ns") if ABSOLUTE_STAMP_S <= float(t[0]) * get_unit(u, "time").si < 1e10]
+    if start >= LATEST_STAMP_S and len(t):  # after 2261 in Unix time, in the unit given: no clock's
+        dated = [u for u in ("s", "ms", "us", "ns") if ABSOLUTE_STAMP_S <= float(t[0]) * get_unit(u, "time").si < LATEST_STAMP_S]
         raise InputError(
             f"{source}: column {names[header.index['t']]!r}: t in {tunit.label} puts the first stamp {start:.3g} s after "
-            "1970, beyond the year 2286; expected seconds since the epoch or since a start"
+            "1970, beyond the year 2261; expected seconds since the epoch or since a start"
             + (f": the unit that makes it a date is {dated[0]} (--time-units {dated[0]})" if len(dated) == 1 else
                " (--time-units)")
         )
-    if ABSOLUTE_STAMP_S <= start < 1e10:  # from 1973 to 2286 in Unix time
-        if t.dtype.kind == "f" and tunit.name != "s" and np.abs(t).max() < 2.0**53 and (t == np.floor(t)).all():
-            t = t.astype(np.int64)  # whole ms or µs read as floats: exact as integers (ms × 1e6 is not in float64)
+    if ABSOLUTE_STAMP_S <= start < LATEST_STAMP_S:  # from 1973 to 2261 in Unix time
+        if t.dtype.kind == "f" and np.abs(t).max() < 2.0**53 and (t == np.floor(t)).all():
+            t = t.astype(np.int64)  # whole s, ms or µs read as floats: exact as integers (ms × 1e6 is not in float64)
         if t.dtype.kind in "iu":
             ns = t * round(tunit.si * 1e9)
             t_s = seconds_from_ns(ns)
@@ -1454,7 +1461,7 @@ def _exact_seconds(cell: str, header: _Header) -> bool:
         header.decimal == "."
         and bool(_DECIMAL_SECONDS.match(cell))
         and (cmap is None or cmap.units["t"].name == "s")
-        and ABSOLUTE_STAMP_S <= float(cell) < 1e10
+        and ABSOLUTE_STAMP_S <= float(cell) < LATEST_STAMP_S
     )
 
 
@@ -1659,7 +1666,8 @@ def _parse_careful(
                 hint = "; its last cell is empty: a delimiter at the end of each row that the header lacks? Remove it"
             elif all(_is_blank(more) for more in reader):  # the file's last line (the reader is not needed after this)
                 hint = _FOOTER_HINT
-            raise InputError(f"{source}:{line}: expected {ncol} cells (one per header column), got {len(row)}{hint}")
+            per = f"one per column of the {header.cmap.source} layout" if header.headerless and header.cmap else "one per header column"
+            raise InputError(f"{source}:{line}: expected {ncol} cells ({per}), got {len(row)}{hint}")
         sample = [0.0] * len(roles)
         for j, name in checks:
             cell = row[j]
