@@ -385,8 +385,8 @@ class EstimatorConfig:
         math.radians(10.0), "A window's line direction is used only when its standard deviation is at most this.",
         unit="rad", low=0.0, low_open=True, cli_unit="deg", metavar="DEG", group="evidence")
     evidence_model_std: float = setting(
-        math.radians(0.4), "Model error of a window's line direction (what no window shows), added in quadrature to "
-        "its standard deviation (0: none).", unit="rad", low=0.0, cli_unit="deg", metavar="DEG", group="evidence")
+        math.radians(0.4), "Model error of the line direction of a window whose load turned about two axes (what no "
+        "window shows), added in quadrature to its standard deviation (0: none).", unit="rad", low=0.0, cli_unit="deg", metavar="DEG", group="evidence")
     unconfirmed_model_std: float = setting(
         math.radians(5.0), "Model error of a line direction from a held h (one tilt: its rolling bias), added in "
         "quadrature to its standard deviation (0: none).", unit="rad", low=0.0, cli_unit="deg",

@@ -46,8 +46,8 @@ class Estimates:
         standard deviation, rad; NaN unless ``line``
     angle_noise_std : (N,) the share of ``angle_std`` that is the sensor noise's alone, rad
         (the window's noise term, or the sample's); ``angle_std² − angle_noise_std²`` is the
-        model error the estimator counts (``evidence_model_std``, ``unconfirmed_model_std``,
-        the window's across-axis spread), which two sensors on one object share and their
+        model error the estimator counts (``evidence_model_std``, ``window_model_std``,
+        ``unconfirmed_model_std``, the window's across-axis spread), which two sensors on one object share and their
         noise is not (:mod:`softtip.fusion`); NaN unless ``line``
     latched : (N,) the contact point is the latched one (not this sample's own solution)
     latch_fallback : (N,) that latch had no light-force sample (manual §3.6)

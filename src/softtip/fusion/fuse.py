@@ -47,7 +47,7 @@ deviation cannot show:
   directions the same way in the common frame. Each finger's ``angle_std`` is split in two:
   the sensor noise's share (``angle_noise_std``), independent between two sensors, and the
   rest, the estimator's model error (``EstimatorConfig.evidence_model_std``, the window's
-  across-axis spread, ``unconfirmed_model_std``), taken as shared with correlation
+  across-axis spread, ``window_model_std``, ``unconfirmed_model_std``), taken as shared with correlation
   ``finger_correlation`` (ρ, default 1). The fused direction is the weighted axial mean,
   with weights ``w = 1 / angle_std²`` and the variance
   ``(w_a + w_b + 2 ρ w_a w_b m_a m_b) / (w_a + w_b)²`` (``m`` the model errors): averaging
@@ -59,7 +59,8 @@ deviation cannot show:
   cube edge at 45° to the joint axis, 7–9° on both fingers alike while each reported about
   3.7° from the noise alone). Each fingertip's estimator therefore reports a line that is
   ``unconfirmed`` with a model-error term in its standard deviation
-  (``EstimatorConfig.unconfirmed_model_std``, 5°), which the correlated fingers carry into
+  (``EstimatorConfig.unconfirmed_model_std``, 5°, from a held ``h``; ``window_model_std``, 2°,
+  from a window that saw one axis), which the correlated fingers carry into
   the fused one undiminished (``unconfirmed_std`` adds a further shared term, for estimates
   made without it); the fused reading stays marked ``unconfirmed``.
 
