@@ -189,7 +189,12 @@ class Log:
         if stamps is None:
             return None
         stamps = np.asarray(stamps)  # softtip's own int64, or a file's column (text from CSV)
-        return stamps if stamps.dtype == np.int64 else np.array([int(s) for s in stamps.tolist()], dtype=np.int64)
+        if stamps.dtype == np.int64:
+            return stamps
+        try:
+            return np.array([int(s) for s in stamps.tolist()], dtype=np.int64)
+        except (TypeError, ValueError, OverflowError):  # a column of that name that holds no whole ns
+            return None
 
 
 #: A time stamp from this many seconds on is absolute (after 1973 in Unix time): ``t`` counts from the first.
