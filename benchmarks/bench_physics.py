@@ -538,6 +538,20 @@ def sweep_rows(physics: list, all_res: dict, setting: str, values: list) -> None
                     print(f"| {p.name} | {scen} | {grp} | " + " | ".join(cells) + " |")
 
 
+def _grasp_table(title: str, column: str, physics: list, cells: dict) -> None:
+    """One ``--check`` table: a row per grasp, a column per physics (``cells``: physics name →
+    ``[(grasp, text)]``; a grasp one physics lacks shows —)."""
+    print(f"\n### {title}\n")
+    print("| grasp | " + " | ".join(f"{p.name}: {column}" for p in physics) + " |")
+    print("|" + " --- |" * (len(physics) + 1))
+    rows: dict[str, dict[str, str]] = {}
+    for p in physics:
+        for nm, text in cells[p.name]:
+            rows.setdefault(nm, {})[p.name] = text
+    for nm, row in rows.items():
+        print(f"| {nm} | " + " | ".join(row.get(p.name, "—") for p in physics) + " |")
+
+
 def per_grasp_rows(name: str, res: dict) -> None:
     print(f"\n#### per grasp, {name} (seed-pooled: line / area / point, median error, RMS err/std)\n")
     print("| scenario | grasp | line / area / point | median error | err/std |")
@@ -808,40 +822,27 @@ def main(argv=None) -> int:
               f"force {pc['force_N']:.3f} N (the field integrated exactly: {pc['force_field_N']:.3f} N); "
               f"area {pc['area_mm2']:.1f} mm²")  # fmt: skip
     if args.check:
-        print("\n### locking: h = k n0 × f_t on every rocked grasp (after both axes), first seed\n")
-        print("| grasp | " + " | ".join(f"{p.name}: k, residual" for p in physics) + " |")
-        print("|" + " --- |" * (len(physics) + 1))
-        rows = {}
-        for p in physics:
-            for nm, (k, rr), _ in checks[p.name]:
-                rows.setdefault(nm, {})[p.name] = f"{k:+.1f} mm, {rr:.0%}"
-        for nm, cells in rows.items():
-            print(f"| {nm} | " + " | ".join(cells.get(p.name, "—") for p in physics) + " |")
-        print("\n### the truth under rocking (after both axes, noise-free): the pressure centre's travel, standard "
-              "deviation along its major / minor axis (mm), the major axis's angle to the line, and the contact area (mm²)\n")  # fmt: skip
-        print("| grasp | " + " | ".join(f"{p.name}: major / minor, to the line, area" for p in physics) + " |")
-        print("|" + " --- |" * (len(physics) + 1))
-        rows = {}
-        for p in physics:
-            for nm, _, (major, minor, off, area) in checks[p.name]:
-                rows.setdefault(nm, {})[p.name] = f"{major:.2f} / {minor:.2f} mm, {f'{off:.1f}°' if math.isfinite(off) else '—'}, {area:.0f} mm²"
-        for nm, cells in rows.items():
-            print(f"| {nm} | " + " | ".join(cells.get(p.name, "—") for p in physics) + " |")
+        _grasp_table(
+            "locking: h = k n0 × f_t on every rocked grasp (after both axes), first seed", "k, residual", physics,
+            {p.name: [(nm, f"{k:+.1f} mm, {rr:.0%}") for nm, (k, rr), _ in checks[p.name]] for p in physics},
+        )  # fmt: skip
+        _grasp_table(
+            "the truth under rocking (after both axes, noise-free): the pressure centre's travel, standard deviation "
+            "along its major / minor axis (mm), the major axis's angle to the line, and the contact area (mm²)",
+            "major / minor, to the line, area", physics,
+            {p.name: [(nm, f"{major:.2f} / {minor:.2f} mm, {f'{off:.1f}°' if math.isfinite(off) else '—'}, {area:.0f} mm²")
+                      for nm, _, (major, minor, off, area) in checks[p.name]] for p in physics},
+        )  # fmt: skip
         held = {p.name: all_res[p.name].get("held_wrench", []) for p in physics}
         if any(held.values()):
-            print("\n### the single tilt's held wrench, noise-free: tangential force |f_t|, |h| about the latched point, "
-                  "the locking fit h = k n0 × f_t, the angle of h to the true line, and the estimator's reading "
-                  "(share line, median error)\n")  # fmt: skip
-            print("| grasp | " + " | ".join(f"{p.name}: \\|f_t\\|, \\|h\\|; k, residual; h to the line; line, error" for p in physics) + " |")
-            print("|" + " --- |" * (len(physics) + 1))
-            rows = {}
-            for p in physics:
-                for nm, r in held[p.name]:
-                    err = f"{r['err']:.1f}°" if math.isfinite(r["err"]) else "—"
-                    rows.setdefault(nm, {})[p.name] = (f"{r['ft']:.1f} mN, {r['h']:.2f} N·mm; {r['k']:+.1f} mm, {r['res']:.0%}; "
-                                                       f"{r['h_to_line']:.0f}°; {r['line']:.0%}, {err}")  # fmt: skip
-            for nm, cells in rows.items():
-                print(f"| {nm} | " + " | ".join(cells.get(p.name, "—") for p in physics) + " |")
+            _grasp_table(
+                "the single tilt's held wrench, noise-free: tangential force |f_t|, |h| about the latched point, the "
+                "locking fit h = k n0 × f_t, the angle of h to the true line, and the estimator's reading (share line, "
+                "median error)", "\\|f_t\\|, \\|h\\|; k, residual; h to the line; line, error", physics,
+                {name: [(nm, f"{r['ft']:.1f} mN, {r['h']:.2f} N·mm; {r['k']:+.1f} mm, {r['res']:.0%}; "
+                             f"{r['h_to_line']:.0f}°; {r['line']:.0%}, " + (f"{r['err']:.1f}°" if math.isfinite(r["err"]) else "—"))
+                        for nm, r in rows] for name, rows in held.items()},
+            )  # fmt: skip
     for opt, setting in SWEEPS:
         if getattr(args, opt):
             sweep_rows(physics, all_res, setting, getattr(args, opt))

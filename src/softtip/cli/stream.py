@@ -201,18 +201,16 @@ def _stream(
                 # as `estimate` reads it: far beyond the sensor's range, or a time unit it cannot guess, stops here
                 check_full_scale(log.t, log.wrench, sensor_range, replay, units=units, margin=COARSE_MARGIN)
                 print_log_notes(log)
-                if recorder is not None and log.stamps_ns is not None:
-                    recorder.keep_stamps()  # the note above says they go along, as with `estimate`
                 if payload is None:
-                    source = LogSource(
-                        log.t, log.wrench, speed=speed, name=os.path.basename(log.source), stop=stop, stamps_ns=log.stamps_ns
-                    )
+                    source = LogSource.from_log(log, speed=speed, stop=stop)
                 else:
                     from softtip.io.payload import replay_source
 
                     source = replay_source(log, speed, payload, stop=stop)
                 info = f"(replay x{speed:g})" if speed else "(replay, as fast as possible)"
                 raw = getattr(source, "source", source)  # the log as read (before any payload compensation)
+                if recorder is not None and raw.stamps_ns is not None:
+                    recorder.keep_stamps()  # the note above says they go along, as with `estimate`
             else:
                 from softtip.io.netft import NetFTSource
 

@@ -47,9 +47,10 @@ one rock ends and the next begins, and it can carry the contact's response to a 
 line's own axis (on a stiffer, smaller hydroelastic tip: 8° off where the current windows were
 within 1°). A sample's own angle standard deviation counts the window's across-axis spread
 beyond the noise as model error, ``sqrt(σ_d² + minor / |h|²)``, plus ``unconfirmed_model_std``
-unless a confirming window whose load turned about two axes is held. The share of the standard deviation that is the sensor noise's alone
-(``angle_noise_std``: the window's noise term, or the sample's ``σ_d``) is kept apart: two
-sensors share the model error, not their noise (:mod:`softtip.fusion`).
+unless a confirming window whose load turned about two axes is held. The share of the standard
+deviation that is the sensor noise's alone (``angle_noise_std``: the window's noise term, or
+the sample's ``σ_d``) is kept apart: two sensors share the model error, not their noise
+(:mod:`softtip.fusion`).
 
 Every ``line`` sample's standard deviation also counts, in quadrature, the **twist** of the
 contact, ``atan(|σ| / (R F_n))`` with ``σ = q · n`` the moment about the normal, ``F_n`` the

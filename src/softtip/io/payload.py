@@ -162,5 +162,5 @@ def replay_source(
 
     payload = load_payload(payload)
     q = read_orientation(log)
-    src = LogSource(log.t, log.wrench, speed=speed, name=os.path.basename(log.source), stop=stop, stamps_ns=log.stamps_ns)
+    src = LogSource.from_log(log, speed=speed, stop=stop)
     return CompensatedSource(src, [tuple(row) for row in q.tolist()], payload)

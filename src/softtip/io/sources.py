@@ -29,10 +29,13 @@ import os
 import threading
 import time
 from collections.abc import Iterable, Iterator
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
+
+if TYPE_CHECKING:
+    from softtip.io.tables import Log
 
 __all__ = ["Interrupted", "LogSource", "Reading", "SourceError", "readings"]
 
@@ -171,7 +174,12 @@ class LogSource:
         """Read a CSV log (manual §4) (columns ``t, fx, fy, fz, mx, my, mz``); see :func:`softtip.io.tables.read_log`."""
         from softtip.io.tables import read_log
 
-        log = read_log(path, units=units)
+        return cls.from_log(read_log(path, units=units), speed=speed, stop=stop)
+
+    @classmethod
+    def from_log(cls, log: Log, speed: float = 1.0, stop: threading.Event | None = None) -> LogSource:
+        """A :class:`~softtip.io.tables.Log` replayed: its samples, named by its file, its absolute stamps
+        (:attr:`~softtip.io.tables.Log.stamps_ns`) passed on as each reading's ``stamp_ns``."""
         return cls(log.t, log.wrench, speed=speed, name=os.path.basename(log.source), stop=stop, stamps_ns=log.stamps_ns)
 
     def __len__(self) -> int:

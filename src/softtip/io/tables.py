@@ -203,6 +203,12 @@ ABSOLUTE_STAMP_S = 1e8
 LATEST_STAMP_S = 9.2e9
 
 
+def _dating_units(first: float, units: tuple[str, ...]) -> list[str]:
+    """The time units among ``units`` that make a first stamp ``first`` a date (Unix time from
+    :data:`ABSOLUTE_STAMP_S` to :data:`LATEST_STAMP_S`)."""
+    return [u for u in units if ABSOLUTE_STAMP_S <= first * get_unit(u, "time").si < LATEST_STAMP_S]
+
+
 def _to_seconds(t: NDArray[np.float64], si: float) -> NDArray[np.float64]:
     """``t`` in a unit of ``si`` seconds as seconds: divided by 1000, 1e6 or 1e9 (exact, so correctly
     rounded: ``3900`` ms gives the float ``3.9``, as the text ``"3.9"`` does), not multiplied by 1e-3."""
@@ -312,7 +318,7 @@ def _finish(
     explicit_time = fmt.time_unit is not None or (cmap is not None and (cmap.from_header["t"] or tunit.name != "s"))
     if not explicit_time and start >= LATEST_STAMP_S and len(t) > 1:
         # no date in seconds: the one unit that makes the first stamp a date (Unix time ns, µs or ms)
-        dated = [u for u in ("ms", "us", "ns") if ABSOLUTE_STAMP_S <= float(t[0]) * get_unit(u, "time").si < LATEST_STAMP_S]
+        dated = _dating_units(float(t[0]), ("ms", "us", "ns"))
         if len(dated) == 1:
             tunit = get_unit(dated[0], "time")
             start = float(t[0]) * tunit.si
@@ -324,7 +330,7 @@ def _finish(
                 f"first stamp a date (give --time-units to say otherwise)"
             )
     if start >= LATEST_STAMP_S and len(t):  # after 2261 in Unix time, in the unit given: no clock's
-        dated = [u for u in ("s", "ms", "us", "ns") if ABSOLUTE_STAMP_S <= float(t[0]) * get_unit(u, "time").si < LATEST_STAMP_S]
+        dated = _dating_units(float(t[0]), ("s", "ms", "us", "ns"))
         raise InputError(
             f"{source}: column {names[header.index['t']]!r}: t in {tunit.label} puts the first stamp {start:.3g} s after "
             "1970, beyond the year 2261; expected seconds since the epoch or since a start"
@@ -1477,7 +1483,7 @@ def _roles(index: Mapping[str, int]) -> list[str]:
 
 #: A stamp split in seconds and nanoseconds (ROS): whole seconds that int64 nanoseconds hold
 #: (to 2262), whole nanoseconds below a second.
-_SPLIT_STAMP = {"t": (9.2e9, "whole seconds from 0 to 9.2e9"), "nanosec": (1e9, "whole nanoseconds from 0 to 999999999")}
+_SPLIT_STAMP = {"t": (LATEST_STAMP_S, "whole seconds from 0 to 9.2e9"), "nanosec": (1e9, "whole nanoseconds from 0 to 999999999")}
 
 
 def _split_stamp_valid(role: str, value: Any) -> Any:
