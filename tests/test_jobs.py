@@ -1,5 +1,6 @@
 """A log's pieces estimated on threads (``estimate_pieces(..., jobs=2)``, ``softtip estimate
---jobs 2``) give the bits of the pieces estimated one after the other (``jobs=1``)."""
+--jobs 2``) give the bits of the pieces estimated one after the other (``jobs=1``); the
+compiled loops they run release the interpreter, the stream's per-sample steps keep it."""
 
 from __future__ import annotations
 
@@ -272,3 +273,44 @@ def test_the_process_pool_with_a_temporary_folder_too_long_for_a_socket(tmp_path
     assert done.returncode == 0, done.stderr
     assert done.stdout.splitlines()[0] == "[1, 2, 3]"
     assert os.listdir(long_tmp) == []
+
+
+def _dispatchers(obj, found: dict, path: str, seen: set) -> dict:
+    """The numba dispatchers an object of softtip holds, by attribute path."""
+    from numba.core.dispatcher import Dispatcher
+
+    if id(obj) in seen:
+        return found
+    seen.add(id(obj))
+    if isinstance(obj, Dispatcher):
+        found[path] = obj
+    elif type(obj).__module__.startswith("softtip"):
+        names = list(getattr(obj, "__dict__", {}))
+        names += [k for cls in type(obj).__mro__ for k in getattr(cls, "__slots__", ())]
+        for k in names:
+            if hasattr(obj, k):
+                _dispatchers(getattr(obj, k), found, f"{path}.{k}", seen)
+    return found
+
+
+@pytest.mark.parametrize("name", ["default", "lowpass", "line-fit", "track"])
+def test_stream_steps_keep_the_interpreter_and_the_batch_loops_release_it(name: str) -> None:
+    """Pieces of a log run in parallel only if the batch's compiled loops release the
+    interpreter; a step the stream calls per sample keeps it (a release mid-update hands it
+    to a live run's other threads, benchmarks/bench_live.py)."""
+    pytest.importorskip("numba")
+    from softtip import Estimator
+    from softtip.core._jit import set_jit
+    from softtip.estimator.contact import contact_run
+    from softtip.estimator.pipeline import line_fit_run, points_run, tail_run
+
+    old = set_jit(True)
+    try:
+        config = dataclasses.replace(CONFIGS[name], sample_rate=100.0)  # a stream's filter needs the rate
+        steps = _dispatchers(Estimator("murakami2006", config), {}, "estimator", set())
+        loops = [f.compiled() for f in (contact_run, points_run, tail_run, line_fit_run)]
+    finally:
+        set_jit(old)
+    assert steps and "estimator._contacts._step" in steps
+    assert {path: d.targetoptions["nogil"] for path, d in steps.items()} == dict.fromkeys(steps, False)
+    assert all(d.targetoptions["nogil"] for d in loops)

@@ -112,6 +112,8 @@ def test_the_soak_measures_a_clean_stream_in_contact_with_nothing_lost():
     assert c["lost"] == 0 and c["dropped"] == 0 and r["rows"] == r["samples"] > 2000
     assert 0.3 < r["in_contact"] < 0.8  # the tare (1 s), then the press
     assert 0 < r["own_contact"]["median"] <= r["own_contact"]["p99"] <= r["latency_contact"]["max"]
+    own, cpu = r["own_contact"], r["own_cpu_contact"]  # a call's CPU time is within its wall time
+    assert 0 < cpu["median"] <= own["median"] and cpu["p99"] <= own["p99"]
 
 
 def test_stream_saves_the_rerun_view_drawn_by_its_own_process(tmp_path):

@@ -4,8 +4,8 @@ Each stateful stage of the estimator is one step function over an explicit state
 (:func:`lazy_jit`), run per sample by the stream and in one loop over the log by the batch.
 With numba (a dependency of softtip) both run it compiled, ``cache=True`` on disk: importing
 numba costs about 0.3 s of CPU once per process and loading the cached steps about 0.4 s (the
-first run after installing compiles them, about 9 s). Without numba, or with ``SOFTTIP_NUMBA=0``
-in the environment, the same source runs as Python (tested equal, about 40 times slower);
+first run after installing compiles them, about 11 s of CPU). Without numba, or with ``SOFTTIP_NUMBA=0``
+in the environment, the same source runs as Python (tested equal, about 90 times slower);
 ``SOFTTIP_NUMBA=1`` insists on numba. :func:`jit_enabled` (from :data:`JIT_MIN_SAMPLES` samples)
 still decides for the CSV formatter of :mod:`softtip.io._csvtext`, whose fallback
 is pyarrow's writer (the same bytes).
@@ -131,10 +131,11 @@ def _sources_stamp() -> tuple:
 
 
 class _Lazy:
-    """A function compiled by ``numba.njit(cache=True)`` on its first compiled call."""
+    """A function compiled by ``numba.njit(cache=True, nogil=...)`` on its first compiled call."""
 
-    def __init__(self, func: Callable):
+    def __init__(self, func: Callable, nogil: bool = True):
         self.py_func = func
+        self.nogil = nogil
         self._compiled: Callable | None = None
         self._python: Callable | None = None
         self.__doc__ = func.__doc__
@@ -146,7 +147,7 @@ class _Lazy:
             import numba
 
             _register_jitables()
-            compiled = numba.njit(cache=True, nogil=True)(self.py_func)
+            compiled = numba.njit(cache=True, nogil=self.nogil)(self.py_func)
             cache_file = getattr(getattr(compiled, "_cache", None), "_cache_file", None)
             if cache_file is not None:  # stale when a function compiled into it changed (module docs)
                 cache_file._source_stamp = (cache_file._source_stamp, _sources_stamp())
@@ -184,6 +185,17 @@ class _Lazy:
         return self.function()(*args)
 
 
-def lazy_jit(func: Callable) -> _Lazy:
-    """Decorator: compile ``func`` with numba (cached on disk) the first time it is called."""
-    return _Lazy(func)
+def lazy_jit(func: Callable | None = None, *, nogil: bool = True) -> Any:
+    """Decorator: compile ``func`` with numba (cached on disk) the first time it is called.
+
+    ``nogil`` (numba's option): a call from Python releases the interpreter while it runs, as
+    the batch's loops over a log do, so that pieces of a log run on several threads. A step
+    the stream calls once per sample from Python is declared ``nogil=False``: releasing and
+    taking the interpreter back costs more than the step's few microseconds and lets another
+    thread (a live run's receive thread, its recorder) take it in the middle of an update,
+    which the update then waits out (the 7 kHz soak's update p99 was about twice the time of
+    the same updates run alone). Compiled callers call a step directly, whatever its flag.
+    """
+    if func is None:
+        return lambda f: _Lazy(f, nogil)
+    return _Lazy(func, nogil)
