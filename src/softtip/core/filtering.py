@@ -90,7 +90,7 @@ def sosfilt_state(
     return _signal().sosfilt(sos, x, axis=0, zi=zi)
 
 
-@lazy_jit(nogil=False)  # called per sample from Python by the stream
+@lazy_jit(nogil=False)
 def sos_step(coef, z, x, y):  # pragma: no cover - compiled
     """One sample of the filter: ``x`` (C,) in, ``y`` (C,) written; the state ``z``
     (sections, 2, C), the layout of :func:`sosfilt_state`'s, read and written.

@@ -125,7 +125,7 @@ def reset_contact_state(state: NDArray[np.float64]) -> None:
     state[_ALARMED] = 0.0
 
 
-@lazy_jit(nogil=False)  # called per sample from Python by the stream
+@lazy_jit(nogil=False)
 def contact_step(state, params, t, dt, x0, x1, x2, x3, x4, x5):  # pragma: no cover - compiled
     """One sample ``x`` (tared, filtered; N and N·m) at ``t``, ``dt`` s after the previous one.
 

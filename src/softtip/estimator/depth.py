@@ -268,7 +268,7 @@ def _solve(state, ring, params, t, head, count) -> None:
     state[_HELD_DATA] = 1.0 if from_data else 0.0
 
 
-@lazy_jit(nogil=False)  # called per sample from Python by the stream
+@lazy_jit(nogil=False)
 def depth_step(state, ring, params, t, fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, d0):
     """One sample in contact with a contact point, online depth: ``(depth, depth_std, from_data)``.
 

@@ -228,7 +228,7 @@ def new_evidence_state(capacity: int, corr: float):
     return np.zeros(_N_STATE), np.zeros(_N_COUNTERS, dtype=np.int64), ring, wconst
 
 
-@lazy_jit(nogil=False)  # called per sample from Python by the stream
+@lazy_jit(nogil=False)
 def evidence_start(state, counts):
     """A new segment (contact onset, re-latch, a moved point): empty windows, no verdict, no held window."""
     for q in range(N_SUMS):
@@ -361,7 +361,7 @@ def _own(hx, hy, hz, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z, param
     )[1:]  # fmt: skip
 
 
-@lazy_jit(nogil=False)  # called per sample from Python by the stream
+@lazy_jit(nogil=False)
 def evidence_step(state, counts, ring, params, wconst, t, px, py, pz, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z,
                   ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, h_std, sg):  # fmt: skip
     """One located sample through the stage.

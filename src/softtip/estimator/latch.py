@@ -107,7 +107,7 @@ def latch_start(state, f_norm, t):  # pragma: no cover - compiled
         state[k] = 0.0
 
 
-@lazy_jit(nogil=False)  # called per sample from Python by the stream
+@lazy_jit(nogil=False)
 def latch_hold(state, px, py, pz):  # pragma: no cover - compiled
     """The fixed latch put back on the skin, ``p`` (m), handed to the state (after
     :data:`FIX` or :data:`ASK_HOLD`)."""
@@ -127,7 +127,7 @@ def latch_keeps(held, onset, f_norm, lo, hi, dist2):
     return held and not onset and not (dist2 >= 0.0 and lo <= f_norm and f_norm <= hi)
 
 
-@lazy_jit(nogil=False)  # called per sample from Python by the stream
+@lazy_jit(nogil=False)
 def latch_step(state, params, onset, t, f_norm, have_sc, valid, rx, ry, rz):  # pragma: no cover - compiled
     """One sample in contact.
 

@@ -106,12 +106,12 @@ def new_line_fit_state() -> NDArray:
     return state
 
 
-@lazy_jit(nogil=False)  # called per sample from Python by the stream
+@lazy_jit(nogil=False)
 def _start_anchor(state):  # pragma: no cover - compiled
     state[_HAS_ANCHOR] = 0.0
 
 
-@lazy_jit(nogil=False)  # called per sample from Python by the stream
+@lazy_jit(nogil=False)
 def _start_window(state):  # pragma: no cover - compiled
     state[_HEAD] = 0.0
     state[_COUNT] = 0.0
@@ -119,7 +119,7 @@ def _start_window(state):  # pragma: no cover - compiled
         state[_CUM + q] = 0.0
 
 
-@lazy_jit(nogil=False)  # called per sample from Python by the stream
+@lazy_jit(nogil=False)
 def line_fit_start_segment(state, t):  # pragma: no cover - compiled
     """At contact onset and at a re-latch (``t``, s): no window held yet."""
     state[_HAS_HELD] = 0.0
@@ -127,7 +127,7 @@ def line_fit_start_segment(state, t):  # pragma: no cover - compiled
     state[_T_SEGMENT] = t
 
 
-@lazy_jit(nogil=False)  # called per sample from Python by the stream
+@lazy_jit(nogil=False)
 def line_fit_anchor_step(state, valid, rx, ry, rz):  # pragma: no cover - compiled
     """The anchor of the sums, ``(ax, ay, az)`` m: the contact's first valid soft-finger point
     ``r`` (NaN before it)."""
@@ -141,7 +141,7 @@ def line_fit_anchor_step(state, valid, rx, ry, rz):  # pragma: no cover - compil
     return state[_AX], state[_AY], state[_AZ]
 
 
-@lazy_jit(nogil=False)  # called per sample from Python by the stream
+@lazy_jit(nogil=False)
 def line_fit_window_step(state, ring, t, window, prods, sums):  # pragma: no cover - compiled
     """A valid sample at ``t`` (s) with products ``prods`` (N_SUMS,): ``sums`` (N_SUMS,) written
     with the sums of the window of ``window`` s ending here; returns its samples.
@@ -172,7 +172,7 @@ def line_fit_window_step(state, ring, t, window, prods, sums):  # pragma: no cov
     return count
 
 
-@lazy_jit(nogil=False)  # called per sample from Python by the stream
+@lazy_jit(nogil=False)
 def line_fit_hold_step(state, t, accepted, offset_std, px, py, pz, drift2):  # pragma: no cover - compiled
     """A sample in contact at ``t`` (s) whose window gave the point ``p`` (m), accepted or not,
     with offset standard deviation ``offset_std`` (m); ``drift2`` is ``line_fit_drift²``.
