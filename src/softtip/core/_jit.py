@@ -149,8 +149,8 @@ class _Lazy:
             _register_jitables()
             compiled = numba.njit(cache=True, nogil=self.nogil)(self.py_func)
             cache_file = getattr(getattr(compiled, "_cache", None), "_cache_file", None)
-            if cache_file is not None:  # stale when a function compiled into it changed (module docs)
-                cache_file._source_stamp = (cache_file._source_stamp, _sources_stamp())
+            if cache_file is not None:  # stale when a function compiled into it or the flag changed (module docs)
+                cache_file._source_stamp = (cache_file._source_stamp, _sources_stamp(), self.nogil)
             self._compiled = compiled
         return self._compiled
 
@@ -190,12 +190,10 @@ def lazy_jit(func: Callable | None = None, *, nogil: bool = True) -> Any:
 
     ``nogil`` (numba's option): a call from Python releases the interpreter while it runs, as
     the batch's loops over a log do, so that pieces of a log run on several threads. A step
-    the stream calls once per sample from Python is declared ``nogil=False``: releasing and
-    taking the interpreter back costs more than the step's few microseconds and lets another
-    thread (a live run's receive thread, its recorder) take it in the middle of an update,
-    which the update then waits out (``benchmarks/bench_live.py``'s 7 kHz soak: the update's
-    p99 53–67 µs before, 41–55 µs since). Compiled callers call a step directly, whatever its
-    flag.
+    the stream calls once per sample from Python is declared ``nogil=False``: a release is
+    cheap, but taking the interpreter back waits while another thread (a live run's receive
+    thread, its recorder) holds it, in the middle of an update (the performance page's live
+    soak). Compiled callers call a step directly, whatever its flag.
     """
     if func is None:
         return lambda f: _Lazy(f, nogil)
