@@ -217,9 +217,7 @@ def soak(rate: float = SOAK_RATE, seconds: float = 60.0, views: bool = True, fre
             collections.append((info["generation"], time.thread_time_ns() - started[0]))
 
     estimator = Estimator("murakami2006")  # before the stream starts (compiled stages load when it is built)
-    update, clock, mono = estimator.update, time.perf_counter_ns, time.monotonic_ns
-
-    cpu_clock = time.thread_time_ns
+    update, clock, mono, cpu_clock = estimator.update, time.perf_counter_ns, time.monotonic_ns, time.thread_time_ns
 
     def timed_update(t, w):  # run_live calls the instance's update: this one, timing the real one
         t0, c0 = clock(), cpu_clock()  # the wall time takes in the two CPU clock reads (about 1 us)

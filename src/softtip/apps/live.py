@@ -222,9 +222,7 @@ class Recorder:
                 f"{self.path}: cannot write there; expected an existing, writable directory"
             )
         self.flush_interval = flush_interval
-        self.columns: tuple[str, ...] = RECORD_COLUMNS
-        self.row: Callable[[SampleEstimate, Reading], tuple] = estimate_row
-        self._format = ",".join(_FORMATS[c] for c in self.columns) + "\n"
+        self._use(RECORD_COLUMNS, estimate_row)
         self.rows = 0
         self._pending: collections.deque = collections.deque()
         self._fh: TextIO | None = None
@@ -240,9 +238,11 @@ class Recorder:
         which ``softtip estimate`` keeps as a column as well); before the first row."""
         if self._fh is not None or self._pending:
             raise RuntimeError("keep_stamps() after the first row")
-        self.columns = RECORD_COLUMNS + (STAMP_COLUMN,)
-        self.row = _stamped_row
-        self._format = ",".join(_FORMATS[c] for c in self.columns) + "\n"
+        self._use(RECORD_COLUMNS + (STAMP_COLUMN,), _stamped_row)
+
+    def _use(self, columns: tuple[str, ...], row: Callable[[SampleEstimate, Reading], tuple]) -> None:
+        self.columns, self.row = columns, row
+        self._format = ",".join(_FORMATS[c] for c in columns) + "\n"
 
     def add(self, row: tuple) -> None:
         """Queue one row (from the consumer loop; never blocks).

@@ -44,8 +44,8 @@ segment that confirmed it and resolved an axis (``h`` on one axis, varied by at 
 carries what the window saw of the roll); the sample's own elsewhere. The current window is
 preferred to the confirming one: a confirming window is a moment of two-axis load, often where
 one rock ends and the next begins, and it can carry the contact's response to a roll about the
-line's own axis (on a stiffer, smaller hydroelastic tip: 8° off where the current windows were
-within 1°). A sample's own angle standard deviation counts the window's across-axis spread
+line's own axis (on a stiffer, smaller hydroelastic tip: 8° off where the current windows are 1.3°
+off in the median). A sample's own angle standard deviation counts the window's across-axis spread
 beyond the noise as model error, ``sqrt(σ_d² + minor / |h|²)``, plus ``unconfirmed_model_std``
 unless a confirming window whose load turned about two axes is held. The share of the standard
 deviation that is the sensor noise's alone (``angle_noise_std``: the window's noise term, or
