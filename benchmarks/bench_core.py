@@ -506,22 +506,26 @@ def timed(fn, repeats=2):
     return min(wall), min(cpu), out
 
 
-_MEASURE = """import resource, subprocess, sys
-done = subprocess.run(sys.argv[1:], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+_MEASURE = """import os, resource, subprocess, sys
+one = sys.argv[1] == "--one-core"
+if one:  # the command and its threads on this process's first CPU alone
+    os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
+done = subprocess.run(sys.argv[1 + one:], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
 u = resource.getrusage(resource.RUSAGE_CHILDREN)
 print(done.returncode, u.ru_utime + u.ru_stime, u.ru_maxrss * 1024)
 sys.stderr.write(done.stderr.decode())
 """
 
 
-def command(cmd: list[str]) -> tuple[float, float, float]:
-    """Wall time, CPU time (user + system) and peak resident memory (bytes) of a command.
+def command(cmd: list[str], *, one_core: bool = False) -> tuple[float, float, float]:
+    """Wall time, CPU time (user + system) and peak resident memory (bytes) of a command
+    (``one_core``: with every thread of it on one CPU, Linux's CPU affinity).
 
     Run through a small Python process: a child's peak memory on Linux starts from the size
     of the process that forked it, so the benchmark (GBs by now) must not be that one.
     """
     w0 = time.perf_counter()
-    done = subprocess.run([sys.executable, "-c", _MEASURE, *cmd], capture_output=True, text=True)
+    done = subprocess.run([sys.executable, "-c", _MEASURE, *(["--one-core"] if one_core else []), *cmd], capture_output=True, text=True)
     wall = time.perf_counter() - w0
     code, cpu, peak = done.stdout.split()
     if done.returncode != 0 or code != "0":
@@ -590,17 +594,28 @@ def _load() -> float:
 
 
 def both_cores(n: int, repeats: int = 3) -> None:
-    """`softtip estimate --jobs 1` against `--jobs 2` on an n-row log (the 1 kHz grasp repeated),
-    CSV -> CSV and Parquet -> Parquet, end to end (new processes), alternating; then where the
-    CPU time goes on one thread (start-up, then the pieces' stages), for the critical path."""
+    """`softtip estimate` on one core (every thread on one CPU) against `--jobs 1` and `--jobs 2`
+    on both, on an n-row log (the 1 kHz grasp repeated), CSV -> CSV and Parquet -> Parquet, end
+    to end (new processes), alternating; then where the CPU time goes on one thread (start-up,
+    then the pieces' stages), for the critical path. ``--jobs 1`` is not one core: the CSV
+    writer formats on a thread of its own while the next piece is estimated."""
+    import hashlib
+
     from softtip.io.tables import write_table
+
+    def digest(path: Path) -> str:
+        h = hashlib.sha256()
+        with open(path, "rb") as fh:
+            while chunk := fh.read(1 << 24):
+                h.update(chunk)
+        return h.hexdigest()
 
     t, w = grasp_log(n)
     n = len(t)
     softtip_cmd = str(Path(sys.executable).with_name("softtip"))
     print(f"both cores: `softtip estimate` on a {n:,}-row log, {os.cpu_count()} CPUs, load average {_load():.1f} at the start;")
     print(f"  {repeats} runs of each, alternating (1 2 1 2 ...): wall s, CPU s (user + system, every thread), peak GB, load average")
-    print("  before the run; a ratio is jobs 1 / jobs 2 of the medians")
+    print("  before the run; a ratio is of the medians; \"one core\": --jobs 1 with every thread on one CPU")
     with tempfile.TemporaryDirectory() as tmp:
         log_columns = {"t": t, **{name: w[:, i] for i, name in enumerate(("fx", "fy", "fz", "mx", "my", "mz"))}}
         for fmt in ("csv", "parquet"):
@@ -609,20 +624,23 @@ def both_cores(n: int, repeats: int = 3) -> None:
             runs: dict[str, list[tuple[float, float, float, float]]] = {}
             outputs = {}
             for _ in range(repeats):
-                for jobs in ("1", "2", "default"):
+                for jobs in ("one core", "1", "2", "default"):
                     load = _load()
-                    extra = [] if jobs == "default" else ["--jobs", jobs]
-                    wall, cpu, peak = command([softtip_cmd, "estimate", str(src), "-o", str(dest), "-q", *extra])
+                    extra = ["--jobs", "1"] if jobs == "one core" else [] if jobs == "default" else ["--jobs", jobs]
+                    cmd = [softtip_cmd, "estimate", str(src), "-o", str(dest), "-q", *extra]
+                    wall, cpu, peak = command(cmd, one_core=jobs == "one core")
                     runs.setdefault(jobs, []).append((wall, cpu, peak, load))
-                    outputs[jobs] = dest.read_bytes()
-            same = outputs["1"] == outputs["2"] == outputs["default"]
+                    outputs[jobs] = digest(dest)
+            same = len(set(outputs.values())) == 1
             for jobs, rs in runs.items():
                 cells = "  ".join(f"{wl:5.2f} {c:5.2f} {p / 1e9:4.2f} ({ld:.1f})" for wl, c, p, ld in rs)
-                print(f"  {fmt:7s} --jobs {jobs:7s}: {cells}")
+                label = jobs if jobs == "one core" else f"--jobs {jobs}"
+                print(f"  {fmt:7s} {label:14s}: {cells}")
             med = {j: (float(np.median([r[0] for r in rs])), float(np.median([r[1] for r in rs]))) for j, rs in runs.items()}
             print(f"  {fmt:7s} the cores this process got: {cores_granted():.2f}x (two threads of a compiled loop against one;"
                   " 2.0 on an idle 2-core machine, ~1 when other work takes the cores)")
-            print(f"  {fmt:7s} wall ratio {med['1'][0] / med['2'][0]:.2f}x, CPU jobs 2 / jobs 1 {med['2'][1] / med['1'][1]:.2f};"
+            print(f"  {fmt:7s} wall ratio one core / --jobs 2 {med['one core'][0] / med['2'][0]:.2f}x, --jobs 1 / --jobs 2"
+                  f" {med['1'][0] / med['2'][0]:.2f}x; CPU --jobs 2 / one core {med['2'][1] / med['one core'][1]:.2f};"
                   f" output bytes identical: {same}")
         stage_cpu(Path(tmp), n, softtip_cmd)
     print(f"  load average at the end {_load():.1f} (other work on the machine shares the cores)")

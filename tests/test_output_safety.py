@@ -179,6 +179,52 @@ def test_atomic_file_refuses_a_directory_and_discards_on_error(tmp_path):
     assert listing(tmp_path) == []
 
 
+
+@pytest.mark.skipif(not hasattr(os, "posix_fadvise"), reason="needs posix_fadvise")
+@pytest.mark.parametrize("mode", ["w", "wb"])
+def test_atomic_file_hands_its_pages_to_writeback_behind_the_writer(tmp_path, monkeypatch, mode):
+    import softtip.io.atomic as atomic
+
+    calls = []
+    monkeypatch.setattr(atomic, "WRITE_BEHIND_BYTES", 1000)
+    monkeypatch.setattr(os, "posix_fadvise", lambda fd, start, length, advice: calls.append((start, length, advice)))
+    rng = np.random.default_rng(3)
+    pieces = ["".join(rng.choice(list("0123456789,.\n"), size=int(rng.integers(1, 900)))) for _ in range(400)]
+    with AtomicFile(tmp_path / "t.csv") as f:
+        with f.open(mode) as fh:
+            for p in pieces:
+                fh.write(p if mode == "w" else p.encode())
+        f.commit()
+    assert (tmp_path / "t.csv").read_text() == "".join(pieces)
+    # each range is handed to writeback once, contiguous from the start, and dropped at the next hand-over
+    ranges = [(start, length) for start, length, advice in calls if advice == os.POSIX_FADV_DONTNEED]
+    handed = list(dict.fromkeys(ranges))
+    assert len(ranges) == len(calls) and len(handed) >= 10 and handed[0][0] == 0
+    assert all(a + n == b for (a, n), (b, _) in zip(handed, handed[1:])) and all(n >= 1000 for _, n in handed)
+    assert handed[-1][0] + handed[-1][1] <= len("".join(pieces))
+    assert ranges == [handed[0]] + [r for pair in zip(handed, handed[1:]) for r in pair]
+
+
+def test_atomic_file_writes_on_where_the_kernel_takes_no_advice(tmp_path, monkeypatch):
+    import softtip.io.atomic as atomic
+
+    calls = []
+
+    def refuse(fd, start, length, advice):
+        calls.append(start)
+        raise OSError(29, "Illegal seek")
+
+    monkeypatch.setattr(atomic, "WRITE_BEHIND_BYTES", 10)
+    monkeypatch.setattr(os, "posix_fadvise", refuse, raising=False)
+    with AtomicFile(tmp_path / "t.bin") as f:
+        with f.open("wb") as fh:
+            for k in range(100):
+                fh.write(bytes([k]) * 7)
+                fh.flush()
+        f.commit()
+    assert (tmp_path / "t.bin").read_bytes() == b"".join(bytes([k]) * 7 for k in range(100))
+    assert len(calls) == 1  # asked once, then written as any file
+
 # ---------------------------------------------------------------------------------------
 # 3. disk full, file too large, standard output on a full device or a closed pipe
 
@@ -208,7 +254,9 @@ def test_file_too_large_exits_2_and_leaves_nothing(tmp_path, log, args, names):
     d = tmp_path / "out"
     d.mkdir()
     argv = [a.format(log=log, d=d) for a in args]
-    out = run(*argv, preexec_fn=_limit_file_size(30_000))
+    # no bytecode written under the limit: Python would keep a cut .pyc where the run's later
+    # processes read it (tests/conftest.py keeps their bytecode in one folder)
+    out = run(*argv, preexec_fn=_limit_file_size(30_000), env={**os.environ, "PYTHONDONTWRITEBYTECODE": "1"})
     assert out.returncode == 2, out.stderr
     assert "File too large" in out.stderr and "Traceback" not in out.stderr
     assert any(str(d / n) in out.stderr for n in names), out.stderr

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import io
 import os
 import secrets
 import select
@@ -174,11 +175,18 @@ class AtomicFile:
         return self._device
 
     def open(self, mode: str = "w", **kwargs: Any) -> IO[Any]:
-        """Open the temporary file (text mode: UTF-8, no newline translation unless given)."""
+        """Open the temporary file (text mode: UTF-8, no newline translation unless given).
+
+        Written from the start (``"w"``, ``"wb"``) into a file to be renamed into place, the
+        kernel writes its pages back and drops them behind the writer (:class:`_WriteBehind`).
+        """
         if "b" not in mode:
             kwargs.setdefault("encoding", "utf-8")
             kwargs.setdefault("newline", "")
-        return open(self.tmp, mode, **kwargs)
+        if self._device or mode not in ("w", "wb") or "buffering" in kwargs or not hasattr(os, "posix_fadvise"):
+            return open(self.tmp, mode, **kwargs)
+        binary = io.BufferedWriter(_WriteBehind(self.tmp))
+        return binary if mode == "wb" else io.TextIOWrapper(binary, **kwargs)
 
     def commit(self) -> None:
         """Put the content in place (rename, or copy into a device); the temporary file goes."""
@@ -254,6 +262,46 @@ class AtomicFile:
             self.discard()
             if isinstance(exc, OSError) and not isinstance(exc, InputError):
                 raise cannot_write(self.path, exc) from None
+
+
+#: Bytes written between two hand-overs to the kernel's writeback (:class:`_WriteBehind`).
+WRITE_BEHIND_BYTES = 64 << 20
+
+
+class _WriteBehind(io.FileIO):
+    """A file written from the start whose pages the kernel writes back and drops behind the
+    writer: every :data:`WRITE_BEHIND_BYTES`, the range written since the last hand-over is
+    handed to writeback, and the range handed over the time before (written back since) is
+    dropped from the page cache (``posix_fadvise(POSIX_FADV_DONTNEED)``, which on Linux starts
+    the writeback of dirty pages without waiting and drops clean ones).
+
+    A table of gigabytes otherwise fills the page cache with dirty pages the commit's ``fsync``
+    then writes at once, and takes that many new pages: on the 2-core virtual machine of the
+    benchmarks 4.9 GB written plainly took 6.8-11.8 s of system time, and 1.4-2.4 s this way
+    (``softtip estimate`` of a 1e7-row log to CSV). Files below the step are not advised at all.
+    The advice changes no byte: the commit still syncs the whole file before the rename.
+    """
+
+    def __init__(self, path: PathLike) -> None:
+        super().__init__(path, "w")
+        self._end = 0  # bytes written
+        self._handed = 0  # the end of the range handed to writeback
+        self._dropped = 0  # the end of the range dropped
+        self._advise = True
+
+    def write(self, b: Any) -> int:
+        n = super().write(b)
+        self._end += n
+        if self._advise and self._end - self._handed >= WRITE_BEHIND_BYTES:
+            fd = self.fileno()
+            try:
+                if self._handed > self._dropped:  # (a length of 0 would mean "to the end of the file")
+                    os.posix_fadvise(fd, self._dropped, self._handed - self._dropped, os.POSIX_FADV_DONTNEED)
+                os.posix_fadvise(fd, self._handed, self._end - self._handed, os.POSIX_FADV_DONTNEED)
+            except OSError:  # advice only: a file system that takes none is written as any other
+                self._advise = False
+            self._dropped, self._handed = self._handed, self._end
+        return n
 
 
 def partial_dir(dest: PathLike) -> Path:

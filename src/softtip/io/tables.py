@@ -2018,19 +2018,13 @@ def _object_cells(a: np.ndarray) -> list[str]:
     return [_quote(c) for c in cells]
 
 
-def _write_rows(out: TextIO | BinaryIO, plan: _Plan, *, header: bool = True, threads: int | None = None,
-                buffers: _TextBuffers | None = None) -> None:  # fmt: skip
-    """Write the table to a text stream (Parquet: to its binary buffer), in blocks.
-
-    A binary stream (an atomic writer's temporary file, say) is written to as UTF-8. ``threads``:
-    the most threads formatting CSV blocks at once (default :data:`_WRITE_THREADS`).
-    ``buffers``: the compiled formatter's memory, kept from one call to the next (a
-    :class:`TableWriter`'s pieces).
-    """
+def _write_rows(out: TextIO | BinaryIO, plan: _Plan) -> None:
+    """Write the table with its header to a text stream (Parquet: to its binary buffer), in
+    blocks; a binary stream (an atomic writer's temporary file, say) is written to as UTF-8."""
     if not hasattr(out, "encoding"):
         text = io.TextIOWrapper(out, encoding="utf-8", newline="", write_through=True)  # type: ignore[arg-type]
         try:
-            _write_rows(text, plan, header=header, threads=threads, buffers=buffers)
+            _write_rows(text, plan)
         finally:
             text.flush()
             text.detach()
@@ -2038,45 +2032,84 @@ def _write_rows(out: TextIO | BinaryIO, plan: _Plan, *, header: bool = True, thr
     if plan.parquet:
         _write_parquet(out, plan)
         return
-    if header:
-        out.write(plan.header)
+    out.write(plan.header)
     if plan.digits is None:
         _write_rows_printf(out, plan)
         return
-    from pyarrow import csv as pacsv
+    with _CsvBlocks(out, None, None) as blocks:
+        blocks.add(plan)
 
-    options = pacsv.WriteOptions(include_header=False, quoting_style=plan.quoting)
-    binary = getattr(out, "buffer", None)
-    if binary is not None:
-        out.flush()  # the header first
-    compiled = _compiled_csv(plan)
-    if compiled:
-        buffers = buffers or _TextBuffers()
-        buffers.put(_compiled_block(plan, 0, min(plan.n, 1), buffers)[0])  # compiled (or loaded from numba's cache) once, before the threads
 
-    def text_of(start: int) -> Any:
-        # formatting floats is the cost; the compiled formatter and pyarrow both run without
-        # the GIL, so blocks are formatted on the free cores while the file gets the ones
-        # before them, in order
-        stop = min(start + _CHUNK_ROWS, plan.n)
-        if compiled:
-            return _compiled_block(plan, start, stop, buffers)
-        sink = io.BytesIO()
-        pacsv.write_csv(_arrow_block(plan, start, stop, rounded=True), sink, options)
-        return sink.getvalue(), None
+class _CsvBlocks:
+    """CSV text formatted in blocks of :data:`_CHUNK_ROWS` rows on a pool of threads and written
+    to ``out`` in order by the caller's thread, across any number of tables (:meth:`add`; a
+    :class:`TableWriter`'s pieces): formatting floats is the cost, and the compiled formatter and
+    pyarrow's writer both run without the GIL, so the blocks of the next piece are formatted
+    while the file gets the ones before them. At most ``2 * threads`` blocks are in flight.
+    :meth:`flush` writes what is pending; leaving the ``with`` block flushes, or, on an error,
+    drops what is pending."""
 
-    starts = range(0, plan.n, _CHUNK_ROWS)
-    workers = min(threads or _WRITE_THREADS, os.cpu_count() or 1, len(starts))
-    with ThreadPoolExecutor(max_workers=max(workers, 1)) as pool:
-        pending: deque = deque()
-        for start in starts:
-            pending.append((start, pool.submit(text_of, start)))
-            if len(pending) > 2 * workers:  # a bounded number of blocks in memory
-                _put_block(out, binary, plan, *pending.popleft(), buffers)
-        while pending:
-            _put_block(out, binary, plan, *pending.popleft(), buffers)
-    if binary is not None:
-        binary.flush()
+    def __init__(self, out: TextIO, threads: int | None, buffers: _TextBuffers | None) -> None:
+        self.out = out
+        self.binary = getattr(out, "buffer", None)
+        self.workers = max(1, min(threads or _WRITE_THREADS, os.cpu_count() or 1))
+        self.buffers = buffers or _TextBuffers()
+        self.pending: deque = deque()
+        self.pool: ThreadPoolExecutor | None = None
+
+    def add(self, plan: _Plan) -> None:
+        """Start formatting ``plan``'s rows; write the blocks before them that are done."""
+        from pyarrow import csv as pacsv
+
+        if self.binary is not None:
+            self.out.flush()  # a header first
+        compiled = _compiled_csv(plan)
+        if compiled:  # compiled (or loaded from numba's cache) once, before the threads
+            self.buffers.put(_compiled_block(plan, 0, min(plan.n, 1), self.buffers)[0])
+        options = pacsv.WriteOptions(include_header=False, quoting_style=plan.quoting)
+
+        def text_of(start: int) -> Any:
+            stop = min(start + _CHUNK_ROWS, plan.n)
+            if compiled:
+                return _compiled_block(plan, start, stop, self.buffers)
+            sink = io.BytesIO()
+            pacsv.write_csv(_arrow_block(plan, start, stop, rounded=True), sink, options)
+            return sink.getvalue(), None
+
+        if self.pool is None:
+            self.pool = ThreadPoolExecutor(max_workers=self.workers)  # its threads start as blocks need them
+        for start in range(0, plan.n, _CHUNK_ROWS):
+            self.pending.append((plan, start, self.pool.submit(text_of, start)))
+            while len(self.pending) > 2 * self.workers:  # a bounded number of blocks in memory
+                self._put_one()
+
+    def _put_one(self) -> None:
+        plan, start, done = self.pending.popleft()
+        _put_block(self.out, self.binary, plan, start, done, self.buffers)
+
+    def flush(self) -> None:
+        """Write every pending block."""
+        while self.pending:
+            self._put_one()
+        if self.binary is not None:
+            self.binary.flush()
+
+    def close(self, *, write: bool = True) -> None:
+        """Write the pending blocks (``write``) and end the threads (also when writing fails)."""
+        try:
+            if write:
+                self.flush()
+        finally:
+            if self.pool is not None:
+                self.pool.shutdown(wait=True, cancel_futures=True)
+                self.pool = None
+            self.pending.clear()
+
+    def __enter__(self) -> _CsvBlocks:
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        self.close(write=exc_type is None)
 
 
 def _compiled_csv(plan: _Plan) -> bool:
@@ -2918,7 +2951,9 @@ class TableWriter:
 
     Each :meth:`write` appends rows with the same columns; the CSV header comes with the
     first. CSV text cells are quoted, when one needs it, piece by piece (each piece as
-    :func:`write_table` would quote it). Call :meth:`close` at the end.
+    :func:`write_table` would quote it). Call :meth:`close` at the end. CSV is formatted on
+    threads while the caller goes on (:class:`_CsvBlocks`): a piece's last rows may be written
+    by the next :meth:`write` or by :meth:`close`, so its arrays must not change until then.
     """
 
     def __init__(self, out: TextIO | BinaryIO, *, parquet: bool = False, format: str | None = None, float_format: str = "%.10g",
@@ -2932,11 +2967,11 @@ class TableWriter:
         self.metadata = dict(metadata or {})
         self.names: list[str] | None = None
         self._writer: Any = None
-        self._buffers = _TextBuffers()  # the compiled CSV formatter's memory, piece after piece
         if not hasattr(out, "encoding"):
             self._text = io.TextIOWrapper(out, encoding="utf-8", newline="", write_through=True)  # type: ignore[arg-type]
         else:
             self._text = None
+        self._blocks = None if self.parquet else _CsvBlocks(self._text or out, threads, None)  # type: ignore[arg-type]
 
     def write(self, columns: Mapping[str, Sequence[Any] | np.ndarray], progress: Callable[[int], object] | None = None) -> None:
         """Append the rows of ``columns`` (the same names, in the same order, every time)."""
@@ -2958,11 +2993,21 @@ class TableWriter:
                 if progress is not None:
                     progress(stop - start)
         else:
-            _write_rows(out, plan, header=self.names is None, threads=self.threads, buffers=self._buffers)  # type: ignore[arg-type]
+            assert self._blocks is not None
+            if self.names is None:
+                out.write(plan.header)
+            if plan.digits is None:
+                self._blocks.flush()
+                _write_rows_printf(out, plan)  # type: ignore[arg-type]
+            else:
+                self._blocks.add(plan)
         self.names = plan.names
 
     def close(self) -> None:
-        """Finish the file (Parquet: its footer); the stream stays open."""
+        """Finish the file (CSV: the rows still being formatted; Parquet: its footer); the stream stays open."""
+        if self._blocks is not None:
+            self._blocks.close()
+            self._blocks = None
         if self._writer is not None:
             self._writer.close()
             self._writer = None
