@@ -71,7 +71,7 @@ import re
 import sys
 from collections import deque
 from collections.abc import Callable, Mapping, Sequence
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, replace
 from typing import Any, BinaryIO, TextIO
 
@@ -2045,7 +2045,8 @@ class _CsvBlocks:
     to ``out`` in order by the caller's thread, across any number of tables (:meth:`add`; a
     :class:`TableWriter`'s pieces): formatting floats is the cost, and the compiled formatter and
     pyarrow's writer both run without the GIL, so the blocks of the next piece are formatted
-    while the file gets the ones before them. At most ``2 * threads`` blocks are in flight.
+    while the file gets the ones before them. At most ``2 * threads`` blocks are in flight; with
+    one thread, the caller formats and writes each block in turn.
     :meth:`flush` writes what is pending; leaving the ``with`` block flushes, or, on an error,
     drops what is pending."""
 
@@ -2076,6 +2077,13 @@ class _CsvBlocks:
             pacsv.write_csv(_arrow_block(plan, start, stop, rounded=True), sink, options)
             return sink.getvalue(), None
 
+        if self.workers == 1:  # the caller's thread alone (``--jobs 1``): each block at once
+            for start in range(0, plan.n, _CHUNK_ROWS):
+                done: Future = Future()
+                done.set_result(text_of(start))
+                self.pending.append((plan, start, done))
+                self._put_one()
+            return
         if self.pool is None:
             self.pool = ThreadPoolExecutor(max_workers=self.workers)  # its threads start as blocks need them
         for start in range(0, plan.n, _CHUNK_ROWS):
