@@ -162,3 +162,25 @@ def test_a_writer_reuses_its_buffers_across_pieces_and_tables_of_other_shapes():
     writer.close()
     whole = {k: np.concatenate([p[k] for p in pieces]) for k in pieces[0]}
     assert out.getvalue().encode() == _text(whole, False)
+
+
+@pytest.mark.parametrize("threads", [1, 3])
+@pytest.mark.parametrize("binary", [False, True])
+def test_a_writer_formats_the_next_pieces_while_the_file_gets_the_ones_before(monkeypatch, threads, binary):
+    """Blocks of several pieces in flight at once (blocks of 7 rows, up to 2 x threads pending):
+    the file gets every row once, in order, the bytes of one write of the whole table."""
+    import softtip.io.tables as tables
+
+    set_jit(True)
+    monkeypatch.setattr(tables, "_CHUNK_ROWS", 7)
+    rng = np.random.default_rng(8381)
+    sizes = (5, 23, 1, 40, 14)
+    pieces = [{"t": rng.normal(size=n) * 10.0 ** rng.integers(-5, 5, size=n), "k": np.arange(n) - 3} for n in sizes]
+    out = io.BytesIO() if binary else io.StringIO()
+    writer = tables.TableWriter(out, threads=threads)
+    for piece in pieces:
+        writer.write(piece)
+    writer.close()
+    whole = {k: np.concatenate([p[k] for p in pieces]) for k in pieces[0]}
+    got = out.getvalue() if binary else out.getvalue().encode()
+    assert got == _text(whole, False)
