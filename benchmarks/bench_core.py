@@ -597,8 +597,8 @@ def both_cores(n: int, repeats: int = 3) -> None:
     """`softtip estimate` on one core (every thread on one CPU) against `--jobs 1` and `--jobs 2`
     on both, on an n-row log (the 1 kHz grasp repeated), CSV -> CSV and Parquet -> Parquet, end
     to end (new processes), alternating; then where the CPU time goes on one thread (start-up,
-    then the pieces' stages), for the critical path. ``--jobs 1`` is not one core: the CSV
-    writer formats on a thread of its own while the next piece is estimated."""
+    then the pieces' stages), for the critical path. ``--jobs 1`` estimates and writes on one
+    thread, but pyarrow's reader may use others: "one core" holds every thread to one CPU."""
     import hashlib
 
     from softtip.io.tables import write_table

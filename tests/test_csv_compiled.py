@@ -184,3 +184,28 @@ def test_a_writer_formats_the_next_pieces_while_the_file_gets_the_ones_before(mo
     whole = {k: np.concatenate([p[k] for p in pieces]) for k in pieces[0]}
     got = out.getvalue() if binary else out.getvalue().encode()
     assert got == _text(whole, False)
+
+
+def test_a_block_that_fails_leaves_no_gap_and_nothing_after_it(monkeypatch):
+    """A block failing while blocks of later pieces are in flight: what was written is the
+    table's first rows, whole, and nothing after them (no gap a reader could not see)."""
+    import softtip.io.tables as tables
+
+    set_jit(True)
+    monkeypatch.setattr(tables, "_CHUNK_ROWS", 5)
+    real = tables._compiled_block
+
+    def failing(plan, start, stop, buffers=None):
+        if plan.arrays[0][0] == 200.0 and start == 5:  # the second block of the third piece
+            raise MemoryError("no memory for this block")
+        return real(plan, start, stop, buffers)
+
+    monkeypatch.setattr(tables, "_compiled_block", failing)
+    pieces = [{"t": np.arange(12.0) + 100.0 * k, "k": np.arange(12) + 12 * k} for k in range(5)]
+    out = io.StringIO()
+    with pytest.raises(MemoryError), tables.TableWriter(out, threads=3) as writer:
+        for piece in pieces:
+            writer.write(piece)
+    whole = {c: np.concatenate([p[c] for p in pieces]) for c in pieces[0]}
+    lines = _text(whole, False).decode().splitlines(keepends=True)
+    assert out.getvalue() == "".join(lines[: 1 + 2 * 12 + 5])  # header, two pieces, the third's first block

@@ -132,7 +132,7 @@ from the bag's /tf.
     "--jobs", type=click.IntRange(1, 64), default=None, metavar="N",
     help="Threads (cores) for a log processed in pieces (see --chunk-rows): N estimate pieces at the same time and "
     "N format CSV, while one more reads the log and the main one writes; 1: all on one thread. The output is the same, "
-    "bit for bit, whatever N; up to N+3 pieces are held in memory. [default: the cores this process may use, at most "
+    "bit for bit, whatever N; up to N+3 pieces, and the output of N more, are held in memory. [default: the cores this process may use, at most "
     f"{DEFAULT_JOBS_MAX}]",
 )  # fmt: skip
 @full_scale_option
@@ -528,29 +528,31 @@ def _estimate_in_pieces(
             except InputError:
                 raise NotStreamable("wrong units: the one-shot run says so") from None
 
+        def written(n: int) -> None:  # rows in the output (CSV blocks go out behind the pieces)
+            sent[0] += n if output is None else 0
+            bar.update(n)
+
         def run(out) -> None:
-            writer = TableWriter(out, format=fmt, metadata=parquet_metadata(fingertip, tip, output_units, blocks), threads=jobs)
             pieces = estimate_pieces(checked(), fingertip, config, rows, jobs=jobs)
             try:
-                for k, (est, extra) in enumerate(pieces):
-                    if k == 0:
-                        noise_fits(est)
-                        _start_pair_votes(pair_votes, first_ratio, vote.limit, blocks.units, est, first_wrench[0], config)
-                    distances = lever_distances(est.wrench[~est.taring], max(0.1, config.contact_threshold))
-                    vote.add(distances)
-                    for pair_vote in pair_votes.values():
-                        pair_vote.add(distances)
-                    columns = _output_columns(est, extra, output_units, carried, notes if not names else None)
-                    names.setdefault("est", list(est.columns(units=output_units)))
-                    names.setdefault("extra", list(extra))
-                    began[0] = output is None  # from here standard output may hold a part of the table
-                    writer.write(columns)
-                    sent[0] += len(est) if output is None else 0
-                    bar.update(len(est))
-                    totals.add(est, summarise_contacts(est) if not quiet else [])
+                with TableWriter(out, format=fmt, metadata=parquet_metadata(fingertip, tip, output_units, blocks),
+                                 threads=jobs) as writer:  # fmt: skip
+                    for k, (est, extra) in enumerate(pieces):
+                        if k == 0:
+                            noise_fits(est)
+                            _start_pair_votes(pair_votes, first_ratio, vote.limit, blocks.units, est, first_wrench[0], config)
+                        distances = lever_distances(est.wrench[~est.taring], max(0.1, config.contact_threshold))
+                        vote.add(distances)
+                        for pair_vote in pair_votes.values():
+                            pair_vote.add(distances)
+                        columns = _output_columns(est, extra, output_units, carried, notes if not names else None)
+                        names.setdefault("est", list(est.columns(units=output_units)))
+                        names.setdefault("extra", list(extra))
+                        began[0] = output is None  # from here standard output may hold a part of the table
+                        writer.write(columns, progress=written)
+                        totals.add(est, summarise_contacts(est) if not quiet else [])
             finally:
                 pieces.close()  # with --jobs, no piece is read or started from now (an error, a signal)
-                writer.close()
             if vote.n >= 5 and vote.median_above():
                 raise NotStreamable("wrong units: the one-shot run says so")  # as check_units decides
             if beyond:
@@ -744,10 +746,8 @@ def _write_estimate_outputs(
 
         with progress_bar(len(est), "writing") as bar:
             try:
-                with outputs.get(output).open() as fh:  # the staged file
-                    writer = TableWriter(fh, format=table_format(output), metadata=metadata)
+                with outputs.get(output).open() as fh, TableWriter(fh, format=table_format(output), metadata=metadata) as writer:
                     writer.write(columns, progress=bar.update)
-                    writer.close()
             except OSError as exc:
                 raise cannot_write(output, exc) from None
     elif to_bag is None:

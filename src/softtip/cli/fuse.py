@@ -216,10 +216,8 @@ def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, 
             from softtip.io.tables import TableWriter
 
             try:
-                with staged[output].open() as fh:
-                    writer = TableWriter(fh, format=table_format(output))
+                with staged[output].open() as fh, TableWriter(fh, format=table_format(output)) as writer:
                     writer.write(fused.columns())
-                    writer.close()
             except OSError as exc:
                 raise cannot_write(output, exc) from None
         elif to_bag is None:

@@ -183,10 +183,19 @@ class AtomicFile:
         if "b" not in mode:
             kwargs.setdefault("encoding", "utf-8")
             kwargs.setdefault("newline", "")
-        if self._device or mode not in ("w", "wb") or "buffering" in kwargs or not hasattr(os, "posix_fadvise"):
+        text_kwargs = {"encoding", "errors", "newline"} if mode == "w" else set()
+        if self._device or mode not in ("w", "wb") or not set(kwargs) <= text_kwargs or not hasattr(os, "posix_fadvise"):
             return open(self.tmp, mode, **kwargs)
         binary = io.BufferedWriter(_WriteBehind(self.tmp))
-        return binary if mode == "wb" else io.TextIOWrapper(binary, **kwargs)
+        if mode == "wb":
+            return binary
+        try:
+            text = io.TextIOWrapper(binary, **kwargs)
+        except BaseException:
+            binary.close()
+            raise
+        text.mode = mode  # as open() sets it
+        return text
 
     def commit(self) -> None:
         """Put the content in place (rename, or copy into a device); the temporary file goes."""
@@ -271,15 +280,16 @@ WRITE_BEHIND_BYTES = 64 << 20
 class _WriteBehind(io.FileIO):
     """A file written from the start whose pages the kernel writes back and drops behind the
     writer: every :data:`WRITE_BEHIND_BYTES`, the range written since the last hand-over is
-    handed to writeback, and the range handed over the time before (written back since) is
-    dropped from the page cache (``posix_fadvise(POSIX_FADV_DONTNEED)``, which on Linux starts
+    handed to writeback, and the range handed over the time before (written back by then, or
+    kept cached where it is not) is dropped from the page cache (``posix_fadvise(POSIX_FADV_DONTNEED)``, which on Linux starts
     the writeback of dirty pages without waiting and drops clean ones).
 
     A table of gigabytes otherwise fills the page cache with dirty pages the commit's ``fsync``
-    then writes at once, and takes that many new pages: on the 2-core virtual machine of the
-    benchmarks 4.9 GB written plainly took 6.8-11.8 s of system time, and 1.4-2.4 s this way
-    (``softtip estimate`` of a 1e7-row log to CSV). Files below the step are not advised at all.
-    The advice changes no byte: the commit still syncs the whole file before the rename.
+    then writes at once, and takes that many new pages, which on some machines cost most of the
+    write (``benchmarks/bench_write_behind.py``; the performance page has the figures). Files
+    below the step are not advised at all. The file is written from its start, in order (the
+    ranges advised are the bytes written so far). The advice changes no byte: the commit still
+    syncs the whole file before the rename.
     """
 
     def __init__(self, path: PathLike) -> None:

@@ -60,6 +60,7 @@ by piece (``softtip estimate`` uses both through :mod:`softtip.apps.chunked`).
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import difflib
 import gc
@@ -2045,23 +2046,31 @@ class _CsvBlocks:
     to ``out`` in order by the caller's thread, across any number of tables (:meth:`add`; a
     :class:`TableWriter`'s pieces): formatting floats is the cost, and the compiled formatter and
     pyarrow's writer both run without the GIL, so the blocks of the next piece are formatted
-    while the file gets the ones before them. At most ``2 * threads`` blocks are in flight; with
-    one thread, the caller formats and writes each block in turn.
-    :meth:`flush` writes what is pending; leaving the ``with`` block flushes, or, on an error,
-    drops what is pending."""
+    while the file gets the ones before them. At most ``threads`` blocks wait to be written; with
+    one thread, the caller formats and writes each block in turn. :meth:`flush` writes what is
+    pending; leaving the ``with`` block flushes, or, on an error, drops what is pending. A block
+    that fails (its formatting or its write) drops every block after it: the text written is
+    always whole rows from the start, never with a gap."""
 
     def __init__(self, out: TextIO, threads: int | None, buffers: _TextBuffers | None) -> None:
         self.out = out
         self.binary = getattr(out, "buffer", None)
-        self.workers = max(1, min(threads or _WRITE_THREADS, os.cpu_count() or 1))
+        try:
+            cores = len(os.sched_getaffinity(0))  # the cores this process may run on
+        except AttributeError:  # not on Linux
+            cores = os.cpu_count() or 1
+        self.workers = max(1, min(threads or _WRITE_THREADS, cores))
         self.buffers = buffers or _TextBuffers()
         self.pending: deque = deque()
         self.pool: ThreadPoolExecutor | None = None
+        self.failed = False  # a block failed: nothing after it is written (no hole in the text)
 
     def add(self, plan: _Plan) -> None:
         """Start formatting ``plan``'s rows; write the blocks before them that are done."""
         from pyarrow import csv as pacsv
 
+        if self.failed:
+            raise RuntimeError("a CSV block failed before; nothing more is written")
         if self.binary is not None:
             self.out.flush()  # a header first
         compiled = _compiled_csv(plan)
@@ -2088,18 +2097,23 @@ class _CsvBlocks:
             self.pool = ThreadPoolExecutor(max_workers=self.workers)  # its threads start as blocks need them
         for start in range(0, plan.n, _CHUNK_ROWS):
             self.pending.append((plan, start, self.pool.submit(text_of, start)))
-            while len(self.pending) > 2 * self.workers:  # a bounded number of blocks in memory
+            while len(self.pending) > self.workers:  # every thread busy while the caller writes one: memory bounded
                 self._put_one()
 
     def _put_one(self) -> None:
         plan, start, done = self.pending.popleft()
-        _put_block(self.out, self.binary, plan, start, done, self.buffers)
+        try:
+            _put_block(self.out, self.binary, plan, start, done, self.buffers)
+        except BaseException:
+            self.failed = True
+            self.close(write=False)
+            raise
 
     def flush(self) -> None:
-        """Write every pending block."""
-        while self.pending:
+        """Write every pending block (none once one failed)."""
+        while self.pending and not self.failed:
             self._put_one()
-        if self.binary is not None:
+        if self.binary is not None and not self.failed:
             self.binary.flush()
 
     def close(self, *, write: bool = True) -> None:
@@ -2959,9 +2973,12 @@ class TableWriter:
 
     Each :meth:`write` appends rows with the same columns; the CSV header comes with the
     first. CSV text cells are quoted, when one needs it, piece by piece (each piece as
-    :func:`write_table` would quote it). Call :meth:`close` at the end. CSV is formatted on
-    threads while the caller goes on (:class:`_CsvBlocks`): a piece's last rows may be written
-    by the next :meth:`write` or by :meth:`close`, so its arrays must not change until then.
+    :func:`write_table` would quote it). Call :meth:`close` at the end, or use it as a context
+    manager: on an error it writes the CSV rows handed to it so far (unless writing them failed)
+    and stops, with no Parquet or Arrow footer. CSV is formatted on threads
+    while the caller goes on (:class:`_CsvBlocks`): a piece's last rows may be written (and
+    ``progress`` told) by the next :meth:`write` or by :meth:`close`, so its arrays must not
+    change until then.
     """
 
     def __init__(self, out: TextIO | BinaryIO, *, parquet: bool = False, format: str | None = None, float_format: str = "%.10g",
@@ -3011,16 +3028,34 @@ class TableWriter:
                 self._blocks.add(plan)
         self.names = plan.names
 
-    def close(self) -> None:
-        """Finish the file (CSV: the rows still being formatted; Parquet: its footer); the stream stays open."""
-        if self._blocks is not None:
-            self._blocks.close()
-            self._blocks = None
-        if self._writer is not None:
-            self._writer.close()
-            self._writer = None
-        out = self._text or self.out
-        out.flush()
-        if self._text is not None:
-            self._text.detach()
-            self._text = None
+    def close(self, *, finish: bool = True) -> None:
+        """Finish the file (CSV: the rows still being formatted; Parquet: its footer); the stream
+        stays open. ``finish=False`` (a failure): stop, with nothing more written, its threads ended."""
+        try:
+            if self._blocks is not None:
+                blocks, self._blocks = self._blocks, None
+                blocks.close(write=finish)
+            if self._writer is not None:
+                writer, self._writer = self._writer, None
+                if finish:
+                    writer.close()
+            if finish:
+                (self._text or self.out).flush()
+        finally:
+            if self._text is not None:
+                self._text.detach()
+                self._text = None
+
+    def __enter__(self) -> TableWriter:
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        if exc_type is None:
+            self.close()
+            return
+        # an error elsewhere: the rows handed over so far still go out, whole (a table cut after
+        # its last piece, as without the threads); the error raised is the one that stopped it
+        if self._blocks is not None and not self._blocks.failed:
+            with contextlib.suppress(Exception):
+                self._blocks.flush()
+        self.close(finish=False)
