@@ -442,11 +442,9 @@ def _auto_chunk_rows(path: str) -> int | None:
 
 def _default_jobs() -> int:
     """``--jobs`` when not given: the cores this process may run on, at most :data:`DEFAULT_JOBS_MAX`."""
-    try:
-        cores = len(os.sched_getaffinity(0))
-    except AttributeError:  # not on Linux
-        cores = os.cpu_count() or 1
-    return max(1, min(cores, DEFAULT_JOBS_MAX))
+    from softtip.core._cores import usable_cores
+
+    return max(1, min(usable_cores(), DEFAULT_JOBS_MAX))
 
 
 def _is_own_stdout(path) -> bool:

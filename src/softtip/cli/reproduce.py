@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 import sys
 from pathlib import Path
 
@@ -10,6 +9,7 @@ import click
 
 from softtip.cli.options import FRAMES_HELP
 from softtip.cli.types import option
+from softtip.core._cores import usable_cores
 
 __all__ = ["reproduce"]
 
@@ -42,8 +42,8 @@ tangent plane as a trace, and the state over time).
 @option(
     "--jobs",
     type=click.IntRange(1, 64),
-    default=min(4, os.cpu_count() or 1),
-    show_default="min(4, CPUs)",
+    default=min(4, usable_cores()),
+    show_default="min(4, the CPUs this process may use)",
     help="Worker processes.",
 )
 def reproduce(out_dir, only, seed, jobs):

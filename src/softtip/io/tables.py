@@ -2055,11 +2055,9 @@ class _CsvBlocks:
     def __init__(self, out: TextIO, threads: int | None, buffers: _TextBuffers | None) -> None:
         self.out = out
         self.binary = getattr(out, "buffer", None)
-        try:
-            cores = len(os.sched_getaffinity(0))  # the cores this process may run on
-        except AttributeError:  # not on Linux
-            cores = os.cpu_count() or 1
-        self.workers = max(1, min(threads or _WRITE_THREADS, cores))
+        from softtip.core._cores import usable_cores
+
+        self.workers = max(1, min(threads or _WRITE_THREADS, usable_cores()))
         self.buffers = buffers or _TextBuffers()
         self.pending: deque = deque()
         self.pool: ThreadPoolExecutor | None = None
