@@ -2062,6 +2062,7 @@ class _CsvBlocks:
         self.pending: deque = deque()
         self.pool: ThreadPoolExecutor | None = None
         self.failed = False  # a block failed: nothing after it is written (no hole in the text)
+        self.primed: tuple | None = None  # the columns' dtypes the formatter was called for, threads idle
 
     def add(self, plan: _Plan) -> None:
         """Start formatting ``plan``'s rows; write the blocks before them that are done."""
@@ -2072,8 +2073,11 @@ class _CsvBlocks:
         if self.binary is not None:
             self.out.flush()  # a header first
         compiled = _compiled_csv(plan)
-        if compiled:  # compiled (or loaded from numba's cache) once, before the threads
+        layout = tuple(a.dtype.str for a in plan.arrays)
+        if compiled and layout != self.primed:  # compiled (or loaded from numba's cache) with no thread running
+            self.flush()
             self.buffers.put(_compiled_block(plan, 0, min(plan.n, 1), self.buffers)[0])
+            self.primed = layout
         options = pacsv.WriteOptions(include_header=False, quoting_style=plan.quoting)
 
         def text_of(start: int) -> Any:
@@ -3053,7 +3057,9 @@ class TableWriter:
             return
         # an error elsewhere: the rows handed over so far still go out, whole (a table cut after
         # its last piece, as without the threads); the error raised is the one that stopped it
-        if self._blocks is not None and not self._blocks.failed:
-            with contextlib.suppress(Exception):
-                self._blocks.flush()
-        self.close(finish=False)
+        try:
+            if self._blocks is not None and not self._blocks.failed:
+                with contextlib.suppress(Exception):
+                    self._blocks.flush()
+        finally:
+            self.close(finish=False)
