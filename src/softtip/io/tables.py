@@ -2037,7 +2037,7 @@ def _write_rows(out: TextIO | BinaryIO, plan: _Plan) -> None:
     if plan.digits is None:
         _write_rows_printf(out, plan)
         return
-    with _CsvBlocks(out, None, None) as blocks:
+    with _CsvBlocks(out) as blocks:
         blocks.add(plan)
 
 
@@ -2052,13 +2052,13 @@ class _CsvBlocks:
     that fails (its formatting or its write) drops every block after it: the text written is
     always whole rows from the start, never with a gap."""
 
-    def __init__(self, out: TextIO, threads: int | None, buffers: _TextBuffers | None) -> None:
+    def __init__(self, out: TextIO, threads: int | None = None) -> None:
         self.out = out
         self.binary = getattr(out, "buffer", None)
         from softtip.core._cores import usable_cores
 
         self.workers = max(1, min(threads or _WRITE_THREADS, usable_cores()))
-        self.buffers = buffers or _TextBuffers()
+        self.buffers = _TextBuffers()  # the compiled formatter's memory, block after block, piece after piece
         self.pending: deque = deque()
         self.pool: ThreadPoolExecutor | None = None
         self.failed = False  # a block failed: nothing after it is written (no hole in the text)
@@ -2986,7 +2986,6 @@ class TableWriter:
     def __init__(self, out: TextIO | BinaryIO, *, parquet: bool = False, format: str | None = None, float_format: str = "%.10g",
                  metadata: Mapping[str, str] | None = None, statistics: bool = False, threads: int | None = None):
         self.format = format or ("parquet" if parquet else "csv")
-        self.threads = threads
         if self.format not in TABLE_FORMATS:
             raise ValueError(f"format {self.format!r}; expected one of: {', '.join(TABLE_FORMATS)}")
         self.out, self.parquet, self.float_format = out, self.format != "csv", float_format
@@ -2998,7 +2997,7 @@ class TableWriter:
             self._text = io.TextIOWrapper(out, encoding="utf-8", newline="", write_through=True)  # type: ignore[arg-type]
         else:
             self._text = None
-        self._blocks = None if self.parquet else _CsvBlocks(self._text or out, threads, None)  # type: ignore[arg-type]
+        self._blocks = None if self.parquet else _CsvBlocks(self._text or out, threads)  # type: ignore[arg-type]
 
     def write(self, columns: Mapping[str, Sequence[Any] | np.ndarray], progress: Callable[[int], object] | None = None) -> None:
         """Append the rows of ``columns`` (the same names, in the same order, every time)."""
