@@ -56,7 +56,7 @@ default) on the same --samples-row log, CSV -> CSV and Parquet -> Parquet, three
 alternating: wall time, CPU time of the whole command (every thread), peak memory, the load
 average before each run, and whether the outputs are the same bytes; then where the CPU time
 goes on one thread: the command's start-up (interpreter, imports, compiled kernels loaded) and
-each stage of the pieces (read, cut, carry_over, estimate, columns, write), from which the
+each stage of the pieces (read, cut: the sequential stages, which find the cut; the per-contact stages; columns; write), from which the
 critical path on two cores follows. Target (issue 31): >= 1.7x in wall time on 2 cores. On a
 machine shared with other work the wall-time ratio is bounded by the share of the cores the run
 gets: the CPU times say what the threads cost.
@@ -376,7 +376,7 @@ def pipeline_reference(t, w, tip, config, reuse=True):
     from softtip.estimator.pipeline import fused_columns
 
     config = resolve_depth(config, tip)
-    bias, taring, _, sos, noise, _ = _sequential_stages(t, w, config, None)
+    bias, taring, _, sos, noise, *_ = _sequential_stages(t, w, config, None)
     n, start = len(t), int(np.count_nonzero(taring))
     params, corr = contact_params(config, noise), noise_correlation(sos)
     cid, busy, contact = np.empty(n, dtype=np.int64), np.empty(n, dtype=bool), np.empty(n, dtype=bool)
@@ -389,7 +389,7 @@ def pipeline_reference(t, w, tip, config, reuse=True):
             cid, busy, contact = np.empty(n, dtype=np.int64), np.empty(n, dtype=bool), np.empty(n, dtype=bool)
             drift, y = np.empty((n, 6)), np.empty((n, 6))
         x, sub = (w, bias) if sos is None else (sosfilt_state(sos, w - bias, None)[0], np.zeros(6))
-        run_contacts(t, x, start, new_contact_state(), params, sub, cid, busy, drift, y)
+        run_contacts(t, x, start, new_contact_state(), params, sub, cid, busy, drift, y, n)
         np.greater(cid, 0, out=contact)
         cols = fused_columns(t, y, drift, contact, taring, tip, config, noise, corr, False, out=out if reuse else None)
         if cols is None:
@@ -682,7 +682,7 @@ def stage_cpu(tmp: Path, n: int, softtip_cmd: str) -> None:
     from softtip.apps.pool import warm_kernels
     from softtip.cli.estimate import _output_columns
     from softtip.core.fingertip import load_fingertip
-    from softtip.estimator.batch import Carry, carry_over
+    from softtip.estimator.batch import Carry, _estimate
     from softtip.estimator.config import EstimatorConfig
     from softtip.estimator.depth import resolve_depth
     from softtip.io.tables import TableWriter, iter_log, write_table
@@ -719,26 +719,22 @@ def stage_cpu(tmp: Path, n: int, softtip_cmd: str) -> None:
             c0 = time.thread_time()
             blocks = list(iter_log(str(tmp / f"in.{fmt}"), None, rows=1 << 16))
             spent["read"] = time.thread_time() - c0
-            carry, ahead = Carry(), Carry()
+            carry = Carry()
 
-            def take(t, w, cfg):
-                timed_call("carry_over (jobs > 1)", carry_over, t, w, tip, cfg, ahead)
-                return timed_call("estimate", chunked._piece, t, w, tip, cfg, carry)
+            def take(t, w, cfg, stages):
+                return timed_call("per-contact stages", _estimate, t, w, tip, cfg, carry, stages)
 
-            cut = chunked._cut
-            chunked._cut = lambda *args: timed_call("cut", cut, *args)
+            sequential = chunked._sequential_stages
+            chunked._sequential_stages = lambda *args, **kw: timed_call("cut (sequential stages)", sequential, *args, **kw)
             try:
                 with open(os.devnull, "wb") as sink:
-                    writer = TableWriter(sink, format=fmt, threads=1)
-                    c0, p0 = time.thread_time(), time.process_time()
-                    for est, extra in chunked._split(iter(blocks), tip, config, chunked.DEFAULT_PIECE_ROWS, carry, take):
+                    writer = TableWriter(sink, format=fmt, threads=1)  # formatting in this thread
+                    for est, extra in chunked._split(iter(blocks), config, chunked.DEFAULT_PIECE_ROWS, carry, take):
                         columns = timed_call("columns", _output_columns, est, extra, "si")
-                        timed_call("write (this thread)", writer.write, columns)
-                    writer.close()
+                        timed_call("write", writer.write, columns)
+                    timed_call("write", writer.close)
             finally:
-                chunked._cut = cut
-            loop_thread, loop_process = time.thread_time() - c0, time.process_time() - p0
-            spent["write (its formatting thread)"] = max(0.0, loop_process - loop_thread)
+                chunked._sequential_stages = sequential
             for key, value in spent.items():
                 best[key] = min(best.get(key, np.inf), value)
         print(f"    {fmt:7s} " + ", ".join(f"{k} {v:.2f}" for k, v in best.items()) + f"; sum {sum(best.values()):.2f}")

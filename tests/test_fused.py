@@ -102,7 +102,7 @@ def test_reused_buffers_give_the_same_columns():
         runs = []
         out = {}
         for _ in range(2):
-            _, taring, _, sos, noise, ct = _sequential_stages(g.t, g.wrench, config, None)
+            _, taring, _, sos, noise, ct, *_ = _sequential_stages(g.t, g.wrench, config, None)
             cols = pipeline.fused_columns(g.t, ct.wrench, ct.drift, ct.contact, taring, tip, config, noise,
                                           noise_correlation(sos), False, out=out)  # fmt: skip
             runs.append({k: np.array(v) for k, v in cols.items()})

@@ -136,11 +136,13 @@ def test_a_short_log_in_a_fresh_process_does_not_load_numba():
     start=st.integers(0, 20),
     tau=st.sampled_from([0.01, 0.5, 5.0]),
     seed=st.integers(0, 2**32 - 1),
+    cut_from=st.integers(0, 620),
 )
-def test_track_contacts_compiled_equals_python(n, p_touch, cut, start, tau, seed):
+def test_track_contacts_compiled_equals_python(n, p_touch, cut, start, tau, seed, cut_from):
     # one source (contact_step in contact_run), compiled and as Python, the same bits: touches
     # of random lengths and forces (near the thresholds too) on a drifting bias, tracked at
-    # once and in two pieces cut at an untouched sample (the state carried)
+    # once and in two pieces cut at an untouched sample (the state carried); and tracked up to
+    # the first untouched sample from cut_from on (the piece a log is cut into), in one pass
     from softtip.core.noise import SensorNoise
     from softtip.estimator import EstimatorConfig
     from softtip.estimator.contact import track_contacts
@@ -163,6 +165,17 @@ def test_track_contacts_compiled_equals_python(n, p_touch, cut, start, tau, seed
             k = int(free[int(cut * (len(free) - 1))]) if len(free) else n
             first = track_contacts(t[:k], x[:k], start, config, noise)
             second = track_contacts(t[k:], x[k:], 0, config, noise, first.state)
+            upto = track_contacts(t, x, start, config, noise, cut_from=cut_from)
+            free = np.flatnonzero(~whole.busy[max(start, cut_from):]) + max(start, cut_from)
+            if not len(free):
+                assert upto is None
+            else:
+                c = int(free[0])
+                alone = track_contacts(t[:c], x[:c], start, config, noise)
+                for name in ("wrench", "drift", "contact", "contact_id", "busy"):
+                    assert np.array_equal(getattr(upto, name), getattr(alone, name)), name
+                assert upto.drift_alarm == alone.drift_alarm
+                assert np.array_equal(upto.state.state, alone.state.state, equal_nan=True)
         finally:
             set_jit(None)
         out.append((whole, first, second))

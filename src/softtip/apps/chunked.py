@@ -13,10 +13,12 @@ A piece holds at least ``rows`` samples, unless the log ends first, and more whe
 (or a pending one) lasts past them: a contact longer than ``rows`` samples makes its piece
 as long as the contact. The first piece holds the whole tare.
 
-With ``jobs`` > 1 the work runs on ``jobs`` threads besides the caller's: one reads, cuts and
-brings the carry past each piece with the stages that carry it alone
-(:func:`softtip.estimator.batch.carry_over`), ``jobs`` threads run the whole estimator on the
-pieces from those carries, and the caller gets the pieces in order, the bits of ``jobs=1``
+The stages that carry state across a cut (tare, low-pass filter, contact tracking) are what
+finds the cut: one pass over the samples held runs them until the first sample where the
+log may be cut, and the piece's per-contact stages start from that pass (they are not run
+twice). With ``jobs`` > 1 the work runs on ``jobs`` threads besides the caller's: one reads,
+cuts and so brings the carry past each piece, ``jobs`` threads run the per-contact stages on
+the pieces, and the caller gets the pieces in order, the bits of ``jobs=1``
 (and writes them, say, while the next are estimated). The compiled loops and numpy's and
 pyarrow's work run without the GIL, and threads share the loaded kernels and the arrays: no
 second interpreter to start, nothing to copy between processes. Whether an earlier contact
@@ -40,15 +42,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from softtip.core.filtering import lowpass_sos, sosfilt_state
 from softtip.core.fingertip import Fingertip, load_fingertip
-from softtip.estimator.batch import Carry, _estimate, carry_over, infer_rate, validate_log
+from softtip.estimator.batch import Carry, _estimate, _Sequential, _sequential_stages, infer_rate, validate_log
 from softtip.estimator.config import EstimatorConfig
-from softtip.estimator.contact import track_contacts
 from softtip.estimator.depth import resolve_depth
-from softtip.estimator.measure import effective_noise
 from softtip.estimator.results import Estimates
-from softtip.estimator.tare import noise_in_use, tare_log
 
 __all__ = ["DEFAULT_PIECE_ROWS", "estimate_pieces"]
 
@@ -100,15 +98,18 @@ def estimate_pieces(
         yield from _parallel_pieces(blocks, tip, config, rows, jobs)
         return
     carry = Carry()
-    yield from _split(blocks, tip, config, rows, carry, lambda t, w, cfg: _piece(t, w, tip, cfg, carry))
+    yield from _split(blocks, config, rows, carry, lambda t, w, cfg, stages: _estimate(t, w, tip, cfg, carry, stages))
 
 
 def _split(
-    blocks: Iterable[Block], tip: Fingertip, config: EstimatorConfig, rows: int, carry: Carry,
-    take: Callable[[NDArray, NDArray, EstimatorConfig], Any],
+    blocks: Iterable[Block], config: EstimatorConfig, rows: int, carry: Carry,
+    take: Callable[[NDArray, NDArray, EstimatorConfig, _Sequential], Any],
 ) -> Iterator[tuple[Any, dict[str, Any]]]:
-    """Cut the log where :func:`_cut` allows; yield ``take(t, w, config)`` of each piece and its extra
-    columns. ``take`` must bring ``carry`` past the piece (the next cut is looked for from there)."""
+    """Cut the log where the estimator, run from ``carry``, is first out of contact at or after
+    ``rows`` samples (and after the tare); yield ``take(t, w, config, stages)`` of each piece
+    (``stages``: its sequential stages, from ``carry`` as it was before the piece) and its extra
+    columns. ``carry`` is brought past the piece after ``take`` (but for ``had_latch``, which
+    ``take`` must bring past it)."""
     t_buf: list[NDArray] = []
     w_buf: list[NDArray] = []
     x_buf: dict[str, list[NDArray]] = {}
@@ -130,52 +131,25 @@ def _split(
         held += len(t)
         while held >= rows:
             tt, ww = _joined(t_buf), _joined(w_buf)
-            cut = _cut(tt, ww, tip, config, carry, rows)
-            if cut is None:
-                break  # a contact goes on past the rows held: read more
+            stages = _sequential_stages(tt, ww, config, carry, cut_from=rows)
+            if stages is None:
+                break  # a contact (or the tare) goes on past the rows held: read more
+            cut = len(stages.taring)
             xx = {k: _joined(v) for k, v in x_buf.items()}
-            yield take(tt[:cut], ww[:cut], config), {k: v[:cut] for k, v in xx.items()}
+            yield take(tt[:cut], ww[:cut], config, stages), {k: v[:cut] for k, v in xx.items()}
+            stages.advance(carry)
             t_buf, w_buf = [tt[cut:]], [ww[cut:]]
             x_buf = {k: [v[cut:]] for k, v in xx.items()}
             held = len(tt) - cut
     if held:
         tt, ww = _joined(t_buf), _joined(w_buf)
-        yield take(tt, ww, config), {k: _joined(v) for k, v in x_buf.items()}
+        stages = _sequential_stages(tt, ww, config, carry)
+        yield take(tt, ww, config, stages), {k: _joined(v) for k, v in x_buf.items()}
+        stages.advance(carry)
 
 
 def _joined(parts: list[NDArray]) -> NDArray:
     return parts[0] if len(parts) == 1 else np.concatenate(parts)
-
-
-def _piece(t: NDArray, w: NDArray, tip: Fingertip, config: EstimatorConfig, carry: Carry) -> Estimates:
-    # the warnings are in Estimates.warnings; not issued (catch_warnings is not thread-safe)
-    return _estimate(t, w, tip, config, carry)
-
-
-def _cut(t: NDArray, w: NDArray, tip: Fingertip, config: EstimatorConfig, carry: Carry, rows: int) -> int | None:
-    """Where the held samples may be cut (the first sample of the next piece): the first
-    sample at or after ``rows``, and after the tare, at which the estimator, run from
-    ``carry``, is out of contact with nothing pending and the drift following. ``None``: no
-    such sample yet (a contact goes on past the samples held)."""
-    later = carry.tare is not None
-    if later:
-        bias, start, report = carry.tare.bias, 0, carry.tare
-    else:
-        bias, taring, report = tare_log(t, w, config)
-        start = int(np.count_nonzero(taring))
-        if not np.all(np.isfinite(bias)):
-            return None  # still taring
-    x = w - bias
-    sos = None
-    if config.lowpass_hz is not None:
-        sos = lowpass_sos(config.lowpass_hz, config.sample_rate, config.lowpass_order)
-        x, _ = sosfilt_state(sos, x, carry.zi if later else None)
-    noise = effective_noise(noise_in_use(config, report), sos)
-    ct = track_contacts(t, x, start, config, noise, carry.track if later else None)
-    free = ~ct.busy
-    free[: max(start + 1, rows)] = False
-    idx = np.flatnonzero(free)
-    return int(idx[0]) if len(idx) else None
 
 
 # --- pieces in parallel (``jobs`` > 1) -------------------------------------------------------
@@ -186,11 +160,11 @@ def _parallel_pieces(
 ) -> Iterator[tuple[Estimates, dict[str, Any]]]:
     """:func:`estimate_pieces` on threads: the same pieces, the same bits.
 
-    A thread of its own reads ``blocks``, finds the cuts (:func:`_cut`), hands each piece with
-    a copy of the carry before it to a pool of ``jobs`` threads (the whole estimator, from that
-    carry) and brings the carry past the piece with the sequential stages alone
-    (:func:`softtip.estimator.batch.carry_over`: tare, low-pass, contact tracking, a small part
-    of the work). The caller's thread takes the pieces in order. The one flag of the carry the
+    A thread of its own reads ``blocks`` and finds the cuts with the sequential stages (tare,
+    low-pass, contact tracking, a small part of the work: :func:`_split`), which brings the
+    carry past each piece; it hands each piece, its sequential stages and a copy of the carry
+    before it to a pool of ``jobs`` threads (the per-contact stages). The caller's thread
+    takes the pieces in order. The one flag of the carry the
     sequential stages cannot give, whether an earlier contact latched (it marks the next
     contact's onset as re-latched), is guessed when a piece is started and checked when its
     predecessors are done: a piece started with the wrong guess is estimated again, in the
@@ -209,11 +183,12 @@ def _parallel_pieces(
     ready: queue.Queue = queue.Queue(maxsize=jobs)  # and one more started while the reader waits to put it
     stop = threading.Event()
 
-    def start(t: NDArray, w: NDArray, cfg: EstimatorConfig) -> _Sent:
-        before = copy.deepcopy(carry)
+    def start(t: NDArray, w: NDArray, cfg: EstimatorConfig, stages: _Sequential) -> _Sent:
+        before = copy.deepcopy(carry)  # (not yet brought past the piece: _split does that after)
         before.had_latch = guess.next()
-        future = pool.submit(_estimate_piece, t, w, tip, cfg, copy.deepcopy(before))
-        sent = _Sent(future, t, w, cfg, before, carry_over(t, w, tip, cfg, carry))
+        future = pool.submit(_estimate_piece, t, w, tip, cfg, copy.deepcopy(before), stages)
+        counted = carry.track.count if carry.track is not None else 0
+        sent = _Sent(future, t, w, cfg, before, stages.ct.state.count - counted)
         guess.sent(sent.contacts)
         return sent
 
@@ -228,7 +203,7 @@ def _parallel_pieces(
 
     def read() -> None:
         try:
-            for item in _split(blocks, tip, config, rows, carry, start):
+            for item in _split(blocks, config, rows, carry, start):
                 if not put(item):
                     return
             put(_END)
@@ -278,17 +253,20 @@ class _Sent:
     contacts: int  #: the contacts that began in it
 
 
-def _estimate_piece(t: NDArray, w: NDArray, tip: Fingertip, config: EstimatorConfig, carry: Carry) -> tuple[Estimates, bool]:
-    """On a thread of the pool: a piece's estimates from ``carry``, and whether a contact latched by its end."""
-    est = _piece(t, w, tip, config, carry)
+def _estimate_piece(t: NDArray, w: NDArray, tip: Fingertip, config: EstimatorConfig, carry: Carry,
+                    stages: _Sequential) -> tuple[Estimates, bool]:  # fmt: skip
+    """On a thread of the pool: a piece's estimates from its sequential stages and ``carry``'s
+    ``had_latch``, and whether a contact latched by its end."""
+    est = _estimate(t, w, tip, config, carry, stages)
     return est, carry.had_latch
 
 
 def _estimate_again(sent: _Sent, tip: Fingertip, had_latch: bool) -> tuple[Estimates, bool]:
     """A piece started with the wrong ``had_latch``, estimated again (in the caller's thread) with
-    the right one; and the flag after it."""
+    the right one; and the flag after it. (The sequential stages are run again: the first run's
+    arrays were the per-contact stages' to change.)"""
     sent.before.had_latch = had_latch
-    est = _piece(sent.t, sent.w, tip, sent.config, sent.before)
+    est = _estimate(sent.t, sent.w, tip, sent.config, sent.before)
     return est, sent.before.had_latch
 
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -20,8 +21,10 @@ from softtip.core._xp import NP
 from softtip.core.filtering import lowpass_sos, sosfilt_state
 from softtip.core.fingertip import Fingertip, load_fingertip
 from softtip.core.location import contact_arrays
+from softtip.core.noise import SensorNoise
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.contact import (
+    ContactTrack,
     TrackState,
     drift_message,
     first_contact_pulls,
@@ -37,7 +40,7 @@ from softtip.estimator.pipeline import fused_columns
 from softtip.estimator.results import LINE, NONE, Estimates, EstimatorWarning
 from softtip.estimator.tare import TareReport, noise_in_use, tare_log
 
-__all__ = ["Carry", "carry_over", "estimate"]
+__all__ = ["Carry", "estimate"]
 
 
 @dataclass
@@ -103,13 +106,35 @@ def sample_rate_mismatch(t: ArrayLike, sample_rate: float | None) -> str | None:
     )
 
 
-def _sequential_stages(t: NDArray, w: NDArray, config: EstimatorConfig, carry: Carry | None):
-    """The stages whose state crosses a cut (tare, low-pass filter, contact tracking) over ``t`` (N,) s and
-    ``w`` (N, 6) N and N·m, validated; ``carry`` (when given) updated to their state at the last sample.
+class _Sequential(NamedTuple):
+    """The stages whose state crosses a cut (tare, low-pass filter, contact tracking) over a
+    piece of a log (:func:`_sequential_stages`): what the per-contact stages start from."""
 
-    Returns ``(bias, taring, tare_report, sos, noise, ct)``: the bias (6,), the taring mask (N,), the
-    :class:`TareReport`, the low-pass filter's sections (None without one), the noise in use and the
-    :class:`~softtip.estimator.contact.ContactTrack`.
+    bias: NDArray  #: (6,) N and N·m
+    taring: NDArray  #: (N,) bool, the samples the tare used
+    tare_report: TareReport
+    sos: NDArray | None  #: the low-pass filter's sections (None without one)
+    noise: SensorNoise  #: the noise in use, after any filter
+    ct: ContactTrack
+    later: bool  #: a later piece of a log (the first piece's tare, not this one's)
+    zi: NDArray | None  #: the low-pass filter's state after the piece's last sample
+
+    def advance(self, carry: Carry) -> None:
+        """Bring ``carry`` past the piece (all but ``had_latch``, which the per-contact stages give)."""
+        carry.tare, carry.zi, carry.track = self.tare_report, self.zi, self.ct.state
+
+
+def _sequential_stages(t: NDArray, w: NDArray, config: EstimatorConfig, carry: Carry | None, *,
+                      cut_from: int | None = None) -> _Sequential | None:  # fmt: skip
+    """The stages whose state crosses a cut over ``t`` (N,) s and ``w`` (N, 6) N and N·m
+    (validated, ``config`` resolved), from ``carry`` (not changed: :meth:`_Sequential.advance`).
+
+    ``cut_from``: the stages over the samples up to the first one at or after ``cut_from``,
+    and after the tare, where the log may be cut (the estimator out of contact, nothing
+    pending, the drift following; the next piece starts there): ``len(result.taring)``
+    samples, the bits of these stages run over those samples alone. None when there is no
+    such sample yet (a contact, or the tare, goes on past the samples given). Finding the cut
+    and running the piece's stages is then one pass (:mod:`softtip.apps.chunked`).
     """
     n = len(t)
     later = carry is not None and carry.tare is not None
@@ -118,54 +143,32 @@ def _sequential_stages(t: NDArray, w: NDArray, config: EstimatorConfig, carry: C
         bias, taring = tare_report.bias, np.zeros(n, dtype=bool)
     else:
         bias, taring, tare_report = tare_log(t, w, config)
+    tared = bool(np.all(np.isfinite(bias)))
+    if cut_from is not None and not tared:
+        return None  # still taring
+    start = int(np.count_nonzero(taring))
     x, sub = w, bias  # the tracker subtracts the bias (no tared copy) unless the filter needs it first
 
     sos = None
     zf = None
+    zi = carry.zi if later else None
     if config.lowpass_hz is not None:
         rate = config.sample_rate or infer_rate(t)
         sos = lowpass_sos(config.lowpass_hz, rate, config.lowpass_order)
-        if np.all(np.isfinite(bias)):
-            x, zf = sosfilt_state(sos, w - bias, carry.zi if later else None)
+        if tared:
+            x, zf = sosfilt_state(sos, w - bias, zi)
             sub = None
     noise = effective_noise(noise_in_use(config, tare_report), sos)
-    ct = track_contacts(t, x, int(np.count_nonzero(taring)), config, noise, carry.track if later else None, sub)
-    if carry is not None:
-        carry.tare, carry.zi, carry.track = tare_report, zf, ct.state
-    return bias, taring, tare_report, sos, noise, ct
-
-
-def carry_over(t: ArrayLike, wrench: ArrayLike, tip: Fingertip | str, config: EstimatorConfig, carry: Carry) -> int:
-    """Bring ``carry`` past a piece of a log with the sequential stages alone (no per-contact stage).
-
-    The tare, the low-pass filter's state and the contact tracker's state become what
-    :func:`estimate` (``carry=carry``) leaves after these samples, to the bit; ``carry.had_latch``
-    is left as it was (whether a contact latched needs the per-contact stages). A few per cent of
-    :func:`estimate`'s time: the pieces of a log can then be estimated in parallel
-    (:func:`softtip.apps.chunked.estimate_pieces`, ``jobs``).
-
-    Parameters
-    ----------
-    t : array-like, shape (N,)
-        Sample times, s.
-    wrench : array-like, shape (N, 6)
-        Raw wrench, N and N·m, sensor frame.
-    tip : Fingertip or str
-    config : EstimatorConfig
-    carry : Carry
-        Updated in place.
-
-    Returns
-    -------
-    int
-        The contacts that began in these samples.
-    """
-    tip = load_fingertip(tip)
-    config = resolve_depth(config, tip)
-    t, w = validate_log(t, wrench)
-    before = carry.track.count if carry.track is not None else 0
-    _sequential_stages(t, w, config, carry)
-    return carry.track.count - before
+    ct = track_contacts(t, x, start, config, noise, carry.track if later else None, sub,
+                        cut_from=None if cut_from is None else max(start + 1, cut_from))  # fmt: skip
+    if ct is None:
+        return None
+    m = len(ct.contact)
+    if m < n:  # cut: the filter's state after the piece (the filter is causal: its output up to there is the same)
+        taring = taring[:m]
+        if zf is not None:
+            _, zf = sosfilt_state(sos, w[:m] - bias, zi)
+    return _Sequential(bias, taring, tare_report, sos, noise, ct, later, zf)
 
 
 def estimate(
@@ -216,15 +219,22 @@ def estimate(
 
 
 def _estimate(t: ArrayLike, wrench: ArrayLike, tip: Fingertip | str, config: EstimatorConfig | None,
-              carry: Carry | None) -> Estimates:  # fmt: skip
+              carry: Carry | None, stages: _Sequential | None = None) -> Estimates:  # fmt: skip
     """:func:`estimate` without issuing its warnings (they are in :attr:`Estimates.warnings`): what
-    a thread may call (``warnings.catch_warnings`` is not thread-safe)."""
+    a thread may call (``warnings.catch_warnings`` is not thread-safe).
+
+    ``stages``: the piece's :func:`_sequential_stages` from ``carry``, already run (and ``carry``
+    brought past them by the caller; only ``carry.had_latch`` is read and written here). Their
+    wrench and drift arrays are this call's to change."""
     tip = load_fingertip(tip)
     config = resolve_depth(config or EstimatorConfig(), tip)
     t, w = validate_log(t, wrench)
 
-    later = carry is not None and carry.tare is not None
-    bias, taring, tare_report, sos, noise, ct = _sequential_stages(t, w, config, carry)
+    if stages is None:
+        stages = _sequential_stages(t, w, config, carry)
+        if carry is not None:
+            stages.advance(carry)
+    bias, taring, tare_report, sos, noise, ct, later, _ = stages
     had_latch = carry is not None and carry.had_latch
     # the closed-form fingertips: the per-contact stages in compiled loops (softtip.estimator.pipeline)
     cols = fused_columns(t, ct.wrench, ct.drift, ct.contact, taring, tip, config, noise, noise_correlation(sos), had_latch)

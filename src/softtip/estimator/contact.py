@@ -224,22 +224,29 @@ def contact_step(state, params, t, dt, x0, x1, x2, x3, x4, x5):  # pragma: no co
 
 
 @lazy_jit
-def contact_run(t, x, start, state, params, bias, cid, busy, drift, y):  # pragma: no cover - compiled
+def contact_run(t, x, start, state, params, bias, cid, busy, drift, y, cut_from):  # pragma: no cover - compiled
     """:func:`contact_step` over a log: ``x − bias`` (``x`` (N, 6), ``bias`` (6,)) at ``t`` (N,) s,
     from sample ``start`` on (the bias subtracted here: no tared copy of a raw log).
 
     The samples before ``start`` (the tare's) only advance the time: ``y = x − bias``, no drift, no
     contact. ``state`` is read and written (its last time in the ``_T_LAST`` slot gives the
     first sample's interval); ``cid`` (N,) int, ``busy`` (N,) bool, ``drift`` (N, 6) (the
-    drift before each sample) and ``y`` (N, 6) are written. Returns the sample at which the
-    drift alarm goes off, -1 if none.
+    drift before each sample) and ``y`` (N, 6) are written.
+
+    ``cut_from``: the run stops at the first sample ``c ≥ cut_from`` that is not busy (a log
+    may be cut there, :func:`track_contacts`), leaving ``state`` as it was after sample
+    ``c − 1`` and the arrays written up to ``c − 1``; ``cut_from ≥ N``: no cut, every sample.
+
+    Returns ``(alarm, done)``: the sample at which the drift alarm goes off (-1 if none) and the
+    samples run (``c``, or N).
     """
     n = t.shape[0]
     alarm_at = -1
     t_last = state[_T_LAST]
+    before = np.empty_like(state)  # the state before the sample a cut may fall on
     for i in range(n):
         dt = 0.0 if t_last != t_last else t[i] - t_last
-        t_last = t[i]
+        t_prev, t_last = t_last, t[i]
         x0, x1, x2 = x[i, 0] - bias[0], x[i, 1] - bias[1], x[i, 2] - bias[2]
         x3, x4, x5 = x[i, 3] - bias[3], x[i, 4] - bias[4], x[i, 5] - bias[5]
         if i < start:
@@ -249,16 +256,23 @@ def contact_run(t, x, start, state, params, bias, cid, busy, drift, y):  # pragm
             cid[i] = 0
             busy[i] = False
             continue
+        cutting = i >= cut_from
+        if cutting:
+            before[:] = state
         for q in range(6):
             drift[i, q] = state[_B + q]
         _, c, _, b, alarm, y0, y1, y2, y3, y4, y5 = contact_step(state, params, t[i], dt, x0, x1, x2, x3, x4, x5)
+        if cutting and not b:  # untouched: the next piece starts here, from the state before it
+            state[:] = before
+            state[_T_LAST] = t_prev
+            return alarm_at, i
         y[i, 0], y[i, 1], y[i, 2], y[i, 3], y[i, 4], y[i, 5] = y0, y1, y2, y3, y4, y5
         cid[i] = c
         busy[i] = b
         if alarm and alarm_at < 0:
             alarm_at = i
     state[_T_LAST] = t_last
-    return alarm_at
+    return alarm_at, n
 
 
 @dataclass
@@ -293,8 +307,8 @@ class ContactTrack(NamedTuple):
 
 def track_contacts(
     t: NDArray, x: NDArray, start: int, config: EstimatorConfig, noise: SensorNoise, state: TrackState | None = None,
-    bias: NDArray | None = None,
-) -> ContactTrack:
+    bias: NDArray | None = None, *, cut_from: int | None = None,
+) -> ContactTrack | None:
     """Contacts and drift of the tared (filtered) wrench ``x`` (N, 6) at ``t`` (N,), from
     sample ``start`` on (the samples before it are the tare's: no contact, no drift); with
     ``bias`` (6,), of ``x − bias`` (a raw log and its bias: the same bits without a tared copy).
@@ -302,6 +316,11 @@ def track_contacts(
     ``state``: a piece of a longer log that goes on from an earlier piece, cut where that
     one's samples were untouched; ``state`` (from that piece's :attr:`ContactTrack.state`)
     is where it left off. Pieces tracked so give the bits of the whole log tracked at once.
+
+    ``cut_from``: track only up to the first sample at or after ``cut_from`` where the log may
+    be cut (untouched); the track is of the samples before it (``len(track.contact)`` of
+    them) and its state is where the next piece starts. None when no sample from
+    ``cut_from`` on is untouched (a contact goes on past the log's end).
     """
     n = len(t)
     rec = new_contact_state() if state is None else np.array(state.state, dtype=float)
@@ -312,7 +331,12 @@ def track_contacts(
     t = np.ascontiguousarray(t, dtype=float)
     x = np.ascontiguousarray(x, dtype=float)
     bias = np.zeros(6) if bias is None else np.ascontiguousarray(bias, dtype=float)
-    alarm = run(t, x, int(start), rec, contact_params(config, noise), bias, cid, busy, drift, y)
+    alarm, done = run(t, x, int(start), rec, contact_params(config, noise), bias, cid, busy, drift, y,
+                      n if cut_from is None else int(cut_from))  # fmt: skip
+    if cut_from is not None:
+        if done == n:
+            return None
+        y, drift, cid, busy = y[:done], drift[:done], cid[:done], busy[:done]
     return ContactTrack(y, drift, cid > 0, cid, int(alarm), busy, TrackState(rec))
 
 
