@@ -710,9 +710,9 @@ def stage_cpu(tmp: Path, n: int, softtip_cmd: str) -> None:
         for _ in range(2):
             spent: dict[str, float] = {}
 
-            def timed_call(key, fn, *args):
+            def timed_call(key, fn, *args, **kwargs):
                 c0 = time.thread_time()
-                out = fn(*args)
+                out = fn(*args, **kwargs)
                 spent[key] = spent.get(key, 0.0) + time.thread_time() - c0
                 return out
 
