@@ -125,3 +125,21 @@ def test_simulate_refuses_a_table_name_it_would_fill_with_csv(tmp_path: Path) ->
         done = subprocess.run([SOFTTIP, "simulate", "-o", str(tmp_path / name)], capture_output=True, text=True, timeout=120)
         assert done.returncode == 2 and "Invalid value for '-o'" in done.stderr, done.stderr
     assert not list(tmp_path.iterdir())
+
+
+def test_a_log_cut_inside_its_last_row(tmp_path: Path) -> None:
+    # refused, naming the line and the option; read without that line with --missing drop
+    log = load_example()
+    src = tmp_path / "cut.csv"
+    write_table(_example_columns(), src)
+    text = src.read_text()
+    src.write_text(text[: text.rstrip("\n").rfind(",") - 2])  # the last row cut inside a cell
+    last = text.count("\n")
+    out = run("estimate", src, "-q", "-o", tmp_path / "out.csv")
+    assert out.returncode == 2 and not (tmp_path / "out.csv").exists()
+    assert f"cut.csv:{last}: expected 7 cells" in out.stderr and "or give --missing drop" in out.stderr
+    out = run("estimate", src, "--missing", "drop", "-o", tmp_path / "out.csv")
+    assert out.returncode == 0, out.stderr
+    assert f"cut.csv:{last}: the file ends inside this line" in out.stderr
+    assert (tmp_path / "out.csv").read_text().count("\n") == len(log.t)  # the header and every row but the cut one
+

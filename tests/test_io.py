@@ -795,13 +795,37 @@ def test_log_cut_inside_its_last_row_is_an_error_that_says_so(tmp_path: Path) ->
     assert _error(path) == (
         f"{path}:31: expected 7 cells (one per header column), got 6 "
         "(the file ends inside line 31, with no line break after it: was it cut while being written? "
-        "Delete that line to use the rest)"
+        "Delete that line to use the rest, or give --missing drop)"
     )
     path = _write(tmp_path, text[: text.rfind(",") + 2] + "e")  # "0.e"-like: a number cut after its e
     assert _error(path).endswith(
         "(the file ends inside line 31, with no line break after it: was it cut while being written? "
-        "Delete that line to use the rest)"
+        "Delete that line to use the rest, or give --missing drop)"
     )
+
+
+@pytest.mark.parametrize("missing", ["drop", "interpolate"])
+@pytest.mark.parametrize("cut", ["cells", "number"])
+def test_log_cut_inside_its_last_row_is_dropped_with_missing_drop(tmp_path: Path, missing: str, cut: str) -> None:
+    # the cut line's cells are missing: --missing drop (and interpolate, which has nothing after
+    # it to fill from) reads the rows before it, the values of the file without that line, and says so
+    text = _log_text(np.arange(30) * 1e-3).rstrip("\n")
+    keep = text[: text.rfind("\n") + 1]
+    cut_text = text[: text.rfind(",") - 2] if cut == "cells" else text[: text.rfind(",") + 2] + "e"
+    log = read_log(_write(tmp_path, cut_text, "cut.csv"), missing=missing)
+    whole = read_log(_write(tmp_path, keep, "kept.csv"))
+    np.testing.assert_array_equal(log.t, whole.t)
+    np.testing.assert_array_equal(log.wrench, whole.wrench)
+    assert len(log.t) == 29 and log.warnings == ()
+    (note,) = [n for n in log.notes if ":31: " in n]
+    assert note.startswith(f"{tmp_path / 'cut.csv'}:31: the file ends inside this line (no line break after it) and it cannot be read (")
+    assert note.endswith(f"): dropped, as a line cut while the file was written (--missing {missing})")
+
+
+def test_a_cut_header_is_not_dropped(tmp_path: Path) -> None:
+    # no line break at all: nothing to keep, the error stands whatever --missing says
+    path = _write(tmp_path, HEADER[:-3])
+    assert _error(path, missing="drop") == _error(path)
 
 
 # ----------------------------------------------------- the fast path accepts what the careful one does

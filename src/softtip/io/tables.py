@@ -428,7 +428,10 @@ def read_log(
     missing : {"fail", "drop", "interpolate"}
         An empty or ``nan`` cell in a required column: an error naming this option
         (default), its row dropped, or its value interpolated linearly in ``t`` (a row
-        without ``t`` is dropped). Either way :attr:`Log.notes` counts them.
+        without ``t`` is dropped). Either way :attr:`Log.notes` counts them. With ``"drop"``
+        or ``"interpolate"`` a last line that the file ends inside (no line break after it)
+        and that cannot be read (cells missing: cut while the file was written) is dropped
+        too, and said in :attr:`Log.notes`.
     skip_rows : int, optional
         Lines before the header row (a preamble); by default found (blank, ``#`` and lines
         before the first line that names the columns).
@@ -471,14 +474,37 @@ def read_log(
     data = _read_data(path, source)
     if isinstance(data, bytes):
         data = _decompress(data, source)
-    parsed = _parse_arrow(data, source, progress, fmt) if isinstance(data, bytes) else None
-    if parsed is None:  # something is off (or a stream that is not UTF-8-encodable): say what
-        text = _decode(data, source) if isinstance(data, bytes) else _strip_bom(data)
-        parsed = _parse_with_header(text, source, fmt)
+    dropped = None
+    try:
+        parsed = _parse_data(data, source, progress, fmt)
+    except _CutLine as exc:
+        # a last line cut while the file was written holds missing cells: --missing drop or
+        # interpolate drops it (it cannot be filled: nothing follows it), and says so
+        shorter = _without_cut_line(data) if fmt.missing != "fail" else None
+        if shorter is None:
+            raise
+        data, dropped = shorter, exc
+        parsed = _parse_data(data, source, progress, fmt)
     t, wrench, extra, first_line, quoted, header = parsed
     raw = data if isinstance(data, bytes) else None
     first_line = None if quoted else first_line
-    return _finish(t, wrench, extra, header, fmt, source, units or "si", first_line, raw)
+    log = _finish(t, wrench, extra, header, fmt, source, units or "si", first_line, raw)
+    if dropped is not None:
+        reason = str(dropped).removeprefix(f"{source}:{dropped.line}: ").split(" (the file ends inside")[0]
+        note = (f"{source}:{dropped.line}: the file ends inside this line (no line break after it) and it cannot be read "
+                f"({reason}): dropped, as a line cut while the file was written (--missing {fmt.missing})")  # fmt: skip
+        log = replace(log, notes=log.notes + (note,))
+    return log
+
+
+def _parse_data(data: bytes | str, source: str, progress: Callable[[int], object] | None, fmt: LogFormat):
+    """A CSV log's text parsed: pyarrow's reader, else (something is off, or a stream that is
+    not UTF-8-encodable) the row-by-row parser, which says what."""
+    parsed = _parse_arrow(data, source, progress, fmt) if isinstance(data, bytes) else None
+    if parsed is None:
+        text = _decode(data, source) if isinstance(data, bytes) else _strip_bom(data)
+        parsed = _parse_with_header(text, source, fmt)
+    return parsed
 
 
 def _log_format(source: str, units: str | None, columns: Any, force_units: str | None, moment_units: str | None,
@@ -971,14 +997,30 @@ def _with_cut_hint(exc: InputError, text: str, source: str, data_base: int) -> I
 _FOOTER_HINT = "; this is the file's last line: a footer after the data, or a row cut short? Delete it"
 
 
+class _CutLine(InputError):
+    """An error on a file's last line, which the file ends inside (no line break after it):
+    the line was probably cut while the file was written. ``line``: its number."""
+
+    def __init__(self, message: str, line: int):
+        super().__init__(message)
+        self.line = line
+
+
 def _cut_hint(exc: InputError, source: str, last: int) -> InputError:
     """:func:`_with_cut_hint` for a file without a line break after its line ``last``."""
     if not str(exc).startswith(f"{source}:{last}: "):
         return exc
-    return InputError(
+    return _CutLine(
         f"{str(exc).removesuffix(_FOOTER_HINT)} (the file ends inside line {last}, with no line break after it: was it "
-        "cut while being written? Delete that line to use the rest)"
+        "cut while being written? Delete that line to use the rest, or give --missing drop)",
+        last,
     )
+
+
+def _without_cut_line(data: bytes | str) -> bytes | str | None:
+    """``data`` up to its last line break (its cut last line dropped); None without a line break."""
+    end = data.rfind(b"\n" if isinstance(data, bytes) else "\n") + 1
+    return data[:end] if end else None
 
 
 # Header text looked at by the fast path; a header record longer than this goes the slow way.
