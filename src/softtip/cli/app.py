@@ -172,7 +172,8 @@ def run() -> None:
     reader thread of a native library that is still winding down occasionally aborts the
     process (``terminate called without an active exception``, exit -6 instead of the
     failure's code). So a failed run flushes its streams and exits with its code directly; a
-    successful one ends normally. In-process callers (tests) use :data:`main` itself.
+    successful one ends normally, but for the cyclic garbage collection of the objects left
+    (:func:`_leave_objects_to_the_exit`). In-process callers (tests) use :data:`main` itself.
     """
     _one_blas_thread()  # before anything imports numpy
     from softtip.io.interrupt import ignore_signals_after_commit_until_exit
@@ -185,6 +186,7 @@ def run() -> None:
     except SystemExit as exc:
         code = exc.code
         if code in (0, None):
+            _leave_objects_to_the_exit()
             raise
         for stream in (sys.stdout, sys.stderr):
             try:
@@ -192,3 +194,19 @@ def run() -> None:
             except Exception:  # noqa: BLE001 - a closed pipe: nothing more can be said
                 pass
         os._exit(code if isinstance(code, int) else 1)
+
+
+def _leave_objects_to_the_exit() -> None:
+    """Take every object left out of the cyclic garbage collector (:func:`gc.freeze`): the
+    collections of the interpreter's finalisation then pass them by.
+
+    Those collections went over every object left, most of them numba's and llvmlite's, and
+    took 0.16 s of the 0.75 s of CPU time of a 20,000-row `softtip estimate` with its compiled
+    kernels (whole process, median of fifteen runs each). A successful run has committed and closed its outputs by then;
+    exit handlers still run and the standard streams are still flushed; objects in reference
+    cycles are left to the process's exit instead of being taken apart one by one.
+    """
+    import gc
+
+    gc.freeze()
+
