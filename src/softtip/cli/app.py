@@ -202,11 +202,11 @@ def _leave_objects_to_the_exit() -> None:
 
     Those collections went over every object left, most of them numba's and llvmlite's, and
     took 0.16 s of the 0.75 s of CPU time of a 20,000-row `softtip estimate` with its compiled
-    kernels (whole process, median of fifteen runs each). A successful run has committed and closed its outputs by then;
-    exit handlers still run and the standard streams are still flushed; objects in reference
-    cycles are left to the process's exit instead of being taken apart one by one.
+    kernels (whole process, median of fifteen runs each). A successful run has committed and
+    closed its outputs by then; exit handlers still run and the standard streams are still
+    flushed; objects in reference cycles are left to the process's exit instead of being taken
+    apart one by one.
     """
     import gc
 
     gc.freeze()
-
