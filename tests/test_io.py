@@ -805,13 +805,14 @@ def test_log_cut_inside_its_last_row_is_an_error_that_says_so(tmp_path: Path) ->
 
 
 @pytest.mark.parametrize("missing", ["drop", "interpolate"])
-@pytest.mark.parametrize("cut", ["cells", "number"])
+@pytest.mark.parametrize("cut", ["cells", "number", "delimiter"])
 def test_log_cut_inside_its_last_row_is_dropped_with_missing_drop(tmp_path: Path, missing: str, cut: str) -> None:
     # the cut line's cells are missing: --missing drop (and interpolate, which has nothing after
     # it to fill from) reads the rows before it, the values of the file without that line, and says so
     text = _log_text(np.arange(30) * 1e-3).rstrip("\n")
     keep = text[: text.rfind("\n") + 1]
-    cut_text = text[: text.rfind(",") - 2] if cut == "cells" else text[: text.rfind(",") + 2] + "e"
+    end = {"cells": text.rfind(",") - 2, "number": text.rfind(",") + 2, "delimiter": text.rfind(",") + 1}[cut]
+    cut_text = text[:end] + ("e" if cut == "number" else "")
     log = read_log(_write(tmp_path, cut_text, "cut.csv"), missing=missing)
     whole = read_log(_write(tmp_path, keep, "kept.csv"))
     np.testing.assert_array_equal(log.t, whole.t)
@@ -819,7 +820,25 @@ def test_log_cut_inside_its_last_row_is_dropped_with_missing_drop(tmp_path: Path
     assert len(log.t) == 29 and log.warnings == ()
     (note,) = [n for n in log.notes if ":31: " in n]
     assert note.startswith(f"{tmp_path / 'cut.csv'}:31: the file ends inside this line (no line break after it) and it cannot be read (")
-    assert note.endswith(f"): dropped, as a line cut while the file was written (--missing {missing})")
+    assert note.endswith(f"): dropped (--missing {missing})")
+    assert not [n for n in log.notes if "empty or nan cells" in n]  # not counted as a missing sample
+
+
+@pytest.mark.parametrize("last", ["more cells", "t back", "complete"])
+def test_an_unterminated_last_row_that_is_whole_is_not_dropped(tmp_path: Path, last: str) -> None:
+    # a cut only takes cells away: a last row with every cell (too many, or t going back) is an
+    # error --missing does not hide, nor suggests; a complete one is read
+    text = _log_text(np.arange(30) * 1e-3).rstrip("\n")
+    if last == "more cells":
+        text += ",1.0"
+    elif last == "t back":
+        text = text[: text.rfind("\n") + 1] + "0.0" + text[text.rfind("\n") + 1 :][len(repr(0.029)) :]
+    path = _write(tmp_path, text)
+    if last == "complete":
+        assert len(read_log(path, missing="drop").t) == 30
+        return
+    error = _error(path, missing="drop")
+    assert error == _error(path) and error.startswith(f"{path}:31: ") and "--missing" not in error
 
 
 def test_a_cut_header_is_not_dropped(tmp_path: Path) -> None:

@@ -474,25 +474,30 @@ def read_log(
     data = _read_data(path, source)
     if isinstance(data, bytes):
         data = _decompress(data, source)
-    dropped = None
+    # A last line cut while the file was written (the file ends inside it, cells missing) is
+    # dropped by --missing drop or interpolate (nothing follows it to fill it from), and said.
+    cut = None
     try:
         parsed = _parse_data(data, source, progress, fmt)
     except _CutLine as exc:
-        # a last line cut while the file was written holds missing cells: --missing drop or
-        # interpolate drops it (it cannot be filled: nothing follows it), and says so
         shorter = _without_cut_line(data) if fmt.missing != "fail" else None
         if shorter is None:
             raise
-        data, dropped = shorter, exc
-        parsed = _parse_data(data, source, progress, fmt)
+        cut = (exc.line, str(exc).removeprefix(f"{source}:{exc.line}: ").split(" (the file ends inside")[0])
+        data, parsed = shorter, _parse_data(shorter, source, None, fmt)  # (progress was told of these bytes)
+    else:
+        last = _cut_after_delimiter(data, parsed) if fmt.missing != "fail" else None
+        if last is not None:  # cut just after a delimiter: its last cells empty, not missing samples
+            cut = (last, "its last cell is empty")
+            data = _without_cut_line(data)
+            parsed = _parse_data(data, source, None, fmt)
     t, wrench, extra, first_line, quoted, header = parsed
     raw = data if isinstance(data, bytes) else None
     first_line = None if quoted else first_line
     log = _finish(t, wrench, extra, header, fmt, source, units or "si", first_line, raw)
-    if dropped is not None:
-        reason = str(dropped).removeprefix(f"{source}:{dropped.line}: ").split(" (the file ends inside")[0]
-        note = (f"{source}:{dropped.line}: the file ends inside this line (no line break after it) and it cannot be read "
-                f"({reason}): dropped, as a line cut while the file was written (--missing {fmt.missing})")  # fmt: skip
+    if cut is not None:
+        note = (f"{source}:{cut[0]}: the file ends inside this line (no line break after it) and it cannot be read "
+                f"({cut[1]}): dropped (--missing {fmt.missing})")  # fmt: skip
         log = replace(log, notes=log.notes + (note,))
     return log
 
@@ -997,9 +1002,14 @@ def _with_cut_hint(exc: InputError, text: str, source: str, data_base: int) -> I
 _FOOTER_HINT = "; this is the file's last line: a footer after the data, or a row cut short? Delete it"
 
 
+class _Unfinished(InputError):
+    """A row that ends too early: cells missing, or its last cell not a number (what a line cut
+    short looks like, when it is the file's last and the file ends inside it)."""
+
+
 class _CutLine(InputError):
-    """An error on a file's last line, which the file ends inside (no line break after it):
-    the line was probably cut while the file was written. ``line``: its number."""
+    """An error on a file's last line, which the file ends inside (no line break after it),
+    that a line cut while the file was written gives (:class:`_Unfinished`). ``line``: its number."""
 
     def __init__(self, message: str, line: int):
         super().__init__(message)
@@ -1010,17 +1020,31 @@ def _cut_hint(exc: InputError, source: str, last: int) -> InputError:
     """:func:`_with_cut_hint` for a file without a line break after its line ``last``."""
     if not str(exc).startswith(f"{source}:{last}: "):
         return exc
-    return _CutLine(
-        f"{str(exc).removesuffix(_FOOTER_HINT)} (the file ends inside line {last}, with no line break after it: was it "
-        "cut while being written? Delete that line to use the rest, or give --missing drop)",
-        last,
-    )
+    text = (f"{str(exc).removesuffix(_FOOTER_HINT)} (the file ends inside line {last}, with no line break after it: was "
+            "it cut while being written? Delete that line to use the rest")  # fmt: skip
+    if not isinstance(exc, _Unfinished):  # a whole row (too many cells, t going back): not dropped by --missing
+        return InputError(text + ")")
+    return _CutLine(text + ", or give --missing drop)", last)
 
 
 def _without_cut_line(data: bytes | str) -> bytes | str | None:
     """``data`` up to its last line break (its cut last line dropped); None without a line break."""
     end = data.rfind(b"\n" if isinstance(data, bytes) else "\n") + 1
     return data[:end] if end else None
+
+
+def _cut_after_delimiter(data: bytes | str, parsed: tuple) -> int | None:
+    """The number of ``data``'s last line when the file ends inside it just after a delimiter
+    and its last row, so read, has an empty required cell (a line cut there, not a missing
+    sample); else None. ``parsed``: :func:`_parse_data` of ``data``."""
+    t, wrench, _, _, quoted, header = parsed
+    nl, cr = (b"\n", b"\r") if isinstance(data, bytes) else ("\n", "\r")
+    delimiter = header.delimiter.encode() if isinstance(data, bytes) else header.delimiter
+    blank = b" \t" if isinstance(data, bytes) else " \t"
+    if quoted or not len(t) or data.endswith((nl, cr)) or not data.rstrip(blank).endswith(delimiter):
+        return None
+    empty = bool(np.isnan(wrench[-1]).any()) or (t.dtype.kind == "f" and bool(np.isnan(t[-1])))
+    return data.count(nl) + 1 if empty and data.count(nl) else None
 
 
 # Header text looked at by the fast path; a header record longer than this goes the slow way.
@@ -1721,7 +1745,8 @@ def _parse_careful(
             elif all(_is_blank(more) for more in reader):  # the file's last line (the reader is not needed after this)
                 hint = _FOOTER_HINT
             per = f"one per column of the {header.cmap.source} layout" if header.headerless and header.cmap else "one per header column"
-            raise InputError(f"{source}:{line}: expected {ncol} cells ({per}), got {len(row)}{hint}")
+            error = _Unfinished if len(row) < ncol else InputError  # cells missing: a line cut short, if it is the last
+            raise error(f"{source}:{line}: expected {ncol} cells ({per}), got {len(row)}{hint}")
         sample = [0.0] * len(roles)
         for j, name in checks:
             cell = row[j]
@@ -1740,7 +1765,8 @@ def _parse_careful(
                 if not comma and re.fullmatch(r"\s*[-+]?\d+,\d+\s*", cell):  # a quoted decimal comma
                     hint = ("; a decimal comma: read with semicolon or tab delimiters only (a comma-separated file "
                             "needs decimal points; re-export it with them, or with ';' between cells)")
-                raise InputError(f"{where}: expected a number, got {cell!r}{hint}") from None
+                error = _Unfinished if j == len(row) - 1 else InputError  # the row's last cell: a number cut short?
+                raise error(f"{where}: expected a number, got {cell!r}{hint}") from None
             if math.isnan(value) and missing != "fail":
                 sample[roles.index(name)] = math.nan
                 continue
