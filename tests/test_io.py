@@ -845,6 +845,12 @@ def test_a_cut_header_is_not_dropped(tmp_path: Path) -> None:
     # no line break at all: nothing to keep, the error stands whatever --missing says
     path = _write(tmp_path, HEADER[:-3])
     assert _error(path, missing="drop") == _error(path)
+    # the only data line cut: nothing left, and the message says which line was dropped
+    path = _write(tmp_path, f"{HEADER}\n0.0,1,2", "only.csv")
+    assert _error(path, missing="drop") == (
+        f"{path}:1: header only, no data rows; expected at least one row of t, fx, fy, fz, mx, my, mz after the header "
+        "(line 2, inside which the file ends, was dropped: --missing drop)"
+    )
 
 
 # ----------------------------------------------------- the fast path accepts what the careful one does

@@ -484,7 +484,10 @@ def read_log(
         if shorter is None:
             raise
         cut = (exc.line, str(exc).removeprefix(f"{source}:{exc.line}: ").split(" (the file ends inside")[0])
-        data, parsed = shorter, _parse_data(shorter, source, None, fmt)  # (progress was told of these bytes)
+        try:  # every row before the cut one read (the first parse stopped at it): a whole-file check fails now
+            data, parsed = shorter, _parse_data(shorter, source, None, fmt)  # (progress was told of these bytes)
+        except InputError as again:
+            raise InputError(f"{again} (line {cut[0]}, inside which the file ends, was dropped: --missing {fmt.missing})") from None
     else:
         last = _cut_after_delimiter(data, parsed) if fmt.missing != "fail" else None
         if last is not None:  # cut just after a delimiter: its last cells empty, not missing samples
