@@ -2105,9 +2105,6 @@ def _write_rows(out: TextIO | BinaryIO, plan: _Plan) -> None:
         _write_parquet(out, plan)
         return
     out.write(plan.header)
-    if plan.digits is None:
-        _write_rows_printf(out, plan)
-        return
     with _CsvBlocks(out) as blocks:
         blocks.add(plan)
 
@@ -2141,6 +2138,10 @@ class _CsvBlocks:
 
         if self.failed:
             raise RuntimeError("a CSV block failed before; nothing more is written")
+        if plan.digits is None:  # a float format that is not %.Ng: Python's printf, in this thread, in order
+            self.flush()
+            _write_rows_printf(self.out, plan)
+            return
         if self.binary is not None:
             self.out.flush()  # a header first
         compiled = _compiled_csv(plan)
@@ -3093,11 +3094,7 @@ class TableWriter:
             assert self._blocks is not None
             if self.names is None:
                 out.write(plan.header)
-            if plan.digits is None:
-                self._blocks.flush()
-                _write_rows_printf(out, plan)  # type: ignore[arg-type]
-            else:
-                self._blocks.add(plan)
+            self._blocks.add(plan)
         self.names = plan.names
 
     def close(self, *, finish: bool = True) -> None:
