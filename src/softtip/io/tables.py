@@ -480,20 +480,19 @@ def read_log(
     try:
         parsed = _parse_data(data, source, progress, fmt)
     except _CutLine as exc:
-        shorter = _without_cut_line(data) if fmt.missing != "fail" else None
-        if shorter is None:
+        if fmt.missing == "fail" or _without_cut_line(data) is None:
             raise
         cut = (exc.line, str(exc).removeprefix(f"{source}:{exc.line}: ").split(" (the file ends inside")[0])
-        try:  # every row before the cut one read (the first parse stopped at it): a whole-file check fails now
-            data, parsed = shorter, _parse_data(shorter, source, None, fmt)  # (progress was told of these bytes)
-        except InputError as again:
-            raise InputError(f"{again} (line {cut[0]}, inside which the file ends, was dropped: --missing {fmt.missing})") from None
     else:
         last = _cut_after_delimiter(data, parsed) if fmt.missing != "fail" else None
         if last is not None:  # cut just after a delimiter: its last cells empty, not missing samples
             cut = (last, "its last cell is empty")
-            data = _without_cut_line(data)
-            parsed = _parse_data(data, source, None, fmt)
+    if cut is not None:
+        data = _without_cut_line(data)
+        try:  # every row before the cut one was read (the first parse stopped at it): only a whole-file check fails
+            parsed = _parse_data(data, source, None, fmt)  # (progress was told of these bytes)
+        except InputError as again:
+            raise InputError(f"{again} (line {cut[0]}, inside which the file ends, was dropped: --missing {fmt.missing})") from None
     t, wrench, extra, first_line, quoted, header = parsed
     raw = data if isinstance(data, bytes) else None
     first_line = None if quoted else first_line
@@ -1044,7 +1043,8 @@ def _cut_after_delimiter(data: bytes | str, parsed: tuple) -> int | None:
     nl, cr = (b"\n", b"\r") if isinstance(data, bytes) else ("\n", "\r")
     delimiter = header.delimiter.encode() if isinstance(data, bytes) else header.delimiter
     blank = b" \t" if isinstance(data, bytes) else " \t"
-    if quoted or not len(t) or data.endswith((nl, cr)) or not data.rstrip(blank).endswith(delimiter):
+    # (the line's end alone: no copy of a file of gigabytes)
+    if quoted or not len(t) or data.endswith((nl, cr)) or not data[-4096:].rstrip(blank).endswith(delimiter):
         return None
     empty = bool(np.isnan(wrench[-1]).any()) or (t.dtype.kind == "f" and bool(np.isnan(t[-1])))
     return data.count(nl) + 1 if empty and data.count(nl) else None
