@@ -25,7 +25,7 @@ Nano17 preset × k) and ``--objects`` check scenarios other than the default gri
 instead of the Nano17 preset, which assumes 1.7 times the simulated force noise and 1.4 times
 its moment noise: with the preset every reported std is conservative, the more so where the
 noise dominates the error; ``--noise-from-tare`` lets the estimator measure the noise from a
-1.5 s tare of each log (``EstimatorConfig(noise_from_tare=True)``), as a user would. ``--load R`` (``--load-direction``, ``--load-profile``) puts a
+1.5 s tare of each log (``EstimatorConfig(noise_from_tare="on")``; without it the estimator keeps the model it is told, ``"off"``), as a user would. ``--load R`` (``--load-direction``, ``--load-profile``) puts a
 friction load on the object during the hold instead of rocking it
 (:class:`softtip.sim.hand.FrictionLoad`, the same vector in the hand at both fingertips;
 the stiffer 2 MPa shear layer of ``bench_accuracy.py --sections friction``), errors from the
@@ -117,13 +117,11 @@ def run_case(tip, model, obj, angle_deg, seed, rock=False, noise=1.0, told="pres
     g = simulate_two_finger(tip, obj, math.radians(angle_deg), rng=seed, rock=rock, load=load, **kw)
     sensor = SensorModel(noise_std=tuple(noise * np.asarray(SensorModel().noise_std)))
     if told == "true":  # the estimator told the simulated sensor's noise with its quantisation, not the Nano17 preset's
-        config = EstimatorConfig(noise=sensor.noise_model())
+        config = EstimatorConfig(noise=sensor.noise_model(), noise_from_tare="off")
     elif told == "tare":  # measured from the samples before contact (at about 2 s)
-        config = EstimatorConfig(noise=NANO17.scaled(noise), noise_from_tare=True, tare_duration=1.5)
-    elif noise != 1.0:
-        config = EstimatorConfig(noise=NANO17.scaled(noise))
-    else:
-        config = EstimatorConfig()
+        config = EstimatorConfig(noise=NANO17.scaled(noise), noise_from_tare="on", tare_duration=1.5)
+    else:  # the model it is told, whatever the tare shows
+        config = EstimatorConfig(noise=NANO17.scaled(noise), noise_from_tare="off")
     fingers = []
     for k, side in enumerate(("right", "left")):
         log = g.logs[side]

@@ -43,6 +43,7 @@ CONFIGS = {
     "no-drift-tracking": EstimatorConfig(drift_tracking=False, lowpass_hz=15.0),
     "joint": EstimatorConfig(contact_point="line-fit"),
     "noise-from-tare": EstimatorConfig(noise_from_tare=True, tare_duration=0.4),
+    "noise-auto-raised": EstimatorConfig(tare_duration=0.4, noise=NANO17.scaled(0.7)),
 }
 
 

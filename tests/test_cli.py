@@ -276,8 +276,13 @@ def test_line_fit_mode_columns(tmp_path):
     assert np.isfinite(est.line_fit_conditioning).any()
     assert "exceeds the noise model" not in out.stderr
     # a noise model well below the sensor's: line-fit mode would take the rest for excitation
-    low = run("estimate", "--example", "--contact-point", "line-fit", "--force-noise", "0.003", "-o", tmp_path / "k.csv")
+    low = run("estimate", "--example", "--contact-point", "line-fit", "--force-noise", "0.003", "--noise-from-tare", "off",
+              "-o", tmp_path / "k.csv")  # fmt: skip
     assert low.returncode == 0 and "exceeds the noise model (0.003 N)" in low.stderr
+    # by default the tare raises that model to the noise it shows, and line-fit mode uses it
+    raised = run("estimate", "--example", "--contact-point", "line-fit", "--force-noise", "0.003", "-o", tmp_path / "m.csv")
+    assert raised.returncode == 0 and "exceeds the noise model" not in raised.stderr
+    assert "noise model measured from them: force (" in raised.stderr
     latch = run("estimate", "--example", "--force-noise", "0.003", "-o", tmp_path / "l.csv")
     assert "exceeds the noise model" not in latch.stderr
 

@@ -8,6 +8,7 @@ from numpy.testing import assert_allclose, assert_array_equal
 from rocking import rocking_log
 from softtip import Capsule, Estimator, EstimatorConfig, Sphere, axial_difference, estimate
 from softtip.core.depth import MURAKAMI2006_DEPTH
+from softtip.core.noise import NANO17
 from softtip.core.units import KGF, KGF_MM
 from softtip.estimator.results import EstimatorWarning
 from softtip.sim.synthetic import synthetic_grasp
@@ -112,6 +113,7 @@ CASES = {
     ),
     # the noise model measured by the tare (or, on logs whose tare is short or touched, kept)
     "noise-from-tare": EstimatorConfig(noise_from_tare=True, tare_duration=1.0),
+    "noise-auto-raised": EstimatorConfig(tare_duration=1.0, noise=NANO17.scaled(0.7)),  # "auto" raises it
     "noise-from-tare-joint-lowpass": EstimatorConfig(
         noise_from_tare=True, tare_duration=1.0, contact_point="line-fit", lowpass_hz=8.0, sample_rate=50.0
     ),
@@ -148,7 +150,7 @@ def tare_in_contact():
 
 
 NEW_LOG_CASES = ["latch", "latch-lowpass", "track", "joint", "given-bias", "mean-tare", "single-threshold",
-                 "min-duration-fast-drift", "fast-drift-lowpass", "drift-reported-only", "noise-from-tare"]  # fmt: skip
+                 "min-duration-fast-drift", "fast-drift-lowpass", "drift-reported-only", "noise-from-tare", "noise-auto-raised"]  # fmt: skip
 
 
 @pytest.mark.parametrize(

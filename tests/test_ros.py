@@ -89,7 +89,8 @@ def test_node_parameters_default_to_the_estimators_defaults():
     cfg = config_from_parameters({"lowpass_hz": 30.0, "sample_rate": 1000.0, "force_noise": 0.01})
     assert cfg.lowpass_hz == 30.0 and cfg.sample_rate == 1000.0 and cfg.noise.force_std == (0.01,) * 3
     assert set(PARAMETERS) >= {"tip", "wrench_topic", "frame_id", "lowpass_hz", "contact_point"}
-    assert config_from_parameters({"noise_from_tare": True, "tare_duration": 1.0}).noise_from_tare
+    assert config_from_parameters({"noise_from_tare": True, "tare_duration": 1.0}).noise_from_tare == "on"
+    assert config_from_parameters({"noise_from_tare": "off"}).noise_from_tare == "off"
 
 
 @pytest.mark.parametrize(
@@ -100,8 +101,8 @@ def test_node_parameters_default_to_the_estimators_defaults():
         ({"lowpass_hz": -1.0}, "non-negative"),
         ({"force_noise": -0.1}, "force_noise"),
         ({"contact_point": "latched"}, "contact_point"),
-        ({"noise_from_tare": "false"}, "noise_from_tare must be true or false"),
-        ({"noise_from_tare": True, "tare_duration": 0.0}, "noise_from_tare needs a tare"),
+        ({"noise_from_tare": "false"}, "noise_from_tare must be one of auto, on, off"),
+        ({"noise_from_tare": True, "tare_duration": 0.0}, "noise_from_tare='on' needs a tare"),
         ({"line_fit_window": 0.0}, "line_fit_window must be a number > 0 s"),
         ({"fallback_samples": 2.5}, "fallback_samples must be an integer"),
         ({"latch_window": [1.0]}, "latch_window must be 2 numbers"),

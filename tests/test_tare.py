@@ -1,6 +1,7 @@
 """Tare checks, robust tare, tare on demand, bias files, drift tracking and contact
 hysteresis (issue 13 items 9, 10, 14)."""
 
+import dataclasses
 import os
 import subprocess
 import sys
@@ -445,7 +446,7 @@ def test_the_noise_measured_by_the_tare_calibrates_a_sensor_the_preset_misjudges
     told, measured = [], []
     for seed in range(6):
         g = synthetic_grasp(angle_deg=30.0, seed=seed, noise=true)
-        preset = quiet_estimate(g.t, g.wrench, EstimatorConfig(**NOISE_ONLY))
+        preset = quiet_estimate(g.t, g.wrench, EstimatorConfig(**NOISE_ONLY, noise_from_tare="off"))
         est = quiet_estimate(g.t, g.wrench, EstimatorConfig(**NOISE_ONLY, noise_from_tare=True))
         n = est.tare.n_samples
         assert n == 75 and est.warnings == ()
@@ -463,10 +464,10 @@ def test_the_noise_measured_by_the_tare_calibrates_a_sensor_the_preset_misjudges
 def test_the_measured_noise_is_what_the_estimator_uses():
     g = synthetic_grasp(angle_deg=-20.0, seed=3, noise=NANO17.scaled(0.5))
     est = quiet_estimate(g.t, g.wrench, EstimatorConfig(tare_duration=1.0, noise_from_tare=True))
-    told = quiet_estimate(g.t, g.wrench, EstimatorConfig(tare_duration=1.0, noise=est.tare.noise))
+    told = quiet_estimate(g.t, g.wrench, EstimatorConfig(tare_duration=1.0, noise=est.tare.noise, noise_from_tare="off"))
     for name in ("state", "contact_id", "h_std", "angle", "angle_std", "angle_noise_std", "line_evidence"):
         assert np.array_equal(getattr(est, name), getattr(told, name), equal_nan=True), name
-    preset = quiet_estimate(g.t, g.wrench, EstimatorConfig(tare_duration=1.0))
+    preset = quiet_estimate(g.t, g.wrench, EstimatorConfig(tare_duration=1.0, noise_from_tare="off"))
     assert not np.array_equal(est.h_std, preset.h_std, equal_nan=True)
 
 
@@ -475,7 +476,7 @@ def test_too_few_tare_samples_keep_the_given_noise_model_and_say_so():
     with pytest.warns(EstimatorWarning, match="10 tare samples .* fewer than the 30 .* configured noise model is used"):
         est = estimate(g.t, g.wrench, "murakami2006", EstimatorConfig(noise_from_tare=True))
     assert est.tare.noise is None
-    plain = quiet_estimate(g.t, g.wrench)
+    plain = quiet_estimate(g.t, g.wrench, EstimatorConfig(noise_from_tare="off"))
     assert np.array_equal(est.angle_std, plain.angle_std, equal_nan=True)
     stream = Estimator("murakami2006", EstimatorConfig(noise_from_tare=True))
     with pytest.warns(EstimatorWarning, match="fewer than the 30"):
@@ -501,20 +502,71 @@ def test_a_touched_tare_or_a_still_axis_keeps_the_given_noise_for_it():
     assert 0.5 * NANO17.force_std[0] < est.tare.noise.force_std[0] < 1.5 * NANO17.force_std[0]
 
 
+@pytest.mark.parametrize("scale", [0.4, 2.5])
+def test_auto_raises_a_model_the_tare_shows_too_small_and_never_lowers_one(scale):
+    # "auto" (the default) against "on" and "off": a sensor noisier than the preset gets the
+    # tare's measurement, a quieter one keeps the preset; no warning either way
+    true = NANO17.scaled(scale)
+    z = []
+    for seed in range(6):
+        g = synthetic_grasp(angle_deg=30.0, seed=seed, noise=true)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", EstimatorWarning)
+            auto = estimate(g.t, g.wrench, "murakami2006", EstimatorConfig(**NOISE_ONLY))
+        on = quiet_estimate(g.t, g.wrench, EstimatorConfig(**NOISE_ONLY, noise_from_tare="on"))
+        off = quiet_estimate(g.t, g.wrench, EstimatorConfig(**NOISE_ONLY, noise_from_tare="off"))
+        assert off.tare.noise is None
+        measured = np.r_[on.tare.noise.force_std, on.tare.noise.moment_std]
+        if scale < 1.0:  # every axis quieter than the preset: the preset, as "off"
+            assert auto.tare.noise is None
+            assert np.array_equal(auto.angle_std, off.angle_std, equal_nan=True)
+        else:  # every axis noisier: the measured model, as "on"
+            assert_allclose(np.r_[auto.tare.noise.force_std, auto.tare.noise.moment_std], measured, rtol=1e-15)
+            assert np.array_equal(auto.angle_std, on.angle_std, equal_nan=True)
+            z.append(per_sample_z(auto, g.angle))
+    if z:
+        assert 0.8 < np.sqrt(np.mean(np.square(z))) < 1.25, z
+
+
+def test_auto_keeps_the_given_model_without_a_tare_long_enough_to_measure():
+    g = synthetic_grasp(angle_deg=10.0, seed=1, noise=NANO17.scaled(2.0))
+    off = quiet_estimate(g.t, g.wrench, EstimatorConfig(noise_from_tare="off"))
+    short = EstimatorConfig(tare_duration=0.18)
+    for config in (short, EstimatorConfig(tare_duration=0.0), EstimatorConfig(bias=(0.0,) * 6)):
+        # 9 tare samples at 50 Hz, none, a given bias: the model as given, no warning about it
+        est = quiet_estimate(g.t, g.wrench, config)
+        assert est.tare.noise is None and not any("noise_from_tare" in m for m in est.warnings)
+    est = quiet_estimate(g.t, g.wrench, short)
+    assert est.tare.n_samples == 9
+    assert np.array_equal(est.angle_std, quiet_estimate(g.t, g.wrench, dataclasses.replace(short, noise_from_tare="off")).angle_std, equal_nan=True)
+    # the default 0.2 s at 50 Hz: 10 samples, enough to raise a model twice too small
+    est = quiet_estimate(g.t, g.wrench)
+    r = est.tare
+    got, std = np.r_[r.noise.force_std, r.noise.moment_std], np.r_[r.force_std, r.moment_std]
+    assert r.n_samples == 10 and np.array_equal(got, np.maximum(std, NOISE)) and np.count_nonzero(got > NOISE) >= 4
+    assert not np.array_equal(est.angle_std, off.angle_std, equal_nan=True)
+    # one axis noisier than a model given per axis: that axis raised, the others kept
+    given = SensorNoise((0.004, 0.004, 0.02), (1e-4, 1e-4, 1e-4))
+    est = quiet_estimate(g.t, g.wrench, EstimatorConfig(tare_duration=1.5, noise=given))
+    got = np.r_[est.tare.noise.force_std, est.tare.noise.moment_std]
+    assert np.all(got[[2, 3, 4, 5]] == np.r_[given.force_std[2:], given.moment_std])
+    assert np.all(got[:2] > 0.008)  # 2 × 6 mN measured over 75 samples
+
+
 def test_noise_from_tare_needs_a_tare():
     for bad in ({"tare_duration": 0.0}, {"bias": (0.0,) * 6}):
-        with pytest.raises(ValueError, match="noise_from_tare needs a tare"):
+        with pytest.raises(ValueError, match="noise_from_tare='on' needs a tare"):
             EstimatorConfig(noise_from_tare=True, **bad)
 
 
 def test_cli_measures_the_noise_with_noise_from_tare(tmp_path):
     g = synthetic_grasp(angle_deg=30.0, seed=2, noise=NANO17.scaled(0.5))
     write_log(tmp_path / "log.csv", g.t, g.wrench)
-    r = run_cli("estimate", "log.csv", "-o", "a.csv", "--noise-from-tare", "--tare-duration", "1", cwd=tmp_path)
+    r = run_cli("estimate", "log.csv", "-o", "a.csv", "--noise-from-tare", "on", "--tare-duration", "1", cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     assert "noise model measured from them: force (" in r.stderr and "warning" not in r.stderr
-    r = run_cli("estimate", "log.csv", "-o", "b.csv", "--noise-from-tare", "--tare-duration", "0", cwd=tmp_path)
-    assert r.returncode == 2 and "noise_from_tare needs a tare" in r.stderr
+    r = run_cli("estimate", "log.csv", "-o", "b.csv", "--noise-from-tare", "on", "--tare-duration", "0", cwd=tmp_path)
+    assert r.returncode == 2 and "noise_from_tare='on' needs a tare" in r.stderr
     assert not (tmp_path / "b.csv").exists()
 
 
@@ -554,7 +606,7 @@ def test_a_re_tare_measures_the_noise_again():
     assert_allclose(np.r_[second.force_std, second.moment_std], 2.0 * NOISE, rtol=0.45)
     # every stage after the re-tare uses the new model: as a batch run on the rest told it
     rest = g.t >= 3.5
-    told = quiet_estimate(g.t[rest], w[rest], EstimatorConfig(tare_duration=1.5, noise=second))
+    told = quiet_estimate(g.t[rest], w[rest], EstimatorConfig(tare_duration=1.5, noise=second, noise_from_tare="off"))
     ours = np.array([o.angle_std for o in out])[rest]
     assert np.array_equal(np.isfinite(ours), np.isfinite(told.angle_std))
     assert_allclose(ours[np.isfinite(ours)], told.angle_std[np.isfinite(told.angle_std)], rtol=1e-12)

@@ -16,12 +16,14 @@ from softtip.core.noise import NANO17, SensorNoise, line_threshold_kernel
 from softtip.core.units import KGF
 from softtip.estimator.settings import Setting, check_value, setting, settings_of
 
-__all__ = ["CONTACT_POINT_MODES", "DEPTH_MODES", "TARE_METHODS", "EstimatorConfig"]
+__all__ = ["CONTACT_POINT_MODES", "DEPTH_MODES", "NOISE_FROM_TARE", "TARE_METHODS", "EstimatorConfig"]
 
 #: Values of :attr:`EstimatorConfig.contact_point`.
 CONTACT_POINT_MODES = ("latch", "track", "line-fit")
 #: Values of :attr:`EstimatorConfig.tare_method`.
 TARE_METHODS = ("robust", "median", "mean")
+#: ``noise_from_tare``: raise the noise model to what the tare shows, replace it, or keep it
+NOISE_FROM_TARE = ("auto", "on", "off")
 #: Values of :attr:`EstimatorConfig.depth_compensation`.
 DEPTH_MODES = ("auto", "online", "law", "off")
 
@@ -50,8 +52,9 @@ class EstimatorConfig:
     fallback_samples : int
         Samples averaged for a latch when the rise has no sample in the window.
     noise : SensorNoise
-        Standard deviations of the unfiltered sensor noise (with ``noise_from_tare``: the
-        model the tare's samples are checked against, and the fallback).
+        Standard deviations of the unfiltered sensor noise: the model the tare's samples are
+        checked against, and the one in use unless the tare measures another
+        (``noise_from_tare``).
     h_sigmas, h_min : float
         ``|h|`` is significant (a ``line`` contact) above ``max(h_sigmas · h_std, h_min)``;
         ``h_min`` in N·m (default 0.5 N·mm).
@@ -223,17 +226,26 @@ class EstimatorConfig:
         sample decides alone (the papers' test); at 1–7 kHz a vote of 15–105 samples, so
         sensor noise near the threshold does not make a line flicker to ``point``. 0: each
         sample alone at every rate.
-    noise_from_tare : bool
-        Measure the noise model from the tare: the standard deviation of each axis over the
-        tare's samples (spikes left out) replaces ``noise`` for everything after the tare
-        (thresholds, every reported standard deviation): the presets are about one
-        resolution count, not this sensor's noise. Needs a tare
-        (``tare_duration`` > 0, no ``bias``) of at least
-        :data:`~softtip.estimator.tare.NOISE_MIN_SAMPLES` samples (its standard deviations
-        then known to about 13 %; e.g. 1 s at 50 Hz); with fewer, with a tare that looks
-        touched, or on an axis that did not vary at all, ``noise`` is kept and a warning
-        says so; an axis read in steps of ``q`` is taken as at least ``q / √12`` (its
-        rounding). Default off.
+    noise_from_tare : {"auto", "on", "off"}
+        Measure the noise from the tare: the standard deviation of each axis over the tare's
+        samples (spikes left out), used for everything after the tare (thresholds, every
+        reported standard deviation). The presets are about one resolution count, not this
+        sensor's noise, and a model that is too small makes noise look like signal: the
+        evidence window then reads the noise's spread as an ``area``.
+
+        ``"auto"`` (default): each axis's model is raised to what the tare shows, never
+        lowered below ``noise`` (a model given larger than the sensor's noise, for vibration
+        say, is kept), where the tare has at least
+        :data:`~softtip.estimator.tare.RAISE_MIN_SAMPLES` samples (spikes left out: the
+        default 0.2 s from 50 Hz on) and does not look touched; otherwise ``noise`` is used
+        as given, without a warning (no tare, a given ``bias``, a shorter tare).
+        ``"on"``: the measured model replaces ``noise`` on every axis, also below it (its
+        standard deviations known to about 13 % from 30 samples); needs a tare
+        (``tare_duration`` > 0, no ``bias``); with fewer samples, with a tare that looks
+        touched, or on an axis that did not vary at all, ``noise`` is kept and a warning says
+        so; an axis read in steps of ``q`` is taken as at least ``q / √12`` (its rounding).
+        ``"off"``: ``noise`` as given. ``True`` and ``False`` are taken as ``"on"`` and
+        ``"off"``.
     """
 
     # -- contact: when the fingertip is touched ------------------------------------------------
@@ -280,10 +292,11 @@ class EstimatorConfig:
     noise: SensorNoise = setting(
         NANO17, "Standard deviations of the unfiltered sensor noise per axis (N, N·m).", kind="composite",
         options=("--sensor", "--force-noise", "--moment-noise"), group="noise")
-    noise_from_tare: bool = setting(
-        False, "Measure the noise model from the tare's samples (each axis's standard deviation) instead of "
-        "--force-noise/--moment-noise, which stay the fallback; needs at least 30 tare samples "
-        "(--tare-duration 1 at 50 Hz).", group="noise")
+    noise_from_tare: Literal["auto", "on", "off"] = setting(
+        "auto", "Measure the noise from the tare's samples (each axis's standard deviation): auto raises "
+        "--force-noise/--moment-noise (or the --sensor preset) to what a tare of at least 10 samples shows and "
+        "keeps them otherwise; on replaces them by it (at least 30 samples, --tare-duration 0.6 at 50 Hz); off "
+        "keeps them as given.", choices=NOISE_FROM_TARE, group="noise")
     h_sigmas: float = setting(
         3.0, "|h| is significant (a line) above this many of its noise standard deviations (or --h-min).",
         unit="noise standard deviations", low=0.0, metavar="SIGMAS", group="noise")
@@ -415,6 +428,8 @@ class EstimatorConfig:
         return line_threshold_kernel(np.asarray(h_std, dtype=float), self.h_sigmas, self.h_min, NP)
 
     def __post_init__(self) -> None:
+        if isinstance(self.noise_from_tare, (bool, np.bool_)):  # the switch it was
+            object.__setattr__(self, "noise_from_tare", "on" if self.noise_from_tare else "off")
         # each value against its Setting (field metadata): kind, range, choices
         for s in settings_of(EstimatorConfig):
             object.__setattr__(self, s.name, check_value(s, getattr(self, s.name)))
@@ -442,10 +457,10 @@ class EstimatorConfig:
             if not (math.isfinite(a) and math.isfinite(b) and a < b):
                 raise ValueError(f"rocked intervals must be finite with start < end, got ({a!r}, {b!r})")
         object.__setattr__(self, "rocked", rocked)
-        if self.noise_from_tare and (self.bias is not None or self.tare_duration <= 0.0):
+        if self.noise_from_tare == "on" and (self.bias is not None or self.tare_duration <= 0.0):
             raise ValueError(
-                "noise_from_tare needs a tare to measure the noise from: tare_duration > 0 (--tare-duration) and no "
-                "bias given (--bias)"
+                "noise_from_tare='on' needs a tare to measure the noise from: tare_duration > 0 (--tare-duration) and "
+                "no bias given (--bias); 'auto' measures it only where there is one"
             )
         if self.bias is not None:
             b = np.asarray(self.bias, dtype=float)

@@ -161,6 +161,8 @@ def _setting_value(s: Setting, v: Any) -> Any:
             raise ValueError(f"{s.name} must be an integer, got {v!r}")
         return v
     if s.kind == "choice":
+        if isinstance(v, bool) and {"on", "off"} <= set(s.choices):  # a switch given as a bool
+            return "on" if v else "off"
         return str(v)
     if s.kind in ("tuple", "tuples"):
         if v is None:
