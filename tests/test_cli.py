@@ -282,7 +282,7 @@ def test_line_fit_mode_columns(tmp_path):
     # by default the tare raises that model to the noise it shows, and line-fit mode uses it
     raised = run("estimate", "--example", "--contact-point", "line-fit", "--force-noise", "0.003", "-o", tmp_path / "m.csv")
     assert raised.returncode == 0 and "exceeds the noise model" not in raised.stderr
-    assert "noise model measured from them: force (" in raised.stderr
+    assert "noise model raised to theirs where larger: force (" in raised.stderr
     latch = run("estimate", "--example", "--force-noise", "0.003", "-o", tmp_path / "l.csv")
     assert "exceeds the noise model" not in latch.stderr
 

@@ -523,6 +523,7 @@ def test_auto_raises_a_model_the_tare_shows_too_small_and_never_lowers_one(scale
         else:  # every axis noisier: the measured model, as "on"
             assert_allclose(np.r_[auto.tare.noise.force_std, auto.tare.noise.moment_std], measured, rtol=1e-15)
             assert np.array_equal(auto.angle_std, on.angle_std, equal_nan=True)
+            assert "noise model raised to theirs where larger" in auto.tare.summary()
             z.append(per_sample_z(auto, g.angle))
     if z:
         assert 0.8 < np.sqrt(np.mean(np.square(z))) < 1.25, z
@@ -568,6 +569,33 @@ def test_cli_measures_the_noise_with_noise_from_tare(tmp_path):
     r = run_cli("estimate", "log.csv", "-o", "b.csv", "--noise-from-tare", "on", "--tare-duration", "0", cwd=tmp_path)
     assert r.returncode == 2 and "noise_from_tare='on' needs a tare" in r.stderr
     assert not (tmp_path / "b.csv").exists()
+
+
+def test_a_re_tare_under_auto_goes_back_to_the_given_model_when_the_sensor_quietens():
+    # twice the preset's noise while first taring (a loose cable, then fixed): the first tare
+    # raises the model, the re-tare sees half the preset's noise and the given model is used again
+    g = synthetic_grasp(angle_deg=45.0, seed=7, duration=14.0, contact_time=6.0, settle_time=8.0, h_start=8.5,
+                        noise=NANO17.scaled(0.5))  # fmt: skip
+    w = g.wrench.copy()
+    early = g.t < 3.0
+    w[early] += np.random.default_rng(7).normal(size=(early.sum(), 6)) * np.sqrt(3.75) * NOISE
+    est = Estimator("murakami2006", EstimatorConfig(tare_duration=1.0))
+    out = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", EstimatorWarning)
+        for ti, wi in zip(g.t, w):
+            if ti == 3.5:
+                first = est.tare_report.noise
+                est.tare(1.5)
+            out.append(est.update(ti, wi))
+    assert first is not None
+    assert np.all(np.r_[first.force_std, first.moment_std] > 1.3 * NOISE)
+    rest = g.t >= 3.5
+    told = quiet_estimate(g.t[rest], w[rest], EstimatorConfig(tare_duration=1.5, noise_from_tare="off"))
+    ours = np.array([o.angle_std for o in out])[rest]
+    assert np.array_equal(np.isfinite(ours), np.isfinite(told.angle_std))
+    assert_allclose(ours[np.isfinite(ours)], told.angle_std[np.isfinite(told.angle_std)], rtol=1e-12)
+    assert est.tare_report.noise is None  # half the preset's noise: the preset kept
 
 
 def test_a_quantised_sensor_is_not_measured_quieter_than_its_rounding():

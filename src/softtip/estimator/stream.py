@@ -40,7 +40,7 @@ from softtip.estimator.latch import LatchTracker
 from softtip.estimator.line_fit import LineFitTracker
 from softtip.estimator.measure import effective_noise, measure_kernel, noise_correlation
 from softtip.estimator.results import EstimatorWarning, SampleEstimate
-from softtip.estimator.tare import StreamTare, TareReport
+from softtip.estimator.tare import StreamTare, TareReport, noise_in_use
 
 __all__ = ["Estimator"]
 
@@ -238,8 +238,8 @@ class Estimator:
                 return self._none(t, (math.nan,) * 6, taring=True)
             for msg in tare.report.warnings:
                 self._warn(msg)
-            if tare.report.noise is not None:  # measured (noise_from_tare)
-                self._use_noise(tare.report.noise)
+            if self.config.noise_from_tare != "off":  # the model this tare measured, or the given one again
+                self._use_noise(noise_in_use(self.config, tare.report))
             if self._filter is not None:  # the tare samples prime the filter, as in the batch
                 for b in tare.release():
                     self._filter([v - bb for v, bb in zip(b, bias)])

@@ -128,6 +128,9 @@ class TareReport:
         configured ones raised to them); ``None`` where the configured model is used: not
         asked for, not measurable (under ``"on"`` a warning says why) or, under ``"auto"``,
         no axis noisier than the model.
+    noise_raised : bool
+        ``noise`` is the configured model raised to the measured one where that is larger
+        (``noise_from_tare="auto"``), not the measured one on every axis.
     """
 
     bias: NDArray[np.float64]
@@ -142,6 +145,7 @@ class TareReport:
     spike_shift: float = 0.0
     warnings: tuple[str, ...] = ()
     noise: SensorNoise | None = None
+    noise_raised: bool = False
 
     def summary(self) -> str:
         """One line: where the bias came from and its value (N, N·mm); for a tare, the noise of
@@ -168,8 +172,9 @@ class TareReport:
                 )
         if self.noise is not None:
             fn, mn = np.asarray(self.noise.force_std) * 1e3, np.asarray(self.noise.moment_std) * 1e3
+            how = "raised to theirs where larger" if self.noise_raised else "measured from them"
             line += (
-                f"; noise model measured from them: force ({fn[0]:.3g}, {fn[1]:.3g}, {fn[2]:.3g}) mN, "
+                f"; noise model {how}: force ({fn[0]:.3g}, {fn[1]:.3g}, {fn[2]:.3g}) mN, "
                 f"moment ({mn[0]:.3g}, {mn[1]:.3g}, {mn[2]:.3g}) N·mm"
             )
         return line
@@ -327,7 +332,7 @@ def tare_from_samples(
         )
     return TareReport(
         bias, "tare", config.tare_method, k, duration, std[:3], std[3:], noise_ratio, n_spikes, shift, tuple(warn),
-        noise=measured,
+        noise=measured, noise_raised=config.noise_from_tare == "auto",
     )
 
 
