@@ -554,6 +554,30 @@ def test_auto_keeps_the_given_model_without_a_tare_long_enough_to_measure():
     assert np.all(got[:2] > 0.008)  # 2 × 6 mN measured over 75 samples
 
 
+def test_auto_raises_nothing_from_a_touched_a_still_or_a_broken_tare():
+    g = synthetic_grasp(angle_deg=0.0, seed=4)
+    config = EstimatorConfig(tare_duration=1.0)
+    off = quiet_estimate(g.t, g.wrench, dataclasses.replace(config, noise_from_tare="off"))
+    # touched while taring (6 times the model in force): the warning, and the model as given
+    w = g.wrench.copy()
+    w[:50, :3] += np.random.default_rng(4).normal(size=(50, 3)) * 6 * NANO17.force_std[0]
+    est = quiet_estimate(g.t, w, config)
+    assert est.tare.noise is None and any("touched" in m for m in est.warnings)
+    # a zero model on a noise-free log: the tare's rounding-level spread raises nothing
+    g0 = synthetic_grasp(angle_deg=0.0, seed=None, noise=None)
+    zero = EstimatorConfig(tare_duration=1.0, noise=SensorNoise((0.0,) * 3, (0.0,) * 3), line_evidence=False)
+    est = quiet_estimate(g0.t, g0.wrench, zero)
+    assert est.tare.noise is None
+    assert np.array_equal(est.state, quiet_estimate(g0.t, g0.wrench, dataclasses.replace(zero, noise_from_tare="off")).state)
+    # a NaN among the tare samples: no model measured from it (and no error from the model)
+    samples = g.wrench[:50].copy()
+    samples[2, 4] = np.nan
+    assert tare_from_samples(samples, config).noise is None
+    assert np.array_equal(off.angle_std, quiet_estimate(g.t, g.wrench, dataclasses.replace(config, noise_from_tare=False)).angle_std, equal_nan=True)
+    assert EstimatorConfig(noise_from_tare=np.True_).noise_from_tare == "on"
+    assert EstimatorConfig(noise_from_tare=np.False_).noise_from_tare == "off"
+
+
 def test_noise_from_tare_needs_a_tare():
     for bad in ({"tare_duration": 0.0}, {"bias": (0.0,) * 6}):
         with pytest.raises(ValueError, match="noise_from_tare='on' needs a tare"):
@@ -566,6 +590,10 @@ def test_cli_measures_the_noise_with_noise_from_tare(tmp_path):
     r = run_cli("estimate", "log.csv", "-o", "a.csv", "--noise-from-tare", "on", "--tare-duration", "1", cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     assert "noise model measured from them: force (" in r.stderr and "warning" not in r.stderr
+    # the bare option, as when it was a flag: on
+    r = run_cli("estimate", "log.csv", "-o", "c.csv", "--noise-from-tare", "--tare-duration", "1", cwd=tmp_path)
+    assert r.returncode == 0 and "noise model measured from them: force (" in r.stderr, r.stderr
+    assert (tmp_path / "c.csv").read_bytes() == (tmp_path / "a.csv").read_bytes()
     r = run_cli("estimate", "log.csv", "-o", "b.csv", "--noise-from-tare", "on", "--tare-duration", "0", cwd=tmp_path)
     assert r.returncode == 2 and "noise_from_tare='on' needs a tare" in r.stderr
     assert not (tmp_path / "b.csv").exists()

@@ -432,7 +432,7 @@ def tare_probing_log(
     (None, and ``w`` as it is, when ``tare_duration`` is 0: the log is already tared)."""
     if not tare_duration > 0:
         return w, None
-    config = EstimatorConfig(noise=noise, tare_duration=tare_duration)
+    config = EstimatorConfig(noise=noise, tare_duration=tare_duration, noise_from_tare="off")  # the fit uses ``noise``
     tare = tare_from_samples(w[t - t[0] < tare_duration], config, touched_remedy=PROBING_TOUCHED_REMEDY)
     return w - tare.bias, tare
 

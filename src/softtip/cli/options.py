@@ -94,8 +94,10 @@ def setting_option(s: Setting):
     if s.kind == "bool":
         return option(f"{s.option}/--no-{s.option[2:]}", s.name, default=default, show_default=True, help=s.help)
     if s.kind == "choice":
+        # a switch's choice (on, off, ...): the bare option means on, as when it was a flag
+        bare = {"is_flag": False, "flag_value": "on"} if "on" in s.choices else {}
         return option(s.option, s.name, type=click.Choice(list(s.choices)), default=default, show_default=True,
-                      help=s.help)  # fmt: skip
+                      help=s.help, **bare)  # fmt: skip
     if s.kind == "tuples":
         return option(s.option, s.name, type=tuple(_part_type(p) for p in s.parts), multiple=True, **attrs)
     if s.kind == "tuple":

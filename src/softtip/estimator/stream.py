@@ -163,9 +163,10 @@ class Estimator:
         duration : float, optional
             s of samples to tare from; default ``config.tare_duration`` (0.2 s when that is 0).
             Those samples are reported as ``none`` (``taring``); the filter, the contact and
-            the drift start again, the contact count goes on. With ``noise_from_tare`` the
-            noise model is measured again from those samples (the configured one if they
-            cannot give it, as the warning then says).
+            the drift start again, the contact count goes on. The noise model is measured
+            again from those samples (``noise_from_tare``: under ``"auto"`` the configured
+            model raised to it, or the configured one as it is; under ``"on"`` the measured
+            one, or the configured one if they cannot give it, as the warning then says).
         """
         d = (self.config.tare_duration or 0.2) if duration is None else float(duration)
         if not (math.isfinite(d) and d > 0.0):

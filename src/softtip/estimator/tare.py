@@ -309,9 +309,11 @@ def tare_from_samples(
         measured, why = _measured_noise(clean, std, model, touched)
         if why:
             warn.append(why)
-    elif config.noise_from_tare == "auto" and len(clean) >= RAISE_MIN_SAMPLES and not touched:
-        # raised to what the tare shows, never lowered: a model given larger is kept
-        raised = np.maximum(std, model)
+    elif config.noise_from_tare == "auto" and len(clean) >= RAISE_MIN_SAMPLES and not touched and np.isfinite(std).all():
+        # raised to what the tare shows, never lowered: a model given larger is kept; an axis
+        # that did not change at all (a quantised or noise-free one) raises nothing (its std
+        # need not come out exactly 0)
+        raised = np.where(np.ptp(clean, axis=0) > 0.0, np.maximum(std, model), model)
         if np.any(raised > model):
             measured = SensorNoise(tuple(raised[:3]), tuple(raised[3:]))
     fstd = float(np.nanmax(std[:3])) if k > 1 else math.nan
