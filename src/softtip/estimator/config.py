@@ -237,8 +237,9 @@ class EstimatorConfig:
         lowered below ``noise`` (a model given larger than the sensor's noise, for vibration
         say, is kept), where the tare has at least
         :data:`~softtip.estimator.tare.RAISE_MIN_SAMPLES` samples (spikes left out: the
-        default 0.2 s from 50 Hz on) and does not look touched; otherwise ``noise`` is used
-        as given, without a warning (no tare, a given ``bias``, a shorter tare).
+        default 0.2 s from 50 Hz on) and does not look touched (an axis whose samples are all
+        alike raises nothing, a tare with a NaN sample nothing at all); otherwise ``noise`` is
+        used as given, without a warning (no tare, a given ``bias``, a shorter tare).
         ``"on"``: the measured model replaces ``noise`` on every axis, also below it (its
         standard deviations known to about 13 % from 30 samples); needs a tare
         (``tare_duration`` > 0, no ``bias``); with fewer samples, with a tare that looks
