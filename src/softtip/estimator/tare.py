@@ -302,7 +302,8 @@ def tare_from_samples(
                 f"the {name} varied by {np.nanmax(std[sl]) * fmt:.3g} {unit} (standard deviation) while taring, "
                 f"{np.nanmax(r):.3g} times the noise model ({np.max(model[sl]) * fmt:g} {unit}): was the fingertip "
                 f"touched in the first {duration:g} s? The bias, and every estimate, would then be wrong "
-                f"({touched_remedy})"
+                f"({touched_remedy}); if it was not, the sensor is that much noisier than the model, which is then "
+                "kept: give its noise model (--force-noise, --moment-noise)"
             )
     measured = None
     if config.noise_from_tare == "on":
