@@ -147,27 +147,34 @@ def _sequential_stages(t: NDArray, w: NDArray, config: EstimatorConfig, carry: C
     if cut_from is not None and not tared:
         return None  # still taring
     start = int(np.count_nonzero(taring))
+    first = None if cut_from is None else min(max(start + 1, cut_from), n)  # the first sample a cut may fall on
     x, sub = w, bias  # the tracker subtracts the bias (no tared copy) unless the filter needs it first
 
     sos = None
-    zf = None
-    zi = carry.zi if later else None
+    zf = zc = None
     if config.lowpass_hz is not None:
         rate = config.sample_rate or infer_rate(t)
         sos = lowpass_sos(config.lowpass_hz, rate, config.lowpass_order)
         if tared:
-            x, zf = sosfilt_state(sos, w - bias, zi)
+            # in two parts, at the first sample a cut may fall on, keeping the state there (zc):
+            # the state at the cut is then the filter over the samples from there alone (causal,
+            # the same bits piece by piece)
+            d = w - bias
+            x, zf = sosfilt_state(sos, d[:first], carry.zi if later else None)
+            if first is not None:
+                zc = zf
+                rest, zf = sosfilt_state(sos, d[first:], zc)
+                x = np.concatenate((x, rest))
             sub = None
     noise = effective_noise(noise_in_use(config, tare_report), sos)
-    ct = track_contacts(t, x, start, config, noise, carry.track if later else None, sub,
-                        cut_from=None if cut_from is None else max(start + 1, cut_from))  # fmt: skip
+    ct = track_contacts(t, x, start, config, noise, carry.track if later else None, sub, cut_from=first)
     if ct is None:
         return None
     m = len(ct.contact)
-    if m < n:  # cut: the filter's state after the piece (the filter is causal: its output up to there is the same)
+    if m < n:  # cut: the filter's state after the piece
         taring = taring[:m]
-        if zf is not None:
-            _, zf = sosfilt_state(sos, w[:m] - bias, zi)
+        if zc is not None:
+            _, zf = sosfilt_state(sos, d[first:m], zc)
     return _Sequential(bias, taring, tare_report, sos, noise, ct, later, zf)
 
 
