@@ -482,7 +482,7 @@ def read_log(
     except _CutLine as exc:
         if fmt.missing == "fail" or _without_cut_line(data) is None:
             raise
-        cut = (exc.line, str(exc).removeprefix(f"{source}:{exc.line}: ").split(" (the file ends inside")[0])
+        cut = (exc.line, exc.reason)
     else:
         last = _cut_after_delimiter(data, parsed) if fmt.missing != "fail" else None
         if last is not None:  # cut just after a delimiter: its last cells empty, not missing samples
@@ -1011,22 +1011,24 @@ class _Unfinished(InputError):
 
 class _CutLine(InputError):
     """An error on a file's last line, which the file ends inside (no line break after it),
-    that a line cut while the file was written gives (:class:`_Unfinished`). ``line``: its number."""
+    that a line cut while the file was written gives (:class:`_Unfinished`). ``line``: its
+    number; ``reason``: what is wrong with it."""
 
-    def __init__(self, message: str, line: int):
+    def __init__(self, message: str, line: int, reason: str):
         super().__init__(message)
-        self.line = line
+        self.line, self.reason = line, reason
 
 
 def _cut_hint(exc: InputError, source: str, last: int) -> InputError:
     """:func:`_with_cut_hint` for a file without a line break after its line ``last``."""
     if not str(exc).startswith(f"{source}:{last}: "):
         return exc
-    text = (f"{str(exc).removesuffix(_FOOTER_HINT)} (the file ends inside line {last}, with no line break after it: was "
-            "it cut while being written? Delete that line to use the rest")  # fmt: skip
+    reason = str(exc).removeprefix(f"{source}:{last}: ").removesuffix(_FOOTER_HINT)
+    text = (f"{source}:{last}: {reason} (the file ends inside line {last}, with no line break after it: was it cut "
+            "while being written? Delete that line to use the rest")  # fmt: skip
     if not isinstance(exc, _Unfinished):  # a whole row (too many cells, t going back): not dropped by --missing
         return InputError(text + ")")
-    return _CutLine(text + ", or give --missing drop)", last)
+    return _CutLine(text + ", or give --missing drop)", last, reason)
 
 
 def _without_cut_line(data: bytes | str) -> bytes | str | None:
@@ -1046,8 +1048,10 @@ def _cut_after_delimiter(data: bytes | str, parsed: tuple) -> int | None:
     # (the line's end alone: no copy of a file of gigabytes)
     if quoted or not len(t) or data.endswith((nl, cr)) or not data[-4096:].rstrip(blank).endswith(delimiter):
         return None
-    empty = bool(np.isnan(wrench[-1]).any()) or (t.dtype.kind == "f" and bool(np.isnan(t[-1])))
-    return data.count(nl) + 1 if empty and data.count(nl) else None
+    if not (bool(np.isnan(wrench[-1]).any()) or (t.dtype.kind == "f" and bool(np.isnan(t[-1])))):
+        return None
+    breaks = data.count(nl)
+    return breaks + 1 if breaks else None
 
 
 # Header text looked at by the fast path; a header record longer than this goes the slow way.
