@@ -20,7 +20,15 @@ from softtip.apps.live import KeyReader, run_live
 from softtip.core.noise import NANO17, SensorNoise
 from softtip.estimator.contact import contact_thresholds
 from softtip.estimator.results import EstimatorWarning
-from softtip.estimator.tare import StreamTare, bias_to_toml, load_bias, tare_from_samples, tare_log
+from softtip.estimator.tare import (
+    WHITE_RATIO,
+    StreamTare,
+    bias_to_toml,
+    load_bias,
+    successive_ratio,
+    tare_from_samples,
+    tare_log,
+)
 from softtip.sim.synthetic import synthetic_grasp
 
 SOFTTIP = str(Path(sys.executable).with_name("softtip"))
@@ -118,16 +126,73 @@ def test_a_clean_tare_gives_no_warning(rate):
             assert est.tare.noise_ratio < 2.0
 
 
-@pytest.mark.parametrize("part, factor", [("force", 8.0), ("moment", 8.0)])
-def test_noise_far_above_the_model_while_taring_says_touched(part, factor):
-    g = synthetic_grasp(angle_deg=0.0, seed=4)
-    w = g.wrench.copy()
-    rng = np.random.default_rng(4)
+def press(n, cols, factor, seed=4):
+    """(n, 6): a fingertip pressed while taring, slowly next to the sample period: a half sine
+    over the ``n`` samples on ``cols``, along a random direction, whose standard deviation is
+    ``factor`` times the noise model's."""
+    out = np.zeros((n, 6))
+    u = np.random.default_rng(seed).normal(size=3)
+    bump = np.sin(np.pi * (np.arange(n) + 0.5) / n)
+    out[:, cols] = np.outer(bump / np.std(bump, ddof=1), u / np.linalg.norm(u)) * factor * NOISE[cols]
+    return out
+
+
+def white(n, cols, factor, seed=4):
+    """(n, 6): a sensor ``factor`` times noisier than the model on ``cols`` (white noise)."""
+    out = np.zeros((n, 6))
+    out[:, cols] = np.random.default_rng(seed).normal(size=(n, 3)) * factor * NOISE[cols]
+    return out
+
+
+@pytest.mark.parametrize("part", ["force", "moment"])
+def test_a_press_while_taring_says_touched_and_white_noise_says_noisier(part):
+    # a press moves the wrench slowly, a noisier sensor from one sample to the next: the same
+    # spread (8 times the model) over 0.2 s, the default tare (10 samples at 50 Hz), at 50 Hz,
+    # 150 Hz and 1 kHz
     cols = slice(0, 3) if part == "force" else slice(3, 6)
-    w[:10, cols] += rng.normal(size=(10, 3)) * factor * NOISE[cols]
-    with pytest.warns(EstimatorWarning, match=f"the {part} varied .* touched"):
-        est = estimate(g.t, w)
-    assert est.tare.noise_ratio > 5.0
+    for rate in (50.0, 150.0, 1000.0):
+        g = synthetic_grasp(angle_deg=0.0, seed=4, rate=rate)
+        n = int(round(0.2 * rate))
+        w = g.wrench.copy()
+        w[:n] += press(n, cols, 8.0)
+        with pytest.warns(EstimatorWarning, match=f"the {part} varied .* slowly as a touch .* touched"):
+            est = estimate(g.t, w)
+        assert est.tare.noise_ratio > 5.0 and est.tare.noise is None  # auto keeps the model
+        w = g.wrench.copy()
+        w[:n] += white(n, cols, 8.0)
+        with pytest.warns(EstimatorWarning, match=f"the {part} varied .* as independent noise does") as caught:
+            est = estimate(g.t, w)
+        assert not any("touched" in str(c.message) for c in caught)
+        assert est.tare.noise_ratio > 5.0
+        message = str(caught[0].message)
+        if n < 30:  # too few samples to replace a model that far off: kept, and said
+            assert est.tare.noise is None and "10 tare samples are too few" in message and "(30 needed" in message
+            continue
+        got = np.r_[est.tare.noise.force_std, est.tare.noise.moment_std]
+        assert np.all(got[cols] > 5.0 * NOISE[cols]) and "uses from now on" in message
+        # told not to measure it: kept, and said how to
+        with pytest.warns(EstimatorWarning, match=r"which is kept \(noise_from_tare off\); give its noise model"):
+            est = estimate(g.t, w, "murakami2006", EstimatorConfig(noise_from_tare="off"))
+        assert est.tare.noise is None
+
+
+def test_the_successive_ratio_tells_white_noise_from_a_slow_change():
+    rng = np.random.default_rng(0)
+    etas = [successive_ratio(rng.normal(size=(10, 3))) for _ in range(2000)]
+    assert 0.95 < np.mean(etas) < 1.05 and np.mean(np.array(etas) < WHITE_RATIO) < 0.01
+    # a press of five times the noise over the tare: below, far below over 200 samples
+    for n, most in ((10, 0.45), (200, 0.15)):
+        x = press(n, slice(0, 3), 5.0)[:, :3] + rng.normal(size=(n, 3)) * NOISE[:3]
+        assert successive_ratio(x) < most
+    assert np.isnan(successive_ratio(np.zeros((2, 3))))
+
+
+@given(st.integers(3, 60), st.floats(1e-6, 1e3), st.floats(-1e3, 1e3), st.integers(0, 2**32 - 1))
+@settings(max_examples=60, deadline=None)
+def test_the_successive_ratio_is_free_of_units_and_offset(n, scale, offset, seed):
+    x = np.random.default_rng(seed).normal(size=(n, 2))
+    assert successive_ratio(x * scale + offset) == pytest.approx(successive_ratio(x), rel=1e-6)
+    assert 0.0 <= successive_ratio(x) <= 2.0 * n / (n - 1)  # (a difference is at most twice a deviation)
 
 
 def held_then_released(seed=5):
@@ -488,12 +553,19 @@ def test_a_touched_tare_or_a_still_axis_keeps_the_given_noise_for_it():
     g = synthetic_grasp(angle_deg=0.0, seed=4)
     config = EstimatorConfig(noise_from_tare=True, tare_duration=1.0)
     w = g.wrench.copy()
-    w[:50, :3] += np.random.default_rng(4).normal(size=(50, 3)) * 8 * NANO17.force_std[0]
+    w[:50] += press(50, slice(0, 3), 8.0)
     with pytest.warns(EstimatorWarning) as caught:
         est = estimate(g.t, w, "murakami2006", config)
     text = " ".join(str(c.message) for c in caught)
     assert "touched" in text and "as if touched; the configured noise model is used" in text
     assert est.tare.noise is None
+    # as noisy from sample to sample: measured, as a sensor that noisy
+    w = g.wrench.copy()
+    w[:50] += white(50, slice(0, 3), 8.0)
+    with pytest.warns(EstimatorWarning, match="as independent noise does") as caught:
+        est = estimate(g.t, w, "murakami2006", config)
+    assert not any("touched" in str(c.message) for c in caught)
+    assert_allclose(est.tare.noise.force_std, est.tare.force_std, rtol=1e-15)
     w = g.wrench.copy()
     w[:50, 5] = w[0, 5]  # mz quantised to one value while taring
     with pytest.warns(EstimatorWarning, match="mz did not change over the 50 tare samples"):
@@ -560,9 +632,19 @@ def test_auto_raises_nothing_from_a_touched_a_still_or_a_broken_tare():
     off = quiet_estimate(g.t, g.wrench, dataclasses.replace(config, noise_from_tare="off"))
     # touched while taring (6 times the model in force): the warning, and the model as given
     w = g.wrench.copy()
-    w[:50, :3] += np.random.default_rng(4).normal(size=(50, 3)) * 6 * NANO17.force_std[0]
+    w[:50] += press(50, slice(0, 3), 6.0)
     est = quiet_estimate(g.t, w, config)
     assert est.tare.noise is None and any("touched" in m for m in est.warnings)
+    # a noisier sensor beside a touch in moment: "on" keeps the model, and says why
+    w[:50] += white(50, slice(3, 6), 6.0)
+    samples = w[:50]
+    for mode, kept in (("on", "as if touched; the configured"), ("auto", "kept while the tare also looks touched")):
+        rep = tare_from_samples(samples, dataclasses.replace(config, noise_from_tare=mode))
+        assert rep.noise is None and any(kept in m for m in rep.warnings), rep.warnings
+    # 29 samples: too few for auto to replace a model that far off, said; 30 enough
+    rep = tare_from_samples(g.wrench[:29] + white(29, slice(3, 6), 8.0), config)
+    assert rep.noise is None and any("29 tare samples are too few" in m for m in rep.warnings), rep.warnings
+    assert tare_from_samples(g.wrench[:30] + white(30, slice(3, 6), 8.0), config).noise is not None
     # a zero model on a noise-free log: the tare's rounding-level spread raises nothing
     g0 = synthetic_grasp(angle_deg=0.0, seed=None, noise=None)
     zero = EstimatorConfig(tare_duration=1.0, noise=SensorNoise((0.0,) * 3, (0.0,) * 3), line_evidence=False)

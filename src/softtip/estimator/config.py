@@ -239,7 +239,12 @@ class EstimatorConfig:
         :data:`~softtip.estimator.tare.RAISE_MIN_SAMPLES` samples (spikes left out: the
         default 0.2 s from 50 Hz on) and does not look touched (an axis whose samples are all
         alike raises nothing, a tare with a NaN sample nothing at all); otherwise ``noise`` is
-        used as given, without a warning (no tare, a given ``bias``, a shorter tare).
+        used as given, without a warning (no tare, a given ``bias``, a shorter tare). A tare
+        that varies more than :data:`~softtip.estimator.tare.TOUCHED_RATIO` times the model
+        looks touched only if it varies slowly next to the sample period, as a press does;
+        one that varies from one sample to the next as independent noise does
+        (:data:`~softtip.estimator.tare.WHITE_RATIO`) is a sensor that much noisier, and is
+        measured, with a warning that says so.
         ``"on"``: the measured model replaces ``noise`` on every axis, also below it (its
         standard deviations known to about 13 % from 30 samples); needs a tare
         (``tare_duration`` > 0, no ``bias``); with fewer samples, with a tare that looks
