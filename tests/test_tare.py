@@ -166,20 +166,37 @@ def test_a_press_while_taring_says_touched_and_white_noise_says_noisier(part):
         assert est.tare.noise_ratio > 5.0
         message = str(caught[0].message)
         if n < 30:  # too few samples to replace a model that far off: kept, and said
-            assert est.tare.noise is None and "10 tare samples are too few" in message and "(30 needed" in message
+            assert est.tare.noise is None and "10 tare samples (spikes left out) are too few" in message
+            assert "(30 needed" in message
             continue
         got = np.r_[est.tare.noise.force_std, est.tare.noise.moment_std]
         assert np.all(got[cols] > 5.0 * NOISE[cols]) and "uses from now on" in message
         # told not to measure it: kept, and said how to
-        with pytest.warns(EstimatorWarning, match=r"which is kept \(noise_from_tare off\); give its noise model"):
+        with pytest.warns(EstimatorWarning, match="which is kept as given; give its noise model"):
             est = estimate(g.t, w, "murakami2006", EstimatorConfig(noise_from_tare="off"))
         assert est.tare.noise is None
+
+
+@pytest.mark.parametrize("n", [10, 30, 200])
+def test_a_press_with_a_glitch_below_the_spike_bar_still_looks_touched(n):
+    # one sample 0.2-0.5 N off inside a press of 8 times the model: not a spike (the press
+    # widens the spread the spike bar is set from), but two large differences, which lifted the
+    # mean-square ratio above the bar; its median form is not moved
+    for glitch in (0.2, 0.3, 0.5):
+        samples = np.random.default_rng(1).normal(size=(n, 6)) * NOISE
+        bump = np.sin(np.pi * (np.arange(n) + 0.5) / n)
+        samples[:, 0] += bump / np.std(bump, ddof=1) * 8.0 * NOISE[0]
+        samples[n // 2, 0] -= glitch
+        rep = tare_from_samples(samples, EstimatorConfig())
+        assert rep.spikes == 0 and rep.noise is None
+        assert any("slowly as a touch" in m and "touched in the first" in m for m in rep.warnings), rep.warnings
 
 
 def test_the_successive_ratio_tells_white_noise_from_a_slow_change():
     rng = np.random.default_rng(0)
     etas = [successive_ratio(rng.normal(size=(10, 3))) for _ in range(2000)]
-    assert 0.95 < np.mean(etas) < 1.05 and np.mean(np.array(etas) < WHITE_RATIO) < 0.01
+    # (the smaller of the mean and median forms: a little below 1 on average)
+    assert 0.9 < np.mean(etas) < 1.05 and np.mean(np.array(etas) < WHITE_RATIO) < 0.03
     # a press of five times the noise over the tare: below, far below over 200 samples
     for n, most in ((10, 0.45), (200, 0.15)):
         x = press(n, slice(0, 3), 5.0)[:, :3] + rng.normal(size=(n, 3)) * NOISE[:3]
@@ -643,8 +660,15 @@ def test_auto_raises_nothing_from_a_touched_a_still_or_a_broken_tare():
         assert rep.noise is None and any(kept in m for m in rep.warnings), rep.warnings
     # 29 samples: too few for auto to replace a model that far off, said; 30 enough
     rep = tare_from_samples(g.wrench[:29] + white(29, slice(3, 6), 8.0), config)
-    assert rep.noise is None and any("29 tare samples are too few" in m for m in rep.warnings), rep.warnings
+    assert rep.noise is None and any("29 tare samples (spikes left out) are too few" in m for m in rep.warnings)
     assert tare_from_samples(g.wrench[:30] + white(30, slice(3, 6), 8.0), config).noise is not None
+    # a NaN on another axis: kept, and why; two samples cannot tell a press from noise: touched
+    samples = g.wrench[:50] + white(50, slice(3, 6), 8.0)
+    samples[3, 0] = np.nan
+    rep = tare_from_samples(samples, config)
+    assert rep.noise is None and any("kept: a tare sample is not a number" in m for m in rep.warnings), rep.warnings
+    rep = tare_from_samples(g.wrench[:2] + white(2, slice(3, 6), 8.0), config)
+    assert any("touched" in m and "slowly" not in m for m in rep.warnings), rep.warnings
     # a zero model on a noise-free log: the tare's rounding-level spread raises nothing
     g0 = synthetic_grasp(angle_deg=0.0, seed=None, noise=None)
     zero = EstimatorConfig(tare_duration=1.0, noise=SensorNoise((0.0,) * 3, (0.0,) * 3), line_evidence=False)

@@ -243,8 +243,10 @@ class EstimatorConfig:
         that varies more than :data:`~softtip.estimator.tare.TOUCHED_RATIO` times the model
         looks touched only if it varies slowly next to the sample period, as a press does;
         one that varies from one sample to the next as independent noise does
-        (:data:`~softtip.estimator.tare.WHITE_RATIO`) is a sensor that much noisier, and is
-        measured, with a warning that says so.
+        (:data:`~softtip.estimator.tare.WHITE_RATIO`) is a sensor that much noisier, measured
+        from :data:`~softtip.estimator.tare.NOISE_MIN_SAMPLES` samples or more (spikes left
+        out), with a warning that says so; from fewer it is kept, and the warning says to tare
+        longer.
         ``"on"``: the measured model replaces ``noise`` on every axis, also below it (its
         standard deviations known to about 13 % from 30 samples); needs a tare
         (``tare_duration`` > 0, no ``bias``); with fewer samples, with a tare that looks
@@ -300,9 +302,9 @@ class EstimatorConfig:
         options=("--sensor", "--force-noise", "--moment-noise"), group="noise")
     noise_from_tare: Literal["auto", "on", "off"] = setting(
         "auto", "Measure the noise from the tare's samples (each axis's standard deviation): auto raises "
-        "--force-noise/--moment-noise (or the --sensor preset) to what a tare of at least 10 samples shows and "
-        "keeps them otherwise; on replaces them by it (at least 30 samples, --tare-duration 0.6 at 50 Hz); off "
-        "keeps them as given.", choices=NOISE_FROM_TARE, group="noise")
+        "--force-noise/--moment-noise (or the --sensor preset) to what a tare of at least 10 samples shows (30 "
+        "beyond 5 times the model, where a spread that changes slowly reads as a touch) and keeps them otherwise; "
+        "on replaces them by it (at least 30 samples, --tare-duration 0.6 at 50 Hz); off keeps them as given.", choices=NOISE_FROM_TARE, group="noise")
     h_sigmas: float = setting(
         3.0, "|h| is significant (a line) above this many of its noise standard deviations (or --h-min).",
         unit="noise standard deviations", low=0.0, metavar="SIGMAS", group="noise")

@@ -55,8 +55,10 @@ class Estimates:
     taring : (N,) sample used for the bias (reported ``none``)
     bias : (6,) the bias subtracted, N and N·m
     tare_force_std : float, N: the largest standard deviation of a force component over
-        the tare samples (NaN without a tare). Far above the sensor noise, the fingertip
-        was touched while taring and the bias is wrong.
+        the tare samples (NaN without a tare). Far above the noise model and changing
+        slowly, the fingertip was touched while taring and the bias is wrong; changing from
+        one sample to the next as white noise, the sensor is that much noisier (the tare's
+        warnings say which).
     relatched : (N,) a new latch starts at this sample, replacing an earlier one (drift at
         light force, or contact regained after a latched contact); an event, not masked
     depth : (N,) depth compensation ``δ`` used, m (0 with the papers' method); NaN when ``none``

@@ -72,11 +72,12 @@ TOUCHED_RATIO = 5.0
 #: A tare's spread beyond :data:`TOUCHED_RATIO` is the sensor's own noise, not a touch, when
 #: successive samples differ as much as independent ones: the mean square of their differences
 #: over twice the variance (von Neumann's ratio, :func:`successive_ratio`), over the axes
-#: beyond, at least this. White noise gives 1 (a 4 % chance below 0.5 from 10 samples on one
-#: axis, none from 200); a press five times the noise, spanning the tare, gives 0.3 over 10
-#: samples (at most 0.45) and 0.1 over 200, the noise's own share (a change slow next to the
-#: sample period moves neighbours alike). Noise that the sensor's own filter correlates from
-#: sample to sample reads as a touch: the cautious side.
+#: beyond, at least this. White noise gives about 1 (below 0.5 on 12 % of 10-sample tares on
+#: one axis, 1.4 % over three, 5 % and 0.2 % from 30 samples, none from 200); a press five
+#: times the noise spanning the tare 0.3 over 10 samples (at most 0.46 over 1000 draws), 0.1
+#: over 200, the noise's own share (a change slow next to the sample period moves neighbours
+#: alike). Noise that the sensor's own filter correlates from sample to sample reads as a
+#: touch: the cautious side; so does white noise below the bar (the model kept, as before).
 WHITE_RATIO = 0.5
 #: What a fingertip touched while taring leaves the user to do, for the estimator's inputs
 TOUCHED_REMEDY = "tare again untouched, give a bias, or tare_duration 0 for an input that is already tared"
@@ -94,6 +95,8 @@ NOISE_MIN_SAMPLES = OVERSTATED_MIN_SAMPLES
 #: short tare would be lowered by ``"on"``
 RAISE_MIN_SAMPLES = 10
 _AXES = ("fx", "fy", "fz", "mx", "my", "mz")
+_MAD_TO_STD = 1.482602218505602  # a normal variable's standard deviation over its median absolute deviation
+_CHI2_1_MEDIAN = 0.454936423119572  # the median of a χ²₁: of (x/σ)² for a normal x
 
 
 _LABELS = {"robust": "mean without spikes", "median": "median", "mean": "mean"}
@@ -217,14 +220,23 @@ def successive_ratio(samples: NDArray) -> float:
     """Von Neumann's ratio of ``samples`` (k, a), pooled over the ``a`` axes (of one unit): the
     mean square of successive differences over twice the variance, each summed over the axes,
     so an axis moves it by its share of the spread (1 for white noise, near 0 for a change slow
-    next to the sample period; :data:`WHITE_RATIO`). NaN from fewer than 3 samples or samples
-    that never change."""
+    next to the sample period; :data:`WHITE_RATIO`). The smaller of that and the same ratio
+    from medians (of the squared differences, over the median of a χ²₁, and of the absolute
+    deviations, times 1.4826), which one sample off the others cannot raise: a glitch below the
+    spike bar inside a press makes two large differences. NaN from fewer than 3 samples or
+    samples that never change."""
     x = np.asarray(samples, dtype=float)
     if len(x) < 3:
         return math.nan
+    d2 = np.diff(x, axis=0) ** 2
     var = float(np.sum(np.var(x, axis=0, ddof=1)))
-    step = float(np.sum(np.mean(np.diff(x, axis=0) ** 2, axis=0)))
-    return step / (2.0 * var) if var > 0.0 else math.nan
+    if not var > 0.0:
+        return math.nan
+    ratio = float(np.sum(np.mean(d2, axis=0))) / (2.0 * var)
+    spread = float(np.sum((_MAD_TO_STD * np.median(np.abs(x - np.median(x, axis=0)), axis=0)) ** 2))
+    if spread > 0.0:  # (more than half the samples alike on every axis: the mean form alone)
+        ratio = min(ratio, float(np.sum(np.median(d2, axis=0))) / _CHI2_1_MEDIAN / (2.0 * spread))
+    return ratio
 
 
 def _measured_noise(clean: NDArray, std: NDArray, model: NDArray, touched: bool) -> tuple[SensorNoise | None, str]:
@@ -297,7 +309,7 @@ def tare_from_samples(
     med = np.median(s, axis=0)
     model = np.array(config.noise.force_std + config.noise.moment_std)
     dev = np.abs(s - med)
-    spread = 1.4826 * np.median(dev, axis=0)
+    spread = _MAD_TO_STD * np.median(dev, axis=0)
     scale = np.maximum(np.maximum(model, spread), 1e-12 * (1.0 + np.abs(med)))
     spike = np.any(dev > SPIKE_SIGMAS * scale, axis=1)
     clean = s[~spike]
@@ -332,12 +344,14 @@ def tare_from_samples(
             f"the {name} varied by {np.nanmax(std[sl]) * fmt:.3g} {unit} (standard deviation) while taring, "
             f"{np.nanmax(r):.3g} times the noise model ({np.max(model[sl]) * fmt:g} {unit})"
         )
-        if successive_ratio(clean[:, sl][:, over]) >= WHITE_RATIO:
+        eta = successive_ratio(clean[:, sl][:, over])
+        if eta >= WHITE_RATIO:
             noisy.append(varied)
             continue
-        touched = True
+        touched = True  # (also where too few samples tell: NaN)
+        how = ", slowly as a touch moves it" if eta < WHITE_RATIO else ""
         warn.append(
-            f"{varied}, slowly as a touch moves it: was the fingertip touched in the first {duration:g} s? The "
+            f"{varied}{how}: was the fingertip touched in the first {duration:g} s? The "
             f"bias, and every estimate, would then be wrong ({touched_remedy}); if it was not, the sensor is that "
             "much noisier than the model, which is then kept: give its noise model (--force-noise, --moment-noise)"
         )
@@ -363,15 +377,21 @@ def tare_from_samples(
         if np.any(raised > model):
             measured = SensorNoise(tuple(raised[:3]), tuple(raised[3:]))
     for varied in noisy:
-        use = (
-            "which the estimate uses from now on (noise_from_tare)" if measured is not None
-            else "which is kept (noise_from_tare off)"
-            if config.noise_from_tare == "off"
-            else "which is kept while the tare also looks touched"
-            if touched
-            else f"which is kept: {len(clean)} tare samples are too few to measure a noise this far above the "
-            f"model ({NOISE_MIN_SAMPLES} needed: tare longer, --tare-duration)"
-        )
+        if measured is not None:
+            use = "which the estimate uses from now on (noise_from_tare, --noise-from-tare)"
+        elif config.noise_from_tare == "off":
+            use = "which is kept as given"
+        elif touched:
+            use = "which is kept while the tare also looks touched"
+        elif not np.isfinite(std).all():
+            use = "which is kept: a tare sample is not a number"
+        elif config.noise_from_tare == "on":
+            use = "which is kept (the noise_from_tare warning says why)"
+        else:
+            use = (
+                f"which is kept: {len(clean)} tare samples (spikes left out) are too few to measure a noise this far "
+                f"above the model ({NOISE_MIN_SAMPLES} needed: tare longer, tare_duration, --tare-duration)"
+            )
         warn.append(
             f"{varied}, from one sample to the next as independent noise does, not slowly as a touch: the sensor "
             f"is that much noisier than the model, {use}; give its noise model (--force-noise, --moment-noise)"
