@@ -304,10 +304,10 @@ def run_cases(phys: Physics, args, tip, objects, kind: str, angles, results: dic
                     start = HELD
                 else:
                     start = 7.0
-                cfg = EstimatorConfig(noise_from_tare=args.noise_from_tare)
+                cfg = EstimatorConfig(noise_from_tare=args.noise_from_tare, tare_duration=args.tare_duration)
                 if args.told_true_noise:  # the simulated sensor's noise, as given, whatever the tare shows
                     cfg = EstimatorConfig(noise=SensorNoise(*np.reshape(args.noise_scale * np.array(BASE_NOISE), (2, 3))),
-                                          noise_from_tare="off")  # fmt: skip
+                                          noise_from_tare="off", tare_duration=args.tare_duration)  # fmt: skip
                 if kind == "rock" and args.stated_rocking:
                     # the user says the object was rocked about two axes from the second axis on
                     cfg = dataclasses.replace(cfg, rocked=((a2.start, scn.duration),))
@@ -747,6 +747,9 @@ def main(argv=None) -> int:
     ap.add_argument("--noise-from-tare", choices=NOISE_FROM_TARE, default=EstimatorConfig.noise_from_tare,
                     help="the estimator's noise_from_tare (default: its default, auto; off: the Nano17 preset as "
                          "given, whatever the tare shows)")  # fmt: skip
+    ap.add_argument("--tare-duration", type=float, default=EstimatorConfig.tare_duration, metavar="S",
+                    help="the estimator's tare_duration, s (default: its default; the grasps touch at 2 s): a longer "
+                         "tare measures the noise from more samples (noise_from_tare)")  # fmt: skip
     ap.add_argument("--told-true-noise", action="store_true",
                     help="the estimator told the simulated sensor's noise (--noise-scale × 5 mN, 0.05 N·mm), "
                          "--noise-from-tare off")  # fmt: skip
@@ -768,6 +771,8 @@ def main(argv=None) -> int:
                          "for each (the model error of a window that saw one axis: how it was set)")  # fmt: skip
     ap.add_argument("--no-progress", action="store_true")
     args = ap.parse_args(argv)
+    if not 0.0 <= args.tare_duration < 2.0:
+        ap.error(f"--tare-duration {args.tare_duration:g}: from 0 to less than 2 s (the grasps touch at 2 s)")
     if args.seeds is None:
         args.seeds = 1 if args.quick else 3
     angles = args.angles if args.angles is not None else ([0.0, 90.0] if args.quick else [0.0, 90.0, -35.0, 25.0])
@@ -788,6 +793,7 @@ def main(argv=None) -> int:
           + ("; the rocking stated (--rocked)" if args.stated_rocking else "; default settings")
           + ("" if args.noise_from_tare == EstimatorConfig.noise_from_tare else f" but --noise-from-tare {args.noise_from_tare}")
           + (" but told the sensor's noise (--told-true-noise)" if args.told_true_noise else "")
+          + ("" if args.tare_duration == EstimatorConfig.tare_duration else f", a {args.tare_duration:g} s tare")
           + ("; estimated with the capsule as a triangle mesh (capsule_mesh, the mesh solver)"
              if args.estimate_tip == "mesh" else ""))  # fmt: skip
     for p in physics:
@@ -822,6 +828,7 @@ def main(argv=None) -> int:
 
     told = "" if args.noise_from_tare == EstimatorConfig.noise_from_tare else f" but --noise-from-tare {args.noise_from_tare}"
     told = " but told the sensor's noise (--told-true-noise)" if args.told_true_noise else told
+    told += "" if args.tare_duration == EstimatorConfig.tare_duration else f", a {args.tare_duration:g} s tare"
     print(f"\n### issue 27's held-out table, default settings{told}\n")
     print("| | held-out grasps | " + " | ".join(p.name for p in physics) + " | target |")
     print("| --- | --- |" + " --- |" * len(physics) + " --- |")
