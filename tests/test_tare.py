@@ -171,7 +171,7 @@ def test_a_press_while_taring_says_touched_and_white_noise_says_noisier(part):
             continue
         got = np.r_[est.tare.noise.force_std, est.tare.noise.moment_std]
         assert np.all(got[cols] > 5.0 * NOISE[cols]) and "uses from now on" in message
-        # told not to measure it: kept, and said how to
+        # told not to measure it: kept, and said
         with pytest.warns(EstimatorWarning, match="which is kept as given; give its noise model"):
             est = estimate(g.t, w, "murakami2006", EstimatorConfig(noise_from_tare="off"))
         assert est.tare.noise is None

@@ -304,7 +304,8 @@ class EstimatorConfig:
         "auto", "Measure the noise from the tare's samples (each axis's standard deviation): auto raises "
         "--force-noise/--moment-noise (or the --sensor preset) to what a tare of at least 10 samples shows (30 "
         "beyond 5 times the model, where a spread that changes slowly reads as a touch) and keeps them otherwise; "
-        "on replaces them by it (at least 30 samples, --tare-duration 0.6 at 50 Hz); off keeps them as given.", choices=NOISE_FROM_TARE, group="noise")
+        "on replaces them by it (at least 30 samples, --tare-duration 0.6 at 50 Hz); off keeps them as given.",
+        choices=NOISE_FROM_TARE, group="noise")
     h_sigmas: float = setting(
         3.0, "|h| is significant (a line) above this many of its noise standard deviations (or --h-min).",
         unit="noise standard deviations", low=0.0, metavar="SIGMAS", group="noise")
