@@ -432,10 +432,27 @@ def test_release_threshold_follows_the_noise_model_and_filter():
     assert off == pytest.approx(0.05 - sigma)
     _, off = contact_thresholds(EstimatorConfig(), NANO17.scaled(0.1))  # e.g. after a low-pass
     assert off == pytest.approx(0.05 - 3 * 0.1 * sigma)
-    _, off = contact_thresholds(EstimatorConfig(), NANO17.scaled(10.0))  # threshold inside the noise
-    assert off == 0.05
     _, off = contact_thresholds(EstimatorConfig(contact_hysteresis=0.0), NANO17)
     assert off == 0.05
+    # a threshold inside the noise (a sensor ten times the Nano17's): onset at 4.5 σ, release at 2.5 σ
+    on, off = contact_thresholds(EstimatorConfig(), NANO17.scaled(10.0))
+    assert on == pytest.approx(4.5 * 10 * sigma) and off == pytest.approx(2.5 * 10 * sigma)  # 4.5 − 3 below the floor
+    on, _ = contact_thresholds(EstimatorConfig(contact_threshold=1.0), NANO17.scaled(10.0))
+    assert on == 1.0  # a threshold above the noise as given
+
+
+def test_a_noisy_sensor_measured_by_the_tare_gives_one_contact_per_press():
+    # 0.03 N per axis (five times the Nano17 preset), measured by the tare at 1 kHz: with the
+    # onset at the 0.05 N threshold the noise alone made contacts (one press read as 5; 100 and
+    # more with the preset kept); at 4.5 σ of |f| one contact, at the grasp; told the noise, the same
+    noisy = NANO17.scaled(5.0)
+    for seed in range(3):
+        g = synthetic_grasp(angle_deg=30.0, rate=1000.0, seed=seed, duration=5.0, noise=noisy)
+        est = quiet_estimate(g.t, g.wrench)
+        assert est.tare.noise is not None and est.n_contacts == 1, est.n_contacts
+        assert quiet_estimate(g.t, g.wrench, EstimatorConfig(noise=noisy)).n_contacts == 1
+        inside = quiet_estimate(g.t, g.wrench, EstimatorConfig(noise_from_tare="off"))  # the preset: inside the noise
+        assert inside.n_contacts > 1
 
 
 def test_min_duration_rejects_a_spike_but_not_a_grasp():

@@ -18,7 +18,7 @@ Per sample (manual §3):
    happened, :attr:`Estimates.warnings` (also issued as :class:`EstimatorWarning`) what is
    wrong. :meth:`Estimator.tare` tares again on demand.
 2. **Filter** (optional): causal Butterworth low-pass, steady state at the first sample.
-3. **Contact** (:mod:`.contact`): onset at ``|f| ≥ contact_threshold``, release below a
+3. **Contact** (:mod:`.contact`): onset at ``|f| ≥ contact_threshold`` (and 4.5 noise standard deviations), release below a
    threshold lower by ``contact_hysteresis`` noise standard deviations, after at least
    ``min_contact_duration``; contacts numbered (``contact_id``). While untouched the bias
    drift is followed (``drift_time_constant``) and, with ``drift_tracking``, subtracted.

@@ -43,7 +43,11 @@ class EstimatorConfig:
         the line's angle and offset over a sliding window (its settings have the ``line_fit_``
         prefix; its output columns, for now, the ``joint_`` one).
     contact_threshold : float
-        N; in contact while ``|f|`` (tared, filtered) is at least this.
+        N; in contact while ``|f|`` (tared, filtered) is at least this, and at least 4.5
+        standard deviations ``σ_f`` of the noise of ``|f|`` (the root sum of squares of the
+        force noise model, after the filter; :data:`~softtip.estimator.contact.ONSET_FLOOR`,
+        about what the default is for the Nano17 preset): with a noisier sensor, a threshold
+        inside its noise would start contacts on noise alone.
     latch_window : (float, float)
         N; the light-force range ``|f|`` must lie in for a sample to be latched (default
         0.2–0.5 kgf; the papers' "window" of force).
@@ -114,11 +118,11 @@ class EstimatorConfig:
         when there is none); ``median``, per component; ``mean``, of all samples (a −20 N
         spike among ten samples moves it by 2 N).
     contact_hysteresis : float
-        Contact starts at ``|f| ≥ contact_threshold`` and ends below the release threshold
-        ``max(contact_threshold − contact_hysteresis · σ_f, min(contact_threshold, 2.5 σ_f))``,
-        with ``σ_f`` the noise of ``|f|`` (root sum of squares of the force noise model, after
-        the filter; an untouched sensor's ``|f|`` is below ``2.5 σ_f`` 90 % of the time);
-        0 for a single threshold.
+        Contact starts at ``|f| ≥ on``, ``on = max(contact_threshold, 4.5 σ_f)``, and ends below
+        the release threshold ``max(on − contact_hysteresis · σ_f, min(on, 2.5 σ_f))``, with
+        ``σ_f`` the noise of ``|f|`` (root sum of squares of the force noise model, after the
+        filter; an untouched sensor's ``|f|`` is below ``2.5 σ_f`` 99.97 % of the time); 0 for
+        a single threshold.
     min_contact_duration : float
         s; a contact is reported once ``|f|`` has stayed above the release threshold for this
         long since it first reached ``contact_threshold``, each sample counting for its
@@ -263,7 +267,8 @@ class EstimatorConfig:
         "then move the point across the line to where a sliding window (--line-fit-window) fits the line-contact "
         "model (flagged line_fit_fallback until one does).", choices=CONTACT_POINT_MODES, group="contact")
     contact_threshold: float = setting(
-        0.05, "In contact while |f| is at least this.", unit="N", low=0.0, cli_unit="force", metavar="FORCE",
+        0.05, "In contact while |f| is at least this (and 4.5 standard deviations of its noise).", unit="N", low=0.0,
+        cli_unit="force", metavar="FORCE",
         group="contact")
     contact_hysteresis: float = setting(
         3.0, "Contact ends below --contact-threshold minus this many standard deviations of the noise of |f| (after "
