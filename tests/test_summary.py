@@ -1,5 +1,6 @@
 """Per-contact summaries."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -28,6 +29,15 @@ def test_two_grasps_are_two_contacts_with_their_own_directions():
     lines = format_summary(contacts)
     assert lines[0].startswith("contact 1: ") and "direction -4" in lines[0]
     assert lines[1].startswith("contact 2: ") and "direction +4" in lines[1]
+
+
+def test_a_contact_without_a_located_sample_lists_no_shares():
+    # a pull (no pushing contact point): every sample `none`, no share, no point
+    g = synthetic_grasp(angle_deg=45.0, seed=1)
+    c = summarise_contacts(softtip.estimate(g.t, g.wrench))[0]
+    pulled = dataclasses.replace(c, shares=dict.fromkeys(c.shares, 0.0), point=(math.nan,) * 3)
+    line = format_summary([pulled])[0]
+    assert line.startswith("contact 1: ") and " N; no point; " in line and ", ;" not in line
 
 
 def test_no_contact():

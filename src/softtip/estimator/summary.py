@@ -101,7 +101,8 @@ def format_summary(contacts: list[ContactSummary]) -> list[str]:
         shares = ", ".join(f"{name} {100 * v:.0f} %" for name, v in c.shares.items() if v > 0)
         p = ", ".join(f"{1e3 * v:+.2f}" for v in c.point)
         where = f"{'latched' if c.latched else 'last'} point ({p}) mm" if all(map(math.isfinite, c.point)) else "no point"
-        text = f"contact {c.index}: {c.start:.3f}–{c.end:.3f} s, peak {c.peak_force:.2f} N, {shares}; {where}"
+        # (a contact with no located sample, a pull, has no share to list)
+        text = f"contact {c.index}: {c.start:.3f}–{c.end:.3f} s, peak {c.peak_force:.2f} N{', ' if shares else ''}{shares}; {where}"
         if math.isfinite(c.direction):
             text += (
                 f"; direction {math.degrees(c.direction):+.1f}° (spread {math.degrees(c.direction_spread):.1f}°, "

@@ -80,7 +80,10 @@ TOUCHED_RATIO = 5.0
 #: touch: the cautious side; so does white noise below the bar (the model kept, as before).
 WHITE_RATIO = 0.5
 #: What a fingertip touched while taring leaves the user to do, for the estimator's inputs
-TOUCHED_REMEDY = "tare again untouched, give a bias, or tare_duration 0 for an input that is already tared"
+TOUCHED_REMEDY = (
+    "tare again untouched, give a bias (bias, --bias), or tare_duration 0 (--tare-duration 0) for an input that is "
+    "already tared"
+)
 #: The tare's noise below this share of the noise model on every axis, over at least
 #: :data:`OVERSTATED_MIN_SAMPLES` samples (its standard deviation then known to about 13 %):
 #: the model overstates the sensor's noise, and the summary says so.
@@ -353,7 +356,8 @@ def tare_from_samples(
         warn.append(
             f"{varied}{how}: was the fingertip touched in the first {duration:g} s? The "
             f"bias, and every estimate, would then be wrong ({touched_remedy}); if it was not, the sensor is that "
-            "much noisier than the model, which is then kept: give its noise model (--force-noise, --moment-noise)"
+            "much noisier than the model, which is then kept as given: give its noise model (--force-noise, "
+            "--moment-noise)"
         )
     measured = None
     if config.noise_from_tare == "on":
