@@ -443,8 +443,8 @@ def test_release_threshold_follows_the_noise_model_and_filter():
 
 def test_a_noisy_sensor_measured_by_the_tare_gives_one_contact_per_press():
     # 0.03 N per axis (five times the Nano17 preset), measured by the tare at 1 kHz: with the
-    # onset at the 0.05 N threshold the noise alone made contacts (one press read as 5; 100 and
-    # more with the preset kept); at 4.5 σ of |f| one contact, at the grasp; told the noise, the same
+    # onset at the 0.05 N threshold the noise alone made contacts (one press read as 13-26; 100
+    # and more with the preset kept); at 4.5 σ of |f| one contact, at the grasp; told the noise, the same
     noisy = NANO17.scaled(5.0)
     for seed in range(3):
         g = synthetic_grasp(angle_deg=30.0, rate=1000.0, seed=seed, duration=5.0, noise=noisy)

@@ -56,8 +56,8 @@ __all__ = [
 #: model, after the filter), about what the default 0.05 N is for the Nano17 preset (4.8): a
 #: sensor noisier than that keeps the onset as far above its noise and the release. With a
 #: sensor of 0.03 N per axis (``σ_f`` 0.052 N) measured by the tare, a 0.05 N onset read one
-#: press of a synthetic grasp at 1 kHz as 106–116 contacts over six noise seeds (the preset kept)
-#: or 5 (the measured model, the release at 2.5 σ_f); a 3 σ_f floor gave 5; this one gives 1.
+#: press of a synthetic grasp at 1 kHz as 13–26 contacts over six noise seeds (106–116 with the
+#: preset kept); a 3 σ_f floor as 2–5; this one as 1.
 ONSET_FLOOR = 4.5
 #: The release threshold is at least this many ``σ_f``: an untouched sensor's ``|f|`` is below
 #: it 99.97 % of the time.
