@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from softtip.core.fingertip import Fingertip
-from softtip.core.noise import SensorNoise
+from softtip.core.noise import MAD_TO_STD, SensorNoise
 from softtip.core.units import find_unit
 from softtip.errors import InputError
 
@@ -203,7 +203,7 @@ def noise_ratio(quiet: ArrayLike, noise: SensorNoise) -> tuple[float, float] | N
         return None
     step = np.diff(w, axis=0)
     dev = np.abs(step - np.median(step, axis=0))
-    sigma = np.median(dev, axis=0) * 1.4826 / np.sqrt(2.0)
+    sigma = np.median(dev, axis=0) * MAD_TO_STD / np.sqrt(2.0)
     # A quantised sensor repeats its value: the differences take discrete values and their
     # median lands on one of them, a multiple of the quantum (0 from a quantum of 2σ on: the
     # check was then skipped, and a log read in impossible units passed; 0.8–1.8 σ from a

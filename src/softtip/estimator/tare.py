@@ -42,7 +42,7 @@ from numpy.typing import NDArray
 
 from softtip.core._blocks import TIME_EDGE
 from softtip.core.line_fit import MODEL_MARGIN
-from softtip.core.noise import SensorNoise
+from softtip.core.noise import MAD_TO_STD, SensorNoise
 from softtip.errors import InputError
 from softtip.estimator.config import EstimatorConfig
 from softtip.tomlfile import read_toml_table
@@ -98,7 +98,6 @@ NOISE_MIN_SAMPLES = OVERSTATED_MIN_SAMPLES
 #: short tare would be lowered by ``"on"``
 RAISE_MIN_SAMPLES = 10
 _AXES = ("fx", "fy", "fz", "mx", "my", "mz")
-_MAD_TO_STD = 1.482602218505602  # a normal variable's standard deviation over its median absolute deviation
 _CHI2_1_MEDIAN = 0.454936423119572  # the median of a χ²₁: of (x/σ)² for a normal x
 
 
@@ -236,7 +235,7 @@ def successive_ratio(samples: NDArray) -> float:
     if not var > 0.0:
         return math.nan
     ratio = float(np.sum(np.mean(d2, axis=0))) / (2.0 * var)
-    spread = float(np.sum((_MAD_TO_STD * np.median(np.abs(x - np.median(x, axis=0)), axis=0)) ** 2))
+    spread = float(np.sum((MAD_TO_STD * np.median(np.abs(x - np.median(x, axis=0)), axis=0)) ** 2))
     if spread > 0.0:  # (more than half the samples alike on every axis: the mean form alone)
         ratio = min(ratio, float(np.sum(np.median(d2, axis=0))) / _CHI2_1_MEDIAN / (2.0 * spread))
     return ratio
@@ -312,7 +311,7 @@ def tare_from_samples(
     med = np.median(s, axis=0)
     model = np.array(config.noise.force_std + config.noise.moment_std)
     dev = np.abs(s - med)
-    spread = _MAD_TO_STD * np.median(dev, axis=0)
+    spread = MAD_TO_STD * np.median(dev, axis=0)
     scale = np.maximum(np.maximum(model, spread), 1e-12 * (1.0 + np.abs(med)))
     spike = np.any(dev > SPIKE_SIGMAS * scale, axis=1)
     clean = s[~spike]
