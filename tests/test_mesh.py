@@ -186,10 +186,30 @@ def soft_finger_wrench(r, n, tilt_dir, tilt, fmag, sigma):
     return np.concatenate((f, np.cross(r, f) + sigma * n))
 
 
+_ONE_NORMAL: dict = {}
+
+
+def one_normal(tip):
+    """Per vertex, True where all its corners share one normal: no crease and no normal jump
+    (the corner normals are grouped by face, so a vertex at a crease's end can have two)."""
+    key = id(tip)
+    if key not in _ONE_NORMAL:
+        cn = tip.corner_normals.reshape(-1, 3)
+        v = tip.faces.ravel()
+        first = np.zeros((len(tip.vertices), 3))
+        first[v[::-1]] = cn[::-1]  # one corner's normal per vertex
+        agree = np.einsum("ij,ij->i", cn, first[v]) >= 1.0 - 1e-12
+        ok = np.ones(len(tip.vertices), dtype=bool)
+        np.logical_and.at(ok, v, agree)
+        _ONE_NORMAL[key] = ok
+    return _ONE_NORMAL[key]
+
+
 @st.composite
 def mesh_contacts(draw, tip):
     """A contact on the mesh's own surface (flat triangles, interpolated normals), above the base,
-    where the skin is smooth: the normal turns by less than 10° across the triangle. (On the
+    where the skin is smooth: the normal turns by less than 10° across the triangle and is one
+    vector at each of its corners. (On the
     nail's flanks and corners, about 1 mm in radius, the soft-finger equations can have two
     roots a few tens of µm apart; which one the solver finds depends on where it starts.)"""
     face = draw(st.integers(0, len(tip.faces) - 1))
@@ -197,6 +217,9 @@ def mesh_contacts(draw, tip):
     assume(tri[:, 2].min() > 0.002)
     cn = tip.corner_normals[face]
     assume(min(cn[0] @ cn[1], cn[1] @ cn[2], cn[0] @ cn[2]) > math.cos(math.radians(10.0)))
+    # and no corner of it has a second normal in another face: on a rim where the normal jumps
+    # (at a crease, or at a crease's end) every normal between the two is the surface's there
+    assume(one_normal(tip)[tip.faces[face]].all())
     b1 = draw(st.floats(0.0, 1.0))
     b2 = draw(st.floats(0.0, 1.0 - b1))
     b = np.array([1.0 - b1 - b2, b1, b2])
