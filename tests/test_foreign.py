@@ -644,7 +644,7 @@ def test_stream_replays_a_foreign_file_as_estimate_reads_it(tmp_path: Path) -> N
 
 def test_a_wrong_unit_in_the_header_is_said_to_be_the_headers(tmp_path: Path) -> None:
     """The header says N·m, the data are N·mm: the units check names the pair that fits and says that
-    the header, which no option overrides, is what to correct (estimate and a replay alike)."""
+    the file's unit, which no option overrides, is what to correct (estimate and a replay alike)."""
     lines = REFERENCE.read_text().splitlines()
     rows = []
     for ln in lines[1:]:
@@ -656,7 +656,7 @@ def test_a_wrong_unit_in_the_header_is_said_to_be_the_headers(tmp_path: Path) ->
         done = run(*args)
         assert done.returncode == 2, done.stderr
         assert "the data fit forces in N with moments in N·mm" in done.stderr
-        assert "an option cannot override a header's unit: if the data are in another unit, the header is wrong" in done.stderr
+        assert "an option cannot override a unit the file gives: if the data are in another unit, the file is wrong" in done.stderr
     assert not (tmp_path / "o.csv").exists() and not (tmp_path / "r.csv").exists()
 
 

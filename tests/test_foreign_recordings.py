@@ -3,6 +3,8 @@ wrong or refused without a way out (tests/test_foreign.py holds the rest of the 
 
 * a preamble (Net F/T, DAQ F/T exports) before a header whose names need ``--columns``;
 * a units row under the header (``s, N, N, N, N-mm, …``), as LabVIEW-style loggers write it;
+* units stated on lines before the header (``Force Units:,N``, ``Torque Units:,N-mm``), as
+  ATI's DAQ F/T software writes them;
 * a time unit guessed from absolute stamps: the "read as" note says the unit it read.
 
 Each file holds softtip's example grasp (the corpus's SI reference), converted exactly.
@@ -169,6 +171,90 @@ def test_cli_units_row_gives_the_si_estimates(tmp_path: Path) -> None:
     got, want = (np.genfromtxt(p, delimiter=",", names=True, dtype=None, encoding="utf-8") for p in (out, ref))
     assert (got["state"] == want["state"]).all()
     np.testing.assert_allclose(got["rz"], want["rz"], rtol=1e-6, atol=1e-9)
+
+
+# --------------------------------------------------------------------------------------
+# units stated before the header (ATI's DAQ F/T log: "Force Units:,N", "Torque Units:,N-mm")
+
+
+def _stated_units_file(path: Path, force: str, moment: str, *, form: str = "{q} Units:,{u}", delimiter: str = ",",
+                       case=str, n: int | None = None) -> Path:  # fmt: skip
+    units = {u.name: u for u in UNITS}
+    body = _rows(n, force=units[force].si, moment=units[moment].si)
+    preamble = ["ATI DAQ F/T Data Log", "Serial Number:,FT24117",
+                case(form.format(q="Force", u=_SPELLING.get(force, force))),
+                case(form.format(q="Torque", u=_SPELLING.get(moment, moment))), "Sample Rate (Hz):,1000"]  # fmt: skip
+    header = "Time,Fx,Fy,Fz,Tx,Ty,Tz"
+    lines = [*(ln.replace(",", delimiter) for ln in preamble), header.replace(",", delimiter),
+             *(delimiter.join(r) for r in body)]  # fmt: skip
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path
+
+
+def test_units_stated_before_the_header_give_the_units(tmp_path: Path) -> None:
+    path = _stated_units_file(tmp_path / "daq.csv", "N", "N*mm")
+    log = read_log(path)
+    _check(log)
+    (note,) = [n for n in log.notes if "read as" in n]
+    assert "fx ← 'Fx' (N, from line 3)" in note and "mx ← 'Tx' (N·mm, from line 4)" in note, note
+    assert "t ← 'Time' (s, not in the header)" in note
+    assert log.units_in_header == ("Fx", "Fy", "Fz", "Tx", "Ty", "Tz")
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    force=st.sampled_from([u.name for u in UNITS if u.quantity == "force"]),
+    moment=st.sampled_from([u.name for u in UNITS if u.quantity == "moment"]),
+    form=st.sampled_from(["{q} Units:,{u}", "{q} Units,{u}", "{q} units: {u}", "# {q}_unit = {u}", "{q} Units:,,{u},"]),
+    delimiter=st.sampled_from([",", ";", "\t"]),
+    case=st.sampled_from([str, str.upper, str.lower]),
+)
+def test_any_stated_units_read_back(tmp_path_factory, force, moment, form, delimiter, case) -> None:
+    path = tmp_path_factory.mktemp("stated") / "log.csv"
+    _stated_units_file(path, force, moment, form=form, delimiter=delimiter, case=case, n=40)
+    _check(read_log(path), 40)
+
+
+def test_stated_units_that_contradict_the_file_or_an_option_or_are_unknown_are_refused(tmp_path: Path) -> None:
+    path = _stated_units_file(tmp_path / "daq.csv", "N", "N*mm")
+    text = path.read_text()
+    with pytest.raises(InputError, match=r"daq\.csv:4: column 'Tx': line 4 says N·mm but --moment-units .* says N\*m"):
+        read_log(path, moment_units="N*m")
+    assert read_log(path, moment_units="N*mm").moment_unit == "N*mm"  # the option agrees: no error
+    cases = {
+        "counts.csv": (text.replace("Torque Units:,N-mm", "Torque Units:,Counts"),
+                       r"counts\.csv:4: column 'Tx': unknown moment unit 'Counts' in line 4; expected one of"),
+        "header.csv": (text.replace("Tx,", "Tx (N-m),", 1),
+                       r"header\.csv:4: column 'Tx \(N-m\)': this line says N·mm but the header says N·m; expected one unit"),
+        "twice.csv": (text.replace("Sample Rate", "Torque Units:,Nm\nSample Rate"),
+                      r"twice\.csv:5: 'Nm' contradicts 'N-mm' on line 4 for the moment unit; expected one \(--moment-units"),
+    }  # fmt: skip
+    for name, (body, message) in cases.items():
+        (tmp_path / name).write_text(body)
+        with pytest.raises(InputError, match=message):
+            read_log(tmp_path / name)
+    same = tmp_path / "same.csv"  # the header and the line agree: read
+    same.write_text(text.replace("Tx,Ty,Tz", "Tx (N-mm),Ty (N-mm),Tz (N-mm)", 1))
+    _check(read_log(same))
+
+
+def test_cli_reads_an_ati_daq_log_with_its_units_before_the_header(tmp_path: Path) -> None:
+    path = _stated_units_file(tmp_path / "daq.csv", "N", "N*mm")
+    out, ref = tmp_path / "e.csv", tmp_path / "ref.csv"
+    done = subprocess.run([SOFTTIP, "estimate", path, "-o", out], capture_output=True, text=True, timeout=180)
+    assert done.returncode == 0, done.stderr
+    assert "mx ← 'Tx' (N·mm, from line 4)" in done.stderr
+    assert subprocess.run([SOFTTIP, "estimate", REFERENCE, "-o", ref], capture_output=True, timeout=180).returncode == 0
+    got, want = (np.genfromtxt(p, delimiter=",", names=True, dtype=None, encoding="utf-8") for p in (out, ref))
+    assert (got["state"] == want["state"]).all()
+    np.testing.assert_allclose(got["rz"], want["rz"], rtol=1e-6, atol=1e-9)
+    # the line is wrong (it says N·m, the data are in N·mm): the unit check stops the run and
+    # names where the unit came from, and nothing is written
+    wrong = tmp_path / "wrong.csv"
+    wrong.write_text(path.read_text().replace("Torque Units:,N-mm", "Torque Units:,N-m"))
+    done = subprocess.run([SOFTTIP, "estimate", wrong, "-o", tmp_path / "w.csv"], capture_output=True, text=True, timeout=180)
+    assert done.returncode == 2, done.stderr
+    assert "a line before the header" in done.stderr and not (tmp_path / "w.csv").exists()
 
 
 # --------------------------------------------------------------------------------------

@@ -325,8 +325,9 @@ def check_units(est, fingertip, config: EstimatorConfig, log, source: str | None
         if not given:
             raise
         raise InputError(
-            f"{exc}. The header gives the units of {', '.join(map(repr, given))}, and an option cannot override a "
-            "header's unit: if the data are in another unit, the header is wrong; correct it in the file"
+            f"{exc}. The file gives the units of {', '.join(map(repr, given))} (its header, a units row or a line "
+            "before the header such as 'Torque Units,N-mm'), and an option cannot override a unit the file gives: if "
+            "the data are in another unit, the file is wrong; correct it"
         ) from None
 
 

@@ -236,6 +236,9 @@ class ColumnMap:
         The line of a row of units under the header, 0 without one.
     row_units : frozenset of str
         The roles whose unit that row gave.
+    stated_on : dict of str to int
+        Role → the line before the header that stated its quantity's unit (``Torque Units,N-mm``
+        in an ATI log's preamble).
     """
 
     index: dict[str, int]
@@ -244,6 +247,7 @@ class ColumnMap:
     source: str
     units_row: int = 0
     row_units: frozenset[str] = frozenset()
+    stated_on: dict[str, int] = field(default_factory=dict)
 
     def native(self, names: Sequence[str]) -> bool:
         """Whether this is softtip's own layout: columns named exactly ``t, fx … mz``, SI, no unit in the header."""
@@ -263,6 +267,8 @@ class ColumnMap:
                 how = "" if self.from_header[role] else ", not in the header"
                 if role in self.row_units:
                     how = f", from the units row on line {self.units_row}"
+                elif role in self.stated_on:
+                    how = f", from line {self.stated_on[role]}"
                 parts.append(f"{role} ← {names[self.index[role]]!r} ({unit.label}{how})")
         return ", ".join(parts)
 

@@ -162,7 +162,8 @@ class Log:
     force_unit, moment_unit : str
         The units the wrench columns were in (names of :data:`softtip.core.units.UNITS`).
     units_in_header : tuple of str
-        The wrench columns whose unit the header (or a row of units under it) gave.
+        The wrench columns whose unit the file gave: the header, a row of units under it, or a
+        line before it (``Torque Units,N-mm``).
     time_suspect : str or None
         The warning about ``t``'s scale when its unit was not given and another one fits
         (``t`` in ms read as s): a command line tool stops with it (``--time-units``).
@@ -855,6 +856,7 @@ def _read_header(text: str, source: str, fmt: LogFormat | None = None) -> _Heade
     if cmap is not None:
         cmap = _units_row(names, cmap, lines, fmt, source, data_base + 1, delimiter)
         data_base += bool(cmap.units_row)
+        cmap = _stated_units(names, cmap, comments, fmt, source)
     decimal = _sniff_decimal(text, lines.tell(), delimiter)
     return _Header(names=names, line=lineno, data_base=data_base, lines=lines, comments=comments,
                    delimiter=delimiter, decimal=decimal, cmap=cmap, preamble=preamble)  # fmt: skip
@@ -894,6 +896,56 @@ def _units_row(names: list[str], cmap: ColumnMap, lines: io.StringIO, fmt: LogFo
             )
         units[role], from_header[role] = unit, True
     return replace(cmap, units=units, from_header=from_header, units_row=line, row_units=frozenset(found))
+
+
+# A line before the header that states a quantity's unit: ``Force Units,N`` or ``Torque
+# Units:,N-mm`` (ATI's DAQ F/T and Net F/T logs), ``# time unit: ms``.
+_STATED_UNIT = re.compile(
+    r"^#?\s*(force|torque|moment|time)[\s_-]*units?\s*[:=]?\s*(?:[,;\t]\s*)*([^,;\t]*?)[\s,;\t]*$", re.IGNORECASE
+)
+
+
+def _stated_units(names: list[str], cmap: ColumnMap, comments: list[tuple[int, str]], fmt: LogFormat,
+                  source: str) -> ColumnMap:  # fmt: skip
+    """The units lines before the header state (see :data:`_STATED_UNIT`) read into the column
+    map for the columns whose header gives none; a unit there that is no such unit, that
+    contradicts the header's, the units row's, an option or another such line, is an error
+    naming the line."""
+    stated: dict[str, tuple[int, str]] = {}
+    for line, text in comments:
+        match = _STATED_UNIT.match(text)
+        if match is None or not match[2]:
+            continue
+        quantity = "moment" if match[1].lower() in ("torque", "moment") else match[1].lower()
+        if quantity in stated and stated[quantity][1] != match[2]:
+            raise InputError(
+                f"{source}:{line}: {match[2]!r} contradicts {stated[quantity][1]!r} on line {stated[quantity][0]} "
+                f"for the {quantity} unit; expected one (--{quantity}-units says which)"
+            )
+        stated[quantity] = (line, match[2])
+    if not stated:
+        return cmap
+    units, from_header, stated_on = dict(cmap.units), dict(cmap.from_header), {}
+    for role in (*ROLES, "nanosec"):
+        quantity = ROLE_QUANTITY[role]
+        if role not in cmap.index or quantity not in stated or role == "nanosec":
+            continue
+        line, text = stated[quantity]
+        column = names[cmap.index[role]]
+        try:
+            unit = stated_unit(text, quantity, fmt.unit_option(quantity), column, f"line {line}")
+        except ColumnError as exc:
+            raise InputError(f"{source}:{line}: {exc}") from None
+        if from_header[role]:
+            if units[role] is not unit:
+                where = f"the units row on line {cmap.units_row}" if role in cmap.row_units else "the header"
+                raise InputError(
+                    f"{source}:{line}: column {column!r}: this line says {unit.label} but {where} says "
+                    f"{units[role].label}; expected one unit per column"
+                )
+            continue
+        units[role], from_header[role], stated_on[role] = unit, True, line
+    return replace(cmap, units=units, from_header=from_header, stated_on=stated_on)
 
 
 def _sniff_decimal(text: str, pos: int, delimiter: str) -> str:
