@@ -394,9 +394,12 @@ def _report_run(
     from softtip.estimator.summary import format_summary
 
     targets = [p for p in (output, to_bag, rerun_save) if p is not None] or ["standard output"]
-    summary = ", ".join(
-        f"{v} {k}" + (f" ({totals.confirmed} confirmed)" if k == "line" else "") for k, v in totals.counts.items()
-    )
+    # "confirmed" is a term of art: the summary says what it needs, for a reader without --help
+    confirmed = (
+        f" ({totals.confirmed} confirmed by a load turned about two axes)" if totals.confirmed
+        else " (none confirmed: the load never turned about two axes while h stayed on one)"
+    )  # fmt: skip
+    summary = ", ".join(f"{v} {k}" + (confirmed if k == "line" and v else "") for k, v in totals.counts.items())
     click.echo(
         f"softtip: {totals.n} samples ({summary}; {totals.n_contacts} contact(s)) -> {', '.join(map(str, targets))}",
         err=True,
