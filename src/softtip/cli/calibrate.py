@@ -18,7 +18,7 @@ from softtip.cli.options import (
 from softtip.cli.types import Length, Number, option
 from softtip.core.fingertip import SHAPES
 from softtip.core.fullscale import check_full_scale
-from softtip.core.noise import NANO17
+from softtip.core.noise import NANO17, NOISE_PRESETS
 from softtip.core.units import UNIT_SYSTEMS
 from softtip.errors import InputError
 from softtip.io.atomic import write_stdout
@@ -102,7 +102,7 @@ capsule's offset of its axis from the sensor's z axis is its axis_offset.
 @option("--rotation", is_flag=True, help="--shape mesh: fit a small rotation as well as the shift (6 DOF).")
 @option("--force-noise", type=Number("N", 0.0, MAX_FORCE_NOISE, min_open=True), default=NANO17.force_std[0], show_default=True, metavar="N", help="Per-axis standard deviation of the sensor's force noise, N (Nano17-class default).")
 @option("--moment-noise", type=Number("N·mm", 0.0, MAX_MOMENT_NOISE_NMM, min_open=True), default=NANO17.moment_std[0] * 1e3, show_default=True, metavar="N·mm", help="Per-axis standard deviation of the sensor's moment noise, N·mm.")
-@option("--sensor", type=click.Choice(["nano17", "nano25", "mini40"]), help="The sensor's noise preset for --force-noise and --moment-noise where they are not given. [default: nano17]")
+@option("--sensor", type=click.Choice(list(NOISE_PRESETS)), help="The sensor's noise preset for --force-noise and --moment-noise where they are not given. [default: nano17]")
 @option(
     "--skin-thickness", type=Length("mm", 0.0, min_open=True), metavar="LENGTH",
     help="Thickness of the fingertip's soft skin (5mm; a bare number is in mm), written into the fingertip file: "

@@ -26,7 +26,7 @@ from softtip.cli.types import (
 )  # fmt: skip
 from softtip.core.fingertip import PRESETS, SHAPES, Fingertip
 from softtip.core.fullscale import DEFAULT_SENSOR, SENSOR_RANGES, FullScale, parse_full_scale
-from softtip.core.noise import NANO17, SensorNoise
+from softtip.core.noise import NANO17, NOISE_PRESETS, SensorNoise
 from softtip.errors import InputError
 from softtip.estimator import EstimatorConfig
 from softtip.estimator.depth import asked_skin_law
@@ -135,9 +135,10 @@ _COMPOSITE_OPTIONS = {
     "noise": [
         option(
             "--sensor",
-            type=click.Choice(["nano17", "nano25", "mini40"]),
+            type=click.Choice(list(NOISE_PRESETS)),
             help="The sensor's noise preset (ATI Nano17, Nano25, Mini40 class; per axis, fz apart) for --force-noise "
-            "and --moment-noise where they are not given. [default: nano17]",
+            "and --moment-noise where they are not given. Another sensor (a Mini45, Gamma, Axia80 of --full-scale): "
+            "give its noise, or let the tare measure it (--noise-from-tare on). [default: nano17]",
         ),
         option(
             "--force-noise",
@@ -281,8 +282,6 @@ def print_log_notes(log, quiet: bool = False) -> None:
 def sensor_noise(sensor: str | None, force_noise: float, moment_noise_nmm: float) -> SensorNoise:
     """The noise model of ``--sensor`` and ``--force-noise`` (N) / ``--moment-noise`` (N·mm): an option given on
     the command line wins for its quantity, the preset (per axis) gives the rest."""
-    from softtip.core.noise import SENSOR_CLASSES
-
     explicit = {"force_noise": True, "moment_noise": True}
     ctx = click.get_current_context(silent=True)
     if ctx is not None:
@@ -295,7 +294,7 @@ def sensor_noise(sensor: str | None, force_noise: float, moment_noise_nmm: float
     given = SensorNoise((force_noise,) * 3, (moment_noise_nmm * 1e-3,) * 3)
     if sensor is None:
         return given
-    preset = SENSOR_CLASSES[{"nano17": "Nano17", "nano25": "Nano25", "mini40": "Mini40"}[sensor]]
+    preset = NOISE_PRESETS[sensor]
     return SensorNoise(
         given.force_std if explicit["force_noise"] else preset.force_std,
         given.moment_std if explicit["moment_noise"] else preset.moment_std,

@@ -29,7 +29,7 @@ from softtip.core._xp import NP
 from softtip.core.spin import angle_kernel, direction_kernel, tangent_frame_kernel
 
 __all__ = [
-    "SensorNoise", "NANO17", "NANO25", "MINI40", "SENSOR_CLASSES", "MAD_TO_STD", "tangential_spin_torque_std",
+    "SensorNoise", "NANO17", "NANO25", "MINI40", "SENSOR_CLASSES", "NOISE_PRESETS", "MAD_TO_STD", "tangential_spin_torque_std",
     "direction_angle_std",
 ]  # fmt: skip
 
@@ -85,6 +85,8 @@ NANO25 = SensorNoise(force_std=(1 / 48, 1 / 48, 1 / 16), moment_std=(1 / 1320, 1
 MINI40 = SensorNoise(force_std=(1 / 100, 1 / 100, 1 / 50), moment_std=(1 / 4000, 1 / 4000, 1 / 4000))
 #: The presets by name.
 SENSOR_CLASSES = {"Nano17": NANO17, "Nano25": NANO25, "Mini40": MINI40}
+#: The presets by the name ``--sensor`` and the ROS parameter ``sensor`` take: the one list of them.
+NOISE_PRESETS = {name.lower(): preset for name, preset in SENSOR_CLASSES.items()}
 #: A normal variable's standard deviation over its median absolute deviation (1 / Φ⁻¹(3/4)):
 #: the robust spreads of the tare and of the unit check.
 MAD_TO_STD = 1.482602218505602

@@ -22,7 +22,7 @@ from __future__ import annotations
 import re
 from typing import Any
 
-from softtip.core.noise import SENSOR_CLASSES, SensorNoise
+from softtip.core.noise import NOISE_PRESETS, SensorNoise
 from softtip.estimator import EstimatorConfig
 from softtip.estimator.settings import Setting, range_text, settings_of
 
@@ -41,12 +41,11 @@ NODE_PARAMETERS: dict[str, tuple[Any, str]] = {
 #: The parameters of the composite settings (:attr:`Setting.options`, the ``softtip`` options'
 #: names): the noise preset and per-axis overrides, the bias file.
 COMPOSITE_PARAMETERS: dict[str, tuple[Any, str]] = {
-    "sensor": ("nano17", "noise preset: nano17, nano25 or mini40 (ATI class, per axis)"),
+    "sensor": ("nano17", f"noise preset: {', '.join(NOISE_PRESETS)} (ATI class, per axis)"),
     "force_noise": (0.0, "N per axis; 0: the sensor preset's"),
     "moment_noise": (0.0, "N·m per axis; 0: the sensor preset's"),
     "bias": ("", "bias TOML file (softtip estimate --save-bias) to subtract instead of taring; \"\": tare"),
 }
-_SENSORS = {"nano17": "Nano17", "nano25": "Nano25", "mini40": "Mini40"}
 
 
 def _ros_default(s: Setting) -> Any:
@@ -214,9 +213,9 @@ def config_from_parameters(params: dict[str, Any], tip=None) -> EstimatorConfig:
     force_noise, moment_noise = _number("force_noise", p["force_noise"]), _number("moment_noise", p["moment_noise"])
     if force_noise < 0 or moment_noise < 0:
         raise ValueError("force_noise and moment_noise must be non-negative (0: the sensor preset's)")
-    if p["sensor"] not in _SENSORS:
-        raise ValueError(f"sensor must be one of {', '.join(_SENSORS)}, got {p['sensor']!r}")
-    preset = SENSOR_CLASSES[_SENSORS[p["sensor"]]]
+    if p["sensor"] not in NOISE_PRESETS:
+        raise ValueError(f"sensor must be one of {', '.join(NOISE_PRESETS)}, got {p['sensor']!r}")
+    preset = NOISE_PRESETS[p["sensor"]]
     noise = SensorNoise(
         force_std=(force_noise,) * 3 if force_noise > 0 else preset.force_std,
         moment_std=(moment_noise,) * 3 if moment_noise > 0 else preset.moment_std,
