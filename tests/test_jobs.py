@@ -103,6 +103,32 @@ def test_a_wrong_latch_guess_is_estimated_again(monkeypatch, guess: bool) -> Non
         _same(ea, eb, f"piece {k}")
 
 
+@pytest.mark.parametrize("jobs", [1, 2])
+@pytest.mark.parametrize("guess", [None, True, False])
+def test_after_runs_on_each_piece_as_handed_out(monkeypatch, jobs: int, guess: bool | None) -> None:
+    """``after`` of each piece is its result on the estimates handed out, on a wrongly guessed
+    piece too (done again with them), on the pool's threads when there are some."""
+    t, w = _log(seed=9, presses=8)
+    config = EstimatorConfig(relatch_distance=1e-3)
+    if guess is not None:
+        monkeypatch.setattr(chunked._LatchGuess, "next", lambda self: guess)
+    where = set()
+
+    def after(est):
+        import threading
+
+        where.add(threading.current_thread().name.split("_")[0])
+        return float(np.nansum(est.angle)), int(est.relatched.sum()), len(est)
+
+    pieces = list(estimate_pieces(_blocks(t, w, 41), "murakami2006", config, 70, jobs=jobs, after=after))
+    plain = _pieces(t, w, config, 70, 1)
+    assert len(pieces) == len(plain) > 3
+    for k, ((est, extra, done), (ref, _)) in enumerate(zip(pieces, plain)):
+        _same(est, ref, f"piece {k}")
+        _same(done, (float(np.nansum(ref.angle)), int(ref.relatched.sum()), len(ref)), f"piece {k} after")
+    assert ("softtip-piece" in where) == (jobs > 1)
+
+
 def _threads(prefix: str) -> list:
     import threading
 

@@ -63,7 +63,8 @@ def estimate_pieces(
     rows: int = DEFAULT_PIECE_ROWS,
     *,
     jobs: int = 1,
-) -> Iterator[tuple[Estimates, dict[str, Any]]]:
+    after: Callable[[Estimates], Any] | None = None,
+) -> Iterator[tuple[Any, ...]]:
     """Estimate a log given block by block; yield each piece's estimates and extra columns.
 
     Parameters
@@ -81,12 +82,15 @@ def estimate_pieces(
         the other; more: besides them a thread reads and cuts the log). The pieces, and every
         bit of them, are those of ``jobs=1`` (see the module's notes); up to ``jobs + 3``
         pieces are held in memory at once (started, being read, and the caller's).
+    after : callable, optional
+        Work on each piece's estimates to do on the thread that estimated it (a command's
+        summaries and checks), so that it too runs in parallel; its result is yielded third.
 
     Yields
     ------
-    (Estimates, dict)
-        A piece's estimates (``contact_id`` counts on across pieces) and its rows of the
-        extra columns.
+    (Estimates, dict) or (Estimates, dict, result)
+        A piece's estimates (``contact_id`` counts on across pieces), its rows of the extra
+        columns, and ``after(estimates)`` when ``after`` is given.
     """
     if rows < 1:
         raise ValueError(f"rows = {rows}; expected at least 1")
@@ -95,10 +99,12 @@ def estimate_pieces(
     tip = load_fingertip(tip)
     config = resolve_depth(config or EstimatorConfig(), tip)
     if jobs > 1:
-        yield from _parallel_pieces(blocks, tip, config, rows, jobs)
+        for est, done, extra in _parallel_pieces(blocks, tip, config, rows, jobs, after):
+            yield (est, extra) if after is None else (est, extra, done)
         return
     carry = Carry()
-    yield from _split(blocks, config, rows, carry, lambda t, w, cfg, stages: _estimate(t, w, tip, cfg, carry, stages))
+    for est, extra in _split(blocks, config, rows, carry, lambda t, w, cfg, stages: _estimate(t, w, tip, cfg, carry, stages)):
+        yield (est, extra) if after is None else (est, extra, after(est))
 
 
 def _split(
@@ -156,9 +162,11 @@ def _joined(parts: list[NDArray]) -> NDArray:
 
 
 def _parallel_pieces(
-    blocks: Iterable[Block], tip: Fingertip, config: EstimatorConfig, rows: int, jobs: int
-) -> Iterator[tuple[Estimates, dict[str, Any]]]:
-    """:func:`estimate_pieces` on threads: the same pieces, the same bits.
+    blocks: Iterable[Block], tip: Fingertip, config: EstimatorConfig, rows: int, jobs: int,
+    after: Callable[[Estimates], Any] | None = None,
+) -> Iterator[tuple[Estimates, Any, dict[str, Any]]]:
+    """:func:`estimate_pieces` on threads: the same pieces, the same bits; each piece's
+    estimates, ``after`` of them (None without it) and its extra columns.
 
     A thread of its own reads ``blocks`` and finds the cuts with the sequential stages (tare,
     low-pass, contact tracking, a small part of the work: :func:`_split`), which brings the
@@ -186,7 +194,7 @@ def _parallel_pieces(
     def start(t: NDArray, w: NDArray, cfg: EstimatorConfig, stages: _Sequential) -> _Sent:
         before = copy.deepcopy(carry)  # (not yet brought past the piece: _split does that after)
         before.had_latch = guess.next()
-        future = pool.submit(_estimate_piece, t, w, tip, cfg, copy.deepcopy(before), stages)
+        future = pool.submit(_estimate_piece, t, w, tip, cfg, copy.deepcopy(before), stages, after)
         counted = carry.track.count if carry.track is not None else 0
         sent = _Sent(future, t, w, cfg, before, stages.ct.state.count - counted)
         guess.sent(sent.contacts)
@@ -220,11 +228,12 @@ def _parallel_pieces(
             if isinstance(item, _Failed):
                 raise item.error
             sent, extra = item
-            est, had_latch = sent.future.result()
+            est, had_latch, done = sent.future.result()
             if sent.before.had_latch != guess.had_latch:  # guessed wrong: again with the flag now known
                 est, had_latch = _estimate_again(sent, tip, guess.had_latch)
+                done = after(est) if after is not None else None
             guess.back(had_latch, sent.contacts)
-            yield est, extra
+            yield est, done, extra
     finally:  # the end, an error, a signal, a consumer that stops: nothing more is read or started
         stop.set()
         pool.shutdown(wait=False, cancel_futures=True)
@@ -254,11 +263,12 @@ class _Sent:
 
 
 def _estimate_piece(t: NDArray, w: NDArray, tip: Fingertip, config: EstimatorConfig, carry: Carry,
-                    stages: _Sequential) -> tuple[Estimates, bool]:  # fmt: skip
+                    stages: _Sequential, after: Callable[[Estimates], Any] | None) -> tuple[Estimates, bool, Any]:  # fmt: skip
     """On a thread of the pool: a piece's estimates from its sequential stages and ``carry``'s
-    ``had_latch``, and whether a contact latched by its end."""
+    ``had_latch``, whether a contact latched by its end, and ``after`` of the estimates (None
+    without it; of estimates started with the wrong ``had_latch`` too, then done again)."""
     est = _estimate(t, w, tip, config, carry, stages)
-    return est, carry.had_latch
+    return est, carry.had_latch, after(est) if after is not None else None
 
 
 def _estimate_again(sent: _Sent, tip: Fingertip, had_latch: bool) -> tuple[Estimates, bool]:

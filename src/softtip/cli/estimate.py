@@ -533,16 +533,21 @@ def _estimate_in_pieces(
             sent[0] += n if output is None else 0
             bar.update(n)
 
+        def after(est) -> tuple:
+            """A piece's units-check distances and contact summaries: on the thread that estimated
+            it (with --jobs, in parallel: in the caller's they were a third of its work)."""
+            distances = lever_distances(est.wrench[~est.taring], max(0.1, config.contact_threshold))
+            return distances, summarise_contacts(est) if not quiet else []
+
         def run(out) -> None:
-            pieces = estimate_pieces(checked(), fingertip, config, rows, jobs=jobs)
+            pieces = estimate_pieces(checked(), fingertip, config, rows, jobs=jobs, after=after)
             try:
                 with TableWriter(out, format=fmt, metadata=parquet_metadata(fingertip, tip, output_units, blocks),
                                  threads=jobs) as writer:  # fmt: skip
-                    for k, (est, extra) in enumerate(pieces):
+                    for k, (est, extra, (distances, contacts)) in enumerate(pieces):
                         if k == 0:
                             noise_fits(est)
                             _start_pair_votes(pair_votes, first_ratio, vote.limit, blocks.units, est, first_wrench[0], config)
-                        distances = lever_distances(est.wrench[~est.taring], max(0.1, config.contact_threshold))
                         vote.add(distances)
                         for pair_vote in pair_votes.values():
                             pair_vote.add(distances)
@@ -551,7 +556,7 @@ def _estimate_in_pieces(
                         names.setdefault("extra", list(extra))
                         began[0] = output is None  # from here standard output may hold a part of the table
                         writer.write(columns, progress=written)
-                        totals.add(est, summarise_contacts(est) if not quiet else [])
+                        totals.add(est, contacts)
             finally:
                 pieces.close()  # with --jobs, no piece is read or started from now (an error, a signal)
             if vote.n >= 5 and vote.median_above():

@@ -577,8 +577,11 @@ class _ColumnarFile:
         if fmt == "parquet":
             import pyarrow.parquet as pq
 
-            # ParquetFile, not read_table: the latter imports pyarrow.dataset (~0.2 s) for nothing here
-            self._file: Any = pq.ParquetFile(path)
+            # ParquetFile, not read_table: the latter imports pyarrow.dataset (~0.2 s) for nothing here.
+            # Memory-mapped: the column chunks are read in place from the page cache, where reading
+            # them copies each into fresh memory whose first touch the kernel zeroes (1e7 rows:
+            # 0.43 s of CPU against 0.48-0.92 s, three fresh processes each)
+            self._file: Any = pq.ParquetFile(path, memory_map=True)
             self.schema = self._file.schema_arrow
             self.num_rows = int(self._file.metadata.num_rows)
         else:
