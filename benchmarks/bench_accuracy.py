@@ -707,8 +707,10 @@ def friction_section(seed: int = 1, angles=(0.0, 30.0, -45.0)) -> None:
     push = [c for c in cases if c[2] != "slip" and c[3] <= 0.5]
     err = np.array([c[0] for c in push])
     for i, label in enumerate(("papers' method", "fixed law", "online (default)", "true depth (oracle)")):
+        blind = int(np.count_nonzero(np.isnan(err[:, i])))  # no line sample: no direction to count
+        none = f", {blind} of them with no direction (no line sample)" if blind else ""
         print(f"{label}: median {np.nanmedian(err[:, i]):.1f}°, worst {np.nanmax(err[:, i]):.1f}° over {len(push)} grasps "
-              f"(push and drag, plates, cylinders, wedges)")  # fmt: skip
+              f"(push and drag, plates, cylinders, wedges){none}")  # fmt: skip
     print(f"online depth within its std of the truth (in most held samples): {np.mean([c[1] for c in cases]):.0%} "
           f"of {len(cases)} grasps (slips included)")
 

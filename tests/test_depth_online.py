@@ -244,6 +244,37 @@ def test_without_tangential_load_the_default_equals_the_papers_method():
     assert np.max(np.linalg.norm(papers.point[both] - online.point[both], axis=1)) == 0.0
 
 
+def test_the_priors_uncertainty_is_in_h_std(rng):
+    """A point pushed by a rigid object with friction at the surface (hand-made data: no depth
+    at all): while the depth is the skin law's, ± its standard deviation, the moment it adds
+    (0.9 mm × 1 N) is within h's uncertainty and the contact reads `point`, as with the depth
+    compensation off; h_std is the noise's and the depth's, ``sqrt(h_std₀² + δ_std² |n × f|²)``."""
+    fs = 1000.0
+    t = np.arange(int(3.0 * fs)) / fs
+    th, ph = math.radians(30.0), math.radians(60.0)
+    r = np.array([0.0, 0.0, 0.020]) + 0.016 * np.array([math.sin(th) * math.cos(ph), math.sin(th) * math.sin(ph), math.cos(th)])
+    s = np.clip((t - 0.3) / 1.0, 0.0, 1.0)
+    f = np.zeros((len(t), 3))
+    f[:, 2] = -2.0 * s * s * (3 - 2 * s)  # straight down: 1 N along the skin at the point, 30° off its normal
+    w = np.hstack((f, np.cross(r, f))) + rng.normal(scale=[*NANO17.force_std, *NANO17.moment_std], size=(len(t), 6))
+    est = estimate(t, w, TIP, EstimatorConfig(noise_from_tare="off"))  # the model as given, for the identity below
+    prior = (est.state != 0) & ~est.depth_from_data & (est.depth > 0.5e-3)
+    assert prior.sum() > 300  # the law's depth (up to 0.9 mm) with its std, for the rest of the ramp and after
+    assert not np.any(est.state == 2), np.unique(est.state, return_counts=True)
+    off = estimate(t, w, TIP, EstimatorConfig(depth_compensation="off"))
+    assert not np.any(off.state == 2)
+    # the depth's part of h_std, to rounding: the noise's h_std at the same point (depth_std 0)
+    from softtip.estimator.measure import measure
+
+    i = np.flatnonzero(prior)
+    e = est.point[i] - est.depth[i, None] * est.normal[i]
+    x = est.wrench[i]
+    base = measure(*x.T, *e.T, *est.normal[i].T, NANO17, 3.0, 5e-4, None, NP).h_std
+    ft2 = np.sum(np.cross(est.normal[i], x[:, :3]) ** 2, axis=1)
+    np.testing.assert_allclose(est.h_std[i] ** 2, base**2 + est.depth_std[i] ** 2 * ft2, rtol=1e-9)
+    assert np.median(est.h_std[i] / base) > 1.5
+
+
 # -- CLI --------------------------------------------------------------------------------
 
 

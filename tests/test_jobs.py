@@ -123,7 +123,7 @@ def test_after_runs_on_each_piece_as_handed_out(monkeypatch, jobs: int, guess: b
     pieces = list(estimate_pieces(_blocks(t, w, 41), "murakami2006", config, 70, jobs=jobs, after=after))
     plain = _pieces(t, w, config, 70, 1)
     assert len(pieces) == len(plain) > 3
-    for k, ((est, extra, done), (ref, _)) in enumerate(zip(pieces, plain)):
+    for k, ((est, _extra, done), (ref, _)) in enumerate(zip(pieces, plain)):
         _same(est, ref, f"piece {k}")
         _same(done, (float(np.nansum(ref.angle)), int(ref.relatched.sum()), len(ref)), f"piece {k} after")
     assert ("softtip-piece" in where) == (jobs > 1)

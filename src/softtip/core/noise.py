@@ -130,15 +130,16 @@ def h_std_kernel(rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, sfx, sfy, sfz, smx, s
     """``sqrt(trace Σ_h)`` component-wise, from any orthonormal tangent frame ``(e1, e2)`` and the
     noise's variances (:func:`noise_variances`)."""
     m1, m2 = noise_moment_part(e1x, e1y, e1z, smx, smy, smz), noise_moment_part(e2x, e2y, e2z, smx, smy, smz)
-    return h_std_parts_kernel(m1, m2, rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, sfx, sfy, sfz, xp)
+    return h_std_parts_kernel(m1, m2, rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, sfx, sfy, sfz, 0.0, xp)
 
 
 @jitable
-def h_std_parts_kernel(m1, m2, rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, sfx, sfy, sfz, xp):
+def h_std_parts_kernel(m1, m2, rx, ry, rz, e1x, e1y, e1z, e2x, e2y, e2z, sfx, sfy, sfz, extra, xp):
     """:func:`h_std_kernel` given the moment-noise parts ``m1``, ``m2`` of the frame
-    (:func:`noise_moment_part`, which a stream keeps while a contact point is held)."""
+    (:func:`noise_moment_part`, which a stream keeps while a contact point is held), with
+    ``extra`` (N²·m²) added to ``trace Σ_h`` (the uncertain depth's part: :func:`~softtip.estimator.measure.measure_kernel`)."""
     v1 = noise_quad_from(m1, e1x, e1y, e1z, rx, ry, rz, sfx, sfy, sfz)
-    return xp.sqrt(v1 + noise_quad_from(m2, e2x, e2y, e2z, rx, ry, rz, sfx, sfy, sfz))
+    return xp.sqrt(v1 + noise_quad_from(m2, e2x, e2y, e2z, rx, ry, rz, sfx, sfy, sfz) + extra)
 
 
 @jitable

@@ -311,11 +311,11 @@ def _staged_columns(t, ct, taring, tip: Fingertip, config: EstimatorConfig, nois
         # taken about the point moved by the depth here, not by a law in measure)
         h = np.empty((n, 3))
         ms = Measurement(*blockwise(
-            lambda fx, fy, fz, mx, my, mz, px, py, pz, nx, ny, nz, d: measure(
+            lambda fx, fy, fz, mx, my, mz, px, py, pz, nx, ny, nz, d, d_std: measure(
                 fx, fy, fz, mx, my, mz, px - d * nx, py - d * ny, pz - d * nz, nx, ny, nz,
-                noise, config.h_sigmas, config.h_min, None, NP,
+                noise, config.h_sigmas, config.h_min, None, NP, d_std,
             )[:-1],
-            (*c, *point.T, *normal.T, delta),
+            (*c, *point.T, *normal.T, delta, delta_std),
             out=(None, *h.T) + (None,) * 9,
         ), None)  # fmt: skip
 

@@ -115,7 +115,7 @@ COLUMNS: tuple[Column, ...] = (
           "edge_direction", "vector"),
     Column("angle_deg", "deg", "float64", "the direction's angle in the tangent frame, in (-90, 90], at the tip from the sensor x "
            "axis; manual §3.4", "evidence", "angle"),
-    Column("h_std", "N·m", "float64", "noise standard deviation of h", "measure", "h_std"),
+    Column("h_std", "N·m", "float64", "standard deviation of h: the sensor noise's and the depth's", "measure", "h_std"),
     Column("angle_std_deg", "deg", "float64", "standard deviation of the angle", "evidence", "angle_std", topic="angle_std",
            field="data"),
     Column("angle_noise_std_deg", "deg", "float64", "the sensor noise's share of angle_std_deg; the rest, "

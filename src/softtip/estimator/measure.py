@@ -47,32 +47,39 @@ class Measurement(NamedTuple):
 
 @jitable
 def measure_kernel(fx, fy, fz, mx, my, mz, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z, m1, m2,
-                   sfx, sfy, sfz, xp):  # fmt: skip
+                   sfx, sfy, sfz, depth_var, xp):  # fmt: skip
     """The measurement about the point ``e`` (m) where the load acts, at the unit normal ``n``:
     ``(σ, hx, hy, hz, |h|, h_std)``, N·m.
 
-    ``q = m − e × f``, ``σ = q · n``, ``h = q − σ n`` and ``h``'s noise level
-    ``sqrt(trace Σ_h)`` in the tangent frame ``(e1, e2)``, whose moment-noise parts ``m1``, ``m2``
-    (:func:`~softtip.core.noise.noise_moment_part`) depend on the normal alone (a stream or a
-    compiled loop keeps them while the normal holds); ``sf*`` the force variances, N². The one
-    composition of the stage: :func:`measure` (arrays), the stream (floats) and the batch's
-    compiled loop (:mod:`softtip.estimator.pipeline`) call it.
+    ``q = m − e × f``, ``σ = q · n``, ``h = q − σ n`` and ``h``'s uncertainty
+    ``sqrt(trace Σ_h)`` in the tangent frame ``(e1, e2)``: the sensor noise's, whose moment
+    parts ``m1``, ``m2`` (:func:`~softtip.core.noise.noise_moment_part`) depend on the normal
+    alone (a stream or a compiled loop keeps them while the normal holds; ``sf*`` the force
+    variances, N²), and the depth's: ``e = r − δ n`` with ``δ`` known to a variance
+    ``depth_var`` (m²) moves ``h`` by ``δ n × f``, of variance ``depth_var · |n × f|²`` (a
+    depth from the skin's law before the data give one: a tangential load on a tip whose
+    friction acts elsewhere then does not read as a line). The one composition of the stage:
+    :func:`measure` (arrays), the stream (floats) and the batch's compiled loop
+    (:mod:`softtip.estimator.pipeline`) call it.
     """
     qx, qy, qz = spin_torque_kernel(fx, fy, fz, mx, my, mz, ex, ey, ez)
     sigma, hx, hy, hz = tangential_kernel(qx, qy, qz, nx, ny, nz)
     hn = xp.sqrt(hx * hx + hy * hy + hz * hz)
-    h_std = h_std_parts_kernel(m1, m2, ex, ey, ez, e1x, e1y, e1z, e2x, e2y, e2z, sfx, sfy, sfz, xp)
+    fn = fx * nx + fy * ny + fz * nz
+    tangential2 = xp.maximum(fx * fx + fy * fy + fz * fz - fn * fn, 0.0)  # |n × f|²
+    h_std = h_std_parts_kernel(m1, m2, ex, ey, ez, e1x, e1y, e1z, e2x, e2y, e2z, sfx, sfy, sfz, depth_var * tangential2, xp)
     return sigma, hx, hy, hz, hn, h_std
 
 
 def measure(
     fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz,
-    noise: SensorNoise, h_sigmas: float, h_min: float, law: DepthLaw | None, xp,
+    noise: SensorNoise, h_sigmas: float, h_min: float, law: DepthLaw | None, xp, depth_std=0.0,
 ) -> Measurement:  # fmt: skip
     """Spin torque, ``h``, noise, direction and the line test for a contact point ``r``
     with outward normal ``n``.
 
-    With a depth law the moment is taken about ``r − δ n`` (friction acts inside the skin).
+    With a depth law the moment is taken about ``r − δ n`` (friction acts inside the skin);
+    ``depth_std`` (m) the uncertainty of a depth the caller moved ``r`` by (:func:`measure_kernel`).
     """
     pushing = fx * nx + fy * ny + fz * nz < 0.0
     if law is None:
@@ -84,7 +91,7 @@ def measure(
     variances = noise_variances(noise)
     m1, m2 = noise_moment_part(*frame[:3], *variances[3:]), noise_moment_part(*frame[3:], *variances[3:])
     sigma, hx, hy, hz, hn, h_std = measure_kernel(
-        fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, *frame, m1, m2, *variances[:3], xp
+        fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, *frame, m1, m2, *variances[:3], depth_std * depth_std, xp
     )
     _, dx, dy, dz, angle, angle_std = sample_direction_kernel(hx, hy, hz, rx, ry, rz, nx, ny, nz, *frame, *variances, xp)
     line = hn > line_threshold_kernel(h_std, h_sigmas, h_min, xp)

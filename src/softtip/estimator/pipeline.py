@@ -443,7 +443,7 @@ def tail_run(t, x, drift, contact, taring, kind, sp, normal_from_tip, point, has
         # friction acts at r − δ n, inside the skin: the moment is taken about it
         ex, ey, ez = px - d * nx, py - d * ny, pz - d * nz
         sg, hx, hy, hz, hn, hs = measure_kernel(fx, fy, fz, mx, my, mz, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z,
-                                                e2x, e2y, e2z, m1, m2, sfx, sfy, sfz, XS)  # fmt: skip
+                                                e2x, e2y, e2z, m1, m2, sfx, sfy, sfz, d_std * d_std, XS)  # fmt: skip
         r = evidence_step(estate, counts, ring, eparams, wconst, t[i], px, py, pz, nx, ny, nz, e1x, e1y, e1z, e2x,
                           e2y, e2z, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, hs, sg)  # fmt: skip
         pulling[i] = False

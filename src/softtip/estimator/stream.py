@@ -343,7 +343,8 @@ class Estimator:
             return self._none(t, x, pulling=True, relatched=relatched)
         # the measurement about the effective point (its noise's moment part kept per point)
         sigma, hx, hy, hz, hn, h_std = measure_kernel(
-            fx, fy, fz, mx, my, mz, ex, ey, ez, nx, ny, nz, *geo.frame, geo.m1, geo.m2, *self._force_var, PY
+            fx, fy, fz, mx, my, mz, ex, ey, ez, nx, ny, nz, *geo.frame, geo.m1, geo.m2, *self._force_var,
+            delta_std * delta_std, PY,
         )
         h = (hx, hy, hz)
         state, evidence, d, angle, angle_std, noise_std, h_ratio, f_ratio = self._evidence.step(
