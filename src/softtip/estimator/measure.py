@@ -34,7 +34,7 @@ class Measurement(NamedTuple):
     hy: Any
     hz: Any
     h_norm: Any  #: ``|h|``, N·m
-    h_std: Any  #: noise level of ``h`` (``sqrt(trace Σ_h)``), N·m
+    h_std: Any  #: standard deviation of ``h`` (``sqrt(trace Σ_h)``: the noise's and the depth's), N·m
     dx: Any  #: unit direction ``n × h / |n × h|`` (an axis)
     dy: Any
     dz: Any

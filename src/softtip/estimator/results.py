@@ -40,7 +40,7 @@ class Estimates:
     point, normal : (N, 3) contact point (m) and outward normal; NaN when ``none``
     sigma : (N,) spin torque about the normal, N·m
     h : (N, 3) tangential spin torque, N·m; ``h_norm`` its magnitude
-    h_std : (N,) noise level of ``h`` (``sqrt(trace Σ_h)``), N·m
+    h_std : (N,) standard deviation of ``h`` (``sqrt(trace Σ_h)``: the sensor noise's and the depth's), N·m
     direction : (N, 3) unit direction of the edge / strip; NaN unless ``line``
     angle, angle_std : (N,) its angle in the tangent frame of the manual (§3.4) and the angle's
         standard deviation, rad; NaN unless ``line``
