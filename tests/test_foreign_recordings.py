@@ -59,7 +59,9 @@ _NETFT_COLUMNS = "t=Time,fx=Force X,fy=Force Y,fz=Force Z,mx=Torque X,my=Torque 
 
 
 def _netft(path: Path) -> Path:
-    body = [",".join([r[0], "0x00000000", str(k + 1), str(1000 + k), *r[1:]]) for k, r in enumerate(_rows())]
+    """A Net F/T demo log: Fx … Tz in counts, 1e6 per N and per N·m (its preamble says so)."""
+    body = [",".join([r[0], "0x00000000", str(k + 1), str(1000 + k), *(repr(float(v) * 1e6) for v in r[1:])])
+            for k, r in enumerate(_rows())]  # fmt: skip
     path.write_text("\n".join([*_NETFT_PREAMBLE, _NETFT_HEADER, *body]) + "\n")
     return path
 
@@ -91,6 +93,7 @@ def test_cli_columns_after_a_preamble(tmp_path: Path) -> None:
                           capture_output=True, text=True, timeout=180)  # fmt: skip
     assert done.returncode == 0, done.stderr
     assert "read as --columns: t ← 'Time' (s, not in the header)" in done.stderr
+    assert "fx ← 'Force X' (N, from line 3, counts ÷ 1e+06 from line 5)" in done.stderr
     assert "the header is on line 8" in done.stderr
 
 
@@ -236,6 +239,45 @@ def test_stated_units_that_contradict_the_file_or_an_option_or_are_unknown_are_r
     same = tmp_path / "same.csv"  # the header and the line agree: read
     same.write_text(text.replace("Tx,Ty,Tz", "Tx (N-mm),Ty (N-mm),Tz (N-mm)", 1))
     _check(read_log(same))
+
+
+@pytest.mark.parametrize("per_unit", ["1000000", "1e6", "4000"])
+def test_counts_per_unit_before_the_header_divide_the_raw_columns(tmp_path: Path, per_unit: str) -> None:
+    """A Net F/T or Ethernet Axia demo log holds counts; the lines before its header say the unit
+    and the counts per unit: the columns are divided by them."""
+    k = float(per_unit)
+    rows = [",".join(["0x00000000", str(j + 1), *(repr(float(v) * k) for v in r[1:]), r[0]]) for j, r in enumerate(_rows())]
+    path = tmp_path / "axia.csv"
+    path.write_text("\n".join(["Start Time,11/29/2026 10:00:00", "RDT Sample Rate,50", "Force Units,N",
+                               f"Counts per Unit Force,{per_unit}", "Torque Units,N-m", f"Counts per Unit Torque,{per_unit}",
+                               "Status (hex),RDT Sequence,Fx,Fy,Fz,Tx,Ty,Tz,Time", *rows]) + "\n")  # fmt: skip
+    log = read_log(path)
+    _check(log)
+    (note,) = [n for n in log.notes if "read as" in n]
+    assert f"mx ← 'Tx' (N·m, from line 5, counts ÷ {k:g} from line 6)" in note, note
+
+
+def test_counts_per_unit_that_are_no_positive_number_or_contradict_are_refused(tmp_path: Path) -> None:
+    path = _netft(tmp_path / "netft.csv")
+    text = path.read_text()
+    for name, body, message in [
+        ("zero.csv", text.replace("Counts per Unit Force,1000000", "Counts per Unit Force,0"),
+         r"zero\.csv:5: counts per unit force '0'; expected a positive number \(the column 'Force X' is divided by it\)"),
+        ("word.csv", text.replace("Counts per Unit Torque,1000000", "Counts per Unit Torque,many"),
+         r"word\.csv:6: counts per unit moment 'many'; expected a positive number"),
+        ("twice.csv", text.replace("Serial Number,FT12345", "Counts per Unit Force,1000"),
+         r"twice\.csv:5: '1000000' contradicts '1000' on line 2 for the force counts per unit; expected one$"),
+    ]:  # fmt: skip
+        (tmp_path / name).write_text(body)
+        with pytest.raises(InputError, match=message):
+            read_log(tmp_path / name, columns=_NETFT_COLUMNS)
+    # a header that gives the unit: the column is in that unit, not in counts
+    named = tmp_path / "named.csv"
+    named.write_text(text.replace("Force X,Force Y,Force Z", "Force X (N),Force Y (N),Force Z (N)"))
+    log = read_log(named, columns=_NETFT_COLUMNS.replace("=Force X", "=Force X (N)").replace("=Force Y", "=Force Y (N)")
+                   .replace("=Force Z", "=Force Z (N)"))  # fmt: skip
+    np.testing.assert_allclose(log.wrench[:, :3], _REF.wrench[:, :3] * 1e6, rtol=1e-12)
+    np.testing.assert_allclose(log.wrench[:, 3:], _REF.wrench[:, 3:], rtol=1e-12)
 
 
 def test_cli_reads_an_ati_daq_log_with_its_units_before_the_header(tmp_path: Path) -> None:

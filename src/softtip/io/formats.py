@@ -239,6 +239,9 @@ class ColumnMap:
     stated_on : dict of str to int
         Role → the line before the header that stated its quantity's unit (``Torque Units,N-mm``
         in an ATI log's preamble).
+    counts : dict of str to (float, int)
+        Role → the counts per unit its raw values are in, and the line that said so (``Counts
+        per Unit Force,1000000`` in a Net F/T demo log): the values are divided by it.
     """
 
     index: dict[str, int]
@@ -248,6 +251,7 @@ class ColumnMap:
     units_row: int = 0
     row_units: frozenset[str] = frozenset()
     stated_on: dict[str, int] = field(default_factory=dict)
+    counts: dict[str, tuple[float, int]] = field(default_factory=dict)
 
     def native(self, names: Sequence[str]) -> bool:
         """Whether this is softtip's own layout: columns named exactly ``t, fx … mz``, SI, no unit in the header."""
@@ -256,6 +260,7 @@ class ColumnMap:
             and all(names[self.index[r]] == r for r in ROLES)
             and all(u.si == 1.0 for u in self.units.values())
             and not any(self.from_header.values())
+            and not self.counts
         )
 
     def describe(self, names: Sequence[str]) -> str:
@@ -269,6 +274,9 @@ class ColumnMap:
                     how = f", from the units row on line {self.units_row}"
                 elif role in self.stated_on:
                     how = f", from line {self.stated_on[role]}"
+                if role in self.counts:
+                    per_unit, line = self.counts[role]
+                    how += f", counts ÷ {per_unit:g} from line {line}"
                 parts.append(f"{role} ← {names[self.index[role]]!r} ({unit.label}{how})")
         return ", ".join(parts)
 

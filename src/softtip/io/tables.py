@@ -356,7 +356,7 @@ def _finish(
     t_s = np.ascontiguousarray(t_s, dtype=np.float64)
     # wrench units
     if cmap is not None:
-        scale = np.array([cmap.units[r].si for r in ROLES[1:]])
+        scale = np.array([cmap.units[r].si / cmap.counts.get(r, (1.0,))[0] for r in ROLES[1:]])
         wrench = _to_seconds_like(np.asarray(wrench, dtype=np.float64), scale)
         scale = np.ones(6)
         force_unit, moment_unit = cmap.units["fx"].name, cmap.units["mx"].name
@@ -902,36 +902,64 @@ def _units_row(names: list[str], cmap: ColumnMap, lines: io.StringIO, fmt: LogFo
 
 
 # A line before the header that states a quantity's unit: ``Force Units,N`` or ``Torque
-# Units:,N-mm`` (ATI's DAQ F/T and Net F/T logs), ``# time unit: ms``.
+# Units:,N-mm`` (ATI's DAQ F/T and Net F/T logs), ``# time unit: ms``; or how many counts a
+# column's values hold per unit: ``Counts per Unit Force,1000000`` (ATI's Net F/T and Ethernet
+# Axia demo logs, whose Fx … Tz are raw counts to be divided by it).
 _STATED_UNIT = re.compile(
     r"^#?\s*(force|torque|moment|time)[\s_-]*units?\s*[:=]?\s*(?:[,;\t]\s*)*([^,;\t]*?)[\s,;\t]*$", re.IGNORECASE
 )
+_STATED_COUNTS = re.compile(
+    r"^#?\s*counts[\s_-]*per[\s_-]*unit[\s_-]*(force|torque|moment)\s*[:=]?\s*(?:[,;\t]\s*)*([^,;\t]*?)[\s,;\t]*$",
+    re.IGNORECASE,
+)
 
 
-def _stated_units(names: list[str], cmap: ColumnMap, comments: list[tuple[int, str]], fmt: LogFormat,
-                  source: str) -> ColumnMap:  # fmt: skip
-    """The units lines before the header state (see :data:`_STATED_UNIT`) read into the column
-    map for the columns whose header gives none; a unit there that is no such unit, that
-    contradicts the header's, the units row's, an option or another such line, is an error
-    naming the line."""
+def _stated(comments: list[tuple[int, str]], pattern: re.Pattern, what: str, source: str) -> dict[str, tuple[int, str]]:
+    """Quantity → (line, text) of the lines ``pattern`` matches; two that differ are an error."""
     stated: dict[str, tuple[int, str]] = {}
     for line, text in comments:
-        match = _STATED_UNIT.match(text)
+        match = pattern.match(text)
         if match is None or not match[2]:
             continue
         quantity = "moment" if match[1].lower() in ("torque", "moment") else match[1].lower()
         if quantity in stated and stated[quantity][1] != match[2]:
             raise InputError(
                 f"{source}:{line}: {match[2]!r} contradicts {stated[quantity][1]!r} on line {stated[quantity][0]} "
-                f"for the {quantity} unit; expected one (--{quantity}-units says which)"
+                f"for the {quantity} {what}; expected one" + (f" (--{quantity}-units says which)" if what == "unit" else "")
             )
         stated[quantity] = (line, match[2])
-    if not stated:
+    return stated
+
+
+def _stated_units(names: list[str], cmap: ColumnMap, comments: list[tuple[int, str]], fmt: LogFormat,
+                  source: str) -> ColumnMap:  # fmt: skip
+    """The units lines before the header state (see :data:`_STATED_UNIT`) read into the column
+    map for the columns whose header gives none, and the counts per unit of those columns
+    (:data:`_STATED_COUNTS`); a unit there that is no such unit, that contradicts the header's,
+    the units row's, an option or another such line, or counts that are no positive number, are
+    an error naming the line."""
+    stated = _stated(comments, _STATED_UNIT, "unit", source)
+    counted = _stated(comments, _STATED_COUNTS, "counts per unit", source)
+    if not stated and not counted:
         return cmap
-    units, from_header, stated_on = dict(cmap.units), dict(cmap.from_header), {}
-    for role in (*ROLES, "nanosec"):
+    units, from_header, stated_on, counts = dict(cmap.units), dict(cmap.from_header), {}, {}
+    for role in ROLES:
         quantity = ROLE_QUANTITY[role]
-        if role not in cmap.index or quantity not in stated or role == "nanosec":
+        if quantity in counted and not cmap.from_header[role]:  # raw counts: the column has no unit of its own
+            line, text = counted[quantity]
+            try:
+                per_unit = float(text)
+            except ValueError:
+                per_unit = math.nan
+            if not (math.isfinite(per_unit) and per_unit > 0):
+                raise InputError(
+                    f"{source}:{line}: counts per unit {quantity} {text!r}; expected a positive number (the column "
+                    f"{names[cmap.index[role]]!r} is divided by it)"
+                )
+            counts[role] = (per_unit, line)
+    for role in ROLES:
+        quantity = ROLE_QUANTITY[role]
+        if quantity not in stated:
             continue
         line, text = stated[quantity]
         column = names[cmap.index[role]]
@@ -948,7 +976,7 @@ def _stated_units(names: list[str], cmap: ColumnMap, comments: list[tuple[int, s
                 )
             continue
         units[role], from_header[role], stated_on[role] = unit, True, line
-    return replace(cmap, units=units, from_header=from_header, stated_on=stated_on)
+    return replace(cmap, units=units, from_header=from_header, stated_on=stated_on, counts=counts)
 
 
 def _sniff_decimal(text: str, pos: int, delimiter: str) -> str:
