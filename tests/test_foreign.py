@@ -393,7 +393,7 @@ def test_cli_columns_skip_rows_and_headerless(tmp_path: Path, reference_estimate
     done = run("estimate", odd, "--columns", "t=nope", "-o", out)
     assert done.returncode == 2 and "--columns t=nope: no column 'nope' in the header" in done.stderr
     done = run("estimate", bare, "--moment-units", "furlong", "-o", out)
-    assert done.returncode == 2 and "expected a moment unit: N*m, N*mm, kgf*mm, lbf*in" in done.stderr
+    assert done.returncode == 2 and "expected a moment unit: N*m, N*mm, kN*m, kgf*mm, kgf*cm, lbf*in, lbf*ft" in done.stderr
 
 
 def test_piecewise_runs_refuse_and_count_stamps_as_the_one_shot_run(tmp_path: Path) -> None:

@@ -37,9 +37,10 @@ def _rows(n: int | None = None, *, force: float = 1.0, moment: float = 1.0, time
     return [[repr(float(ti / time)), *(repr(float(v)) for v in wi / scale)] for ti, wi in zip(t, w)]
 
 
-def _check(log, n: int | None = None) -> None:
+def _check(log, n: int | None = None, per_unit: float | None = None) -> None:
+    """The log is the reference; ``per_unit``: read from whole counts, so to half a count."""
     np.testing.assert_allclose(log.t, _REF.t[:n], rtol=1e-12, atol=1e-12)
-    np.testing.assert_allclose(log.wrench, _REF.wrench[:n], rtol=1e-12, atol=0)
+    np.testing.assert_allclose(log.wrench, _REF.wrench[:n], rtol=1e-12, atol=0 if per_unit is None else 0.5 / per_unit)
 
 
 # --------------------------------------------------------------------------------------
@@ -60,7 +61,7 @@ _NETFT_COLUMNS = "t=Time,fx=Force X,fy=Force Y,fz=Force Z,mx=Torque X,my=Torque 
 
 def _netft(path: Path) -> Path:
     """A Net F/T demo log: Fx … Tz in counts, 1e6 per N and per N·m (its preamble says so)."""
-    body = [",".join([r[0], "0x00000000", str(k + 1), str(1000 + k), *(repr(float(v) * 1e6) for v in r[1:])])
+    body = [",".join([r[0], "0x00000000", str(k + 1), str(1000 + k), *(str(round(float(v) * 1e6)) for v in r[1:])])
             for k, r in enumerate(_rows())]  # fmt: skip
     path.write_text("\n".join([*_NETFT_PREAMBLE, _NETFT_HEADER, *body]) + "\n")
     return path
@@ -70,7 +71,7 @@ def test_columns_find_their_header_after_a_preamble(tmp_path: Path) -> None:
     """--columns names the header's columns: the preamble before it is skipped, as without --columns."""
     path = _netft(tmp_path / "netft.csv")
     log = read_log(path, columns=_NETFT_COLUMNS)
-    _check(log)
+    _check(log, per_unit=1e6)
     assert any("the header is on line 8; the 7 line(s) before it skipped (--skip-rows 7" in n for n in log.notes), log.notes
     np.testing.assert_array_equal(read_log(path, columns=_NETFT_COLUMNS, skip_rows=7).wrench, log.wrench)
     partial = read_log(path, columns="fx=Force X,fy=Force Y,fz=Force Z,mx=Torque X,my=Torque Y,mz=Torque Z")
@@ -221,12 +222,13 @@ def test_any_stated_units_read_back(tmp_path_factory, force, moment, form, delim
 def test_stated_units_that_contradict_the_file_or_an_option_or_are_unknown_are_refused(tmp_path: Path) -> None:
     path = _stated_units_file(tmp_path / "daq.csv", "N", "N*mm")
     text = path.read_text()
-    with pytest.raises(InputError, match=r"daq\.csv:4: column 'Tx': line 4 says N·mm but --moment-units .* says N\*m"):
+    with pytest.raises(InputError, match=r"daq\.csv:4: 'N-mm' says the moment unit is N·mm but --moment-units .* says N\*m"):
         read_log(path, moment_units="N*m")
     assert read_log(path, moment_units="N*mm").moment_unit == "N*mm"  # the option agrees: no error
     cases = {
         "counts.csv": (text.replace("Torque Units:,N-mm", "Torque Units:,Counts"),
-                       r"counts\.csv:4: column 'Tx': unknown moment unit 'Counts' in line 4; expected one of"),
+                       r"counts\.csv:4: unknown moment unit 'Counts' on a line before the header; expected one of: .*"
+                       r"\(or give --moment-units\)"),
         "header.csv": (text.replace("Tx,", "Tx (N-m),", 1),
                        r"header\.csv:4: column 'Tx \(N-m\)': this line says N·mm but the header says N·m; expected one unit"),
         "twice.csv": (text.replace("Sample Rate", "Torque Units:,Nm\nSample Rate"),
@@ -236,9 +238,21 @@ def test_stated_units_that_contradict_the_file_or_an_option_or_are_unknown_are_r
         (tmp_path / name).write_text(body)
         with pytest.raises(InputError, match=message):
             read_log(tmp_path / name)
-    same = tmp_path / "same.csv"  # the header and the line agree: read
-    same.write_text(text.replace("Tx,Ty,Tz", "Tx (N-mm),Ty (N-mm),Tz (N-mm)", 1))
-    _check(read_log(same))
+    # what the option settles: a unit the file names that softtip does not know, two lines that disagree
+    for name in ("counts.csv", "twice.csv"):
+        _check(read_log(tmp_path / name, moment_units="N*mm"))
+    variants = {  # read as the plain file: the same unit spelled otherwise, a remark, brackets, a table of labels
+        "same.csv": text.replace("Tx,Ty,Tz", "Tx (N-mm),Ty (N-mm),Tz (N-mm)", 1),
+        "spelled.csv": text.replace("Sample Rate", "torque units = Nmm\nSample Rate"),
+        "remark.csv": text.replace("Force Units:,N", "Force Units: N (calibrated)"),
+        "brackets.csv": text.replace("Torque Units:,N-mm", "Torque Units (N-mm)"),
+        "labels.csv": text.replace("Sample Rate (Hz):,1000", "Force Units,Torque Units\nN,N-mm"),
+        "words.csv": text.replace("Force Units:,N", "Force Units:,Newton").replace("Torque Units:,N-mm",
+                                                                                      "Torque Units:,Newton-millimeter"),
+    }  # fmt: skip
+    for name, body in variants.items():
+        (tmp_path / name).write_text(body)
+        _check(read_log(tmp_path / name))
 
 
 @pytest.mark.parametrize("per_unit", ["1000000", "1e6", "4000"])
@@ -246,15 +260,25 @@ def test_counts_per_unit_before_the_header_divide_the_raw_columns(tmp_path: Path
     """A Net F/T or Ethernet Axia demo log holds counts; the lines before its header say the unit
     and the counts per unit: the columns are divided by them."""
     k = float(per_unit)
-    rows = [",".join(["0x00000000", str(j + 1), *(repr(float(v) * k) for v in r[1:]), r[0]]) for j, r in enumerate(_rows())]
+    rows = [",".join(["0x00000000", str(j + 1), *(str(round(float(v) * k)) for v in r[1:]), r[0]]) for j, r in enumerate(_rows())]
     path = tmp_path / "axia.csv"
     path.write_text("\n".join(["Start Time,11/29/2026 10:00:00", "RDT Sample Rate,50", "Force Units,N",
                                f"Counts per Unit Force,{per_unit}", "Torque Units,N-m", f"Counts per Unit Torque,{per_unit}",
                                "Status (hex),RDT Sequence,Fx,Fy,Fz,Tx,Ty,Tz,Time", *rows]) + "\n")  # fmt: skip
     log = read_log(path)
-    _check(log)
+    _check(log, per_unit=k)
     (note,) = [n for n in log.notes if "read as" in n]
     assert f"mx ← 'Tx' (N·m, from line 5, counts ÷ {k:g} from line 6)" in note, note
+    # values in units under lines that say counts (a file converted and its preamble kept): refused
+    # at the first fraction, with the option that reads them as they are
+    converted = tmp_path / "converted.csv"
+    lines = path.read_text().splitlines()
+    converted.write_text("\n".join(lines[:7] + [",".join(["0x00000000", str(j + 1), *r[1:], r[0]])
+                                               for j, r in enumerate(_rows())]) + "\n")  # fmt: skip
+    with pytest.raises(InputError, match=r"converted\.csv:8: column 'Fx': line 4 says its values are counts .* is not a "
+                                         r"whole number; if the values are in N already, give --force-units N"):
+        read_log(converted)
+    _check(read_log(converted, force_units="N", moment_units="N*m"))
 
 
 def test_counts_per_unit_that_are_no_positive_number_or_contradict_are_refused(tmp_path: Path) -> None:
@@ -262,11 +286,11 @@ def test_counts_per_unit_that_are_no_positive_number_or_contradict_are_refused(t
     text = path.read_text()
     for name, body, message in [
         ("zero.csv", text.replace("Counts per Unit Force,1000000", "Counts per Unit Force,0"),
-         r"zero\.csv:5: counts per unit force '0'; expected a positive number \(the column 'Force X' is divided by it\)"),
+         r"zero\.csv:5: counts per unit force '0'; expected a positive number \(the columns of force without a unit"),
         ("word.csv", text.replace("Counts per Unit Torque,1000000", "Counts per Unit Torque,many"),
          r"word\.csv:6: counts per unit moment 'many'; expected a positive number"),
         ("twice.csv", text.replace("Serial Number,FT12345", "Counts per Unit Force,1000"),
-         r"twice\.csv:5: '1000000' contradicts '1000' on line 2 for the force counts per unit; expected one$"),
+         r"twice\.csv:5: counts per unit force 1000000 contradicts 1000 on line 2; expected one$"),
     ]:  # fmt: skip
         (tmp_path / name).write_text(body)
         with pytest.raises(InputError, match=message):
@@ -276,8 +300,11 @@ def test_counts_per_unit_that_are_no_positive_number_or_contradict_are_refused(t
     named.write_text(text.replace("Force X,Force Y,Force Z", "Force X (N),Force Y (N),Force Z (N)"))
     log = read_log(named, columns=_NETFT_COLUMNS.replace("=Force X", "=Force X (N)").replace("=Force Y", "=Force Y (N)")
                    .replace("=Force Z", "=Force Z (N)"))  # fmt: skip
-    np.testing.assert_allclose(log.wrench[:, :3], _REF.wrench[:, :3] * 1e6, rtol=1e-12)
-    np.testing.assert_allclose(log.wrench[:, 3:], _REF.wrench[:, 3:], rtol=1e-12)
+    np.testing.assert_allclose(log.wrench[:, :3], np.round(_REF.wrench[:, :3] * 1e6), rtol=1e-12)
+    np.testing.assert_allclose(log.wrench[:, 3:], _REF.wrench[:, 3:], rtol=1e-12, atol=0.5e-6)
+    # the same line also spelled 1e6 agrees with it
+    (tmp_path / "again.csv").write_text(text.replace("Serial Number,FT12345", "Counts per Unit Force,1e6"))
+    _check(read_log(tmp_path / "again.csv", columns=_NETFT_COLUMNS), per_unit=1e6)
 
 
 def test_cli_reads_an_ati_daq_log_with_its_units_before_the_header(tmp_path: Path) -> None:

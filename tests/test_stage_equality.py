@@ -71,7 +71,7 @@ def _stages(t, w, config):
         normal = tip.normal(point)
         delta, delta_std, from_data = depth_points(t, c, ct.contact, point, normal, config, noise, corr)
         eff = point - delta[:, None] * normal
-        ms = measure(*c, *eff.T, *normal.T, noise, config.h_sigmas, config.h_min, None, NP)
+        ms = measure(*c, *eff.T, *normal.T, noise, config.h_sigmas, config.h_min, None, NP, delta_std)
     has = np.all(np.isfinite(point), axis=-1)
     located = ct.contact & has & ms.pushing
     begin = ct.contact & ~np.concatenate(([False], ct.contact[:-1])) | (relatched & ct.contact)

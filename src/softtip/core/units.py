@@ -132,19 +132,27 @@ class Unit:
     aliases: tuple[str, ...] = ()
 
 
-#: lbf in N, and one inch in m (exact by definition).
+#: lbf in N, and one inch and one foot in m (exact by definition).
 LBF = 4.4482216152605
 INCH = 0.0254
+FOOT = 0.3048
 
 #: Every unit a log's column may be in, each declared once.
 UNITS: tuple[Unit, ...] = (
     Unit("N", "force", 1.0, "N", ("newton", "newtons")),
-    Unit("kgf", "force", KGF, "kgf", ("kg-f", "kilogram-force", "kp")),
-    Unit("lbf", "force", LBF, "lbf", ("lb", "lbs", "pound-force")),
+    # a force "in kg" or "in g" (ATI's F/T software offers Kilogram and Gram) is kilogram-force
+    Unit("kgf", "force", KGF, "kgf", ("kg-f", "kilogram-force", "kp", "kg", "kilogram")),
+    Unit("gf", "force", KGF * 1e-3, "gf", ("g", "gram", "gram-force")),
+    Unit("kN", "force", 1e3, "kN", ("kilonewton",)),
+    Unit("lbf", "force", LBF, "lbf", ("lb", "lbs", "pound-force", "pound")),
+    Unit("klbf", "force", LBF * 1e3, "klbf", ("klb", "kip", "kilopound")),
     Unit("N*m", "moment", 1.0, "N·m", ("Nm", "newton-metre", "newton-meter")),
-    Unit("N*mm", "moment", 1e-3, "N·mm", ("Nmm", "mN*m", "mNm")),
+    Unit("N*mm", "moment", 1e-3, "N·mm", ("Nmm", "mN*m", "mNm", "newton-millimeter", "newton-millimetre")),
+    Unit("kN*m", "moment", 1e3, "kN·m", ("kNm", "kilonewton-meter", "kilonewton-metre")),
     Unit("kgf*mm", "moment", KGF_MM, "kgf·mm", ("kgfmm",)),
-    Unit("lbf*in", "moment", LBF * INCH, "lbf·in", ("lbfin", "lb*in", "lbin", "in*lb", "in*lbf", "inlb", "inlbf")),
+    Unit("kgf*cm", "moment", KGF * 1e-2, "kgf·cm", ("kgfcm", "kg*cm", "kgcm", "kilogram-centimeter", "kilogram-centimetre")),
+    Unit("lbf*in", "moment", LBF * INCH, "lbf·in", ("lbfin", "lb*in", "lbin", "in*lb", "in*lbf", "inlb", "inlbf", "pound-inch")),
+    Unit("lbf*ft", "moment", LBF * FOOT, "lbf·ft", ("lbfft", "lb*ft", "lbft", "ft*lb", "ft*lbf", "ftlb", "pound-foot")),
     Unit("s", "time", 1.0, "s", ("sec", "secs", "second", "seconds")),
     Unit("ms", "time", 1e-3, "ms", ("msec", "millisecond", "milliseconds")),
     Unit("us", "time", 1e-6, "µs", ("µs", "μs", "usec", "microsecond", "microseconds")),

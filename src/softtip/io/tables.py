@@ -82,9 +82,11 @@ from numpy.typing import NDArray
 from softtip.core.units import (
     UNIT_SYSTEM_UNITS,
     UNIT_SYSTEMS,
+    Unit,
     find_unit,
     get_unit,
     seconds_from_ns,
+    unit_names,
     wrench_scale,
     wrench_to_si,
 )
@@ -356,6 +358,20 @@ def _finish(
     t_s = np.ascontiguousarray(t_s, dtype=np.float64)
     # wrench units
     if cmap is not None:
+        for k, role in enumerate(ROLES[1:]):
+            if role in cmap.counts:  # counts are whole numbers: fractions are values in units already
+                col = np.asarray(wrench[:, k], dtype=np.float64)
+                frac = np.flatnonzero(np.isfinite(col) & (col != np.floor(col)))
+                if len(frac):
+                    per_unit, line = cmap.counts[role]
+                    quantity = ROLE_QUANTITY[role]
+                    i = int(frac[0])
+                    loc = f"{source}:{first_line + i}" if first_line is not None else f"{source}: {where(i)}"
+                    raise InputError(
+                        f"{loc}: column {names[header.index[role]]!r}: line {line} says its values "
+                        f"are counts ({per_unit:g} per unit), but {col[i]!r} is not a whole number; if the values are in "
+                        f"{cmap.units[role].label} already, give --{quantity}-units {cmap.units[role].name} to read them as they are"
+                    )
         scale = np.array([cmap.units[r].si / cmap.counts.get(r, (1.0,))[0] for r in ROLES[1:]])
         wrench = _to_seconds_like(np.asarray(wrench, dtype=np.float64), scale)
         scale = np.ones(6)
@@ -914,68 +930,112 @@ _STATED_COUNTS = re.compile(
 )
 
 
-def _stated(comments: list[tuple[int, str]], pattern: re.Pattern, what: str, source: str) -> dict[str, tuple[int, str]]:
-    """Quantity → (line, text) of the lines ``pattern`` matches; two that differ are an error."""
-    stated: dict[str, tuple[int, str]] = {}
+def _stated(comments: list[tuple[int, str]], pattern: re.Pattern) -> dict[str, list[tuple[int, str]]]:
+    """Quantity → the (line, value) of each line ``pattern`` matches (a value in brackets taken
+    out of them, a remark in brackets after it left out: ``N (calibrated)``; a value naming
+    another quantity's units, a small table's header, left out)."""
+    stated: dict[str, list[tuple[int, str]]] = {}
     for line, text in comments:
         match = pattern.match(text)
-        if match is None or not match[2]:
+        if match is None:
+            continue
+        value = _BRACKETED.sub(r"\1", match[2].strip())
+        value = re.sub(r"^([^(\[]+?)\s*[(\[].*[)\]]$", r"\1", value)
+        if not value or re.search(r"\bunits?\b", value, re.IGNORECASE):
             continue
         quantity = "moment" if match[1].lower() in ("torque", "moment") else match[1].lower()
-        if quantity in stated and stated[quantity][1] != match[2]:
-            raise InputError(
-                f"{source}:{line}: {match[2]!r} contradicts {stated[quantity][1]!r} on line {stated[quantity][0]} "
-                f"for the {quantity} {what}; expected one" + (f" (--{quantity}-units says which)" if what == "unit" else "")
-            )
-        stated[quantity] = (line, match[2])
+        stated.setdefault(quantity, []).append((line, value))
     return stated
+
+
+def _stated_unit(found: list[tuple[int, str]], quantity: str, fmt: LogFormat, source: str) -> tuple[Unit | None, int]:
+    """The unit the lines before the header give ``quantity``, and the first line giving it. A
+    unit option decides where it is given: a line naming another known unit is then an error,
+    one naming no unit softtip knows (``see calibration sheet``) is left to the option."""
+    option = fmt.unit_option(quantity)
+    known = [(line, text, find_unit(text, quantity)) for line, text in found]
+    units = {unit for _, _, unit in known if unit is not None}
+    if option is not None:
+        given = get_unit(option, quantity)
+        for line, text, unit in known:
+            # one unit in the file, another in the option: stop, as for a header's; lines that
+            # contradict each other are the option's to settle
+            if len(units) == 1 and unit is not None and unit is not given:
+                raise InputError(
+                    f"{source}:{line}: {text!r} says the {quantity} unit is {unit.label} but --{quantity}-units (or "
+                    f"--units) says {option}; leave the option out to use the unit the file gives"
+                )
+        return given, known[0][0]
+    if len(units) > 1:
+        (l1, t1, _), (l2, t2, _) = [k for k in known if k[2] is not None][:2]
+        raise InputError(
+            f"{source}:{l2}: {t2!r} contradicts {t1!r} on line {l1} for the {quantity} unit; expected one "
+            f"(--{quantity}-units says which)"
+        )
+    if not units:
+        line, text = found[0]
+        raise InputError(
+            f"{source}:{line}: unknown {quantity} unit {text!r} on a line before the header; expected one of: "
+            f"{', '.join(unit_names(quantity))} (or give --{quantity}-units)"
+        )
+    line, _, unit = next(k for k in known if k[2] is not None)
+    return unit, line
 
 
 def _stated_units(names: list[str], cmap: ColumnMap, comments: list[tuple[int, str]], fmt: LogFormat,
                   source: str) -> ColumnMap:  # fmt: skip
     """The units lines before the header state (see :data:`_STATED_UNIT`) read into the column
-    map for the columns whose header gives none, and the counts per unit of those columns
-    (:data:`_STATED_COUNTS`); a unit there that is no such unit, that contradicts the header's,
-    the units row's, an option or another such line, or counts that are no positive number, are
-    an error naming the line."""
-    stated = _stated(comments, _STATED_UNIT, "unit", source)
-    counted = _stated(comments, _STATED_COUNTS, "counts per unit", source)
+    map for the columns whose header (or units row) gives none, and the counts per unit of those
+    columns (:data:`_STATED_COUNTS`, not with a unit option: the option says the values are in
+    that unit). A unit there that is no such unit, that contradicts the header's, the units
+    row's, an option or another such line, or counts that are no positive number or differ
+    between two lines, are an error naming the line."""
+    stated = _stated(comments, _STATED_UNIT)
+    counted = _stated(comments, _STATED_COUNTS)
     if not stated and not counted:
         return cmap
     units, from_header, stated_on, counts = dict(cmap.units), dict(cmap.from_header), {}, {}
-    for role in ROLES:
-        quantity = ROLE_QUANTITY[role]
-        if quantity in counted and not cmap.from_header[role]:  # raw counts: the column has no unit of its own
-            line, text = counted[quantity]
+    per_unit: dict[str, tuple[float, int]] = {}
+    for quantity, found in counted.items():
+        values = []
+        for line, text in found:
             try:
-                per_unit = float(text)
+                value = float(text)
             except ValueError:
-                per_unit = math.nan
-            if not (math.isfinite(per_unit) and per_unit > 0):
+                value = math.nan
+            if not (math.isfinite(value) and value > 0):
                 raise InputError(
-                    f"{source}:{line}: counts per unit {quantity} {text!r}; expected a positive number (the column "
-                    f"{names[cmap.index[role]]!r} is divided by it)"
+                    f"{source}:{line}: counts per unit {quantity} {text!r}; expected a positive number (the columns "
+                    f"of {quantity} without a unit of their own are divided by it)"
                 )
-            counts[role] = (per_unit, line)
+            if values and value != values[0][0]:
+                raise InputError(
+                    f"{source}:{line}: counts per unit {quantity} {text} contradicts {values[0][0]:g} on line "
+                    f"{values[0][1]}; expected one"
+                )
+            values.append((value, line))
+        per_unit[quantity] = values[0]
     for role in ROLES:
         quantity = ROLE_QUANTITY[role]
-        if quantity not in stated:
+        if quantity in per_unit and not cmap.from_header[role] and fmt.unit_option(quantity) is None:
+            counts[role] = per_unit[quantity]  # raw counts: the column has no unit of its own
+    resolved = {q: _stated_unit(found, q, fmt, source) for q, found in stated.items()}
+    for role in ROLES:
+        quantity = ROLE_QUANTITY[role]
+        if quantity not in resolved:
             continue
-        line, text = stated[quantity]
-        column = names[cmap.index[role]]
-        try:
-            unit = stated_unit(text, quantity, fmt.unit_option(quantity), column, f"line {line}")
-        except ColumnError as exc:
-            raise InputError(f"{source}:{line}: {exc}") from None
+        unit, line = resolved[quantity]
         if from_header[role]:
             if units[role] is not unit:
+                column = names[cmap.index[role]]
                 where = f"the units row on line {cmap.units_row}" if role in cmap.row_units else "the header"
                 raise InputError(
                     f"{source}:{line}: column {column!r}: this line says {unit.label} but {where} says "
                     f"{units[role].label}; expected one unit per column"
                 )
             continue
-        units[role], from_header[role], stated_on[role] = unit, True, line
+        if fmt.unit_option(quantity) is None:
+            units[role], from_header[role], stated_on[role] = unit, True, line
     return replace(cmap, units=units, from_header=from_header, stated_on=stated_on, counts=counts)
 
 
@@ -2342,9 +2402,11 @@ def _arrow_block(plan: _Plan, start: int, stop: int, *, rounded: bool) -> Any:
             cols.append(pa.array(cells, type=pa.string()))
     if not plan.parquet:
         return pa.Table.from_arrays(cols, names=plan.names)
-    # no column holds a null (NaN is a value): required columns spare Parquet its definition
-    # levels, a fifth of the write's time on softtip's 47 columns
-    fields = [pa.field(name, c.type, nullable=c.null_count > 0) for name, c in zip(plan.names, cols)]
+    # a numpy number or flag is never a null (NaN is a value): such columns are required, which
+    # spares Parquet their definition levels, a fifth of the write's time on softtip's 47
+    # columns; text stays nullable (by its type, so every block of a file has one schema)
+    fields = [pa.field(name, c.type, nullable=arr.dtype.kind not in "fbiu")
+              for name, c, arr in zip(plan.names, cols, plan.arrays)]  # fmt: skip
     return pa.Table.from_arrays(cols, schema=pa.schema(fields))
 
 

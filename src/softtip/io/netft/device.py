@@ -6,29 +6,17 @@ import math
 import re
 from dataclasses import dataclass
 
+from softtip.core.units import find_unit
 from softtip.io.sources import SourceError
 
 __all__ = ["COUNTS_PER_UNIT_RANGE", "FORCE_UNITS_SI", "RDT_RATE_RANGE", "TORQUE_UNITS_SI", "DeviceInfo", "parse_device_xml"]
 
-#: SI value (N) of one force unit, by the name the device (or pynetft) gives it.
-FORCE_UNITS_SI = {
-    "N": 1.0,
-    "lbf": 4.4482216152605,
-    "klbf": 4448.2216152605,
-    "kN": 1e3,
-    "kgf": 9.80665,
-}
+#: SI value (N) of one force unit, by the name the device (or pynetft) gives it: the device's
+#: spellings, their sizes from softtip's unit registry (:data:`softtip.core.units.UNITS`).
+FORCE_UNITS_SI = {name: find_unit(name, "force").si for name in ("N", "lbf", "klbf", "kN", "kgf")}
 #: SI value (N·m) of one torque unit, by the name the device (or pynetft) gives it.
 TORQUE_UNITS_SI = {
-    "N-m": 1.0,
-    "Nm": 1.0,
-    "N-mm": 1e-3,
-    "Nmm": 1e-3,
-    "lbf-in": 0.1129848290276167,
-    "lbf-ft": 1.3558179483314004,
-    "kgf-cm": 0.0980665,
-    "kN-m": 1e3,
-    "kNm": 1e3,
+    name: find_unit(name, "moment").si for name in ("N-m", "Nm", "N-mm", "Nmm", "lbf-in", "lbf-ft", "kgf-cm", "kN-m", "kNm")
 }
 
 @dataclass(frozen=True)
