@@ -948,7 +948,7 @@ def _stated(comments: list[tuple[int, str]], pattern: re.Pattern) -> dict[str, l
     return stated
 
 
-def _stated_unit(found: list[tuple[int, str]], quantity: str, fmt: LogFormat, source: str) -> tuple[Unit | None, int]:
+def _stated_unit(found: list[tuple[int, str]], quantity: str, fmt: LogFormat, source: str) -> tuple[Unit, int]:
     """The unit the lines before the header give ``quantity``, and the first line giving it. A
     unit option decides where it is given: a line naming another known unit is then an error,
     one naming no unit softtip knows (``see calibration sheet``) is left to the option."""
