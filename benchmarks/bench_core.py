@@ -29,8 +29,10 @@ the project's settings: the compiled CSV formatter, lean Parquet, uncompressed A
 writing the least output the command line contract allows (24 columns), and numpy filling that
 many columns: what any `softtip estimate` must stay below, whatever its pipeline. Then the CSV
 number formatters side by side (compiled, its fallback, pyarrow's own, printf) in ns per
-number, the Parquet / Arrow IPC compressions measured on all the estimates' columns, and the
-log's CSV parsed by pyarrow as softtip's reader runs it and by pandas' C engine.
+number, the Parquet / Arrow IPC compressions measured on all the estimates' columns (and
+softtip's Parquet settings with every column nullable, as before its numbers were declared
+required), the log's CSV parsed by pyarrow as softtip's reader runs it and by pandas' C
+engine, and the log's Parquet read in fresh processes memory-mapped and not.
 
 Compiled (--only compiled): the pipeline at 2e4 rows with the stages' step functions compiled
 by numba and run as Python (the same source; the path without numba), and the start-up cost of
@@ -822,6 +824,7 @@ def bounds(n: int) -> None:
         csv_formatters(every)
         columnar_settings(every, Path(tmp, "settings"))
         csv_readers(src["csv"])
+        parquet_input(src["parquet"], n)
     k = sum(1 for c in SPEC_COLUMNS if c not in ("state", "line_evidence"))
     m = 10 * n
     # memory the process has not touched yet costs the system a page fault per page, and on a
@@ -840,6 +843,25 @@ def bounds(n: int) -> None:
         print(f"  numpy: allocate and fill {k} float64 columns of {m:,} rows ({gib:.2f} GiB), {label}: "
               f"{(user + system) / m * 1e9:.0f} ns/row, system time {system / gib:.2f} s/GiB "
               "(3 M rows/s, about the pipeline target, is 330 ns/row for everything)")  # fmt: skip
+
+
+def parquet_input(path: Path, n: int, repeats: int = 3) -> None:
+    """The input Parquet log read in a fresh process, memory-mapped (softtip's reader) against
+    read into pyarrow's buffers: CPU time of the process beyond its imports, alternating. In one
+    process the second read reuses the first one's memory and hides the difference."""
+    code = ("import resource, sys, pyarrow.parquet as pq; r = resource.getrusage(resource.RUSAGE_SELF); "
+            "f = pq.ParquetFile(sys.argv[1], memory_map=sys.argv[2] == '1'); "
+            "[c.to_numpy() for b in f.iter_batches(batch_size=65536) for c in b.columns]; "
+            "q = resource.getrusage(resource.RUSAGE_SELF); "
+            "print(q.ru_utime + q.ru_stime - r.ru_utime - r.ru_stime)")  # fmt: skip
+    got: dict[str, list[float]] = {"1": [], "0": []}
+    for _ in range(repeats):
+        for mapped in got:
+            out = subprocess.run([sys.executable, "-c", code, str(path), mapped], check=True, capture_output=True, text=True)
+            got[mapped].append(float(out.stdout))
+    print(f"  Parquet input in a fresh process ({n:,} rows, CPU s beyond the imports, {repeats} runs each, alternating): "
+          f"memory-mapped (softtip's reader) {' '.join(f'{c:.2f}' for c in got['1'])}, "
+          f"read into buffers {' '.join(f'{c:.2f}' for c in got['0'])}")  # fmt: skip
 
 
 def csv_formatters(columns: dict) -> None:
@@ -970,11 +992,18 @@ def columnar_settings(columns: dict, dest: Path) -> None:
                for c in ("none", "snappy", "lz4", "zstd")}  # fmt: skip
     configs["Parquet snappy with statistics"] = dict(compression="snappy", use_dictionary=coded)
     configs["Parquet pyarrow's defaults (snappy, dictionary everywhere, statistics)"] = {}
+    # every column nullable, as before softtip declared its numbers required: definition levels
+    nullable = pa.schema([f.with_nullable(True) for f in schema])
+    configs["Parquet snappy, softtip's settings, every column nullable"] = dict(
+        compression="snappy", use_dictionary=coded, write_statistics=False, schema=nullable
+    )
 
     def parquet(kw):
-        with pq.ParquetWriter(dest, schema, **kw) as writer:
+        kw = dict(kw)
+        use = kw.pop("schema", schema)
+        with pq.ParquetWriter(dest, use, **kw) as writer:
             for table in tables:
-                writer.write_table(table)
+                writer.write_table(table.cast(use) if use is not schema else table)
 
     def arrow(compression):
         with pa.OSFile(str(dest), "wb") as sink, pa.ipc.new_file(sink, schema, options=pa.ipc.IpcWriteOptions(compression=compression)) as writer:
