@@ -595,8 +595,8 @@ class _ColumnarFile:
 
             # ParquetFile, not read_table: the latter imports pyarrow.dataset (~0.2 s) for nothing here.
             # Memory-mapped: the column chunks are read in place from the page cache, where reading
-            # them copies each into fresh memory whose first touch the kernel zeroes (1e7 rows:
-            # 0.43 s of CPU against 0.48-0.92 s, three fresh processes each)
+            # them copies each into fresh memory whose first touch the kernel zeroes (1e7 rows in
+            # a fresh process: 0.39-0.42 s of CPU against 0.43-0.53 s; bench_core.py --only bounds)
             self._file: Any = pq.ParquetFile(path, memory_map=True)
             self.schema = self._file.schema_arrow
             self.num_rows = int(self._file.metadata.num_rows)
@@ -2403,8 +2403,8 @@ def _arrow_block(plan: _Plan, start: int, stop: int, *, rounded: bool) -> Any:
     if not plan.parquet:
         return pa.Table.from_arrays(cols, names=plan.names)
     # a numpy number or flag is never a null (NaN is a value): such columns are required, which
-    # spares Parquet their definition levels, a fifth of the write's time on softtip's 47
-    # columns; text stays nullable (by its type, so every block of a file has one schema)
+    # spares Parquet their definition levels, a quarter of the write's time on softtip's 47
+    # columns (bench_core.py --only bounds); text stays nullable (by its type, so every block of a file has one schema)
     fields = [pa.field(name, c.type, nullable=arr.dtype.kind not in "fbiu")
               for name, c, arr in zip(plan.names, cols, plan.arrays)]  # fmt: skip
     return pa.Table.from_arrays(cols, schema=pa.schema(fields))
