@@ -535,7 +535,7 @@ def _estimate_in_pieces(
 
         def after(est) -> tuple:
             """A piece's units-check distances and contact summaries: on the thread that estimated
-            it (with --jobs, in parallel: in the caller's they were a third of its work)."""
+            it (with --jobs, in parallel, not in the caller's thread, which writes the output)."""
             distances = lever_distances(est.wrench[~est.taring], max(0.1, config.contact_threshold))
             return distances, summarise_contacts(est) if not quiet else []
 
