@@ -22,7 +22,9 @@ peak memory, by default (pieces of 131072 rows for a log this large) and in one 
 hand-written Python CSV reader and writer that softtip used before, on the same files.
 Rates are rows per second of CPU time (the process's own, or the command's): on a shared
 machine that is the steady figure; the wall-clock time is printed beside it. Targets (manual §6) end to end, per core: CSV >= 0.4 M rows/s, Parquet >= 1 M rows/s.
-Only this part: --only end-to-end; only the streaming rows: --only stream.
+Only this part: --only end-to-end; only the streaming rows: --only stream (with a sensor's first
+touch: the estimator built in a fresh process, numba's cache warm and empty, with and without
+its warm-up, and the slowest update of the grasp after it).
 
 Bounds (--only bounds): pyarrow reading the log and softtip's own writers (write_table, with
 the project's settings: the compiled CSV formatter, lean Parquet, uncompressed Arrow IPC)
@@ -73,6 +75,7 @@ the worst case), in batch, and the whole pipeline with the mesh tip.
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import platform
 import resource
@@ -166,6 +169,7 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--soak-rate", type=float, default=7000.0, help="Hz of the live soak (default 7000)")
     ap.add_argument("--sizes", default="1e5,1e6,1e7", help="log lengths of the scaling table (comma-separated)")
     ap.add_argument("--scaling-worker", type=float, help=argparse.SUPPRESS)
+    ap.add_argument("--first-contact-worker", type=int, help=argparse.SUPPRESS)
     ap.add_argument("--mesh-only", action="store_true", help="only the mesh fingertip rows")
     args = ap.parse_args(argv)
     rng = np.random.default_rng(6)
@@ -176,6 +180,9 @@ def main(argv: list[str] | None = None) -> None:
     if args.scaling_worker:
         scaling_worker(int(args.scaling_worker))
         return
+    if args.first_contact_worker is not None:
+        first_contact_worker(args.first_contact_worker)
+        return
     n = args.samples
     print(f"softtip core benchmark | python {platform.python_version()} | numpy {np.__version__} | {platform.machine()}")
     if args.only == "end-to-end":
@@ -183,6 +190,7 @@ def main(argv: list[str] | None = None) -> None:
         return
     if args.only == "stream":
         stream_rows(args, benchmark_grasp())
+        first_contact_rows()
         return
     if args.only == "soak":
         soak_rows(args)
@@ -228,6 +236,7 @@ def main(argv: list[str] | None = None) -> None:
     print(f"  {'whole batch pipeline (capsule)':30s} {len(t_rep) / dt / 1e6:8.2f} M samples/s   ({dt:.3f} s)")
 
     stream_rows(args, benchmark_grasp())
+    first_contact_rows()
     soak_rows(args)
     end_to_end(n)
     bounds(n)
@@ -280,6 +289,41 @@ def stream_rows(args, g) -> None:
             f"   (in contact, {contact.mean():.0%}: median {np.median(per[contact]) * 1e6:6.1f} us"
             f"   p99 {np.percentile(per[contact], 99) * 1e6:6.1f} us)"
         )
+
+
+#: In a fresh process (``--first-contact-worker``): build an Estimator for a sensor (length unknown,
+#: with its warm-up) or for a replay of known length (no warm-up; SOFTTIP_NUMBA=1 keeps it compiled),
+#: then stream the benchmarks' grasp; prints the build's time and the slowest update.
+def first_contact_worker(expected: int) -> None:
+    g = benchmark_grasp()
+    t0 = time.perf_counter()
+    est = Estimator("murakami2006", expected_samples=expected or None)
+    build = time.perf_counter() - t0
+    slowest, at, state, clock = 0.0, 0, "", time.perf_counter
+    for i, (t, w) in enumerate(zip(g.t.tolist(), g.wrench.tolist())):
+        t0 = clock()
+        e = est.update(t, w)
+        dt = clock() - t0
+        if dt > slowest:
+            slowest, at, state = dt, i, e.state
+    print(json.dumps({"build": build, "slowest": slowest, "at": at, "state": state}))
+
+
+def first_contact_rows() -> None:
+    """A sensor's first contact: each way of building the estimator in a fresh process, with
+    numba's disk cache as it is (warm) and empty (``NUMBA_CACHE_DIR`` a new folder: the first run
+    after installing)."""
+    print("a sensor's first touch: Estimator built, then the 1 kHz grasp streamed, in a fresh process; "
+          "the build's wall time and the slowest update (the sample, its state)")  # fmt: skip
+    for cache in ("warm", "empty"):
+        for label, expected in (("for a sensor (with its warm-up)", 0), ("without the warm-up (length given)", 100_000)):
+            with tempfile.TemporaryDirectory() as tmp:
+                env = {**os.environ, "SOFTTIP_NUMBA": "1", **({"NUMBA_CACHE_DIR": tmp} if cache == "empty" else {})}
+                out = subprocess.run([sys.executable, __file__, "--first-contact-worker", str(expected)], env=env,
+                                     capture_output=True, text=True, check=True).stdout  # fmt: skip
+            r = json.loads(out.strip().splitlines()[-1])
+            print(f"  cache {cache:5s} {label:36s} build {r['build'] * 1e3:8.1f} ms   slowest update "
+                  f"{r['slowest'] * 1e3:8.1f} ms (sample {r['at']:,}, {r['state']})")
 
 
 def _cpu() -> float:

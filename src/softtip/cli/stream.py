@@ -218,8 +218,8 @@ def _stream(
                     source = NetFTSource(host, rdt_port=rdt_port, http_port=http_port, timeout=timeout, device_bias=device_bias, strict=faults, stop=stop)
                 except ValueError as exc:
                     raise click.UsageError(str(exc)) from None
-                # load the estimator's compiled steps before the device streams: built after open(),
-                # the estimator would start the session behind by that load (about 0.5 s of CPU)
+                # load the estimator's compiled steps (its warm-up) before the device streams: built
+                # after open(), the estimator would start the session behind by that load (about 0.5 s of CPU)
                 Estimator(fingertip)
                 source.open()
                 d = source.info

@@ -401,8 +401,6 @@ class DepthTracker:
         self._state = new_depth_state()
         self._ring = np.empty((_RING_START, RING_COLUMNS))
         self._step = depth_step.function(expected_samples) if self.online else None
-        if self.online:  # numba loads the compiled step at its first call: here, not at the first contact
-            self._step(new_depth_state(), np.empty((2, RING_COLUMNS)), self._params, 0.0, *(0.0,) * 11, 1.0, 0.0)
 
     def start_contact(self) -> None:
         """At contact onset."""

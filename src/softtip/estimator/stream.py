@@ -20,11 +20,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from softtip.core._blocks import TIME_EDGE
+from softtip.core._jit import use_numba
 from softtip.core._xp import PY
 from softtip.core.filtering import SosStream, lowpass_sos
 from softtip.core.fingertip import Fingertip, load_fingertip
 from softtip.core.location import contact_kernel
 from softtip.core.noise import SensorNoise, noise_variances
+from softtip.core.spin import tangent_frame
 from softtip.estimator.batch import sample_rate_mismatch
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.contact import (
@@ -88,6 +90,11 @@ class Estimator:
         self, tip: Fingertip | str = "murakami2006", config: EstimatorConfig | None = None, *,
         expected_samples: int | None = None,
     ):  # fmt: skip
+        self._build(tip, config, expected_samples)
+        if expected_samples is None and use_numba(None):
+            self.warm_up()
+
+    def _build(self, tip: Fingertip | str, config: EstimatorConfig | None, expected_samples: int | None) -> None:
         self._n = expected_samples
         self.tip = load_fingertip(tip)
         self.config = resolve_depth(config or EstimatorConfig(), self.tip)
@@ -103,6 +110,38 @@ class Estimator:
         self._contacts = ContactTracker(cfg, effective_noise(cfg.noise, self._sos), expected_samples=self._n)
         self._use_noise(cfg.noise)
         self.reset()
+
+    def warm_up(self) -> None:
+        """Load every compiled step this estimator's configuration calls, now rather than at
+        the first contact: a made-up press (a tare, a push at the skin's apex with a tangential
+        load and a moment rocked about two axes, a release) through a throwaway estimator of the
+        same fingertip and configuration; this estimator's state is untouched.
+
+        numba compiles or loads a step at its first call: at a sensor's first touch that was
+        16.5 ms from the disk cache and 6.0 s of compiling the first time after installing,
+        while the samples queued up (manual §3.7, "The pipeline"). Built for a sensor
+        (``expected_samples`` None) with numba, :class:`Estimator` calls it itself.
+        """
+        cfg = self.config
+        rate = cfg.sample_rate or 1000.0
+        probe = Estimator.__new__(Estimator)  # built as this one was, without a warm-up of its own
+        probe._build(self.tip, cfg, self._n)
+        tip = probe.tip
+        r = tip.project(tip.apex_hint())
+        n = tip.normal(r)
+        e1, e2 = tangent_frame(n)
+        quiet = cfg.tare_duration if cfg.bias is None else 0.0
+        t = np.arange(int(math.ceil((quiet + 0.5) * rate))) / rate
+        s = np.clip((t - quiet - 0.02) / 0.05, 0.0, 1.0) * (t < quiet + 0.4)  # press, hold, release
+        f = 2.0 * s[:, None] * (-n + 0.1 * e1)
+        rock = np.sin(2.0 * math.pi * 5.0 * t)[:, None] * e1 + np.cos(2.0 * math.pi * 7.0 * t)[:, None] * e2
+        m = np.cross(r, f) + 1e-3 * s[:, None] * rock
+        noise = np.concatenate((cfg.noise.force_std, cfg.noise.moment_std))
+        w = np.concatenate((f, m), axis=1) + np.random.default_rng(0).normal(size=(len(t), 6)) * noise
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", EstimatorWarning)
+            for ti, wi in zip(t.tolist(), w.tolist()):
+                probe.update(ti, wi)
 
     def _use_noise(self, noise: SensorNoise) -> None:
         """Build the stages that depend on the (unfiltered) noise model ``noise``: at the
