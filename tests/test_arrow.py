@@ -105,8 +105,10 @@ def test_blocks_read_as_the_whole(tmp_path: Path, suffix: str) -> None:
 
 def _cases() -> list:
     return [
-        ("fz", 7, None, "column 'fz', row 7: empty (null); expected a number"),
-        ("my", 3, float("nan"), "column 'my', row 3: expected a finite number, got nan"),
+        ("fz", 7, None, "column 'fz', row 7: empty (null); expected a number; or give --missing drop (skip the row) or "
+                        "--missing interpolate (fill it)"),
+        ("my", 3, float("nan"), "column 'my', row 3: expected a finite number, got nan; or give --missing drop (skip "
+                                "the row) or --missing interpolate (fill it)"),
         ("t", 1, float("inf"), "column 't', row 1: expected a finite number, got inf"),
     ]
 
@@ -130,9 +132,9 @@ def test_columns_units_and_time_are_checked_as_in_parquet(tmp_path: Path, suffix
         return a.replace(suffix, ".parquet"), b
 
     cols = _table()
-    cols["Fx"] = cols.pop("fx")
+    cols["kraft x"] = cols.pop("fx")
     a, b = both("m", cols)
-    assert a == b and "missing column 'fx'" in a and "did you mean 'fx'?" in a
+    assert a == b and "missing column 'fx'" in a and "--columns t=NAME,fx=NAME" in a
     cols = _table()
     cols["mx"] = cols["mx"].astype(str)
     a, b = both("s", cols)
@@ -145,10 +147,12 @@ def test_columns_units_and_time_are_checked_as_in_parquet(tmp_path: Path, suffix
     assert a == b and a.endswith("metadata softtip.units = 'furlongs'; expected one of: si, kgf-mm")
     a, b = both("e", {k: v[:0] for k, v in _table().items()})
     assert a == b and a.endswith("no rows; expected at least one row of t, fx, fy, fz, mx, my, mz")
-    path = _write(tmp_path / f"opt{suffix}", _table())
-    assert _error(path, columns="t=t") == (
-        f"{path}: --columns, --force-units, --moment-units, --time-units, --missing and --skip-rows apply to "
-        "CSV logs; expected an Arrow IPC (Feather v2) log with softtip's columns (and its softtip.units metadata)"
+    cols = _table()
+    cols["zeit"] = cols.pop("t")
+    path = _write(tmp_path / f"opt{suffix}", cols)  # the CSV options read it as they would a CSV log
+    np.testing.assert_array_equal(read_log(path, columns="t=zeit").t, cols["zeit"])
+    assert _error(path, skip_rows=1) == (
+        f"{path}: --skip-rows applies to CSV logs; an Arrow IPC (Feather v2) file has no lines before its columns"
     )
 
 

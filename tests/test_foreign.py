@@ -410,16 +410,14 @@ def test_piecewise_runs_refuse_and_count_stamps_as_the_one_shot_run(tmp_path: Pa
     assert out.read_bytes() == one_shot.read_bytes()
 
 
-def test_csv_options_on_a_parquet_log_are_refused(tmp_path: Path) -> None:
+def test_csv_options_on_a_parquet_log_read_it_as_a_csv_log(tmp_path: Path) -> None:
     from softtip.io.tables import write_table
 
     ref = read_log(REFERENCE)
     path = tmp_path / "log.parquet"
     write_table({"t": ref.t, **{c: ref.wrench[:, i] for i, c in enumerate(("fx", "fy", "fz", "mx", "my", "mz"))}}, path)
-    with pytest.raises(InputError, match="apply to CSV logs"):
-        read_log(path, moment_units="N*mm")
-    with pytest.raises(InputError, match="apply to CSV logs"):
-        read_log(path, missing="drop")
+    np.testing.assert_allclose(read_log(path, moment_units="N*mm").wrench[:, 3:], ref.wrench[:, 3:] * 1e-3, rtol=1e-15)
+    np.testing.assert_array_equal(read_log(path, missing="drop").wrench, ref.wrench)
     assert len(read_log(path).t) == len(ref.t)
 
 

@@ -82,20 +82,74 @@ def test_units_from_metadata_and_conflicts(tmp_path: Path) -> None:
 
 def test_missing_and_misspelled_columns(tmp_path: Path) -> None:
     cols = _table()
-    cols["Fx"] = cols.pop("fx")
+    cols["kraft x"] = cols.pop("fx")
     path = _write_pq(tmp_path / "m.parquet", cols)
     assert _error(path) == (
-        f"{path}: missing column 'fx'; expected a header with columns t, fx, fy, fz, mx, my, mz (any order, exact "
-        "case). Column 7 is 'Fx': did you mean 'fx'? Other names: rename the columns (a Parquet or Arrow file is read "
-        "by its column names; --columns applies to CSV)."
+        f"{path}: missing column 'fx'; expected a header with columns t, fx, fy, fz, mx, my, mz (any order). "
+        "Other names: map them with --columns t=NAME,fx=NAME,… (docs/guide/input-formats.md lists the headers read "
+        "as they are)."
     )
+    log = read_log(path, columns="fx=kraft x")  # the option the message names
+    np.testing.assert_array_equal(log.wrench[:, 0], cols["kraft x"])
+
+
+def test_foreign_column_names_are_read_as_a_csv_headers(tmp_path: Path) -> None:
+    # ATI's names (Time, Fx … Tz), any case, as in a CSV header; the note says how they were read
+    cols = _table()
+    ati = {"Time": cols["t"], **{n: cols[w] for n, w in zip(("Fx", "Fy", "Fz", "Tx", "Ty", "Tz"), WRENCH)}}
+    path = _write_pq(tmp_path / "ati.parquet", ati)
+    log = read_log(path)
+    np.testing.assert_array_equal(log.t, cols["t"])
+    np.testing.assert_array_equal(log.wrench, np.column_stack([cols[w] for w in WRENCH]))
+    assert "mx ← 'Tx' (N·m" in log.notes[0]
+
+
+def test_unit_options_and_missing_apply_as_to_csv(tmp_path: Path) -> None:
+    cols = _table()
+    cols["t"] = np.round(cols["t"] * 1e3, 3)  # ms
+    path = _write_pq(tmp_path / "u.parquet", cols)
+    log = read_log(path, moment_units="N*mm", force_units="kgf", time_units="ms")
+    np.testing.assert_allclose(log.t, cols["t"] * 1e-3, rtol=1e-15)
+    np.testing.assert_allclose(log.wrench[:, :3], np.column_stack([cols[w] for w in WRENCH[:3]]) * KGF, rtol=1e-15)
+    np.testing.assert_allclose(log.wrench[:, 3:], np.column_stack([cols[w] for w in WRENCH[3:]]) * 1e-3, rtol=1e-15)
+    assert (log.force_unit, log.moment_unit) == ("kgf", "N*mm")
+    # a file whose metadata gives its units refuses the options; --skip-rows never applies
+    meta = _write_pq(tmp_path / "meta.parquet", _table(), {PARQUET_UNITS_KEY: "si"})
+    assert _error(meta, moment_units="N*mm") == (
+        f"{meta}: the file's metadata says its wrench is in si and its t in s; --moment-units applies to a file "
+        "without that metadata (leave it out)"
+    )
+    assert _error(meta, skip_rows=2) == (
+        f"{meta}: --skip-rows applies to CSV logs; a Parquet file has no lines before its columns"
+    )
+    # nulls: the error names the row and --missing, which drops or fills them
+    cols = {k: v.tolist() for k, v in _table().items()}
+    cols["fz"][6] = None
+    holes = _write_pq(tmp_path / "holes.parquet", cols)
+    assert _error(holes).endswith("row 7: empty (null); expected a number; or give --missing drop (skip the row) "
+                                  "or --missing interpolate (fill it)")  # fmt: skip
+    assert len(read_log(holes, missing="drop").t) == 49
+    filled = read_log(holes, missing="interpolate")
+    t = np.array(cols["t"])
+    assert filled.wrench[6, 2] == pytest.approx(np.interp(t[6], t[[5, 7]], [cols["fz"][5], cols["fz"][7]]))
+
+
+def test_kgf_mm_metadata_holds_for_foreign_names(tmp_path: Path) -> None:
+    cols = _table()
+    cols["Fx"] = cols.pop("fx")
+    path = _write_pq(tmp_path / "k.parquet", cols, {PARQUET_UNITS_KEY: "kgf-mm"})
+    log = read_log(path)
+    np.testing.assert_allclose(log.wrench[:, 0], cols["Fx"] * KGF, rtol=1e-15)
+    np.testing.assert_allclose(log.wrench[:, 3], cols["mx"] * KGF_MM, rtol=1e-15)
 
 
 @pytest.mark.parametrize(
     ("column", "row", "value", "expected"),
     [
-        ("fz", 7, None, "column 'fz', row 7: empty (null); expected a number"),
-        ("my", 3, float("nan"), "column 'my', row 3: expected a finite number, got nan"),
+        ("fz", 7, None, "column 'fz', row 7: empty (null); expected a number; or give --missing drop (skip the row) or "
+                        "--missing interpolate (fill it)"),
+        ("my", 3, float("nan"), "column 'my', row 3: expected a finite number, got nan; or give --missing drop (skip "
+                                "the row) or --missing interpolate (fill it)"),
         ("t", 1, float("inf"), "column 't', row 1: expected a finite number, got inf"),
     ],
 )

@@ -259,3 +259,12 @@ def test_a_replayed_ros_export_keeps_its_stamps_in_the_recording(tmp_path):
                          capture_output=True, text=True, timeout=60)  # fmt: skip
     assert out.returncode == 0, out.stderr
     assert tuple(read_rows(plain)[0]) == RECORD_COLUMNS
+
+
+def test_the_recording_is_csv_and_a_parquet_or_arrow_name_is_refused(tmp_path):
+    # the recorder writes CSV rows as they come: under a .parquet name they were CSV text (exit 0)
+    for name in ("rec.parquet", "rec.arrow", "rec.feather"):
+        r = subprocess.run([SOFTTIP, "stream", "--replay", EXAMPLE_PATH, "--speed", "0", "-o", str(tmp_path / name)],
+                           capture_output=True, text=True, timeout=60)  # fmt: skip
+        assert r.returncode == 2 and "but this command writes CSV; expected a name ending in .csv" in r.stderr, r.stderr
+    assert list(tmp_path.iterdir()) == []

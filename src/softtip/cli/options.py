@@ -346,13 +346,14 @@ def bag_warnings(path: str, bag_log) -> None:
         )
 
 
-def check_outputs(inputs, outputs) -> None:
-    """Exit 2 when an output is an input or another output of the run (:func:`softtip.io.atomic.check_distinct`)."""
+def check_outputs(inputs, outputs, table_formats: tuple[str, ...] = ("csv", "parquet", "arrow")) -> None:
+    """Exit 2 when an output is an input or another output of the run (:func:`softtip.io.atomic.check_distinct`),
+    or ``-o`` is named like a table the command does not write (``table_formats``: :func:`check_table_names`)."""
     from softtip.io.atomic import check_distinct
 
     outputs = list(outputs)
     check_output_names(outputs)
-    check_table_names(outputs)
+    check_table_names(outputs, table_formats)
     check_distinct(inputs, outputs)
 
 

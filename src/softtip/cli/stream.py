@@ -82,7 +82,7 @@ an error (exit 1).
     + FRAMES_HELP
 )
 @option("--netft", "host", metavar="HOST", help="Address of the Net F/T / Axia.")
-@option("--replay", "replay", type=click.Path(dir_okay=False), metavar="LOG.csv", help="Replay a recorded CSV log (columns t, fx, fy, fz, mx, my, mz) instead.")
+@option("--replay", "replay", type=click.Path(dir_okay=False), metavar="LOG", help="Replay a recorded log instead: CSV, or Parquet or Arrow IPC by its name (columns t, fx, fy, fz, mx, my, mz, or a layout the input formats page lists).")
 @option("--speed", type=Number("× real time", 0.0, MAX_SPEED), default=1.0, show_default=True, help="Replay speed: 1 real time, 2 twice as fast, 0 as fast as possible.")
 @option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the replayed log's wrench.")
 @option("--rdt-port", type=PORT, default=49152, show_default=True, help="UDP port of the sensor's RDT server.")
@@ -127,9 +127,9 @@ def stream(
     sensor_range = full_scale_range(full_scale, estimator_opts.get("sensor"))  # default: the --sensor's, else a Nano17's
 
     if (host is None) == (replay is None):
-        raise click.UsageError("give either --netft HOST or --replay LOG.csv")
+        raise click.UsageError("give either --netft HOST or --replay LOG")
     if payload is not None and replay is None:
-        raise click.UsageError("--payload needs the orientation columns of a replayed log (--replay LOG.csv)")
+        raise click.UsageError("--payload needs the orientation columns of a replayed log (--replay LOG)")
     if 0 < speed < MIN_SPEED:
         raise click.BadParameter(
             f"{speed:g}; expected 0 (as fast as possible) or a number in [{MIN_SPEED:g}, {MAX_SPEED:g}] × real time",
@@ -149,6 +149,7 @@ def stream(
         [("--replay", replay), ("--payload", payload), ("--tip", tip if os.path.isfile(tip) else None),
          ("--bias", estimator_opts.get("bias_file"))],
         [("-o", record), ("--rerun-save", rerun_save)],
+        table_formats=("csv",),  # the recorder writes CSV rows as they come
     )
     from softtip.io.atomic import Outputs
 

@@ -357,7 +357,8 @@ def check_wrench_units(
     if off > np.log(NOISE_OFF) and named:
         f0, m0 = float(np.median(noise.force_std)), float(np.median(noise.moment_std))  # type: ignore[union-attr]
         raise InputError(
-            f"{where}read in {read_in}, the noise while taring is {ratio[0] * f0:.3g} N and {ratio[1] * m0 * 1e3:.3g} N·mm, "
+            f"{where}read in {read_in}, the noise while taring is {ratio[0] * f0:.3g} N and {ratio[1] * m0 * 1e3:.3g} N·mm "
+            f"({ratio[1] * m0:.3g} N·m), "
             f"but the sensor's is {f0:.3g} N and {m0 * 1e3:.3g} N·mm (--force-noise, --moment-noise): {fit_text()}. "
             "If the sensor really is this noisy, give its --force-noise and --moment-noise"
         )

@@ -121,6 +121,14 @@ _WRITE_THREADS = 4
 # Header names people use for time; difflib alone does not connect them to "t".
 _TIME_ALIASES = frozenset({"time", "times", "timestamp", "ts", "sec", "secs", "seconds"})
 
+#: Cells read as missing (empty) in a required column: pyarrow's CSV reader's default null values,
+#: written out so that the row-by-row parser, which words the errors, reads the same ones.
+_NULL_CELLS = frozenset(("", "#N/A", "#N/A N/A", "#NA", "-1.#IND", "-1.#QNAN", "-NaN", "-nan", "1.#IND", "1.#QNAN",
+                         "N/A", "NA", "NULL", "NaN", "n/a", "nan", "null"))  # fmt: skip
+
+#: What an error about a missing or NaN cell adds: the options that read such a log.
+_MISSING_FIX = "; or give --missing drop (skip the row) or --missing interpolate (fill it)"
+
 # Characters that force a CSV cell to be quoted.
 _CSV_SPECIAL = (",", '"', "\n", "\r")
 
@@ -481,13 +489,13 @@ def read_log(
     fmt = _log_format(source, units, columns, force_units, moment_units, time_units, missing, skip_rows)
     columnar = None if hasattr(path, "read") else _columnar(path)  # type: ignore[arg-type]
     if columnar is not None:
-        if not fmt.plain or (force_units or moment_units):
-            raise InputError(
-                f"{source}: --columns, --force-units, --moment-units, --time-units, --missing and --skip-rows apply to "
-                f"CSV logs; expected a{'n' if columnar == 'arrow' else ''} {TABLE_FORMATS[columnar][1]} log with "
-                "softtip's columns (and its softtip.units metadata)"
-            )
-        return _read_parquet(path, source, units, columnar)  # type: ignore[arg-type]
+        if skip_rows is not None:
+            article = "an" if columnar == "arrow" else "a"
+            raise InputError(f"{source}: --skip-rows applies to CSV logs; {article} {TABLE_FORMATS[columnar][1]} file has "
+                             "no lines before its columns")  # fmt: skip
+        stated = [o for o, v in (("--force-units", force_units), ("--moment-units", moment_units),
+                                 ("--time-units", time_units)) if v is not None]  # fmt: skip
+        return _read_parquet(path, source, units, columnar, fmt, stated)  # type: ignore[arg-type]
     data = _read_data(path, source)
     if isinstance(data, bytes):
         data = _decompress(data, source)
@@ -1267,7 +1275,7 @@ def _parse_arrow(
             ),
             convert_options=pacsv.ConvertOptions(
                 column_types=types, check_utf8=True, strings_can_be_null=False, quoted_strings_can_be_null=False,
-                decimal_point=header.decimal,
+                decimal_point=header.decimal, null_values=sorted(_NULL_CELLS),
             ),
         )
         try:
@@ -1494,11 +1502,17 @@ PARQUET_UNITS_KEY = "softtip.units"
 PARQUET_FINGERTIP_KEY = "softtip.fingertip"
 
 
-def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None, fmt: str = "parquet") -> Log:
+def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None, fmt: str = "parquet",
+                  layout: LogFormat | None = None, stated: Sequence[str] = ()) -> Log:  # fmt: skip
     """A log from a Parquet or Arrow IPC (Feather v2) file (``fmt``): the same columns and checks as
-    CSV, rows named by number."""
+    CSV, rows named by number. softtip's own columns are read as they are (the units of the
+    schema's ``softtip.units`` metadata); other names, and the options ``layout`` gives (columns,
+    units, ``--missing``), as a CSV header with those names (:func:`_read_mapped_table`).
+    ``stated``: the per-quantity unit options given (their names), which a file with that
+    metadata refuses."""
     import pyarrow as pa
 
+    layout = layout or LogFormat.of(units)
     name = TABLE_FORMATS[fmt][1]
     what = f"{name} log file"
     try:
@@ -1519,9 +1533,19 @@ def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None, 
             f"{source}: the file's metadata says its wrench is in {file_units}, but {units} was asked for; "
             f"expected the units to agree (leave them out to use the file's)"
         )
-    units = units or file_units or "si"
-
     names = list(table.column_names)
+    if file_units is not None and stated:
+        raise InputError(
+            f"{source}: the file's metadata says its wrench is in {file_units} and its t in s; {', '.join(stated)} "
+            f"appl{'ies' if len(stated) == 1 else 'y'} to a file without that metadata (leave "
+            f"{'it' if len(stated) == 1 else 'them'} out)"
+        )
+    if not (layout.plain and not stated and set(REQUIRED_COLUMNS) <= set(names)):
+        if units is None and file_units not in (None, "si"):  # the metadata's units for the columns that give none
+            force, moment = UNIT_SYSTEM_UNITS[file_units]
+            layout = replace(layout, force_unit=force, moment_unit=moment)
+        return _read_mapped_table(table, names, source, layout, units or file_units or "si")
+    units = units or file_units or "si"
     header = _Header(names=[n.strip() for n in names], line=0, data_base=0, lines=io.StringIO(), comments=[])
     try:
         index = _column_index(header, source, dialects=False)
@@ -1541,13 +1565,14 @@ def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None, 
             raise InputError(f"{where}: expected numbers, got type {col.type}")
         if col.null_count:
             row = int(np.argmax(col.is_null().to_numpy(zero_copy_only=False))) + 1
-            raise InputError(f"{where}, row {row}: empty (null); expected a number")
+            raise InputError(f"{where}, row {row}: empty (null); expected a number{_MISSING_FIX}")
         values = t if i == 0 else wrench[:, i - 1]
         values[:] = col.to_numpy()
         bad = ~np.isfinite(values)
         if bad.any():
             row = int(np.argmax(bad))
-            raise InputError(f"{where}, row {row + 1}: expected a finite number, got {float(values[row])!r}")
+            raise InputError(f"{where}, row {row + 1}: expected a finite number, got {float(values[row])!r}"
+                             f"{_MISSING_FIX if math.isnan(values[row]) else ''}")  # fmt: skip
     back = np.diff(t) < 0
     if back.any():
         row = int(np.argmax(back)) + 1
@@ -1568,6 +1593,68 @@ def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None, 
         repeated_t=repeated,
         warnings=tuple(notes),
     )
+
+
+def _read_mapped_table(table: Any, names: list[str], source: str, fmt: LogFormat, units: str) -> Log:
+    """A Parquet or Arrow table whose column names are read as a CSV header's (the recognised
+    layouts, ``--columns``, units in the names or the unit options; ``fmt``), then the same
+    missing cells, time unit and origin and wrench units as a CSV log (:func:`_finish`); rows
+    named by number."""
+    import pyarrow as pa
+
+    stripped = [n.strip() for n in names]
+    header = _Header(names=stripped, line=0, data_base=0, lines=io.StringIO(), comments=[])
+    try:
+        header.cmap = resolve_columns(stripped, fmt)
+    except ColumnError as exc:
+        raise InputError(f"{source}: {exc}") from None
+    try:
+        index = _column_index(header, source)
+    except InputError as exc:  # the CSV wording, without a header line
+        raise InputError(str(exc).replace(f"{source}:0: ", f"{source}: ", 1)) from None
+    n = table.num_rows
+    if n == 0:
+        raise InputError(f"{source}: no rows; expected at least one row of {_EXPECTED_HEADER}")
+    values = {}
+    for role in _roles(index):
+        col = table.column(index[role])
+        where = f"{source}: column {names[index[role]]!r}"
+        if not (pa.types.is_floating(col.type) or pa.types.is_integer(col.type)):
+            raise InputError(f"{where}: expected numbers, got type {col.type}")
+        exact = pa.types.is_integer(col.type) and role in ("t", "nanosec") and not col.null_count
+        v = np.array(col.to_numpy(zero_copy_only=False), dtype=np.int64 if exact else np.float64)
+        bad = np.isinf(v) if fmt.missing != "fail" or exact else ~np.isfinite(v)
+        if bad.any():
+            row = int(np.argmax(bad))
+            what = "empty (null)" if col.is_null()[row].as_py() else repr(float(v[row]))
+            raise InputError(f"{where}, row {row + 1}: expected a finite number, got {what}"
+                             f"{'' if np.isinf(v[row]) else _MISSING_FIX}")  # fmt: skip
+        if role in _SPLIT_STAMP and "nanosec" in index:
+            ok = _split_stamp_valid(role, v) | np.isnan(v)
+            if not ok.all():
+                row = int(np.argmin(ok))
+                raise InputError(f"{where}, row {row + 1}: expected {_SPLIT_STAMP[role][1]} (the stamp is split in "
+                                 f"seconds and nanoseconds), got {v[row]!r}")  # fmt: skip
+        values[role] = v
+    t = values["t"]
+    if "nanosec" in index:
+        t = (values["t"] * 1_000_000_000 + values["nanosec"]) if t.dtype.kind == "i" and values["nanosec"].dtype.kind == "i" \
+            else values["t"] * 1e9 + values["nanosec"]  # fmt: skip
+    wrench = np.empty((n, 6))
+    for k, role in enumerate(ROLES[1:]):
+        wrench[:, k] = values[role]
+    tf = t.astype(np.float64, copy=False)
+    known = np.flatnonzero(~np.isnan(tf))
+    back = np.flatnonzero(np.diff(tf[known]) < 0)
+    if len(back):
+        row, before = int(known[back[0] + 1]), int(known[back[0]])
+        cols = " and ".join(repr(names[index[r]]) for r in ("t", "nanosec") if r in index)
+        raise InputError(
+            f"{source}: column {cols}, row {row + 1}: expected t non-decreasing (a stamp may repeat, not go back), "
+            f"got {t[row]!r} at row {row + 1} after {t[before]!r} at row {before + 1}"
+        )
+    extra = {names[j]: table.column(j).to_numpy(zero_copy_only=False) for j in range(len(names)) if j not in index.values()}
+    return _finish(t, wrench, extra, header, fmt, source, units, None, None)
 
 
 def _column_index(header: _Header, source: str, *, dialects: bool = True) -> dict[str, int]:
@@ -1843,7 +1930,7 @@ def _parse_careful(
     header.lines.seek(start[0])
     reader = csv.reader(header.lines, delimiter=header.delimiter)
     comma = header.decimal == ","
-    fix = "; or give --missing drop (skip the row) or --missing interpolate (fill it)"
+    fix = _MISSING_FIX
     # A record ends on line base + line_num and starts one after the previous one ended.
     base = header.data_base + start[1]
     values: list[list[float]] = []
@@ -1909,6 +1996,11 @@ def _parse_careful(
             try:
                 value = float(cell.replace(",", ".") if comma else cell)
             except ValueError:
+                if cell.strip() in _NULL_CELLS:  # a missing value's spelling (pyarrow's reader takes it as one too)
+                    if missing != "fail":
+                        sample[roles.index(name)] = math.nan
+                        continue
+                    raise InputError(f"{where}: expected a number, got {cell!r} (a missing value){fix}") from None
                 clock = name in ("t", "nanosec") and re.fullmatch(r"\s*\d{1,2}:\d{2}(:\d{2}([.,]\d+)?)?\s*", cell)
                 hint = ("; clock times (hh:mm:ss) are not read: give t in seconds, or map a column of seconds or "
                         "stamps with --columns t=NAME") if clock else ""  # fmt: skip
@@ -2889,7 +2981,8 @@ class LogBlocks:
                 read_options=pacsv.ReadOptions(column_names=names, use_threads=False, block_size=_CSV_BLOCK_BYTES),
                 parse_options=pacsv.ParseOptions(newlines_in_values=True, ignore_empty_lines=False),
                 convert_options=pacsv.ConvertOptions(
-                    column_types=types, check_utf8=True, strings_can_be_null=False, quoted_strings_can_be_null=False
+                    column_types=types, check_utf8=True, strings_can_be_null=False, quoted_strings_can_be_null=False,
+                    null_values=sorted(_NULL_CELLS),
                 ),
             )
             while True:
