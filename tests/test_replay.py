@@ -268,3 +268,16 @@ def test_the_recording_is_csv_and_a_parquet_or_arrow_name_is_refused(tmp_path):
                            capture_output=True, text=True, timeout=60)  # fmt: skip
         assert r.returncode == 2 and "but this command writes CSV; expected a name ending in .csv" in r.stderr, r.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+def test_quiet_stream_says_nothing_but_records_the_same(tmp_path):
+    loud, quiet = tmp_path / "loud.csv", tmp_path / "quiet.csv"
+    a = subprocess.run([SOFTTIP, "stream", "--replay", EXAMPLE_PATH, "--speed", "0", "-o", str(loud)],
+                       capture_output=True, text=True, timeout=60)  # fmt: skip
+    b = subprocess.run([SOFTTIP, "stream", "--replay", EXAMPLE_PATH, "--speed", "0", "-o", str(quiet), "-q"],
+                       capture_output=True, text=True, timeout=60)  # fmt: skip
+    assert a.returncode == b.returncode == 0, a.stderr + b.stderr
+    assert "samples in" in a.stderr and b.stderr == ""
+    for row_a, row_b in zip(read_rows(loud), read_rows(quiet), strict=True):
+        row_a.pop("host_time"), row_b.pop("host_time")  # the host's clock at each sample
+        assert row_a == row_b

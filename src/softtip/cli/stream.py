@@ -92,7 +92,8 @@ an error (exit 1).
 @option("--strict", metavar="FAULTS", default="", help="Comma-separated faults that end the stream (exit 1): status, restart, stall, lost, duplicate, late, malformed, dropped, or all. Default: none (counted, warned).")
 @option("--duration", type=POSITIVE("s"), metavar="S", help="Stop after S seconds (default: until Ctrl-C or the end of the replayed log).")
 @option("-o", "--output", "--record", "record", type=click.Path(dir_okay=False), metavar="FILE.csv", help="Record raw samples and estimates to FILE.csv as they come (--record is the same option).")
-@option("--view/--no-view", default=None, help="Live terminal view (default: when standard error is a terminal).")
+@option("--view/--no-view", default=None, help="Live terminal view (default: when standard error is a terminal, and not with -q).")
+@option("-q", "--quiet", is_flag=True, help="Nothing but warnings and errors on standard error (no view unless --view, no tare line, no summary).")
 @option("--rerun", "rerun_spawn", is_flag=True, help="Show the 3-D view live in a Rerun viewer (needs the rerun-sdk package; at most 50 samples/s are drawn).")
 @option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save the 3-D view and time series to FILE.rrd.")
 @option("--payload", type=click.Path(dir_okay=False), metavar="FILE.toml", help="With --replay: remove the fingertip's weight per sample, using the log's qw, qx, qy, qz columns (recorded raw_* columns are then compensated).")
@@ -114,6 +115,7 @@ def stream(
     duration,
     record,
     view,
+    quiet,
     rerun_spawn,
     rerun_save,
     tip,
@@ -153,12 +155,14 @@ def stream(
     )
     from softtip.io.atomic import Outputs
 
+    if quiet and view is None:
+        view = False
     outputs = Outputs()  # the Rerun recording, put in place when the session ends (the -o recording is written as it comes)
     rerun_file = outputs.file(rerun_save) if rerun_save else None  # a missing folder: stop before the sensor is opened
     try:
         _stream(
             ctx, host, replay, speed, units, rdt_port, http_port, timeout, device_bias, faults, duration, record, view,
-            rerun_spawn, rerun_file, tip, payload, estimator_opts, outputs, sensor_range, formats,
+            rerun_spawn, rerun_file, tip, payload, estimator_opts, outputs, sensor_range, formats, quiet,
         )  # fmt: skip
     except BaseException:
         outputs.discard()
@@ -168,7 +172,7 @@ def stream(
 
 def _stream(
     ctx, host, replay, speed, units, rdt_port, http_port, timeout, device_bias, faults, duration, record, view,
-    rerun_spawn, rerun_file, tip, payload, estimator_opts, outputs, sensor_range, formats,
+    rerun_spawn, rerun_file, tip, payload, estimator_opts, outputs, sensor_range, formats, quiet=False,
 ) -> None:
     import signal
     import threading
@@ -281,7 +285,7 @@ def _stream(
             return
         except SourceError as exc:
             if stats is not None and estimator is not None:  # the session ran: its counters as at any end
-                _report(LiveSummary.of(stats, "fault"), source.name, estimator, record)
+                _report(LiveSummary.of(stats, "fault"), source.name, estimator, record, quiet)
             else:
                 for w in getattr(source, "warnings", None) or []:
                     click.echo(f"softtip: warning: {source.name}: {w}", err=True)
@@ -297,7 +301,7 @@ def _stream(
             source.close()
         if recorder is not None:
             recorder.close()
-    _report(summary, source.name, estimator, record)
+    _report(summary, source.name, estimator, record, quiet)
 
 
 def _check_replay_units(log, payload, fingertip, config) -> None:
@@ -321,12 +325,20 @@ def _check_replay_units(log, payload, fingertip, config) -> None:
     check_units(SimpleNamespace(wrench=log.wrench - bias, taring=tare.taring), fingertip, config, log)
 
 
-def _report(summary: LiveSummary, name: str, estimator: Estimator, record: str | None) -> None:
+def _report(summary: LiveSummary, name: str, estimator: Estimator, record: str | None, quiet: bool = False) -> None:
     """The end of a session on standard error: the source's warnings, the tare (as `estimate`
     says it, before its summary), the counters and the estimator's warnings (also when a fault
-    ended it, before the error)."""
+    ended it, before the error); ``quiet``: the warnings only."""
     for w in summary.warnings:
         click.echo(f"softtip: warning: {name}: {w}", err=True)
+    if not quiet:
+        _summary(summary, estimator, record)
+    for msg in dict.fromkeys(estimator.warnings):
+        click.echo(f"softtip: warning: {msg}", err=True)
+
+
+def _summary(summary: LiveSummary, estimator: Estimator, record: str | None) -> None:
+    """The tare and the counters of a session."""
     if estimator.tare_report is not None and estimator.tare_report.source != "none":
         click.echo(f"softtip: {estimator.tare_report.summary()}", err=True)
     rate = summary.samples / summary.seconds if summary.seconds > 0 else 0.0
@@ -340,8 +352,6 @@ def _report(summary: LiveSummary, name: str, estimator: Estimator, record: str |
         + (f"; recorded -> {record}" if record else ""),
         err=True,
     )
-    for msg in dict.fromkeys(estimator.warnings):
-        click.echo(f"softtip: warning: {msg}", err=True)
 
 
 def _within_range(full_scale: FullScale, name: str, stats):
