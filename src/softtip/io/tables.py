@@ -1626,8 +1626,9 @@ def _read_mapped_table(table: Any, names: list[str], source: str, fmt: LogFormat
         bad = np.isinf(v) if fmt.missing != "fail" or exact else ~np.isfinite(v)
         if bad.any():
             row = int(np.argmax(bad))
-            what = "empty (null)" if col.is_null()[row].as_py() else repr(float(v[row]))
-            raise InputError(f"{where}, row {row + 1}: expected a finite number, got {what}"
+            if col.is_null()[row].as_py():
+                raise InputError(f"{where}, row {row + 1}: empty (null); expected a number{_MISSING_FIX}")
+            raise InputError(f"{where}, row {row + 1}: expected a finite number, got {float(v[row])!r}"
                              f"{'' if np.isinf(v[row]) else _MISSING_FIX}")  # fmt: skip
         if role in _SPLIT_STAMP and "nanosec" in index:
             ok = _split_stamp_valid(role, v) | np.isnan(v)
@@ -1637,9 +1638,8 @@ def _read_mapped_table(table: Any, names: list[str], source: str, fmt: LogFormat
                                  f"seconds and nanoseconds), got {v[row]!r}")  # fmt: skip
         values[role] = v
     t = values["t"]
-    if "nanosec" in index:
-        t = (values["t"] * 1_000_000_000 + values["nanosec"]) if t.dtype.kind == "i" and values["nanosec"].dtype.kind == "i" \
-            else values["t"] * 1e9 + values["nanosec"]  # fmt: skip
+    if "nanosec" in index:  # whole seconds and nanoseconds: exact as int64 ns, as a CSV log's (_combine_time)
+        t = _combine_time(np.column_stack((values["t"], values["nanosec"])).astype(np.float64), ["t", "nanosec"])
     wrench = np.empty((n, 6))
     for k, role in enumerate(ROLES[1:]):
         wrench[:, k] = values[role]
