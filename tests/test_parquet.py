@@ -273,3 +273,15 @@ def test_lean_writer_settings(tmp_path: Path) -> None:
     group = pq.ParquetFile(path).metadata.row_group(0)
     assert all(group.column(i).is_stats_set for i in range(group.num_columns))
     assert group.column(0).statistics.min == cols["t"].min()
+
+
+def test_a_stamp_split_in_seconds_and_nanoseconds_is_exact(tmp_path: Path) -> None:
+    # a ROS export's names (PlotJuggler, rosbags-dataframe): header.stamp.sec and .nanosec, integers
+    cols = _table()
+    ns = 1_700_000_000_123_456_789 + np.round(cols["t"] * 1e9).astype(np.int64)
+    table = {"header.stamp.sec": ns // 10**9, "header.stamp.nanosec": ns % 10**9}
+    table.update({f"wrench.{'force' if w[0] == 'f' else 'torque'}.{w[1]}": cols[w] for w in WRENCH})
+    log = read_log(_write_pq(tmp_path / "ros.parquet", table))
+    np.testing.assert_array_equal(log.extra["stamp_ns"], ns)
+    np.testing.assert_allclose(log.t, (ns - ns[0]) * 1e-9, rtol=0, atol=1e-15)
+    np.testing.assert_array_equal(log.wrench, np.column_stack([cols[w] for w in WRENCH]))
