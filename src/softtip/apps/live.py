@@ -275,7 +275,7 @@ class Recorder:
         rows = [pending.popleft() for _ in range(n)]
         # one C-level format per block of rows (as softtip.io.tables.write_table does); small blocks,
         # because a format call holds the GIL and the consumer loop must not wait long for it; each
-        # block written out at once: the write (a system call) hands the GIL back to the loop
+        # block written out at once, then (a sensor's batch) a pause that lets the loop take the GIL
         fh = self._fh
         pause = _YIELD_S if pace and n <= _PACED_ROWS else 0.0
         for i in range(0, n, _BLOCK):
