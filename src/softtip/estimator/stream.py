@@ -46,6 +46,9 @@ from softtip.estimator.tare import StreamTare, TareReport, noise_in_use
 
 __all__ = ["Estimator"]
 
+#: (fingertip class, configuration) pairs whose steps a warm-up loaded in this process: the same
+#: pair calls the same compiled steps, so a sensor's Estimator built again skips it (about 8 ms).
+_WARMED: set = set()
 _NAN3 = (math.nan, math.nan, math.nan)
 _NAN6 = (math.nan,) * 6
 _new_estimate = tuple.__new__  # SampleEstimate with every field given, without its __new__'s frame
@@ -91,7 +94,7 @@ class Estimator:
         expected_samples: int | None = None,
     ):  # fmt: skip
         self._build(tip, config, expected_samples)
-        if expected_samples is None and use_numba(None):
+        if expected_samples is None and use_numba(None) and (type(self.tip), self.config) not in _WARMED:
             self.warm_up()
 
     def _build(self, tip: Fingertip | str, config: EstimatorConfig | None, expected_samples: int | None) -> None:
@@ -120,7 +123,8 @@ class Estimator:
         numba compiles or loads a step at its first call: at a sensor's first touch that was
         16.5 ms from the disk cache and 6.0 s of compiling the first time after installing,
         while the samples queued up (manual §3.7, "The pipeline"). Built for a sensor
-        (``expected_samples`` None) with numba, :class:`Estimator` calls it itself.
+        (``expected_samples`` None) with numba, :class:`Estimator` calls it itself, once per
+        process for each fingertip class and configuration.
         """
         cfg = self.config
         rate = cfg.sample_rate or 1000.0
@@ -142,6 +146,7 @@ class Estimator:
             warnings.simplefilter("ignore", EstimatorWarning)
             for ti, wi in zip(t.tolist(), w.tolist()):
                 probe.update(ti, wi)
+        _WARMED.add((type(self.tip), cfg))
 
     def _use_noise(self, noise: SensorNoise) -> None:
         """Build the stages that depend on the (unfiltered) noise model ``noise``: at the
