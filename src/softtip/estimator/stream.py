@@ -47,7 +47,7 @@ from softtip.estimator.tare import StreamTare, TareReport, noise_in_use
 __all__ = ["Estimator"]
 
 #: (fingertip class, configuration) pairs whose steps a warm-up loaded in this process: the same
-#: pair calls the same compiled steps, so a sensor's Estimator built again skips it (about 8 ms).
+#: pair calls the same compiled steps, so a sensor's Estimator built again skips it.
 _WARMED: set = set()
 _NAN3 = (math.nan, math.nan, math.nan)
 _NAN6 = (math.nan,) * 6
