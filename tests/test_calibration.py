@@ -100,11 +100,15 @@ def test_refuses_presses_at_one_spot():
         calibrate_fingertip(t, w, "sphere")
 
 
-def test_refuses_too_few_presses(sphere_log):
+@pytest.mark.parametrize("end", [4.4, 5.7])
+def test_refuses_too_few_presses(sphere_log, end):
+    # three and four presses: through four points any sphere fits, so the fit needs five (four
+    # were refused as "too close to one spot ... (radius no sphere)", asking for at least 4)
     t, w = sphere_log
-    keep = t < 4.4  # three presses
-    with pytest.raises(InputError, match="expected at least 4"):
+    keep = t < end
+    with pytest.raises(InputError, match="expected at least 5") as info:
         calibrate_fingertip(t[keep], w[keep], "sphere")
+    assert "no sphere" not in str(info.value)
 
 
 @settings(max_examples=60)

@@ -87,15 +87,20 @@ class MeshCalibration:
     def summary(self) -> str:
         t = ", ".join(f"{v * 1e3:+.3f}" for v in self.translation)
         ts = ", ".join(f"{v * 1e3:.3f}" for v in self.translation_std)
+        rotated = bool(np.any(self.rotation_std > 0))
         lines = [
-            f"mesh shift ({t}) mm ± ({ts}) mm",
+            f"mesh shift ({t}) mm ± ({ts}) mm" + (" (after the rotation below, about the mesh's centre)" if rotated else ""),
             f"skin compliance {self.compliance * 1e3:.3f} ± {self.compliance_std * 1e3:.3f} mm/√N",
             f"{self.n_presses} presses used ({self.n_skipped} skipped), rms residual {self.rms_residual * 1e3:.3f} mm",
         ]
-        if np.any(self.rotation_std > 0):
+        if rotated:
             r = ", ".join(f"{math.degrees(v):+.3f}" for v in self.rotation)
             rs = ", ".join(f"{math.degrees(v):.3f}" for v in self.rotation_std)
-            lines.insert(1, f"mesh rotation ({r})° ± ({rs})°")
+            lines.insert(1, f"mesh rotation vector ({r})° ± ({rs})°, about the mesh's bounding-sphere centre")
+        # what the fingertip file gets: the file's own mounting composed with the fitted move
+        tr = ", ".join(f"{v * 1e3:+.3f}" for v in self.tip.translation)
+        rpy = ", ".join(f"{math.degrees(v):+.3f}" for v in self.tip.rpy)
+        lines.insert(2 if rotated else 1, f"the fingertip file's mounting: translation ({tr}) mm, rpy ({rpy})°")
         return "\n".join(lines)
 
 

@@ -407,12 +407,20 @@ def _sphere_fit(points: NDArray) -> tuple[NDArray, float, float]:
 # the fit
 
 
+#: Presses the fit needs at least: the sphere through their points that starts it has 4
+#: parameters, and one press more is what shows its spread (through 4 points any sphere fits).
+MIN_PRESSES = 5
+#: deg: the least turn of a press's force direction that locates its point (``min_spread``).
+MIN_TURN_DEG = 3.0
+
+
 def _not_excited(detail: str, model: PressModel) -> InputError:
     return InputError(
         f"the presses do not excite enough directions to calibrate the fingertip: {detail}. "
         "Press the fingertip against a flat surface at many points spread over the skin (at least "
-        f"4, better 15 or more, covering {model.coverage}), and during each press let the surface "
-        "slide or the finger rock a little so that the friction force turns (by 10° or more)"
+        f"{MIN_PRESSES}, better 15 or more, covering {model.coverage}), and during each press let the surface "
+        f"slide or the finger rock a little so that the friction force turns (at least {MIN_TURN_DEG:g}° to locate "
+        "the press; 40° or more pins its point well)"
     )
 
 
@@ -445,7 +453,7 @@ def calibrate_fingertip(
     tare_duration: float = 0.2,
     contact_threshold: float = 0.05,
     min_force: float = 0.5,
-    min_spread: float = math.sin(math.radians(3.0)),
+    min_spread: float = math.sin(math.radians(MIN_TURN_DEG)),
     compliance: bool = True,
     noise: SensorNoise = NANO17,
     jackknife: bool | None = None,
@@ -527,20 +535,21 @@ def calibrate_fingertip(
             n_skipped += 1
             continue
         presses.append(keep)
-    if len(presses) < 4:
+    if len(presses) < MIN_PRESSES:
         raise _not_excited(
-            f"{source} has {len(presses)} press(es) with at least 5 samples above {min_force:g} N; expected at least 4",
+            f"{source} has {len(presses)} press(es) with at least 5 samples above {min_force:g} N; expected at least "
+            f"{MIN_PRESSES}",
             model,
         )
 
     # start values: per press the point m = r × f pins (if the force turns), a sphere through them
     spread = np.array([force_spread(f_all[k]) for k in presses])
     located = np.flatnonzero(spread >= min_spread)
-    if len(located) < 4:
+    if len(located) < MIN_PRESSES:
         raise _not_excited(
             f"in {len(located)} of {len(presses)} presses of {source} the force direction turns by more than "
             f"{math.degrees(math.asin(min_spread)):.0f}° (largest turn {math.degrees(math.asin(min(spread.max(), 1.0))):.1f}°); "
-            "expected at least 4",
+            f"expected at least {MIN_PRESSES}",
             model,
         )
     force_var = np.square(noise.force_std)
@@ -560,8 +569,9 @@ def calibrate_fingertip(
         n_skipped += int(np.count_nonzero(~keep))
         presses = [p for p, ok in zip(presses, keep) if ok]
         normals0 = normals0[keep]
-        if len(presses) < 4:
-            raise _not_excited(f"{len(presses)} presses of {source} are {model.region}; expected at least 4", model)
+        if len(presses) < MIN_PRESSES:
+            raise _not_excited(f"{len(presses)} presses of {source} are {model.region}; expected at least {MIN_PRESSES}",
+                               model)  # fmt: skip
 
     sol = _fit(f_all, m_all, presses, normals0, c0, r0, compliance, noise, model)
     tip = model.tip(sol["parameters"], source)

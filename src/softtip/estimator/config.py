@@ -54,7 +54,8 @@ class EstimatorConfig:
     stall_time : float
         s; the first rise ends when ``|f|`` has set no new maximum for this long.
     fallback_samples : int
-        Samples averaged for a latch when the rise has no sample in the window.
+        When the rise has no sample in the window: the least number of soft-finger solutions
+        averaged (weighted by ``|f|²``) for the latch, the rise's and those after it.
     noise : SensorNoise
         Standard deviations of the unfiltered sensor noise: the model the tare's samples are
         checked against, and the one in use unless the tare measures another
@@ -327,7 +328,8 @@ class EstimatorConfig:
         0.1, "The first rise ends when |f| has set no new maximum for this long.", unit="s", low=0.0, metavar="S",
         group="latch")
     fallback_samples: int = setting(
-        5, "Soft-finger solutions averaged for a latch when the rise has no sample in the window.", low=1,
+        5, "When the rise has no sample in the window, its soft-finger solutions are averaged for the latch, weighted by "
+        "|f|², and at least this many (the samples after the rise too).", low=1,
         metavar="N", group="latch")
     relatch_distance: float | None = setting(
         None, "Latch again when, at light force, the soft-finger contact point moves farther than this from the "

@@ -4,8 +4,10 @@ During the first rise of the force after onset (until ``|f|`` first exceeds the 
 window, or sets no new maximum for ``stall_time``), the soft-finger solutions of the samples
 inside the window are averaged; that mean, put back on the skin, is the contact point from
 then on, until contact ends. Before the first window sample the current soft-finger solution
-is used. With no window sample in the whole rise, the mean of the first ``fallback_samples``
-solutions of the contact is latched and flagged.
+is used. With no window sample in the whole rise (a press that stays below the window, or
+one that jumps past it between two samples), the mean of the rise's soft-finger solutions, and
+of the samples after it up to ``fallback_samples`` in all, weighted by ``|f|²`` (a solution's
+noise falls as ``1 / |f|``), is latched and flagged.
 
 Re-latching (``relatch_distance``): once the latch is held, a sample at light force whose
 soft-finger solution lies farther than this from the latched point starts a new first rise.
@@ -47,14 +49,15 @@ _PEAK = 1  # N, the largest |f| of the rise so far
 _T_PEAK = 2  # s, when it was set
 _N_WIN = 3  # soft-finger solutions in the light-force window during the rise
 _WX, _WY, _WZ = 4, 5, 6  # m, their sum
-_N_FB = 7  # the first valid soft-finger solutions (up to fallback_samples)
-_FX, _FY, _FZ = 8, 9, 10  # m, their sum
+_N_FB = 7  # the fallback's valid soft-finger solutions: the rise's, and at least fallback_samples
+_FX, _FY, _FZ = 8, 9, 10  # m·N², their sum weighted by |f|²
 _HOLD = 11  # 0: no latch fixed; 1: fixed on the window mean; 2: on the fallback mean
 _PENDING = 12  # 1: fixed, the held point not projected yet (_MX.. not yet put on the skin)
 _MX, _MY, _MZ = 13, 14, 15  # m, the mean fixed
 _LX, _LY, _LZ = 16, 17, 18  # m, the held point (the mean put back on the skin)
 _HAD = 19  # 1 once any sample was latched (a contact regained after it starts re-latched)
-_N_STATE = 20
+_FW = 20  # N², the fallback's sum of weights |f|²
+_N_STATE = 21
 
 # the parameters' slots
 _LO, _HI = 0, 1  # N, the light-force window
@@ -105,6 +108,7 @@ def latch_start(state, f_norm, t):  # pragma: no cover - compiled
     state[_T_PEAK] = t
     for k in range(_N_WIN, _LZ + 1):
         state[k] = 0.0
+    state[_FW] = 0.0
 
 
 @lazy_jit(nogil=False)
@@ -186,12 +190,16 @@ def latch_step(state, params, onset, t, f_norm, have_sc, valid, rx, ry, rz):  # 
     if hold > 0.0:
         return HELD, nan, nan, nan, True, hold == 2.0, relatched, begin
     n_fb = state[_N_FB]
-    if valid and n_fb < params[_N_FALLBACK]:
+    if valid and (rising or n_fb < params[_N_FALLBACK]):
+        # a solution's noise falls as 1 / |f|: weighted by |f|², the top of a rise that never
+        # reached the window counts, not its first samples at the contact threshold
+        w = f_norm * f_norm
         n_fb += 1.0
         state[_N_FB] = n_fb
-        state[_FX] = state[_FX] + rx
-        state[_FY] = state[_FY] + ry
-        state[_FZ] = state[_FZ] + rz
+        state[_FW] = state[_FW] + w
+        state[_FX] = state[_FX] + w * rx
+        state[_FY] = state[_FY] + w * ry
+        state[_FZ] = state[_FZ] + w * rz
     code = NONE
     mx = my = mz = nan
     fallback = False
@@ -217,7 +225,8 @@ def latch_step(state, params, onset, t, f_norm, have_sc, valid, rx, ry, rz):  # 
         elif valid:
             code = SOFT
     elif code == NONE and n_fb > 0.0:
-        mx, my, mz = state[_FX] / n_fb, state[_FY] / n_fb, state[_FZ] / n_fb
+        fw = state[_FW]
+        mx, my, mz = state[_FX] / fw, state[_FY] / fw, state[_FZ] / fw
         fallback = True
         code = MEAN
         if n_fb >= params[_N_FALLBACK]:
