@@ -221,6 +221,10 @@ def test_fuse_command_on_csv_and_on_a_bag_agree(simulated):
     # the CSV holds 10 significant digits and µs times, the bag the doubles and ns stamps: the
     # windowed stages (depth, line evidence) then differ a little, never in substance
     assert np.mean(ta["grasp"] == tb["grasp"]) > 0.95
+    # the bag's stamps go along, as `estimate` keeps them: the first topic's, one per fused row
+    assert "stamp_ns" not in ta.dtype.names and tb.dtype.names[-1] == "stamp_ns"
+    stamps = tb["stamp_ns"].astype(np.int64)
+    assert (np.diff(stamps) > 0).all() and np.allclose((stamps - stamps[0]) * 1e-9, tb["t"] - tb["t"][0], atol=2e-6)
     both = (ta["grasp"] == "parallel_lines") & (tb["grasp"] == "parallel_lines")
     da = np.stack([ta["dx"], ta["dy"], ta["dz"]], axis=-1)[both]
     db = np.stack([tb["dx"], tb["dy"], tb["dz"]], axis=-1)[both]

@@ -76,7 +76,8 @@ angle and closest approach), line_and_face, faces, single or none; with the evid
 lines (confirmed once the object was rocked about two axes) and flags (unbalanced forces,
 an area contact). Writes CSV (standard output without -o), Parquet (-o ending in .parquet) or
 Arrow IPC (.arrow, .feather), the contact points as r1_x..r2_z of the first and second finger given (named on standard
-error), whatever the input; a summary on standard error. --to-bag also writes the fused line and plane as
+error), whatever the input, and the first log's absolute stamps as a last column stamp_ns (a bag's, or a log's whose t
+are dates); a summary on standard error. --to-bag also writes the fused line and plane as
 geometry_msgs/msg/PoseStamped (x axis along the line, z axis the plane's normal), the contacts as
 PointStamped and RViz markers, in the common frame, in the format --ros-distro plays; with
 --to-bag and no -o no CSV is written.
@@ -142,6 +143,7 @@ def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, 
         tree = read_tf(path)
         origin = min(int(b.stamps_ns[0]) for b in blogs)
         common, stamps = frame, blogs[0].stamps_ns
+        stamp_ns = np.asarray(stamps, dtype=np.int64)  # the first topic's, whose samples the fused rows are
         logs = []
         for b in blogs:
             if not b.frame_id:
@@ -165,6 +167,7 @@ def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, 
             poses = [(os.path.basename(p), poses_from_columns(log.t, log.extra, os.path.basename(p), p)) for p, log in zip(inputs, read)]
         logs = [(name, log.t, log.wrench, pose) for (name, pose), log in zip(poses, read)]
         stamps = np.rint(read[0].t * 1e9).astype(np.int64)
+        stamp_ns = read[0].extra.get("stamp_ns")  # the first log's absolute stamps, where it had them
     else:
         raise click.UsageError(f"expected two CSV logs or one bag, got {len(inputs)} inputs")
     try:
@@ -186,6 +189,10 @@ def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, 
 
         truth = read_truth(truth_file, fused.t)
     from softtip.io.atomic import Outputs, cannot_write
+
+    table = fused.columns()
+    if stamp_ns is not None and len(stamp_ns) == len(fused.t):  # as `estimate` keeps them: a last column
+        table["stamp_ns"] = np.asarray(stamp_ns, dtype=np.int64)
 
     # one transaction for every output: all appear, or none (an error, a signal)
     with Outputs() as outputs:
@@ -217,13 +224,13 @@ def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, 
 
             try:
                 with staged[output].open() as fh, TableWriter(fh, format=table_format(output)) as writer:
-                    writer.write(fused.columns())
+                    writer.write(table)
             except OSError as exc:
                 raise cannot_write(output, exc) from None
         elif to_bag is None:
             from softtip.io.atomic import write_stdout
 
-            write_stdout(lambda out: write_table(fused.columns(), out))
+            write_stdout(lambda out: write_table(table, out))
     for line in _summary(fused):
         click.echo(f"softtip: {line}", err=True)
 
