@@ -49,6 +49,23 @@ def test_noisy_presses_are_within_their_standard_deviations(nominal, seed):
     assert np.all(np.abs(cal.translation - shift) < 4.0 * cal.translation_std)
 
 
+@pytest.mark.parametrize("seed", [6, 7])
+def test_a_turned_tip_fitted_by_its_shift_alone_is_warned(seed):
+    # an oval tip (a capsule scaled 0.8 × 1.2 across) turned 15° about its axis: no shift fits it,
+    # and the residual says so; the same presses of the tip as the file places it fit within
+    # their scatter (a round tip's turn about its cap's centre is a shift: nothing to warn of)
+    oval = V * np.array([0.8, 1.2, 1.0])
+    c, s = np.cos(np.radians(15.0)), np.sin(np.radians(15.0))
+    turn = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    nominal = MeshFingertip(oval, F)
+    t, w = mesh_probing_log(MeshFingertip(oval @ turn.T, F), 20, np.random.default_rng(seed), noise=NANO17)
+    cal = calibrate_mesh(t, w, nominal)
+    assert cal.noise_ratio > 2.0 and "--rotation fits it" in cal.fit_warning
+    t, w = mesh_probing_log(nominal, 20, np.random.default_rng(seed), noise=NANO17)
+    good = calibrate_mesh(t, w, nominal)
+    assert good.noise_ratio < 2.0 and good.fit_warning == ""
+
+
 def test_a_round_tips_roll_is_refused(nominal):
     t, w = mesh_probing_log(shifted(np.zeros(3)), 16, np.random.default_rng(4))
     with pytest.raises(InputError, match="undetermined"):

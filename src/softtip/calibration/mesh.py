@@ -65,6 +65,9 @@ class MeshCalibration:
         Presses used, and presses left out (too short or without a turning force).
     rms_residual : float
         RMS distance of the press points from the fitted skin (indentation included), m.
+    noise_ratio : float
+        The residual over what the presses' own scatter explains (about 1 when the mesh fits;
+        :attr:`fit_warning` above 2).
     tip : MeshFingertip
         The fingertip moved to the fitted pose.
     tare : TareReport or None
@@ -83,6 +86,20 @@ class MeshCalibration:
     rms_residual: float
     tip: MeshFingertip
     tare: TareReport | None = field(default=None, repr=False)
+    noise_ratio: float = math.nan
+
+    @property
+    def fit_warning(self) -> str:
+        """``""``, or why the mesh does not fit the presses as placed: the presses lie farther from
+        the fitted skin than their own scatter explains (:attr:`noise_ratio` above 2)."""
+        if not self.noise_ratio > 2.0:
+            return ""
+        tilt = "" if np.any(self.rotation_std > 0) else "a tilt of the mesh (--rotation fits it, where the shape fixes it), "
+        return (
+            f"the presses lie {self.noise_ratio:.1f} times farther from the fitted skin than their own scatter explains "
+            f"(rms {self.rms_residual * 1e3:.3f} mm): the mesh does not fit them as placed; look for {tilt}the wrong "
+            "mesh or units, or a skin that is not this shape. The standard deviations are scaled by it"
+        )
 
     def summary(self) -> str:
         t = ", ".join(f"{v * 1e3:+.3f}" for v in self.translation)
@@ -91,7 +108,8 @@ class MeshCalibration:
         lines = [
             f"mesh shift ({t}) mm ± ({ts}) mm" + (" (after the rotation below, about the mesh's centre)" if rotated else ""),
             f"skin compliance {self.compliance * 1e3:.3f} ± {self.compliance_std * 1e3:.3f} mm/√N",
-            f"{self.n_presses} presses used ({self.n_skipped} skipped), rms residual {self.rms_residual * 1e3:.3f} mm",
+            f"{self.n_presses} presses used ({self.n_skipped} skipped), rms residual {self.rms_residual * 1e3:.3f} mm "
+            f"({self.noise_ratio:.2f} × the presses' own scatter)",
         ]
         if rotated:
             r = ", ".join(f"{math.degrees(v):+.3f}" for v in self.rotation)
@@ -250,6 +268,7 @@ def calibrate_mesh(
         n_presses=len(pts),
         n_skipped=skipped,
         rms_residual=float(np.sqrt(np.mean(res * res))),
+        noise_ratio=math.sqrt(chi2),
         tip=moved,
         tare=tare,
     )

@@ -155,6 +155,8 @@ def calibrate(
             _fail(ctx, exc)
             return
         _tare_warnings(cal)
+        if cal.fit_warning:
+            click.echo(f"softtip: warning: {cal.fit_warning}", err=True)
         return
     input_path = _example_or_log(input_path, example, units, EXAMPLE_PROBING_PATH, "probing log")
     try:
