@@ -1559,27 +1559,9 @@ def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None, 
     t = np.empty(n)
     wrench = np.empty((n, 6))
     for i, name in enumerate(REQUIRED_COLUMNS):
-        col = table.column(index[name])
-        where = f"{source}: column {names[index[name]]!r}"
-        if not (pa.types.is_floating(col.type) or pa.types.is_integer(col.type)):
-            raise InputError(f"{where}: expected numbers, got type {col.type}")
-        if col.null_count:
-            row = int(np.argmax(col.is_null().to_numpy(zero_copy_only=False))) + 1
-            raise InputError(f"{where}, row {row}: empty (null); expected a number{_MISSING_FIX}")
         values = t if i == 0 else wrench[:, i - 1]
-        values[:] = col.to_numpy()
-        bad = ~np.isfinite(values)
-        if bad.any():
-            row = int(np.argmax(bad))
-            raise InputError(f"{where}, row {row + 1}: expected a finite number, got {float(values[row])!r}"
-                             f"{_MISSING_FIX if math.isnan(values[row]) else ''}")  # fmt: skip
-    back = np.diff(t) < 0
-    if back.any():
-        row = int(np.argmax(back)) + 1
-        raise InputError(
-            f"{source}: column 't', row {row + 1}: expected t non-decreasing (a stamp may repeat, not go back), "
-            f"got t = {float(t[row])!r} at row {row + 1} after t = {float(t[row - 1])!r} at row {row}"
-        )
+        values[:] = _table_numbers(table.column(index[name]), f"{source}: column {names[index[name]]!r}")
+    _check_time_order(t, source, "'t'")
     extra = {
         names[j]: table.column(j).to_numpy(zero_copy_only=False) for j in range(len(names)) if j not in index.values()
     }
@@ -1595,12 +1577,45 @@ def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None, 
     )
 
 
+def _table_numbers(col: Any, where: str, *, missing: bool = False, exact: bool = False) -> NDArray[Any]:
+    """A Parquet or Arrow column of a required role as numbers (float64; int64 when ``exact``, an
+    integer column of a stamp without nulls), or the located error (``where``: the file and the
+    column; rows counted from 1). ``missing``: nulls (as NaN) and NaN pass, for ``--missing``."""
+    import pyarrow as pa
+
+    if not (pa.types.is_floating(col.type) or pa.types.is_integer(col.type)):
+        raise InputError(f"{where}: expected numbers, got type {col.type}")
+    exact = exact and pa.types.is_integer(col.type) and not col.null_count
+    if col.null_count and not missing:
+        row = int(np.argmax(col.is_null().to_numpy(zero_copy_only=False))) + 1
+        raise InputError(f"{where}, row {row}: empty (null); expected a number{_MISSING_FIX}")
+    v = np.asarray(col.to_numpy(zero_copy_only=False), dtype=np.int64 if exact else np.float64)
+    bad = np.isinf(v) if missing or exact else ~np.isfinite(v)
+    if bad.any():
+        row = int(np.argmax(bad))
+        raise InputError(f"{where}, row {row + 1}: expected a finite number, got {float(v[row])!r}"
+                         f"{'' if np.isinf(v[row]) else _MISSING_FIX}")  # fmt: skip
+    return v
+
+
+def _check_time_order(t: NDArray[Any], source: str, columns: str) -> None:
+    """The located error of stamps that go back (a missing, NaN, stamp skipped); ``columns``: their names."""
+    tf = t.astype(np.float64, copy=False)
+    known = np.flatnonzero(~np.isnan(tf))
+    back = np.flatnonzero(np.diff(tf[known]) < 0)
+    if len(back):
+        row, before = int(known[back[0] + 1]), int(known[back[0]])
+        raise InputError(
+            f"{source}: column {columns}, row {row + 1}: expected t non-decreasing (a stamp may repeat, not go back), "
+            f"got t = {t[row].item()!r} at row {row + 1} after t = {t[before].item()!r} at row {before + 1}"
+        )
+
+
 def _read_mapped_table(table: Any, names: list[str], source: str, fmt: LogFormat, units: str) -> Log:
     """A Parquet or Arrow table whose column names are read as a CSV header's (the recognised
     layouts, ``--columns``, units in the names or the unit options; ``fmt``), then the same
     missing cells, time unit and origin and wrench units as a CSV log (:func:`_finish`); rows
     named by number."""
-    import pyarrow as pa
 
     stripped = [n.strip() for n in names]
     header = _Header(names=stripped, line=0, data_base=0, lines=io.StringIO(), comments=[])
@@ -1617,19 +1632,8 @@ def _read_mapped_table(table: Any, names: list[str], source: str, fmt: LogFormat
         raise InputError(f"{source}: no rows; expected at least one row of {_EXPECTED_HEADER}")
     values = {}
     for role in _roles(index):
-        col = table.column(index[role])
         where = f"{source}: column {names[index[role]]!r}"
-        if not (pa.types.is_floating(col.type) or pa.types.is_integer(col.type)):
-            raise InputError(f"{where}: expected numbers, got type {col.type}")
-        exact = pa.types.is_integer(col.type) and role in ("t", "nanosec") and not col.null_count
-        v = np.array(col.to_numpy(zero_copy_only=False), dtype=np.int64 if exact else np.float64)
-        bad = np.isinf(v) if fmt.missing != "fail" or exact else ~np.isfinite(v)
-        if bad.any():
-            row = int(np.argmax(bad))
-            if col.is_null()[row].as_py():
-                raise InputError(f"{where}, row {row + 1}: empty (null); expected a number{_MISSING_FIX}")
-            raise InputError(f"{where}, row {row + 1}: expected a finite number, got {float(v[row])!r}"
-                             f"{'' if np.isinf(v[row]) else _MISSING_FIX}")  # fmt: skip
+        v = _table_numbers(table.column(index[role]), where, missing=fmt.missing != "fail", exact=role in _SPLIT_STAMP)
         if role in _SPLIT_STAMP and "nanosec" in index:
             ok = _split_stamp_valid(role, v) | np.isnan(v)
             if not ok.all():
@@ -1643,16 +1647,7 @@ def _read_mapped_table(table: Any, names: list[str], source: str, fmt: LogFormat
     wrench = np.empty((n, 6))
     for k, role in enumerate(ROLES[1:]):
         wrench[:, k] = values[role]
-    tf = t.astype(np.float64, copy=False)
-    known = np.flatnonzero(~np.isnan(tf))
-    back = np.flatnonzero(np.diff(tf[known]) < 0)
-    if len(back):
-        row, before = int(known[back[0] + 1]), int(known[back[0]])
-        cols = " and ".join(repr(names[index[r]]) for r in ("t", "nanosec") if r in index)
-        raise InputError(
-            f"{source}: column {cols}, row {row + 1}: expected t non-decreasing (a stamp may repeat, not go back), "
-            f"got {t[row]!r} at row {row + 1} after {t[before]!r} at row {before + 1}"
-        )
+    _check_time_order(t, source, " and ".join(repr(names[index[r]]) for r in ("t", "nanosec") if r in index))
     extra = {names[j]: table.column(j).to_numpy(zero_copy_only=False) for j in range(len(names)) if j not in index.values()}
     return _finish(t, wrench, extra, header, fmt, source, units, None, None)
 
