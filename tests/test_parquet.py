@@ -2,16 +2,20 @@
 
 from __future__ import annotations
 
+import tempfile
 from pathlib import Path
 
 import numpy as np
 import pyarrow as pa
+import pyarrow.feather as feather
 import pyarrow.parquet as pq
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from softtip.core.units import KGF, KGF_MM
 from softtip.errors import InputError
-from softtip.io.tables import PARQUET_UNITS_KEY, read_log, write_table
+from softtip.io.tables import ABSOLUTE_STAMP_S, PARQUET_UNITS_KEY, read_log, write_table
 
 WRENCH = ("fx", "fy", "fz", "mx", "my", "mz")
 
@@ -285,3 +289,60 @@ def test_a_stamp_split_in_seconds_and_nanoseconds_is_exact(tmp_path: Path) -> No
     np.testing.assert_array_equal(log.extra["stamp_ns"], ns)
     np.testing.assert_allclose(log.t, (ns - ns[0]) * 1e-9, rtol=0, atol=1e-15)
     np.testing.assert_array_equal(log.wrench, np.column_stack([cols[w] for w in WRENCH]))
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    unit=st.sampled_from(["s", "ms", "us", "ns"]),
+    tz=st.sampled_from([None, "UTC", "Europe/Berlin", "-05:00"]),
+    first=st.integers(0, 2**62 // 10**9),  # s after 1970, within int64 ns (to 2116)
+    steps=st.lists(st.integers(1, 10**6), min_size=1, max_size=30),
+)
+def test_a_timestamp_column_is_read_exactly_as_absolute_stamps(unit: str, tz: str | None, first: int, steps: list[int]) -> None:
+    # pandas' datetime64 and ROS exports' header.stamp written as Arrow timestamps, any unit or time zone
+    per = {"s": 10**9, "ms": 10**6, "us": 10**3, "ns": 1}[unit]
+    ticks = first * (10**9 // per) + np.cumsum([0, *steps])
+    ns = ticks * per
+    cols = _table(len(ticks))
+    table = pa.table({"t": pa.array(ticks, pa.timestamp(unit, tz=tz)), **{w: cols[w] for w in WRENCH}})
+    with tempfile.TemporaryDirectory() as tmp:
+        log = read_log(_write_pq(Path(tmp, "ts.parquet"), table))
+    if ns[0] >= ABSOLUTE_STAMP_S * 1e9:  # a date: counted from the first, the stamps kept
+        np.testing.assert_array_equal(log.extra["stamp_ns"], ns)
+        np.testing.assert_allclose(log.t, (ns - ns[0]) * 1e-9, rtol=1e-15, atol=0)
+    else:  # 1970 to 1973: seconds since a start, as for numbers
+        np.testing.assert_allclose(log.t, ns * 1e-9, rtol=1e-15, atol=0)
+    np.testing.assert_array_equal(log.wrench, np.column_stack([cols[w] for w in WRENCH]))
+
+
+def test_timestamp_and_duration_columns_in_parquet_and_arrow(tmp_path: Path) -> None:
+    cols = _table()
+    ns = 1_764_000_000_123_456_789 + np.round(cols["t"] * 1e9).astype(np.int64)
+    wrench = {w: cols[w] for w in WRENCH}
+    # an Arrow file, and ATI's names with a timestamp Time column and moments in N·mm
+    arrow = tmp_path / "ts.arrow"
+    feather.write_feather(pa.table({"t": pa.array(ns, pa.timestamp("ns")), **wrench}), arrow)
+    np.testing.assert_array_equal(read_log(arrow).extra["stamp_ns"], ns)
+    ati = {"Time": pa.array(ns // 1000, pa.timestamp("us", tz="UTC"))}
+    ati.update({n: cols[w] * (1e3 if n[0] == "T" else 1.0) for n, w in zip(("Fx", "Fy", "Fz", "Tx", "Ty", "Tz"), WRENCH)})
+    log = read_log(_write_pq(tmp_path / "ati.parquet", ati), moment_units="N*mm")
+    np.testing.assert_array_equal(log.extra["stamp_ns"], ns // 1000 * 1000)
+    np.testing.assert_allclose(log.wrench, np.column_stack([cols[w] for w in WRENCH]), rtol=1e-15)
+    # a duration: seconds since a start, no stamps to keep
+    us = np.round(cols["t"] * 1e6).astype(np.int64)
+    log = read_log(_write_pq(tmp_path / "dur.parquet", {"t": pa.array(us, pa.duration("us")), **wrench}))
+    np.testing.assert_allclose(log.t, us * 1e-6, rtol=1e-15)
+    assert "stamp_ns" not in log.extra
+    # the type gives the unit: --time-units contradicts it
+    path = tmp_path / "ts.parquet"
+    _write_pq(path, {"t": pa.array(ns, pa.timestamp("ns")), **wrench})
+    assert _error(path, time_units="ms") == (
+        f"{path}: column 't': its type timestamp[ns] carries its own time unit; --time-units ms applies to a column "
+        "of numbers (leave it out)"
+    )
+    # a null stamp: named with --missing, dropped with it
+    holes = pa.array([None if i == 4 else v for i, v in enumerate(ns.tolist())], pa.timestamp("ns"))
+    path = _write_pq(tmp_path / "holes.parquet", {"t": holes, **wrench})
+    assert "row 5: empty (null); expected a number; or give --missing drop" in _error(path)
+    log = read_log(path, missing="drop")
+    np.testing.assert_array_equal(log.extra["stamp_ns"], np.delete(ns, 4))

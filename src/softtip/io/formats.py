@@ -242,6 +242,8 @@ class ColumnMap:
     counts : dict of str to (float, int)
         Role → the counts per unit its raw values are in, and the line that said so (``Counts
         per Unit Force,1000000`` in a Net F/T demo log): the values are divided by it.
+    typed : dict of str to str
+        Role → the Parquet or Arrow column type that gave its unit (``timestamp[us, tz=UTC]``).
     """
 
     index: dict[str, int]
@@ -252,6 +254,7 @@ class ColumnMap:
     row_units: frozenset[str] = frozenset()
     stated_on: dict[str, int] = field(default_factory=dict)
     counts: dict[str, tuple[float, int]] = field(default_factory=dict)
+    typed: dict[str, str] = field(default_factory=dict)
 
     def native(self, names: Sequence[str]) -> bool:
         """Whether this is softtip's own layout: columns named exactly ``t, fx … mz``, SI, no unit in the header."""
@@ -261,16 +264,20 @@ class ColumnMap:
             and all(u.si == 1.0 for u in self.units.values())
             and not any(self.from_header.values())
             and not self.counts
+            and not self.typed
         )
 
-    def describe(self, names: Sequence[str]) -> str:
-        """``t ← 'Time (ms)' (ms), fx ← 'Fx (N)' (N), …`` for the message on stderr."""
+    def describe(self, names: Sequence[str], named: str = "header") -> str:
+        """``t ← 'Time (ms)' (ms), fx ← 'Fx (N)' (N), …`` for the message on stderr; ``named``:
+        what gives the names (a CSV file's header, a Parquet or Arrow column's name)."""
         parts = []
         for role in (*ROLES, "nanosec"):
             if role in self.index:
                 unit = self.units[role]
-                how = "" if self.from_header[role] else ", not in the header"
-                if role in self.row_units:
+                how = "" if self.from_header[role] else f", not in the {named}"
+                if role in self.typed:
+                    how = f", its type {self.typed[role]}"
+                elif role in self.row_units:
                     how = f", from the units row on line {self.units_row}"
                 elif role in self.stated_on:
                     how = f", from line {self.stated_on[role]}"

@@ -257,6 +257,7 @@ def _finish(
     """The :class:`Log` of parsed columns: missing cells, time unit and origin, wrench units, notes."""
     cmap = header.cmap
     names = header.names
+    named = "name" if header.columnar else "header"
     notes: list[str] = []
 
     def where(i: int) -> str:
@@ -264,7 +265,7 @@ def _finish(
 
     read_as = cmap is not None and not cmap.native(names)
     if read_as:
-        notes.append(f"{source}: read as {cmap.source}: {cmap.describe(names)}")
+        notes.append(f"{source}: read as {cmap.source}: {cmap.describe(names, named)}")
     if header.preamble:
         notes.append(
             f"{source}: the header is on line {header.line}; the {header.preamble} line(s) before it skipped "
@@ -326,7 +327,8 @@ def _finish(
             f"{loc}: column{'s' if len(cols) > 1 else ''} {', '.join(map(repr, cols))}: expected the stamps "
             f"non-decreasing (a stamp may repeat, not go back), got {t[i]} ns after {t[i - 1]} ns on the row before"
         )
-    start = float(t[0]) * tunit.si
+    origin = header.t_origin_ns  # int ns (0 but for a timestamp column with holes)
+    start = (float(t[0]) + origin) * tunit.si
     explicit_time = fmt.time_unit is not None or (cmap is not None and (cmap.from_header["t"] or tunit.name != "s"))
     if not explicit_time and start >= LATEST_STAMP_S and len(t) > 1:
         # no date in seconds: the one unit that makes the first stamp a date (Unix time ns, µs or ms)
@@ -336,7 +338,7 @@ def _finish(
             start = float(t[0]) * tunit.si
             explicit_time = True
             if read_as:  # the unit read, not the default the columns were mapped with
-                notes[0] = f"{source}: read as {cmap.source}: {replace(cmap, units={**cmap.units, 't': tunit}).describe(names)}"
+                notes[0] = f"{source}: read as {cmap.source}: {replace(cmap, units={**cmap.units, 't': tunit}).describe(names, named)}"
             notes.append(
                 f"{source}: column {names[header.index['t']]!r}: t read in {tunit.label}, the only unit that makes its "
                 f"first stamp a date (give --time-units to say otherwise)"
@@ -353,16 +355,16 @@ def _finish(
         if t.dtype.kind == "f" and np.abs(t).max() < 2.0**53 and (t == np.floor(t)).all():
             t = t.astype(np.int64)  # whole s, ms or µs read as floats: exact as integers (ms × 1e6 is not in float64)
         if t.dtype.kind in "iu":
-            ns = t * round(tunit.si * 1e9)
+            ns = t * round(tunit.si * 1e9) + origin
             t_s = seconds_from_ns(ns)
             stamps = ns.tolist()
         else:
             t_s = _to_seconds(t - t[0], tunit.si)
-            stamps = np.round(t * (tunit.si * 1e9)).astype(np.int64).tolist()
+            stamps = (np.round(t * (tunit.si * 1e9)).astype(np.int64) + origin).tolist()
         extra = {**extra, "stamp_ns": np.array(stamps, dtype=np.int64)}  # int64 in Parquet and Arrow, digits in CSV
         notes.append(f"{source}: absolute stamps ({tunit.label}): t counts from the first, {stamps[0]} ns; the stamps go along as column stamp_ns")
     else:
-        t_s = _to_seconds(t.astype(np.float64), tunit.si)
+        t_s = _to_seconds(t.astype(np.float64) + origin, tunit.si)
     t_s = np.ascontiguousarray(t_s, dtype=np.float64)
     # wrench units
     if cmap is not None:
@@ -755,6 +757,8 @@ class _Header:
     preamble: int = 0  # lines skipped before the header that were neither blank nor comments
     headerless: bool = False
     t_in_ns: bool = False  # set by a parser that read absolute decimal seconds exactly, as int64 ns
+    columnar: bool = False  # the names are a Parquet or Arrow file's columns, not a header's
+    t_origin_ns: int = 0  # the stamps are t + this (int64 ns): absolute stamps with holes, exact as float64 offsets
 
     @property
     def index(self) -> dict[str, int]:
@@ -1540,7 +1544,8 @@ def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None, 
             f"appl{'ies' if len(stated) == 1 else 'y'} to a file without that metadata (leave "
             f"{'it' if len(stated) == 1 else 'them'} out)"
         )
-    if not (layout.plain and not stated and set(REQUIRED_COLUMNS) <= set(names)):
+    t_typed = "t" in names and _is_time_type(table.schema.field("t").type)
+    if t_typed or not (layout.plain and not stated and set(REQUIRED_COLUMNS) <= set(names)):
         if units is None and file_units not in (None, "si"):  # the metadata's units for the columns that give none
             force, moment = UNIT_SYSTEM_UNITS[file_units]
             layout = replace(layout, force_unit=force, moment_unit=moment)
@@ -1598,6 +1603,32 @@ def _table_numbers(col: Any, where: str, *, missing: bool = False, exact: bool =
     return v
 
 
+def _is_time_type(kind: Any) -> bool:
+    """A Parquet or Arrow column type that carries its own time unit: a timestamp (a date, as
+    pandas writes ``datetime64`` and ROS exports write ``header.stamp``) or a duration."""
+    import pyarrow as pa
+
+    return pa.types.is_timestamp(kind) or pa.types.is_duration(kind)
+
+
+def _stamps_as_ns(col: Any, where: str, fmt: LogFormat, split: bool) -> Any:
+    """A timestamp or duration column as int64 nanoseconds (Unix time for a timestamp, whatever
+    its time zone: Arrow keeps timestamps in UTC), or the located error where the options say
+    otherwise. The unit is the column type's: ``--time-units`` would contradict it."""
+    import pyarrow as pa
+
+    if fmt.time_unit is not None:
+        raise InputError(f"{where}: its type {col.type} carries its own time unit; --time-units {fmt.time_unit} "
+                         "applies to a column of numbers (leave it out)")  # fmt: skip
+    if split:
+        raise InputError(f"{where}: its type {col.type} is a whole stamp; expected whole seconds when a nanosec "
+                         "column is mapped too (leave --columns nanosec=... out)")  # fmt: skip
+    try:
+        return col.cast(pa.duration("ns") if pa.types.is_duration(col.type) else pa.timestamp("ns")).cast(pa.int64())
+    except pa.ArrowInvalid as exc:  # beyond int64 nanoseconds (after 2262)
+        raise InputError(f"{where}: {exc}; expected stamps between the years 1678 and 2262") from None
+
+
 def _check_time_order(t: NDArray[Any], source: str, columns: str) -> None:
     """The located error of stamps that go back (a missing, NaN, stamp skipped); ``columns``: their names."""
     tf = t.astype(np.float64, copy=False)
@@ -1616,9 +1647,11 @@ def _read_mapped_table(table: Any, names: list[str], source: str, fmt: LogFormat
     layouts, ``--columns``, units in the names or the unit options; ``fmt``), then the same
     missing cells, time unit and origin and wrench units as a CSV log (:func:`_finish`); rows
     named by number."""
+    import pyarrow as pa
+    import pyarrow.compute  # noqa: F401  (pa.compute)
 
     stripped = [n.strip() for n in names]
-    header = _Header(names=stripped, line=0, data_base=0, lines=io.StringIO(), comments=[])
+    header = _Header(names=stripped, line=0, data_base=0, lines=io.StringIO(), comments=[], columnar=True)
     try:
         header.cmap = resolve_columns(stripped, fmt)
     except ColumnError as exc:
@@ -1633,7 +1666,17 @@ def _read_mapped_table(table: Any, names: list[str], source: str, fmt: LogFormat
     values = {}
     for role in _roles(index):
         where = f"{source}: column {names[index[role]]!r}"
-        v = _table_numbers(table.column(index[role]), where, missing=fmt.missing != "fail", exact=role in _SPLIT_STAMP)
+        col = table.column(index[role])
+        if role == "t" and _is_time_type(col.type):
+            header.cmap = replace(header.cmap, typed={"t": str(col.type)}, units={**header.cmap.units, "t": get_unit("ns", "time")})
+            col = _stamps_as_ns(col, where, fmt, "nanosec" in index)
+            header.t_in_ns = True
+            if col.null_count and fmt.missing != "fail" and col.null_count < len(col):
+                # NaN for the holes needs float64, which holds a date's nanoseconds to 256 ns:
+                # offsets from the first stamp are exact (to 104 days)
+                header.t_origin_ns = int(pa.compute.min(col).as_py())
+                col = pa.compute.subtract(col, header.t_origin_ns)
+        v = _table_numbers(col, where, missing=fmt.missing != "fail", exact=role in _SPLIT_STAMP)
         if role in _SPLIT_STAMP and "nanosec" in index:
             ok = _split_stamp_valid(role, v) | np.isnan(v)
             if not ok.all():
