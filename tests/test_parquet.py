@@ -346,3 +346,22 @@ def test_timestamp_and_duration_columns_in_parquet_and_arrow(tmp_path: Path) -> 
     assert "row 5: empty (null); expected a number; or give --missing drop" in _error(path)
     log = read_log(path, missing="drop")
     np.testing.assert_array_equal(log.extra["stamp_ns"], np.delete(ns, 4))
+
+
+def test_a_stamp_ns_column_of_the_file_is_never_overwritten(tmp_path: Path) -> None:
+    # softtip adds stamp_ns beside absolute stamps: a file's own column of that name must agree
+    cols = _table()
+    ns = 1_764_000_000_123_456_789 + np.round(cols["t"] * 1e9).astype(np.int64)
+    wrench = {w: cols[w] for w in WRENCH}
+    same = read_log(_write_pq(tmp_path / "same.parquet", {"t": pa.array(ns, pa.timestamp("ns")), **wrench, "stamp_ns": ns}))
+    np.testing.assert_array_equal(same.extra["stamp_ns"], ns)
+    other = _write_pq(tmp_path / "other.parquet", {"t": pa.array(ns, pa.timestamp("ns")), **wrench, "stamp_ns": ns * 0 + 7})
+    assert _error(other) == (
+        f"{other}: column 'stamp_ns' holds other values than the absolute stamps of column 't', which softtip writes "
+        "under that name; expected one of them (rename the column, or read the time from it: --columns t=stamp_ns "
+        "--time-units ns)"
+    )
+    csv = tmp_path / "other.csv"
+    rows = [f"{s / 1e9:.6f},1,2,3,0.1,0.2,0.3,{k}" for k, s in enumerate(ns - ns % 1000)]
+    csv.write_text("t,fx,fy,fz,mx,my,mz,stamp_ns\n" + "\n".join(rows) + "\n")
+    assert "column 'stamp_ns' holds other values" in _error(csv)

@@ -361,7 +361,14 @@ def _finish(
         else:
             t_s = _to_seconds(t - t[0], tunit.si)
             stamps = (np.round(t * (tunit.si * 1e9)).astype(np.int64) + origin).tolist()
-        extra = {**extra, "stamp_ns": np.array(stamps, dtype=np.int64)}  # int64 in Parquet and Arrow, digits in CSV
+        stamps = np.array(stamps, dtype=np.int64)
+        if "stamp_ns" in extra and not _same_stamps(extra["stamp_ns"], stamps):  # the file's own would be lost
+            raise InputError(
+                f"{source}: column 'stamp_ns' holds other values than the absolute stamps of column "
+                f"{names[header.index['t']]!r}, which softtip writes under that name; expected one of them (rename "
+                "the column, or read the time from it: --columns t=stamp_ns --time-units ns)"
+            )
+        extra = {**extra, "stamp_ns": stamps}  # int64 in Parquet and Arrow, digits in CSV
         notes.append(f"{source}: absolute stamps ({tunit.label}): t counts from the first, {stamps[0]} ns; the stamps go along as column stamp_ns")
     else:
         t_s = _to_seconds(t.astype(np.float64) + origin, tunit.si)
@@ -1601,6 +1608,15 @@ def _table_numbers(col: Any, where: str, *, missing: bool = False, exact: bool =
         raise InputError(f"{where}, row {row + 1}: expected a finite number, got {float(v[row])!r}"
                          f"{'' if np.isinf(v[row]) else _MISSING_FIX}")  # fmt: skip
     return v
+
+
+def _same_stamps(column: Any, stamps: NDArray[np.int64]) -> bool:
+    """Whether a log's own ``stamp_ns`` column (numbers, or CSV text) holds ``stamps``."""
+    try:
+        values = np.asarray([int(v) for v in column], dtype=np.int64)
+    except (TypeError, ValueError, OverflowError):
+        return False
+    return values.shape == stamps.shape and bool((values == stamps).all())
 
 
 def _is_time_type(kind: Any) -> bool:
