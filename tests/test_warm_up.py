@@ -60,7 +60,7 @@ def test_a_sensors_estimator_compiles_nothing_while_it_streams():
 def test_without_the_warm_up_the_first_contact_loads_the_steps():
     # the check above can fail: a replay of known length (no warm-up) loads them in the stream
     ((states, compiled),) = _compiled_while_streaming(100_000, [{}])
-    assert "latch_step" in compiled and "evidence_step" in compiled
+    assert "latch_step" in compiled and "located_step" in compiled
 
 
 def test_the_warm_up_leaves_the_estimators_state_untouched():

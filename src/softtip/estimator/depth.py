@@ -415,14 +415,23 @@ class DepthTracker:
         with contact point ``point`` and its normal ``normal`` (3 floats each)."""
         fx, fy, fz, mx, my, mz = x
         nx, ny, nz = normal
-        d0 = depth_kernel(-(fx * nx + fy * ny + fz * nz), self.law, PY)
+        d0, params, state, ring = self.ready(fx, fy, fz, nx, ny, nz)
         if not self.online:
             return d0, 0.0, False
-        state = self._state
-        if state[_COUNT] >= len(self._ring):
-            self._grow()
         rx, ry, rz = point
-        return self._step(state, self._ring, self._params, t, fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, d0)
+        return self._step(state, ring, params, t, fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, d0)
+
+    def ready(self, fx: float, fy: float, fz: float, nx: float, ny: float, nz: float):
+        """Before a sample in contact with a contact point of normal ``n`` is stepped elsewhere
+        (:func:`softtip.estimator.pipeline.located_step`): ``(d0, params, state, ring)``, the skin
+        law's depth at the normal force (m) and the online stage's records (None when not
+        online), its ring with room for one more."""
+        d0 = depth_kernel(-(fx * nx + fy * ny + fz * nz), self.law, PY)
+        if not self.online:
+            return d0, None, None, None
+        if self._state[_COUNT] >= len(self._ring):
+            self._grow()
+        return d0, self._params, self._state, self._ring
 
     def _grow(self) -> None:
         """A ring twice as long, the window's rows first (oldest first)."""

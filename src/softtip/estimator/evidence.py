@@ -636,15 +636,21 @@ class EvidenceTracker:
         c[_HEAD] = m - 1 if m else 0
         self._ring, self._wconst = ring, wconst
 
+    def ready(self):
+        """Before a located sample is stepped elsewhere (:func:`softtip.estimator.pipeline.located_step`):
+        ``(params, wconst, state, counts, ring)``, the ring with room for one more."""
+        c = self._counts
+        if max(c[_N_AREA], c[_N_VOTE]) + 1 >= self._ring.shape[0]:
+            self._grow()
+        return self._params, self._wconst, self._state, c, self._ring
+
     def step(self, t, geo: PointGeometry, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, h_std, sg=0.0):
         """``(state, evidence, direction, angle, angle_std, angle_noise_std, h_ratio, f_ratio)`` of a located
         sample at the contact point of ``geo``, with ``h`` (N·m) taken about ``e`` (m; the
         point, or the effective point under the depth), the force ``f`` (N), ``hn = |h|``
         and ``h_std`` ``h``'s noise level (N·m) of the measurement stage; ``sg`` its moment about
         the normal (N·m), for the twist term."""
-        c = self._counts
-        if max(c[_N_AREA], c[_N_VOTE]) + 1 >= self._ring.shape[0]:
-            self._grow()
+        _, _, _, c, _ = self.ready()
         p = geo.point
         e1x, e1y, e1z, e2x, e2y, e2z = geo.frame
         code, ev, dx, dy, dz, angle, angle_std, noise_std, h_ratio, f_ratio = self._step(

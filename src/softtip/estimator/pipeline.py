@@ -107,7 +107,7 @@ from softtip.estimator.line_fit import (
 )
 from softtip.estimator.measure import measure_kernel
 
-__all__ = ["ShapeRecord", "shape_record", "points_run", "line_fit_run", "tail_run", "fused_columns"]
+__all__ = ["ShapeRecord", "shape_record", "points_run", "line_fit_run", "located_step", "tail_run", "fused_columns"]
 
 #: Shape codes of :func:`shape_record`.
 SPHERE, CAPSULE, ELLIPSOID = 0, 1, 2
@@ -347,6 +347,46 @@ def line_fit_run(t, x, contact, relatched, sc, sc_valid, point, tip, noise, acce
             fallback[i] = False
 
 
+@lazy_jit(nogil=False)
+def located_step(t, fx, fy, fz, mx, my, mz, px, py, pz, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z, m1, m2,
+                 sfx, sfy, sfz, depth_mode, d0, dparams, dstate, dring, eparams, wconst, estate, counts,
+                 ring):  # fmt: skip
+    """The depth, measurement and line evidence of a sample in contact at a finite contact point:
+    one call per sample for the stream (:class:`~softtip.estimator.stream.Estimator`) and for
+    :func:`tail_run`, the steps in one order.
+
+    ``t`` s; the tared wrench ``fx … mz`` (N, N·m); the point ``p`` (m), its outward normal ``n``,
+    its tangent frame ``e1, e2`` and moment-noise parts ``m1, m2``
+    (:class:`~softtip.estimator.floats.PointGeometry`); the force noise's variances ``sfx, sfy,
+    sfz`` (N²); ``depth_mode`` (:data:`DEPTH_OFF`, :data:`DEPTH_LAW`, :data:`DEPTH_ONLINE`) with
+    the skin law's depth at the normal force ``d0`` (m) and the depth stage's ``dparams``,
+    ``dstate``, ``dring`` (:func:`~softtip.estimator.depth.depth_step`; the ring with room for
+    one more); the evidence stage's ``eparams``, ``wconst``, ``estate``, ``counts``, ``ring``
+    (:func:`~softtip.estimator.evidence.evidence_step`; its ring with room for one more).
+
+    Returns ``(located, depth, depth_std, from_data, sigma, hx, hy, hz, h_norm, h_std, state,
+    evidence, dx, dy, dz, angle, angle_std, angle_noise_std, h_ratio, f_ratio)``: ``located``
+    False (the force not pushing in; the depth stepped, nothing else, the rest NaN) or the
+    measurement about ``p − depth · n`` and the evidence step's returns.
+    """
+    d = d_std = 0.0
+    data = False
+    if depth_mode == DEPTH_ONLINE:
+        d, d_std, data = depth_step(dstate, dring, dparams, t, fx, fy, fz, mx, my, mz, px, py, pz, nx, ny, nz, d0)
+    elif depth_mode == DEPTH_LAW:
+        d = d0
+    if not fx * nx + fy * ny + fz * nz < 0.0:  # not pushing
+        return (False, d, d_std, data, _NAN, _NAN, _NAN, _NAN, _NAN, _NAN, 0, 0, _NAN, _NAN, _NAN, _NAN, _NAN,
+                _NAN, _NAN, _NAN)  # fmt: skip
+    # friction acts at r − δ n, inside the skin: the moment is taken about it
+    ex, ey, ez = px - d * nx, py - d * ny, pz - d * nz
+    sg, hx, hy, hz, hn, hs = measure_kernel(fx, fy, fz, mx, my, mz, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z,
+                                            e2x, e2y, e2z, m1, m2, sfx, sfy, sfz, d_std * d_std, XS)  # fmt: skip
+    r = evidence_step(estate, counts, ring, eparams, wconst, t, px, py, pz, nx, ny, nz, e1x, e1y, e1z, e2x,
+                      e2y, e2z, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, hs, sg)  # fmt: skip
+    return True, d, d_std, data, sg, hx, hy, hz, hn, hs, r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[9]
+
+
 @lazy_jit
 def tail_run(t, x, drift, contact, taring, kind, sp, normal_from_tip, point, has, normal_in, relatched,
              depth_mode, law, dparams, noise_var, eparams, wconst, estate, counts, ring,
@@ -393,8 +433,6 @@ def tail_run(t, x, drift, contact, taring, kind, sp, normal_from_tip, point, has
         if onset or (relatched[i] and contact[i]):  # a new segment of the line evidence
             evidence_start(estate, counts)
         located = False
-        fx = fy = fz = mx = my = mz = px = py = pz = d = d_std = 0.0
-        data = False
         if contact[i]:
             fx, fy, fz, mx, my, mz = x[i, 0], x[i, 1], x[i, 2], x[i, 3], x[i, 4], x[i, 5]
             px, py, pz = point[i, 0], point[i, 1], point[i, 2]
@@ -405,18 +443,36 @@ def tail_run(t, x, drift, contact, taring, kind, sp, normal_from_tip, point, has
                     lpx, lpy, lpz = px, py, pz
             else:
                 nx, ny, nz = normal_in[i, 0], normal_in[i, 1], normal_in[i, 2]
-            if depth_mode == DEPTH_ONLINE:
-                if onset:
-                    depth_start_contact(dstate)
-                if finite:
+            if depth_mode == DEPTH_ONLINE and onset:
+                depth_start_contact(dstate)
+            if finite:
+                if not (nx == lnx and ny == lny and nz == lnz):
+                    e1x, e1y, e1z, e2x, e2y, e2z = tangent_frame_kernel(nx, ny, nz, XS)
+                    m1 = noise_moment_part(e1x, e1y, e1z, smx, smy, smz)
+                    m2 = noise_moment_part(e2x, e2y, e2z, smx, smy, smz)
+                    lnx, lny, lnz = nx, ny, nz
+                d0 = 0.0
+                if depth_mode != DEPTH_OFF:
                     d0 = square_depth_kernel(-(fx * nx + fy * ny + fz * nz), law[0], law[1], XS)
-                    d, d_std, data = depth_step(dstate, dring, dparams, t[i], fx, fy, fz, mx, my, mz, px, py, pz,
-                                                nx, ny, nz, d0)  # fmt: skip
-                else:
-                    depth_gap(dstate)
-            elif depth_mode == DEPTH_LAW and finite:
-                d = square_depth_kernel(-(fx * nx + fy * ny + fz * nz), law[0], law[1], XS)
-            located = has[i] and fx * nx + fy * ny + fz * nz < 0.0
+                if has[i]:
+                    r = located_step(t[i], fx, fy, fz, mx, my, mz, px, py, pz, nx, ny, nz, e1x, e1y, e1z, e2x, e2y,
+                                     e2z, m1, m2, sfx, sfy, sfz, depth_mode, d0, dparams, dstate, dring, eparams,
+                                     wconst, estate, counts, ring)  # fmt: skip
+                    located = r[0]
+                    if located:
+                        pulling[i] = False
+                        depth[i], depth_std[i], from_data[i] = r[1], r[2], r[3]
+                        normal[i, 0], normal[i, 1], normal[i, 2] = nx, ny, nz
+                        sigma[i], h[i, 0], h[i, 1], h[i, 2], h_norm[i], h_std[i] = r[4], r[5], r[6], r[7], r[8], r[9]
+                        state[i] = r[10]
+                        line_evidence[i] = r[11] if r[10] == _LINE_CODE else 0
+                        direction[i, 0], direction[i, 1], direction[i, 2] = r[12], r[13], r[14]
+                        angle[i], angle_std[i], angle_noise_std[i] = r[15], r[16], r[17]
+                        h_ratio[i], f_ratio[i] = r[18], r[19]
+                elif depth_mode == DEPTH_ONLINE:  # a finite point without a valid solution (track mode)
+                    depth_step(dstate, dring, dparams, t[i], fx, fy, fz, mx, my, mz, px, py, pz, nx, ny, nz, d0)
+            elif depth_mode == DEPTH_ONLINE:
+                depth_gap(dstate)
         if fill_stats or not located:
             for k in range(4):
                 stats[k, i] = _NAN
@@ -435,30 +491,6 @@ def tail_run(t, x, drift, contact, taring, kind, sp, normal_from_tip, point, has
                 direction[i, k] = _NAN
             sigma[i] = h_norm[i] = h_std[i] = depth[i] = depth_std[i] = _NAN
             angle[i] = angle_std[i] = angle_noise_std[i] = h_ratio[i] = f_ratio[i] = _NAN
-            continue
-        if not (nx == lnx and ny == lny and nz == lnz):
-            e1x, e1y, e1z, e2x, e2y, e2z = tangent_frame_kernel(nx, ny, nz, XS)
-            m1, m2 = noise_moment_part(e1x, e1y, e1z, smx, smy, smz), noise_moment_part(e2x, e2y, e2z, smx, smy, smz)
-            lnx, lny, lnz = nx, ny, nz
-        # friction acts at r − δ n, inside the skin: the moment is taken about it
-        ex, ey, ez = px - d * nx, py - d * ny, pz - d * nz
-        sg, hx, hy, hz, hn, hs = measure_kernel(fx, fy, fz, mx, my, mz, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z,
-                                                e2x, e2y, e2z, m1, m2, sfx, sfy, sfz, d_std * d_std, XS)  # fmt: skip
-        r = evidence_step(estate, counts, ring, eparams, wconst, t[i], px, py, pz, nx, ny, nz, e1x, e1y, e1z, e2x,
-                          e2y, e2z, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, hs, sg)  # fmt: skip
-        pulling[i] = False
-        from_data[i] = data
-        normal[i, 0], normal[i, 1], normal[i, 2] = nx, ny, nz
-        h[i, 0], h[i, 1], h[i, 2] = hx, hy, hz
-        sigma[i] = sg
-        h_norm[i] = hn
-        h_std[i] = hs
-        depth[i] = d
-        depth_std[i] = d_std
-        state[i] = r[0]
-        line_evidence[i] = r[1] if r[0] == _LINE_CODE else 0
-        direction[i, 0], direction[i, 1], direction[i, 2] = r[2], r[3], r[4]
-        angle[i], angle_std[i], angle_noise_std[i], h_ratio[i], f_ratio[i] = r[5], r[6], r[7], r[8], r[9]
 
 
 def fused_columns(t: NDArray, x: NDArray, drift: NDArray, contact: NDArray, taring: NDArray, tip: Fingertip,

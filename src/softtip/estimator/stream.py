@@ -35,12 +35,13 @@ from softtip.estimator.contact import (
     drift_message,
     started_in_contact_message,
 )
-from softtip.estimator.depth import DepthTracker, resolve_depth
-from softtip.estimator.evidence import EvidenceTracker, twist_curvature
+from softtip.estimator.depth import RING_COLUMNS, DepthTracker, new_depth_state, resolve_depth
+from softtip.estimator.evidence import _EVIDENCE_NAMES, _STATE_NAMES, EvidenceTracker, twist_curvature
 from softtip.estimator.floats import PointGeometry
 from softtip.estimator.latch import LatchTracker
 from softtip.estimator.line_fit import LineFitTracker
-from softtip.estimator.measure import effective_noise, measure_kernel, noise_correlation
+from softtip.estimator.measure import effective_noise, noise_correlation
+from softtip.estimator.pipeline import DEPTH_LAW, DEPTH_OFF, DEPTH_ONLINE, located_step
 from softtip.estimator.results import EstimatorWarning, SampleEstimate
 from softtip.estimator.tare import StreamTare, TareReport, noise_in_use
 
@@ -169,6 +170,9 @@ class Estimator:
         self._force_var = self._var[:3]
         self._geo = PointGeometry((math.nan,) * 3, (0.0, 0.0, 1.0), self._var)  # none yet
         self._depth = None if cfg.skin_law is None else DepthTracker(cfg, self._noise, corr, expected_samples=self._n)
+        self._located = located_step.function(self._n)
+        self._python = self._located is located_step.python
+        self._no_depth = (np.zeros(1), new_depth_state(), np.empty((1, RING_COLUMNS)))  # the step's records, unused
 
     @property
     def bias(self) -> tuple[float, ...] | None:
@@ -382,23 +386,28 @@ class Estimator:
             else:
                 geo = self._geo = PointGeometry.on_tip(tip, point, self._var)
         nx, ny, nz = geo.nx, geo.ny, geo.nz
-        if depth is None:
-            delta, delta_std, from_data = 0.0, 0.0, False
-            ex, ey, ez = rx, ry, rz
-        else:  # friction acts at r − δ n, inside the skin
-            delta, delta_std, from_data = depth.step(t, x, point, geo.normal)
-            ex, ey, ez = rx - delta * nx, ry - delta * ny, rz - delta * nz
-        if not fx * nx + fy * ny + fz * nz < 0.0:  # not pushing
+        # the depth, the measurement about the effective point and the line evidence: one step
+        # (compiled), the batch's (softtip.estimator.pipeline.tail_run)
+        mode, d0, dp, ds, dr = DEPTH_OFF, 0.0, None, None, None
+        if depth is not None:
+            d0, dp, ds, dr = depth.ready(fx, fy, fz, nx, ny, nz)
+            mode = DEPTH_LAW if dp is None else DEPTH_ONLINE
+        if dp is None:
+            dp, ds, dr = self._no_depth
+        sfx, sfy, sfz = self._force_var
+        (located, delta, delta_std, from_data, sigma, hx, hy, hz, hn, h_std, code, ev, dx, dy, dz, angle, angle_std,
+         noise_std, h_ratio, f_ratio) = self._located(
+            t, fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, geo.e1x, geo.e1y, geo.e1z, geo.e2x, geo.e2y, geo.e2z,
+            geo.m1, geo.m2, sfx, sfy, sfz, mode, d0, dp, ds, dr, *self._evidence.ready(),
+        )  # fmt: skip
+        if not located:  # not pushing
             return self._none(t, x, pulling=True, relatched=relatched)
-        # the measurement about the effective point (its noise's moment part kept per point)
-        sigma, hx, hy, hz, hn, h_std = measure_kernel(
-            fx, fy, fz, mx, my, mz, ex, ey, ez, nx, ny, nz, *geo.frame, geo.m1, geo.m2, *self._force_var,
-            delta_std * delta_std, PY,
-        )
+        if self._python:  # read from the records' arrays: numpy's floats
+            sigma, hx, hy, hz, hn, h_std, delta, delta_std = (float(v) for v in (sigma, hx, hy, hz, hn, h_std, delta, delta_std))
+            dx, dy, dz, angle, angle_std, noise_std = float(dx), float(dy), float(dz), float(angle), float(angle_std), float(noise_std)
+            h_ratio, f_ratio, from_data = float(h_ratio), float(f_ratio), bool(from_data)
         h = (hx, hy, hz)
-        state, evidence, d, angle, angle_std, noise_std, h_ratio, f_ratio = self._evidence.step(
-            t, geo, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, h_std, sigma
-        )
+        state, evidence, d = _STATE_NAMES[code], _EVIDENCE_NAMES[ev], (dx, dy, dz)
         if self._lead:
             self._lead = False
         return _new_estimate(SampleEstimate, (
