@@ -16,10 +16,10 @@ here in compiled loops that call, per sample, the same step functions the stream
    :class:`~softtip.estimator.line_fit.LineFitTracker`; with a skin law the stage's batch form
    :func:`~softtip.estimator.line_fit.line_fit_points` (its solve vectorised);
 3. :func:`tail_run`: the normal and the tangent frame (once per contact point, as the stream's
-   :class:`~softtip.estimator.floats.PointGeometry`), the depth
-   (:func:`~softtip.estimator.depth.depth_step`), the measurement
+   :class:`~softtip.estimator.floats.PointGeometry`), then :func:`located_step`, which the
+   stream calls too: the depth (:func:`~softtip.estimator.depth.depth_step`), the measurement
    (:func:`~softtip.estimator.measure.measure_kernel`), the line evidence
-   (:func:`~softtip.estimator.evidence.evidence_step`), every output column written once, NaN
+   (:func:`~softtip.estimator.evidence.evidence_step`); every output column written once, NaN
    where the sample has no value (no separate blanking pass).
 
 Each step is the stage's one source; this module only sequences them (no stage is written

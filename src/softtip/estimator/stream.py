@@ -6,8 +6,9 @@ Each stage is the stream form of the batch stage beside it (:mod:`~softtip.estim
 :func:`~softtip.estimator.batch.estimate` give the same bits. Each stateful stage (contact
 tracking, the low-pass filter, the latch, the line fit, the depth, the line evidence) is one
 step function over a state record, called here once per sample and by the batch in a compiled
-loop (:mod:`softtip.core._jit`); the measurement calls the batch's kernels on floats
-(:data:`softtip.core._xp.PY`).
+loop (:mod:`softtip.core._jit`). A located sample's depth, measurement and line evidence are
+one call, :func:`~softtip.estimator.pipeline.located_step`, the one the batch's compiled tail
+loop makes per sample.
 """
 
 from __future__ import annotations
