@@ -227,3 +227,30 @@ def test_a_bad_arrow_file_is_named_and_nothing_is_written(tmp_path: Path) -> Non
     assert f"softtip: error: {bad}: not a readable Arrow IPC (Feather v2) file (" in out.stderr
     assert "Traceback" not in out.stderr
     assert [p.name for p in tmp_path.iterdir()] == ["bad.feather"]
+
+
+def test_foreign_names_and_dropped_rows_carry_only_the_extras_row_for_row(tmp_path: Path) -> None:
+    # a ROS export (stamp split in int seconds and nanoseconds, a sequence number) written to
+    # Parquet and Arrow: the stamp's columns are read as t, not carried as extras; and with a row
+    # dropped (--missing drop), a typed extra keeps its rows aligned
+    cols = _example_columns()
+    n = len(cols["t"])
+    ns = 1_709_632_800_123_456_789 + np.round(cols["t"] * 1e9).astype(np.int64)
+    ros = {"header.stamp.sec": pa.array(ns // 10**9, pa.int32()), "header.stamp.nanosec": pa.array(ns % 10**9, pa.uint32()),
+           "seq": pa.array(np.arange(n), pa.int64())}  # fmt: skip
+    ros.update({f"wrench.{'force' if w[0] == 'f' else 'torque'}.{w[1]}": cols[w] for w in WRENCH})
+    src = tmp_path / "ros.arrow"
+    feather.write_feather(pa.table(ros), src)
+    for dest in ("out.arrow", "out.parquet"):
+        out = run("estimate", src, "-o", tmp_path / dest, "-q")
+        assert out.returncode == 0, out.stderr
+        table = feather.read_table(tmp_path / dest) if dest.endswith("arrow") else pq.read_table(tmp_path / dest)
+        assert table.column("seq").to_pylist() == list(range(n))
+        assert table.column("stamp_ns").to_pylist() == ns.tolist()
+        assert "header.stamp.sec" not in table.column_names
+    holes = {**cols, "seq": pa.array(np.arange(n), pa.int64())}
+    holes["fz"] = np.where(np.arange(n) == 7, np.nan, cols["fz"])
+    pq.write_table(pa.table(holes), tmp_path / "holes.parquet")
+    out = run("estimate", tmp_path / "holes.parquet", "-o", tmp_path / "holes.out.parquet", "--missing", "drop", "-q")
+    assert out.returncode == 0, out.stderr
+    assert pq.read_table(tmp_path / "holes.out.parquet").column("seq").to_pylist() == [i for i in range(n) if i != 7]

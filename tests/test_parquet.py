@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 
 from softtip.core.units import KGF, KGF_MM
 from softtip.errors import InputError
-from softtip.io.tables import ABSOLUTE_STAMP_S, PARQUET_UNITS_KEY, read_log, write_table
+from softtip.io.tables import PARQUET_UNITS_KEY, read_log, write_table
 
 WRENCH = ("fx", "fy", "fz", "mx", "my", "mz")
 
@@ -295,7 +295,7 @@ def test_a_stamp_split_in_seconds_and_nanoseconds_is_exact(tmp_path: Path) -> No
 @given(
     unit=st.sampled_from(["s", "ms", "us", "ns"]),
     tz=st.sampled_from([None, "UTC", "Europe/Berlin", "-05:00"]),
-    first=st.integers(0, 2**62 // 10**9),  # s after 1970, within int64 ns (to 2116)
+    first=st.integers(-(2**61) // 10**9, 2**62 // 10**9),  # s after 1970 (1897 to 2116), within int64 ns
     steps=st.lists(st.integers(1, 10**6), min_size=1, max_size=30),
 )
 def test_a_timestamp_column_is_read_exactly_as_absolute_stamps(unit: str, tz: str | None, first: int, steps: list[int]) -> None:
@@ -307,11 +307,9 @@ def test_a_timestamp_column_is_read_exactly_as_absolute_stamps(unit: str, tz: st
     table = pa.table({"t": pa.array(ticks, pa.timestamp(unit, tz=tz)), **{w: cols[w] for w in WRENCH}})
     with tempfile.TemporaryDirectory() as tmp:
         log = read_log(_write_pq(Path(tmp, "ts.parquet"), table))
-    if ns[0] >= ABSOLUTE_STAMP_S * 1e9:  # a date: counted from the first, the stamps kept
-        np.testing.assert_array_equal(log.extra["stamp_ns"], ns)
-        np.testing.assert_allclose(log.t, (ns - ns[0]) * 1e-9, rtol=1e-15, atol=0)
-    else:  # 1970 to 1973: seconds since a start, as for numbers
-        np.testing.assert_allclose(log.t, ns * 1e-9, rtol=1e-15, atol=0)
+    # a date, whatever the year (numbers are dates from 1973 on): counted from the first, the stamps kept
+    np.testing.assert_array_equal(log.extra["stamp_ns"], ns)
+    np.testing.assert_allclose(log.t, (ns - ns[0]) * 1e-9, rtol=1e-15, atol=0)
     np.testing.assert_array_equal(log.wrench, np.column_stack([cols[w] for w in WRENCH]))
 
 
@@ -343,9 +341,28 @@ def test_timestamp_and_duration_columns_in_parquet_and_arrow(tmp_path: Path) -> 
     # a null stamp: named with --missing, dropped with it
     holes = pa.array([None if i == 4 else v for i, v in enumerate(ns.tolist())], pa.timestamp("ns"))
     path = _write_pq(tmp_path / "holes.parquet", {"t": holes, **wrench})
-    assert "row 5: empty (null); expected a number; or give --missing drop" in _error(path)
+    assert "row 5: empty (null); expected a time stamp; or give --missing drop" in _error(path)
     log = read_log(path, missing="drop")
     np.testing.assert_array_equal(log.extra["stamp_ns"], np.delete(ns, 4))
+    # stamps that go back: in ns
+    back = _write_pq(tmp_path / "back.parquet", {"t": pa.array(ns[[0, 2, 1]], pa.timestamp("ns")), **{w: cols[w][:3] for w in WRENCH}})
+    assert _error(back).endswith(f"got t = {ns[1]} ns at row 3 after t = {ns[2]} ns at row 2")
+
+
+@pytest.mark.parametrize("name", ["__index_level_0__", "header.stamp", "recorded"])
+def test_the_one_date_typed_column_is_the_time(tmp_path: Path, name: str) -> None:
+    # pandas writes an unnamed DatetimeIndex as __index_level_0__; a ROS export's header.stamp as
+    # one date: when no layout names a time column, the one column typed a date is t
+    cols = _table()
+    ns = 1_709_632_800_123_456_789 + np.round(cols["t"] * 1e9).astype(np.int64)
+    table = {name: pa.array(ns, pa.timestamp("ns")), "frame_id": ["ft"] * len(ns), **{w: cols[w] for w in WRENCH}}
+    log = read_log(_write_pq(tmp_path / "d.parquet", table))
+    np.testing.assert_array_equal(log.extra["stamp_ns"], ns)
+    assert "read as its one date-typed column and " in log.notes[0]
+    assert f"t ← {name!r} (ns, its type timestamp[ns])" in log.notes[0]
+    # two such columns: which is the time is the user's to say
+    table["other"] = pa.array(ns, pa.timestamp("ns"))
+    assert "missing column 't'" in _error(_write_pq(tmp_path / "two.parquet", table))
 
 
 def test_a_stamp_ns_column_of_the_file_is_never_overwritten(tmp_path: Path) -> None:

@@ -297,6 +297,13 @@ def _estimate(
     check_full_scale(log.t, log.wrench, sensor_range, log.source, units=log.units)
 
     carried = _carried(None if example or bag_log is not None else input_path, output)
+    if carried:
+        from softtip.io.tables import columnar_rows
+
+        # the file's own columns, row for row: only those the log kept as extras (not the ones it
+        # read as t or the wrench under other names), and only when it kept every row
+        same_rows = columnar_rows(input_path) == len(log.t)
+        carried = [c for c in carried if c in log.extra] if same_rows else []
     notes: list[str] = []
     columns = _output_columns(est, log.extra, output_units, carried, notes)
     for note in notes:

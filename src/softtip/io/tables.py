@@ -343,7 +343,7 @@ def _finish(
                 f"{source}: column {names[header.index['t']]!r}: t read in {tunit.label}, the only unit that makes its "
                 f"first stamp a date (give --time-units to say otherwise)"
             )
-    if start >= LATEST_STAMP_S and len(t):  # after 2261 in Unix time, in the unit given: no clock's
+    if start >= LATEST_STAMP_S and len(t) and not header.t_dated:  # after 2261 in Unix time, in the unit given: no clock's
         dated = _dating_units(float(t[0]), ("s", "ms", "us", "ns"))
         raise InputError(
             f"{source}: column {names[header.index['t']]!r}: t in {tunit.label} puts the first stamp {start:.3g} s after "
@@ -351,7 +351,7 @@ def _finish(
             + (f": the unit that makes it a date is {dated[0]} (--time-units {dated[0]})" if len(dated) == 1 else
                " (--time-units)")
         )
-    if ABSOLUTE_STAMP_S <= start < LATEST_STAMP_S:  # from 1973 to 2261 in Unix time
+    if ABSOLUTE_STAMP_S <= start < LATEST_STAMP_S or header.t_dated:  # from 1973 to 2261 in Unix time, or typed a date
         if t.dtype.kind == "f" and np.abs(t).max() < 2.0**53 and (t == np.floor(t)).all():
             t = t.astype(np.int64)  # whole s, ms or µs read as floats: exact as integers (ms × 1e6 is not in float64)
         if t.dtype.kind in "iu":
@@ -765,6 +765,7 @@ class _Header:
     headerless: bool = False
     t_in_ns: bool = False  # set by a parser that read absolute decimal seconds exactly, as int64 ns
     columnar: bool = False  # the names are a Parquet or Arrow file's columns, not a header's
+    t_dated: bool = False  # t's column is typed a date (Arrow's timestamp): absolute stamps, whatever the year
     t_origin_ns: int = 0  # the stamps are t + this (int64 ns): absolute stamps with holes, exact as float64 offsets
 
     @property
@@ -1589,10 +1590,12 @@ def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None, 
     )
 
 
-def _table_numbers(col: Any, where: str, *, missing: bool = False, exact: bool = False) -> NDArray[Any]:
+def _table_numbers(col: Any, where: str, *, missing: bool = False, exact: bool = False,
+                   expected: str = "a number") -> NDArray[Any]:  # fmt: skip
     """A Parquet or Arrow column of a required role as numbers (float64; int64 when ``exact``, an
     integer column of a stamp without nulls), or the located error (``where``: the file and the
-    column; rows counted from 1). ``missing``: nulls (as NaN) and NaN pass, for ``--missing``."""
+    column; rows counted from 1; ``expected``: what a cell should be, in the message of a null).
+    ``missing``: nulls (as NaN) and NaN pass, for ``--missing``."""
     import pyarrow as pa
 
     if not (pa.types.is_floating(col.type) or pa.types.is_integer(col.type)):
@@ -1600,7 +1603,7 @@ def _table_numbers(col: Any, where: str, *, missing: bool = False, exact: bool =
     exact = exact and pa.types.is_integer(col.type) and not col.null_count
     if col.null_count and not missing:
         row = int(np.argmax(col.is_null().to_numpy(zero_copy_only=False))) + 1
-        raise InputError(f"{where}, row {row}: empty (null); expected a number{_MISSING_FIX}")
+        raise InputError(f"{where}, row {row}: empty (null); expected {expected}{_MISSING_FIX}")
     v = np.asarray(col.to_numpy(zero_copy_only=False), dtype=np.int64 if exact else np.float64)
     bad = np.isinf(v) if missing or exact else ~np.isfinite(v)
     if bad.any():
@@ -1645,8 +1648,9 @@ def _stamps_as_ns(col: Any, where: str, fmt: LogFormat, split: bool) -> Any:
         raise InputError(f"{where}: {exc}; expected stamps between the years 1678 and 2262") from None
 
 
-def _check_time_order(t: NDArray[Any], source: str, columns: str) -> None:
-    """The located error of stamps that go back (a missing, NaN, stamp skipped); ``columns``: their names."""
+def _check_time_order(t: NDArray[Any], source: str, columns: str, unit: str = "") -> None:
+    """The located error of stamps that go back (a missing, NaN, stamp skipped); ``columns``: their
+    names; ``unit``: said after the values (`` ns`` for a date's nanoseconds)."""
     tf = t.astype(np.float64, copy=False)
     known = np.flatnonzero(~np.isnan(tf))
     back = np.flatnonzero(np.diff(tf[known]) < 0)
@@ -1654,7 +1658,7 @@ def _check_time_order(t: NDArray[Any], source: str, columns: str) -> None:
         row, before = int(known[back[0] + 1]), int(known[back[0]])
         raise InputError(
             f"{source}: column {columns}, row {row + 1}: expected t non-decreasing (a stamp may repeat, not go back), "
-            f"got t = {t[row].item()!r} at row {row + 1} after t = {t[before].item()!r} at row {before + 1}"
+            f"got t = {t[row].item()!r}{unit} at row {row + 1} after t = {t[before].item()!r}{unit} at row {before + 1}"
         )
 
 
@@ -1670,6 +1674,13 @@ def _read_mapped_table(table: Any, names: list[str], source: str, fmt: LogFormat
     header = _Header(names=stripped, line=0, data_base=0, lines=io.StringIO(), comments=[], columnar=True)
     try:
         header.cmap = resolve_columns(stripped, fmt)
+        dated = [name for name, f in zip(stripped, table.schema) if pa.types.is_timestamp(f.type)]
+        if header.cmap is None and "t" not in fmt.columns and len(dated) == 1:
+            # no layout names a time column, and one column is typed a date (pandas' index,
+            # ``__index_level_0__`` when unnamed; a ROS export's ``header.stamp``): it is t
+            header.cmap = resolve_columns(stripped, replace(fmt, columns={**fmt.columns, "t": dated[0]}))
+            if header.cmap is not None:
+                header.cmap = replace(header.cmap, source=header.cmap.source.replace("--columns", "its one date-typed column", 1))
     except ColumnError as exc:
         raise InputError(f"{source}: {exc}") from None
     try:
@@ -1680,19 +1691,23 @@ def _read_mapped_table(table: Any, names: list[str], source: str, fmt: LogFormat
     if n == 0:
         raise InputError(f"{source}: no rows; expected at least one row of {_EXPECTED_HEADER}")
     values = {}
+    what = "a number"
     for role in _roles(index):
         where = f"{source}: column {names[index[role]]!r}"
         col = table.column(index[role])
         if role == "t" and _is_time_type(col.type):
             header.cmap = replace(header.cmap, typed={"t": str(col.type)}, units={**header.cmap.units, "t": get_unit("ns", "time")})
+            header.t_dated = pa.types.is_timestamp(col.type)
             col = _stamps_as_ns(col, where, fmt, "nanosec" in index)
             header.t_in_ns = True
+            what = "a time stamp"
             if col.null_count and fmt.missing != "fail" and col.null_count < len(col):
                 # NaN for the holes needs float64, which holds a date's nanoseconds to 256 ns:
                 # offsets from the first stamp are exact (to 104 days)
                 header.t_origin_ns = int(pa.compute.min(col).as_py())
                 col = pa.compute.subtract(col, header.t_origin_ns)
-        v = _table_numbers(col, where, missing=fmt.missing != "fail", exact=role in _SPLIT_STAMP)
+        v = _table_numbers(col, where, missing=fmt.missing != "fail", exact=role in _SPLIT_STAMP, expected=what)
+        what = "a number"
         if role in _SPLIT_STAMP and "nanosec" in index:
             ok = _split_stamp_valid(role, v) | np.isnan(v)
             if not ok.all():
@@ -1706,7 +1721,8 @@ def _read_mapped_table(table: Any, names: list[str], source: str, fmt: LogFormat
     wrench = np.empty((n, 6))
     for k, role in enumerate(ROLES[1:]):
         wrench[:, k] = values[role]
-    _check_time_order(t, source, " and ".join(repr(names[index[r]]) for r in ("t", "nanosec") if r in index))
+    _check_time_order(t, source, " and ".join(repr(names[index[r]]) for r in ("t", "nanosec") if r in index),
+                      " ns" if header.t_in_ns else "")  # fmt: skip
     extra = {names[j]: table.column(j).to_numpy(zero_copy_only=False) for j in range(len(names)) if j not in index.values()}
     return _finish(t, wrench, extra, header, fmt, source, units, None, None)
 
