@@ -382,3 +382,18 @@ def test_a_stamp_ns_column_of_the_file_is_never_overwritten(tmp_path: Path) -> N
     rows = [f"{s / 1e9:.6f},1,2,3,0.1,0.2,0.3,{k}" for k, s in enumerate(ns - ns % 1000)]
     csv.write_text("t,fx,fy,fz,mx,my,mz,stamp_ns\n" + "\n".join(rows) + "\n")
     assert "column 'stamp_ns' holds other values" in _error(csv)
+
+
+def test_stamps_coarser_than_the_sampling_are_said_so(tmp_path: Path) -> None:
+    # datetime64[s] of a 50 Hz sensor: most stamps repeat; the note says so, with the column's
+    # own name, and does not ask for seconds (the type gives them)
+    cols = _table(500)
+    t = np.arange(500) * 0.02
+    seconds = 1_709_632_800 + np.floor(t).astype(np.int64)
+    ati = {"Time": pa.array(seconds, pa.timestamp("s")), **{n: cols[w] for n, w in zip(("Fx", "Fy", "Fz", "Tx", "Ty", "Tz"), WRENCH)}}
+    log = read_log(_write_pq(tmp_path / "s.parquet", ati))
+    notes = [n for n in log.warnings if "steps are 0" in n]
+    assert notes == [f"{tmp_path / 's.parquet'}: column 'Time': 490 of 499 steps are 0: the stamps are coarser than "
+                     "the sampling, and every time window (the tare, the line evidence) counts samples of equal stamps "
+                     "as one instant; expected stamps of the samples' own resolution"]  # fmt: skip
+    assert not any("Give t in seconds" in n for n in log.warnings)

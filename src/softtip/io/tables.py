@@ -396,7 +396,7 @@ def _finish(
     else:
         force_unit, moment_unit = UNIT_SYSTEM_UNITS[units]
         scale = wrench_scale(force_unit, moment_unit)
-    repeated, time_notes = _time_notes(t_s, source, first_line, explicit=explicit_time)
+    repeated, time_notes = _time_notes(t_s, source, first_line, explicit=explicit_time, column=names[header.index["t"]])
     cut = _cut_last_line(raw, source, len(t_s)) if raw is not None and header.delimiter == "," else None
     return Log(
         t=t_s,
@@ -1417,7 +1417,8 @@ def _gap_note(source: str, count: int, largest: float, where: str, median: float
 
 
 def _time_notes(
-    t: NDArray[np.float64], source: str, first_line: int | None, *, explicit: bool = False, ask_unit: bool = True
+    t: NDArray[np.float64], source: str, first_line: int | None, *, explicit: bool = False, ask_unit: bool = True,
+    column: str = "t",
 ) -> tuple[int, list[str]]:
     """Count repeated stamps and say what looks wrong with the time scale.
 
@@ -1426,6 +1427,7 @@ def _time_notes(
     ``explicit``: the time unit was given (header or option), so it is not second-guessed.
     ``ask_unit``: a rate as plausible in seconds as in milliseconds asks for ``--time-units``
     (not for a Parquet or Arrow file, whose ``t`` is in seconds by softtip's contract).
+    ``column``: the time column's name in the file.
     """
 
     def where(i: int) -> str:
@@ -1442,7 +1444,15 @@ def _time_notes(
             f"t = {float(t[i]):.10g} s as on the {'line' if first_line is not None else 'row'} before); kept in file order"
         )
     median = _median_step(step)
-    if median == median:
+    if 2 * n_repeated > len(step):  # most stamps repeat: the clock ticks slower than the samples come
+        notes.append(
+            f"{source}: column {column!r}: {n_repeated} of {len(step)} steps are 0"
+            + (f" (median step of the rest {median:.6g} s)" if median == median else "")
+            + ": the stamps are coarser than the sampling, and every time window (the tare, the "
+            "line evidence) counts samples of equal stamps as one instant; expected stamps of the samples' own "
+            "resolution"
+        )
+    elif median == median:
         low, high = _PLAUSIBLE_RATE_HZ
         rate = 1.0 / median
         if not low <= rate <= high:
@@ -1453,13 +1463,13 @@ def _time_notes(
             ]
             guess = f"; if t is {', or '.join(guesses)}" if guesses else ""
             notes.append(
-                f"{source}: column 't': median step {median:.6g} s, i.e. {rate:.3g} samples/s: implausible for a "
+                f"{source}: column {column!r}: median step {median:.6g} s, i.e. {rate:.3g} samples/s: implausible for a "
                 f"force/torque log (expected {low:g} Hz to {high / 1e3:g} kHz with t in seconds){guess}. "
                 "Give t in seconds: the tare duration and every time window are in seconds"
             )
         elif rate < _AMBIGUOUS_RATE_HZ and not explicit and ask_unit:
             notes.append(
-                f"{source}: column 't': median step {median:.6g}: {rate:.4g} Hz if t is in seconds, {rate * 1e3:.5g} Hz "
+                f"{source}: column {column!r}: median step {median:.6g}: {rate:.4g} Hz if t is in seconds, {rate * 1e3:.5g} Hz "
                 "if in milliseconds, and no unit in the header says which (a force/torque sensor may stream at "
                 "either): give --time-units s or --time-units ms"
             )
