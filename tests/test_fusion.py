@@ -245,9 +245,46 @@ def test_fuse_command_errors(simulated, tmp_path):
     r = _run("fuse", out / "bag", "--topics", "/right/wrench", "/left/wrench")
     assert r.returncode == 2 and "--frame" in r.stderr
     r = _run("fuse", out / "grasp/right.csv", out / "grasp/left.csv")
-    assert r.returncode == 2 and "missing pose column" in r.stderr
+    assert r.returncode == 2 and "missing pose column" in r.stderr and "--hand HAND.toml" in r.stderr
+    r = _run("fuse", out / "grasp/right.csv", "--hand", out / "grasp/hand.toml")
+    assert r.returncode == 2 and "expected two logs, one per finger" in r.stderr
     r = _run("fuse", out / "grasp/right.csv", out / "grasp/left.csv", "--hand", out / "grasp/hand.toml", "--object-mass", "-1")
     assert r.returncode == 2 and "--object-mass" in r.stderr
+
+
+def _shifted(src, dest, dt, keep=None):
+    """A copy of a grasp log with ``dt`` (s) added to t, rows ``keep`` (a slice) only."""
+    lines = src.read_text().splitlines()
+    rows = [ln.split(",") for ln in lines[1:]][keep or slice(None)]
+    for row in rows:
+        row[0] = f"{float(row[0]) + dt:.6f}"
+    dest.write_text("\n".join([lines[0], *(",".join(r) for r in rows)]) + "\n")
+    return dest
+
+
+def test_fuse_puts_two_dated_logs_on_their_common_clock(simulated, tmp_path):
+    """Logs with absolute stamps are fused on the clock they share (each log's own t counts from
+    its first stamp); logs that never overlap, or one dated and one not, stop the run."""
+    g, out = simulated
+    hand = out / "grasp/hand.toml"
+    epoch = 1_710_408_121.0
+    right = _shifted(out / "grasp/right.csv", tmp_path / "r.csv", epoch)
+    late = _shifted(out / "grasp/left.csv", tmp_path / "l.csv", epoch, slice(50, None))  # starts 1 s later
+    rel = _shifted(out / "grasp/left.csv", tmp_path / "l_rel.csv", 0.0, slice(50, None))
+    dated = _run("fuse", right, late, "--hand", hand, "-o", tmp_path / "dated.csv")
+    plain = _run("fuse", out / "grasp/right.csv", rel, "--hand", hand, "-o", tmp_path / "plain.csv")
+    assert dated.returncode == 0 and plain.returncode == 0, dated.stderr + plain.stderr
+    a = np.genfromtxt(tmp_path / "dated.csv", delimiter=",", names=True, dtype=None, encoding=None)
+    b = np.genfromtxt(tmp_path / "plain.csv", delimiter=",", names=True, dtype=None, encoding=None)
+    assert (a["grasp"] == b["grasp"]).all() and np.allclose(a["t"], b["t"], atol=2e-6)
+    assert "unbalanced" not in dated.stderr
+    assert f"finger 1 (right) <- {right}, finger 2 (left) <- {late}" in dated.stderr
+    far = _shifted(out / "grasp/left.csv", tmp_path / "far.csv", epoch + 100.0)
+    r = _run("fuse", right, far, "--hand", hand, "-o", tmp_path / "x.csv")
+    assert r.returncode == 2 and "the logs do not overlap in time" in r.stderr, r.stderr
+    r = _run("fuse", right, out / "grasp/left.csv", "--hand", hand, "-o", tmp_path / "x.csv")
+    assert r.returncode == 2 and "has absolute stamps (dates) and" in r.stderr, r.stderr
+    assert not (tmp_path / "x.csv").exists()
 
 
 # -- gravity from the robot's transforms -----------------------------------------------------------

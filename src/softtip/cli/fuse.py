@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import sys
 import warnings
 
 import click
@@ -13,6 +14,7 @@ from softtip.cli.options import (
     check_figure_path,
     check_units,
     estimator_options,
+    is_bag,
     log_format_kwargs,
     log_format_options,
     make_config,
@@ -26,6 +28,38 @@ from softtip.errors import InputError
 from softtip.estimator.results import EstimatorWarning
 
 __all__ = ["fuse"]
+
+
+def _common_clock(paths, logs) -> list[np.ndarray]:
+    """Each log's ``t`` (s) on the clock the two share: from the earlier log's first stamp where
+    both have absolute stamps (each log's own ``t`` counts from its first), else as read; the
+    located error where only one has them or where the logs do not overlap in time."""
+    stamps = [log.stamps_ns for log in logs]
+    if (stamps[0] is None) != (stamps[1] is None):
+        dated, other = (0, 1) if stamps[0] is not None else (1, 0)
+        raise InputError(
+            f"{paths[dated]} has absolute stamps (dates) and {paths[other]} counts from its own start: expected the "
+            "two logs on one clock (both dated, or both counted from the same moment)"
+        )
+    if stamps[0] is None:
+        times = [np.asarray(log.t, dtype=float) for log in logs]
+    else:
+        origin = min(int(s[0]) for s in stamps)
+        times = [seconds_from_ns(np.asarray(s, dtype=np.int64), origin) for s in stamps]
+    (a0, a1), (b0, b1) = ((float(t[0]), float(t[-1])) for t in times)
+    overlap = min(a1, b1) - max(a0, b0)
+    if overlap <= 0.0:
+        raise InputError(
+            f"the logs do not overlap in time: {paths[0]} spans {a0:.6g}–{a1:.6g} s and {paths[1]} {b0:.6g}–{b1:.6g} s"
+            f"{' on their common clock (their absolute stamps)' if stamps[0] is not None else ''}; expected two "
+            "fingers recorded together"
+        )
+    shorter = min(a1 - a0, b1 - b0)
+    if overlap < 0.9 * shorter:
+        print(f"softtip: warning: the logs overlap for {overlap:.6g} s of the shorter's {shorter:.6g} s "
+              f"({paths[0]}: {a0:.6g}–{a1:.6g} s, {paths[1]}: {b0:.6g}–{b1:.6g} s); outside it one finger is "
+              "fused alone (single)", file=sys.stderr)  # fmt: skip
+    return times
 
 
 def _summary(fused) -> list[str]:
@@ -131,6 +165,9 @@ def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, 
     fingertip = load_fingertip(tip)
     config = make_config(estimator_opts)
     if len(inputs) == 1:
+        if not is_bag(inputs[0]):
+            raise click.UsageError(f"one log ({inputs[0]}); expected two logs, one per finger (or one bag with "
+                                   "--topics TOPIC TOPIC and --frame FRAME)")  # fmt: skip
         if topics is None or frame is None:
             raise click.UsageError("a bag input needs --topics TOPIC TOPIC and --frame FRAME")
         if hand_file is not None:
@@ -156,6 +193,7 @@ def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, 
         read = [read_log(p, units=units, **formats) for p in inputs]
         for log in read:
             print_log_notes(log)
+        times = _common_clock(inputs, read)
         common = "hand"  # pose columns name no frame
         if hand_file is not None:
             hand = read_hand_file(hand_file)
@@ -164,10 +202,12 @@ def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, 
             poses = list(hand.fingers.items())
             common = hand.frame
         else:
-            poses = [(os.path.basename(p), poses_from_columns(log.t, log.extra, os.path.basename(p), p)) for p, log in zip(inputs, read)]
-        logs = [(name, log.t, log.wrench, pose) for (name, pose), log in zip(poses, read)]
-        stamps = np.rint(read[0].t * 1e9).astype(np.int64)
-        stamp_ns = read[0].extra.get("stamp_ns")  # the first log's absolute stamps, where it had them
+            poses = [(os.path.basename(p), poses_from_columns(t, log.extra, os.path.basename(p), p))
+                     for p, log, t in zip(inputs, read, times)]  # fmt: skip
+        logs = [(name, t, log.wrench, pose) for (name, pose), log, t in zip(poses, read, times)]
+        print(f"softtip: finger 1 ({poses[0][0]}) <- {inputs[0]}, finger 2 ({poses[1][0]}) <- {inputs[1]}", file=sys.stderr)
+        stamps = np.rint(times[0] * 1e9).astype(np.int64)
+        stamp_ns = read[0].stamps_ns  # the first log's absolute stamps, where it had them
     else:
         raise click.UsageError(f"expected two CSV logs or one bag, got {len(inputs)} inputs")
     try:

@@ -118,7 +118,8 @@ def poses_from_columns(t: ArrayLike, columns: Mapping[str, ArrayLike], name: str
     """The pose columns ``px, py, pz, qw, qx, qy, qz`` of a log (m; unit quaternion)."""
     missing = [c for c in POSE_COLUMNS if c not in columns]
     if missing:
-        raise InputError(f"{source}: missing pose column(s) {', '.join(missing)}; expected {', '.join(POSE_COLUMNS)}")
+        raise InputError(f"{source}: missing pose column(s) {', '.join(missing)}; expected {', '.join(POSE_COLUMNS)} "
+                         "(the sensor's pose over time), or fixed poses in a hand file (softtip fuse --hand HAND.toml)")  # fmt: skip
     try:
         a = {c: np.asarray(columns[c], dtype=float) for c in POSE_COLUMNS}
     except ValueError:
