@@ -2,6 +2,7 @@
 
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -102,6 +103,34 @@ def test_calibrate_command_writes_a_mesh_fingertip(tmp_path):
         capture_output=True, text=True, timeout=120,
     )  # fmt: skip
     assert bad.returncode == 2 and "--mesh-units" in bad.stderr and not (tmp_path / "bad.toml").exists()
+    # a mesh drawn in mm declared in cm: 10× a fingertip, refused by its size (it made the fit diverge)
+    cm = subprocess.run(
+        [SOFTTIP, "calibrate", tmp_path / "probe.csv", "--shape", "mesh", "--mesh", tmp_path / "tip.stl",
+         "--mesh-units", "cm", "-o", tmp_path / "cm.toml"],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert cm.returncode == 2 and "read as cm 10×" in cm.stderr and "Traceback" not in cm.stderr, cm.stderr
+    assert not (tmp_path / "cm.toml").exists()
+    # --skin-thickness goes into the file written from a bare mesh (depth compensation needs it)
+    thick = subprocess.run(
+        [SOFTTIP, "calibrate", tmp_path / "probe.csv", "--shape", "mesh", "--mesh", tmp_path / "tip.stl",
+         "--mesh-units", "mm", "--skin-thickness", "5mm", "-o", tmp_path / "thick.toml"],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+    assert thick.returncode == 0, thick.stderr
+    assert load_fingertip(tmp_path / "thick.toml").skin_thickness == pytest.approx(0.005)
+    assert load_fingertip(tmp_path / "tip.toml").skin_thickness is None and "has no skin_thickness" in out.stderr
+
+
+def test_a_shift_known_to_more_than_a_tenth_of_a_millimetre_says_how_many_presses(nominal):
+    t, w = mesh_probing_log(shifted(np.zeros(3)), 16, np.random.default_rng(3), noise=NANO17)
+    cal = calibrate_mesh(t, w, nominal)
+    assert replace(cal, translation_std=np.full(3, 0.05e-3)).precision_warning() == ""
+    loose = replace(cal, translation_std=np.array([0.05e-3, 0.05e-3, 0.2e-3]))
+    assert loose.precision_warning().startswith(
+        f"the shift along z is known to ±0.20 mm (1 std) only: about {4 * cal.n_presses} presses like these would "
+        "bring it to 0.1 mm"
+    )
 
 
 def test_fitted_shift_is_composed_with_the_files_transform(tmp_path):

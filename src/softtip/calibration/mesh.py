@@ -37,7 +37,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from softtip.calibration.probing import find_presses, force_spread, tare_probing_log
+from softtip.calibration.probing import TARGET_STD, find_presses, force_spread, tare_probing_log
 from softtip.core._vec import tangent_basis as _tangent_basis
 from softtip.core.mesh import MeshFingertip
 from softtip.errors import InputError
@@ -99,6 +99,21 @@ class MeshCalibration:
             f"the presses lie {self.noise_ratio:.1f} times farther from the fitted skin than their own scatter explains "
             f"(rms {self.rms_residual * 1e3:.3f} mm): the mesh does not fit them as placed; look for {tilt}the wrong "
             "mesh or units, or a skin that is not this shape. The standard deviations are scaled by it"
+        )
+
+    def precision_warning(self, target: float = TARGET_STD) -> str:
+        """``""``, or what it would take to bring the shift's standard deviations to ``target``
+        (m): they fall as ``1/√presses`` (as :meth:`Calibration.precision_warning
+        <softtip.calibration.probing.Calibration.precision_warning>` says for the closed forms)."""
+        worst = float(np.max(self.translation_std))
+        if not worst > target:
+            return ""
+        axis = "xyz"[int(np.argmax(self.translation_std))]
+        need = math.ceil(self.n_presses * (worst / target) ** 2)
+        return (
+            f"the shift along {axis} is known to ±{worst * 1e3:.2f} mm (1 std) only: about {need} presses like these "
+            f"would bring it to {target * 1e3:.2g} mm (they fall as 1/√presses); press all over the skin, and "
+            "where its normal points along that axis"
         )
 
     def summary(self) -> str:
@@ -236,6 +251,14 @@ def calibrate_mesh(
     q, nu = tip._interp(face, b1, b2)
     res = np.sum((local - q) * nu, axis=1) + (x[-1] - kappa0) * sqf
     chi2 = float(np.sum(res * res * wgt)) / max(len(pts) - n_par, 1)
+    if not (np.isfinite(a).all() and np.isfinite(x).all()):
+        # the registration ran away: the presses lie nowhere near this skin
+        extent = float(np.ptp(tip.vertices, axis=0).max())
+        raise InputError(
+            f"the presses do not fit this mesh (the fit diverged): it is {extent * 1e3:.4g} mm across; wrong mesh "
+            "units (--mesh-units, or mesh_units in the fingertip file), the wrong mesh, or a mesh not placed on the "
+            "sensor?"
+        )
     scale = np.sqrt(np.diag(a))
     cond = np.linalg.cond(a / np.outer(scale, scale))
     if not np.isfinite(cond) or cond > 1e8:
@@ -313,10 +336,13 @@ def _register(tip, w, presses, x, rotation, centre, iterations, nrm):
 
 
 def calibrate_mesh_file(
-    t: ArrayLike, wrench: ArrayLike, mesh: str, mesh_units: str | None = None, **kwargs
+    t: ArrayLike, wrench: ArrayLike, mesh: str, mesh_units: str | None = None, skin_thickness: float | None = None,
+    **kwargs,
 ) -> MeshCalibration:
     """:func:`calibrate_mesh` for a mesh given as a file: a mesh fingertip ``.toml`` or a bare
-    ``.stl`` / ``.obj`` / ``.ply`` with ``mesh_units`` (placed as drawn)."""
+    ``.stl`` / ``.obj`` / ``.ply`` with ``mesh_units`` (placed as drawn); ``skin_thickness`` (m),
+    where given, is the fitted fingertip's (a ``.toml``'s own otherwise)."""
+    from dataclasses import replace
     from pathlib import Path
 
     from softtip.core.mesh import load_mesh_fingertip, mesh_fingertip_from_table
@@ -326,8 +352,13 @@ def calibrate_mesh_file(
         if mesh_units is not None:
             raise InputError("--mesh-units is for a bare mesh file; a fingertip .toml gives mesh_units itself")
         tip = load_mesh_fingertip(path)
+        if skin_thickness is not None and skin_thickness != tip.skin_thickness:
+            tip = replace(tip, skin_thickness=skin_thickness)
     else:
         if mesh_units is None:
             raise InputError(f"{path}: give --mesh-units (mesh files carry no units)")
-        tip = mesh_fingertip_from_table({"mesh": str(path.resolve()), "mesh_units": mesh_units}, source=str(path))
+        table = {"mesh": str(path.resolve()), "mesh_units": mesh_units}
+        if skin_thickness is not None:
+            table["skin_thickness"] = skin_thickness
+        tip = mesh_fingertip_from_table(table, source=str(path))
     return calibrate_mesh(t, wrench, tip, **kwargs)

@@ -60,6 +60,12 @@ def _fail(ctx: click.Context, exc: InputError) -> None:
     ctx.exit(2)
 
 
+_NO_SKIN_THICKNESS = (
+    "softtip: the fingertip file has no skin_thickness, so estimate's depth compensation (on for the "
+    "murakami2006 preset) stays off for it; give --skin-thickness (the soft skin's thickness) to turn it on"
+)
+
+
 @click.command(
     "calibrate",
     help="""Calibrate the fingertip geometry from a probing log of plane presses.
@@ -141,8 +147,8 @@ def calibrate(
             log = _read(input_path, units, **formats)
             check_full_scale(log.t, log.wrench, sensor_range, log.source, units=units)
             cal = calibrate_mesh_file(
-                log.t, log.wrench, mesh_path, mesh_units, rotation=rotation, tare_duration=tare_duration,
-                contact_threshold=contact_threshold, min_force=min_force,
+                log.t, log.wrench, mesh_path, mesh_units, skin_thickness=skin_thickness, rotation=rotation,
+                tare_duration=tare_duration, contact_threshold=contact_threshold, min_force=min_force,
             )  # fmt: skip
             if output is not None:
                 atomic_write_text(output, cal.tip.to_toml())
@@ -155,8 +161,11 @@ def calibrate(
             _fail(ctx, exc)
             return
         _tare_warnings(cal)
-        if cal.fit_warning:
-            click.echo(f"softtip: warning: {cal.fit_warning}", err=True)
+        for warning in (cal.fit_warning, cal.precision_warning()):
+            if warning:
+                click.echo(f"softtip: warning: {warning}", err=True)
+        if cal.tip.skin_thickness is None:
+            click.echo(_NO_SKIN_THICKNESS, err=True)
         return
     input_path = _example_or_log(input_path, example, units, EXAMPLE_PROBING_PATH, "probing log")
     try:
@@ -173,11 +182,7 @@ def calibrate(
 
             cal = replace(cal, tip=replace(cal.tip, skin_thickness=skin_thickness))
         else:
-            click.echo(
-                "softtip: the fingertip file has no skin_thickness, so estimate's depth compensation (on for the "
-                "murakami2006 preset) stays off for it; give --skin-thickness (the soft skin's thickness) to turn it on",
-                err=True,
-            )
+            click.echo(_NO_SKIN_THICKNESS, err=True)
         report = cal.summary()
         if output is not None:
             write_fingertip_toml(cal, output, source=log.source)

@@ -39,8 +39,9 @@ from softtip.errors import InputError
 
 __all__ = ["MeshFingertip", "load_mesh_fingertip", "mesh_fingertip_from_table"]
 
-#: Plausible fingertip sizes (largest extent of the mesh, m); outside: a units mistake.
-_SIZE_RANGE = (0.002, 0.5)
+#: Plausible fingertip sizes (largest extent of the mesh, m); outside: a units mistake (a mesh
+#: drawn in mm read as cm is 10× too large: 200 mm for a 20 mm tip).
+_SIZE_RANGE = (0.002, 0.2)
 _BRANCH = 16  # at most this many clusters per super-cluster
 
 
@@ -114,7 +115,7 @@ class MeshFingertip(ClosestPoints, AxisCast, CreaseContact, NewtonRefine, Finger
         if extent > hi:
             raise ValueError(
                 f"the mesh is {extent:.4g} m across, {extent / 0.03:.0f}× a fingertip's size: "
-                "wrong mesh_units (a mesh drawn in mm read as m is 1000× too large)?"
+                "wrong mesh_units (a mesh drawn in mm read as m is 1000× too large, read as cm 10×)?"
             )
         if extent < lo:
             raise ValueError(
