@@ -132,3 +132,20 @@ def test_bad_mounts_are_located(tmp_path, mount, match):
     with pytest.raises(InputError, match=match) as exc:
         load_fingertip(p)
     assert str(p) in str(exc.value)
+
+
+@given(
+    roll=st.floats(-np.pi, np.pi), pitch=st.sampled_from([-np.pi / 2, np.pi / 2, 0.3, -1.2]), yaw=st.floats(-np.pi, np.pi)
+)
+def test_rpy_of_composes_to_the_rotation_without_a_warning_at_gimbal_lock(roll, pitch, yaw):
+    # a CAD part with its axis along x, mounted upright (pitch ±90°): scipy warns of gimbal lock
+    # on every load; the angles still give the same rotation
+    import warnings
+
+    from softtip.core.mounting import rpy_of
+
+    rot = Rotation.from_euler("xyz", [roll, pitch, yaw])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        angles = rpy_of(rot)
+    assert_allclose(Rotation.from_euler("xyz", angles).as_matrix(), rot.as_matrix(), atol=1e-12)

@@ -377,8 +377,13 @@ def test_repeated_stamps_batch_equals_stream():
     for config in (EstimatorConfig(), EstimatorConfig(lowpass_hz=10.0, sample_rate=50.0)):
         assert_stream_equals_batch(t, g.wrench, "murakami2006", config)
     assert estimate(t, g.wrench).repeated_stamps == 3
-    with pytest.raises(ValueError, match="time must not go back: sample 11"):
+    with pytest.raises(ValueError, match=rf"time must not go back: sample 11 at {float(t[9])!r} s follows {float(t[10])!r} s$"):
         estimate(np.r_[t[:11], t[9], t[12:]], g.wrench)
+    # a sample that is not finite is named, by its index and its values (plain floats, not numpy's)
+    w = g.wrench.copy()
+    w[7, 4] = np.nan
+    with pytest.raises(ValueError, match=r"t and wrench must be finite: sample 7 \(from 0\) has wrench = \["):
+        estimate(t, w)
 
 
 def test_log_shorter_than_the_tare_is_all_taring():

@@ -40,6 +40,7 @@ from scipy.spatial.transform import Rotation
 from softtip.calibration.probing import TARGET_STD, find_presses, force_spread, tare_probing_log
 from softtip.core._vec import tangent_basis as _tangent_basis
 from softtip.core.mesh import MeshFingertip
+from softtip.core.mounting import rpy_of
 from softtip.errors import InputError
 from softtip.estimator.tare import TareReport
 
@@ -279,7 +280,7 @@ def calibrate_mesh(
         source=tip.source,
         mesh_units=tip.mesh_units,
         translation=tuple(float(v) for v in rot.apply(np.asarray(tip.translation) - centre) + centre + shift),
-        rpy=tuple(float(v) for v in (rot * r_file).as_euler("xyz")),
+        rpy=rpy_of(rot * r_file),
     )
     return MeshCalibration(
         translation=x[:3].copy(),

@@ -38,7 +38,7 @@ from softtip.core._xp import NP
 from softtip.core.shape import Fingertip
 from softtip.errors import InputError
 
-__all__ = ["Mounted", "mount_from_mapping", "pose_from_table"]
+__all__ = ["Mounted", "mount_from_mapping", "pose_from_table", "rpy_of"]
 
 
 @dataclass(frozen=True)
@@ -172,6 +172,17 @@ def _numbers(value, n: int, key: str, where: str) -> list[float]:
     if not ok:
         raise InputError(f"{where} {key} = {value!r}; expected a list of {n} finite numbers")
     return [float(v) for v in value]
+
+
+def rpy_of(rotation: Rotation) -> tuple[float, float, float]:
+    """Roll, pitch, yaw (rad, URDF's fixed-axis ``xyz``) of ``rotation``. At a pitch of ±90°
+    (a CAD part whose axis is along x, mounted upright) only roll ± yaw is defined: scipy then
+    sets yaw to 0 and warns on every load; the angles returned compose to the same rotation."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="Gimbal lock detected", category=UserWarning)
+        return tuple(float(a) for a in rotation.as_euler("xyz"))
 
 
 def pose_from_table(table: dict, where: str) -> tuple[Rotation, tuple[float, float, float]]:

@@ -63,11 +63,14 @@ def validate_log(t: ArrayLike, wrench: ArrayLike) -> tuple[NDArray, NDArray]:
     if t.ndim != 1 or w.shape != (len(t), 6):
         raise ValueError(f"expected t of shape (N,) and wrench of shape (N, 6), got {t.shape} and {w.shape}")
     if not (np.all(np.isfinite(t)) and np.all(np.isfinite(w))):
-        raise ValueError("t and wrench must be finite")
+        bad_t, bad_w = ~np.isfinite(t), ~np.isfinite(w).all(axis=1)
+        i = int(np.argmax(bad_t | bad_w))
+        what = f"t = {float(t[i])!r}" if bad_t[i] else f"wrench = {w[i].tolist()!r}"
+        raise ValueError(f"t and wrench must be finite: sample {i} (from 0) has {what}")
     back = np.flatnonzero(np.diff(t) < 0)
     if len(back):
         i = int(back[0]) + 1
-        raise ValueError(f"time must not go back: sample {i} at {t[i]!r} s follows {t[i - 1]!r} s")
+        raise ValueError(f"time must not go back: sample {i} at {float(t[i])!r} s follows {float(t[i - 1])!r} s")
     return t, w
 
 

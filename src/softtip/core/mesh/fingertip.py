@@ -33,7 +33,7 @@ from softtip.core.mesh.topology import (
     _exposure,
     _near_classes,
 )
-from softtip.core.mounting import pose_from_table
+from softtip.core.mounting import pose_from_table, rpy_of
 from softtip.core.shape import Fingertip
 from softtip.errors import InputError
 
@@ -447,7 +447,7 @@ def mesh_fingertip_from_table(table: dict, source: str = "<fingertip>") -> MeshF
     thickness = None if thickness is None else number("skin_thickness", thickness)
     # the mesh frame's pose in the sensor frame: the [fingertip.mount] of every shape
     rotation, translation = pose_from_table(table.get("mount", {}), f"{source}: [fingertip.mount]")
-    rpy = tuple(float(a) for a in rotation.as_euler("xyz"))
+    rpy = rpy_of(rotation)
     base = Path(source).parent if source and not source.startswith("<") else Path(".")
     path = Path(mesh)
     if not path.is_absolute():
