@@ -290,6 +290,9 @@ def test_missing_header_hints(tmp_path: Path) -> None:
     assert read_log(commented, columns="t=1,fx=2,fy=3,fz=4,mx=5,my=6,mz=7").wrench.tolist() == [[1, 2, 3, 4, 5, 6]]
     spaces = _write(tmp_path, "t fx fy fz mx my mz\n0 1 2 3 4 5 6\n", "s.csv")
     assert "The header looks space-separated; softtip reads comma, tab or semicolon delimiters" in _error(spaces)
+    savetxt = _write(tmp_path, "0.0 1 2 3 4 5 6\n0.02 1 2 3 4 5 6\n", "savetxt.txt")  # numpy.savetxt's default
+    assert "Line 1 looks like space-separated numbers; softtip reads comma, tab or semicolon" in _error(savetxt)
+    assert "its rows look space-separated" in _error(savetxt, columns="t=1,fx=2,fy=3,fz=4,mx=5,my=6,mz=7")
     no_header = _write(tmp_path, "0,1,2,3,4,5,6\n", "c.csv")
     assert _error(no_header).endswith(
         "Line 1 looks like data; expected the header row first (a file without one: give the columns by position, "
@@ -340,6 +343,12 @@ def test_clock_times_and_utf16_are_named(tmp_path: Path) -> None:
         f"{path}:2: column 't': expected a number, got '12:03:04.000'; clock times (hh:mm:ss) are not read: give t "
         "in seconds, or map a column of seconds or stamps with --columns t=NAME"
     )
+    for stamp in ("2024-03-14T10:22:01.120", "2024-03-14 10:22:01.120+01:00"):  # pandas' to_csv of datetime64
+        path = _write(tmp_path, f"{HEADER}\n{stamp},1,2,3,4,5,6\n", "iso.csv")
+        assert _error(path) == (
+            f"{path}:2: column 't': expected a number, got {stamp!r}; dates as text are not read from CSV: give t in "
+            "seconds (or Unix time), or write the log as Parquet or Arrow, whose timestamp columns are read as dates"
+        )
     utf16 = tmp_path / "u16.txt"
     utf16.write_bytes(f"{HEADER}\n0,1,2,3,4,5,6\n".encode("utf-16"))  # with its byte-order mark, as Excel writes
     assert _error(utf16) == (

@@ -358,7 +358,12 @@ def resolve_columns(names: Sequence[str], fmt: LogFormat, *, headerless: bool = 
             if want.isdigit() and (headerless or want not in names):
                 j = int(want) - 1
                 if not 0 <= j < len(names):
-                    raise ColumnAbsent(f"--columns {role}={want}: the file has {len(names)} columns", len(chosen))
+                    spaced = len(names) == 1 and len(names[0].split()) > 1
+                    raise ColumnAbsent(
+                        f"--columns {role}={want}: the file has {len(names)} columns"
+                        + ("; its rows look space-separated: softtip reads comma, tab or semicolon delimiters (replace "
+                           "the spaces between cells, e.g. tr -s ' ' ',')" if spaced else ""), len(chosen),
+                    )  # fmt: skip
             elif want in names:
                 j = list(names).index(want)
             else:

@@ -1779,9 +1779,14 @@ def _column_index(header: _Header, source: str, *, dialects: bool = True) -> dic
             for delim, label in ((";", "semicolon"), ("\t", "tab")):
                 if delim in names[0]:
                     hints.append(f"The header looks {label}-separated; expected commas between columns.")
-            if set(REQUIRED_COLUMNS) <= set(names[0].split()):
+            cells = names[0].split()
+            if set(REQUIRED_COLUMNS) <= set(cells):
                 hints.append("The header looks space-separated; softtip reads comma, tab or semicolon delimiters: "
                              "replace the spaces between cells (e.g. tr -s ' ' ',').")  # fmt: skip
+            elif len(cells) > 1 and all(_is_number(c) for c in cells):  # numpy.savetxt's default: spaces, no header
+                hints.append(f"Line {line} looks like space-separated numbers; softtip reads comma, tab or semicolon "
+                             "delimiters: replace the spaces between cells (e.g. tr -s ' ' ','), then give the "
+                             "header or --columns.")  # fmt: skip
         # numpy.savetxt(header=...) writes "# t,fx,...": point at it rather than guess.
         commented = [
             ln
@@ -2084,6 +2089,9 @@ def _parse_careful(
                 clock = name in ("t", "nanosec") and re.fullmatch(r"\s*\d{1,2}:\d{2}(:\d{2}([.,]\d+)?)?\s*", cell)
                 hint = ("; clock times (hh:mm:ss) are not read: give t in seconds, or map a column of seconds or "
                         "stamps with --columns t=NAME") if clock else ""  # fmt: skip
+                if name == "t" and re.match(r"\s*\d{4}-\d{2}-\d{2}[T ]\d", cell):  # ISO 8601, as pandas' to_csv writes
+                    hint = ("; dates as text are not read from CSV: give t in seconds (or Unix time), or write the log "
+                            "as Parquet or Arrow, whose timestamp columns are read as dates")  # fmt: skip
                 if not comma and re.fullmatch(r"\s*[-+]?\d+,\d+\s*", cell):  # a quoted decimal comma
                     hint = ("; a decimal comma: read with semicolon or tab delimiters only (a comma-separated file "
                             "needs decimal points; re-export it with them, or with ';' between cells)")
