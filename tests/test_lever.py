@@ -110,3 +110,31 @@ def test_cli_stops_a_simulated_si_log_read_as_kgf_mm(tmp_path):
                              capture_output=True, text=True, timeout=120)  # fmt: skip
         assert out.returncode == 0, out.stderr
         (tmp_path / "e.csv").unlink()
+
+
+def test_a_lever_off_by_a_thousand_names_the_pairs_it_fits_when_the_noise_fits_none():
+    # moments in N·mm read as N·m (a lever 1000 times the fingertip's) with a tare whose noise is
+    # 2.5 times quieter than the sensor's in force and 5 times in N·mm (a simulated log's quantised
+    # noise, a short tare): the noise puts no pair within 3 times (kgf-mm: 4 and 2 times too
+    # noisy), so it picks none; every pair the lever fits is named, --moment-units N*mm among them
+    from softtip.core.lever import check_wrench_units
+    from softtip.core.noise import NANO17
+
+    ex = load_example()
+    tared = ex.wrench - ex.wrench[:10].mean(axis=0)
+    in_nmm = np.concatenate([tared[:, :3], tared[:, 3:] * 1e3], axis=1)
+    rng = np.random.default_rng(5)
+    f0, m0 = NANO17.force_std[0], NANO17.moment_std[0] * 1e3  # the sensor's, the moment's as read (N·mm as N·m)
+    quiet = np.concatenate([rng.normal(0, 0.4 * f0, (40, 3)), rng.normal(0, 0.2 * m0, (40, 3))], axis=1)
+    with pytest.raises(InputError) as info:
+        check_wrench_units(in_nmm, murakami2006(), quiet=quiet, noise=NANO17)
+    msg = str(info.value)
+    assert "the noise while taring fits no unit pair within 3 times the sensor's" in msg
+    assert "forces in N with moments in N·mm (--moment-units N*mm)" in msg
+    # a tare far quieter than the sensor in force and moment alike (noise-free simulated data): the
+    # noise cannot tell pairs apart, and the lever names them as the pairs that fit the data
+    silent = rng.normal(0, 1e-9, (40, 6))
+    with pytest.raises(InputError) as info:
+        check_wrench_units(in_nmm, murakami2006(), quiet=silent, noise=NANO17)
+    assert "reaches only 42.1 mm: the data fit " in str(info.value)
+    assert "forces in N with moments in N·mm (--moment-units N*mm)" in str(info.value)

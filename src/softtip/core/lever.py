@@ -327,7 +327,10 @@ def check_wrench_units(
     limit = LEVER_MARGIN * lever.reach
     lever_fits = {pair: not (lever.n_samples >= 5 and not lever.median * km / kf <= limit)
                   for pair, (kf, km) in pair_scales(force_unit, moment_unit).items()}  # fmt: skip
-    named = pairs_that_fit(lever_fits, ratio, force_unit, moment_unit)
+    # quieter than the sensor's noise in force and moment alike (simulated, filtered, or a better
+    # sensor): the noise cannot tell the unit pairs apart; the lever alone names them
+    quiet_all = ratio is not None and max(ratio) < 1.0 / NOISE_FITS
+    named = pairs_that_fit(lever_fits, None if quiet_all else ratio, force_unit, moment_unit)
     labels = {u: find_unit(u, q).label for u, q in ((f_unit.name, "force"), (m_unit.name, "moment"))}  # type: ignore[union-attr]
     read_in = f"{labels[f_unit.name]} and {labels[m_unit.name]}"
 
@@ -338,6 +341,14 @@ def check_wrench_units(
 
     where = f"{source}: " if source else ""
     if not lever.plausible:
+        ranked = _ranked_pairs(lever_fits, ratio, force_unit, moment_unit)
+        if not named and ranked:
+            # the lever rules the units read out by a factor of about 1000; the tare's noise (10
+            # samples at 50 Hz; a quiet or quantised sensor is not the model) puts none of the
+            # pairs the lever fits within NOISE_FITS of the sensor's: name them all
+            named = [pair for _, pair in ranked]
+            lead = (f"the noise while taring fits no unit pair within {NOISE_FITS:g} times the sensor's "
+                    "(--force-noise, --moment-noise); the lever fits ")  # fmt: skip
         raise InputError(
             f"{where}the forces act {lever.median * 1e3:.4g} mm from the sensor origin (median of the moment-to-force "
             f"ratio over {lever.n_samples} samples with |f| ≥ {min_force:g} N, read in {read_in}), but the fingertip "
@@ -360,6 +371,7 @@ def check_wrench_units(
             f"{where}read in {read_in}, the noise while taring is {ratio[0] * f0:.3g} N and {ratio[1] * m0 * 1e3:.3g} N·mm "
             f"({ratio[1] * m0:.3g} N·m), "
             f"but the sensor's is {f0:.3g} N and {m0 * 1e3:.3g} N·mm (--force-noise, --moment-noise): {fit_text()}. "
-            "If the sensor really is this noisy, give its --force-noise and --moment-noise"
+            f"If the sensor really is this {'noisy' if max(ratio) > 1.0 else 'quiet'}, give its --force-noise and "
+            "--moment-noise"
         )
     return lever
