@@ -417,9 +417,10 @@ def test_quoted_lines_and_lone_crs_in_pieces_in_bounded_memory(tmp_path: Path, p
 
 @pytest.mark.parametrize("noise", [["--force-noise", "0", "--moment-noise", "0"], ["--moment-noise", "40"]], ids=["lever-only", "noise"])
 def test_wrong_units_after_pieces_went_to_standard_output_name_the_pairs_that_fit(tmp_path: Path, noise: list) -> None:
-    """Moments in N·mm read as N·m, the tare's noise not telling (a sensor noise given to fit): the
-    lever vote over every piece fails after pieces went onto standard output. The message names the
-    unit pairs that fit and their options as the one-shot run's does (it said only 'give --units')."""
+    """Moments in N·mm read as N·m, the tare's noise not telling (a sensor noise given to fit) or
+    fitting none: the lever vote over every piece fails after pieces went onto standard output. The
+    message names the unit pairs that fit and their options as the one-shot run's does (it said only
+    'give --units')."""
     from softtip.io.examples import load_example
     from softtip.io.tables import write_table
 
@@ -437,5 +438,7 @@ def test_wrong_units_after_pieces_went_to_standard_output_name_the_pairs_that_fi
     assert "over 1568 samples with |f| ≥ 0.1 N, read in N and N·m)" in said and "over 1568 samples with |f| ≥ 0.1 N, read in N and N·m)" in err
     fits = said.split("read in N and N·m), but the fingertip reaches only 42.1 mm: ")[1]
     assert err.endswith(f"read in N and N·m): {fits}") and "the fingertip's reach (42.1 mm)" in err
-    assert ("--moment-units N*mm" in fits) == (noise[1] == "0")
+    # named whether or not the noise fits a pair (the lever rules the units read out; the message says which)
+    assert "--moment-units N*mm" in fits
+    assert ("the noise while taring fits no unit pair" in fits) == (noise[1] != "0")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["nmm.csv"]

@@ -634,18 +634,18 @@ def _units_error(input_path, vote, pair_votes, ratio, units, fingertip, min_forc
     """The units check's message for a run whose pieces went onto standard output already (the
     one-shot run cannot start over to word it): the unit pairs that fit and their options, decided
     as the one-shot check decides (the median lever of every piece, the first piece's noise)."""
-    from softtip.core.lever import LEVER_MARGIN, describe_pairs, fingertip_reach, pairs_that_fit
+    from softtip.core.lever import LEVER_MARGIN, fingertip_reach, lever_pairs_text
     from softtip.core.units import UNIT_SYSTEM_UNITS, find_unit
 
     force_unit, moment_unit = UNIT_SYSTEM_UNITS[units or "si"]
-    fits = pairs_that_fit({pair: not (v.n >= 5 and v.median_above()) for pair, v in pair_votes.items()}, ratio,
-                          force_unit, moment_unit)  # fmt: skip
+    fits = lever_pairs_text({pair: not (v.n >= 5 and v.median_above()) for pair, v in pair_votes.items()}, ratio,
+                            force_unit, moment_unit)  # fmt: skip
     read_in = f"{find_unit(force_unit, 'force').label} and {find_unit(moment_unit, 'moment').label}"
     return InputError(
         f"{input_path}: the forces act more than {LEVER_MARGIN:g} times the fingertip's reach "
         f"({fingertip_reach(fingertip) * 1e3:.3g} mm) from the sensor origin (median of the moment-to-force ratio over "
         f"{vote.n} samples with |f| ≥ {min_force:g} N, read in {read_in}): "
-        f"{describe_pairs(fits, (force_unit, moment_unit))}; or is the fingertip (--tip) the wrong one? "
+        f"{fits}; or is the fingertip (--tip) the wrong one? "
         "Expected moments in N·m about the sensor origin"
     )
 

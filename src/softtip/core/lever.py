@@ -278,6 +278,22 @@ def describe_pairs(named: list[tuple[str, str]], given: tuple[str, str], lead: s
     return lead + ", or ".join(pairs)
 
 
+def lever_pairs_text(lever_fits: dict[tuple[str, str], bool], ratio: tuple[float, float] | None, force_unit: str,
+                     moment_unit: str) -> str:  # fmt: skip
+    """What the message of a lever beyond the fingertip's reach says of the units: the pairs that
+    fit (:func:`pairs_that_fit`) with their options; where the tare's noise ``ratio`` puts none of
+    the pairs the lever fits within :data:`NOISE_FITS` of the sensor's (10 samples at 50 Hz; a
+    quiet, quantised or noise-free log is not the model), every pair the lever fits, saying so:
+    the lever rules the units read out by a factor of about 1000, the noise by a few."""
+    given = (find_unit(force_unit, "force").name, find_unit(moment_unit, "moment").name)  # type: ignore[union-attr]
+    named = pairs_that_fit(lever_fits, ratio, force_unit, moment_unit)
+    if named or ratio is None:
+        return describe_pairs(named, given)
+    lever_only = [pair for _, pair in _ranked_pairs(lever_fits, ratio, force_unit, moment_unit)]
+    return describe_pairs(lever_only, given, f"the noise while taring fits no unit pair within {NOISE_FITS:g} times "
+                          "the sensor's (--force-noise, --moment-noise); the lever fits ")  # fmt: skip
+
+
 def check_wrench_units(
     wrench: ArrayLike,
     fingertip: Fingertip,
@@ -327,10 +343,7 @@ def check_wrench_units(
     limit = LEVER_MARGIN * lever.reach
     lever_fits = {pair: not (lever.n_samples >= 5 and not lever.median * km / kf <= limit)
                   for pair, (kf, km) in pair_scales(force_unit, moment_unit).items()}  # fmt: skip
-    # quieter than the sensor's noise in force and moment alike (simulated, filtered, or a better
-    # sensor): the noise cannot tell the unit pairs apart; the lever alone names them
-    quiet_all = ratio is not None and max(ratio) < 1.0 / NOISE_FITS
-    named = pairs_that_fit(lever_fits, None if quiet_all else ratio, force_unit, moment_unit)
+    named = pairs_that_fit(lever_fits, ratio, force_unit, moment_unit)
     labels = {u: find_unit(u, q).label for u, q in ((f_unit.name, "force"), (m_unit.name, "moment"))}  # type: ignore[union-attr]
     read_in = f"{labels[f_unit.name]} and {labels[m_unit.name]}"
 
@@ -341,19 +354,11 @@ def check_wrench_units(
 
     where = f"{source}: " if source else ""
     if not lever.plausible:
-        ranked = _ranked_pairs(lever_fits, ratio, force_unit, moment_unit)
-        if not named and ranked:
-            # the lever rules the units read out by a factor of about 1000; the tare's noise (10
-            # samples at 50 Hz; a quiet or quantised sensor is not the model) puts none of the
-            # pairs the lever fits within NOISE_FITS of the sensor's: name them all
-            named = [pair for _, pair in ranked]
-            lead = (f"the noise while taring fits no unit pair within {NOISE_FITS:g} times the sensor's "
-                    "(--force-noise, --moment-noise); the lever fits ")  # fmt: skip
         raise InputError(
             f"{where}the forces act {lever.median * 1e3:.4g} mm from the sensor origin (median of the moment-to-force "
             f"ratio over {lever.n_samples} samples with |f| ≥ {min_force:g} N, read in {read_in}), but the fingertip "
-            f"reaches only {lever.reach * 1e3:.3g} mm: {fit_text()}; or is the fingertip (--tip) the wrong one? "
-            "Expected moments in N·m about the sensor origin"
+            f"reaches only {lever.reach * 1e3:.3g} mm: {lever_pairs_text(lever_fits, ratio, force_unit, moment_unit)}; "
+            "or is the fingertip (--tip) the wrong one? Expected moments in N·m about the sensor origin"
         )
     off = max(abs(np.log(ratio[0])), abs(np.log(ratio[1]))) if ratio is not None else 0.0
     if off > np.log(NOISE_OFF) and not named:
