@@ -384,3 +384,19 @@ def test_a_command_imports_only_its_own_module() -> None:
     others = {"softtip.cli.calibrate", "softtip.cli.calibrate_payload", "softtip.cli.fuse", "softtip.cli.reproduce",
               "softtip.cli.simulate", "softtip.cli.stream", "softtip.apps.live"}  # fmt: skip
     assert not others & set(loaded), others & set(loaded)
+
+
+def test_a_log_entirely_inside_the_tare_stops_the_run(tmp_path):
+    # 'Time (ms)' over seconds: 10 s read as 10 ms, every sample inside the 0.2 s tare; nothing
+    # would be estimated, with exit 0 and a warning before
+    ex = load_example()
+    rows = [f"{t:.6f},{','.join(f'{v:.6g}' for v in w)}" for t, w in zip(ex.t, ex.wrench)]
+    log = tmp_path / "ms.csv"
+    log.write_text("Time (ms),fx,fy,fz,mx,my,mz\n" + "\n".join(rows) + "\n")
+    out = subprocess.run([SOFTTIP, "estimate", log, "-o", tmp_path / "out.csv"], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 2, out.stderr
+    assert f"softtip: error: {log}: the whole log (500 samples, t from 0 to 0.00998 s as read) lies within the first " in out.stderr
+    assert not (tmp_path / "out.csv").exists()
+    tared = subprocess.run([SOFTTIP, "estimate", log, "-o", tmp_path / "out.csv", "--tare-duration", "0"],
+                           capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert "the whole log" not in tared.stderr

@@ -313,6 +313,15 @@ def check_units(est, fingertip, config: EstimatorConfig, log, source: str | None
     (:func:`softtip.core.lever.check_wrench_units`), naming the unit pairs that fit the data."""
     from softtip.core.lever import check_wrench_units
 
+    taring = np.asarray(est.taring, dtype=bool)
+    if len(taring) > 1 and taring.all():  # nothing estimated: a log that cannot be what its reader took it for
+        t = np.asarray(log.t, dtype=float)
+        raise InputError(
+            f"{source or log.source}: the whole log ({len(t)} samples, t from {t[0]:.6g} to {t[-1]:.6g} s as read) lies "
+            f"within the first {config.tare_duration:g} s used to tare the sensor: nothing to estimate. If t is in "
+            "another unit than read (a header's 'Time (ms)' over seconds), correct the header or give --time-units; "
+            "a log that is already tared needs --tare-duration 0 (or a --bias)"
+        )
     try:
         check_wrench_units(
             est.wrench[~est.taring], fingertip, force_unit=getattr(log, "force_unit", "N"),
