@@ -97,6 +97,8 @@ def test_calibrate_command_writes_a_mesh_fingertip(tmp_path):
     assert "mesh shift" in out.stdout and "1 spike(s) among the 40 tare samples" in out.stderr
     tip = load_fingertip(tmp_path / "tip.toml")
     assert_allclose(np.sort(tip.vertices, axis=0), np.sort(V + shift, axis=0), atol=1e-6)
+    # the mesh named relative to the file, as a fingertip file's paths are read: the folder can move
+    assert 'mesh = "tip.stl"' in (tmp_path / "tip.toml").read_text()
     bad = subprocess.run(
         [SOFTTIP, "calibrate", tmp_path / "probe.csv", "--shape", "mesh", "--mesh", tmp_path / "tip.stl",
          "-o", tmp_path / "bad.toml"],

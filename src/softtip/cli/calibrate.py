@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import sys
 
 import click
@@ -151,7 +152,7 @@ def calibrate(
                 tare_duration=tare_duration, contact_threshold=contact_threshold, min_force=min_force,
             )  # fmt: skip
             if output is not None:
-                atomic_write_text(output, cal.tip.to_toml())
+                atomic_write_text(output, cal.tip.to_toml(os.path.dirname(os.path.abspath(output))))
                 click.echo(cal.summary())
                 click.echo(f"softtip: fingertip -> {output}", err=True)
             else:

@@ -11,6 +11,7 @@ class that ties them together.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import ClassVar
@@ -352,15 +353,23 @@ class MeshFingertip(ClosestPoints, AxisCast, CreaseContact, NewtonRefine, Finger
         """See :func:`mesh_fingertip_from_table`."""
         return mesh_fingertip_from_table(table, source)
 
-    def to_toml(self) -> str:
+    def to_toml(self, folder: str | os.PathLike[str] | None = None) -> str:
+        """The fingertip file's text; the mesh named by its path relative to ``folder`` (the file's
+        own folder, as a fingertip file's paths are read), else absolute."""
         if self.source is None:
             raise ValueError("a mesh fingertip built from arrays has no file to name in TOML; save the mesh first")
         t = ", ".join(repr(float(x)) for x in self.translation)
         r = ", ".join(repr(math.degrees(float(x))) for x in self.rpy)
+        mesh = Path(self.source).resolve()
+        if folder is not None:
+            try:
+                mesh = Path(os.path.relpath(mesh, Path(folder).resolve()))
+            except ValueError:  # another drive (Windows): absolute
+                pass
         lines = [
             "[fingertip]",
             'shape = "mesh"',
-            f"mesh = {_toml_str(str(Path(self.source).resolve()))}",
+            f"mesh = {_toml_str(mesh.as_posix())}",
             f'mesh_units = "{self.mesh_units}"',
             f"crease_angle_deg = {float(self.crease_angle_deg)!r}",
         ]
