@@ -266,7 +266,7 @@ def stream_rows(args, g) -> None:
         ("latch, --no-line-evidence", EstimatorConfig(line_evidence=False), 0.0),
         ("latch, 4th-order low-pass", EstimatorConfig(lowpass_hz=30.0, sample_rate=1000.0, lowpass_order=4), 0.0),
         ("track", EstimatorConfig(contact_point="track"), 0.0),
-        ("latch, idle 100 us between samples", EstimatorConfig(), 100e-6),
+        ("latch, 100 us idle between", EstimatorConfig(), 100e-6),
     ):
         ts = g.t[: args.stream_samples]
         ws = g.wrench[: args.stream_samples].tolist()
