@@ -252,8 +252,9 @@ def test_tare_that_cannot_be_right_is_reported(tmp_path, example_run):
     for name, keep in (("short.csv", log.t < 0.1), ("in_contact.csv", log.t > 3.0)):
         cols = {"t": log.t[keep], **{n: log.wrench[keep, i] for i, n in enumerate(("fx", "fy", "fz", "mx", "my", "mz"))}}
         write_table(cols, tmp_path / name)
-    short = run("estimate", tmp_path / "short.csv", "-o", tmp_path / "a.csv")
-    assert short.returncode == 0 and "whole log lies within" in short.stderr
+    short = run("estimate", tmp_path / "short.csv", "-o", tmp_path / "a.csv")  # nothing to estimate: a located error
+    assert short.returncode == 2 and "the whole log (5 samples, t from 0 to 0.08 s as read) lies within" in short.stderr
+    assert not (tmp_path / "a.csv").exists()
     touched = run("estimate", tmp_path / "in_contact.csv", "-o", tmp_path / "b.csv")
     assert touched.returncode == 0 and "while taring" in touched.stderr
     untouched, _ = example_run  # estimate --example -o si.csv

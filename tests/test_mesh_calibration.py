@@ -170,3 +170,19 @@ def test_a_spike_while_taring_is_left_out(nominal):
     clean, got = calibrate_mesh(t, w, nominal), calibrate_mesh(t, spiked, nominal)
     assert got.n_presses == clean.n_presses == 20 and got.tare.spikes == 1 and clean.tare.spikes == 0
     assert_allclose(got.translation, clean.translation, atol=0.2 * np.max(clean.translation_std))
+
+
+def test_an_18_mm_tip_drawn_in_mm_and_read_in_cm_is_a_located_error(tmp_path):
+    # 180 mm across: within a fingertip's size range, but the presses lie nowhere near its skin;
+    # the fit diverged (numpy's SVD did not converge, a traceback) and now says what to check
+    import trimesh
+
+    from softtip.calibration.mesh import calibrate_mesh_file
+
+    v, f = capsule_mesh(0.008, 0.010, segments=48)
+    trimesh.Trimesh(v * 1e3, f, process=False).export(tmp_path / "small.stl")
+    t, w = mesh_probing_log(MeshFingertip(v, f), 16, np.random.default_rng(8), noise=NANO17)
+    with pytest.raises(InputError, match=r"the presses do not fit this mesh .* wrong mesh units"):
+        calibrate_mesh_file(t, w, str(tmp_path / "small.stl"), "cm")
+    cal = calibrate_mesh_file(t, w, str(tmp_path / "small.stl"), "mm")  # the same presses, the mesh's own units
+    assert np.all(np.abs(cal.translation) < 5 * cal.translation_std + 1e-5)

@@ -238,8 +238,11 @@ def calibrate_mesh(
     # press points with the indentation of the current κ, then the registration; twice more
     # with the fitted κ (the points move by the indentation's spread within each press)
     nrm = None  # press normals: against the mean force first, then the fitted skin's
-    for _ in range(4):
-        x, a, wgt, pts, cov, sqf, kappa0, nrm = _register(tip, w, presses, x, rotation, centre, iterations, nrm)
+    try:
+        for _ in range(4):
+            x, a, wgt, pts, cov, sqf, kappa0, nrm = _register(tip, w, presses, x, rotation, centre, iterations, nrm)
+    except np.linalg.LinAlgError:
+        raise _diverged(tip) from None
 
     def posed(x):
         rot = Rotation.from_rotvec(x[3:6]) if rotation else Rotation.identity()
@@ -252,16 +255,13 @@ def calibrate_mesh(
     q, nu = tip._interp(face, b1, b2)
     res = np.sum((local - q) * nu, axis=1) + (x[-1] - kappa0) * sqf
     chi2 = float(np.sum(res * res * wgt)) / max(len(pts) - n_par, 1)
-    if not (np.isfinite(a).all() and np.isfinite(x).all()):
-        # the registration ran away: the presses lie nowhere near this skin
-        extent = float(np.ptp(tip.vertices, axis=0).max())
-        raise InputError(
-            f"the presses do not fit this mesh (the fit diverged): it is {extent * 1e3:.4g} mm across; wrong mesh "
-            "units (--mesh-units, or mesh_units in the fingertip file), the wrong mesh, or a mesh not placed on the "
-            "sensor?"
-        )
     scale = np.sqrt(np.diag(a))
-    cond = np.linalg.cond(a / np.outer(scale, scale))
+    if not (np.isfinite(a).all() and np.isfinite(x).all() and (scale > 0).all()):
+        raise _diverged(tip)  # the registration ran away: the presses lie nowhere near this skin
+    try:
+        cond = np.linalg.cond(a / np.outer(scale, scale))
+    except np.linalg.LinAlgError:
+        raise _diverged(tip) from None
     if not np.isfinite(cond) or cond > 1e8:
         raise InputError(
             "the presses leave part of the mesh placement undetermined (a direction the skin's shape does not "
@@ -334,6 +334,15 @@ def _register(tip, w, presses, x, rotation, centre, iterations, nrm):
         if np.max(np.abs(step[:-1])) < 1e-10:
             break
     return x, a, wgt, pts, cov, sqf, kappa0, nu_s
+
+
+def _diverged(tip: MeshFingertip) -> InputError:
+    """The error of a registration that ran away from the skin."""
+    extent = float(np.ptp(tip.vertices, axis=0).max())
+    return InputError(
+        f"the presses do not fit this mesh (the fit diverged): it is {extent * 1e3:.4g} mm across; wrong mesh units "
+        "(--mesh-units, or mesh_units in the fingertip file), the wrong mesh, or a mesh not placed on the sensor?"
+    )
 
 
 def calibrate_mesh_file(

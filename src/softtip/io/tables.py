@@ -1444,7 +1444,8 @@ def _time_notes(
             f"t = {float(t[i]):.10g} s as on the {'line' if first_line is not None else 'row'} before); kept in file order"
         )
     median = _median_step(step)
-    if 2 * n_repeated > len(step):  # most stamps repeat: the clock ticks slower than the samples come
+    coarse = 2 * n_repeated > len(step)
+    if coarse:  # most stamps repeat: the clock ticks slower than the samples come
         notes.append(
             f"{source}: column {column!r}: {n_repeated} of {len(step)} steps are 0"
             + (f" (median step of the rest {median:.6g} s)" if median == median else "")
@@ -1452,7 +1453,10 @@ def _time_notes(
             "line evidence) counts samples of equal stamps as one instant; expected stamps of the samples' own "
             "resolution"
         )
-    elif median == median:
+        # the rate is the samples' over the log's span (the median of the moving steps is the tick)
+        span = float(t[-1] - t[0]) if len(t) else 0.0
+        median = span / len(step) if span > 0 and len(step) >= 10 else math.nan
+    if median == median:
         low, high = _PLAUSIBLE_RATE_HZ
         rate = 1.0 / median
         if not low <= rate <= high:
@@ -1473,7 +1477,7 @@ def _time_notes(
                 "if in milliseconds, and no unit in the header says which (a force/torque sensor may stream at "
                 "either): give --time-units s or --time-units ms"
             )
-        if low <= rate <= high:  # a time scale in doubt is said above; its gaps would say nothing
+        if low <= rate <= high and not coarse:  # a time scale in doubt is said above; its gaps would say nothing
             gaps = step > _gap_threshold(median)
             if gaps.any():
                 i = int(np.argmax(step)) + 1
@@ -1562,7 +1566,7 @@ def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None, 
             f"appl{'ies' if len(stated) == 1 else 'y'} to a file without that metadata (leave "
             f"{'it' if len(stated) == 1 else 'them'} out)"
         )
-    t_typed = "t" in names and _is_time_type(table.schema.field("t").type)
+    t_typed = names.count("t") == 1 and _is_time_type(table.schema.field("t").type)
     if t_typed or not (layout.plain and not stated and set(REQUIRED_COLUMNS) <= set(names)):
         if units is None and file_units not in (None, "si"):  # the metadata's units for the columns that give none
             force, moment = UNIT_SYSTEM_UNITS[file_units]
