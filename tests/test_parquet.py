@@ -362,7 +362,8 @@ def test_the_one_date_typed_column_is_the_time(tmp_path: Path, name: str) -> Non
     assert f"t ← {name!r} (ns, its type timestamp[ns])" in log.notes[0]
     # two such columns: which is the time is the user's to say
     table["other"] = pa.array(ns, pa.timestamp("ns"))
-    assert "missing column 't'" in _error(_write_pq(tmp_path / "two.parquet", table))
+    two = _error(_write_pq(tmp_path / "two.parquet", table))
+    assert "missing column 't'" in two and f"Columns typed a date: {name!r}, 'other'; say which is t: --columns t=NAME." in two
 
 
 def test_a_stamp_ns_column_of_the_file_is_never_overwritten(tmp_path: Path) -> None:
@@ -378,6 +379,11 @@ def test_a_stamp_ns_column_of_the_file_is_never_overwritten(tmp_path: Path) -> N
         "under that name; expected one of them (rename the column, or read the time from it: --columns t=stamp_ns "
         "--time-units ns)"
     )
+    # pandas' to_csv of t = stamp_ns / 1e9: t to 100 ns, the column exact; the column's stamps are kept
+    pandas = tmp_path / "pandas.csv"
+    rows = [f"{v / 1e9!r},1,2,3,0.1,0.2,0.3,{v}" for v in ns.tolist()]
+    pandas.write_text("t,fx,fy,fz,mx,my,mz,stamp_ns\n" + "\n".join(rows) + "\n")
+    np.testing.assert_array_equal(read_log(pandas).stamps_ns, ns)
     csv = tmp_path / "other.csv"
     rows = [f"{s / 1e9:.6f},1,2,3,0.1,0.2,0.3,{k}" for k, s in enumerate(ns - ns % 1000)]
     csv.write_text("t,fx,fy,fz,mx,my,mz,stamp_ns\n" + "\n".join(rows) + "\n")

@@ -48,7 +48,7 @@ def _common_clock(paths, logs) -> list[np.ndarray]:
         times = [seconds_from_ns(np.asarray(s, dtype=np.int64), origin) for s in stamps]
     (a0, a1), (b0, b1) = ((float(t[0]), float(t[-1])) for t in times)
     overlap = min(a1, b1) - max(a0, b0)
-    if overlap <= 0.0:
+    if overlap < 0.0:
         raise InputError(
             f"the logs do not overlap in time: {paths[0]} spans {a0:.6g}–{a1:.6g} s and {paths[1]} {b0:.6g}–{b1:.6g} s"
             f"{' on their common clock (their absolute stamps)' if stamps[0] is not None else ''}; expected two "
@@ -206,8 +206,8 @@ def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, 
                      for p, log, t in zip(inputs, read, times)]  # fmt: skip
         logs = [(name, t, log.wrench, pose) for (name, pose), log, t in zip(poses, read, times)]
         print(f"softtip: finger 1 ({poses[0][0]}) <- {inputs[0]}, finger 2 ({poses[1][0]}) <- {inputs[1]}", file=sys.stderr)
-        stamps = np.rint(times[0] * 1e9).astype(np.int64)
         stamp_ns = read[0].stamps_ns  # the first log's absolute stamps, where it had them
+        stamps = stamp_ns if stamp_ns is not None else np.rint(times[0] * 1e9).astype(np.int64)
     else:
         raise click.UsageError(f"expected two CSV logs or one bag, got {len(inputs)} inputs")
     try:

@@ -376,7 +376,8 @@ def check_wrench_units(
             f"{where}read in {read_in}, the noise while taring is {ratio[0] * f0:.3g} N and {ratio[1] * m0 * 1e3:.3g} N·mm "
             f"({ratio[1] * m0:.3g} N·m), "
             f"but the sensor's is {f0:.3g} N and {m0 * 1e3:.3g} N·mm (--force-noise, --moment-noise): {fit_text()}. "
-            f"If the sensor really is this {'noisy' if max(ratio) > 1.0 else 'quiet'}, give its --force-noise and "
+            f"If the sensor really is this {'noisy' if max(ratio, key=lambda r: abs(np.log(r))) > 1.0 else 'quiet'}, "
+            "give its --force-noise and "
             "--moment-noise"
         )
     return lever

@@ -200,13 +200,7 @@ class Log:
         stamps = self.extra.get("stamp_ns")
         if stamps is None:
             return None
-        stamps = np.asarray(stamps)  # softtip's own int64, or a file's column (text from CSV)
-        if stamps.dtype == np.int64:
-            return stamps
-        try:
-            return np.array([int(s) for s in stamps.tolist()], dtype=np.int64)
-        except (TypeError, ValueError, OverflowError):  # a column of that name that holds no whole ns
-            return None
+        return _whole_ns(stamps)
 
 
 #: A time stamp from this many seconds on is absolute (after 1973 in Unix time): ``t`` counts from the first.
@@ -362,7 +356,9 @@ def _finish(
             t_s = _to_seconds(t - t[0], tunit.si)
             stamps = (np.round(t * (tunit.si * 1e9)).astype(np.int64) + origin).tolist()
         stamps = np.array(stamps, dtype=np.int64)
-        if "stamp_ns" in extra and not _same_stamps(extra["stamp_ns"], stamps):  # the file's own would be lost
+        if "stamp_ns" in extra and _same_stamps(extra["stamp_ns"], stamps):
+            stamps = _whole_ns(extra["stamp_ns"])  # the file's own: as exact, or more (t printed with fewer digits)
+        elif "stamp_ns" in extra:  # the file's own would be lost
             raise InputError(
                 f"{source}: column 'stamp_ns' holds other values than the absolute stamps of column "
                 f"{names[header.index['t']]!r}, which softtip writes under that name; expected one of them (rename "
@@ -1627,13 +1623,34 @@ def _table_numbers(col: Any, where: str, *, missing: bool = False, exact: bool =
     return v
 
 
-def _same_stamps(column: Any, stamps: NDArray[np.int64]) -> bool:
-    """Whether a log's own ``stamp_ns`` column (numbers, or CSV text) holds ``stamps``."""
+def _whole_ns(column: Any) -> NDArray[np.int64] | None:
+    """A ``stamp_ns`` column (softtip's int64, a file's integers or CSV text) as int64 ns; None
+    where it holds other than whole numbers."""
+    values = np.asarray(column)
+    if values.dtype.kind in "iu":
+        return values.astype(np.int64, copy=False)
     try:
-        values = np.asarray([int(v) for v in column], dtype=np.int64)
-    except (TypeError, ValueError, OverflowError):
+        return np.array([int(s) for s in values.tolist()], dtype=np.int64)
+    except (TypeError, ValueError, OverflowError):  # a column of that name that holds no whole ns
+        return None
+
+
+def _same_stamps(column: Any, stamps: NDArray[np.int64]) -> bool:
+    """Whether a log's own ``stamp_ns`` column holds ``stamps`` (the stamps of its ``t``), to ``t``'s
+    resolution: within half a sample's step (at least 1 µs), as ``t`` printed with fewer digits
+    than the column's exact nanoseconds is."""
+    values = _whole_ns(column)
+    if values is None or values.shape != stamps.shape:
         return False
-    return values.shape == stamps.shape and bool((values == stamps).all())
+    steps = np.diff(stamps)
+    moving = steps[steps > 0]
+    tolerance = max(1000.0, 0.5 * float(np.median(moving))) if len(moving) else 1000.0
+    return bool((np.abs(values - stamps) <= tolerance).all())
+
+
+def _said(value: Any, origin: int) -> str:
+    """A stamp as a message gives it: the value, or ``origin`` plus a whole offset as an integer."""
+    return repr(value.item()) if not origin else str(origin + int(value))
 
 
 def _is_time_type(kind: Any) -> bool:
@@ -1662,9 +1679,10 @@ def _stamps_as_ns(col: Any, where: str, fmt: LogFormat, split: bool) -> Any:
         raise InputError(f"{where}: {exc}; expected stamps between the years 1678 and 2262") from None
 
 
-def _check_time_order(t: NDArray[Any], source: str, columns: str, unit: str = "") -> None:
+def _check_time_order(t: NDArray[Any], source: str, columns: str, unit: str = "", origin: int = 0) -> None:
     """The located error of stamps that go back (a missing, NaN, stamp skipped); ``columns``: their
-    names; ``unit``: said after the values (`` ns`` for a date's nanoseconds)."""
+    names; ``unit``: said after the values (`` ns`` for a date's nanoseconds); ``origin``: added
+    to the values said (``t`` holds offsets from it)."""
     tf = t.astype(np.float64, copy=False)
     known = np.flatnonzero(~np.isnan(tf))
     back = np.flatnonzero(np.diff(tf[known]) < 0)
@@ -1672,7 +1690,8 @@ def _check_time_order(t: NDArray[Any], source: str, columns: str, unit: str = ""
         row, before = int(known[back[0] + 1]), int(known[back[0]])
         raise InputError(
             f"{source}: column {columns}, row {row + 1}: expected t non-decreasing (a stamp may repeat, not go back), "
-            f"got t = {t[row].item()!r}{unit} at row {row + 1} after t = {t[before].item()!r}{unit} at row {before + 1}"
+            f"got t = {_said(t[row], origin)}{unit} at row {row + 1} after t = {_said(t[before], origin)}{unit} at row "
+            f"{before + 1}"
         )
 
 
@@ -1700,7 +1719,10 @@ def _read_mapped_table(table: Any, names: list[str], source: str, fmt: LogFormat
     try:
         index = _column_index(header, source)
     except InputError as exc:  # the CSV wording, without a header line
-        raise InputError(str(exc).replace(f"{source}:0: ", f"{source}: ", 1)) from None
+        said = str(exc).replace(f"{source}:0: ", f"{source}: ", 1)
+        if len(dated) > 1 and "missing column" in said and "'t'" in said:
+            said += f" Columns typed a date: {', '.join(map(repr, dated))}; say which is t: --columns t=NAME."
+        raise InputError(said) from None
     n = table.num_rows
     if n == 0:
         raise InputError(f"{source}: no rows; expected at least one row of {_EXPECTED_HEADER}")
@@ -1736,7 +1758,7 @@ def _read_mapped_table(table: Any, names: list[str], source: str, fmt: LogFormat
     for k, role in enumerate(ROLES[1:]):
         wrench[:, k] = values[role]
     _check_time_order(t, source, " and ".join(repr(names[index[r]]) for r in ("t", "nanosec") if r in index),
-                      " ns" if header.t_in_ns else "")  # fmt: skip
+                      " ns" if header.t_in_ns else "", header.t_origin_ns)  # fmt: skip
     extra = {names[j]: table.column(j).to_numpy(zero_copy_only=False) for j in range(len(names)) if j not in index.values()}
     return _finish(t, wrench, extra, header, fmt, source, units, None, None)
 
