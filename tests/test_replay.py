@@ -281,3 +281,11 @@ def test_quiet_stream_says_nothing_but_records_the_same(tmp_path):
     for row_a, row_b in zip(read_rows(loud), read_rows(quiet), strict=True):
         row_a.pop("host_time"), row_b.pop("host_time")  # the host's clock at each sample
         assert row_a == row_b
+    # a foreign file: how it was read is a note, said without -q only (as estimate -q)
+    ati = tmp_path / "ati.csv"
+    log = load_example()
+    rows = [f"{t!r},{','.join(repr(v) for v in w)}" for t, w in zip(log.t.tolist(), log.wrench.tolist())]
+    ati.write_text("Time,Fx,Fy,Fz,Tx,Ty,Tz\n" + "\n".join(rows) + "\n")
+    c = subprocess.run([SOFTTIP, "stream", "--replay", str(ati), "--speed", "0", "-o", str(tmp_path / "c.csv"), "-q"],
+                       capture_output=True, text=True, timeout=60)  # fmt: skip
+    assert c.returncode == 0 and c.stderr == "", c.stderr

@@ -205,7 +205,7 @@ def _stream(
                 log = read_log(replay, units=units, **formats)
                 # as `estimate` reads it: far beyond the sensor's range, or a time unit it cannot guess, stops here
                 check_full_scale(log.t, log.wrench, sensor_range, replay, units=units, margin=COARSE_MARGIN)
-                print_log_notes(log)
+                print_log_notes(log, quiet)
                 if payload is None:
                     source = LogSource.from_log(log, speed=speed, stop=stop)
                 else:
