@@ -37,7 +37,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
-from softtip.calibration.probing import TARGET_STD, find_presses, force_spread, tare_probing_log
+from softtip.calibration.probing import TARGET_STD, find_presses, force_spread, precision_text, tare_probing_log
 from softtip.core._vec import tangent_basis as _tangent_basis
 from softtip.core.mesh import MeshFingertip
 from softtip.core.mounting import rpy_of
@@ -106,16 +106,9 @@ class MeshCalibration:
         """``""``, or what it would take to bring the shift's standard deviations to ``target``
         (m): they fall as ``1/√presses`` (as :meth:`Calibration.precision_warning
         <softtip.calibration.probing.Calibration.precision_warning>` says for the closed forms)."""
-        worst = float(np.max(self.translation_std))
-        if not worst > target:
-            return ""
-        axis = "xyz"[int(np.argmax(self.translation_std))]
-        need = math.ceil(self.n_presses * (worst / target) ** 2)
-        return (
-            f"the shift along {axis} is known to ±{worst * 1e3:.2f} mm (1 std) only: about {need} presses like these "
-            f"would bring it to {target * 1e3:.2g} mm (they fall as 1/√presses); press all over the skin, and "
-            "where its normal points along that axis"
-        )
+        stds = {f"shift along {axis}": float(v) for axis, v in zip("xyz", self.translation_std)}
+        return precision_text(stds, self.n_presses, target, "it",
+                              "press all over the skin, and where its normal points along that axis")  # fmt: skip
 
     def summary(self) -> str:
         t = ", ".join(f"{v * 1e3:+.3f}" for v in self.translation)
@@ -258,10 +251,7 @@ def calibrate_mesh(
     scale = np.sqrt(np.diag(a))
     if not (np.isfinite(a).all() and np.isfinite(x).all() and (scale > 0).all()):
         raise _diverged(tip)  # the registration ran away: the presses lie nowhere near this skin
-    try:
-        cond = np.linalg.cond(a / np.outer(scale, scale))
-    except np.linalg.LinAlgError:
-        raise _diverged(tip) from None
+    cond = np.linalg.cond(a / np.outer(scale, scale))
     if not np.isfinite(cond) or cond > 1e8:
         raise InputError(
             "the presses leave part of the mesh placement undetermined (a direction the skin's shape does not "

@@ -287,18 +287,11 @@ class Calibration:
         ``n_presses (std / target)²`` presses like these are needed. With the default
         0.1 mm the centre and radius stay within 0.2 mm in 95 % of calibrations.
         """
-        stds = self.model.stds(self.parameters_std)
-        name = max(stds, key=lambda k: stds[k])
-        worst = stds[name]
-        if not worst > target:
-            return ""
-        need = math.ceil(self.n_presses * (worst / target) ** 2)
-        return (
-            f"the {name} is known to ±{worst * 1e3:.2f} mm (1 std) only: about {need} presses like these would bring "
-            f"every standard deviation to {target * 1e3:.2g} mm (they fall as 1/√presses); presses over a wider range of "
-            "forces (half of them at 1-2 N, half at 5-8 N) separate the radius from the skin's indentation and help most "
-            "(softtip calibrate --guide)"
-        )
+        return precision_text(
+            self.model.stds(self.parameters_std), self.n_presses, target, "every standard deviation",
+            "presses over a wider range of forces (half of them at 1-2 N, half at 5-8 N) separate the radius from the "
+            "skin's indentation and help most (softtip calibrate --guide)",
+        )  # fmt: skip
 
     @property
     def noise_warning(self) -> str:
@@ -412,6 +405,21 @@ def _sphere_fit(points: NDArray) -> tuple[NDArray, float, float]:
 MIN_PRESSES = 5
 #: deg: the least turn of a press's force direction that locates its point (``min_spread``).
 MIN_TURN_DEG = 3.0
+
+
+def precision_text(stds: dict[str, float], n_presses: int, target: float, what: str, advice: str) -> str:
+    """``""``, or the calibration warning of its largest standard deviation (``stds``: name → m)
+    above ``target`` (m): they fall as ``1/√presses``, so about ``n_presses (std / target)²``
+    presses like these bring ``what`` to ``target``; ``advice`` says how to press."""
+    name = max(stds, key=lambda k: stds[k])
+    worst = stds[name]
+    if not worst > target:
+        return ""
+    need = math.ceil(n_presses * (worst / target) ** 2)
+    return (
+        f"the {name} is known to ±{worst * 1e3:.2f} mm (1 std) only: about {need} presses like these would bring "
+        f"{what} to {target * 1e3:.2g} mm (they fall as 1/√presses); {advice}"
+    )
 
 
 def _not_excited(detail: str, model: PressModel) -> InputError:
