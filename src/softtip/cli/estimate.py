@@ -296,14 +296,7 @@ def _estimate(
     check_units(est, fingertip, config, log)
     check_full_scale(log.t, log.wrench, sensor_range, log.source, units=log.units)
 
-    carried = _carried(None if example or bag_log is not None else input_path, output)
-    if carried:
-        from softtip.io.tables import columnar_rows
-
-        # the file's own columns, row for row: only those the log kept as extras (not the ones it
-        # read as t or the wrench under other names), and only when it kept every row
-        same_rows = columnar_rows(input_path) == len(log.t)
-        carried = [c for c in carried if c in log.extra] if same_rows else []
+    carried = _carried(None if example or bag_log is not None else input_path, output, log)
     notes: list[str] = []
     columns = _output_columns(est, log.extra, output_units, carried, notes)
     for note in notes:
@@ -690,16 +683,21 @@ def _output_columns(est, extra, output_units: str, carried=(), notes: list[str] 
     return columns
 
 
-def _carried(input_path, output) -> list[str]:
-    """The input's extra columns to carry with their Arrow type (Parquet or Arrow IPC in and out), else none."""
+def _carried(input_path, output, log=None) -> list[str]:
+    """The input's extra columns to carry with their Arrow type (Parquet or Arrow IPC in and out), else none.
+    With the ``log`` read whole: only the columns it kept as extras (not those read as t or the
+    wrench under other names), and none when it dropped rows (they are copied row for row)."""
     from softtip.io.formats import table_format
 
     if input_path in (None, "-") or output is None or "csv" in (table_format(input_path), table_format(output)):
         return []
     from softtip.io.carry import typed_extras
-    from softtip.io.tables import REQUIRED_COLUMNS
+    from softtip.io.tables import REQUIRED_COLUMNS, columnar_rows
 
-    return typed_extras(input_path, tuple(REQUIRED_COLUMNS))
+    carried = typed_extras(input_path, tuple(REQUIRED_COLUMNS))
+    if log is None or not carried:  # pieces of a log of softtip's own columns, each row kept
+        return carried
+    return [c for c in carried if c in log.extra] if columnar_rows(input_path) == len(log.t) else []
 
 
 def _carry(input_path, output, outputs, est_names: list[str], extra_names_in: list[str], carried: list[str]) -> None:

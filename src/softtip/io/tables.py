@@ -356,8 +356,9 @@ def _finish(
             t_s = _to_seconds(t - t[0], tunit.si)
             stamps = (np.round(t * (tunit.si * 1e9)).astype(np.int64) + origin).tolist()
         stamps = np.array(stamps, dtype=np.int64)
-        if "stamp_ns" in extra and _same_stamps(extra["stamp_ns"], stamps):
-            stamps = _whole_ns(extra["stamp_ns"])  # the file's own: as exact, or more (t printed with fewer digits)
+        own = _file_stamps(extra["stamp_ns"], stamps) if "stamp_ns" in extra else None
+        if own is not None:
+            stamps = own  # the file's own: as exact, or more (t printed with fewer digits)
         elif "stamp_ns" in extra:  # the file's own would be lost
             raise InputError(
                 f"{source}: column 'stamp_ns' holds other values than the absolute stamps of column "
@@ -1629,23 +1630,26 @@ def _whole_ns(column: Any) -> NDArray[np.int64] | None:
     values = np.asarray(column)
     if values.dtype.kind in "iu":
         return values.astype(np.int64, copy=False)
-    try:
-        return np.array([int(s) for s in values.tolist()], dtype=np.int64)
-    except (TypeError, ValueError, OverflowError):  # a column of that name that holds no whole ns
+    if values.dtype.kind == "f":  # a float column (Parquet, Arrow): its whole values, to float64's resolution
+        whole = np.isfinite(values).all() and (values == np.floor(values)).all() and np.abs(values).max(initial=0) < 2**63
+        return values.astype(np.int64) if whole else None
+    try:  # text (CSV): numpy's conversion is exact for whole numbers, as int() is
+        return values.astype(str).astype(np.int64)
+    except (ValueError, OverflowError):  # a column of that name that holds no whole ns
         return None
 
 
-def _same_stamps(column: Any, stamps: NDArray[np.int64]) -> bool:
-    """Whether a log's own ``stamp_ns`` column holds ``stamps`` (the stamps of its ``t``), to ``t``'s
-    resolution: within half a sample's step (at least 1 µs), as ``t`` printed with fewer digits
-    than the column's exact nanoseconds is."""
+def _file_stamps(column: Any, stamps: NDArray[np.int64]) -> NDArray[np.int64] | None:
+    """A log's own ``stamp_ns`` column as int64 ns where it holds ``stamps`` (the stamps of its
+    ``t``) to ``t``'s resolution: within half a sample's step (at least 1 µs), as ``t`` printed
+    with fewer digits than the column's exact nanoseconds is; None where it holds others."""
     values = _whole_ns(column)
     if values is None or values.shape != stamps.shape:
-        return False
+        return None
     steps = np.diff(stamps)
     moving = steps[steps > 0]
     tolerance = max(1000.0, 0.5 * float(np.median(moving))) if len(moving) else 1000.0
-    return bool((np.abs(values - stamps) <= tolerance).all())
+    return values if bool((np.abs(values - stamps) <= tolerance).all()) else None
 
 
 def _said(value: Any, origin: int) -> str:
@@ -1727,23 +1731,22 @@ def _read_mapped_table(table: Any, names: list[str], source: str, fmt: LogFormat
     if n == 0:
         raise InputError(f"{source}: no rows; expected at least one row of {_EXPECTED_HEADER}")
     values = {}
-    what = "a number"
     for role in _roles(index):
         where = f"{source}: column {names[index[role]]!r}"
         col = table.column(index[role])
-        if role == "t" and _is_time_type(col.type):
+        typed = role == "t" and _is_time_type(col.type)
+        if typed:
             header.cmap = replace(header.cmap, typed={"t": str(col.type)}, units={**header.cmap.units, "t": get_unit("ns", "time")})
             header.t_dated = pa.types.is_timestamp(col.type)
             col = _stamps_as_ns(col, where, fmt, "nanosec" in index)
             header.t_in_ns = True
-            what = "a time stamp"
             if col.null_count and fmt.missing != "fail" and col.null_count < len(col):
                 # NaN for the holes needs float64, which holds a date's nanoseconds to 256 ns:
                 # offsets from the first stamp are exact (to 104 days)
                 header.t_origin_ns = int(pa.compute.min(col).as_py())
                 col = pa.compute.subtract(col, header.t_origin_ns)
-        v = _table_numbers(col, where, missing=fmt.missing != "fail", exact=role in _SPLIT_STAMP, expected=what)
-        what = "a number"
+        v = _table_numbers(col, where, missing=fmt.missing != "fail", exact=role in _SPLIT_STAMP,
+                           expected="a time stamp" if typed else "a number")  # fmt: skip
         if role in _SPLIT_STAMP and "nanosec" in index:
             ok = _split_stamp_valid(role, v) | np.isnan(v)
             if not ok.all():
