@@ -395,7 +395,12 @@ class ContactTracker:
         ``1`` (in contact) or ``2`` (a new contact starts at this sample).
         """
         x0, x1, x2, x3, x4, x5 = x
-        r = self._step(self.state, self.params, t, dt, x0, x1, x2, x3, x4, x5)
+        return self.apply(self._step(self.state, self.params, t, dt, x0, x1, x2, x3, x4, x5))
+
+    def apply(self, r: tuple) -> tuple[tuple[float, ...], int]:
+        """What :meth:`step` returns and keeps of :func:`contact_step`'s returns ``r`` on this
+        tracker's state (the step called here, or inside a compiled step that goes on with the
+        sample: :func:`softtip.estimator.pipeline.held_step`)."""
         self.drift_before = self.drift
         self.contact_id = r[1]
         if r[2]:  # the drift followed

@@ -429,9 +429,13 @@ class DepthTracker:
         d0 = depth_kernel(-(fx * nx + fy * ny + fz * nz), self.law, PY)
         if not self.online:
             return d0, None, None, None
+        return (d0, *self.records())
+
+    def records(self) -> tuple[NDArray, NDArray, NDArray]:
+        """The online stage's ``(params, state, ring)``, its ring with room for one more sample."""
         if self._state[_COUNT] >= len(self._ring):
             self._grow()
-        return d0, self._params, self._state, self._ring
+        return self._params, self._state, self._ring
 
     def _grow(self) -> None:
         """A ring twice as long, the window's rows first (oldest first)."""

@@ -28,6 +28,7 @@ to the bit.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
@@ -328,20 +329,26 @@ class LatchTracker:
     and handed back for reuse.
     """
 
-    def __init__(self, tip: Fingertip, config: EstimatorConfig, *, expected_samples: int | None = None):
+    def __init__(
+        self, tip: Fingertip, config: EstimatorConfig, *, expected_samples: int | None = None,
+        soft_finger: Callable[..., tuple] | None = None,
+    ):  # fmt: skip
         self.tip = tip
         self.config = config
+        #: the soft-finger solution of a sample's six floats (the 8-tuple of
+        #: :func:`~softtip.core.location.contact_kernel`; default the tip's own, as Python)
+        self.soft_finger = soft_finger or (lambda *x: contact_kernel(tip, *x, xp=PY))
         self._params = latch_params(config)
         self._step, self._hold = latch_step.function(expected_samples), latch_hold.function(expected_samples)
         p = self._params.tolist()
-        self._window = (p[_LO], p[_HI], p[_DIST2])  # latch_keeps's, as floats
+        self.window = (p[_LO], p[_HI], p[_DIST2])  #: latch_keeps's window (N, N, m²), as floats
         self.reset()
 
     def reset(self) -> None:
         """No contact so far."""
         self.state = new_latch_state()
         self.point: tuple[float, float, float] | None = None  #: the latch held, m (None when none)
-        self._fallback = False  # the latch held is a fallback one
+        self.fallback = False  #: the latch held is a fallback one
 
     def step(self, t: float, f_norm: float, x: list[float], sc, onset: bool):
         """A sample in contact at ``t`` (s) with tared wrench ``x`` and ``|f|`` ``f_norm`` (N);
@@ -351,14 +358,14 @@ class LatchTracker:
         when there is none yet (no valid soft-finger solution); ``begin``: a first rise starts
         (onset or re-latch).
         """
-        if latch_keeps(self.point is not None, onset, f_norm, *self._window):
+        if latch_keeps(self.point is not None, onset, f_norm, *self.window):
             # latch_step's first test, here: a compiled call less per sample of a held contact
-            return self.point, True, self._fallback, False, False, sc
+            return self.point, True, self.fallback, False, False, sc
         state, params = self.state, self._params
         if sc is None:
             out = self._step(state, params, onset, t, f_norm, False, False, 0.0, 0.0, 0.0)
             if out[0] == ASK_SC:
-                sc = SoftFinger(*contact_kernel(self.tip, *x, xp=PY))
+                sc = SoftFinger(*self.soft_finger(*x))
         if sc is not None:
             out = self._step(state, params, onset, t, f_norm, True, sc.valid, sc.rx, sc.ry, sc.rz)
         code, mx, my, mz, latched, fallback, relatched, begin = out
@@ -372,7 +379,7 @@ class LatchTracker:
             point = self.tip._project_kernel(mx, my, mz, PY)
         elif code == FIX:
             point = self.point = self.tip._project_kernel(mx, my, mz, PY)
-            self._fallback = fallback
+            self.fallback = fallback
             self._hold(state, *point)
         else:
             point = None

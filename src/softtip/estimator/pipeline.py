@@ -65,6 +65,7 @@ from softtip.core.noise import SensorNoise, noise_moment_part, noise_variances
 from softtip.core.shape import SoftFinger, sphere_kernel
 from softtip.core.spin import spin_torque_kernel, tangent_frame_kernel
 from softtip.estimator.config import EstimatorConfig
+from softtip.estimator.contact import contact_step
 from softtip.estimator.depth import (
     RING_COLUMNS,
     depth_gap,
@@ -90,6 +91,7 @@ from softtip.estimator.latch import (
     MEAN,
     SOFT,
     latch_hold,
+    latch_keeps,
     latch_params,
     latch_step,
     new_latch_state,
@@ -107,7 +109,10 @@ from softtip.estimator.line_fit import (
 )
 from softtip.estimator.measure import measure_kernel
 
-__all__ = ["ShapeRecord", "shape_record", "points_run", "line_fit_run", "located_step", "tail_run", "fused_columns"]
+__all__ = [
+    "ShapeRecord", "shape_record", "soft_finger_step", "soft_finger_function", "points_run", "line_fit_run",
+    "located_step", "held_record", "held_step", "tail_run", "fused_columns",
+]  # fmt: skip
 
 #: Shape codes of :func:`shape_record`.
 SPHERE, CAPSULE, ELLIPSOID = 0, 1, 2
@@ -198,6 +203,26 @@ def _contact(kind, sp, fx, fy, fz, mx, my, mz, xp):
     if kind == CAPSULE:
         return _capsule_kernel(fx, fy, fz, mx, my, mz, sp[0], sp[1], sp[2], sp[3], xp)
     return _ellipsoid_kernel(fx, fy, fz, mx, my, mz, sp[0], sp[1], sp[2], sp[3], sp[4], sp[5], xp)
+
+
+@lazy_jit
+def soft_finger_step(kind, sp, fx, fy, fz, mx, my, mz):  # pragma: no cover - compiled
+    """:func:`_contact` of one sample, compiled: the stream's soft-finger solution on a
+    closed-form fingertip (:func:`soft_finger_function`)."""
+    return _contact(kind, sp, fx, fy, fz, mx, my, mz, XS)
+
+
+def soft_finger_function(tip: Fingertip, expected_samples: int | None = None):
+    """The soft-finger solution of one sample's six floats on ``tip`` (the 8-tuple of
+    :func:`~softtip.core.location.contact_kernel`): a closed-form fingertip's kernel compiled
+    (:func:`soft_finger_step`: :func:`_contact`, as :func:`points_run` calls it) when the steps are
+    (:func:`~softtip.core._jit.lazy_jit`'s ``function``), else None (the tip's own, as Python)."""
+    rec = shape_record(tip)
+    step = soft_finger_step.function(expected_samples)
+    if rec is None or step is soft_finger_step.python:
+        return None
+    kind, sp = rec
+    return lambda fx, fy, fz, mx, my, mz: step(kind, sp, fx, fy, fz, mx, my, mz)
 
 
 @jitable
@@ -385,6 +410,56 @@ def located_step(t, fx, fy, fz, mx, my, mz, px, py, pz, nx, ny, nz, e1x, e1y, e1
     r = evidence_step(estate, counts, ring, eparams, wconst, t, px, py, pz, nx, ny, nz, e1x, e1y, e1z, e2x,
                       e2y, e2z, ex, ey, ez, hx, hy, hz, fx, fy, fz, hn, hs, sg)  # fmt: skip
     return True, d, d_std, data, sg, hx, hy, hz, hn, hs, r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[9]
+
+
+#: The entries of :func:`held_step`'s ``held`` record (:func:`held_record`): the latch's
+#: keep window (:func:`~softtip.estimator.latch.latch_keeps`: low, high force, N; squared
+#: distance, m²), the held point (m), its normal, tangent frame and moment-noise parts
+#: (:class:`~softtip.estimator.floats.PointGeometry`), the force noise's variances (N²) and the
+#: skin law of exponent 2 (stiffness N/m², cap m; zeros without one).
+HELD_RECORD = 22
+
+
+def held_record(window, geo, force_var, law) -> NDArray[np.float64]:
+    """:func:`held_step`'s record of a held latch's point ``geo`` (:class:`~softtip.estimator.floats.PointGeometry`):
+    ``window`` the latch's keep window, ``force_var`` the force noise's variances, ``law`` the
+    skin law (exponent 2) or None."""
+    stiffness, cap = (law.stiffness, law.max_depth) if law is not None else (0.0, 0.0)
+    rec = np.array((
+        *window, *geo.point, geo.nx, geo.ny, geo.nz, geo.e1x, geo.e1y, geo.e1z, geo.e2x, geo.e2y, geo.e2z,
+        geo.m1, geo.m2, *force_var, stiffness, cap,
+    ), dtype=np.float64)  # fmt: skip
+    assert rec.shape == (HELD_RECORD,)
+    return rec
+
+
+@lazy_jit(nogil=False)
+def held_step(cstate, cparams, t, dt, x0, x1, x2, x3, x4, x5, held, depth_mode, dparams, dstate, dring,
+              eparams, wconst, estate, counts, ring):  # fmt: skip
+    """A stream sample while a latch is held: the contact tracking's step
+    (:func:`~softtip.estimator.contact.contact_step`), then, if the contact goes on and the latch
+    keeps its point (:func:`~softtip.estimator.latch.latch_keeps`), :func:`located_step` at
+    that point: the stages' own steps in the stream's order, one compiled call for the samples
+    that make up nearly all of a held contact (:class:`~softtip.estimator.stream.Estimator`).
+
+    ``held`` is :func:`held_record`; the depth and evidence records as for :func:`located_step`
+    (their rings with room for one more). Returns ``(contact, done, located)``: the contact
+    step's returns, whether the sample was done here, and :func:`located_step`'s returns (NaN
+    when not done: the caller goes on from the contact step with the other stages).
+    """
+    c = contact_step(cstate, cparams, t, dt, x0, x1, x2, x3, x4, x5)
+    fx, fy, fz, mx, my, mz = c[5], c[6], c[7], c[8], c[9], c[10]
+    if not (c[0] == 1 and latch_keeps(True, False, math.sqrt(fx * fx + fy * fy + fz * fz), held[0], held[1], held[2])):
+        return c, False, (False, _NAN, _NAN, False, _NAN, _NAN, _NAN, _NAN, _NAN, _NAN, 0, 0, _NAN, _NAN, _NAN,
+                          _NAN, _NAN, _NAN, _NAN, _NAN)  # fmt: skip
+    nx, ny, nz = held[6], held[7], held[8]
+    d0 = 0.0
+    if depth_mode != DEPTH_OFF:
+        d0 = square_depth_kernel(-(fx * nx + fy * ny + fz * nz), held[20], held[21], XS)
+    r = located_step(t, fx, fy, fz, mx, my, mz, held[3], held[4], held[5], nx, ny, nz, held[9], held[10], held[11],
+                     held[12], held[13], held[14], held[15], held[16], held[17], held[18], held[19], depth_mode, d0,
+                     dparams, dstate, dring, eparams, wconst, estate, counts, ring)  # fmt: skip
+    return c, True, r
 
 
 @lazy_jit

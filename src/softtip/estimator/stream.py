@@ -8,7 +8,11 @@ tracking, the low-pass filter, the latch, the line fit, the depth, the line evid
 step function over a state record, called here once per sample and by the batch in a compiled
 loop (:mod:`softtip.core._jit`). A located sample's depth, measurement and line evidence are
 one call, :func:`~softtip.estimator.pipeline.located_step`, the one the batch's compiled tail
-loop makes per sample.
+loop makes per sample; while a latch is held (nearly every sample of a contact), the contact
+tracking's step, the latch's keep test and that call are one compiled call,
+:func:`~softtip.estimator.pipeline.held_step`. On a closed-form fingertip the soft-finger
+solution (the latch's first rise, ``track`` mode) is the batch's compiled kernel too
+(:func:`~softtip.estimator.pipeline.soft_finger_function`).
 """
 
 from __future__ import annotations
@@ -42,7 +46,15 @@ from softtip.estimator.floats import PointGeometry
 from softtip.estimator.latch import LatchTracker
 from softtip.estimator.line_fit import LineFitTracker
 from softtip.estimator.measure import effective_noise, noise_correlation
-from softtip.estimator.pipeline import DEPTH_LAW, DEPTH_OFF, DEPTH_ONLINE, located_step
+from softtip.estimator.pipeline import (
+    DEPTH_LAW,
+    DEPTH_OFF,
+    DEPTH_ONLINE,
+    held_record,
+    held_step,
+    located_step,
+    soft_finger_function,
+)
 from softtip.estimator.results import EstimatorWarning, SampleEstimate
 from softtip.estimator.tare import StreamTare, TareReport, noise_in_use
 
@@ -52,6 +64,7 @@ __all__ = ["Estimator"]
 #: pair calls the same compiled steps, so a sensor's Estimator built again skips it.
 _WARMED: set = set()
 _NAN3 = (math.nan, math.nan, math.nan)
+_NAN4 = (math.nan,) * 4
 _NAN6 = (math.nan,) * 6
 _new_estimate = tuple.__new__  # SampleEstimate with every field given, without its __new__'s frame
 
@@ -111,7 +124,11 @@ class Estimator:
             self._sos = lowpass_sos(cfg.lowpass_hz, cfg.sample_rate, cfg.lowpass_order)
         self._track = cfg.contact_point == "track"
         self._tare = StreamTare(cfg)
-        self._latch = LatchTracker(self.tip, cfg, expected_samples=self._n)
+        # the soft-finger solution of a sample (the latch's first rise, track mode): compiled on a
+        # closed-form fingertip, the batch's kernel (softtip.estimator.pipeline.points_run)
+        tip = self.tip
+        self._soft = soft_finger_function(tip, expected_samples) or (lambda *x: contact_kernel(tip, *x, xp=PY))
+        self._latch = LatchTracker(tip, cfg, expected_samples=self._n, soft_finger=self._soft)
         self._contacts = ContactTracker(cfg, effective_noise(cfg.noise, self._sos), expected_samples=self._n)
         self._use_noise(cfg.noise)
         self.reset()
@@ -174,6 +191,15 @@ class Estimator:
         self._located = located_step.function(self._n)
         self._python = self._located is located_step.python
         self._no_depth = (np.zeros(1), new_depth_state(), np.empty((1, RING_COLUMNS)))  # the step's records, unused
+        depth = self._depth
+        self._depth_mode = DEPTH_OFF if depth is None else DEPTH_ONLINE if depth.online else DEPTH_LAW
+        # a held latch's samples in one compiled call (contact, latch, located: held_step), where
+        # the stages between are the latch's alone and the skin law is one compiled code computes
+        self._held = None
+        law = cfg.skin_law
+        if not self._track and self._line_fit is None and not self._python and (law is None or law.exponent == 2.0):
+            self._held = held_step.function(self._n)
+        self._held_rec = None  # held_step's record of self._geo (a latch's point)
 
     @property
     def bias(self) -> tuple[float, ...] | None:
@@ -330,12 +356,29 @@ class Estimator:
             self._warn(started_in_contact_message(self.config))
 
     def _step(self, t: float, dt: float, x: list[float]) -> SampleEstimate:
-        cfg = self.config
         contacts = self._contacts
         alarm = contacts.drift_alarm
-        x, code = contacts.step(t, dt, x)
-        if contacts.drift_alarm and not alarm:
-            self._warn(drift_message(cfg, t))
+        latch = self._latch
+        rec = self._held_rec
+        if rec is not None and latch.point is self._geo.point and not self._lead:  # a latch held
+            dp, ds, dr = self._depth.records() if self._depth_mode == DEPTH_ONLINE else self._no_depth
+            c, done, r = self._held(
+                contacts.state, contacts.params, t, dt, *x, rec, self._depth_mode, dp, ds, dr, *self._evidence.ready()
+            )  # fmt: skip
+            x, code = contacts.apply(c)
+            if contacts.drift_alarm and not alarm:
+                self._warn(drift_message(self.config, t))
+            if done:
+                return self._estimate(t, x, latch.point, r, True, latch.fallback, False)
+        else:
+            x, code = contacts.step(t, dt, x)
+            if contacts.drift_alarm and not alarm:
+                self._warn(drift_message(self.config, t))
+        return self._after_contact(t, x, code)
+
+    def _after_contact(self, t: float, x: tuple[float, ...], code: int) -> SampleEstimate:
+        """A sample after the contact tracking's step (``code``: 0 none, 1 in contact, 2 onset)."""
+        contacts = self._contacts
         if not code:
             return self._none(t, x)
         if code == 2 and not self._first_contact:
@@ -353,7 +396,7 @@ class Estimator:
         if self._track:
             if code == 2:
                 self._evidence.start_segment()
-            rx, ry, rz, nx, ny, nz, _, valid = contact_kernel(tip, *x, xp=PY)
+            rx, ry, rz, nx, ny, nz, _, valid = self._soft(*x)
             point, normal = (rx, ry, rz), (nx, ny, nz)
             if not valid:
                 if depth is not None:
@@ -386,6 +429,10 @@ class Estimator:
                 geo = self._geo = PointGeometry(point, normal, self._var)
             else:
                 geo = self._geo = PointGeometry.on_tip(tip, point, self._var)
+                if self._held is not None:  # a latch's point (not a first rise's soft-finger one)
+                    latch = self._latch
+                    rec = point is latch.point
+                    self._held_rec = held_record(latch.window, geo, self._force_var, self.config.skin_law) if rec else None
         nx, ny, nz = geo.nx, geo.ny, geo.nz
         # the depth, the measurement about the effective point and the line evidence: one step
         # (compiled), the batch's (softtip.estimator.pipeline.tail_run)
@@ -396,13 +443,22 @@ class Estimator:
         if dp is None:
             dp, ds, dr = self._no_depth
         sfx, sfy, sfz = self._force_var
-        (located, delta, delta_std, from_data, sigma, hx, hy, hz, hn, h_std, code, ev, dx, dy, dz, angle, angle_std,
-         noise_std, h_ratio, f_ratio) = self._located(
+        r = self._located(
             t, fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, geo.e1x, geo.e1y, geo.e1z, geo.e2x, geo.e2y, geo.e2z,
             geo.m1, geo.m2, sfx, sfy, sfz, mode, d0, dp, ds, dr, *self._evidence.ready(),
         )  # fmt: skip
+        return self._estimate(t, x, point, r, latched, fallback, relatched, (j0, j1, j2, j3), joint_fb)
+
+    def _estimate(
+        self, t: float, x: tuple[float, ...], point: tuple[float, float, float], r: tuple, latched: bool,
+        fallback: bool, relatched: bool, joint: tuple[float, ...] = _NAN4, joint_fb: bool = False,
+    ) -> SampleEstimate:  # fmt: skip
+        """The estimate of a sample in contact at ``point`` from :func:`located_step`'s returns ``r``."""
+        (located, delta, delta_std, from_data, sigma, hx, hy, hz, hn, h_std, code, ev, dx, dy, dz, angle, angle_std,
+         noise_std, h_ratio, f_ratio) = r  # fmt: skip
         if not located:  # not pushing
             return self._none(t, x, pulling=True, relatched=relatched)
+        contacts = self._contacts
         if self._python:  # read from the records' arrays: numpy's floats
             sigma, hx, hy, hz, hn, h_std, delta, delta_std = (float(v) for v in (sigma, hx, hy, hz, hn, h_std, delta, delta_std))
             dx, dy, dz, angle, angle_std, noise_std = float(dx), float(dy), float(dz), float(angle), float(angle_std), float(noise_std)
@@ -412,8 +468,8 @@ class Estimator:
         if self._lead:
             self._lead = False
         return _new_estimate(SampleEstimate, (
-            t, state, tuple(x), point, geo.normal, sigma, h, hn, h_std, d,
-            angle, angle_std, latched, fallback, False, False, relatched, delta, j0, j1, j2, j3, joint_fb,
+            t, state, tuple(x), point, self._geo.normal, sigma, h, hn, h_std, d,
+            angle, angle_std, latched, fallback, False, False, relatched, delta, *joint, joint_fb,
             contacts.contact_id, contacts.drift_before, delta_std, from_data, evidence, h_ratio, f_ratio, noise_std,
         ))  # fmt: skip
 
