@@ -114,7 +114,7 @@ def test_after_runs_on_each_piece_as_handed_out(monkeypatch, jobs: int, guess: b
         monkeypatch.setattr(chunked._LatchGuess, "next", lambda self: guess)
     where = set()
 
-    def after(est):
+    def after(est, extra):
         import threading
 
         where.add(threading.current_thread().name.split("_")[0])

@@ -63,7 +63,7 @@ def estimate_pieces(
     rows: int = DEFAULT_PIECE_ROWS,
     *,
     jobs: int = 1,
-    after: Callable[[Estimates], Any] | None = None,
+    after: Callable[[Estimates, dict[str, Any]], Any] | None = None,
 ) -> Iterator[tuple[Any, ...]]:
     """Estimate a log given block by block; yield each piece's estimates and extra columns.
 
@@ -83,14 +83,15 @@ def estimate_pieces(
         bit of them, are those of ``jobs=1`` (see the module's notes); up to ``jobs + 3``
         pieces are held in memory at once (started, being read, and the caller's).
     after : callable, optional
-        Work on each piece's estimates to do on the thread that estimated it (a command's
-        summaries and checks), so that it too runs in parallel; its result is yielded third.
+        Work on each piece's estimates and extra columns to do on the thread that estimated it
+        (a command's summaries, checks and output blocks), so that it too runs in parallel; its
+        result is yielded third.
 
     Yields
     ------
     (Estimates, dict) or (Estimates, dict, result)
         A piece's estimates (``contact_id`` counts on across pieces), its rows of the extra
-        columns, and ``after(estimates)`` when ``after`` is given.
+        columns, and ``after(estimates, extra)`` when ``after`` is given.
     """
     if rows < 1:
         raise ValueError(f"rows = {rows}; expected at least 1")
@@ -103,18 +104,18 @@ def estimate_pieces(
             yield (est, extra) if after is None else (est, extra, done)
         return
     carry = Carry()
-    for est, extra in _split(blocks, config, rows, carry, lambda t, w, cfg, stages: _estimate(t, w, tip, cfg, carry, stages)):
-        yield (est, extra) if after is None else (est, extra, after(est))
+    for est, extra in _split(blocks, config, rows, carry, lambda t, w, x, cfg, stages: _estimate(t, w, tip, cfg, carry, stages)):
+        yield (est, extra) if after is None else (est, extra, after(est, extra))
 
 
 def _split(
     blocks: Iterable[Block], config: EstimatorConfig, rows: int, carry: Carry,
-    take: Callable[[NDArray, NDArray, EstimatorConfig, _Sequential], Any],
+    take: Callable[[NDArray, NDArray, dict[str, NDArray], EstimatorConfig, _Sequential], Any],
 ) -> Iterator[tuple[Any, dict[str, Any]]]:
     """Cut the log where the estimator, run from ``carry``, is first out of contact at or after
-    ``rows`` samples (and after the tare); yield ``take(t, w, config, stages)`` of each piece
-    (``stages``: its sequential stages, from ``carry`` as it was before the piece) and its extra
-    columns. ``carry`` is brought past the piece after ``take`` (but for ``had_latch``, which
+    ``rows`` samples (and after the tare); yield ``take(t, w, extra, config, stages)`` of each
+    piece (``stages``: its sequential stages, from ``carry`` as it was before the piece) and its
+    extra columns. ``carry`` is brought past the piece after ``take`` (but for ``had_latch``, which
     ``take`` must bring past it)."""
     t_buf: list[NDArray] = []
     w_buf: list[NDArray] = []
@@ -142,7 +143,8 @@ def _split(
                 break  # a contact (or the tare) goes on past the rows held: read more
             cut = len(stages.taring)
             xx = {k: _joined(v) for k, v in x_buf.items()}
-            yield take(tt[:cut], ww[:cut], config, stages), {k: v[:cut] for k, v in xx.items()}
+            extra = {k: v[:cut] for k, v in xx.items()}
+            yield take(tt[:cut], ww[:cut], extra, config, stages), extra
             stages.advance(carry)
             t_buf, w_buf = [tt[cut:]], [ww[cut:]]
             x_buf = {k: [v[cut:]] for k, v in xx.items()}
@@ -150,7 +152,8 @@ def _split(
     if held:
         tt, ww = _joined(t_buf), _joined(w_buf)
         stages = _sequential_stages(tt, ww, config, carry)
-        yield take(tt, ww, config, stages), {k: _joined(v) for k, v in x_buf.items()}
+        extra = {k: _joined(v) for k, v in x_buf.items()}
+        yield take(tt, ww, extra, config, stages), extra
         stages.advance(carry)
 
 
@@ -163,7 +166,7 @@ def _joined(parts: list[NDArray]) -> NDArray:
 
 def _parallel_pieces(
     blocks: Iterable[Block], tip: Fingertip, config: EstimatorConfig, rows: int, jobs: int,
-    after: Callable[[Estimates], Any] | None = None,
+    after: Callable[[Estimates, dict[str, Any]], Any] | None = None,
 ) -> Iterator[tuple[Estimates, Any, dict[str, Any]]]:
     """:func:`estimate_pieces` on threads: the same pieces, the same bits; each piece's
     estimates, ``after`` of them (None without it) and its extra columns.
@@ -191,10 +194,10 @@ def _parallel_pieces(
     ready: queue.Queue = queue.Queue(maxsize=jobs)  # and one more started while the reader waits to put it
     stop = threading.Event()
 
-    def start(t: NDArray, w: NDArray, cfg: EstimatorConfig, stages: _Sequential) -> _Sent:
+    def start(t: NDArray, w: NDArray, extra: dict[str, NDArray], cfg: EstimatorConfig, stages: _Sequential) -> _Sent:
         before = copy.deepcopy(carry)  # (not yet brought past the piece: _split does that after)
         before.had_latch = guess.next()
-        future = pool.submit(_estimate_piece, t, w, tip, cfg, copy.deepcopy(before), stages, after)
+        future = pool.submit(_estimate_piece, t, w, extra, tip, cfg, copy.deepcopy(before), stages, after)
         counted = carry.track.count if carry.track is not None else 0
         sent = _Sent(future, t, w, cfg, before, stages.ct.state.count - counted)
         guess.sent(sent.contacts)
@@ -231,7 +234,7 @@ def _parallel_pieces(
             est, had_latch, done = sent.future.result()
             if sent.before.had_latch != guess.had_latch:  # guessed wrong: again with the flag now known
                 est, had_latch = _estimate_again(sent, tip, guess.had_latch)
-                done = after(est) if after is not None else None
+                done = after(est, extra) if after is not None else None
             guess.back(had_latch, sent.contacts)
             yield est, done, extra
     finally:  # the end, an error, a signal, a consumer that stops: nothing more is read or started
@@ -262,13 +265,14 @@ class _Sent:
     contacts: int  #: the contacts that began in it
 
 
-def _estimate_piece(t: NDArray, w: NDArray, tip: Fingertip, config: EstimatorConfig, carry: Carry,
-                    stages: _Sequential, after: Callable[[Estimates], Any] | None) -> tuple[Estimates, bool, Any]:  # fmt: skip
+def _estimate_piece(t: NDArray, w: NDArray, extra: dict[str, NDArray], tip: Fingertip, config: EstimatorConfig,
+                    carry: Carry, stages: _Sequential,
+                    after: Callable[[Estimates, dict[str, NDArray]], Any] | None) -> tuple[Estimates, bool, Any]:  # fmt: skip
     """On a thread of the pool: a piece's estimates from its sequential stages and ``carry``'s
-    ``had_latch``, whether a contact latched by its end, and ``after`` of the estimates (None
+    ``had_latch``, whether a contact latched by its end, and ``after`` of the estimates and ``extra`` (None
     without it; of estimates started with the wrong ``had_latch`` too, then done again)."""
     est = _estimate(t, w, tip, config, carry, stages)
-    return est, carry.had_latch, after(est) if after is not None else None
+    return est, carry.had_latch, after(est, extra) if after is not None else None
 
 
 def _estimate_again(sent: _Sent, tip: Fingertip, had_latch: bool) -> tuple[Estimates, bool]:

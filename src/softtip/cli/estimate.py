@@ -298,7 +298,9 @@ def _estimate(
 
     carried = _carried(None if example or bag_log is not None else input_path, output, log)
     notes: list[str] = []
-    columns = _output_columns(est, log.extra, output_units, carried, notes)
+    est_columns = est.columns(units=output_units)
+    est_names = list(est_columns)
+    columns = _output_columns(est_columns, log.extra, carried, notes)
     for note in notes:
         click.echo(f"softtip: warning: {note}", err=True)
 
@@ -310,7 +312,7 @@ def _estimate(
         to_bag=to_bag, rerun_spawn=rerun_spawn, rerun_save=rerun_save, ros_distro=ros_distro, frame_id=frame_id,
         metadata=parquet_metadata(fingertip, tip, output_units, log), outputs=outputs, staged_bag=staged_bag,
     )  # fmt: skip
-    _carry(input_path, output, outputs, list(est.columns(units=output_units)), list(log.extra), carried)
+    _carry(input_path, output, outputs, est_names, list(log.extra), carried)
 
     from softtip.estimator.summary import summarise_contacts
 
@@ -533,32 +535,37 @@ def _estimate_in_pieces(
             sent[0] += n if output is None else 0
             bar.update(n)
 
-        def after(est) -> tuple:
-            """A piece's units-check distances and contact summaries: on the thread that estimated
-            it (with --jobs, in parallel, not in the caller's thread, which writes the output)."""
-            distances = lever_distances(est.wrench[~est.taring], max(0.1, config.contact_threshold))
-            return distances, summarise_contacts(est) if not quiet else []
-
         def run(out) -> None:
-            pieces = estimate_pieces(checked(), fingertip, config, rows, jobs=jobs, after=after)
-            try:
-                with TableWriter(out, format=fmt, metadata=parquet_metadata(fingertip, tip, output_units, blocks),
-                                 threads=jobs) as writer:  # fmt: skip
-                    for k, (est, extra, (distances, contacts)) in enumerate(pieces):
+            with TableWriter(out, format=fmt, metadata=parquet_metadata(fingertip, tip, output_units, blocks),
+                             threads=jobs) as writer:  # fmt: skip
+
+                def after(est, extra) -> tuple:
+                    """A piece's units-check distances, contact summaries and output rows (its
+                    columns' names, the notes on them, the writer's blocks): on the thread that
+                    estimated it (with --jobs, in parallel, not in the caller's thread, which
+                    writes the output)."""
+                    distances = lever_distances(est.wrench[~est.taring], max(0.1, config.contact_threshold))
+                    est_columns = est.columns(units=output_units)
+                    est_names, piece_notes = list(est_columns), []
+                    prepared = writer.prepare(_output_columns(est_columns, extra, carried, piece_notes))
+                    return distances, summarise_contacts(est) if not quiet else [], est_names, piece_notes, prepared
+
+                pieces = estimate_pieces(checked(), fingertip, config, rows, jobs=jobs, after=after)
+                try:
+                    for k, (est, extra, (distances, contacts, est_names, piece_notes, prepared)) in enumerate(pieces):
                         if k == 0:
                             noise_fits(est)
                             _start_pair_votes(pair_votes, first_ratio, vote.limit, blocks.units, est, first_wrench[0], config)
+                            names["est"], names["extra"] = est_names, list(extra)
+                            notes.extend(piece_notes)  # the same for every piece: the first's said once
                         vote.add(distances)
                         for pair_vote in pair_votes.values():
                             pair_vote.add(distances)
-                        columns = _output_columns(est, extra, output_units, carried, notes if not names else None)
-                        names.setdefault("est", list(est.columns(units=output_units)))
-                        names.setdefault("extra", list(extra))
                         began[0] = output is None  # from here standard output may hold a part of the table
-                        writer.write(columns, progress=written)
+                        writer.write(prepared, progress=written)
                         totals.add(est, contacts)
-            finally:
-                pieces.close()  # with --jobs, no piece is read or started from now (an error, a signal)
+                finally:
+                    pieces.close()  # with --jobs, no piece is read or started from now (an error, a signal)
             if vote.n >= 5 and vote.median_above():
                 raise NotStreamable("wrong units: the one-shot run says so")  # as check_units decides
             if beyond:
@@ -664,16 +671,18 @@ def _column(values) -> np.ndarray:
     return np.asarray(values)
 
 
-def _output_columns(est, extra, output_units: str, carried=(), notes: list[str] | None = None) -> dict:
-    """The output table: the estimates' columns in ``output_units`` (``Estimates.columns``), then the input's
-    extra columns (renamed ``input_NAME`` when named like an output column, said in ``notes``; a ``carried``
-    column as a placeholder for :func:`softtip.io.carry.carry_columns`)."""
+def _output_columns(est_columns: dict, extra, carried=(), notes: list[str] | None = None) -> dict:
+    """The output table: the estimates' columns (``Estimates.columns`` in the output's units; added
+    to in place), then the input's extra columns (renamed ``input_NAME`` when named like an output
+    column, said in ``notes``; a ``carried`` column as a placeholder for
+    :func:`softtip.io.carry.carry_columns`)."""
     from softtip.io.carry import extra_names, placeholder
 
-    columns = est.columns(units=output_units)
+    columns = est_columns
+    n = len(next(iter(columns.values())))
     names = extra_names(list(columns), list(extra))
     for name, values in extra.items():
-        columns[names[name]] = placeholder(len(est)) if name in carried else _column(values)
+        columns[names[name]] = placeholder(n) if name in carried else _column(values)
     renamed = [name for name in extra if names[name] != name]
     if notes is not None and len(renamed) == 1:
         notes.append(f"input column {renamed[0]!r} is named like an output column; written as {names[renamed[0]]!r}")

@@ -74,7 +74,7 @@ from collections import deque
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, replace
-from typing import Any, BinaryIO, TextIO
+from typing import Any, BinaryIO, NamedTuple, TextIO
 
 import numpy as np
 from numpy.typing import NDArray
@@ -106,7 +106,10 @@ from softtip.io.formats import (
     table_format,
 )
 
-__all__ = ["REQUIRED_COLUMNS", "Log", "LogBlocks", "NotStreamable", "TableWriter", "iter_log", "read_log", "write_table"]
+__all__ = [
+    "REQUIRED_COLUMNS", "Log", "LogBlocks", "NotStreamable", "PreparedRows", "TableWriter", "iter_log", "read_log",
+    "write_table",
+]  # fmt: skip
 
 #: Columns every input log must have, in wrench order after ``t``.
 REQUIRED_COLUMNS: tuple[str, ...] = ("t", "fx", "fy", "fz", "mx", "my", "mz")
@@ -3392,6 +3395,13 @@ def iter_log(
     return LogBlocks(path, units, rows, progress)
 
 
+class PreparedRows(NamedTuple):
+    """Rows for :meth:`TableWriter.write`, made by :meth:`TableWriter.prepare`."""
+
+    plan: _Plan  #: the checked columns and their cell formats
+    blocks: tuple  #: Parquet and Arrow IPC: the Arrow tables to write, in order (CSV: none)
+
+
 class TableWriter:
     """:func:`write_table`, piece by piece, to an open stream (an atomic writer's file).
 
@@ -3435,9 +3445,27 @@ class TableWriter:
             self._text = None
         self._blocks = None if self.parquet else _CsvBlocks(self._text or out, threads)  # type: ignore[arg-type]
 
-    def write(self, columns: Mapping[str, Sequence[Any] | np.ndarray], progress: Callable[[int], object] | None = None) -> None:
-        """Append the rows of ``columns`` (the same names, in the same order, every time)."""
+    def prepare(self, columns: Mapping[str, Sequence[Any] | np.ndarray]) -> PreparedRows:
+        """What :meth:`write` makes of ``columns`` before it writes: the checked plan and, for
+        Parquet and Arrow IPC, the Arrow blocks. It reads nothing of the writer's state but its
+        settings, so another thread may make it (``softtip estimate --jobs``: the threads that
+        estimated the pieces) and hand it to :meth:`write`."""
         plan = _plan_table(columns, self.float_format, text=not self.parquet)
+        if not self.parquet:
+            return PreparedRows(plan, ())
+        plan.parquet = True
+        blocks = tuple(
+            _arrow_block(plan, start, min(start + _PARQUET_ROWS, plan.n), rounded=False)
+            for start in range(0, plan.n, _PARQUET_ROWS)
+        )  # fmt: skip
+        return PreparedRows(plan, blocks)
+
+    def write(self, columns: Mapping[str, Sequence[Any] | np.ndarray] | PreparedRows,
+              progress: Callable[[int], object] | None = None) -> None:  # fmt: skip
+        """Append the rows of ``columns`` (the same names, in the same order, every time), or of
+        what :meth:`prepare` made of them."""
+        prepared = columns if isinstance(columns, PreparedRows) else self.prepare(columns)
+        plan = prepared.plan
         if self.names is not None and plan.names != self.names:
             raise ValueError(f"columns {plan.names} differ from the first piece's {self.names}")
         plan.progress = progress
@@ -3445,15 +3473,12 @@ class TableWriter:
         if self.parquet:
             binary = getattr(out, "buffer", out)
             out.flush()
-            for start in range(0, plan.n, _PARQUET_ROWS):
-                stop = min(start + _PARQUET_ROWS, plan.n)
-                plan.parquet = True
-                table = _arrow_block(plan, start, stop, rounded=False)
+            for table in prepared.blocks:
                 if self._writer is None:
                     self._writer = _columnar_writer(binary, table, self.metadata, self.format, statistics=self.statistics)
                 self._writer.write_table(table)
                 if progress is not None:
-                    progress(stop - start)
+                    progress(table.num_rows)
         else:
             assert self._blocks is not None
             if self.names is None:
