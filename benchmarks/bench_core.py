@@ -785,7 +785,7 @@ def stage_cpu(tmp: Path, n: int, softtip_cmd: str) -> None:
             spent["read"] = time.thread_time() - c0
             carry = Carry()
 
-            def take(t, w, cfg, stages):
+            def take(t, w, extra, cfg, stages):
                 return timed_call("per-contact stages", _estimate, t, w, tip, cfg, carry, stages)
 
             sequential = chunked._sequential_stages
@@ -794,7 +794,7 @@ def stage_cpu(tmp: Path, n: int, softtip_cmd: str) -> None:
                 with open(os.devnull, "wb") as sink:
                     writer = TableWriter(sink, format=fmt, threads=1)  # formatting in this thread
                     for est, extra in chunked._split(iter(blocks), config, chunked.DEFAULT_PIECE_ROWS, carry, take):
-                        columns = timed_call("columns", _output_columns, est, extra, "si")
+                        columns = timed_call("columns", lambda: _output_columns(est.columns(units="si"), extra))
                         timed_call("write", writer.write, columns)
                     timed_call("write", writer.close)
             finally:

@@ -10,6 +10,7 @@ import signal
 import subprocess
 import sys
 import time
+import types
 from pathlib import Path
 
 import numpy as np
@@ -310,6 +311,9 @@ def _dispatchers(obj, found: dict, path: str, seen: set) -> dict:
     seen.add(id(obj))
     if isinstance(obj, Dispatcher):
         found[path] = obj
+    elif isinstance(obj, types.FunctionType) and obj.__module__.startswith("softtip"):  # a closure's
+        for k, cell in enumerate(obj.__closure__ or ()):
+            _dispatchers(cell.cell_contents, found, f"{path}.<closure {k}>", seen)
     elif type(obj).__module__.startswith("softtip"):
         names = list(getattr(obj, "__dict__", {}))
         names += [k for cls in type(obj).__mro__ for k in getattr(cls, "__slots__", ())]

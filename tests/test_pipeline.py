@@ -196,10 +196,21 @@ def test_stream_agrees_with_batch_on_a_sphere_with_pulling_samples(rng):
                          ids=["latch", "track", "papers"])  # fmt: skip
 def test_stream_agrees_with_batch_on_an_ellipsoid(config):
     # the stream's soft-finger solution on a closed shape is the batch's compiled kernel
+    from softtip.core._jit import use_numba
+    from softtip.core._xp import PY
+    from softtip.core.location import contact_kernel
+    from softtip.estimator.pipeline import soft_finger_function
+
     tip = Ellipsoid(semi_axes=(0.012, 0.015, 0.02), center=(0.0, 0.0, -0.005))
     g = synthetic_grasp(tip, angle_deg=35.0, seed=8)
     batch = assert_stream_equals_batch(g.t, g.wrench, tip, config)
     assert (batch.state_names == ("point" if config.contact_point == "track" else "line")).sum() > 50
+    if use_numba(None):  # the compiled kernel, to the bit the tip's own
+        soft = soft_finger_function(tip)
+        assert soft is not None
+        x = batch.wrench[batch.state_names != "none"].tolist()[::50]
+        assert len(x) > 5
+        assert [soft(*w) for w in x] == [contact_kernel(tip, *w, xp=PY) for w in x]
 
 
 def test_a_held_latch_is_one_compiled_step_per_sample(monkeypatch):
@@ -224,17 +235,45 @@ def test_a_held_latch_is_one_compiled_step_per_sample(monkeypatch):
 
             return step if step is Counted.python else counted
 
+    from softtip.core._jit import use_numba
+
+    if not use_numba(None):
+        pytest.skip("the steps run as Python here (no numba)")
     monkeypatch.setattr(stream, "held_step", Counted)
     g = synthetic_grasp(angle_deg=45.0, seed=1, rate=1000.0)
     est = Estimator("murakami2006", EstimatorConfig())
-    if est._held is None:
-        pytest.skip("the steps run as Python here (no numba)")
+    assert est._held is not None
     done.clear()  # the warm-up's
     out = est.process(g.t, g.wrench)
     # held: latched at the point of the sample before (the latch's first rise moves it)
     held = sum(a.state != "none" and b.state != "none" and b.latched and a.point == b.point for a, b in zip(out, out[1:]))
     assert held > 3000
     assert held - 1 <= sum(done) <= held  # the sample that fixes the latch may repeat the last mean's point
+
+
+@pytest.mark.parametrize("name", ["latch", "latch-law", "latch-papers", "vote", "latch-lowpass"])
+def test_a_held_latch_step_gives_the_stages_bits(name, monkeypatch):
+    # the samples a held latch does in one compiled call, done by the stages in turn instead:
+    # every field of every estimate the same, to the bit (repr: -0.0 and NaN included)
+    import softtip.estimator.stream as stream
+
+    g = synthetic_grasp(angle_deg=30.0, seed=4)
+    config = CASES[name]
+    fast = Estimator("murakami2006", config).process(g.t, g.wrench)
+
+    class Off:
+        python = stream.held_step.python
+
+        @staticmethod
+        def function(n):
+            return None
+
+    monkeypatch.setattr(stream, "held_step", Off)
+    slow_est = Estimator("murakami2006", config)
+    assert slow_est._held is None
+    slow = slow_est.process(g.t, g.wrench)
+    assert sum(e.latched and e.state == "line" for e in fast) > 100
+    assert [repr(e) for e in fast] == [repr(e) for e in slow]
 
 
 @pytest.mark.parametrize("angle", [-45.0, 0.0, 30.0, 45.0, 89.0])

@@ -81,7 +81,8 @@ def estimate_pieces(
         Threads estimating pieces at the same time (1: all in the caller's thread, one after
         the other; more: besides them a thread reads and cuts the log). The pieces, and every
         bit of them, are those of ``jobs=1`` (see the module's notes); up to ``jobs + 3``
-        pieces are held in memory at once (started, being read, and the caller's).
+        pieces are held in memory at once (started, being read, and the caller's), each with
+        what ``after`` made of it.
     after : callable, optional
         Work on each piece's estimates and extra columns to do on the thread that estimated it
         (a command's summaries, checks and output blocks), so that it too runs in parallel; its
@@ -169,7 +170,7 @@ def _parallel_pieces(
     after: Callable[[Estimates, dict[str, Any]], Any] | None = None,
 ) -> Iterator[tuple[Estimates, Any, dict[str, Any]]]:
     """:func:`estimate_pieces` on threads: the same pieces, the same bits; each piece's
-    estimates, ``after`` of them (None without it) and its extra columns.
+    estimates, ``after`` of them and their extra columns (None without it) and its extra columns.
 
     A thread of its own reads ``blocks`` and finds the cuts with the sequential stages (tare,
     low-pass, contact tracking, a small part of the work: :func:`_split`), which brings the

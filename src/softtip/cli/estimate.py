@@ -541,9 +541,10 @@ def _estimate_in_pieces(
 
                 def after(est, extra) -> tuple:
                     """A piece's units-check distances, contact summaries and output rows (its
-                    columns' names, the notes on them, the writer's blocks): on the thread that
-                    estimated it (with --jobs, in parallel, not in the caller's thread, which
-                    writes the output)."""
+                    columns' names, the notes on them, what the writer makes of them before it
+                    writes: the checked columns, and Parquet's or Arrow's blocks; CSV is formatted
+                    on the writer's threads): on the thread that estimated it (with --jobs, in
+                    parallel, not in the caller's thread, which writes the output)."""
                     distances = lever_distances(est.wrench[~est.taring], max(0.1, config.contact_threshold))
                     est_columns = est.columns(units=output_units)
                     est_names, piece_notes = list(est_columns), []
@@ -679,10 +680,10 @@ def _output_columns(est_columns: dict, extra, carried=(), notes: list[str] | Non
     from softtip.io.carry import extra_names, placeholder
 
     columns = est_columns
-    n = len(next(iter(columns.values())))
+    rows = len(next(iter(columns.values())))
     names = extra_names(list(columns), list(extra))
     for name, values in extra.items():
-        columns[names[name]] = placeholder(n) if name in carried else _column(values)
+        columns[names[name]] = placeholder(rows) if name in carried else _column(values)
     renamed = [name for name in extra if names[name] != name]
     if notes is not None and len(renamed) == 1:
         notes.append(f"input column {renamed[0]!r} is named like an output column; written as {names[renamed[0]]!r}")

@@ -205,7 +205,7 @@ def _contact(kind, sp, fx, fy, fz, mx, my, mz, xp):
     return _ellipsoid_kernel(fx, fy, fz, mx, my, mz, sp[0], sp[1], sp[2], sp[3], sp[4], sp[5], xp)
 
 
-@lazy_jit
+@lazy_jit(nogil=False)
 def soft_finger_step(kind, sp, fx, fy, fz, mx, my, mz):  # pragma: no cover - compiled
     """:func:`_contact` of one sample, compiled: the stream's soft-finger solution on a
     closed-form fingertip (:func:`soft_finger_function`)."""
@@ -412,12 +412,13 @@ def located_step(t, fx, fy, fz, mx, my, mz, px, py, pz, nx, ny, nz, e1x, e1y, e1
     return True, d, d_std, data, sg, hx, hy, hz, hn, hs, r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[9]
 
 
-#: The entries of :func:`held_step`'s ``held`` record (:func:`held_record`): the latch's
-#: keep window (:func:`~softtip.estimator.latch.latch_keeps`: low, high force, N; squared
-#: distance, m²), the held point (m), its normal, tangent frame and moment-noise parts
-#: (:class:`~softtip.estimator.floats.PointGeometry`), the force noise's variances (N²) and the
-#: skin law of exponent 2 (stiffness N/m², cap m; zeros without one).
-HELD_RECORD = 22
+#: The entries of :func:`held_step`'s ``held`` record (:func:`held_record`), where each starts:
+#: the latch's keep window (:func:`~softtip.estimator.latch.latch_keeps`: low, high force, N;
+#: squared distance, m²), the held point (m), its normal, tangent frame ``e1``, ``e2`` and
+#: moment-noise parts ``m1, m2`` (:class:`~softtip.estimator.floats.PointGeometry`), the force
+#: noise's variances (N²) and the skin law of exponent 2 (stiffness N/m², cap m; zeros without one).
+_H_WINDOW, _H_POINT, _H_NORMAL, _H_E1, _H_E2, _H_M, _H_FORCE_VAR, _H_LAW = 0, 3, 6, 9, 12, 15, 17, 20
+HELD_RECORD = 22  #: its length
 
 
 def held_record(window, geo, force_var, law) -> NDArray[np.float64]:
@@ -449,16 +450,21 @@ def held_step(cstate, cparams, t, dt, x0, x1, x2, x3, x4, x5, held, depth_mode, 
     """
     c = contact_step(cstate, cparams, t, dt, x0, x1, x2, x3, x4, x5)
     fx, fy, fz, mx, my, mz = c[5], c[6], c[7], c[8], c[9], c[10]
-    if not (c[0] == 1 and latch_keeps(True, False, math.sqrt(fx * fx + fy * fy + fz * fz), held[0], held[1], held[2])):
+    keep = latch_keeps(True, False, math.sqrt(fx * fx + fy * fy + fz * fz), held[_H_WINDOW], held[_H_WINDOW + 1],
+                       held[_H_WINDOW + 2])  # fmt: skip
+    if not (c[0] == 1 and keep):
         return c, False, (False, _NAN, _NAN, False, _NAN, _NAN, _NAN, _NAN, _NAN, _NAN, 0, 0, _NAN, _NAN, _NAN,
                           _NAN, _NAN, _NAN, _NAN, _NAN)  # fmt: skip
-    nx, ny, nz = held[6], held[7], held[8]
+    nx, ny, nz = held[_H_NORMAL], held[_H_NORMAL + 1], held[_H_NORMAL + 2]
     d0 = 0.0
     if depth_mode != DEPTH_OFF:
-        d0 = square_depth_kernel(-(fx * nx + fy * ny + fz * nz), held[20], held[21], XS)
-    r = located_step(t, fx, fy, fz, mx, my, mz, held[3], held[4], held[5], nx, ny, nz, held[9], held[10], held[11],
-                     held[12], held[13], held[14], held[15], held[16], held[17], held[18], held[19], depth_mode, d0,
-                     dparams, dstate, dring, eparams, wconst, estate, counts, ring)  # fmt: skip
+        d0 = square_depth_kernel(-(fx * nx + fy * ny + fz * nz), held[_H_LAW], held[_H_LAW + 1], XS)
+    r = located_step(
+        t, fx, fy, fz, mx, my, mz, held[_H_POINT], held[_H_POINT + 1], held[_H_POINT + 2], nx, ny, nz,
+        held[_H_E1], held[_H_E1 + 1], held[_H_E1 + 2], held[_H_E2], held[_H_E2 + 1], held[_H_E2 + 2],
+        held[_H_M], held[_H_M + 1], held[_H_FORCE_VAR], held[_H_FORCE_VAR + 1], held[_H_FORCE_VAR + 2], depth_mode, d0,
+        dparams, dstate, dring, eparams, wconst, estate, counts, ring,
+    )  # fmt: skip
     return c, True, r
 
 

@@ -8,10 +8,12 @@ tracking, the low-pass filter, the latch, the line fit, the depth, the line evid
 step function over a state record, called here once per sample and by the batch in a compiled
 loop (:mod:`softtip.core._jit`). A located sample's depth, measurement and line evidence are
 one call, :func:`~softtip.estimator.pipeline.located_step`, the one the batch's compiled tail
-loop makes per sample; while a latch is held (nearly every sample of a contact), the contact
-tracking's step, the latch's keep test and that call are one compiled call,
-:func:`~softtip.estimator.pipeline.held_step`. On a closed-form fingertip the soft-finger
-solution (the latch's first rise, ``track`` mode) is the batch's compiled kernel too
+loop makes per sample. Where the steps are compiled: while a latch is held (nearly every sample
+of a contact; ``latch`` mode without the line fit, a skin law of exponent 2 or none, not while
+the first contact after a tare may still be a release), the contact tracking's step, the
+latch's keep test and that call are one compiled call,
+:func:`~softtip.estimator.pipeline.held_step`; and on a closed-form fingertip the soft-finger
+solution (the latch's first rise, ``track`` mode) is the batch's compiled kernel
 (:func:`~softtip.estimator.pipeline.soft_finger_function`).
 """
 
@@ -26,10 +28,8 @@ from numpy.typing import ArrayLike
 
 from softtip.core._blocks import TIME_EDGE
 from softtip.core._jit import use_numba
-from softtip.core._xp import PY
 from softtip.core.filtering import SosStream, lowpass_sos
 from softtip.core.fingertip import Fingertip, load_fingertip
-from softtip.core.location import contact_kernel
 from softtip.core.noise import SensorNoise, noise_variances
 from softtip.core.spin import tangent_frame
 from softtip.estimator.batch import sample_rate_mismatch
@@ -126,9 +126,9 @@ class Estimator:
         self._tare = StreamTare(cfg)
         # the soft-finger solution of a sample (the latch's first rise, track mode): compiled on a
         # closed-form fingertip, the batch's kernel (softtip.estimator.pipeline.points_run)
-        tip = self.tip
-        self._soft = soft_finger_function(tip, expected_samples) or (lambda *x: contact_kernel(tip, *x, xp=PY))
-        self._latch = LatchTracker(tip, cfg, expected_samples=self._n, soft_finger=self._soft)
+        self._latch = LatchTracker(self.tip, cfg, expected_samples=self._n,
+                                   soft_finger=soft_finger_function(self.tip, expected_samples))  # fmt: skip
+        self._soft = self._latch.soft_finger
         self._contacts = ContactTracker(cfg, effective_noise(cfg.noise, self._sos), expected_samples=self._n)
         self._use_noise(cfg.noise)
         self.reset()

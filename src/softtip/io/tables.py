@@ -71,7 +71,7 @@ import os
 import re
 import sys
 from collections import deque
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, replace
 from typing import Any, BinaryIO, NamedTuple, TextIO
@@ -3399,7 +3399,7 @@ class PreparedRows(NamedTuple):
     """Rows for :meth:`TableWriter.write`, made by :meth:`TableWriter.prepare`."""
 
     plan: _Plan  #: the checked columns and their cell formats
-    blocks: tuple  #: Parquet and Arrow IPC: the Arrow tables to write, in order (CSV: none)
+    blocks: Iterable[Any]  #: Parquet and Arrow IPC: the Arrow tables to write, in order (CSV: none)
 
 
 class TableWriter:
@@ -3450,11 +3450,17 @@ class TableWriter:
         Parquet and Arrow IPC, the Arrow blocks. It reads nothing of the writer's state but its
         settings, so another thread may make it (``softtip estimate --jobs``: the threads that
         estimated the pieces) and hand it to :meth:`write`."""
+        prepared = self._plan(columns)
+        return PreparedRows(prepared.plan, tuple(prepared.blocks))
+
+    def _plan(self, columns: Mapping[str, Sequence[Any] | np.ndarray]) -> PreparedRows:
+        """:meth:`prepare`'s, with the Arrow blocks made one at a time as they are written (a
+        table written in one call holds one block beside its columns, not all of them)."""
         plan = _plan_table(columns, self.float_format, text=not self.parquet)
         if not self.parquet:
             return PreparedRows(plan, ())
         plan.parquet = True
-        blocks = tuple(
+        blocks = (
             _arrow_block(plan, start, min(start + _PARQUET_ROWS, plan.n), rounded=False)
             for start in range(0, plan.n, _PARQUET_ROWS)
         )  # fmt: skip
@@ -3464,7 +3470,7 @@ class TableWriter:
               progress: Callable[[int], object] | None = None) -> None:  # fmt: skip
         """Append the rows of ``columns`` (the same names, in the same order, every time), or of
         what :meth:`prepare` made of them."""
-        prepared = columns if isinstance(columns, PreparedRows) else self.prepare(columns)
+        prepared = columns if isinstance(columns, PreparedRows) else self._plan(columns)
         plan = prepared.plan
         if self.names is not None and plan.names != self.names:
             raise ValueError(f"columns {plan.names} differ from the first piece's {self.names}")
