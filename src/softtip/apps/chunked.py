@@ -170,7 +170,7 @@ def _parallel_pieces(
     after: Callable[[Estimates, dict[str, Any]], Any] | None = None,
 ) -> Iterator[tuple[Estimates, Any, dict[str, Any]]]:
     """:func:`estimate_pieces` on threads: the same pieces, the same bits; each piece's
-    estimates, ``after`` of them and their extra columns (None without it) and its extra columns.
+    estimates, ``after(estimates, extra)`` (None without ``after``) and its extra columns.
 
     A thread of its own reads ``blocks`` and finds the cuts with the sequential stages (tare,
     low-pass, contact tracking, a small part of the work: :func:`_split`), which brings the
