@@ -237,18 +237,20 @@ def test_a_held_latch_is_one_compiled_step_per_sample(monkeypatch):
 
     from softtip.core._jit import use_numba
 
-    if not use_numba(None):
-        pytest.skip("the steps run as Python here (no numba)")
+    compiled = use_numba(None)  # as Python (SOFTTIP_NUMBA=0, no numba) the stages run in turn
     monkeypatch.setattr(stream, "held_step", Counted)
     g = synthetic_grasp(angle_deg=45.0, seed=1, rate=1000.0)
     est = Estimator("murakami2006", EstimatorConfig())
-    assert est._held is not None
+    assert (est._held is not None) == compiled
     done.clear()  # the warm-up's
     out = est.process(g.t, g.wrench)
     # held: latched at the point of the sample before (the latch's first rise moves it)
     held = sum(a.state != "none" and b.state != "none" and b.latched and a.point == b.point for a, b in zip(out, out[1:]))
     assert held > 3000
-    assert held - 1 <= sum(done) <= held  # the sample that fixes the latch may repeat the last mean's point
+    if compiled:
+        assert held - 1 <= sum(done) <= held  # the sample that fixes the latch may repeat the last mean's point
+    else:
+        assert not done
 
 
 @pytest.mark.parametrize("name", ["latch", "latch-law", "latch-papers", "vote", "latch-lowpass"])

@@ -360,20 +360,19 @@ class Estimator:
         alarm = contacts.drift_alarm
         latch = self._latch
         rec = self._held_rec
+        done = False
         if rec is not None and latch.point is self._geo.point and not self._lead:  # a latch held
             dp, ds, dr = self._depth.records() if self._depth_mode == DEPTH_ONLINE else self._no_depth
             c, done, r = self._held(
                 contacts.state, contacts.params, t, dt, *x, rec, self._depth_mode, dp, ds, dr, *self._evidence.ready()
             )  # fmt: skip
             x, code = contacts.apply(c)
-            if contacts.drift_alarm and not alarm:
-                self._warn(drift_message(self.config, t))
-            if done:
-                return self._estimate(t, x, latch.point, r, True, latch.fallback, False)
         else:
             x, code = contacts.step(t, dt, x)
-            if contacts.drift_alarm and not alarm:
-                self._warn(drift_message(self.config, t))
+        if contacts.drift_alarm and not alarm:
+            self._warn(drift_message(self.config, t))
+        if done:
+            return self._estimate(t, x, latch.point, r, True, latch.fallback, False)
         return self._after_contact(t, x, code)
 
     def _after_contact(self, t: float, x: tuple[float, ...], code: int) -> SampleEstimate:
@@ -436,16 +435,15 @@ class Estimator:
         nx, ny, nz = geo.nx, geo.ny, geo.nz
         # the depth, the measurement about the effective point and the line evidence: one step
         # (compiled), the batch's (softtip.estimator.pipeline.tail_run)
-        mode, d0, dp, ds, dr = DEPTH_OFF, 0.0, None, None, None
+        d0, dp, ds, dr = 0.0, None, None, None
         if depth is not None:
             d0, dp, ds, dr = depth.ready(fx, fy, fz, nx, ny, nz)
-            mode = DEPTH_LAW if dp is None else DEPTH_ONLINE
         if dp is None:
             dp, ds, dr = self._no_depth
         sfx, sfy, sfz = self._force_var
         r = self._located(
             t, fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, geo.e1x, geo.e1y, geo.e1z, geo.e2x, geo.e2y, geo.e2z,
-            geo.m1, geo.m2, sfx, sfy, sfz, mode, d0, dp, ds, dr, *self._evidence.ready(),
+            geo.m1, geo.m2, sfx, sfy, sfz, self._depth_mode, d0, dp, ds, dr, *self._evidence.ready(),
         )  # fmt: skip
         return self._estimate(t, x, point, r, latched, fallback, relatched, (j0, j1, j2, j3), joint_fb)
 
