@@ -10,6 +10,8 @@ from softtip import Capsule, Ellipsoid, Estimator, EstimatorConfig, Sphere, axia
 from softtip.core.depth import MURAKAMI2006_DEPTH
 from softtip.core.noise import NANO17
 from softtip.core.units import KGF, KGF_MM
+from softtip.estimator.latch import HELD
+from softtip.estimator.pipeline import STEP_HELD, STEP_NO_POINT, STEP_POINT
 from softtip.estimator.results import EstimatorWarning
 from softtip.sim.synthetic import synthetic_grasp
 
@@ -213,13 +215,14 @@ def test_stream_agrees_with_batch_on_an_ellipsoid(config):
         assert [soft(*w) for w in x] == [contact_kernel(tip, *w, xp=PY) for w in x]
 
 
-def test_a_held_latch_is_one_compiled_step_per_sample(monkeypatch):
-    # the samples of a held latch are done in one call (held_step), the others by the stages in
-    # turn; both give the batch's bits (the tests above), and the one call is what streaming
-    # at sensor rate needs: here every held sample in contact but the one that fixes the latch
+def test_a_contact_is_one_compiled_step_per_sample(monkeypatch):
+    # every sample in contact but its onset is one call (sample_step): at a held latch, and
+    # before (the first rise) and where the held latch's test is due (a re-latch test); it gives
+    # the stages' bits (the test below) and the batch's (the tests above), and one call is what
+    # streaming at sensor rate needs
     import softtip.estimator.stream as stream
 
-    done, real = [], stream.held_step
+    done, codes, real = [], [], stream.sample_step  # the status, the latch's code
 
     class Counted:
         python = real.python
@@ -228,53 +231,92 @@ def test_a_held_latch_is_one_compiled_step_per_sample(monkeypatch):
         def function(n):
             step = real.function(n)
 
-            def counted(*args):
+            def count(*args):
                 out = step(*args)
                 done.append(out[1])
+                codes.append(out[2])
                 return out
 
-            return step if step is Counted.python else counted
+            return step if step is Counted.python else count
 
     from softtip.core._jit import use_numba
 
     compiled = use_numba(None)  # as Python (SOFTTIP_NUMBA=0, no numba) the stages run in turn
-    monkeypatch.setattr(stream, "held_step", Counted)
-    g = synthetic_grasp(angle_deg=45.0, seed=1, rate=1000.0)
-    est = Estimator("murakami2006", EstimatorConfig())
-    assert (est._held is not None) == compiled
+    monkeypatch.setattr(stream, "sample_step", Counted)
+    t, w = sliding_grasp()
+    est = Estimator("murakami2006", EstimatorConfig(relatch_distance=1e-3))
+    assert (est._sample is not None) == compiled
     done.clear()  # the warm-up's
-    out = est.process(g.t, g.wrench)
-    # held: latched at the point of the sample before (the latch's first rise moves it)
+    codes.clear()
+    out = est.process(t, w)
+    in_contact = sum(e.state != "none" for e in out)
+    onsets = sum(b.state != "none" and a.state == "none" for a, b in zip(out, out[1:]))
     held = sum(a.state != "none" and b.state != "none" and b.latched and a.point == b.point for a, b in zip(out, out[1:]))
-    assert held > 3000
+    relatched = sum(e.relatched for e in out)
+    assert onsets == 1 and relatched >= 2 and held > 300
     if compiled:
-        assert held - 1 <= sum(done) <= held  # the sample that fixes the latch may repeat the last mean's point
+        # (every sample in contact has a point here; the rest, out of contact, are not done)
+        assert done.count(STEP_HELD) + done.count(STEP_POINT) == in_contact - onsets and STEP_NO_POINT not in done
+        # the first rise and the re-latch tests at light force: at a point the latch gave
+        assert done.count(STEP_POINT) > 100 + relatched
+        # held (at the point of the sample before; the sample that fixes the latch may repeat the
+        # last mean's point): the held latch's, and those whose re-latch test kept it
+        tested = sum(s == STEP_POINT and c == HELD for s, c in zip(done, codes))
+        assert tested > 50
+        assert held - 1 - relatched <= done.count(STEP_HELD) + tested <= held
     else:
         assert not done
 
 
-@pytest.mark.parametrize("name", ["latch", "latch-law", "latch-papers", "vote", "latch-lowpass"])
-def test_a_held_latch_step_gives_the_stages_bits(name, monkeypatch):
-    # the samples a held latch does in one compiled call, done by the stages in turn instead:
-    # every field of every estimate the same, to the bit (repr: -0.0 and NaN included)
+class _Off:
+    """A compiled step taken away: the stream runs the stages in turn."""
+
+    def __init__(self, step):
+        self.python = step.python
+
+    @staticmethod
+    def function(n):
+        return None
+
+
+_TIPS = {
+    "murakami2006": "murakami2006",
+    "sphere": Sphere(0.02, center=(0, 0, 0.01)),
+    "ellipsoid": Ellipsoid(semi_axes=(0.012, 0.015, 0.02), center=(0.0, 0.0, -0.005)),
+}
+
+
+@pytest.mark.parametrize(
+    ("name", "tip"),
+    [(name, "murakami2006") for name in ("latch", "latch-law", "latch-papers", "vote", "latch-lowpass",
+                                         "latch-relatch-tight", "latch-depth-relatch-lowpass", "track", "track-depth")]
+    + [("latch", "sphere"), ("latch-relatch-tight", "ellipsoid"), ("track", "ellipsoid")],
+)  # fmt: skip
+def test_a_contacts_compiled_steps_give_the_stages_bits(name, tip, monkeypatch):
+    # the samples done in one compiled call (sample_step), done by the stages in turn
+    # instead: every field of every estimate the same, to the bit (repr: -0.0 and NaN included)
     import softtip.estimator.stream as stream
 
-    g = synthetic_grasp(angle_deg=30.0, seed=4)
+    shape = _TIPS[tip]
     config = CASES[name]
-    fast = Estimator("murakami2006", config).process(g.t, g.wrench)
-
-    class Off:
-        python = stream.held_step.python
-
-        @staticmethod
-        def function(n):
-            return None
-
-    monkeypatch.setattr(stream, "held_step", Off)
-    slow_est = Estimator("murakami2006", config)
-    assert slow_est._held is None
-    slow = slow_est.process(g.t, g.wrench)
-    assert sum(e.latched and e.state == "line" for e in fast) > 100
+    if "relatch" in name:  # the contact slides: re-latch tests, re-latches
+        t, w = sliding_grasp()
+        if shape != "murakami2006":
+            t, w = grasp_with_two_contacts()
+    else:
+        g = synthetic_grasp(shape, angle_deg=30.0, seed=4)
+        t, w = g.t, g.wrench
+    fast = Estimator(shape, config).process(t, w)
+    monkeypatch.setattr(stream, "sample_step", _Off(stream.sample_step))
+    slow_est = Estimator(shape, config)
+    assert slow_est._sample is None
+    slow = slow_est.process(t, w)
+    if "relatch" in name:
+        assert sum(e.relatched for e in fast) >= 1
+    if config.contact_point == "track":
+        assert sum(e.state == "point" for e in fast) > 100
+    else:
+        assert sum(e.latched and e.state == "line" for e in fast) > 100
     assert [repr(e) for e in fast] == [repr(e) for e in slow]
 
 

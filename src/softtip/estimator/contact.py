@@ -400,7 +400,7 @@ class ContactTracker:
     def apply(self, r: tuple) -> tuple[tuple[float, ...], int]:
         """What :meth:`step` returns and keeps of :func:`contact_step`'s returns ``r`` on this
         tracker's state (the step called here, or inside a compiled step that goes on with the
-        sample: :func:`softtip.estimator.pipeline.held_step`)."""
+        sample: :func:`softtip.estimator.pipeline.sample_step`)."""
         self.drift_before = self.drift
         self.contact_id = r[1]
         if r[2]:  # the drift followed

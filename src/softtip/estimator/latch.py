@@ -338,9 +338,9 @@ class LatchTracker:
         #: the soft-finger solution of a sample's six floats (the 8-tuple of
         #: :func:`~softtip.core.location.contact_kernel`; default the tip's own, as Python)
         self.soft_finger = soft_finger or (lambda *x: contact_kernel(tip, *x, xp=PY))
-        self._params = latch_params(config)
+        self.params = latch_params(config)  #: the latch's parameter record (:func:`latch_params`)
         self._step, self._hold = latch_step.function(expected_samples), latch_hold.function(expected_samples)
-        p = self._params.tolist()
+        p = self.params.tolist()
         self.window = (p[_LO], p[_HI], p[_DIST2])  #: latch_keeps's window (N, N, m²), as floats
         self.reset()
 
@@ -361,7 +361,7 @@ class LatchTracker:
         if latch_keeps(self.point is not None, onset, f_norm, *self.window):
             # latch_step's first test, here: a compiled call less per sample of a held contact
             return self.point, True, self.fallback, False, False, sc
-        state, params = self.state, self._params
+        state, params = self.state, self.params
         if sc is None:
             out = self._step(state, params, onset, t, f_norm, False, False, 0.0, 0.0, 0.0)
             if out[0] == ASK_SC:

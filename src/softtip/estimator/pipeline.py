@@ -96,6 +96,9 @@ from softtip.estimator.latch import (
     latch_step,
     new_latch_state,
 )
+from softtip.estimator.latch import (
+    _N_PARAMS as _N_LATCH_PARAMS,
+)
 from softtip.estimator.line_fit import (
     _start_anchor,
     _start_window,
@@ -111,11 +114,15 @@ from softtip.estimator.measure import measure_kernel
 
 __all__ = [
     "ShapeRecord", "shape_record", "soft_finger_step", "soft_finger_function", "points_run", "line_fit_run",
-    "located_step", "held_record", "held_step", "tail_run", "fused_columns",
+    "located_step", "held_record", "latch_point", "sample_setup", "sample_step", "STEP_NOT_DONE", "STEP_HELD", "STEP_POINT",
+    "STEP_NO_POINT", "NO_SHAPE", "tail_run", "fused_columns",
 ]  # fmt: skip
 
 #: Shape codes of :func:`shape_record`.
 SPHERE, CAPSULE, ELLIPSOID = 0, 1, 2
+#: :func:`sample_setup`'s shape code for a fingertip without a :func:`shape_record`: only a held
+#: latch's samples are done in :func:`sample_step`.
+NO_SHAPE = -1
 #: Contact-point modes of :func:`points_run`.
 TRACK, LATCH = 0, 1
 #: Depth modes of :func:`tail_run`.
@@ -245,6 +252,26 @@ def _project(kind, sp, x, y, z, xp):
     return ellipsoid_project_kernel(x, y, z, sp[0], sp[1], sp[2], sp[3], sp[4], sp[5], xp)
 
 
+@jitable
+def latch_point(kind, sp, lstate, lparams, onset, t, f_norm, valid, rx, ry, rz):
+    """The latch's step (:func:`~softtip.estimator.latch.latch_step`) of a sample in contact with
+    its soft-finger solution ``valid, r`` (m), and the sample's point: the solution's, a mean
+    put back on the skin (the shape's projection; a latch held when fixed) or the latch held;
+    NaN without one. Returns ``(code, px, py, pz, latched, fallback, relatched, begin)``."""
+    code, qx, qy, qz, lat, fb, rel, begin = latch_step(lstate, lparams, onset, t, f_norm, True, valid, rx, ry, rz)
+    if code == SOFT:
+        px, py, pz = rx, ry, rz
+    elif code == MEAN or code == FIX:
+        px, py, pz = _project(kind, sp, qx, qy, qz, XS)
+        if code == FIX:
+            latch_hold(lstate, px, py, pz)
+    elif code == HELD:
+        px, py, pz = lstate[_LX], lstate[_LY], lstate[_LZ]
+    else:
+        px = py = pz = _NAN
+    return code, px, py, pz, lat, fb, rel, begin
+
+
 @lazy_jit
 def points_run(t, x, contact, kind, sp, mode, lparams, lstate, point, has, sc, sc_valid, latched, fallback,
                relatched):  # pragma: no cover - compiled
@@ -299,17 +326,7 @@ def points_run(t, x, contact, kind, sp, mode, lparams, lstate, point, has, sc, s
             sc[i, 0], sc[i, 1], sc[i, 2], sc[i, 3], sc[i, 4], sc[i, 5], sc[i, 6] = rx, ry, rz, nx, ny, nz, sig
         if mode == TRACK:
             continue
-        code, qx, qy, qz, lat, fb, rel, _ = latch_step(lstate, lparams, onset, t[i], f_norm, True, valid, rx, ry, rz)
-        if code == SOFT:
-            px, py, pz = rx, ry, rz
-        elif code == MEAN or code == FIX:
-            px, py, pz = _project(kind, sp, qx, qy, qz, XS)
-            if code == FIX:
-                latch_hold(lstate, px, py, pz)
-        elif code == HELD:
-            px, py, pz = lstate[_LX], lstate[_LY], lstate[_LZ]
-        else:
-            px = py = pz = _NAN
+        _, px, py, pz, lat, fb, rel, _ = latch_point(kind, sp, lstate, lparams, onset, t[i], f_norm, valid, rx, ry, rz)
         point[i, 0], point[i, 1], point[i, 2] = px, py, pz
         has[i] = math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)
         latched[i] = lat
@@ -412,60 +429,134 @@ def located_step(t, fx, fy, fz, mx, my, mz, px, py, pz, nx, ny, nz, e1x, e1y, e1
     return True, d, d_std, data, sg, hx, hy, hz, hn, hs, r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[9]
 
 
-#: The entries of :func:`held_step`'s ``held`` record (:func:`held_record`), where each starts:
+#: The entries of :func:`sample_step`'s ``held`` record (:func:`held_record`), where each starts:
 #: the latch's keep window (:func:`~softtip.estimator.latch.latch_keeps`: low, high force, N;
 #: squared distance, m²), the held point (m), its normal, tangent frame ``e1``, ``e2`` and
-#: moment-noise parts ``m1, m2`` (:class:`~softtip.estimator.floats.PointGeometry`), the force
-#: noise's variances (N²) and the skin law of exponent 2 (stiffness N/m², cap m; zeros without one).
-_H_WINDOW, _H_POINT, _H_NORMAL, _H_E1, _H_E2, _H_M, _H_FORCE_VAR, _H_LAW = 0, 3, 6, 9, 12, 15, 17, 20
-HELD_RECORD = 22  #: its length
+#: moment-noise parts ``m1, m2`` (:class:`~softtip.estimator.floats.PointGeometry`).
+_H_WINDOW, _H_POINT, _H_NORMAL, _H_E1, _H_E2, _H_M = 0, 3, 6, 9, 12, 15
+HELD_RECORD = 17  #: its length
 
 
-def held_record(window, geo, force_var, law) -> NDArray[np.float64]:
-    """:func:`held_step`'s record of a held latch's point ``geo`` (:class:`~softtip.estimator.floats.PointGeometry`):
-    ``window`` the latch's keep window, ``force_var`` the force noise's variances, ``law`` the
-    skin law (exponent 2) or None."""
-    stiffness, cap = (law.stiffness, law.max_depth) if law is not None else (0.0, 0.0)
+def held_record(window, geo) -> NDArray[np.float64]:
+    """:func:`sample_step`'s record of a held latch's point ``geo``
+    (:class:`~softtip.estimator.floats.PointGeometry`); ``window`` the latch's keep window."""
     rec = np.array((
-        *window, *geo.point, geo.nx, geo.ny, geo.nz, geo.e1x, geo.e1y, geo.e1z, geo.e2x, geo.e2y, geo.e2z,
-        geo.m1, geo.m2, *force_var, stiffness, cap,
+        *window, *geo.point, geo.nx, geo.ny, geo.nz, geo.e1x, geo.e1y, geo.e1z, geo.e2x, geo.e2y, geo.e2z, geo.m1, geo.m2,
     ), dtype=np.float64)  # fmt: skip
     assert rec.shape == (HELD_RECORD,)
     return rec
 
 
-@lazy_jit(nogil=False)
-def held_step(cstate, cparams, t, dt, x0, x1, x2, x3, x4, x5, held, depth_mode, dparams, dstate, dring,
-              eparams, wconst, estate, counts, ring):  # fmt: skip
-    """A stream sample while a latch is held: the contact tracking's step
-    (:func:`~softtip.estimator.contact.contact_step`), then, if the contact goes on and the latch
-    keeps its point (:func:`~softtip.estimator.latch.latch_keeps`), :func:`located_step` at
-    that point: the stages' own steps in the stream's order, one compiled call for the samples
-    that make up nearly all of a held contact (:class:`~softtip.estimator.stream.Estimator`).
+#: The entries of :func:`sample_step`'s ``setup`` record (:func:`sample_setup`), where each
+#: starts: ``track`` (1.0 in ``track`` mode), the shape code (:data:`NO_SHAPE` for a fingertip
+#: without a :func:`shape_record`), the noise's variances (fx … mz: N², (N·m)²), the skin law of
+#: exponent 2 (stiffness N/m², cap m; zeros without one), the latch's parameters
+#: (:func:`~softtip.estimator.latch.latch_params`), then the shape's parameters to the end.
+_S_TRACK, _S_KIND, _S_VAR, _S_LAW, _S_LATCH = 0, 1, 2, 8, 10
+_S_SHAPE = _S_LATCH + _N_LATCH_PARAMS
 
-    ``held`` is :func:`held_record`; the depth and evidence records as for :func:`located_step`
-    (their rings with room for one more). Returns ``(contact, done, located)``: the contact
-    step's returns, whether the sample was done here, and :func:`located_step`'s returns (NaN
-    when not done: the caller goes on from the contact step with the other stages).
+
+def sample_setup(track: bool, shape: ShapeRecord | None, variances, law, lparams) -> NDArray[np.float64]:
+    """:func:`sample_step`'s record of what stays the same from sample to sample: ``track`` mode,
+    the fingertip's :func:`shape_record` (None: no closed form), the noise's ``variances`` (6),
+    the skin ``law`` (exponent 2) or None, the latch's parameter record ``lparams``. One array:
+    a compiled call takes each argument apart, and an array is one."""
+    kind, sp = (NO_SHAPE, ()) if shape is None else shape
+    stiffness, cap = (law.stiffness, law.max_depth) if law is not None else (0.0, 0.0)
+    setup = np.array((float(track), float(kind), *variances, stiffness, cap, *lparams, *sp), dtype=np.float64)
+    assert setup.shape == (_S_SHAPE + len(sp),)
+    return setup
+
+
+#: :func:`sample_step`'s ``status``: the sample was not done there (the caller goes on from the
+#: contact step with the stages in turn); done at the held latch; done at a point of the first
+#: rise (or re-latch test, or ``track`` mode); in contact without a contact point.
+STEP_NOT_DONE, STEP_HELD, STEP_POINT, STEP_NO_POINT = 0, 1, 2, 3
+@lazy_jit(nogil=False)
+def sample_step(cstate, cparams, t, dt, x0, x1, x2, x3, x4, x5, held, setup, lstate, depth_mode, dparams, dstate,
+                dring, eparams, wconst, estate, counts, ring):  # fmt: skip
+    """A stream sample after the low-pass filter, in one compiled call: the contact tracking's
+    step (:func:`~softtip.estimator.contact.contact_step`) and, if the contact goes on (not its
+    onset):
+
+    * while a latch is held (``held``, :func:`held_record`; empty when none) and keeps its point
+      (:func:`~softtip.estimator.latch.latch_keeps`: nearly every sample of a contact),
+      :func:`located_step` at that point;
+    * else, on a closed-form fingertip, the shape's soft-finger solution, the latch
+      (:func:`latch_point` on its state ``lstate``; in ``track`` mode the solution's point and
+      normal), the point's
+      normal, tangent frame and moment-noise parts (as
+      :class:`~softtip.estimator.floats.PointGeometry`) and :func:`located_step`.
+
+    The stages' own steps in the stream's order (:class:`~softtip.estimator.stream.Estimator`,
+    ``latch`` mode without the line fit, or ``track`` mode; a skin law of exponent 2 or none).
+    ``setup`` is :func:`sample_setup` (the mode, the fingertip, the noise, the skin law, the
+    latch's parameters); the depth and evidence records as for :func:`located_step` (their rings
+    with room for one more).
+
+    Returns ``(contact, status, code, point, normal, flags, located)``: the contact step's
+    returns; :data:`STEP_NOT_DONE` … :data:`STEP_NO_POINT`; the latch's code
+    (:data:`~softtip.estimator.latch.FIX`: a latch fixed at ``point``); the point (m) and its
+    normal (NaN at a held latch: the caller has them); ``(latched, fallback, relatched, begin)``;
+    :func:`located_step`'s returns (NaN unless done).
     """
+    nan3 = (_NAN, _NAN, _NAN)
+    none = (False, _NAN, _NAN, False, _NAN, _NAN, _NAN, _NAN, _NAN, _NAN, 0, 0, _NAN, _NAN, _NAN, _NAN, _NAN, _NAN,
+            _NAN, _NAN)  # fmt: skip
     c = contact_step(cstate, cparams, t, dt, x0, x1, x2, x3, x4, x5)
+    if c[0] != 1:  # out of contact, or its onset
+        return c, STEP_NOT_DONE, 0, nan3, nan3, (False, False, False, False), none
     fx, fy, fz, mx, my, mz = c[5], c[6], c[7], c[8], c[9], c[10]
-    keep = latch_keeps(True, False, math.sqrt(fx * fx + fy * fy + fz * fz), held[_H_WINDOW], held[_H_WINDOW + 1],
-                       held[_H_WINDOW + 2])  # fmt: skip
-    if not (c[0] == 1 and keep):
-        return c, False, (False, _NAN, _NAN, False, _NAN, _NAN, _NAN, _NAN, _NAN, _NAN, 0, 0, _NAN, _NAN, _NAN,
-                          _NAN, _NAN, _NAN, _NAN, _NAN)  # fmt: skip
-    nx, ny, nz = held[_H_NORMAL], held[_H_NORMAL + 1], held[_H_NORMAL + 2]
+    f_norm = math.sqrt(fx * fx + fy * fy + fz * fz)
+    sfx, sfy, sfz = setup[_S_VAR], setup[_S_VAR + 1], setup[_S_VAR + 2]
+    law_k, law_cap = setup[_S_LAW], setup[_S_LAW + 1]
+    if held.shape[0] and latch_keeps(True, False, f_norm, held[_H_WINDOW], held[_H_WINDOW + 1], held[_H_WINDOW + 2]):
+        nx, ny, nz = held[_H_NORMAL], held[_H_NORMAL + 1], held[_H_NORMAL + 2]
+        d0 = 0.0
+        if depth_mode != DEPTH_OFF:
+            d0 = square_depth_kernel(-(fx * nx + fy * ny + fz * nz), law_k, law_cap, XS)
+        r = located_step(
+            t, fx, fy, fz, mx, my, mz, held[_H_POINT], held[_H_POINT + 1], held[_H_POINT + 2], nx, ny, nz,
+            held[_H_E1], held[_H_E1 + 1], held[_H_E1 + 2], held[_H_E2], held[_H_E2 + 1], held[_H_E2 + 2],
+            held[_H_M], held[_H_M + 1], sfx, sfy, sfz, depth_mode, d0, dparams, dstate, dring, eparams, wconst, estate, counts, ring,
+        )  # fmt: skip
+        return c, STEP_HELD, HELD, nan3, nan3, (True, False, False, False), r
+    kind = int(setup[_S_KIND])
+    if kind == NO_SHAPE:
+        return c, STEP_NOT_DONE, 0, nan3, nan3, (False, False, False, False), none
+    sp = setup[_S_SHAPE:]
+    smx, smy, smz = setup[_S_VAR + 3], setup[_S_VAR + 4], setup[_S_VAR + 5]
+    rx, ry, rz, qx, qy, qz, _, valid = _contact(kind, sp, fx, fy, fz, mx, my, mz, XS)
+    code = 0
+    lat = fb = rel = begin = False
+    if setup[_S_TRACK] > 0.0:
+        px, py, pz, nx, ny, nz = rx, ry, rz, qx, qy, qz
+        has = valid
+    else:
+        lparams = setup[_S_LATCH:_S_SHAPE]
+        code, px, py, pz, lat, fb, rel, begin = latch_point(kind, sp, lstate, lparams, False, t, f_norm, valid, rx, ry,
+                                                            rz)  # fmt: skip
+        if begin:  # a re-latch: a new segment of the line evidence
+            evidence_start(estate, counts)
+        has = math.isfinite(px) and math.isfinite(py) and math.isfinite(pz)
+        nx = ny = nz = _NAN
+        if has:
+            nx, ny, nz = _normal(kind, sp, px, py, pz, XS)
+    flags = (lat, fb, rel, begin)
+    if not has:
+        if depth_mode == DEPTH_ONLINE:
+            depth_gap(dstate)
+        return c, STEP_NO_POINT, code, (px, py, pz), (nx, ny, nz), flags, none
+    e1x, e1y, e1z, e2x, e2y, e2z = tangent_frame_kernel(nx, ny, nz, XS)
+    m1 = noise_moment_part(e1x, e1y, e1z, smx, smy, smz)
+    m2 = noise_moment_part(e2x, e2y, e2z, smx, smy, smz)
     d0 = 0.0
     if depth_mode != DEPTH_OFF:
-        d0 = square_depth_kernel(-(fx * nx + fy * ny + fz * nz), held[_H_LAW], held[_H_LAW + 1], XS)
-    r = located_step(
-        t, fx, fy, fz, mx, my, mz, held[_H_POINT], held[_H_POINT + 1], held[_H_POINT + 2], nx, ny, nz,
-        held[_H_E1], held[_H_E1 + 1], held[_H_E1 + 2], held[_H_E2], held[_H_E2 + 1], held[_H_E2 + 2],
-        held[_H_M], held[_H_M + 1], held[_H_FORCE_VAR], held[_H_FORCE_VAR + 1], held[_H_FORCE_VAR + 2], depth_mode, d0,
-        dparams, dstate, dring, eparams, wconst, estate, counts, ring,
-    )  # fmt: skip
-    return c, True, r
+        d0 = square_depth_kernel(-(fx * nx + fy * ny + fz * nz), law_k, law_cap, XS)
+    r = located_step(t, fx, fy, fz, mx, my, mz, px, py, pz, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z, m1, m2, sfx,
+                     sfy, sfz, depth_mode, d0, dparams, dstate, dring, eparams, wconst, estate, counts,
+                     ring)  # fmt: skip
+    return c, STEP_POINT, code, (px, py, pz), (nx, ny, nz), flags, r
 
 
 @lazy_jit

@@ -8,13 +8,16 @@ tracking, the low-pass filter, the latch, the line fit, the depth, the line evid
 step function over a state record, called here once per sample and by the batch in a compiled
 loop (:mod:`softtip.core._jit`). A located sample's depth, measurement and line evidence are
 one call, :func:`~softtip.estimator.pipeline.located_step`, the one the batch's compiled tail
-loop makes per sample. Where the steps are compiled: while a latch is held (nearly every sample
-of a contact; ``latch`` mode without the line fit, a skin law of exponent 2 or none, not while
-the first contact after a tare may still be a release), the contact tracking's step, the
-latch's keep test and that call are one compiled call,
-:func:`~softtip.estimator.pipeline.held_step`; and on a closed-form fingertip the soft-finger
-solution (the latch's first rise, ``track`` mode) is the batch's compiled kernel
-(:func:`~softtip.estimator.pipeline.soft_finger_function`).
+loop makes per sample. Where the steps are compiled (``latch`` mode without the line fit, or
+``track`` mode; a skin law of exponent 2 or none; not while the first contact after a tare may
+still be a release), every sample in contact but a contact's onset is one compiled call of those
+steps in this order, :func:`~softtip.estimator.pipeline.sample_step`: the contact tracking's
+step, then the latch's keep test and the located step at a held latch (nearly every sample of a
+contact) or, on a closed-form fingertip, the soft-finger solution (the shape's compiled kernel),
+the latch's step and the located step at the point it gives (the first rise, a re-latch test,
+``track`` mode). The onset, and every sample of another configuration, goes through the stages
+in turn (the soft-finger solution compiled on a closed-form fingertip:
+:func:`~softtip.estimator.pipeline.soft_finger_function`).
 """
 
 from __future__ import annotations
@@ -43,16 +46,21 @@ from softtip.estimator.contact import (
 from softtip.estimator.depth import RING_COLUMNS, DepthTracker, new_depth_state, resolve_depth
 from softtip.estimator.evidence import _EVIDENCE_NAMES, _STATE_NAMES, EvidenceTracker, twist_curvature
 from softtip.estimator.floats import PointGeometry
-from softtip.estimator.latch import LatchTracker
+from softtip.estimator.latch import FIX, HELD, LatchTracker
 from softtip.estimator.line_fit import LineFitTracker
 from softtip.estimator.measure import effective_noise, noise_correlation
 from softtip.estimator.pipeline import (
     DEPTH_LAW,
     DEPTH_OFF,
     DEPTH_ONLINE,
+    STEP_HELD,
+    STEP_NO_POINT,
+    STEP_NOT_DONE,
     held_record,
-    held_step,
     located_step,
+    sample_setup,
+    sample_step,
+    shape_record,
     soft_finger_function,
 )
 from softtip.estimator.results import EstimatorWarning, SampleEstimate
@@ -66,6 +74,7 @@ _WARMED: set = set()
 _NAN3 = (math.nan, math.nan, math.nan)
 _NAN4 = (math.nan,) * 4
 _NAN6 = (math.nan,) * 6
+_NO_HELD = np.zeros(0)  # sample_step's held record when no latch is held
 _new_estimate = tuple.__new__  # SampleEstimate with every field given, without its __new__'s frame
 
 
@@ -193,13 +202,16 @@ class Estimator:
         self._no_depth = (np.zeros(1), new_depth_state(), np.empty((1, RING_COLUMNS)))  # the step's records, unused
         depth = self._depth
         self._depth_mode = DEPTH_OFF if depth is None else DEPTH_ONLINE if depth.online else DEPTH_LAW
-        # a held latch's samples in one compiled call (contact, latch, located: held_step), where
-        # the stages between are the latch's alone and the skin law is one compiled code computes
-        self._held = None
+        # a sample in contact in one compiled call (contact, latch, located: sample_step) where the
+        # stages between are the latch's alone and the skin law is one compiled code computes: a
+        # held latch's samples on any fingertip, the others on a closed-form one (its soft-finger
+        # solution compiled)
         law = cfg.skin_law
-        if not self._track and self._line_fit is None and not self._python and (law is None or law.exponent == 2.0):
-            self._held = held_step.function(self._n)
-        self._held_rec = None  # held_step's record of self._geo (a latch's point)
+        self._sample = None
+        if self._line_fit is None and not self._python and (law is None or law.exponent == 2.0):
+            self._sample = sample_step.function(self._n)
+        self._setup = sample_setup(self._track, shape_record(self.tip), self._var, law, self._latch.params)
+        self._held_rec = _NO_HELD  # sample_step's record of self._geo (a held latch's point)
 
     @property
     def bias(self) -> tuple[float, ...] | None:
@@ -359,21 +371,46 @@ class Estimator:
         contacts = self._contacts
         alarm = contacts.drift_alarm
         latch = self._latch
-        rec = self._held_rec
-        done = False
-        if rec is not None and latch.point is self._geo.point and not self._lead:  # a latch held
+        status = STEP_NOT_DONE
+        if self._sample is not None and not self._lead:
             dp, ds, dr = self._depth.records() if self._depth_mode == DEPTH_ONLINE else self._no_depth
-            c, done, r = self._held(
-                contacts.state, contacts.params, t, dt, *x, rec, self._depth_mode, dp, ds, dr, *self._evidence.ready()
+            c, status, lcode, point, normal, flags, r = self._sample(
+                contacts.state, contacts.params, t, dt, *x, self._held_rec if latch.point is self._geo.point else _NO_HELD,
+                self._setup, latch.state, self._depth_mode, dp, ds, dr, *self._evidence.ready(),
             )  # fmt: skip
             x, code = contacts.apply(c)
         else:
             x, code = contacts.step(t, dt, x)
         if contacts.drift_alarm and not alarm:
             self._warn(drift_message(self.config, t))
-        if done:
-            return self._estimate(t, x, latch.point, r, True, latch.fallback, False)
+        if status == STEP_HELD:
+            return self._estimate(t, x, latch.point, self._geo.normal, r, True, latch.fallback, False)
+        if status != STEP_NOT_DONE:
+            return self._risen(t, x, status, lcode, point, normal, flags, r)
         return self._after_contact(t, x, code)
+
+    def _risen(self, t: float, x: tuple[float, ...], status: int, lcode: int, point: tuple[float, float, float],
+               normal: tuple[float, float, float], flags: tuple[bool, ...], r: tuple) -> SampleEstimate:  # fmt: skip
+        """A sample :func:`~softtip.estimator.pipeline.sample_step` did at a point that is not a
+        held latch's: what the latch keeps of it (:class:`~softtip.estimator.latch.LatchTracker`'s
+        point, as its step keeps it), then the estimate."""
+        latched, fallback, relatched, begin = flags
+        if not self._track:
+            latch = self._latch
+            if begin:
+                latch.point = None
+            if lcode == FIX:
+                latch.point = point
+                latch.fallback = fallback
+            elif lcode == HELD:
+                point = latch.point
+            if lcode == FIX or (lcode == HELD and point is not self._geo.point):
+                # a latch held from here: its geometry and sample_step's record
+                geo = self._geo = PointGeometry.on_tip(self.tip, point, self._var)
+                self._held_rec = held_record(latch.window, geo)
+        if status == STEP_NO_POINT:
+            return self._none(t, x, pulling=True, relatched=relatched)
+        return self._estimate(t, x, point, normal, r, latched, fallback, relatched)
 
     def _after_contact(self, t: float, x: tuple[float, ...], code: int) -> SampleEstimate:
         """A sample after the contact tracking's step (``code``: 0 none, 1 in contact, 2 onset)."""
@@ -428,10 +465,8 @@ class Estimator:
                 geo = self._geo = PointGeometry(point, normal, self._var)
             else:
                 geo = self._geo = PointGeometry.on_tip(tip, point, self._var)
-                if self._held is not None:  # a latch's point (not a first rise's soft-finger one)
-                    latch = self._latch
-                    rec = point is latch.point
-                    self._held_rec = held_record(latch.window, geo, self._force_var, self.config.skin_law) if rec else None
+                if point is self._latch.point:  # a latch held (not a first rise's point): sample_step's record
+                    self._held_rec = held_record(self._latch.window, geo)
         nx, ny, nz = geo.nx, geo.ny, geo.nz
         # the depth, the measurement about the effective point and the line evidence: one step
         # (compiled), the batch's (softtip.estimator.pipeline.tail_run)
@@ -445,13 +480,14 @@ class Estimator:
             t, fx, fy, fz, mx, my, mz, rx, ry, rz, nx, ny, nz, geo.e1x, geo.e1y, geo.e1z, geo.e2x, geo.e2y, geo.e2z,
             geo.m1, geo.m2, sfx, sfy, sfz, self._depth_mode, d0, dp, ds, dr, *self._evidence.ready(),
         )  # fmt: skip
-        return self._estimate(t, x, point, r, latched, fallback, relatched, (j0, j1, j2, j3), joint_fb)
+        return self._estimate(t, x, point, geo.normal, r, latched, fallback, relatched, (j0, j1, j2, j3), joint_fb)
 
     def _estimate(
-        self, t: float, x: tuple[float, ...], point: tuple[float, float, float], r: tuple, latched: bool,
-        fallback: bool, relatched: bool, joint: tuple[float, ...] = _NAN4, joint_fb: bool = False,
+        self, t: float, x: tuple[float, ...], point: tuple[float, float, float], normal: tuple[float, float, float],
+        r: tuple, latched: bool, fallback: bool, relatched: bool, joint: tuple[float, ...] = _NAN4,
+        joint_fb: bool = False,
     ) -> SampleEstimate:  # fmt: skip
-        """The estimate of a sample in contact at ``point`` from :func:`located_step`'s returns ``r``."""
+        """The estimate of a sample in contact at ``point`` of normal ``normal`` from :func:`located_step`'s returns ``r``."""
         (located, delta, delta_std, from_data, sigma, hx, hy, hz, hn, h_std, code, ev, dx, dy, dz, angle, angle_std,
          noise_std, h_ratio, f_ratio) = r  # fmt: skip
         if not located:  # not pushing
@@ -466,7 +502,7 @@ class Estimator:
         if self._lead:
             self._lead = False
         return _new_estimate(SampleEstimate, (
-            t, state, tuple(x), point, self._geo.normal, sigma, h, hn, h_std, d,
+            t, state, tuple(x), point, normal, sigma, h, hn, h_std, d,
             angle, angle_std, latched, fallback, False, False, relatched, delta, *joint, joint_fb,
             contacts.contact_id, contacts.drift_before, delta_std, from_data, evidence, h_ratio, f_ratio, noise_std,
         ))  # fmt: skip
