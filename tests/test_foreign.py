@@ -460,6 +460,20 @@ def test_damaged_foreign_logs_read_or_fail_cleanly(tmp_path_factory, name: str, 
     assert all(len(v) == len(log.t) for v in log.extra.values())
 
 
+@pytest.mark.parametrize("row", [2, 250, -1])
+def test_a_later_stamp_beyond_any_clock_is_located(tmp_path: Path, row: int) -> None:
+    """A dated log whose stamps gain a digit from a row on (the last row, or a jump of the clock:
+    still increasing, dates after 2261, their nanoseconds beyond int64): a located error, never a
+    wrapped stamp or a numpy warning."""
+    lines = (DATA / "plotjuggler.csv").read_text().splitlines()
+    row = row % len(lines)
+    lines[row:] = ["9" + line for line in lines[row:]]
+    path = tmp_path / "damaged.csv"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(InputError, match=rf"^{path}:{row + 1}: column '__time': the stamp .* beyond the year 2261"):
+        read_log(path)
+
+
 @pytest.mark.parametrize("row", [0, 250, 499])
 @pytest.mark.parametrize(("part", "cell"), [
     ("sec", "1700000000e12"), ("sec", "1700000000.5"), ("sec", "-1700000000"),

@@ -23,7 +23,8 @@ here in compiled loops that call, per sample, the same step functions the stream
    where the sample has no value (no separate blanking pass).
 
 Each step is the stage's one source; this module only sequences them (no stage is written
-again). The results are the staged path's to the bit (the stream's, which the staged batch
+again), for the stream too: :func:`sample_step` is one sample in contact, the contact tracking's
+step then :func:`latch_point` (which :func:`points_run` calls) and :func:`located_step`. The results are the staged path's to the bit (the stream's, which the staged batch
 equals): the kernels do the same IEEE operations compiled as in numpy, and a line-fit window
 statistic that is NaN (the square root of a negative number) is +NaN on both paths, as in the
 stream (the staged path rewrites numpy's −NaN), so a written log's bytes do not depend on the
@@ -472,6 +473,8 @@ def sample_setup(track: bool, shape: ShapeRecord | None, variances, law, lparams
 #: contact step with the stages in turn); done at the held latch; done at a point of the first
 #: rise (or re-latch test, or ``track`` mode); in contact without a contact point.
 STEP_NOT_DONE, STEP_HELD, STEP_POINT, STEP_NO_POINT = 0, 1, 2, 3
+
+
 @lazy_jit(nogil=False)
 def sample_step(cstate, cparams, t, dt, x0, x1, x2, x3, x4, x5, held, setup, lstate, depth_mode, dparams, dstate,
                 dring, eparams, wconst, estate, counts, ring):  # fmt: skip

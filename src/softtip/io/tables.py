@@ -349,6 +349,16 @@ def _finish(
                " (--time-units)")
         )
     if ABSOLUTE_STAMP_S <= start < LATEST_STAMP_S or header.t_dated:  # from 1973 to 2261 in Unix time, or typed a date
+        # a later stamp beyond 2261 (a damaged digit): no clock's, and its nanoseconds beyond int64
+        late = np.flatnonzero((t.astype(np.float64) + origin) * tunit.si >= LATEST_STAMP_S)
+        if len(late):
+            i = int(late[0])
+            loc = f"{source}:{first_line + i}" if first_line is not None else f"{source}: {where(i)}"
+            raise InputError(
+                f"{loc}: column {names[header.index['t']]!r}: the stamp {t[i]} ({tunit.label}) is "
+                f"{(float(t[i]) + origin) * tunit.si:.4g} s after 1970, beyond the year 2261, where the first is "
+                f"{start:.4g} s; expected the stamps of one clock (a damaged digit?)"
+            )
         if t.dtype.kind == "f" and np.abs(t).max() < 2.0**53 and (t == np.floor(t)).all():
             t = t.astype(np.int64)  # whole s, ms or µs read as floats: exact as integers (ms × 1e6 is not in float64)
         if t.dtype.kind in "iu":
