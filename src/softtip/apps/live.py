@@ -6,10 +6,11 @@ alike. Its consumer loop takes each :class:`~softtip.io.sources.Reading` from th
 :meth:`Estimator.update <softtip.estimator.Estimator.update>` on it and hands the result
 on without waiting for anything slow:
 
-* the :class:`Recorder` queues rows; its own thread formats and writes them in batches and
-  flushes the file every ``flush_interval`` (0.05 s), always on a whole line, and the loop
-  never waits on the disk; a stop (Ctrl-C, SIGTERM, SIGHUP, ``duration``) writes every row
-  taken so far before the file is closed;
+* the :class:`Recorder` formats each row as it is handed one (in the loop, after the
+  estimate) and queues the text; its own thread writes what is queued and flushes the file
+  every ``flush_interval`` (0.05 s), always on a whole line, and the loop never waits on the
+  disk; a stop (Ctrl-C, SIGTERM, SIGHUP, ``duration``) writes every row taken so far before the
+  file is closed;
 * the :class:`TerminalView` thread redraws one screen a few times a second from the latest
   estimate and the counters in :class:`LiveStats`;
 * an optional ``on_estimate`` callback is called in the loop and must be cheap: the Rerun
@@ -17,9 +18,12 @@ on without waiting for anything slow:
   a process of its own, which draws them.
 
 Python runs one thread at a time, so every thread here takes its turn from the loop: the
-recorder formats a few rows per call (:data:`_BLOCK`) and hands its turn back at each write,
-the view redraws five times a second (about 20 us each), and Rerun's work
-(about 1 ms a drawn sample) is in another process. The cyclic garbage collector's full
+recording's text is made in the loop itself (about 10 us a row, Python's formatting), where it
+delays nothing but the loop's next wait; made by the recorder's thread, in blocks of rows with
+pauses between, it interrupted the estimator's updates and set the 7 kHz soak's p99 (the
+performance page). The recorder's thread only joins the lines and writes them (the system call
+without the interpreter). The view redraws five times a second (about
+20 us each), and Rerun's work (about 1 ms a drawn sample) is in another process. The cyclic garbage collector's full
 collections walk every object of the process (imports included: about 20 ms); the
 loop freezes what exists when it starts (:func:`gc.freeze`), so that they walk only what the
 session made.
@@ -34,7 +38,6 @@ from __future__ import annotations
 import collections
 import contextlib
 import gc
-import itertools
 import math
 import operator
 import os
@@ -89,19 +92,6 @@ _FORMATS = {
 #: export): :attr:`~softtip.io.sources.Reading.stamp_ns`, ns since the Unix epoch, exact.
 STAMP_COLUMN = "stamp_ns"
 _DEG = 180.0 / math.pi
-#: Rows the recorder formats per call and writes at once. One call holds the interpreter
-#: (about 10 us a row): the consumer loop waits for at most one block.
-_BLOCK = 8
-#: s the recorder sleeps after each block, long enough for the consumer loop to take the
-#: interpreter: a write's system call hands it back too, but the recorder took it again before
-#: the waiting loop was scheduled, so the loop waited for the whole batch (at 7 kHz, 350 rows
-#: every 50 ms: the estimates' latency p99 was several ms). Only for batches of a sensor's rate
-#: (:data:`_PACED_ROWS`): a replay as fast as possible gives more, and its throughput counts.
-_YIELD_S = 5e-5
-#: A batch of at most this many rows is written paced (:data:`_YIELD_S`): 20 kHz at the 0.05 s interval.
-_PACED_ROWS = 1000
-
-
 def _row_function(extra: tuple[str, ...] = ()) -> Callable[[SampleEstimate, Reading], tuple]:
     """:func:`estimate_row`, compiled once from the column registry into one tuple expression
     (as :func:`collections.namedtuple` compiles its methods): it runs per sample at the
@@ -187,7 +177,8 @@ class LiveStats:
 
 
 class Recorder:
-    """Writes recording rows to a CSV file as they come, from a thread, in batches.
+    """Writes recording rows to a CSV file as they come: each formatted when handed over, the
+    text written from a thread, in batches.
 
     The file is created when the first row is written (a run that fails before any sample
     leaves no file), and flushed to the OS every ``flush_interval`` seconds.
@@ -253,7 +244,7 @@ class Recorder:
         self._format = ",".join(_FORMATS[c] for c in columns) + "\n"
 
     def add(self, row: tuple) -> None:
-        """Queue one row (from the consumer loop; never blocks).
+        """Format one row and queue its line (from the consumer loop; never blocks on the disk).
 
         Raises
         ------
@@ -262,9 +253,11 @@ class Recorder:
         """
         if self._error is not None:
             self.close()  # raises the InputError naming the file and the reason
-        self._pending.append(row)
+        # formatted here, in the loop's thread: the writer's thread then holds the interpreter
+        # only to join the lines, and never in the middle of an estimator's update
+        self._pending.append(self._format % row)
 
-    def _write_pending(self, pace: bool = False) -> None:
+    def _write_pending(self) -> None:
         pending = self._pending
         n = len(pending)
         if not n:
@@ -272,24 +265,14 @@ class Recorder:
         if self._fh is None:
             self._fh = open(self.path, "w", encoding="utf-8", newline="")
             self._fh.write(",".join(self.columns) + "\n")
-        rows = [pending.popleft() for _ in range(n)]
-        # one C-level format per block of rows (as softtip.io.tables.write_table does); small blocks,
-        # because a format call holds the GIL and the consumer loop must not wait long for it; each
-        # block written out at once, then (a sensor's batch) a pause that lets the loop take the GIL
-        fh = self._fh
-        pause = _YIELD_S if pace and n <= _PACED_ROWS else 0.0
-        for i in range(0, n, _BLOCK):
-            block = rows[i : i + _BLOCK]
-            fh.write((self._format * len(block)) % tuple(itertools.chain.from_iterable(block)))
-            fh.flush()
-            if pause:
-                time.sleep(pause)
+        self._fh.write("".join([pending.popleft() for _ in range(n)]))
+        self._fh.flush()
         self.rows += n
 
     def _loop(self) -> None:
         try:
             while not self._stop.wait(self.flush_interval):
-                self._write_pending(pace=True)
+                self._write_pending()
         except BaseException as exc:  # noqa: BLE001 - reported to the consumer on its next add()/close()
             self._error = exc
 
