@@ -117,7 +117,7 @@ def bench(rate: float, seconds: float, record: bool = True, view: bool = True, f
                     duration=seconds,
                     on_estimate=on_estimate,
                 )
-                rows = recorder.rows if recorder is not None else 0 if recorder else 0
+                rows = recorder.rows if recorder else 0
     finally:
         _stop_device(dev)
     lat = latencies[:n] * 1e-6  # ms

@@ -92,6 +92,8 @@ _FORMATS = {
 #: export): :attr:`~softtip.io.sources.Reading.stamp_ns`, ns since the Unix epoch, exact.
 STAMP_COLUMN = "stamp_ns"
 _DEG = 180.0 / math.pi
+
+
 def _row_function(extra: tuple[str, ...] = ()) -> Callable[[SampleEstimate, Reading], tuple]:
     """:func:`estimate_row`, compiled once from the column registry into one tuple expression
     (as :func:`collections.namedtuple` compiles its methods): it runs per sample at the

@@ -465,7 +465,7 @@ class Estimator:
                 geo = self._geo = PointGeometry(point, normal, self._var)
             else:
                 geo = self._geo = PointGeometry.on_tip(tip, point, self._var)
-                if point is self._latch.point:  # a latch held (not a first rise's point): sample_step's record
+                if point is self._latch.point and self._sample is not None:  # a latch held: sample_step's record
                     self._held_rec = held_record(self._latch.window, geo)
         nx, ny, nz = geo.nx, geo.ny, geo.nz
         # the depth, the measurement about the effective point and the line evidence: one step

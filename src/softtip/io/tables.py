@@ -355,7 +355,7 @@ def _finish(
             i = int(late[0])
             loc = f"{source}:{first_line + i}" if first_line is not None else f"{source}: {where(i)}"
             raise InputError(
-                f"{loc}: column {names[header.index['t']]!r}: the stamp {t[i]} ({tunit.label}) is "
+                f"{loc}: column {names[header.index['t']]!r}: the stamp {t[i] + origin} ({tunit.label}) is "
                 f"{(float(t[i]) + origin) * tunit.si:.4g} s after 1970, beyond the year 2261, where the first is "
                 f"{start:.4g} s; expected the stamps of one clock (a damaged digit?)"
             )
