@@ -168,21 +168,22 @@ def soak_device(rate: float, seconds: float) -> None:
         time.sleep(seconds + 30.0)
 
 
-def _rerun_view(tmp: str):
-    """The live Rerun view saving to a temporary file, or None without rerun-sdk."""
+def _rerun_view(tmp: str, rate_hz: float = 50.0):
+    """The live Rerun view saving to a temporary file, drawing ``rate_hz`` samples a second (the
+    view's default: 50), or None without rerun-sdk."""
     try:
-        from softtip.viz.rerun import LiveRerun, import_rerun
+        from softtip.viz.rerun import LiveRerun, RerunView, import_rerun
 
         import_rerun()
     except ImportError:
         return None
     from softtip.core.fingertip import load_fingertip
 
-    return LiveRerun(load_fingertip("murakami2006"), save=os.path.join(tmp, "view.rrd"))
+    return LiveRerun(load_fingertip("murakami2006"), save=os.path.join(tmp, "view.rrd"), view=RerunView(max_rate_hz=rate_hz))
 
 
 def soak(rate: float = SOAK_RATE, seconds: float = 60.0, views: bool = True, freeze_gc: bool = True,
-         switch_interval: float | None = None, record: bool = True) -> dict:  # fmt: skip
+         switch_interval: float | None = None, record: bool = True, rerun_rate: float = 50.0) -> dict:  # fmt: skip
     """One soak session (see the module's docstring); returns its figures.
 
     Parameters
@@ -198,7 +199,9 @@ def soak(rate: float = SOAK_RATE, seconds: float = 60.0, views: bool = True, fre
     switch_interval : float, optional
         s, :func:`sys.setswitchinterval` for the session (Python's default: 0.005).
     record : bool
-        With the CSV recorder (off: what the recorder's thread costs the estimator).
+        With the CSV recorder (off: what the recorder costs the estimator).
+    rerun_rate : float
+        Hz, the samples the Rerun view draws per second (its ``max_rate_hz``; default 50, the view's).
     """
     dev, rdt_port, http_port = _start_device(
         [sys.executable, str(Path(__file__).resolve()), "--soak-device", "--rate", str(rate), "--seconds", str(seconds)]
@@ -239,7 +242,7 @@ def soak(rate: float = SOAK_RATE, seconds: float = 60.0, views: bool = True, fre
     try:
         with tempfile.TemporaryDirectory() as tmp, open(os.devnull, "w") as null:
             recorder = Recorder(os.path.join(tmp, "soak.csv")) if record else None
-            rerun = _rerun_view(tmp) if views else None  # its process started before the stream
+            rerun = _rerun_view(tmp, rerun_rate) if views else None  # its process started before the stream
             with NetFTSource("127.0.0.1", rdt_port=rdt_port, http_port=http_port, timeout=2.0, max_rate_hz=rate) as src:
                 stats = LiveStats(source_name=src.name, dropped=lambda: src.dropped, counters=src.counters,
                                   warnings=lambda: src.warnings)  # fmt: skip
@@ -279,6 +282,7 @@ def soak(rate: float = SOAK_RATE, seconds: float = 60.0, views: bool = True, fre
         "rate": rate,
         "views": ("terminal + Rerun" if rerun is not None else "terminal") if views else "off",
         "settings": ("" if freeze_gc else ", GC not frozen") + ("" if record else ", no recorder")
+        + ("" if rerun is None or rerun_rate == 50.0 else f", Rerun view at {rerun_rate:g} Hz")
         + ("" if switch_interval is None else f", switch interval {switch_interval * 1e6:g} us"),
         "rerun_bytes": rerun_bytes if rerun is not None else 0,
         "samples": summary.samples,
@@ -359,7 +363,7 @@ def print_soak(r: dict) -> None:
 
 def soak_rows(rate: float = SOAK_RATE, seconds: float = 60.0, views: tuple[str, ...] = ("on", "off"), **settings) -> list[dict]:
     """The soak with the views on and off, one session each, printed; returns their figures.
-    ``settings``: :func:`soak`'s ``freeze_gc``, ``switch_interval`` and ``record``."""
+    ``settings``: :func:`soak`'s ``freeze_gc``, ``switch_interval``, ``record`` and ``rerun_rate``."""
     print(f"live soak: {seconds:g} s at {rate:g} Hz from the fake Net F/T over loopback UDP (its own process), "
           "receive thread + estimator + CSV recorder, grasps in contact about 90 % of the time; target 0 lost")  # fmt: skip
     out = []
@@ -382,6 +386,8 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--views", nargs="+", choices=["on", "off"], default=["on", "off"], help="the soak's sessions")
     p.add_argument("--no-gc-freeze", action="store_true", help="the soak without run_live's gc.freeze")
     p.add_argument("--switch-interval", type=float, metavar="S", help="the soak with sys.setswitchinterval(S)")
+    p.add_argument("--rerun-rate", type=float, default=50.0, metavar="HZ",
+                   help="the soak's Rerun view draws this many samples a second (default 50, the view's)")
     p.add_argument("--soak-device", action="store_true", help=argparse.SUPPRESS)
     args = p.parse_args(argv)
     if args.soak_device:
@@ -392,7 +398,8 @@ def main(argv: list[str] | None = None) -> None:
     )
     if args.soak:
         soak_rows(args.rate, 60.0 if args.seconds is None else args.seconds, tuple(args.views),
-                  freeze_gc=not args.no_gc_freeze, switch_interval=args.switch_interval, record=not args.no_record)  # fmt: skip
+                  freeze_gc=not args.no_gc_freeze, switch_interval=args.switch_interval, record=not args.no_record,
+                  rerun_rate=args.rerun_rate)  # fmt: skip
         return
     seconds = 5.0 if args.seconds is None else args.seconds
     print(
