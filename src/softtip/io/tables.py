@@ -260,6 +260,10 @@ def _finish(
     def where(i: int) -> str:
         return f"line {first_line + i}" if first_line is not None else f"data row {i + 1}"
 
+    def at(i: int) -> str:
+        """A message's start for data row ``i``: ``file:line``, or ``file: data row``."""
+        return f"{source}:{first_line + i}" if first_line is not None else f"{source}: {where(i)}"
+
     read_as = cmap is not None and not cmap.native(names)
     if read_as:
         notes.append(f"{source}: read as {cmap.source}: {cmap.describe(names, named)}")
@@ -319,7 +323,7 @@ def _finish(
     if len(back):  # only a stamp split in seconds and nanoseconds gets here
         i = int(back[0]) + 1
         cols = [names[header.index[r]] for r in ("t", "nanosec") if r in header.index]
-        loc = f"{source}:{first_line + i}" if first_line is not None else f"{source}: {where(i)}"
+        loc = at(i)
         raise InputError(
             f"{loc}: column{'s' if len(cols) > 1 else ''} {', '.join(map(repr, cols))}: expected the stamps "
             f"non-decreasing (a stamp may repeat, not go back), got {t[i]} ns after {t[i - 1]} ns on the row before"
@@ -352,12 +356,10 @@ def _finish(
         # a later stamp beyond 2261 (a damaged digit): no clock's, and its nanoseconds beyond int64
         late = np.flatnonzero((t.astype(np.float64) + origin) * tunit.si >= LATEST_STAMP_S)
         if len(late):
-            i = int(late[0])
-            loc = f"{source}:{first_line + i}" if first_line is not None else f"{source}: {where(i)}"
             raise InputError(
-                f"{loc}: column {names[header.index['t']]!r}: the stamp {t[i] + origin} ({tunit.label}) is "
-                f"{(float(t[i]) + origin) * tunit.si:.4g} s after 1970, beyond the year 2261, where the first is "
-                f"{start:.4g} s; expected the stamps of one clock (a damaged digit?)"
+                f"{at(late[0])}: column {names[header.index['t']]!r}: the stamp {t[late[0]] + origin} ({tunit.label}) "
+                f"is {(float(t[late[0]]) + origin) * tunit.si:.4g} s after 1970, beyond the year 2261, where the first "
+                f"is {start:.4g} s; expected the stamps of one clock (a damaged digit?)"
             )
         if t.dtype.kind == "f" and np.abs(t).max() < 2.0**53 and (t == np.floor(t)).all():
             t = t.astype(np.int64)  # whole s, ms or µs read as floats: exact as integers (ms × 1e6 is not in float64)
@@ -393,7 +395,7 @@ def _finish(
                     per_unit, line = cmap.counts[role]
                     quantity = ROLE_QUANTITY[role]
                     i = int(frac[0])
-                    loc = f"{source}:{first_line + i}" if first_line is not None else f"{source}: {where(i)}"
+                    loc = at(i)
                     raise InputError(
                         f"{loc}: column {names[header.index[role]]!r}: line {line} says its values "
                         f"are counts ({per_unit:g} per unit), but {col[i]!r} is not a whole number; if the values are in "
