@@ -22,11 +22,10 @@ recording's text is made in the loop itself (about 10 us a row, Python's formatt
 delays nothing but the loop's next wait; made by the recorder's thread, in blocks of rows with
 pauses between, it interrupted the estimator's updates and set the 7 kHz soak's p99 (the
 performance page). The recorder's thread only joins the lines and writes them (the system call
-without the interpreter). The view redraws five times a second (about
-20 us each), and Rerun's work (about 1 ms a drawn sample) is in another process. The cyclic garbage collector's full
-collections walk every object of the process (imports included: about 20 ms); the
-loop freezes what exists when it starts (:func:`gc.freeze`), so that they walk only what the
-session made.
+without the interpreter). The view redraws five times a second (about 20 us each), and Rerun's
+work (about 2 ms a drawn sample) is in another process. The cyclic garbage collector's full
+collections walk every object of the process (imports included: about 20 ms); the loop freezes
+what exists when it starts (:func:`gc.freeze`), so that they walk only what the session made.
 
 Receiving itself happens before the loop: for a Net F/T in softtip's receive thread and
 queue (:mod:`softtip.io.netft`), so even a stalled loop does not lose packets until the queue
