@@ -65,6 +65,27 @@ def test_the_live_rerun_view_draws_what_the_logger_draws_from_another_process(es
     assert set(_series(tmp_path / "live.rrd", "/series/state").values()) >= {0.0, 1.0, 2.0}  # none, point, line
 
 
+@pytest.mark.parametrize("n", [1, 13, 20])
+def test_the_rerun_series_keep_every_drawn_sample(estimates, tmp_path, n):
+    # the series go out as columns every SERIES_BATCH samples: the samples of an unfinished batch
+    # are sent at close, each at its own t with its own values
+    pytest.importorskip("rerun")
+    from softtip.viz.rerun import SERIES, SERIES_BATCH, RerunLogger
+
+    tip, es = estimates
+    drawn = [e for e in es if e.state != "none"][: n * 25 : 25]  # 40 Hz of t: every one drawn (50 at most)
+    assert len(drawn) == n and (n % SERIES_BATCH or n == 20)
+    view = RerunLogger(tip, save=tmp_path / "v.rrd")
+    for e in drawn:
+        view.log_sample(e)
+    view.close()
+    for k, entity in enumerate(SERIES):
+        got = _series(tmp_path / "v.rrd", "/" + entity)
+        want = [(*e.wrench, e.h_norm, np.degrees(e.angle), ("none", "point", "line", "area").index(e.state))[k] for e in drawn]
+        assert sorted(got) == pytest.approx([e.t for e in drawn]), entity
+        assert np.array_equal([got[t] for t in sorted(got)], want, equal_nan=True), entity
+
+
 def test_the_live_rerun_view_says_why_it_cannot_start(estimates, tmp_path):
     pytest.importorskip("rerun")
     from softtip.viz.rerun import LiveRerun

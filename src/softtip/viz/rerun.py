@@ -42,6 +42,17 @@ from softtip.estimator import STATES, Estimates, SampleEstimate
 
 __all__ = ["LiveRerun", "RerunLogger", "RerunView", "check_viewer", "import_rerun", "surface_mesh"]
 
+#: The time series of the view, by entity path: ``fx … mz`` (N, N·m), ``|h|`` (N·m), the angle (°)
+#: and the state's index in :data:`~softtip.estimator.STATES`.
+SERIES = (
+    "series/force/fx", "series/force/fy", "series/force/fz", "series/moment/mx", "series/moment/my",
+    "series/moment/mz", "series/h_norm", "series/angle_deg", "series/state",
+)  # fmt: skip
+#: Samples of the series :meth:`RerunLogger.log_sample` keeps before it sends them, as columns
+#: (one call per series, where a call per sample and series cost Rerun's Python SDK about 50 us
+#: each: most of a drawn sample's time, in the process that shares the cores with the estimator).
+SERIES_BATCH = 10
+
 
 def import_rerun():
     """Import ``rerun`` or raise an :class:`ImportError` that names the extra to install."""
@@ -182,6 +193,8 @@ class RerunLogger:
             static=True,
         )
         self._last_t = -math.inf
+        self._series_t: list[float] = []  # the series' samples not sent yet (SERIES_BATCH)
+        self._series_v: list[tuple[float, ...]] = []
 
     # -- per sample (live) --------------------------------------------------------------------
 
@@ -190,17 +203,25 @@ class RerunLogger:
         if e.t - self._last_t < self.min_dt:
             return
         self._last_t = e.t
-        rr, rec = self.rr, self.rec
-        rec.set_time("t", duration=e.t)
+        self.rec.set_time("t", duration=e.t)
         self._log_geometry(e.state, e.point, e.normal, e.wrench[:3], e.direction, e.h)
-        f, m = e.wrench[:3], e.wrench[3:]
-        for name, value in zip(("fx", "fy", "fz"), f):
-            rec.log(f"series/force/{name}", rr.Scalars(value))
-        for name, value in zip(("mx", "my", "mz"), m):
-            rec.log(f"series/moment/{name}", rr.Scalars(value))
-        rec.log("series/h_norm", rr.Scalars(e.h_norm))
-        rec.log("series/angle_deg", rr.Scalars(math.degrees(e.angle)))
-        rec.log("series/state", rr.Scalars(STATES.index(e.state)))
+        self._series_t.append(e.t)
+        self._series_v.append((*e.wrench, e.h_norm, math.degrees(e.angle), STATES.index(e.state)))
+        if len(self._series_t) >= SERIES_BATCH:
+            self._send_kept_series()
+
+    def _send_kept_series(self) -> None:
+        """Send the series' samples :meth:`log_sample` kept."""
+        if self._series_t:
+            self._send_series(np.array(self._series_t), np.array(self._series_v, dtype=float))
+            self._series_t, self._series_v = [], []
+
+    def _send_series(self, t: NDArray[np.float64], values: NDArray[np.float64]) -> None:
+        """Send the :data:`SERIES` of samples at ``t`` (s), ``values`` (N, 9) in their order, as columns."""
+        rr, rec = self.rr, self.rec
+        times = [rr.TimeColumn("t", duration=t)]
+        for k, path in enumerate(SERIES):
+            rec.send_columns(path, indexes=times, columns=rr.Scalars.columns(scalars=values[:, k]))
 
     def _log_geometry(self, state: str, r, n, f, d, h=None) -> None:
         rr, rec = self.rr, self.rec
@@ -244,19 +265,9 @@ class RerunLogger:
         Time series go in as columns (every sample); the 3-D view gets at most
         ``max_frames`` evenly spaced samples.
         """
-        rr, rec = self.rr, self.rec
-        times = [rr.TimeColumn("t", duration=est.t)]
-        series = {
-            "series/force/fx": est.wrench[:, 0], "series/force/fy": est.wrench[:, 1], "series/force/fz": est.wrench[:, 2],
-            "series/moment/mx": est.wrench[:, 3], "series/moment/my": est.wrench[:, 4], "series/moment/mz": est.wrench[:, 5],
-            "series/h_norm": est.h_norm, "series/angle_deg": np.degrees(est.angle), "series/state": est.state.astype(float),
-        }  # fmt: skip
-        for path, values in series.items():
-            rec.send_columns(
-                path,
-                indexes=times,
-                columns=rr.Scalars.columns(scalars=np.asarray(values, dtype=float)),
-            )
+        rec = self.rec
+        values = np.column_stack((est.wrench, est.h_norm, np.degrees(est.angle), est.state)).astype(float)
+        self._send_series(np.asarray(est.t, dtype=float), values)
         names = est.state_names
         step = max(1, math.ceil(len(est) / max_frames))
         for k in range(0, len(est), step):
@@ -271,8 +282,10 @@ class RerunLogger:
             )
 
     def close(self) -> None:
-        """Flush and close the recording (the ``.rrd`` file is complete afterwards)."""
+        """Send the series' last samples, flush and close the recording (the ``.rrd`` file is
+        complete afterwards)."""
         try:
+            self._send_kept_series()
             self.rec.flush()
         except RuntimeError as exc:  # the spawned viewer died (no display, no GPU, closed early)
             raise InputError(
