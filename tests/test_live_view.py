@@ -67,14 +67,14 @@ def test_the_live_rerun_view_draws_what_the_logger_draws_from_another_process(es
 
 @pytest.mark.parametrize("n", [1, 13, 20])
 def test_the_rerun_series_keep_every_drawn_sample(estimates, tmp_path, n):
-    # the series go out as columns every SERIES_BATCH samples: the samples of an unfinished batch
+    # the series go out as columns every SERIES_BATCH_S of t: the samples of an unfinished batch
     # are sent at close, each at its own t with its own values
     pytest.importorskip("rerun")
-    from softtip.viz.rerun import SERIES, SERIES_BATCH, RerunLogger
+    from softtip.viz.rerun import SERIES, SERIES_BATCH_S, RerunLogger
 
     tip, es = estimates
     drawn = [e for e in es if e.state != "none"][: n * 25 : 25]  # 40 Hz of t: every one drawn (50 at most)
-    assert len(drawn) == n and (n % SERIES_BATCH or n == 20)
+    assert len(drawn) == n and (n == 1 or drawn[-1].t - drawn[0].t > SERIES_BATCH_S)
     view = RerunLogger(tip, save=tmp_path / "v.rrd")
     for e in drawn:
         view.log_sample(e)

@@ -48,10 +48,11 @@ SERIES = (
     "series/force/fx", "series/force/fy", "series/force/fz", "series/moment/mx", "series/moment/my",
     "series/moment/mz", "series/h_norm", "series/angle_deg", "series/state",
 )  # fmt: skip
-#: Samples of the series :meth:`RerunLogger.log_sample` keeps before it sends them, as columns
-#: (one call per series, where a call per sample and series cost Rerun's Python SDK about 50 us
-#: each: most of a drawn sample's time, in the process that shares the cores with the estimator).
-SERIES_BATCH = 10
+#: s of ``t`` over which :meth:`RerunLogger.log_sample` keeps the series' samples before it sends
+#: them, as columns (one call per series, where a call per sample and series cost Rerun's Python
+#: SDK about 50 us each, in the process that shares the cores with the estimator): 10 samples of
+#: the live view's 50 a second; the plots lag the 3-D view by at most this much.
+SERIES_BATCH_S = 0.2
 
 
 def import_rerun():
@@ -193,7 +194,7 @@ class RerunLogger:
             static=True,
         )
         self._last_t = -math.inf
-        self._series_t: list[float] = []  # the series' samples not sent yet (SERIES_BATCH)
+        self._series_t: list[float] = []  # the series' samples not sent yet (SERIES_BATCH_S)
         self._series_v: list[tuple[float, ...]] = []
 
     # -- per sample (live) --------------------------------------------------------------------
@@ -207,7 +208,7 @@ class RerunLogger:
         self._log_geometry(e.state, e.point, e.normal, e.wrench[:3], e.direction, e.h)
         self._series_t.append(e.t)
         self._series_v.append((*e.wrench, e.h_norm, math.degrees(e.angle), STATES.index(e.state)))
-        if len(self._series_t) >= SERIES_BATCH:
+        if e.t - self._series_t[0] >= SERIES_BATCH_S - 1e-9:
             self._send_kept_series()
 
     def _send_kept_series(self) -> None:
