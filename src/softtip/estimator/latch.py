@@ -369,18 +369,25 @@ class LatchTracker:
         if sc is not None:
             out = self._step(state, params, onset, t, f_norm, True, sc.valid, sc.rx, sc.ry, sc.rz)
         code, mx, my, mz, latched, fallback, relatched, begin = out
+        point = None
+        if code == SOFT:
+            point = sc.point
+        elif code == MEAN or code == FIX:
+            point = self.tip._project_kernel(mx, my, mz, PY)
+            if code == FIX:
+                self._hold(state, *point)
+        return self.keep(code, point, fallback, begin), latched, fallback, relatched, begin, sc
+
+    def keep(self, code: int, point: tuple[float, float, float] | None, fallback: bool, begin: bool):
+        """What the tracker keeps of a :func:`latch_step` (``code``, the sample's ``point``, m,
+        ``fallback``, ``begin``), here or in a compiled step that went on with the sample
+        (:func:`softtip.estimator.pipeline.sample_step`); returns the sample's point: the latch
+        held for :data:`HELD` (the same object from sample to sample)."""
         if begin:
             self.point = None
         if code == HELD:
-            point = self.point
-        elif code == SOFT:
-            point = sc.point
-        elif code == MEAN:
-            point = self.tip._project_kernel(mx, my, mz, PY)
-        elif code == FIX:
-            point = self.point = self.tip._project_kernel(mx, my, mz, PY)
+            return self.point
+        if code == FIX:
+            self.point = point
             self.fallback = fallback
-            self._hold(state, *point)
-        else:
-            point = None
-        return point, latched, fallback, relatched, begin, sc
+        return point

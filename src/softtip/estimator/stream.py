@@ -397,13 +397,7 @@ class Estimator:
         latched, fallback, relatched, begin = flags
         if not self._track:
             latch = self._latch
-            if begin:
-                latch.point = None
-            if lcode == FIX:
-                latch.point = point
-                latch.fallback = fallback
-            elif lcode == HELD:
-                point = latch.point
+            point = latch.keep(lcode, point, fallback, begin)
             if lcode == FIX or (lcode == HELD and point is not self._geo.point):
                 # a latch held from here: its geometry and sample_step's record
                 geo = self._geo = PointGeometry.on_tip(self.tip, point, self._var)
