@@ -86,6 +86,30 @@ def test_the_rerun_series_keep_every_drawn_sample(estimates, tmp_path, n):
         assert np.array_equal([got[t] for t in sorted(got)], want, equal_nan=True), entity
 
 
+def test_the_live_rerun_view_draws_behind_the_estimator(estimates, tmp_path):
+    # the drawing process and every thread Rerun started in it run only on a core the
+    # estimator's threads leave idle (Linux's idle class), elsewhere at the lowest priority
+    pytest.importorskip("rerun")
+    from softtip.viz.rerun import LiveRerun
+
+    tip, es = estimates
+    live = LiveRerun(tip, save=tmp_path / "live.rrd")  # started: Rerun's threads are running
+    try:
+        for e in es[:100]:
+            live.log_sample(e)
+        pid = live._proc.pid
+        if sys.platform.startswith("linux"):
+            threads = [int(tid) for tid in os.listdir(f"/proc/{pid}/task")]
+            assert len(threads) > 1
+            assert {os.sched_getscheduler(tid) for tid in threads} == {os.SCHED_IDLE}
+            assert os.sched_getscheduler(0) != os.SCHED_IDLE  # the estimator's process keeps its class
+        else:
+            assert os.getpriority(os.PRIO_PROCESS, pid) == 19
+    finally:
+        live.close()
+    assert live._proc.returncode == 0
+
+
 def test_the_live_rerun_view_says_why_it_cannot_start(estimates, tmp_path):
     pytest.importorskip("rerun")
     from softtip.viz.rerun import LiveRerun

@@ -23,7 +23,8 @@ delays nothing but the loop's next wait; made by the recorder's thread, in block
 pauses between, it interrupted the estimator's updates and set the 7 kHz soak's p99 (the
 performance page). The recorder's thread only joins the lines and writes them (the system call
 without the interpreter). The view redraws five times a second (about 20 us each), and Rerun's
-work (about 2 ms a drawn sample) is in another process. The cyclic garbage collector's full
+work (about 2 ms a drawn sample) is in another process, which runs only on a core the
+estimator's leave idle. The cyclic garbage collector's full
 collections walk every object of the process (imports included: about 20 ms); the loop freezes
 what exists when it starts (:func:`gc.freeze`), so that they walk only what the session made.
 

@@ -17,7 +17,8 @@ is logged, sensor frame, metres, on the timeline ``t`` (s of the log):
 
 Live, :class:`LiveRerun` draws in a process of its own, so that Rerun's work (about 1 ms of
 CPU per drawn sample) never runs on the estimator's thread nor holds its interpreter (a
-thread would: Python runs one thread at a time). ``rerun FILE.rrd`` opens a saved recording.
+thread would: Python runs one thread at a time), and at the lowest priority (Linux's idle
+scheduling class, the viewer it spawns too), so that it takes no core the estimator wants. ``rerun FILE.rrd`` opens a saved recording.
 """
 
 from __future__ import annotations
@@ -510,7 +511,22 @@ def _draw(stdin, stdout) -> None:
     answer("ok")
 
 
+def _behind_the_estimator() -> None:
+    """Give this process's CPU time to the estimator's first: the live view must never slow it,
+    and on a machine with few cores its drawing (and the viewer it may spawn, which inherits
+    this) would take a core from the estimator's threads. Linux's idle scheduling class (this
+    thread's; the threads Rerun starts after it inherit it), elsewhere the lowest priority."""
+    try:
+        os.sched_setscheduler(0, os.SCHED_IDLE, os.sched_param(0))
+    except (AttributeError, OSError):  # not Linux, or not allowed: nice 19 is any process's right
+        try:
+            os.nice(19)
+        except (AttributeError, OSError):
+            pass
+
+
 if __name__ == "__main__":
+    _behind_the_estimator()
     # the answers go on the original standard output; anything printed goes to standard error
     _answers = os.fdopen(os.dup(sys.stdout.fileno()), "wb")
     os.dup2(sys.stderr.fileno(), sys.stdout.fileno())
