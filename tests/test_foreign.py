@@ -669,6 +669,7 @@ def test_a_wrong_unit_in_the_header_is_said_to_be_the_headers(tmp_path: Path) ->
         done = run(*args)
         assert done.returncode == 2, done.stderr
         assert "the data fit forces in N with moments in N·mm" in done.stderr
+        assert "--moment-units" not in done.stderr  # no option the file's unit would overrule named as the fix
         assert "an option cannot override a unit the file gives: if the data are in another unit, the file is wrong" in done.stderr
     assert not (tmp_path / "o.csv").exists() and not (tmp_path / "r.csv").exists()
 

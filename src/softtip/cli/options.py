@@ -322,14 +322,14 @@ def check_units(est, fingertip, config: EstimatorConfig, log, source: str | None
             "another unit than read (a header's 'Time (ms)' over seconds), correct the header or give --time-units; "
             "a log that is already tared needs --tare-duration 0 (or a --bias)"
         )
+    given = getattr(log, "units_in_header", ())
     try:
         check_wrench_units(
             est.wrench[~est.taring], fingertip, force_unit=getattr(log, "force_unit", "N"),
             moment_unit=getattr(log, "moment_unit", "N*m"), quiet=quiet_samples(est, log.wrench), noise=config.noise,
-            source=source or log.source, min_force=max(0.1, config.contact_threshold),
+            source=source or log.source, min_force=max(0.1, config.contact_threshold), options=not given,
         )  # fmt: skip
     except InputError as exc:
-        given = getattr(log, "units_in_header", ())
         if not given:
             raise
         raise InputError(

@@ -265,33 +265,36 @@ def pairs_that_fit(lever_fits: dict[tuple[str, str], bool], ratio: tuple[float, 
     return [pair for off, pair in _ranked_pairs(lever_fits, ratio, force_unit, moment_unit) if off <= np.log(NOISE_FITS)]
 
 
-def describe_pairs(named: list[tuple[str, str]], given: tuple[str, str], lead: str = "the data fit ") -> str:
+def describe_pairs(named: list[tuple[str, str]], given: tuple[str, str], lead: str = "the data fit ", *,
+                   options: bool = True) -> str:  # fmt: skip
     """What a units message says of the pairs that fit (:func:`pairs_that_fit`), with their options
-    (``lead`` before them)."""
+    (``lead`` before them; ``options`` False: without them, for units a file gives, which no
+    option overrides)."""
     if not named:
         return "no unit pair F/T software writes fits the data"
     pairs = [
-        f"forces in {find_unit(fo, 'force').label} with moments in {find_unit(mo, 'moment').label} "  # type: ignore[union-attr]
-        f"({_pair_option(fo, mo, given)})"
+        f"forces in {find_unit(fo, 'force').label} with moments in {find_unit(mo, 'moment').label}"  # type: ignore[union-attr]
+        + (f" ({_pair_option(fo, mo, given)})" if options else "")
         for fo, mo in named
     ]
     return lead + ", or ".join(pairs)
 
 
 def lever_pairs_text(lever_fits: dict[tuple[str, str], bool], ratio: tuple[float, float] | None, force_unit: str,
-                     moment_unit: str) -> str:  # fmt: skip
+                     moment_unit: str, *, options: bool = True) -> str:  # fmt: skip
     """What the message of a lever beyond the fingertip's reach says of the units: the pairs that
     fit (:func:`pairs_that_fit`) with their options; where the tare's noise ``ratio`` puts none of
     the pairs the lever fits within :data:`NOISE_FITS` of the sensor's (10 samples at 50 Hz; a
     quiet, quantised or noise-free log is not the model), every pair the lever fits, saying so:
-    the lever rules the units read out by a factor of about 1000, the noise by a few."""
+    the lever rules the units read out by a factor of about 1000, the noise by a few. ``options``:
+    as :func:`describe_pairs`."""
     given = (find_unit(force_unit, "force").name, find_unit(moment_unit, "moment").name)  # type: ignore[union-attr]
     named = pairs_that_fit(lever_fits, ratio, force_unit, moment_unit)
     if named or ratio is None:
-        return describe_pairs(named, given)
+        return describe_pairs(named, given, options=options)
     lever_only = [pair for _, pair in _ranked_pairs(lever_fits, ratio, force_unit, moment_unit)]
     return describe_pairs(lever_only, given, f"the noise while taring fits no unit pair within {NOISE_FITS:g} times "
-                          "the sensor's (--force-noise, --moment-noise); the lever fits ")  # fmt: skip
+                          "the sensor's (--force-noise, --moment-noise); the lever fits ", options=options)  # fmt: skip
 
 
 def check_wrench_units(
@@ -304,6 +307,7 @@ def check_wrench_units(
     noise: SensorNoise | None = None,
     source: str = "",
     min_force: float = 0.1,
+    options: bool = True,
 ) -> ForceLever:
     """Stop a log whose units make the fingertip geometry or the sensor's noise impossible.
 
@@ -322,6 +326,9 @@ def check_wrench_units(
         The log's name, for the message.
     min_force : float
         As :func:`force_lever`, N.
+    options : bool
+        Name the command-line options that read the log in each pair that fits; False where
+        the file gives the units (no option overrides them).
 
     Returns
     -------
@@ -350,14 +357,14 @@ def check_wrench_units(
     lead = "the data fit "
 
     def fit_text() -> str:
-        return describe_pairs(named, given, lead)
+        return describe_pairs(named, given, lead, options=options)
 
     where = f"{source}: " if source else ""
     if not lever.plausible:
         raise InputError(
             f"{where}the forces act {lever.median * 1e3:.4g} mm from the sensor origin (median of the moment-to-force "
             f"ratio over {lever.n_samples} samples with |f| ≥ {min_force:g} N, read in {read_in}), but the fingertip "
-            f"reaches only {lever.reach * 1e3:.3g} mm: {lever_pairs_text(lever_fits, ratio, force_unit, moment_unit)}; "
+            f"reaches only {lever.reach * 1e3:.3g} mm: {lever_pairs_text(lever_fits, ratio, force_unit, moment_unit, options=options)}; "
             "or is the fingertip (--tip) the wrong one? Expected moments in N·m about the sensor origin"
         )
     off = max(abs(np.log(ratio[0])), abs(np.log(ratio[1]))) if ratio is not None else 0.0
