@@ -387,17 +387,25 @@ def test_a_command_imports_only_its_own_module() -> None:
     assert not others & set(loaded), others & set(loaded)
 
 
-def test_a_log_entirely_inside_the_tare_stops_the_run(tmp_path):
+@pytest.mark.parametrize("pieces", [[], ["--chunk-rows", "100"], ["--chunk-rows", "100", "--jobs", "2"]],
+                         ids=["one-shot", "pieces", "pieces-jobs"])  # fmt: skip
+def test_a_log_entirely_inside_the_tare_stops_the_run(tmp_path, pieces):
     # 'Time (ms)' over seconds: 10 s read as 10 ms, every sample inside the 0.2 s tare; nothing
-    # would be estimated, with exit 0 and a warning before
+    # would be estimated, with exit 0 and a warning before (in pieces, until this was checked there
+    # too: a log the pieces' reader takes, t in s under a plain header)
     ex = load_example()
-    rows = [f"{t:.6f},{','.join(f'{v:.6g}' for v in w)}" for t, w in zip(ex.t, ex.wrench)]
+    rows = [f"{t:.6f},{','.join(f'{v:.6g}' for v in w)}" for t, w in zip(ex.t * (1e-3 if pieces else 1.0), ex.wrench)]
     log = tmp_path / "ms.csv"
-    log.write_text("Time (ms),fx,fy,fz,mx,my,mz\n" + "\n".join(rows) + "\n")
-    out = subprocess.run([SOFTTIP, "estimate", log, "-o", tmp_path / "out.csv"], capture_output=True, text=True, timeout=120)
+    log.write_text(("t" if pieces else "Time (ms)") + ",fx,fy,fz,mx,my,mz\n" + "\n".join(rows) + "\n")
+    said = f"softtip: error: {log}: the whole log (500 samples, t from 0 to 0.00998 s as read) lies within the first "
+    out = subprocess.run([SOFTTIP, "estimate", log, "-o", tmp_path / "out.csv", *pieces], capture_output=True, text=True,
+                         timeout=120)  # fmt: skip
     assert out.returncode == 2, out.stderr
-    assert f"softtip: error: {log}: the whole log (500 samples, t from 0 to 0.00998 s as read) lies within the first " in out.stderr
+    assert said in out.stderr
     assert not (tmp_path / "out.csv").exists()
+    if pieces:  # onto standard output: the rows gone out are said to be wrong
+        out = subprocess.run([SOFTTIP, "estimate", log, *pieces], capture_output=True, text=True, timeout=120)
+        assert out.returncode == 2 and said in out.stderr and "cannot be taken back" in out.stderr, out.stderr
     tared = subprocess.run([SOFTTIP, "estimate", log, "-o", tmp_path / "out.csv", "--tare-duration", "0"],
                            capture_output=True, text=True, timeout=120)  # fmt: skip
     assert "the whole log" not in tared.stderr

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import os
 import sys
 import warnings
@@ -30,6 +31,7 @@ from softtip.cli.options import (
     parquet_metadata,
     print_log_notes,
     progress_bar,
+    tare_covers_log,
     tare_warnings,
 )  # fmt: skip
 from softtip.cli.types import check_lowpass, option
@@ -336,6 +338,8 @@ class _RunTotals:
         self.warnings: list[str] = []
         self.bias = np.full(6, np.nan)
         self.tare = None
+        self.taring = 0  # samples in the tare window
+        self.t_first = self.t_last = math.nan  # s, as read
 
     @classmethod
     def of(cls, est, contacts: list) -> _RunTotals:
@@ -349,7 +353,11 @@ class _RunTotals:
 
         if self.tare is None:
             self.tare, self.bias = est.tare, est.bias
+        if len(est):
+            self.t_first = est.t[0] if not self.n else self.t_first
+            self.t_last = est.t[-1]
         self.n += len(est)
+        self.taring += int(np.count_nonzero(est.taring))
         for code, name in enumerate(STATES):
             self.counts[name] += int(np.count_nonzero(est.state == code))
         self.confirmed += int(np.count_nonzero(est.line_evidence == 2))
@@ -567,6 +575,8 @@ def _estimate_in_pieces(
                         totals.add(est, contacts)
                 finally:
                     pieces.close()  # with --jobs, no piece is read or started from now (an error, a signal)
+            if totals.n > 1 and totals.taring == totals.n:  # nothing estimated, as check_units decides
+                raise tare_covers_log(input_path, totals.n, totals.t_first, totals.t_last, config.tare_duration)
             if vote.n >= 5 and vote.median_above():
                 raise NotStreamable("wrong units: the one-shot run says so")  # as check_units decides
             if beyond:

@@ -308,6 +308,17 @@ def estimator_options(f):
     return f
 
 
+def tare_covers_log(source: str, n: int, t_first: float, t_last: float, tare_duration: float) -> InputError:
+    """The error of a log of ``n`` samples (``n`` > 1, t from ``t_first`` to ``t_last``, s as read)
+    that lies within its tare window: nothing estimated, so the time unit read is likely wrong."""
+    return InputError(
+        f"{source}: the whole log ({n} samples, t from {t_first:.6g} to {t_last:.6g} s as read) lies within the first "
+        f"{tare_duration:g} s used to tare the sensor: nothing to estimate. If t is in another unit than read (a "
+        "header's 'Time (ms)' over seconds), correct the header or give --time-units; a log that is already tared "
+        "needs --tare-duration 0 (or a --bias)"
+    )
+
+
 def check_units(est, fingertip, config: EstimatorConfig, log, source: str | None = None) -> None:
     """Exit 2 when the wrench's units make the fingertip geometry or the sensor's noise impossible
     (:func:`softtip.core.lever.check_wrench_units`), naming the unit pairs that fit the data."""
@@ -316,12 +327,7 @@ def check_units(est, fingertip, config: EstimatorConfig, log, source: str | None
     taring = np.asarray(est.taring, dtype=bool)
     if len(taring) > 1 and taring.all():  # nothing estimated: a log that cannot be what its reader took it for
         t = np.asarray(log.t, dtype=float)
-        raise InputError(
-            f"{source or log.source}: the whole log ({len(t)} samples, t from {t[0]:.6g} to {t[-1]:.6g} s as read) lies "
-            f"within the first {config.tare_duration:g} s used to tare the sensor: nothing to estimate. If t is in "
-            "another unit than read (a header's 'Time (ms)' over seconds), correct the header or give --time-units; "
-            "a log that is already tared needs --tare-duration 0 (or a --bias)"
-        )
+        raise tare_covers_log(source or log.source, len(t), t[0], t[-1], config.tare_duration)
     given = getattr(log, "units_in_header", ())
     try:
         check_wrench_units(
