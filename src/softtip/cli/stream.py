@@ -94,7 +94,7 @@ an error (exit 1).
 @option("-o", "--output", "--record", "record", type=click.Path(dir_okay=False), metavar="FILE.csv", help="Record raw samples and estimates to FILE.csv as they come (--record is the same option).")
 @option("--view/--no-view", default=None, help="Live terminal view (default: when standard error is a terminal, and not with -q).")
 @option("-q", "--quiet", is_flag=True, help="Nothing but warnings and errors on standard error (no view unless --view, no tare line, no summary).")
-@option("--rerun", "rerun_spawn", is_flag=True, help="Show the 3-D view live in a Rerun viewer (needs the rerun-sdk package; at most 50 samples/s are drawn).")
+@option("--rerun", "rerun_spawn", is_flag=True, help="Show the 3-D view live in a Rerun viewer (needs the rerun-sdk package; at most 50 samples/s are drawn, by a process at the lowest priority, and the viewer it starts too, so that they never take a core from the estimator: on a busy machine the view lags, the estimates do not).")
 @option("--rerun-save", type=click.Path(dir_okay=False), metavar="FILE.rrd", help="Save the 3-D view and time series to FILE.rrd.")
 @option("--payload", type=click.Path(dir_okay=False), metavar="FILE.toml", help="With --replay: remove the fingertip's weight per sample, using the log's qw, qx, qy, qz columns (recorded raw_* columns are then compensated).")
 @full_scale_option
