@@ -254,3 +254,62 @@ def test_foreign_names_and_dropped_rows_carry_only_the_extras_row_for_row(tmp_pa
     out = run("estimate", tmp_path / "holes.parquet", "-o", tmp_path / "holes.out.parquet", "--missing", "drop", "-q")
     assert out.returncode == 0, out.stderr
     assert pq.read_table(tmp_path / "holes.out.parquet").column("seq").to_pylist() == [i for i in range(n) if i != 7]
+
+
+def _example_table(t: np.ndarray, scale: tuple[float, float] = (1.0, 1.0)) -> pa.Table:
+    ex = load_example()
+    w = ex.wrench / np.repeat(scale, 3)
+    return pa.table({"t": t, **{name: w[:, i] for i, name in enumerate(WRENCH)}})
+
+
+@pytest.mark.parametrize("suffix", [".parquet", ".arrow"])
+@pytest.mark.parametrize("pieces", [[], ["--chunk-rows", "100"]], ids=["one-shot", "pieces"])
+def test_softtips_own_column_names_get_a_csv_logs_time_and_units_checks(tmp_path: Path, suffix: str, pieces: list) -> None:
+    """A Parquet or Arrow log named ``t, fx … mz`` as softtip writes them, but without softtip's metadata,
+    is read as a CSV log with that header: t in ms stops naming --time-units, Unix ns count from the
+    first stamp, and the units check sees the units the wrench was read in (such files went through a
+    shortcut that did none of it: wrong estimates, exit 0)."""
+    ex = load_example()
+    base = tmp_path / "base.csv"
+    assert run("estimate", "--example", "-o", base).returncode == 0
+
+    def write(name: str, table: pa.Table) -> Path:
+        path = tmp_path / (name + suffix)
+        (pq.write_table if suffix == ".parquet" else feather.write_feather)(table, path)
+        return path
+
+    ms = write("ms", _example_table(ex.t * 1e3))
+    done = run("estimate", ms, "-o", tmp_path / "ms.csv", *pieces)
+    assert done.returncode == 2 and "if t is in milliseconds 50 Hz (--time-units ms)" in done.stderr, done.stderr
+    assert not (tmp_path / "ms.csv").exists()
+    told = run("estimate", ms, "--time-units", "ms", "-o", tmp_path / "ms.csv", *pieces)
+    assert told.returncode == 0, told.stderr
+    assert (tmp_path / "ms.csv").read_bytes() == base.read_bytes()
+
+    dated = write("ns", _example_table(1_700_000_000 * 10**9 + np.round(ex.t * 1e9).astype(np.int64)))
+    done = run("estimate", dated, "-o", tmp_path / "ns.csv", *pieces)
+    assert done.returncode == 0 and "t counts from the first, 1700000000000000000 ns" in done.stderr, done.stderr
+    lines = (tmp_path / "ns.csv").read_text().splitlines()
+    assert lines[0].endswith(",stamp_ns") and [ln.rsplit(",", 1)[0] for ln in lines] == base.read_text().splitlines()
+
+    si = write("si", _example_table(ex.t))
+    done = run("estimate", si, "--units", "kgf-mm", "-o", tmp_path / "k.csv", *pieces)
+    assert done.returncode == 2 and "read in kgf and kgf·mm, the noise while taring is" in done.stderr, done.stderr
+    assert "the data fit forces in N with moments in N·m" in done.stderr
+
+
+def test_a_replay_takes_the_units_of_softtips_metadata(tmp_path: Path) -> None:
+    # stream's --units defaulted to si, which the file's kgf-mm contradicted: the replay stopped
+    from softtip.core.units import KGF, KGF_MM
+
+    ex = load_example()
+    table = _example_table(ex.t, (KGF, KGF_MM)).replace_schema_metadata({PARQUET_UNITS_KEY: "kgf-mm"})
+    for suffix in (".parquet", ".arrow"):
+        path = tmp_path / ("kgf" + suffix)
+        (pq.write_table if suffix == ".parquet" else feather.write_feather)(table, path)
+        for args in (("estimate", path, "-o", tmp_path / "e.csv"),
+                     ("stream", "--replay", path, "--speed", 0, "-o", tmp_path / "r.csv")):  # fmt: skip
+            done = run(*args)
+            assert done.returncode == 0, done.stderr
+            assert "read as" not in done.stderr  # softtip's own file: its units are its metadata's, not said
+        assert "1 contact(s)" in done.stderr

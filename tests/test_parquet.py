@@ -194,6 +194,19 @@ def test_time_in_milliseconds_is_reported(tmp_path: Path) -> None:
     assert "median step 1 s, i.e. 1 samples/s: implausible" in note and "if t is in milliseconds 1e+03 Hz" in note
 
 
+def test_softtips_metadata_says_t_is_in_seconds(tmp_path: Path) -> None:
+    # 10 Hz in s is also 10 kHz in ms: a file without softtip's metadata is asked which, as a CSV
+    # log with a plain header; softtip's own file (a slow recording) is not
+    cols = _table()
+    cols["t"] = np.arange(50) * 0.1
+    plain = read_log(_write_pq(tmp_path / "plain.parquet", cols))
+    assert plain.time_suspect is not None and "give --time-units s or --time-units ms" in plain.time_suspect
+    own = read_log(_write_pq(tmp_path / "own.parquet", cols, {PARQUET_UNITS_KEY: "si"}))
+    assert own.time_suspect is None and own.warnings == () and own.notes == ()
+    np.testing.assert_array_equal(own.t, plain.t)
+    np.testing.assert_array_equal(own.wrench, plain.wrench)
+
+
 @pytest.mark.parametrize("content", [b"", b"t,fx\n0,1\n", b"PAR1garbagePAR1"])
 def test_not_parquet(tmp_path: Path, content: bytes) -> None:
     path = tmp_path / "x.parquet"

@@ -31,7 +31,7 @@ __all__ = ["calibrate"]
 CALIBRATED_SHAPES = [name for name, cls in SHAPES.items() if cls.calibrates is not None]
 
 
-def _read(input_path: str, units: str, **formats):
+def _read(input_path: str, units: str | None, **formats):
     """The log (``formats``: :func:`~softtip.cli.options.log_format_kwargs`), its notes said on stderr."""
     from softtip.cli.options import print_log_notes
     from softtip.io.tables import read_log
@@ -41,10 +41,10 @@ def _read(input_path: str, units: str, **formats):
     return log
 
 
-def _example_or_log(input_path, example: bool, units: str, path, what: str) -> str:
+def _example_or_log(input_path, example: bool, units: str | None, path, what: str) -> str:
     if example == (input_path is not None):
         raise click.UsageError(f"give either LOG or --example (the shipped example {what})")
-    if example and units != "si":
+    if example and units not in (None, "si"):
         raise click.UsageError(f"--units applies to LOG; the example {what} is in SI")
     return str(path) if example else input_path
 
@@ -99,7 +99,7 @@ capsule's offset of its axis from the sensor's z axis is its axis_offset.
 @option("--example", is_flag=True, help="Use the shipped example probing log (simulated: 30 presses on a 16 mm sphere centred at 0.3, -0.2, 20.0 mm) as LOG.")
 @option("--guide", is_flag=True, help="Print how to record a probing log (where, how hard and how to press) and exit.")
 @option("-o", "--output", type=click.Path(dir_okay=False), help="Fingertip TOML file to write (default: standard output).")
-@option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the log's wrench.")
+@option("--units", type=click.Choice(UNIT_SYSTEMS), default=None, help="Units of the log's wrench: si (N, N·m) or kgf-mm (kgf, kgf·mm, the papers').  [default: si, or a Parquet or Arrow LOG's own]")
 @option("--tare-duration", type=Number("s", 0.0), default=0.2, show_default=True, metavar="S", help="Average the first S seconds (untouched) as the sensor bias; 0 if LOG is tared.")
 @option("--contact-threshold", type=Number("N", 0.0, min_open=True), default=0.05, show_default=True, metavar="N", help="A press lasts while |f| is at least this (at least 4 times the force noise's magnitude), N.")
 @option("--min-force", type=Number("N", 0.0), default=0.5, show_default=True, metavar="N", help="Only samples with |f| at least this enter the fit, N.")
@@ -146,7 +146,7 @@ def calibrate(
             if not placement or mesh_path is None or rigid:
                 raise InputError("--shape mesh goes with --mesh FILE (and without --rigid)")
             log = _read(input_path, units, **formats)
-            check_full_scale(log.t, log.wrench, sensor_range, log.source, units=units)
+            check_full_scale(log.t, log.wrench, sensor_range, log.source, units=log.units)
             cal = calibrate_mesh_file(
                 log.t, log.wrench, mesh_path, mesh_units, skin_thickness=skin_thickness, rotation=rotation,
                 tare_duration=tare_duration, contact_threshold=contact_threshold, min_force=min_force,
@@ -172,7 +172,7 @@ def calibrate(
     try:
         _check_output(input_path, output)
         log = _read(input_path, units, **formats)  # a `stream --record` file: its fx_raw..mz_raw (the registry)
-        check_full_scale(log.t, log.wrench, sensor_range, log.source, units=units)
+        check_full_scale(log.t, log.wrench, sensor_range, log.source, units=log.units)
         cal = calibrate_fingertip(
             log.t, log.wrench, shape, tare_duration=tare_duration, contact_threshold=contact_threshold,
             min_force=min_force, compliance=not rigid, source=log.source,

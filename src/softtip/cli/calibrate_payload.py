@@ -34,7 +34,7 @@ together with --payload (no tare needed).
 )
 @click.argument("input_path", metavar="LOG", required=False, type=click.Path(allow_dash=True, dir_okay=False))
 @option("-o", "--output", type=click.Path(dir_okay=False), help="Payload TOML file to write (default: standard output).")
-@option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the log's wrench.")
+@option("--units", type=click.Choice(UNIT_SYSTEMS), default=None, help="Units of the log's wrench: si (N, N·m) or kgf-mm (kgf, kgf·mm, the papers').  [default: si, or a Parquet or Arrow LOG's own]")
 @option("--example", is_flag=True, help="Use the shipped example still log (simulated: a 20 g fingertip, centre of mass 1, -0.5, 20 mm, in 12 orientations) as LOG.")
 @log_format_options
 @click.pass_context

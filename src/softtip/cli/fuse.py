@@ -122,7 +122,7 @@ PointStamped and RViz markers, in the common frame, in the format --ros-distro p
 @option("--hand", "hand_file", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Fingertip poses in the common frame ([hand] frame, [finger.NAME] translation m, rpy_deg or quaternion).")
 @option("--topics", nargs=2, metavar="TOPIC TOPIC", help="Bag input: the two fingertips' wrench topics.")
 @option("--frame", metavar="FRAME", help="Bag input: the common frame (e.g. hand, base_link).")
-@option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the CSV logs' wrench.")
+@option("--units", type=click.Choice(UNIT_SYSTEMS), default=None, help="Units of the logs' wrench (CSV, Parquet, Arrow; a bag's wrench): si (N, N·m) or kgf-mm (kgf, kgf·mm, the papers').  [default: si, or a Parquet or Arrow log's own]")
 @option("--object-mass", type=Number("kg", 0.0), metavar="KG", help="The object's mass for the force balance (default: unknown; any weight along gravity allowed).")
 @option("--gravity", type=(Number("m/s²"), Number("m/s²"), Number("m/s²")), default=(0.0, 0.0, -9.80665), show_default=True, metavar="X Y Z", help="Gravity in the common frame, m/s².")
 @option("--point-std", type=Length("mm", 0.0, min_open=True), default="0.05mm", show_default=True, metavar="LENGTH", help="Standard deviation of each contact point across its line, independent between the fingers, for the plane normal (a bare number is in mm).")
@@ -186,7 +186,7 @@ def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, 
             if not b.frame_id:
                 raise InputError(f"{path}: topic {b.topic!r} has an empty header.frame_id; cannot place it with /tf")
             pose = tree.poses(frame, b.frame_id, b.stamps_ns, origin_ns=origin)
-            logs.append((b.topic, seconds_from_ns(b.stamps_ns, origin), wrench_to_si(b.wrench, units), pose))
+            logs.append((b.topic, seconds_from_ns(b.stamps_ns, origin), wrench_to_si(b.wrench, units or "si"), pose))
     elif len(inputs) == 2:
         if topics is not None or frame is not None:
             raise click.UsageError("--topics and --frame apply to a bag input")

@@ -84,7 +84,7 @@ an error (exit 1).
 @option("--netft", "host", metavar="HOST", help="Address of the Net F/T / Axia.")
 @option("--replay", "replay", type=click.Path(dir_okay=False), metavar="LOG", help="Replay a recorded log instead: CSV, or Parquet or Arrow IPC by its name (columns t, fx, fy, fz, mx, my, mz, or a layout the input formats page lists).")
 @option("--speed", type=Number("× real time", 0.0, MAX_SPEED), default=1.0, show_default=True, help="Replay speed: 1 real time, 2 twice as fast, 0 as fast as possible.")
-@option("--units", type=click.Choice(UNIT_SYSTEMS), default="si", show_default=True, help="Units of the replayed log's wrench.")
+@option("--units", type=click.Choice(UNIT_SYSTEMS), default=None, help="Units of the replayed log's wrench: si (N, N·m) or kgf-mm (kgf, kgf·mm, the papers').  [default: si, or a Parquet or Arrow --replay's own]")
 @option("--rdt-port", type=PORT, default=49152, show_default=True, help="UDP port of the sensor's RDT server.")
 @option("--http-port", type=PORT, default=80, show_default=True, help="HTTP port of the sensor's web server (calibration).")
 @option("--timeout", type=Number("s", 0.0, MAX_TIMEOUT, min_open=True), default=2.0, show_default=True, metavar="S", help="Give up after S seconds without data from the sensor.")
@@ -204,7 +204,7 @@ def _stream(
 
                 log = read_log(replay, units=units, **formats)
                 # as `estimate` reads it: far beyond the sensor's range, or a time unit it cannot guess, stops here
-                check_full_scale(log.t, log.wrench, sensor_range, replay, units=units, margin=COARSE_MARGIN)
+                check_full_scale(log.t, log.wrench, sensor_range, replay, units=log.units, margin=COARSE_MARGIN)
                 print_log_notes(log, quiet)
                 if payload is None:
                     source = LogSource.from_log(log, speed=speed, stop=stop)
@@ -240,7 +240,7 @@ def _stream(
                 raise click.UsageError("--lowpass-hz needs the sample rate, which this source does not report")
             if replay is not None:  # `estimate`'s units check, then its range check, before any sample is used
                 _check_replay_units(log, payload, fingertip, config)
-                check_full_scale(raw.t, raw.wrench, sensor_range, replay, units=units)
+                check_full_scale(raw.t, raw.wrench, sensor_range, replay, units=log.units)
             # a short replay runs the steps as Python: loading numba would cost more (the same bits)
             estimator = Estimator(fingertip, config, expected_samples=len(raw.t) if replay is not None else None)
             tare_request = threading.Event()

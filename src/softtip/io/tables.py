@@ -264,7 +264,8 @@ def _finish(
         """A message's start for data row ``i``: ``file:line``, or ``file: data row``."""
         return f"{source}:{first_line + i}" if first_line is not None else f"{source}: {where(i)}"
 
-    read_as = cmap is not None and not cmap.native(names)
+    own = header.t_stated and all(names[cmap.index[r]] == r for r in ROLES) if cmap is not None else False
+    read_as = cmap is not None and not cmap.native(names) and not own  # softtip's own file: its metadata's units
     if read_as:
         notes.append(f"{source}: read as {cmap.source}: {cmap.describe(names, named)}")
     if header.preamble:
@@ -330,7 +331,9 @@ def _finish(
         )
     origin = header.t_origin_ns  # int ns (0 but for a timestamp column with holes)
     start = (float(t[0]) + origin) * tunit.si
-    explicit_time = fmt.time_unit is not None or (cmap is not None and (cmap.from_header["t"] or tunit.name != "s"))
+    explicit_time = fmt.time_unit is not None or header.t_stated or (
+        cmap is not None and (cmap.from_header["t"] or tunit.name != "s")
+    )
     if not explicit_time and start >= LATEST_STAMP_S and len(t) > 1:
         # no date in seconds: the one unit that makes the first stamp a date (Unix time ns, µs or ms)
         dated = _dating_units(float(t[0]), ("ms", "us", "ns"))
@@ -779,6 +782,7 @@ class _Header:
     columnar: bool = False  # the names are a Parquet or Arrow file's columns, not a header's
     t_dated: bool = False  # t's column is typed a date (Arrow's timestamp): absolute stamps, whatever the year
     t_origin_ns: int = 0  # the stamps are t + this (int64 ns): absolute stamps with holes, exact as float64 offsets
+    t_stated: bool = False  # the file says t is in seconds (softtip's Parquet or Arrow metadata): not second-guessed
 
     @property
     def index(self) -> dict[str, int]:
@@ -1429,16 +1433,15 @@ def _gap_note(source: str, count: int, largest: float, where: str, median: float
 
 
 def _time_notes(
-    t: NDArray[np.float64], source: str, first_line: int | None, *, explicit: bool = False, ask_unit: bool = True,
+    t: NDArray[np.float64], source: str, first_line: int | None, *, explicit: bool = False,
     column: str = "t",
 ) -> tuple[int, list[str]]:
     """Count repeated stamps and say what looks wrong with the time scale.
 
     ``first_line`` is the line of the first data row when every row is one line (then row
     ``i`` is on line ``first_line + i``), else ``None`` (rows are then named by number).
-    ``explicit``: the time unit was given (header or option), so it is not second-guessed.
-    ``ask_unit``: a rate as plausible in seconds as in milliseconds asks for ``--time-units``
-    (not for a Parquet or Arrow file, whose ``t`` is in seconds by softtip's contract).
+    ``explicit``: the time unit was given (header, option or softtip's metadata), so it is not
+    second-guessed; else a rate as plausible in seconds as in milliseconds asks for ``--time-units``.
     ``column``: the time column's name in the file.
     """
 
@@ -1483,7 +1486,7 @@ def _time_notes(
                 f"force/torque log (expected {low:g} Hz to {high / 1e3:g} kHz with t in seconds){guess}. "
                 "Give t in seconds: the tare duration and every time window are in seconds"
             )
-        elif rate < _AMBIGUOUS_RATE_HZ and not explicit and ask_unit:
+        elif rate < _AMBIGUOUS_RATE_HZ and not explicit:
             notes.append(
                 f"{source}: column {column!r}: median step {median:.6g}: {rate:.4g} Hz if t is in seconds, {rate * 1e3:.5g} Hz "
                 "if in milliseconds, and no unit in the header says which (a force/torque sensor may stream at "
@@ -1543,11 +1546,11 @@ PARQUET_FINGERTIP_KEY = "softtip.fingertip"
 def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None, fmt: str = "parquet",
                   layout: LogFormat | None = None, stated: Sequence[str] = ()) -> Log:  # fmt: skip
     """A log from a Parquet or Arrow IPC (Feather v2) file (``fmt``): the same columns and checks as
-    CSV, rows named by number. softtip's own columns are read as they are (the units of the
-    schema's ``softtip.units`` metadata); other names, and the options ``layout`` gives (columns,
-    units, ``--missing``), as a CSV header with those names (:func:`_read_mapped_table`).
-    ``stated``: the per-quantity unit options given (their names), which a file with that
-    metadata refuses."""
+    CSV, rows named by number: the column names read as a CSV header's, with the options
+    ``layout`` gives (columns, units, ``--missing``; :func:`_read_mapped_table`). The schema's
+    ``softtip.units`` metadata (softtip's own files) gives the wrench's units where the names
+    give none, and says ``t`` is in seconds. ``stated``: the per-quantity unit options given
+    (their names), which a file with that metadata refuses."""
     import pyarrow as pa
 
     layout = layout or LogFormat.of(units)
@@ -1578,42 +1581,12 @@ def _read_parquet(path: str | os.PathLike[str], source: str, units: str | None, 
             f"appl{'ies' if len(stated) == 1 else 'y'} to a file without that metadata (leave "
             f"{'it' if len(stated) == 1 else 'them'} out)"
         )
-    t_typed = names.count("t") == 1 and _is_time_type(table.schema.field("t").type)
-    if t_typed or not (layout.plain and not stated and set(REQUIRED_COLUMNS) <= set(names)):
-        if units is None and file_units not in (None, "si"):  # the metadata's units for the columns that give none
-            force, moment = UNIT_SYSTEM_UNITS[file_units]
-            layout = replace(layout, force_unit=force, moment_unit=moment)
-        return _read_mapped_table(table, names, source, layout, units or file_units or "si")
-    units = units or file_units or "si"
-    header = _Header(names=[n.strip() for n in names], line=0, data_base=0, lines=io.StringIO(), comments=[])
-    try:
-        index = _column_index(header, source, dialects=False)
-    except InputError as exc:  # the CSV wording, without a header line
-        raise InputError(str(exc).replace(f"{source}:0: ", f"{source}: ", 1)) from None
-    n = table.num_rows
-    if n == 0:
-        raise InputError(f"{source}: no rows; expected at least one row of {_EXPECTED_HEADER}")
-    # t and the wrench filled in place, each once (a block of 7 columns copied out again cost a
-    # third of the read)
-    t = np.empty(n)
-    wrench = np.empty((n, 6))
-    for i, name in enumerate(REQUIRED_COLUMNS):
-        values = t if i == 0 else wrench[:, i - 1]
-        values[:] = _table_numbers(table.column(index[name]), f"{source}: column {names[index[name]]!r}")
-    _check_time_order(t, source, "'t'")
-    extra = {
-        names[j]: table.column(j).to_numpy(zero_copy_only=False) for j in range(len(names)) if j not in index.values()
-    }
-    repeated, notes = _time_notes(t, source, None, ask_unit=False)
-    return Log(
-        t=t,
-        wrench=wrench if units == "si" else wrench_to_si(wrench, units),  # SI already: x * 1.0 is x
-        extra=extra,
-        source=source,
-        units=units,
-        repeated_t=repeated,
-        warnings=tuple(notes),
-    )
+    if units is None and file_units not in (None, "si"):  # the metadata's units for the columns that give none
+        force, moment = UNIT_SYSTEM_UNITS[file_units]
+        layout = replace(layout, force_unit=force, moment_unit=moment)
+    # every file through the same checks as a CSV log's (time unit and origin, the units the
+    # wrench was read in for the units check); softtip's metadata says t is in seconds
+    return _read_mapped_table(table, names, source, layout, units or file_units or "si", t_stated=file_units is not None)
 
 
 def _table_numbers(col: Any, where: str, *, missing: bool = False, exact: bool = False,
@@ -1714,16 +1687,18 @@ def _check_time_order(t: NDArray[Any], source: str, columns: str, unit: str = ""
         )
 
 
-def _read_mapped_table(table: Any, names: list[str], source: str, fmt: LogFormat, units: str) -> Log:
+def _read_mapped_table(table: Any, names: list[str], source: str, fmt: LogFormat, units: str, *,
+                       t_stated: bool = False) -> Log:  # fmt: skip
     """A Parquet or Arrow table whose column names are read as a CSV header's (the recognised
     layouts, ``--columns``, units in the names or the unit options; ``fmt``), then the same
     missing cells, time unit and origin and wrench units as a CSV log (:func:`_finish`); rows
-    named by number."""
+    named by number. ``t_stated``: the file says its ``t`` is in seconds (softtip's metadata)."""
     import pyarrow as pa
     import pyarrow.compute  # noqa: F401  (pa.compute)
 
     stripped = [n.strip() for n in names]
-    header = _Header(names=stripped, line=0, data_base=0, lines=io.StringIO(), comments=[], columnar=True)
+    header = _Header(names=stripped, line=0, data_base=0, lines=io.StringIO(), comments=[], columnar=True,
+                     t_stated=t_stated)  # fmt: skip
     try:
         header.cmap = resolve_columns(stripped, fmt)
         dated = [name for name, f in zip(stripped, table.schema) if pa.types.is_timestamp(f.type)]
@@ -2998,6 +2973,7 @@ class LogBlocks:
         self._bad_prefix: int | None = None
         self._header: _Header | None = None
         self._index: dict[str, int] = {}
+        self._t_stated = False  # Parquet or Arrow: the file's metadata says t is in seconds
 
     def __iter__(self) -> Any:
         blocks = self._parquet_blocks() if self.parquet else self._csv_blocks()
@@ -3018,8 +2994,8 @@ class LogBlocks:
                 self._repeat_t = float(t[same[0]])
             self.repeated += len(same)
             if self._first_t is None:
-                if not self.parquet and (t[0] >= ABSOLUTE_STAMP_S or _time_notes(t, self.source, None)[1] and any(
-                        "--time-units" in note for note in _time_notes(t, self.source, None)[1])):  # fmt: skip
+                if t[0] >= ABSOLUTE_STAMP_S or any(
+                        "--time-units" in note for note in _time_notes(t, self.source, None, explicit=self._t_stated)[1]):  # fmt: skip
                     raise NotStreamable("absolute stamps or a time unit to guess: read_log counts or refuses them")
                 self._first_t = t
                 median = _median_step(step[1:])
@@ -3054,7 +3030,8 @@ class LogBlocks:
                 f"{where}: t = {self._repeat_t:.10g} s as on the {what} before); kept in file order"
             )
         if self._first_t is not None:
-            notes += [n for n in _time_notes(self._first_t, self.source, first_line)[1] if "median step" in n]
+            notes += [n for n in _time_notes(self._first_t, self.source, first_line, explicit=self._t_stated)[1]
+                      if "median step" in n]  # fmt: skip
         if self._gaps:
             where = f"line {first_line + self._gap_row}" if first_line is not None else f"data row {self._gap_row + 1}"
             notes.append(_gap_note(self.source, self._gaps, self._gap_largest, where, self._gap_median))
@@ -3346,6 +3323,7 @@ class LogBlocks:
             ):
                 raise NotStreamable("units")
             self.units = self.units or file_units or "si"
+            self._t_stated = file_units is not None  # t in s, as the one-shot reader takes it
             names = list(pf.schema.names)
             header = _Header(names=[n.strip() for n in names], line=0, data_base=0, lines=io.StringIO(), comments=[])
             try:
