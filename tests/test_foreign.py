@@ -78,6 +78,8 @@ REFUSED = [
     ("unterminated_quote.csv", {}, ":102: column 'note': a quote opened on this line is never closed"),
     ("ati_ms_n_nmm.csv", {"moment_units": "N*m"},
      "column 'Tx (N-mm)': the header says N·mm but --moment-units (or --units) says N*m; leave the option out"),
+    ("ati_ms_n_nmm.csv", {"time_units": "s"},  # --units says nothing of time
+     "column 'Time (ms)': the header says ms but --time-units says s; leave the option out"),
     ("si_reference.csv", {"columns": "t=time"}, "--columns t=time: no column 'time' in the header"),
     ("si_reference.csv", {"units": "kgf-mm", "force_units": "N"}, "--units kgf-mm says force in kgf, --force-units says N"),
 ]
@@ -105,6 +107,25 @@ def test_missing_cells_dropped_or_interpolated() -> None:
     expected = (ref.wrench[119, 1] + ref.wrench[121, 1]) / 2
     assert filled.wrench[120, 1] == pytest.approx(expected)
     assert "2 row(s) filled by linear interpolation in t" in filled.notes[0]
+
+
+def test_missing_cells_at_the_ends_take_the_nearest_value_and_say_so(tmp_path: Path) -> None:
+    # nothing before the first row or after the last to interpolate from: the note said
+    # "linear interpolation" for a copied value; Microsoft's NaN spelling is a missing value
+    lines = REFERENCE.read_text().splitlines()
+    n = len(lines) - 1
+    first, last = lines[1].split(","), lines[-1].split(",")
+    first[2], last[6] = "", "-nan(ind)"
+    path = tmp_path / "ends.csv"
+    path.write_text("\n".join([lines[0], ",".join(first), *lines[2:-1], ",".join(last)]) + "\n")
+    with pytest.raises(InputError, match=r"column 'fy': empty cell; expected a number; or give --missing drop"):
+        read_log(path)
+    ref = read_log(REFERENCE)
+    log = read_log(path, missing="interpolate")
+    assert log.wrench[0, 1] == ref.wrench[1, 1] and log.wrench[-1, 5] == ref.wrench[-2, 5]
+    assert ("2 row(s) at the log's start or end filled with the nearest value (no value beyond to interpolate from)"
+            in log.notes[0]) and "linear" not in log.notes[0]  # fmt: skip
+    assert len(read_log(path, missing="drop").t) == n - 2
 
 
 def test_columns_option_and_headerless_positions(tmp_path: Path) -> None:

@@ -275,8 +275,9 @@ def test_counts_per_unit_before_the_header_divide_the_raw_columns(tmp_path: Path
     lines = path.read_text().splitlines()
     converted.write_text("\n".join(lines[:7] + [",".join(["0x00000000", str(j + 1), *r[1:], r[0]])
                                                for j, r in enumerate(_rows())]) + "\n")  # fmt: skip
-    with pytest.raises(InputError, match=r"converted\.csv:8: column 'Fx': line 4 says its values are counts .* is not a "
-                                         r"whole number; if the values are in N already, give --force-units N"):
+    with pytest.raises(InputError, match=r"converted\.csv:8: column 'Fx': line 4 says its values are counts \(\S+ per "
+                                         r"unit\), but -?[0-9.e-]+ is not a whole number; if the values are in N already, "
+                                         r"give --force-units N"):  # fmt: skip  (the number as a float's repr, no numpy type)
         read_log(converted)
     _check(read_log(converted, force_units="N", moment_units="N*m"))
 

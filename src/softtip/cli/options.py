@@ -210,7 +210,7 @@ _LOG_FORMAT_OPTIONS = [
         default="fail",
         show_default=True,
         help="An empty or nan cell in t, fx … mz: stop naming it, drop its row (t keeps the gap), or interpolate "
-        "linearly in t (a row without t is dropped). drop and interpolate also drop a last line cut short (the file "
+        "linearly in t (before a column's first value or after its last: that value; a row without t is dropped). drop and interpolate also drop a last line cut short (the file "
         "ends inside it, its cells missing). Dropped or filled rows are counted on standard error.",
     ),
     option("--skip-rows", type=click.IntRange(min=0), metavar="N", help="Lines before the header row (a preamble). [default: found]"),

@@ -460,7 +460,8 @@ def stated_unit(text: str, quantity: str, option: str | None, column: str, state
         )
     if option is not None and get_unit(option, quantity) is not unit:
         raise ColumnError(
-            f"column {column!r}: {stated_by} says {unit.label} but --{quantity}-units (or --units) says {option}; "
+            f"column {column!r}: {stated_by} says {unit.label} but --{quantity}-units{'' if quantity == 'time' else ' (or --units)'} "
+            f"says {option}; "
             f"leave the option out to use the unit {stated_by} gives"
         )
     return unit

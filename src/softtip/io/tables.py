@@ -127,7 +127,8 @@ _TIME_ALIASES = frozenset({"time", "times", "timestamp", "ts", "sec", "secs", "s
 #: Cells read as missing (empty) in a required column: pyarrow's CSV reader's default null values,
 #: written out so that the row-by-row parser, which words the errors, reads the same ones.
 _NULL_CELLS = frozenset(("", "#N/A", "#N/A N/A", "#NA", "-1.#IND", "-1.#QNAN", "-NaN", "-nan", "1.#IND", "1.#QNAN",
-                         "N/A", "NA", "NULL", "NaN", "n/a", "nan", "null"))  # fmt: skip
+                         "N/A", "NA", "NULL", "NaN", "n/a", "nan", "null",
+                         "nan(ind)", "-nan(ind)"))  # fmt: skip  (the last two: Microsoft's C library's NaN)
 
 #: What an error about a missing or NaN cell adds: the options that read such a log.
 _MISSING_FIX = "; or give --missing drop (skip the row) or --missing interpolate (fill it)"
@@ -286,11 +287,20 @@ def _finish(
             filled = int(np.count_nonzero(keep & bad))
             tt = t[keep].astype(np.float64)
             w = wrench[keep]
+            outside = np.zeros(len(tt), dtype=bool)  # a hole before a column's first value or after its last
             for k in range(6):
                 hole = np.isnan(w[:, k])
                 if hole.any() and (~hole).any():
-                    w[hole, k] = np.interp(tt[hole], tt[~hole], w[~hole, k])
-            what = f"{filled} row(s) filled by linear interpolation in t"
+                    have = np.flatnonzero(~hole)
+                    outside[: have[0]] |= hole[: have[0]]
+                    outside[have[-1] + 1 :] |= hole[have[-1] + 1 :]
+                    w[hole, k] = np.interp(tt[hole], tt[~hole], w[~hole, k])  # the nearest value beyond the ends
+            ends = int(np.count_nonzero(outside))
+            what = ", ".join(
+                ([f"{filled - ends} row(s) filled by linear interpolation in t"] if filled > ends else [])
+                + ([f"{ends} row(s) at the log's start or end filled with the nearest value (no value beyond to "
+                    "interpolate from)"] if ends else [])  # fmt: skip
+            ) or "0 row(s) filled"
             if bad_t.any():
                 what += f", {int(np.count_nonzero(bad_t))} row(s) without t dropped"
             if (no_wrench & ~bad_t).any():
@@ -401,7 +411,7 @@ def _finish(
                     loc = at(i)
                     raise InputError(
                         f"{loc}: column {names[header.index[role]]!r}: line {line} says its values "
-                        f"are counts ({per_unit:g} per unit), but {col[i]!r} is not a whole number; if the values are in "
+                        f"are counts ({per_unit:g} per unit), but {float(col[i])!r} is not a whole number; if the values are in "
                         f"{cmap.units[role].label} already, give --{quantity}-units {cmap.units[role].name} to read them as they are"
                     )
         scale = np.array([cmap.units[r].si / cmap.counts.get(r, (1.0,))[0] for r in ROLES[1:]])
