@@ -356,3 +356,16 @@ def test_simulate_and_calibrate_interrupted_leave_no_temporary_file(tmp_path):
     code, err, tmpdir = _interrupt_while_blocked(tmp_path, ["calibrate-payload", free, "-o", fifo], signal.SIGTERM, 1)
     assert code == 143, err
     assert listing(tmp_path) == ["free.csv", "pipe", "tmpdir"] and listing(tmpdir) == []
+
+
+@pytest.mark.parametrize("name", ["out.csv.gz", "out.csv.ZST", "out.bz2"])
+def test_o_refuses_a_compressed_name_it_would_fill_with_plain_text(tmp_path, name):
+    # the readers take compressed logs; the writers write plain text, which a .gz name hid (exit 0,
+    # a file gzip and pandas then refused)
+    for args in (("estimate", "--example"), ("stream", "--replay", EXAMPLE_PATH, "--speed", "0"), ("simulate",)):
+        out = run(*args, "-o", tmp_path / name)
+        assert out.returncode == 2 and "compressed file, but -o writes uncompressed text" in out.stderr, out.stderr
+        plain = str(tmp_path / name)[: -len(Path(name).suffix)]
+        assert f"(-o {plain}, then compress it:" in out.stderr
+        assert ("-o OUT.parquet" in out.stderr) == (args[0] == "estimate")
+    assert list(tmp_path.iterdir()) == []

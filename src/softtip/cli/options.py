@@ -378,12 +378,22 @@ def check_table_names(outputs, formats: tuple[str, ...] = ("csv", "parquet", "ar
     not write, which it would otherwise fill with CSV text; the remedy names ``--to-bag`` where
     the command has it."""
     from softtip.io.bag import BAG_SUFFIXES
-    from softtip.io.formats import TABLE_FORMATS, table_format
+    from softtip.io.formats import COMPRESSED_SUFFIXES, TABLE_FORMATS, table_format
 
     labels = [label for label, _ in outputs]
     for label, path in outputs:
         if label != "-o" or path is None:
             continue
+        suffix = Path(os.fspath(path)).suffix
+        codec = COMPRESSED_SUFFIXES.get(suffix.lower())
+        if codec is not None:
+            plain = os.fspath(path)[: -len(suffix)]
+            parquet = "; or -o OUT.parquet, which is compressed" if "parquet" in formats else ""
+            raise click.BadParameter(
+                f"{path} is named like {'an' if codec[0] in 'aeiouxl' else 'a'} {codec}-compressed file, but -o writes "
+                f"uncompressed text; expected a name without {suffix} (-o {plain}, then compress it: {codec} {plain})"
+                f"{parquet}", param_hint="'-o'",
+            )  # fmt: skip
         if Path(os.fspath(path)).suffix.lower() in BAG_SUFFIXES:
             remedy = f"; a bag is written by --to-bag {path}" if "--to-bag" in labels else ""
             raise click.BadParameter(

@@ -52,6 +52,11 @@ TABLE_FORMATS: dict[str, tuple[tuple[str, ...], str]] = {
 }
 
 
+#: Compression suffixes, by the compression's name. The readers take compressed CSV logs by their
+#: content, whatever the name; the writers write uncompressed text, so ``-o`` refuses these names.
+COMPRESSED_SUFFIXES: dict[str, str] = {".gz": "gzip", ".bz2": "bzip2", ".xz": "xz", ".zst": "zstd", ".lz4": "lz4"}
+
+
 def table_format(path: object) -> str:
     """``"parquet"``, ``"arrow"`` or ``"csv"``: a table file's format by its name's suffix.
 
