@@ -409,3 +409,18 @@ def test_a_log_entirely_inside_the_tare_stops_the_run(tmp_path, pieces):
     tared = subprocess.run([SOFTTIP, "estimate", log, "-o", tmp_path / "out.csv", "--tare-duration", "0"],
                            capture_output=True, text=True, timeout=120)  # fmt: skip
     assert "the whole log" not in tared.stderr
+
+
+def test_a_one_sample_log_stops_the_run_as_a_longer_one_inside_the_tare(tmp_path):
+    # one row exited 0 with a warning where two rows stopped; --tare-duration 0 estimates it
+    ex = load_example()
+    log = tmp_path / "one.csv"
+    log.write_text("t,fx,fy,fz,mx,my,mz\n" + ",".join(repr(float(v)) for v in (ex.t[0], *ex.wrench[0])) + "\n")
+    for args in (("estimate", log, "-o", tmp_path / "o.csv"), ("stream", "--replay", log, "--speed", "0", "-o", tmp_path / "r.csv")):
+        out = subprocess.run([SOFTTIP, *map(str, args)], capture_output=True, text=True, timeout=120)
+        assert out.returncode == 2 and f"{log}: one sample (t = 0 s): nothing to estimate" in out.stderr, out.stderr
+    assert not (tmp_path / "o.csv").exists() and not (tmp_path / "r.csv").exists()
+    tared = subprocess.run([SOFTTIP, "estimate", log, "--tare-duration", "0", "-o", tmp_path / "o.csv"], capture_output=True,
+                           text=True, timeout=120)  # fmt: skip
+    assert tared.returncode == 0, tared.stderr
+    assert len((tmp_path / "o.csv").read_text().splitlines()) == 2

@@ -575,7 +575,7 @@ def _estimate_in_pieces(
                         totals.add(est, contacts)
                 finally:
                     pieces.close()  # with --jobs, no piece is read or started from now (an error, a signal)
-            if totals.n > 1 and totals.taring == totals.n:  # nothing estimated, as check_units decides
+            if totals.n and totals.taring == totals.n:  # nothing estimated, as check_units decides
                 raise tare_covers_log(input_path, totals.n, totals.t_first, totals.t_last, config.tare_duration)
             if vote.n >= 5 and vote.median_above():
                 raise NotStreamable("wrong units: the one-shot run says so")  # as check_units decides

@@ -309,8 +309,14 @@ def estimator_options(f):
 
 
 def tare_covers_log(source: str, n: int, t_first: float, t_last: float, tare_duration: float) -> InputError:
-    """The error of a log of ``n`` samples (``n`` > 1, t from ``t_first`` to ``t_last``, s as read)
-    that lies within its tare window: nothing estimated, so the time unit read is likely wrong."""
+    """The error of a log of ``n`` samples (t from ``t_first`` to ``t_last``, s as read) that lies
+    within its tare window: nothing estimated, so the time unit read is likely wrong (or, for one
+    sample, the log is too short to tare)."""
+    if n == 1:
+        return InputError(
+            f"{source}: one sample (t = {t_first:.6g} s): nothing to estimate, as the first {tare_duration:g} s tare the "
+            "sensor; expected a log longer than the tare, or --tare-duration 0 (or a --bias) for one that is tared"
+        )
     return InputError(
         f"{source}: the whole log ({n} samples, t from {t_first:.6g} to {t_last:.6g} s as read) lies within the first "
         f"{tare_duration:g} s used to tare the sensor: nothing to estimate. If t is in another unit than read (a "
@@ -325,7 +331,7 @@ def check_units(est, fingertip, config: EstimatorConfig, log, source: str | None
     from softtip.core.lever import check_wrench_units
 
     taring = np.asarray(est.taring, dtype=bool)
-    if len(taring) > 1 and taring.all():  # nothing estimated: a log that cannot be what its reader took it for
+    if len(taring) and taring.all():  # nothing estimated: a log that cannot be what its reader took it for
         t = np.asarray(log.t, dtype=float)
         raise tare_covers_log(source or log.source, len(t), t[0], t[-1], config.tare_duration)
     given = getattr(log, "units_in_header", ())
