@@ -62,6 +62,30 @@ def test_read_to_the_reference(name: str, kwargs: dict, note: str | None) -> Non
     assert not log.warnings
 
 
+@pytest.mark.parametrize("quoted", [False, True], ids=["arrow-parser", "python-parser"])
+@pytest.mark.parametrize("dialect", [",.", ";,", "\t,"], ids=["comma", "semicolon-decimal-comma", "tab-decimal-comma"])
+def test_absolute_decimal_seconds_are_exact_with_a_decimal_comma_too(tmp_path: Path, dialect: str, quoted: bool) -> None:
+    # Unix seconds with decimals are read as ns exactly; with a decimal comma they were read as
+    # floats (t 0.01999998093 for 0.02, estimates off by 1e-7 degrees)
+    delimiter, decimal = dialect
+    ref = read_log(REFERENCE)
+    lines = REFERENCE.read_text().splitlines()
+    rows = []
+    for k, ln in enumerate(lines[1:]):
+        t, rest = ln.split(",", 1)
+        cells = [f"17000000{int(float(t) * 100) // 100:02d}.{round(float(t) * 100) % 100:02d}", *rest.split(",")]
+        rows.append(delimiter.join(c.replace(".", decimal) for c in cells) + (f'{delimiter}"a note"' if quoted else ""))
+    if quoted:  # a note spanning two lines: only the Python parser reads the log
+        rows[3] = rows[3][: -len('"a note"')] + '"a\nnote"'
+    header = delimiter.join(["t", "fx", "fy", "fz", "mx", "my", "mz"] + (["note"] if quoted else []))
+    path = tmp_path / "dated.csv"
+    path.write_text("\n".join([header, *rows]) + "\n")
+    log = read_log(path)
+    assert int(log.extra["stamp_ns"][0]) == 1_700_000_000 * 10**9
+    np.testing.assert_array_equal(log.t, ref.t)  # to the last bit
+    np.testing.assert_array_equal(log.wrench, ref.wrench)
+
+
 @pytest.mark.parametrize("name", ["rostopic_echo_p.csv", "ros2_topic_echo.csv", "t_absolute_ns.csv"])
 def test_absolute_ns_stamps_are_exact_and_kept(name: str) -> None:
     log = read_log(DATA / name)

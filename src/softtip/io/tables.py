@@ -1886,9 +1886,9 @@ _DECIMAL_SECONDS = re.compile(r"^\s*\d{9,10}\.\d{1,9}\s*$")
 def _exact_seconds(cell: str, header: _Header) -> bool:
     """Whether a first ``t`` cell is an absolute stamp in seconds with decimals (read exactly, as ns)."""
     cmap = header.cmap
+    cell = cell.replace(",", ".") if header.decimal == "," else cell  # a decimal comma: the same stamp
     return (
-        header.decimal == "."
-        and bool(_DECIMAL_SECONDS.match(cell))
+        bool(_DECIMAL_SECONDS.match(cell))
         and (cmap is None or cmap.units["t"].name == "s")
         and ABSOLUTE_STAMP_S <= float(cell) < LATEST_STAMP_S
     )
@@ -1961,6 +1961,10 @@ def _parse_fast(
             if set(map(len, rows)) != {ncol}:
                 raise _Suspect(previous)
             cols = list(zip(*rows))
+            if not blocks and "nanosec" not in index:
+                first_t = cols[index["t"]][0].strip()
+                if _exact_seconds(first_t, header) or (first_t.isdigit() and len(first_t) >= 16):
+                    raise _Suspect(previous)  # stamps that are exact only as ns: the careful parser reads them so
             block = np.empty((len(rows), len(roles)))
             for i, name in enumerate(roles):
                 cells = cols[index[name]]
@@ -2154,7 +2158,7 @@ def _parse_careful(
             continue
         big_t.append(sample[0])
         if exact_ns is not None:
-            exact_ns.append(_ns_of(row[index["t"]]))
+            exact_ns.append(_ns_of(row[index["t"]].replace(",", ".") if comma else row[index["t"]]))
         values.append(sample)
         for j in extra_idx:
             extra[names[j]].append(row[j])
