@@ -71,9 +71,10 @@ def test_absolute_decimal_seconds_are_exact_with_a_decimal_comma_too(tmp_path: P
     ref = read_log(REFERENCE)
     lines = REFERENCE.read_text().splitlines()
     rows = []
-    for k, ln in enumerate(lines[1:]):
+    for ln in lines[1:]:
         t, rest = ln.split(",", 1)
-        cells = [f"17000000{int(float(t) * 100) // 100:02d}.{round(float(t) * 100) % 100:02d}", *rest.split(",")]
+        cs = round(float(t) * 100)  # t on a grid of 0.01 s (50 Hz): the stamp's text exactly
+        cells = [f"17000000{cs // 100:02d}.{cs % 100:02d}", *rest.split(",")]
         rows.append(delimiter.join(c.replace(".", decimal) for c in cells) + (f'{delimiter}"a note"' if quoted else ""))
     if quoted:  # a note spanning two lines: only the Python parser reads the log
         rows[3] = rows[3][: -len('"a note"')] + '"a\nnote"'
