@@ -133,7 +133,9 @@ def test_cli_in_pieces_writes_the_one_shot_output(tmp_path: Path, fmt: str) -> N
     t[300] = t[299]  # a repeated stamp: the reader's warning says the same
     t[len(t) // 2 :] += 0.5  # a recorder that lost half a second: so does its note on the gap
     src = tmp_path / f"in.{fmt}"
-    write_table({"t": t, **{k: w[:, i] for i, k in enumerate(WRENCH)}, "trial": np.full(len(t), "a")}, src)
+    trial = np.full(len(t), "a", dtype=object)
+    trial[40] = 'b,"c"'  # a cell that needs quotes, in one piece: the others' cells are written as in the whole
+    write_table({"t": t, **{k: w[:, i] for i, k in enumerate(WRENCH)}, "trial": trial.astype(str)}, src)
     outs = {}
     for label, extra in (("one", []), ("pieces", ["--chunk-rows", 50])):
         dest = tmp_path / f"{label}.{fmt}"

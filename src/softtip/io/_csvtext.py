@@ -128,7 +128,8 @@ def format_rows(floats, ints, codes, cell_off, data, quote, layout, digits, far_
         Cell ``c`` is ``data[cell_off[c]:cell_off[c + 1]]`` (UTF-8).
     data : ndarray of uint8
     quote : ndarray of bool, shape (nt,)
-        Text columns whose cells are quoted (``"`` doubled inside).
+        Text columns whose cells may need quotes: each cell of them that holds a comma, a
+        quote or a line break is quoted (``"`` doubled inside), the others are not.
     layout : ndarray of int64, shape (ncols, 2)
         Column ``c`` is float column ``layout[c, 1]`` when ``layout[c, 0]`` is 0, integer
         column when 1, text column when 2.
@@ -184,7 +185,14 @@ def format_rows(floats, ints, codes, cell_off, data, quote, layout, digits, far_
                 cell = codes[j, i]
                 a = cell_off[cell]
                 b = cell_off[cell + 1]
+                needs = False  # quoted only when it holds a comma, a quote or a line break (minimal quoting)
                 if quote[j]:
+                    for p in range(a, b):
+                        ch = data[p]
+                        if ch == 44 or ch == 34 or ch == 10 or ch == 13:
+                            needs = True
+                            break
+                if needs:
                     out[pos] = 34
                     pos += 1
                     for p in range(a, b):

@@ -2436,6 +2436,15 @@ def _quote(cell: str) -> str:
     return cell
 
 
+def _minimal_quotes(text: bytes) -> bytes:
+    """pyarrow's CSV text (``quoting_style="needed"``: every text cell quoted) with only the cells
+    that hold a comma, a quote or a line break quoted, as the compiled formatter and Python's
+    printf path write them: the same bytes whichever writes a block, and whatever the rest of
+    the table holds (a piece of a log written alone gives the text it has in the whole)."""
+    rows = csv.reader(io.StringIO(text.decode("utf-8"), newline=""))
+    return "".join(",".join(_quote(cell) for cell in row) + "\n" for row in rows).encode("utf-8")
+
+
 def _str_cells(a: np.ndarray) -> list[str]:
     cells = a.tolist()
     # One C-level scan of the block decides whether any cell needs quoting at all.
@@ -2518,7 +2527,7 @@ class _CsvBlocks:
                 return _compiled_block(plan, start, stop, self.buffers)
             sink = io.BytesIO()
             pacsv.write_csv(_arrow_block(plan, start, stop, rounded=True), sink, options)
-            return sink.getvalue(), None
+            return (_minimal_quotes(sink.getvalue()) if plan.quoting == "needed" else sink.getvalue()), None
 
         if self.workers == 1:  # the caller's thread alone (``--jobs 1``): each block at once
             for start in range(0, plan.n, _CHUNK_ROWS):
@@ -2741,7 +2750,7 @@ def _compiled_block(plan: _Plan, start: int, stop: int, buffers: _TextBuffers | 
 
     Floats are rounded and formatted in the compiled loop; integers and booleans too (as
     pyarrow's writer writes them: ``-12``, ``0``/``1``); text cells are their pyarrow text,
-    copied in by the loop, quoted as the writer quotes them. ``buffers``: where the gathered
+    copied in by the loop, quoted where they need it (:func:`_minimal_quotes`). ``buffers``: where the gathered
     columns and the text go (reused; :meth:`_TextBuffers.put` the array back when written).
     """
     from softtip.io._csvtext import FLOAT_CELL_BYTES, SLACK_BYTES, format_rows
