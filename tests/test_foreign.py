@@ -153,6 +153,15 @@ def test_missing_cells_at_the_ends_take_the_nearest_value_and_say_so(tmp_path: P
     assert len(read_log(path, missing="drop").t) == n - 2
 
 
+def test_a_spreadsheets_empty_columns_are_named_in_the_error(tmp_path: Path) -> None:
+    lines = REFERENCE.read_text().splitlines()
+    path = tmp_path / "sheet.csv"
+    path.write_text("\n".join(ln + ",," for ln in lines) + "\n")
+    with pytest.raises(InputError, match=r"sheet\.csv:1: duplicate column '' \(columns 8 and 9\); expected each column "
+                                         r"name once\. Columns 8, 9 have no name \(a spreadsheet's empty columns"):  # fmt: skip
+        read_log(path)
+
+
 def test_columns_option_and_headerless_positions(tmp_path: Path) -> None:
     text = REFERENCE.read_text().replace("t,fx,fy,fz,mx,my,mz", "zeit,a,b,c,d,e,f", 1)
     odd = tmp_path / "odd.csv"

@@ -1781,12 +1781,16 @@ def _column_index(header: _Header, source: str, *, dialects: bool = True) -> dic
     seen: dict[str, int] = {}
     for j, name in enumerate(names):
         if name in seen:
+            unnamed = [k + 1 for k, n in enumerate(names) if not n.strip()]
             raise InputError(
                 f"{source}:{line}: duplicate column {name!r} (columns {seen[name] + 1} and {j + 1}); "
                 "expected each column name once"
                 # a first row of data repeats values (zeros) as no header repeats a name
                 + (f". {looks_like_data}" if all(_is_number(n.replace(",", ".")) for n in names) else "")
-            )
+                # a spreadsheet's empty columns: a delimiter at the end of every line, or more
+                + (f". Columns {', '.join(map(str, unnamed))} have no name (a spreadsheet's empty columns, or a "
+                   "delimiter at the end of each line?): delete them, or name them" if not name.strip() else "")
+            )  # fmt: skip
         seen[name] = j
 
     if header.cmap is not None:
