@@ -424,3 +424,19 @@ def test_a_one_sample_log_stops_the_run_as_a_longer_one_inside_the_tare(tmp_path
                            text=True, timeout=120)  # fmt: skip
     assert tared.returncode == 0, tared.stderr
     assert len((tmp_path / "o.csv").read_text().splitlines()) == 2
+
+
+def test_a_csv_output_whose_t_cannot_resolve_the_samples_says_so(tmp_path):
+    # t from a clock started 30 days ago at 7 kHz: 10 significant digits resolve 1 ms, seven steps
+    ex = load_example()
+    n = 2000
+    rows = [",".join(repr(float(v)) for v in (2.6e6 + k / 7000, *ex.wrench[k % len(ex.t)])) for k in range(n)]
+    log = tmp_path / "mono.csv"
+    log.write_text("t,fx,fy,fz,mx,my,mz\n" + "\n".join(rows) + "\n")
+    said = "t reaches 2.6e+06 s, where the CSV's 10 significant digits resolve 0.001 s, more than a tenth of the log's"
+    for out, warned in (("o.csv", True), ("o.parquet", False)):
+        done = subprocess.run([SOFTTIP, "estimate", log, "-o", tmp_path / out], capture_output=True, text=True, timeout=120)
+        assert done.returncode == 0 and (said in done.stderr) == warned, done.stderr
+    example = subprocess.run([SOFTTIP, "estimate", "--example", "-o", tmp_path / "ex.csv"], capture_output=True, text=True,
+                             timeout=120)  # fmt: skip
+    assert example.returncode == 0 and "t reaches" not in example.stderr

@@ -340,6 +340,7 @@ class _RunTotals:
         self.tare = None
         self.taring = 0  # samples in the tare window
         self.t_first = self.t_last = math.nan  # s, as read
+        self.step = math.nan  # s, the first piece's median step of t
 
     @classmethod
     def of(cls, est, contacts: list) -> _RunTotals:
@@ -356,6 +357,8 @@ class _RunTotals:
         if len(est):
             self.t_first = est.t[0] if not self.n else self.t_first
             self.t_last = est.t[-1]
+            if self.step != self.step and len(est) > 1:
+                self.step = float(np.median(np.diff(est.t[: 1 << 16])))
         self.n += len(est)
         self.taring += int(np.count_nonzero(est.taring))
         for code, name in enumerate(STATES):
@@ -366,6 +369,27 @@ class _RunTotals:
         self.contacts += [dataclasses.replace(c, index=first + c.index) for c in contacts]
         self.n_contacts = max(self.n_contacts, est.n_contacts)
         self.warnings += [w for w in est.warnings if w not in self.warnings]
+
+
+def _coarse_t_note(totals: _RunTotals, output, to_bag) -> str | None:
+    """A CSV output's ``t`` is written to 10 significant digits: a log whose ``t`` counts from a
+    clock's start long ago (a monotonic clock after days) keeps less than its sample step there."""
+    from softtip.io.formats import table_format
+
+    if to_bag is not None or (output is not None and table_format(output) != "csv"):
+        return None
+    largest = max(abs(totals.t_first), abs(totals.t_last))
+    if not (largest > 0 and totals.step > 0):
+        return None
+    resolution = 10.0 ** (math.floor(math.log10(largest)) - 9)  # a unit of the 10th significant digit
+    if resolution <= totals.step / 10:
+        return None
+    where = output if output is not None else "standard output"
+    return (
+        f"{where}: t reaches {largest:.4g} s, where the CSV's 10 significant digits resolve {resolution:g} s, more than "
+        f"a tenth of the log's {totals.step:.3g} s step: its t cells are rounded off the samples' times (estimates are "
+        "not); write Parquet or Arrow (-o OUT.parquet, exact), or count t from the log's start"
+    )
 
 
 def _report_run(
@@ -391,6 +415,9 @@ def _report_run(
     tare_warnings(totals, quiet)
     if save_bias is not None:
         click.echo(f"softtip: bias -> {save_bias}", err=True)
+    coarse = _coarse_t_note(totals, output, to_bag)
+    if coarse:
+        click.echo(f"softtip: warning: {coarse}", err=True)
     if totals.n_pulling:
         click.echo(
             f"softtip: warning: {totals.n_pulling} sample(s) in contact by force had no contact point where the force "
