@@ -313,3 +313,18 @@ def test_a_replay_takes_the_units_of_softtips_metadata(tmp_path: Path) -> None:
             assert done.returncode == 0, done.stderr
             assert "read as" not in done.stderr  # softtip's own file: its units are its metadata's, not said
         assert "1 contact(s)" in done.stderr
+
+
+def test_a_columnar_file_read_as_csv_says_what_it_is(tmp_path: Path) -> None:
+    # by its name (.csv) or on standard input, a Parquet or Arrow file read as CSV said "not valid UTF-8"
+    table = _example_table(load_example().t)
+    for fmt, write, suffix, kind in (("parquet", pq.write_table, ".parquet", "a Parquet file"),
+                                     ("arrow", feather.write_feather, ".arrow", "an Arrow IPC (Feather v2) file")):  # fmt: skip
+        path = tmp_path / f"{fmt}.csv"
+        write(table, path)
+        done = run("estimate", path)
+        assert done.returncode == 2, done.stderr
+        assert f"{path}: {kind} (it starts as one), read as CSV by its name; expected a name ending in {suffix}" in done.stderr
+        with open(path, "rb") as fh:
+            piped = subprocess.run([SOFTTIP, "estimate", "-"], stdin=fh, capture_output=True, text=True, timeout=120)
+        assert piped.returncode == 2 and "on standard input, which takes CSV only" in piped.stderr, piped.stderr

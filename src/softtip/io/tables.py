@@ -738,6 +738,14 @@ def _not_utf8(source: str, line: int, byte: int, offset: int, start: bytes) -> I
     """The error of a byte that is not UTF-8 at ``offset`` of a file whose first bytes are ``start``."""
     utf16 = start[:2] in (b"\xff\xfe", b"\xfe\xff")  # a UTF-16 byte-order mark: Excel's "Unicode text"
     what = " (a UTF-16 file: it starts with UTF-16's byte-order mark, as Excel's \"Unicode text\" writes)" if utf16 else ""
+    columnar = next((fmt for fmt, magic in (("parquet", b"PAR1"), ("arrow", b"ARROW1")) if start.startswith(magic)), None)
+    if columnar is not None:  # read as CSV by its name (or from standard input)
+        suffix, name = TABLE_FORMATS[columnar][0][0], TABLE_FORMATS[columnar][1]
+        kind = f"{'an' if name[0] in 'AEIOU' else 'a'} {name} file (it starts as one)"
+        if source == "<stdin>":
+            return InputError(f"{source}: {kind} on standard input, which takes CSV only; expected its file's name as "
+                              f"INPUT, ending in {suffix}")  # fmt: skip
+        return InputError(f"{source}: {kind}, read as CSV by its name; expected a name ending in {suffix} (rename it)")
     return InputError(
         f"{source}:{line}: not valid UTF-8 (byte 0x{byte:02x} at byte offset {offset}){what}; "
         "expected a UTF-8 text file (re-save it as UTF-8)"
@@ -751,7 +759,7 @@ def _decode(data: bytes, source: str) -> str:
         return data[skip:].decode("utf-8")
     except UnicodeDecodeError as exc:
         offset = skip + exc.start
-        raise _not_utf8(source, _line_breaks(data, offset) + 1, data[offset], offset, data[:2]) from None
+        raise _not_utf8(source, _line_breaks(data, offset) + 1, data[offset], offset, data[:8]) from None
 
 
 def _line_breaks(data: bytes, end: int | None = None) -> int:
@@ -3303,7 +3311,7 @@ class LogBlocks:
                 part.decode("utf-8")
             except UnicodeDecodeError as exc:
                 at = line + _line_breaks(part, exc.start)
-                return _not_utf8(self.source, at, part[exc.start], pos + exc.start, part[:2] if pos == 0 else b"")
+                return _not_utf8(self.source, at, part[exc.start], pos + exc.start, part[:8] if pos == 0 else b"")
             if not chunk:
                 return None
             line += _line_breaks(part)
