@@ -369,3 +369,22 @@ def test_o_refuses_a_compressed_name_it_would_fill_with_plain_text(tmp_path, nam
         assert f"(-o {plain}, then compress it:" in out.stderr
         assert ("-o OUT.parquet" in out.stderr) == (args[0] == "estimate")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_o_dash_is_standard_output_for_every_command(tmp_path):
+    # simulate, calibrate and calibrate-payload wrote a file named '-' (and simulate '-.truth.json')
+    for args, first in ((("simulate",), "t,fx"), (("calibrate", "--example", "--shape", "sphere"), "[fingertip]"),
+                        (("calibrate-payload", "--example"), "# softtip calibrate-payload")):  # fmt: skip
+        out = run(*args, "-o", "-", cwd=tmp_path)
+        assert out.returncode == 0 and out.stdout.startswith(first), out.stderr
+    assert listing(tmp_path) == []
+
+
+@posix_only
+def test_simulate_writes_no_truth_file_beside_a_device(tmp_path):
+    # -o /dev/null (or /dev/stdout) made /dev/null.truth.json: the truth goes beside a file only
+    before = set(os.listdir("/dev"))
+    out = run("simulate", "-o", "/dev/null", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert not any(n.endswith(".truth.json") for n in set(os.listdir("/dev")) - before)
+    assert "-> /dev/null" in out.stderr and "truth" not in out.stderr

@@ -16,7 +16,7 @@ from softtip.cli.options import (
     log_format_options,
     sensor_noise,
 )
-from softtip.cli.types import Length, Number, option
+from softtip.cli.types import Length, Number, dash_is_stdout, option
 from softtip.core.fingertip import SHAPES
 from softtip.core.fullscale import check_full_scale
 from softtip.core.noise import NANO17, NOISE_PRESETS
@@ -98,7 +98,7 @@ capsule's offset of its axis from the sensor's z axis is its axis_offset.
 @option("--shape", type=click.Choice(CALIBRATED_SHAPES), help="Fingertip shape to fit (required unless --guide; mesh: the placement of --mesh on the sensor).")
 @option("--example", is_flag=True, help="Use the shipped example probing log (simulated: 30 presses on a 16 mm sphere centred at 0.3, -0.2, 20.0 mm) as LOG.")
 @option("--guide", is_flag=True, help="Print how to record a probing log (where, how hard and how to press) and exit.")
-@option("-o", "--output", type=click.Path(dir_okay=False), help="Fingertip TOML file to write (default: standard output).")
+@option("-o", "--output", type=click.Path(dir_okay=False, allow_dash=True), callback=dash_is_stdout, help="Fingertip TOML file to write (default, or '-': standard output).")
 @option("--units", type=click.Choice(UNIT_SYSTEMS), default=None, help="Units of the log's wrench: si (N, N·m) or kgf-mm (kgf, kgf·mm, the papers').  [default: si, or a Parquet or Arrow LOG's own]")
 @option("--tare-duration", type=Number("s", 0.0), default=0.2, show_default=True, metavar="S", help="Average the first S seconds (untouched) as the sensor bias; 0 if LOG is tared.")
 @option("--contact-threshold", type=Number("N", 0.0, min_open=True), default=0.05, show_default=True, metavar="N", help="A press lasts while |f| is at least this (at least 4 times the force noise's magnitude), N.")

@@ -6,7 +6,7 @@ import click
 
 from softtip.cli.calibrate import _check_output, _example_or_log, _fail, _read
 from softtip.cli.options import log_format_kwargs, log_format_options
-from softtip.cli.types import option
+from softtip.cli.types import dash_is_stdout, option
 from softtip.core.units import UNIT_SYSTEMS
 from softtip.errors import InputError
 from softtip.io.atomic import write_stdout
@@ -33,7 +33,7 @@ together with --payload (no tare needed).
 """,
 )
 @click.argument("input_path", metavar="LOG", required=False, type=click.Path(allow_dash=True, dir_okay=False))
-@option("-o", "--output", type=click.Path(dir_okay=False), help="Payload TOML file to write (default: standard output).")
+@option("-o", "--output", type=click.Path(dir_okay=False, allow_dash=True), callback=dash_is_stdout, help="Payload TOML file to write (default, or '-': standard output).")
 @option("--units", type=click.Choice(UNIT_SYSTEMS), default=None, help="Units of the log's wrench: si (N, N·m) or kgf-mm (kgf, kgf·mm, the papers').  [default: si, or a Parquet or Arrow LOG's own]")
 @option("--example", is_flag=True, help="Use the shipped example still log (simulated: a 20 g fingertip, centre of mass 1, -0.5, 20 mm, in 12 orientations) as LOG.")
 @log_format_options

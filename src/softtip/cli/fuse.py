@@ -22,7 +22,7 @@ from softtip.cli.options import (
     print_log_notes,
     tare_warnings,
 )
-from softtip.cli.types import Length, Number, option
+from softtip.cli.types import Length, Number, dash_is_stdout, option
 from softtip.core.units import UNIT_SYSTEMS, seconds_from_ns, wrench_to_si
 from softtip.errors import InputError
 from softtip.estimator.results import EstimatorWarning
@@ -118,7 +118,7 @@ PointStamped and RViz markers, in the common frame, in the format --ros-distro p
 """,
 )
 @click.argument("inputs", nargs=-1, required=True, type=click.Path(exists=False))
-@option("-o", "--output", type=click.Path(dir_okay=False, writable=True), help="Output CSV, or Parquet for a name ending in .parquet, Arrow IPC (Feather v2) for .arrow or .feather (default: CSV on standard output).")
+@option("-o", "--output", type=click.Path(dir_okay=False, writable=True, allow_dash=True), callback=dash_is_stdout, help="Output CSV, or Parquet for a name ending in .parquet, Arrow IPC (Feather v2) for .arrow or .feather (default, or '-': CSV on standard output).")
 @option("--hand", "hand_file", type=click.Path(dir_okay=False), metavar="FILE.toml", help="Fingertip poses in the common frame ([hand] frame, [finger.NAME] translation m, rpy_deg or quaternion).")
 @option("--topics", nargs=2, metavar="TOPIC TOPIC", help="Bag input: the two fingertips' wrench topics.")
 @option("--frame", metavar="FRAME", help="Bag input: the common frame (e.g. hand, base_link).")

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import click
 
-from softtip.cli.types import Force, Length, Number, option
+from softtip.cli.types import Force, Length, Number, dash_is_stdout, option
 from softtip.core.units import UNIT_SYSTEMS
 from softtip.errors import InputError
 from softtip.io.atomic import (
@@ -152,8 +152,8 @@ def _check_sizes(options: dict) -> None:
 @option("--to-bag", type=click.Path(file_okay=False, path_type=Path), default=None,
               help="--hand two-finger: also a rosbag2 (MCAP) with /right/wrench, /left/wrench and the fingertips' "
                    "poses on /tf_static and /tf (DIR must not exist).")
-@option("-o", "--output", type=click.Path(path_type=Path), default=None,
-              help="Log CSV (t,fx,fy,fz,mx,my,mz) [default: stdout]; --hand two-finger: a new directory.")
+@option("-o", "--output", type=click.Path(path_type=Path, allow_dash=True), default=None, callback=dash_is_stdout,
+              help="Log CSV (t,fx,fy,fz,mx,my,mz) [default, or '-': stdout]; --hand two-finger: a new directory.")
 @option("--truth", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Ground truth JSON [default: OUTPUT with suffix .truth.json; none when writing to stdout].")
 def simulate(
@@ -176,7 +176,8 @@ def simulate(
 
     check_output_names([("-o", output), ("--truth", truth)])
     check_table_names([("-o", output)], formats=("csv",))
-    if truth is None and output is not None:
+    if truth is None and output is not None and (output.is_file() or not output.exists()):
+        # beside a file, not beside a device or a pipe (-o /dev/stdout, /dev/null: none, as on standard output)
         truth = output.with_name(output.stem + ".truth.json")
     tip = options["tip"]
     check_distinct(

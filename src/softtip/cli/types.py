@@ -244,6 +244,12 @@ def option(*param_decls: str, **attrs):
     return click.option(*param_decls, cls=Option, **attrs)
 
 
+def dash_is_stdout(ctx, param, value):
+    """An ``-o`` option's callback: ``-`` is standard output (None, the option's default), as
+    for ``softtip estimate``, not a file named ``-``."""
+    return None if value is not None and str(value) == "-" else value
+
+
 #: A TCP/UDP port.
 PORT = click.IntRange(1, 65535)
 
