@@ -358,3 +358,14 @@ def test_a_spike_while_taring_is_left_out_as_the_estimators_tare_does():
     assert got.n_presses == clean.n_presses == 30
     moved = np.r_[got.center - clean.center, got.radius - clean.radius]
     assert np.all(np.abs(moved) < 0.2 * np.r_[clean.center_std, clean.radius_std]), moved
+
+
+@pytest.mark.parametrize("options", [["--units", "kgf-mm"], ["--moment-units", "N*mm"]])
+def test_calibrate_stops_on_a_fingertip_its_units_make_of_no_fingertips_size(tmp_path, options):
+    # an SI probing log read in kgf-mm calibrated a 0.03 mm sphere and wrote it, exit 0
+    out = tmp_path / "tip.toml"
+    done = run("calibrate", EXAMPLE_PROBING_PATH, "--shape", "sphere", *options, "-o", out)
+    assert done.returncode == 2 and "mm across (939× smaller than a fingertip)" in done.stderr, done.stderr
+    assert "the data fit forces in N with moments in N·m" in done.stderr and not out.exists()
+    thin = run("calibrate", "--example", "--shape", "sphere", "--skin-thickness", "0.005", "-o", out)
+    assert thin.returncode == 2 and "skin_thickness = 5e-06 m (0.005 mm)" in thin.stderr and not out.exists()

@@ -68,3 +68,16 @@ def test_invalid_dimensions():
         Capsule(0.01, -1.0)
     with pytest.raises(ValueError, match="center"):
         Sphere(0.01, center=(0, 0))
+
+
+@pytest.mark.parametrize(("table", "said"), [
+    ({"shape": "capsule", "radius": 16, "length": 20}, "mm across (1.61e+03× a fingertip's size); expected 2 to 200 mm"),
+    ({"shape": "sphere", "radius": 0.0005}, "the fingertip is 1 mm across (30× smaller than a fingertip)"),
+    ({"shape": "sphere", "radius": 0.016, "skin_thickness": 5e-6}, "skin_thickness = 5e-06 m (0.005 mm) on a fingertip 32"),
+    ({"shape": "sphere", "radius": 0.016, "skin_thickness": 0.1}, "expected 0.1 mm to less than its radius (16 mm)"),
+])  # fmt: skip
+def test_a_fingertip_file_of_no_fingertips_size_is_refused(table: dict, said: str) -> None:
+    # a file in mm (16 for 0.016) gave a 48 m fingertip and confident estimates, exit 0
+    with pytest.raises(InputError, match=r"^tip\.toml: .*" + said.replace("(", r"\(").replace(")", r"\)").replace("+", r"\+")):
+        fingertip_from_mapping({"fingertip": table}, "tip.toml")
+    fingertip_from_mapping({"fingertip": {"shape": "sphere", "radius": 0.016, "skin_thickness": 0.005}}, "tip.toml")

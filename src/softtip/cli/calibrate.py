@@ -49,6 +49,25 @@ def _example_or_log(input_path, example: bool, units: str | None, path, what: st
     return str(path) if example else input_path
 
 
+def _check_calibrated_size(tip, log) -> None:
+    """Stop a calibrated fingertip of no fingertip's size (:func:`softtip.core.shape.check_size`):
+    the size follows the log's moment-to-force ratio, so it names the unit pairs that give a
+    fingertip's size (moments in N·mm read as N·m calibrate a tip 1000 times too small)."""
+    from softtip.core.lever import describe_pairs, pair_scales
+    from softtip.core.shape import SIZE_RANGE, check_size
+    from softtip.core.units import find_unit
+
+    force_unit, moment_unit = getattr(log, "force_unit", "N"), getattr(log, "moment_unit", "N*m")
+    size = 2.0 * float(tip.bounding_sphere[1])
+    lo, hi = SIZE_RANGE
+    given = (find_unit(force_unit, "force").name, find_unit(moment_unit, "moment").name)
+    fits = [pair for pair, (kf, km) in pair_scales(force_unit, moment_unit).items()
+            if pair != given and lo <= size * km / kf <= hi]  # fmt: skip (as the units check scales the lever)
+    check_size(tip, log.source, fix="the log's moment-to-force ratio sets the size, so are its units right? "
+               f"{describe_pairs(fits, given, options=not getattr(log, 'units_in_header', ()))}; or is it not a probing of "
+               "this fingertip?")  # fmt: skip
+
+
 def _check_output(input_path: str, output: str | None) -> None:
     from softtip.io.atomic import check_distinct
 
@@ -182,7 +201,8 @@ def calibrate(
             from dataclasses import replace
 
             cal = replace(cal, tip=replace(cal.tip, skin_thickness=skin_thickness))
-        else:
+        _check_calibrated_size(cal.tip, log)
+        if skin_thickness is None:
             click.echo(_NO_SKIN_THICKNESS, err=True)
         report = cal.summary()
         if output is not None:

@@ -33,6 +33,7 @@ from softtip.core.mounting import mount_from_mapping
 from softtip.core.shape import (
     Fingertip,
     PressModel,
+    check_size,
     check_skin,
     fibonacci_cap,
     fields_from_table,
@@ -671,4 +672,6 @@ def fingertip_from_mapping(data: dict, source: str = "<fingertip>") -> Fingertip
         return mount_from_mapping(fingertip_from_mapping({"fingertip": inner}, source), mount, source)
     if cls is None:
         raise InputError(f"{source}: [fingertip] shape = {shape!r}; expected one of {', '.join(SHAPES)}")
-    return cls.from_table(table, source)
+    tip = cls.from_table(table, source)
+    check_size(tip, source)  # a file in mm: 1000× too large
+    return tip

@@ -358,6 +358,48 @@ def fmt(v: float) -> str:
     return repr(float(v))
 
 
+#: Plausible fingertip sizes (m, the diameter of its bounding sphere; a mesh's largest extent):
+#: outside, a units mistake (a file in mm read as m is 1000× too large; a log's moments in N·mm
+#: read as N·m calibrate a tip 1000× too small).
+SIZE_RANGE = (0.002, 0.2)
+#: Plausible skin thickness (m): from this to the fingertip's bounding radius.
+MIN_SKIN_THICKNESS = 1e-4
+
+
+def check_size(tip, source: str, fix: str = "lengths in a fingertip file are in metres: 16 mm is 0.016") -> None:
+    """Stop a fingertip whose size, or whose skin, no fingertip has (:data:`SIZE_RANGE`,
+    :data:`MIN_SKIN_THICKNESS`): a units mistake.
+
+    Parameters
+    ----------
+    tip : Fingertip
+    source : str
+        Where it comes from, for the message (a file; a calibration's log).
+    fix : str
+        What the message says to check.
+
+    Raises
+    ------
+    InputError
+    """
+    _, radius = tip.bounding_sphere
+    size = 2.0 * float(radius)
+    lo, hi = SIZE_RANGE
+    if not lo <= size <= hi:
+        times = f"{size / 0.03:.3g}× a fingertip's size" if size > hi else f"{0.03 / size:.3g}× smaller than a fingertip"
+        raise InputError(
+            f"{source}: the fingertip is {size * 1e3:.4g} mm across ({times}); expected {lo * 1e3:g} to {hi * 1e3:g} mm: "
+            f"{fix}"
+        )
+    h = getattr(tip, "skin_thickness", None)
+    if h is not None and not MIN_SKIN_THICKNESS <= h < radius:
+        raise InputError(
+            f"{source}: skin_thickness = {h:.4g} m ({h * 1e3:.4g} mm) on a fingertip {size * 1e3:.4g} mm across; expected "
+            f"{MIN_SKIN_THICKNESS * 1e3:g} mm to less than its radius ({float(radius) * 1e3:.4g} mm): lengths in a "
+            "fingertip file are in metres (5 mm is 0.005), and --skin-thickness takes a unit (5mm)"
+        )
+
+
 def check_skin(tip) -> None:
     """Validate the optional ``skin_thickness`` (m) of a fingertip dataclass."""
     h = tip.skin_thickness

@@ -35,14 +35,11 @@ from softtip.core.mesh.topology import (
     _near_classes,
 )
 from softtip.core.mounting import pose_from_table, rpy_of
-from softtip.core.shape import Fingertip
+from softtip.core.shape import SIZE_RANGE, Fingertip
 from softtip.errors import InputError
 
 __all__ = ["MeshFingertip", "load_mesh_fingertip", "mesh_fingertip_from_table"]
 
-#: Plausible fingertip sizes (largest extent of the mesh, m); outside: a units mistake (a mesh
-#: drawn in mm read as cm is 10× too large: 200 mm for a 20 mm tip).
-_SIZE_RANGE = (0.002, 0.2)
 _BRANCH = 16  # at most this many clusters per super-cluster
 
 
@@ -112,7 +109,7 @@ class MeshFingertip(ClosestPoints, AxisCast, CreaseContact, NewtonRefine, Finger
     def _prepare(self) -> None:
         v, f = self.vertices, self.faces
         extent = float(np.max(v.max(axis=0) - v.min(axis=0)))
-        lo, hi = _SIZE_RANGE
+        lo, hi = SIZE_RANGE  # a mesh drawn in mm read as cm is 10× too large: 200 mm for a 20 mm tip
         if extent > hi:
             raise ValueError(
                 f"the mesh is {extent:.4g} m across, {extent / 0.03:.0f}× a fingertip's size: "
