@@ -1,5 +1,6 @@
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -520,3 +521,35 @@ def test_log_shorter_than_the_tare_is_all_taring():
         est = estimate(t, np.zeros((5, 6)), Capsule(0.016, 0.02))
     assert est.taring.all() and (est.state == 0).all()
     assert any("whole log" in m for m in est.warnings)
+
+
+def test_dates_durations_and_complex_numbers_are_refused_naming_the_conversion() -> None:
+    # a pandas DatetimeIndex as t was taken as 1.7e18 s: a one-sample tare and a direction 0.9° off
+    g = synthetic_grasp("murakami2006", duration=1.0, rate=100.0, seed=1)
+    dated = np.datetime64("2024-05-01T12:00:00", "ns") + (g.t * 1e9).astype("timedelta64[ns]")
+    with pytest.raises(ValueError, match=r"t holds dates \(datetime64\[ns\]\); expected seconds as floats, e\.g\. "
+                                         r"\(t - t\[0\]\) / np\.timedelta64\(1, 's'\)"):  # fmt: skip
+        estimate(dated, g.wrench, "murakami2006")
+    with pytest.raises(ValueError, match=r"t holds durations"):
+        estimate(dated - dated[0], g.wrench, "murakami2006")
+    with pytest.raises(ValueError, match="wrench holds complex numbers"):
+        estimate(g.t, g.wrench + 0j, "murakami2006")
+    seconds = (dated - dated[0]) / np.timedelta64(1, "s")  # the conversion the message gives
+    assert_array_equal(estimate(seconds, g.wrench, "murakami2006").state, estimate(g.t, g.wrench, "murakami2006").state)
+
+
+@pytest.mark.parametrize("scale", [1e3, 1e9])
+def test_stamps_at_no_sensors_rate_are_warned_of_alike_in_batch_and_stream(scale: float) -> None:
+    # t in ms (or ns) given as seconds: every time window off by that factor, without a word
+    g = synthetic_grasp("murakami2006", duration=2.0, rate=500.0, seed=1)
+    with pytest.warns(EstimatorWarning, match=r"t steps at 0\.5 Hz|t steps at 5e-07 Hz") as batch:
+        estimate(g.t * scale, g.wrench, "murakami2006")
+    est = Estimator("murakami2006")
+    with pytest.warns(EstimatorWarning) as stream:
+        for t, w in zip(g.t * scale, g.wrench):
+            est.update(t, w)
+    assert [str(w.message) for w in batch] == [str(w.message) for w in stream]
+    assert "is t in milliseconds or microseconds?" in str(batch[0].message)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # seconds: no word
+        estimate(g.t, g.wrench, "murakami2006")

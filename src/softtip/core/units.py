@@ -222,3 +222,8 @@ def seconds_from_ns(stamps_ns: ArrayLike, origin_ns: int | None = None) -> NDArr
     if origin_ns is None:
         origin_ns = int(ns[0]) if len(ns) else 0
     return (ns - np.int64(origin_ns)).astype(np.float64) / 1e9
+
+
+#: Hz: a force/torque log is sampled at this rate or more, and at most this (ATI's Net F/T
+#: streams 7 kHz; DAQ systems some tens of kHz); outside, its t is not in seconds.
+PLAUSIBLE_RATE_HZ = (2.0, 100e3)

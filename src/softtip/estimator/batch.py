@@ -22,6 +22,7 @@ from softtip.core.filtering import lowpass_sos, sosfilt_state
 from softtip.core.fingertip import Fingertip, load_fingertip
 from softtip.core.location import contact_arrays
 from softtip.core.noise import SensorNoise
+from softtip.core.units import PLAUSIBLE_RATE_HZ
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.contact import (
     ContactTrack,
@@ -58,6 +59,13 @@ class Carry:
 
 def validate_log(t: ArrayLike, wrench: ArrayLike) -> tuple[NDArray, NDArray]:
     """``t`` (N,) and ``wrench`` (N, 6) as float arrays, checked: finite, time non-decreasing."""
+    kind = np.asarray(t).dtype.kind
+    if kind in "mM":  # numpy's and pandas' dates and durations: their unit is not seconds
+        fix = "(t - t[0]) / np.timedelta64(1, 's')" if kind == "M" else "t / np.timedelta64(1, 's')"
+        raise ValueError(f"t holds {'dates' if kind == 'M' else 'durations'} ({np.asarray(t).dtype}); expected seconds "
+                         f"as floats, e.g. {fix}")  # fmt: skip
+    if np.asarray(wrench).dtype.kind == "c":
+        raise ValueError("wrench holds complex numbers; expected real N and N·m")
     t = np.asarray(t, dtype=float)
     w = np.asarray(wrench, dtype=float)
     if t.ndim != 1 or w.shape != (len(t), 6):
@@ -87,6 +95,28 @@ def infer_rate(t: NDArray) -> float:
 
 #: A configured sample rate this far (relative) from the stamps' is warned about.
 SAMPLE_RATE_TOLERANCE = 0.1
+#: The stamps the rate checks look at: the first ones, in the batch as in the stream.
+RATE_CHECK_SAMPLES = 21
+
+
+def implausible_rate(t: ArrayLike) -> str | None:
+    """The warning when the stamps ``t`` (the first :data:`RATE_CHECK_SAMPLES`) step at no force/torque
+    sensor's rate (:data:`PLAUSIBLE_RATE_HZ`): t in ms, µs or ns taken as seconds, which puts
+    every time window (the tare, the line evidence, the filter) off by that factor."""
+    first = np.asarray(t, dtype=float)[:RATE_CHECK_SAMPLES]
+    dt = np.diff(first)
+    dt = dt[dt > 0]
+    if len(first) < RATE_CHECK_SAMPLES or len(dt) < 9:  # as the stream, which looks once it has them
+        return None
+    rate = 1.0 / float(np.median(dt))
+    low, high = PLAUSIBLE_RATE_HZ
+    if low <= rate <= high:
+        return None
+    return (
+        f"t steps at {rate:.4g} Hz (the median of its first steps), no force/torque sensor's rate ({low:g} Hz to "
+        f"{high / 1e3:g} kHz): is t in {'milliseconds or microseconds' if rate < low else 'another unit'}? Every time "
+        "window (the tare, the line evidence, the filter) is in seconds; give t in seconds"
+    )
 
 
 def sample_rate_mismatch(t: ArrayLike, sample_rate: float | None) -> str | None:
@@ -259,6 +289,9 @@ def _estimate(t: ArrayLike, wrench: ArrayLike, tip: Fingertip | str, config: Est
     mismatch = None if later else sample_rate_mismatch(t, config.sample_rate)
     if mismatch:
         warn.append(mismatch)
+    odd_rate = None if later else implausible_rate(t)
+    if odd_rate:
+        warn.append(odd_rate)
     if started_in_contact:
         warn.append(started_in_contact_message(config))
     if ct.drift_alarm >= 0:

@@ -35,7 +35,7 @@ from softtip.core.filtering import SosStream, lowpass_sos
 from softtip.core.fingertip import Fingertip, load_fingertip
 from softtip.core.noise import SensorNoise, noise_variances
 from softtip.core.spin import tangent_frame
-from softtip.estimator.batch import sample_rate_mismatch
+from softtip.estimator.batch import RATE_CHECK_SAMPLES, implausible_rate, sample_rate_mismatch
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.contact import (
     START_PULL_TIME,
@@ -242,7 +242,7 @@ class Estimator:
         self._contacts.count = 0
         self._latch.reset()
         self._t_prev: float | None = None
-        self._rate_t: list[float] | None = [] if self.config.sample_rate is not None else None  # the first stamps
+        self._rate_t: list[float] | None = []  # the first stamps, for the rate checks
         self.repeated_stamps = 0
         self.warnings: list[str] = []
         self._after_tare()
@@ -315,13 +315,13 @@ class Estimator:
                 self.repeated_stamps += 1
             dt = t - t_prev
         self._t_prev = t
-        if self._rate_t is not None:  # once, after 21 samples: does config.sample_rate fit the stamps?
+        if self._rate_t is not None:  # once, after 21 samples: does config.sample_rate fit the stamps? do seconds?
             self._rate_t.append(t)
-            if len(self._rate_t) > 20:
-                msg = sample_rate_mismatch(self._rate_t, self.config.sample_rate)
+            if len(self._rate_t) >= RATE_CHECK_SAMPLES:
+                for msg in (sample_rate_mismatch(self._rate_t, self.config.sample_rate), implausible_rate(self._rate_t)):
+                    if msg:
+                        self._warn(msg)
                 self._rate_t = None
-                if msg:
-                    self._warn(msg)
 
         tare = self._tare
         bias = tare.bias

@@ -80,6 +80,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from softtip.core.units import (
+    PLAUSIBLE_RATE_HZ,
     UNIT_SYSTEM_UNITS,
     UNIT_SYSTEMS,
     Unit,
@@ -1415,9 +1416,7 @@ def _end_of_content(data: bytes) -> int:
         size *= 8
 
 
-# A force/torque log is sampled at this many Hz or more, and at most this many (ATI's
-# Net F/T streams 7 kHz; DAQ systems some tens of kHz).
-_PLAUSIBLE_RATE_HZ = (2.0, 100e3)
+_PLAUSIBLE_RATE_HZ = PLAUSIBLE_RATE_HZ  # a force/torque log's rates (softtip.core.units)
 #: Hz: below this a t read in seconds is also a sensor's rate read in milliseconds (7 Hz or
 #: 7 kHz, an ATI Net F/T's rate): with no unit given, the run asks which
 _AMBIGUOUS_RATE_HZ = 20.0
