@@ -553,3 +553,16 @@ def test_stamps_at_no_sensors_rate_are_warned_of_alike_in_batch_and_stream(scale
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # seconds: no word
         estimate(g.t, g.wrench, "murakami2006")
+
+
+def test_misshaped_inputs_are_refused_not_cut_or_reshaped() -> None:
+    from softtip import check_wrench_units
+
+    g = synthetic_grasp("murakami2006", duration=1.0, rate=100.0, seed=1)
+    with pytest.raises(ValueError, match=r"expected t of shape \(N,\) and wrench of shape \(N, 6\), got \(10,\) and"):
+        Estimator("murakami2006").process(g.t[:10], g.wrench)  # zip kept 10 samples of each
+    tared = g.wrench - g.wrench[:5].mean(axis=0)
+    for bad in (tared.T, tared[:, :3]):  # reshaped to (N, 6), they passed the units check
+        with pytest.raises(ValueError, match=r"check_wrench_units: expected wrench of shape \(N, 6\)"):
+            check_wrench_units(bad, "murakami2006")
+    assert check_wrench_units(tared, "murakami2006").plausible  # a preset's name, as estimate takes it

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from softtip.core.fingertip import Fingertip
+from softtip.core.fingertip import Fingertip, load_fingertip
 from softtip.core.noise import MAD_TO_STD, SensorNoise
 from softtip.core.units import find_unit
 from softtip.errors import InputError
@@ -299,7 +299,7 @@ def lever_pairs_text(lever_fits: dict[tuple[str, str], bool], ratio: tuple[float
 
 def check_wrench_units(
     wrench: ArrayLike,
-    fingertip: Fingertip,
+    fingertip: Fingertip | str,
     *,
     force_unit: str = "N",
     moment_unit: str = "N*m",
@@ -315,7 +315,8 @@ def check_wrench_units(
     ----------
     wrench : array-like, shape (N, 6)
         Tared wrench as read, converted to N and N·m from ``force_unit`` and ``moment_unit``.
-    fingertip : Fingertip
+    fingertip : Fingertip or str
+        The fingertip, or a preset's name or a fingertip file (:func:`~softtip.core.fingertip.load_fingertip`).
     force_unit, moment_unit : str
         The units the log was read in (names of :data:`softtip.core.units.UNITS`).
     quiet : array-like, shape (M, 6), optional
@@ -340,7 +341,14 @@ def check_wrench_units(
         The median line of action lies beyond ``LEVER_MARGIN`` times the fingertip's reach,
         or the noise is :data:`NOISE_OFF` times off the sensor's while another pair of
         :data:`UNIT_PAIRS` fits both; the message names the pairs that fit and their options.
+    ValueError
+        ``wrench`` or ``quiet`` is not of shape (N, 6).
     """
+    fingertip = load_fingertip(fingertip)  # a preset's name too
+    for name, value in (("wrench", wrench), ("quiet", quiet)):
+        shape = np.shape(value) if value is not None else (0, 6)
+        if len(shape) != 2 or shape[1] != 6:  # a (6, N) array reshaped to (N, 6) read as a wrench nobody measured
+            raise ValueError(f"check_wrench_units: expected {name} of shape (N, 6), got {shape}")
     lever = force_lever(wrench, fingertip, min_force=min_force)
     ratio = noise_ratio(quiet, noise) if quiet is not None and noise is not None else None
     f_unit, m_unit = find_unit(force_unit, "force"), find_unit(moment_unit, "moment")

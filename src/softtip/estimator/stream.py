@@ -502,5 +502,14 @@ class Estimator:
         ))  # fmt: skip
 
     def process(self, t: ArrayLike, wrench: ArrayLike) -> list[SampleEstimate]:
-        """Feed a sequence of samples through :meth:`update`; returns one estimate each."""
-        return [self.update(ti, wi) for ti, wi in zip(np.asarray(t, dtype=float), np.asarray(wrench, dtype=float))]
+        """Feed a sequence of samples through :meth:`update`; returns one estimate each.
+
+        Raises
+        ------
+        ValueError
+            ``t`` and ``wrench`` hold different numbers of samples.
+        """
+        t, wrench = np.asarray(t, dtype=float), np.asarray(wrench, dtype=float)
+        if t.ndim != 1 or wrench.shape != (len(t), 6):  # zip would drop the samples of the longer one
+            raise ValueError(f"expected t of shape (N,) and wrench of shape (N, 6), got {t.shape} and {wrench.shape}")
+        return [self.update(ti, wi) for ti, wi in zip(t, wrench)]
