@@ -665,3 +665,22 @@ def test_fuse_logs_checks_the_force_balance_against_the_noise_each_tare_measured
     for finger, scale in zip(fingers, (0.5, 2.0)):
         assert finger.noise == finger.estimates.tare.noise
         assert_allclose(finger.noise.force_std, np.full(3, scale * NANO17.force_std[0]), rtol=0.5)
+
+
+def test_fuse_refuses_a_sample_beyond_the_sensors_range_as_estimate_does(tmp_path):
+    # fuse had no range check (one row at 100 N: "1 time step flagged unbalanced", exit 0), and its
+    # help named a --full-scale it did not have
+    r = _run("simulate", "--hand", "two-finger", "--rate", "50", "--duration", "6", "-o", tmp_path / "g")
+    assert r.returncode == 0, r.stderr
+    lines = (tmp_path / "g" / "left.csv").read_text().splitlines()
+    cells = lines[200].split(",")
+    cells[2] = "100"  # fy
+    lines[200] = ",".join(cells)
+    spiked = tmp_path / "spiked.csv"
+    spiked.write_text("\n".join(lines) + "\n")
+    args = ["fuse", tmp_path / "g" / "right.csv", spiked, "--hand", tmp_path / "g" / "hand.toml", "-o", tmp_path / "f.csv"]
+    done = _run(*args)
+    assert done.returncode == 2 and f"{spiked}: sample 200 (t = 3.98 s): fy = 100 N is beyond the sensor's" in done.stderr
+    assert not (tmp_path / "f.csv").exists()
+    allowed = _run(*args, "--full-scale", "off")
+    assert allowed.returncode == 0, allowed.stderr

@@ -14,6 +14,8 @@ from softtip.cli.options import (
     check_figure_path,
     check_units,
     estimator_options,
+    full_scale_option,
+    full_scale_range,
     is_bag,
     log_format_kwargs,
     log_format_options,
@@ -23,6 +25,7 @@ from softtip.cli.options import (
     tare_warnings,
 )
 from softtip.cli.types import Length, Number, dash_is_stdout, option
+from softtip.core.fullscale import COARSE_MARGIN, check_full_scale
 from softtip.core.units import UNIT_SYSTEMS, seconds_from_ns, wrench_to_si
 from softtip.errors import InputError
 from softtip.estimator.results import EstimatorWarning
@@ -133,8 +136,9 @@ PointStamped and RViz markers, in the common frame, in the format --ros-distro p
 @bag_output_options(frame_default="the common frame: --frame, the hand file's, else hand")
 @log_format_options
 @estimator_options
+@full_scale_option
 def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, point_std, plot_path, rerun_spawn, rerun_save,
-         truth_file, tip, to_bag=None, ros_distro=None, frame_id=None, **estimator_opts):  # fmt: skip
+         truth_file, tip, to_bag=None, ros_distro=None, frame_id=None, full_scale=None, **estimator_opts):  # fmt: skip
     from softtip.core.fingertip import load_fingertip
     from softtip.fusion import fuse_logs, poses_from_columns, read_hand_file
     from softtip.io.tables import read_log, write_table
@@ -186,11 +190,17 @@ def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, 
             if not b.frame_id:
                 raise InputError(f"{path}: topic {b.topic!r} has an empty header.frame_id; cannot place it with /tf")
             pose = tree.poses(frame, b.frame_id, b.stamps_ns, origin_ns=origin)
-            logs.append((b.topic, seconds_from_ns(b.stamps_ns, origin), wrench_to_si(b.wrench, units or "si"), pose))
+            t, wrench = seconds_from_ns(b.stamps_ns, origin), wrench_to_si(b.wrench, units or "si")
+            check_full_scale(t, wrench, full_scale_range(full_scale, estimator_opts.get("sensor")), f"{path} {b.topic}",
+                             units=units or "si")  # fmt: skip
+            logs.append((b.topic, t, wrench, pose))
     elif len(inputs) == 2:
         if topics is not None or frame is not None:
             raise click.UsageError("--topics and --frame apply to a bag input")
         read = [read_log(p, units=units, **formats) for p in inputs]
+        sensor_range = full_scale_range(full_scale, estimator_opts.get("sensor"))
+        for log, path in zip(read, inputs):  # far beyond the sensor's range: refused before any estimate, as by estimate
+            check_full_scale(log.t, log.wrench, sensor_range, str(path), units=log.units, margin=COARSE_MARGIN)
         for log in read:
             print_log_notes(log)
         times = _common_clock(inputs, read)
@@ -223,6 +233,7 @@ def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, 
     if len(inputs) == 2:  # units the files say or the options give: checked as `estimate` checks them
         for finger, log, path in zip(fingers, read, inputs):
             check_units(finger.estimates, fingertip, config, log, source=str(path))
+            check_full_scale(log.t, log.wrench, sensor_range, str(path), units=log.units)  # just beyond: after the units
     truth = None
     if truth_file:
         from softtip.fusion.viz import read_truth
