@@ -2238,9 +2238,9 @@ def write_table(
     without holding the GIL) and written in order; at most twice that many wait in memory.
 
     CSV cells: NaN as ``nan``, infinities as ``inf``/``-inf``; booleans as ``0``/``1``;
-    integers, strings and anything else with ``str``. When any text cell contains a comma,
-    quote or line break, text cells are quoted as CSV requires (with the pyarrow writer:
-    all text cells of the table).
+    integers, strings and anything else with ``str``. A text cell that holds a comma, a quote
+    or a line break is quoted (a quote doubled inside), and only such a cell, whichever writer
+    formats it: a cell's text does not depend on the other cells.
 
     Raises
     ------
