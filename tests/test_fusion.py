@@ -684,3 +684,15 @@ def test_fuse_refuses_a_sample_beyond_the_sensors_range_as_estimate_does(tmp_pat
     assert not (tmp_path / "f.csv").exists()
     allowed = _run(*args, "--full-scale", "off")
     assert allowed.returncode == 0, allowed.stderr
+
+
+def test_fuse_refuses_one_log_twice_and_says_how_much_is_fused_alone(tmp_path):
+    r = _run("simulate", "--hand", "two-finger", "--rate", "50", "--duration", "6", "-o", tmp_path / "g")
+    assert r.returncode == 0, r.stderr
+    right, left, hand = (tmp_path / "g" / n for n in ("right.csv", "left.csv", "hand.toml"))
+    twice = _run("fuse", right, right, "--hand", hand)
+    assert twice.returncode == 2 and "are the same file; expected one log per finger" in twice.stderr
+    half = tmp_path / "half.csv"  # the left finger's first 3 s of 6: half the fused rows are one finger's
+    half.write_text("\n".join(left.read_text().splitlines()[:151]) + "\n")
+    done = _run("fuse", right, half, "--hand", hand, "-o", tmp_path / "f.csv")
+    assert done.returncode == 0 and "the logs overlap for 2.98 s of the longer's 5.98 s" in done.stderr, done.stderr

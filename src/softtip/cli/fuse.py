@@ -57,9 +57,9 @@ def _common_clock(paths, logs) -> list[np.ndarray]:
             f"{' on their common clock (their absolute stamps)' if stamps[0] is not None else ''}; expected two "
             "fingers recorded together"
         )
-    shorter = min(a1 - a0, b1 - b0)
-    if overlap < 0.9 * shorter:
-        print(f"softtip: warning: the logs overlap for {overlap:.6g} s of the shorter's {shorter:.6g} s "
+    longer = max(a1 - a0, b1 - b0)  # the fused rows span the first log: any part without the other is single
+    if overlap < 0.9 * longer:
+        print(f"softtip: warning: the logs overlap for {overlap:.6g} s of the longer's {longer:.6g} s "
               f"({paths[0]}: {a0:.6g}–{a1:.6g} s, {paths[1]}: {b0:.6g}–{b1:.6g} s); outside it one finger is "
               "fused alone (single)", file=sys.stderr)  # fmt: skip
     return times
@@ -197,6 +197,8 @@ def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, 
     elif len(inputs) == 2:
         if topics is not None or frame is not None:
             raise click.UsageError("--topics and --frame apply to a bag input")
+        if all(os.path.isfile(p) for p in inputs) and os.path.samefile(*inputs):
+            raise click.UsageError(f"{inputs[0]} and {inputs[1]} are the same file; expected one log per finger")
         read = [read_log(p, units=units, **formats) for p in inputs]
         sensor_range = full_scale_range(full_scale, estimator_opts.get("sensor"))
         for log, path in zip(read, inputs):  # far beyond the sensor's range: refused before any estimate, as by estimate
