@@ -388,3 +388,11 @@ def test_simulate_writes_no_truth_file_beside_a_device(tmp_path):
     assert out.returncode == 0, out.stderr
     assert not any(n.endswith(".truth.json") for n in set(os.listdir("/dev")) - before)
     assert "-> /dev/null" in out.stderr and "truth" not in out.stderr
+
+
+def test_o_dot_is_a_directory(tmp_path):
+    # simulate -o . said "'' is an empty file name"
+    for args in (("simulate",), ("estimate", "--example"), ("calibrate", "--example", "--shape", "sphere")):
+        out = run(*args, "-o", ".", cwd=tmp_path)
+        assert out.returncode == 2 and ("'.' is a directory" in out.stderr or ". is a directory" in out.stderr), out.stderr
+    assert listing(tmp_path) == []

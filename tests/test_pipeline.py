@@ -566,3 +566,11 @@ def test_misshaped_inputs_are_refused_not_cut_or_reshaped() -> None:
         with pytest.raises(ValueError, match=r"check_wrench_units: expected wrench of shape \(N, 6\)"):
             check_wrench_units(bad, "murakami2006")
     assert check_wrench_units(tared, "murakami2006").plausible  # a preset's name, as estimate takes it
+
+
+def test_a_dict_of_settings_is_refused_naming_the_config_to_give() -> None:
+    g = synthetic_grasp("murakami2006", duration=1.0, rate=100.0, seed=1)
+    for run in (lambda: estimate(g.t, g.wrench, "murakami2006", config={"lowpass_hz": 10.0}),
+                lambda: Estimator("murakami2006", {"lowpass_hz": 10.0})):  # fmt: skip
+        with pytest.raises(TypeError, match=r"config: expected an EstimatorConfig, e\.g\. EstimatorConfig\(\*\*\{'lowpass_hz'"):
+            run()

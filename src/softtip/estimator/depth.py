@@ -119,7 +119,12 @@ def resolve_depth(config: EstimatorConfig, tip: Fingertip) -> EstimatorConfig:
     ValueError
         ``online`` or ``law`` asked for with neither ``config.skin_law`` nor a fingertip skin
         thickness.
+    TypeError
+        ``config`` is not an :class:`~softtip.estimator.config.EstimatorConfig` (a dict of settings, say).
     """
+    if not isinstance(config, EstimatorConfig):
+        example = f"EstimatorConfig(**{config!r})" if isinstance(config, dict) else "EstimatorConfig(lowpass_hz=20.0)"
+        raise TypeError(f"config: expected an EstimatorConfig, e.g. {example}; got {type(config).__name__}")
     mode = config.depth_compensation
     if mode == "auto" and config.contact_point != "latch":
         # track mode has no tangential spin torque; line-fit mode moves the point under a
