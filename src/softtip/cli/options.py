@@ -421,9 +421,9 @@ def check_output_names(outputs) -> None:
         if path is None:
             continue
         text = os.fspath(path)
-        if text and os.path.isdir(text):  # '.' too, whose name is empty
-            raise click.BadParameter(f"{text} is a directory; expected a file name", param_hint=f"'{label}'")
         if text == "" or (isinstance(path, Path) and not path.name):
+            if text and os.path.isdir(text):  # '.', whose name is empty
+                raise click.BadParameter(f"{text} is a directory; expected a file name", param_hint=f"'{label}'")
             raise click.BadParameter(f"{text!r} is an empty file name; expected a file name", param_hint=f"'{label}'")
 
 

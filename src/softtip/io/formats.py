@@ -216,11 +216,6 @@ class LogFormat:
         """The unit an option gives ``quantity`` (``"force"``, ``"moment"``, ``"time"``), or None."""
         return getattr(self, f"{quantity}_unit")
 
-    @property
-    def plain(self) -> bool:
-        """Whether nothing beyond softtip's own layout was asked for."""
-        return not self.columns and self.time_unit is None and self.missing == "fail" and self.skip_rows is None
-
 
 @dataclass(frozen=True)
 class ColumnMap:

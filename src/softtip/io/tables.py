@@ -1416,7 +1416,6 @@ def _end_of_content(data: bytes) -> int:
         size *= 8
 
 
-_PLAUSIBLE_RATE_HZ = PLAUSIBLE_RATE_HZ  # a force/torque log's rates (softtip.core.units)
 #: Hz: below this a t read in seconds is also a sensor's rate read in milliseconds (7 Hz or
 #: 7 kHz, an ATI Net F/T's rate): with no unit given, the run asks which
 _AMBIGUOUS_RATE_HZ = 20.0
@@ -1489,7 +1488,7 @@ def _time_notes(
         span = float(t[-1] - t[0]) if len(t) else 0.0
         median = span / len(step) if span > 0 and len(step) >= 10 else math.nan
     if median == median:
-        low, high = _PLAUSIBLE_RATE_HZ
+        low, high = PLAUSIBLE_RATE_HZ
         rate = 1.0 / median
         if not low <= rate <= high:
             guesses = [
@@ -1773,12 +1772,11 @@ def _read_mapped_table(table: Any, names: list[str], source: str, fmt: LogFormat
     return _finish(t, wrench, extra, header, fmt, source, units, None, None)
 
 
-def _column_index(header: _Header, source: str, *, dialects: bool = True) -> dict[str, int]:
+def _column_index(header: _Header, source: str) -> dict[str, int]:
     """Map each required column to its position; raise on duplicate or missing names.
 
-    ``dialects``: the header's names may be those of :data:`~softtip.io.formats.SOURCES`
-    (CSV); a missing column is then one no dialect reads, and no column a dialect reads is
-    offered as a misspelling."""
+    The header's names may be those of :data:`~softtip.io.formats.SOURCES`: a missing column is
+    one no dialect reads, and no column a dialect reads is offered as a misspelling."""
     names, line = header.names, header.line
     positions = ",".join(f"{c}={k + 1}" for k, c in enumerate(REQUIRED_COLUMNS))
     looks_like_data = (
@@ -1803,7 +1801,7 @@ def _column_index(header: _Header, source: str, *, dialects: bool = True) -> dic
     if header.cmap is not None:
         return {r: header.cmap.index[r] for r in (*ROLES, "nanosec") if r in header.cmap.index}
     missing = [c for c in REQUIRED_COLUMNS if c not in seen]
-    read = recognised_roles(names) if dialects else {}
+    read = recognised_roles(names)
     if any(c not in read for c in missing):  # else each is read, by dialects that do not go together
         missing = [c for c in missing if c not in read]
     else:
@@ -1812,7 +1810,7 @@ def _column_index(header: _Header, source: str, *, dialects: bool = True) -> dic
         msg = (
             f"{source}:{line}: missing column{'s' if len(missing) > 1 else ''} "
             f"{', '.join(repr(c) for c in missing)}; expected a header with columns "
-            f"{_EXPECTED_HEADER} (any order{'' if dialects else ', exact case'})"
+            f"{_EXPECTED_HEADER} (any order)"
         )
         hints = _near_misses(missing, names, set(read.values()))
         if len(names) == 1:
@@ -1842,8 +1840,6 @@ def _column_index(header: _Header, source: str, *, dialects: bool = True) -> dic
             hints.append(looks_like_data)
         hints.append(
             "Other names: map them with --columns t=NAME,fx=NAME,… (docs/guide/input-formats.md lists the headers read as they are)."
-            if dialects else "Other names: rename the columns (a Parquet or Arrow file is read by its column names; --columns "
-            "applies to CSV)."
         )
         raise InputError(" ".join([msg + ".", *hints]))
     return {c: seen[c] for c in REQUIRED_COLUMNS}
@@ -3033,7 +3029,7 @@ class LogBlocks:
                     raise NotStreamable("absolute stamps or a time unit to guess: read_log counts or refuses them")
                 self._first_t = t
                 median = _median_step(step[1:])
-                if median == median and _PLAUSIBLE_RATE_HZ[0] <= 1.0 / median <= _PLAUSIBLE_RATE_HZ[1]:
+                if median == median and PLAUSIBLE_RATE_HZ[0] <= 1.0 / median <= PLAUSIBLE_RATE_HZ[1]:
                     self._gap_median = median  # gaps are measured against the first block's rate
             if self._gap_median == self._gap_median:
                 gaps = np.flatnonzero((step > _gap_threshold(self._gap_median)) & np.isfinite(step))
