@@ -153,13 +153,23 @@ def test_missing_cells_at_the_ends_take_the_nearest_value_and_say_so(tmp_path: P
     assert len(read_log(path, missing="drop").t) == n - 2
 
 
-def test_a_spreadsheets_empty_columns_are_named_in_the_error(tmp_path: Path) -> None:
+def test_a_spreadsheets_empty_columns_are_left_out_and_one_with_values_is_refused(tmp_path: Path) -> None:
+    # a spreadsheet saved as CSV ends every line with delimiters: two empty columns were "duplicate
+    # column ''", one was carried into the output as a column named ''
     lines = REFERENCE.read_text().splitlines()
     path = tmp_path / "sheet.csv"
     path.write_text("\n".join(ln + ",," for ln in lines) + "\n")
-    with pytest.raises(InputError, match=r"sheet\.csv:1: duplicate column '' \(columns 8 and 9\); expected each column "
-                                         r"name once\. Columns 8, 9 have no name \(a spreadsheet's empty columns"):  # fmt: skip
-        read_log(path)
+    log, ref = read_log(path), read_log(REFERENCE)
+    np.testing.assert_array_equal(log.t, ref.t)
+    np.testing.assert_array_equal(log.wrench, ref.wrench)
+    assert log.extra == {} and "2 empty column(s) without a name in the header (a spreadsheet's: 8, 9) left out" in log.notes[0]
+    lines[5] += ",,"
+    lines[6] += ",note,"
+    held = tmp_path / "held.csv"
+    held.write_text("\n".join([lines[0] + ",,", *(ln if ln.endswith(",") else ln + ",," for ln in lines[1:])]) + "\n")
+    with pytest.raises(InputError, match=r"held\.csv:1: column 8 has no name in the header but holds values \(the first "
+                                         r"on line 7: 'note'\); expected a name for each column that holds values"):  # fmt: skip
+        read_log(held)
 
 
 def test_columns_option_and_headerless_positions(tmp_path: Path) -> None:

@@ -134,6 +134,10 @@ _NULL_CELLS = frozenset(("", "#N/A", "#N/A N/A", "#NA", "-1.#IND", "-1.#QNAN", "
 #: What an error about a missing or NaN cell adds: the options that read such a log.
 _MISSING_FIX = "; or give --missing drop (skip the row) or --missing interpolate (fill it)"
 
+#: The name given a header's unnamed column (a spreadsheet's empty one), then its position: no
+#: header holds it (a control character), and no output does (:func:`_finish` drops the column).
+_UNNAMED = "\x00column "
+
 # Characters that force a CSV cell to be quoted.
 _CSV_SPECIAL = (",", '"', "\n", "\r")
 
@@ -258,6 +262,19 @@ def _finish(
     names = header.names
     named = "name" if header.columnar else "header"
     notes: list[str] = []
+    unnamed = [name for name in extra if name.startswith(_UNNAMED)]
+    for name in unnamed:  # a spreadsheet's empty columns: dropped; one that holds values has no name to go by
+        cells = np.asarray(extra.pop(name), dtype=object)
+        held = np.flatnonzero([not (c != c or not str(c).strip()) for c in cells.tolist()])
+        if len(held):
+            at_row = f"line {first_line + int(held[0])}" if first_line is not None else f"data row {int(held[0]) + 1}"
+            raise InputError(
+                f"{source}:{header.line}: column {name[len(_UNNAMED):]} has no name in the header but holds values "
+                f"(the first on {at_row}: {cells[held[0]]!r}); expected a name for each column that holds values"
+            )
+    if unnamed:
+        notes.append(f"{source}: {len(unnamed)} empty column(s) without a name in the header (a spreadsheet's: "
+                     f"{', '.join(n[len(_UNNAMED):] for n in unnamed)}) left out")  # fmt: skip
 
     def where(i: int) -> str:
         return f"line {first_line + i}" if first_line is not None else f"data row {i + 1}"
@@ -925,6 +942,9 @@ def _read_header(text: str, source: str, fmt: LogFormat | None = None) -> _Heade
         names = [name.strip() for name in next(reader)]
     except csv.Error as exc:
         raise InputError(f"{source}:{lineno}: malformed CSV header ({exc}); expected {_EXPECTED_HEADER}") from None
+    # a spreadsheet's empty columns have no name: each its own, which no header holds, until
+    # _finish drops them (or refuses one that holds values)
+    names = [name or f"{_UNNAMED}{j + 1}" for j, name in enumerate(names)]
     # csv pulls lines one at a time, so ``lines`` now sits right after the header record.
     data_base = lineno - 1 + reader.line_num
     if cmap is not None:
@@ -3100,6 +3120,8 @@ class LogBlocks:
             raise NotStreamable("header") from None
         if header.cmap is None or not header.cmap.native(header.names) or header.delimiter != "," or header.preamble:
             raise NotStreamable("not softtip's own layout: read_log maps it")
+        if any(name.startswith(_UNNAMED) for name in header.names):
+            raise NotStreamable("unnamed columns: read_log leaves them out")
         pos = header.lines.tell()
         if not whole and pos >= len(text):
             raise NotStreamable("long header")
