@@ -280,6 +280,24 @@ def test_queue_overflow_is_counted_as_dropped_not_lost():
     assert src.tracker.dropped == c["dropped"] - len(src.tracker.local_drops)
 
 
+@pytest.mark.parametrize("rate", [100.0, 1000.0])
+def test_the_devices_bias_leaves_no_record_of_the_sensor_before_it(rate):
+    # the first records after the bias command were the offset sensor's (50 ms of them at any
+    # rate): a short tare took the offset for the bias and an untouched fingertip read `point`
+    offset = np.array([0.12, -0.05, 0.3, 2e-3, -1e-3, 5e-4])
+    with FakeNetFT(wrench=np.tile(offset, (10, 1)), rate_hz=rate) as dev:
+        with NetFTSource("127.0.0.1", rdt_port=dev.rdt_port, http_port=dev.http_port, timeout=2.0,
+                         device_bias=True) as src:  # fmt: skip
+            first = []
+            for r in src:
+                first.append(np.asarray(r.wrench))
+                if len(first) == 20:
+                    break
+            c = src.counters()
+    assert np.abs(np.array(first)).max() < 1e-9, np.array(first)[:3]  # zeroed from the first record read
+    assert c["lost"] == 0 and c["dropped"] == 0, c
+
+
 def test_the_view_shows_every_counter_the_status_and_the_latest_warning():
     import io
 

@@ -88,7 +88,7 @@ an error (exit 1).
 @option("--rdt-port", type=PORT, default=49152, show_default=True, help="UDP port of the sensor's RDT server.")
 @option("--http-port", type=PORT, default=80, show_default=True, help="HTTP port of the sensor's web server (calibration).")
 @option("--timeout", type=Number("s", 0.0, MAX_TIMEOUT, min_open=True), default=2.0, show_default=True, metavar="S", help="Give up after S seconds without data from the sensor.")
-@option("--device-bias", is_flag=True, help="Send the sensor's own bias (zero) command at start, before softtip's tare.")
+@option("--device-bias", is_flag=True, help="Send the sensor's own bias (zero) command at start, before softtip's tare (the records of the first 0.05 s after it are dropped: the sensor's before it zeroed itself).")
 @option("--strict", metavar="FAULTS", default="", help="Comma-separated faults that end the stream (exit 1): status, restart, stall, lost, duplicate, late, malformed, dropped, or all. Default: none (counted, warned).")
 @option("--duration", type=POSITIVE("s"), metavar="S", help="Stop after S seconds (default: until Ctrl-C or the end of the replayed log).")
 @option("-o", "--output", "--record", "record", type=click.Path(dir_okay=False), metavar="FILE.csv", help="Record raw samples and estimates to FILE.csv as they come (--record is the same option).")

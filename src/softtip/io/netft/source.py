@@ -32,6 +32,9 @@ from softtip.io.sources import Interrupted, Reading, SourceError
 
 __all__ = ["NetFTSource"]
 
+#: s after the device's bias command whose records are dropped: those it sent before it zeroed
+#: itself and those on their way (a tare over them takes the old offset for the bias).
+BIAS_SETTLE_S = 0.05
 _SO_TIMESTAMPNS = 35  # Linux: kernel receive time stamps (SOL_SOCKET level, CLOCK_REALTIME)
 _SO_RXQ_OVFL = 40  # Linux: datagrams the socket's buffer dropped so far, with each datagram
 
@@ -264,6 +267,7 @@ class NetFTSource:
         try:
             self._request(CMD_START)
             deadline = time.monotonic() + self.timeout
+            self._waiting = True  # the receive thread wakes this wait at the first record
             while not self._queue:
                 if self.stop_event is not None and self.stop_event.is_set():
                     raise Interrupted("interrupted while waiting for the first RDT record")
@@ -277,8 +281,15 @@ class NetFTSource:
                     self._request(CMD_START)
                 self._wake.wait(0.05)
                 self._wake.clear()
+            self._waiting = False
             if self.device_bias:
                 self._request(CMD_BIAS)
+                settled = time.monotonic() + BIAS_SETTLE_S
+                while time.monotonic() < settled:
+                    if self.stop_event is not None and self.stop_event.is_set():
+                        raise Interrupted("interrupted while the sensor zeroed itself")
+                    time.sleep(0.005)
+                self._queue.clear()  # none read yet: the records of the sensor before its zero
         except BaseException:
             self.close()
             raise
