@@ -314,6 +314,35 @@ def test_the_view_shows_every_counter_the_status_and_the_latest_warning():
         assert part in text, (part, text)
 
 
+@pytest.mark.skipif(sys.platform == "win32", reason="a pseudo-terminal")
+@pytest.mark.parametrize("columns", [50, 80])
+def test_the_view_fits_each_line_in_the_terminals_width(columns):
+    # a line wider than the terminal wraps into two rows; moved back up by the line count, each
+    # redraw stacked under the last (an 80-column terminal's network line is 85 characters)
+    import fcntl
+    import os
+    import pty
+    import struct
+    import termios
+
+    from softtip.apps.live import LiveStats, TerminalView
+
+    leader, follower = pty.openpty()
+    fcntl.ioctl(follower, termios.TIOCSWINSZ, struct.pack("HHHH", 24, columns, 0, 0))
+    counters = {"lost": 4, "dropped": 7, "duplicates": 2, "late": 3, "malformed": 5, "restarts": 1, "stalls": 6,
+                "status_records": 9}  # fmt: skip
+    stats = LiveStats(received=996, counters=lambda: counters, warnings=lambda: ["a warning " * 20], status=0)
+    with os.fdopen(follower, "w", encoding="utf-8", closefd=True) as out:
+        view = TerminalView(stats, out=out)
+        assert max(map(len, view.render())) > columns  # lines to cut
+        view.draw()
+        view.draw()
+    text = os.read(leader, 1 << 16).decode("utf-8")
+    os.close(leader)
+    rows = [row.split("\x1b[2K")[-1] for row in text.replace("\r", "").split("\n")]
+    assert max(len(row) for row in rows) < columns, max(rows, key=len)
+
+
 @pytest.mark.parametrize("h_sigmas", [3.0, 5.0])
 def test_the_view_shows_the_estimators_own_line_threshold(h_sigmas):
     import io

@@ -456,7 +456,10 @@ class TerminalView:
         return lines
 
     def draw(self) -> None:
-        lines = self.render()
+        # each line cut to the terminal's width: a line that wraps takes two rows, and the move back
+        # up by a line count then stops short, stacking the screens (an 80-column terminal's network line)
+        width = self._width()
+        lines = [line if len(line) < width else line[: width - 2] + "…" for line in self.render()]
         # back to the top of the previous screen, then rewrite each line and clear the rest
         up = f"\x1b[{self._lines}F" if self._lines else ""
         text = up + "".join(f"\x1b[2K{line}\n" for line in lines) + "\x1b[J"
@@ -466,6 +469,15 @@ class TerminalView:
             self.out.flush()
         except (OSError, ValueError):  # terminal gone
             pass
+
+
+    def _width(self) -> int:
+        """Columns of the terminal drawn on (its current size: it may be resized); a large number
+        for a file or a pipe, which do not wrap."""
+        try:
+            return max(20, os.get_terminal_size(self.out.fileno()).columns)
+        except (OSError, ValueError, AttributeError):
+            return 1 << 16
 
 
 class KeyReader:
