@@ -396,3 +396,21 @@ def test_o_dot_is_a_directory(tmp_path):
         out = run(*args, "-o", ".", cwd=tmp_path)
         assert out.returncode == 2 and ("'.' is a directory" in out.stderr or ". is a directory" in out.stderr), out.stderr
     assert listing(tmp_path) == []
+
+
+def test_a_replay_of_a_bag_says_it_is_one_and_where_bags_are_read(tmp_path):
+    # it said "not valid UTF-8 ... re-save it as UTF-8"
+    bag = tmp_path / "run.bag"
+    bag.write_bytes(b"#ROSBAG V2.0\n" + bytes(range(256)))
+    out = run("stream", "--replay", bag, "--speed", "0", cwd=tmp_path)
+    assert out.returncode == 2 and f"{bag}: a ROS bag; --replay reads a CSV, Parquet or Arrow log" in out.stderr, out.stderr
+
+
+def test_a_csv_only_output_named_like_parquet_names_no_conversion_that_loses_columns(tmp_path):
+    # the remedy named `softtip estimate LOG.csv -o OUT.parquet`, which writes estimates, not the log
+    # or the recording (their raw columns lost)
+    for args in (("simulate",), ("stream", "--replay", EXAMPLE_PATH, "--speed", "0")):
+        out = run(*args, "-o", tmp_path / "x.parquet", cwd=tmp_path)
+        assert out.returncode == 2 and "this command writes CSV; expected a name ending in .csv" in out.stderr
+        assert "converts" not in out.stderr
+    assert listing(tmp_path) == []

@@ -410,7 +410,7 @@ def check_table_names(outputs, formats: tuple[str, ...] = ("csv", "parquet", "ar
             kind = TABLE_FORMATS[table_format(path)][1]
             raise click.BadParameter(
                 f"{path} is named like {'an' if kind[0] in 'AEIOU' else 'a'} {kind} file, but this command writes CSV; "
-                "expected a name ending in .csv (`softtip estimate LOG.csv -o OUT.parquet` converts a log)",
+                "expected a name ending in .csv",
                 param_hint="'-o'",
             )
 

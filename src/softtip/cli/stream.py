@@ -17,6 +17,7 @@ from softtip.cli.options import (
     estimator_options,
     full_scale_option,
     full_scale_range,
+    is_bag,
     log_format_given,
     log_format_kwargs,
     log_format_names,
@@ -29,6 +30,7 @@ from softtip.cli.types import PORT, Number, check_lowpass, option
 from softtip.core.fingertip import load_fingertip
 from softtip.core.fullscale import COARSE_MARGIN, FullScale, check_full_scale
 from softtip.core.units import UNIT_SYSTEMS
+from softtip.errors import InputError
 from softtip.estimator.results import EstimatorWarning
 
 if TYPE_CHECKING:
@@ -202,6 +204,9 @@ def _stream(
             if replay is not None:
                 from softtip.io.tables import read_log
 
+                if is_bag(replay):  # its bytes are not a log's text: say so, not "not valid UTF-8"
+                    raise InputError(f"{replay}: a ROS bag; --replay reads a CSV, Parquet or Arrow log (softtip "
+                                     "estimate reads a bag: softtip estimate BAG --topic TOPIC)")  # fmt: skip
                 log = read_log(replay, units=units, **formats)
                 # as `estimate` reads it: far beyond the sensor's range, or a time unit it cannot guess, stops here
                 check_full_scale(log.t, log.wrench, sensor_range, replay, units=log.units, margin=COARSE_MARGIN)
