@@ -358,3 +358,14 @@ def test_the_view_shows_the_estimators_own_line_threshold(h_sigmas):
     text = "\n".join(TerminalView(stats, out=io.StringIO(), config=config).render())
     expected = max(h_sigmas * e.h_std, config.h_min) * 1e3
     assert f"(significant above {expected:.3f} N·mm)" in text, text
+
+
+def test_a_faults_summary_ends_at_the_last_sample_not_after_the_silence():
+    # a device that stopped: "2312 samples in 4.32 s (535 Hz)" for a 1 kHz device, the 2 s time-out counted
+    from softtip.apps.live import LiveStats, LiveSummary
+
+    stats = LiveStats(received=1000)
+    stats.started = time.monotonic() - 3.0
+    stats.last_at = stats.started + 1.0  # then 2 s of silence until the time-out
+    assert LiveSummary.of(stats, "fault").seconds == pytest.approx(1.0)
+    assert LiveSummary.of(stats, "interrupt").seconds >= 3.0  # a stop: until now

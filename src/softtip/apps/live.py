@@ -144,6 +144,8 @@ class LiveStats:
         The newest nonzero status word (0: none yet).
     started : float
         ``time.monotonic()`` at the first sample.
+    last_at : float
+        ``time.monotonic()`` when the newest sample was done.
     latest : SampleEstimate or None
     """
 
@@ -151,6 +153,7 @@ class LiveStats:
     lost: int = 0
     dropped: Callable[[], int] | None = None
     started: float | None = None
+    last_at: float | None = None
     latest: SampleEstimate | None = None
     source_name: str = ""
     info: str = ""
@@ -549,8 +552,10 @@ class LiveSummary:
 
     @classmethod
     def of(cls, stats: LiveStats, reason: str) -> LiveSummary:
-        """The summary of a run whose counters are ``stats``, ended for ``reason``."""
-        seconds = time.monotonic() - stats.started if stats.started is not None else 0.0
+        """The summary of a run whose counters are ``stats``, ended for ``reason`` (a fault: its
+        seconds end at the last sample, not after the silence that ended it)."""
+        end = stats.last_at if reason == "fault" and stats.last_at is not None else time.monotonic()
+        seconds = end - stats.started if stats.started is not None else 0.0
         totals = stats.totals()
         return cls(
             stats.received,
@@ -683,7 +688,8 @@ def run_live(
                 add(row(e, r))
             if on_estimate is not None:
                 on_estimate(e, r)
-            if time.monotonic() >= deadline:
+            stats.last_at = now = time.monotonic()
+            if now >= deadline:
                 reason = "duration"
                 break
             if stop.is_set():
