@@ -194,3 +194,20 @@ def test_the_receiver_says_how_far_behind_its_consumer_is():
                 next(it)
             after = src.queued
     assert 300 <= behind <= 2000 and after < behind
+
+
+def test_a_retare_is_in_the_summary_and_the_tare_line_says_where():
+    # the t key's tare was not said anywhere: the summary's tare line read "from the first 0.2 s"
+    import threading
+
+    g = synthetic_grasp("murakami2006", duration=3.0, rate=100.0, seed=2)
+    request = threading.Event()
+    est = Estimator()
+
+    def press(e, r):
+        if abs(r.t - 1.0) < 1e-9:
+            request.set()  # taken at the next sample
+
+    summary = run_live(zip(g.t, g.wrench), est, on_estimate=press, tare_request=request)
+    assert summary.retares == [pytest.approx(1.01)]
+    assert est.tare_report.summary(summary.retares[-1]).startswith("bias from the first 0.2 s of the re-tare at t = 1.01 s (")

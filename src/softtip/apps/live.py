@@ -146,6 +146,8 @@ class LiveStats:
         ``time.monotonic()`` at the first sample.
     last_at : float
         ``time.monotonic()`` when the newest sample was done.
+    retares : list of float
+        t (s) of each tare asked for again (``tare_request``), at the sample it began.
     latest : SampleEstimate or None
     """
 
@@ -154,6 +156,7 @@ class LiveStats:
     dropped: Callable[[], int] | None = None
     started: float | None = None
     last_at: float | None = None
+    retares: list[float] = field(default_factory=list)
     latest: SampleEstimate | None = None
     source_name: str = ""
     info: str = ""
@@ -549,6 +552,7 @@ class LiveSummary:
     last: SampleEstimate | None
     counters: dict[str, int] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
+    retares: list[float] = field(default_factory=list)  # t (s) of each tare asked for again
 
     @classmethod
     def of(cls, stats: LiveStats, reason: str) -> LiveSummary:
@@ -566,6 +570,7 @@ class LiveSummary:
             stats.latest,
             totals,
             list(stats.warnings()) if stats.warnings else [],
+            list(stats.retares),
         )
 
 
@@ -677,6 +682,7 @@ def run_live(
             if tare_request is not None and tare_request.is_set():
                 tare_request.clear()
                 estimator.tare()
+                stats.retares.append(r.t)
             e = update(r.t, r.wrench)
             stats.received += 1
             stats.lost += r.lost

@@ -344,8 +344,16 @@ def _report(summary: LiveSummary, name: str, estimator: Estimator, record: str |
 
 def _summary(summary: LiveSummary, estimator: Estimator, record: str | None) -> None:
     """The tare and the counters of a session."""
+    retared_at = summary.retares[-1] if summary.retares else None
     if estimator.tare_report is not None and estimator.tare_report.source != "none":
-        click.echo(f"softtip: {estimator.tare_report.summary()}", err=True)
+        click.echo(f"softtip: {estimator.tare_report.summary(retared_at)}", err=True)
+    if record and summary.retares:  # the key's tares are not in the file: a re-estimate tares once, at its start
+        at = ", ".join(f"{t:g}" for t in summary.retares)
+        click.echo(
+            f"softtip: warning: {record}: tared again at t = {at} s (the t key), which the recording does not hold: "
+            "softtip estimate on it tares once, from its start, so its estimates from there differ from the recorded ones",
+            err=True,
+        )
     rate = summary.samples / summary.seconds if summary.seconds > 0 else 0.0
     why = {"end": "end of log", "duration": "duration reached", "interrupt": "interrupted", "fault": "ended by the fault below"}[summary.reason]
     c = summary.counters

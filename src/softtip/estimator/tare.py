@@ -166,12 +166,14 @@ class TareReport:
     noise: SensorNoise | None = None
     noise_raised: bool = False
 
-    def summary(self) -> str:
+    def summary(self, retared_at: float | None = None) -> str:
         """One line: where the bias came from and its value (N, N·mm); for a tare, the noise of
-        its samples against the noise model (and whether the model overstates it)."""
+        its samples against the noise model (and whether the model overstates it).
+        ``retared_at``: t (s) of a tare asked for again (:meth:`Estimator.tare`), where it began."""
         f, m = self.bias[:3], self.bias[3:] * 1e3
+        span = f"{self.duration:g} s" if retared_at is None else f"{self.duration:g} s of the re-tare at t = {retared_at:g} s"
         what = {
-            "tare": f"from the first {self.duration:g} s ({self.n_samples} samples, {_LABELS[self.method]})",
+            "tare": f"from the first {span} ({self.n_samples} samples, {_LABELS[self.method]})",
             "given": "given",
             "none": "none (input already tared)",
         }[self.source]
