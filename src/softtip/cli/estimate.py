@@ -75,8 +75,10 @@ The output CSV (standard output unless -o; Parquet when -o ends in .parquet, Arr
 (Feather v2) when it ends in .arrow or .feather, with the units and the fingertip in its
 key-value metadata) has these columns, in order, then the
 input's extra columns; units are SI (N and N·m, or kgf and kgf·mm with --output-units
-kgf-mm), angles in degrees; an empty cell is nan. r, n, h are empty when state is none; d
-and the angle only for line contacts, where |h| stands out of the noise. """
+kgf-mm), angles in degrees; a number that is not there is nan, a text cell empty, and a flag
+is 0 or 1 (booleans in Parquet and Arrow). Every estimate (r, n, sigma, h, |h|, the depth, the
+ratios) is nan when state is none; d and the angle only for line contacts, where |h| stands out
+of the noise. """
     + column_help()
     + """
 

@@ -79,7 +79,8 @@ def _check_sizes(options: dict) -> None:
               help="What the fingertip touches.")
 @option("--size", type=LENGTH, default=None,
               help="Plate thickness, or cylinder/stick/fringe diameter (e.g. 2mm). Defaults: plate 1mm, "
-                   "cylinder 6mm, stick 4mm, fringe 40mm.")
+                   "cylinder 6mm, stick 4mm, fringe 40mm. Every length option here takes a unit; a bare number "
+                   "is in m, and one of 0.1 or more is refused as ambiguous.")
 @option("--angle", "angle_deg", type=Number("deg"), default=0.0, show_default=True,
               help="Direction of the edge/axis/fringe at the contact, degrees from the sensor x axis "
                    "(manual §3.4 tangent frame; 90 = along the hand's joint axes).")
