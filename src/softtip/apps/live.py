@@ -476,7 +476,6 @@ class TerminalView:
         except (OSError, ValueError):  # terminal gone
             pass
 
-
     def _width(self) -> int:
         """Columns of the terminal drawn on (its current size: it may be resized); a large number
         for a file or a pipe, which do not wrap."""

@@ -262,19 +262,6 @@ def _finish(
     names = header.names
     named = "name" if header.columnar else "header"
     notes: list[str] = []
-    unnamed = [name for name in extra if name.startswith(_UNNAMED)]
-    for name in unnamed:  # a spreadsheet's empty columns: dropped; one that holds values has no name to go by
-        cells = np.asarray(extra.pop(name), dtype=object)
-        held = np.flatnonzero([not (c != c or not str(c).strip()) for c in cells.tolist()])
-        if len(held):
-            at_row = f"line {first_line + int(held[0])}" if first_line is not None else f"data row {int(held[0]) + 1}"
-            raise InputError(
-                f"{source}:{header.line}: column {name[len(_UNNAMED):]} has no name in the header but holds values "
-                f"(the first on {at_row}: {cells[held[0]]!r}); expected a name for each column that holds values"
-            )
-    if unnamed:
-        notes.append(f"{source}: {len(unnamed)} empty column(s) without a name in the header (a spreadsheet's: "
-                     f"{', '.join(n[len(_UNNAMED):] for n in unnamed)}) left out")  # fmt: skip
 
     def where(i: int) -> str:
         return f"line {first_line + i}" if first_line is not None else f"data row {i + 1}"
@@ -282,6 +269,19 @@ def _finish(
     def at(i: int) -> str:
         """A message's start for data row ``i``: ``file:line``, or ``file: data row``."""
         return f"{source}:{first_line + i}" if first_line is not None else f"{source}: {where(i)}"
+
+    unnamed = [name for name in extra if name.startswith(_UNNAMED)]
+    for name in unnamed:  # a spreadsheet's empty columns: dropped; one that holds values has no name to go by
+        cells = np.asarray(extra.pop(name), dtype=object)
+        held = np.flatnonzero([not (c != c or not str(c).strip()) for c in cells.tolist()])
+        if len(held):
+            raise InputError(
+                f"{source}:{header.line}: column {name[len(_UNNAMED):]} has no name in the header but holds values "
+                f"(the first on {where(int(held[0]))}: {cells[held[0]]!r}); expected a name for each column that holds values"
+            )
+    if unnamed:
+        notes.append(f"{source}: {len(unnamed)} empty column(s) without a name in the header (a spreadsheet's: "
+                     f"{', '.join(n[len(_UNNAMED):] for n in unnamed)}) left out")  # fmt: skip
 
     own = header.t_stated and all(names[cmap.index[r]] == r for r in ROLES) if cmap is not None else False
     read_as = cmap is not None and not cmap.native(names) and not own  # softtip's own file: its metadata's units

@@ -15,10 +15,11 @@ is logged, sensor frame, metres, on the timeline ``t`` (s of the log):
 * ``series/...``: time series of force, moment, ``|h|`` with its significance level, the
   edge angle (degrees) and the state code (0 none, 1 point, 2 line, 3 area).
 
-Live, :class:`LiveRerun` draws in a process of its own, so that Rerun's work (about 1 ms of
+Live, :class:`LiveRerun` draws in a process of its own, so that Rerun's work (about 2 ms of
 CPU per drawn sample) never runs on the estimator's thread nor holds its interpreter (a
 thread would: Python runs one thread at a time), and at the lowest priority (Linux's idle
-scheduling class, the viewer it spawns too), so that it takes no core the estimator wants. ``rerun FILE.rrd`` opens a saved recording.
+scheduling class, the viewer it spawns too), so that it takes no core the estimator wants.
+``rerun FILE.rrd`` opens a saved recording.
 """
 
 from __future__ import annotations
