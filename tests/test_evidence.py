@@ -652,6 +652,20 @@ def test_a_transient_two_axis_spread_does_not_lock_area():
     assert np.median(axial_error_deg(est.angle[late & (est.state == 2)], truth)) <= 2.0
 
 
+
+@pytest.mark.parametrize("load", [0.0, 0.03])
+def test_an_area_stays_while_no_window_contradicts_it(load):
+    # a plane rocked about two axes reads area; held still afterwards, its windows see h on
+    # one axis or none, which a plane rocked about one axis (or not at all) gives as a line
+    # does: no evidence against the area, which stays (it used to turn line once the window
+    # had slid past the rocking, with a confident direction)
+    t, w, _ = rocking_log("area", 20.0, seed=43, load=load, duration=13.0)
+    est = estimate(t, w, "murakami2006")
+    assert np.mean(est.state[(t >= 6.0) & (t < 9.0)] == 3) >= 0.9
+    assert np.all(est.state[t >= 6.5] == 3)
+    stream = Estimator("murakami2006").process(t, w)
+    assert [s.state for s in stream] == list(est.columns()["state"])
+
 # --- the twist term of the standard deviation ---
 
 

@@ -10,9 +10,12 @@ covariance (noise removed) and ``ratio = minor / major``:
   ``ratio ≥ area_ratio[0]``, at a sample whose ``|h|`` is significant, provided the load
   turned about its weaker axis too (its ``minor`` beyond the noise and at least
   ``excitation_min²``) or ``minor ≥ h_min²`` (a point gone stale). The contact **reads
-  ``area``** while more than ``area_share`` of the window's samples span both axes: a reading
-  of the current window, revisited as it slides (a transient spread, as a new rock begins
-  while the window still holds the last one, neither makes nor locks an area);
+  ``area``** once more than ``area_share`` of the window's samples span both axes (a sustained
+  spread: a transient one, as a new rock begins while the window still holds the last one,
+  does not make an area), and goes on reading it until the segment ends or a window
+  contradicts it by confirming a line: a window whose excitation was about one axis cannot
+  tell a plane rocked about that axis from a line (both give ``h`` on one axis), so it is no
+  evidence against the area the earlier window showed;
 * it **confirms a line** when the contact was excited about two axes, as the tangential load
   shows (its own ``minor`` beyond the noise, at least ``excitation_ratio`` times its
   ``major`` and at least ``excitation_min²``) or as the user states (the window wholly inside
@@ -22,7 +25,7 @@ covariance (noise removed) and ``ratio = minor / major``:
   least ``h_min²``, ``ratio < area_ratio[1]``) with an angle standard deviation at most
   ``evidence_max_angle_std``.
 
-Where the window reads ``area`` the sample is ``area`` (no direction). Otherwise it is a
+Where the contact reads ``area`` the sample is ``area`` (no direction). Otherwise it is a
 ``line`` where ``|h|`` is significant or the current window resolves an axis (``h`` passing
 through zero while the object rocks does not make a line a point), and ``point`` elsewhere,
 except inside a confirmed line with a window direction held. Significance has hysteresis:
@@ -456,7 +459,7 @@ def evidence_step(state, counts, ring, params, wconst, t, px, py, pz, nx, ny, nz
         major, minor, tail * s_big, e[10], e[11], tail * f_n, hn, thr, params
     )
     # area: more than area_share of the evidence window's samples spread over both axes (a
-    # reading of the current window: a transient spread neither makes nor locks an area)
+    # sustained spread: a transient one does not make an area; _choose keeps the verdict)
     ring[head, _R_SPREAD] = 1.0 if spread else 0.0
     counts[_N_AREA] += 1
     counts[_N_SPREAD] += 1 if spread else 0
@@ -482,7 +485,11 @@ def evidence_step(state, counts, ring, params, wconst, t, px, py, pz, nx, ny, nz
 def _choose(state, params, area, axis, confirming, sig, w_angle, w_std, w_noise, minor, h_ratio, f_ratio,
             hx, hy, hz, hn, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z):  # fmt: skip
     """The sample's state and direction (the returns of :func:`evidence_step`)."""
-    if area:
+    if area or state[_VERDICT] == _AREA:
+        # the window reads an area, or did in this segment and nothing since contradicted it:
+        # a window that saw one axis only cannot tell a plane rocked about it from a line
+        # (both give h on one axis); only a line confirmed by the load turning about two axes
+        # while h stayed on one (the verdict then turns line) does
         return _AREA_CODE, 0, _NAN, _NAN, _NAN, _NAN, _NAN, _NAN, h_ratio, f_ratio
     confirmed = state[_VERDICT] == _LINE
     held = confirmed and state[_HAS_HELD] != 0.0
