@@ -106,6 +106,7 @@ from softtip.sim import (
     rock_scenario,
     simulate_grasp,
 )
+from softtip.sim.simulate import FRICTION_SHEAR_MODULUS
 
 TIP = murakami2006()
 
@@ -147,7 +148,7 @@ def depth_section(seed: int = 1) -> None:
     print("\n### deep penetration (items 3, 4): direction error, median (line coverage); contact-point error\n")
     print("| condition | the papers' method (latch) | latch + depth | track | joint | joint + depth |")
     print("| --- | --- | --- | --- | --- | --- |")
-    model = ContactModel(discretise_skin(TIP, 10000), ContactParams(shear_modulus=2e6)).prepare()
+    model = ContactModel(discretise_skin(TIP, 10000), ContactParams(shear_modulus=FRICTION_SHEAR_MODULUS)).prepare()
     force = 0.5 * KGF
     for name, obj in (("plate 1 mm", Plate(0.001)), ("plate 2 mm", Plate(0.002)), ("wedge 90°", Wedge(math.pi / 2))):
         for ang in (0.0, 45.0, -45.0):
@@ -594,7 +595,7 @@ def flicker_rows(seeds: int = 3) -> None:
 
 def fit_depth() -> DepthLaw:
     """Refit :data:`MURAKAMI2006_DEPTH` from simulated calibration presses."""
-    model = ContactModel(discretise_skin(TIP, 10000), ContactParams(shear_modulus=2e6)).prepare()
+    model = ContactModel(discretise_skin(TIP, 10000), ContactParams(shear_modulus=FRICTION_SHEAR_MODULUS)).prepare()
     force = 0.5 * KGF
     fs, ds = [], []
     d, n = np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.0])
@@ -673,7 +674,7 @@ def friction_section(seed: int = 1, angles=(0.0, 30.0, -45.0)) -> None:
     print("| object, angle, load | papers' method | fixed law | online (default) | true depth (oracle) "
           "| depth: truth / online ± std (from data) | within std |")
     print("| --- | --- | --- | --- | --- | --- | --- |")
-    model = ContactModel(discretise_skin(TIP, 10000), ContactParams(shear_modulus=2e6)).prepare()
+    model = ContactModel(discretise_skin(TIP, 10000), ContactParams(shear_modulus=FRICTION_SHEAR_MODULUS)).prepare()
     cases = []
     for name, obj in FRICTION_OBJECTS + (("fringe Ø 40 mm", CylinderRim(0.040)),):
         for ang in angles:

@@ -72,6 +72,7 @@ from softtip.sim import (
 )
 from softtip.sim.hand import FrictionLoad, simulate_two_finger
 from softtip.sim.sensor import SensorModel
+from softtip.sim.simulate import FRICTION_SHEAR_MODULUS
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _markdown import markdown_option, run_with_markdown  # noqa: E402
@@ -173,7 +174,7 @@ def fusion_section(
     elif load is None:
         model = ContactModel(discretise_skin(tip), ContactParams(), 2)
     else:  # the stiffer shear layer of bench_accuracy's friction section: the default cannot hold the loads
-        model = ContactModel(discretise_skin(tip, 10000), ContactParams(shear_modulus=2e6), 2)
+        model = ContactModel(discretise_skin(tip, 10000), ContactParams(shear_modulus=FRICTION_SHEAR_MODULUS), 2)
     print(f"\n### fusion: two fingertips on one object, {'Winkler skin' if simulate is None else 'Drake'}\n")
     print("Median over the held grasp (t > 6 s, or once rocked about both axes, t > 8 s); z = rms(error / reported std);")
     print("each finger's own z against its own line; shared:")

@@ -131,6 +131,7 @@ from softtip.sim import (
     simulator_digest,
     tangent_frame,
 )
+from softtip.sim.simulate import FRICTION_SHEAR_MODULUS
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _markdown import markdown_option, run_with_markdown  # noqa: E402
@@ -190,7 +191,7 @@ class Physics:
             return simulate_drake(tip, obj, scn, sensor, 0, modulus=a.modulus, mesh_resolution=a.mesh_resolution,
                                   friction=a.friction, solver=solver, progress=not a.no_progress)  # fmt: skip
         params = ContactParams(modulus=self.winkler_modulus, friction=a.friction,
-                               shear_modulus=2e6 if friction_load else None)  # fmt: skip
+                               shear_modulus=FRICTION_SHEAR_MODULUS if friction_load else None)  # fmt: skip
         # the simulator's sources and libraries are in the key: a change to them simulates again
         key = json.dumps({"simulator": self.digest, "tip": repr(tip), "obj": obj.describe(),
                           "scn": scn.as_dict(), "params": params.as_dict()}, sort_keys=True, default=str)  # fmt: skip

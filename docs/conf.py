@@ -43,6 +43,7 @@ exclude_patterns = [
     "benchmarks/accuracy-*run.md",  # written by benchmarks/bench_accuracy.py --markdown, included by accuracy.md
     "benchmarks/calibration-*run.md",  # written by benchmarks/bench_calibration.py --markdown, included by accuracy.md
     "guide/columns.md",  # written by scripts/make_column_table.py, included by 04-data-and-command-line.md
+    "guide/fused-columns.md",  # written by scripts/make_column_table.py, included by 08-two-fingertips-….md
     "examples/README.txt",
     "auto_examples/*.ipynb",
     "auto_examples/*.py",

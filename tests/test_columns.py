@@ -190,3 +190,26 @@ def test_a_bag_carries_each_column_in_its_topic_and_field(tmp_path, example):
             assert operator.attrgetter(c.field)(msg) == want, (c.name, k)
             checked += 1
     assert checked > 1000
+
+
+def test_the_fused_columns_are_the_registry_and_the_manual_table_is_it():
+    """`softtip fuse`'s columns (FusedGrasp.columns) in the registry's order, and manual §8's table
+    (docs/guide/fused-columns.md) the registry's: regenerate it with scripts/make_column_table.py."""
+    import dataclasses
+
+    from softtip.fusion.columns import fused_column_names, fused_markdown_table
+    from softtip.fusion.fuse import FusedGrasp
+
+    n = 2
+    shapes = {"t": (n,), "grasp": (n,), "evidence": (n,), "flag": (n,)}
+    kw = {}
+    for f in dataclasses.fields(FusedGrasp):
+        if f.name == "names":
+            continue
+        vector = f.name in ("point_a", "point_b", "direction", "direction_b", "plane_normal", "face_normal", "force_residual")
+        kind = np.int8 if f.name == "grasp" else (str if f.name in ("evidence", "flag") else float)
+        kw[f.name] = np.zeros((n, 3) if vector else shapes.get(f.name, (n,)), dtype=kind)
+    assert list(FusedGrasp(**kw).columns()) == fused_column_names()
+    table = ROOT / "docs" / "guide" / "fused-columns.md"
+    assert table.read_text(encoding="utf-8") == fused_markdown_table()
+    assert "```{include} fused-columns.md" in (ROOT / "docs" / "guide" / "08-two-fingertips-the-grasped-object.md").read_text(encoding="utf-8")

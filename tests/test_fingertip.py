@@ -81,3 +81,11 @@ def test_a_fingertip_file_of_no_fingertips_size_is_refused(table: dict, said: st
     with pytest.raises(InputError, match=r"^tip\.toml: .*" + said.replace("(", r"\(").replace(")", r"\)").replace("+", r"\+")):
         fingertip_from_mapping({"fingertip": table}, "tip.toml")
     fingertip_from_mapping({"fingertip": {"shape": "sphere", "radius": 0.016, "skin_thickness": 0.005}}, "tip.toml")
+
+
+@pytest.mark.parametrize("extra", [{"mount": {"translation": [0.0, 0.0, 0.01]}}, {"tip": {"radius": 0.01}}, {"radius": 0.01}])
+def test_a_table_outside_fingertip_is_refused(extra):
+    # [mount] for [fingertip.mount] used to leave the tip unmounted without a word
+    table = {"fingertip": {"shape": "sphere", "radius": 0.016}, **extra}
+    with pytest.raises(InputError, match=f"tip.toml: unknown .*'{next(iter(extra))}' outside"):
+        fingertip_from_mapping(table, "tip.toml")

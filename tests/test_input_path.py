@@ -12,6 +12,7 @@ import sys
 import warnings
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from softtip import Estimator, EstimatorConfig, EstimatorWarning, estimate, load_example
@@ -67,6 +68,20 @@ def test_configured_sample_rate_contradicting_the_stamps_is_a_warning() -> None:
         for t, w in zip(log.t[:30], log.wrench[:30]):
             right.update(t, w)
 
+
+
+def test_the_sample_rate_check_reads_the_same_stamps_in_batch_and_stream() -> None:
+    # 100 Hz for 0.3 s, then 125 Hz: the stream checks its first stamps (100 Hz, as configured)
+    # and the batch checked all of them (their median: 125 Hz) and warned where the stream did not
+    t = np.concatenate([np.arange(30) / 100.0, 0.3 + np.arange(1, 400) / 125.0])
+    w = np.zeros((len(t), 6))
+    cfg = EstimatorConfig(sample_rate=100.0, tare_duration=0.1)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", EstimatorWarning)
+        batch = estimate(t, w, "murakami2006", cfg).warnings
+        est = Estimator("murakami2006", cfg)
+        est.process(t, w)
+    assert not any("sample_rate" in m for m in batch) and list(batch) == est.warnings, (batch, est.warnings, caught)
 
 def test_the_package_is_typed() -> None:
     import softtip

@@ -1162,3 +1162,24 @@ def test_unsearchable_folder_as_an_unprivileged_user(locked_folder, argv):
     named = next(a for a in argv if a.startswith("../locked/"))
     assert r.stderr.startswith(f"softtip: error: {named}: ") and "ermission denied" in r.stderr, r.stderr
     assert sorted(p.name for p in (locked_folder / "out").iterdir()) == []
+
+
+
+@pytest.mark.parametrize(
+    ("force", "fix"),
+    [
+        # the papers' kgf and kgf·mm, or N and N·mm: range alone cannot tell them apart
+        (0.5, "Give --units kgf-mm, or --moment-units 'N*mm' for a log in N and N·mm"),
+        # forces beyond a Nano17's in kgf: only the moments in N·mm fit
+        (60.0, "with the moments in N·mm: wrong units? Give --moment-units 'N*mm'"),
+    ],
+)
+def test_a_wrench_beyond_the_range_names_the_units_that_fit_it(force, fix):
+    import numpy as np
+
+    from softtip.core.fullscale import full_scale_error, parse_full_scale
+
+    w = np.zeros((3, 6))
+    w[:, 2], w[:, 3] = -force, 2.0  # mx 2 "N·m": 2 N·mm, or 2 kgf·mm
+    err = full_scale_error(np.arange(3.0), w, parse_full_scale("nano17"), "log.csv", units="si")
+    assert err is not None and fix in str(err), str(err)

@@ -117,6 +117,22 @@ def test_simulation_without_equilibrium_is_a_usage_error():
     assert result.exit_code == 2 and "no equilibrium" in result.output and "--friction" in result.output
 
 
+
+def test_simulate_takes_the_skin_of_the_fingertip_file(tmp_path):
+    # the file's skin_thickness is the simulated skin (it used to be the 5 mm default whatever
+    # the file said); --thickness still overrides it
+    import json
+
+    tip = tmp_path / "tip.toml"
+    tip.write_text('[fingertip]\nshape = "sphere"\nradius = 0.012\ncenter = [0.0, 0.0, 0.018]\nskin_thickness = 0.002\n')
+    for extra, skin in (([], 0.002), (["--thickness", "3mm"], 0.003)):
+        out = tmp_path / f"s{skin}.csv"
+        args = ["simulate", "--tip", str(tip), "--scenario", "push", "--duration", "3", "--rate", "20", *extra, "-o", str(out)]
+        result = CliRunner().invoke(main, args, catch_exceptions=False)
+        assert result.exit_code == 0, result.output
+        truth = json.loads(out.with_name(out.stem + ".truth.json").read_text())
+        assert truth["skin"]["thickness_m"] == skin
+
 def test_number_type_bounds():
     t = Number("s", 0.0, 10.0, min_open=True)
     assert t.convert("10", None, None) == 10.0 and t.convert(0.5, None, None) == 0.5

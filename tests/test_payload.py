@@ -194,6 +194,25 @@ def test_cli_payload_errors_name_file_and_column(tmp_path):
     assert not out.exists()
 
 
+def test_cli_calibrate_payload_refuses_a_sample_beyond_the_sensors_range(tmp_path):
+    # one corrupted row would move the fitted bias (fz -0.05 N for +0.20 N, exit 0), which a
+    # later run takes with --bias: stopped as estimate stops it, nothing written
+    from softtip.io.examples import EXAMPLE_STILL_PATH
+
+    lines = Path(EXAMPLE_STILL_PATH).read_text().splitlines()
+    header = lines[0].split(",")
+    row = lines[31].split(",")
+    row[header.index("fz")] = "-300"
+    lines[31] = ",".join(row)
+    spiked = tmp_path / "spiked.csv"
+    spiked.write_text("\n".join(lines) + "\n")
+    out = tmp_path / "p.toml"
+    res = run("calibrate-payload", spiked, "-o", out)
+    assert res.returncode == 2 and "spiked.csv" in res.stderr and "--full-scale" in res.stderr, res.stderr
+    assert not out.exists()
+    res = run("calibrate-payload", spiked, "--full-scale", "off", "-o", out)
+    assert res.returncode == 0 and out.exists()
+
 @pytest.mark.parametrize(
     "noise_std",
     [

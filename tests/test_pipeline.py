@@ -574,3 +574,27 @@ def test_a_dict_of_settings_is_refused_naming_the_config_to_give() -> None:
                 lambda: Estimator("murakami2006", {"lowpass_hz": 10.0})):  # fmt: skip
         with pytest.raises(TypeError, match=r"config: expected an EstimatorConfig, e\.g\. EstimatorConfig\(\*\*\{'lowpass_hz'"):
             run()
+
+
+@pytest.mark.parametrize("value", ["false", "off", "0", None, 2])
+def test_a_flag_setting_takes_only_true_or_false(value) -> None:
+    # bool("false") is True: a setting read from text turned line evidence on where it said off
+    for name in ("line_evidence", "drift_tracking"):
+        with pytest.raises(ValueError, match=f"{name} must be True or False, got {value!r}"):
+            EstimatorConfig(**{name: value})
+    assert EstimatorConfig(line_evidence=0).line_evidence is False and EstimatorConfig(drift_tracking=np.True_).drift_tracking is True
+
+
+@pytest.mark.parametrize(
+    ("t", "wrench", "message"),
+    [
+        (np.timedelta64(5, "ms"), [0.0] * 6, r"t holds durations \(timedelta64\[ms\]\); expected seconds"),
+        (None, [0.0] * 6, r"expected t as a number of s, got None"),
+        ("0.1", [0.0] * 6, r"expected t as a number of s, got '0.1'"),  # float() would take it
+        (0.0, "123456", r"6 finite wrench components, got t=0.0, wrench='123456'"),  # six characters
+        (0.0, dict.fromkeys(range(6), 0.0), r"6 finite wrench components"),  # six keys
+    ],
+)
+def test_a_sample_of_the_wrong_kind_is_refused_by_the_stream(t, wrench, message) -> None:
+    with pytest.raises(ValueError, match=message):
+        Estimator("murakami2006").update(t, wrench)

@@ -100,7 +100,7 @@ def _summary(fused) -> list[str]:
     "fuse",
     help="""Fuse two fingertips into the grasped object's local geometry, in a common frame.
 
-INPUTS are either two CSV logs (one per fingertip, on one clock) with the fingertips' poses
+INPUTS are either two logs (CSV, Parquet or Arrow; one per fingertip, on one clock) with the fingertips' poses
 from --hand FILE.toml (a [finger.NAME] table per fingertip, in the order of the logs) or from
 pose columns px, py, pz (m) and qw, qx, qy, qz in each log; or one ROS bag with --topics
 (two geometry_msgs/msg/WrenchStamped topics) and --frame (the common frame), the poses
@@ -114,7 +114,8 @@ lines (confirmed once the object was rocked about two axes) and flags (unbalance
 an area contact). Writes CSV (standard output without -o), Parquet (-o ending in .parquet) or
 Arrow IPC (.arrow, .feather), the contact points as r1_x..r2_z of the first and second finger given (named on standard
 error), whatever the input, and the first log's absolute stamps as a last column stamp_ns (a bag's, or a log's whose t
-are dates); a summary on standard error. --to-bag also writes the fused line and plane as
+are dates); every column, its unit and when it is NaN: the manual §8 (docs/guide/fused-columns.md). A
+summary on standard error. --to-bag also writes the fused line and plane as
 geometry_msgs/msg/PoseStamped (x axis along the line, z axis the plane's normal), the contacts as
 PointStamped and RViz markers, in the common frame, in the format --ros-distro plays; with
 --to-bag and no -o no CSV is written.
@@ -221,7 +222,7 @@ def fuse(inputs, output, hand_file, topics, frame, units, object_mass, gravity, 
         stamp_ns = read[0].stamps_ns  # the first log's absolute stamps, where it had them
         stamps = stamp_ns if stamp_ns is not None else np.rint(times[0] * 1e9).astype(np.int64)
     else:
-        raise click.UsageError(f"expected two CSV logs or one bag, got {len(inputs)} inputs")
+        raise click.UsageError(f"expected two logs or one bag, got {len(inputs)} inputs")
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", EstimatorWarning)  # said below, finger by finger

@@ -44,6 +44,8 @@ MAX_FRICTION = 10.0
 
 #: simulate's lengths: a bare number is in metres, and one of 0.1 m or more needs a unit
 LENGTH, FORCE = Length("m", bare_max=0.1), Force()
+#: m: the skin of a fingertip that does not give one (the papers': 5 mm of silicone)
+DEFAULT_SKIN = 0.005
 
 
 def _check_sizes(options: dict) -> None:
@@ -60,13 +62,16 @@ def _check_sizes(options: dict) -> None:
         raise click.BadParameter(f"{options['size'] * 1e3:g} mm; expected a positive length", param_hint="'--size'")
     if not options["force"] > 0:
         raise click.BadParameter(f"{options['force']:g} N; expected a positive force (N or kgf)", param_hint="'--force'")
-    thickness = options["thickness"]
     try:
         from softtip.core.fingertip import load_fingertip
 
-        _, reach = load_fingertip(options["tip"]).bounding_sphere
+        tip = load_fingertip(options["tip"])
     except (InputError, ValueError, OSError):
+        options["thickness"] = options["thickness"] or DEFAULT_SKIN
         return  # run_simulation names the problem with --tip
+    if options["thickness"] is None:  # the fingertip file's skin, else the papers' 5 mm
+        options["thickness"] = tip.skin_thickness or DEFAULT_SKIN
+    thickness, (_, reach) = options["thickness"], tip.bounding_sphere
     if not 0.0 < thickness < reach:
         raise click.BadParameter(
             f"{thickness * 1e3:g} mm; expected a skin thickness in (0, {reach * 1e3:g}) mm, less than the fingertip's size",
@@ -131,9 +136,9 @@ def _check_sizes(options: dict) -> None:
 @option("--elements", "n_elements", type=click.IntRange(50, MAX_ELEMENTS), default=DEFAULT_ELEMENTS, show_default=True,
               help="Skin surface elements.")
 @option("--modulus", type=Number("Pa", 0.0, min_open=True), default=0.6e6, show_default=True, help="Skin Winkler modulus, Pa.")
-@option("--shear-modulus", type=Number("Pa", 0.0, min_open=True), default=None, help="Skin shear modulus, Pa [default: modulus/3].")
+@option("--shear-modulus", type=Number("Pa", 0.0, min_open=True), default=None, help="Skin shear modulus, Pa [default: modulus/3; 2e6 with --scenario friction].")
 @option("--friction", type=Number("", 0.0, MAX_FRICTION, min_open=True), default=1.0, show_default=True, help="Coulomb friction coefficient.")
-@option("--thickness", type=LENGTH, default="5mm", show_default=True, help="Skin thickness (length).")
+@option("--thickness", type=LENGTH, default=None, help="Skin thickness (length).  [default: the --tip file's skin_thickness, else 5mm]")
 @option("--noise/--no-noise", default=True, show_default=True,
               help="Apply the sensor model (ATI Nano17 class noise and quantisation) or write the true wrench.")
 @option("--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Seed of the noise generator.")
@@ -219,7 +224,7 @@ def simulate(
 def _no_equilibrium(exc: RuntimeError, options) -> click.UsageError:
     """The error for a contact solve that found no equilibrium, with what may help."""
     if options["scenario"] == "friction":
-        hint = "a stiffer shear layer (e.g. --shear-modulus 2e6) holds larger loads"
+        hint = "a stiffer shear layer (a larger --shear-modulus) or a smaller --load may find one"
     else:
         hint = "a larger --friction or --force, a smaller --mass, or a thinner --thickness helps"
     return click.UsageError(f"the simulated grasp has no equilibrium with these options ({exc}); {hint}")

@@ -663,6 +663,13 @@ def fingertip_from_mapping(data: dict, source: str = "<fingertip>") -> Fingertip
     table = data.get("fingertip")
     if not isinstance(table, dict):
         raise InputError(f"{source}: expected a [fingertip] table")
+    extra = [k for k in data if k != "fingertip"]
+    if extra:  # e.g. [mount] for [fingertip.mount]: ignored, it would leave the tip unmounted
+        hint = "; a mount is [fingertip.mount]" if "mount" in extra else ""
+        raise InputError(
+            f"{source}: unknown {'table' if isinstance(data[extra[0]], dict) else 'key'} {extra[0]!r} outside "
+            f"[fingertip]; expected only the [fingertip] table and its [fingertip.mount]{hint}"
+        )
     shape = _shape_name(table)
     cls = SHAPES.get(shape) if isinstance(shape, str) else None
     mount = table.get("mount")

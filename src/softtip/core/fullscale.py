@@ -177,11 +177,20 @@ def full_scale_error(
         from softtip.core.units import KGF
 
         # |w| · scale > bound as |w| > bound / scale: no overflow near the float range
-        if not np.any(np.abs(w) > full_scale.bounds / np.array([KGF] * 3 + [KGF * 1e-3] * 3)):
+        kgf = not np.any(np.abs(w) > full_scale.bounds / np.array([KGF] * 3 + [KGF * 1e-3] * 3))
+        # the forces in N and the moments in N·mm (a common export); whatever fits in kgf and
+        # kgf·mm fits so too, and range alone cannot tell the two apart: both are named then
+        nmm = not np.any(np.abs(w) > full_scale.bounds / np.array([1.0] * 3 + [1e-3] * 3))
+        if nmm:
+            fix = (
+                "every sample fits it in kgf and kgf·mm, and with the moments in N·mm: wrong units? Give --units "
+                "kgf-mm, or --moment-units 'N*mm' for a log in N and N·mm"
+                if kgf else "every sample fits it with the moments in N·mm: wrong units? Give --moment-units 'N*mm'"
+            )
             return InputError(
                 f"{source}: sample {first_sample + i + 1} (t = {float(np.asarray(t)[i]):g} s): {_AXES[j]} = {w[i, j]:g} "
                 f"{unit} is beyond the sensor's full-scale range (±{bound:g} {unit}, {option} {full_scale.name}){more}, "
-                "but every sample fits it in kgf and kgf·mm: wrong units? Give --units kgf-mm"
+                f"but {fix}"
             )
     return InputError(
         f"{source}: sample {first_sample + i + 1} (t = {float(np.asarray(t)[i]):g} s): {_AXES[j]} = {w[i, j]:g} {unit} "

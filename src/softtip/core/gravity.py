@@ -31,6 +31,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
+from softtip.core.shape import SIZE_RANGE
 from softtip.core.units import STANDARD_GRAVITY
 from softtip.errors import InputError
 from softtip.tomlfile import read_toml_table
@@ -83,9 +84,39 @@ def load_payload(path: str | os.PathLike[str] | Payload) -> Payload:
     if not (isinstance(com, list) and len(com) == 3 and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in com)):
         raise InputError(f"{name}: [payload] com = {com!r} is not a list of 3 numbers in metres")
     try:
-        return Payload(float(mass), tuple(com))
+        payload = Payload(float(mass), tuple(com))
     except ValueError as exc:
         raise InputError(f"{name}: [payload] {exc}") from None
+    check_payload(payload, f"{name}: [payload]")
+    return payload
+
+
+#: kg: the heaviest fingertip a payload file may give (a mass in g written as kg is 1000× this
+#: or more for any fingertip of a few grams)
+MAX_PAYLOAD_MASS = 1.0
+
+
+def check_payload(payload: Payload, source: str) -> None:
+    """Refuse a payload no fingertip has: heavier than :data:`MAX_PAYLOAD_MASS`, or its centre
+    of mass farther from the sensor than a fingertip's largest size
+    (:data:`~softtip.core.shape.SIZE_RANGE`): a units mistake (grams as kg, mm as m).
+
+    Raises
+    ------
+    InputError
+        Naming ``source``, the value and the likely mistake.
+    """
+    if payload.mass > MAX_PAYLOAD_MASS:
+        raise InputError(
+            f"{source} mass = {payload.mass:.6g} kg; expected a fingertip's, at most {MAX_PAYLOAD_MASS:g} kg "
+            "(a mass in g written as kg?)"
+        )
+    reach = float(np.linalg.norm(payload.com))
+    if reach > SIZE_RANGE[1]:
+        raise InputError(
+            f"{source} com is {reach:.4g} m from the sensor; expected a fingertip's centre of mass, within "
+            f"{SIZE_RANGE[1]:g} m (lengths in mm written as m, or a log's moments in N·mm read as N·m?)"
+        )
 
 
 # --------------------------------------------------------------------------------------

@@ -57,13 +57,22 @@ class Carry:
     had_latch: bool = False  #: a contact so far had a latched point (the next one starts re-latched)
 
 
+def time_type_error(t: ArrayLike) -> ValueError | None:
+    """The error for time stamps given as numpy's or pandas' dates or durations (one or an
+    array), whose unit is not seconds; None for anything else."""
+    kind = np.asarray(t).dtype.kind
+    if kind not in "mM":
+        return None
+    fix = "(t - t[0]) / np.timedelta64(1, 's')" if kind == "M" else "t / np.timedelta64(1, 's')"
+    return ValueError(f"t holds {'dates' if kind == 'M' else 'durations'} ({np.asarray(t).dtype}); expected seconds "
+                      f"as floats, e.g. {fix}")  # fmt: skip
+
+
 def validate_log(t: ArrayLike, wrench: ArrayLike) -> tuple[NDArray, NDArray]:
     """``t`` (N,) and ``wrench`` (N, 6) as float arrays, checked: finite, time non-decreasing."""
-    kind = np.asarray(t).dtype.kind
-    if kind in "mM":  # numpy's and pandas' dates and durations: their unit is not seconds
-        fix = "(t - t[0]) / np.timedelta64(1, 's')" if kind == "M" else "t / np.timedelta64(1, 's')"
-        raise ValueError(f"t holds {'dates' if kind == 'M' else 'durations'} ({np.asarray(t).dtype}); expected seconds "
-                         f"as floats, e.g. {fix}")  # fmt: skip
+    err = time_type_error(t)
+    if err is not None:
+        raise err
     if np.asarray(wrench).dtype.kind == "c":
         raise ValueError("wrench holds complex numbers; expected real N and N·m")
     t = np.asarray(t, dtype=float)
@@ -120,14 +129,16 @@ def implausible_rate(t: ArrayLike) -> str | None:
 
 
 def sample_rate_mismatch(t: ArrayLike, sample_rate: float | None) -> str | None:
-    """The warning when ``config.sample_rate`` (Hz) contradicts the stamps ``t`` (s): their rate (the
-    median step's, :func:`infer_rate`) more than :data:`SAMPLE_RATE_TOLERANCE` away; None when they agree,
-    or with fewer than 10 distinct stamps."""
+    """The warning when ``config.sample_rate`` (Hz) contradicts the stamps ``t`` (s, the first
+    :data:`RATE_CHECK_SAMPLES`, as the stream has them): their rate (the median step's) more than
+    :data:`SAMPLE_RATE_TOLERANCE` away; None when they agree, or with fewer stamps (or fewer than
+    10 distinct)."""
     if sample_rate is None:
         return None
-    dt = np.diff(np.asarray(t, dtype=float))
+    first = np.asarray(t, dtype=float)[:RATE_CHECK_SAMPLES]
+    dt = np.diff(first)
     dt = dt[dt > 0]
-    if len(dt) < 9:
+    if len(first) < RATE_CHECK_SAMPLES or len(dt) < 9:  # as the stream, which looks once it has them
         return None
     rate = 1.0 / float(np.median(dt))
     if abs(rate / sample_rate - 1.0) <= SAMPLE_RATE_TOLERANCE:

@@ -21,6 +21,8 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+
 __all__ = ["Setting", "setting", "settings_of", "check_value", "range_text"]
 
 #: How a setting is given: a number, an integer, a flag, a choice, a fixed tuple of numbers
@@ -188,7 +190,10 @@ def check_value(s: Setting, value: Any) -> Any:
             raise ValueError(f"{s.name} must be an integer {range_text(s).removeprefix('a number ')}, got {value!r}")
         return int(value)
     if s.kind == "bool":
-        return bool(value)
+        # a string is refused: bool("false") is True (a setting read from text)
+        if isinstance(value, (bool, np.bool_)) or (isinstance(value, (int, np.integer)) and value in (0, 1)):
+            return bool(value)
+        raise ValueError(f"{s.name} must be True or False, got {value!r}")
     if s.kind == "choice":
         if value not in s.choices:
             raise ValueError(f"{s.name} must be one of {', '.join(s.choices)}, got {value!r}")

@@ -35,7 +35,7 @@ from softtip.core.filtering import SosStream, lowpass_sos
 from softtip.core.fingertip import Fingertip, load_fingertip
 from softtip.core.noise import SensorNoise, noise_variances
 from softtip.core.spin import tangent_frame
-from softtip.estimator.batch import RATE_CHECK_SAMPLES, implausible_rate, sample_rate_mismatch
+from softtip.estimator.batch import RATE_CHECK_SAMPLES, implausible_rate, sample_rate_mismatch, time_type_error
 from softtip.estimator.config import EstimatorConfig
 from softtip.estimator.contact import (
     START_PULL_TIME,
@@ -140,6 +140,7 @@ class Estimator:
         self._soft = self._latch.soft_finger
         self._contacts = ContactTracker(cfg, effective_noise(cfg.noise, self._sos), expected_samples=self._n)
         self._use_noise(cfg.noise)
+        self._measured_noise = False  # a tare replaced the configured noise model
         self.reset()
 
     def warm_up(self) -> None:
@@ -235,7 +236,11 @@ class Estimator:
         return self._contacts.count
 
     def reset(self) -> None:
-        """Forget everything: bias (unless given), filter state, drift, contacts."""
+        """Forget everything: bias (unless given), filter state, drift, contacts, and a noise
+        model a tare measured (the configured one again)."""
+        if self._measured_noise:  # a re-tare's model would outlive it where no tare follows
+            self._use_noise(self.config.noise)
+            self._measured_noise = False
         self._tare.reset()
         self._filter = SosStream(self._sos, expected_samples=self._n) if self._sos is not None else None
         self._contacts.reset()
@@ -294,9 +299,19 @@ class Estimator:
         wrench : array-like, shape (6,)
             Raw ``fx, fy, fz`` (N), ``mx, my, mz`` (N·m).
         """
-        t = float(t)
         try:
-            w0, w1, w2, w3, w4, w5 = wrench.tolist() if type(wrench) is np.ndarray else wrench
+            if isinstance(t, (str, bytes)):  # float("12") would take it
+                raise TypeError
+            t = float(t)
+        except (TypeError, ValueError):
+            raise time_type_error(t) or ValueError(f"expected t as a number of s, got {t!r}") from None
+        try:
+            if type(wrench) is np.ndarray:
+                w0, w1, w2, w3, w4, w5 = wrench.tolist()
+            elif isinstance(wrench, (str, bytes, dict, set)):  # six characters or keys would unpack
+                raise TypeError
+            else:
+                w0, w1, w2, w3, w4, w5 = wrench
             w = [float(w0), float(w1), float(w2), float(w3), float(w4), float(w5)]
         except (TypeError, ValueError):
             w = []
@@ -333,6 +348,7 @@ class Estimator:
                 self._warn(msg)
             if self.config.noise_from_tare != "off":  # the model this tare measured, or the given one again
                 self._use_noise(noise_in_use(self.config, tare.report))
+                self._measured_noise = True
             if self._filter is not None:  # the tare samples prime the filter, as in the batch
                 for b in tare.release():
                     self._filter([v - bb for v, bb in zip(b, bias)])
@@ -429,8 +445,11 @@ class Estimator:
             rx, ry, rz, nx, ny, nz, _, valid = self._soft(*x)
             point, normal = (rx, ry, rz), (nx, ny, nz)
             if not valid:
-                if depth is not None:
-                    depth.gap()
+                if depth is not None and depth.online:  # as the batch (pipeline.tail_run)
+                    if isfinite(rx) and isfinite(ry) and isfinite(rz):  # a point, not a valid solution: it learns
+                        depth.step(t, x, point, normal)
+                    else:
+                        depth.gap()
                 return self._none(t, x, pulling=True)
         else:
             if code == 2 and self._line_fit is not None:

@@ -147,7 +147,8 @@ class FusedGrasp:
         return np.asarray(GRASPS)[self.grasp]
 
     def columns(self) -> dict[str, NDArray]:
-        """Output columns (SI, angles in degrees), in order. The contact points are ``r1_*`` and
+        """Output columns (SI, angles in degrees), in the order of :data:`softtip.fusion.columns.FUSED_COLUMNS`
+        (which describes each; a test holds the two together). The contact points are ``r1_*`` and
         ``r2_*``, of the first and the second finger given (:attr:`names` says which is which),
         so the columns are the same whether the fingers came from CSV logs or a bag's topics."""
         out: dict[str, NDArray] = {"t": self.t, "grasp": self.grasp_names, "evidence": self.evidence, "flag": self.flag}

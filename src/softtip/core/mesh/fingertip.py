@@ -27,6 +27,7 @@ from softtip.core.mesh.files import MESH_UNITS, load_mesh
 from softtip.core.mesh.refine import NewtonRefine
 from softtip.core.mesh.topology import (
     _LEAF,
+    _bodies,
     _clusters,
     _corner_normals,
     _creases,
@@ -128,6 +129,12 @@ class MeshFingertip(ClosestPoints, AxisCast, CreaseContact, NewtonRefine, Finger
             raise ValueError(f"{int(bad.sum())} degenerate (zero-area) triangles, e.g. face {int(np.argmax(bad))}")
         face_n = cross / dbl_area[:, None]
         nb_face, li, lj = _edge_neighbours(f)
+        bodies = _bodies(nb_face)
+        if bodies > 1:  # a contact could land on the other body (a loose part of a CAD export)
+            raise ValueError(
+                f"the mesh has {bodies} separate closed bodies; expected one, the fingertip's surface (remove the others, "
+                "e.g. keep the largest of trimesh's mesh.split())"
+            )
         volume = float(np.sum(v0 * np.cross(v1, v2)) / 6.0)
         if volume <= 0.0:
             raise ValueError(

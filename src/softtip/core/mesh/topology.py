@@ -49,6 +49,18 @@ def _edge_neighbours(faces: NDArray[np.int64]) -> tuple[NDArray, NDArray, NDArra
     return nb_face, li, lj
 
 
+def _bodies(nb_face: NDArray) -> int:
+    """How many separate bodies (edge-connected groups of faces) a closed mesh has, from its
+    neighbour table (:func:`_edge_neighbours`)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    nf = len(nb_face)
+    rows = np.repeat(np.arange(nf), 3)
+    graph = coo_matrix((np.ones(3 * nf, dtype=np.int8), (rows, nb_face.ravel())), shape=(nf, nf))
+    return int(connected_components(graph, directed=False)[0])
+
+
 def _corner_normals(vertices: NDArray, faces: NDArray, face_normals: NDArray, crease_cos: float) -> NDArray:
     """Per-corner unit normals ``(F, 3, 3)``: angle-weighted face normals around the corner's
     vertex, over the faces within the crease angle of the corner's own face."""
