@@ -8,7 +8,7 @@ manual §8 (softtip.fusion.columns); tests/test_columns.py checks that they are 
 from pathlib import Path
 
 from softtip.estimator.columns import markdown_table
-from softtip.fusion.columns import fused_markdown_table
+from softtip.fusion.fuse import fused_markdown_table
 
 GUIDE = Path(__file__).resolve().parents[1] / "docs" / "guide"
 

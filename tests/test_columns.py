@@ -197,8 +197,8 @@ def test_the_fused_columns_are_the_registry_and_the_manual_table_is_it():
     (docs/guide/fused-columns.md) the registry's: regenerate it with scripts/make_column_table.py."""
     import dataclasses
 
-    from softtip.fusion.columns import fused_column_names, fused_markdown_table
-    from softtip.fusion.fuse import FusedGrasp
+    from softtip.fusion.columns import fused_column_names
+    from softtip.fusion.fuse import FusedGrasp, fused_markdown_table
 
     n = 2
     shapes = {"t": (n,), "grasp": (n,), "evidence": (n,), "flag": (n,)}

@@ -109,7 +109,7 @@ def test_a_mesh_of_two_bodies_is_refused(tmp_path):
     v, f = capsule_mesh(0.016, 0.020, segments=24)
     v2 = v * 0.25 + np.array([0.03, 0.0, 0.0])
     msg = bad_mesh_message(tmp_path, np.vstack([v, v2]) * 1e3, np.vstack([f, f + len(v)]))
-    assert "tip.toml" in msg and "2 separate closed bodies" in msg
+    assert "tip.toml" in msg and "2 separate closed surfaces" in msg
 
 def test_inverted_normals_are_refused(tmp_path):
     v, f = capsule_mesh(0.016, 0.020, segments=24)

@@ -1083,13 +1083,13 @@ def test_calibrate_full_scale_presets_and_the_sensor(tmp_path):
     assert "1 spike(s) among the 20 tare samples (up to 100 N off the median), left out" in r.stderr
 
 
-@pytest.mark.parametrize("command", ["estimate", "stream", "calibrate"])
+@pytest.mark.parametrize("command", ["estimate", "stream", "calibrate", "calibrate-payload", "fuse"])
 def test_full_scale_is_one_shared_option(command):
     from softtip.cli import main
 
     opt = next(p for p in main.commands[command].params if p.name == "full_scale")
     assert opt.opts == ["--full-scale"] and opt.metavar == "SENSOR|FORCE,MOMENT|off"
-    assert "[default: the --sensor's, nano17]" in opt.help
+    assert "[default: the --sensor's where the command has one, else nano17]" in opt.help
 
 
 # ---------------------------------------------------------------------------------------

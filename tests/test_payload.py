@@ -115,6 +115,18 @@ def test_refuses_orientations_that_barely_vary():
         calibrate_payload(w, q, source="still.csv")
 
 
+
+def test_a_negative_mass_names_the_quaternion_conventions():
+    # the shipped still log with its quaternions read x, y, z, w: the fit's mass comes out negative
+    from softtip.io.examples import EXAMPLE_STILL_PATH
+    from softtip.io.payload import read_orientation
+    from softtip.io.tables import read_log
+
+    log = read_log(EXAMPLE_STILL_PATH)
+    q = read_orientation(log)
+    with pytest.raises(InputError, match=r"not significantly positive.*x, y, z, w, or conjugated"):
+        calibrate_payload(log.wrench, np.roll(q, -1, axis=1), source="still.csv")
+
 def test_compensation_restores_the_static_direction(rotating_hand):
     log, q, w_rot = rotating_hand
     rng = np.random.default_rng(5)

@@ -207,7 +207,9 @@ def calibrate_payload(wrench: ArrayLike, orientation: ArrayLike, source: str = "
     if not mass > 3.0 * math.sqrt(mass_var):
         raise InputError(
             f"{source}: the estimated mass {mass * 1e3:.3g} ± {math.sqrt(mass_var) * 1e3:.2g} g is not significantly "
-            "positive; expected a fingertip of a few grams or more (was something touching it?)"
+            "positive; expected a fingertip of a few grams or more (was something touching it? Or are the "
+            "quaternions in another order, x, y, z, w, or conjugated, the world in the sensor frame? qw, qx, qy, qz "
+            "is the sensor frame's orientation in a world frame with z up)"
         )
     mc = xm[3:]
     com = mc / mass

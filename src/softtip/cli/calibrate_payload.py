@@ -56,7 +56,8 @@ def calibrate_payload(ctx, input_path, output, units, example, full_scale=None, 
         check_full_scale(log.t, log.wrench, sensor_range, log.source, units=log.units)
         fit = fit_payload(log.wrench, read_orientation(log), source=log.source)
         try:  # a log's moments in N·mm read as N·m fit a centre of mass metres away
-            check_payload(fit.payload, f"{log.source}: the fitted")
+            check_payload(fit.payload, f"{log.source}: the fitted", mass_hint="the log's forces in other units?",
+                          com_hint="the log's moments in N·mm read as N·m?")  # fmt: skip
         except InputError as exc:
             raise InputError(f"{exc}; give the log's units (--units, --force-units, --moment-units)") from None
         b = fit.bias

@@ -222,7 +222,7 @@ _FULL_SCALE_OPTION = option(
     "--full-scale", metavar="SENSOR|FORCE,MOMENT|off",
     help="The sensor's full-scale range: a sample beyond it (a corrupted row) stops the run naming it. A sensor ("
     + ", ".join(SENSOR_RANGES) + "; rated range per axis), FORCE,MOMENT in N and N·m for every axis, or off "
-    "(then only values no sensor gives).  [default: the --sensor's, nano17]",
+    "(then only values no sensor gives).  [default: the --sensor's where the command has one, else nano17]",
 )  # fmt: skip
 
 

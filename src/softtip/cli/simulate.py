@@ -31,7 +31,13 @@ from softtip.sim.scenario import (
     ROCK_AMPLITUDE_DEG,
     ROCK_LOAD,
 )
-from softtip.sim.simulate import log_csv_text, run_simulation, truth_json_text
+from softtip.sim.simulate import (
+    FRICTION_SHEAR_MODULUS,
+    log_csv_text,
+    run_simulation,
+    skin_thickness_of,
+    truth_json_text,
+)
 from softtip.sim.skin import DEFAULT_ELEMENTS
 
 __all__ = ["simulate"]
@@ -44,8 +50,6 @@ MAX_FRICTION = 10.0
 
 #: simulate's lengths: a bare number is in metres, and one of 0.1 m or more needs a unit
 LENGTH, FORCE = Length("m", bare_max=0.1), Force()
-#: m: the skin of a fingertip that does not give one (the papers': 5 mm of silicone)
-DEFAULT_SKIN = 0.005
 
 
 def _check_sizes(options: dict) -> None:
@@ -67,10 +71,8 @@ def _check_sizes(options: dict) -> None:
 
         tip = load_fingertip(options["tip"])
     except (InputError, ValueError, OSError):
-        options["thickness"] = options["thickness"] or DEFAULT_SKIN
         return  # run_simulation names the problem with --tip
-    if options["thickness"] is None:  # the fingertip file's skin, else the papers' 5 mm
-        options["thickness"] = tip.skin_thickness or DEFAULT_SKIN
+    options["thickness"] = skin_thickness_of(tip, options["thickness"])  # the file's skin, else 5 mm
     thickness, (_, reach) = options["thickness"], tip.bounding_sphere
     if not 0.0 < thickness < reach:
         raise click.BadParameter(
@@ -136,7 +138,7 @@ def _check_sizes(options: dict) -> None:
 @option("--elements", "n_elements", type=click.IntRange(50, MAX_ELEMENTS), default=DEFAULT_ELEMENTS, show_default=True,
               help="Skin surface elements.")
 @option("--modulus", type=Number("Pa", 0.0, min_open=True), default=0.6e6, show_default=True, help="Skin Winkler modulus, Pa.")
-@option("--shear-modulus", type=Number("Pa", 0.0, min_open=True), default=None, help="Skin shear modulus, Pa [default: modulus/3; 2e6 with --scenario friction].")
+@option("--shear-modulus", type=Number("Pa", 0.0, min_open=True), default=None, help=f"Skin shear modulus, Pa [default: modulus/3; {FRICTION_SHEAR_MODULUS / 1e6:g} MPa with --scenario friction].")
 @option("--friction", type=Number("", 0.0, MAX_FRICTION, min_open=True), default=1.0, show_default=True, help="Coulomb friction coefficient.")
 @option("--thickness", type=LENGTH, default=None, help="Skin thickness (length).  [default: the --tip file's skin_thickness, else 5mm]")
 @option("--noise/--no-noise", default=True, show_default=True,

@@ -37,6 +37,7 @@ from softtip.core.shape import (
     check_skin,
     fibonacci_cap,
     fields_from_table,
+    fingertip_table,
     fmt,
     grid_mesh,
     positive,
@@ -660,16 +661,7 @@ def fingertip_from_mapping(data: dict, source: str = "<fingertip>") -> Fingertip
     rest (:meth:`~softtip.core.shape.Fingertip.from_table`); a ``[fingertip.mount]`` places
     it on the sensor (:class:`~softtip.core.mounting.Mounted`) unless the shape reads it itself.
     """
-    table = data.get("fingertip")
-    if not isinstance(table, dict):
-        raise InputError(f"{source}: expected a [fingertip] table")
-    extra = [k for k in data if k != "fingertip"]
-    if extra:  # e.g. [mount] for [fingertip.mount]: ignored, it would leave the tip unmounted
-        hint = "; a mount is [fingertip.mount]" if "mount" in extra else ""
-        raise InputError(
-            f"{source}: unknown {'table' if isinstance(data[extra[0]], dict) else 'key'} {extra[0]!r} outside "
-            f"[fingertip]; expected only the [fingertip] table and its [fingertip.mount]{hint}"
-        )
+    table = fingertip_table(data, source)
     shape = _shape_name(table)
     cls = SHAPES.get(shape) if isinstance(shape, str) else None
     mount = table.get("mount")

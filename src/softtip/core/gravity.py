@@ -91,15 +91,17 @@ def load_payload(path: str | os.PathLike[str] | Payload) -> Payload:
     return payload
 
 
-#: kg: the heaviest fingertip a payload file may give (a mass in g written as kg is 1000× this
-#: or more for any fingertip of a few grams)
+#: kg: the heaviest fingertip a payload may have (a mass of a few grams written in g as kg
+#: reads 1000 times too large: beyond this from 1 g on)
 MAX_PAYLOAD_MASS = 1.0
 
 
-def check_payload(payload: Payload, source: str) -> None:
+def check_payload(payload: Payload, source: str, *, mass_hint: str = "a mass in g written as kg?",
+                  com_hint: str = "lengths in mm written as m?") -> None:  # fmt: skip
     """Refuse a payload no fingertip has: heavier than :data:`MAX_PAYLOAD_MASS`, or its centre
     of mass farther from the sensor than a fingertip's largest size
-    (:data:`~softtip.core.shape.SIZE_RANGE`): a units mistake (grams as kg, mm as m).
+    (:data:`~softtip.core.shape.SIZE_RANGE`): a units mistake, which ``mass_hint`` and
+    ``com_hint`` name (a file's by default; a fit's is its log's units).
 
     Raises
     ------
@@ -108,14 +110,13 @@ def check_payload(payload: Payload, source: str) -> None:
     """
     if payload.mass > MAX_PAYLOAD_MASS:
         raise InputError(
-            f"{source} mass = {payload.mass:.6g} kg; expected a fingertip's, at most {MAX_PAYLOAD_MASS:g} kg "
-            "(a mass in g written as kg?)"
+            f"{source} mass = {payload.mass:.6g} kg; expected a fingertip's, at most {MAX_PAYLOAD_MASS:g} kg ({mass_hint})"
         )
     reach = float(np.linalg.norm(payload.com))
     if reach > SIZE_RANGE[1]:
         raise InputError(
             f"{source} com is {reach:.4g} m from the sensor; expected a fingertip's centre of mass, within "
-            f"{SIZE_RANGE[1]:g} m (lengths in mm written as m, or a log's moments in N·mm read as N·m?)"
+            f"{SIZE_RANGE[1]:g} m ({com_hint})"
         )
 
 

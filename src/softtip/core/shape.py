@@ -498,3 +498,25 @@ def grid_mesh(tip: Fingertip, pts: NDArray) -> tuple[NDArray, NDArray, NDArray]:
         normals = tip.normal(vertices)
     normals = np.where(np.isfinite(normals), normals, np.array([0.0, 0.0, 1.0]))
     return vertices, triangles.astype(np.int32), normals
+
+
+def fingertip_table(data: dict, source: str) -> dict:
+    """The ``[fingertip]`` table of a parsed fingertip file, which must hold nothing else (a
+    ``[mount]`` meant as ``[fingertip.mount]`` would leave the tip unmounted without a word).
+
+    Raises
+    ------
+    InputError
+        No ``[fingertip]`` table, or a key or table outside it; naming ``source``.
+    """
+    table = data.get("fingertip")
+    if not isinstance(table, dict):
+        raise InputError(f"{source}: expected a [fingertip] table")
+    extra = [k for k in data if k != "fingertip"]
+    if extra:
+        hint = "; a mount is [fingertip.mount]" if "mount" in extra else ""
+        raise InputError(
+            f"{source}: unknown {'table' if isinstance(data[extra[0]], dict) else 'key'} {extra[0]!r} outside "
+            f"[fingertip]; expected only the [fingertip] table and its [fingertip.mount]{hint}"
+        )
+    return table

@@ -10,17 +10,19 @@ covariance (noise removed) and ``ratio = minor / major``:
   ``ratio ≥ area_ratio[0]``, at a sample whose ``|h|`` is significant, provided the load
   turned about its weaker axis too (its ``minor`` beyond the noise and at least
   ``excitation_min²``) or ``minor ≥ h_min²`` (a point gone stale). The contact **reads
-  ``area``** once more than ``area_share`` of the window's samples span both axes (a sustained
-  spread: a transient one, as a new rock begins while the window still holds the last one,
-  does not make an area), and goes on reading it until the segment ends or a window
-  contradicts it by confirming a line: a window whose excitation was about one axis cannot
-  tell a plane rocked about that axis from a line (both give ``h`` on one axis), so it is no
-  evidence against the area the earlier window showed;
+  ``area``** while more than ``area_share`` of the window's samples span both axes (a
+  sustained spread: a transient one, as a new rock begins while the window still holds the
+  last one, does not make an area), and for one ``evidence_window`` after the last sample
+  whose window read it, unless a window confirms a line by its load meanwhile: the window
+  after an area reading holds the end of the two-axis spread sliding out, often one rocking
+  axis only, which a plane gives as a line does (both give ``h`` on one axis); a window later
+  the reading is the current window's again, so a transient cannot lock an area;
 * it **confirms a line** when the contact was excited about two axes, as the tangential load
   shows (its own ``minor`` beyond the noise, at least ``excitation_ratio`` times its
   ``major`` and at least ``excitation_min²``) or as the user states (the window wholly inside
-  an interval of ``rocked``), ``h`` varied beyond the noise and ``ratio < area_ratio[1]``; a
-  confirmed line stays confirmed until the window reads an area;
+  an interval of ``rocked``, not while an area is kept: a stated window that saw one axis cannot
+  tell a plane from a line either), ``h`` varied beyond the noise and ``ratio < area_ratio[1]``;
+  a confirmed line stays confirmed until the window reads an area;
 * it **resolves an axis** when ``h`` varied along one axis (``major`` beyond the noise and at
   least ``h_min²``, ``ratio < area_ratio[1]``) with an angle standard deviation at most
   ``evidence_max_angle_std``.
@@ -168,7 +170,8 @@ _HELD_STD = _HELD_ANGLE + 1  # its standard deviation with the model error of it
 _HELD_NOISE = _HELD_STD + 1  # the noise's share, rad
 _HELD_SEEN = _HELD_NOISE + 1  # 1.0: its load turned about both axes (not only a stated rocking)
 _SIG = _HELD_SEEN + 1  # |h| significant (the last decided vote)
-_N_STATE = _SIG + 1
+_AREA_T = _SIG + 1  # s: the latest sample whose window read an area (kept one window after it)
+_N_STATE = _AREA_T + 1
 
 _HEAD = 0  # the ring's slot of the latest sample
 _N_WIN = 1  # samples in the evidence window (t_i > t − evidence_window; may be none)
@@ -295,11 +298,14 @@ def _update_verdict(state, params, t, area, one_axis, excited, e, s2, nu):
     if area:
         # a confirmed line stays confirmed until the window reads an area
         state[_VERDICT] = _AREA
+        state[_AREA_T] = t
         state[_HAS_HELD] = 0.0
         return False, False, _NAN, _NAN, _NAN
     # excited about two axes: the load shows it, or the user says so (where the load is locked
-    # to h, as on a frictionless round skin, it cannot)
-    line_now = one_axis and (excited or _stated(params, t))
+    # to h, as on a frictionless round skin, it cannot); a statement does not overturn an area
+    # the data showed within the last window (_kept_area): a stated window that saw one axis
+    # cannot tell a plane from a line either
+    line_now = one_axis and (excited or (not _kept_area(state, params, t) and _stated(params, t)))
     if line_now:
         state[_VERDICT] = _LINE
     if not one_axis:
@@ -325,6 +331,15 @@ def _update_verdict(state, params, t, area, one_axis, excited, e, s2, nu):
         state[_HELD_NOISE] = noise_std
         state[_HELD_SEEN] = 1.0 if excited else 0.0
     return axis, confirming, angle, angle_std, noise_std
+
+
+@lazy_jit
+def _kept_area(state, params, t):
+    """An area read within the last ``evidence_window`` s and not overturned since (the verdict
+    still area): the window after an area reading holds the end of the two-axis spread sliding
+    out, often one rocking axis only, which a plane gives as a line does; a window later the
+    reading is the current window's again (a transient does not lock an area)."""
+    return state[_VERDICT] == _AREA and t - state[_AREA_T] <= params[_WINDOW]
 
 
 @lazy_jit
@@ -459,7 +474,7 @@ def evidence_step(state, counts, ring, params, wconst, t, px, py, pz, nx, ny, nz
         major, minor, tail * s_big, e[10], e[11], tail * f_n, hn, thr, params
     )
     # area: more than area_share of the evidence window's samples spread over both axes (a
-    # sustained spread: a transient one does not make an area; _choose keeps the verdict)
+    # sustained spread: a transient one does not make an area), kept one window (_kept_area)
     ring[head, _R_SPREAD] = 1.0 if spread else 0.0
     counts[_N_AREA] += 1
     counts[_N_SPREAD] += 1 if spread else 0
@@ -472,7 +487,7 @@ def evidence_step(state, counts, ring, params, wconst, t, px, py, pz, nx, ny, nz
     area = counts[_N_SPREAD] > params[_AREA_SHARE] * counts[_N_AREA]
     axis, confirming, w_angle, w_std, w_noise = _update_verdict(state, params, t, area, one_axis, excited, e, s2, nu)
     sig = _significance(state, counts, ring, params, t, hn, thr)
-    r = _choose(state, params, area, axis, confirming, sig, w_angle, w_std, w_noise, minor, h_ratio, f_ratio,
+    r = _choose(state, params, area or _kept_area(state, params, t), axis, confirming, sig, w_angle, w_std, w_noise, minor, h_ratio, f_ratio,
                 hx, hy, hz, hn, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z)  # fmt: skip
     if r[0] != _LINE_CODE or params[_INV_RADIUS] == 0.0:
         return r
@@ -485,11 +500,7 @@ def evidence_step(state, counts, ring, params, wconst, t, px, py, pz, nx, ny, nz
 def _choose(state, params, area, axis, confirming, sig, w_angle, w_std, w_noise, minor, h_ratio, f_ratio,
             hx, hy, hz, hn, ex, ey, ez, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z):  # fmt: skip
     """The sample's state and direction (the returns of :func:`evidence_step`)."""
-    if area or state[_VERDICT] == _AREA:
-        # the window reads an area, or did in this segment and nothing since contradicted it:
-        # a window that saw one axis only cannot tell a plane rocked about it from a line
-        # (both give h on one axis); only a line confirmed by the load turning about two axes
-        # while h stayed on one (the verdict then turns line) does
+    if area:
         return _AREA_CODE, 0, _NAN, _NAN, _NAN, _NAN, _NAN, _NAN, h_ratio, f_ratio
     confirmed = state[_VERDICT] == _LINE
     held = confirmed and state[_HAS_HELD] != 0.0

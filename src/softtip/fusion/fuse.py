@@ -82,9 +82,10 @@ from numpy.typing import ArrayLike, NDArray
 from softtip.core.noise import NANO17, SensorNoise
 from softtip.estimator import Estimates
 from softtip.estimator.results import EVIDENCE
+from softtip.fusion.columns import FUSED_COLUMNS
 from softtip.fusion.poses import PoseSeries
 
-__all__ = ["GRASPS", "Finger", "FusedGrasp", "fuse"]
+__all__ = ["GRASPS", "Finger", "FusedGrasp", "fuse", "fused_markdown_table"]
 
 #: Grasp readings, indexed by the codes in :attr:`FusedGrasp.grasp`.
 GRASPS = ("none", "single", "parallel_lines", "crossing_lines", "line_and_face", "faces")
@@ -147,25 +148,20 @@ class FusedGrasp:
         return np.asarray(GRASPS)[self.grasp]
 
     def columns(self) -> dict[str, NDArray]:
-        """Output columns (SI, angles in degrees), in the order of :data:`softtip.fusion.columns.FUSED_COLUMNS`
-        (which describes each; a test holds the two together). The contact points are ``r1_*`` and
+        """Output columns (SI, angles in degrees), as :data:`softtip.fusion.columns.FUSED_COLUMNS`
+        declares them. The contact points are ``r1_*`` and
         ``r2_*``, of the first and the second finger given (:attr:`names` says which is which),
         so the columns are the same whether the fingers came from CSV logs or a bag's topics."""
-        out: dict[str, NDArray] = {"t": self.t, "grasp": self.grasp_names, "evidence": self.evidence, "flag": self.flag}
-        for key, arr in (("r1", self.point_a), ("r2", self.point_b)):
-            for i, ax in enumerate("xyz"):
-                out[f"{key}_{ax}"] = arr[:, i]
-        for key, arr in (("d", self.direction), ("d2", self.direction_b), ("plane_n", self.plane_normal), ("face_n", self.face_normal)):
-            for i, ax in enumerate("xyz"):
-                out[f"{key}{ax}"] = arr[:, i]
-        out["direction_std_deg"] = np.degrees(self.direction_std)
-        out["line_angle_deg"] = np.degrees(self.line_angle)
-        out["line_angle_std_deg"] = np.degrees(self.line_angle_std)
-        out["closest_approach"] = self.closest_approach
-        out["plane_normal_std_deg"] = np.degrees(self.plane_normal_std)
-        for i, ax in enumerate("xyz"):
-            out[f"residual_f{ax}"] = self.force_residual[:, i]
-        out["balance_chi2"] = self.balance_chi2
+        out: dict[str, NDArray] = {}
+        for c in FUSED_COLUMNS:
+            v = getattr(self, c.source)
+            if c.unit == "deg":
+                v = np.degrees(v)
+            if len(c.names) == 1:
+                out[c.names[0]] = v
+            else:
+                for i, name in enumerate(c.names):
+                    out[name] = v[:, i]
         return out
 
 
@@ -407,4 +403,23 @@ def fuse(
         force_residual=np.where(both_in[:, None], res, nan3),
         balance_chi2=np.where(both_in, chi2, nan1),
         names=(fa.name, fb.name),
+    )
+
+
+def fused_markdown_table() -> str:
+    """The table of manual §8: one row per column or vector, empty cells NaN where a reading
+    does not define them."""
+    import inspect
+
+    defaults = inspect.signature(fuse).parameters  # the defaults the descriptions quote
+    fill = {"tolerance": 100.0 * defaults["balance_tolerance"].default, "chi2": defaults["balance_chi2"].default}
+    rows = ["| column | unit | |", "| --- | --- | --- |"]
+    for c in FUSED_COLUMNS:
+        names = f"`{c.names[0]}`" if len(c.names) == 1 else f"`{c.names[0]}` … `{c.names[-1]}`"
+        rows.append(f"| {names} | {c.unit} | {c.description.format(**fill)} |")
+    return (
+        "<!-- written by scripts/make_column_table.py from softtip.fusion.columns; do not edit -->\n\n"
+        + "\n".join(rows)
+        + "\n\nA number is NaN (empty in CSV) where the reading does not define it. Where the first log has absolute "
+        "stamps (a bag, a log with Unix time) `stamp_ns`, its stamps in ns, is the last column.\n"
     )

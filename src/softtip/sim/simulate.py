@@ -539,10 +539,22 @@ def scenario_options(
     return kw
 
 
+#: m: the skin of a fingertip that gives none (the papers': 5 mm of silicone)
+DEFAULT_SKIN_THICKNESS = 0.005
+
+
+def skin_thickness_of(tip: Fingertip, thickness: float | None = None) -> float:
+    """The simulated skin's thickness, m: ``thickness`` if given, else the fingertip's
+    ``skin_thickness`` (a fingertip file's), else :data:`DEFAULT_SKIN_THICKNESS`."""
+    if thickness is not None:
+        return thickness
+    return getattr(tip, "skin_thickness", None) or DEFAULT_SKIN_THICKNESS
+
+
 #: Pa: the shear layer's modulus under a friction load (``scenario="friction"``) unless one is
-#: given. The default ``E / 3`` (0.2 MPa) finds no equilibrium for loads from about a sixth of
-#: the grasp force (0.25 of it on a 2 mm plate at 30°, far inside friction), and the benchmarks'
-#: friction loads are simulated with this one.
+#: given. With the default ``E / 3`` (0.2 MPa) a load of a quarter of the grasp force across a
+#: 2 mm plate at 30° (far inside friction) finds no equilibrium, and the benchmarks' friction
+#: loads are simulated with this one.
 FRICTION_SHEAR_MODULUS = 2e6
 
 
@@ -587,7 +599,7 @@ def run_simulation(
     modulus: float = 0.6e6,
     shear_modulus: float | None = None,
     friction: float = 1.0,
-    thickness: float = 0.005,
+    thickness: float | None = None,
     noise: bool = True,
     seed: int = 0,
     output: str | os.PathLike | None = None,
@@ -606,9 +618,11 @@ def run_simulation(
     ``load_profile`` ``push``, ``drag`` or ``slip``; ``object_mass`` is ignored); ``rock`` adds the
     rocking of :func:`~softtip.sim.scenario.rock_scenario` to the paper scenario (``duration``
     defaults to its end; otherwise 10 s). Writes the log CSV to ``output`` and the ground truth
-    to ``truth`` when given; returns the log.
+    to ``truth`` when given; returns the log. ``thickness`` (m): the skin's; None, the
+    fingertip's ``skin_thickness`` (:func:`skin_thickness_of`).
     """
     tipo = load_fingertip(tip)
+    thickness = skin_thickness_of(tipo, thickness)
     obj = make_object(object_kind, size, edge_radius=edge_radius, apex_angle=math.radians(apex_angle_deg),
                       tilt=math.radians(tilt_deg))
     if rock and scenario != "paper":

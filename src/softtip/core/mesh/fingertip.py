@@ -36,7 +36,7 @@ from softtip.core.mesh.topology import (
     _near_classes,
 )
 from softtip.core.mounting import pose_from_table, rpy_of
-from softtip.core.shape import SIZE_RANGE, Fingertip
+from softtip.core.shape import SIZE_RANGE, Fingertip, fingertip_table
 from softtip.errors import InputError
 
 __all__ = ["MeshFingertip", "load_mesh_fingertip", "mesh_fingertip_from_table"]
@@ -132,8 +132,8 @@ class MeshFingertip(ClosestPoints, AxisCast, CreaseContact, NewtonRefine, Finger
         bodies = _bodies(nb_face)
         if bodies > 1:  # a contact could land on the other body (a loose part of a CAD export)
             raise ValueError(
-                f"the mesh has {bodies} separate closed bodies; expected one, the fingertip's surface (remove the others, "
-                "e.g. keep the largest of trimesh's mesh.split())"
+                f"the mesh has {bodies} separate closed surfaces; expected one, the fingertip's outer surface (remove "
+                "the others, e.g. keep the largest of trimesh's mesh.split(); a hollow solid's inner surface is one)"
             )
         volume = float(np.sum(v0 * np.cross(v1, v2)) / 6.0)
         if volume <= 0.0:
@@ -491,9 +491,7 @@ def load_mesh_fingertip(path: str | Path) -> MeshFingertip:
     """A mesh fingertip from a TOML fingertip file (see :func:`mesh_fingertip_from_table`)."""
     from softtip.tomlfile import read_toml
 
-    table = read_toml(path, "fingertip").get("fingertip")
-    if not isinstance(table, dict):
-        raise InputError(f"{path}: expected a [fingertip] table")
+    table = fingertip_table(read_toml(path, "fingertip"), str(path))
     shape = table.get("shape", MeshFingertip.kind if MeshFingertip.implied_by in table else None)
     if shape != MeshFingertip.kind:
         raise InputError(f"{path}: not a mesh fingertip (shape = {shape!r})")
