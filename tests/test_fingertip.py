@@ -89,3 +89,13 @@ def test_a_table_outside_fingertip_is_refused(extra):
     table = {"fingertip": {"shape": "sphere", "radius": 0.016}, **extra}
     with pytest.raises(InputError, match=f"tip.toml: unknown .*'{next(iter(extra))}' outside"):
         fingertip_from_mapping(table, "tip.toml")
+
+
+def test_a_mesh_file_given_as_the_fingertip_file_names_the_toml_it_needs(tmp_path):
+    # read as TOML it was "malformed TOML"; a missing shape read "shape = None"
+    mesh = tmp_path / "tip.stl"
+    mesh.write_text("solid x\nendsolid x\n")
+    with pytest.raises(InputError, match=r'tip\.stl: a mesh file, not a fingertip file; .*\[fingertip\] mesh = "tip\.stl"'):
+        load_fingertip(mesh)
+    with pytest.raises(InputError, match=r"x\.toml: \[fingertip\] has no shape key; expected shape = one of sphere"):
+        fingertip_from_mapping({"fingertip": {"radius": 0.01}}, "x.toml")

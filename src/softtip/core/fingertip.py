@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from softtip.core._jit import jitable
 from softtip.core.implicit import ImplicitSurface
-from softtip.core.mesh import MeshFingertip
+from softtip.core.mesh import MESH_SUFFIXES, MeshFingertip
 from softtip.core.mounting import mount_from_mapping
 from softtip.core.shape import (
     Fingertip,
@@ -635,6 +635,11 @@ def load_fingertip(spec: str | Path | Fingertip) -> Fingertip:
                 f"{', '.join(sorted(PRESETS))} or a path to a .toml fingertip file"
             )
         raise InputError(f"{name}: fingertip file not found")
+    if path.suffix.lower() in MESH_SUFFIXES:  # read as TOML, it would be "malformed TOML"
+        raise InputError(
+            f"{name}: a mesh file, not a fingertip file; expected a fingertip TOML naming it: [fingertip] mesh = "
+            f'"{path.name}", mesh_units = "mm" (or m, cm...) (manual §2)'
+        )
     from softtip.tomlfile import read_toml
 
     return fingertip_from_mapping(read_toml(path, "fingertip"), source=str(path))
@@ -670,7 +675,8 @@ def fingertip_from_mapping(data: dict, source: str = "<fingertip>") -> Fingertip
         inner = {k: v for k, v in table.items() if k != "mount"}
         return mount_from_mapping(fingertip_from_mapping({"fingertip": inner}, source), mount, source)
     if cls is None:
-        raise InputError(f"{source}: [fingertip] shape = {shape!r}; expected one of {', '.join(SHAPES)}")
+        given = "has no shape key" if shape is None else f"shape = {shape!r}"
+        raise InputError(f"{source}: [fingertip] {given}; expected shape = one of {', '.join(SHAPES)}")
     tip = cls.from_table(table, source)
     check_size(tip, source)  # a file in mm: 1000× too large
     return tip

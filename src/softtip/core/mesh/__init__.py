@@ -22,11 +22,12 @@ mesh fingertip is loaded.
 
 
 from softtip.core.mesh.capsule import capsule_mesh
-from softtip.core.mesh.files import MESH_UNITS, load_mesh, rotation_from_rpy
+from softtip.core.mesh.files import MESH_SUFFIXES, MESH_UNITS, load_mesh, rotation_from_rpy
 from softtip.core.mesh.fingertip import MeshFingertip, load_mesh_fingertip, mesh_fingertip_from_table
 
 __all__ = [
     "MeshFingertip",
+    "MESH_SUFFIXES",
     "MESH_UNITS",
     "capsule_mesh",
     "load_mesh",

@@ -12,7 +12,10 @@ from numpy.typing import NDArray
 
 from softtip.errors import InputError
 
-__all__ = ["MESH_UNITS", "load_mesh", "rotation_from_rpy"]
+__all__ = ["MESH_SUFFIXES", "MESH_UNITS", "load_mesh", "rotation_from_rpy"]
+
+#: The mesh files a fingertip can be read from
+MESH_SUFFIXES = (".stl", ".obj", ".ply")
 
 #: Length units accepted for ``mesh_units`` (metres per unit).
 MESH_UNITS: dict[str, float] = {"m": 1.0, "cm": 0.01, "mm": 0.001, "um": 1e-6, "in": 0.0254}
@@ -53,8 +56,8 @@ def load_mesh(path: str | Path, units: str) -> tuple[NDArray[np.float64], NDArra
     path = Path(path)
     if units not in MESH_UNITS:
         raise InputError(f"mesh_units = {units!r}; expected one of {', '.join(MESH_UNITS)}")
-    if path.suffix.lower() not in (".stl", ".obj", ".ply"):
-        raise InputError(f"{path}: mesh file must be .stl, .obj or .ply")
+    if path.suffix.lower() not in MESH_SUFFIXES:
+        raise InputError(f"{path}: mesh file must be {', '.join(MESH_SUFFIXES[:-1])} or {MESH_SUFFIXES[-1]}")
     if not path.is_file():
         raise InputError(f"{path}: mesh file not found")
     trimesh = _import_trimesh()
