@@ -314,7 +314,7 @@ def test_the_view_shows_every_counter_the_status_and_the_latest_warning():
         assert part in text, (part, text)
 
 
-@pytest.mark.skipif(sys.platform == "win32", reason="a pseudo-terminal")
+@pytest.mark.skipif(sys.platform == "win32", reason="pty, fcntl and termios are POSIX only")
 @pytest.mark.parametrize("columns", [50, 80])
 def test_the_view_fits_each_line_in_the_terminals_width(columns):
     # a line wider than the terminal wraps into two rows; moved back up by the line count, each

@@ -108,16 +108,24 @@ SAMPLE_RATE_TOLERANCE = 0.1
 RATE_CHECK_SAMPLES = 21
 
 
+def _first_rate(t: ArrayLike) -> float | None:
+    """Hz: the rate of the first :data:`RATE_CHECK_SAMPLES` stamps (their median positive step),
+    as the stream has them once it has that many; None before, or with fewer than 10 distinct."""
+    first = np.asarray(t, dtype=float)[:RATE_CHECK_SAMPLES]
+    dt = np.diff(first)
+    dt = dt[dt > 0]
+    if len(first) < RATE_CHECK_SAMPLES or len(dt) < 9:
+        return None
+    return 1.0 / float(np.median(dt))
+
+
 def implausible_rate(t: ArrayLike) -> str | None:
     """The warning when the stamps ``t`` (the first :data:`RATE_CHECK_SAMPLES`) step at no force/torque
     sensor's rate (:data:`PLAUSIBLE_RATE_HZ`): t in ms, µs or ns taken as seconds, which puts
     every time window (the tare, the line evidence, the filter) off by that factor."""
-    first = np.asarray(t, dtype=float)[:RATE_CHECK_SAMPLES]
-    dt = np.diff(first)
-    dt = dt[dt > 0]
-    if len(first) < RATE_CHECK_SAMPLES or len(dt) < 9:  # as the stream, which looks once it has them
+    rate = _first_rate(t)
+    if rate is None:
         return None
-    rate = 1.0 / float(np.median(dt))
     low, high = PLAUSIBLE_RATE_HZ
     if low <= rate <= high:
         return None
@@ -130,17 +138,11 @@ def implausible_rate(t: ArrayLike) -> str | None:
 
 def sample_rate_mismatch(t: ArrayLike, sample_rate: float | None) -> str | None:
     """The warning when ``config.sample_rate`` (Hz) contradicts the stamps ``t`` (s, the first
-    :data:`RATE_CHECK_SAMPLES`, as the stream has them): their rate (the median step's) more than
-    :data:`SAMPLE_RATE_TOLERANCE` away; None when they agree, or with fewer stamps (or fewer than
-    10 distinct)."""
-    if sample_rate is None:
+    :data:`RATE_CHECK_SAMPLES`, :func:`_first_rate`) more than :data:`SAMPLE_RATE_TOLERANCE` away;
+    None when they agree, or before there are enough stamps."""
+    rate = None if sample_rate is None else _first_rate(t)
+    if rate is None:
         return None
-    first = np.asarray(t, dtype=float)[:RATE_CHECK_SAMPLES]
-    dt = np.diff(first)
-    dt = dt[dt > 0]
-    if len(first) < RATE_CHECK_SAMPLES or len(dt) < 9:  # as the stream, which looks once it has them
-        return None
-    rate = 1.0 / float(np.median(dt))
     if abs(rate / sample_rate - 1.0) <= SAMPLE_RATE_TOLERANCE:
         return None
     return (
